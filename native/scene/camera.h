@@ -1,0 +1,44 @@
+// Cameras from Blender's parameters: perspective and orthographic.
+//
+// world_from_camera is Blender's camera matrix_world (the camera looks down its local -Z with +Y
+// up). The sensor fit, lens, sensor size and shift follow Blender's camera data; resolution is
+// the render size in pixels. Film coordinates: (0,0) is the top-left corner of the image, x to
+// the right, y down, in pixels (pixel (i,j) covers [i,i+1) x [j,j+1)).
+#pragma once
+
+#include <cstdint>
+
+#include "scene/ray.h"
+#include "util/math.h"
+
+namespace shgi {
+
+enum class CameraType : uint8_t { Perspective, Orthographic };
+enum class SensorFit : uint8_t { Auto, Horizontal, Vertical };
+
+struct Camera {
+    CameraType type = CameraType::Perspective;
+    mat4 world_from_camera{1.0f};
+    float lens = 50.0f;            // mm (perspective)
+    float sensor_width = 36.0f;    // mm
+    float sensor_height = 24.0f;   // mm
+    SensorFit sensor_fit = SensorFit::Auto;
+    float ortho_scale = 7.314f;    // m across the fitted axis (orthographic)
+    float shift_x = 0.0f, shift_y = 0.0f;  // in units of the larger image dimension, as Blender
+    float clip_start = 0.1f, clip_end = 1000.0f;  // m
+    uint32_t resolution_x = 640, resolution_y = 480;
+
+    // A ray through film point `film` (pixels, see above); direction is unit length, tmin and
+    // tmax are the clip distances along the view axis converted to distances along the ray.
+    Ray generate_ray(const vec2& film) const;
+
+    // Inverse of generate_ray for points in front of the camera: the film position of world
+    // point p, or false when p is behind the camera.
+    bool project(const vec3& p, vec2* film) const;
+};
+
+// Throws InvalidArgument naming the field (NaN/Inf transform, non-positive lens or sensor,
+// zero resolution, clip_start >= clip_end, ...).
+void validate_camera(const Camera& camera);
+
+}  // namespace shgi

@@ -1,0 +1,50 @@
+// Materials: the subset of Blender's Principled BSDF (3.4 semantics) that SHGI renders, and
+// textures for the base colour.
+//
+// Colours are linear Rec.709. `specular` is Principled's 0..1 "Specular" (F0 = 0.08 * specular
+// for dielectrics); Blender 4.x's "Specular IOR Level" maps onto it in the exporter. Emitted
+// radiance is emission_color x emission_strength (W m^-2 sr^-1), as Cycles' Emission closure:
+// a white surface of strength 1 seen by the camera renders as 1.0.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "util/math.h"
+
+namespace shgi {
+
+inline constexpr int32_t kNoTexture = -1;
+
+struct Material {
+    std::string name = "default";
+    vec3 base_color{0.8f};
+    int32_t base_color_texture = kNoTexture;  // index into Scene::textures(), or kNoTexture
+    std::string base_color_uv_set;            // UV set used by the texture ("" = first)
+    float roughness = 0.5f;                   // 0..1, GGX alpha = roughness^2
+    float metallic = 0.0f;                    // 0..1
+    float specular = 0.5f;                    // 0..1 (F0 = 0.08 * specular)
+    float transmission = 0.0f;                // 0..1
+    float ior = 1.45f;                        // >= 1
+    vec3 emission_color{0.0f};
+    float emission_strength = 1.0f;           // >= 0
+
+    vec3 emission() const { return emission_color * emission_strength; }
+    bool is_emissive() const {
+        return emission_strength > 0.0f && glm::any(glm::greaterThan(emission_color, vec3(0.0f)));
+    }
+};
+
+// Throws InvalidArgument naming the material and field for NaN/Inf or out-of-range values.
+void validate_material(const Material& material, uint32_t texture_count);
+
+struct Texture {
+    std::string name;
+    uint32_t width = 0, height = 0;
+    std::vector<vec4> texels;  // linear RGBA, row 0 at the bottom (Blender's image convention)
+};
+
+void validate_texture(const Texture& texture);
+
+}  // namespace shgi

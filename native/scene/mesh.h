@@ -1,0 +1,44 @@
+// Triangle meshes: indexed vertices with optional normals and UV sets, one material per triangle.
+//
+// Positions are in object space (metres). Normals, when given, are per vertex (the Blender
+// exporter splits vertices where split normals or UVs differ, as glTF does). Material indices are
+// per triangle and index Scene::materials(). Mesh::validate() is the input boundary: it rejects
+// NaN/Inf and out-of-range indices with an InvalidArgument naming the array and element, and drops
+// degenerate triangles (repeated index or zero area), counting them in the report.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "util/math.h"
+
+namespace shgi {
+
+struct UvSet {
+    std::string name;          // Blender's UV map name, e.g. "UVMap", "LightmapUV"
+    std::vector<vec2> coords;  // one per vertex
+};
+
+struct Mesh {
+    std::string name;
+    std::vector<vec3> positions;
+    std::vector<uvec3> triangles;             // vertex indices, counter-clockwise = front
+    std::vector<vec3> normals;                // empty, or one per vertex
+    std::vector<UvSet> uv_sets;               // each with one coordinate per vertex
+    std::vector<uint32_t> material_indices;   // empty (all use material 0), or one per triangle
+};
+
+struct MeshReport {
+    uint64_t dropped_degenerate = 0;  // triangles removed for repeated indices or zero area
+    uint64_t fixed_normals = 0;       // zero-length normals replaced by the face normal
+};
+
+// Checks and cleans a mesh in place; `material_count` bounds the material indices.
+// Throws InvalidArgument naming the mesh, the array and the first bad element.
+MeshReport validate_mesh(Mesh& mesh, uint32_t material_count);
+
+// Area of triangle `i` in object space.
+float triangle_area(const Mesh& mesh, uint32_t triangle);
+
+}  // namespace shgi

@@ -1,0 +1,40 @@
+// Rays and hits: what goes into and comes out of the Embree queries (scene/scene.h).
+//
+// A ray is origin + t * direction for t in [tmin, tmax]; direction need not be unit length
+// (t is then in units of |direction|). Scene validates every ray before it reaches Embree:
+// Debian's Embree aborts the process on a non-finite ray.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+
+#include "util/math.h"
+
+namespace shgi {
+
+inline constexpr uint32_t kInvalidId = 0xFFFFFFFFu;
+inline constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
+struct Ray {
+    vec3 origin{0.0f};
+    vec3 direction{0.0f, 0.0f, 1.0f};
+    float tmin = 0.0f;
+    float tmax = kInfinity;
+};
+
+// True if the ray may be traced: finite origin and direction, non-zero direction,
+// 0 <= tmin <= tmax (tmax may be +inf), tmin finite.
+bool is_valid_ray(const Ray& ray);
+
+struct Hit {
+    float t = kInfinity;
+    uint32_t instance_id = kInvalidId;  // index into Scene::instances()
+    uint32_t triangle_id = kInvalidId;  // triangle index within the instance's mesh (after
+                                        // degenerate triangles were dropped)
+    vec2 barycentrics{0.0f};            // (b1, b2): p = (1-b1-b2) p0 + b1 p1 + b2 p2
+    vec3 geometric_normal{0.0f};        // world space, unnormalised, facing as wound (CCW)
+
+    bool valid() const { return instance_id != kInvalidId; }
+};
+
+}  // namespace shgi

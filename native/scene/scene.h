@@ -1,0 +1,154 @@
+// Scene: meshes, instances, materials, textures, lights, world and camera, plus the Embree BVH
+// that answers ray queries.
+//
+// Building: add_* validates each item at this boundary (NaN/Inf, ranges, index bounds; degenerate
+// triangles are dropped and counted) and throws InvalidArgument naming the item and field.
+// commit() checks cross references (instance -> mesh, triangle -> material, material -> texture),
+// gathers emissive triangles, and builds the BVH: one Embree geometry per mesh, instanced once
+// per Instance, so a mesh used a thousand times is stored once. Any edit un-commits the scene;
+// set_instance_transform() keeps the per-mesh BVHs and re-commits only the top level.
+//
+// Queries: intersect/occluded for single rays and for batches (Embree ray streams), callable
+// from many threads at once on a committed scene. Every ray is validated first; an invalid ray
+// throws InvalidArgument (Debian's Embree aborts the process on a non-finite ray).
+//
+// Memory: commit() enforces CommitSettings::memory_budget_bytes through Embree's memory monitor
+// and fails with OutOfMemory and a message giving the sizes, instead of the process being killed.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "scene/camera.h"
+#include "scene/light.h"
+#include "scene/material.h"
+#include "scene/mesh.h"
+#include "scene/ray.h"
+#include "util/math.h"
+#include "util/progress.h"
+
+namespace shgi {
+
+struct Instance {
+    std::string name;
+    uint32_t mesh_id = 0;
+    mat4 world_from_object{1.0f};
+};
+
+struct Bounds3 {
+    vec3 lower{kInfinity};
+    vec3 upper{-kInfinity};
+
+    bool empty() const { return lower.x > upper.x || lower.y > upper.y || lower.z > upper.z; }
+    void extend(const vec3& p) {
+        lower = glm::min(lower, p);
+        upper = glm::max(upper, p);
+    }
+    vec3 extent() const { return upper - lower; }
+};
+
+// A triangle whose material emits: the "emissive triangles" light type.
+struct EmissiveTriangle {
+    uint32_t instance_id;
+    uint32_t triangle_id;
+    vec3 p0, p1, p2;   // world space
+    float area;        // m^2
+    vec3 radiance;     // W m^-2 sr^-1 (emission colour x strength)
+};
+
+// Where a ray hit, with everything shading needs. Normals are unit length, world space;
+// `shading_normal` is interpolated from vertex normals (or equals the geometric one).
+struct SurfacePoint {
+    vec3 position{0.0f};
+    vec3 geometric_normal{0.0f, 0.0f, 1.0f};
+    vec3 shading_normal{0.0f, 0.0f, 1.0f};
+    vec2 uv{0.0f};             // first UV set, (0,0) when the mesh has none
+    uint32_t material_id = 0;
+    uint32_t instance_id = kInvalidId;
+    uint32_t triangle_id = kInvalidId;
+};
+
+struct CommitSettings {
+    // Upper bound on the memory Embree may allocate for the BVH (bytes); 0 = 75% of physical RAM.
+    uint64_t memory_budget_bytes = 0;
+};
+
+struct SceneStats {
+    uint64_t meshes = 0, instances = 0, triangles = 0, instanced_triangles = 0;
+    uint64_t dropped_degenerate = 0, emissive_triangles = 0, lights = 0;
+    uint64_t bvh_bytes = 0;  // peak Embree allocation during the last commit
+};
+
+class EmbreeScene;  // scene/embree_scene.h: the only place that sees Embree
+
+class Scene {
+  public:
+    Scene();
+    ~Scene();
+    Scene(Scene&&) noexcept;
+    Scene& operator=(Scene&&) noexcept;
+    Scene(const Scene&) = delete;
+    Scene& operator=(const Scene&) = delete;
+
+    // --- building (each returns the new item's id) ---
+    uint32_t add_mesh(Mesh mesh);
+    uint32_t add_instance(uint32_t mesh_id, const mat4& world_from_object, std::string name = "");
+    uint32_t add_material(Material material);
+    uint32_t add_texture(Texture texture);
+    uint32_t add_light(Light light);
+    void set_world(const World& world);
+    void set_camera(const Camera& camera);
+    void set_instance_transform(uint32_t instance_id, const mat4& world_from_object);
+
+    const std::vector<Mesh>& meshes() const { return meshes_; }
+    const std::vector<MeshReport>& mesh_reports() const { return mesh_reports_; }
+    const std::vector<Instance>& instances() const { return instances_; }
+    const std::vector<Material>& materials() const { return materials_; }
+    const std::vector<Texture>& textures() const { return textures_; }
+    const std::vector<Light>& lights() const { return lights_; }
+    const World& world() const { return world_; }
+    bool has_camera() const { return has_camera_; }
+    const Camera& camera() const;  // throws InvalidArgument when no camera was set
+
+    // --- BVH ---
+    void commit(const CommitSettings& settings = {}, Progress* progress = nullptr);
+    bool committed() const { return committed_; }
+    // True when the scene has no triangles (after dropping degenerate ones).
+    bool empty() const;
+    // World-space bounds of all instances; throws InvalidArgument for an empty scene.
+    Bounds3 bounds() const;
+    SceneStats stats() const;
+    const std::vector<EmissiveTriangle>& emissive_triangles() const { return emissive_; }
+
+    // --- queries (scene must be committed: otherwise InvalidArgument "call commit() first") ---
+    Hit intersect(const Ray& ray) const;
+    bool occluded(const Ray& ray) const;
+    // Batches: hits/occluded must have rays.size() elements. Work is split into chunks that
+    // poll `progress`.
+    void intersect(const std::vector<Ray>& rays, std::vector<Hit>& hits,
+                   Progress* progress = nullptr) const;
+    void occluded(const std::vector<Ray>& rays, std::vector<uint8_t>& occluded,
+                  Progress* progress = nullptr) const;
+    SurfacePoint surface_point(const Ray& ray, const Hit& hit) const;
+
+  private:
+    void invalidate();
+
+    std::vector<Mesh> meshes_;
+    std::vector<MeshReport> mesh_reports_;
+    std::vector<Instance> instances_;
+    std::vector<Material> materials_;
+    std::vector<Texture> textures_;
+    std::vector<Light> lights_;
+    World world_;
+    Camera camera_;
+    bool has_camera_ = false;
+    bool committed_ = false;
+    bool geometry_dirty_ = true;  // meshes changed: per-mesh BVHs must be rebuilt
+    std::vector<EmissiveTriangle> emissive_;
+    std::unique_ptr<EmbreeScene> embree_;
+};
+
+}  // namespace shgi

@@ -1,0 +1,72 @@
+#include "util/progress.h"
+
+#include <algorithm>
+
+#include "util/error.h"
+#include "util/log.h"
+
+namespace shgi {
+
+Progress::Progress(Callback callback, double min_interval_seconds)
+    : callback_(std::move(callback)),
+      min_interval_(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+          std::chrono::duration<double>(min_interval_seconds))) {}
+
+std::string Progress::stage() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return stage_;
+}
+
+void Progress::throw_if_cancelled() const {
+    if (cancelled()) throw Cancelled();
+}
+
+void Progress::begin_stage(const std::string& name, float lo, float hi) {
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stage_ = name;
+        stage_lo_ = std::clamp(lo, 0.0f, 1.0f);
+        stage_hi_ = std::clamp(hi, stage_lo_, 1.0f);
+    }
+    fraction_.store(stage_lo_, std::memory_order_relaxed);
+    notify(true);
+}
+
+void Progress::report(uint64_t done, uint64_t total) {
+    const float local = total > 0 ? static_cast<float>(static_cast<double>(done) / total) : 1.0f;
+    float lo, hi;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        lo = stage_lo_;
+        hi = stage_hi_;
+    }
+    fraction_.store(lo + std::clamp(local, 0.0f, 1.0f) * (hi - lo), std::memory_order_relaxed);
+    notify(done >= total);
+}
+
+void Progress::set_fraction(float fraction) {
+    fraction_.store(std::clamp(fraction, 0.0f, 1.0f), std::memory_order_relaxed);
+    notify(fraction >= 1.0f);
+}
+
+void Progress::notify(bool force) {
+    if (!callback_) return;
+    std::unique_lock<std::mutex> lock(mutex_);
+    const auto now = std::chrono::steady_clock::now();
+    if (!force && now - last_notify_ < min_interval_) return;
+    last_notify_ = now;
+    const std::string stage = stage_;
+    // The callback runs under the mutex so that two workers never call it at once.
+    try {
+        callback_(fraction(), stage);
+    } catch (const std::exception& error) {
+        // A failing callback (e.g. a Python exception) cancels the work instead of unwinding
+        // through a worker thread.
+        log_warning("progress callback failed (", error.what(), "); cancelling");
+        cancel();
+    } catch (...) {
+        cancel();
+    }
+}
+
+}  // namespace shgi

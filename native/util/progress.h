@@ -1,0 +1,65 @@
+// Progress of a long operation: fraction done, stage name, cancel flag, optional callback.
+//
+// DESIGN.md, "Progress and cancel": every long call takes a Progress and polls it between
+// chunks of work; once cancel() is called the work stops within a chunk and the call throws
+// Cancelled (< 0.2 s for the chunk sizes SHGI uses). All members are thread-safe: workers report,
+// the caller (or a UI thread) reads and cancels.
+//
+// Multi-stage work maps each stage onto a sub-range of [0, 1] with begin_stage(name, lo, hi);
+// report(done, total) inside the stage then moves the overall fraction from lo to hi.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <mutex>
+#include <string>
+
+namespace shgi {
+
+class Progress {
+  public:
+    // Called with (overall fraction in [0,1], stage name). It may run on any thread, but never
+    // on two at once, and at most every `min_interval` (plus once at each stage start and at 1).
+    using Callback = std::function<void(float fraction, const std::string& stage)>;
+
+    Progress() = default;
+    explicit Progress(Callback callback, double min_interval_seconds = 0.05);
+    Progress(const Progress&) = delete;
+    Progress& operator=(const Progress&) = delete;
+
+    // --- caller side ---
+    void cancel() { cancelled_.store(true, std::memory_order_relaxed); }
+    bool cancelled() const { return cancelled_.load(std::memory_order_relaxed); }
+    float fraction() const { return fraction_.load(std::memory_order_relaxed); }
+    std::string stage() const;
+
+    // --- worker side ---
+    // Throws Cancelled if cancel() was called.
+    void throw_if_cancelled() const;
+    void begin_stage(const std::string& name, float lo = 0.0f, float hi = 1.0f);
+    // `done` of `total` units of the current stage are finished.
+    void report(uint64_t done, uint64_t total);
+    // Sets the overall fraction directly.
+    void set_fraction(float fraction);
+
+  private:
+    void notify(bool force);
+
+    std::atomic<bool> cancelled_{false};
+    std::atomic<float> fraction_{0.0f};
+    float stage_lo_ = 0.0f, stage_hi_ = 1.0f;
+    mutable std::mutex mutex_;  // guards stage_ and the callback bookkeeping
+    std::string stage_;
+    Callback callback_;
+    std::chrono::steady_clock::duration min_interval_{};
+    std::chrono::steady_clock::time_point last_notify_{};
+};
+
+// Polls an optional Progress: the idiom for code that takes `Progress* progress = nullptr`.
+inline void throw_if_cancelled(const Progress* progress) {
+    if (progress) progress->throw_if_cancelled();
+}
+
+}  // namespace shgi

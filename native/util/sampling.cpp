@@ -1,0 +1,113 @@
+#include "util/sampling.h"
+
+#include <algorithm>
+
+#include "util/error.h"
+
+namespace shgi {
+
+vec3 sample_uniform_sphere(const vec2& u) {
+    const float z = 1.0f - 2.0f * u.x;
+    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+    return spherical_direction(r, z, kTwoPi * u.y);
+}
+float sample_uniform_sphere_pdf() { return kInvFourPi; }
+
+vec3 sample_uniform_hemisphere(const vec2& u) {
+    const float z = u.x;
+    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+    return spherical_direction(r, z, kTwoPi * u.y);
+}
+float sample_uniform_hemisphere_pdf() { return kInvTwoPi; }
+
+vec3 sample_cosine_hemisphere(const vec2& u) {
+    const vec2 d = sample_uniform_disk(u);
+    const float z = std::sqrt(std::max(0.0f, 1.0f - d.x * d.x - d.y * d.y));
+    return vec3(d.x, d.y, z);
+}
+float sample_cosine_hemisphere_pdf(float cos_theta) { return std::max(cos_theta, 0.0f) * kInvPi; }
+
+vec3 sample_uniform_cone(const vec2& u, float cos_theta_max) {
+    const float cos_theta = (1.0f - u.x) + u.x * cos_theta_max;
+    const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - cos_theta * cos_theta));
+    return spherical_direction(sin_theta, cos_theta, kTwoPi * u.y);
+}
+float sample_uniform_cone_pdf(float cos_theta_max) {
+    return 1.0f / (kTwoPi * (1.0f - cos_theta_max));
+}
+
+vec3 sample_power_cosine(const vec2& u, float exponent) {
+    // Inverting the cdf of cos^n over the hemisphere: cos(theta) = u^(1/(n+1)).
+    const float cos_theta = std::pow(u.x, 1.0f / (exponent + 1.0f));
+    const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - cos_theta * cos_theta));
+    return spherical_direction(sin_theta, cos_theta, kTwoPi * u.y);
+}
+float sample_power_cosine_pdf(float exponent, float cos_theta) {
+    if (cos_theta <= 0.0f) return 0.0f;
+    return (exponent + 1.0f) * kInvTwoPi * std::pow(cos_theta, exponent);
+}
+
+vec2 sample_uniform_disk(const vec2& u) {
+    // Shirley & Chiu 1997: maps concentric squares to concentric circles.
+    const vec2 offset = 2.0f * u - vec2(1.0f);
+    if (offset.x == 0.0f && offset.y == 0.0f) return vec2(0.0f);
+    float r, theta;
+    if (std::abs(offset.x) > std::abs(offset.y)) {
+        r = offset.x;
+        theta = 0.25f * kPi * (offset.y / offset.x);
+    } else {
+        r = offset.y;
+        theta = 0.5f * kPi - 0.25f * kPi * (offset.x / offset.y);
+    }
+    return r * vec2(std::cos(theta), std::sin(theta));
+}
+float sample_uniform_disk_pdf() { return kInvPi; }
+
+vec3 sample_uniform_triangle(const vec2& u) {
+    // Heitz 2019, "A Low-Distortion Map Between Triangle and Square".
+    float b0, b1;
+    if (u.x < u.y) {
+        b0 = u.x / 2.0f;
+        b1 = u.y - b0;
+    } else {
+        b1 = u.y / 2.0f;
+        b0 = u.x - b1;
+    }
+    return vec3(b0, b1, 1.0f - b0 - b1);
+}
+
+DiscreteDistribution::DiscreteDistribution(const std::vector<float>& weights) {
+    double sum = 0.0;
+    for (size_t i = 0; i < weights.size(); ++i) {
+        if (!std::isfinite(weights[i]) || weights[i] < 0.0f)
+            throw InvalidArgument(format_message("DiscreteDistribution: weight[", i, "] is ",
+                                                 weights[i], "; weights must be finite and >= 0"));
+        sum += weights[i];
+    }
+    total_ = sum;
+    pdf_.resize(weights.size(), 0.0f);
+    cdf_.resize(weights.size() + 1, 0.0);
+    if (sum <= 0.0) return;
+    for (size_t i = 0; i < weights.size(); ++i) {
+        pdf_[i] = static_cast<float>(weights[i] / sum);
+        cdf_[i + 1] = cdf_[i] + weights[i] / sum;
+    }
+    cdf_.back() = 1.0;
+}
+
+uint32_t DiscreteDistribution::sample(float u, float* u_remapped) const {
+    if (empty()) throw InvalidArgument("DiscreteDistribution::sample: all weights are zero");
+    // First bin whose upper cdf bound exceeds u; zero-weight bins have zero width and are skipped.
+    const auto it = std::upper_bound(cdf_.begin() + 1, cdf_.end(), static_cast<double>(u));
+    uint32_t index = static_cast<uint32_t>(std::min<ptrdiff_t>(it - cdf_.begin() - 1,
+                                                                 static_cast<ptrdiff_t>(size() - 1)));
+    while (pdf_[index] == 0.0f && index > 0) --index;  // u == 1 - eps landing past the last bin
+    if (u_remapped) {
+        const double width = cdf_[index + 1] - cdf_[index];
+        const double t = width > 0.0 ? (u - cdf_[index]) / width : 0.0;
+        *u_remapped = std::min(static_cast<float>(t), 0x1.fffffep-1f);
+    }
+    return index;
+}
+
+}  // namespace shgi
