@@ -1,0 +1,71 @@
+# SHGI: the two commands of the README ("make demo", "make test") and the install step.
+#
+# Every target first installs missing Debian packages (apt-get when root; otherwise it prints
+# the exact command and stops), configures CMake with Debian's /usr/bin/python3 (the Python that
+# Debian's Blender embeds) and builds with 2 jobs, warnings as errors.
+
+SHELL := /bin/bash
+BUILD_DIR ?= build
+JOBS ?= 2
+PYTHON := /usr/bin/python3
+CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release -DSHGI_WERROR=ON
+DEB_PACKAGES := build-essential cmake pkg-config libembree-dev libglm-dev libopenexr-dev \
+	libimath-dev pybind11-dev libtbb-dev libgtest-dev libbenchmark-dev libtinygltf-dev \
+	libtinyobjloader-dev libpcg-cpp-dev libpng-dev python3-dev python3-numpy python3-pytest \
+	blender xvfb xauth
+SITE_DIR := /usr/local/lib/python3.11/dist-packages
+
+.PHONY: all deps build install test test-cpp test-python demo bench clean
+
+all: build
+
+# Installs only what is missing, so repeated runs cost one dpkg query.
+deps:
+	@missing=$$(for p in $(DEB_PACKAGES); do \
+		dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || echo $$p; \
+	done); \
+	if [ -n "$$missing" ]; then \
+		echo "Installing missing Debian packages: $$missing"; \
+		if [ "$$(id -u)" = 0 ]; then \
+			(apt-get update -qq || true) && \
+			DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $$missing; \
+		else \
+			echo "Run as root first:  sudo apt-get install -y $$missing"; exit 1; \
+		fi; \
+	fi
+
+$(BUILD_DIR)/CMakeCache.txt: | deps
+	cmake -S . -B $(BUILD_DIR) -DPython_EXECUTABLE=$(PYTHON) $(CMAKE_FLAGS)
+
+build: deps $(BUILD_DIR)/CMakeCache.txt
+	cmake --build $(BUILD_DIR) -j $(JOBS)
+
+# Installs the shgi package for Debian's Python and Blender (SITE_DIR) and, when the python3 on
+# PATH is another interpreter (pyenv), into its site-packages too.
+install: build
+	rm -rf $(SITE_DIR)/shgi && mkdir -p $(SITE_DIR) && cp -r $(BUILD_DIR)/python/shgi $(SITE_DIR)/
+	@other=$$(command -v python3); \
+	if [ -n "$$other" ] && [ "$$(readlink -f $$other)" != "$$(readlink -f $(PYTHON))" ]; then \
+		site=$$($$other -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])'); \
+		echo "Installing shgi for $$other into $$site"; \
+		rm -rf $$site/shgi && cp -r $(BUILD_DIR)/python/shgi $$site/; \
+		$$other -c 'import numpy' 2>/dev/null || $$other -m pip install -q numpy; \
+	fi
+	cd / && $(PYTHON) -c 'import shgi; print("shgi", shgi.__version__, "installed in", shgi.__file__)'
+
+test-cpp: build
+	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+
+test-python: build
+	cd tests/python && PYTHONPATH=$(CURDIR)/$(BUILD_DIR)/python $(PYTHON) -m pytest -q -p no:cacheprovider .
+
+test: test-cpp test-python
+
+demo: install
+	$(PYTHON) examples/cornell_box.py --out $(CURDIR)/demo_output
+
+bench: build
+	$(BUILD_DIR)/bench/embree_ray_bench
+
+clean:
+	rm -rf $(BUILD_DIR)

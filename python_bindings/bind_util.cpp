@@ -1,0 +1,173 @@
+// Bindings for native/util: exception mapping, Progress, the log sink, thread count, version.
+//
+// Exceptions (DESIGN.md, "Errors"): InvalidArgument -> ValueError, IoError -> OSError,
+// OutOfMemory -> MemoryError, Cancelled -> shgi.Cancelled, Internal and other shgi::Error ->
+// RuntimeError.
+//
+// Callbacks into Python (progress, log sink) may run on TBB worker threads: they take the GIL
+// themselves. To keep that deadlock-free, every binding that runs parallel work releases the GIL,
+// and the Python-side accessors here release it before taking a native mutex.
+#include <memory>
+#include <mutex>
+
+#include <pybind11/functional.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <tbb/global_control.h>
+
+#include "util/error.h"
+#include "util/log.h"
+#include "util/parallel.h"
+#include "util/progress.h"
+#include "util/version.h"
+
+namespace py = pybind11;
+
+namespace shgi::python {
+namespace {
+
+// Holds a Python callable; copies and the final release take the GIL, so the object can live in
+// std::function values owned by native code.
+class PyCallable {
+  public:
+    explicit PyCallable(py::function function)
+        : function_(new py::function(std::move(function)), [](py::function* f) {
+              py::gil_scoped_acquire gil;
+              delete f;
+          }) {}
+
+    template <typename... Args>
+    void operator()(Args&&... args) const {
+        py::gil_scoped_acquire gil;
+        try {
+            (*function_)(std::forward<Args>(args)...);
+        } catch (py::error_already_set& error) {
+            // Report it the way Python reports errors in callbacks, then let native code react
+            // (Progress cancels; the log sink falls back to stderr).
+            const std::string message = error.what();
+            error.discard_as_unraisable("shgi callback");
+            throw std::runtime_error(message);
+        }
+    }
+
+  private:
+    std::shared_ptr<py::function> function_;
+};
+
+std::unique_ptr<tbb::global_control>& thread_limit() {
+    static std::unique_ptr<tbb::global_control> limit;
+    return limit;
+}
+
+void register_exceptions(py::module_& m) {
+    static py::exception<Cancelled> cancelled(m, "Cancelled", PyExc_Exception);
+    cancelled.doc() = "Raised when a long operation stops because Progress.cancel() was called.";
+    py::register_exception_translator([](std::exception_ptr pointer) {
+        if (!pointer) return;
+        try {
+            std::rethrow_exception(pointer);
+        } catch (const Cancelled& error) {
+            PyErr_SetString(cancelled.ptr(), error.what());
+        } catch (const InvalidArgument& error) {
+            PyErr_SetString(PyExc_ValueError, error.what());
+        } catch (const IoError& error) {
+            PyErr_SetString(PyExc_OSError, error.what());
+        } catch (const OutOfMemory& error) {
+            PyErr_SetString(PyExc_MemoryError, error.what());
+        } catch (const Error& error) {
+            PyErr_SetString(PyExc_RuntimeError, error.what());
+        }
+    });
+}
+
+void bind_progress(py::module_& m) {
+    py::class_<Progress>(m, "Progress", R"doc(
+Progress and cancellation of a long operation.
+
+Pass one to any long call (``progress=``). ``cancel()`` from another thread makes the call stop
+within one chunk of work and raise ``shgi.Cancelled``. The optional ``callback(fraction, stage)``
+is called at most every ``min_interval`` seconds, possibly from a worker thread.)doc")
+        .def(py::init([](std::optional<py::function> callback, double min_interval) {
+                 if (!callback) return std::make_unique<Progress>();
+                 return std::make_unique<Progress>(
+                     Progress::Callback(PyCallable(std::move(*callback))), min_interval);
+             }),
+             py::arg("callback") = py::none(), py::arg("min_interval") = 0.05,
+             "Creates a Progress; callback(fraction: float, stage: str) is optional.")
+        .def("cancel", &Progress::cancel, "Asks the operation to stop as soon as possible.")
+        .def_property_readonly("cancelled", &Progress::cancelled,
+                               "True once cancel() was called.")
+        .def_property_readonly("fraction", &Progress::fraction,
+                               "Fraction of the work done, in [0, 1].")
+        .def_property_readonly(
+            "stage",
+            [](const Progress& progress) {
+                py::gil_scoped_release release;  // stage() takes the mutex a callback may hold
+                return progress.stage();
+            },
+            "Name of the current stage.");
+}
+
+void bind_logging(py::module_& m) {
+    py::enum_<LogLevel>(m, "LogLevel", "Severity of a log message.")
+        .value("DEBUG", LogLevel::Debug)
+        .value("INFO", LogLevel::Info)
+        .value("WARNING", LogLevel::Warning)
+        .value("ERROR", LogLevel::Error);
+    m.def(
+        "set_log_sink",
+        [](std::optional<py::function> sink) {
+            LogSink native_sink;
+            if (sink) {
+                PyCallable callable(std::move(*sink));
+                native_sink = [callable](LogLevel level, const std::string& message) {
+                    callable(level, message);
+                };
+            }
+            LogSink previous;
+            {
+                py::gil_scoped_release release;  // a worker may hold the log mutex
+                previous = set_log_sink(std::move(native_sink));
+            }
+        },
+        py::arg("sink"),
+        "Routes SHGI's log messages to sink(level: LogLevel, message: str); None restores "
+        "stderr. The shgi package installs a sink that forwards to logging.getLogger('shgi').");
+    m.def("set_log_level", &set_log_level, py::arg("level"),
+          "Drops messages below `level` before they reach the sink.");
+    m.def("log_level", &log_level, "The current minimum log level.");
+}
+
+}  // namespace
+
+void bind_util(py::module_& m) {
+    register_exceptions(m);
+    bind_progress(m);
+    bind_logging(m);
+    m.def("version", &version, "SHGI's version string.");
+    m.def(
+        "set_max_threads",
+        [](int threads) {
+            if (threads < 0)
+                throw py::value_error("threads: must be >= 0 (0 = all cores), got " +
+                                      std::to_string(threads));
+            thread_limit().reset();
+            if (threads > 0)
+                thread_limit() = std::make_unique<tbb::global_control>(
+                    tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+        },
+        py::arg("threads"),
+        "Limits SHGI's worker threads (0 = all cores). Results do not depend on it.");
+    m.def("max_threads", &max_threads, "The number of worker threads SHGI may use.");
+    // Drop Python objects held by native code before the interpreter finalises.
+    py::module_::import("atexit").attr("register")(py::cpp_function([]() {
+        LogSink previous;
+        {
+            py::gil_scoped_release release;
+            previous = set_log_sink(LogSink());
+        }
+        thread_limit().reset();
+    }));
+}
+
+}  // namespace shgi::python

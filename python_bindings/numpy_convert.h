@@ -1,0 +1,48 @@
+// Checked conversions between numpy arrays and SHGI types, shared by every bind_<area>.cpp.
+//
+// The boundary rules (DESIGN.md, "Bindings"): explicit shapes and dtypes, checks done with the
+// GIL held, and a ValueError that names the argument, the expected shape/dtype and what came in.
+// Floating input accepts float32 or float64 (converted to float32); integer input accepts any
+// integer dtype whose values fit (negative or too-large indices are errors, not wrap-arounds).
+// Non-finite floats are rejected unless allow_non_finite is set.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include "util/math.h"
+
+namespace shgi::python {
+
+namespace py = pybind11;
+
+// An (N, columns) float array, or (N,) when columns == 0. Returns the data row-major as float32.
+// Integer dtypes are rejected unless accept_integers (meant for small literals like colours).
+std::vector<float> to_float_rows(const py::handle& obj, const char* arg_name, int columns,
+                                 bool allow_non_finite = false, bool accept_integers = false);
+
+std::vector<vec2> to_vec2_array(const py::handle& obj, const char* arg_name);
+std::vector<vec3> to_vec3_array(const py::handle& obj, const char* arg_name);
+std::vector<uvec3> to_uvec3_array(const py::handle& obj, const char* arg_name);
+std::vector<uint32_t> to_uint_array(const py::handle& obj, const char* arg_name);
+
+// A length-3 sequence or array of finite floats (a colour or a point).
+vec3 to_vec3(const py::handle& obj, const char* arg_name);
+// A 4x4 float matrix given row-major as numpy/Blender write it (m[row][col]); returned as GLM's
+// column-major mat4 so that world_from_object * p works as written.
+mat4 to_mat4(const py::handle& obj, const char* arg_name);
+py::array_t<float> from_mat4(const mat4& m);
+
+// (N, k) float32 arrays out.
+py::array_t<float> to_numpy(const std::vector<vec2>& values);
+py::array_t<float> to_numpy(const std::vector<vec3>& values);
+py::array_t<uint32_t> to_numpy(const std::vector<uvec3>& values);
+
+// Raises ValueError "<arg_name>: <message>".
+[[noreturn]] void throw_value_error(const char* arg_name, const std::string& message);
+
+}  // namespace shgi::python
