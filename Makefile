@@ -33,6 +33,11 @@ deps:
 			echo "Run as root first:  sudo apt-get install -y $$missing"; exit 1; \
 		fi; \
 	fi
+	@# pybind11 >= 2.12 (numpy 2 support) as a pip build tool, when a pip-capable python3 is on PATH.
+	@if command -v python3 >/dev/null && python3 -m pip --version >/dev/null 2>&1 && \
+	   ! python3 -c 'import pybind11, sys; sys.exit(tuple(map(int, pybind11.__version__.split(".")[:2])) < (2, 12))' 2>/dev/null; then \
+		python3 -m pip install -q 'pybind11>=2.12'; \
+	fi
 
 $(BUILD_DIR)/CMakeCache.txt: | deps
 	cmake -S . -B $(BUILD_DIR) -DPython_EXECUTABLE=$(PYTHON) $(CMAKE_FLAGS)
