@@ -1,0 +1,285 @@
+#include "io/exr_image.h"
+
+#include <algorithm>
+#include <array>
+#include <tuple>
+#include <utility>
+
+#include <Iex.h>
+#include <ImathBox.h>
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfStringVectorAttribute.h>
+#include <half.h>
+
+#include "util/error.h"
+
+namespace shgi {
+
+namespace {
+
+// Header attribute holding the channel names in the order they were added to the Image.
+constexpr const char* kChannelOrderAttribute = "shgiChannelOrder";
+
+struct CompressionName {
+    Imf::Compression imf;
+    const char* name;
+};
+
+// Every OpenEXR 3.1 codec by name; the first five are the ones SHGI writes (ExrCompression).
+constexpr std::array<CompressionName, 10> kCompressionNames = {{
+    {Imf::NO_COMPRESSION, "none"},
+    {Imf::RLE_COMPRESSION, "rle"},
+    {Imf::ZIPS_COMPRESSION, "zips"},
+    {Imf::ZIP_COMPRESSION, "zip"},
+    {Imf::PIZ_COMPRESSION, "piz"},
+    {Imf::PXR24_COMPRESSION, "pxr24"},
+    {Imf::B44_COMPRESSION, "b44"},
+    {Imf::B44A_COMPRESSION, "b44a"},
+    {Imf::DWAA_COMPRESSION, "dwaa"},
+    {Imf::DWAB_COMPRESSION, "dwab"},
+}};
+
+Imf::Compression to_imf(ExrCompression compression) {
+    switch (compression) {
+        case ExrCompression::None: return Imf::NO_COMPRESSION;
+        case ExrCompression::Rle: return Imf::RLE_COMPRESSION;
+        case ExrCompression::Zips: return Imf::ZIPS_COMPRESSION;
+        case ExrCompression::Zip: return Imf::ZIP_COMPRESSION;
+        case ExrCompression::Piz: return Imf::PIZ_COMPRESSION;
+    }
+    throw Internal(format_message("unknown ExrCompression ", int(compression)));
+}
+
+const char* imf_compression_name(Imf::Compression compression) {
+    for (const CompressionName& entry : kCompressionNames) {
+        if (entry.imf == compression) return entry.name;
+    }
+    return "unknown";
+}
+
+// Position of a channel suffix in Blender's order: R G B A, X Y Z W, U V, then the rest.
+int suffix_rank(const std::string& suffix) {
+    static const std::array<const char*, 10> kOrder = {"R", "G", "B", "A", "X",
+                                                       "Y", "Z", "W", "U", "V"};
+    for (size_t i = 0; i < kOrder.size(); ++i) {
+        if (suffix == kOrder[i]) return int(i);
+    }
+    return int(kOrder.size());
+}
+
+// Channels of a file from another writer: layers in order of first appearance in the (sorted)
+// channel list, each layer's channels in Blender's suffix order, then by name.
+void sort_channels_blender_style(std::vector<ExrChannelInfo>& channels) {
+    std::vector<std::string> layers;
+    for (const ExrChannelInfo& channel : channels) {
+        const std::string layer = channel_layer(channel.name);
+        if (std::find(layers.begin(), layers.end(), layer) == layers.end()) layers.push_back(layer);
+    }
+    auto key = [&layers](const ExrChannelInfo& channel) {
+        const std::string suffix = channel_suffix(channel.name);
+        const auto layer = std::find(layers.begin(), layers.end(), channel_layer(channel.name));
+        return std::make_tuple(layer - layers.begin(), suffix_rank(suffix), suffix);
+    };
+    std::stable_sort(channels.begin(), channels.end(),
+                     [&key](const ExrChannelInfo& a, const ExrChannelInfo& b) {
+                         return key(a) < key(b);
+                     });
+}
+
+// Puts `channels` in the order SHGI wrote them when the header records it and names exactly
+// these channels; otherwise in Blender's order.
+void order_channels(const Imf::Header& header, std::vector<ExrChannelInfo>& channels) {
+    const auto* order = header.findTypedAttribute<Imf::StringVectorAttribute>(
+        kChannelOrderAttribute);
+    if (order != nullptr && order->value().size() == channels.size()) {
+        std::vector<ExrChannelInfo> ordered;
+        for (const std::string& name : order->value()) {
+            const auto found = std::find_if(channels.begin(), channels.end(),
+                                            [&name](const ExrChannelInfo& c) {
+                                                return c.name == name;
+                                            });
+            if (found == channels.end()) break;
+            ordered.push_back(*found);
+        }
+        if (ordered.size() == channels.size()) {
+            channels = std::move(ordered);
+            return;
+        }
+    }
+    sort_channels_blender_style(channels);
+}
+
+// The channels of a header that SHGI can read, in read order.
+std::vector<ExrChannelInfo> readable_channels(const std::string& path, const Imf::Header& header) {
+    std::vector<ExrChannelInfo> channels;
+    for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
+        const Imf::Channel& channel = it.channel();
+        if (channel.type != Imf::HALF && channel.type != Imf::FLOAT) {
+            throw IoError(format_message("cannot read EXR \"", path, "\": channel \"", it.name(),
+                                         "\" holds unsigned integers; SHGI reads only half and "
+                                         "float channels"));
+        }
+        if (channel.xSampling != 1 || channel.ySampling != 1) {
+            throw IoError(format_message("cannot read EXR \"", path, "\": channel \"", it.name(),
+                                         "\" is subsampled (", channel.xSampling, " x ",
+                                         channel.ySampling, "); SHGI reads only full-resolution "
+                                         "channels"));
+        }
+        channels.push_back(ExrChannelInfo{
+            it.name(), channel.type == Imf::HALF ? PixelType::Half : PixelType::Float});
+    }
+    order_channels(header, channels);
+    return channels;
+}
+
+// Width and height of the data window, checked to be a valid, non-empty box.
+std::pair<int64_t, int64_t> data_window_size(const std::string& path, const Imf::Header& header) {
+    const Imath::Box2i& window = header.dataWindow();
+    const int64_t width = int64_t(window.max.x) - int64_t(window.min.x) + 1;
+    const int64_t height = int64_t(window.max.y) - int64_t(window.min.y) + 1;
+    if (width < 1 || height < 1 || width > kMaxImageDimension || height > kMaxImageDimension) {
+        throw IoError(format_message("cannot read EXR \"", path, "\": its data window is ", width,
+                                     " x ", height, " pixels; SHGI reads sizes from 1 to ",
+                                     kMaxImageDimension));
+    }
+    return {width, height};
+}
+
+void check_read_budget(const std::string& path, int64_t width, int64_t height,
+                       size_t channel_count, int64_t max_pixels) {
+    const int64_t pixels = width * height;
+    if (pixels > max_pixels) {
+        throw IoError(format_message("cannot read EXR \"", path, "\": it is ", width, " x ", height,
+                                     " = ", pixels, " pixels, more than max_pixels = ", max_pixels,
+                                     "; raise max_pixels if the file is trusted"));
+    }
+    const int64_t values = pixels * int64_t(channel_count);
+    if (values > kMaxExrValuesPerPixel * max_pixels) {
+        throw IoError(format_message("cannot read EXR \"", path, "\": its ", channel_count,
+                                     " channels of ", pixels, " pixels hold ", values,
+                                     " values, more than ", kMaxExrValuesPerPixel,
+                                     " * max_pixels = ", kMaxExrValuesPerPixel * max_pixels,
+                                     "; raise max_pixels if the file is trusted"));
+    }
+}
+
+void check_writable(const Image& image) {
+    if (image.channels().empty()) {
+        throw InvalidArgument("cannot write an EXR image without channels; add a layer first");
+    }
+}
+
+// Writes `image` to `file_path` (the temporary file); `path` is the name the caller asked for.
+void write_exr_file(const std::string& file_path, const Image& image,
+                    const ExrWriteSettings& settings) {
+    Imf::Header header(image.width(), image.height());
+    header.compression() = to_imf(settings.compression);
+    header.lineOrder() = Imf::INCREASING_Y;
+    Imf::StringVector order;
+    Imf::FrameBuffer frame_buffer;
+    // Half channels need converted copies that live until writePixels returns.
+    std::vector<std::vector<half>> half_copies;
+    half_copies.reserve(image.channels().size());
+    const size_t width = size_t(image.width());
+    for (const ImageChannel& channel : image.channels()) {
+        order.push_back(channel.name);
+        if (channel.pixel_type == PixelType::Float) {
+            header.channels().insert(channel.name, Imf::Channel(Imf::FLOAT));
+            // OpenEXR's Slice takes char* for reading and writing alike; it only reads here.
+            char* base = reinterpret_cast<char*>(const_cast<float*>(channel.data.data()));
+            frame_buffer.insert(channel.name, Imf::Slice(Imf::FLOAT, base, sizeof(float),
+                                                         sizeof(float) * width));
+        } else {
+            header.channels().insert(channel.name, Imf::Channel(Imf::HALF));
+            half_copies.emplace_back(channel.data.begin(), channel.data.end());
+            char* base = reinterpret_cast<char*>(half_copies.back().data());
+            frame_buffer.insert(channel.name,
+                                Imf::Slice(Imf::HALF, base, sizeof(half), sizeof(half) * width));
+        }
+    }
+    header.insert(kChannelOrderAttribute, Imf::StringVectorAttribute(order));
+    Imf::OutputFile file(file_path.c_str(), header);
+    file.setFrameBuffer(frame_buffer);
+    file.writePixels(image.height());
+}
+
+}  // namespace
+
+const char* exr_compression_name(ExrCompression compression) {
+    return imf_compression_name(to_imf(compression));
+}
+
+ExrCompression exr_compression_from_name(const std::string& name) {
+    for (ExrCompression compression : {ExrCompression::None, ExrCompression::Rle,
+                                       ExrCompression::Zips, ExrCompression::Zip,
+                                       ExrCompression::Piz}) {
+        if (name == exr_compression_name(compression)) return compression;
+    }
+    throw InvalidArgument(format_message("unknown EXR compression \"", name,
+                                         "\"; use one of none, rle, zips, zip, piz"));
+}
+
+void write_exr(const std::string& path, const Image& image, const ExrWriteSettings& settings) {
+    check_writable(image);
+    write_file_atomically(path, [&](const std::string& temp_path) {
+        try {
+            write_exr_file(temp_path, image, settings);
+        } catch (const Iex::BaseExc& error) {
+            throw IoError(format_message("cannot write EXR \"", path, "\": ", error.what()));
+        }
+    });
+}
+
+Image read_exr(const std::string& path, int64_t max_pixels) {
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imf::Header& header = file.header();
+        const auto [width, height] = data_window_size(path, header);
+        const std::vector<ExrChannelInfo> channels = readable_channels(path, header);
+        check_read_budget(path, width, height, channels.size(), max_pixels);
+
+        // OpenEXR converts half channels to the float slices while reading.
+        const Imath::Box2i& window = header.dataWindow();
+        std::vector<std::vector<float>> buffers(channels.size());
+        Imf::FrameBuffer frame_buffer;
+        for (size_t c = 0; c < channels.size(); ++c) {
+            buffers[c].resize(size_t(width * height));
+            frame_buffer.insert(channels[c].name,
+                                Imf::Slice::Make(Imf::FLOAT, buffers[c].data(), window));
+        }
+        file.setFrameBuffer(frame_buffer);
+        file.readPixels(window.min.y, window.max.y);
+
+        Image image(static_cast<int>(width), static_cast<int>(height));
+        for (size_t c = 0; c < channels.size(); ++c) {
+            image.add_channel(channels[c].name, channels[c].pixel_type, std::move(buffers[c]));
+        }
+        return image;
+    } catch (const Iex::BaseExc& error) {
+        throw IoError(format_message("cannot read EXR \"", path, "\": ", error.what()));
+    } catch (const InvalidArgument& error) {  // e.g. a channel name Image does not accept
+        throw IoError(format_message("cannot read EXR \"", path, "\": ", error.what()));
+    }
+}
+
+ExrInfo read_exr_info(const std::string& path) {
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imf::Header& header = file.header();
+        const auto [width, height] = data_window_size(path, header);
+        ExrInfo info;
+        info.width = int(width);
+        info.height = int(height);
+        info.compression = imf_compression_name(header.compression());
+        info.channels = readable_channels(path, header);
+        return info;
+    } catch (const Iex::BaseExc& error) {
+        throw IoError(format_message("cannot read EXR \"", path, "\": ", error.what()));
+    }
+}
+
+}  // namespace shgi

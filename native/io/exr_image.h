@@ -1,0 +1,76 @@
+// OpenEXR files: write an Image as a single-part scanline EXR and read one back (OpenEXR 3.1).
+//
+// Layout of the files written:
+// - data window = display window = (0, 0) .. (width - 1, height - 1), INCREASING_Y line order:
+//   the first row in the file is the top row, matching Image's top-row-first buffers.
+// - one channel per Image channel, with its name ("Combined.R", "Depth.Z") and pixel type. Float
+//   channels round-trip bit-exactly (NaN payloads included); Half channels are rounded to the
+//   nearest half (values beyond +-65504 become +-inf, as in every EXR writer).
+// - compression: lossless only. The default is ZIP (16-scanline zlib blocks, Blender's default
+//   EXR codec): it compresses the smooth, noise-free data SHGI writes (bakes, SH volumes) best
+//   and decodes fastest. PIZ (wavelet) is better for noisy renders; ZIPS, RLE and NONE exist.
+// - EXR sorts channels by name inside the file; the writer also stores the Image's channel order
+//   in a string-vector attribute "shgiChannelOrder" so read_exr returns channels in the order
+//   they were added. Files from other writers come back in layer order (as stored: sorted by
+//   name) with the channels of each layer in Blender's order R, G, B, A, then X, Y, Z, W, then
+//   U, V, then any other suffix by name.
+//
+// Reading accepts scanline or tiled single-part files (the first part of a multipart file) with
+// HALF or FLOAT channels at full resolution; UINT or subsampled channels, deep data, and
+// images larger than a caller-given pixel budget are rejected with an IoError naming the file.
+// Every OpenEXR exception becomes an shgi::IoError naming the path.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "io/image.h"
+
+namespace shgi {
+
+enum class ExrCompression { None, Rle, Zips, Zip, Piz };
+
+// "none", "rle", "zips", "zip", "piz".
+const char* exr_compression_name(ExrCompression compression);
+// The inverse of exr_compression_name; throws InvalidArgument listing the valid names.
+ExrCompression exr_compression_from_name(const std::string& name);
+
+// Default read budget: 2^28 pixels (16384 x 16384), 1 GiB per float channel.
+inline constexpr int64_t kDefaultMaxExrPixels = int64_t(1) << 28;
+// read_exr also caps the total number of values at this many times max_pixels (e.g. four RGBA
+// layers at the full pixel budget), so that a small, malicious header with thousands of
+// channels cannot make the reader allocate terabytes.
+inline constexpr int64_t kMaxExrValuesPerPixel = 16;
+
+struct ExrWriteSettings {
+    ExrCompression compression = ExrCompression::Zip;
+};
+
+struct ExrChannelInfo {
+    std::string name;
+    PixelType pixel_type = PixelType::Float;
+};
+
+// What the header of an EXR file says, without reading its pixels.
+struct ExrInfo {
+    int width = 0;   // of the data window
+    int height = 0;
+    std::string compression;  // "zip", "piz", ... or a lossy codec of another writer ("dwaa")
+    std::vector<ExrChannelInfo> channels;  // in the order read_exr returns them
+};
+
+// Writes `image` to `path` atomically (a temporary file in the same folder, then a rename).
+// Throws InvalidArgument for an image without channels, IoError naming the path when the file
+// cannot be written.
+void write_exr(const std::string& path, const Image& image, const ExrWriteSettings& settings = {});
+
+// Reads every channel of `path`. Throws IoError naming the path for a missing, unreadable or
+// corrupt file, for unsupported channels, and when width * height exceeds max_pixels (raise it
+// only for trusted files) or the channels together exceed kMaxExrValuesPerPixel * max_pixels.
+Image read_exr(const std::string& path, int64_t max_pixels = kDefaultMaxExrPixels);
+
+// Reads only the header of `path` (same errors as read_exr, without the size checks).
+ExrInfo read_exr_info(const std::string& path);
+
+}  // namespace shgi

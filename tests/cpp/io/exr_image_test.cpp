@@ -1,0 +1,328 @@
+// Tests of io/image.h and io/exr_image.h: bit-exact float round trips, half precision, layer
+// names and order, size limits, errors that name the file, and atomic writes.
+#include "io/exr_image.h"
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "util/error.h"
+
+namespace shgi {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Half keeps 11 significant bits: round to nearest is within 2^-11 relative (normal range).
+constexpr float kHalfRelativeError = 1.0f / 2048.0f;
+
+// A fresh, empty folder per test, so that tests can list what a write left behind.
+fs::path test_folder() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    const fs::path folder = fs::path(SHGI_TEST_TMPDIR) / "exr" /
+                            (std::string(info->test_suite_name()) + "." + info->name());
+    fs::remove_all(folder);
+    fs::create_directories(folder);
+    return folder;
+}
+
+std::vector<std::string> folder_entries(const fs::path& folder) {
+    std::vector<std::string> names;
+    for (const auto& entry : fs::directory_iterator(folder)) {
+        names.push_back(entry.path().filename().string());
+    }
+    return names;
+}
+
+uint32_t float_bits(float value) {
+    uint32_t bits = 0;
+    std::memcpy(&bits, &value, sizeof(bits));
+    return bits;
+}
+
+float float_from_bits(uint32_t bits) {
+    float value = 0.0f;
+    std::memcpy(&value, &bits, sizeof(value));
+    return value;
+}
+
+// `count` finite floats from random bit patterns (every exponent, sign and mantissa), with the
+// awkward values up front: zeros, denormals, the extremes of the float range.
+std::vector<float> awkward_floats(size_t count, uint32_t seed) {
+    std::vector<float> values = {0.0f,
+                                 -0.0f,
+                                 std::numeric_limits<float>::denorm_min(),
+                                 -std::numeric_limits<float>::denorm_min(),
+                                 float_from_bits(0x007fffffu),  // largest denormal
+                                 std::numeric_limits<float>::min(),
+                                 std::numeric_limits<float>::max(),
+                                 -std::numeric_limits<float>::max(),
+                                 1.0e30f,
+                                 -3.4e37f,
+                                 1.0f,
+                                 0.1f};
+    std::mt19937 rng(seed);
+    while (values.size() < count) {
+        const float value = float_from_bits(uint32_t(rng()));
+        if (std::isfinite(value)) values.push_back(value);
+    }
+    values.resize(count);
+    return values;
+}
+
+void expect_bit_exact(const std::vector<float>& expected, const std::vector<float>& actual,
+                      const std::string& what) {
+    ASSERT_EQ(expected.size(), actual.size()) << what;
+    for (size_t i = 0; i < expected.size(); ++i) {
+        ASSERT_EQ(float_bits(expected[i]), float_bits(actual[i]))
+            << what << "[" << i << "]: wrote " << expected[i] << ", read " << actual[i];
+    }
+}
+
+std::vector<std::string> channel_names(const Image& image) {
+    std::vector<std::string> names;
+    for (const ImageChannel& channel : image.channels()) names.push_back(channel.name);
+    return names;
+}
+
+TEST(ExrImage, FloatRoundTripIsBitExactForEveryCompression) {
+    const fs::path folder = test_folder();
+    constexpr int kWidth = 37;  // odd sizes: no accidental alignment with 16-line ZIP blocks
+    constexpr int kHeight = 23;
+    const size_t pixels = size_t(kWidth) * kHeight;
+    Image image(kWidth, kHeight);
+    image.add_layer("Combined", {"R", "G", "B", "A"}, awkward_floats(pixels * 4, 1));
+    image.add_layer("Depth", {"Z"}, awkward_floats(pixels, 2));
+    for (ExrCompression compression : {ExrCompression::None, ExrCompression::Rle,
+                                       ExrCompression::Zips, ExrCompression::Zip,
+                                       ExrCompression::Piz}) {
+        const std::string name = exr_compression_name(compression);
+        const std::string path = (folder / (name + ".exr")).string();
+        write_exr(path, image, ExrWriteSettings{compression});
+        const Image read = read_exr(path);
+        ASSERT_EQ(read.width(), kWidth);
+        ASSERT_EQ(read.height(), kHeight);
+        ASSERT_EQ(channel_names(read), channel_names(image)) << name;
+        EXPECT_EQ(read_exr_info(path).compression, name);
+        for (size_t c = 0; c < image.channels().size(); ++c) {
+            EXPECT_EQ(read.channels()[c].pixel_type, PixelType::Float);
+            expect_bit_exact(image.channels()[c].data, read.channels()[c].data,
+                             name + " " + image.channels()[c].name);
+        }
+    }
+}
+
+TEST(ExrImage, RowsAreStoredTopRowFirst) {
+    const fs::path folder = test_folder();
+    // Pixel (x, y) holds 10 * y + x; the first value in the buffer is the top-left pixel.
+    Image image(3, 2);
+    image.add_channel("Gradient.Z", PixelType::Float, {0, 1, 2, 10, 11, 12});
+    const std::string path = (folder / "rows.exr").string();
+    write_exr(path, image);
+    const Image read = read_exr(path);
+    EXPECT_EQ(read.channels()[0].data, image.channels()[0].data);
+}
+
+TEST(ExrImage, HalfRoundTripIsWithinHalfPrecision) {
+    const fs::path folder = test_folder();
+    constexpr int kWidth = 16;
+    constexpr int kHeight = 9;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> log2_magnitude(-14.0f, 15.0f);  // half's normal range
+    std::vector<float> values(size_t(kWidth) * kHeight * 3);
+    for (float& value : values) value = std::exp2(log2_magnitude(rng)) * (rng() % 2 ? 1.0f : -1.0f);
+    // Values that half represents exactly come back exactly.
+    const std::vector<float> exact = {0.0f, 1.0f, 0.5f, -2.0f, 0.25f, 2048.0f, 65504.0f};
+    std::copy(exact.begin(), exact.end(), values.begin());
+
+    Image image(kWidth, kHeight);
+    image.add_layer("DiffInd", {"R", "G", "B"}, values, PixelType::Half);
+    const std::string path = (folder / "half.exr").string();
+    write_exr(path, image);
+    const Image read = read_exr(path);
+    for (const ImageChannel& channel : read.channels()) {
+        EXPECT_EQ(channel.pixel_type, PixelType::Half) << channel.name;
+    }
+    const std::vector<float> read_values = read.layer_pixels("DiffInd");
+    ASSERT_EQ(read_values.size(), values.size());
+    for (size_t i = 0; i < values.size(); ++i) {
+        EXPECT_LE(std::abs(read_values[i] - values[i]), kHalfRelativeError * std::abs(values[i]))
+            << "value " << i << ": wrote " << values[i] << ", read " << read_values[i];
+    }
+    for (size_t i = 0; i < exact.size(); ++i) EXPECT_EQ(read_values[i], exact[i]);
+}
+
+TEST(ExrImage, LayerNamesAndChannelOrderArePreserved) {
+    const fs::path folder = test_folder();
+    constexpr int kSize = 4;
+    const size_t pixels = kSize * kSize;
+    Image image(kSize, kSize);
+    // Deliberately not in EXR's alphabetical order.
+    image.add_layer("ViewLayer.Normal", {"X", "Y", "Z"}, std::vector<float>(pixels * 3, 0.5f));
+    image.add_layer("Combined", {"R", "G", "B", "A"}, std::vector<float>(pixels * 4, 1.0f));
+    image.add_layer("DiffInd", {"R", "G", "B"}, std::vector<float>(pixels * 3, 2.0f),
+                    PixelType::Half);
+    image.add_layer("Depth", {"Z"}, std::vector<float>(pixels, 3.0f));
+    const std::string path = (folder / "layers.exr").string();
+    write_exr(path, image, ExrWriteSettings{ExrCompression::Piz});
+
+    const Image read = read_exr(path);
+    EXPECT_EQ(channel_names(read), channel_names(image));
+    EXPECT_EQ(read.layer_names(),
+              (std::vector<std::string>{"ViewLayer.Normal", "Combined", "DiffInd", "Depth"}));
+    EXPECT_EQ(read.layer_suffixes("Combined"), (std::vector<std::string>{"R", "G", "B", "A"}));
+    EXPECT_EQ(read.layer_pixels("Depth"), std::vector<float>(pixels, 3.0f));
+
+    const ExrInfo info = read_exr_info(path);
+    EXPECT_EQ(info.width, kSize);
+    EXPECT_EQ(info.height, kSize);
+    EXPECT_EQ(info.compression, "piz");
+    ASSERT_EQ(info.channels.size(), image.channels().size());
+    for (size_t c = 0; c < info.channels.size(); ++c) {
+        EXPECT_EQ(info.channels[c].name, image.channels()[c].name);
+        EXPECT_EQ(info.channels[c].pixel_type, image.channels()[c].pixel_type);
+    }
+}
+
+TEST(ExrImage, LayerPixelsInvertsAddLayer) {
+    Image image(2, 1);
+    const std::vector<float> rgba = {1, 2, 3, 4, 5, 6, 7, 8};
+    image.add_layer("", {"R", "G", "B", "A"}, rgba);
+    EXPECT_EQ(channel_names(image), (std::vector<std::string>{"R", "G", "B", "A"}));
+    EXPECT_EQ(image.find_channel("G")->data, (std::vector<float>{2, 6}));
+    EXPECT_EQ(image.layer_pixels(""), rgba);
+    EXPECT_THROW(image.layer_pixels("Combined"), InvalidArgument);
+}
+
+TEST(ExrImage, ChannelNamesSplitAtTheLastDot) {
+    EXPECT_EQ(channel_layer("ViewLayer.Combined.R"), "ViewLayer.Combined");
+    EXPECT_EQ(channel_suffix("ViewLayer.Combined.R"), "R");
+    EXPECT_EQ(channel_layer("R"), "");
+    EXPECT_EQ(channel_suffix("R"), "R");
+    EXPECT_EQ(channel_name("", "Z"), "Z");
+    EXPECT_EQ(channel_name("Depth", "Z"), "Depth.Z");
+}
+
+// Runs `action`, expects an exception of type E whose message contains every part.
+template <typename E, typename Action>
+void expect_error(Action action, const std::vector<std::string>& parts) {
+    try {
+        action();
+        ADD_FAILURE() << "expected an exception mentioning " << parts.front();
+    } catch (const E& error) {
+        for (const std::string& part : parts) {
+            EXPECT_NE(std::string(error.what()).find(part), std::string::npos)
+                << "message \"" << error.what() << "\" does not mention \"" << part << "\"";
+        }
+    }
+}
+
+TEST(ExrImage, InvalidImagesAreRejectedWithTheReason) {
+    expect_error<InvalidArgument>([] { Image(0, 5); }, {"0 x 5"});
+    expect_error<InvalidArgument>([] { Image(5, -1); }, {"5 x -1"});
+    expect_error<InvalidArgument>([] { Image(kMaxImageDimension + 1, 1); }, {"out of range"});
+    expect_error<InvalidArgument>([] { Image(kMaxImageDimension, kMaxImageDimension); },
+                                  {"exceeds the limit"});
+    Image image(2, 2);
+    expect_error<InvalidArgument>([&] { image.add_channel("", PixelType::Float, {0, 0, 0, 0}); },
+                                  {"empty"});
+    expect_error<InvalidArgument>(
+        [&] { image.add_channel("Combined.", PixelType::Float, {0, 0, 0, 0}); }, {"Combined."});
+    expect_error<InvalidArgument>([&] { image.add_channel("Depth.Z", PixelType::Float, {0}); },
+                                  {"Depth.Z", "1 values", "4"});
+    image.add_channel("Depth.Z", PixelType::Float, {0, 0, 0, 0});
+    expect_error<InvalidArgument>(
+        [&] { image.add_channel("Depth.Z", PixelType::Half, {0, 0, 0, 0}); },
+        {"Depth.Z", "already present"});
+    expect_error<InvalidArgument>(
+        [&] { image.add_layer("Combined", {"R", "G"}, std::vector<float>(7)); },
+        {"Combined", "7 values", "8"});
+    expect_error<InvalidArgument>(
+        [&] { image.add_layer("Combined", {"R", "R"}, std::vector<float>(8)); },
+        {"Combined.R", "already present"});
+    EXPECT_EQ(image.channels().size(), 1u) << "a failed add_layer must leave the image unchanged";
+    expect_error<InvalidArgument>([] { write_exr("unused.exr", Image(1, 1)); },
+                                  {"without channels"});
+}
+
+Image small_image() {
+    Image image(8, 8);
+    image.add_layer("Combined", {"R", "G", "B", "A"}, std::vector<float>(8 * 8 * 4, 0.25f));
+    return image;
+}
+
+TEST(ExrImage, MissingAndCorruptFilesRaiseIoErrorNamingThePath) {
+    const fs::path folder = test_folder();
+    const std::string missing = (folder / "missing.exr").string();
+    expect_error<IoError>([&] { read_exr(missing); }, {missing});
+    expect_error<IoError>([&] { read_exr_info(missing); }, {missing});
+
+    const std::string garbage = (folder / "garbage.exr").string();
+    std::ofstream(garbage, std::ios::binary) << "this is not an OpenEXR file at all";
+    expect_error<IoError>([&] { read_exr(garbage); }, {garbage});
+
+    // A valid file cut in half: the header parses, the pixel data is missing.
+    const std::string truncated = (folder / "truncated.exr").string();
+    write_exr(truncated, small_image(), ExrWriteSettings{ExrCompression::None});
+    fs::resize_file(truncated, fs::file_size(truncated) / 2);
+    expect_error<IoError>([&] { read_exr(truncated); }, {truncated});
+}
+
+TEST(ExrImage, ReadEnforcesThePixelBudget) {
+    const fs::path folder = test_folder();
+    const std::string path = (folder / "budget.exr").string();
+    write_exr(path, small_image());
+    expect_error<IoError>([&] { read_exr(path, 63); }, {path, "64 pixels", "max_pixels = 63"});
+    EXPECT_EQ(read_exr(path, 64).pixel_count(), 64u);
+
+    // The value budget: more than kMaxExrValuesPerPixel channels at the full pixel budget.
+    Image wide(8, 8);
+    for (int64_t c = 0; c <= kMaxExrValuesPerPixel; ++c) {
+        wide.add_channel("Lattice.c" + std::to_string(c), PixelType::Half, std::vector<float>(64));
+    }
+    const std::string wide_path = (folder / "wide.exr").string();
+    write_exr(wide_path, wide);
+    expect_error<IoError>([&] { read_exr(wide_path, 64); }, {wide_path, "17 channels"});
+    EXPECT_EQ(read_exr(wide_path, 128).channels().size(), size_t(kMaxExrValuesPerPixel + 1));
+}
+
+TEST(ExrImage, WritesAreAtomicAndLeaveNoTemporaryFile) {
+    const fs::path folder = test_folder();
+    const std::string path = (folder / "atomic.exr").string();
+    write_exr(path, small_image());
+    write_exr(path, small_image());  // overwrites in place
+    EXPECT_EQ(folder_entries(folder), std::vector<std::string>{"atomic.exr"});
+
+    // A writer that fails half-way: the old file survives, the temporary file is removed.
+    const auto old_size = fs::file_size(path);
+    EXPECT_THROW(write_file_atomically(path,
+                                       [](const std::string& temp_path) {
+                                           std::ofstream(temp_path) << "partial";
+                                           throw IoError("disk full");
+                                       }),
+                 IoError);
+    EXPECT_EQ(folder_entries(folder), std::vector<std::string>{"atomic.exr"});
+    EXPECT_EQ(fs::file_size(path), old_size);
+}
+
+TEST(ExrImage, UnwritablePathsRaiseIoErrorNamingThePath) {
+    const fs::path folder = test_folder();
+    const std::string no_folder = (folder / "no_such_folder" / "out.exr").string();
+    expect_error<IoError>([&] { write_exr(no_folder, small_image()); },
+                          {no_folder, "does not exist"});
+    expect_error<IoError>([&] { write_exr(folder.string(), small_image()); },
+                          {folder.string(), "folder"});
+    expect_error<IoError>([&] { write_exr("", small_image()); }, {"empty"});
+    EXPECT_TRUE(folder_entries(folder).empty());
+}
+
+}  // namespace
+}  // namespace shgi

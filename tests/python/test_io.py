@@ -1,0 +1,271 @@
+"""Tests of the image bindings: write_exr / read_exr / read_exr_info, write_png, the sRGB curve.
+
+EXR round trips must be bit-exact for float channels; PNG files are decoded here with zlib and
+struct alone (no PIL) and compared with the 8-bit sRGB levels the curve predicts.
+"""
+
+import math
+import pathlib
+import struct
+import zlib
+
+import numpy as np
+import pytest
+
+import shgi
+
+# 1.055 * 0.5 ** (1 / 2.4) - 0.055: linear 0.5 in sRGB.
+SRGB_OF_HALF = 0.7353569830524495
+
+
+def random_finite_floats(shape, seed):
+    """float32 values from random bit patterns: every sign, exponent (denormals too), mantissa."""
+    rng = np.random.default_rng(seed)
+    bits = rng.integers(0, 2**32, size=shape, dtype=np.uint64).astype(np.uint32)
+    values = bits.view(np.float32).copy()
+    values[~np.isfinite(values)] = 1.0
+    flat = values.reshape(-1)
+    flat[:6] = [0.0, -0.0, np.finfo(np.float32).smallest_subnormal, np.finfo(np.float32).max,
+                -np.finfo(np.float32).max, 1e-40]
+    return values
+
+
+def assert_bit_exact(actual, expected):
+    assert actual.dtype == np.float32 and actual.shape == expected.shape
+    np.testing.assert_array_equal(actual.view(np.uint32), expected.view(np.uint32))
+
+
+# --- EXR ----------------------------------------------------------------------------------------
+
+def test_exr_float_round_trip_is_bit_exact(tmp_path):
+    combined = random_finite_floats((23, 37, 4), seed=1)
+    depth = random_finite_floats((23, 37), seed=2)
+    path = tmp_path / "passes.exr"
+    shgi.write_exr(path, {"Combined": combined, "Depth": depth})
+    layers = shgi.read_exr(path)
+    assert list(layers) == ["Combined", "Depth"]
+    assert_bit_exact(layers["Combined"], combined)
+    assert_bit_exact(layers["Depth"], depth[:, :, np.newaxis])  # always (H, W, C)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["passes.exr"]  # no temporary file
+
+
+@pytest.mark.parametrize("compression", ["none", "rle", "zips", "zip", "piz"])
+def test_every_compression_is_lossless(tmp_path, compression):
+    pixels = random_finite_floats((9, 17, 3), seed=3)
+    path = tmp_path / f"{compression}.exr"
+    shgi.write_exr(str(path), {"Emit": pixels}, compression=compression)
+    assert shgi.read_exr_info(path)["compression"] == compression
+    assert_bit_exact(shgi.read_exr(path)["Emit"], pixels)
+
+
+def test_exr_half_channels(tmp_path):
+    rng = np.random.default_rng(4)
+    values = (rng.standard_normal((8, 6, 3)) * 100).astype(np.float32)
+    path = tmp_path / "half.exr"
+    # float16 input is stored as half by default; float32 input when asked.
+    shgi.write_exr(path, {"DiffInd": values.astype(np.float16)})
+    info = shgi.read_exr_info(path)
+    assert info["channels"] == [("DiffInd.R", "half"), ("DiffInd.G", "half"), ("DiffInd.B", "half")]
+    expected = values.astype(np.float16).astype(np.float32)  # half is exact in float32
+    np.testing.assert_array_equal(shgi.read_exr(path)["DiffInd"], expected)
+
+    shgi.write_exr(path, {"DiffInd": values}, pixel_type="half")
+    # Both numpy and OpenEXR round float -> half to nearest even.
+    np.testing.assert_array_equal(shgi.read_exr(path)["DiffInd"], expected)
+
+
+def test_exr_layer_names_and_order_are_preserved(tmp_path):
+    h, w = 4, 5
+    layers = {
+        "ViewLayer.Normal": np.full((h, w, 3), 0.5, np.float32),
+        "Combined": np.ones((h, w, 4), np.float32),
+        "Depth": np.full((h, w), 3.0, np.float32),
+        "DiffInd": np.full((h, w, 3), 2.0, np.float32),
+    }
+    path = tmp_path / "layers.exr"
+    shgi.write_exr(path, layers, channel_names={"ViewLayer.Normal": "XYZ"})
+    info = shgi.read_exr_info(path)
+    assert (info["width"], info["height"]) == (w, h)
+    assert [name for name, _ in info["channels"]] == [
+        "ViewLayer.Normal.X", "ViewLayer.Normal.Y", "ViewLayer.Normal.Z",
+        "Combined.R", "Combined.G", "Combined.B", "Combined.A",
+        "Depth.Z", "DiffInd.R", "DiffInd.G", "DiffInd.B"]
+    read = shgi.read_exr(path)
+    assert list(read) == list(layers)
+    for name, pixels in layers.items():
+        np.testing.assert_array_equal(read[name], pixels.reshape(h, w, -1))
+
+
+def test_exr_rows_are_top_row_first(tmp_path):
+    gradient = np.arange(6, dtype=np.float32).reshape(2, 3)  # row 0 = top
+    path = tmp_path / "rows.exr"
+    shgi.write_exr(path, {"Gradient": gradient})
+    np.testing.assert_array_equal(shgi.read_exr(path)["Gradient"][:, :, 0], gradient)
+
+
+def test_exr_bare_and_many_channel_layers(tmp_path):
+    rgb = np.random.default_rng(5).random((3, 2, 3), dtype=np.float32)
+    coefficients = np.random.default_rng(6).random((3, 2, 25), dtype=np.float32)
+    names = [f"c{i:02d}" for i in range(25)]
+    path = tmp_path / "bare.exr"
+    shgi.write_exr(path, {"": rgb, "Lattice": coefficients}, channel_names={"Lattice": names})
+    channels = [name for name, _ in shgi.read_exr_info(path)["channels"]]
+    assert channels[:3] == ["R", "G", "B"]
+    assert channels[3:] == [f"Lattice.{n}" for n in names]
+    read = shgi.read_exr(path)
+    np.testing.assert_array_equal(read[""], rgb)
+    np.testing.assert_array_equal(read["Lattice"], coefficients)
+
+
+def test_read_exr_enforces_max_pixels(tmp_path):
+    path = tmp_path / "big.exr"
+    shgi.write_exr(path, {"Combined": np.zeros((8, 8, 4), np.float32)})
+    with pytest.raises(OSError, match="max_pixels = 63"):
+        shgi.read_exr(path, max_pixels=63)
+    assert shgi.read_exr(path, max_pixels=64)["Combined"].shape == (8, 8, 4)
+
+
+def test_missing_and_corrupt_exr_raise_os_error_naming_the_file(tmp_path):
+    missing = tmp_path / "missing.exr"
+    with pytest.raises(OSError, match="missing.exr"):
+        shgi.read_exr(missing)
+    with pytest.raises(OSError, match="missing.exr"):
+        shgi.read_exr_info(missing)
+    corrupt = tmp_path / "corrupt.exr"
+    corrupt.write_bytes(b"\x76\x2f\x31\x01" + b"\x00" * 40)  # EXR magic, then nonsense
+    with pytest.raises(OSError, match="corrupt.exr"):
+        shgi.read_exr(corrupt)
+
+
+def test_write_exr_into_a_missing_folder_raises_os_error(tmp_path):
+    path = tmp_path / "no_such_folder" / "out.exr"
+    with pytest.raises(OSError, match="does not exist"):
+        shgi.write_exr(path, {"Combined": np.zeros((2, 2, 4), np.float32)})
+
+
+GOOD = np.zeros((2, 3, 4), np.float32)
+
+
+@pytest.mark.parametrize("kwargs, argument", [
+    (dict(layers={"Combined": GOOD.astype(np.int32)}), r"layers\['Combined'\]"),
+    (dict(layers={"Combined": np.zeros(5, np.float32)}), r"layers\['Combined'\]"),
+    (dict(layers={"Combined": None}), r"layers\['Combined'\]"),
+    (dict(layers={"Combined": np.zeros((0, 3, 4), np.float32)}), r"layers\['Combined'\]"),
+    (dict(layers={"Combined": GOOD, "Depth": np.zeros((3, 2), np.float32)}), r"layers\['Depth'\]"),
+    (dict(layers={"Lattice": np.zeros((2, 3, 9), np.float32)}), r"channel_names\['Lattice'\]"),
+    (dict(layers={}), "layers"),
+    (dict(layers={1: GOOD}), "layers"),
+    (dict(layers={"Combined": GOOD}, channel_names={"Combined": "RGB"}),
+     r"channel_names\['Combined'\]"),
+    (dict(layers={"Combined": GOOD}, channel_names={"Emit": "RGB"}), "channel_names"),
+    (dict(layers={"Combined": GOOD}, channel_names={"Combined": "RRGB"}), "Combined.R"),
+    (dict(layers={"Combined": GOOD}, pixel_type="double"), "pixel_type"),
+    (dict(layers={"Combined": GOOD}, compression="dwaa"), "compression"),
+])
+def test_write_exr_bad_input_raises_value_error_naming_the_argument(tmp_path, kwargs, argument):
+    with pytest.raises(ValueError, match=argument):
+        shgi.write_exr(tmp_path / "bad.exr", **kwargs)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_read_exr_rejects_a_non_positive_budget(tmp_path):
+    with pytest.raises(ValueError, match="max_pixels"):
+        shgi.read_exr(tmp_path / "any.exr", max_pixels=0)
+
+
+# --- PNG ----------------------------------------------------------------------------------------
+
+def paeth(a, b, c):
+    p = a + b - c
+    pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+    if pa <= pb and pa <= pc:
+        return a
+    return b if pb <= pc else c
+
+
+def decode_png(path):
+    """Minimal decoder for 8-bit RGB/RGBA non-interlaced PNGs: (pixels (H, W, C) uint8, chunks)."""
+    data = pathlib.Path(path).read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    chunks, offset, idat = {}, 8, b""
+    while offset < len(data):
+        length, kind = struct.unpack(">I4s", data[offset:offset + 8])
+        body = data[offset + 8:offset + 8 + length]
+        chunks[kind.decode()] = body
+        idat += body if kind == b"IDAT" else b""
+        offset += 12 + length
+    width, height, depth, colour_type, _, _, interlace = struct.unpack(">IIBBBBB", chunks["IHDR"])
+    assert depth == 8 and interlace == 0 and colour_type in (2, 6)
+    channels = 3 if colour_type == 2 else 4
+    stride = width * channels
+    raw = zlib.decompress(idat)
+    rows, previous = [], bytearray(stride)
+    for y in range(height):
+        start = y * (stride + 1)
+        kind, line = raw[start], bytearray(raw[start + 1:start + 1 + stride])
+        for i in range(stride):
+            left = line[i - channels] if i >= channels else 0
+            up = previous[i]
+            up_left = previous[i - channels] if i >= channels else 0
+            predictor = [0, left, up, (left + up) // 2, paeth(left, up, up_left)][kind]
+            line[i] = (line[i] + predictor) & 0xFF
+        rows.append(bytes(line))
+        previous = line
+    pixels = np.frombuffer(b"".join(rows), np.uint8).reshape(height, width, channels)
+    return pixels, chunks
+
+
+def test_write_png_encodes_srgb_levels(tmp_path):
+    # Top row: black, white, linear 0.5; bottom row: 0.18 grey, over-white, negative + threshold.
+    pixels = np.array([[[0, 0, 0], [1, 1, 1], [0.5, 0.5, 0.5]],
+                       [[0.18, 0.5, 1], [4, 2, 1], [-1, 0.0031308, 0.5]]], np.float32)
+    path = tmp_path / "rgb.png"
+    shgi.write_png(path, pixels)
+    decoded, chunks = decode_png(path)
+    expected = [[[0, 0, 0], [255, 255, 255], [188, 188, 188]],
+                [[118, 188, 255], [255, 255, 255], [0, 10, 188]]]
+    np.testing.assert_array_equal(decoded, np.array(expected, np.uint8))
+    assert "sRGB" in chunks
+    assert [p.name for p in tmp_path.iterdir()] == ["rgb.png"]
+
+
+def test_write_png_exposure_and_premultiplied_alpha(tmp_path):
+    # Premultiplied 0.125 at alpha 0.5 is straight 0.25; +1 stop makes it 0.5 -> level 188.
+    pixels = np.array([[[0.125, 0.125, 0.125, 0.5], [0.3, 0.2, 0.1, 0.0]]], np.float64)
+    path = tmp_path / "rgba.png"
+    shgi.write_png(path, pixels, exposure=1.0)
+    decoded, _ = decode_png(path)
+    np.testing.assert_array_equal(decoded, [[[188, 188, 188, 128], [0, 0, 0, 0]]])
+
+    shgi.write_png(path, np.array([[[1.0, 1.0, 1.0, 0.5]]]), exposure=-1.0, premultiplied=False)
+    decoded, _ = decode_png(path)
+    np.testing.assert_array_equal(decoded, [[[188, 188, 188, 128]]])
+
+
+@pytest.mark.parametrize("kwargs, argument", [
+    (dict(pixels=np.zeros((2, 2, 2), np.float32)), "pixels"),
+    (dict(pixels=np.zeros((2, 2), np.float32)), "pixels"),
+    (dict(pixels=np.zeros((2, 2, 3), np.uint8)), "pixels"),
+    (dict(pixels=np.zeros((2, 2, 3), np.float32), exposure=math.inf), "exposure"),
+])
+def test_write_png_bad_input_raises_value_error_naming_the_argument(tmp_path, kwargs, argument):
+    with pytest.raises(ValueError, match=argument):
+        shgi.write_png(tmp_path / "bad.png", **kwargs)
+
+
+def test_write_png_into_a_missing_folder_raises_os_error(tmp_path):
+    path = tmp_path / "missing" / "out.png"
+    with pytest.raises(OSError, match="out.png"):
+        shgi.write_png(path, np.zeros((1, 1, 3), np.float32))
+
+
+def test_srgb_curve():
+    assert shgi.srgb_from_linear(0.0) == 0.0
+    assert shgi.srgb_from_linear(1.0) == 1.0
+    assert shgi.srgb_from_linear(0.5) == pytest.approx(SRGB_OF_HALF, abs=1e-7)
+    assert shgi.srgb_from_linear(0.0031308) == pytest.approx(12.92 * 0.0031308, abs=1e-7)
+    assert shgi.srgb_from_linear(-1.0) == 0.0 and shgi.srgb_from_linear(2.0) == 1.0
+    linear = np.linspace(0.0, 1.0, 101, dtype=np.float32)
+    encoded = shgi.srgb_from_linear(linear)
+    assert encoded.dtype == np.float32 and encoded.shape == linear.shape
+    np.testing.assert_allclose(shgi.linear_from_srgb(encoded), linear, atol=1e-6)
