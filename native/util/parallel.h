@@ -1,7 +1,8 @@
 // Parallel loops on TBB that poll a cancel flag and report progress.
 //
-// parallel_for splits [begin, end) into fixed chunks of `grain` items (TBB's simple_partitioner,
-// so chunk boundaries never depend on the thread count) and calls body(chunk_begin, chunk_end).
+// parallel_for splits [begin, end) by halving until chunks hold at most `grain` items (TBB's
+// simple_partitioner: chunks of grain/2 to grain items whose boundaries depend only on the range
+// and the grain, never on the thread count) and calls body(chunk_begin, chunk_end).
 // Bodies must write only to their own items; with per-item RNG streams (util/rng.h) the result
 // is then bit-identical for any thread count. Before each chunk the Progress is polled; after a
 // cancel no new chunk starts and parallel_for throws Cancelled once the running chunks finish.

@@ -40,7 +40,13 @@ void Progress::report(uint64_t done, uint64_t total) {
         lo = stage_lo_;
         hi = stage_hi_;
     }
-    fraction_.store(lo + std::clamp(local, 0.0f, 1.0f) * (hi - lo), std::memory_order_relaxed);
+    // Parallel workers report out of order (the one that finished last may store a smaller
+    // `done`), so only move forward: a completed loop must end at `hi`, not at a stale value.
+    const float target = lo + std::clamp(local, 0.0f, 1.0f) * (hi - lo);
+    float current = fraction_.load(std::memory_order_relaxed);
+    while (target > current &&
+           !fraction_.compare_exchange_weak(current, target, std::memory_order_relaxed)) {
+    }
     notify(done >= total);
 }
 

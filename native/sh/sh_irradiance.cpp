@@ -1,0 +1,17 @@
+#include "sh/sh_irradiance.h"
+
+#include "sh/lobe_zh.h"
+
+namespace shgi {
+
+BandFactors cosine_lobe_band_factors() { return zonal_band_factors(cosine_lobe_zh()); }
+
+void sh_convolve_cosine(ShRgb& sh) { sh_scale_bands(sh, cosine_lobe_band_factors()); }
+
+vec3 sh_irradiance(const ShRgb& radiance, const vec3& normal) {
+    ShRgb irradiance = radiance;
+    sh_convolve_cosine(irradiance);
+    return sh_evaluate(irradiance, normal);
+}
+
+}  // namespace shgi

@@ -1,0 +1,125 @@
+// Progress: stage mapping onto [0, 1], callback throttling, cancel, failing callbacks.
+#include "util/progress.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <tbb/global_control.h>
+
+#include "util/error.h"
+#include "util/log.h"
+#include "util/parallel.h"
+
+namespace shgi {
+namespace {
+
+constexpr float kExact = 1e-6f;
+// Long enough that no two un-forced notifications of a test can fall in different intervals.
+constexpr double kLongInterval = 3600.0;
+
+TEST(Progress, StagesMapOntoSubranges) {
+    Progress progress;
+    progress.begin_stage("trace", 0.2f, 0.6f);
+    EXPECT_EQ(progress.stage(), "trace");
+    EXPECT_NEAR(progress.fraction(), 0.2f, kExact);
+    progress.report(1, 4);
+    EXPECT_NEAR(progress.fraction(), 0.3f, kExact);
+    progress.report(4, 4);
+    EXPECT_NEAR(progress.fraction(), 0.6f, kExact);
+    progress.report(9, 4);  // over-reporting clamps to the stage end
+    EXPECT_NEAR(progress.fraction(), 0.6f, kExact);
+    progress.begin_stage("gather", 0.6f, 1.0f);
+    progress.report(1, 2);
+    EXPECT_NEAR(progress.fraction(), 0.8f, kExact);
+    progress.report(0, 0);  // an empty stage is complete
+    EXPECT_NEAR(progress.fraction(), 1.0f, kExact);
+}
+
+TEST(Progress, StageBoundsAreClamped) {
+    Progress progress;
+    progress.begin_stage("odd", 0.7f, 0.3f);  // hi < lo collapses to lo
+    progress.report(1, 2);
+    EXPECT_NEAR(progress.fraction(), 0.7f, kExact);
+    progress.begin_stage("wide", -1.0f, 2.0f);
+    progress.report(1, 2);
+    EXPECT_NEAR(progress.fraction(), 0.5f, kExact);
+    progress.set_fraction(3.0f);
+    EXPECT_NEAR(progress.fraction(), 1.0f, kExact);
+}
+
+TEST(Progress, CallbackIsThrottledButStageStartsAndCompletionAreForced) {
+    std::vector<std::pair<float, std::string>> calls;
+    Progress progress([&](float f, const std::string& s) { calls.emplace_back(f, s); },
+                      kLongInterval);
+    progress.begin_stage("a", 0.0f, 0.5f);  // forced
+    for (int i = 1; i < 100; ++i) progress.report(i, 100);  // throttled
+    progress.report(100, 100);             // forced: stage complete
+    progress.begin_stage("b", 0.5f, 1.0f);  // forced
+    progress.report(50, 100);              // throttled
+    progress.set_fraction(1.0f);           // forced
+    ASSERT_EQ(calls.size(), 4u);
+    EXPECT_EQ(calls[0].second, "a");
+    EXPECT_NEAR(calls[0].first, 0.0f, kExact);
+    EXPECT_NEAR(calls[1].first, 0.5f, kExact);
+    EXPECT_EQ(calls[2].second, "b");
+    EXPECT_NEAR(calls[3].first, 1.0f, kExact);
+}
+
+TEST(Progress, ZeroIntervalCallsBackEveryTime) {
+    int calls = 0;
+    Progress progress([&](float, const std::string&) { ++calls; }, 0.0);
+    for (int i = 1; i <= 10; ++i) progress.report(i, 10);
+    EXPECT_EQ(calls, 10);
+}
+
+TEST(Progress, CancelIsSeenByWorkers) {
+    Progress progress;
+    EXPECT_FALSE(progress.cancelled());
+    EXPECT_NO_THROW(progress.throw_if_cancelled());
+    progress.cancel();
+    EXPECT_TRUE(progress.cancelled());
+    EXPECT_THROW(progress.throw_if_cancelled(), Cancelled);
+    EXPECT_THROW(throw_if_cancelled(&progress), Cancelled);
+    EXPECT_NO_THROW(throw_if_cancelled(nullptr));
+}
+
+TEST(Progress, FailingCallbackCancelsInsteadOfUnwinding) {
+    std::vector<std::string> warnings;
+    const LogSink previous = set_log_sink(
+        [&](LogLevel level, const std::string& message) {
+            if (level == LogLevel::Warning) warnings.push_back(message);
+        });
+    Progress progress([](float, const std::string&) { throw std::runtime_error("ui gone"); });
+    EXPECT_NO_THROW(progress.begin_stage("work"));
+    EXPECT_TRUE(progress.cancelled());
+    set_log_sink(previous);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("ui gone"), std::string::npos);
+}
+
+// "never on two threads at once": reports from parallel workers are serialised.
+TEST(Progress, CallbackNeverRunsConcurrently) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    std::atomic<int> inside{0}, max_inside{0}, calls{0};
+    Progress progress(
+        [&](float, const std::string&) {
+            const int now = inside.fetch_add(1) + 1;
+            int seen = max_inside.load();
+            while (now > seen && !max_inside.compare_exchange_weak(seen, now)) {
+            }
+            calls.fetch_add(1);
+            inside.fetch_sub(1);
+        },
+        0.0);
+    parallel_for(0, 20000, 10, [](uint64_t, uint64_t) {}, &progress);
+    EXPECT_EQ(max_inside.load(), 1);
+    EXPECT_GT(calls.load(), 0);
+    EXPECT_NEAR(progress.fraction(), 1.0f, kExact);
+}
+
+}  // namespace
+}  // namespace shgi
