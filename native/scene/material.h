@@ -20,6 +20,8 @@ inline constexpr int32_t kNoTexture = -1;
 struct Material {
     std::string name = "default";
     vec3 base_color{0.8f};
+    // With a texture the albedo is texture x base_color (glTF's rule); the Blender exporter
+    // passes base_color = 1 when a texture drives Principled's Base Color.
     int32_t base_color_texture = kNoTexture;  // index into Scene::textures(), or kNoTexture
     std::string base_color_uv_set;            // UV set used by the texture ("" = first)
     float roughness = 0.5f;                   // 0..1, GGX alpha = roughness^2

@@ -1,0 +1,778 @@
+// glTF loading (see gltf_loader.h). The only file that includes tiny_gltf.h.
+//
+// Debian ships tinygltf as a shared library (libtinygltf.so, built with stb_image for PNG/JPEG/
+// BMP/GIF decoding and nlohmann-json), so this file includes the header without
+// TINYGLTF_IMPLEMENTATION or any of its configuration macros: defining them here would disagree
+// with how the library was compiled.
+//
+// Loading runs in steps: read and parse the file (tinygltf), then walk the node hierarchy of the
+// chosen scene; meshes, materials and textures are converted on first use and cached, so a mesh
+// shared by many nodes is stored once and instanced. Every index read from the file is checked
+// before use: a malformed file must end in IoError, never in an out-of-bounds read.
+#include "io/gltf_loader.h"
+
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include "util/error.h"
+#include "util/log.h"
+
+namespace shgi {
+namespace {
+
+// Blender's importer reads at most this many TEXCOORD_n sets (UV_MAX in gltf2_blender_mesh.py).
+constexpr int kMaxUvSets = 8;
+// The first four bytes of a .glb file (glTF 2.0 spec, "Binary glTF Layout").
+constexpr char kGlbMagic[4] = {'g', 'l', 'T', 'F'};
+constexpr const char* kLightsExtension = "KHR_lights_punctual";
+
+// Extensions a file may list in extensionsRequired: everything else changes the meaning of the
+// data in ways this loader cannot honour (Draco or meshopt compression, Basis textures, ...).
+const std::set<std::string>& supported_required_extensions() {
+    static const std::set<std::string> extensions = {
+        kLightsExtension, "KHR_materials_emissive_strength", "KHR_materials_ior",
+        "KHR_materials_transmission", "KHR_mesh_quantization"};
+    return extensions;
+}
+
+// (x, y, z)_gltf -> (x, -z, y)_blender: a rotation, so it applies to normals unchanged.
+vec3 blender_from_gltf_vector(const vec3& v) { return vec3(v.x, -v.z, v.y); }
+
+std::string trimmed(std::string text) {
+    while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+    return text;
+}
+
+// sRGB transfer function, IEC 61966-2-1, as Blender's "sRGB" colour space decodes 8-bit images.
+float srgb_to_linear(float c) {
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Step 1: reading the file.
+
+// tinygltf fails the whole load when one image does not decode; an undecodable texture should
+// only cost the texture, so the failure is recorded and the image left empty.
+bool decode_image_or_record(tinygltf::Image* image, const int image_index, std::string* /*err*/,
+                            std::string* warn, int req_width, int req_height,
+                            const unsigned char* bytes, int size, void* failures) {
+    std::string error;
+    if (tinygltf::LoadImageData(image, image_index, &error, warn, req_width, req_height, bytes,
+                                size, nullptr))
+        return true;
+    static_cast<std::vector<std::string>*>(failures)->push_back(
+        format_message("image ", image_index, " could not be decoded (", trimmed(error), ")"));
+    image->image.clear();
+    image->width = image->height = 0;
+    return true;
+}
+
+// Used when the caller does not want textures: keeps the image records, decodes nothing.
+bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int,
+                const unsigned char*, int, void*) {
+    return true;
+}
+
+bool starts_with_glb_magic(const std::string& path) {
+    std::ifstream file(path, std::ios::binary);
+    if (!file)
+        throw IoError(format_message(path, ": cannot open the file (", std::strerror(errno), ")"));
+    std::array<char, 4> magic{};
+    file.read(magic.data(), magic.size());
+    return file.gcount() == 4 && std::memcmp(magic.data(), kGlbMagic, 4) == 0;
+}
+
+tinygltf::Model read_model(const std::string& path, const GltfLoadOptions& options) {
+    // The container is told by its content, not its extension: some tools write .glb as .gltf.
+    const bool binary = starts_with_glb_magic(path);
+    std::vector<std::string> image_failures;
+    tinygltf::TinyGLTF parser;
+    if (options.import_textures)
+        parser.SetImageLoader(decode_image_or_record, &image_failures);
+    else
+        parser.SetImageLoader(skip_image, nullptr);
+
+    tinygltf::Model model;
+    std::string error, warning;
+    const bool ok = binary ? parser.LoadBinaryFromFile(&model, &error, &warning, path)
+                           : parser.LoadASCIIFromFile(&model, &error, &warning, path);
+    if (!warning.empty()) log_warning(path, ": ", trimmed(warning));
+    for (const std::string& failure : image_failures) log_warning(path, ": ", failure);
+    if (!ok) {
+        throw IoError(format_message(path, ": not a valid glTF ", binary ? "binary (.glb)" : "JSON",
+                                     " file: ", trimmed(error)));
+    }
+    for (const std::string& extension : model.extensionsRequired) {
+        if (!supported_required_extensions().count(extension)) {
+            throw IoError(format_message(path, ": requires the glTF extension ", extension,
+                                         ", which SHGI does not support; re-export without it"));
+        }
+    }
+    return model;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Step 2: accessors, with every offset checked against the buffer before anything is read.
+
+struct AccessorView {
+    const uint8_t* data = nullptr;
+    size_t stride = 0;
+    size_t count = 0;
+    int component_type = 0;
+    int components = 0;
+    bool normalized = false;
+};
+
+class AccessorReader {
+  public:
+    AccessorReader(const std::string& path, const tinygltf::Model& model)
+        : path_(path), model_(model) {}
+
+    // `components` floats per element; integer components are converted (normalised if the
+    // accessor says so). `what` names the use, e.g. "mesh 2 primitive 0 POSITION".
+    std::vector<float> read_floats(int index, int components, const std::string& what) const;
+    // An index accessor: SCALAR of unsigned byte, short or int.
+    std::vector<uint32_t> read_indices(int index, const std::string& what) const;
+
+  private:
+    AccessorView view(int index, const std::string& what) const;
+    [[noreturn]] void fail(const std::string& what, int index, const std::string& problem) const {
+        throw IoError(format_message(path_, ": ", what, " (accessor ", index, "): ", problem));
+    }
+
+    const std::string& path_;
+    const tinygltf::Model& model_;
+};
+
+AccessorView AccessorReader::view(int index, const std::string& what) const {
+    if (index < 0 || size_t(index) >= model_.accessors.size())
+        fail(what, index, format_message("no such accessor, the file has ",
+                                         model_.accessors.size()));
+    const tinygltf::Accessor& accessor = model_.accessors[size_t(index)];
+    if (accessor.sparse.isSparse) fail(what, index, "sparse accessors are not supported");
+    AccessorView result;
+    result.count = accessor.count;
+    result.component_type = accessor.componentType;
+    result.components = tinygltf::GetNumComponentsInType(uint32_t(accessor.type));
+    result.normalized = accessor.normalized;
+    const int component_size = tinygltf::GetComponentSizeInBytes(uint32_t(accessor.componentType));
+    if (result.components <= 0 || component_size <= 0)
+        fail(what, index, format_message("bad type ", accessor.type, " or componentType ",
+                                         accessor.componentType));
+    // Without a bufferView an accessor is all zeros unless sparse; nothing bounds its count then,
+    // and all-zero geometry is useless, so it is refused rather than allocated.
+    if (accessor.bufferView < 0)
+        fail(what, index, "accessors without a bufferView (all zeros) are not supported");
+    if (size_t(accessor.bufferView) >= model_.bufferViews.size())
+        fail(what, index, format_message("bufferView ", accessor.bufferView, " does not exist (",
+                                         model_.bufferViews.size(), " buffer views)"));
+    const tinygltf::BufferView& buffer_view = model_.bufferViews[size_t(accessor.bufferView)];
+    if (buffer_view.buffer < 0 || size_t(buffer_view.buffer) >= model_.buffers.size())
+        fail(what, index, format_message("bufferView ", accessor.bufferView, " names buffer ",
+                                         buffer_view.buffer, ", which does not exist"));
+    const std::vector<unsigned char>& buffer = model_.buffers[size_t(buffer_view.buffer)].data;
+    if (buffer_view.byteOffset > buffer.size() ||
+        buffer_view.byteLength > buffer.size() - buffer_view.byteOffset)
+        fail(what, index, format_message("bufferView ", accessor.bufferView, " (",
+                                         buffer_view.byteLength, " bytes at ",
+                                         buffer_view.byteOffset, ") exceeds its buffer of ",
+                                         buffer.size(), " bytes"));
+    const int stride = accessor.ByteStride(buffer_view);
+    if (stride <= 0) fail(what, index, "invalid byteStride");
+    result.stride = size_t(stride);
+    // The last element must end inside the buffer view; computed without overflow.
+    const size_t element_size = size_t(component_size) * size_t(result.components);
+    bool fits = accessor.byteOffset <= buffer_view.byteLength;
+    if (fits && result.count > 0) {
+        const size_t room = buffer_view.byteLength - accessor.byteOffset;
+        fits = element_size <= room && result.count - 1 <= (room - element_size) / result.stride;
+    }
+    if (!fits)
+        fail(what, index, format_message(result.count, " elements of ", element_size,
+                                         " bytes (stride ", stride, ") at offset ",
+                                         accessor.byteOffset, " do not fit bufferView ",
+                                         accessor.bufferView, " (", buffer_view.byteLength,
+                                         " bytes)"));
+    result.data = buffer.data() + buffer_view.byteOffset + accessor.byteOffset;
+    return result;
+}
+
+// One component as float; normalised integers map to [0, 1] or [-1, 1] (glTF spec, "Animation"
+// and "Meshes": c / (2^(n-1) - 1) clamped at -1 for signed types).
+float read_component(const uint8_t* p, int component_type, bool normalized) {
+    switch (component_type) {
+        case TINYGLTF_COMPONENT_TYPE_BYTE: {
+            int8_t v;
+            std::memcpy(&v, p, sizeof v);
+            return normalized ? std::max(float(v) / 127.0f, -1.0f) : float(v);
+        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+            return normalized ? float(*p) / 255.0f : float(*p);
+        case TINYGLTF_COMPONENT_TYPE_SHORT: {
+            int16_t v;
+            std::memcpy(&v, p, sizeof v);
+            return normalized ? std::max(float(v) / 32767.0f, -1.0f) : float(v);
+        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+            uint16_t v;
+            std::memcpy(&v, p, sizeof v);
+            return normalized ? float(v) / 65535.0f : float(v);
+        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+            uint32_t v;
+            std::memcpy(&v, p, sizeof v);
+            return float(v);
+        }
+        case TINYGLTF_COMPONENT_TYPE_FLOAT: {
+            float v;
+            std::memcpy(&v, p, sizeof v);
+            return v;
+        }
+        default:
+            return 0.0f;  // unreachable: view() rejected other types (doubles are not glTF 2.0)
+    }
+}
+
+std::vector<float> AccessorReader::read_floats(int index, int components,
+                                               const std::string& what) const {
+    const AccessorView v = view(index, what);
+    if (v.components != components)
+        fail(what, index, format_message("expected ", components, " components per element, got ",
+                                         v.components));
+    if (v.component_type == TINYGLTF_COMPONENT_TYPE_DOUBLE)
+        fail(what, index, "double components are not valid glTF 2.0");
+    const size_t component_size =
+        size_t(tinygltf::GetComponentSizeInBytes(uint32_t(v.component_type)));
+    std::vector<float> values(v.count * size_t(components), 0.0f);
+    for (size_t i = 0; i < v.count; ++i) {
+        const uint8_t* element = v.data + i * v.stride;
+        for (int c = 0; c < components; ++c) {
+            const uint8_t* component = element + size_t(c) * component_size;
+            values[i * size_t(components) + size_t(c)] =
+                read_component(component, v.component_type, v.normalized);
+        }
+    }
+    return values;
+}
+
+std::vector<uint32_t> AccessorReader::read_indices(int index, const std::string& what) const {
+    const AccessorView v = view(index, what);
+    const bool unsigned_integer = v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                  v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ||
+                                  v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+    if (v.components != 1 || !unsigned_integer)
+        fail(what, index, "indices must be SCALAR unsigned byte, short or int");
+    std::vector<uint32_t> indices(v.count, 0u);
+    for (size_t i = 0; i < v.count; ++i)
+        indices[i] = uint32_t(read_component(v.data + i * v.stride, v.component_type, false));
+    return indices;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Step 3: converting glTF objects to SHGI ones.
+
+double extension_number(const tinygltf::ExtensionMap& extensions, const char* extension,
+                        const char* key, double fallback) {
+    const auto found = extensions.find(extension);
+    if (found == extensions.end() || !found->second.Has(key)) return fallback;
+    const tinygltf::Value& value = found->second.Get(key);
+    return value.IsNumber() ? value.GetNumberAsDouble() : fallback;
+}
+
+// Blender's names for the n-th UV map: "UVMap", "UVMap.001", "UVMap.002", ...
+std::string uv_set_name(int texcoord) {
+    if (texcoord == 0) return "UVMap";
+    std::ostringstream name;
+    name << "UVMap." << std::setw(3) << std::setfill('0') << texcoord;
+    return name.str();
+}
+
+vec3 vec3_at(const std::vector<float>& values, size_t i) {
+    return vec3(values[3 * i], values[3 * i + 1], values[3 * i + 2]);
+}
+
+vec3 rgb_or(const std::vector<double>& values, const vec3& fallback) {
+    return values.size() >= 3 ? vec3(float(values[0]), float(values[1]), float(values[2]))
+                              : fallback;
+}
+
+// Decoded tinygltf image (8 or 16 bits, 1-4 channels, top row first) -> linear RGBA texture
+// with the bottom row first. Colour channels are sRGB-encoded (glTF spec, baseColorTexture).
+Texture texture_from_image(const tinygltf::Image& image, const std::string& name) {
+    Texture texture;
+    texture.name = name;
+    texture.width = uint32_t(image.width);
+    texture.height = uint32_t(image.height);
+    const size_t channels = size_t(image.component);
+    const size_t bytes_per_channel = image.bits == 16 ? 2 : 1;
+    const float max_value = image.bits == 16 ? 65535.0f : 255.0f;
+    texture.texels.resize(size_t(texture.width) * texture.height);
+    for (size_t y = 0; y < texture.height; ++y) {
+        const size_t source_row = texture.height - 1 - y;
+        for (size_t x = 0; x < texture.width; ++x) {
+            const size_t first_channel = (source_row * texture.width + x) * channels;
+            const uint8_t* pixel = image.image.data() + first_channel * bytes_per_channel;
+            float c[4] = {0.0f, 0.0f, 0.0f, 1.0f};
+            for (size_t k = 0; k < channels; ++k) {
+                uint16_t wide = 0;  // tinygltf stores 16-bit channels in native byte order
+                if (bytes_per_channel == 2) std::memcpy(&wide, pixel + 2 * k, sizeof wide);
+                c[k] = (bytes_per_channel == 2 ? float(wide) : float(pixel[k])) / max_value;
+            }
+            if (channels <= 2) {  // grey or grey + alpha
+                c[3] = channels == 2 ? c[1] : 1.0f;
+                c[1] = c[2] = c[0];
+            }
+            texture.texels[y * texture.width + x] = vec4(
+                srgb_to_linear(c[0]), srgb_to_linear(c[1]), srgb_to_linear(c[2]), c[3]);
+        }
+    }
+    return texture;
+}
+
+bool image_is_decoded(const tinygltf::Image& image) {
+    const size_t bytes = size_t(std::max(image.width, 0)) * size_t(std::max(image.height, 0)) *
+                         size_t(std::max(image.component, 0)) * (image.bits == 16 ? 2u : 1u);
+    return image.width > 0 && image.height > 0 && image.component >= 1 &&
+           image.component <= 4 && (image.bits == 8 || image.bits == 16) &&
+           image.image.size() >= bytes;
+}
+
+Light light_from_gltf(const tinygltf::Light& source, const mat4& world_from_light,
+                      const GltfLoadOptions& options) {
+    Light light;
+    light.name = source.name.empty() ? source.type : source.name;
+    light.color = rgb_or(source.color, vec3(1.0f));
+    light.world_from_light = world_from_light;
+    const float intensity = float(source.intensity);
+    if (source.type == "directional") {
+        light.type = LightType::Sun;
+        light.strength = gltf_sun_strength(intensity, options.lighting_mode);
+        light.angle = options.sun_angle;
+        return light;
+    }
+    light.type = source.type == "spot" ? LightType::Spot : LightType::Point;
+    light.power = gltf_point_power(intensity, options.lighting_mode);
+    light.radius = options.light_radius;
+    if (light.type == LightType::Spot) {
+        // gltf2_blender_light.py create_spot(): the cone angles are half angles.
+        const float outer = float(source.spot.outerConeAngle);
+        const float inner = float(source.spot.innerConeAngle);
+        light.spot_size = 2.0f * outer;
+        light.spot_blend = outer > 0.0f ? std::clamp(1.0f - inner / outer, 0.0f, 1.0f) : 0.0f;
+    }
+    return light;
+}
+
+Camera camera_from_gltf(const tinygltf::Camera& source, const mat4& world_from_camera) {
+    Camera camera;
+    camera.world_from_camera = world_from_camera;
+    if (source.type == "orthographic") {
+        const tinygltf::OrthographicCamera& ortho = source.orthographic;
+        camera.type = CameraType::Orthographic;
+        camera.sensor_fit = SensorFit::Auto;
+        camera.ortho_scale = 2.0f * float(std::max(ortho.xmag, ortho.ymag));
+        if (ortho.xmag > 0.0 && ortho.ymag > 0.0)
+            camera.resolution_x =
+                uint32_t(std::max(1.0, std::round(camera.resolution_y * ortho.xmag / ortho.ymag)));
+        camera.clip_start = float(ortho.znear);
+        camera.clip_end = float(ortho.zfar);
+        return camera;
+    }
+    const tinygltf::PerspectiveCamera& perspective = source.perspective;
+    camera.type = CameraType::Perspective;
+    camera.sensor_fit = SensorFit::Vertical;
+    camera.lens = 0.5f * camera.sensor_height / std::tan(0.5f * float(perspective.yfov));
+    if (perspective.aspectRatio > 0.0)
+        camera.resolution_x = uint32_t(
+            std::max(1.0, std::round(camera.resolution_y * perspective.aspectRatio)));
+    camera.clip_start = float(perspective.znear);
+    camera.clip_end = perspective.zfar > 0.0 ? float(perspective.zfar) : kGltfInfiniteClipEnd;
+    return camera;
+}
+
+mat4 node_local_matrix(const tinygltf::Node& node) {
+    if (node.matrix.size() == 16) {
+        float m[16];
+        for (int i = 0; i < 16; ++i) m[i] = float(node.matrix[size_t(i)]);
+        return glm::make_mat4(m);  // both column-major
+    }
+    mat4 local(1.0f);
+    if (node.translation.size() == 3)
+        local = glm::translate(local, vec3(float(node.translation[0]), float(node.translation[1]),
+                                           float(node.translation[2])));
+    if (node.rotation.size() == 4) {
+        // glTF stores (x, y, z, w); glm::quat's constructor takes (w, x, y, z).
+        const glm::quat q(float(node.rotation[3]), float(node.rotation[0]),
+                          float(node.rotation[1]), float(node.rotation[2]));
+        local = local * glm::mat4_cast(glm::normalize(q));
+    }
+    if (node.scale.size() == 3)
+        local = glm::scale(local, vec3(float(node.scale[0]), float(node.scale[1]),
+                                       float(node.scale[2])));
+    return local;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Step 4: the importer, which walks the nodes and converts what they use on first use.
+
+class GltfImporter {
+  public:
+    GltfImporter(const std::string& path, const tinygltf::Model& model,
+                 const GltfLoadOptions& options)
+        : path_(path), model_(model), options_(options), accessors_(path, model) {}
+
+    Scene run();
+
+  private:
+    std::vector<int> root_nodes() const;
+    // Adds the node's instances, light and camera; returns its glTF world transform.
+    mat4 visit_node(int node_index, const mat4& gltf_world_from_parent);
+    void add_node_light(int node_index, const tinygltf::Node& node, const mat4& world_from_node);
+    void add_node_camera(const tinygltf::Node& node, const mat4& world_from_node);
+    const std::vector<uint32_t>& mesh_ids(int mesh_index);
+    Mesh build_primitive(int mesh_index, int primitive_index, uint32_t material_id) const;
+    void read_uv_sets(const tinygltf::Primitive& primitive, const std::string& what,
+                      size_t vertex_count, Mesh& mesh) const;
+    std::vector<uvec3> read_triangles(const tinygltf::Primitive& primitive,
+                                      const std::string& what, size_t vertex_count) const;
+    uint32_t material_id(int material_index);
+    uint32_t default_material_id();
+    int32_t base_color_texture_id(const tinygltf::TextureInfo& info, const std::string& what);
+    void check_index(int index, size_t size, const std::string& what) const;
+
+    const std::string& path_;
+    const tinygltf::Model& model_;
+    const GltfLoadOptions& options_;
+    AccessorReader accessors_;
+    Scene scene_;
+    std::map<int, std::vector<uint32_t>> mesh_ids_;  // glTF mesh -> one SHGI mesh per primitive
+    std::map<int, uint32_t> material_ids_;           // glTF material -> SHGI material
+    std::map<int, int32_t> texture_ids_;             // glTF image -> SHGI texture (or none)
+    int64_t default_material_ = -1;
+};
+
+void GltfImporter::check_index(int index, size_t size, const std::string& what) const {
+    if (index < 0 || size_t(index) >= size)
+        throw IoError(format_message(path_, ": ", what, " ", index,
+                                     " does not exist (the file has ", size, ")"));
+}
+
+std::vector<int> GltfImporter::root_nodes() const {
+    if (!model_.scenes.empty()) {
+        const int scene = model_.defaultScene >= 0 ? model_.defaultScene : 0;
+        check_index(scene, model_.scenes.size(), "default scene");
+        return model_.scenes[size_t(scene)].nodes;
+    }
+    // No scenes: every node without a parent is a root (as Blender's importer does).
+    std::vector<uint8_t> is_child(model_.nodes.size(), 0);
+    for (const tinygltf::Node& node : model_.nodes) {
+        for (int child : node.children) {
+            check_index(child, model_.nodes.size(), "child node");
+            is_child[size_t(child)] = 1;
+        }
+    }
+    std::vector<int> roots;
+    for (size_t i = 0; i < model_.nodes.size(); ++i)
+        if (!is_child[i]) roots.push_back(int(i));
+    return roots;
+}
+
+// Depth-first, parents before children and children in file order (so "the first camera node"
+// is the importer's), with an explicit stack: a hostile file's deep hierarchy must not be able to
+// overflow the call stack (Python's and Blender's threads have small ones).
+Scene GltfImporter::run() {
+    struct Pending {
+        int node;
+        mat4 gltf_world_from_parent;
+        bool leaving;  // pops the node off the current path after its subtree
+    };
+    std::vector<uint8_t> on_path(model_.nodes.size(), 0);  // ancestors of the node being visited
+    std::vector<Pending> stack;
+    const std::vector<int> roots = root_nodes();
+    for (auto root = roots.rbegin(); root != roots.rend(); ++root)
+        stack.push_back({*root, mat4(1.0f), false});
+    while (!stack.empty()) {
+        const Pending item = stack.back();
+        stack.pop_back();
+        if (item.leaving) {
+            on_path[size_t(item.node)] = 0;
+            continue;
+        }
+        check_index(item.node, model_.nodes.size(), "node");
+        if (on_path[size_t(item.node)])
+            throw IoError(format_message(path_, ": node ", item.node,
+                                         " is its own ancestor (the node hierarchy has a cycle)"));
+        on_path[size_t(item.node)] = 1;
+        stack.push_back({item.node, mat4(1.0f), true});
+        const mat4 gltf_world = visit_node(item.node, item.gltf_world_from_parent);
+        const std::vector<int>& children = model_.nodes[size_t(item.node)].children;
+        for (auto child = children.rbegin(); child != children.rend(); ++child)
+            stack.push_back({*child, gltf_world, false});
+    }
+    if (scene_.instances().empty()) log_warning(path_, ": the scene has no triangle meshes");
+    return std::move(scene_);
+}
+
+mat4 GltfImporter::visit_node(int node_index, const mat4& gltf_world_from_parent) {
+    const tinygltf::Node& node = model_.nodes[size_t(node_index)];
+    const mat4 gltf_world = gltf_world_from_parent * node_local_matrix(node);
+    const mat4 c = blender_from_gltf();
+    // Cameras and lights: C * world (the importer's camera_correction, see the header).
+    const mat4 world_from_node = c * gltf_world;
+
+    if (node.mesh >= 0) {
+        check_index(node.mesh, model_.meshes.size(), format_message("node ", node_index, ": mesh"));
+        const mat4 world_from_object = world_from_node * glm::transpose(c);  // C^-1 = C^T
+        const std::string name =
+            node.name.empty() ? format_message("node_", node_index) : node.name;
+        for (uint32_t mesh_id : mesh_ids(node.mesh))
+            scene_.add_instance(mesh_id, world_from_object, name);
+    }
+    if (options_.import_lights) add_node_light(node_index, node, world_from_node);
+    if (options_.import_camera && node.camera >= 0) add_node_camera(node, world_from_node);
+    return gltf_world;
+}
+
+void GltfImporter::add_node_light(int node_index, const tinygltf::Node& node,
+                                  const mat4& world_from_node) {
+    const auto found = node.extensions.find(kLightsExtension);
+    if (found == node.extensions.end() || !found->second.Has("light")) return;
+    const tinygltf::Value& light = found->second.Get("light");
+    const int light_index = light.IsNumber() ? light.GetNumberAsInt() : -1;
+    check_index(light_index, model_.lights.size(),
+                format_message("node ", node_index, ": KHR_lights_punctual light"));
+    const tinygltf::Light& source = model_.lights[size_t(light_index)];
+    if (source.type != "point" && source.type != "spot" && source.type != "directional") {
+        log_warning(path_, ": light ", light_index, " has unknown type '", source.type,
+                    "'; skipped");
+        return;
+    }
+    scene_.add_light(light_from_gltf(source, world_from_node, options_));
+}
+
+void GltfImporter::add_node_camera(const tinygltf::Node& node, const mat4& world_from_node) {
+    check_index(node.camera, model_.cameras.size(), "camera");
+    if (scene_.has_camera()) {
+        log_info(path_, ": camera ", node.camera, " ignored; the first camera node is used");
+        return;
+    }
+    scene_.set_camera(camera_from_gltf(model_.cameras[size_t(node.camera)], world_from_node));
+}
+
+const std::vector<uint32_t>& GltfImporter::mesh_ids(int mesh_index) {
+    const auto cached = mesh_ids_.find(mesh_index);
+    if (cached != mesh_ids_.end()) return cached->second;
+    std::vector<uint32_t> ids;
+    const tinygltf::Mesh& mesh = model_.meshes[size_t(mesh_index)];
+    for (size_t p = 0; p < mesh.primitives.size(); ++p) {
+        const tinygltf::Primitive& primitive = mesh.primitives[p];
+        if (primitive.mode != TINYGLTF_MODE_TRIANGLES) {
+            log_warning(path_, ": mesh ", mesh_index, " primitive ", p, " has mode ",
+                        primitive.mode, " (only TRIANGLES = 4 is supported); skipped");
+            continue;
+        }
+        const uint32_t material = primitive.material >= 0 ? material_id(primitive.material)
+                                                          : default_material_id();
+        ids.push_back(scene_.add_mesh(build_primitive(mesh_index, int(p), material)));
+    }
+    return mesh_ids_.emplace(mesh_index, std::move(ids)).first->second;
+}
+
+Mesh GltfImporter::build_primitive(int mesh_index, int primitive_index,
+                                   uint32_t material_id) const {
+    const tinygltf::Mesh& source = model_.meshes[size_t(mesh_index)];
+    const tinygltf::Primitive& primitive = source.primitives[size_t(primitive_index)];
+    const std::string what = format_message("mesh ", mesh_index, " primitive ", primitive_index);
+    const auto position = primitive.attributes.find("POSITION");
+    if (position == primitive.attributes.end())
+        throw IoError(format_message(path_, ": ", what, " has no POSITION attribute"));
+
+    Mesh mesh;
+    mesh.name = source.name.empty() ? format_message("mesh_", mesh_index) : source.name;
+    if (source.primitives.size() > 1) mesh.name += format_message(".", primitive_index);
+    const std::vector<float> p = accessors_.read_floats(position->second, 3, what + " POSITION");
+    const size_t vertex_count = p.size() / 3;
+    for (size_t i = 0; i < vertex_count; ++i)
+        mesh.positions.push_back(blender_from_gltf_vector(vec3_at(p, i)));
+
+    const auto normal = primitive.attributes.find("NORMAL");
+    if (normal != primitive.attributes.end()) {
+        const std::vector<float> n = accessors_.read_floats(normal->second, 3, what + " NORMAL");
+        if (n.size() != p.size())
+            throw IoError(format_message(path_, ": ", what, " has ", n.size() / 3,
+                                         " normals for ", vertex_count, " vertices"));
+        for (size_t i = 0; i < vertex_count; ++i)
+            mesh.normals.push_back(blender_from_gltf_vector(vec3_at(n, i)));
+    }
+    read_uv_sets(primitive, what, vertex_count, mesh);
+
+    mesh.triangles = read_triangles(primitive, what, vertex_count);
+    mesh.material_indices.assign(mesh.triangles.size(), material_id);
+    return mesh;
+}
+
+std::vector<uvec3> GltfImporter::read_triangles(const tinygltf::Primitive& primitive,
+                                                const std::string& what,
+                                                size_t vertex_count) const {
+    std::vector<uint32_t> indices;
+    if (primitive.indices >= 0) {
+        indices = accessors_.read_indices(primitive.indices, what + " indices");
+    } else {  // non-indexed: consecutive vertex triples
+        indices.resize(vertex_count);
+        for (size_t i = 0; i < vertex_count; ++i) indices[i] = uint32_t(i);
+    }
+    if (indices.size() % 3 != 0)
+        log_warning(path_, ": ", what, " has ", indices.size(),
+                    " indices, not a multiple of 3; the last ", indices.size() % 3, " are ignored");
+    for (size_t i = 0; i < indices.size(); ++i) {
+        if (indices[i] >= vertex_count)
+            throw IoError(format_message(path_, ": ", what, " (accessor ", primitive.indices,
+                                         "): indices[", i, "] = ", indices[i],
+                                         ", but the primitive has only ", vertex_count,
+                                         " vertices"));
+    }
+    std::vector<uvec3> triangles;
+    triangles.reserve(indices.size() / 3);
+    for (size_t t = 0; t + 2 < indices.size(); t += 3)
+        triangles.emplace_back(indices[t], indices[t + 1], indices[t + 2]);
+    return triangles;
+}
+
+void GltfImporter::read_uv_sets(const tinygltf::Primitive& primitive, const std::string& what,
+                                size_t vertex_count, Mesh& mesh) const {
+    for (int set = 0; set < kMaxUvSets; ++set) {
+        const std::string attribute = format_message("TEXCOORD_", set);
+        const auto found = primitive.attributes.find(attribute);
+        if (found == primitive.attributes.end()) break;  // sets are numbered consecutively
+        const std::vector<float> uv =
+            accessors_.read_floats(found->second, 2, what + " " + attribute);
+        if (uv.size() != 2 * vertex_count)
+            throw IoError(format_message(path_, ": ", what, " has ", uv.size() / 2, " ", attribute,
+                                         " coordinates for ", vertex_count, " vertices"));
+        UvSet uv_set;
+        uv_set.name = uv_set_name(set);
+        uv_set.coords.reserve(vertex_count);
+        for (size_t i = 0; i < vertex_count; ++i)
+            uv_set.coords.emplace_back(uv[2 * i], 1.0f - uv[2 * i + 1]);  // top-left -> bottom-left
+        mesh.uv_sets.push_back(std::move(uv_set));
+    }
+}
+
+uint32_t GltfImporter::default_material_id() {
+    // Blender leaves such faces without material, which renders as its default surface.
+    if (default_material_ < 0) default_material_ = scene_.add_material(Material{});
+    return uint32_t(default_material_);
+}
+
+uint32_t GltfImporter::material_id(int material_index) {
+    const auto cached = material_ids_.find(material_index);
+    if (cached != material_ids_.end()) return cached->second;
+    check_index(material_index, model_.materials.size(), "material");
+    const tinygltf::Material& source = model_.materials[size_t(material_index)];
+    const tinygltf::PbrMetallicRoughness& pbr = source.pbrMetallicRoughness;
+    const std::string what = format_message("material ", material_index);
+
+    Material material;
+    material.name = source.name.empty() ? format_message("material_", material_index) : source.name;
+    material.base_color = rgb_or(pbr.baseColorFactor, vec3(1.0f));  // glTF's default is white
+    material.metallic = float(pbr.metallicFactor);
+    material.roughness = float(pbr.roughnessFactor);
+    material.emission_color = rgb_or(source.emissiveFactor, vec3(0.0f));
+    material.emission_strength = float(extension_number(
+        source.extensions, "KHR_materials_emissive_strength", "emissiveStrength", 1.0));
+    // Blender keeps its own IOR (1.45) unless the file has KHR_materials_ior (default 1.5).
+    material.ior = float(extension_number(source.extensions, "KHR_materials_ior", "ior",
+                                          source.extensions.count("KHR_materials_ior") ? 1.5
+                                                                                       : 1.45));
+    if (material.ior < 1.0f) {  // the extension allows 0 ("infinite"); SHGI needs >= 1
+        log_warning(path_, ": ", what, " has ior ", material.ior, "; using 1.45");
+        material.ior = 1.45f;
+    }
+    material.transmission = float(extension_number(source.extensions, "KHR_materials_transmission",
+                                                   "transmissionFactor", 0.0));
+    if (pbr.baseColorTexture.index >= 0 && options_.import_textures) {
+        material.base_color_texture = base_color_texture_id(pbr.baseColorTexture, what);
+        if (material.base_color_texture != kNoTexture)
+            material.base_color_uv_set = uv_set_name(pbr.baseColorTexture.texCoord);
+    }
+    const uint32_t id = scene_.add_material(std::move(material));
+    material_ids_.emplace(material_index, id);
+    return id;
+}
+
+int32_t GltfImporter::base_color_texture_id(const tinygltf::TextureInfo& info,
+                                            const std::string& what) {
+    check_index(info.index, model_.textures.size(), what + ": baseColorTexture");
+    const int image_index = model_.textures[size_t(info.index)].source;
+    if (image_index < 0) {
+        log_warning(path_, ": ", what, ": texture ", info.index,
+                    " has no source image (extension-only textures are not supported)");
+        return kNoTexture;
+    }
+    check_index(image_index, model_.images.size(), what + ": image");
+    const auto cached = texture_ids_.find(image_index);
+    if (cached != texture_ids_.end()) return cached->second;
+    const tinygltf::Image& image = model_.images[size_t(image_index)];
+    int32_t id = kNoTexture;
+    if (image_is_decoded(image)) {
+        const std::string name =
+            !image.name.empty() ? image.name : format_message("image_", image_index);
+        id = int32_t(scene_.add_texture(texture_from_image(image, name)));
+    } else {
+        log_warning(path_, ": ", what, ": image ", image_index, " ('", image.uri,
+                    "') has no decoded pixels; using baseColorFactor only");
+    }
+    texture_ids_.emplace(image_index, id);
+    return id;
+}
+
+}  // namespace
+
+mat4 blender_from_gltf() {
+    // Columns are the images of the glTF axes: +X -> +X, +Y -> +Z, +Z -> -Y.
+    return mat4(vec4(1, 0, 0, 0), vec4(0, 0, 1, 0), vec4(0, -1, 0, 0), vec4(0, 0, 0, 1));
+}
+
+float gltf_point_power(float intensity, GltfLightingMode mode) {
+    // gltf2_blender_light.py _calc_energy_pointlike().
+    switch (mode) {
+        case GltfLightingMode::Spec: return intensity / kPbrWattsToLumens * kFourPi;
+        case GltfLightingMode::Compat: return intensity * kFourPi;
+        case GltfLightingMode::Raw: return intensity;
+    }
+    return intensity;
+}
+
+float gltf_sun_strength(float illuminance, GltfLightingMode mode) {
+    // gltf2_blender_light.py create_directional().
+    return mode == GltfLightingMode::Spec ? illuminance / kPbrWattsToLumens : illuminance;
+}
+
+Scene load_gltf(const std::string& path, const GltfLoadOptions& options) {
+    const tinygltf::Model model = read_model(path, options);
+    try {
+        return GltfImporter(path, model, options).run();
+    } catch (const InvalidArgument& error) {
+        // Scene::add_* rejected a converted value (NaN vertex, bad light angle, ...).
+        throw IoError(format_message(path, ": ", error.what()));
+    }
+}
+
+}  // namespace shgi

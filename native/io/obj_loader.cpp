@@ -1,0 +1,353 @@
+// OBJ + MTL loading (see obj_loader.h). The only file that includes tiny_obj_loader.h.
+//
+// tinyobjloader parses; this file checks every face index itself (tinyobjloader only warns about
+// indices past the end, and its own triangulation would read through them), triangulates,
+// welds corners into vertices and maps MTL statements the way Blender's importer does. Which
+// statements a material actually contains is needed for Blender's fallbacks, and tinyobjloader
+// fills absent ones with zeros, so the .mtl text is read here and its statement keys recorded
+// before tinyobjloader parses it.
+#include "io/obj_loader.h"
+
+#include <tiny_obj_loader.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "util/error.h"
+#include "util/log.h"
+
+namespace shgi {
+namespace {
+
+// Blender's importer clamps the specular exponent to this range before mapping it to roughness.
+constexpr float kMaxSpecularExponent = 1000.0f;
+// Blender's importer's IOR for transparent (illum 6, 7) and glass (illum 4, 9) modes without Ni.
+constexpr float kTransparentIor = 1.0f;
+constexpr float kGlassIor = 1.5f;
+
+std::string trimmed(std::string text) {
+    while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+    return text;
+}
+
+std::string directory_of(const std::string& path) {
+    const size_t slash = path.find_last_of('/');
+    return slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Step 1: reading the .obj and its .mtl files.
+
+// Statement keys ("Kd", "Ns", "Pr", ...) present in each material, by material name.
+using MaterialKeys = std::map<std::string, std::set<std::string>>;
+
+void record_material_keys(const std::string& mtl_text, MaterialKeys& keys) {
+    std::istringstream lines(mtl_text);
+    std::string line;
+    std::set<std::string>* current = nullptr;
+    while (std::getline(lines, line)) {
+        while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '\t'))
+            line.pop_back();
+        const size_t start = line.find_first_not_of(" \t");
+        if (start == std::string::npos || line[start] == '#') continue;
+        const size_t end = line.find_first_of(" \t", start);
+        const std::string key = line.substr(start, end - start);
+        if (key == "newmtl" && end != std::string::npos) {
+            // tinyobjloader's name: everything after "newmtl" and one separator.
+            current = &keys[line.substr(end + 1)];
+        } else if (current) {
+            current->insert(key);
+        }
+    }
+}
+
+// Reads .mtl files beside the .obj, recording their keys before tinyobjloader parses them.
+class MtlReader : public tinyobj::MaterialReader {
+  public:
+    MtlReader(std::string directory, MaterialKeys& keys)
+        : directory_(std::move(directory)), keys_(keys) {}
+
+    bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                    std::map<std::string, int>* material_map, std::string* warn,
+                    std::string* err) override {
+        const std::string path = directory_ + name;
+        std::ifstream file(path, std::ios::binary);
+        if (!file) {
+            *warn += format_message("material library '", path, "' not found (",
+                                    std::strerror(errno), "); its materials are replaced by the "
+                                    "default material\n");
+            return false;
+        }
+        std::ostringstream text;
+        text << file.rdbuf();
+        record_material_keys(text.str(), keys_);
+        std::istringstream stream(text.str());
+        tinyobj::LoadMtl(material_map, materials, &stream, warn, err);
+        return true;
+    }
+
+  private:
+    std::string directory_;
+    MaterialKeys& keys_;
+};
+
+struct ObjData {
+    tinyobj::attrib_t attrib;
+    std::vector<tinyobj::shape_t> shapes;
+    std::vector<tinyobj::material_t> materials;
+    MaterialKeys material_keys;
+};
+
+ObjData read_obj(const std::string& path) {
+    std::ifstream file(path, std::ios::binary);
+    if (!file)
+        throw IoError(format_message(path, ": cannot open the file (", std::strerror(errno), ")"));
+    ObjData data;
+    MtlReader mtl_reader(directory_of(path), data.material_keys);
+    std::string warning, error;
+    // No triangulation here: it would run before the indices are checked (see the file header).
+    const bool ok = tinyobj::LoadObj(&data.attrib, &data.shapes, &data.materials, &warning,
+                                     &error, &file, &mtl_reader, /*triangulate=*/false,
+                                     /*default_vcols_fallback=*/false);
+    // Index problems are reported precisely by the checks below; other warnings go to the log.
+    std::istringstream warning_lines(warning);
+    for (std::string line; std::getline(warning_lines, line);) {
+        if (!line.empty() && line.find("indices out of bounds") == std::string::npos)
+            log_warning(path, ": ", line);
+    }
+    if (!ok)
+        throw IoError(format_message(path, ": not a valid OBJ file: ",
+                                     error.empty() ? "unknown parse error" : trimmed(error)));
+    if (!error.empty()) log_warning(path, ": ", trimmed(error));
+    return data;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Step 2: MTL -> Material, after set_bsdf_socket_values() in Blender's obj_import_mtl.cc.
+
+struct IllumModes {
+    bool highlight = false, reflection = false, transparency = false, glass = false;
+};
+
+IllumModes illum_modes(int illum) {
+    IllumModes modes;
+    modes.highlight = illum == 2;
+    modes.reflection = illum == 3 || illum == 4 || illum == 5 || illum == 6 || illum == 7 ||
+                       illum == 8;
+    modes.transparency = illum == 4 || illum == 6 || illum == 7 || illum == 9;
+    modes.glass = illum == 4 || illum == 9;
+    return modes;
+}
+
+float mean(const tinyobj::real_t rgb[3]) { return (rgb[0] + rgb[1] + rgb[2]) / 3.0f; }
+vec3 to_vec3(const tinyobj::real_t rgb[3]) { return vec3(rgb[0], rgb[1], rgb[2]); }
+
+Material material_from_mtl(const tinyobj::material_t& source, const std::set<std::string>& keys,
+                           const std::string& path) {
+    const auto has = [&keys](const char* key) { return keys.count(key) > 0; };
+    const IllumModes modes = illum_modes(has("illum") ? source.illum : -1);
+    Material material;
+    material.name = source.name;
+    if (has("Kd")) material.base_color = to_vec3(source.diffuse);
+    if (has("Ke")) material.emission_color = glm::max(to_vec3(source.emission), vec3(0.0f));
+    material.specular = has("Ks") ? std::clamp(mean(source.specular), 0.0f, 1.0f)
+                                  : (modes.highlight ? 1.0f : 0.0f);
+    material.roughness = has("Pr")   ? std::clamp(float(source.roughness), 0.0f, 1.0f)
+                         : has("Ns") ? obj_roughness_from_exponent(source.shininess)
+                                     : (modes.highlight ? 0.0f : 1.0f);
+    if (has("Pm"))
+        material.metallic = std::clamp(float(source.metallic), 0.0f, 1.0f);
+    else if (modes.reflection)
+        material.metallic = has("Ka") ? std::clamp(mean(source.ambient), 0.0f, 1.0f) : 1.0f;
+    else
+        material.metallic = 0.0f;
+    if (has("Ni")) {
+        material.ior = float(source.ior);
+        if (!(material.ior >= 1.0f)) {
+            log_warning(path, ": material '", source.name, "' has Ni ", source.ior,
+                        "; SHGI needs an IOR >= 1, using 1");
+            material.ior = 1.0f;
+        }
+    } else if (modes.glass) {
+        material.ior = kGlassIor;
+    } else if (modes.transparency) {
+        material.ior = kTransparentIor;
+    }
+    if (!source.diffuse_texname.empty())
+        log_warning(path, ": material '", source.name, "': map_Kd '", source.diffuse_texname,
+                    "' is not loaded (OBJ textures are not supported); using Kd");
+    return material;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Step 3: shapes -> meshes.
+
+class ObjImporter {
+  public:
+    ObjImporter(const std::string& path, const ObjData& data, const ObjLoadOptions& options)
+        : path_(path), data_(data), options_(options) {}
+
+    Scene run();
+
+  private:
+    void check_corner(const tinyobj::index_t& corner, const std::string& shape, size_t face) const;
+    Mesh build_mesh(const tinyobj::shape_t& shape, const std::string& name);
+    uint32_t add_corner(const tinyobj::index_t& corner, bool with_uv, bool with_normal,
+                        Mesh& mesh);
+    uint32_t material_id(int obj_material);
+    vec3 to_blender(float x, float y, float z) const {
+        return options_.up_axis == ObjUpAxis::Y ? vec3(x, -z, y) : vec3(x, y, z);
+    }
+
+    const std::string& path_;
+    const ObjData& data_;
+    const ObjLoadOptions& options_;
+    Scene scene_;
+    std::map<int, uint32_t> material_ids_;  // tinyobj material (-1 = none) -> SHGI material
+    // Corner (v, vt, vn) -> vertex of the mesh being built.
+    std::map<std::array<int, 3>, uint32_t> vertex_of_corner_;
+};
+
+Scene ObjImporter::run() {
+    for (size_t s = 0; s < data_.shapes.size(); ++s) {
+        const tinyobj::shape_t& shape = data_.shapes[s];
+        const std::string name = shape.name.empty() ? format_message("shape_", s) : shape.name;
+        if (shape.mesh.num_face_vertices.empty()) {
+            log_info(path_, ": shape '", name, "' has no faces (lines or points only); skipped");
+            continue;
+        }
+        const uint32_t mesh_id = scene_.add_mesh(build_mesh(shape, name));
+        scene_.add_instance(mesh_id, mat4(1.0f), name);
+    }
+    if (scene_.instances().empty()) log_warning(path_, ": the file has no faces");
+    return std::move(scene_);
+}
+
+void ObjImporter::check_corner(const tinyobj::index_t& corner, const std::string& shape,
+                               size_t face) const {
+    const auto check = [&](int index, size_t count, const char* kind) {
+        if (index < -1 || (index >= 0 && size_t(index) >= count))
+            throw IoError(format_message(path_, ": shape '", shape, "' face ", face, " uses ",
+                                         kind, " ", index + 1, " (1-based) but the file has ",
+                                         count));
+    };
+    if (corner.vertex_index < 0)
+        throw IoError(format_message(path_, ": shape '", shape, "' face ", face,
+                                     " has a corner without a vertex index"));
+    check(corner.vertex_index, data_.attrib.vertices.size() / 3, "vertex (v)");
+    check(corner.texcoord_index, data_.attrib.texcoords.size() / 2, "texture coordinate (vt)");
+    check(corner.normal_index, data_.attrib.normals.size() / 3, "normal (vn)");
+}
+
+Mesh ObjImporter::build_mesh(const tinyobj::shape_t& shape, const std::string& name) {
+    const tinyobj::mesh_t& source = shape.mesh;
+    bool with_uv = false, with_normal = true;
+    size_t first = 0;
+    for (size_t f = 0; f < source.num_face_vertices.size(); ++f) {
+        const size_t corners = source.num_face_vertices[f];
+        if (first + corners > source.indices.size())
+            throw IoError(format_message(path_, ": shape '", name, "' face ", f,
+                                         " runs past the end of the index list"));
+        for (size_t c = first; c < first + corners; ++c) {
+            check_corner(source.indices[c], name, f);
+            with_uv = with_uv || source.indices[c].texcoord_index >= 0;
+            with_normal = with_normal && source.indices[c].normal_index >= 0;
+        }
+        first += corners;
+    }
+
+    Mesh mesh;
+    mesh.name = name;
+    if (with_uv) mesh.uv_sets.push_back(UvSet{"UVMap", {}});
+    vertex_of_corner_.clear();
+    first = 0;
+    for (size_t f = 0; f < source.num_face_vertices.size(); ++f) {
+        const size_t corners = source.num_face_vertices[f];
+        const int obj_material = f < source.material_ids.size() ? source.material_ids[f] : -1;
+        const uint32_t material = material_id(obj_material);
+        // Fan around the first corner: (0, k, k + 1) keeps the polygon's winding.
+        const auto vertex = [&](size_t corner) {
+            return add_corner(source.indices[first + corner], with_uv, with_normal, mesh);
+        };
+        for (size_t k = 1; k + 1 < corners; ++k) {
+            // Separate statements: vertices are numbered in corner order on every compiler.
+            const uint32_t v0 = vertex(0);
+            const uint32_t v1 = vertex(k);
+            const uint32_t v2 = vertex(k + 1);
+            mesh.triangles.emplace_back(v0, v1, v2);
+            mesh.material_indices.push_back(material);
+        }
+        first += corners;
+    }
+    return mesh;
+}
+
+uint32_t ObjImporter::add_corner(const tinyobj::index_t& corner, bool with_uv, bool with_normal,
+                                 Mesh& mesh) {
+    const std::array<int, 3> key = {corner.vertex_index, corner.texcoord_index,
+                                    corner.normal_index};
+    const auto found = vertex_of_corner_.find(key);
+    if (found != vertex_of_corner_.end()) return found->second;
+    const uint32_t vertex = uint32_t(mesh.positions.size());
+    const std::vector<tinyobj::real_t>& v = data_.attrib.vertices;
+    const size_t i = size_t(corner.vertex_index) * 3;
+    mesh.positions.push_back(to_blender(v[i], v[i + 1], v[i + 2]));
+    if (with_normal) {
+        const std::vector<tinyobj::real_t>& n = data_.attrib.normals;
+        const size_t j = size_t(corner.normal_index) * 3;
+        mesh.normals.push_back(to_blender(n[j], n[j + 1], n[j + 2]));
+    }
+    if (with_uv) {
+        const std::vector<tinyobj::real_t>& t = data_.attrib.texcoords;
+        const size_t j = size_t(std::max(corner.texcoord_index, 0)) * 2;
+        mesh.uv_sets[0].coords.push_back(corner.texcoord_index >= 0 ? vec2(t[j], t[j + 1])
+                                                                    : vec2(0.0f));
+    }
+    vertex_of_corner_.emplace(key, vertex);
+    return vertex;
+}
+
+uint32_t ObjImporter::material_id(int obj_material) {
+    if (obj_material >= int(data_.materials.size())) obj_material = -1;  // defensive
+    const auto cached = material_ids_.find(obj_material);
+    if (cached != material_ids_.end()) return cached->second;
+    Material material;  // faces without usemtl, or whose material was not found
+    if (obj_material >= 0) {
+        const tinyobj::material_t& source = data_.materials[size_t(obj_material)];
+        const auto keys = data_.material_keys.find(source.name);
+        material = material_from_mtl(
+            source, keys != data_.material_keys.end() ? keys->second : std::set<std::string>{},
+            path_);
+    }
+    const uint32_t id = scene_.add_material(std::move(material));
+    material_ids_.emplace(obj_material, id);
+    return id;
+}
+
+}  // namespace
+
+float obj_roughness_from_exponent(float ns) {
+    return 1.0f - std::sqrt(std::clamp(ns, 0.0f, kMaxSpecularExponent) / kMaxSpecularExponent);
+}
+
+Scene load_obj(const std::string& path, const ObjLoadOptions& options) {
+    const ObjData data = read_obj(path);
+    try {
+        return ObjImporter(path, data, options).run();
+    } catch (const InvalidArgument& error) {
+        // Scene::add_* rejected a converted value (NaN vertex, ...).
+        throw IoError(format_message(path, ": ", error.what()));
+    }
+}
+
+}  // namespace shgi

@@ -1,0 +1,228 @@
+"""Tests of shgi.load_gltf and shgi.load_obj: small files written into tmp_path, loaded, committed
+and traced; expected values follow the conventions in native/io/gltf_loader.h and obj_loader.h
+(Y-up -> Z-up as (x, y, z) -> (x, -z, y), glTF v -> 1 - v, glTF light units / 683 lm/W).
+"""
+
+import base64
+import json
+import math
+import struct
+import threading
+
+import numpy as np
+import pytest
+
+import shgi
+
+# Blender's glTF importer: PBR_WATTS_TO_LUMENS
+# (io_scene_gltf2/blender/com/gltf2_blender_conversion.py).
+PBR_WATTS_TO_LUMENS = 683.0
+
+
+def gltf_document(indices=(0, 1, 2, 0, 2, 3)):
+    """A floor quad at glTF height y = 2 (Blender z = 2) facing up, a point light, a camera."""
+    positions = [-1, 0, 1, 1, 0, 1, 1, 0, -1, -1, 0, -1]
+    uvs = [0, 0, 1, 0, 1, 1, 0, 1]
+    data = (struct.pack("<12f", *positions) + struct.pack("<8f", *uvs)
+            + struct.pack("<6H", *indices))
+    return {
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1, 2]}],
+        "nodes": [
+            {"name": "Floor", "mesh": 0, "translation": [0, 2, 0]},
+            {"name": "Lamp", "translation": [0, 5, 0],
+             "extensions": {"KHR_lights_punctual": {"light": 0}}},
+            {"name": "Cam", "camera": 0, "translation": [0, 3, 6]},
+        ],
+        "cameras": [{"type": "perspective",
+                     "perspective": {"yfov": 0.6, "aspectRatio": 2.0, "znear": 0.05}}],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"name": "Lamp", "type": "point", "intensity": PBR_WATTS_TO_LUMENS}]}},
+        "materials": [{"name": "Green",
+                       "pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.7, 0.2, 1.0],
+                                                "metallicFactor": 0.0, "roughnessFactor": 0.4}}],
+        "meshes": [{"name": "Quad", "primitives": [
+            {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"},
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 12},
+        ],
+        "buffers": [{"byteLength": len(data),
+                     "uri": "data:application/octet-stream;base64,"
+                            + base64.b64encode(data).decode()}],
+    }
+
+
+def write_gltf(path, document):
+    path.write_text(json.dumps(document))
+    return path
+
+
+def trace_down(scene, x, y):
+    """Distance from (x, y, 10) straight down to the first hit, or None."""
+    hits = scene.intersect(np.array([[x, y, 10.0]], np.float32),
+                           np.array([[0.0, 0.0, -1.0]], np.float32))
+    if not hits["hit"][0]:
+        return None
+    return float(hits["t"][0])
+
+
+# --- glTF ---------------------------------------------------------------------------------------
+
+def test_load_gltf_counts_materials_lights_and_a_ray_hit(tmp_path):
+    scene = shgi.load_gltf(write_gltf(tmp_path / "scene.gltf", gltf_document()))
+    assert len(scene.meshes) == 1 and len(scene.instances) == 1
+    assert len(scene.materials) == 1 and len(scene.lights) == 1
+
+    green = scene.materials[0]
+    assert green.name == "Green"
+    np.testing.assert_allclose(np.asarray(green.base_color), [0.1, 0.7, 0.2], rtol=1e-6)
+    assert green.roughness == pytest.approx(0.4)
+
+    lamp = scene.lights[0]
+    assert lamp.name == "Lamp"
+    assert lamp.power == pytest.approx(4 * math.pi)  # 683 cd -> 4 pi W
+    np.testing.assert_allclose(np.asarray(lamp.world_from_light)[:3, 3], [0, 0, 5], atol=1e-6)
+
+    scene.commit()
+    assert trace_down(scene, 0.5, 0.5) == pytest.approx(8.0)  # floor at Blender z = 2
+    assert trace_down(scene, 3.0, 0.0) is None
+
+
+def test_load_gltf_flips_v_and_converts_the_camera(tmp_path):
+    scene = shgi.load_gltf(str(write_gltf(tmp_path / "scene.gltf", gltf_document())))
+    mesh = scene.meshes[0]
+    positions = np.asarray(mesh.positions)
+    np.testing.assert_allclose(positions[0], [-1, -1, 0])  # glTF (-1, 0, 1)
+    uv = mesh.uv_sets["UVMap"]
+    np.testing.assert_allclose(uv[0], [0, 1])  # glTF (0, 0) is the top-left corner
+
+    camera = scene.camera
+    world_from_camera = np.asarray(camera.world_from_camera)
+    np.testing.assert_allclose(world_from_camera[:3, 3], [0, -6, 3], atol=1e-6)
+    forward = world_from_camera[:3, :3] @ np.array([0, 0, -1])
+    np.testing.assert_allclose(forward, [0, 1, 0], atol=1e-6)  # glTF -Z is Blender +Y
+    assert camera.resolution_x == 2 * camera.resolution_y
+
+
+def test_load_gltf_options_and_bad_lighting_mode(tmp_path):
+    path = write_gltf(tmp_path / "scene.gltf", gltf_document())
+    unitless = shgi.load_gltf(path, lighting_mode="COMPAT")
+    assert unitless.lights[0].power == pytest.approx(4 * math.pi * PBR_WATTS_TO_LUMENS, rel=1e-6)
+    bare = shgi.load_gltf(path, import_lights=False, import_camera=False)
+    assert len(bare.lights) == 0
+    with pytest.raises(ValueError, match="lighting_mode"):
+        shgi.load_gltf(path, lighting_mode="WATTS")
+
+
+def test_load_gltf_missing_file_is_oserror(tmp_path):
+    missing = tmp_path / "missing.gltf"
+    with pytest.raises(OSError, match="missing.gltf"):
+        shgi.load_gltf(missing)
+
+
+def test_load_gltf_malformed_names_the_path(tmp_path):
+    path = tmp_path / "broken.gltf"
+    path.write_text('{"asset": {"version": "2.0"}, "nodes": [')
+    with pytest.raises(OSError) as info:
+        shgi.load_gltf(path)
+    assert str(path) in str(info.value)
+
+
+def test_load_gltf_index_out_of_range_is_oserror(tmp_path):
+    path = write_gltf(tmp_path / "bad_index.gltf", gltf_document(indices=(0, 1, 2, 0, 2, 40)))
+    with pytest.raises(OSError, match=r"indices\[5\] = 40, but the primitive has only 4"):
+        shgi.load_gltf(path)
+
+
+def test_load_gltf_from_two_threads(tmp_path):
+    """Loading releases the GIL and logs through a sink that takes it: two concurrent loads must
+    neither deadlock nor interfere."""
+    path = write_gltf(tmp_path / "scene.gltf", gltf_document())
+    results = []
+    threads = [threading.Thread(target=lambda: results.append(shgi.load_gltf(path)))
+               for _ in range(2)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=60)
+    assert [len(scene.meshes) for scene in results] == [1, 1]
+
+
+# --- OBJ ----------------------------------------------------------------------------------------
+
+OBJ_TEXT = """mtllib two.mtl
+v -1 1 1
+v 1 1 1
+v 1 1 -1
+v -1 1 -1
+v 3 0 0
+v 4 0 0
+v 3 2 0
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+o Floor
+usemtl Red
+f 1/1 2/2 3/3 4/4
+o Glow
+usemtl Glow
+f 5 6 7
+"""
+
+MTL_TEXT = """newmtl Red
+Kd 0.8 0.1 0.1
+Ns 250
+illum 2
+newmtl Glow
+Kd 0 0 0
+Ke 3 3 3
+"""
+
+
+def write_obj(tmp_path, obj_text=OBJ_TEXT):
+    (tmp_path / "two.mtl").write_text(MTL_TEXT)
+    path = tmp_path / "two.obj"
+    path.write_text(obj_text)
+    return path
+
+
+def test_load_obj_counts_materials_and_a_ray_hit(tmp_path):
+    scene = shgi.load_obj(write_obj(tmp_path))
+    assert len(scene.meshes) == 2 and len(scene.instances) == 2
+    assert [m.name for m in scene.materials] == ["Red", "Glow"]
+    red, glow = scene.materials
+    np.testing.assert_allclose(np.asarray(red.base_color), [0.8, 0.1, 0.1], rtol=1e-6)
+    assert red.roughness == pytest.approx(1 - math.sqrt(0.25))
+    np.testing.assert_allclose(np.asarray(glow.emission_color) * glow.emission_strength, [3, 3, 3])
+    np.testing.assert_allclose(scene.meshes[0].uv_sets["UVMap"][2], [1, 1])  # not flipped
+
+    scene.commit()
+    assert trace_down(scene, 0.0, 0.0) == pytest.approx(9.0)  # OBJ y = 1 is Blender z = 1
+
+
+def test_load_obj_missing_file_is_oserror(tmp_path):
+    with pytest.raises(OSError, match="nothing.obj"):
+        shgi.load_obj(tmp_path / "nothing.obj")
+
+
+def test_load_obj_malformed_names_the_path(tmp_path):
+    path = write_obj(tmp_path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 12\n")
+    with pytest.raises(OSError) as info:
+        shgi.load_obj(path)
+    assert str(path) in str(info.value)
+    assert "vertex (v) 12" in str(info.value)
+
+
+def test_load_obj_bad_up_axis_is_valueerror(tmp_path):
+    with pytest.raises(ValueError, match="up_axis"):
+        shgi.load_obj(write_obj(tmp_path), up_axis="X")
