@@ -34,9 +34,18 @@ struct MeshReport {
     uint64_t fixed_normals = 0;       // zero-length normals replaced by the face normal
 };
 
-// Checks and cleans a mesh in place; `material_count` bounds the material indices.
-// Throws InvalidArgument naming the mesh, the array and the first bad element.
+// Checks and cleans a mesh in place; `material_count` bounds the material indices (Scene passes
+// kAnyMaterialCount while materials may still be added, and checks again at commit).
+// Throws InvalidArgument naming the mesh, the array and the first bad element: NaN/Inf or
+// |coordinate| > 1e15 (beyond Embree's float range), array sizes that differ from the vertex or
+// triangle count, vertex or material indices out of range. Degenerate triangles are dropped (with
+// their material index); zero-length normals are replaced by the adjacent face normals.
 MeshReport validate_mesh(Mesh& mesh, uint32_t material_count);
+
+inline constexpr uint32_t kAnyMaterialCount = 0xFFFFFFFFu;
+
+// Throws InvalidArgument if a material index is >= material_count (used again at commit time).
+void check_material_indices(const Mesh& mesh, uint32_t material_count);
 
 // Area of triangle `i` in object space.
 float triangle_area(const Mesh& mesh, uint32_t triangle);

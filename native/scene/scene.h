@@ -3,8 +3,9 @@
 //
 // Building: add_* validates each item at this boundary (NaN/Inf, ranges, index bounds; degenerate
 // triangles are dropped and counted) and throws InvalidArgument naming the item and field.
-// commit() checks cross references (instance -> mesh, triangle -> material, material -> texture),
-// gathers emissive triangles, and builds the BVH: one Embree geometry per mesh, instanced once
+// commit() checks cross references (instance -> mesh, triangle -> material, material -> texture;
+// a scene without materials gets one default Material so every triangle has one), gathers
+// emissive triangles, and builds the BVH: one Embree geometry per mesh, instanced once
 // per Instance, so a mesh used a thousand times is stored once. Any edit un-commits the scene;
 // set_instance_transform() keeps the per-mesh BVHs and re-commits only the top level.
 //
@@ -14,6 +15,11 @@
 //
 // Memory: commit() enforces CommitSettings::memory_budget_bytes through Embree's memory monitor
 // and fails with OutOfMemory and a message giving the sizes, instead of the process being killed.
+//
+// Normals: a hit's geometric normal is the object-space cross(p1 - p0, p2 - p0) mapped by the
+// cofactor of world_from_object times sign(det) (= |det| * inverse-transpose): its length is twice
+// the world-space area, and a mirroring (negative-determinant) transform keeps the object's front
+// side as the front, as Cycles does for negatively scaled objects.
 #pragma once
 
 #include <cstdint>
@@ -123,18 +129,27 @@ class Scene {
     const std::vector<EmissiveTriangle>& emissive_triangles() const { return emissive_; }
 
     // --- queries (scene must be committed: otherwise InvalidArgument "call commit() first") ---
+    // A ray failing is_valid_ray throws InvalidArgument naming the ray (index) and its values.
     Hit intersect(const Ray& ray) const;
     bool occluded(const Ray& ray) const;
-    // Batches: hits/occluded must have rays.size() elements. Work is split into chunks that
-    // poll `progress`.
+    // Batches: hits/occluded are resized to rays.size(). All rays are validated before any is
+    // traced; the work is then split into chunks of kRaysPerChunk that poll `progress`.
     void intersect(const std::vector<Ray>& rays, std::vector<Hit>& hits,
                    Progress* progress = nullptr) const;
     void occluded(const std::vector<Ray>& rays, std::vector<uint8_t>& occluded,
                   Progress* progress = nullptr) const;
+    // Shading data at a valid hit (InvalidArgument for a miss or ids out of range).
     SurfacePoint surface_point(const Ray& ray, const Hit& hit) const;
+
+    static constexpr uint64_t kRaysPerChunk = 4096;
 
   private:
     void invalidate();
+    void require_committed(const char* query) const;
+    void check_references();
+    Bounds3 compute_bounds() const;
+    void gather_emissive();
+    void finish_hit(Hit& hit) const;
 
     std::vector<Mesh> meshes_;
     std::vector<MeshReport> mesh_reports_;
@@ -148,6 +163,10 @@ class Scene {
     bool committed_ = false;
     bool geometry_dirty_ = true;  // meshes changed: per-mesh BVHs must be rebuilt
     std::vector<EmissiveTriangle> emissive_;
+    // Per instance, world_from_object's cofactor times sign(det): maps object normals to world.
+    std::vector<mat3> normal_from_object_;
+    Bounds3 bounds_;  // world bounds of the instanced triangles, cached at commit
+    uint64_t bvh_bytes_ = 0;
     std::unique_ptr<EmbreeScene> embree_;
 };
 

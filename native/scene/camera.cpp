@@ -1,0 +1,115 @@
+#include "scene/camera.h"
+
+#include "scene/validation.h"
+#include "util/error.h"
+
+namespace shgi {
+namespace {
+
+using namespace scene_detail;
+
+// The image rectangle in camera space: on the plane z = -1 for a perspective camera (so x, y
+// are tangents of the view angles), in metres on z = 0 for an orthographic one.
+struct Viewplane {
+    float xmin, xmax, ymin, ymax;
+};
+
+// Blender's BKE_camera_params_compute_viewplane with pixel aspect 1 and no border: the sensor
+// (or ortho_scale) spans the fitted axis; Auto fits the larger image dimension with
+// sensor_width; the shift is in units of the fitted dimension.
+Viewplane compute_viewplane(const Camera& camera) {
+    const float width = static_cast<float>(camera.resolution_x);
+    const float height = static_cast<float>(camera.resolution_y);
+    const float sensor_size =
+        camera.sensor_fit == SensorFit::Vertical ? camera.sensor_height : camera.sensor_width;
+    SensorFit fit = camera.sensor_fit;
+    if (fit == SensorFit::Auto) fit = width >= height ? SensorFit::Horizontal : SensorFit::Vertical;
+    const float view_factor = fit == SensorFit::Horizontal ? width : height;
+    const float fitted_extent = camera.type == CameraType::Orthographic
+                                    ? camera.ortho_scale
+                                    : sensor_size / camera.lens;
+    const float pixel_size = fitted_extent / view_factor;
+    const float dx = camera.shift_x * view_factor;
+    const float dy = camera.shift_y * view_factor;
+    return {(-0.5f * width + dx) * pixel_size, (0.5f * width + dx) * pixel_size,
+            (-0.5f * height + dy) * pixel_size, (0.5f * height + dy) * pixel_size};
+}
+
+// Blender's camera matrix with its scale removed (Cycles' transform_clear_scale): a scaled camera
+// object renders as if unscaled.
+mat4 unscaled(const mat4& world_from_camera) {
+    mat4 m = world_from_camera;
+    for (int axis = 0; axis < 3; ++axis) m[axis] = vec4(glm::normalize(vec3(m[axis])), 0.0f);
+    return m;
+}
+
+}  // namespace
+
+Ray Camera::generate_ray(const vec2& film) const {
+    const Viewplane plane = compute_viewplane(*this);
+    const float u = film.x / static_cast<float>(resolution_x);
+    const float v = film.y / static_cast<float>(resolution_y);
+    // Film y grows downwards, camera y upwards.
+    const float x = plane.xmin + u * (plane.xmax - plane.xmin);
+    const float y = plane.ymax - v * (plane.ymax - plane.ymin);
+    const mat4 frame = unscaled(world_from_camera);
+    Ray ray;
+    if (type == CameraType::Orthographic) {
+        ray.origin = vec3(frame * vec4(x, y, 0.0f, 1.0f));
+        ray.direction = glm::normalize(-vec3(frame[2]));
+        ray.tmin = clip_start;
+        ray.tmax = clip_end;
+        return ray;
+    }
+    const vec3 local(x, y, -1.0f);
+    // Clip planes are distances along the view axis; along a ray whose view-axis component is
+    // 1 / |local| per unit length they are |local| times longer.
+    const float axis_to_ray = glm::length(local);
+    ray.origin = vec3(frame[3]);
+    ray.direction = glm::normalize(vec3(frame * vec4(local, 0.0f)));
+    ray.tmin = clip_start * axis_to_ray;
+    ray.tmax = clip_end * axis_to_ray;
+    return ray;
+}
+
+bool Camera::project(const vec3& p, vec2* film) const {
+    const vec3 local = vec3(glm::inverse(unscaled(world_from_camera)) * vec4(p, 1.0f));
+    float x = local.x, y = local.y;
+    if (type == CameraType::Perspective) {
+        if (!(local.z < 0.0f)) return false;
+        x /= -local.z;
+        y /= -local.z;
+    } else if (local.z > 0.0f) {
+        return false;
+    }
+    const Viewplane plane = compute_viewplane(*this);
+    if (film) {
+        film->x = (x - plane.xmin) / (plane.xmax - plane.xmin) * static_cast<float>(resolution_x);
+        film->y = (plane.ymax - y) / (plane.ymax - plane.ymin) * static_cast<float>(resolution_y);
+    }
+    return true;
+}
+
+void validate_camera(const Camera& camera) {
+    const std::string item = "camera";
+    require_transform(item, "world_from_camera", camera.world_from_camera);
+    if (camera.type != CameraType::Perspective && camera.type != CameraType::Orthographic)
+        throw InvalidArgument(format_message(item, ": type = ", static_cast<int>(camera.type),
+                                             " is unknown"));
+    require_positive(item, "lens", camera.lens);
+    require_positive(item, "sensor_width", camera.sensor_width);
+    require_positive(item, "sensor_height", camera.sensor_height);
+    require_positive(item, "ortho_scale", camera.ortho_scale);
+    require_finite(item, "shift_x", camera.shift_x);
+    require_finite(item, "shift_y", camera.shift_y);
+    require_non_negative(item, "clip_start", camera.clip_start);
+    require_finite(item, "clip_end", camera.clip_end);
+    if (!(camera.clip_start < camera.clip_end))
+        throw InvalidArgument(format_message(item, ": clip_start = ", camera.clip_start,
+                                             " must be < clip_end = ", camera.clip_end));
+    if (camera.resolution_x == 0 || camera.resolution_y == 0)
+        throw InvalidArgument(format_message(item, ": resolution ", camera.resolution_x, " x ",
+                                             camera.resolution_y, " must be at least 1 x 1"));
+}
+
+}  // namespace shgi

@@ -1,0 +1,266 @@
+#include "scene/embree_scene.h"
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+
+#include "scene/embree_device.h"
+#include "scene/scene.h"
+#include "scene/validation.h"
+#include "util/error.h"
+
+namespace shgi {
+namespace {
+
+static_assert(sizeof(vec3) == 3 * sizeof(float), "Embree's FLOAT3 vertex buffer layout");
+static_assert(sizeof(uvec3) == 3 * sizeof(uint32_t), "Embree's UINT3 index buffer layout");
+
+// Lower bounds for estimate_bvh_bytes, from Embree 3's smallest layouts: a triangle costs at
+// least its share of a BVH4 node plus a Triangle4 leaf slot (measured ~60 bytes per triangle for
+// MEDIUM quality; 32 keeps the estimate a bound), an instance its geometry object and a leaf.
+constexpr uint64_t kMinBvhBytesPerTriangle = 32;
+constexpr uint64_t kMinBytesPerInstance = 256;
+
+// Rays handed to Embree per rtcIntersect1M/rtcOccluded1M call: large enough for Embree's stream
+// traversal to sort rays into packets, small enough for the buffer to live on the stack.
+constexpr size_t kStreamSize = 256;
+
+// Instance geometries attached between cancel polls in the top-level build.
+constexpr size_t kInstancesPerPoll = 4096;
+
+// Steps per mesh in the progress of build_meshes (Embree reports a build as a fraction).
+constexpr uint64_t kProgressSteps = 1000;
+
+struct SceneDeleter {
+    void operator()(RTCScene scene) const { rtcReleaseScene(scene); }
+};
+struct GeometryDeleter {
+    void operator()(RTCGeometry geometry) const { rtcReleaseGeometry(geometry); }
+};
+using SceneHandle = std::unique_ptr<RTCSceneTy, SceneDeleter>;
+using GeometryHandle = std::unique_ptr<RTCGeometryTy, GeometryDeleter>;
+
+// Where a build stands, for Embree's progress monitor: build `index` of `count`.
+struct BuildMonitor {
+    Progress* progress = nullptr;
+    uint64_t index = 0, count = 1;
+};
+
+// Embree calls this from its builder threads; returning false cancels the build (the commit then
+// fails with RTC_ERROR_CANCELLED, which EmbreeDevice turns into Cancelled).
+bool on_build_progress(void* pointer, double fraction) {
+    const auto* monitor = static_cast<const BuildMonitor*>(pointer);
+    if (!monitor->progress) return true;
+    if (monitor->progress->cancelled()) return false;
+    const double clamped = std::clamp(fraction, 0.0, 1.0);
+    monitor->progress->report(
+        monitor->index * kProgressSteps + static_cast<uint64_t>(clamped * kProgressSteps),
+        monitor->count * kProgressSteps);
+    return true;
+}
+
+void to_embree(const Ray& ray, RTCRay& out) {
+    out.org_x = ray.origin.x;
+    out.org_y = ray.origin.y;
+    out.org_z = ray.origin.z;
+    out.tnear = ray.tmin;
+    out.dir_x = ray.direction.x;
+    out.dir_y = ray.direction.y;
+    out.dir_z = ray.direction.z;
+    out.time = 0.0f;
+    out.tfar = ray.tmax;
+    out.mask = 0xFFFFFFFFu;
+    out.id = 0;
+    out.flags = 0;
+}
+
+void to_embree(const Ray& ray, RTCRayHit& out) {
+    to_embree(ray, out.ray);
+    out.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    out.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    out.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
+Hit from_embree(const RTCRayHit& in) {
+    Hit hit;
+    if (in.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
+    hit.t = in.ray.tfar;
+    hit.instance_id = in.hit.instID[0];
+    hit.triangle_id = in.hit.primID;
+    hit.barycentrics = vec2(in.hit.u, in.hit.v);
+    hit.geometric_normal = vec3(in.hit.Ng_x, in.hit.Ng_y, in.hit.Ng_z);
+    return hit;
+}
+
+}  // namespace
+
+uint64_t estimate_bvh_bytes(const std::vector<Mesh>& meshes,
+                            const std::vector<Instance>& instances) {
+    uint64_t bytes = 0;
+    for (const Mesh& mesh : meshes) {
+        if (mesh.triangles.empty()) continue;
+        bytes += mesh.positions.size() * sizeof(vec3) + mesh.triangles.size() * sizeof(uvec3);
+        bytes += mesh.triangles.size() * kMinBvhBytesPerTriangle;
+    }
+    return bytes + instances.size() * kMinBytesPerInstance;
+}
+
+struct EmbreeScene::Impl {
+    EmbreeDevice device;                   // declared first: released last
+    std::vector<SceneHandle> mesh_scenes;  // null for meshes without triangles
+    SceneHandle top;
+
+    // Throws if Embree recorded an error during `operation`, or returned null without one.
+    template <typename T>
+    T* require(T* object, const std::string& operation) {
+        device.throw_if_error(operation);
+        if (!object) throw Internal(format_message(operation, ": Embree returned null"));
+        return object;
+    }
+
+    SceneHandle new_scene(const std::string& operation) {
+        SceneHandle scene(require(rtcNewScene(device.get()), operation));
+        // Robust traversal: no missed hits on shared edges, which photons and shadow rays would
+        // turn into light leaks.
+        rtcSetSceneFlags(scene.get(), RTC_SCENE_FLAG_ROBUST);
+        rtcSetSceneBuildQuality(scene.get(), RTC_BUILD_QUALITY_MEDIUM);
+        return scene;
+    }
+
+    void commit_scene(RTCScene scene, BuildMonitor& monitor, const std::string& operation) {
+        rtcSetSceneProgressMonitorFunction(scene, &on_build_progress, &monitor);
+        rtcCommitScene(scene);
+        rtcSetSceneProgressMonitorFunction(scene, nullptr, nullptr);
+        device.throw_if_error(operation);
+    }
+
+    SceneHandle build_mesh(const Mesh& mesh, BuildMonitor& monitor);
+    void attach_instance(RTCScene top_scene, const Instance& instance, uint32_t id);
+};
+
+SceneHandle EmbreeScene::Impl::build_mesh(const Mesh& mesh, BuildMonitor& monitor) {
+    const std::string operation =
+        "building the BVH of " + scene_detail::label("mesh", mesh.name);
+    SceneHandle scene = new_scene(operation);
+    GeometryHandle geometry(
+        require(rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE), operation));
+    void* vertices =
+        require(rtcSetNewGeometryBuffer(geometry.get(), RTC_BUFFER_TYPE_VERTEX, 0,
+                                        RTC_FORMAT_FLOAT3, sizeof(vec3), mesh.positions.size()),
+                operation);
+    std::memcpy(vertices, mesh.positions.data(), mesh.positions.size() * sizeof(vec3));
+    void* indices =
+        require(rtcSetNewGeometryBuffer(geometry.get(), RTC_BUFFER_TYPE_INDEX, 0,
+                                        RTC_FORMAT_UINT3, sizeof(uvec3), mesh.triangles.size()),
+                operation);
+    std::memcpy(indices, mesh.triangles.data(), mesh.triangles.size() * sizeof(uvec3));
+    rtcCommitGeometry(geometry.get());
+    rtcAttachGeometryByID(scene.get(), geometry.get(), 0);
+    device.throw_if_error(operation);
+    commit_scene(scene.get(), monitor, operation);
+    return scene;
+}
+
+void EmbreeScene::Impl::attach_instance(RTCScene top_scene, const Instance& instance,
+                                        uint32_t id) {
+    GeometryHandle geometry(rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_INSTANCE));
+    if (!geometry) return;  // the caller's throw_if_error reports why
+    rtcSetGeometryInstancedScene(geometry.get(), mesh_scenes[instance.mesh_id].get());
+    // GLM stores column-major, which is Embree's FLOAT4X4_COLUMN_MAJOR layout.
+    rtcSetGeometryTransform(geometry.get(), 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR,
+                            &instance.world_from_object[0][0]);
+    rtcCommitGeometry(geometry.get());
+    rtcAttachGeometryByID(top_scene, geometry.get(), id);
+}
+
+EmbreeScene::EmbreeScene() : impl_(std::make_unique<Impl>()) {}
+EmbreeScene::~EmbreeScene() = default;
+
+void EmbreeScene::set_memory_budget(uint64_t bytes) { impl_->device.set_memory_budget(bytes); }
+uint64_t EmbreeScene::peak_bytes() const { return impl_->device.peak_bytes(); }
+void EmbreeScene::reset_peak() { impl_->device.reset_peak(); }
+
+void EmbreeScene::clear() {
+    impl_->top.reset();
+    impl_->mesh_scenes.clear();
+}
+
+void EmbreeScene::build_meshes(const std::vector<Mesh>& meshes, Progress* progress) {
+    clear();
+    impl_->device.clear_error();
+    BuildMonitor monitor{progress, 0, std::max<uint64_t>(meshes.size(), 1)};
+    try {
+        for (const Mesh& mesh : meshes) {
+            throw_if_cancelled(progress);
+            impl_->mesh_scenes.push_back(mesh.triangles.empty() ? SceneHandle()
+                                                                : impl_->build_mesh(mesh, monitor));
+            ++monitor.index;
+        }
+    } catch (...) {
+        clear();
+        throw;
+    }
+}
+
+void EmbreeScene::build_instances(const std::vector<Instance>& instances, Progress* progress) {
+    impl_->top.reset();
+    impl_->device.clear_error();
+    const std::string operation = "building the top-level BVH over the instances";
+    SceneHandle top = impl_->new_scene(operation);
+    for (size_t i = 0; i < instances.size(); ++i) {
+        if (i % kInstancesPerPoll == 0) throw_if_cancelled(progress);
+        const uint32_t mesh_id = instances[i].mesh_id;
+        if (mesh_id >= impl_->mesh_scenes.size())
+            throw Internal(format_message(operation, ": instance ", i, " uses mesh ", mesh_id,
+                                          " which has no BVH; build_meshes first"));
+        if (!impl_->mesh_scenes[mesh_id]) continue;  // a mesh without triangles
+        impl_->attach_instance(top.get(), instances[i], static_cast<uint32_t>(i));
+    }
+    impl_->device.throw_if_error(operation);
+    BuildMonitor monitor{progress, 0, 1};
+    impl_->commit_scene(top.get(), monitor, operation);
+    impl_->top = std::move(top);
+}
+
+void EmbreeScene::intersect(const Ray* rays, Hit* hits, size_t count) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    if (count == 1) {
+        RTCRayHit ray_hit;
+        to_embree(rays[0], ray_hit);
+        rtcIntersect1(impl_->top.get(), &context, &ray_hit);
+        hits[0] = from_embree(ray_hit);
+        return;
+    }
+    std::array<RTCRayHit, kStreamSize> stream;
+    for (size_t begin = 0; begin < count; begin += kStreamSize) {
+        const size_t size = std::min(kStreamSize, count - begin);
+        for (size_t i = 0; i < size; ++i) to_embree(rays[begin + i], stream[i]);
+        rtcIntersect1M(impl_->top.get(), &context, stream.data(), static_cast<unsigned>(size),
+                       sizeof(RTCRayHit));
+        for (size_t i = 0; i < size; ++i) hits[begin + i] = from_embree(stream[i]);
+    }
+}
+
+void EmbreeScene::occluded(const Ray* rays, uint8_t* occluded, size_t count) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    // Embree marks an occluded ray by setting tfar to -inf.
+    if (count == 1) {
+        RTCRay ray;
+        to_embree(rays[0], ray);
+        rtcOccluded1(impl_->top.get(), &context, &ray);
+        occluded[0] = ray.tfar < 0.0f ? 1 : 0;
+        return;
+    }
+    std::array<RTCRay, kStreamSize> stream;
+    for (size_t begin = 0; begin < count; begin += kStreamSize) {
+        const size_t size = std::min(kStreamSize, count - begin);
+        for (size_t i = 0; i < size; ++i) to_embree(rays[begin + i], stream[i]);
+        rtcOccluded1M(impl_->top.get(), &context, stream.data(), static_cast<unsigned>(size),
+                      sizeof(RTCRay));
+        for (size_t i = 0; i < size; ++i) occluded[begin + i] = stream[i].tfar < 0.0f ? 1 : 0;
+    }
+}
+
+}  // namespace shgi

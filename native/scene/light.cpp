@@ -1,0 +1,50 @@
+#include "scene/light.h"
+
+#include "scene/validation.h"
+#include "util/error.h"
+
+namespace shgi {
+
+using namespace scene_detail;
+
+void validate_light(const Light& light) {
+    const std::string item = label("light", light.name);
+    require_non_negative(item, "color", light.color);
+    require_non_negative(item, "power", light.power);
+    require_non_negative(item, "strength", light.strength);
+    require_transform(item, "world_from_light", light.world_from_light);
+    require_non_negative(item, "radius", light.radius);
+    switch (light.type) {
+        case LightType::Point:
+            break;
+        case LightType::Spot:
+            require_finite(item, "spot_size", light.spot_size);
+            if (!(light.spot_size > 0.0f) || light.spot_size > kPi)
+                throw InvalidArgument(format_message(item, ": spot_size = ", light.spot_size,
+                                                     " rad must be in (0, pi]"));
+            require_in_range(item, "spot_blend", light.spot_blend, 0.0f, 1.0f);
+            break;
+        case LightType::Sun:
+            require_finite(item, "angle", light.angle);
+            if (light.angle < 0.0f || light.angle >= kPi)
+                throw InvalidArgument(format_message(item, ": angle = ", light.angle,
+                                                     " rad must be in [0, pi)"));
+            break;
+        case LightType::Area:
+            // A zero-size area light would need infinite radiance to emit its power.
+            require_positive(item, "size_x", light.size_x);
+            if (light.shape == AreaShape::Rectangle || light.shape == AreaShape::Ellipse)
+                require_positive(item, "size_y", light.size_y);
+            break;
+        default:
+            throw InvalidArgument(format_message(item, ": type = ",
+                                                 static_cast<int>(light.type), " is unknown"));
+    }
+}
+
+void validate_world(const World& world) {
+    require_non_negative("world", "color", world.color);
+    require_non_negative("world", "strength", world.strength);
+}
+
+}  // namespace shgi

@@ -1,0 +1,49 @@
+#include "scene/material.h"
+
+#include <cmath>
+
+#include "scene/validation.h"
+#include "util/error.h"
+
+namespace shgi {
+
+using namespace scene_detail;
+
+void validate_material(const Material& material, uint32_t texture_count) {
+    const std::string item = label("material", material.name);
+    require_non_negative(item, "base_color", material.base_color);
+    require_in_range(item, "roughness", material.roughness, 0.0f, 1.0f);
+    require_in_range(item, "metallic", material.metallic, 0.0f, 1.0f);
+    require_in_range(item, "specular", material.specular, 0.0f, 1.0f);
+    require_in_range(item, "transmission", material.transmission, 0.0f, 1.0f);
+    require_finite(item, "ior", material.ior);
+    if (material.ior < 1.0f)
+        throw InvalidArgument(format_message(item, ": ior = ", material.ior, " must be >= 1"));
+    require_non_negative(item, "emission_color", material.emission_color);
+    require_non_negative(item, "emission_strength", material.emission_strength);
+    const int32_t texture = material.base_color_texture;
+    if (texture != kNoTexture && (texture < 0 || static_cast<uint32_t>(texture) >= texture_count))
+        throw InvalidArgument(format_message(item, ": base_color_texture = ", texture,
+                                             " but the scene has ", texture_count,
+                                             " textures (use -1 for none)"));
+}
+
+void validate_texture(const Texture& texture) {
+    const std::string item = label("texture", texture.name);
+    if (texture.width == 0 || texture.height == 0)
+        throw InvalidArgument(format_message(item, ": size ", texture.width, " x ",
+                                             texture.height, " is empty"));
+    const uint64_t expected = static_cast<uint64_t>(texture.width) * texture.height;
+    if (texture.texels.size() != expected)
+        throw InvalidArgument(format_message(item, ": texels has ", texture.texels.size(),
+                                             " elements but width x height = ", expected));
+    for (size_t i = 0; i < texture.texels.size(); ++i) {
+        const vec4& texel = texture.texels[i];
+        if (!is_finite(vec3(texel)) || !std::isfinite(texel.w))
+            throw InvalidArgument(format_message(item, ": texels[", i, "] = (", texel.x, ", ",
+                                                 texel.y, ", ", texel.z, ", ", texel.w,
+                                                 ") is not finite"));
+    }
+}
+
+}  // namespace shgi

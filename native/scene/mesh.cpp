@@ -1,0 +1,166 @@
+#include "scene/mesh.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "scene/validation.h"
+#include "util/error.h"
+
+namespace shgi {
+namespace {
+
+using scene_detail::kMaxCoordinate;
+using scene_detail::to_string;
+
+// A triangle is degenerate when twice its area is below this fraction of its longest edge
+// squared (the sine of its smallest angle, roughly). 1e-7 is float32's resolution: the normal of
+// a flatter triangle is rounding noise, and Embree would report hits with meaningless normals.
+constexpr double kMinRelativeArea = 1e-7;
+
+// A normal shorter than this cannot be normalised reliably (Blender writes unit normals; zero
+// ones come from broken importers or collapsed geometry).
+constexpr float kMinNormalLength = 1e-6f;
+
+std::string mesh_label(const Mesh& mesh) { return scene_detail::label("mesh", mesh.name); }
+
+void check_count(const Mesh& mesh, const char* array, size_t count, const char* reference,
+                 size_t expected, const char* fix) {
+    if (count != expected)
+        throw InvalidArgument(format_message(mesh_label(mesh), ": ", array, " has ", count,
+                                             " elements but ", reference, " has ", expected,
+                                             "; ", fix));
+}
+
+void check_sizes(const Mesh& mesh) {
+    const size_t vertices = mesh.positions.size();
+    if (!mesh.normals.empty())
+        check_count(mesh, "normals", mesh.normals.size(), "positions", vertices,
+                    "give one normal per vertex or none");
+    for (const UvSet& uv_set : mesh.uv_sets)
+        check_count(mesh, ("uv set '" + uv_set.name + "'").c_str(), uv_set.coords.size(),
+                    "positions", vertices, "give one UV per vertex");
+    if (!mesh.material_indices.empty())
+        check_count(mesh, "material_indices", mesh.material_indices.size(), "triangles",
+                    mesh.triangles.size(), "give one material index per triangle or none");
+    if (vertices >= kAnyMaterialCount)
+        throw InvalidArgument(format_message(mesh_label(mesh), ": ", vertices,
+                                             " vertices exceed the 32-bit index range"));
+}
+
+template <typename Vec>
+void check_finite(const Mesh& mesh, const std::string& array, const std::vector<Vec>& values) {
+    for (size_t i = 0; i < values.size(); ++i)
+        if (!is_finite(values[i]))
+            throw InvalidArgument(format_message(mesh_label(mesh), ": ", array, "[", i,
+                                                 "] = ", to_string(values[i]),
+                                                 " is not finite"));
+}
+
+void check_values(const Mesh& mesh) {
+    check_finite(mesh, "positions", mesh.positions);
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+        const vec3& p = mesh.positions[i];
+        if (glm::any(glm::greaterThan(glm::abs(p), vec3(kMaxCoordinate))))
+            throw InvalidArgument(format_message(
+                mesh_label(mesh), ": positions[", i, "] = ", to_string(p), " exceeds ",
+                kMaxCoordinate, " m in magnitude (beyond Embree's float range); apply a scale"));
+    }
+    check_finite(mesh, "normals", mesh.normals);
+    for (const UvSet& uv_set : mesh.uv_sets)
+        check_finite(mesh, "uv set '" + uv_set.name + "'", uv_set.coords);
+}
+
+void check_triangle_indices(const Mesh& mesh) {
+    const size_t vertices = mesh.positions.size();
+    for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+        const uvec3& tri = mesh.triangles[i];
+        for (int k = 0; k < 3; ++k)
+            if (tri[k] >= vertices)
+                throw InvalidArgument(format_message(
+                    mesh_label(mesh), ": triangles[", i, "] = (", tri.x, ", ", tri.y, ", ",
+                    tri.z, ") indexes vertex ", tri[k], " but the mesh has ", vertices,
+                    " vertices"));
+    }
+}
+
+bool is_degenerate(const Mesh& mesh, const uvec3& tri) {
+    if (tri.x == tri.y || tri.y == tri.z || tri.x == tri.z) return true;
+    const glm::dvec3 p0(mesh.positions[tri.x]);
+    const glm::dvec3 e1 = glm::dvec3(mesh.positions[tri.y]) - p0;
+    const glm::dvec3 e2 = glm::dvec3(mesh.positions[tri.z]) - p0;
+    const glm::dvec3 e3 = e2 - e1;
+    const double longest_squared =
+        std::max({glm::dot(e1, e1), glm::dot(e2, e2), glm::dot(e3, e3)});
+    const double twice_area = glm::length(glm::cross(e1, e2));
+    return !(twice_area > kMinRelativeArea * longest_squared);
+}
+
+// Removes degenerate triangles (and their material indices) in place, keeping the order.
+uint64_t drop_degenerate(Mesh& mesh) {
+    const bool has_materials = !mesh.material_indices.empty();
+    size_t kept = 0;
+    for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+        if (is_degenerate(mesh, mesh.triangles[i])) continue;
+        mesh.triangles[kept] = mesh.triangles[i];
+        if (has_materials) mesh.material_indices[kept] = mesh.material_indices[i];
+        ++kept;
+    }
+    const uint64_t dropped = mesh.triangles.size() - kept;
+    mesh.triangles.resize(kept);
+    if (has_materials) mesh.material_indices.resize(kept);
+    return dropped;
+}
+
+// Replaces zero-length vertex normals by the area-weighted sum of the adjacent face normals
+// (the face normal itself for a vertex used once); +Z for a vertex no triangle uses.
+uint64_t fix_normals(Mesh& mesh) {
+    const auto is_zero = [](const vec3& n) { return !(glm::length(n) >= kMinNormalLength); };
+    if (std::none_of(mesh.normals.begin(), mesh.normals.end(), is_zero)) return 0;
+    std::vector<vec3> face_sum(mesh.positions.size(), vec3(0.0f));
+    for (const uvec3& tri : mesh.triangles) {
+        const vec3 n = glm::cross(mesh.positions[tri.y] - mesh.positions[tri.x],
+                                  mesh.positions[tri.z] - mesh.positions[tri.x]);
+        for (int k = 0; k < 3; ++k) face_sum[tri[k]] += n;
+    }
+    uint64_t fixed = 0;
+    for (size_t i = 0; i < mesh.normals.size(); ++i) {
+        if (!is_zero(mesh.normals[i])) continue;
+        const float length = glm::length(face_sum[i]);
+        mesh.normals[i] = length > 0.0f ? face_sum[i] / length : vec3(0.0f, 0.0f, 1.0f);
+        ++fixed;
+    }
+    return fixed;
+}
+
+}  // namespace
+
+void check_material_indices(const Mesh& mesh, uint32_t material_count) {
+    for (size_t i = 0; i < mesh.material_indices.size(); ++i)
+        if (mesh.material_indices[i] >= material_count)
+            throw InvalidArgument(format_message(
+                mesh_label(mesh), ": material_indices[", i, "] = ", mesh.material_indices[i],
+                " but the scene has ", material_count, " materials"));
+}
+
+MeshReport validate_mesh(Mesh& mesh, uint32_t material_count) {
+    check_sizes(mesh);
+    check_values(mesh);
+    check_triangle_indices(mesh);
+    check_material_indices(mesh, material_count);
+    MeshReport report;
+    report.dropped_degenerate = drop_degenerate(mesh);
+    report.fixed_normals = fix_normals(mesh);
+    return report;
+}
+
+float triangle_area(const Mesh& mesh, uint32_t triangle) {
+    if (triangle >= mesh.triangles.size())
+        throw InvalidArgument(format_message(mesh_label(mesh), ": triangle ", triangle,
+                                             " is out of range (", mesh.triangles.size(),
+                                             " triangles)"));
+    const uvec3& tri = mesh.triangles[triangle];
+    const vec3& p0 = mesh.positions[tri.x];
+    return 0.5f * glm::length(glm::cross(mesh.positions[tri.y] - p0, mesh.positions[tri.z] - p0));
+}
+
+}  // namespace shgi

@@ -1,0 +1,392 @@
+#include "scene/scene.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <limits>
+
+#include "scene/embree_scene.h"
+#include "scene/validation.h"
+#include "util/error.h"
+#include "util/log.h"
+#include "util/parallel.h"
+
+namespace shgi {
+namespace {
+
+using namespace scene_detail;
+
+// add_material runs before textures may have been added; commit() checks the real count.
+constexpr uint32_t kAnyTextureCount = std::numeric_limits<uint32_t>::max();
+
+// CommitSettings::memory_budget_bytes = 0 leaves a quarter of the machine's RAM to Blender and
+// the rest of SHGI.
+constexpr double kDefaultBudgetFraction = 0.75;
+
+uint64_t resolve_budget(uint64_t requested) {
+    if (requested > 0) return requested;
+    const long pages = sysconf(_SC_PHYS_PAGES);
+    const long page_size = sysconf(_SC_PAGE_SIZE);
+    if (pages <= 0 || page_size <= 0) return std::numeric_limits<uint64_t>::max();
+    const double physical = static_cast<double>(pages) * static_cast<double>(page_size);
+    return static_cast<uint64_t>(physical * kDefaultBudgetFraction);
+}
+
+std::string instance_label(const std::vector<Instance>& instances, size_t i) {
+    const std::string& name = instances[i].name;
+    return name.empty() ? format_message("instance ", i)
+                        : format_message("instance ", i, " '", name, "'");
+}
+
+// Why is_valid_ray rejects `ray`, in the order is_valid_ray checks.
+const char* ray_problem(const Ray& ray) {
+    if (!is_finite(ray.origin)) return "origin is not finite";
+    if (!is_finite(ray.direction)) return "direction is not finite";
+    if (ray.direction == vec3(0.0f)) return "direction is zero";
+    if (!std::isfinite(ray.tmin) || ray.tmin < 0.0f) return "tmin must be finite and >= 0";
+    if (std::isnan(ray.tmax)) return "tmax is NaN";
+    if (ray.tmax < ray.tmin) return "tmax is less than tmin";
+    return "is invalid";
+}
+
+void check_ray(const Ray& ray, const std::string& name) {
+    if (is_valid_ray(ray)) return;
+    throw InvalidArgument(format_message(name, ": ", ray_problem(ray), " (origin ",
+                                         to_string(ray.origin), ", direction ",
+                                         to_string(ray.direction), ", tmin ", ray.tmin,
+                                         ", tmax ", ray.tmax, ")"));
+}
+
+// Validates every ray before any is traced, so the message names the first bad one whatever
+// the chunking.
+void check_rays(const std::vector<Ray>& rays) {
+    for (size_t i = 0; i < rays.size(); ++i)
+        if (!is_valid_ray(rays[i])) check_ray(rays[i], format_message("rays[", i, "]"));
+}
+
+// det(M) * M^-T, whose columns are cross products of M's columns; times sign(det) so that a
+// mirroring transform keeps the front side (see scene.h, "Normals").
+mat3 normal_matrix(const mat4& world_from_object) {
+    const mat3 m(world_from_object);
+    const mat3 cofactor(glm::cross(m[1], m[2]), glm::cross(m[2], m[0]), glm::cross(m[0], m[1]));
+    return glm::determinant(m) < 0.0f ? -cofactor : cofactor;
+}
+
+Bounds3 instance_bounds(const Mesh& mesh, const mat4& world_from_object) {
+    Bounds3 bounds;
+    if (mesh.triangles.empty()) return bounds;
+    for (const vec3& p : mesh.positions) bounds.extend(vec3(world_from_object * vec4(p, 1.0f)));
+    return bounds;
+}
+
+}  // namespace
+
+Scene::Scene() = default;
+Scene::~Scene() = default;
+Scene::Scene(Scene&&) noexcept = default;
+Scene& Scene::operator=(Scene&&) noexcept = default;
+
+void Scene::invalidate() { committed_ = false; }
+
+uint32_t Scene::add_mesh(Mesh mesh) {
+    MeshReport report = validate_mesh(mesh, kAnyMaterialCount);
+    meshes_.push_back(std::move(mesh));
+    mesh_reports_.push_back(report);
+    geometry_dirty_ = true;
+    invalidate();
+    return static_cast<uint32_t>(meshes_.size() - 1);
+}
+
+uint32_t Scene::add_instance(uint32_t mesh_id, const mat4& world_from_object, std::string name) {
+    const std::string item = name.empty() ? format_message("instance ", instances_.size())
+                                          : format_message("instance '", name, "'");
+    if (mesh_id >= meshes_.size())
+        throw InvalidArgument(format_message(item, ": mesh_id = ", mesh_id, " but the scene has ",
+                                             meshes_.size(), " meshes; add the mesh first"));
+    require_transform(item, "world_from_object", world_from_object);
+    instances_.push_back(Instance{std::move(name), mesh_id, world_from_object});
+    invalidate();
+    return static_cast<uint32_t>(instances_.size() - 1);
+}
+
+uint32_t Scene::add_material(Material material) {
+    validate_material(material, kAnyTextureCount);
+    materials_.push_back(std::move(material));
+    invalidate();
+    return static_cast<uint32_t>(materials_.size() - 1);
+}
+
+uint32_t Scene::add_texture(Texture texture) {
+    validate_texture(texture);
+    textures_.push_back(std::move(texture));
+    invalidate();
+    return static_cast<uint32_t>(textures_.size() - 1);
+}
+
+uint32_t Scene::add_light(Light light) {
+    validate_light(light);
+    lights_.push_back(std::move(light));
+    invalidate();
+    return static_cast<uint32_t>(lights_.size() - 1);
+}
+
+void Scene::set_world(const World& world) {
+    validate_world(world);
+    world_ = world;
+    invalidate();
+}
+
+void Scene::set_camera(const Camera& camera) {
+    validate_camera(camera);
+    camera_ = camera;
+    has_camera_ = true;
+    invalidate();
+}
+
+void Scene::set_instance_transform(uint32_t instance_id, const mat4& world_from_object) {
+    if (instance_id >= instances_.size())
+        throw InvalidArgument(format_message("set_instance_transform: instance_id = ",
+                                             instance_id, " but the scene has ",
+                                             instances_.size(), " instances"));
+    require_transform(instance_label(instances_, instance_id), "world_from_object",
+                      world_from_object);
+    instances_[instance_id].world_from_object = world_from_object;
+    invalidate();  // the per-mesh BVHs stay: only the top level is rebuilt
+}
+
+const Camera& Scene::camera() const {
+    if (!has_camera_)
+        throw InvalidArgument("the scene has no camera; call set_camera() first");
+    return camera_;
+}
+
+void Scene::check_references() {
+    if (materials_.empty()) materials_.push_back(Material{});
+    const auto material_count = static_cast<uint32_t>(materials_.size());
+    for (const Material& material : materials_)
+        validate_material(material, static_cast<uint32_t>(textures_.size()));
+    for (const Mesh& mesh : meshes_) check_material_indices(mesh, material_count);
+}
+
+Bounds3 Scene::compute_bounds() const {
+    Bounds3 bounds;
+    for (size_t i = 0; i < instances_.size(); ++i) {
+        const Bounds3 b =
+            instance_bounds(meshes_[instances_[i].mesh_id], instances_[i].world_from_object);
+        if (b.empty()) continue;
+        const vec3 magnitude = glm::max(glm::abs(b.lower), glm::abs(b.upper));
+        if (glm::any(glm::greaterThan(magnitude, vec3(kMaxCoordinate))))
+            throw InvalidArgument(format_message(
+                instance_label(instances_, i), ": world-space bounds ", to_string(b.lower),
+                " to ", to_string(b.upper), " exceed ", kMaxCoordinate,
+                " m (beyond Embree's float range); scale the object down"));
+        bounds.extend(b.lower);
+        bounds.extend(b.upper);
+    }
+    return bounds;
+}
+
+void Scene::gather_emissive() {
+    emissive_.clear();
+    for (size_t i = 0; i < instances_.size(); ++i) {
+        const Mesh& mesh = meshes_[instances_[i].mesh_id];
+        const mat4& world_from_object = instances_[i].world_from_object;
+        for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+            const uint32_t material_id = mesh.material_indices.empty() ? 0
+                                                                       : mesh.material_indices[t];
+            const Material& material = materials_[material_id];
+            if (!material.is_emissive()) continue;
+            EmissiveTriangle emissive;
+            emissive.instance_id = static_cast<uint32_t>(i);
+            emissive.triangle_id = static_cast<uint32_t>(t);
+            const uvec3& tri = mesh.triangles[t];
+            emissive.p0 = vec3(world_from_object * vec4(mesh.positions[tri.x], 1.0f));
+            emissive.p1 = vec3(world_from_object * vec4(mesh.positions[tri.y], 1.0f));
+            emissive.p2 = vec3(world_from_object * vec4(mesh.positions[tri.z], 1.0f));
+            const vec3 twice_area_normal =
+                glm::cross(emissive.p1 - emissive.p0, emissive.p2 - emissive.p0);
+            emissive.area = 0.5f * glm::length(twice_area_normal);
+            emissive.radiance = material.emission();
+            emissive_.push_back(emissive);
+        }
+    }
+}
+
+void Scene::commit(const CommitSettings& settings, Progress* progress) {
+    committed_ = false;
+    if (progress) progress->begin_stage("checking scene", 0.0f, 0.05f);
+    check_references();
+    bounds_ = compute_bounds();
+    const uint64_t budget = resolve_budget(settings.memory_budget_bytes);
+    const uint64_t estimate = estimate_bvh_bytes(meshes_, instances_);
+    if (estimate > budget)
+        throw OutOfMemory(format_message(
+            "the scene's BVH needs at least ", estimate, " bytes (", stats().triangles,
+            " triangles in ", meshes_.size(), " meshes, ", instances_.size(),
+            " instances) but the memory budget is ", budget,
+            " bytes; raise memory_budget_bytes (0 = 75% of physical RAM) or simplify the scene"));
+    if (!embree_) embree_ = std::make_unique<EmbreeScene>();
+    embree_->set_memory_budget(budget);
+    embree_->reset_peak();
+    try {
+        if (geometry_dirty_) {
+            if (progress) progress->begin_stage("building mesh BVHs", 0.05f, 0.85f);
+            embree_->build_meshes(meshes_, progress);
+            geometry_dirty_ = false;
+        }
+        if (progress) progress->begin_stage("building instance BVH", 0.85f, 0.95f);
+        embree_->build_instances(instances_, progress);
+    } catch (...) {
+        embree_->clear();
+        geometry_dirty_ = true;
+        throw;
+    }
+    bvh_bytes_ = embree_->peak_bytes();
+    if (progress) progress->begin_stage("gathering emissive triangles", 0.95f, 1.0f);
+    normal_from_object_.clear();
+    for (const Instance& instance : instances_)
+        normal_from_object_.push_back(normal_matrix(instance.world_from_object));
+    gather_emissive();
+    if (empty()) log_warning("scene has no triangles: every ray misses");
+    committed_ = true;
+    if (progress) progress->set_fraction(1.0f);
+}
+
+bool Scene::empty() const {
+    for (const Instance& instance : instances_)
+        if (!meshes_[instance.mesh_id].triangles.empty()) return false;
+    return true;
+}
+
+Bounds3 Scene::bounds() const {
+    if (empty())
+        throw InvalidArgument("the scene has no triangles, so it has no bounds; add a mesh and "
+                              "an instance of it");
+    return committed_ ? bounds_ : compute_bounds();
+}
+
+SceneStats Scene::stats() const {
+    SceneStats stats;
+    stats.meshes = meshes_.size();
+    stats.instances = instances_.size();
+    for (size_t i = 0; i < meshes_.size(); ++i) {
+        stats.triangles += meshes_[i].triangles.size();
+        stats.dropped_degenerate += mesh_reports_[i].dropped_degenerate;
+    }
+    for (const Instance& instance : instances_)
+        stats.instanced_triangles += meshes_[instance.mesh_id].triangles.size();
+    stats.emissive_triangles = emissive_.size();
+    stats.lights = lights_.size();
+    stats.bvh_bytes = bvh_bytes_;
+    return stats;
+}
+
+void Scene::require_committed(const char* query) const {
+    if (!committed_)
+        throw InvalidArgument(format_message(
+            "Scene::", query, ": the scene was edited or never committed; call commit() first"));
+}
+
+void Scene::finish_hit(Hit& hit) const {
+    if (hit.valid())
+        hit.geometric_normal = normal_from_object_[hit.instance_id] * hit.geometric_normal;
+}
+
+Hit Scene::intersect(const Ray& ray) const {
+    require_committed("intersect");
+    check_ray(ray, "ray");
+    Hit hit;
+    if (empty()) return hit;
+    embree_->intersect(&ray, &hit, 1);
+    finish_hit(hit);
+    return hit;
+}
+
+bool Scene::occluded(const Ray& ray) const {
+    require_committed("occluded");
+    check_ray(ray, "ray");
+    if (empty()) return false;
+    uint8_t result = 0;
+    embree_->occluded(&ray, &result, 1);
+    return result != 0;
+}
+
+void Scene::intersect(const std::vector<Ray>& rays, std::vector<Hit>& hits,
+                      Progress* progress) const {
+    require_committed("intersect");
+    check_rays(rays);
+    hits.assign(rays.size(), Hit{});
+    if (empty()) {
+        throw_if_cancelled(progress);
+        return;
+    }
+    parallel_for(
+        0, rays.size(), kRaysPerChunk,
+        [&](uint64_t begin, uint64_t end) {
+            embree_->intersect(&rays[begin], &hits[begin], end - begin);
+            for (uint64_t i = begin; i < end; ++i) finish_hit(hits[i]);
+        },
+        progress);
+}
+
+void Scene::occluded(const std::vector<Ray>& rays, std::vector<uint8_t>& occluded,
+                     Progress* progress) const {
+    require_committed("occluded");
+    check_rays(rays);
+    occluded.assign(rays.size(), 0);
+    if (empty()) {
+        throw_if_cancelled(progress);
+        return;
+    }
+    parallel_for(
+        0, rays.size(), kRaysPerChunk,
+        [&](uint64_t begin, uint64_t end) {
+            embree_->occluded(&rays[begin], &occluded[begin], end - begin);
+        },
+        progress);
+}
+
+// The ray is not needed: positions come from the barycentrics, which stay on the triangle,
+// unlike origin + t * direction (whose rounding error grows with t).
+SurfacePoint Scene::surface_point(const Ray& /*ray*/, const Hit& hit) const {
+    require_committed("surface_point");
+    if (!hit.valid()) throw InvalidArgument("surface_point: the hit is a miss (no instance)");
+    if (hit.instance_id >= instances_.size())
+        throw InvalidArgument(format_message("surface_point: hit.instance_id = ", hit.instance_id,
+                                             " but the scene has ", instances_.size(),
+                                             " instances"));
+    const Instance& instance = instances_[hit.instance_id];
+    const Mesh& mesh = meshes_[instance.mesh_id];
+    if (hit.triangle_id >= mesh.triangles.size())
+        throw InvalidArgument(format_message("surface_point: hit.triangle_id = ", hit.triangle_id,
+                                             " but its mesh has ", mesh.triangles.size(),
+                                             " triangles"));
+    const uvec3& tri = mesh.triangles[hit.triangle_id];
+    const float b1 = hit.barycentrics.x, b2 = hit.barycentrics.y, b0 = 1.0f - b1 - b2;
+    const vec3& p0 = mesh.positions[tri.x];
+    const vec3& p1 = mesh.positions[tri.y];
+    const vec3& p2 = mesh.positions[tri.z];
+    const mat3& normal_from_object = normal_from_object_[hit.instance_id];
+
+    SurfacePoint point;
+    point.instance_id = hit.instance_id;
+    point.triangle_id = hit.triangle_id;
+    point.position = vec3(instance.world_from_object * vec4(b0 * p0 + b1 * p1 + b2 * p2, 1.0f));
+    point.geometric_normal = glm::normalize(normal_from_object * glm::cross(p1 - p0, p2 - p0));
+    point.shading_normal = point.geometric_normal;
+    if (!mesh.normals.empty()) {
+        const vec3 n = normal_from_object * (b0 * mesh.normals[tri.x] + b1 * mesh.normals[tri.y] +
+                                             b2 * mesh.normals[tri.z]);
+        const float length = glm::length(n);
+        // Opposite vertex normals can cancel out; the face normal is then the best guess.
+        if (length > 0.0f) point.shading_normal = n / length;
+    }
+    if (!mesh.uv_sets.empty()) {
+        const std::vector<vec2>& uv = mesh.uv_sets.front().coords;
+        point.uv = b0 * uv[tri.x] + b1 * uv[tri.y] + b2 * uv[tri.z];
+    }
+    point.material_id = mesh.material_indices.empty() ? 0 : mesh.material_indices[hit.triangle_id];
+    return point;
+}
+
+}  // namespace shgi

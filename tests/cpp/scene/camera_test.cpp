@@ -1,0 +1,117 @@
+// Camera rays against Blender's camera model, worked out by hand: the sensor (or ortho_scale)
+// spans the fitted image axis, Auto fits the larger dimension with sensor_width, shift is in
+// units of the fitted dimension, clip distances are measured along the view axis.
+#include <gtest/gtest.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "scene/camera.h"
+
+namespace shgi {
+namespace {
+
+// Float rounding of a few multiplications: directions and positions of unit magnitude.
+constexpr float kTolerance = 1e-5f;
+// Film positions after a generate_ray -> project round trip (pixels).
+constexpr float kFilmTolerance = 1e-3f;
+
+void expect_near(const vec3& actual, const vec3& expected, float tolerance = kTolerance) {
+    EXPECT_NEAR(actual.x, expected.x, tolerance);
+    EXPECT_NEAR(actual.y, expected.y, tolerance);
+    EXPECT_NEAR(actual.z, expected.z, tolerance);
+}
+
+TEST(Camera, CenterPixelLooksDownMinusZ) {
+    Camera camera;  // identity: at the origin, looking down -Z, 640 x 480
+    const Ray ray = camera.generate_ray(vec2(320, 240));
+    expect_near(ray.origin, vec3(0));
+    expect_near(ray.direction, vec3(0, 0, -1));
+    EXPECT_FLOAT_EQ(ray.tmin, camera.clip_start);
+    EXPECT_FLOAT_EQ(ray.tmax, camera.clip_end);
+}
+
+TEST(Camera, AutoFitSpansTheWiderAxisWithSensorWidth) {
+    Camera camera;  // 640 x 480 landscape, lens 50, sensor 36: tan(half width) = 18 / 50
+    const Ray corner = camera.generate_ray(vec2(0, 0));
+    expect_near(corner.direction, glm::normalize(vec3(-0.36f, 0.27f, -1.0f)));
+    // Clip planes are perpendicular to the view axis: along this ray they are further away.
+    EXPECT_NEAR(corner.tmin, camera.clip_start * glm::length(vec3(0.36f, 0.27f, 1.0f)), 1e-6f);
+
+    camera.resolution_x = 480;  // portrait: Auto fits the height with sensor_width
+    camera.resolution_y = 640;
+    expect_near(camera.generate_ray(vec2(480, 640)).direction,
+                glm::normalize(vec3(0.27f, -0.36f, -1.0f)));
+}
+
+TEST(Camera, VerticalFitUsesSensorHeight) {
+    Camera camera;
+    camera.sensor_fit = SensorFit::Vertical;  // 24 mm across 480 px: tan = 12 / 50 = 0.24
+    expect_near(camera.generate_ray(vec2(640, 0)).direction,
+                glm::normalize(vec3(0.32f, 0.24f, -1.0f)));
+}
+
+TEST(Camera, HorizontalFitOnPortraitImage) {
+    Camera camera;
+    camera.sensor_fit = SensorFit::Horizontal;
+    camera.resolution_x = 480;
+    camera.resolution_y = 640;  // width spans 36 mm: tan(half width) = 0.36, height 0.48
+    expect_near(camera.generate_ray(vec2(0, 640)).direction,
+                glm::normalize(vec3(-0.36f, -0.48f, -1.0f)));
+}
+
+TEST(Camera, ShiftIsInUnitsOfTheFittedDimension) {
+    Camera camera;
+    camera.shift_x = 0.1f;   // 0.1 * 36 / 50 = 0.072 along x
+    camera.shift_y = -0.2f;  // -0.2 * 0.72 = -0.144 along y (also the larger dimension)
+    expect_near(camera.generate_ray(vec2(320, 240)).direction,
+                glm::normalize(vec3(0.072f, -0.144f, -1.0f)));
+}
+
+TEST(Camera, OrthographicRaysAreParallelAndSpanOrthoScale) {
+    Camera camera;
+    camera.type = CameraType::Orthographic;
+    camera.ortho_scale = 4.0f;  // 4 m across 640 px, so 3 m across 480 px
+    camera.world_from_camera = glm::translate(mat4(1.0f), vec3(0, 0, 10));
+    const Ray corner = camera.generate_ray(vec2(0, 0));
+    expect_near(corner.origin, vec3(-2.0f, 1.5f, 10.0f));
+    expect_near(corner.direction, vec3(0, 0, -1));
+    EXPECT_FLOAT_EQ(corner.tmin, camera.clip_start);
+}
+
+TEST(Camera, ScaleOfTheCameraObjectIsIgnored) {
+    Camera camera;
+    camera.world_from_camera = glm::scale(mat4(1.0f), vec3(3.0f));
+    expect_near(camera.generate_ray(vec2(0, 0)).direction,
+                glm::normalize(vec3(-0.36f, 0.27f, -1.0f)));
+}
+
+TEST(Camera, ProjectInvertsGenerateRay) {
+    for (const CameraType type : {CameraType::Perspective, CameraType::Orthographic}) {
+        Camera camera;
+        camera.type = type;
+        camera.shift_x = 0.05f;
+        camera.sensor_fit = SensorFit::Vertical;
+        camera.world_from_camera = glm::translate(mat4(1.0f), vec3(1, -2, 3)) *
+                                   glm::rotate(mat4(1.0f), 1.1f, glm::normalize(vec3(1, 2, 3)));
+        for (const vec2 film :
+             {vec2(0.5f, 0.5f), vec2(320, 240), vec2(639.5f, 10), vec2(17, 470)}) {
+            const Ray ray = camera.generate_ray(film);
+            vec2 projected;
+            ASSERT_TRUE(camera.project(ray.origin + 5.0f * ray.direction, &projected));
+            EXPECT_NEAR(projected.x, film.x, kFilmTolerance);
+            EXPECT_NEAR(projected.y, film.y, kFilmTolerance);
+        }
+    }
+}
+
+TEST(Camera, ProjectRejectsPointsBehind) {
+    Camera camera;
+    vec2 film;
+    EXPECT_FALSE(camera.project(vec3(0, 0, 1), &film));
+    EXPECT_TRUE(camera.project(vec3(0, 0, -1), &film));
+    EXPECT_NEAR(film.x, 320.0f, kFilmTolerance);
+    EXPECT_NEAR(film.y, 240.0f, kFilmTolerance);
+}
+
+}  // namespace
+}  // namespace shgi

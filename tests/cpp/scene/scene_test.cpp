@@ -1,0 +1,504 @@
+// Scene on Embree: hits on known geometry (exact t, barycentrics, normals) through instance
+// transforms, batch == single, every bad input rejected with its own message, memory budget,
+// empty scenes, emissive triangles, cancel.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <random>
+#include <string>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "scene/embree_scene.h"
+#include "scene/scene.h"
+#include "util/error.h"
+#include "util/log.h"
+
+namespace shgi {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+// Embree's robust watertight intersection is accurate to a few float ulps at unit scale.
+constexpr float kTolerance = 1e-5f;
+
+// Unit quad in the XY plane, facing +Z: triangle 0 = (0,0),(1,0),(1,1); triangle 1 the rest.
+Mesh unit_quad(std::string name = "Quad") {
+    Mesh mesh;
+    mesh.name = std::move(name);
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+    mesh.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
+    mesh.uv_sets = {{"UVMap", {{0, 0}, {1, 0}, {1, 1}, {0, 1}}}};
+    return mesh;
+}
+
+// Closed unit cube [0,1]^3, outward-facing, 12 triangles.
+Mesh unit_cube() {
+    Mesh mesh;
+    mesh.name = "Cube";
+    for (int i = 0; i < 8; ++i) mesh.positions.push_back(vec3(i & 1, (i >> 1) & 1, (i >> 2) & 1));
+    mesh.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                      {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+    return mesh;
+}
+
+// A grid of n x n quads (2 n^2 triangles) in the XY plane.
+Mesh grid(int n) {
+    Mesh mesh;
+    mesh.name = "Grid";
+    for (int y = 0; y <= n; ++y)
+        for (int x = 0; x <= n; ++x) mesh.positions.push_back(vec3(x, y, 0) / float(n));
+    const auto v = [n](int x, int y) { return static_cast<uint32_t>(y * (n + 1) + x); };
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            mesh.triangles.push_back(uvec3(v(x, y), v(x + 1, y), v(x + 1, y + 1)));
+            mesh.triangles.push_back(uvec3(v(x, y), v(x + 1, y + 1), v(x, y + 1)));
+        }
+    return mesh;
+}
+
+Ray make_ray(vec3 origin, vec3 direction, float tmin = 0.0f, float tmax = kInfinity) {
+    Ray ray;
+    ray.origin = origin;
+    ray.direction = direction;
+    ray.tmin = tmin;
+    ray.tmax = tmax;
+    return ray;
+}
+
+template <typename Error>
+std::string rejection(const std::function<void()>& action) {
+    try {
+        action();
+    } catch (const Error& error) {
+        return error.what();
+    }
+    return "";
+}
+
+void expect_contains(const std::string& message, const std::string& part) {
+    EXPECT_NE(message.find(part), std::string::npos) << "message: '" << message << "'";
+}
+
+void expect_near(const vec3& actual, const vec3& expected, float tolerance = kTolerance) {
+    EXPECT_NEAR(actual.x, expected.x, tolerance);
+    EXPECT_NEAR(actual.y, expected.y, tolerance);
+    EXPECT_NEAR(actual.z, expected.z, tolerance);
+}
+
+Scene quad_scene(const mat4& world_from_object = mat4(1.0f)) {
+    Scene scene;
+    scene.add_instance(scene.add_mesh(unit_quad()), world_from_object, "QuadObject");
+    scene.commit();
+    return scene;
+}
+
+TEST(SceneIntersect, HitsUnitQuadWithExactTBarycentricsAndNormal) {
+    const Scene scene = quad_scene();
+    const Hit hit = scene.intersect(make_ray(vec3(0.75f, 0.25f, 1.0f), vec3(0, 0, -1)));
+    ASSERT_TRUE(hit.valid());
+    EXPECT_NEAR(hit.t, 1.0f, kTolerance);
+    EXPECT_EQ(hit.instance_id, 0u);
+    EXPECT_EQ(hit.triangle_id, 0u);
+    // p = (0.75, 0.25) = b1 (1,0) + b2 (1,1): b2 = 0.25, b1 = 0.5.
+    EXPECT_NEAR(hit.barycentrics.x, 0.5f, kTolerance);
+    EXPECT_NEAR(hit.barycentrics.y, 0.25f, kTolerance);
+    // Unnormalised: twice the triangle's area (1) along +Z.
+    expect_near(hit.geometric_normal, vec3(0, 0, 1));
+
+    const Hit other = scene.intersect(make_ray(vec3(0.25f, 0.75f, 2.0f), vec3(0, 0, -2)));
+    EXPECT_EQ(other.triangle_id, 1u);
+    EXPECT_NEAR(other.t, 1.0f, kTolerance);  // t is in units of |direction|
+}
+
+TEST(SceneIntersect, MissesBesideBehindAndBeyondTmax) {
+    const Scene scene = quad_scene();
+    EXPECT_FALSE(scene.intersect(make_ray(vec3(2, 2, 1), vec3(0, 0, -1))).valid());
+    EXPECT_FALSE(scene.intersect(make_ray(vec3(0.5f, 0.5f, 1), vec3(0, 0, 1))).valid());
+    EXPECT_FALSE(scene.intersect(make_ray(vec3(0.5f, 0.5f, 1), vec3(0, 0, -1), 0, 0.99f)).valid());
+    EXPECT_FALSE(scene.intersect(make_ray(vec3(0.5f, 0.5f, 1), vec3(0, 0, -1), 1.01f)).valid());
+}
+
+TEST(SceneOccluded, RespectsTheRaySegment) {
+    const Scene scene = quad_scene();
+    EXPECT_TRUE(scene.occluded(make_ray(vec3(0.5f, 0.5f, 1), vec3(0, 0, -1))));
+    EXPECT_FALSE(scene.occluded(make_ray(vec3(0.5f, 0.5f, 1), vec3(0, 0, -1), 0, 0.5f)));
+    EXPECT_FALSE(scene.occluded(make_ray(vec3(3, 0.5f, 1), vec3(0, 0, -1))));
+}
+
+TEST(SceneIntersect, InstanceWithScaleRotationAndTranslation) {
+    // Object (x, y, 0) -> world (2x, 0, 2y + 5): rotated +90 degrees about X, scaled by 2.
+    const mat4 world_from_object = glm::translate(mat4(1.0f), vec3(0, 0, 5)) *
+                                   glm::rotate(mat4(1.0f), 0.5f * kPi, vec3(1, 0, 0)) *
+                                   glm::scale(mat4(1.0f), vec3(2.0f));
+    const Scene scene = quad_scene(world_from_object);
+    const Ray ray = make_ray(vec3(1.5f, -3.0f, 5.5f), vec3(0, 1, 0));
+    const Hit hit = scene.intersect(ray);
+    ASSERT_TRUE(hit.valid());
+    EXPECT_NEAR(hit.t, 3.0f, kTolerance);
+    EXPECT_EQ(hit.triangle_id, 0u);  // object point (0.75, 0.25)
+    EXPECT_NEAR(hit.barycentrics.x, 0.5f, kTolerance);
+    EXPECT_NEAR(hit.barycentrics.y, 0.25f, kTolerance);
+    // +Z rotates to -Y; length = twice the world-space area = 2 * 0.5 * 2 * 2.
+    expect_near(hit.geometric_normal, vec3(0, -4, 0));
+
+    const SurfacePoint point = scene.surface_point(ray, hit);
+    expect_near(point.position, vec3(1.5f, 0.0f, 5.5f));
+    expect_near(point.geometric_normal, vec3(0, -1, 0));
+    expect_near(point.shading_normal, vec3(0, -1, 0));
+    EXPECT_NEAR(point.uv.x, 0.75f, kTolerance);
+    EXPECT_NEAR(point.uv.y, 0.25f, kTolerance);
+}
+
+TEST(SceneIntersect, NonUniformScaleTransformsNormalsByInverseTranspose) {
+    // A quad tilted 45 degrees about Y, then squashed along X: the world normal is not the
+    // transformed object normal but the inverse-transpose one.
+    Mesh tilted = unit_quad("Tilted");
+    for (vec3& p : tilted.positions) p.z = p.x;  // plane z = x, normal (-1, 0, 1) / sqrt 2
+    for (vec3& n : tilted.normals) n = glm::normalize(vec3(-1, 0, 1));
+    Scene scene;
+    const mat4 world_from_object = glm::scale(mat4(1.0f), vec3(0.5f, 1.0f, 1.0f));
+    scene.add_instance(scene.add_mesh(tilted), world_from_object);
+    scene.commit();
+    // World plane: z = 2x, normal (-2, 0, 1) / sqrt 5.
+    const Ray ray = make_ray(vec3(0.25f, 0.5f, 3.0f), vec3(0, 0, -1));
+    const Hit hit = scene.intersect(ray);
+    ASSERT_TRUE(hit.valid());
+    EXPECT_NEAR(hit.t, 2.5f, kTolerance);
+    const SurfacePoint point = scene.surface_point(ray, hit);
+    expect_near(point.geometric_normal, glm::normalize(vec3(-2, 0, 1)));
+    expect_near(point.shading_normal, glm::normalize(vec3(-2, 0, 1)));
+}
+
+TEST(SceneIntersect, MirroringTransformKeepsTheFrontSide) {
+    // Mirrored in X: the world winding flips, but the object's front (+Z) stays the front.
+    const Scene scene = quad_scene(glm::scale(mat4(1.0f), vec3(-1, 1, 1)));
+    const Ray ray = make_ray(vec3(-0.75f, 0.25f, 1.0f), vec3(0, 0, -1));
+    const Hit hit = scene.intersect(ray);
+    ASSERT_TRUE(hit.valid());
+    expect_near(hit.geometric_normal, vec3(0, 0, 1));
+    const SurfacePoint point = scene.surface_point(ray, hit);
+    expect_near(point.geometric_normal, vec3(0, 0, 1));
+    expect_near(point.shading_normal, vec3(0, 0, 1));
+}
+
+TEST(SceneIntersect, TwoInstancesOfOneMeshAndTransformUpdate) {
+    Scene scene;
+    const uint32_t mesh = scene.add_mesh(unit_quad());
+    scene.add_instance(mesh, mat4(1.0f), "Low");
+    scene.add_instance(mesh, glm::translate(mat4(1.0f), vec3(0, 0, 2)), "High");
+    scene.commit();
+    const Ray down = make_ray(vec3(0.75f, 0.25f, 10), vec3(0, 0, -1));
+    Hit hit = scene.intersect(down);
+    EXPECT_EQ(hit.instance_id, 1u);
+    EXPECT_NEAR(hit.t, 8.0f, kTolerance);
+    EXPECT_EQ(scene.stats().triangles, 2u);
+    EXPECT_EQ(scene.stats().instanced_triangles, 4u);
+
+    scene.set_instance_transform(0, glm::translate(mat4(1.0f), vec3(0, 0, 4)));
+    expect_contains(rejection<InvalidArgument>([&] { scene.intersect(down); }),
+                    "call commit() first");
+    scene.commit();
+    hit = scene.intersect(down);
+    EXPECT_EQ(hit.instance_id, 0u);
+    EXPECT_NEAR(hit.t, 6.0f, kTolerance);
+}
+
+TEST(SceneIntersect, BatchMatchesSingleRays) {
+    Scene scene;
+    const uint32_t cube = scene.add_mesh(unit_cube());
+    scene.add_instance(cube, mat4(1.0f));
+    scene.add_instance(cube, glm::translate(mat4(1.0f), vec3(2, 0, 0)) *
+                                 glm::rotate(mat4(1.0f), 0.3f, vec3(0, 0, 1)));
+    scene.commit();
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
+    std::vector<Ray> rays;
+    for (int i = 0; i < 10000; ++i) {  // several chunks and a partial one
+        const vec3 target(1.5f + 1.5f * uniform(rng), 0.5f + uniform(rng), 0.5f + uniform(rng));
+        const vec3 origin(1.5f + 4 * uniform(rng), 4 * uniform(rng), 3.0f + uniform(rng));
+        rays.push_back(make_ray(origin, target - origin, 0.0f, i % 3 == 0 ? 0.7f : kInfinity));
+    }
+    std::vector<Hit> hits;
+    std::vector<uint8_t> occluded;
+    scene.intersect(rays, hits);
+    scene.occluded(rays, occluded);
+    ASSERT_EQ(hits.size(), rays.size());
+    ASSERT_EQ(occluded.size(), rays.size());
+    int hit_count = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        const Hit single = scene.intersect(rays[i]);
+        ASSERT_EQ(hits[i].instance_id, single.instance_id) << "ray " << i;
+        EXPECT_EQ(hits[i].triangle_id, single.triangle_id);
+        EXPECT_EQ(hits[i].t, single.t);
+        EXPECT_EQ(hits[i].barycentrics, single.barycentrics);
+        EXPECT_EQ(hits[i].geometric_normal, single.geometric_normal);
+        EXPECT_EQ(occluded[i] != 0, scene.occluded(rays[i]));
+        EXPECT_EQ(occluded[i] != 0, single.valid());
+        hit_count += single.valid();
+    }
+    EXPECT_GT(hit_count, 1000);  // the test would be vacuous if every ray missed
+    EXPECT_LT(hit_count, 9000);
+}
+
+TEST(SceneIntersect, SurfacePointGivesMaterialAndInterpolatedNormal) {
+    Mesh mesh = unit_quad();
+    mesh.material_indices = {1, 0};
+    mesh.normals[2] = glm::normalize(vec3(1, 0, 1));
+    Scene scene;
+    scene.add_material(Material{});
+    scene.add_material(Material{});
+    scene.add_instance(scene.add_mesh(mesh), mat4(1.0f));
+    scene.commit();
+    const Ray ray = make_ray(vec3(0.75f, 0.25f, 1), vec3(0, 0, -1));
+    const SurfacePoint point = scene.surface_point(ray, scene.intersect(ray));
+    EXPECT_EQ(point.material_id, 1u);
+    // b = (0.25, 0.5, 0.25) over normals (0,0,1), (0,0,1), (1,0,1)/sqrt 2.
+    const vec3 n = 0.75f * vec3(0, 0, 1) + 0.25f * glm::normalize(vec3(1, 0, 1));
+    expect_near(point.shading_normal, glm::normalize(n));
+    expect_contains(rejection<InvalidArgument>([&] { scene.surface_point(ray, Hit{}); }),
+                    "the hit is a miss");
+}
+
+TEST(SceneValidation, EachBadInputHasItsOwnMessage) {
+    Scene scene;
+    Mesh nan_mesh = unit_quad();
+    nan_mesh.positions[1].y = kNaN;
+    expect_contains(rejection<InvalidArgument>([&] { scene.add_mesh(nan_mesh); }),
+                    "mesh 'Quad': positions[1] = (1, nan, 0) is not finite");
+    const uint32_t mesh = scene.add_mesh(unit_quad());
+    expect_contains(rejection<InvalidArgument>([&] { scene.add_instance(7, mat4(1.0f)); }),
+                    "mesh_id = 7 but the scene has 1 meshes");
+    expect_contains(rejection<InvalidArgument>([&] {
+                        scene.add_instance(mesh, glm::scale(mat4(1.0f), vec3(1, 0, 1)), "Flat");
+                    }),
+                    "instance 'Flat': world_from_object is singular");
+    mat4 nan_transform(1.0f);
+    nan_transform[3].y = kNaN;
+    expect_contains(rejection<InvalidArgument>([&] { scene.add_instance(mesh, nan_transform); }),
+                    "world_from_object has a non-finite (NaN or Inf) entry");
+    expect_contains(rejection<InvalidArgument>([&] {
+                        scene.set_instance_transform(3, mat4(1.0f));
+                    }),
+                    "instance_id = 3 but the scene has 0 instances");
+    expect_contains(rejection<InvalidArgument>([&] { scene.camera(); }), "has no camera");
+    Camera camera;
+    camera.lens = -1.0f;
+    expect_contains(rejection<InvalidArgument>([&] { scene.set_camera(camera); }),
+                    "camera: lens = -1 must be > 0");
+    Light light;
+    light.name = "Fill";
+    light.power = kNaN;
+    expect_contains(rejection<InvalidArgument>([&] { scene.add_light(light); }),
+                    "light 'Fill': power = nan is not finite");
+}
+
+TEST(SceneValidation, CommitChecksCrossReferences) {
+    Scene scene;
+    Mesh mesh = unit_quad();
+    mesh.material_indices = {0, 2};
+    scene.add_instance(scene.add_mesh(mesh), mat4(1.0f));
+    scene.add_material(Material{});
+    expect_contains(rejection<InvalidArgument>([&] { scene.commit(); }),
+                    "mesh 'Quad': material_indices[1] = 2 but the scene has 1 materials");
+
+    Scene textured;
+    Material material;
+    material.name = "Bricks";
+    material.base_color_texture = 0;
+    textured.add_material(material);  // the texture may still come
+    expect_contains(rejection<InvalidArgument>([&] { textured.commit(); }),
+                    "material 'Bricks': base_color_texture = 0 but the scene has 0 textures");
+    Texture texture;
+    texture.width = texture.height = 1;
+    texture.texels = {vec4(1)};
+    textured.add_texture(texture);
+    EXPECT_NO_THROW(textured.commit());
+    EXPECT_TRUE(textured.committed());
+}
+
+TEST(SceneValidation, InstanceBeyondEmbreeRangeIsRejectedAtCommit) {
+    Scene scene;
+    scene.add_instance(scene.add_mesh(unit_quad()), glm::scale(mat4(1.0f), vec3(1e16f)), "Huge");
+    expect_contains(rejection<InvalidArgument>([&] { scene.commit(); }),
+                    "instance 0 'Huge': world-space bounds");
+}
+
+TEST(SceneValidation, EachBadRayHasItsOwnMessage) {
+    const Scene scene = quad_scene();
+    const auto bad = [&](const Ray& ray) {
+        return rejection<InvalidArgument>([&] { scene.intersect(ray); });
+    };
+    expect_contains(bad(make_ray(vec3(kNaN, 0, 0), vec3(0, 0, -1))),
+                    "ray: origin is not finite (origin (nan, 0, 0), direction (0, 0, -1)");
+    expect_contains(bad(make_ray(vec3(0), vec3(0, kInfinity, 0))), "ray: direction is not finite");
+    expect_contains(bad(make_ray(vec3(0), vec3(0))), "ray: direction is zero");
+    expect_contains(bad(make_ray(vec3(0), vec3(0, 0, 1), -1.0f)),
+                    "ray: tmin must be finite and >= 0");
+    expect_contains(bad(make_ray(vec3(0), vec3(0, 0, 1), 2.0f, 1.0f)),
+                    "ray: tmax is less than tmin (origin (0, 0, 0), direction (0, 0, 1), tmin 2, "
+                    "tmax 1)");
+    expect_contains(bad(make_ray(vec3(0), vec3(0, 0, 1), 0.0f, kNaN)), "ray: tmax is NaN");
+    expect_contains(rejection<InvalidArgument>([&] {
+                        scene.occluded(make_ray(vec3(0), vec3(0)));
+                    }),
+                    "ray: direction is zero");
+    // Batches name the first bad ray by index.
+    std::vector<Ray> rays(10, make_ray(vec3(0.5f, 0.5f, 1), vec3(0, 0, -1)));
+    rays[6].direction.z = kNaN;
+    rays[8].origin.x = kNaN;
+    std::vector<Hit> hits;
+    std::vector<uint8_t> occluded;
+    expect_contains(rejection<InvalidArgument>([&] { scene.intersect(rays, hits); }),
+                    "rays[6]: direction is not finite");
+    expect_contains(rejection<InvalidArgument>([&] { scene.occluded(rays, occluded); }),
+                    "rays[6]: direction is not finite");
+}
+
+TEST(SceneValidation, QueriesBeforeCommitAreRejected) {
+    Scene scene;
+    scene.add_instance(scene.add_mesh(unit_quad()), mat4(1.0f));
+    const Ray ray = make_ray(vec3(0.5f, 0.5f, 1), vec3(0, 0, -1));
+    std::vector<Hit> hits;
+    expect_contains(rejection<InvalidArgument>([&] { scene.intersect(ray); }),
+                    "Scene::intersect: the scene was edited or never committed; call commit() "
+                    "first");
+    expect_contains(rejection<InvalidArgument>([&] { scene.occluded(ray); }),
+                    "Scene::occluded");
+    expect_contains(rejection<InvalidArgument>([&] { scene.intersect({ray}, hits); }),
+                    "call commit() first");
+    scene.commit();
+    EXPECT_TRUE(scene.occluded(ray));
+    scene.add_material(Material{});  // any edit un-commits
+    EXPECT_FALSE(scene.committed());
+}
+
+TEST(SceneStats, CountsDroppedDegenerateTriangles) {
+    Mesh mesh = unit_quad();
+    mesh.triangles.push_back(uvec3(1, 1, 2));
+    mesh.triangles.push_back(uvec3(0, 1, 1));
+    Scene scene;
+    scene.add_instance(scene.add_mesh(mesh), mat4(1.0f));
+    scene.commit();
+    EXPECT_EQ(scene.stats().dropped_degenerate, 2u);
+    EXPECT_EQ(scene.mesh_reports()[0].dropped_degenerate, 2u);
+    EXPECT_EQ(scene.stats().triangles, 2u);
+    EXPECT_GT(scene.stats().bvh_bytes, 0u);
+}
+
+TEST(SceneMemory, TinyBudgetFailsUpFrontWithOutOfMemory) {
+    Scene scene;
+    scene.add_instance(scene.add_mesh(grid(16)), mat4(1.0f));
+    CommitSettings settings;
+    settings.memory_budget_bytes = 1024;
+    const std::string message = rejection<OutOfMemory>([&] { scene.commit(settings); });
+    expect_contains(message, "needs at least");
+    expect_contains(message, "the memory budget is 1024 bytes");
+    EXPECT_FALSE(scene.committed());
+}
+
+TEST(SceneMemory, MonitorRefusesAllocationsBeyondTheBudget) {
+    Scene scene;
+    scene.add_instance(scene.add_mesh(grid(100)), mat4(1.0f));
+    // Above the up-front estimate, so the build starts and the memory monitor must stop it.
+    CommitSettings settings;
+    settings.memory_budget_bytes = estimate_bvh_bytes(scene.meshes(), scene.instances()) + 1;
+    const std::string message = rejection<OutOfMemory>([&] { scene.commit(settings); });
+    expect_contains(message, "building the BVH of mesh 'Grid' exceeded the memory budget: budget " +
+                                 std::to_string(settings.memory_budget_bytes) + " bytes");
+    expect_contains(message, "more bytes requested");
+    EXPECT_FALSE(scene.committed());
+    // The failed build released everything: the same scene commits with the default budget.
+    scene.commit();
+    EXPECT_TRUE(scene.occluded(make_ray(vec3(0.5f, 0.5f, 1), vec3(0, 0, -1))));
+    EXPECT_GT(scene.stats().bvh_bytes, settings.memory_budget_bytes);
+}
+
+TEST(SceneEmpty, CommitWarnsRaysMissAndBoundsThrow) {
+    std::vector<std::string> warnings;
+    const LogSink previous = set_log_sink([&](LogLevel level, const std::string& message) {
+        if (level == LogLevel::Warning) warnings.push_back(message);
+    });
+    Scene scene;
+    scene.add_mesh(unit_quad());  // a mesh without an instance renders nothing
+    scene.commit();
+    set_log_sink(previous);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_EQ(warnings[0], "scene has no triangles: every ray misses");
+    EXPECT_TRUE(scene.empty());
+    const Ray ray = make_ray(vec3(0.5f, 0.5f, 1), vec3(0, 0, -1));
+    EXPECT_FALSE(scene.intersect(ray).valid());
+    EXPECT_FALSE(scene.occluded(ray));
+    std::vector<Hit> hits;
+    scene.intersect({ray, ray}, hits);
+    EXPECT_FALSE(hits[1].valid());
+    expect_contains(rejection<InvalidArgument>([&] { scene.bounds(); }),
+                    "the scene has no triangles");
+    // Invalid rays are still rejected in an empty scene.
+    EXPECT_THROW(scene.intersect(make_ray(vec3(kNaN), vec3(0, 0, 1))), InvalidArgument);
+}
+
+TEST(SceneBounds, AreTheWorldBoundsOfTheInstances) {
+    const Scene scene = quad_scene(glm::translate(mat4(1.0f), vec3(1, 2, 3)) *
+                                   glm::scale(mat4(1.0f), vec3(2.0f)));
+    const Bounds3 bounds = scene.bounds();
+    expect_near(bounds.lower, vec3(1, 2, 3));
+    expect_near(bounds.upper, vec3(3, 4, 3));
+}
+
+TEST(SceneEmissive, GathersWorldSpaceEmissiveTriangles) {
+    Scene scene;
+    Material lamp;
+    lamp.name = "Lamp";
+    lamp.emission_color = vec3(1.0f, 0.5f, 0.25f);
+    lamp.emission_strength = 4.0f;
+    scene.add_material(Material{});
+    const uint32_t lamp_id = scene.add_material(lamp);
+    Mesh half_lit = unit_quad();
+    half_lit.material_indices = {lamp_id, 0};
+    scene.add_instance(scene.add_mesh(half_lit),
+                       glm::translate(mat4(1.0f), vec3(0, 0, 3)) *
+                           glm::scale(mat4(1.0f), vec3(2.0f)));
+    scene.add_instance(scene.add_mesh(unit_cube()), mat4(1.0f));  // not emissive
+    scene.commit();
+    ASSERT_EQ(scene.emissive_triangles().size(), 1u);
+    const EmissiveTriangle& emissive = scene.emissive_triangles()[0];
+    EXPECT_EQ(emissive.instance_id, 0u);
+    EXPECT_EQ(emissive.triangle_id, 0u);
+    expect_near(emissive.p0, vec3(0, 0, 3));
+    expect_near(emissive.p1, vec3(2, 0, 3));
+    expect_near(emissive.p2, vec3(2, 2, 3));
+    EXPECT_NEAR(emissive.area, 2.0f, kTolerance);
+    expect_near(emissive.radiance, vec3(4.0f, 2.0f, 1.0f));
+    EXPECT_EQ(scene.stats().emissive_triangles, 1u);
+}
+
+TEST(SceneProgress, CancelledBatchThrowsCancelled) {
+    const Scene scene = quad_scene();
+    std::vector<Ray> rays(50000, make_ray(vec3(0.5f, 0.5f, 1), vec3(0, 0, -1)));
+    std::vector<Hit> hits;
+    Progress progress;
+    progress.cancel();
+    EXPECT_THROW(scene.intersect(rays, hits, &progress), Cancelled);
+    Progress commit_progress;
+    commit_progress.cancel();
+    Scene other;
+    other.add_instance(other.add_mesh(grid(8)), mat4(1.0f));
+    EXPECT_THROW(other.commit({}, &commit_progress), Cancelled);
+    EXPECT_FALSE(other.committed());
+}
+
+TEST(SceneProgress, BatchReportsCompletion) {
+    const Scene scene = quad_scene();
+    std::vector<Ray> rays(20000, make_ray(vec3(0.5f, 0.5f, 1), vec3(0, 0, -1)));
+    std::vector<uint8_t> occluded;
+    Progress progress;
+    scene.occluded(rays, occluded, &progress);
+    EXPECT_FLOAT_EQ(progress.fraction(), 1.0f);
+    for (uint8_t o : occluded) ASSERT_EQ(o, 1);
+}
+
+}  // namespace
+}  // namespace shgi

@@ -1,0 +1,134 @@
+// validate_material / validate_texture / validate_light / validate_world / validate_camera:
+// each bad field is rejected with a message naming the item, the field and the value.
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <limits>
+#include <string>
+
+#include "scene/camera.h"
+#include "scene/light.h"
+#include "scene/material.h"
+#include "util/error.h"
+
+namespace shgi {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+std::string rejection(const std::function<void()>& check) {
+    try {
+        check();
+    } catch (const InvalidArgument& error) {
+        return error.what();
+    }
+    return "";
+}
+
+void expect_contains(const std::string& message, const std::string& part) {
+    EXPECT_NE(message.find(part), std::string::npos) << "message: '" << message << "'";
+}
+
+TEST(MaterialValidation, DefaultIsValid) {
+    EXPECT_EQ(rejection([] { validate_material(Material{}, 0); }), "");
+}
+
+TEST(MaterialValidation, RejectsEachBadField) {
+    const auto bad = [](const std::function<void(Material&)>& edit) {
+        Material material;
+        material.name = "Red";
+        edit(material);
+        return rejection([&] { validate_material(material, 1); });
+    };
+    expect_contains(bad([](Material& m) { m.base_color.y = kNaN; }),
+                    "material 'Red': base_color = (0.8, nan, 0.8) is not finite");
+    expect_contains(bad([](Material& m) { m.roughness = 1.5f; }),
+                    "material 'Red': roughness = 1.5 is outside [0, 1]");
+    expect_contains(bad([](Material& m) { m.metallic = -0.1f; }), "metallic = -0.1");
+    expect_contains(bad([](Material& m) { m.ior = 0.5f; }), "ior = 0.5 must be >= 1");
+    expect_contains(bad([](Material& m) { m.emission_strength = -1.0f; }),
+                    "emission_strength = -1 must be >= 0");
+    expect_contains(bad([](Material& m) { m.emission_color = vec3(-1, 0, 0); }),
+                    "emission_color = (-1, 0, 0) must have every component >= 0");
+    expect_contains(bad([](Material& m) { m.base_color_texture = 3; }),
+                    "base_color_texture = 3 but the scene has 1 textures");
+}
+
+TEST(TextureValidation, RejectsSizeMismatchAndNaN) {
+    Texture texture;
+    texture.name = "Bricks";
+    texture.width = 2;
+    texture.height = 2;
+    texture.texels.assign(3, vec4(1));
+    expect_contains(rejection([&] { validate_texture(texture); }),
+                    "texture 'Bricks': texels has 3 elements but width x height = 4");
+    texture.texels.assign(4, vec4(1));
+    texture.texels[2].w = kNaN;
+    expect_contains(rejection([&] { validate_texture(texture); }), "texels[2] = (1, 1, 1, nan)");
+}
+
+TEST(LightValidation, RejectsEachBadField) {
+    const auto bad = [](LightType type, const std::function<void(Light&)>& edit) {
+        Light light;
+        light.name = "Key";
+        light.type = type;
+        edit(light);
+        return rejection([&] { validate_light(light); });
+    };
+    expect_contains(bad(LightType::Point, [](Light& l) { l.power = -5.0f; }),
+                    "light 'Key': power = -5 must be >= 0");
+    expect_contains(bad(LightType::Point, [](Light& l) { l.color.x = kNaN; }),
+                    "light 'Key': color = (nan, 1, 1) is not finite");
+    expect_contains(bad(LightType::Point, [](Light& l) { l.world_from_light[2] = vec4(0); }),
+                    "light 'Key': world_from_light is singular");
+    expect_contains(bad(LightType::Point, [](Light& l) { l.world_from_light[3].x = kNaN; }),
+                    "world_from_light has a non-finite");
+    expect_contains(bad(LightType::Spot, [](Light& l) { l.spot_size = 4.0f; }),
+                    "spot_size = 4 rad must be in (0, pi]");
+    expect_contains(bad(LightType::Spot, [](Light& l) { l.spot_blend = 2.0f; }),
+                    "spot_blend = 2 is outside [0, 1]");
+    expect_contains(bad(LightType::Sun, [](Light& l) { l.angle = -0.1f; }),
+                    "angle = -0.1 rad must be in [0, pi)");
+    expect_contains(bad(LightType::Sun, [](Light& l) { l.strength = kNaN; }),
+                    "strength = nan is not finite");
+    expect_contains(bad(LightType::Area, [](Light& l) { l.size_x = 0.0f; }),
+                    "size_x = 0 must be > 0");
+    expect_contains(bad(LightType::Area,
+                        [](Light& l) {
+                            l.shape = AreaShape::Rectangle;
+                            l.size_y = -1.0f;
+                        }),
+                    "size_y = -1 must be > 0");
+    // A point light ignores the area size.
+    EXPECT_EQ(bad(LightType::Point, [](Light& l) { l.size_x = 0.0f; }), "");
+}
+
+TEST(WorldValidation, RejectsNegativeStrength) {
+    World world;
+    world.strength = -1.0f;
+    expect_contains(rejection([&] { validate_world(world); }), "world: strength = -1 must be >= 0");
+}
+
+TEST(CameraValidation, RejectsEachBadField) {
+    const auto bad = [](const std::function<void(Camera&)>& edit) {
+        Camera camera;
+        edit(camera);
+        return rejection([&] { validate_camera(camera); });
+    };
+    EXPECT_EQ(bad([](Camera&) {}), "");
+    expect_contains(bad([](Camera& c) { c.lens = 0.0f; }), "camera: lens = 0 must be > 0");
+    expect_contains(bad([](Camera& c) { c.sensor_width = -36.0f; }),
+                    "camera: sensor_width = -36 must be > 0");
+    expect_contains(bad([](Camera& c) { c.ortho_scale = kNaN; }),
+                    "camera: ortho_scale = nan is not finite");
+    expect_contains(bad([](Camera& c) { c.clip_start = 10.0f, c.clip_end = 1.0f; }),
+                    "camera: clip_start = 10 must be < clip_end = 1");
+    expect_contains(bad([](Camera& c) { c.resolution_x = 0; }),
+                    "camera: resolution 0 x 480 must be at least 1 x 1");
+    expect_contains(bad([](Camera& c) { c.world_from_camera[0] = vec4(0); }),
+                    "camera: world_from_camera is singular");
+    expect_contains(bad([](Camera& c) { c.shift_x = kNaN; }), "camera: shift_x = nan");
+}
+
+}  // namespace
+}  // namespace shgi
