@@ -7,9 +7,20 @@ import sys
 import pytest
 
 REPO_ROOT = pathlib.Path(__file__).resolve().parents[2]
-BUILD_PYTHON = pathlib.Path(os.environ.get("SHGI_BUILD_PYTHON", REPO_ROOT / "build" / "python"))
 
-if str(BUILD_PYTHON) not in sys.path and (BUILD_PYTHON / "shgi").is_dir():
+
+def _build_python_dir():
+    """SHGI_BUILD_PYTHON, else the first PYTHONPATH entry holding shgi, else build/python."""
+    if "SHGI_BUILD_PYTHON" in os.environ:
+        return pathlib.Path(os.environ["SHGI_BUILD_PYTHON"])
+    for entry in filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep)):
+        if (pathlib.Path(entry) / "shgi").is_dir():
+            return pathlib.Path(entry)
+    return REPO_ROOT / "build" / "python"
+
+
+BUILD_PYTHON = _build_python_dir()
+if (BUILD_PYTHON / "shgi").is_dir():
     sys.path.insert(0, str(BUILD_PYTHON))
 
 
