@@ -61,8 +61,17 @@ install: build
 test-cpp: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
+# Debian's Python always; the python3 on PATH too when it is another interpreter (pyenv, with
+# numpy 2) that has pytest, because shgi must work in both.
 test-python: build
 	cd tests/python && PYTHONPATH=$(CURDIR)/$(BUILD_DIR)/python $(PYTHON) -m pytest -q -p no:cacheprovider .
+	@other=$$(command -v python3); \
+	if [ -n "$$other" ] && [ "$$(readlink -f $$other)" != "$$(readlink -f $(PYTHON))" ]; then \
+		if $$other -c 'import numpy, pytest' 2>/dev/null; then \
+			echo "Python tests again under $$other"; \
+			cd tests/python && PYTHONPATH=$(CURDIR)/$(BUILD_DIR)/python $$other -m pytest -q -p no:cacheprovider .; \
+		else echo "note: $$other lacks numpy/pytest; its Python tests were skipped"; fi; \
+	fi
 
 test: test-cpp test-python
 

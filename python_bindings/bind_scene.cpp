@@ -22,6 +22,7 @@
 
 #include "numpy_convert.h"
 #include "scene/scene.h"
+#include "util/parallel.h"
 #include "util/progress.h"
 
 namespace py = pybind11;
@@ -269,6 +270,9 @@ void bind_light(py::module_& m) {
     def_vec3(world, "color", &World::color, "Linear RGB background colour.");
 }
 
+// Camera rays are cheap: large chunks keep the scheduling overhead negligible.
+constexpr uint64_t kFilmPointsPerChunk = 16384;
+
 void bind_camera(py::module_& m) {
     py::enum_<CameraType>(m, "CameraType", "Perspective or orthographic.")
         .value("PERSPECTIVE", CameraType::Perspective)
@@ -302,6 +306,27 @@ void bind_camera(py::module_& m) {
             py::arg("x"), py::arg("y"),
             "(origin, direction, tmin, tmax) of the ray through film point (x, y) in pixels "
             "from the top-left corner; direction is unit length, tmin/tmax the clip distances.")
+        .def(
+            "generate_rays",
+            [](const Camera& camera, const py::object& film_points) {
+                validate_camera(camera);
+                const std::vector<vec2> film = to_vec2_array(film_points, "film");
+                std::vector<vec3> origins(film.size()), directions(film.size());
+                {
+                    py::gil_scoped_release release;
+                    parallel_for(0, film.size(), kFilmPointsPerChunk, [&](uint64_t lo, uint64_t hi) {
+                        for (uint64_t i = lo; i < hi; ++i) {
+                            const Ray ray = camera.generate_ray(film[i]);
+                            origins[i] = ray.origin;
+                            directions[i] = ray.direction;
+                        }
+                    });
+                }
+                return py::make_tuple(to_numpy(origins), to_numpy(directions));
+            },
+            py::arg("film"),
+            "(origins (N, 3), directions (N, 3)) of the rays through film points (N, 2) in pixels "
+            "from the top-left corner (pixel centres at +0.5); directions are unit length.")
         .def(
             "project",
             [](const Camera& camera, const py::object& point) -> py::object {

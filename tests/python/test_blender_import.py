@@ -1,11 +1,8 @@
 """shgi imports and works inside Debian's Blender (its embedded Python 3.11)."""
 
-import shutil
-import subprocess
-
 import pytest
 
-BLENDER = shutil.which("blender")
+from blender_support import BLENDER, run_blender
 
 SCRIPT = """
 import sys
@@ -28,8 +25,6 @@ print("SHGI_IN_BLENDER", shgi.__version__, shgi.__file__)
 def test_shgi_imports_and_traces_inside_blender(build_python_dir, tmp_path):
     script = tmp_path / "import_shgi.py"
     script.write_text(SCRIPT.format(path=str(build_python_dir)))
-    result = subprocess.run(
-        [BLENDER, "-b", "--factory-startup", "--python-exit-code", "1", "--python", str(script)],
-        capture_output=True, text=True, timeout=300)
+    result = run_blender(script, timeout=300)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
     assert "SHGI_IN_BLENDER" in result.stdout
