@@ -15,7 +15,7 @@ DEB_PACKAGES := build-essential cmake pkg-config libembree-dev libglm-dev libope
 	blender xvfb xauth
 SITE_DIR := /usr/local/lib/python3.11/dist-packages
 
-.PHONY: all deps build install test test-cpp test-python demo bench clean
+.PHONY: all deps build install test test-cpp test-python test-stubs stubs demo bench clean
 
 all: build
 
@@ -37,6 +37,10 @@ deps:
 	@if command -v python3 >/dev/null && python3 -m pip --version >/dev/null 2>&1 && \
 	   ! python3 -c 'import pybind11, sys; sys.exit(tuple(map(int, pybind11.__version__.split(".")[:2])) < (2, 12))' 2>/dev/null; then \
 		python3 -m pip install -q 'pybind11>=2.12'; \
+	fi
+	@if command -v python3 >/dev/null && python3 -m pip --version >/dev/null 2>&1 && \
+	   ! python3 -c 'import pybind11_stubgen' 2>/dev/null; then \
+		python3 -m pip install -q 'pybind11-stubgen==2.5.1'; \
 	fi
 
 $(BUILD_DIR)/CMakeCache.txt: | deps
@@ -73,7 +77,20 @@ test-python: build
 		else echo "note: $$other lacks numpy/pytest; its Python tests were skipped"; fi; \
 	fi
 
-test: test-cpp test-python
+# The committed .pyi stubs (python_bindings/shgi/_shgi/) must match the built module. They are
+# generated with pybind11-stubgen under the PATH python3 (pip-installed by make deps).
+STUBGEN := python3 -m pybind11_stubgen --numpy-array-remove-parameters
+stubs: build
+	rm -rf $(BUILD_DIR)/stubs && cd $(BUILD_DIR)/python && $(STUBGEN) shgi._shgi -o $(CURDIR)/$(BUILD_DIR)/stubs
+	rm -rf python_bindings/shgi/_shgi && cp -r $(BUILD_DIR)/stubs/shgi/_shgi python_bindings/shgi/_shgi
+
+test-stubs: build
+	rm -rf $(BUILD_DIR)/stubs && cd $(BUILD_DIR)/python && $(STUBGEN) shgi._shgi -o $(CURDIR)/$(BUILD_DIR)/stubs >/dev/null
+	@diff -ru python_bindings/shgi/_shgi $(BUILD_DIR)/stubs/shgi/_shgi || \
+		{ echo "The .pyi stubs are out of date: run 'make stubs' and commit them."; exit 1; }
+	@echo "stubs: python_bindings/shgi/_shgi matches the built module"
+
+test: test-cpp test-stubs test-python
 
 demo: install
 	$(PYTHON) examples/cornell_box.py --out $(CURDIR)/demo_output

@@ -34,14 +34,6 @@ namespace {
 using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
 
 // "(H, W, C) float64" for error messages.
-std::string describe(const py::array& array) {
-    std::string shape = "(";
-    for (py::ssize_t i = 0; i < array.ndim(); ++i) {
-        shape += (i ? ", " : "") + std::to_string(array.shape(i));
-    }
-    shape += array.ndim() == 1 ? ",)" : ")";
-    return shape + " " + py::str(static_cast<py::object>(array.dtype())).cast<std::string>();
-}
 
 // An image-shaped float array: (H, W) or (H, W, C) with a float dtype (float16/32/64) and
 // 1 <= H, W <= kMaxImageDimension. Returns it C-contiguous as float32.
@@ -50,15 +42,15 @@ FloatArray checked_image_array(const py::handle& obj, const std::string& arg_nam
     if (!array) throw_value_error(arg_name.c_str(), "expected a numpy array");
     if (array.dtype().kind() != 'f') {
         throw_value_error(arg_name.c_str(), "expected a float16/float32/float64 array, got " +
-                                                describe(array));
+                                                describe_array(array));
     }
     if (array.ndim() != 2 && array.ndim() != 3) {
         throw_value_error(arg_name.c_str(),
-                          "expected shape (H, W) or (H, W, C), got " + describe(array));
+                          "expected shape (H, W) or (H, W, C), got " + describe_array(array));
     }
     for (py::ssize_t axis = 0; axis < array.ndim(); ++axis) {
         if (array.shape(axis) < 1 || (axis < 2 && array.shape(axis) > kMaxImageDimension)) {
-            throw_value_error(arg_name.c_str(), "shape " + describe(array) +
+            throw_value_error(arg_name.c_str(), "shape " + describe_array(array) +
                                                     " is out of range: each size must be in [1, " +
                                                     std::to_string(kMaxImageDimension) + "]");
         }
@@ -270,7 +262,7 @@ void bind_png(py::module_& m) {
             const size_t channels = channel_count(array);
             if (array.ndim() != 3 || (channels != 3 && channels != 4)) {
                 throw_value_error("pixels", "expected shape (H, W, 3) or (H, W, 4), got " +
-                                                describe(array));
+                                                describe_array(array));
             }
             if (!std::isfinite(exposure)) {
                 throw_value_error("exposure", "must be finite, got " + std::to_string(exposure));

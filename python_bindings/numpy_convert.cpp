@@ -5,7 +5,6 @@
 #include <sstream>
 
 namespace shgi::python {
-namespace {
 
 std::string shape_string(const py::array& array) {
     std::ostringstream out;
@@ -18,6 +17,12 @@ std::string shape_string(const py::array& array) {
 std::string dtype_string(const py::array& array) {
     return py::str(static_cast<py::object>(array.dtype())).cast<std::string>();
 }
+
+std::string describe_array(const py::array& array) {
+    return shape_string(array) + " " + dtype_string(array);
+}
+
+namespace {
 
 py::array as_array(const py::handle& obj, const char* arg_name) {
     if (obj.is_none()) throw_value_error(arg_name, "expected an array, got None");

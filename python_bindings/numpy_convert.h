@@ -42,6 +42,11 @@ py::array_t<float> to_numpy(const std::vector<vec2>& values);
 py::array_t<float> to_numpy(const std::vector<vec3>& values);
 py::array_t<uint32_t> to_numpy(const std::vector<uvec3>& values);
 
+// "(H, W, 3)", "float64" and "(H, W, 3) float64", for error messages.
+std::string shape_string(const py::array& array);
+std::string dtype_string(const py::array& array);
+std::string describe_array(const py::array& array);
+
 // Raises ValueError "<arg_name>: <message>".
 [[noreturn]] void throw_value_error(const char* arg_name, const std::string& message);
 

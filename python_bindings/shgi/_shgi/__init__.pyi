@@ -1,0 +1,1036 @@
+"""
+SHGI native core: SH maths, scenes on Embree, EXR/PNG I/O, glTF/OBJ loading (see the shgi package).
+"""
+from __future__ import annotations
+import numpy
+import numpy.typing
+from shgi import Cancelled
+import typing
+from . import sh
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'Instance', 'Light', 'LightType', 'LogLevel', 'Material', 'Mesh', 'Progress', 'Scene', 'SensorFit', 'Texture', 'World', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'max_threads', 'read_exr', 'read_exr_info', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'version', 'write_exr', 'write_png']
+class AreaShape:
+    """
+    Blender's area light shapes.
+    
+    Members:
+    
+      SQUARE
+    
+      RECTANGLE
+    
+      DISK
+    
+      ELLIPSE
+    """
+    DISK: typing.ClassVar[AreaShape]  # value = <AreaShape.DISK: 2>
+    ELLIPSE: typing.ClassVar[AreaShape]  # value = <AreaShape.ELLIPSE: 3>
+    RECTANGLE: typing.ClassVar[AreaShape]  # value = <AreaShape.RECTANGLE: 1>
+    SQUARE: typing.ClassVar[AreaShape]  # value = <AreaShape.SQUARE: 0>
+    __members__: typing.ClassVar[dict[str, AreaShape]]  # value = {'SQUARE': <AreaShape.SQUARE: 0>, 'RECTANGLE': <AreaShape.RECTANGLE: 1>, 'DISK': <AreaShape.DISK: 2>, 'ELLIPSE': <AreaShape.ELLIPSE: 3>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: AreaShape) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: AreaShape) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
+class Camera:
+    """
+    A Blender camera (see scene/camera.h).
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        Camera(**fields): Blender's default camera data.
+        """
+    def generate_ray(self, x: typing.SupportsFloat | typing.SupportsIndex, y: typing.SupportsFloat | typing.SupportsIndex) -> tuple[tuple, tuple, float, float]:
+        """
+        (origin, direction, tmin, tmax) of the ray through film point (x, y) in pixels from the top-left corner; direction is unit length, tmin/tmax the clip distances.
+        """
+    def generate_rays(self, film: typing.Any) -> tuple[numpy.typing.NDArray[numpy.float32], numpy.typing.NDArray[numpy.float32]]:
+        """
+        (origins (N, 3), directions (N, 3)) of the rays through film points (N, 2) in pixels from the top-left corner (pixel centres at +0.5); directions are unit length.
+        """
+    def project(self, point: typing.Any) -> typing.Any:
+        """
+        Film position (x, y) in pixels of a world point, or None when it is behind.
+        """
+    @property
+    def clip_end(self) -> float:
+        """
+        m.
+        """
+    @clip_end.setter
+    def clip_end(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def clip_start(self) -> float:
+        """
+        m.
+        """
+    @clip_start.setter
+    def clip_start(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def lens(self) -> float:
+        """
+        Focal length in mm (perspective).
+        """
+    @lens.setter
+    def lens(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def ortho_scale(self) -> float:
+        """
+        m across the fitted axis.
+        """
+    @ortho_scale.setter
+    def ortho_scale(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def resolution_x(self) -> int:
+        """
+        Render width in pixels.
+        """
+    @resolution_x.setter
+    def resolution_x(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def resolution_y(self) -> int:
+        """
+        Render height in pixels.
+        """
+    @resolution_y.setter
+    def resolution_y(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def sensor_fit(self) -> SensorFit:
+        """
+        SensorFit.
+        """
+    @sensor_fit.setter
+    def sensor_fit(self, arg0: SensorFit) -> None:
+        ...
+    @property
+    def sensor_height(self) -> float:
+        """
+        mm.
+        """
+    @sensor_height.setter
+    def sensor_height(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def sensor_width(self) -> float:
+        """
+        mm.
+        """
+    @sensor_width.setter
+    def sensor_width(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def shift_x(self) -> float:
+        """
+        In units of the fitted dimension.
+        """
+    @shift_x.setter
+    def shift_x(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def shift_y(self) -> float:
+        """
+        In units of the fitted dimension.
+        """
+    @shift_y.setter
+    def shift_y(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def type(self) -> CameraType:
+        """
+        CameraType.
+        """
+    @type.setter
+    def type(self, arg0: CameraType) -> None:
+        ...
+    @property
+    def world_from_camera(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (4, 4) row-major matrix_world; the camera looks down its local -Z, +Y up.
+        """
+    @world_from_camera.setter
+    def world_from_camera(self, arg1: typing.Any) -> None:
+        ...
+class CameraType:
+    """
+    Perspective or orthographic.
+    
+    Members:
+    
+      PERSPECTIVE
+    
+      ORTHOGRAPHIC
+    """
+    ORTHOGRAPHIC: typing.ClassVar[CameraType]  # value = <CameraType.ORTHOGRAPHIC: 1>
+    PERSPECTIVE: typing.ClassVar[CameraType]  # value = <CameraType.PERSPECTIVE: 0>
+    __members__: typing.ClassVar[dict[str, CameraType]]  # value = {'PERSPECTIVE': <CameraType.PERSPECTIVE: 0>, 'ORTHOGRAPHIC': <CameraType.ORTHOGRAPHIC: 1>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: CameraType) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: CameraType) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
+class Instance:
+    """
+    A placement of a mesh in the world.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @property
+    def mesh_id(self) -> int:
+        """
+        Index of the instanced mesh.
+        """
+    @property
+    def name(self) -> str:
+        """
+        The object's name.
+        """
+    @property
+    def world_from_object(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (4, 4) row-major matrix_world.
+        """
+class Light:
+    """
+    A Blender light with Cycles' units (see scene/light.h).
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        Light(**fields): a default point light with the given fields set.
+        """
+    @property
+    def angle(self) -> float:
+        """
+        rad: sun's angular diameter, [0, pi).
+        """
+    @angle.setter
+    def angle(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def color(self) -> tuple:
+        """
+        Linear RGB, each >= 0.
+        """
+    @color.setter
+    def color(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def name(self) -> str:
+        """
+        Blender's light object name.
+        """
+    @name.setter
+    def name(self, arg0: str) -> None:
+        ...
+    @property
+    def power(self) -> float:
+        """
+        W (point, spot, area).
+        """
+    @power.setter
+    def power(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def radius(self) -> float:
+        """
+        m: point/spot radius (0 = a true point).
+        """
+    @radius.setter
+    def radius(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def shape(self) -> AreaShape:
+        """
+        AreaShape.
+        """
+    @shape.setter
+    def shape(self, arg0: AreaShape) -> None:
+        ...
+    @property
+    def size_x(self) -> float:
+        """
+        m: area light size along local X.
+        """
+    @size_x.setter
+    def size_x(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def size_y(self) -> float:
+        """
+        m: area light size along local Y.
+        """
+    @size_y.setter
+    def size_y(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def spot_blend(self) -> float:
+        """
+        [0, 1].
+        """
+    @spot_blend.setter
+    def spot_blend(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def spot_size(self) -> float:
+        """
+        rad: full cone angle, (0, pi].
+        """
+    @spot_size.setter
+    def spot_size(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def strength(self) -> float:
+        """
+        W/m^2 (sun).
+        """
+    @strength.setter
+    def strength(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def type(self) -> LightType:
+        """
+        LightType.
+        """
+    @type.setter
+    def type(self, arg0: LightType) -> None:
+        ...
+    @property
+    def world_from_light(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (4, 4) row-major matrix_world; the light emits along its local -Z.
+        """
+    @world_from_light.setter
+    def world_from_light(self, arg1: typing.Any) -> None:
+        ...
+class LightType:
+    """
+    Blender's light types.
+    
+    Members:
+    
+      POINT
+    
+      SPOT
+    
+      SUN
+    
+      AREA
+    """
+    AREA: typing.ClassVar[LightType]  # value = <LightType.AREA: 3>
+    POINT: typing.ClassVar[LightType]  # value = <LightType.POINT: 0>
+    SPOT: typing.ClassVar[LightType]  # value = <LightType.SPOT: 1>
+    SUN: typing.ClassVar[LightType]  # value = <LightType.SUN: 2>
+    __members__: typing.ClassVar[dict[str, LightType]]  # value = {'POINT': <LightType.POINT: 0>, 'SPOT': <LightType.SPOT: 1>, 'SUN': <LightType.SUN: 2>, 'AREA': <LightType.AREA: 3>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: LightType) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: LightType) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
+class LogLevel:
+    """
+    Severity of a log message.
+    
+    Members:
+    
+      DEBUG
+    
+      INFO
+    
+      WARNING
+    
+      ERROR
+    """
+    DEBUG: typing.ClassVar[LogLevel]  # value = <LogLevel.DEBUG: 0>
+    ERROR: typing.ClassVar[LogLevel]  # value = <LogLevel.ERROR: 3>
+    INFO: typing.ClassVar[LogLevel]  # value = <LogLevel.INFO: 1>
+    WARNING: typing.ClassVar[LogLevel]  # value = <LogLevel.WARNING: 2>
+    __members__: typing.ClassVar[dict[str, LogLevel]]  # value = {'DEBUG': <LogLevel.DEBUG: 0>, 'INFO': <LogLevel.INFO: 1>, 'WARNING': <LogLevel.WARNING: 2>, 'ERROR': <LogLevel.ERROR: 3>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: LogLevel) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: LogLevel) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
+class Material:
+    """
+    Principled BSDF subset (Blender 3.4 semantics), linear Rec.709.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        Material(**fields): a default material with the given fields set, e.g. Material(name='Red', base_color=(0.8, 0.1, 0.1), roughness=0.3).
+        """
+    def is_emissive(self) -> bool:
+        """
+        True if the material emits light.
+        """
+    @property
+    def base_color(self) -> tuple:
+        """
+        Linear RGB albedo.
+        """
+    @base_color.setter
+    def base_color(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def base_color_texture(self) -> int:
+        """
+        Index into the scene's textures, or -1 for none.
+        """
+    @base_color_texture.setter
+    def base_color_texture(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def base_color_uv_set(self) -> str:
+        """
+        UV map used by the texture ('' = the first).
+        """
+    @base_color_uv_set.setter
+    def base_color_uv_set(self, arg0: str) -> None:
+        ...
+    @property
+    def emission_color(self) -> tuple:
+        """
+        Linear RGB; emitted radiance = emission_color * emission_strength (W m^-2 sr^-1).
+        """
+    @emission_color.setter
+    def emission_color(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def emission_strength(self) -> float:
+        """
+        >= 0.
+        """
+    @emission_strength.setter
+    def emission_strength(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def ior(self) -> float:
+        """
+        Index of refraction, >= 1.
+        """
+    @ior.setter
+    def ior(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def metallic(self) -> float:
+        """
+        0..1.
+        """
+    @metallic.setter
+    def metallic(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def name(self) -> str:
+        """
+        Blender's material name.
+        """
+    @name.setter
+    def name(self, arg0: str) -> None:
+        ...
+    @property
+    def roughness(self) -> float:
+        """
+        0..1 (GGX alpha = roughness^2).
+        """
+    @roughness.setter
+    def roughness(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def specular(self) -> float:
+        """
+        0..1 (F0 = 0.08 * specular).
+        """
+    @specular.setter
+    def specular(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def transmission(self) -> float:
+        """
+        0..1.
+        """
+    @transmission.setter
+    def transmission(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class Mesh:
+    """
+    A triangle mesh in object space (see scene/mesh.h).
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, positions: typing.Any, triangles: typing.Any, normals: typing.Any = None, uvs: typing.Any = None, material_indices: typing.Any = None, name: str = '') -> None:
+        """
+        Builds a mesh from numpy arrays. positions: (N, 3) float, object space (m); triangles: (T, 3) int vertex indices, counter-clockwise = front; normals: (N, 3) float or None; uvs: (N, 2) float (UV map 'UVMap'), a dict {name: (N, 2)} or None; material_indices: (T,) int or None (all 0).
+        """
+    def __repr__(self) -> str:
+        """
+        Name and sizes.
+        """
+    @property
+    def material_indices(self) -> numpy.typing.NDArray[numpy.uint32]:
+        """
+        (T,) uint32 material index per triangle, or empty (all use material 0).
+        """
+    @material_indices.setter
+    def material_indices(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def name(self) -> str:
+        """
+        The mesh's name (Blender's mesh data name).
+        """
+    @name.setter
+    def name(self, arg0: str) -> None:
+        ...
+    @property
+    def normals(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (N, 3) float32 vertex normals, or (0, 3) when the mesh has none.
+        """
+    @normals.setter
+    def normals(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def positions(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (N, 3) float32 vertex positions, object space (m).
+        """
+    @positions.setter
+    def positions(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def triangles(self) -> numpy.typing.NDArray[numpy.uint32]:
+        """
+        (T, 3) uint32 vertex indices per triangle.
+        """
+    @triangles.setter
+    def triangles(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def uv_sets(self) -> dict:
+        """
+        Dict {uv map name: (N, 2) float32}, in order (the first is used for textures).
+        """
+    @uv_sets.setter
+    def uv_sets(self, arg1: typing.Any) -> None:
+        ...
+class Progress:
+    """
+    
+    Progress and cancellation of a long operation.
+    
+    Pass one to any long call (``progress=``). ``cancel()`` from another thread makes the call stop
+    within one chunk of work and raise ``shgi.Cancelled``. The optional ``callback(fraction, stage)``
+    is called at most every ``min_interval`` seconds, possibly from a worker thread.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, callback: collections.abc.Callable | None = None, min_interval: typing.SupportsFloat | typing.SupportsIndex = 0.05) -> None:
+        """
+        Creates a Progress; callback(fraction: float, stage: str) is optional.
+        """
+    def cancel(self) -> None:
+        """
+        Asks the operation to stop as soon as possible.
+        """
+    @property
+    def cancelled(self) -> bool:
+        """
+        True once cancel() was called.
+        """
+    @property
+    def fraction(self) -> float:
+        """
+        Fraction of the work done, in [0, 1].
+        """
+    @property
+    def stage(self) -> str:
+        """
+        Name of the current stage.
+        """
+class Scene:
+    """
+    
+    Meshes, instances, materials, textures, lights, world and camera, plus the Embree BVH that
+    answers ray queries. Build it with add_*, call commit(), then query. Any edit un-commits.
+    Editing while another thread commits or queries the scene raises RuntimeError.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self) -> None:
+        """
+        An empty scene.
+        """
+    def add_instance(self, mesh_id: typing.SupportsInt | typing.SupportsIndex, world_from_object: typing.Any = None, name: str = '') -> int:
+        """
+        Places mesh `mesh_id` with a (4, 4) row-major matrix (Blender's matrix_world; None = identity); returns the instance id.
+        """
+    def add_light(self, light: Light) -> int:
+        """
+        Adds a Light; returns its id.
+        """
+    def add_material(self, material: Material) -> int:
+        """
+        Adds a Material; returns its id (the index triangles' material_indices use).
+        """
+    def add_mesh(self, mesh: typing.Any = None, *, positions: typing.Any = None, triangles: typing.Any = None, normals: typing.Any = None, uvs: typing.Any = None, material_indices: typing.Any = None, name: str = '') -> int:
+        """
+        Adds a mesh (an shgi.Mesh, or keyword arrays) and returns its id. Degenerate triangles are dropped (see stats()). positions: (N, 3) float, object space (m); triangles: (T, 3) int vertex indices, counter-clockwise = front; normals: (N, 3) float or None; uvs: (N, 2) float (UV map 'UVMap'), a dict {name: (N, 2)} or None; material_indices: (T,) int or None (all 0).
+        """
+    def add_texture(self, texture: Texture) -> int:
+        """
+        Adds a Texture; returns its id (Material.base_color_texture).
+        """
+    def bounds(self) -> tuple[tuple, tuple]:
+        """
+        World-space bounds ((x0, y0, z0), (x1, y1, z1)); ValueError for an empty scene.
+        """
+    def commit(self, memory_budget_bytes: typing.SupportsInt | typing.SupportsIndex = 0, progress: Progress = None) -> None:
+        """
+        Checks cross references and builds the BVH, with the GIL released. Raises MemoryError when the BVH would exceed memory_budget_bytes (0 = 75% of RAM), shgi.Cancelled when progress.cancel() is called.
+        """
+    def emissive_triangles(self) -> dict:
+        """
+        Emissive triangles gathered at commit: dict of p0, p1, p2 (K, 3) world space, area (K,) m^2, radiance (K, 3), instance_id and triangle_id (K,).
+        """
+    def intersect(self, origins: typing.Any, directions: typing.Any, tmin: typing.Any = 0.0, tmax: typing.Any = ..., progress: Progress = None) -> dict:
+        """
+        Closest hits of a batch of rays: dict of hit (N,) bool, t (N,) float32 (inf on a miss), instance_id and triangle_id (N,) uint32 (0xFFFFFFFF on a miss), barycentrics (N, 2) float32 (b1, b2), normal (N, 3) unit world-space geometric normal (0 on a miss). origins, directions: (N, 3) float (directions need not be unit: t is in units of their length); tmin, tmax: scalars or (N,) arrays (tmax may be inf). The GIL is released; progress (shgi.Progress) reports and cancels (shgi.Cancelled). ValueError names the first invalid ray (NaN, zero direction, tmax < tmin).
+        """
+    def occluded(self, origins: typing.Any, directions: typing.Any, tmin: typing.Any = 0.0, tmax: typing.Any = ..., progress: Progress = None) -> numpy.typing.NDArray[numpy.bool]:
+        """
+        (N,) bool: True where something lies between tmin and tmax. origins, directions: (N, 3) float (directions need not be unit: t is in units of their length); tmin, tmax: scalars or (N,) arrays (tmax may be inf). The GIL is released; progress (shgi.Progress) reports and cancels (shgi.Cancelled). ValueError names the first invalid ray (NaN, zero direction, tmax < tmin).
+        """
+    def set_camera(self, camera: Camera) -> None:
+        """
+        Sets the Camera.
+        """
+    def set_instance_transform(self, instance_id: typing.SupportsInt | typing.SupportsIndex, world_from_object: typing.Any) -> None:
+        """
+        Moves an instance; the next commit() rebuilds only the top-level BVH.
+        """
+    def set_world(self, world: World) -> None:
+        """
+        Sets the World (uniform background light).
+        """
+    def stats(self) -> dict:
+        """
+        Dict of counts: meshes, instances, triangles, instanced_triangles, dropped_degenerate, emissive_triangles, lights, bvh_bytes (peak of last commit).
+        """
+    @property
+    def camera(self) -> Camera:
+        """
+        A copy of the Camera (ValueError if none was set).
+        """
+    @property
+    def committed(self) -> bool:
+        """
+        True after a successful commit.
+        """
+    @property
+    def empty(self) -> bool:
+        """
+        True when no instance has triangles.
+        """
+    @property
+    def has_camera(self) -> bool:
+        """
+        True once set_camera ran.
+        """
+    @property
+    def instances(self) -> list[Instance]:
+        """
+        Copies of the instances.
+        """
+    @property
+    def lights(self) -> list[Light]:
+        """
+        Copies of the lights.
+        """
+    @property
+    def materials(self) -> list[Material]:
+        """
+        Copies of the materials.
+        """
+    @property
+    def meshes(self) -> list[Mesh]:
+        """
+        Copies of the (cleaned) meshes.
+        """
+    @property
+    def textures(self) -> list[Texture]:
+        """
+        Copies of the textures.
+        """
+    @property
+    def world(self) -> World:
+        """
+        A copy of the World.
+        """
+class SensorFit:
+    """
+    Blender's camera sensor fit.
+    
+    Members:
+    
+      AUTO
+    
+      HORIZONTAL
+    
+      VERTICAL
+    """
+    AUTO: typing.ClassVar[SensorFit]  # value = <SensorFit.AUTO: 0>
+    HORIZONTAL: typing.ClassVar[SensorFit]  # value = <SensorFit.HORIZONTAL: 1>
+    VERTICAL: typing.ClassVar[SensorFit]  # value = <SensorFit.VERTICAL: 2>
+    __members__: typing.ClassVar[dict[str, SensorFit]]  # value = {'AUTO': <SensorFit.AUTO: 0>, 'HORIZONTAL': <SensorFit.HORIZONTAL: 1>, 'VERTICAL': <SensorFit.VERTICAL: 2>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: SensorFit) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: SensorFit) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
+class Texture:
+    """
+    A linear RGBA image; row 0 is the bottom row (Blender).
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, pixels: typing.Any, name: str = '') -> None:
+        """
+        Builds a texture from an (H, W, 4) or (H, W, 3) float array of linear values, row 0 at the bottom as in Blender's Image.pixels (alpha 1 when absent).
+        """
+    @property
+    def height(self) -> int:
+        """
+        Height in pixels.
+        """
+    @property
+    def name(self) -> str:
+        """
+        The image name.
+        """
+    @name.setter
+    def name(self, arg0: str) -> None:
+        ...
+    @property
+    def pixels(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (H, W, 4) float32 copy of the texels.
+        """
+    @property
+    def width(self) -> int:
+        """
+        Width in pixels.
+        """
+class World:
+    """
+    Uniform background light: color * strength.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        World(**fields), e.g. World(strength=2.0).
+        """
+    @property
+    def color(self) -> tuple:
+        """
+        Linear RGB background colour.
+        """
+    @color.setter
+    def color(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def strength(self) -> float:
+        """
+        >= 0.
+        """
+    @strength.setter
+    def strength(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+def linear_from_srgb(encoded: typing.Annotated[numpy.typing.ArrayLike, numpy.float32]) -> typing.Any:
+    """
+    Inverse sRGB transfer function: x / 12.92 up to 0.04045, ((x + 0.055) / 1.055)**2.4 above.
+    Input is clamped to [0, 1] (NaN -> 0). Accepts a float or an array (float32 result).
+    """
+def load_gltf(path: os.PathLike | str | bytes, *, lighting_mode: str = 'SPEC', import_lights: bool = True, import_camera: bool = True, import_textures: bool = True, light_radius: typing.SupportsFloat | typing.SupportsIndex = 0.25, sun_angle: typing.SupportsFloat | typing.SupportsIndex = 0.009180432185530663) -> Scene:
+    """
+    Loads the default scene of a glTF 2.0 file (.gltf or .glb) into a new, uncommitted Scene, as
+    Blender 3.4's glTF importer would import it.
+    
+    Y-up glTF becomes Z-up ((x, y, z) -> (x, -z, y)); UV v becomes 1 - v; each TRIANGLES primitive
+    is one mesh, instanced once per node that uses it; TEXCOORD_n are UV sets "UVMap", "UVMap.001",
+    ...; the base colour texture is decoded to linear RGBA; the first camera node sets the camera.
+    lighting_mode: how KHR_lights_punctual intensities become Blender units, as the importer's
+        "Lighting Mode": "SPEC" (point/spot W = cd * 4 pi / 683, sun W/m^2 = lux / 683), "COMPAT"
+        (W = cd * 4 pi, sun = lux) or "RAW" (values copied).
+    import_lights, import_camera, import_textures: skip those parts when False.
+    light_radius (m), sun_angle (rad): what glTF's punctual lights lack; the defaults are Blender's
+        new-light defaults (0.25 m, 0.526 degrees), which its importer keeps. 0 gives point lights.
+    Raises OSError naming the file when it is missing, malformed or uses unsupported required
+    extensions; problems that only cost a part (an undecodable image, a non-triangle primitive) are
+    logged as warnings.
+    """
+def load_obj(path: os.PathLike | str | bytes, *, up_axis: str = 'Y') -> Scene:
+    """
+    Loads a Wavefront OBJ file and the .mtl files it names (looked up beside it) into a new,
+    uncommitted Scene, as Blender 3.4's OBJ importer would import it.
+    
+    One mesh per OBJ object/group, each instanced once with the identity transform; polygons are
+    triangulated; vt coordinates become UV set "UVMap". MTL statements map to materials as Blender
+    maps them: Kd base colour, Ke emission, Ks specular, Ns roughness = 1 - sqrt(Ns / 1000),
+    Ni IOR, Pr/Pm (PBR extension) roughness/metallic; d/Tr are ignored.
+    up_axis: "Y" (the importer's default: forward -Z, up Y, converted to Z-up) or "Z" (no change).
+    Raises OSError naming the file when it is missing or malformed, or when a face refers to a
+    vertex, normal or UV that does not exist; a missing .mtl is logged as a warning.
+    """
+def log_level() -> LogLevel:
+    """
+    The current minimum log level.
+    """
+def max_threads() -> int:
+    """
+    The number of worker threads SHGI may use.
+    """
+def read_exr(path: os.PathLike | str | bytes, max_pixels: typing.SupportsInt | typing.SupportsIndex = 268435456) -> dict:
+    """
+    Reads an OpenEXR file into a dict of layer name -> float32 array (H, W, C), row 0 at the top.
+    
+    Layers and channels come back in the order write_exr wrote them; for files from other writers
+    layers are in the file's (alphabetical) order and channels in Blender's order (R G B A,
+    X Y Z W, U V, others by name). Half channels are converted to float32. Channels named without a
+    '.' form the layer "". read_exr_info gives the channel names and pixel types.
+    max_pixels: refuse images with more than this many pixels (width * height), so that a hostile
+        file cannot exhaust memory; raise it only for trusted files.
+    Raises OSError naming the file when it is missing, corrupt, too large or unsupported.
+    """
+def read_exr_info(path: os.PathLike | str | bytes) -> dict:
+    """
+    Reads only the header of an OpenEXR file: {"width", "height", "compression",
+    "channels": [(full name, "half" | "float"), ...]} with channels in read_exr's order.
+    Raises OSError naming the file when it is missing, corrupt or unsupported.
+    """
+def set_log_level(level: LogLevel) -> None:
+    """
+    Drops messages below `level` before they reach the sink.
+    """
+def set_log_sink(sink: collections.abc.Callable | None) -> None:
+    """
+    Routes SHGI's log messages to sink(level: LogLevel, message: str); None restores stderr. The shgi package installs a sink that forwards to logging.getLogger('shgi').
+    """
+def set_max_threads(threads: typing.SupportsInt | typing.SupportsIndex) -> None:
+    """
+    Limits SHGI's worker threads (0 = all cores). Results do not depend on it.
+    """
+def srgb_from_linear(linear: typing.Annotated[numpy.typing.ArrayLike, numpy.float32]) -> typing.Any:
+    """
+    sRGB transfer function (IEC 61966-2-1): 12.92 x up to 0.0031308, 1.055 x**(1/2.4) - 0.055
+    above. Input is clamped to [0, 1] (NaN -> 0). Accepts a float or an array (float32 result).
+    """
+def version() -> str:
+    """
+    SHGI's version string.
+    """
+def write_exr(path: os.PathLike | str | bytes, layers: dict, pixel_type: str | None = None, channel_names: dict = {}, compression: str = 'zip') -> None:
+    """
+    Writes a multilayer OpenEXR file, atomically (temporary file in the same folder, then rename).
+    
+    layers: dict of layer name -> float16/32/64 array (H, W) or (H, W, C), all the same H x W, row 0
+        at the top. Channels are named "<layer>.<suffix>" (Blender's style: "Combined.R",
+        "Depth.Z"); suffixes default to R G B A (4), R G B (3), X Y (2), Z (1). An empty layer name
+        writes bare suffixes ("R", "G", "B").
+    pixel_type: "float" (exact), "half", or None: half for float16 arrays, float otherwise.
+    channel_names: dict of layer name -> suffixes, a str with one per character ("XYZ") or a list
+        of str (["c0", "c1", ...]); needed for layers with more than 4 channels.
+    compression: lossless codec "zip" (default), "piz", "zips", "rle" or "none".
+    Raises ValueError for bad arrays or names (naming the argument), OSError when the file cannot
+    be written.
+    """
+def write_png(path: os.PathLike | str | bytes, pixels: typing.Any, exposure: typing.SupportsFloat | typing.SupportsIndex = 0.0, premultiplied: bool = True) -> None:
+    """
+    Writes linear float pixels as an 8-bit sRGB PNG, atomically.
+    
+    pixels: float array (H, W, 3) RGB or (H, W, 4) RGBA, linear Rec.709, row 0 at the top.
+    exposure: stops; colour is multiplied by 2**exposure before encoding.
+    premultiplied: RGBA colour is premultiplied by alpha (as SHGI and Cycles render it) and is
+        divided by alpha before encoding, since PNG stores straight alpha.
+    Colour is clamped to [0, 1] (NaN -> 0) and encoded with the exact sRGB curve; alpha is stored
+    linearly. Raises ValueError for bad arguments, OSError when the file cannot be written.
+    """
