@@ -14,6 +14,7 @@
 
 #include "util/error.h"
 #include "util/log.h"
+#include "support/log_capture.h"
 
 namespace shgi {
 namespace {
@@ -137,20 +138,7 @@ std::string replaced(std::string text, const std::string& from, const std::strin
     return text;
 }
 
-// Collects warnings for the lifetime of the object.
-class LogCapture {
-  public:
-    LogCapture() {
-        previous_ = set_log_sink([this](LogLevel level, const std::string& message) {
-            if (level >= LogLevel::Warning) warnings += message + "\n";
-        });
-    }
-    ~LogCapture() { set_log_sink(previous_); }
-    std::string warnings;
-
-  private:
-    LogSink previous_;
-};
+using testing::LogCapture;
 
 void expect_near(const vec3& actual, const vec3& expected, float tolerance = kTolerance) {
     EXPECT_NEAR(actual.x, expected.x, tolerance);

@@ -10,6 +10,7 @@
 
 #include "util/error.h"
 #include "util/log.h"
+#include "support/log_capture.h"
 
 namespace shgi {
 namespace {
@@ -70,19 +71,7 @@ void expect_near(const vec3& actual, const vec3& expected) {
     EXPECT_NEAR(actual.z, expected.z, kTolerance);
 }
 
-class LogCapture {
-  public:
-    LogCapture() {
-        previous_ = set_log_sink([this](LogLevel level, const std::string& message) {
-            if (level >= LogLevel::Warning) warnings += message + "\n";
-        });
-    }
-    ~LogCapture() { set_log_sink(previous_); }
-    std::string warnings;
-
-  private:
-    LogSink previous_;
-};
+using testing::LogCapture;
 
 class ObjLoaderTest : public ::testing::Test {
   protected:

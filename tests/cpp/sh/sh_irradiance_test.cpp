@@ -13,6 +13,7 @@
 #include "sh/sphere_quadrature.h"
 #include "util/rng.h"
 #include "util/sampling.h"
+#include "support/sh_fields.h"
 
 namespace shgi {
 namespace {
@@ -22,13 +23,7 @@ namespace {
 constexpr float kIrradianceTolerance = 1e-4f;
 constexpr int kRandomNormals = 50;
 
-ShRgb random_field(int order, uint64_t seed) {
-    Pcg32 rng(seed, 3);
-    ShRgb sh(order);
-    for (int i = 0; i < sh.num_coefficients(); ++i)
-        sh.coeffs[i] = vec3(rng.next_float(), rng.next_float(), rng.next_float()) * 2.0f - 1.0f;
-    return sh;
-}
+ShRgb random_field(int order, uint64_t seed) { return testing::random_sh_field(order, seed); }
 
 // ∫ L(ω) max(0, n·ω) dω over the hemisphere around n, exact for band-limited L.
 glm::dvec3 brute_force_irradiance(const ShRgb& radiance, const vec3& normal) {

@@ -11,6 +11,7 @@
 #include "util/error.h"
 #include "util/rng.h"
 #include "util/sampling.h"
+#include "support/sh_fields.h"
 
 namespace shgi {
 namespace {
@@ -23,13 +24,7 @@ constexpr int kMonteCarloSamples = 200000;
 // the seed is fixed), while a wrong weight or pdf is off by many standard errors.
 constexpr double kMonteCarloSigmas = 5.0;
 
-ShRgb random_field(int order, uint64_t seed) {
-    Pcg32 rng(seed, 3);
-    ShRgb sh(order);
-    for (int i = 0; i < sh.num_coefficients(); ++i)
-        sh.coeffs[i] = vec3(rng.next_float(), rng.next_float(), rng.next_float()) * 2.0f - 1.0f;
-    return sh;
-}
+ShRgb random_field(int order, uint64_t seed) { return testing::random_sh_field(order, seed); }
 
 TEST(ShProjection, QuadratureRecoversBandLimitedField) {
     for (int order = 0; order <= kMaxShOrder; ++order) {
