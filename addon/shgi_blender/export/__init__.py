@@ -1,0 +1,25 @@
+"""Blender scene export: an evaluated depsgraph → an shgi.Scene.
+
+``export_scene(depsgraph, scene=None, *, report=None, for_render=None) -> ExportResult`` is the
+entry point the render engine and operators call (scene_export.py). The modules split bpy code
+from bpy-free code so that pytest checks the conversions outside Blender:
+
+* bpy-free: conversions.py (socket names, units, fields), mesh_split.py (per-corner → per-vertex),
+  result.py (ExportResult, ExportStats, warnings);
+* bpy: scene_export.py (instances), mesh.py, material.py, light.py (and the world), camera.py,
+  node_tree.py.
+
+``export_scene`` is imported lazily so that ``import shgi_blender.export.conversions`` works
+without bpy.
+"""
+
+from .result import ExportResult, ExportStats
+
+__all__ = ["ExportResult", "ExportStats", "export_scene"]
+
+
+def __getattr__(name):
+    if name == "export_scene":
+        from .scene_export import export_scene
+        return export_scene
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

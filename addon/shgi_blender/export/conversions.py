@@ -1,0 +1,298 @@
+"""Blender data → SHGI field values, without bpy (pytest checks every rule outside Blender).
+
+The bpy side (material.py, light.py, camera.py) reads plain values out of Blender — socket
+default values by socket name, light and camera properties — and this module turns them into
+keyword arguments for ``shgi.Material``, ``shgi.Light``, ``shgi.Camera`` and ``shgi.World``.
+Everything that depends on Blender's version or units lives here.
+
+Principled BSDF socket names (``principled_socket_names``):
+
+=================  ====================  ======================
+SHGI field         Blender 3.x           Blender 4.x
+=================  ====================  ======================
+base_color         "Base Color"          "Base Color"
+metallic           "Metallic"            "Metallic"
+roughness          "Roughness"           "Roughness"
+ior                "IOR"                 "IOR"
+specular           "Specular"            "Specular IOR Level"
+transmission       "Transmission"        "Transmission Weight"
+emission_color     "Emission"            "Emission Color"
+emission_strength  "Emission Strength"   "Emission Strength"
+=================  ====================  ======================
+
+Units: SHGI's material is Blender 3.4's Principled (dielectric F0 = 0.08 · specular). Blender 4's
+"Specular IOR Level" scales the Fresnel reflectance given by the IOR, as Cycles 4 does:
+F0 = ((ior − 1) / (ior + 1))² · 2 · level (0.5 = the IOR's own reflectance), so
+specular = F0 / 0.08. Lights: point, spot and area "Power" in W → ``power``; the sun's
+"Strength" in W/m² → ``strength`` (both are Blender's ``Light.energy``); angles in radians as
+Blender stores them. Matrices are Blender's ``matrix_world`` as row-major 4 × 4 numpy arrays.
+"""
+
+import math
+
+import numpy as np
+import shgi
+
+# Blender 4.0 renamed the Principled BSDF's inputs (its "Principled v2").
+PRINCIPLED_V2_VERSION = (4, 0, 0)
+
+_PRINCIPLED_SOCKETS_3X = {
+    "base_color": "Base Color",
+    "metallic": "Metallic",
+    "roughness": "Roughness",
+    "ior": "IOR",
+    "specular": "Specular",
+    "transmission": "Transmission",
+    "emission_color": "Emission",
+    "emission_strength": "Emission Strength",
+}
+_PRINCIPLED_SOCKETS_4X = dict(
+    _PRINCIPLED_SOCKETS_3X,
+    specular="Specular IOR Level",
+    transmission="Transmission Weight",
+    emission_color="Emission Color",
+)
+
+# Blender 3.4's Principled BSDF: dielectric F0 = SPECULAR_F0_SCALE * specular
+# (intern/cycles/kernel/closure/bsdf_principled_*: "0.08 * specular").
+SPECULAR_F0_SCALE = 0.08
+# Blender 4's "Specular IOR Level" at which the IOR's own reflectance is used unchanged.
+NEUTRAL_SPECULAR_IOR_LEVEL = 0.5
+
+# What Blender renders a surface without a usable material with: the Principled defaults
+# (grey 0.8, roughness 0.5), as Cycles' default surface shader and Blender's "Material" do.
+FALLBACK_BASE_COLOR = (0.8, 0.8, 0.8)
+FALLBACK_ROUGHNESS = 0.5
+
+# Cycles treats an IOR below 1 as 1 for the Principled BSDF's dielectric layer.
+MIN_IOR = 1.0
+
+# The shader node types the exporter understands at the Material Output's Surface input.
+PRINCIPLED_NODE = "ShaderNodeBsdfPrincipled"
+EMISSION_NODE = "ShaderNodeEmission"
+DIFFUSE_NODE = "ShaderNodeBsdfDiffuse"
+
+# Blender enum identifiers → shgi enums.
+LIGHT_TYPES = {"POINT": shgi.LightType.POINT, "SPOT": shgi.LightType.SPOT,
+               "SUN": shgi.LightType.SUN, "AREA": shgi.LightType.AREA}
+AREA_SHAPES = {"SQUARE": shgi.AreaShape.SQUARE, "RECTANGLE": shgi.AreaShape.RECTANGLE,
+               "DISK": shgi.AreaShape.DISK, "ELLIPSE": shgi.AreaShape.ELLIPSE}
+CAMERA_TYPES = {"PERSP": shgi.CameraType.PERSPECTIVE, "ORTHO": shgi.CameraType.ORTHOGRAPHIC}
+SENSOR_FITS = {"AUTO": shgi.SensorFit.AUTO, "HORIZONTAL": shgi.SensorFit.HORIZONTAL,
+               "VERTICAL": shgi.SensorFit.VERTICAL}
+# Blender's area shapes whose second side is size_y; the others are square / round.
+AREA_SHAPES_WITH_SIZE_Y = ("RECTANGLE", "ELLIPSE")
+
+# Image colour spaces whose byte pixels hold sRGB-encoded values that must be decoded.
+SRGB_COLORSPACES = ("sRGB",)
+# Colour spaces whose pixels are used as they are (already linear or data).
+LINEAR_COLORSPACES = ("Linear", "Linear Rec.709", "Non-Color", "Raw", "Linear CIE-XYZ E",
+                      "Linear FilmLight E-Gamut", "Rec.709 Linear")
+
+
+def principled_socket_names(blender_version):
+    """{shgi field: Principled BSDF input name} for a Blender version tuple, e.g. (3, 4, 1)."""
+    if tuple(blender_version) >= PRINCIPLED_V2_VERSION:
+        return dict(_PRINCIPLED_SOCKETS_4X)
+    return dict(_PRINCIPLED_SOCKETS_3X)
+
+
+def specular_from_ior_level(specular_ior_level, ior):
+    """Blender 4's "Specular IOR Level" (with the IOR) → Blender 3.4's "Specular" (0..1).
+
+    Cycles 4 scales the dielectric F0 from the IOR by 2 · level; Blender 3.4 has F0 = 0.08 ·
+    specular. The result is not clamped (see ``clamp_material_fields``).
+    """
+    ior = max(float(ior), MIN_IOR)
+    f0_from_ior = ((ior - 1.0) / (ior + 1.0)) ** 2
+    f0 = f0_from_ior * float(specular_ior_level) / NEUTRAL_SPECULAR_IOR_LEVEL
+    return f0 / SPECULAR_F0_SCALE
+
+
+def rgb(color):
+    """The first three components of a colour (Blender colour sockets are RGBA)."""
+    return tuple(float(c) for c in tuple(color)[:3])
+
+
+def material_fields_from_principled(values, blender_version):
+    """shgi.Material fields from a Principled BSDF's input values.
+
+    values: {socket name: default value} for the node's inputs (colours as 3 or 4 floats).
+    Returns a dict of fields, not yet clamped to SHGI's ranges.
+    """
+    names = principled_socket_names(blender_version)
+    fields = {
+        "base_color": rgb(values[names["base_color"]]),
+        "metallic": float(values[names["metallic"]]),
+        "roughness": float(values[names["roughness"]]),
+        "ior": float(values[names["ior"]]),
+        "transmission": float(values[names["transmission"]]),
+        "emission_color": rgb(values[names["emission_color"]]),
+        "emission_strength": float(values[names["emission_strength"]]),
+    }
+    specular = float(values[names["specular"]])
+    if tuple(blender_version) >= PRINCIPLED_V2_VERSION:
+        specular = specular_from_ior_level(specular, fields["ior"])
+    fields["specular"] = specular
+    return fields
+
+
+def material_fields_from_emission(color, strength):
+    """shgi.Material fields for a plain Emission shader: it emits and reflects nothing."""
+    return {"base_color": (0.0, 0.0, 0.0), "specular": 0.0, "metallic": 0.0,
+            "emission_color": rgb(color), "emission_strength": float(strength)}
+
+
+def material_fields_from_diffuse(color):
+    """shgi.Material fields for a Diffuse BSDF: Lambert (its Oren–Nayar roughness is ignored)."""
+    return {"base_color": rgb(color), "specular": 0.0, "metallic": 0.0, "roughness": 1.0}
+
+
+def fallback_material_fields():
+    """The documented fallback for anything the exporter cannot read: grey 0.8, roughness 0.5."""
+    return {"base_color": FALLBACK_BASE_COLOR, "roughness": FALLBACK_ROUGHNESS}
+
+
+_UNIT_RANGE_FIELDS = ("metallic", "roughness", "specular", "transmission")
+
+
+def clamp_material_fields(fields):
+    """(fields clamped to SHGI's ranges, [names of the fields that changed]).
+
+    Blender lets metallic, roughness, specular and transmission leave [0, 1], colours and
+    strengths go negative and the IOR drop below 1; SHGI rejects those, so they are clamped.
+    """
+    clamped, changed = dict(fields), []
+    for name in _UNIT_RANGE_FIELDS:
+        if name in clamped:
+            clamped[name] = min(max(clamped[name], 0.0), 1.0)
+    if "ior" in clamped:
+        clamped["ior"] = max(clamped["ior"], MIN_IOR)
+    for name in ("base_color", "emission_color"):
+        if name in clamped:
+            clamped[name] = tuple(max(c, 0.0) for c in clamped[name])
+    if "emission_strength" in clamped:
+        clamped["emission_strength"] = max(clamped["emission_strength"], 0.0)
+    for name, value in fields.items():
+        if clamped[name] != value:
+            changed.append(name)
+    return clamped, changed
+
+
+def texture_needs_srgb_decode(colorspace_name, is_float):
+    """True when Image.pixels holds sRGB-encoded values that must be decoded to linear.
+
+    Blender converts float images to scene linear when it loads them; byte images keep their
+    encoded values in Image.pixels.
+    """
+    return (not is_float) and colorspace_name in SRGB_COLORSPACES
+
+
+def texture_colorspace_is_known(colorspace_name):
+    """True for colour spaces the exporter handles exactly (sRGB, linear and data)."""
+    return colorspace_name in SRGB_COLORSPACES or colorspace_name in LINEAR_COLORSPACES
+
+
+def light_fields(light_type, energy, color, matrix_world, *, shadow_soft_size=0.0,
+                 spot_size=math.pi / 4, spot_blend=0.15, angle=0.0, shape="SQUARE", size=1.0,
+                 size_y=1.0, name="light"):
+    """shgi.Light fields from a Blender light's properties (Blender's names and units).
+
+    energy: ``Light.energy`` — W for point, spot and area ("Power"), W/m² for the sun
+    ("Strength"). shadow_soft_size: the point/spot "Radius" in m. spot_size, angle: radians.
+    size, size_y: the area light's sides or diameters in m (size_y only for RECTANGLE/ELLIPSE).
+    """
+    if light_type not in LIGHT_TYPES:
+        raise ValueError(f"light {name!r}: type {light_type!r} is not one of {list(LIGHT_TYPES)}")
+    fields = {"name": name, "type": LIGHT_TYPES[light_type], "color": rgb(color),
+              "world_from_light": row_major(matrix_world)}
+    if light_type == "SUN":
+        fields.update(strength=float(energy), angle=float(angle))
+        return fields
+    fields["power"] = float(energy)
+    if light_type in ("POINT", "SPOT"):
+        fields["radius"] = float(shadow_soft_size)
+    if light_type == "SPOT":
+        fields.update(spot_size=float(spot_size), spot_blend=float(spot_blend))
+    if light_type == "AREA":
+        if shape not in AREA_SHAPES:
+            raise ValueError(f"light {name!r}: area shape {shape!r} is not one of "
+                             f"{list(AREA_SHAPES)}")
+        second_side = size_y if shape in AREA_SHAPES_WITH_SIZE_Y else size
+        fields.update(shape=AREA_SHAPES[shape], size_x=float(size), size_y=float(second_side))
+    return fields
+
+
+def render_resolution(resolution_x, resolution_y, resolution_percentage):
+    """Blender's rendered size in pixels: size × percentage / 100, rounded down, at least 1."""
+    return (max(1, int(resolution_x) * int(resolution_percentage) // 100),
+            max(1, int(resolution_y) * int(resolution_percentage) // 100))
+
+
+def camera_fields(camera_type, matrix_world, *, lens, sensor_width, sensor_height, sensor_fit,
+                  ortho_scale, shift_x, shift_y, clip_start, clip_end, resolution_x,
+                  resolution_y, resolution_percentage):
+    """shgi.Camera fields from Blender's camera data and render size (Blender's names, mm/m).
+
+    camera_type: "PERSP" or "ORTHO" (ValueError otherwise: SHGI has no panoramic camera).
+    """
+    if camera_type not in CAMERA_TYPES:
+        raise ValueError(f"camera type {camera_type!r} is not supported; use one of "
+                         f"{list(CAMERA_TYPES)}")
+    if sensor_fit not in SENSOR_FITS:
+        raise ValueError(f"sensor_fit {sensor_fit!r} is not one of {list(SENSOR_FITS)}")
+    width, height = render_resolution(resolution_x, resolution_y, resolution_percentage)
+    return {"type": CAMERA_TYPES[camera_type], "lens": float(lens),
+            "sensor_width": float(sensor_width), "sensor_height": float(sensor_height),
+            "sensor_fit": SENSOR_FITS[sensor_fit], "ortho_scale": float(ortho_scale),
+            "shift_x": float(shift_x), "shift_y": float(shift_y),
+            "clip_start": float(clip_start), "clip_end": float(clip_end),
+            "resolution_x": width, "resolution_y": height,
+            "world_from_camera": row_major(matrix_world)}
+
+
+def world_fields(color, strength):
+    """shgi.World fields: the Background's colour and strength (radiance = colour × strength)."""
+    return {"color": tuple(max(c, 0.0) for c in rgb(color)), "strength": max(float(strength), 0.0)}
+
+
+def equirect_average(pixels):
+    """Solid-angle weighted mean RGB of an equirectangular image (H, W, ≥3), row 0 at the bottom.
+
+    Row i spans latitudes around ((i + 0.5) / H − 0.5) · π; its solid angle is ∝ cos(latitude).
+    Used as the uniform colour of a textured world.
+    """
+    pixels = np.asarray(pixels, dtype=np.float64)
+    if pixels.ndim != 3 or pixels.shape[2] < 3 or pixels.shape[0] == 0 or pixels.shape[1] == 0:
+        raise ValueError(f"pixels: shape {pixels.shape} is not (H, W, 3 or 4)")
+    height = pixels.shape[0]
+    latitude = ((np.arange(height) + 0.5) / height - 0.5) * math.pi
+    weights = np.cos(latitude)
+    row_means = pixels[:, :, :3].mean(axis=1)
+    return tuple(float(c) for c in (weights[:, None] * row_means).sum(axis=0) / weights.sum())
+
+
+def row_major(matrix):
+    """A 4 × 4 float64 numpy array from a Blender Matrix (its rows) or any nested sequence.
+
+    mathutils.Matrix iterates over rows, so ``np.array(matrix_world)`` is already row-major with
+    the translation in the last column, as shgi expects.
+    """
+    array = np.array([list(row) for row in matrix], dtype=np.float64)
+    if array.shape != (4, 4):
+        raise ValueError(f"matrix: shape {array.shape} is not (4, 4)")
+    return array
+
+
+# Principled inputs SHGI does not render, with the value at which they have no effect
+# (3.x and 4.x names). A material using them gets a warning naming them.
+IGNORED_PRINCIPLED_INPUTS = {
+    "Subsurface": 0.0, "Subsurface Weight": 0.0, "Sheen": 0.0, "Sheen Weight": 0.0,
+    "Clearcoat": 0.0, "Coat Weight": 0.0, "Anisotropic": 0.0, "Alpha": 1.0,
+}
+
+
+def ignored_principled_inputs(values):
+    """Names of the Principled inputs in `values` that SHGI ignores but that are in use."""
+    return [name for name, neutral in IGNORED_PRINCIPLED_INPUTS.items()
+            if name in values and float(values[name]) != neutral]

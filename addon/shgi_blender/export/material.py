@@ -1,0 +1,183 @@
+"""Blender materials and images → shgi.Material and shgi.Texture (bpy side).
+
+Reads the node feeding the active Material Output's Surface input: a Principled BSDF, an
+Emission shader or a Diffuse BSDF. Socket names and units are mapped in conversions.py. An Image
+Texture node linked to the Principled Base Color becomes an shgi.Texture with base_color = 1
+(SHGI multiplies texture × base_color). Anything else gets the documented fallback material
+(conversions.fallback_material_fields) and a warning naming the material.
+"""
+
+import bpy
+import numpy as np
+import shgi
+
+from . import conversions, node_tree
+
+MATERIAL_OUTPUT_NODE = "ShaderNodeOutputMaterial"
+IMAGE_TEXTURE_NODE = "ShaderNodeTexImage"
+UV_MAP_NODE = "ShaderNodeUVMap"
+# The name of the one material shared by every surface without a usable material.
+FALLBACK_MATERIAL_NAME = "SHGI fallback"
+RGB_CHANNELS = 3
+
+
+class MaterialExporter:
+    """Adds each Blender material (and image) once to an shgi.Scene and remembers its id."""
+
+    def __init__(self, scene, log):
+        self._scene = scene
+        self._log = log
+        self._material_ids = {}
+        self._texture_ids = {}
+        self._fallback_id = None
+
+    @property
+    def texture_count(self):
+        """Number of textures added."""
+        return sum(1 for texture_id in self._texture_ids.values() if texture_id is not None)
+
+    def fallback_id(self):
+        """Id of the shared fallback material (added on first use)."""
+        if self._fallback_id is None:
+            fields = conversions.fallback_material_fields()
+            self._fallback_id = self._scene.add_material(
+                shgi.Material(name=FALLBACK_MATERIAL_NAME, **fields))
+        return self._fallback_id
+
+    def slot_ids(self, obj):
+        """Scene material ids of an object's material slots (fallback for empty slots)."""
+        if not obj.material_slots:
+            self._log.warn(f"object {obj.name!r} has no material; using the fallback "
+                           f"(grey {conversions.FALLBACK_BASE_COLOR[0]}, roughness "
+                           f"{conversions.FALLBACK_ROUGHNESS})")
+            return [self.fallback_id()]
+        ids = []
+        for index, slot in enumerate(obj.material_slots):
+            if slot.material is None:
+                self._log.warn(f"object {obj.name!r}: material slot {index} is empty; "
+                               "using the fallback material")
+                ids.append(self.fallback_id())
+            else:
+                ids.append(self.material_id(slot.material))
+        return ids
+
+    def material_id(self, material):
+        """Scene id of a Blender material, converting it on first use."""
+        key = material.original.name_full
+        if key not in self._material_ids:
+            fields = self._material_fields(material)
+            if fields is None:
+                self._material_ids[key] = self.fallback_id()
+            else:
+                clamped, changed = conversions.clamp_material_fields(fields)
+                if changed:
+                    self._log.warn(f"material {material.name!r}: {', '.join(changed)} clamped to "
+                                   "the range SHGI accepts")
+                self._material_ids[key] = self._scene.add_material(
+                    shgi.Material(name=material.name, **clamped))
+        return self._material_ids[key]
+
+    def _material_fields(self, material):
+        """shgi.Material fields of a material, or None (after a warning) for the fallback."""
+        surface, problem = _surface_node(material)
+        if surface is None:
+            self._log.warn(f"material {material.name!r} {problem}; using the fallback material")
+            return None
+        values = node_tree.input_values(surface)
+        if surface.bl_idname == conversions.PRINCIPLED_NODE:
+            return self._principled_fields(material, surface, values)
+        self._warn_linked_inputs(material, surface, ())
+        if surface.bl_idname == conversions.EMISSION_NODE:
+            return conversions.material_fields_from_emission(values["Color"], values["Strength"])
+        if surface.bl_idname == conversions.DIFFUSE_NODE:
+            return conversions.material_fields_from_diffuse(values["Color"])
+        self._log.warn(f"material {material.name!r}: surface shader {surface.bl_idname} is not "
+                       "supported (Principled BSDF, Emission, Diffuse BSDF are); using the "
+                       "fallback material")
+        return None
+
+    def _principled_fields(self, material, node, values):
+        """Fields of a Principled BSDF, with an Image Texture on Base Color as a texture."""
+        fields = conversions.material_fields_from_principled(values, bpy.app.version)
+        ignored = conversions.ignored_principled_inputs(values)
+        if ignored:
+            self._log.warn(f"material {material.name!r}: Principled inputs {', '.join(ignored)} "
+                           "are not rendered by SHGI and were ignored")
+        base_socket = conversions.principled_socket_names(bpy.app.version)["base_color"]
+        texture_node = node_tree.linked_node(node.inputs[base_socket])
+        handled = ()
+        if texture_node is not None and texture_node.bl_idname == IMAGE_TEXTURE_NODE:
+            texture_id = self._texture_id(texture_node.image, material.name)
+            if texture_id is not None:
+                fields.update(base_color=(1.0, 1.0, 1.0), base_color_texture=texture_id,
+                              base_color_uv_set=_uv_map_name(texture_node))
+                handled = (base_socket,)
+        self._warn_linked_inputs(material, node, handled)
+        return fields
+
+    def _warn_linked_inputs(self, material, node, handled):
+        """Warns about linked inputs whose unlinked value is used instead."""
+        for socket in node.inputs:
+            if socket.is_linked and socket.name not in handled and hasattr(socket, "default_value"):
+                source = node_tree.linked_node(socket)
+                if source is None:
+                    continue
+                self._log.warn(f"material {material.name!r}: input {socket.name!r} is driven by "
+                               f"a {source.bl_idname} node that SHGI does not evaluate; its "
+                               "unlinked value is used")
+
+    def _texture_id(self, image, material_name):
+        """Scene id of an image as a linear texture, or None (after a warning)."""
+        if image is None:
+            self._log.warn(f"material {material_name!r}: Image Texture node has no image")
+            return None
+        key = image.name_full
+        if key not in self._texture_ids:
+            self._texture_ids[key] = self._add_texture(image, material_name)
+        return self._texture_ids[key]
+
+    def _add_texture(self, image, material_name):
+        width, height = image.size
+        if width == 0 or height == 0 or image.channels == 0:
+            self._log.warn(f"material {material_name!r}: image {image.name!r} has no pixels "
+                           "(missing file?); base colour untextured")
+            return None
+        pixels = image_pixels(image, self._log)
+        return self._scene.add_texture(shgi.Texture(pixels, name=image.name))
+
+
+def image_pixels(image, log):
+    """(H, W, C) float32 linear pixels of a Blender image, row 0 at the bottom."""
+    width, height = image.size
+    pixels = np.empty(width * height * image.channels, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    pixels = pixels.reshape(height, width, image.channels)
+    colorspace = image.colorspace_settings.name
+    if not conversions.texture_colorspace_is_known(colorspace):
+        log.warn(f"image {image.name!r}: colour space {colorspace!r} is not supported; its "
+                 "values are used as linear")
+    if conversions.texture_needs_srgb_decode(colorspace, image.is_float):
+        rgb = min(RGB_CHANNELS, image.channels)
+        pixels[:, :, :rgb] = shgi.linear_from_srgb(np.ascontiguousarray(pixels[:, :, :rgb]))
+    return pixels
+
+
+def _surface_node(material):
+    """(node feeding the active Material Output's Surface, None) or (None, what is wrong)."""
+    if not material.use_nodes or material.node_tree is None:
+        return None, "does not use nodes"
+    output = node_tree.active_output(material.node_tree, MATERIAL_OUTPUT_NODE)
+    if output is None:
+        return None, "has no Material Output node"
+    surface = node_tree.linked_node(output.inputs["Surface"])
+    if surface is None:
+        return None, "has nothing connected to the Material Output's Surface"
+    return surface, None
+
+
+def _uv_map_name(texture_node):
+    """The UV map an Image Texture reads: a UV Map node's map, else '' (the render UV map)."""
+    source = node_tree.linked_node(texture_node.inputs["Vector"])
+    if source is not None and source.bl_idname == UV_MAP_NODE:
+        return source.uv_map
+    return ""

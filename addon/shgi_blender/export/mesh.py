@@ -1,0 +1,56 @@
+"""An evaluated Blender mesh → per-corner numpy arrays → a SplitMesh (bpy side).
+
+Bulk data goes through ``foreach_get`` into numpy: vertex positions, the loop triangles' loops,
+vertices and material indices, the corner ("split") normals and every UV map. Corner normals
+come from ``Mesh.corner_normals`` on Blender 4.1+ and ``calc_normals_split()`` before.
+UV maps are ordered with the active render UV map first: SHGI textures read the first UV set,
+as Blender reads the render UV map when an Image Texture's Vector input is unlinked.
+"""
+
+import numpy as np
+
+from .mesh_split import require_finite_positions, split_corners
+
+
+def read_mesh(mesh, name):
+    """(SplitMesh, (T,) int32 Blender material index per triangle) of a Blender mesh.
+
+    Raises ValueError naming the mesh for a non-finite vertex.
+    """
+    positions = _foreach(mesh.vertices, "co", np.float32, len(mesh.vertices) * 3).reshape(-1, 3)
+    # Check before the normals are computed, which would spread the NaN around.
+    require_finite_positions(positions, name)
+    mesh.calc_loop_triangles()
+    triangles = mesh.loop_triangles
+    corner_loops = _foreach(triangles, "loops", np.int32, len(triangles) * 3)
+    corner_vertices = _foreach(triangles, "vertices", np.int32, len(triangles) * 3)
+    material_indices = _foreach(triangles, "material_index", np.int32, len(triangles))
+    corner_normals = _loop_normals(mesh)[corner_loops]
+    corner_uvs = {layer.name: _foreach(layer.data, "uv", np.float32,
+                                       len(mesh.loops) * 2).reshape(-1, 2)[corner_loops]
+                  for layer in _uv_layers_render_first(mesh)}
+    split = split_corners(positions, corner_vertices, corner_normals, corner_uvs, name=name)
+    return split, material_indices
+
+
+def _loop_normals(mesh):
+    """(L, 3) float32 corner normals (flat, smooth, auto-smooth and custom as Blender shades)."""
+    loops = len(mesh.loops)
+    if hasattr(mesh, "corner_normals"):  # Blender 4.1+
+        return _foreach(mesh.corner_normals, "vector", np.float32, loops * 3).reshape(-1, 3)
+    mesh.calc_normals_split()
+    return _foreach(mesh.loops, "normal", np.float32, loops * 3).reshape(-1, 3)
+
+
+def _uv_layers_render_first(mesh):
+    """The mesh's UV maps with the active render one first, the others in Blender's order."""
+    layers = list(mesh.uv_layers)
+    return sorted(layers, key=lambda layer: not layer.active_render)
+
+
+def _foreach(collection, attribute, dtype, size):
+    """A flat numpy array of `attribute` over a bpy collection, read with foreach_get."""
+    array = np.empty(size, dtype=dtype)
+    if size:
+        collection.foreach_get(attribute, array)
+    return array

@@ -1,0 +1,179 @@
+"""An evaluated depsgraph → an shgi.Scene: the export entry point (bpy side).
+
+Walks ``depsgraph.object_instances`` (objects, collection instances, particles and geometry-node
+instances alike). Each distinct geometry — an original mesh data without render-changing
+modifiers, else the object itself — with its material slots is converted once (``to_mesh`` on
+the evaluated object, so modifiers are applied) and placed by one shgi instance per object
+instance with its matrix_world. Lights keep their units; the world and the scene camera follow.
+
+Visibility is the depsgraph's: a render depsgraph (the engine's F12 depsgraph) already leaves
+out objects and collections disabled for render. For a viewport depsgraph with
+``for_render=True``, objects whose own or direct collections' hide_render is set are left out too.
+Problems never raise: they become warnings (logged, reported, returned), and the object is
+skipped.
+"""
+
+import time
+
+import numpy as np
+import shgi
+
+from . import conversions
+from .camera import camera_from_scene
+from .light import light_from_object, world_from_blender
+from .material import MaterialExporter
+from .mesh import read_mesh
+from .result import ExportResult, ExportStats, WarningLog
+
+# Object types whose geometry to_mesh() converts to triangles.
+MESH_CONVERTIBLE_TYPES = ("MESH", "CURVE", "SURFACE", "FONT", "META")
+# Since Blender 3.0 the depsgraph lists the evaluated mesh of curves, text and (3.4) metaballs as
+# a separate MESH instance whose parent is the object; the object's own entry is then skipped
+# (as Cycles' object_is_geometry does) so that the geometry is not exported twice.
+NON_MESH_GEOMETRY_TYPES = ("CURVE", "SURFACE", "FONT", "META")
+# Object types with render geometry SHGI cannot convert (skipped with a warning).
+UNSUPPORTED_GEOMETRY_TYPES = ("CURVES", "POINTCLOUD", "VOLUME", "GPENCIL")
+
+
+def export_scene(depsgraph, scene=None, *, report=None, for_render=None):
+    """Converts an evaluated depsgraph into a new, uncommitted shgi.Scene.
+
+    depsgraph: an evaluated Depsgraph (the render engine's, or
+        ``bpy.context.evaluated_depsgraph_get()``).
+    scene: the bpy Scene whose camera, world and render size are used (default:
+        ``depsgraph.scene``).
+    report: a callable like ``Operator.report`` that also receives every warning.
+    for_render: leave out objects hidden for render (default: True for a render depsgraph,
+        False for a viewport one, which already holds only the viewport-visible objects).
+    Returns ExportResult(scene, warnings, stats).
+    """
+    start = time.perf_counter()
+    scene = scene if scene is not None else depsgraph.scene
+    if for_render is None:
+        for_render = depsgraph.mode == "RENDER"
+    exporter = _SceneExporter(depsgraph, WarningLog(report), for_render)
+    exporter.export_instances()
+    exporter.export_world_and_camera(scene)
+    exporter.stats.seconds = time.perf_counter() - start
+    return ExportResult(scene=exporter.shgi_scene, warnings=list(exporter.log.messages),
+                        stats=exporter.stats)
+
+
+class _SceneExporter:
+    """The state of one export: the shgi.Scene being built and what was converted already."""
+
+    def __init__(self, depsgraph, log, for_render):
+        self.depsgraph = depsgraph
+        self.log = log
+        self.for_render = for_render
+        self.shgi_scene = shgi.Scene()
+        self.stats = ExportStats()
+        self.materials = MaterialExporter(self.shgi_scene, log)
+        self._mesh_ids = {}  # (geometry key, material ids) -> mesh id, or None when skipped
+
+    def export_instances(self):
+        """Adds every visible object instance's geometry or light."""
+        evaluated_as_mesh = self._objects_evaluated_as_mesh_instances()
+        for instance in self.depsgraph.object_instances:
+            obj = instance.object
+            if not instance.show_self or not self._is_visible(instance):
+                continue
+            if not instance.is_instance and obj.original.name_full in evaluated_as_mesh:
+                continue
+            if obj.type == "LIGHT":
+                self._add_light(obj, instance.matrix_world)
+            elif obj.type in MESH_CONVERTIBLE_TYPES:
+                self._add_geometry(instance)
+            elif obj.type in UNSUPPORTED_GEOMETRY_TYPES:
+                self.log.warn(f"object {obj.name!r}: type {obj.type} is not supported; skipped")
+                self.stats.skipped_objects += 1
+        self.stats.materials = len(self.shgi_scene.materials)
+        self.stats.textures = self.materials.texture_count
+
+    def _objects_evaluated_as_mesh_instances(self):
+        """Names of the non-mesh objects whose geometry the depsgraph lists as MESH instances."""
+        return {instance.parent.original.name_full
+                for instance in self.depsgraph.object_instances
+                if instance.is_instance and instance.object.type == "MESH"
+                and instance.parent.type in NON_MESH_GEOMETRY_TYPES}
+
+    def export_world_and_camera(self, scene):
+        """Sets the world and, when the scene has a usable camera, the camera."""
+        try:
+            self.shgi_scene.set_world(world_from_blender(scene.world, self.log))
+        except ValueError as error:
+            self.log.warn(f"world: {error}; SHGI's default world is used")
+        camera = camera_from_scene(scene, self.depsgraph, self.log)
+        try:
+            if camera is not None:
+                self.shgi_scene.set_camera(camera)
+        except ValueError as error:
+            self.log.warn(f"camera: {error}; the export has no camera")
+
+    def _is_visible(self, instance):
+        """False for objects hidden for render when the depsgraph has not left them out."""
+        if not self.for_render or self.depsgraph.mode == "RENDER":
+            return True
+        owner = instance.parent if instance.is_instance else instance.object
+        original = owner.original
+        return not (original.hide_render
+                    or any(collection.hide_render for collection in original.users_collection))
+
+    def _add_light(self, obj, matrix_world):
+        try:
+            self.shgi_scene.add_light(light_from_object(obj, matrix_world))
+            self.stats.lights += 1
+        except ValueError as error:
+            self.log.warn(f"light {obj.name!r}: {error}; skipped")
+
+    def _add_geometry(self, instance):
+        """Adds an instance of the object's geometry, converting the geometry on first use."""
+        obj = instance.object
+        material_ids = tuple(self.materials.slot_ids(obj))
+        key = (self._geometry_key(obj), material_ids)
+        if key not in self._mesh_ids:
+            self._mesh_ids[key] = self._add_mesh(obj, key[0][1], material_ids)
+        mesh_id = self._mesh_ids[key]
+        if mesh_id is None:
+            return
+        try:
+            self.shgi_scene.add_instance(mesh_id, conversions.row_major(instance.matrix_world),
+                                         name=obj.name)
+            self.stats.instances += 1
+        except ValueError as error:  # e.g. a zero scale makes matrix_world singular
+            self.log.warn(f"object {obj.name!r}: {error}; skipped")
+            self.stats.skipped_objects += 1
+
+    def _geometry_key(self, obj):
+        """("DATA", mesh name) when the geometry is the shared mesh data, else ("OBJECT", name)."""
+        original = obj.original
+        render = self.depsgraph.mode == "RENDER"
+        modified = any(modifier.show_render if render else modifier.show_viewport
+                       for modifier in original.modifiers)
+        if obj.type == "MESH" and not modified and obj.data is not None:
+            return ("DATA", obj.data.original.name_full)
+        return ("OBJECT", original.name_full)
+
+    def _add_mesh(self, obj, name, material_ids):
+        """Id of the new shgi mesh of an evaluated object, or None (empty or skipped)."""
+        mesh = obj.to_mesh()
+        try:
+            if mesh is None or not mesh.polygons:
+                return None
+            split, blender_indices = read_mesh(mesh, name)
+            # Cycles clamps material indices beyond the last slot to the last slot.
+            slot_count = len(material_ids)
+            material_indices = np.asarray(material_ids, dtype=np.int32)[
+                np.clip(blender_indices, 0, slot_count - 1)]
+            mesh_id = self.shgi_scene.add_mesh(
+                positions=split.positions, triangles=split.triangles, normals=split.normals,
+                uvs=split.uvs or None, material_indices=material_indices, name=name)
+        except ValueError as error:
+            self.log.warn(f"object {obj.name!r}: {error}; skipped")
+            self.stats.skipped_objects += 1
+            return None
+        finally:
+            obj.to_mesh_clear()
+        self.stats.meshes += 1
+        self.stats.triangles += len(split.triangles)
+        return mesh_id
