@@ -14,6 +14,8 @@ DEB_PACKAGES := build-essential cmake pkg-config libembree-dev libglm-dev libope
 	libtinyobjloader-dev libpcg-cpp-dev libpng-dev python3-dev python3-numpy python3-pytest \
 	blender xvfb xauth
 SITE_DIR := /usr/local/lib/python3.11/dist-packages
+# Debian's Blender adopts the Python home of the first python3 on PATH, so run it without pyenv.
+SYSTEM_PATH := /usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
 
 .PHONY: all deps build install test test-cpp test-python test-stubs stubs demo bench clean
 
@@ -61,6 +63,14 @@ install: build
 		$$other -c 'import numpy' 2>/dev/null || $$other -m pip install -q numpy; \
 	fi
 	cd / && $(PYTHON) -c 'import shgi; print("shgi", shgi.__version__, "installed in", shgi.__file__)'
+	@# The add-on goes into Blender's user add-on folder (Preferences > Add-ons lists it as SHGI).
+	@addons=$$(env PATH=$(SYSTEM_PATH) blender -b --factory-startup --python-expr \
+		'import bpy; print("ADDONS=" + bpy.utils.user_resource("SCRIPTS", path="addons", create=True))' \
+		2>/dev/null | sed -n 's/^ADDONS=//p'); \
+	if [ -z "$$addons" ]; then echo "Blender did not report its add-on folder"; exit 1; fi; \
+	rm -rf "$$addons/shgi_blender" && cp -r addon/shgi_blender "$$addons/" && \
+	find "$$addons/shgi_blender" -name __pycache__ -prune -exec rm -rf {} + && \
+	echo "add-on shgi_blender installed in $$addons"
 
 test-cpp: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
