@@ -7,7 +7,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'Instance', 'Light', 'LightType', 'LogLevel', 'Material', 'Mesh', 'Progress', 'Scene', 'SensorFit', 'Texture', 'World', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'max_threads', 'read_exr', 'read_exr_info', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'DiffuseModel', 'Instance', 'Light', 'LightType', 'LogLevel', 'Material', 'Mesh', 'PathTracer', 'PathTracerSettings', 'Progress', 'Scene', 'SensorFit', 'Texture', 'World', 'WorldSampling', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'max_threads', 'read_exr', 'read_exr_info', 'render_path_traced', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -225,6 +225,56 @@ class CameraType:
         ...
     @typing.overload
     def __ne__(self, other: CameraType) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
+class DiffuseModel:
+    """
+    Diffuse lobe of the Principled BSDF.
+    
+    Members:
+    
+      PRINCIPLED
+    
+      LAMBERT
+    """
+    LAMBERT: typing.ClassVar[DiffuseModel]  # value = <DiffuseModel.LAMBERT: 1>
+    PRINCIPLED: typing.ClassVar[DiffuseModel]  # value = <DiffuseModel.PRINCIPLED: 0>
+    __members__: typing.ClassVar[dict[str, DiffuseModel]]  # value = {'PRINCIPLED': <DiffuseModel.PRINCIPLED: 0>, 'LAMBERT': <DiffuseModel.LAMBERT: 1>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: DiffuseModel) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: DiffuseModel) -> bool:
         ...
     @typing.overload
     def __ne__(self, other: typing.Any) -> bool:
@@ -656,6 +706,138 @@ class Mesh:
     @uv_sets.setter
     def uv_sets(self, arg1: typing.Any) -> None:
         ...
+class PathTracer:
+    """
+    
+    Progressive reference path tracer over a committed Scene with a camera.
+    
+    render(samples) adds samples to the film; passes() returns every pass so far. The result
+    depends only on the seed and the total sample count, not on threads or how the samples
+    were split between render() calls.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, scene: Scene, settings: PathTracerSettings = ...) -> None:
+        """
+        Checks the settings (ValueError) and prepares light sampling.
+        """
+    def passes(self) -> dict:
+        """
+        {pass name: float32 array (H, W, C)}: Combined (RGBA), DiffDir, ..., Normal (XYZ), Depth (1 channel), with Cycles' meaning.
+        """
+    def render(self, samples: typing.Any = None, progress: Progress = None) -> None:
+        """
+        Adds `samples` samples per pixel (default settings.samples) with the GIL released. Raises shgi.Cancelled when progress.cancel() is called; the film is then unchanged.
+        """
+    @property
+    def samples_done(self) -> int:
+        """
+        Samples per pixel accumulated so far.
+        """
+class PathTracerSettings:
+    """
+    Settings of the reference path tracer; every field has a default.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        PathTracerSettings(**fields), e.g. PathTracerSettings(samples=16, seed=3).
+        """
+    def validate(self) -> None:
+        """
+        Raises ValueError naming the first invalid field.
+        """
+    @property
+    def clamp_indirect(self) -> float:
+        """
+        Max component of an indirect sample's contribution; 0 = off (0).
+        """
+    @clamp_indirect.setter
+    def clamp_indirect(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def diffuse_bounces(self) -> int:
+        """
+        Diffuse bounce limit (4).
+        """
+    @diffuse_bounces.setter
+    def diffuse_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def diffuse_model(self) -> DiffuseModel:
+        """
+        DiffuseModel (PRINCIPLED).
+        """
+    @diffuse_model.setter
+    def diffuse_model(self, arg0: DiffuseModel) -> None:
+        ...
+    @property
+    def glossy_bounces(self) -> int:
+        """
+        Glossy bounce limit (4).
+        """
+    @glossy_bounces.setter
+    def glossy_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_bounces(self) -> int:
+        """
+        Total bounce limit, Cycles' (12).
+        """
+    @max_bounces.setter
+    def max_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def russian_roulette_depth(self) -> int:
+        """
+        Surfaces before Russian roulette may end a path (3).
+        """
+    @russian_roulette_depth.setter
+    def russian_roulette_depth(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def samples(self) -> int:
+        """
+        Samples per pixel rendered by render_path_traced (default 64).
+        """
+    @samples.setter
+    def samples(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def seed(self) -> int:
+        """
+        Random seed; the image is a pure function of it (default 0).
+        """
+    @seed.setter
+    def seed(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def tile_size(self) -> int:
+        """
+        Tile side in pixels (16).
+        """
+    @tile_size.setter
+    def tile_size(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def transmission_bounces(self) -> int:
+        """
+        Transmission bounce limit (12).
+        """
+    @transmission_bounces.setter
+    def transmission_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def world_sampling(self) -> WorldSampling:
+        """
+        WorldSampling (COSINE).
+        """
+    @world_sampling.setter
+    def world_sampling(self, arg0: WorldSampling) -> None:
+        ...
 class Progress:
     """
     
@@ -925,6 +1107,56 @@ class World:
     @strength.setter
     def strength(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
+class WorldSampling:
+    """
+    How next-event estimation samples the world.
+    
+    Members:
+    
+      COSINE
+    
+      UNIFORM
+    """
+    COSINE: typing.ClassVar[WorldSampling]  # value = <WorldSampling.COSINE: 0>
+    UNIFORM: typing.ClassVar[WorldSampling]  # value = <WorldSampling.UNIFORM: 1>
+    __members__: typing.ClassVar[dict[str, WorldSampling]]  # value = {'COSINE': <WorldSampling.COSINE: 0>, 'UNIFORM': <WorldSampling.UNIFORM: 1>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: WorldSampling) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: WorldSampling) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
 def linear_from_srgb(encoded: typing.Annotated[numpy.typing.ArrayLike, numpy.float32]) -> typing.Any:
     """
     Inverse sRGB transfer function: x / 12.92 up to 0.04045, ((x + 0.055) / 1.055)**2.4 above.
@@ -986,6 +1218,10 @@ def read_exr_info(path: os.PathLike | str | bytes) -> dict:
     Reads only the header of an OpenEXR file: {"width", "height", "compression",
     "channels": [(full name, "half" | "float"), ...]} with channels in read_exr's order.
     Raises OSError naming the file when it is missing, corrupt or unsupported.
+    """
+def render_path_traced(scene: Scene, settings: PathTracerSettings = ..., progress: Progress = None) -> dict:
+    """
+    Renders settings.samples samples per pixel of the scene's camera; returns {pass name: float32 array (H, W, C)}.
     """
 def set_log_level(level: LogLevel) -> None:
     """

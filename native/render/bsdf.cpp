@@ -1,0 +1,269 @@
+#include "render/bsdf.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "util/sampling.h"
+
+namespace shgi {
+namespace {
+
+// Principled's "Specular" 0..1 maps to F0 = kSpecularF0Scale * specular (Blender manual).
+constexpr float kSpecularF0Scale = 0.08f;
+// Lobes whose closure weight averages below this are dropped (Cycles' CLOSURE_WEIGHT_CUTOFF).
+constexpr float kClosureWeightCutoff = 1e-5f;
+
+float average(const vec3& v) { return (v.x + v.y + v.z) / 3.0f; }
+
+// (1 - x)^5, the Schlick weight of Burley's diffuse.
+float schlick_weight(float x) {
+    const float m = std::clamp(1.0f - x, 0.0f, 1.0f);
+    const float m2 = m * m;
+    return m2 * m2 * m;
+}
+
+// Refracts wo (on the +Z side of the microfacet normal h, wo.h > 0) into the medium of relative
+// ior eta; false under total internal reflection.
+bool refract_local(const vec3& wo, const vec3& h, float eta, vec3* wi) {
+    const float cos_i = glm::dot(wo, h);
+    const float sin2_t = (1.0f - cos_i * cos_i) / (eta * eta);
+    if (sin2_t >= 1.0f) return false;
+    const float cos_t = std::sqrt(1.0f - sin2_t);
+    *wi = -wo / eta + (cos_i / eta - cos_t) * h;
+    return true;
+}
+
+// Half vector of a refraction pair (wo outside, wi inside, relative ior eta), on wo's side.
+vec3 refraction_half_vector(const vec3& wo, const vec3& wi, float eta) {
+    vec3 h = wo + eta * wi;
+    const float length = glm::length(h);
+    if (length <= 0.0f) return vec3(0.0f, 0.0f, 1.0f);
+    h /= length;
+    return h.z < 0.0f ? -h : h;
+}
+
+}  // namespace
+
+float ggx_d(const vec3& h, float alpha) {
+    if (h.z <= 0.0f) return 0.0f;
+    const float a2 = alpha * alpha;
+    const float c2 = h.z * h.z;
+    const float denom = c2 * (a2 - 1.0f) + 1.0f;
+    return a2 / (kPi * denom * denom);
+}
+
+float ggx_g1(const vec3& w, float alpha) {
+    const float c2 = w.z * w.z;
+    if (c2 <= 0.0f) return 0.0f;
+    const float tan2 = std::max(0.0f, 1.0f - c2) / c2;
+    return 2.0f / (1.0f + std::sqrt(1.0f + alpha * alpha * tan2));
+}
+
+vec3 sample_ggx_visible_normal(const vec3& w, float alpha, const vec2& u) {
+    const vec3 vh = glm::normalize(vec3(alpha * w.x, alpha * w.y, w.z));
+    const float length2 = vh.x * vh.x + vh.y * vh.y;
+    const vec3 t1 = length2 > 0.0f ? vec3(-vh.y, vh.x, 0.0f) / std::sqrt(length2)
+                                   : vec3(1.0f, 0.0f, 0.0f);
+    const vec3 t2 = glm::cross(vh, t1);
+    const float r = std::sqrt(u.x);
+    const float phi = kTwoPi * u.y;
+    const float p1 = r * std::cos(phi);
+    const float s = 0.5f * (1.0f + vh.z);
+    const float p2 = (1.0f - s) * std::sqrt(std::max(0.0f, 1.0f - p1 * p1)) + s * r * std::sin(phi);
+    const vec3 nh = p1 * t1 + p2 * t2 + std::sqrt(std::max(0.0f, 1.0f - p1 * p1 - p2 * p2)) * vh;
+    return glm::normalize(vec3(alpha * nh.x, alpha * nh.y, std::max(0.0f, nh.z)));
+}
+
+float fresnel_dielectric(float cos_i, float eta) {
+    const float c = std::fabs(cos_i);
+    float g = eta * eta - 1.0f + c * c;
+    if (g <= 0.0f) return 1.0f;
+    g = std::sqrt(g);
+    const float a = (g - c) / (g + c);
+    const float b = (c * (g + c) - 1.0f) / (c * (g - c) + 1.0f);
+    return 0.5f * a * a * (1.0f + b * b);
+}
+
+LobeClass PrincipledBsdf::Lobe::lobe_class() const {
+    switch (kind) {
+        case LobeKind::Diffuse: return LobeClass::Diffuse;
+        case LobeKind::Refraction: return LobeClass::Transmission;
+        default: return LobeClass::Glossy;
+    }
+}
+
+PrincipledBsdf::PrincipledBsdf(const Material& material, const vec3& base_color, bool back_face,
+                               float cos_nv, DiffuseModel diffuse_model)
+    : roughness_(material.roughness), diffuse_model_(diffuse_model) {
+    const float metallic = std::clamp(material.metallic, 0.0f, 1.0f);
+    const float transmission = (1.0f - metallic) * std::clamp(material.transmission, 0.0f, 1.0f);
+    const float alpha = material.roughness * material.roughness;
+    eta_ = back_face ? 1.0f / material.ior : material.ior;
+
+    const float f0_dielectric = kSpecularF0Scale * std::clamp(material.specular, 0.0f, 1.0f);
+    specular_f0_ = f0_dielectric;
+    specular_ior_ = 2.0f / (1.0f - std::sqrt(f0_dielectric)) - 1.0f;
+    cspec0_ = glm::mix(vec3(f0_dielectric), base_color, metallic);
+
+    add_lobe(LobeKind::Diffuse, (1.0f - metallic) * (1.0f - material.transmission) * base_color,
+             alpha);
+    add_lobe(LobeKind::Specular, vec3(1.0f - transmission), alpha);
+    const float fresnel = fresnel_dielectric(cos_nv, eta_);
+    add_lobe(LobeKind::GlassReflection, vec3(transmission * fresnel), alpha);
+    add_lobe(LobeKind::Refraction, transmission * (1.0f - fresnel) * base_color, alpha);
+
+    // Lobe selection by average closure weight as Cycles, except that the specular lobe is
+    // weighted by its colour at normal view so a 4% dielectric coat does not take half the samples.
+    float total = 0.0f;
+    for (int i = 0; i < lobe_count_; ++i) {
+        Lobe& lobe = lobes_[i];
+        lobe.select_prob = average(lobe.weight);
+        if (lobe.kind == LobeKind::Specular) lobe.select_prob *= average(specular_color(cos_nv));
+        total += lobe.select_prob;
+    }
+    for (int i = 0; i < lobe_count_; ++i)
+        lobes_[i].select_prob = total > 0.0f ? lobes_[i].select_prob / total : 0.0f;
+}
+
+void PrincipledBsdf::add_lobe(LobeKind kind, const vec3& weight, float alpha) {
+    if (average(weight) <= kClosureWeightCutoff) return;
+    Lobe& lobe = lobes_[lobe_count_++];
+    lobe.kind = kind;
+    lobe.weight = weight;
+    lobe.alpha = alpha;
+}
+
+vec3 PrincipledBsdf::specular_color(float cos_lh) const {
+    // Cycles' interpolate_fresnel_color: Fresnel of specular_ior_, renormalised to [F0, 1].
+    if (specular_f0_ >= 1.0f) return vec3(1.0f);
+    const float fh = (fresnel_dielectric(cos_lh, specular_ior_) - specular_f0_) /
+                     (1.0f - specular_f0_);
+    return cspec0_ * (1.0f - fh) + vec3(fh);
+}
+
+float PrincipledBsdf::diffuse_brdf(const vec3& wo, const vec3& wi) const {
+    if (diffuse_model_ == DiffuseModel::Lambert) return kInvPi;
+    const float fl = schlick_weight(wi.z);
+    const float fv = schlick_weight(wo.z);
+    const vec3 h = glm::normalize(wo + wi);
+    const float cos_lh = glm::dot(wi, h);
+    const float rr = 2.0f * roughness_ * cos_lh * cos_lh;
+    const float lambert = (1.0f - 0.5f * fl) * (1.0f - 0.5f * fv);
+    const float retro = rr * (fl + fv + fl * fv * (rr - 1.0f));
+    return kInvPi * (lambert + retro);
+}
+
+vec3 PrincipledBsdf::lobe_eval(const Lobe& lobe, const vec3& wo, const vec3& wi) const {
+    if (lobe.delta() || wo.z <= 0.0f) return vec3(0.0f);
+    if (lobe.kind == LobeKind::Refraction) {
+        if (wi.z >= 0.0f) return vec3(0.0f);
+        const vec3 h = refraction_half_vector(wo, wi, eta_);
+        const float cos_oh = glm::dot(wo, h), cos_ih = glm::dot(wi, h);
+        if (cos_oh <= 0.0f || cos_ih >= 0.0f) return vec3(0.0f);
+        const float denom = cos_oh + eta_ * cos_ih;
+        const float g = ggx_g1(wo, lobe.alpha) * ggx_g1(wi, lobe.alpha);
+        const float value = eta_ * eta_ * ggx_d(h, lobe.alpha) * g * std::fabs(cos_ih) * cos_oh /
+                            (wo.z * denom * denom);
+        return lobe.weight * value;
+    }
+    if (wi.z <= 0.0f) return vec3(0.0f);
+    if (lobe.kind == LobeKind::Diffuse) return lobe.weight * (diffuse_brdf(wo, wi) * wi.z);
+    const vec3 h = glm::normalize(wo + wi);
+    const float g = ggx_g1(wo, lobe.alpha) * ggx_g1(wi, lobe.alpha);
+    const float value = ggx_d(h, lobe.alpha) * g / (4.0f * wo.z);
+    const vec3 color = lobe.kind == LobeKind::Specular ? specular_color(glm::dot(wi, h))
+                                                       : vec3(1.0f);
+    return lobe.weight * color * value;
+}
+
+float PrincipledBsdf::lobe_pdf(const Lobe& lobe, const vec3& wo, const vec3& wi) const {
+    if (lobe.delta() || wo.z <= 0.0f) return 0.0f;
+    if (lobe.kind == LobeKind::Diffuse) return wi.z > 0.0f ? wi.z * kInvPi : 0.0f;
+    if (lobe.kind == LobeKind::Refraction) {
+        if (wi.z >= 0.0f) return 0.0f;
+        const vec3 h = refraction_half_vector(wo, wi, eta_);
+        const float cos_oh = glm::dot(wo, h), cos_ih = glm::dot(wi, h);
+        if (cos_oh <= 0.0f || cos_ih >= 0.0f) return 0.0f;
+        const float denom = cos_oh + eta_ * cos_ih;
+        const float visible = ggx_g1(wo, lobe.alpha) * ggx_d(h, lobe.alpha) * cos_oh / wo.z;
+        return visible * eta_ * eta_ * std::fabs(cos_ih) / (denom * denom);
+    }
+    if (wi.z <= 0.0f) return 0.0f;
+    const vec3 h = glm::normalize(wo + wi);
+    return ggx_g1(wo, lobe.alpha) * ggx_d(h, lobe.alpha) / (4.0f * wo.z);
+}
+
+bool PrincipledBsdf::lobe_sample(const Lobe& lobe, const vec3& wo, const vec2& u,
+                                 vec3* wi) const {
+    if (lobe.kind == LobeKind::Diffuse) {
+        *wi = sample_cosine_hemisphere(u);
+        return wi->z > 0.0f;
+    }
+    const vec3 h = lobe.delta() ? vec3(0.0f, 0.0f, 1.0f)
+                                : sample_ggx_visible_normal(wo, lobe.alpha, u);
+    if (lobe.kind == LobeKind::Refraction) {
+        if (!refract_local(wo, h, eta_, wi)) return false;
+        return wi->z < 0.0f;
+    }
+    *wi = 2.0f * glm::dot(wo, h) * h - wo;
+    return wi->z > 0.0f;
+}
+
+BsdfEval PrincipledBsdf::eval(const vec3& wo, const vec3& wi) const {
+    BsdfEval result;
+    for (int i = 0; i < lobe_count_; ++i)
+        result.by_class[int(lobes_[i].lobe_class())] += lobe_eval(lobes_[i], wo, wi);
+    return result;
+}
+
+float PrincipledBsdf::pdf(const vec3& wo, const vec3& wi) const {
+    float pdf = 0.0f;
+    for (int i = 0; i < lobe_count_; ++i)
+        pdf += lobes_[i].select_prob * lobe_pdf(lobes_[i], wo, wi);
+    return pdf;
+}
+
+bool PrincipledBsdf::sample(const vec3& wo, float u_lobe, const vec2& u, BsdfSample* out) const {
+    if (wo.z <= 0.0f || lobe_count_ == 0) return false;
+    int chosen = lobe_count_ - 1;
+    for (int i = 0; i < lobe_count_; ++i) {
+        if (u_lobe < lobes_[i].select_prob) {
+            chosen = i;
+            break;
+        }
+        u_lobe -= lobes_[i].select_prob;
+    }
+    const Lobe& lobe = lobes_[chosen];
+    if (lobe.select_prob <= 0.0f) return false;
+    if (!lobe_sample(lobe, wo, u, &out->wi)) return false;
+    out->lobe_class = lobe.lobe_class();
+    out->delta = lobe.delta();
+    out->eval = BsdfEval{};
+    if (out->delta) {
+        const vec3 color = lobe.kind == LobeKind::Specular ? specular_color(wo.z) : vec3(1.0f);
+        out->weight = lobe.weight * color / lobe.select_prob;
+        out->pdf = 0.0f;
+        out->eval.by_class[int(out->lobe_class)] = out->weight;
+    } else {
+        out->eval = eval(wo, out->wi);
+        out->pdf = pdf(wo, out->wi);
+        if (out->pdf <= 0.0f) return false;
+        out->weight = out->eval.total() / out->pdf;
+    }
+    return is_finite(out->weight) && glm::any(glm::greaterThan(out->weight, vec3(0.0f)));
+}
+
+vec3 PrincipledBsdf::class_color(LobeClass lobe_class) const {
+    vec3 color(0.0f);
+    for (int i = 0; i < lobe_count_; ++i)
+        if (lobes_[i].lobe_class() == lobe_class) color += lobes_[i].weight;
+    return color;
+}
+
+bool PrincipledBsdf::has_smooth_lobes() const {
+    for (int i = 0; i < lobe_count_; ++i)
+        if (!lobes_[i].delta()) return true;
+    return false;
+}
+
+}  // namespace shgi

@@ -1,0 +1,117 @@
+// PrincipledBsdf: the closures Cycles builds for Blender 3.4's Principled BSDF (GGX distribution,
+// no clearcoat/sheen/subsurface), evaluated and sampled in a local shading frame.
+//
+// Lobes and their closure weights, as intern/cycles/kernel/svm/closure.h (3.4, principled v1):
+//   diffuse      weight = (1 - metallic)(1 - transmission) * base_color; Lambert (1/pi) or
+//                Cycles' principled diffuse (Burley 2015 split form: Lambert * (1 - FL/2)(1 - FV/2)
+//                plus retro-reflection RR (FL + FV + FL FV (RR - 1)), RR = 2 roughness (L.H)^2)
+//   specular     weight = 1 - (1 - metallic) transmission; GGX reflection (alpha = roughness^2,
+//                separable Smith G) whose colour is Cycles' interpolate_fresnel_color: the
+//                dielectric Fresnel of ior = 2/(1 - sqrt(0.08 specular)) - 1 rescaled between
+//                cspec0 = mix(0.08 specular, base_color, metallic) at normal incidence and 1
+//   glass refl.  weight = (1 - metallic) transmission * F(N.V, ior); GGX reflection, white
+//   refraction   weight = (1 - metallic) transmission * (1 - F(N.V, ior)) * base_color; GGX BTDF
+//                (Walter et al. 2007, eq. 21 without the Fresnel term, which is in the weight)
+// Diffuse and specular are added, not layered (Cycles 3.x does the same: albedo may exceed 1 by
+// the specular's share). Refraction does not scale radiance by 1/eta^2, as Cycles: a sampled
+// smooth refraction has weight 1, and the rough BTDF's sampled weight tends to 1 with alpha.
+// Lobes with alpha below kDeltaAlpha are perfectly smooth (Dirac) lobes, as Cycles' threshold.
+//
+// Frame: +Z is the shading normal flipped to the side of wo (so wo.z > 0); a hit on a back face
+// uses ior' = 1/ior. wo and wi point away from the surface. eval() returns f * |cos(wi)| split
+// by lobe class (diffuse / glossy / transmission) so passes can be split as Cycles does; pdfs are
+// per unit solid angle, for the one-sample lobe mixture (lobe chosen by average closure weight).
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "scene/material.h"
+#include "util/math.h"
+
+namespace shgi {
+
+// Cycles' pass classes of a closure.
+enum class LobeClass : uint8_t { Diffuse = 0, Glossy = 1, Transmission = 2 };
+inline constexpr int kLobeClassCount = 3;
+
+enum class DiffuseModel : uint8_t {
+    Principled,  // Cycles 3.4 Principled diffuse (Burley, with roughness retro-reflection)
+    Lambert,     // f = albedo / pi (Blender's Diffuse BSDF with roughness 0)
+};
+
+// Alpha below which GGX becomes a perfect mirror / smooth refraction (Cycles: 1e-4).
+inline constexpr float kDeltaAlpha = 1e-4f;
+
+// f * |cos(wi)| per lobe class, RGB.
+struct BsdfEval {
+    std::array<vec3, kLobeClassCount> by_class{vec3(0.0f), vec3(0.0f), vec3(0.0f)};
+    vec3 total() const { return by_class[0] + by_class[1] + by_class[2]; }
+};
+
+struct BsdfSample {
+    vec3 wi{0.0f};           // local frame
+    vec3 weight{0.0f};       // f |cos| / pdf, or the closure weight for a Dirac lobe
+    float pdf = 0.0f;        // mixture pdf (sr^-1); 0 for a Dirac lobe
+    bool delta = false;
+    LobeClass lobe_class = LobeClass::Diffuse;
+    BsdfEval eval;           // f |cos| split by class (for a Dirac lobe: weight in its class)
+};
+
+// --- GGX pieces (Walter et al. 2007; Heitz 2018 visible-normal sampling), local frame ---
+float ggx_d(const vec3& h, float alpha);
+float ggx_g1(const vec3& w, float alpha);
+// Samples a visible normal for view direction w (w.z > 0), Heitz 2018 "Sampling the GGX
+// Distribution of Visible Normals", JCGT 7(4). pdf(h) = G1(w) max(0, w.h) D(h) / w.z.
+vec3 sample_ggx_visible_normal(const vec3& w, float alpha, const vec2& u);
+// Dielectric Fresnel reflectance for cos_i = cos of the incident angle and relative ior eta;
+// 1 under total internal reflection (Cycles' fresnel_dielectric_cos).
+float fresnel_dielectric(float cos_i, float eta);
+
+class PrincipledBsdf {
+  public:
+    // base_color is the material's base colour times its texture at the hit. back_face: the ray
+    // hit the back of the surface (ior inverted). cos_nv: wo.z in the shading frame.
+    PrincipledBsdf(const Material& material, const vec3& base_color, bool back_face,
+                   float cos_nv, DiffuseModel diffuse_model);
+
+    BsdfEval eval(const vec3& wo, const vec3& wi) const;
+    float pdf(const vec3& wo, const vec3& wi) const;
+    // u_lobe picks the lobe, u the direction. False when the sample is invalid (below the
+    // surface for a reflection lobe, total internal reflection, zero weight).
+    bool sample(const vec3& wo, float u_lobe, const vec2& u, BsdfSample* out) const;
+
+    // Sum of closure weights per class: Cycles' DiffCol / GlossCol / TransCol for this hit.
+    vec3 class_color(LobeClass lobe_class) const;
+    // True when at least one lobe is not a Dirac lobe (light sampling can help).
+    bool has_smooth_lobes() const;
+
+  private:
+    enum class LobeKind : uint8_t { Diffuse, Specular, GlassReflection, Refraction };
+    struct Lobe {
+        LobeKind kind;
+        vec3 weight;        // closure weight
+        float alpha;        // GGX alpha (unused for diffuse)
+        float select_prob;  // probability of sampling this lobe
+        bool delta() const { return kind != LobeKind::Diffuse && alpha < kDeltaAlpha; }
+        LobeClass lobe_class() const;
+    };
+
+    void add_lobe(LobeKind kind, const vec3& weight, float alpha);
+    vec3 lobe_eval(const Lobe& lobe, const vec3& wo, const vec3& wi) const;
+    float lobe_pdf(const Lobe& lobe, const vec3& wo, const vec3& wi) const;
+    bool lobe_sample(const Lobe& lobe, const vec3& wo, const vec2& u, vec3* wi) const;
+    vec3 specular_color(float cos_lh) const;
+    float diffuse_brdf(const vec3& wo, const vec3& wi) const;
+
+    std::array<Lobe, 4> lobes_{};
+    int lobe_count_ = 0;
+    vec3 cspec0_{0.0f};
+    float specular_ior_ = 1.0f;  // ior whose Fresnel drives the specular colour
+    float specular_f0_ = 0.0f;
+    float eta_ = 1.45f;          // relative ior across the surface (inverted on back faces)
+    float roughness_ = 0.5f;
+    DiffuseModel diffuse_model_ = DiffuseModel::Principled;
+};
+
+}  // namespace shgi

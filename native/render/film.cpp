@@ -1,0 +1,83 @@
+#include "render/film.h"
+
+#include "util/error.h"
+
+namespace shgi {
+namespace {
+
+// Cycles writes this depth where no sample hit anything (film_get_pass_pixel_depth).
+constexpr float kMissDepth = 1e10f;
+
+constexpr const char* kPassNames[kPassCount] = {
+    "Combined", "DiffDir", "DiffInd", "DiffCol", "GlossDir", "GlossInd", "GlossCol",
+    "TransDir", "TransInd", "TransCol", "Emit",    "Env",     "Normal",   "Depth",
+};
+
+// The colour pass a light pass is divided by, or the pass itself when it is not divided.
+Pass divisor_of(Pass pass) {
+    switch (pass) {
+        case Pass::DiffDir:
+        case Pass::DiffInd: return Pass::DiffCol;
+        case Pass::GlossDir:
+        case Pass::GlossInd: return Pass::GlossCol;
+        case Pass::TransDir:
+        case Pass::TransInd: return Pass::TransCol;
+        default: return pass;
+    }
+}
+
+float safe_divide(float a, float b) { return b != 0.0f ? a / b : 0.0f; }
+
+}  // namespace
+
+const char* pass_name(Pass pass) { return kPassNames[size_t(pass)]; }
+
+std::vector<std::string> pass_suffixes(Pass pass) {
+    switch (pass) {
+        case Pass::Combined: return {"R", "G", "B", "A"};
+        case Pass::Normal: return {"X", "Y", "Z"};
+        case Pass::Depth: return {"Z"};
+        default: return {"R", "G", "B"};
+    }
+}
+
+Film::Film(int width, int height) : width_(width), height_(height) {
+    check_image_size(width, height, "film");
+    sums_.assign(size_t(kPassCount) * pixel_count(), vec3(0.0f));
+}
+
+void Film::add(int x, int y, const PassValues& values) {
+    const size_t pixel = size_t(y) * size_t(width_) + size_t(x);
+    for (int p = 0; p < kPassCount; ++p) sums_[size_t(p) * pixel_count() + pixel] += values.value[p];
+}
+
+vec3 Film::normalised(Pass pass, size_t pixel) const {
+    const vec3& s = sum(pass, pixel);
+    const Pass divisor = divisor_of(pass);
+    if (divisor != pass) {
+        const vec3& c = sum(divisor, pixel);
+        return vec3(safe_divide(s.x, c.x), safe_divide(s.y, c.y), safe_divide(s.z, c.z));
+    }
+    const float scale = samples_ > 0 ? 1.0f / float(samples_) : 0.0f;
+    if (pass == Pass::Depth) return vec3(s.x != 0.0f ? s.x * scale : kMissDepth, 0.0f, 0.0f);
+    return s * scale;
+}
+
+std::vector<float> Film::pixels(Pass pass) const {
+    const size_t channels = pass_suffixes(pass).size();
+    std::vector<float> out(pixel_count() * channels);
+    for (size_t i = 0; i < pixel_count(); ++i) {
+        const vec3 v = normalised(pass, i);
+        for (size_t c = 0; c < channels; ++c) out[i * channels + c] = c < 3 ? v[int(c)] : 1.0f;
+    }
+    return out;
+}
+
+Image Film::image() const {
+    Image image(width_, height_);
+    for (int p = 0; p < kPassCount; ++p)
+        image.add_layer(pass_name(Pass(p)), pass_suffixes(Pass(p)), pixels(Pass(p)));
+    return image;
+}
+
+}  // namespace shgi

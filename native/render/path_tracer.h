@@ -1,0 +1,78 @@
+// PathTracer: the reference unidirectional path tracer every SHGI solver is checked against.
+//
+// Algorithm (Veach 1997, ch. 9; pbrt-v4 §13.4 "PathIntegrator"): at each surface, next-event
+// estimation samples one emitter (LightSampler, chosen by power) and the BSDF (PrincipledBsdf)
+// is sampled to continue; emitters found by BSDF rays (emissive triangles, point/spot disks,
+// area lights, sun cones, the world) are weighted against NEE by the power heuristic (beta = 2).
+// Russian roulette starts after `russian_roulette_depth` surfaces with survival probability
+// min(1, max throughput component).
+//
+// Bounce limits mean what Cycles' Light Paths panel means: max_bounces = 0 is direct light only
+// (emitters reached after one scattering, by NEE or by the BSDF ray); each scattering counts as
+// one bounce of its lobe class, and a path whose counts exceed a limit still adds the emission
+// its last ray meets, then stops (Cycles' PATH_RAY_TERMINATE_ON_NEXT_SURFACE).
+//
+// Determinism: sample s of pixel i uses its own Pcg32 stream (seed, stream_id(s, i)), so the
+// image is bit-identical for any thread count, any tile split and any split of the samples
+// into progressive render() calls. Pixel filter: a box of one pixel (uniform jitter), where
+// Cycles defaults to a 1.5 px Blackman-Harris; set Cycles' Filter Size to 0.01 to compare.
+// Passes: see render/film.h. Units and emitters: see render/light_sampler.h.
+#pragma once
+
+#include <cstdint>
+
+#include "io/image.h"
+#include "render/bsdf.h"
+#include "render/film.h"
+#include "render/light_sampler.h"
+#include "scene/scene.h"
+#include "util/progress.h"
+
+namespace shgi {
+
+struct PathTracerSettings {
+    uint32_t samples = 64;             // per pixel, used by render_path_traced
+    uint64_t seed = 0;
+    int max_bounces = 12;              // Cycles' defaults for the four limits
+    int diffuse_bounces = 4;
+    int glossy_bounces = 4;
+    int transmission_bounces = 12;
+    int russian_roulette_depth = 3;    // surfaces before roulette may end a path
+    float clamp_indirect = 0.0f;       // max component of an indirect sample; 0 = off
+    WorldSampling world_sampling = WorldSampling::Cosine;
+    DiffuseModel diffuse_model = DiffuseModel::Principled;
+    int tile_size = 16;                // pixels per tile side (work unit of the thread pool)
+};
+
+// Largest total sample count per pixel: sample indices name RNG streams (util/rng.h stream_id).
+inline constexpr uint64_t kMaxPathTracerSamples = uint64_t(1) << 24;
+
+// Throws InvalidArgument naming the field and its value.
+void validate_path_tracer_settings(const PathTracerSettings& settings);
+
+class PathTracer {
+  public:
+    // The scene must be committed and have a camera; it must outlive the PathTracer.
+    PathTracer(const Scene& scene, const PathTracerSettings& settings);
+
+    // Adds `samples` samples per pixel to the film (progressive). On Cancelled or any other
+    // error the film is left as it was before the call.
+    void render(uint32_t samples, Progress* progress = nullptr);
+
+    const Film& film() const { return film_; }
+    uint32_t samples_done() const { return film_.samples(); }
+    const PathTracerSettings& settings() const { return settings_; }
+    Image image() const { return film_.image(); }
+
+  private:
+    const Scene* scene_;
+    PathTracerSettings settings_;
+    LightSampler lights_;
+    Film film_;
+};
+
+// Renders settings.samples samples per pixel and returns every pass (render/film.h).
+Image render_path_traced(const Scene& scene, const PathTracerSettings& settings,
+                         Progress* progress = nullptr);
+
+}  // namespace shgi

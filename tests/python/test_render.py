@@ -1,0 +1,111 @@
+"""shgi.PathTracer / render_path_traced from Python: furnace, pass names, bad settings, cancel.
+
+Run with Debian's Python: PYTHONPATH=<build>/python /usr/bin/python3 -m pytest tests/python
+"""
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import shgi
+
+PASS_CHANNELS = {
+    "Combined": 4, "DiffDir": 3, "DiffInd": 3, "DiffCol": 3, "GlossDir": 3, "GlossInd": 3,
+    "GlossCol": 3, "TransDir": 3, "TransInd": 3, "TransCol": 3, "Emit": 3, "Env": 3,
+    "Normal": 3, "Depth": 1,
+}
+# Five standard errors of the pixel mean: a false failure has probability ~6e-7.
+SIGMAS = 5.0
+# DESIGN.md asks cancel to return within 0.2 s; allow for a loaded shared machine.
+CANCEL_LATENCY_LIMIT = 2.0
+
+
+def inward_box_scene(albedo, emission, resolution=12):
+    """Closed cube seen from inside: uniform emission and Lambert albedo on every wall."""
+    corners = np.array([[x, y, z] for z in (-1, 1) for y in (-1, 1) for x in (-1, 1)], np.float32)
+    triangles = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                          [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]],
+                         np.int64)
+    scene = shgi.Scene()
+    scene.add_material(shgi.Material(base_color=(albedo,) * 3, specular=0.0,
+                                     emission_color=(1.0, 1.0, 1.0), emission_strength=emission))
+    scene.add_instance(scene.add_mesh(positions=corners, triangles=triangles), None)
+    scene.set_world(shgi.World(strength=0.0))
+    scene.set_camera(shgi.Camera(type=shgi.CameraType.ORTHOGRAPHIC, ortho_scale=1.0,
+                                 resolution_x=resolution, resolution_y=resolution,
+                                 clip_start=0.001))
+    scene.commit()
+    return scene
+
+
+def test_settings_defaults_mirror_cpp():
+    settings = shgi.PathTracerSettings()
+    assert settings.samples == 64
+    assert (settings.max_bounces, settings.diffuse_bounces, settings.glossy_bounces,
+            settings.transmission_bounces) == (12, 4, 4, 12)
+    assert settings.clamp_indirect == 0.0
+    assert settings.world_sampling == shgi.WorldSampling.COSINE
+    assert settings.diffuse_model == shgi.DiffuseModel.PRINCIPLED
+    assert shgi.PathTracerSettings(samples=5, seed=9).seed == 9
+
+
+def test_white_furnace_through_python():
+    albedo, emission = 0.5, 0.3
+    scene = inward_box_scene(albedo, emission)
+    settings = shgi.PathTracerSettings(samples=16, max_bounces=64, diffuse_bounces=64,
+                                       diffuse_model=shgi.DiffuseModel.LAMBERT)
+    passes = shgi.render_path_traced(scene, settings)
+    assert set(passes) == set(PASS_CHANNELS)
+    for name, channels in PASS_CHANNELS.items():
+        assert passes[name].shape == (12, 12, channels), name
+        assert passes[name].dtype == np.float32, name
+    red = passes["Combined"][..., 0].ravel().astype(np.float64)
+    standard_error = red.std(ddof=1) / np.sqrt(red.size)
+    assert abs(red.mean() - emission / (1 - albedo)) < SIGMAS * standard_error + 1e-3
+    np.testing.assert_allclose(passes["Emit"][..., 0], emission, rtol=1e-5)
+    np.testing.assert_array_equal(passes["Combined"][..., 3], 1.0)
+
+
+def test_progressive_matches_one_shot():
+    scene = inward_box_scene(0.5, 1.0, resolution=6)
+    settings = shgi.PathTracerSettings(samples=3, seed=4)
+    tracer = shgi.PathTracer(scene, settings)
+    tracer.render(1)
+    tracer.render(2)
+    assert tracer.samples_done == 3
+    one_shot = shgi.render_path_traced(scene, settings)
+    np.testing.assert_array_equal(tracer.passes()["Combined"], one_shot["Combined"])
+
+
+@pytest.mark.parametrize("field, value", [("max_bounces", -1), ("clamp_indirect", -1.0),
+                                          ("tile_size", 0), ("diffuse_bounces", -2)])
+def test_bad_settings_raise_value_error_naming_the_field(field, value):
+    scene = inward_box_scene(0.5, 1.0, resolution=4)
+    settings = shgi.PathTracerSettings(**{field: value})
+    with pytest.raises(ValueError, match=field):
+        shgi.render_path_traced(scene, settings)
+
+
+def test_bad_arguments():
+    with pytest.raises(ValueError, match="samples"):
+        shgi.PathTracerSettings(samples=0)
+    with pytest.raises(ValueError, match="not_a_field"):
+        shgi.PathTracerSettings(not_a_field=1)
+    with pytest.raises(ValueError, match="commit"):
+        shgi.PathTracer(shgi.Scene())
+
+
+def test_cancel_raises_promptly_and_keeps_the_film():
+    scene = inward_box_scene(0.9, 1.0, resolution=32)
+    tracer = shgi.PathTracer(scene, shgi.PathTracerSettings(max_bounces=64, diffuse_bounces=64))
+    progress = shgi.Progress()
+    timer = threading.Timer(0.05, progress.cancel)
+    start = time.monotonic()
+    timer.start()
+    with pytest.raises(shgi.Cancelled):
+        tracer.render(1 << 16, progress)
+    timer.join()
+    assert time.monotonic() - start < CANCEL_LATENCY_LIMIT
+    assert tracer.samples_done == 0
