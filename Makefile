@@ -103,10 +103,10 @@ test-stubs: build
 test: test-cpp test-stubs test-python
 
 demo: install
-	$(PYTHON) examples/cornell_box.py --out $(CURDIR)/demo_output
+	$(PYTHON) examples/demo.py --out $(CURDIR)/demo_output
 
 bench: build
-	$(BUILD_DIR)/bench/embree_ray_bench
+	$(BUILD_DIR)/bench/path_tracer_bench
 
 clean:
 	rm -rf $(BUILD_DIR)

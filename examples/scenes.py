@@ -1,0 +1,130 @@
+"""The project's test and demo scenes, built from numpy arrays with the shgi scripting API.
+
+Blender's frame: Z up, metres. Both scenes face the camera along +Y.
+
+* cornell_box(): the classic box (2 m), white/red/green walls, two white blocks, a square area
+  light just under the ceiling, front open towards the camera, black world.
+* sun_room(): a closed 4 x 4 x 2.6 m room whose left wall has a 1.4 x 1.2 m window; the sun
+  shines through it onto the floor, a blue sky fills the window; the camera stands inside.
+"""
+
+import numpy as np
+
+import shgi
+
+WHITE, RED, GREEN = (0.73, 0.73, 0.73), (0.65, 0.05, 0.05), (0.12, 0.45, 0.15)
+
+
+def quad(corner, edge_u, edge_v):
+    """Vertices and triangles of the parallelogram corner + [0,1]u + [0,1]v (front: u x v)."""
+    c, u, v = (np.asarray(x, np.float32) for x in (corner, edge_u, edge_v))
+    return np.array([c, c + u, c + u + v, c + v], np.float32), np.array([[0, 1, 2], [0, 2, 3]])
+
+
+def box(center, sx, sy, sz, angle):
+    """A closed box (12 triangles, outward CCW) standing on z = center[2], turned about Z."""
+    x, y = sx / 2, sy / 2
+    corners = np.array([[-x, -y, 0], [x, -y, 0], [x, y, 0], [-x, y, 0],
+                        [-x, -y, sz], [x, -y, sz], [x, y, sz], [-x, y, sz]], np.float32)
+    c, s = np.cos(angle), np.sin(angle)
+    corners = corners @ np.array([[c, s, 0], [-s, c, 0], [0, 0, 1]], np.float32)
+    corners += np.asarray(center, np.float32)
+    faces = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]]
+    triangles = [[f[0], f[1], f[2]] for f in faces] + [[f[0], f[2], f[3]] for f in faces]
+    return corners, np.array(triangles, np.int32)
+
+
+def look_at(eye, target, up=(0, 0, 1)):
+    """Blender-style camera matrix_world (row-major): looks down local -Z with +Y up."""
+    eye, target, up = (np.asarray(v, np.float64) for v in (eye, target, up))
+    forward = (target - eye) / np.linalg.norm(target - eye)
+    right = np.cross(forward, up)
+    right /= np.linalg.norm(right)
+    matrix = np.eye(4)
+    matrix[:3, 0], matrix[:3, 1] = right, np.cross(right, forward)
+    matrix[:3, 2], matrix[:3, 3] = -forward, eye
+    return matrix
+
+
+class SceneBuilder:
+    """Adds named parts to a shgi.Scene, remembering the albedo of every instance."""
+
+    def __init__(self):
+        self.scene = shgi.Scene()
+        self.materials = {}
+        self.albedo = {}
+
+    def material(self, name, color, **fields):
+        if name not in self.materials:
+            self.materials[name] = self.scene.add_material(
+                shgi.Material(name=name, base_color=color, **fields))
+        return self.materials[name]
+
+    def part(self, name, geometry, material, color):
+        positions, triangles = geometry
+        mesh_id = self.scene.add_mesh(
+            positions=positions, triangles=triangles, name=name,
+            material_indices=np.full(len(triangles), self.material(material, color)))
+        instance_id = self.scene.add_instance(mesh_id, np.eye(4), name)
+        self.albedo[instance_id] = color
+        return instance_id
+
+    def camera(self, eye, target, lens, width, height):
+        camera = shgi.Camera(lens=lens, resolution_x=width, resolution_y=height)
+        camera.world_from_camera = look_at(eye, target)
+        self.scene.set_camera(camera)
+
+
+def cornell_box(width=256, height=256):
+    b = SceneBuilder()
+    size = 2.0
+    walls = [  # normals point into the box
+        ("floor", WHITE, (-1, 0, 0), (0, size, 0), (size, 0, 0)),
+        ("ceiling", WHITE, (-1, 0, size), (size, 0, 0), (0, size, 0)),
+        ("back", WHITE, (-1, size, 0), (0, 0, size), (size, 0, 0)),
+        ("left", RED, (-1, 0, 0), (0, 0, size), (0, size, 0)),
+        ("right", GREEN, (1, 0, 0), (0, size, 0), (0, 0, size)),
+    ]
+    names = {WHITE: "white", RED: "red", GREEN: "green"}
+    for name, color, corner, u, v in walls:
+        b.part(name, quad(corner, u, v), names[color], color)
+    b.part("short_block", box((0.35, 0.7, 0.0), 0.6, 0.6, 0.6, np.radians(-18)), "white", WHITE)
+    b.part("tall_block", box((-0.35, 1.3, 0.0), 0.6, 0.6, 1.2, np.radians(17)), "white", WHITE)
+    light = shgi.Light(name="ceiling_light", type=shgi.LightType.AREA, power=60.0,
+                       shape=shgi.AreaShape.SQUARE, size_x=0.5, size_y=0.5)
+    light.world_from_light = np.array([[1, 0, 0, 0], [0, 1, 0, 1.0], [0, 0, 1, size - 0.01],
+                                       [0, 0, 0, 1]], np.float32)  # emits down its local -Z
+    b.scene.add_light(light)
+    b.scene.set_world(shgi.World(color=(0.0, 0.0, 0.0), strength=0.0))
+    b.camera(eye=(0, -3.6, 1.0), target=(0, 1.0, 1.0), lens=50.0, width=width, height=height)
+    return b
+
+
+def sun_room(width=256, height=192):
+    b = SceneBuilder()
+    room_x, room_y, room_z = 4.0, 4.0, 2.6
+    x0, y0 = -room_x / 2, 0.0
+    b.part("floor", quad((x0, y0, 0), (0, room_y, 0), (room_x, 0, 0)), "plaster", WHITE)
+    b.part("ceiling", quad((x0, y0, room_z), (room_x, 0, 0), (0, room_y, 0)), "plaster", WHITE)
+    b.part("back", quad((x0, room_y, 0), (0, 0, room_z), (room_x, 0, 0)), "plaster", WHITE)
+    b.part("right", quad((-x0, y0, 0), (0, room_y, 0), (0, 0, room_z)), "plaster", WHITE)
+    b.part("front", quad((x0, y0, 0), (room_x, 0, 0), (0, 0, room_z)), "plaster", WHITE)
+    # Left wall (x = x0, facing +X) with a window from y 1.3..2.7, z 0.9..2.1, as four quads.
+    win_y, win_z = (1.3, 2.7), (0.9, 2.1)
+    left = [((x0, y0, 0), (0, 0, win_z[0]), (0, room_y, 0)),
+            ((x0, y0, win_z[1]), (0, 0, room_z - win_z[1]), (0, room_y, 0)),
+            ((x0, y0, win_z[0]), (0, 0, win_z[1] - win_z[0]), (0, win_y[0], 0)),
+            ((x0, win_y[1], win_z[0]), (0, 0, win_z[1] - win_z[0]), (0, room_y - win_y[1], 0))]
+    for i, (corner, u, v) in enumerate(left):
+        b.part(f"left_wall_{i}", quad(corner, u, v), "plaster", WHITE)
+    b.part("table", box((0.6, 2.2, 0.0), 1.0, 0.7, 0.75, np.radians(10)), "wood", (0.45, 0.3, 0.18))
+    sun = shgi.Light(name="sun", type=shgi.LightType.SUN, strength=6.0, angle=np.radians(1.0))
+    # Sun direction: from the upper left through the window, down onto the floor.
+    b_dir = np.array([1.0, 0.15, -0.6])
+    b_dir /= np.linalg.norm(b_dir)
+    sun.world_from_light = look_at((0, 0, 0), b_dir).astype(np.float32)
+    b.scene.add_light(sun)
+    b.scene.set_world(shgi.World(color=(0.35, 0.5, 0.8), strength=1.0))
+    b.camera(eye=(1.7, 0.25, 1.5), target=(-0.8, 2.6, 0.8), lens=16.0, width=width,
+             height=height)
+    return b
