@@ -30,18 +30,24 @@ void expect_near_stats(const PixelStats& stats, double expected, const char* wha
         << what << ": standard error " << stats.standard_error;
 }
 
-// Closed box, uniform emission Le and Lambert albedo a on every wall: L = Le / (1 - a) everywhere.
-TEST(PathTracer, WhiteFurnaceClosedBox) {
-    const float albedo = 0.5f, emission = 0.3f;
-    Scene scene;
+// A closed unit box, inside faces emitting `emission` with Lambert albedo `albedo`, black world,
+// seen by a 16x16 orthographic camera centred at `camera_center`.
+void build_emissive_furnace(Scene& scene, float albedo, float emission, const vec3& camera_center) {
     Material material = test::lambert(albedo);
     material.emission_color = vec3(1.0f);
     material.emission_strength = emission;
     scene.add_material(material);
     scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
     scene.set_world(test::black_world());
-    scene.set_camera(test::ortho_camera_down(vec3(0.1f, 0.2f, 0.3f), 1.0f, 16));
+    scene.set_camera(test::ortho_camera_down(camera_center, 1.0f, 16));
     scene.commit();
+}
+
+// Closed box, uniform emission Le and Lambert albedo a on every wall: L = Le / (1 - a) everywhere.
+TEST(PathTracer, WhiteFurnaceClosedBox) {
+    const float albedo = 0.5f, emission = 0.3f;
+    Scene scene;
+    build_emissive_furnace(scene, albedo, emission, vec3(0.1f, 0.2f, 0.3f));
     PathTracerSettings settings = test::lambert_settings(16);
     settings.max_bounces = settings.diffuse_bounces = 64;  // a^65 is far below the noise
     PathTracer tracer(scene, settings);
@@ -58,14 +64,7 @@ TEST(PathTracer, WhiteFurnaceClosedBox) {
 TEST(PathTracer, FurnaceTruncatedByMaxBounces) {
     const float albedo = 0.5f, emission = 1.0f;
     Scene scene;
-    Material material = test::lambert(albedo);
-    material.emission_color = vec3(1.0f);
-    material.emission_strength = emission;
-    scene.add_material(material);
-    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
-    scene.set_world(test::black_world());
-    scene.set_camera(test::ortho_camera_down(vec3(0.0f), 1.0f, 16));
-    scene.commit();
+    build_emissive_furnace(scene, albedo, emission, vec3(0.0f));
     PathTracerSettings settings = test::lambert_settings(16);
     settings.max_bounces = 1;
     PathTracer tracer(scene, settings);
