@@ -1,0 +1,111 @@
+"""Calibration of SHGI's reference path tracer against Cycles (issue 3), run inside Blender.
+
+tests/blender/calibration_lights.py (point, spot, sun, area rectangle and disk, emissive mesh,
+world, lights seen by the camera) and tests/blender/calibration_materials.py (Principled diffuse,
+Diffuse BSDF, glossy metal, rough glass) render each case with Cycles and with
+shgi.render_path_traced on the exported scene and write per-case image means as JSON. Each
+script runs once (one Blender start); each case is one test here.
+
+A case passes when the mean of Combined agrees within 2% and every listed pass within 3%, and
+both renderers' standard errors of those means are below a quarter of the tolerance (so that
+the comparison is meaningful). Cases that disagree for a known reason outside these tests are
+strict xfails naming the measured discrepancy; they turn into failures (XPASS) once fixed.
+"""
+
+import json
+import math
+import pathlib
+
+import pytest
+
+from blender_support import BLENDER, run_blender
+
+BLENDER_SCRIPTS = pathlib.Path(__file__).resolve().parents[1] / "blender"
+ADDON_DIR = pathlib.Path(__file__).resolve().parents[2] / "addon"
+
+SCRIPTS = {
+    "calibration_lights.py": ("CALIBRATION_LIGHTS_DONE", [
+        "point", "spot", "sun", "area", "area_disk", "emissive_mesh", "world",
+        "light_camera_visible", "light_camera_default"]),
+    "calibration_materials.py": ("CALIBRATION_MATERIALS_DONE", [
+        "diffuse", "diffuse_gloss_passes", "diffuse_bsdf", "diffuse_bsdf_lambert",
+        "glossy_metal", "glossy_metal_gloss_passes", "glass"]),
+}
+
+# Measured on Blender 3.4.1 / Cycles CPU at 48x48 px, 1024-2048 spp (see the report printed by
+# the scripts). The causes were found; the fixes are outside the calibration tests.
+KNOWN_DISCREPANCIES = {
+    "light_camera_default": (
+        "Combined +389% (Emit 0 in Cycles, 0.94 in SHGI): Blender 3.4 lights have "
+        "Object.visible_camera = False by default and Cycles' camera does not see them; the "
+        "exporter ignores the object's ray visibility and SHGI's camera rays always see "
+        "point/spot disks and area lights (light_camera_visible, with visible_camera = True, "
+        "agrees within 0.1%)"),
+    "diffuse_gloss_passes": (
+        "GlossCol +757%, GlossDir -3.1%: SHGI writes GlossCol = 1 on Principled surfaces with "
+        "Specular 0 and Metallic 0, where Cycles 3.4 adds no specular closure (GlossCol 0); "
+        "silhouette pixels of glossy objects then divide by too large a GlossCol. The products "
+        "GlossDir*GlossCol agree (-0.2%, case diffuse)"),
+    "glossy_metal_gloss_passes": (
+        "GlossCol +757%, GlossInd -11.8%: same cause as diffuse_gloss_passes (GlossCol = 1 on "
+        "Specular-0 surfaces); GlossDir*GlossCol and GlossInd*GlossCol agree within 1% "
+        "(case glossy_metal)"),
+    "diffuse_bsdf": (
+        "Combined +10.2%, DiffDir +9.6%, DiffInd +14.1%: the exporter turns a Diffuse BSDF into "
+        "a Principled material with roughness 1, which SHGI renders with Cycles' principled "
+        "(Burley + retro-reflection) diffuse, whereas Cycles' Diffuse BSDF at roughness 0 is "
+        "Lambert; with PathTracerSettings.diffuse_model = LAMBERT (case diffuse_bsdf_lambert) "
+        "it agrees within 0.4%"),
+}
+
+CASES = [(script, case) for script, (_, cases) in SCRIPTS.items() for case in cases]
+
+
+def _param(script, case):
+    marks = [pytest.mark.skipif(BLENDER is None,
+                                reason="Blender is not installed (make deps installs it)")]
+    if case in KNOWN_DISCREPANCIES:
+        marks.append(pytest.mark.xfail(strict=True, reason=KNOWN_DISCREPANCIES[case]))
+    return pytest.param(script, case, marks=marks, id=f"{script[:-3]}-{case}")
+
+
+_RESULTS = {}
+
+
+def _script_results(script, build_python_dir, tmp_path_factory):
+    """Runs a calibration script once per session and returns its per-case results."""
+    if script not in _RESULTS:
+        out = tmp_path_factory.mktemp("calibration") / (script[:-3] + ".json")
+        result = run_blender(BLENDER_SCRIPTS / script, build_python_dir, ADDON_DIR, out,
+                             timeout=600)
+        log = result.stdout[-6000:] + result.stderr[-3000:]
+        if result.returncode != 0 or SCRIPTS[script][0] not in result.stdout:
+            _RESULTS[script] = RuntimeError(f"{script} failed (exit {result.returncode}):\n{log}")
+        else:
+            table = "\n".join(line for line in result.stdout.splitlines()
+                              if line.startswith(("==", "   ")))
+            print(table)
+            _RESULTS[script] = json.loads(out.read_text())
+    if isinstance(_RESULTS[script], Exception):
+        raise _RESULTS[script]
+    return _RESULTS[script]
+
+
+@pytest.mark.parametrize("script, case", [_param(s, c) for s, c in CASES])
+def test_cycles_calibration(script, case, build_python_dir, tmp_path_factory):
+    results = _script_results(script, build_python_dir, tmp_path_factory)
+    assert case in results, f"{script} did not report case {case!r}"
+    rows = [row for row in results[case]["rows"] if row["tolerance"] is not None]
+    assert rows, f"{case}: no compared passes"
+    for row in rows:
+        tol = row["tolerance"]
+        for renderer in ("cycles", "shgi"):
+            rel_se = row[f"{renderer}_rel_se"]
+            assert rel_se < tol / 4, (
+                f"{case} {row['pass']}: {renderer} standard error of the mean {100 * rel_se:.2f}% "
+                f"is not below a quarter of the {100 * tol:.0f}% tolerance; raise the samples")
+    failures = [f"{row['pass']}: Cycles {row['cycles']:.6g}, SHGI {row['shgi']:.6g}, "
+                f"{100 * row['rel_error']:+.2f}% (tolerance {100 * row['tolerance']:.0f}%)"
+                for row in rows if not abs(row["rel_error"]) <= row["tolerance"]
+                or math.isnan(row["rel_error"])]
+    assert not failures, f"{case} disagrees with Cycles:\n  " + "\n  ".join(failures)
