@@ -15,6 +15,7 @@
 #include <pybind11/pybind11.h>
 
 #include "numpy_convert.h"
+#include "scene_use.h"
 #include "render/path_tracer.h"
 #include "util/error.h"
 #include "util/progress.h"
@@ -111,6 +112,7 @@ were split between render() calls.)doc")
                 const uint32_t count =
                     samples.is_none() ? tracer.settings().samples
                                       : checked_samples(samples.cast<int64_t>(), "samples");
+                SceneUse use(tracer.scene(), SceneUse::Kind::Query, "render (PathTracer)");
                 py::gil_scoped_release release;
                 tracer.render(count, progress);
             },
@@ -129,6 +131,7 @@ were split between render() calls.)doc")
             validate_path_tracer_settings(settings);
             PathTracer tracer(scene, settings);
             {
+                SceneUse use(scene, SceneUse::Kind::Query, "render (render_path_traced)");
                 py::gil_scoped_release release;
                 tracer.render(settings.samples, progress);
             }

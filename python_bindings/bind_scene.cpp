@@ -21,6 +21,7 @@
 #include <pybind11/stl.h>
 
 #include "numpy_convert.h"
+#include "scene_use.h"
 #include "scene/scene.h"
 #include "util/parallel.h"
 #include "util/progress.h"
@@ -341,48 +342,6 @@ void bind_camera(py::module_& m) {
              "(4, 4) row-major matrix_world; the camera looks down its local -Z, +Y up.");
 }
 
-
-// --- scene use: no edits while another thread commits or queries --------------------------------
-
-// Scenes in use by a call that released the GIL: n > 0 running queries, or -1 for a commit.
-// Read and written only with the GIL held, which serialises access. Never destroyed, because a
-// worker may still hold a guard while the interpreter shuts down.
-std::unordered_map<const Scene*, int>& scene_users() {
-    static auto* users = new std::unordered_map<const Scene*, int>();
-    return *users;
-}
-
-// Marks a scene as in use for the guard's lifetime; construct it before py::gil_scoped_release
-// so that it is destroyed after the GIL is taken back.
-class SceneUse {
-  public:
-    enum class Kind { Query, Commit, Edit };
-
-    SceneUse(const Scene& scene, Kind kind, const char* method) : scene_(&scene), kind_(kind) {
-        auto& users = scene_users();
-        const auto it = users.find(scene_);
-        const int current = it == users.end() ? 0 : it->second;
-        if (current < 0 || (kind != Kind::Query && current > 0))
-            throw std::runtime_error(std::string("Scene.") + method +
-                                     ": the scene is being committed or queried in another "
-                                     "thread; wait for that call to return");
-        if (kind == Kind::Edit) return;  // edits hold the GIL throughout: nothing to mark
-        users[scene_] = kind == Kind::Commit ? -1 : current + 1;
-    }
-    ~SceneUse() {
-        if (kind_ == Kind::Edit) return;
-        auto& users = scene_users();
-        const auto it = users.find(scene_);
-        if (it == users.end()) return;
-        if (kind_ == Kind::Commit || --it->second == 0) users.erase(it);
-    }
-    SceneUse(const SceneUse&) = delete;
-    SceneUse& operator=(const SceneUse&) = delete;
-
-  private:
-    const Scene* scene_;
-    Kind kind_;
-};
 
 // --- scene building ----------------------------------------------------------------------------
 

@@ -282,12 +282,20 @@ void validate_path_tracer_settings(const PathTracerSettings& settings) {
 }
 
 PathTracer::PathTracer(const Scene& scene, const PathTracerSettings& settings)
-    : scene_(&scene), settings_(validated(settings)), lights_(scene, settings.world_sampling) {
+    : scene_(&scene),
+      scene_revision_(scene.revision()),
+      settings_(validated(settings)),
+      lights_(scene, settings.world_sampling) {
     const Camera& camera = scene.camera();
     film_ = Film(int(camera.resolution_x), int(camera.resolution_y));
 }
 
 void PathTracer::render(uint32_t samples, Progress* progress) {
+    if (scene_->revision() != scene_revision_ || !scene_->committed())
+        throw InvalidArgument(format_message(
+            "PathTracer::render: the scene was edited after this PathTracer was created "
+            "(revision ", scene_revision_, ", now ", scene_->revision(),
+            "); commit it and create a new PathTracer"));
     const uint64_t first = film_.samples();
     if (samples == 0) return;
     if (first + samples > kMaxPathTracerSamples)

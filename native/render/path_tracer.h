@@ -56,16 +56,19 @@ class PathTracer {
     PathTracer(const Scene& scene, const PathTracerSettings& settings);
 
     // Adds `samples` samples per pixel to the film (progressive). On Cancelled or any other
-    // error the film is left as it was before the call.
+    // error the film is left as it was before the call. Throws InvalidArgument when the scene
+    // was edited since construction: the light tables and film no longer match it.
     void render(uint32_t samples, Progress* progress = nullptr);
 
     const Film& film() const { return film_; }
     uint32_t samples_done() const { return film_.samples(); }
     const PathTracerSettings& settings() const { return settings_; }
+    const Scene& scene() const { return *scene_; }
     Image image() const { return film_.image(); }
 
   private:
     const Scene* scene_;
+    uint64_t scene_revision_;  // Scene::revision() the light tables and film were built for
     PathTracerSettings settings_;
     LightSampler lights_;
     Film film_;

@@ -86,7 +86,10 @@ Scene::~Scene() = default;
 Scene::Scene(Scene&&) noexcept = default;
 Scene& Scene::operator=(Scene&&) noexcept = default;
 
-void Scene::invalidate() { committed_ = false; }
+void Scene::invalidate() {
+    committed_ = false;
+    ++revision_;
+}
 
 uint32_t Scene::add_mesh(Mesh mesh) {
     MeshReport report = validate_mesh(mesh, kAnyMaterialCount);

@@ -121,6 +121,9 @@ class Scene {
     // --- BVH ---
     void commit(const CommitSettings& settings = {}, Progress* progress = nullptr);
     bool committed() const { return committed_; }
+    // Increases with every edit. Consumers that cache data derived from a committed scene (light
+    // tables, films sized to the camera) keep the revision they saw and refuse a changed scene.
+    uint64_t revision() const { return revision_; }
     // True when the scene has no triangles (after dropping degenerate ones).
     bool empty() const;
     // World-space bounds of all instances; throws InvalidArgument for an empty scene.
@@ -161,6 +164,7 @@ class Scene {
     Camera camera_;
     bool has_camera_ = false;
     bool committed_ = false;
+    uint64_t revision_ = 0;
     bool geometry_dirty_ = true;  // meshes changed: per-mesh BVHs must be rebuilt
     std::vector<EmissiveTriangle> emissive_;
     // Per instance, world_from_object's cofactor times sign(det): maps object normals to world.

@@ -20,6 +20,8 @@ PASS_CHANNELS = {
 SIGMAS = 5.0
 # DESIGN.md asks cancel to return within 0.2 s; allow for a loaded shared machine.
 CANCEL_LATENCY_LIMIT = 2.0
+# Seconds for a thread that is about to call render() to enter it and mark the scene in use.
+RENDER_START_GRACE = 0.2
 
 
 def inward_box_scene(albedo, emission, resolution=12):
@@ -109,3 +111,41 @@ def test_cancel_raises_promptly_and_keeps_the_film():
     timer.join()
     assert time.monotonic() - start < CANCEL_LATENCY_LIMIT
     assert tracer.samples_done == 0
+
+
+def test_render_after_a_scene_edit_raises_instead_of_using_stale_light_tables():
+    scene = inward_box_scene(0.5, 1.0)
+    tracer = shgi.PathTracer(scene, shgi.PathTracerSettings(samples=1))
+    tracer.render(1)
+    scene.add_light(shgi.Light(type=shgi.LightType.POINT, power=10.0))
+    scene.commit()
+    with pytest.raises(ValueError, match="edited after this PathTracer"):
+        tracer.render(1)
+    assert tracer.samples_done == 1
+
+
+def test_scene_edits_are_refused_while_a_render_runs_in_another_thread():
+    scene = inward_box_scene(0.9, 1.0, resolution=32)
+    tracer = shgi.PathTracer(scene, shgi.PathTracerSettings(max_bounces=64, diffuse_bounces=64))
+    progress = shgi.Progress()
+    outcome = {}
+    starting = threading.Event()
+
+    def render():
+        starting.set()
+        try:
+            tracer.render(1 << 16, progress)
+        except shgi.Cancelled:
+            outcome["cancelled"] = True
+
+    worker = threading.Thread(target=render)
+    worker.start()
+    try:
+        starting.wait()
+        time.sleep(RENDER_START_GRACE)  # a few bytecodes until render() holds the scene
+        with pytest.raises(RuntimeError, match="being committed or queried in another thread"):
+            scene.add_light(shgi.Light(type=shgi.LightType.POINT, power=10.0))
+    finally:
+        progress.cancel()
+        worker.join()
+    assert outcome.get("cancelled")

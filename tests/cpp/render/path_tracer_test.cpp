@@ -294,6 +294,27 @@ TEST(PathTracer, CancelThrowsPromptly) {
     EXPECT_EQ(tracer.samples_done(), 0u);  // the film is left as it was
 }
 
+// A tracer caches light tables and a film sized for the scene it was built on; after an edit
+// (here: one more light, recommitted) it must refuse to render rather than index stale tables.
+TEST(PathTracer, RefusesASceneEditedAfterConstruction) {
+    Scene scene = mixed_scene();
+    PathTracerSettings settings;
+    settings.samples = 1;
+    PathTracer tracer(scene, settings);
+    tracer.render(1);
+    scene.add_light(Light{});
+    scene.commit();
+    try {
+        tracer.render(1);
+        ADD_FAILURE() << "render after an edit did not throw";
+    } catch (const InvalidArgument& error) {
+        EXPECT_NE(std::string(error.what()).find("edited after this PathTracer"),
+                  std::string::npos)
+            << error.what();
+    }
+    EXPECT_EQ(tracer.samples_done(), 1u);
+}
+
 TEST(PathTracer, RejectsInvalidSettings) {
     const Scene scene = mixed_scene();
     auto expect_message = [&](PathTracerSettings settings, const std::string& field) {
