@@ -51,11 +51,7 @@ def main(argv=None):
     args.out.mkdir(parents=True, exist_ok=True)
     print(f"SHGI {shgi.__version__}, reference path tracer, {shgi.max_threads()} threads")
     for name, make in SCENES.items():
-        default = make()
-        camera = default.scene.camera
-        width = max(1, round(camera.resolution_x * args.scale))
-        height = max(1, round(camera.resolution_y * args.scale))
-        render_scene(name, make(width, height), args.samples, args.seed, args.out)
+        render_scene(name, make(args.scale), args.samples, args.seed, args.out)
     return 0
 
 

@@ -47,12 +47,11 @@ def look_at(eye, target, up=(0, 0, 1)):
 
 
 class SceneBuilder:
-    """Adds named parts to a shgi.Scene, remembering the albedo of every instance."""
+    """Adds named parts to a shgi.Scene, sharing one material per name."""
 
     def __init__(self):
         self.scene = shgi.Scene()
         self.materials = {}
-        self.albedo = {}
 
     def material(self, name, color, **fields):
         if name not in self.materials:
@@ -65,17 +64,17 @@ class SceneBuilder:
         mesh_id = self.scene.add_mesh(
             positions=positions, triangles=triangles, name=name,
             material_indices=np.full(len(triangles), self.material(material, color)))
-        instance_id = self.scene.add_instance(mesh_id, np.eye(4), name)
-        self.albedo[instance_id] = color
-        return instance_id
+        return self.scene.add_instance(mesh_id, np.eye(4), name)
 
-    def camera(self, eye, target, lens, width, height):
-        camera = shgi.Camera(lens=lens, resolution_x=width, resolution_y=height)
+    def camera(self, eye, target, lens, width, height, scale):
+        camera = shgi.Camera(lens=lens, resolution_x=max(1, round(width * scale)),
+                             resolution_y=max(1, round(height * scale)))
         camera.world_from_camera = look_at(eye, target)
         self.scene.set_camera(camera)
 
 
-def cornell_box(width=256, height=256):
+def cornell_box(scale=1.0):
+    """256 x 256 pixels times `scale`."""
     b = SceneBuilder()
     size = 2.0
     walls = [  # normals point into the box
@@ -96,11 +95,13 @@ def cornell_box(width=256, height=256):
                                        [0, 0, 0, 1]], np.float32)  # emits down its local -Z
     b.scene.add_light(light)
     b.scene.set_world(shgi.World(color=(0.0, 0.0, 0.0), strength=0.0))
-    b.camera(eye=(0, -3.6, 1.0), target=(0, 1.0, 1.0), lens=50.0, width=width, height=height)
+    b.camera(eye=(0, -3.6, 1.0), target=(0, 1.0, 1.0), lens=50.0, width=256, height=256,
+             scale=scale)
     return b
 
 
-def sun_room(width=256, height=192):
+def sun_room(scale=1.0):
+    """256 x 192 pixels times `scale`."""
     b = SceneBuilder()
     room_x, room_y, room_z = 4.0, 4.0, 2.6
     x0, y0 = -room_x / 2, 0.0
@@ -125,6 +126,6 @@ def sun_room(width=256, height=192):
     sun.world_from_light = look_at((0, 0, 0), b_dir).astype(np.float32)
     b.scene.add_light(sun)
     b.scene.set_world(shgi.World(color=(0.35, 0.5, 0.8), strength=1.0))
-    b.camera(eye=(1.7, 0.25, 1.5), target=(-0.8, 2.6, 0.8), lens=16.0, width=width,
-             height=height)
+    b.camera(eye=(1.7, 0.25, 1.5), target=(-0.8, 2.6, 0.8), lens=16.0, width=256, height=192,
+             scale=scale)
     return b
