@@ -84,19 +84,26 @@ std::vector<float> to_float_rows(const py::handle& obj, const char* arg_name, in
     return out;
 }
 
-std::vector<vec2> to_vec2_array(const py::handle& obj, const char* arg_name) {
-    const std::vector<float> rows = to_float_rows(obj, arg_name, 2);
-    std::vector<vec2> out(rows.size() / 2);
-    for (size_t i = 0; i < out.size(); ++i) out[i] = vec2(rows[2 * i], rows[2 * i + 1]);
+namespace {
+
+// Row-major (N, Vec::length()) values into N vectors: the inverse of rows_to_numpy below.
+template <typename Vec, typename Scalar>
+std::vector<Vec> rows_to_vectors(const std::vector<Scalar>& rows) {
+    constexpr int kColumns = Vec::length();
+    std::vector<Vec> out(rows.size() / kColumns);
+    for (size_t i = 0; i < out.size(); ++i)
+        for (int k = 0; k < kColumns; ++k) out[i][k] = rows[kColumns * i + k];
     return out;
 }
 
+}  // namespace
+
+std::vector<vec2> to_vec2_array(const py::handle& obj, const char* arg_name) {
+    return rows_to_vectors<vec2>(to_float_rows(obj, arg_name, 2));
+}
+
 std::vector<vec3> to_vec3_array(const py::handle& obj, const char* arg_name) {
-    const std::vector<float> rows = to_float_rows(obj, arg_name, 3);
-    std::vector<vec3> out(rows.size() / 3);
-    for (size_t i = 0; i < out.size(); ++i)
-        out[i] = vec3(rows[3 * i], rows[3 * i + 1], rows[3 * i + 2]);
-    return out;
+    return rows_to_vectors<vec3>(to_float_rows(obj, arg_name, 3));
 }
 
 namespace {
@@ -123,11 +130,7 @@ std::vector<uint32_t> checked_indices(const py::handle& obj, const char* arg_nam
 }  // namespace
 
 std::vector<uvec3> to_uvec3_array(const py::handle& obj, const char* arg_name) {
-    const std::vector<uint32_t> flat = checked_indices(obj, arg_name, 3);
-    std::vector<uvec3> out(flat.size() / 3);
-    for (size_t i = 0; i < out.size(); ++i)
-        out[i] = uvec3(flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]);
-    return out;
+    return rows_to_vectors<uvec3>(checked_indices(obj, arg_name, 3));
 }
 
 std::vector<uint32_t> to_uint_array(const py::handle& obj, const char* arg_name) {
