@@ -90,7 +90,8 @@ def cornell_box(scale=1.0):
     b.part("short_block", box((0.35, 0.7, 0.0), 0.6, 0.6, 0.6, np.radians(-18)), "white", WHITE)
     b.part("tall_block", box((-0.35, 1.3, 0.0), 0.6, 0.6, 1.2, np.radians(17)), "white", WHITE)
     light = shgi.Light(name="ceiling_light", type=shgi.LightType.AREA, power=60.0,
-                       shape=shgi.AreaShape.SQUARE, size_x=0.5, size_y=0.5)
+                       shape=shgi.AreaShape.SQUARE, size_x=0.5, size_y=0.5,
+                       visible_camera=True)  # the classic box shows its light panel
     light.world_from_light = np.array([[1, 0, 0, 0], [0, 1, 0, 1.0], [0, 0, 1, size - 0.01],
                                        [0, 0, 0, 1]], np.float32)  # emits down its local -Z
     b.scene.add_light(light)

@@ -49,9 +49,6 @@ void bind_settings(py::module_& m) {
     py::enum_<WorldSampling>(m, "WorldSampling", "How next-event estimation samples the world.")
         .value("COSINE", WorldSampling::Cosine)
         .value("UNIFORM", WorldSampling::Uniform);
-    py::enum_<DiffuseModel>(m, "DiffuseModel", "Diffuse lobe of the Principled BSDF.")
-        .value("PRINCIPLED", DiffuseModel::Principled)
-        .value("LAMBERT", DiffuseModel::Lambert);
     using S = PathTracerSettings;
     py::class_<S> cls(m, "PathTracerSettings",
                       "Settings of the reference path tracer; every field has a default.");
@@ -88,7 +85,6 @@ void bind_settings(py::module_& m) {
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
                        "Max component of an indirect sample's contribution; 0 = off (0).")
         .def_readwrite("world_sampling", &S::world_sampling, "WorldSampling (COSINE).")
-        .def_readwrite("diffuse_model", &S::diffuse_model, "DiffuseModel (PRINCIPLED).")
         .def_readwrite("tile_size", &S::tile_size, "Tile side in pixels (16).")
         .def("validate", &validate_path_tracer_settings,
              "Raises ValueError naming the first invalid field.");

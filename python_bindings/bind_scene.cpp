@@ -170,6 +170,10 @@ void bind_mesh(py::module_& m) {
 // --- materials and textures --------------------------------------------------------------------
 
 void bind_material(py::module_& m) {
+    py::enum_<DiffuseModel>(m, "DiffuseModel", "The diffuse lobe of a Material.")
+        .value("PRINCIPLED", DiffuseModel::Principled,
+               "Principled BSDF's diffuse (Burley, with retro-reflection at high roughness)")
+        .value("LAMBERT", DiffuseModel::Lambert, "Lambert, as Blender's Diffuse BSDF");
     py::class_<Material> cls(m, "Material",
                              "Principled BSDF subset (Blender 3.4 semantics), linear Rec.709.");
     cls.def(py::init(&from_kwargs<Material>),
@@ -186,6 +190,8 @@ void bind_material(py::module_& m) {
         .def_readwrite("transmission", &Material::transmission, "0..1.")
         .def_readwrite("ior", &Material::ior, "Index of refraction, >= 1.")
         .def_readwrite("emission_strength", &Material::emission_strength, ">= 0.")
+        .def_readwrite("diffuse_model", &Material::diffuse_model,
+                       "DiffuseModel (PRINCIPLED; the exporter sets LAMBERT for a Diffuse BSDF).")
         .def("is_emissive", &Material::is_emissive, "True if the material emits light.");
     def_vec3(cls, "base_color", &Material::base_color, "Linear RGB albedo.");
     def_vec3(cls, "emission_color", &Material::emission_color,
@@ -260,7 +266,10 @@ void bind_light(py::module_& m) {
         .def_readwrite("angle", &Light::angle, "rad: sun's angular diameter, [0, pi).")
         .def_readwrite("shape", &Light::shape, "AreaShape.")
         .def_readwrite("size_x", &Light::size_x, "m: area light size along local X.")
-        .def_readwrite("size_y", &Light::size_y, "m: area light size along local Y.");
+        .def_readwrite("size_y", &Light::size_y, "m: area light size along local Y.")
+        .def_readwrite("visible_camera", &Light::visible_camera,
+                       "Blender's Object.visible_camera: camera rays see the light (False, as "
+                       "Blender's lights).");
     def_vec3(cls, "color", &Light::color, "Linear RGB, each >= 0.");
     def_mat4(cls, "world_from_light", &Light::world_from_light,
              "(4, 4) row-major matrix_world; the light emits along its local -Z.");

@@ -93,8 +93,8 @@ LobeClass PrincipledBsdf::Lobe::lobe_class() const {
 }
 
 PrincipledBsdf::PrincipledBsdf(const Material& material, const vec3& base_color, bool back_face,
-                               float cos_nv, DiffuseModel diffuse_model)
-    : roughness_(material.roughness), diffuse_model_(diffuse_model) {
+                               float cos_nv)
+    : roughness_(material.roughness), diffuse_model_(material.diffuse_model) {
     const float metallic = std::clamp(material.metallic, 0.0f, 1.0f);
     const float transmission = (1.0f - metallic) * std::clamp(material.transmission, 0.0f, 1.0f);
     const float alpha = material.roughness * material.roughness;
@@ -107,7 +107,10 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const vec3& base_color,
 
     add_lobe(LobeKind::Diffuse, (1.0f - metallic) * (1.0f - material.transmission) * base_color,
              alpha);
-    add_lobe(LobeKind::Specular, vec3(1.0f - transmission), alpha);
+    // Cycles adds no specular closure to a surface with Specular 0 and Metallic 0 (its GlossCol
+    // is 0 and it has no grazing-angle reflection).
+    if (material.specular > kClosureWeightCutoff || metallic > kClosureWeightCutoff)
+        add_lobe(LobeKind::Specular, vec3(1.0f - transmission), alpha);
     const float fresnel = fresnel_dielectric(cos_nv, eta_);
     add_lobe(LobeKind::GlassReflection, vec3(transmission * fresnel), alpha);
     add_lobe(LobeKind::Refraction, transmission * (1.0f - fresnel) * base_color, alpha);

@@ -5,7 +5,7 @@
 //   diffuse      weight = (1 - metallic)(1 - transmission) * base_color; Lambert (1/pi) or
 //                Cycles' principled diffuse (Burley 2015 split form: Lambert * (1 - FL/2)(1 - FV/2)
 //                plus retro-reflection RR (FL + FV + FL FV (RR - 1)), RR = 2 roughness (L.H)^2)
-//   specular     weight = 1 - (1 - metallic) transmission; GGX reflection (alpha = roughness^2,
+//   specular     weight = 1 - (1 - metallic) transmission, only when specular or metallic > 0; GGX reflection (alpha = roughness^2,
 //                separable Smith G) whose colour is Cycles' interpolate_fresnel_color: the
 //                dielectric Fresnel of ior = 2/(1 - sqrt(0.08 specular)) - 1 rescaled between
 //                cspec0 = mix(0.08 specular, base_color, metallic) at normal incidence and 1
@@ -34,11 +34,6 @@ namespace shgi {
 // Cycles' pass classes of a closure.
 enum class LobeClass : uint8_t { Diffuse = 0, Glossy = 1, Transmission = 2 };
 inline constexpr int kLobeClassCount = 3;
-
-enum class DiffuseModel : uint8_t {
-    Principled,  // Cycles 3.4 Principled diffuse (Burley, with roughness retro-reflection)
-    Lambert,     // f = albedo / pi (Blender's Diffuse BSDF with roughness 0)
-};
 
 // Alpha below which GGX becomes a perfect mirror / smooth refraction (Cycles: 1e-4).
 inline constexpr float kDeltaAlpha = 1e-4f;
@@ -72,8 +67,9 @@ class PrincipledBsdf {
   public:
     // base_color is the material's base colour times its texture at the hit. back_face: the ray
     // hit the back of the surface (ior inverted). cos_nv: wo.z in the shading frame.
+    // The diffuse lobe follows material.diffuse_model.
     PrincipledBsdf(const Material& material, const vec3& base_color, bool back_face,
-                   float cos_nv, DiffuseModel diffuse_model);
+                   float cos_nv);
 
     BsdfEval eval(const vec3& wo, const vec3& wi) const;
     float pdf(const vec3& wo, const vec3& wi) const;

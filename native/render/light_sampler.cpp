@@ -227,13 +227,14 @@ float LightSampler::world_pdf(const vec3& n, const vec3& wi) const {
     return std::max(0.0f, glm::dot(n, wi)) * kInvPi;
 }
 
-bool LightSampler::intersect_lights(const vec3& p, const vec3& wi, float t_max,
+bool LightSampler::intersect_lights(const vec3& p, const vec3& wi, float t_max, bool camera_ray,
                                     EmissionHit* out) const {
     float best_t = t_max;
     bool found = false;
     for (uint32_t i = 0; i < scene_->lights().size(); ++i) {
         if (light_emitter_[i] == kInvalidId) continue;
         const Light& light = scene_->lights()[i];
+        if (camera_ray && !light.visible_camera) continue;
         const bool disk = (light.type == LightType::Point || light.type == LightType::Spot) &&
                           light.radius > 0.0f;
         if (!disk && light.type != LightType::Area) continue;
@@ -271,7 +272,8 @@ bool LightSampler::intersect_lights(const vec3& p, const vec3& wi, float t_max,
     return found;
 }
 
-std::vector<EmissionHit> LightSampler::escaped(const vec3& n, const vec3& wi) const {
+std::vector<EmissionHit> LightSampler::escaped(const vec3& n, const vec3& wi,
+                                               bool camera_ray) const {
     std::vector<EmissionHit> hits;
     if (world_emitter_ != kInvalidId)
         hits.push_back({scene_->world().radiance(),
@@ -280,6 +282,7 @@ std::vector<EmissionHit> LightSampler::escaped(const vec3& n, const vec3& wi) co
         const Light& light = scene_->lights()[i];
         if (light_emitter_[i] == kInvalidId || light.type != LightType::Sun || light.angle <= 0.0f)
             continue;
+        if (camera_ray && !light.visible_camera) continue;
         const float cos_max = std::cos(0.5f * light.angle);
         if (glm::dot(wi, -light.direction()) < cos_max) continue;
         const float solid_angle = kTwoPi * (1.0f - cos_max);

@@ -22,8 +22,10 @@
 //   strength 2.5, ratio 1.0000).
 // - world: radiance = colour x strength (0.05 x 0.7 seen as 0.0350; a plane of albedo 0.8
 //   under it: 0.0280).
-// Lights are not occluders and are invisible from behind (area); camera and BSDF rays that hit
-// a point/spot disk, an area light, a sun's cone or the world see their radiance.
+// Lights are not occluders and are invisible from behind (area); BSDF rays that hit a point/spot
+// disk, an area light, a sun's cone or the world see their radiance, camera rays only when the
+// light has visible_camera (Blender's Object.visible_camera, False by default for lights:
+// Cycles' camera then sees through it; measured, case light_camera_default).
 //
 // Selection: one emitter per NEE sample, chosen with probability proportional to an estimate of
 // its power (util DiscreteDistribution). Returned pdfs include that selection probability and are
@@ -72,11 +74,14 @@ class LightSampler {
     bool sample(const vec3& p, const vec3& n, float u_select, const vec2& u,
                 LightSample* out) const;
 
-    // Closest point/spot disk or area light along p + t wi for t in (0, t_max).
-    bool intersect_lights(const vec3& p, const vec3& wi, float t_max, EmissionHit* out) const;
-    // What a ray leaving p (normal n) along wi sees when it misses the scene: world and suns.
-    // Returns the emissions separately so each gets its own MIS weight.
-    std::vector<EmissionHit> escaped(const vec3& n, const vec3& wi) const;
+    // Closest point/spot disk or area light along p + t wi for t in (0, t_max). A camera ray
+    // sees only lights with visible_camera.
+    bool intersect_lights(const vec3& p, const vec3& wi, float t_max, bool camera_ray,
+                          EmissionHit* out) const;
+    // What a ray leaving p (normal n) along wi sees when it misses the scene: world and suns
+    // (for a camera ray, only suns with visible_camera). Returns the emissions separately so
+    // each gets its own MIS weight.
+    std::vector<EmissionHit> escaped(const vec3& n, const vec3& wi, bool camera_ray) const;
     // An emissive triangle hit at `hit` from p.
     EmissionHit triangle_emission(const Hit& hit, const vec3& wi) const;
 

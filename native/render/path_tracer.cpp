@@ -55,8 +55,7 @@ struct Shading {
     PrincipledBsdf bsdf;
 };
 
-Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray_direction,
-                     DiffuseModel diffuse_model) {
+Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray_direction) {
     vec3 ng = sp.geometric_normal, ns = sp.shading_normal;
     const bool back_face = glm::dot(ray_direction, ng) > 0.0f;
     if (back_face) {
@@ -72,7 +71,7 @@ Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray
     if (material.base_color_texture != kNoTexture)
         base_color *= texture_bilinear(scene.textures()[size_t(material.base_color_texture)], sp.uv);
     return Shading{sp.position, ng, frame, wo,
-                   PrincipledBsdf(material, base_color, back_face, wo.z, diffuse_model)};
+                   PrincipledBsdf(material, base_color, back_face, wo.z)};
 }
 
 const Pass kDirectPass[kLobeClassCount] = {Pass::DiffDir, Pass::GlossDir, Pass::TransDir};
@@ -119,7 +118,7 @@ void PathIntegrator::trace(Ray ray) {
         find_emission(ray, hit);
         if (!hit.valid() || terminate_on_next_surface) break;
         const SurfacePoint sp = scene_.surface_point(ray, hit);
-        const Shading shading = make_shading(scene_, sp, ray.direction, settings_.diffuse_model);
+        const Shading shading = make_shading(scene_, sp, ray.direction);
         if (vertex_ == 0) record_first_hit(shading, ray, hit);
         if (shading.bsdf.has_smooth_lobes()) sample_direct(shading);
         if (!scatter(shading, &ray)) break;
@@ -140,15 +139,16 @@ void PathIntegrator::trace(Ray ray) {
 // emission, or the world and suns when it escapes.
 void PathIntegrator::find_emission(const Ray& ray, const Hit& hit) {
     EmissionHit light_hit;
+    const bool camera_ray = vertex_ == 0;
     if (lights_.intersect_lights(ray.origin, ray.direction, hit.valid() ? hit.t : kInfinity,
-                                 &light_hit)) {
+                                 camera_ray, &light_hit)) {
         add_emission(light_hit.radiance, light_hit.light_pdf, false);
     } else if (hit.valid()) {
         const EmissionHit surface = lights_.triangle_emission(hit, ray.direction);
         if (max_component(surface.radiance) > 0.0f)
             add_emission(surface.radiance, surface.light_pdf, false);
     } else {
-        for (const EmissionHit& escaped : lights_.escaped(last_normal_, ray.direction))
+        for (const EmissionHit& escaped : lights_.escaped(last_normal_, ray.direction, camera_ray))
             add_emission(escaped.radiance, escaped.light_pdf, true);
     }
 }

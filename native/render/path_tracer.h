@@ -40,7 +40,6 @@ struct PathTracerSettings {
     int russian_roulette_depth = 3;    // surfaces before roulette may end a path
     float clamp_indirect = 0.0f;       // max component of an indirect sample; 0 = off
     WorldSampling world_sampling = WorldSampling::Cosine;
-    DiffuseModel diffuse_model = DiffuseModel::Principled;
     int tile_size = 16;                // pixels per tile side (work unit of the thread pool)
 };
 

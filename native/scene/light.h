@@ -32,6 +32,10 @@ struct Light {
     AreaShape shape = AreaShape::Square;
     float size_x = 1.0f;       // m: side (square), width (rectangle), diameter (disk/ellipse)
     float size_y = 1.0f;       // m: height (rectangle), second diameter (ellipse)
+    // Blender's Object.visible_camera: whether camera rays see the light's disk, surface or sun
+    // cone. False by default, as for every light object Blender 3.4 creates; it never changes
+    // the light a surface receives.
+    bool visible_camera = false;
 
     vec3 position() const { return vec3(world_from_light[3]); }
     // Unit emission axis in world space (the light's local -Z).

@@ -17,6 +17,12 @@ namespace shgi {
 
 inline constexpr int32_t kNoTexture = -1;
 
+// The diffuse lobe: Principled BSDF's, or Blender's Diffuse BSDF (which the exporter maps here).
+enum class DiffuseModel : uint8_t {
+    Principled,  // Cycles 3.4 Principled diffuse (Burley, with roughness retro-reflection)
+    Lambert,     // f = albedo / pi (Blender's Diffuse BSDF with roughness 0)
+};
+
 struct Material {
     std::string name = "default";
     vec3 base_color{0.8f};
@@ -31,6 +37,7 @@ struct Material {
     float ior = 1.45f;                        // >= 1
     vec3 emission_color{0.0f};
     float emission_strength = 1.0f;           // >= 0
+    DiffuseModel diffuse_model = DiffuseModel::Principled;
 
     vec3 emission() const { return emission_color * emission_strength; }
     bool is_emissive() const {

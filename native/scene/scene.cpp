@@ -79,6 +79,16 @@ Bounds3 instance_bounds(const Mesh& mesh, const mat4& world_from_object) {
     return bounds;
 }
 
+// The UV set a material's texture reads on a mesh with at least one set: the one it names, else
+// the first (as Blender's Image Texture without a UV Map node uses the active render UV map,
+// which the exporter puts first).
+const UvSet& texture_uv_set(const Mesh& mesh, const Material& material) {
+    if (!material.base_color_uv_set.empty())
+        for (const UvSet& set : mesh.uv_sets)
+            if (set.name == material.base_color_uv_set) return set;
+    return mesh.uv_sets.front();
+}
+
 }  // namespace
 
 Scene::Scene() = default;
@@ -384,11 +394,11 @@ SurfacePoint Scene::surface_point(const Ray& /*ray*/, const Hit& hit) const {
         // Opposite vertex normals can cancel out; the face normal is then the best guess.
         if (length > 0.0f) point.shading_normal = n / length;
     }
+    point.material_id = mesh.material_indices.empty() ? 0 : mesh.material_indices[hit.triangle_id];
     if (!mesh.uv_sets.empty()) {
-        const std::vector<vec2>& uv = mesh.uv_sets.front().coords;
+        const std::vector<vec2>& uv = texture_uv_set(mesh, materials_[point.material_id]).coords;
         point.uv = b0 * uv[tri.x] + b1 * uv[tri.y] + b2 * uv[tri.z];
     }
-    point.material_id = mesh.material_indices.empty() ? 0 : mesh.material_indices[hit.triangle_id];
     return point;
 }
 

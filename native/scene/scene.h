@@ -70,7 +70,9 @@ struct SurfacePoint {
     vec3 position{0.0f};
     vec3 geometric_normal{0.0f, 0.0f, 1.0f};
     vec3 shading_normal{0.0f, 0.0f, 1.0f};
-    vec2 uv{0.0f};             // first UV set, (0,0) when the mesh has none
+    // The UV set the material's texture names (Material::base_color_uv_set), else the first;
+    // (0,0) when the mesh has none.
+    vec2 uv{0.0f};
     uint32_t material_id = 0;
     uint32_t instance_id = kInvalidId;
     uint32_t triangle_id = kInvalidId;

@@ -1,10 +1,10 @@
 """Cycles calibration of every light type: an open-topped diffuse room (floor, back and side
 walls, a box) lit by one emitter per case. Compares Combined, DiffDir and DiffInd.
 
-The emitters hang in front of the room, above the top of the frame: in Blender 3.4 a light
-object's Ray Visibility > Camera (Object.visible_camera) is off by default, so Cycles' camera
-never sees lights, whereas SHGI's camera rays see point/spot disks and area lights. The two
-light_camera_* cases check that separately with lights in view.
+The emitters hang in front of the room, above the top of the frame, so the cases measure the
+light they cast. In Blender 3.4 a light object's Ray Visibility > Camera (Object.visible_camera)
+is off by default and Cycles' camera sees through lights; the two light_camera_* cases check
+that SHGI follows the flag, with lights in view.
 
 Run by tests/python/test_cycles_calibration.py; prints CALIBRATION_LIGHTS_DONE and writes the
 per-case results as JSON (see calibration_common.py).

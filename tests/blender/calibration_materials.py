@@ -40,14 +40,6 @@ def diffuse_bsdf(name, tmpdir, results):
     cal.compare(name, ("DiffDir", "DiffInd"), SAMPLES, SAMPLES, tmpdir, results)
 
 
-def diffuse_bsdf_lambert(name, tmpdir, results):
-    # The same scene with SHGI's diffuse_model = LAMBERT for every material: what Cycles renders.
-    lit_room(material=cal.diffuse_bsdf)
-    cal.add_sphere("sphere", (0.0, 0.0, 0.75), 0.75, cal.diffuse_bsdf("diffuse", (0.8, 0.5, 0.2)))
-    cal.compare(name, ("DiffDir", "DiffInd"), SAMPLES, SAMPLES, tmpdir, results,
-                shgi_settings={"diffuse_model": cal.shgi.DiffuseModel.LAMBERT})
-
-
 def glossy_metal(name, tmpdir, results):
     lit_room()
     cal.add_sphere("sphere", (0.0, 0.0, 0.75), 0.75,
@@ -76,8 +68,8 @@ def glass(name, tmpdir, results):
     cal.compare(name, ("TransDir", "TransInd", "GlossDir"), SAMPLES, SAMPLES, tmpdir, results)
 
 
-CASES = {"diffuse": diffuse, "diffuse_bsdf": diffuse_bsdf,
-         "diffuse_bsdf_lambert": diffuse_bsdf_lambert, "glossy_metal": glossy_metal, "glass": glass}
+CASES = {"diffuse": diffuse, "diffuse_bsdf": diffuse_bsdf, "glossy_metal": glossy_metal,
+         "glass": glass}
 
 if __name__ == "__main__":
     cal.run_cases(CASES, "CALIBRATION_MATERIALS_DONE")

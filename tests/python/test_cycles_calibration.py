@@ -8,8 +8,7 @@ script runs once (one Blender start); each case is one test here.
 
 A case passes when the mean of Combined agrees within 2% and every listed pass within 3%, and
 both renderers' standard errors of those means are below a quarter of the tolerance (so that
-the comparison is meaningful). Cases that disagree for a known reason outside these tests are
-strict xfails naming the measured discrepancy; they turn into failures (XPASS) once fixed.
+the comparison is meaningful).
 """
 
 import json
@@ -28,34 +27,8 @@ SCRIPTS = {
         "point", "spot", "sun", "area", "area_disk", "emissive_mesh", "world",
         "light_camera_visible", "light_camera_default"]),
     "calibration_materials.py": ("CALIBRATION_MATERIALS_DONE", [
-        "diffuse", "diffuse_gloss_passes", "diffuse_bsdf", "diffuse_bsdf_lambert",
+        "diffuse", "diffuse_gloss_passes", "diffuse_bsdf",
         "glossy_metal", "glossy_metal_gloss_passes", "glass"]),
-}
-
-# Measured on Blender 3.4.1 / Cycles CPU at 48x48 px, 1024-2048 spp (see the report printed by
-# the scripts). The causes were found; the fixes are outside the calibration tests.
-KNOWN_DISCREPANCIES = {
-    "light_camera_default": (
-        "Combined +389% (Emit 0 in Cycles, 0.94 in SHGI): Blender 3.4 lights have "
-        "Object.visible_camera = False by default and Cycles' camera does not see them; the "
-        "exporter ignores the object's ray visibility and SHGI's camera rays always see "
-        "point/spot disks and area lights (light_camera_visible, with visible_camera = True, "
-        "agrees within 0.1%)"),
-    "diffuse_gloss_passes": (
-        "GlossCol +757%, GlossDir -3.1%: SHGI writes GlossCol = 1 on Principled surfaces with "
-        "Specular 0 and Metallic 0, where Cycles 3.4 adds no specular closure (GlossCol 0); "
-        "silhouette pixels of glossy objects then divide by too large a GlossCol. The products "
-        "GlossDir*GlossCol agree (-0.2%, case diffuse)"),
-    "glossy_metal_gloss_passes": (
-        "GlossCol +757%, GlossInd -11.8%: same cause as diffuse_gloss_passes (GlossCol = 1 on "
-        "Specular-0 surfaces); GlossDir*GlossCol and GlossInd*GlossCol agree within 1% "
-        "(case glossy_metal)"),
-    "diffuse_bsdf": (
-        "Combined +10.2%, DiffDir +9.6%, DiffInd +14.1%: the exporter turns a Diffuse BSDF into "
-        "a Principled material with roughness 1, which SHGI renders with Cycles' principled "
-        "(Burley + retro-reflection) diffuse, whereas Cycles' Diffuse BSDF at roughness 0 is "
-        "Lambert; with PathTracerSettings.diffuse_model = LAMBERT (case diffuse_bsdf_lambert) "
-        "it agrees within 0.4%"),
 }
 
 CASES = [(script, case) for script, (_, cases) in SCRIPTS.items() for case in cases]
@@ -64,8 +37,6 @@ CASES = [(script, case) for script, (_, cases) in SCRIPTS.items() for case in ca
 def _param(script, case):
     marks = [pytest.mark.skipif(BLENDER is None,
                                 reason="Blender is not installed (make deps installs it)")]
-    if case in KNOWN_DISCREPANCIES:
-        marks.append(pytest.mark.xfail(strict=True, reason=KNOWN_DISCREPANCIES[case]))
     return pytest.param(script, case, marks=marks, id=f"{script[:-3]}-{case}")
 
 

@@ -32,6 +32,7 @@ def inward_box_scene(albedo, emission, resolution=12):
                          np.int64)
     scene = shgi.Scene()
     scene.add_material(shgi.Material(base_color=(albedo,) * 3, specular=0.0,
+                                     diffuse_model=shgi.DiffuseModel.LAMBERT,
                                      emission_color=(1.0, 1.0, 1.0), emission_strength=emission))
     scene.add_instance(scene.add_mesh(positions=corners, triangles=triangles), None)
     scene.set_world(shgi.World(strength=0.0))
@@ -49,15 +50,13 @@ def test_settings_defaults_mirror_cpp():
             settings.transmission_bounces) == (12, 4, 4, 12)
     assert settings.clamp_indirect == 0.0
     assert settings.world_sampling == shgi.WorldSampling.COSINE
-    assert settings.diffuse_model == shgi.DiffuseModel.PRINCIPLED
     assert shgi.PathTracerSettings(samples=5, seed=9).seed == 9
 
 
 def test_white_furnace_through_python():
     albedo, emission = 0.5, 0.3
     scene = inward_box_scene(albedo, emission)
-    settings = shgi.PathTracerSettings(samples=16, max_bounces=64, diffuse_bounces=64,
-                                       diffuse_model=shgi.DiffuseModel.LAMBERT)
+    settings = shgi.PathTracerSettings(samples=16, max_bounces=64, diffuse_bounces=64)
     passes = shgi.render_path_traced(scene, settings)
     assert set(passes) == set(PASS_CHANNELS)
     for name, channels in PASS_CHANNELS.items():

@@ -145,7 +145,8 @@ def material_fields_from_emission(color, strength):
 
 def material_fields_from_diffuse(color):
     """shgi.Material fields for a Diffuse BSDF: Lambert (its Oren–Nayar roughness is ignored)."""
-    return {"base_color": rgb(color), "specular": 0.0, "metallic": 0.0, "roughness": 1.0}
+    return {"base_color": rgb(color), "specular": 0.0, "metallic": 0.0, "roughness": 1.0,
+            "diffuse_model": shgi.DiffuseModel.LAMBERT}
 
 
 def fallback_material_fields():
@@ -195,17 +196,19 @@ def texture_colorspace_is_known(colorspace_name):
 
 def light_fields(light_type, energy, color, matrix_world, *, shadow_soft_size=0.0,
                  spot_size=math.pi / 4, spot_blend=0.15, angle=0.0, shape="SQUARE", size=1.0,
-                 size_y=1.0, name="light"):
+                 size_y=1.0, visible_camera=False, name="light"):
     """shgi.Light fields from a Blender light's properties (Blender's names and units).
 
     energy: ``Light.energy`` — W for point, spot and area ("Power"), W/m² for the sun
     ("Strength"). shadow_soft_size: the point/spot "Radius" in m. spot_size, angle: radians.
     size, size_y: the area light's sides or diameters in m (size_y only for RECTANGLE/ELLIPSE).
+    visible_camera: the object's ``visible_camera`` (False for Blender's lights by default).
     """
     if light_type not in LIGHT_TYPES:
         raise ValueError(f"light {name!r}: type {light_type!r} is not one of {list(LIGHT_TYPES)}")
     fields = {"name": name, "type": LIGHT_TYPES[light_type], "color": rgb(color),
-              "world_from_light": row_major(matrix_world)}
+              "world_from_light": row_major(matrix_world),
+              "visible_camera": bool(visible_camera)}
     if light_type == "SUN":
         fields.update(strength=float(energy), angle=float(angle))
         return fields

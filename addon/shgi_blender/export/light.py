@@ -25,7 +25,8 @@ def light_from_object(obj, matrix_world):
         shadow_soft_size=getattr(data, "shadow_soft_size", 0.0),
         spot_size=getattr(data, "spot_size", 0.0), spot_blend=getattr(data, "spot_blend", 0.0),
         angle=getattr(data, "angle", 0.0), shape=getattr(data, "shape", "SQUARE"),
-        size=getattr(data, "size", 0.0), size_y=getattr(data, "size_y", 0.0), name=obj.name)
+        size=getattr(data, "size", 0.0), size_y=getattr(data, "size_y", 0.0),
+        visible_camera=getattr(obj, "visible_camera", False), name=obj.name)
     return shgi.Light(**fields)
 
 

@@ -243,13 +243,13 @@ class CameraType:
         ...
 class DiffuseModel:
     """
-    Diffuse lobe of the Principled BSDF.
+    The diffuse lobe of a Material.
     
     Members:
     
-      PRINCIPLED
+      PRINCIPLED : Principled BSDF's diffuse (Burley, with retro-reflection at high roughness)
     
-      LAMBERT
+      LAMBERT : Lambert, as Blender's Diffuse BSDF
     """
     LAMBERT: typing.ClassVar[DiffuseModel]  # value = <DiffuseModel.LAMBERT: 1>
     PRINCIPLED: typing.ClassVar[DiffuseModel]  # value = <DiffuseModel.PRINCIPLED: 0>
@@ -421,6 +421,14 @@ class Light:
     def type(self, arg0: LightType) -> None:
         ...
     @property
+    def visible_camera(self) -> bool:
+        """
+        Blender's Object.visible_camera: camera rays see the light (False, as Blender's lights).
+        """
+    @visible_camera.setter
+    def visible_camera(self, arg0: bool) -> None:
+        ...
+    @property
     def world_from_light(self) -> numpy.typing.NDArray[numpy.float32]:
         """
         (4, 4) row-major matrix_world; the light emits along its local -Z.
@@ -578,6 +586,14 @@ class Material:
         """
     @base_color_uv_set.setter
     def base_color_uv_set(self, arg0: str) -> None:
+        ...
+    @property
+    def diffuse_model(self) -> DiffuseModel:
+        """
+        DiffuseModel (PRINCIPLED; the exporter sets LAMBERT for a Diffuse BSDF).
+        """
+    @diffuse_model.setter
+    def diffuse_model(self, arg0: DiffuseModel) -> None:
         ...
     @property
     def emission_color(self) -> tuple:
@@ -765,14 +781,6 @@ class PathTracerSettings:
         """
     @diffuse_bounces.setter
     def diffuse_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
-        ...
-    @property
-    def diffuse_model(self) -> DiffuseModel:
-        """
-        DiffuseModel (PRINCIPLED).
-        """
-    @diffuse_model.setter
-    def diffuse_model(self, arg0: DiffuseModel) -> None:
         ...
     @property
     def glossy_bounces(self) -> int:

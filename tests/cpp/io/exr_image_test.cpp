@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "support/test_folder.h"
 #include "util/error.h"
 
 namespace shgi {
@@ -24,15 +25,6 @@ namespace fs = std::filesystem;
 // Half keeps 11 significant bits: round to nearest is within 2^-11 relative (normal range).
 constexpr float kHalfRelativeError = 1.0f / 2048.0f;
 
-// A fresh, empty folder per test, so that tests can list what a write left behind.
-fs::path test_folder() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const fs::path folder = fs::path(SHGI_TEST_TMPDIR) / "exr" /
-                            (std::string(info->test_suite_name()) + "." + info->name());
-    fs::remove_all(folder);
-    fs::create_directories(folder);
-    return folder;
-}
 
 std::vector<std::string> folder_entries(const fs::path& folder) {
     std::vector<std::string> names;
@@ -94,7 +86,7 @@ std::vector<std::string> channel_names(const Image& image) {
 }
 
 TEST(ExrImage, FloatRoundTripIsBitExactForEveryCompression) {
-    const fs::path folder = test_folder();
+    const fs::path folder = testing::test_folder("exr");
     constexpr int kWidth = 37;  // odd sizes: no accidental alignment with 16-line ZIP blocks
     constexpr int kHeight = 23;
     const size_t pixels = size_t(kWidth) * kHeight;
@@ -121,7 +113,7 @@ TEST(ExrImage, FloatRoundTripIsBitExactForEveryCompression) {
 }
 
 TEST(ExrImage, RowsAreStoredTopRowFirst) {
-    const fs::path folder = test_folder();
+    const fs::path folder = testing::test_folder("exr");
     // Pixel (x, y) holds 10 * y + x; the first value in the buffer is the top-left pixel.
     Image image(3, 2);
     image.add_channel("Gradient.Z", PixelType::Float, {0, 1, 2, 10, 11, 12});
@@ -132,7 +124,7 @@ TEST(ExrImage, RowsAreStoredTopRowFirst) {
 }
 
 TEST(ExrImage, HalfRoundTripIsWithinHalfPrecision) {
-    const fs::path folder = test_folder();
+    const fs::path folder = testing::test_folder("exr");
     constexpr int kWidth = 16;
     constexpr int kHeight = 9;
     std::mt19937 rng(7);
@@ -161,7 +153,7 @@ TEST(ExrImage, HalfRoundTripIsWithinHalfPrecision) {
 }
 
 TEST(ExrImage, LayerNamesAndChannelOrderArePreserved) {
-    const fs::path folder = test_folder();
+    const fs::path folder = testing::test_folder("exr");
     constexpr int kSize = 4;
     const size_t pixels = kSize * kSize;
     Image image(kSize, kSize);
@@ -260,7 +252,7 @@ Image small_image() {
 }
 
 TEST(ExrImage, MissingAndCorruptFilesRaiseIoErrorNamingThePath) {
-    const fs::path folder = test_folder();
+    const fs::path folder = testing::test_folder("exr");
     const std::string missing = (folder / "missing.exr").string();
     expect_error<IoError>([&] { read_exr(missing); }, {missing});
     expect_error<IoError>([&] { read_exr_info(missing); }, {missing});
@@ -277,7 +269,7 @@ TEST(ExrImage, MissingAndCorruptFilesRaiseIoErrorNamingThePath) {
 }
 
 TEST(ExrImage, ReadEnforcesThePixelBudget) {
-    const fs::path folder = test_folder();
+    const fs::path folder = testing::test_folder("exr");
     const std::string path = (folder / "budget.exr").string();
     write_exr(path, small_image());
     expect_error<IoError>([&] { read_exr(path, 63); }, {path, "64 pixels", "max_pixels = 63"});
@@ -295,7 +287,7 @@ TEST(ExrImage, ReadEnforcesThePixelBudget) {
 }
 
 TEST(ExrImage, WritesAreAtomicAndLeaveNoTemporaryFile) {
-    const fs::path folder = test_folder();
+    const fs::path folder = testing::test_folder("exr");
     const std::string path = (folder / "atomic.exr").string();
     write_exr(path, small_image());
     write_exr(path, small_image());  // overwrites in place
@@ -314,7 +306,7 @@ TEST(ExrImage, WritesAreAtomicAndLeaveNoTemporaryFile) {
 }
 
 TEST(ExrImage, UnwritablePathsRaiseIoErrorNamingThePath) {
-    const fs::path folder = test_folder();
+    const fs::path folder = testing::test_folder("exr");
     const std::string no_folder = (folder / "no_such_folder" / "out.exr").string();
     expect_error<IoError>([&] { write_exr(no_folder, small_image()); },
                           {no_folder, "does not exist"});

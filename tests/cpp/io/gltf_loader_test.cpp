@@ -15,6 +15,7 @@
 #include "util/error.h"
 #include "util/log.h"
 #include "support/log_capture.h"
+#include "support/test_folder.h"
 
 namespace shgi {
 namespace {
@@ -27,7 +28,11 @@ constexpr const char* kPng2x2 =
     "iVBORw0KGgoAAAANSUhEUgAAAAIAAAACCAYAAABytg0kAAAAFElEQVR4nGP4z8DwHwyB9P8GIAAARNIH+zqrED4AAAA"
     "ASUVORK5CYII=";
 
-std::string tmp_path(const std::string& name) { return std::string(SHGI_TEST_TMPDIR) + "/" + name; }
+// Files go to this test's own folder: ctest runs tests of one binary in parallel processes.
+std::string tmp_path(const std::string& name) {
+    static const std::string folder = testing::test_folder("gltf").string();
+    return folder + "/" + name;
+}
 
 void write_file(const std::string& path, const std::string& contents) {
     std::ofstream file(path, std::ios::binary);

@@ -11,13 +11,18 @@
 #include "util/error.h"
 #include "util/log.h"
 #include "support/log_capture.h"
+#include "support/test_folder.h"
 
 namespace shgi {
 namespace {
 
 constexpr float kTolerance = 1e-6f;
 
-std::string tmp_path(const std::string& name) { return std::string(SHGI_TEST_TMPDIR) + "/" + name; }
+// Files go to this test's own folder: ctest runs tests of one binary in parallel processes.
+std::string tmp_path(const std::string& name) {
+    static const std::string folder = testing::test_folder("obj").string();
+    return folder + "/" + name;
+}
 
 void write_file(const std::string& path, const std::string& contents) {
     std::ofstream file(path, std::ios::binary);

@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <png.h>
 
+#include "support/test_folder.h"
 #include "util/error.h"
 
 namespace shgi {
@@ -24,14 +25,6 @@ namespace fs = std::filesystem;
 // One float ulp near 1 is 6e-8; the curve is evaluated in double and rounded once.
 constexpr float kCurveTolerance = 1.0e-7f;
 
-fs::path test_folder() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const fs::path folder = fs::path(SHGI_TEST_TMPDIR) / "png" /
-                            (std::string(info->test_suite_name()) + "." + info->name());
-    fs::remove_all(folder);
-    fs::create_directories(folder);
-    return folder;
-}
 
 TEST(Srgb, CurveIsExactAtItsDefiningPoints) {
     EXPECT_EQ(srgb_from_linear(0.0f), 0.0f);
@@ -106,7 +99,7 @@ std::string file_bytes(const std::string& path) {
 }
 
 TEST(PngImage, RgbFileDecodesToSrgbLevels) {
-    const fs::path folder = test_folder();
+    const fs::path folder = testing::test_folder("png");
     // 3 x 2, top row first: black, white, mid grey / 0.18 grey, over-white (clamped), negative.
     const std::vector<float> pixels = {0, 0, 0,        1, 1, 1,  0.5f, 0.5f, 0.5f,
                                        0.18f, 0.5f, 1, 4, 2, 1,  -1, 0.0031308f, 0.5f};
@@ -124,7 +117,7 @@ TEST(PngImage, RgbFileDecodesToSrgbLevels) {
 }
 
 TEST(PngImage, ExposureAndPremultipliedAlpha) {
-    const fs::path folder = test_folder();
+    const fs::path folder = testing::test_folder("png");
     // Premultiplied 0.125 at alpha 0.5 is straight 0.25; one stop of exposure makes it 0.5.
     const std::vector<float> pixels = {0.125f, 0.125f, 0.125f, 0.5f,  0.3f, 0.2f, 0.1f, 0.0f};
     const std::string path = (folder / "rgba.png").string();
@@ -142,7 +135,7 @@ TEST(PngImage, ExposureAndPremultipliedAlpha) {
 }
 
 TEST(PngImage, BadInputIsRejectedWithTheReason) {
-    const fs::path folder = test_folder();
+    const fs::path folder = testing::test_folder("png");
     const std::string path = (folder / "bad.png").string();
     const std::vector<float> rgb(12, 0.5f);
     EXPECT_THROW(write_png(path, rgb, 2, 2, 2), InvalidArgument);     // 2 channels

@@ -25,6 +25,7 @@ Material make_material(float metallic, float transmission, float roughness) {
     material.transmission = transmission;
     material.roughness = roughness;
     material.ior = 1.5f;
+    material.diffuse_model = DiffuseModel::Lambert;
     return material;
 }
 
@@ -82,7 +83,7 @@ TEST_P(BsdfConsistency, SampledWeightsMatchQuadratureAndPdfIntegratesToValidFrac
     for (float theta : {0.2f, 0.8f, 1.3f}) {
         const vec3 wo = direction_from_angle(theta);
         const PrincipledBsdf bsdf(make_material(c.metallic, c.transmission, c.roughness),
-                                  vec3(1.0f), false, wo.z, DiffuseModel::Lambert);
+                                  vec3(1.0f), false, wo.z);
         const Estimates e = sample_estimates(bsdf, wo);
         vec3 albedo;
         float pdf_integral;
@@ -106,7 +107,7 @@ TEST(Bsdf, LambertAlbedoIsBaseColor) {
     Material material = make_material(0.0f, 0.0f, 0.5f);
     material.specular = 0.0f;
     const vec3 wo = direction_from_angle(0.7f);
-    const PrincipledBsdf bsdf(material, vec3(0.6f), false, wo.z, DiffuseModel::Lambert);
+    const PrincipledBsdf bsdf(material, vec3(0.6f), false, wo.z);
     vec3 albedo;
     float pdf_integral;
     quadrature(bsdf, wo, &albedo, &pdf_integral);
@@ -116,13 +117,14 @@ TEST(Bsdf, LambertAlbedoIsBaseColor) {
 
 TEST(Bsdf, ReflectionIsReciprocal) {
     for (DiffuseModel model : {DiffuseModel::Lambert, DiffuseModel::Principled}) {
-        const Material material = make_material(0.3f, 0.0f, 0.4f);
+        Material material = make_material(0.3f, 0.0f, 0.4f);
+        material.diffuse_model = model;
         Pcg32 rng(3, 4);
         for (int i = 0; i < 100; ++i) {
             const vec3 a = sample_uniform_hemisphere(rng.next_vec2());
             const vec3 b = sample_uniform_hemisphere(rng.next_vec2());
             // The Fresnel of the glass lobes depends on N.V; none here, so any cos_nv works.
-            const PrincipledBsdf bsdf(material, vec3(0.5f, 0.7f, 0.9f), false, 1.0f, model);
+            const PrincipledBsdf bsdf(material, vec3(0.5f, 0.7f, 0.9f), false, 1.0f);
             const vec3 f_ab = bsdf.eval(a, b).total() / b.z;
             const vec3 f_ba = bsdf.eval(b, a).total() / a.z;
             EXPECT_NEAR(f_ab.y, f_ba.y, 1e-4f * (1.0f + f_ab.y));
@@ -132,8 +134,7 @@ TEST(Bsdf, ReflectionIsReciprocal) {
 
 TEST(Bsdf, SmoothGlassSplitsByFresnel) {
     const vec3 wo = direction_from_angle(0.5f);
-    const PrincipledBsdf bsdf(make_material(0.0f, 1.0f, 0.0f), vec3(1.0f), false, wo.z,
-                              DiffuseModel::Lambert);
+    const PrincipledBsdf bsdf(make_material(0.0f, 1.0f, 0.0f), vec3(1.0f), false, wo.z);
     EXPECT_FALSE(bsdf.has_smooth_lobes());
     const float fresnel = fresnel_dielectric(wo.z, 1.5f);
     EXPECT_NEAR(bsdf.class_color(LobeClass::Glossy).x, fresnel, 1e-6f);
@@ -146,6 +147,28 @@ TEST(Bsdf, FresnelAtNormalIncidence) {
     // ((n - 1) / (n + 1))^2 for n = 1.5 is 0.04.
     EXPECT_NEAR(fresnel_dielectric(1.0f, 1.5f), 0.04f, 1e-6f);
     EXPECT_FLOAT_EQ(fresnel_dielectric(0.1f, 1.0f / 1.5f), 1.0f);  // total internal reflection
+}
+
+// Cycles 3.4 adds the specular closure only when Specular or Metallic is above its cutoff: a
+// Specular-0 dielectric has no glossy colour and no grazing-angle reflection.
+TEST(Bsdf, NoSpecularClosureWithoutSpecularOrMetallic) {
+    const vec3 grazing = direction_from_angle(1.45f);
+    const vec3 mirror(-grazing.x, -grazing.y, grazing.z);
+    Material material = make_material(0.0f, 0.0f, 0.3f);
+    material.specular = 0.0f;
+    const PrincipledBsdf matte(material, vec3(0.5f), false, grazing.z);
+    EXPECT_EQ(matte.class_color(LobeClass::Glossy), vec3(0.0f));
+    EXPECT_EQ(matte.eval(grazing, mirror).by_class[int(LobeClass::Glossy)], vec3(0.0f));
+
+    material.specular = 0.5f;
+    const PrincipledBsdf plastic(material, vec3(0.5f), false, grazing.z);
+    EXPECT_EQ(plastic.class_color(LobeClass::Glossy), vec3(1.0f));
+    EXPECT_GT(plastic.eval(grazing, mirror).by_class[int(LobeClass::Glossy)].x, 0.0f);
+
+    material.specular = 0.0f;
+    material.metallic = 1.0f;
+    const PrincipledBsdf metal(material, vec3(0.5f), false, grazing.z);
+    EXPECT_EQ(metal.class_color(LobeClass::Glossy), vec3(1.0f));
 }
 
 }  // namespace

@@ -48,7 +48,7 @@ TEST(PathTracer, WhiteFurnaceClosedBox) {
     const float albedo = 0.5f, emission = 0.3f;
     Scene scene;
     build_emissive_furnace(scene, albedo, emission, vec3(0.1f, 0.2f, 0.3f));
-    PathTracerSettings settings = test::lambert_settings(16);
+    PathTracerSettings settings = test::settings_with_samples(16);
     settings.max_bounces = settings.diffuse_bounces = 64;  // a^65 is far below the noise
     PathTracer tracer(scene, settings);
     tracer.render(settings.samples);
@@ -65,7 +65,7 @@ TEST(PathTracer, FurnaceTruncatedByMaxBounces) {
     const float albedo = 0.5f, emission = 1.0f;
     Scene scene;
     build_emissive_furnace(scene, albedo, emission, vec3(0.0f));
-    PathTracerSettings settings = test::lambert_settings(16);
+    PathTracerSettings settings = test::settings_with_samples(16);
     settings.max_bounces = 1;
     PathTracer tracer(scene, settings);
     tracer.render(settings.samples);
@@ -82,7 +82,7 @@ TEST(PathTracer, WorldSeenDirectly) {
     scene.set_world(world);
     scene.set_camera(test::ortho_camera_down(vec3(0.0f), 1.0f, 4));
     scene.commit();
-    const Image image = render_path_traced(scene, test::lambert_settings(2));
+    const Image image = render_path_traced(scene, test::settings_with_samples(2));
     const std::vector<float> combined = image.layer_pixels("Combined");
     const std::vector<float> env = image.layer_pixels("Env");
     for (size_t i = 0; i < 16; ++i)
@@ -104,7 +104,7 @@ TEST(PathTracer, WhiteSphereUnderUniformWorld) {
     scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 3.0f), 0.8f, 12));
     scene.commit();
     for (WorldSampling sampling : {WorldSampling::Cosine, WorldSampling::Uniform}) {
-        PathTracerSettings settings = test::lambert_settings(16);
+        PathTracerSettings settings = test::settings_with_samples(16);
         settings.world_sampling = sampling;
         PathTracer tracer(scene, settings);
         tracer.render(settings.samples);
@@ -123,7 +123,7 @@ TEST(PathTracer, PointLightOverLambertPlane) {
     light.world_from_light = glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, height));
     scene.add_light(light);
     scene.commit();
-    PathTracer tracer(scene, test::lambert_settings(4));
+    PathTracer tracer(scene, test::settings_with_samples(4));
     tracer.render(4);
     const double expected = albedo * kInvPi * power * kInvFourPi / (height * height);
     expect_near_stats(test::pixel_stats(tracer.film(), Pass::Combined), expected, "point");
@@ -141,7 +141,7 @@ TEST(PathTracer, SunOverLambertPlane) {
     light.world_from_light = glm::rotate(mat4(1.0f), zenith, vec3(1.0f, 0.0f, 0.0f));
     scene.add_light(light);
     scene.commit();
-    PathTracer tracer(scene, test::lambert_settings(4));
+    PathTracer tracer(scene, test::settings_with_samples(4));
     tracer.render(4);
     expect_near_stats(test::pixel_stats(tracer.film(), Pass::Combined),
                       albedo * kInvPi * strength * std::cos(zenith), "sun");
@@ -160,7 +160,7 @@ TEST(PathTracer, DiskAreaLightOnAxis) {
     light.world_from_light = glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, height));
     scene.add_light(light);
     scene.commit();
-    PathTracer tracer(scene, test::lambert_settings(64));
+    PathTracer tracer(scene, test::settings_with_samples(64));
     tracer.render(64);
     const double radiance = power / (4.0 * kPiD * radius * radius);
     const double irradiance = kPiD * radiance * radius * radius / (radius * radius + height * height);
@@ -179,7 +179,7 @@ TEST(PathTracer, EmissionSeenByCamera) {
     scene.set_world(test::black_world());
     scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 1.0f), 1.0f, 4));
     scene.commit();
-    PathTracer tracer(scene, test::lambert_settings(2));
+    PathTracer tracer(scene, test::settings_with_samples(2));
     tracer.render(2);
     const std::vector<float> emit = tracer.film().pixels(Pass::Emit);
     EXPECT_FLOAT_EQ(emit[0], 2.5f);
@@ -187,6 +187,46 @@ TEST(PathTracer, EmissionSeenByCamera) {
     EXPECT_FLOAT_EQ(emit[2], 0.625f);
     const std::vector<float> depth = tracer.film().pixels(Pass::Depth);
     EXPECT_NEAR(depth[0], 1.0f, 1e-5f);
+}
+
+// Lights facing the camera from in front of an unlit plane: the camera sees their radiance only
+// with visible_camera (Blender's default for lights is off); otherwise it sees through them.
+TEST(PathTracer, CameraSeesLightsOnlyWhenVisibleToCamera) {
+    const float power = 50.0f, radius = 0.1f;
+    Light area;
+    area.type = LightType::Area;
+    area.shape = AreaShape::Disk;
+    area.size_x = 2.0f * radius;
+    area.power = power;
+    // Emits along its local -Z, turned to face +Z (the camera above).
+    area.world_from_light = glm::rotate(glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, 0.25f)), kPi,
+                                        vec3(1.0f, 0.0f, 0.0f));
+    Light point;
+    point.type = LightType::Point;
+    point.radius = radius;
+    point.power = power;
+    point.world_from_light = glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, 0.25f));
+    const float disk_area = kPi * radius * radius;
+    const struct {
+        Light light;
+        float radiance;
+    } cases[] = {{area, power / (4.0f * disk_area)},
+                 {point, power * kInvFourPi / disk_area}};
+    for (const auto& c : cases) {
+        for (bool visible : {false, true}) {
+            Scene scene = test::plane_scene(0.0f);  // black plane: only the light can be seen
+            Light light = c.light;
+            light.visible_camera = visible;
+            scene.add_light(light);
+            scene.commit();
+            PathTracer tracer(scene, test::settings_with_samples(2));
+            tracer.render(2);
+            const float expected = visible ? c.radiance : 0.0f;
+            for (float emit : tracer.film().pixels(Pass::Emit))
+                EXPECT_NEAR(emit, expected, 1e-4f * c.radiance)
+                    << "light type " << int(light.type) << " visible " << visible;
+        }
+    }
 }
 
 // A glossy + diffuse scene used by the determinism and pass tests.

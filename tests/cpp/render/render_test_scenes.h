@@ -64,6 +64,7 @@ inline Material lambert(float albedo) {
     material.base_color = vec3(albedo);
     material.specular = 0.0f;  // no specular lobe: a pure diffuse closure
     material.roughness = 1.0f;
+    material.diffuse_model = DiffuseModel::Lambert;
     return material;
 }
 
@@ -94,10 +95,9 @@ inline Scene plane_scene(float albedo, uint32_t resolution = 4) {
     return scene;
 }
 
-inline PathTracerSettings lambert_settings(uint32_t samples) {
+inline PathTracerSettings settings_with_samples(uint32_t samples) {
     PathTracerSettings settings;
     settings.samples = samples;
-    settings.diffuse_model = DiffuseModel::Lambert;
     return settings;
 }
 

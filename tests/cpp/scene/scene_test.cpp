@@ -262,6 +262,27 @@ TEST(SceneIntersect, SurfacePointGivesMaterialAndInterpolatedNormal) {
                     "the hit is a miss");
 }
 
+// A texture reads the UV set its material names; without a name, or with an unknown one, the first.
+TEST(SceneIntersect, SurfacePointUsesTheMaterialsUvSet) {
+    Mesh mesh = unit_quad();
+    mesh.uv_sets = {{"UVMap", {{0, 0}, {1, 0}, {1, 1}, {0, 1}}},
+                    {"Detail", {{0, 0}, {4, 0}, {4, 4}, {0, 4}}}};
+    const Ray ray = make_ray(vec3(0.75f, 0.25f, 1), vec3(0, 0, -1));
+    for (const auto& [uv_set, expected] :
+         {std::pair<std::string, vec2>{"", {0.75f, 0.25f}}, {"Detail", {3.0f, 1.0f}},
+          {"Missing", {0.75f, 0.25f}}}) {
+        Material material;
+        material.base_color_uv_set = uv_set;
+        Scene scene;
+        scene.add_material(material);
+        scene.add_instance(scene.add_mesh(mesh), mat4(1.0f));
+        scene.commit();
+        const SurfacePoint point = scene.surface_point(ray, scene.intersect(ray));
+        EXPECT_NEAR(point.uv.x, expected.x, 1e-5f) << uv_set;
+        EXPECT_NEAR(point.uv.y, expected.y, 1e-5f) << uv_set;
+    }
+}
+
 TEST(SceneValidation, EachBadInputHasItsOwnMessage) {
     Scene scene;
     Mesh nan_mesh = unit_quad();
