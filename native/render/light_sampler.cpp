@@ -20,17 +20,6 @@ uint64_t triangle_key(uint32_t instance_id, uint32_t triangle_id) {
     return (uint64_t(instance_id) << 32) | triangle_id;
 }
 
-bool is_round(AreaShape shape) { return shape == AreaShape::Disk || shape == AreaShape::Ellipse; }
-
-// Half extents of an area light along its local X and Y, in world space (object scale included,
-// as Cycles multiplies the light's size by its transform).
-void area_half_axes(const Light& light, vec3* ex, vec3* ey) {
-    const bool square = light.shape == AreaShape::Square || light.shape == AreaShape::Disk;
-    const float size_y = square ? light.size_x : light.size_y;
-    *ex = vec3(light.world_from_light[0]) * (0.5f * light.size_x);
-    *ey = vec3(light.world_from_light[1]) * (0.5f * size_y);
-}
-
 vec3 area_emit_normal(const Light& light) { return light.direction(); }
 
 float scene_radius(const Scene& scene) {
@@ -47,6 +36,15 @@ float spot_attenuation(const Light& light, float cos_angle) {
     const float smooth = (1.0f - cos_half) * light.spot_blend;
     if (smooth > 0.0f && t < smooth) return cos_angle * smoothstep01(t / smooth);
     return cos_angle;
+}
+
+bool is_round(AreaShape shape) { return shape == AreaShape::Disk || shape == AreaShape::Ellipse; }
+
+void area_half_axes(const Light& light, vec3* ex, vec3* ey) {
+    const bool square = light.shape == AreaShape::Square || light.shape == AreaShape::Disk;
+    const float size_y = square ? light.size_x : light.size_y;
+    *ex = vec3(light.world_from_light[0]) * (0.5f * light.size_x);
+    *ey = vec3(light.world_from_light[1]) * (0.5f * size_y);
 }
 
 float area_light_area(const Light& light) {

@@ -119,5 +119,10 @@ inline float area_radiance_from_power(float power, float area) { return power / 
 float spot_attenuation(const Light& light, float cos_angle);
 // Area (m^2) of an area light including its transform's scale.
 float area_light_area(const Light& light);
+// Disk and ellipse area lights (their surface is the ellipse inscribed in the half axes).
+bool is_round(AreaShape shape);
+// Half extents of an area light along its local X and Y, in world space (object scale included,
+// as Cycles multiplies the light's size by its transform).
+void area_half_axes(const Light& light, vec3* ex, vec3* ey);
 
 }  // namespace shgi

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "render/shading.h"
 #include "util/error.h"
 #include "util/parallel.h"
 #include "util/rng.h"
@@ -10,68 +11,10 @@
 namespace shgi {
 namespace {
 
-// Spawned rays start this far (relative to the coordinates' magnitude) off the surface along
-// the geometric normal: float32 hit points are accurate to ~1e-7 relative, 1e-4 keeps clear of
-// self-intersection on metre-scale scenes without visible light leaks.
-constexpr float kRayOffset = 1e-4f;
-// Shadow rays stop this fraction short of the light sample so the emitter's own triangle does
-// not occlude it.
-constexpr float kShadowShorten = 1e-3f;
-
 float power_heuristic(float pdf_a, float pdf_b) {
     const float a2 = pdf_a * pdf_a;
     const float sum = a2 + pdf_b * pdf_b;
     return sum > 0.0f ? a2 / sum : 0.0f;
-}
-
-float max_component(const vec3& v) { return std::max(v.x, std::max(v.y, v.z)); }
-
-vec3 offset_origin(const vec3& p, const vec3& normal) {
-    const float scale = 1.0f + max_component(glm::abs(p));
-    return p + normal * (kRayOffset * scale);
-}
-
-// Bilinear lookup with repeat wrapping; v = 0 is the bottom row (Texture's convention).
-vec3 texture_bilinear(const Texture& texture, const vec2& uv) {
-    const float x = uv.x * float(texture.width) - 0.5f;
-    const float y = uv.y * float(texture.height) - 0.5f;
-    const float fx = std::floor(x), fy = std::floor(y);
-    const float tx = x - fx, ty = y - fy;
-    auto texel = [&](float ix, float iy) {
-        const int64_t w = texture.width, h = texture.height;
-        const int64_t cx = ((int64_t(ix) % w) + w) % w, cy = ((int64_t(iy) % h) + h) % h;
-        return vec3(texture.texels[size_t(cy * w + cx)]);
-    };
-    const vec3 bottom = glm::mix(texel(fx, fy), texel(fx + 1.0f, fy), tx);
-    const vec3 top = glm::mix(texel(fx, fy + 1.0f), texel(fx + 1.0f, fy + 1.0f), tx);
-    return glm::mix(bottom, top, ty);
-}
-
-// A surface hit prepared for shading: facing normals, shading frame, BSDF.
-struct Shading {
-    vec3 position, geometric_normal;  // normal flipped to the side the ray came from
-    Frame frame;
-    vec3 wo;                          // local frame
-    PrincipledBsdf bsdf;
-};
-
-Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray_direction) {
-    vec3 ng = sp.geometric_normal, ns = sp.shading_normal;
-    const bool back_face = glm::dot(ray_direction, ng) > 0.0f;
-    if (back_face) {
-        ng = -ng;
-        ns = -ns;
-    }
-    // An interpolated normal facing away from the viewer would make wo.z <= 0: fall back.
-    if (glm::dot(ns, -ray_direction) <= 0.0f) ns = ng;
-    const Frame frame = Frame::from_z(ns);
-    const vec3 wo = frame.to_local(-ray_direction);
-    const Material& material = scene.materials()[sp.material_id];
-    vec3 base_color = material.base_color;
-    if (material.base_color_texture != kNoTexture)
-        base_color *= texture_bilinear(scene.textures()[size_t(material.base_color_texture)], sp.uv);
-    return Shading{sp.position, ng, frame, wo,
-                   PrincipledBsdf(material, base_color, back_face, wo.z)};
 }
 
 const Pass kDirectPass[kLobeClassCount] = {Pass::DiffDir, Pass::GlossDir, Pass::TransDir};

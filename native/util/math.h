@@ -14,6 +14,7 @@ namespace shgi {
 
 using glm::mat3;
 using glm::mat4;
+using glm::ivec3;
 using glm::uvec3;
 using glm::vec2;
 using glm::vec3;

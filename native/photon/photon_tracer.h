@@ -1,0 +1,64 @@
+// Photon tracing (seed 000 §5.1–5.2, §6.2–6.3): photons are emitted from every emitter of a Scene
+// in proportion to its power with Cycles' light units (render/light_sampler.h), traced through
+// the scene with the same Principled BSDF sampling as the path tracer (Lambert/Principled
+// diffuse, GGX glossy, mirror, refraction with IOR and Fresnel) and Russian roulette by albedo,
+// and stored where they land.
+//
+// Emission (flux of each emitter, linear RGB, W):
+//   point  colour x P, uniform directions from its position (a radius is ignored for emission)
+//   spot   colour x P/(4 pi) x spot_attenuation over the cone, uniform directions in the cone
+//   sun    colour x S x pi R^2: parallel photons (directions uniform in the sun's cone when it has
+//          an angle, weighted by cos) through a disk of the scene's bounding-sphere radius R
+//   area   colour x P/(4A) x pi A = colour x pi P / 4, one-sided, cosine-weighted directions
+//   emissive triangles  2 pi Le A (two-sided), world  Lw x 4 pi x pi R^2 (disk per direction)
+// The emitter of photon i is chosen stratified: u = (i + rng) / N through the power CDF.
+//
+// Storage: the first surface a photon hits after emission is not stored (the renderers compute
+// direct light exactly); each later hit on a surface whose BSDF has a non-Dirac lobe stores a
+// Photon (the power arriving there) before the photon scatters on. A stored photon whose path
+// since emission bounced only on specular surfaces (Dirac lobes, or lobes with roughness <=
+// specular_roughness), at least once, goes to the caustic map (L S+ D); every other stored
+// photon to the global map. Paths end after max_bounces scatterings, by Russian roulette
+// (survival = min(1, max component of the sampled BSDF weight), the survivor's power divided by
+// it) or when they leave the scene.
+//
+// Determinism: photon i of pass k uses RNG stream stream_id(k, i) (util/rng.h) and photons are
+// processed in fixed chunks whose outputs are concatenated in chunk order, so the maps are
+// bit-identical whatever the thread count. Multithreaded with util/parallel.h, cancellable and
+// with progress.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "photon/photon.h"
+#include "scene/scene.h"
+#include "util/progress.h"
+
+namespace shgi {
+
+struct PhotonTracerSettings {
+    uint64_t photons = 200000;          // emitted per pass
+    uint64_t seed = 0;
+    int max_bounces = 8;                // scatterings after emission before a path ends
+    float specular_roughness = 0.1f;    // lobes up to this roughness count as specular (caustics)
+};
+
+// Throws InvalidArgument naming the field (photons 0 or > 2^40, max_bounces < 1, roughness
+// outside [0, 1] or NaN).
+void validate_photon_tracer_settings(const PhotonTracerSettings& settings);
+
+struct PhotonMaps {
+    std::vector<Photon> global;
+    std::vector<Photon> caustic;
+    uint64_t emitted = 0;            // photons emitted in this pass (settings.photons)
+    vec3 emitted_power{0.0f};        // W: total flux of the emitters (sum over emitted photons)
+    uint64_t bounces = 0;            // surface interactions traced (rays cast), for benchmarks
+};
+
+// Traces pass `pass` (0, 1, 2, ...: independent RNG streams) on a committed scene. An empty
+// scene or one without emitters returns empty maps. Throws Cancelled on cancel.
+PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& settings, uint64_t pass,
+                         Progress* progress = nullptr);
+
+}  // namespace shgi

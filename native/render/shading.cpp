@@ -1,0 +1,51 @@
+#include "render/shading.h"
+
+#include <cmath>
+
+namespace shgi {
+
+vec3 offset_origin(const vec3& p, const vec3& normal) {
+    const float scale = 1.0f + max_component(glm::abs(p));
+    return p + normal * (kRayOffset * scale);
+}
+
+vec3 texture_bilinear(const Texture& texture, const vec2& uv) {
+    const float x = uv.x * float(texture.width) - 0.5f;
+    const float y = uv.y * float(texture.height) - 0.5f;
+    const float fx = std::floor(x), fy = std::floor(y);
+    const float tx = x - fx, ty = y - fy;
+    auto texel = [&](float ix, float iy) {
+        const int64_t w = texture.width, h = texture.height;
+        const int64_t cx = ((int64_t(ix) % w) + w) % w, cy = ((int64_t(iy) % h) + h) % h;
+        return vec3(texture.texels[size_t(cy * w + cx)]);
+    };
+    const vec3 bottom = glm::mix(texel(fx, fy), texel(fx + 1.0f, fy), tx);
+    const vec3 top = glm::mix(texel(fx, fy + 1.0f), texel(fx + 1.0f, fy + 1.0f), tx);
+    return glm::mix(bottom, top, ty);
+}
+
+Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray_direction) {
+    vec3 ng = sp.geometric_normal, ns = sp.shading_normal;
+    const bool back_face = glm::dot(ray_direction, ng) > 0.0f;
+    if (back_face) {
+        ng = -ng;
+        ns = -ns;
+    }
+    // An interpolated normal facing away from the viewer would make wo.z <= 0: fall back.
+    if (glm::dot(ns, -ray_direction) <= 0.0f) ns = ng;
+    const Frame frame = Frame::from_z(ns);
+    const vec3 wo = frame.to_local(-ray_direction);
+    const Material& material = scene.materials()[sp.material_id];
+    vec3 base_color = material.base_color;
+    if (material.base_color_texture != kNoTexture)
+        base_color *= texture_bilinear(scene.textures()[size_t(material.base_color_texture)], sp.uv);
+    return Shading{sp.position, ng, frame, wo,
+                   PrincipledBsdf(material, base_color, back_face, wo.z)};
+}
+
+vec3 Shading::spawn_origin(const vec3& wi) const {
+    return offset_origin(position, glm::dot(wi, geometric_normal) > 0.0f ? geometric_normal
+                                                                         : -geometric_normal);
+}
+
+}  // namespace shgi
