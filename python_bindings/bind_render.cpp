@@ -15,8 +15,11 @@
 #include <pybind11/pybind11.h>
 
 #include "numpy_convert.h"
+#include "struct_fields.h"
 #include "scene_use.h"
+#include "render/indirect_field.h"
 #include "render/path_tracer.h"
+#include "render/preview_renderer.h"
 #include "util/error.h"
 #include "util/progress.h"
 
@@ -52,17 +55,7 @@ void bind_settings(py::module_& m) {
     using S = PathTracerSettings;
     py::class_<S> cls(m, "PathTracerSettings",
                       "Settings of the reference path tracer; every field has a default.");
-    cls.def(py::init([](const py::kwargs& kwargs) {
-                S settings;
-                py::object self = py::cast(settings);
-                for (const auto& item : kwargs) {
-                    const std::string key = py::str(item.first);
-                    if (!py::hasattr(self, key.c_str()))
-                        throw_value_error(key.c_str(), "is not a PathTracerSettings field");
-                    self.attr(key.c_str()) = item.second;
-                }
-                return self.cast<S>();
-            }),
+    cls.def(py::init(&from_kwargs<S>),
             "PathTracerSettings(**fields), e.g. PathTracerSettings(samples=16, seed=3).")
         .def_property(
             "samples", [](const S& s) { return s.samples; },
@@ -139,11 +132,141 @@ were split between render() calls.)doc")
         "{pass name: float32 array (H, W, C)}.");
 }
 
+py::dict timings_to_dict(const PreviewTimings& timings) {
+    py::dict out;
+    out["primary"] = timings.primary;
+    out["direct"] = timings.direct;
+    out["indirect"] = timings.indirect;
+    out["total"] = timings.total;
+    return out;
+}
+
+void bind_indirect_field(py::module_& m) {
+    py::class_<IndirectField>(m, "IndirectField", R"doc(
+Indirect incident light solved by a solver (PhotonLattice, ...), read by the renderers.
+
+Units: radiance W m^-2 sr^-1, irradiance W m^-2; only indirect light (direct light is computed
+exactly by the consumer). Queries take arrays of points and unit normals.)doc")
+        .def(
+            "irradiance",
+            [](const IndirectField& field, const py::object& points, const py::object& normals) {
+                const std::vector<vec3> p = to_vec3_array(points, "points");
+                const std::vector<vec3> n = to_vec3_array(normals, "normals");
+                if (p.size() != n.size())
+                    throw_value_error("normals", format_message("has ", n.size(),
+                                                                " rows but points has ", p.size()));
+                std::vector<vec3> out(p.size());
+                {
+                    py::gil_scoped_release release;
+                    for (size_t i = 0; i < p.size(); ++i)
+                        out[i] = field.irradiance(p[i], glm::normalize(n[i]));
+                }
+                return to_numpy(out);
+            },
+            py::arg("points"), py::arg("normals"),
+            "(N, 3) irradiance in W/m^2 at points (N, 3) on surfaces with normals (N, 3).")
+        .def(
+            "radiance_sh",
+            [](const IndirectField& field, const py::object& point, const py::object& normal) {
+                const ShRgb sh = field.radiance_sh(to_vec3(point, "point"),
+                                                   glm::normalize(to_vec3(normal, "normal")));
+                py::array_t<float> out({py::ssize_t(sh.num_coefficients()), py::ssize_t(3)});
+                std::memcpy(out.mutable_data(), sh.data(),
+                            size_t(sh.num_coefficients()) * 3 * sizeof(float));
+                return out;
+            },
+            py::arg("point"), py::arg("normal"),
+            "Incident radiance SH at a point for a surface with that normal: float32 "
+            "(coefficients, 3), index l(l+1)+m, coefficient-major RGB.");
+}
+
+void bind_preview(py::module_& m) {
+    using S = PreviewSettings;
+    py::class_<S> cls(m, "PreviewSettings",
+                      "Settings of the preview renderer; every field has a default.");
+    cls.def(py::init(&from_kwargs<S>),
+            "PreviewSettings(**fields), e.g. PreviewSettings(samples=4, seed=1).")
+        .def_property(
+            "samples", [](const S& s) { return s.samples; },
+            [](S& s, int64_t v) { s.samples = checked_samples(v, "samples"); },
+            "Samples per pixel rendered by render_preview (default 16).")
+        .def_property(
+            "seed", [](const S& s) { return s.seed; },
+            [](S& s, int64_t v) {
+                if (v < 0) throw_value_error("seed", "must be >= 0, got " + std::to_string(v));
+                s.seed = uint64_t(v);
+            },
+            "Random seed (default 0).")
+        .def_readwrite("max_specular_bounces", &S::max_specular_bounces,
+                       "Mirror/glass bounces followed per path (8).")
+        .def_readwrite("clamp_indirect", &S::clamp_indirect,
+                       "Max component of an indirect contribution; 0 = off (0).")
+        .def_readwrite("world_sampling", &S::world_sampling, "WorldSampling (COSINE).")
+        .def_readwrite("tile_size", &S::tile_size, "Tile side in pixels (16).")
+        .def("validate", &validate_preview_settings,
+             "Raises ValueError naming the first invalid field.");
+
+    py::class_<PreviewRenderer>(m, "PreviewRenderer", R"doc(
+Progressive preview frames: exact direct light, indirect light from an IndirectField.
+
+render(field, samples) adds samples; passes() returns the passes (as the path tracer's);
+timings is the last render's stage times in seconds (primary, direct, indirect, total).)doc")
+        .def(py::init([](const Scene& scene, const PreviewSettings& settings,
+                         const Camera* camera) {
+                 return camera != nullptr ? std::make_unique<PreviewRenderer>(scene, *camera, settings)
+                                          : std::make_unique<PreviewRenderer>(scene, settings);
+             }),
+             py::arg("scene"), py::arg("settings") = PreviewSettings{},
+             py::arg("camera") = py::none(), py::keep_alive<1, 2>(),
+             "camera: a shgi.Camera replacing the scene's (any view of a solved field).")
+        .def(
+            "render",
+            [](PreviewRenderer& renderer, const IndirectField* field, const py::object& samples,
+               Progress* progress) {
+                const uint32_t count =
+                    samples.is_none() ? 1u : checked_samples(samples.cast<int64_t>(), "samples");
+                SceneUse use(renderer.scene(), SceneUse::Kind::Query, "render (PreviewRenderer)");
+                py::gil_scoped_release release;
+                renderer.render(field, count, progress);
+            },
+            py::arg("field"), py::arg("samples") = py::none(), py::arg("progress") = py::none(),
+            "Adds `samples` samples per pixel (default 1) lit indirectly by `field` (None: "
+            "direct light only). The field must have been solved on the renderer's scene.")
+        .def("passes", [](const PreviewRenderer& r) { return passes_to_dict(r.film()); },
+             "{pass name: float32 array (H, W, C)}, as PathTracer.passes().")
+        .def_property_readonly("timings",
+                               [](const PreviewRenderer& r) { return timings_to_dict(r.timings()); },
+                               "Seconds of the last render: primary, direct, indirect, total.");
+
+    m.def(
+        "render_preview",
+        [](const Scene& scene, const IndirectField* field, const PreviewSettings& settings,
+           const Camera* camera, Progress* progress) {
+            validate_preview_settings(settings);
+            std::unique_ptr<PreviewRenderer> renderer =
+                camera != nullptr ? std::make_unique<PreviewRenderer>(scene, *camera, settings)
+                                  : std::make_unique<PreviewRenderer>(scene, settings);
+            {
+                SceneUse use(scene, SceneUse::Kind::Query, "render (render_preview)");
+                py::gil_scoped_release release;
+                renderer->render(field, settings.samples, progress);
+            }
+            py::dict passes = passes_to_dict(renderer->film());
+            return py::make_tuple(passes, timings_to_dict(renderer->timings()));
+        },
+        py::arg("scene"), py::arg("field"), py::arg("settings") = PreviewSettings{},
+        py::arg("camera") = py::none(), py::arg("progress") = py::none(),
+        "Renders settings.samples samples per pixel with indirect light from `field` (None: "
+        "direct only); returns (passes dict, timings dict in seconds).");
+}
+
 }  // namespace
 
 void bind_render(py::module_& m) {
     bind_settings(m);
     bind_path_tracer(m);
+    bind_indirect_field(m);
+    bind_preview(m);
 }
 
 }  // namespace shgi::python

@@ -21,6 +21,7 @@
 #include <pybind11/stl.h>
 
 #include "numpy_convert.h"
+#include "struct_fields.h"
 #include "scene_use.h"
 #include "scene/scene.h"
 #include "util/parallel.h"
@@ -32,8 +33,6 @@ namespace shgi::python {
 namespace {
 
 // --- conversions -------------------------------------------------------------------------------
-
-py::tuple to_tuple(const vec3& v) { return py::make_tuple(v.x, v.y, v.z); }
 
 py::array_t<float> to_numpy_1d(const std::vector<float>& values) {
     py::array_t<float> out(static_cast<py::ssize_t>(values.size()));
@@ -47,15 +46,6 @@ py::array_t<uint32_t> to_numpy_1d(const std::vector<uint32_t>& values) {
     return out;
 }
 
-// A vec3 field exposed as a 3-tuple; assignment accepts any length-3 sequence of finite numbers.
-template <typename T>
-void def_vec3(py::class_<T>& cls, const char* name, vec3 T::*field, const char* doc) {
-    cls.def_property(
-        name, [field](const T& self) { return to_tuple(self.*field); },
-        [field, name](T& self, const py::object& value) { self.*field = to_vec3(value, name); },
-        doc);
-}
-
 // A mat4 field exposed as a (4, 4) float32 array, row-major like Blender's Matrix.
 template <typename T>
 void def_mat4(py::class_<T>& cls, const char* name, mat4 T::*field, const char* doc) {
@@ -63,21 +53,6 @@ void def_mat4(py::class_<T>& cls, const char* name, mat4 T::*field, const char* 
         name, [field](const T& self) { return from_mat4(self.*field); },
         [field, name](T& self, const py::object& value) { self.*field = to_mat4(value, name); },
         doc);
-}
-
-// Constructor from keyword arguments naming fields: Material(roughness=0.2, name="Red").
-template <typename T>
-std::unique_ptr<T> from_kwargs(const py::kwargs& kwargs) {
-    auto value = std::make_unique<T>();
-    py::object self = py::cast(value.get(), py::return_value_policy::reference);
-    for (const auto& item : kwargs) {
-        const std::string field = py::str(item.first);
-        if (field.empty() || field[0] == '_' || !py::hasattr(self, field.c_str()))
-            throw py::type_error(std::string(py::str(py::type::of<T>().attr("__name__"))) +
-                                 " has no field '" + field + "'");
-        self.attr(field.c_str()) = item.second;
-    }
-    return value;
 }
 
 // --- meshes ------------------------------------------------------------------------------------

@@ -10,6 +10,7 @@ void bind_scene(py::module_& m);
 void bind_io(py::module_& m);
 void bind_loaders(py::module_& m);
 void bind_render(py::module_& m);
+void bind_lattice(py::module_& m);
 }  // namespace shgi::python
 
 PYBIND11_MODULE(_shgi, m) {
@@ -21,4 +22,5 @@ PYBIND11_MODULE(_shgi, m) {
     shgi::python::bind_io(m);
     shgi::python::bind_loaders(m);  // needs Scene from bind_scene
     shgi::python::bind_render(m);
+    shgi::python::bind_lattice(m);  // PhotonLattice derives from IndirectField (bind_render)
 }

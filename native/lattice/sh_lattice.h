@@ -3,9 +3,13 @@
 // (§5.4, §6.4) and sampled at shading points by trilinear or 27-neighbour cubic weighting
 // (seed 001 §4.1).
 //
-// Cells are cubes of side cell_size() = (longest side of the bounds) / resolution, laid from
-// origin() (the bounds' lower corner); dims() counts cells per axis (>= 1 each). Cell (i, j, k) is
-// [origin + (i, j, k) cell_size, origin + (i+1, j+1, k+1) cell_size); its index is
+// Cells are cubes of side cell_size() ≈ (longest side of the bounds) / resolution, laid from
+// origin() just below the bounds' lower corner; dims() counts cells per axis (>= 1 each). The
+// grid is centred on the bounds and overhangs them by a small margin (1e-4 of the longest side,
+// at least 10 µm) so that surfaces on the bounds are inside; an axis whose extent is a whole
+// number of cells keeps that number (the cells grow by at most 0.1% instead of adding a nearly
+// empty layer), so dims() = (8, 2, 2) for bounds of 4 x 1 x 1 m at resolution 8. Cell (i, j, k)
+// is [origin + (i, j, k) cell_size, origin + (i+1, j+1, k+1) cell_size); its index is
 // i + dims.x (j + dims.y k). Coefficients are stored per cell coefficient-major [coeff][rgb]
 // (DESIGN.md), the basis of sh/sh_basis.h.
 //
@@ -36,6 +40,7 @@
 // (the energy the cells' surfaces receive) exactly. Cells without surface stay empty.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -69,7 +74,7 @@ class ShLattice {
     ivec3 cell_of(const vec3& p) const;
 
     // Surface inside every cell from the scene's instanced triangles (exact clipping). The scene
-    // must be committed. Cancellable.
+    // must be committed. Cancellable (the previous surfaces are then kept).
     void measure_surfaces(const Scene& scene, Progress* progress = nullptr);
     float surface_area(size_t cell) const;
     // D_c(dir): projected surface area of the cell seen from unit direction dir (both sides).
@@ -77,7 +82,9 @@ class ShLattice {
 
     // Adds scale × Φ Y(ω) / max(D_c(ω), kMinProjectedFraction A_c) per photon to its cell.
     // Photons outside the lattice or in cells without surface are skipped; returns how many were
-    // injected. Deterministic (per-cell sums in photon order) and parallel.
+    // injected. Deterministic (per-cell sums in photon order) and parallel. Fewer than 2^32
+    // photons per call. Cancellable; after Cancelled some cells hold their photons and others do
+    // not, so clear() before injecting again.
     uint64_t inject(const std::vector<Photon>& photons, float scale, Progress* progress = nullptr);
     void clear();                  // all coefficients to zero (surfaces are kept)
     void scale(float factor);      // all coefficients times factor
@@ -86,6 +93,7 @@ class ShLattice {
     ShRgb cell_radiance(size_t cell) const;
     void set_cell_radiance(size_t cell, const ShRgb& radiance);  // order must match
 
+    // Incident radiance at p for a shading point with unit normal n; normal_offset in cells.
     ShRgb sample_trilinear(const vec3& p, const vec3& n, float normal_offset) const;
     ShRgb sample_cubic(const vec3& p, const vec3& n, float normal_offset) const;
 
@@ -94,16 +102,43 @@ class ShLattice {
     size_t memory_bytes() const;
 
   private:
-    struct SurfaceBin {
+    // The surface of a cell that has one: A_c and, per orientation bin, A_b n̄_b (the bin's area
+    // times the unit mean of its sign-folded normals), so that D_c(ω) = Σ_b |(A_b n̄_b) · ω| costs
+    // three dot products. Surfaces are 2D, so only an index is stored per cell.
+    struct CellSurface {
         float area = 0.0f;
-        vec3 normal{0.0f};  // area-weighted sum of sign-folded normals
+        vec3 projected[3] = {vec3(0.0f), vec3(0.0f), vec3(0.0f)};
+
+        float projected_area(const vec3& dir) const {  // D_c(dir)
+            return std::fabs(glm::dot(projected[0], dir)) + std::fabs(glm::dot(projected[1], dir)) +
+                   std::fabs(glm::dot(projected[2], dir));
+        }
     };
+    static constexpr uint32_t kNoSurface = 0xFFFFFFFFu;
+
+    void check_cell(size_t cell, const char* what) const;
+    const CellSurface* cell_surface(size_t cell) const {  // nullptr without surface
+        const uint32_t index = surface_index_[cell];
+        return index == kNoSurface ? nullptr : &surfaces_[index];
+    }
+    float cell_area(size_t cell) const {  // A_c, no range check
+        const CellSurface* surface = cell_surface(cell);
+        return surface ? surface->area : 0.0f;
+    }
+    // Normalised blend of the cells for_each_cell(visit) visits, weighted by D_c(n) (sampling).
+    template <typename ForEachCell>
+    ShRgb blend(const vec3& n, ForEachCell&& for_each_cell) const;
+    const float* cell_coefficients(size_t cell) const {
+        return coeffs_.data() + cell * size_t(num_coefficients()) * 3;
+    }
+
     int order_ = 1;
     ivec3 dims_{0};
     vec3 origin_{0.0f};
     float cell_size_ = 1.0f;
     std::vector<float> coeffs_;
-    std::vector<SurfaceBin> bins_;   // 3 per cell
+    std::vector<uint32_t> surface_index_;  // per cell: index into surfaces_, or kNoSurface
+    std::vector<CellSurface> surfaces_;    // cells with surface, in order of first measurement
 };
 
 }  // namespace shgi

@@ -8,7 +8,8 @@
 //   point  colour x P, uniform directions from its position (a radius is ignored for emission)
 //   spot   colour x P/(4 pi) x spot_attenuation over the cone, uniform directions in the cone
 //   sun    colour x S x pi R^2: parallel photons (directions uniform in the sun's cone when it has
-//          an angle, weighted by cos) through a disk of the scene's bounding-sphere radius R
+//          an angle) through a disk of the scene's bounding-sphere radius R perpendicular to each
+//          photon's direction (a surface facing the sun then receives S (1 + cos(angle/2)) / 2)
 //   area   colour x P/(4A) x pi A = colour x pi P / 4, one-sided, cosine-weighted directions
 //   emissive triangles  2 pi Le A (two-sided), world  Lw x 4 pi x pi R^2 (disk per direction)
 // The emitter of photon i is chosen stratified: u = (i + rng) / N through the power CDF.
@@ -42,6 +43,9 @@ struct PhotonTracerSettings {
     uint64_t seed = 0;
     int max_bounces = 8;                // scatterings after emission before a path ends
     float specular_roughness = 0.1f;    // lobes up to this roughness count as specular (caustics)
+    // Store photons from the world at their first hit too (global map): the maps then carry the
+    // world's direct light, which consumers leave out of next-event estimation.
+    bool store_world_direct = false;
 };
 
 // Throws InvalidArgument naming the field (photons 0 or > 2^40, max_bounces < 1, roughness
@@ -52,12 +56,14 @@ struct PhotonMaps {
     std::vector<Photon> global;
     std::vector<Photon> caustic;
     uint64_t emitted = 0;            // photons emitted in this pass (settings.photons)
-    vec3 emitted_power{0.0f};        // W: total flux of the emitters (sum over emitted photons)
+    vec3 emitted_power{0.0f};        // W: exact total flux of the emitters (photon_emitter.h);
+                                     // the emitted photons' powers sum to an estimate of it
     uint64_t bounces = 0;            // surface interactions traced (rays cast), for benchmarks
 };
 
-// Traces pass `pass` (0, 1, 2, ...: independent RNG streams) on a committed scene. An empty
-// scene or one without emitters returns empty maps. Throws Cancelled on cancel.
+// Traces pass `pass` (0, 1, 2, ...: independent RNG streams) on a committed scene (else
+// InvalidArgument). An empty scene or one without emitters returns empty maps (emitted = 0).
+// Throws Cancelled on cancel.
 PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& settings, uint64_t pass,
                          Progress* progress = nullptr);
 

@@ -42,6 +42,109 @@ vec3 refraction_half_vector(const vec3& wo, const vec3& wi, float eta) {
     return h.z < 0.0f ? -h : h;
 }
 
+// Directional albedo of a GGX reflection lobe with colour 1 (`total`) and with the colour fh of
+// interpolate_fresnel_color (`fresnel`, for Specular 0.5: ior 1.5, F0 0.04), tabulated over
+// cos(N.V) and roughness by stratified visible-normal sampling (f cos / pdf = G1(wi) for
+// separable Smith GGX) and interpolated bilinearly.
+struct GgxAlbedo {
+    float total = 0.0f, fresnel = 0.0f;
+};
+
+constexpr int kAlbedoTableSize = 32;
+constexpr int kAlbedoTableStrata = 16;
+
+struct GgxAlbedoTable {
+    GgxAlbedo entries[kAlbedoTableSize][kAlbedoTableSize];  // [cos_nv][roughness]
+
+    GgxAlbedoTable() {
+        const float f0 = kSpecularF0Scale * 0.5f;
+        const float ior = 2.0f / (1.0f - std::sqrt(f0)) - 1.0f;
+        for (int i = 0; i < kAlbedoTableSize; ++i) {
+            const float cos_nv = std::max(float(i) / float(kAlbedoTableSize - 1), 1e-3f);
+            const vec3 wo(std::sqrt(1.0f - cos_nv * cos_nv), 0.0f, cos_nv);
+            for (int j = 0; j < kAlbedoTableSize; ++j) {
+                const float roughness = float(j) / float(kAlbedoTableSize - 1);
+                const float alpha = std::max(roughness * roughness, kDeltaAlpha);
+                double total = 0.0, fresnel = 0.0;
+                for (int a = 0; a < kAlbedoTableStrata; ++a) {
+                    for (int b = 0; b < kAlbedoTableStrata; ++b) {
+                        const vec2 u((float(a) + 0.5f) / kAlbedoTableStrata,
+                                     (float(b) + 0.5f) / kAlbedoTableStrata);
+                        const vec3 h = sample_ggx_visible_normal(wo, alpha, u);
+                        const vec3 wi = 2.0f * glm::dot(wo, h) * h - wo;
+                        if (wi.z <= 0.0f) continue;
+                        const float weight = ggx_g1(wi, alpha);
+                        const float fh = (fresnel_dielectric(glm::dot(wi, h), ior) - f0) /
+                                         (1.0f - f0);
+                        total += weight;
+                        fresnel += weight * fh;
+                    }
+                }
+                const double n = double(kAlbedoTableStrata * kAlbedoTableStrata);
+                entries[i][j] = GgxAlbedo{float(total / n), float(fresnel / n)};
+            }
+        }
+    }
+};
+
+// Directional albedo of Cycles' principled diffuse (Burley, with retro-reflection) for a view
+// cos(N.V) and roughness, by stratified cosine sampling; Lambert's is 1.
+struct BurleyAlbedoTable {
+    float entries[kAlbedoTableSize][kAlbedoTableSize];  // [cos_nv][roughness]
+
+    BurleyAlbedoTable() {
+        for (int i = 0; i < kAlbedoTableSize; ++i) {
+            const float cos_nv = std::max(float(i) / float(kAlbedoTableSize - 1), 1e-3f);
+            const vec3 wo(std::sqrt(1.0f - cos_nv * cos_nv), 0.0f, cos_nv);
+            const float fv = schlick_weight(cos_nv);
+            for (int j = 0; j < kAlbedoTableSize; ++j) {
+                const float roughness = float(j) / float(kAlbedoTableSize - 1);
+                double sum = 0.0;
+                for (int a = 0; a < kAlbedoTableStrata; ++a) {
+                    for (int b = 0; b < kAlbedoTableStrata; ++b) {
+                        const vec3 wi = sample_cosine_hemisphere(
+                            vec2((float(a) + 0.5f) / kAlbedoTableStrata,
+                                 (float(b) + 0.5f) / kAlbedoTableStrata));
+                        const float fl = schlick_weight(wi.z);
+                        const float cos_lh = glm::dot(wi, glm::normalize(wo + wi));
+                        const float rr = 2.0f * roughness * cos_lh * cos_lh;
+                        sum += (1.0f - 0.5f * fl) * (1.0f - 0.5f * fv) +
+                               rr * (fl + fv + fl * fv * (rr - 1.0f));
+                    }
+                }
+                entries[i][j] = float(sum / double(kAlbedoTableStrata * kAlbedoTableStrata));
+            }
+        }
+    }
+};
+
+float burley_albedo(float cos_nv, float roughness) {
+    static const BurleyAlbedoTable table;
+    const float x = std::clamp(cos_nv, 0.0f, 1.0f) * float(kAlbedoTableSize - 1);
+    const float y = std::clamp(roughness, 0.0f, 1.0f) * float(kAlbedoTableSize - 1);
+    const int x0 = std::min(int(x), kAlbedoTableSize - 2), y0 = std::min(int(y), kAlbedoTableSize - 2);
+    const float tx = x - float(x0), ty = y - float(y0);
+    const float bottom = (1.0f - tx) * table.entries[x0][y0] + tx * table.entries[x0 + 1][y0];
+    const float top = (1.0f - tx) * table.entries[x0][y0 + 1] + tx * table.entries[x0 + 1][y0 + 1];
+    return (1.0f - ty) * bottom + ty * top;
+}
+
+GgxAlbedo ggx_albedo(float cos_nv, float roughness) {
+    static const GgxAlbedoTable table;
+    const float x = std::clamp(cos_nv, 0.0f, 1.0f) * float(kAlbedoTableSize - 1);
+    const float y = std::clamp(roughness, 0.0f, 1.0f) * float(kAlbedoTableSize - 1);
+    const int x0 = std::min(int(x), kAlbedoTableSize - 2), y0 = std::min(int(y), kAlbedoTableSize - 2);
+    const float tx = x - float(x0), ty = y - float(y0);
+    auto lerp = [&](auto member) {
+        const float bottom = (1.0f - tx) * table.entries[x0][y0].*member +
+                             tx * table.entries[x0 + 1][y0].*member;
+        const float top = (1.0f - tx) * table.entries[x0][y0 + 1].*member +
+                          tx * table.entries[x0 + 1][y0 + 1].*member;
+        return (1.0f - ty) * bottom + ty * top;
+    };
+    return GgxAlbedo{lerp(&GgxAlbedo::total), lerp(&GgxAlbedo::fresnel)};
+}
+
 }  // namespace
 
 float ggx_d(const vec3& h, float alpha) {
@@ -267,6 +370,79 @@ bool PrincipledBsdf::has_smooth_lobes() const {
     for (int i = 0; i < lobe_count_; ++i)
         if (!lobes_[i].delta()) return true;
     return false;
+}
+
+bool PrincipledBsdf::has_traced_lobes() const {
+    for (int i = 0; i < lobe_count_; ++i)
+        if (lobes_[i].traced()) return true;
+    return false;
+}
+
+bool PrincipledBsdf::sample_traced(const vec3& wo, float u_lobe, const vec2& u,
+                                   BsdfSample* out) const {
+    if (wo.z <= 0.0f) return false;
+    float total = 0.0f;
+    for (int i = 0; i < lobe_count_; ++i)
+        if (lobes_[i].traced()) total += lobes_[i].select_prob;
+    if (!(total > 0.0f)) return false;
+    u_lobe *= total;
+    const Lobe* chosen = nullptr;
+    for (int i = 0; i < lobe_count_; ++i) {
+        if (!lobes_[i].traced()) continue;
+        chosen = &lobes_[i];
+        if (u_lobe < lobes_[i].select_prob) break;
+        u_lobe -= lobes_[i].select_prob;
+    }
+    return sample_lobe(*chosen, chosen->select_prob / total, wo, u, out);
+}
+
+bool PrincipledBsdf::sample_lobe(const Lobe& lobe, float choice_prob, const vec3& wo,
+                                 const vec2& u, BsdfSample* out) const {
+    if (!lobe_sample(lobe, wo, u, &out->wi)) return false;
+    out->lobe_class = lobe.lobe_class();
+    out->delta = lobe.delta();
+    out->eval = BsdfEval{};
+    if (out->delta) {
+        const vec3 color = lobe.kind == LobeKind::Specular ? specular_color(wo.z) : vec3(1.0f);
+        out->weight = lobe.weight * color / choice_prob;
+        out->pdf = 0.0f;
+    } else {
+        const vec3 f = lobe_eval(lobe, wo, out->wi);
+        out->pdf = choice_prob * lobe_pdf(lobe, wo, out->wi);
+        if (!(out->pdf > 0.0f)) return false;
+        out->weight = f / out->pdf;
+    }
+    out->eval.by_class[int(out->lobe_class)] = out->weight;
+    return is_finite(out->weight) && glm::any(glm::greaterThan(out->weight, vec3(0.0f)));
+}
+
+vec3 PrincipledBsdf::field_diffuse(const vec3& wo) const {
+    const vec3 weight = class_color(LobeClass::Diffuse);
+    if (diffuse_model_ == DiffuseModel::Lambert) return weight;
+    return weight * burley_albedo(wo.z, roughness_);
+}
+
+BsdfEval PrincipledBsdf::eval_field(const vec3& wo, const vec3& wi) const {
+    BsdfEval result;
+    for (int i = 0; i < lobe_count_; ++i)
+        if (!lobes_[i].traced())
+            result.by_class[int(lobes_[i].lobe_class())] += lobe_eval(lobes_[i], wo, wi);
+    return result;
+}
+
+int PrincipledBsdf::field_glossy_lobes(const vec3& wo, GlossyLobe out[2]) const {
+    int count = 0;
+    for (int i = 0; i < lobe_count_ && count < 2; ++i) {
+        const Lobe& lobe = lobes_[i];
+        if (lobe.traced() || lobe.kind == LobeKind::Diffuse) continue;
+        const GgxAlbedo albedo = ggx_albedo(wo.z, roughness_);
+        // Specular colour = cspec0 (1 - fh) + fh, so its albedo is cspec0 (a - a_fh) + a_fh.
+        const vec3 color = lobe.kind == LobeKind::Specular
+                               ? cspec0_ * (albedo.total - albedo.fresnel) + vec3(albedo.fresnel)
+                               : vec3(albedo.total);
+        out[count++] = GlossyLobe{lobe.weight * color, roughness_};
+    }
+    return count;
 }
 
 }  // namespace shgi

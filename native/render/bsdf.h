@@ -82,6 +82,31 @@ class PrincipledBsdf {
     // True when at least one lobe is not a Dirac lobe (light sampling can help).
     bool has_smooth_lobes() const;
 
+    // --- The split the preview renderer uses (render/preview_renderer.h). "Field lobes" are the
+    // non-Dirac diffuse and glossy reflection lobes, whose indirect light comes from an
+    // IndirectField; "traced lobes" are every Dirac lobe and every refraction lobe, which the
+    // renderer follows by tracing a ray.
+    bool has_traced_lobes() const;
+    // Samples one traced lobe, chosen in proportion to the selection weights of the traced lobes;
+    // weight = that lobe's f |cos| / (choice probability x its pdf), or its closure weight over
+    // the choice probability for a Dirac lobe. False without traced lobes or for an invalid
+    // sample.
+    bool sample_traced(const vec3& wo, float u_lobe, const vec2& u, BsdfSample* out) const;
+    // Outgoing radiance of the diffuse lobe under uniform incident radiance 1/pi (i.e. per unit
+    // irradiance): the closure weight times the lobe's directional albedo for wo (1 for
+    // Lambert; tabulated for the principled diffuse, which darkens at grazing views).
+    vec3 field_diffuse(const vec3& wo) const;
+    // f |cos(wi)| of the field lobes only (transmission class is always zero).
+    BsdfEval eval_field(const vec3& wo, const vec3& wi) const;
+    // The non-Dirac glossy reflection lobes with their directional albedo for wo (∫ f cos dwi,
+    // from a tabulated GGX albedo; the Fresnel curve of the specular colour is the default
+    // Specular 0.5 one) and roughness. Returns how many were written (at most 2).
+    struct GlossyLobe {
+        vec3 albedo{0.0f};
+        float roughness = 0.0f;
+    };
+    int field_glossy_lobes(const vec3& wo, GlossyLobe out[2]) const;
+
   private:
     enum class LobeKind : uint8_t { Diffuse, Specular, GlassReflection, Refraction };
     struct Lobe {
@@ -90,8 +115,12 @@ class PrincipledBsdf {
         float alpha;        // GGX alpha (unused for diffuse)
         float select_prob;  // probability of sampling this lobe
         bool delta() const { return kind != LobeKind::Diffuse && alpha < kDeltaAlpha; }
+        bool traced() const { return delta() || kind == LobeKind::Refraction; }
         LobeClass lobe_class() const;
     };
+
+    bool sample_lobe(const Lobe& lobe, float choice_prob, const vec3& wo, const vec2& u,
+                     BsdfSample* out) const;
 
     void add_lobe(LobeKind kind, const vec3& weight, float alpha);
     vec3 lobe_eval(const Lobe& lobe, const vec3& wo, const vec3& wi) const;

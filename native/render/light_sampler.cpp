@@ -54,7 +54,7 @@ float area_light_area(const Light& light) {
     return is_round(light.shape) ? kEllipseAreaFactor * rectangle : rectangle;
 }
 
-LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling)
+LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, bool sample_world)
     : scene_(&scene), world_sampling_(world_sampling) {
     if (!scene.committed())
         throw InvalidArgument("LightSampler: the scene is not committed; call commit() first");
@@ -84,7 +84,7 @@ LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling)
         weights.push_back(weight);
     }
     const float world_weight = luminance(scene.world().radiance()) * kPi * 4.0f * disk_area;
-    if (world_weight > 0.0f) {
+    if (world_weight > 0.0f && sample_world) {
         world_emitter_ = uint32_t(emitters_.size());
         emitters_.push_back({Kind::World, 0});
         weights.push_back(world_weight);
@@ -273,9 +273,11 @@ bool LightSampler::intersect_lights(const vec3& p, const vec3& wi, float t_max, 
 std::vector<EmissionHit> LightSampler::escaped(const vec3& n, const vec3& wi,
                                                bool camera_ray) const {
     std::vector<EmissionHit> hits;
-    if (world_emitter_ != kInvalidId)
-        hits.push_back({scene_->world().radiance(),
-                        selection_pdf(world_emitter_) * world_pdf(n, wi)});
+    const vec3 world = scene_->world().radiance();
+    if (glm::any(glm::greaterThan(world, vec3(0.0f))))
+        hits.push_back({world, world_emitter_ != kInvalidId
+                                   ? selection_pdf(world_emitter_) * world_pdf(n, wi)
+                                   : 0.0f});
     for (uint32_t i = 0; i < scene_->lights().size(); ++i) {
         const Light& light = scene_->lights()[i];
         if (light_emitter_[i] == kInvalidId || light.type != LightType::Sun || light.angle <= 0.0f)

@@ -64,8 +64,9 @@ struct EmissionHit {
 
 class LightSampler {
   public:
-    // The scene must be committed. Emitters with zero power are left out.
-    LightSampler(const Scene& scene, WorldSampling world_sampling);
+    // The scene must be committed. Emitters with zero power are left out; so is the world when
+    // sample_world is false (escaped rays still see it, with a light pdf of 0).
+    LightSampler(const Scene& scene, WorldSampling world_sampling, bool sample_world = true);
 
     bool empty() const { return distribution_.empty(); }
 

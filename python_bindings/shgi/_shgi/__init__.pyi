@@ -7,7 +7,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'DiffuseModel', 'Instance', 'Light', 'LightType', 'LogLevel', 'Material', 'Mesh', 'PathTracer', 'PathTracerSettings', 'Progress', 'Scene', 'SensorFit', 'Texture', 'World', 'WorldSampling', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'max_threads', 'read_exr', 'read_exr_info', 'render_path_traced', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LogLevel', 'Material', 'Mesh', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'Progress', 'Scene', 'SensorFit', 'Texture', 'World', 'WorldSampling', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'max_threads', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -241,6 +241,59 @@ class CameraType:
     @property
     def value(self) -> int:
         ...
+class CausticMode:
+    """
+    Where caustic photons (light → specular+ → diffuse) go.
+    
+    Members:
+    
+      OFF
+    
+      LATTICE
+    
+      PHOTON_MAP
+    """
+    LATTICE: typing.ClassVar[CausticMode]  # value = <CausticMode.LATTICE: 1>
+    OFF: typing.ClassVar[CausticMode]  # value = <CausticMode.OFF: 0>
+    PHOTON_MAP: typing.ClassVar[CausticMode]  # value = <CausticMode.PHOTON_MAP: 2>
+    __members__: typing.ClassVar[dict[str, CausticMode]]  # value = {'OFF': <CausticMode.OFF: 0>, 'LATTICE': <CausticMode.LATTICE: 1>, 'PHOTON_MAP': <CausticMode.PHOTON_MAP: 2>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: CausticMode) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: CausticMode) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
 class DiffuseModel:
     """
     The diffuse lobe of a Material.
@@ -291,6 +344,25 @@ class DiffuseModel:
     @property
     def value(self) -> int:
         ...
+class IndirectField:
+    """
+    
+    Indirect incident light solved by a solver (PhotonLattice, ...), read by the renderers.
+    
+    Units: radiance W m^-2 sr^-1, irradiance W m^-2; only indirect light (direct light is computed
+    exactly by the consumer). Queries take arrays of points and unit normals.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def irradiance(self, points: typing.Any, normals: typing.Any) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (N, 3) irradiance in W/m^2 at points (N, 3) on surfaces with normals (N, 3).
+        """
+    def radiance_sh(self, point: typing.Any, normal: typing.Any) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        Incident radiance SH at a point for a surface with that normal: float32 (coefficients, 3), index l(l+1)+m, coefficient-major RGB.
+        """
 class Instance:
     """
     A placement of a mesh in the world.
@@ -313,6 +385,56 @@ class Instance:
         """
         (4, 4) row-major matrix_world.
         """
+class LatticeInterpolation:
+    """
+    How lattices are sampled.
+    
+    Members:
+    
+      TRILINEAR
+    
+      CUBIC
+    """
+    CUBIC: typing.ClassVar[LatticeInterpolation]  # value = <LatticeInterpolation.CUBIC: 1>
+    TRILINEAR: typing.ClassVar[LatticeInterpolation]  # value = <LatticeInterpolation.TRILINEAR: 0>
+    __members__: typing.ClassVar[dict[str, LatticeInterpolation]]  # value = {'TRILINEAR': <LatticeInterpolation.TRILINEAR: 0>, 'CUBIC': <LatticeInterpolation.CUBIC: 1>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: LatticeInterpolation) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: LatticeInterpolation) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
 class Light:
     """
     A Blender light with Cycles' units (see scene/light.h).
@@ -846,6 +968,308 @@ class PathTracerSettings:
     @world_sampling.setter
     def world_sampling(self, arg0: WorldSampling) -> None:
         ...
+class PhotonLattice(IndirectField):
+    """
+    
+    The ISLLPM solver (seed 000): photons traced from the lights, injected into SH lattices.
+    
+    Interactive: call solve() repeatedly; each call traces `photons` more and the lattices
+    average all passes. Non-interactive: one solve() with many photons, then render any camera.
+    After editing and re-committing the scene, call reset().
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, scene: Scene, settings: PhotonLatticeSettings = ..., progress: Progress = None) -> None:
+        """
+        Measures the surface inside the lattices' cells (the scene must be committed).
+        """
+    def reset(self, progress: Progress = None) -> None:
+        """
+        Forgets every pass and re-measures the (re-committed) scene.
+        """
+    def solve(self, progress: Progress = None) -> None:
+        """
+        Traces one more pass of photons and rebuilds the lattices (GIL released). Raises shgi.Cancelled on cancel, keeping the previous solution.
+        """
+    @property
+    def memory_bytes(self) -> int:
+        """
+        Bytes held by the lattices and photon map.
+        """
+    @property
+    def passes(self) -> int:
+        """
+        Solve passes averaged so far.
+        """
+    @property
+    def settings(self) -> PhotonLatticeSettings:
+        """
+        A copy of the settings.
+        """
+    @property
+    def timings(self) -> dict:
+        """
+        The last solve: seconds of emit_trace, injection, blur; photons_emitted, photons_stored, bounces.
+        """
+class PhotonLatticeSettings:
+    """
+    Settings of the PhotonLattice solver; every field has a default.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        PhotonLatticeSettings(**fields), e.g. PhotonLatticeSettings(photons=100000).
+        """
+    def validate(self) -> None:
+        """
+        Raises ValueError naming the first invalid field.
+        """
+    @property
+    def blur_passes(self) -> int:
+        """
+        3x3x3 blurs of the global lattice (0: blurring darkens corners).
+        """
+    @blur_passes.setter
+    def blur_passes(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def bounds_max(self) -> tuple:
+        """
+        Upper corner (m) when use_bounds.
+        """
+    @bounds_max.setter
+    def bounds_max(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def bounds_min(self) -> tuple:
+        """
+        Lower corner (m) when use_bounds.
+        """
+    @bounds_min.setter
+    def bounds_min(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def caustic_blur_passes(self) -> int:
+        """
+        3x3x3 blurs of the caustic lattice (0).
+        """
+    @caustic_blur_passes.setter
+    def caustic_blur_passes(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def caustic_neighbours(self) -> int:
+        """
+        Photons per density estimate, PHOTON_MAP mode (50).
+        """
+    @caustic_neighbours.setter
+    def caustic_neighbours(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def caustic_order(self) -> int:
+        """
+        Caustic lattice SH order (1).
+        """
+    @caustic_order.setter
+    def caustic_order(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def caustic_radius(self) -> float:
+        """
+        Max radius (m) of the density estimate; 0 = 2% of the bounds' diagonal.
+        """
+    @caustic_radius.setter
+    def caustic_radius(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def caustic_resolution(self) -> int:
+        """
+        Caustic lattice: cells along the longest side (64).
+        """
+    @caustic_resolution.setter
+    def caustic_resolution(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def caustics(self) -> CausticMode:
+        """
+        CausticMode (LATTICE).
+        """
+    @caustics.setter
+    def caustics(self, arg0: CausticMode) -> None:
+        ...
+    @property
+    def interpolation(self) -> LatticeInterpolation:
+        """
+        LatticeInterpolation (CUBIC).
+        """
+    @interpolation.setter
+    def interpolation(self, arg0: LatticeInterpolation) -> None:
+        ...
+    @property
+    def max_bounces(self) -> int:
+        """
+        Photon scatterings after emission; 4 matches Cycles' default diffuse bounces (4).
+        """
+    @max_bounces.setter
+    def max_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def normal_offset(self) -> float:
+        """
+        Cells along the normal before sampling, against self-lighting (0.25).
+        """
+    @normal_offset.setter
+    def normal_offset(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def order(self) -> int:
+        """
+        Global lattice SH order, 1 or 2 (2).
+        """
+    @order.setter
+    def order(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def photons(self) -> int:
+        """
+        Photons emitted per solve() (200000).
+        """
+    @photons.setter
+    def photons(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def resolution(self) -> int:
+        """
+        Global lattice: cells along the bounds' longest side (16).
+        """
+    @resolution.setter
+    def resolution(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def seed(self) -> int:
+        """
+        Random seed (0).
+        """
+    @seed.setter
+    def seed(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def specular_roughness(self) -> float:
+        """
+        Lobes up to this roughness make caustic paths (0.1).
+        """
+    @specular_roughness.setter
+    def specular_roughness(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def use_bounds(self) -> bool:
+        """
+        Use bounds_min/bounds_max instead of the scene's bounds (False).
+        """
+    @use_bounds.setter
+    def use_bounds(self, arg0: bool) -> None:
+        ...
+    @property
+    def world_in_field(self) -> bool:
+        """
+        The lattices carry the world's direct light; renderers skip the world in next-event estimation; that light then lands in the Ind passes (False).
+        """
+    @world_in_field.setter
+    def world_in_field(self, arg0: bool) -> None:
+        ...
+class PreviewRenderer:
+    """
+    
+    Progressive preview frames: exact direct light, indirect light from an IndirectField.
+    
+    render(field, samples) adds samples; passes() returns the passes (as the path tracer's);
+    timings is the last render's stage times in seconds (primary, direct, indirect, total).
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, scene: Scene, settings: PreviewSettings = ..., camera: Camera = None) -> None:
+        """
+        camera: a shgi.Camera replacing the scene's (any view of a solved field).
+        """
+    def passes(self) -> dict:
+        """
+        {pass name: float32 array (H, W, C)}, as PathTracer.passes().
+        """
+    def render(self, field: IndirectField, samples: typing.Any = None, progress: Progress = None) -> None:
+        """
+        Adds `samples` samples per pixel (default 1) lit indirectly by `field` (None: direct light only). The field must have been solved on the renderer's scene.
+        """
+    @property
+    def timings(self) -> dict:
+        """
+        Seconds of the last render: primary, direct, indirect, total.
+        """
+class PreviewSettings:
+    """
+    Settings of the preview renderer; every field has a default.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        PreviewSettings(**fields), e.g. PreviewSettings(samples=4, seed=1).
+        """
+    def validate(self) -> None:
+        """
+        Raises ValueError naming the first invalid field.
+        """
+    @property
+    def clamp_indirect(self) -> float:
+        """
+        Max component of an indirect contribution; 0 = off (0).
+        """
+    @clamp_indirect.setter
+    def clamp_indirect(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_specular_bounces(self) -> int:
+        """
+        Mirror/glass bounces followed per path (8).
+        """
+    @max_specular_bounces.setter
+    def max_specular_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def samples(self) -> int:
+        """
+        Samples per pixel rendered by render_preview (default 16).
+        """
+    @samples.setter
+    def samples(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def seed(self) -> int:
+        """
+        Random seed (default 0).
+        """
+    @seed.setter
+    def seed(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def tile_size(self) -> int:
+        """
+        Tile side in pixels (16).
+        """
+    @tile_size.setter
+    def tile_size(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def world_sampling(self) -> WorldSampling:
+        """
+        WorldSampling (COSINE).
+        """
+    @world_sampling.setter
+    def world_sampling(self, arg0: WorldSampling) -> None:
+        ...
 class Progress:
     """
     
@@ -1230,6 +1654,10 @@ def read_exr_info(path: os.PathLike | str | bytes) -> dict:
 def render_path_traced(scene: Scene, settings: PathTracerSettings = ..., progress: Progress = None) -> dict:
     """
     Renders settings.samples samples per pixel of the scene's camera; returns {pass name: float32 array (H, W, C)}.
+    """
+def render_preview(scene: Scene, field: IndirectField, settings: PreviewSettings = ..., camera: Camera = None, progress: Progress = None) -> tuple[dict, dict]:
+    """
+    Renders settings.samples samples per pixel with indirect light from `field` (None: direct only); returns (passes dict, timings dict in seconds).
     """
 def set_log_level(level: LogLevel) -> None:
     """

@@ -1,0 +1,89 @@
+// Scenes and timing helpers shared by the benchmarks.
+#pragma once
+
+#include <chrono>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "scene/scene.h"
+#include "util/rng.h"
+#include "util/sampling.h"
+
+namespace shgi::bench {
+
+inline constexpr float kHalf = 1.0f;  // box half size (m)
+
+inline Mesh box(float half, bool inward) {
+    Mesh mesh;
+    for (int i = 0; i < 8; ++i)
+        mesh.positions.push_back(vec3(i & 1 ? half : -half, i & 2 ? half : -half,
+                                      i & 4 ? half : -half));
+    const uvec3 faces[12] = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}, {0, 4, 5}, {0, 5, 1},
+                             {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
+    for (uvec3 f : faces) mesh.triangles.push_back(inward ? f : uvec3(f.x, f.z, f.y));
+    // Faces 8-9 are x = -half (red), 10-11 x = +half (green), the rest white.
+    mesh.material_indices.assign(12, 0);
+    mesh.material_indices[8] = mesh.material_indices[9] = 1;
+    mesh.material_indices[10] = mesh.material_indices[11] = 2;
+    return mesh;
+}
+
+// A Cornell-like room (2 m closed box, red and green side walls, two inner blocks, a 0.5 m square
+// area light under the ceiling), the camera inside looking at the back wall; not committed.
+inline Scene cornell_box(uint32_t width = 128, uint32_t height = 128) {
+    Scene scene;
+    const vec3 colors[3] = {vec3(0.73f), vec3(0.65f, 0.05f, 0.05f), vec3(0.12f, 0.45f, 0.15f)};
+    for (const vec3& c : colors) {
+        Material material;
+        material.base_color = c;
+        material.roughness = 0.8f;
+        scene.add_material(material);
+    }
+    scene.add_instance(scene.add_mesh(box(kHalf, true)), mat4(1.0f));
+    const uint32_t block = scene.add_mesh(box(0.3f, false));
+    scene.add_instance(block, glm::translate(mat4(1.0f), vec3(-0.35f, 0.3f, -0.7f)));
+    scene.add_instance(block, glm::scale(glm::translate(mat4(1.0f), vec3(0.4f, -0.3f, -0.4f)),
+                                         vec3(1.0f, 1.0f, 2.0f)));
+    Light light;
+    light.type = LightType::Area;
+    light.size_x = 0.5f;
+    light.power = 100.0f;
+    light.world_from_light = glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, kHalf - 0.01f));
+    scene.add_light(light);
+    World world;
+    world.strength = 0.0f;
+    scene.set_world(world);
+    Camera camera;  // inside the box, looking along +Y at the back wall
+    camera.world_from_camera =
+        glm::inverse(glm::lookAt(vec3(0.0f, -0.95f, 0.0f), vec3(0.0f, 1.0f, 0.0f), vec3(0, 0, 1)));
+    camera.lens = 18.0f;
+    camera.resolution_x = width;
+    camera.resolution_y = height;
+    camera.clip_start = 0.01f;
+    scene.set_camera(camera);
+    return scene;
+}
+
+inline double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Raw Embree rate: random origins inside the box, uniformly random directions, traced through
+// Scene::intersect's batch interface (ray streams, all threads). Rays per second.
+inline double incoherent_ray_rate(const Scene& scene, size_t count = size_t(1) << 21) {
+    std::vector<Ray> rays(count);
+    Pcg32 rng(1, 0);
+    for (Ray& ray : rays) {
+        ray.origin = (2.0f * vec3(rng.next_float(), rng.next_float(), rng.next_float()) - 1.0f) *
+                     (0.99f * kHalf);
+        ray.direction = sample_uniform_sphere(rng.next_vec2());
+    }
+    std::vector<Hit> hits;
+    scene.intersect(rays, hits);  // warm-up
+    const auto start = std::chrono::steady_clock::now();
+    scene.intersect(rays, hits);
+    return double(count) / seconds_since(start);
+}
+
+}  // namespace shgi::bench

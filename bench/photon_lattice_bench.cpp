@@ -1,0 +1,98 @@
+// PhotonLattice and preview renderer figures (issue 4, seed 000 Tables 5 and 6), with the raw
+// Embree incoherent ray rate measured in the same run.
+//
+// Scenes: the Cornell-like room of bench_scenes.h, and the same room holding a UV sphere of
+// ~500k triangles. For each, printed: photon bounces (rays traced by the photon tracer) per
+// second and their ratio to the raw rate; injection rate (stored photons per second); the
+// solve's stage times; and the frame time of a 640 x 360 preview with the solved field, at 1
+// sample per pixel (one progressive viewport frame) and 16 (PreviewSettings' default), with its
+// stage times. Best of three runs each. A plain main printing figures: benchmarks are not tests.
+#include <algorithm>
+#include <cstdio>
+
+#include "bench_scenes.h"
+#include "lattice/photon_lattice.h"
+#include "render/preview_renderer.h"
+
+using namespace shgi;
+
+namespace {
+
+constexpr int kRuns = 3;
+
+Mesh uv_sphere(float radius, int rings, int segments) {
+    Mesh mesh;
+    for (int r = 0; r <= rings; ++r) {
+        const float theta = kPi * float(r) / float(rings);
+        for (int s = 0; s < segments; ++s) {
+            const float phi = kTwoPi * float(s) / float(segments);
+            mesh.positions.push_back(radius * vec3(std::sin(theta) * std::cos(phi),
+                                                   std::sin(theta) * std::sin(phi),
+                                                   std::cos(theta)));
+        }
+    }
+    for (int r = 0; r < rings; ++r)
+        for (int s = 0; s < segments; ++s) {
+            const uint32_t a = uint32_t(r * segments + s);
+            const uint32_t b = uint32_t(r * segments + (s + 1) % segments);
+            const uint32_t c = a + uint32_t(segments), d = b + uint32_t(segments);
+            if (r > 0) mesh.triangles.push_back(uvec3(a, c, b));
+            if (r + 1 < rings) mesh.triangles.push_back(uvec3(b, c, d));
+        }
+    return mesh;
+}
+
+void run(const char* name, Scene& scene) {
+    scene.commit();
+    const double raw = bench::incoherent_ray_rate(scene);
+    PhotonLatticeSettings settings;
+    PhotonLattice lattice(scene, settings);
+    PhotonLatticeTimings best;
+    best.emit_trace = best.injection = best.blur = 1e30;
+    for (int run = 0; run < kRuns; ++run) {
+        lattice.reset();
+        lattice.solve();
+        const PhotonLatticeTimings& t = lattice.timings();
+        if (t.emit_trace < best.emit_trace) best = t;
+    }
+    const double bounce_rate = double(best.bounces) / best.emit_trace;
+    std::printf("%s: %zu triangles\n", name, size_t(scene.stats().instanced_triangles));
+    std::printf("  embree incoherent closest-hit: %.3g rays/s\n", raw);
+    std::printf("  photons: %llu emitted, %llu stored, %llu bounces in %.3f s: %.3g bounces/s, "
+                "ratio to raw %.2f\n",
+                (unsigned long long)best.photons_emitted, (unsigned long long)best.photons_stored,
+                (unsigned long long)best.bounces, best.emit_trace, bounce_rate, bounce_rate / raw);
+    std::printf("  injection: %.4f s (%.3g photons/s), blur %.4f s\n", best.injection,
+                double(best.photons_stored) / best.injection, best.blur);
+    for (uint32_t samples : {1u, 16u}) {
+        PreviewSettings preview;
+        preview.samples = samples;
+        PreviewTimings fastest;
+        fastest.total = 1e30;
+        for (int run = 0; run < kRuns; ++run) {
+            PreviewTimings t;
+            render_preview(scene, &lattice, preview, nullptr, &t);
+            if (t.total < fastest.total) fastest = t;
+        }
+        std::printf("  preview 640x360, %2u spp: %.1f ms (primary %.1f, direct %.1f, indirect "
+                    "%.1f)\n",
+                    samples, fastest.total * 1e3, fastest.primary * 1e3, fastest.direct * 1e3,
+                    fastest.indirect * 1e3);
+    }
+}
+
+}  // namespace
+
+int main() {
+    Scene cornell = bench::cornell_box(640, 360);
+    run("cornell box", cornell);
+    Scene dense = bench::cornell_box(640, 360);
+    Material material;
+    material.base_color = vec3(0.8f, 0.6f, 0.3f);
+    const uint32_t material_id = dense.add_material(material);
+    Mesh sphere = uv_sphere(0.3f, 360, 700);
+    sphere.material_indices.assign(sphere.triangles.size(), material_id);
+    dense.add_instance(dense.add_mesh(sphere), glm::translate(mat4(1.0f), vec3(0.3f, 0.4f, 0.2f)));
+    run("cornell box + dense sphere", dense);
+    return 0;
+}

@@ -1,0 +1,219 @@
+#include "lattice/photon_lattice.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "util/error.h"
+
+namespace shgi {
+namespace {
+
+// Share of the bounds' diagonal used as the caustic density estimate's radius by default.
+constexpr float kDefaultCausticRadiusFraction = 0.02f;
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+PhotonTracerSettings tracer_settings(const PhotonLatticeSettings& settings) {
+    PhotonTracerSettings tracer;
+    tracer.photons = settings.photons;
+    tracer.seed = settings.seed;
+    tracer.max_bounces = settings.max_bounces;
+    tracer.specular_roughness = settings.specular_roughness;
+    tracer.store_world_direct = settings.world_in_field;
+    return tracer;
+}
+
+Bounds3 lattice_bounds(const Scene& scene, const PhotonLatticeSettings& settings) {
+    if (settings.use_bounds) {
+        Bounds3 bounds;
+        bounds.extend(settings.bounds_min);
+        bounds.extend(settings.bounds_max);
+        return bounds;
+    }
+    if (scene.empty())
+        throw InvalidArgument("PhotonLattice: the scene has no geometry; add meshes and instances "
+                              "(or set use_bounds) before solving");
+    return scene.bounds();
+}
+
+void check_range(int value, int lo, int hi, const char* name) {
+    if (value < lo || value > hi)
+        throw InvalidArgument(format_message("PhotonLatticeSettings.", name, " is ", value,
+                                             "; it must be in [", lo, ", ", hi, "]"));
+}
+
+// a += b over the coefficients both have (orders may differ).
+void add_sh(ShRgb& a, const ShRgb& b) {
+    const int count = std::min(a.num_coefficients(), b.num_coefficients());
+    for (int i = 0; i < count; ++i) a[i] += b[i];
+}
+
+const PhotonLatticeSettings& validated(const PhotonLatticeSettings& settings) {
+    validate_photon_lattice_settings(settings);
+    return settings;
+}
+
+}  // namespace
+
+void validate_photon_lattice_settings(const PhotonLatticeSettings& settings) {
+    validate_photon_tracer_settings(tracer_settings(settings));
+    check_range(settings.resolution, 1, 1024, "resolution");
+    check_range(settings.order, 1, 2, "order");
+    check_range(settings.blur_passes, 0, 64, "blur_passes");
+    check_range(settings.caustic_resolution, 1, 1024, "caustic_resolution");
+    check_range(settings.caustic_order, 1, 2, "caustic_order");
+    check_range(settings.caustic_blur_passes, 0, 64, "caustic_blur_passes");
+    check_range(settings.caustic_neighbours, 1, 100000, "caustic_neighbours");
+    if (!std::isfinite(settings.caustic_radius) || settings.caustic_radius < 0.0f)
+        throw InvalidArgument(format_message("PhotonLatticeSettings.caustic_radius is ",
+                                             settings.caustic_radius,
+                                             "; it must be finite and >= 0 (0 = automatic)"));
+    if (!std::isfinite(settings.normal_offset) || settings.normal_offset < 0.0f ||
+        settings.normal_offset > 2.0f)
+        throw InvalidArgument(format_message("PhotonLatticeSettings.normal_offset is ",
+                                             settings.normal_offset,
+                                             "; it must be in [0, 2] cells"));
+    if (settings.use_bounds) {
+        if (!is_finite(settings.bounds_min) || !is_finite(settings.bounds_max) ||
+            glm::any(glm::greaterThanEqual(settings.bounds_min, settings.bounds_max)))
+            throw InvalidArgument(format_message(
+                "PhotonLatticeSettings.bounds_min/bounds_max are (", settings.bounds_min.x, ", ",
+                settings.bounds_min.y, ", ", settings.bounds_min.z, ") / (", settings.bounds_max.x,
+                ", ", settings.bounds_max.y, ", ", settings.bounds_max.z,
+                "); they must be finite with min < max on every axis"));
+    }
+}
+
+PhotonLattice::PhotonLattice(const Scene& scene, const PhotonLatticeSettings& settings,
+                             Progress* progress)
+    : scene_(&scene), settings_(validated(settings)) {
+    reset(progress);
+}
+
+PhotonLattice::~PhotonLattice() = default;
+
+void PhotonLattice::reset(Progress* progress) {
+    if (!scene_->committed())
+        throw InvalidArgument("PhotonLattice: the scene is not committed; call commit() first");
+    bounds_ = lattice_bounds(*scene_, settings_);
+    ShLattice global(bounds_, settings_.resolution, settings_.order);
+    global.measure_surfaces(*scene_, progress);
+    ShLattice caustic;
+    if (settings_.caustics == CausticMode::Lattice) {
+        caustic = ShLattice(bounds_, settings_.caustic_resolution, settings_.caustic_order);
+        caustic.measure_surfaces(*scene_, progress);
+    }
+    caustic_radius_ = settings_.caustic_radius > 0.0f
+                          ? settings_.caustic_radius
+                          : kDefaultCausticRadiusFraction * glm::length(bounds_.extent());
+    global_raw_ = global;
+    global_ = std::move(global);
+    caustic_raw_ = caustic;
+    caustic_ = std::move(caustic);
+    caustic_photons_.clear();
+    caustic_map_ = PhotonMap();
+    caustic_photons_injected_ = 0;
+    passes_ = 0;
+    timings_ = PhotonLatticeTimings{};
+    scene_revision_ = scene_->revision();
+}
+
+void PhotonLattice::check_scene(const char* what) const {
+    if (scene_->revision() != scene_revision_ || !scene_->committed())
+        throw InvalidArgument(format_message(
+            "PhotonLattice::", what, ": the scene was edited after the lattices were built "
+            "(revision ", scene_revision_, ", now ", scene_->revision(),
+            "); commit it and call reset()"));
+}
+
+void PhotonLattice::solve(Progress* progress) {
+    check_scene("solve");
+    PhotonLatticeTimings timings;
+    auto start = std::chrono::steady_clock::now();
+    if (progress != nullptr) progress->begin_stage("photons", 0.0f, 0.8f);
+    const PhotonMaps maps = trace_photons(*scene_, tracer_settings(settings_), passes_, progress);
+    timings.emit_trace = seconds_since(start);
+    timings.photons_emitted = maps.emitted;
+    timings.photons_stored = maps.global.size() + maps.caustic.size();
+    timings.bounces = maps.bounces;
+
+    // Work on copies so that a cancel keeps the previous solution.
+    if (progress != nullptr) progress->begin_stage("injection", 0.8f, 0.95f);
+    start = std::chrono::steady_clock::now();
+    ShLattice global_raw = global_raw_;
+    global_raw.inject(maps.global, 1.0f, progress);
+    ShLattice caustic_raw = caustic_raw_;
+    std::vector<Photon> caustic_photons;
+    uint64_t caustic_injected = caustic_photons_injected_;
+    if (settings_.caustics == CausticMode::Lattice) {
+        caustic_injected += caustic_raw.inject(maps.caustic, 1.0f, progress);
+    } else if (settings_.caustics == CausticMode::PhotonMap) {
+        caustic_photons = caustic_photons_;
+        caustic_photons.insert(caustic_photons.end(), maps.caustic.begin(), maps.caustic.end());
+    }
+    timings.injection = seconds_since(start);
+
+    if (progress != nullptr) progress->begin_stage("blur", 0.95f, 1.0f);
+    start = std::chrono::steady_clock::now();
+    const float average = 1.0f / float(passes_ + 1);
+    ShLattice global = global_raw;
+    global.scale(average);
+    global.blur(settings_.blur_passes);
+    ShLattice caustic = caustic_raw;
+    if (settings_.caustics == CausticMode::Lattice) {
+        caustic.scale(average);
+        caustic.blur(settings_.caustic_blur_passes);
+    }
+    PhotonMap caustic_map;
+    if (settings_.caustics == CausticMode::PhotonMap)
+        caustic_map = PhotonMap(caustic_photons, average);
+    timings.blur = seconds_since(start);
+    throw_if_cancelled(progress);
+
+    global_raw_ = std::move(global_raw);
+    caustic_raw_ = std::move(caustic_raw);
+    global_ = std::move(global);
+    caustic_ = std::move(caustic);
+    caustic_photons_ = std::move(caustic_photons);
+    caustic_map_ = std::move(caustic_map);
+    caustic_photons_injected_ = caustic_injected;
+    ++passes_;
+    timings_ = timings;
+    if (progress != nullptr) progress->set_fraction(1.0f);
+}
+
+ShRgb PhotonLattice::sample(const ShLattice& lattice, const vec3& p, const vec3& n) const {
+    return settings_.interpolation == LatticeInterpolation::Cubic
+               ? lattice.sample_cubic(p, n, settings_.normal_offset)
+               : lattice.sample_trilinear(p, n, settings_.normal_offset);
+}
+
+ShRgb PhotonLattice::radiance_sh(const vec3& p, const vec3& n) const {
+    const int order = settings_.caustics == CausticMode::Lattice
+                          ? std::max(settings_.order, settings_.caustic_order)
+                          : settings_.order;
+    ShRgb result(order);
+    if (passes_ == 0) return result;
+    add_sh(result, sample(global_, p, n));
+    if (settings_.caustics == CausticMode::Lattice && caustic_photons_injected_ > 0)
+        add_sh(result, sample(caustic_, p, n));
+    return result;
+}
+
+FieldLookup PhotonLattice::lookup(const vec3& p, const vec3& n) const {
+    FieldLookup result{radiance_sh(p, n), vec3(0.0f)};
+    if (settings_.caustics == CausticMode::PhotonMap && caustic_map_.size() > 0)
+        result.extra_irradiance =
+            caustic_map_.irradiance(p, n, settings_.caustic_neighbours, caustic_radius_);
+    return result;
+}
+
+size_t PhotonLattice::memory_bytes() const {
+    return global_raw_.memory_bytes() + global_.memory_bytes() + caustic_raw_.memory_bytes() +
+           caustic_.memory_bytes() + caustic_photons_.size() * sizeof(Photon) * 2;
+}
+
+}  // namespace shgi

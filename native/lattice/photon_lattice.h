@@ -1,0 +1,132 @@
+// PhotonLattice: the ISLLPM solver (seed 000): photons traced from the lights (photon/), the
+// global photons injected into a coarse SH lattice for low-frequency indirect light and the
+// caustic photons into a fine one (or kept in a photon map for a density estimate), lattices
+// blurred in lattice space, then queried as an IndirectField by the preview renderer.
+//
+// Modes (seed 000 §6.5): interactive — each solve() traces one more budget of `photons` with
+// its own RNG streams (pass k) and the lattices hold the average of all passes, so the field
+// refines progressively; reset() starts over (after scene edits). Non-interactive — one solve()
+// with many photons, then any number of frames from any camera.
+//
+// Bounces: a photon stored after m scatterings reaches the camera after m + 1, like a camera
+// path with m bounces, so max_bounces = 4 matches Cycles' default Diffuse bounces (4).
+// Blur: off by default. The 3x3x3 blur mixes cells whose surfaces face different ways, and each
+// cell's SH knows only the directions its own surfaces receive from (zero elsewhere), so near
+// corners it darkens indirect light: -6% on the Cornell box and the sun room with one pass.
+//
+// World light: with world_in_field photons from the world are stored at their first hit too, so the
+// lattices carry the sky's direct light and renderers leave the world out of next-event
+// estimation (DESIGN.md has every consumer compute direct light exactly; an environment seen
+// through openings is the exception, because sampling it per pixel is what makes previews
+// noisy — the role Cycles' light portals play). world_in_field = false restores exact NEE.
+//
+// Lattice bounds: the scene's bounds, or [bounds_min, bounds_max] with use_bounds. The density
+// estimate, blur and interpolation are those of lattice/sh_lattice.h.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "lattice/sh_lattice.h"
+#include "photon/photon_map.h"
+#include "photon/photon_tracer.h"
+#include "render/indirect_field.h"
+#include "scene/scene.h"
+#include "util/progress.h"
+
+namespace shgi {
+
+enum class CausticMode : uint8_t {
+    Off,        // caustic photons are dropped
+    Lattice,    // injected into the fine caustic lattice
+    PhotonMap,  // density estimate of the caustic photon map (k nearest photons)
+};
+
+enum class LatticeInterpolation : uint8_t {
+    Trilinear,  // the 8 surrounding cells
+    Cubic,      // the 27-neighbour weighting of seed 001 §4.1
+};
+
+struct PhotonLatticeSettings {
+    uint64_t photons = 200000;          // emitted per solve()
+    uint64_t seed = 0;
+    int max_bounces = 4;                // photon scatterings after emission (see below)
+    float specular_roughness = 0.1f;    // lobes up to this roughness make caustic paths
+    // The lattices also carry the world's direct light (see below) and renderers skip the world
+    // in next-event estimation: sky light through windows is then noise-free in previews.
+    bool world_in_field = false;
+    int resolution = 16;                // global lattice: cells along the longest side
+    int order = 2;                      // global lattice SH order (1 or 2)
+    int blur_passes = 0;                // 3x3x3 blurs of the global lattice (see below)
+    CausticMode caustics = CausticMode::Lattice;
+    int caustic_resolution = 64;        // caustic lattice: cells along the longest side
+    int caustic_order = 1;
+    int caustic_blur_passes = 0;
+    int caustic_neighbours = 50;        // k of the photon map density estimate
+    float caustic_radius = 0.0f;        // m: its max radius; 0 = 2% of the bounds' diagonal
+    LatticeInterpolation interpolation = LatticeInterpolation::Cubic;
+    float normal_offset = 0.25f;        // cells along the normal before sampling
+    bool use_bounds = false;
+    vec3 bounds_min{0.0f};
+    vec3 bounds_max{0.0f};
+};
+
+void validate_photon_lattice_settings(const PhotonLatticeSettings& settings);
+
+// Seconds of the last solve() (seed 000 Tables 5 and 6), and the photon counts behind them.
+struct PhotonLatticeTimings {
+    double emit_trace = 0.0;
+    double injection = 0.0;
+    double blur = 0.0;
+    uint64_t photons_emitted = 0;   // by the last solve
+    uint64_t photons_stored = 0;    // global + caustic, by the last solve
+    uint64_t bounces = 0;           // rays traced by the last solve
+};
+
+class PhotonLattice : public IndirectField {
+  public:
+    // The scene must be committed and outlive the solver. Measures the lattices' surfaces.
+    PhotonLattice(const Scene& scene, const PhotonLatticeSettings& settings,
+                  Progress* progress = nullptr);
+    ~PhotonLattice() override;
+
+    // Traces one more pass of settings.photons and rebuilds the lattices (average of all
+    // passes). Cancel leaves the previous solution intact. InvalidArgument if the scene was
+    // edited since construction or reset().
+    void solve(Progress* progress = nullptr);
+    // Forgets every pass and re-measures the scene (call after edits and commit()).
+    void reset(Progress* progress = nullptr);
+
+    uint64_t passes() const { return passes_; }
+    const Scene& scene() const { return *scene_; }
+    const PhotonLatticeSettings& settings() const { return settings_; }
+    const PhotonLatticeTimings& timings() const { return timings_; }
+    const ShLattice& global_lattice() const { return global_; }
+    const ShLattice& caustic_lattice() const { return caustic_; }
+    const PhotonMap& caustic_map() const { return caustic_map_; }
+    size_t memory_bytes() const;
+
+    ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
+    FieldLookup lookup(const vec3& p, const vec3& n) const override;
+    bool includes_world_direct() const override { return settings_.world_in_field; }
+
+  private:
+    void check_scene(const char* what) const;
+    void build_lattices(Progress* progress);
+    ShRgb sample(const ShLattice& lattice, const vec3& p, const vec3& n) const;
+
+    const Scene* scene_;
+    uint64_t scene_revision_ = 0;
+    PhotonLatticeSettings settings_;
+    Bounds3 bounds_;
+    uint64_t passes_ = 0;
+    ShLattice global_raw_, caustic_raw_;  // sums over passes, unblurred
+    ShLattice global_, caustic_;          // averaged and blurred: what queries read
+    std::vector<Photon> caustic_photons_; // all passes (PhotonMap mode)
+    PhotonMap caustic_map_;
+    float caustic_radius_ = 0.0f;
+    uint64_t caustic_photons_injected_ = 0;  // over all passes: 0 skips the caustic lattice
+    PhotonLatticeTimings timings_;
+};
+
+}  // namespace shgi

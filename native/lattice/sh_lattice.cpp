@@ -1,0 +1,661 @@
+#include "lattice/sh_lattice.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+#include <glm/gtx/component_wise.hpp>
+#include <glm/gtx/string_cast.hpp>
+
+#include "sh/sh_basis.h"
+#include "util/error.h"
+#include "util/parallel.h"
+
+namespace shgi {
+namespace {
+
+constexpr int kMaxResolution = 1024;
+constexpr uint64_t kMaxCells = uint64_t(1) << 27;
+// Margin around the bounds so that surfaces lying on them (a floor at the scene's lowest z) fall
+// inside the lattice: a fraction of the longest side, at least an absolute floor for tiny scenes.
+constexpr float kBoundsMarginFraction = 1e-4f;
+constexpr float kMinBoundsMargin = 1e-5f;  // m
+// A fraction of a cell by which an axis may exceed a whole number of cells before it gets one
+// more: the margin then comes from slightly larger cells instead of a nearly empty cell layer.
+constexpr double kCellCountSlack = 1e-3;
+constexpr int kMaxCoefficients = 9 * 3;  // L2 RGB: the largest cell this lattice stores
+
+// measure_surfaces: triangles per parallel chunk, and chunks whose fragments are held at once
+// before they are merged (bounds the transient memory to ~0.5M triangles' fragments).
+constexpr uint64_t kTrianglesPerChunk = 2048;
+constexpr uint64_t kChunksPerBatch = 256;
+// A triangle clipped by the 6 planes of a box gains at most one vertex per plane (convexity);
+// the capacity leaves room for rounding producing a near-collinear extra vertex or two.
+constexpr int kClipCapacity = 16;
+// Slack (in cells) when bounding the cells a triangle's plane crosses in a column: the clipping
+// is exact, so visiting one cell too many costs only time, and one too few loses area.
+constexpr float kColumnSlackCells = 1e-3f;
+
+constexpr uint64_t kPhotonsPerChunk = 1 << 16;
+constexpr uint64_t kCellsPerChunk = 512;
+constexpr uint32_t kNoCell = std::numeric_limits<uint32_t>::max();
+
+const char* const kClassName = "ShLattice";
+
+// ---------------------------------------------------------------------------------------------
+// Surface measurement
+
+// The part of one triangle inside one cell.
+struct SurfaceFragment {
+    uint32_t cell;
+    uint32_t bin;
+    float area;   // m^2
+    vec3 normal;  // unit, sign-folded
+};
+
+// Per cell, per orientation bin: Σ area and Σ area × sign-folded unit normal.
+struct BinSums {
+    float area[3] = {0.0f, 0.0f, 0.0f};
+    vec3 normal[3] = {vec3(0.0f), vec3(0.0f), vec3(0.0f)};
+
+    void add(const SurfaceFragment& fragment) {
+        area[fragment.bin] += fragment.area;
+        normal[fragment.bin] += fragment.area * fragment.normal;
+    }
+};
+
+// A convex polygon in a cell's local coordinates ([0, 1)^3 is the cell).
+struct ClipPolygon {
+    std::array<vec3, kClipCapacity> vertices;
+    int count = 0;
+};
+
+// Sutherland–Hodgman against one axis-aligned plane. The cell is half-open, [0, 1): the lower
+// plane keeps x >= 0 and the upper one keeps x < 1, so a polygon lying exactly on a shared face
+// belongs to exactly one of the two cells (the one cell_of() picks), never to both. Returns
+// false, leaving `out` untouched, when the plane keeps the whole polygon (the common case).
+bool clip_against_plane(const ClipPolygon& in, int axis, bool upper, ClipPolygon& out) {
+    auto distance = [&](const vec3& v) { return upper ? 1.0f - v[axis] : v[axis]; };
+    auto inside = [&](float s) { return upper ? s > 0.0f : s >= 0.0f; };
+    bool all_inside = true;
+    for (int i = 0; i < in.count && all_inside; ++i) all_inside = inside(distance(in.vertices[i]));
+    if (all_inside) return false;
+    auto push = [&](const vec3& v) {
+        if (out.count == kClipCapacity)
+            throw Internal("ShLattice: a clipped triangle exceeded the polygon capacity");
+        out.vertices[out.count++] = v;
+    };
+    out.count = 0;
+    vec3 previous = in.vertices[in.count - 1];
+    float s_previous = distance(previous);
+    for (int i = 0; i < in.count; ++i) {
+        const vec3& current = in.vertices[i];
+        const float s_current = distance(current);
+        if (inside(s_current) != inside(s_previous)) {
+            const float t = s_previous / (s_previous - s_current);
+            vec3 crossing = previous + t * (current - previous);
+            crossing[axis] = upper ? 1.0f : 0.0f;  // exactly on the plane, whatever the rounding
+            push(crossing);
+        }
+        if (inside(s_current)) push(current);
+        previous = current;
+        s_previous = s_current;
+    }
+    return true;
+}
+
+// Area (in cells²) of the triangle q0 q1 q2 (cell coordinates) inside cell `cell`; `unit_normal`
+// is the triangle's.
+float clipped_area(const vec3 q[3], const ivec3& cell, const vec3& unit_normal) {
+    ClipPolygon buffers[2];
+    ClipPolygon* polygon = &buffers[0];
+    ClipPolygon* clipped = &buffers[1];
+    const vec3 corner(cell);
+    for (int i = 0; i < 3; ++i) polygon->vertices[i] = q[i] - corner;
+    polygon->count = 3;
+    for (int plane = 0; plane < 6; ++plane) {
+        if (clip_against_plane(*polygon, plane / 2, plane % 2 == 1, *clipped))
+            std::swap(polygon, clipped);
+        if (polygon->count < 3) return 0.0f;
+    }
+    vec3 twice_area(0.0f);
+    const vec3* v = polygon->vertices.data();
+    for (int i = 1; i + 1 < polygon->count; ++i)
+        twice_area += glm::cross(v[i] - v[0], v[i + 1] - v[0]);
+    return 0.5f * std::fabs(glm::dot(twice_area, unit_normal));
+}
+
+int dominant_axis(const vec3& v) {
+    const vec3 a = glm::abs(v);
+    return a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
+}
+
+// Calls emit(cell, area in cells²) for every cell the triangle q0 q1 q2 (cell coordinates) has
+// area in. The cells visited are those of the triangle's bounding box, walked column by column
+// along the dominant axis of its normal and limited in each column to the span the plane
+// crosses, so the work grows with the cells the triangle touches, not with its box's volume.
+template <typename Emit>
+void for_each_cell_piece(const vec3 q[3], const ivec3& dims, Emit&& emit) {
+    const vec3 lo = glm::min(q[0], glm::min(q[1], q[2]));
+    const vec3 hi = glm::max(q[0], glm::max(q[1], q[2]));
+    const vec3 dims_f(dims);
+    if (glm::any(glm::lessThan(hi, vec3(0.0f))) || glm::any(glm::greaterThanEqual(lo, dims_f)))
+        return;
+    const vec3 m = glm::cross(q[1] - q[0], q[2] - q[0]);
+    const float twice_area = glm::length(m);
+    if (!(twice_area > 0.0f)) return;  // below float resolution in cell units
+    const vec3 unit_normal = m / twice_area;
+    const ivec3 first = glm::clamp(ivec3(glm::floor(glm::max(lo, vec3(0.0f)))), ivec3(0), dims - 1);
+    const ivec3 last = glm::clamp(ivec3(glm::floor(glm::min(hi, dims_f))), ivec3(0), dims - 1);
+    const bool inside_lattice = glm::all(glm::greaterThanEqual(lo, vec3(0.0f))) &&
+                                glm::all(glm::lessThan(hi, dims_f));
+    if (inside_lattice && first == last) {
+        emit(first, 0.5f * twice_area);  // the whole triangle lies in one cell
+        return;
+    }
+    const int w = dominant_axis(m), u = (w + 1) % 3, v = (w + 2) % 3;
+    const float plane = glm::dot(m, q[0]);
+    ivec3 cell;
+    for (cell[v] = first[v]; cell[v] <= last[v]; ++cell[v]) {
+        for (cell[u] = first[u]; cell[u] <= last[u]; ++cell[u]) {
+            // The plane's w coordinate over the column's square is extreme at its corners.
+            float w_min = std::numeric_limits<float>::max(), w_max = -w_min;
+            for (int corner = 0; corner < 4; ++corner) {
+                const float cu = float(cell[u] + (corner & 1)), cv = float(cell[v] + (corner >> 1));
+                const float cw = (plane - m[u] * cu - m[v] * cv) / m[w];
+                w_min = std::min(w_min, cw);
+                w_max = std::max(w_max, cw);
+            }
+            const int k0 = std::max(first[w], int(std::floor(std::max(
+                                                  w_min - kColumnSlackCells, float(first[w])))));
+            const int k1 = std::min(last[w], int(std::floor(std::min(
+                                                 w_max + kColumnSlackCells, float(last[w])))));
+            for (cell[w] = k0; cell[w] <= k1; ++cell[w]) {
+                const float area = clipped_area(q, cell, unit_normal);
+                if (area > 0.0f) emit(cell, area);
+            }
+        }
+    }
+}
+
+// The instanced triangles of a scene, numbered consecutively instance after instance.
+class InstancedTriangles {
+  public:
+    explicit InstancedTriangles(const Scene& scene) : scene_(scene) {
+        first_.reserve(scene.instances().size() + 1);
+        uint64_t total = 0;
+        for (const Instance& instance : scene.instances()) {
+            first_.push_back(total);
+            total += scene.meshes()[instance.mesh_id].triangles.size();
+        }
+        first_.push_back(total);
+    }
+    uint64_t count() const { return first_.back(); }
+
+    // Calls body(p0, p1, p2) with the world-space vertices of triangles [begin, end).
+    template <typename Body>
+    void for_each(uint64_t begin, uint64_t end, Body&& body) const {
+        size_t instance = size_t(std::upper_bound(first_.begin(), first_.end(), begin) -
+                                 first_.begin()) - 1;
+        for (uint64_t t = begin; t < end; ++t) {
+            while (t >= first_[instance + 1]) ++instance;
+            const Instance& inst = scene_.instances()[instance];
+            const Mesh& mesh = scene_.meshes()[inst.mesh_id];
+            const uvec3& tri = mesh.triangles[t - first_[instance]];
+            const mat4& world_from_object = inst.world_from_object;
+            body(vec3(world_from_object * vec4(mesh.positions[tri.x], 1.0f)),
+                 vec3(world_from_object * vec4(mesh.positions[tri.y], 1.0f)),
+                 vec3(world_from_object * vec4(mesh.positions[tri.z], 1.0f)));
+        }
+    }
+
+  private:
+    const Scene& scene_;
+    std::vector<uint64_t> first_;  // first global triangle of each instance, then the total
+};
+
+// The pieces of instanced triangles [begin, end) in the cells of `lattice`, in triangle order.
+// Triangle normals are sign-folded: flipped so that their dominant component, which names the
+// orientation bin, is positive.
+void clip_triangles(const InstancedTriangles& triangles, uint64_t begin, uint64_t end,
+                    const ShLattice& lattice, std::vector<SurfaceFragment>& out) {
+    out.clear();
+    const vec3 origin = lattice.origin();
+    const float cell_size = lattice.cell_size();
+    const float cell_face = cell_size * cell_size;
+    triangles.for_each(begin, end, [&](const vec3& p0, const vec3& p1, const vec3& p2) {
+        vec3 normal = glm::cross(p1 - p0, p2 - p0);
+        const float length = glm::length(normal);
+        if (!(length > 0.0f) || !std::isfinite(length)) return;  // degenerate in world space
+        normal /= length;
+        const int bin = dominant_axis(normal);
+        if (normal[bin] < 0.0f) normal = -normal;
+        const vec3 q[3] = {(p0 - origin) / cell_size, (p1 - origin) / cell_size,
+                           (p2 - origin) / cell_size};
+        for_each_cell_piece(q, lattice.dims(), [&](const ivec3& cell, float area_cells) {
+            out.push_back({uint32_t(lattice.cell_index(cell)), uint32_t(bin),
+                           area_cells * cell_face, normal});
+        });
+    });
+}
+
+// ---------------------------------------------------------------------------------------------
+// Injection
+
+// Photon indices grouped by cell, each group in photon order (a stable counting sort): the
+// photons of cell c are order[start[c]] .. order[start[c + 1] - 1].
+struct PhotonsByCell {
+    std::vector<uint32_t> start;  // cell count + 1 entries
+    std::vector<uint32_t> order;
+};
+
+// `photon_cell` holds each photon's cell index, or kNoCell for photons to skip.
+PhotonsByCell sort_by_cell(const std::vector<uint32_t>& photon_cell, size_t cells) {
+    PhotonsByCell sorted;
+    sorted.start.assign(cells + 1, 0);
+    for (uint32_t cell : photon_cell)
+        if (cell != kNoCell) ++sorted.start[cell + 1];
+    for (size_t c = 0; c < cells; ++c) sorted.start[c + 1] += sorted.start[c];
+    sorted.order.resize(sorted.start[cells]);
+    std::vector<uint32_t> next(sorted.start.begin(), sorted.start.end() - 1);
+    for (size_t i = 0; i < photon_cell.size(); ++i)
+        if (photon_cell[i] != kNoCell) sorted.order[next[photon_cell[i]]++] = uint32_t(i);
+    return sorted;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Sampling
+
+// Σ w_c L(c) / Σ w_c over the cells a sample visits, without heap allocation. kFloats
+// (3 × coefficients) is a compile-time count so that the accumulation unrolls.
+template <int kFloats>
+class WeightedCellSum {
+  public:
+    void add(const float* coefficients, float weight) {
+        for (int i = 0; i < kFloats; ++i) sum_[i] += weight * coefficients[i];
+        total_ += weight;
+    }
+    ShRgb result(int order) const {
+        ShRgb radiance;  // all zero; the order is the lattice's, already checked
+        radiance.order = order;
+        if (total_ <= 0.0f) return radiance;
+        const float inv_total = 1.0f / total_;
+        float* out = radiance.data();
+        for (int i = 0; i < kFloats; ++i) out[i] = sum_[i] * inv_total;
+        return radiance;
+    }
+
+  private:
+    float total_ = 0.0f;
+    std::array<float, kFloats> sum_{};
+};
+
+// Normalised blend of the cells `for_each_cell` visits, each weighted by its filter weight times
+// density(cell) = D_c(n) (zero for cells without surface).
+template <int kFloats, typename ForEachCell, typename Density>
+ShRgb blend_cells(int order, const float* coefficients, ForEachCell&& for_each_cell,
+                  Density&& density) {
+    WeightedCellSum<kFloats> sum;
+    for_each_cell([&](size_t cell, float filter_weight) {
+        const float weight = filter_weight * density(cell);
+        if (weight > 0.0f) sum.add(coefficients + cell * kFloats, weight);
+    });
+    return sum.result(order);
+}
+
+// Smooth falloff of the 27-neighbour filter (seed 001 §4.1): 1 at d = 0, 0 with zero slope at
+// d = r, in cells.
+float cubic_weight(float d) {
+    constexpr float r = kCubicRadiusCells;
+    if (d >= r) return 0.0f;
+    const float x = d * (1.0f / r);
+    return (2.0f * x - 3.0f) * x * x + 1.0f;
+}
+
+// Lattice coordinates in cells of the sample point, or false for a non-finite point. Far-away
+// points are clamped (keeping them outside) so the integer conversions below cannot overflow.
+bool sample_coordinates(const vec3& p, const vec3& n, float normal_offset, const vec3& origin,
+                        float cell_size, const ivec3& dims, vec3& cells) {
+    const vec3 q = p + (normal_offset * cell_size) * n;
+    if (!is_finite(q)) return false;
+    cells = glm::clamp((q - origin) / cell_size, vec3(-4.0f), vec3(dims) + 4.0f);
+    return true;
+}
+
+// visit(cell index, weight) for the lattice cells among the 8 whose centres surround `cells`,
+// with their trilinear weights.
+template <typename Visit>
+void for_each_trilinear_cell(const vec3& cells, const ivec3& dims, Visit&& visit) {
+    const vec3 f = cells - 0.5f;  // relative to cell centres
+    const ivec3 base(glm::floor(f));
+    const vec3 t = f - vec3(base);
+    const ivec3 lo = glm::max(base, ivec3(0)), hi = glm::min(base + 1, dims - 1);
+    for (int z = lo.z; z <= hi.z; ++z) {
+        const float wz = z == base.z ? 1.0f - t.z : t.z;
+        for (int y = lo.y; y <= hi.y; ++y) {
+            const float wyz = (y == base.y ? 1.0f - t.y : t.y) * wz;
+            const size_t row = size_t(dims.x) * (size_t(y) + size_t(dims.y) * size_t(z));
+            for (int x = lo.x; x <= hi.x; ++x)
+                visit(row + size_t(x), (x == base.x ? 1.0f - t.x : t.x) * wyz);
+        }
+    }
+}
+
+// visit(cell index, w(d)) for the lattice cells of the 3x3x3 block around the cell holding
+// `cells` whose centres are closer than kCubicRadiusCells.
+template <typename Visit>
+void for_each_cubic_cell(const vec3& cells, const ivec3& dims, Visit&& visit) {
+    constexpr float r2 = kCubicRadiusCells * kCubicRadiusCells;
+    const ivec3 centre(glm::floor(cells));
+    const ivec3 lo = glm::max(centre - 1, ivec3(0)), hi = glm::min(centre + 1, dims - 1);
+    for (int z = lo.z; z <= hi.z; ++z) {
+        const float dz = cells.z - (float(z) + 0.5f);
+        for (int y = lo.y; y <= hi.y; ++y) {
+            const float dy = cells.y - (float(y) + 0.5f);
+            const float dyz2 = dy * dy + dz * dz;
+            const size_t row = size_t(dims.x) * (size_t(y) + size_t(dims.y) * size_t(z));
+            for (int x = lo.x; x <= hi.x; ++x) {
+                const float dx = cells.x - (float(x) + 0.5f);
+                const float d2 = dx * dx + dyz2;
+                if (d2 < r2) visit(row + size_t(x), cubic_weight(std::sqrt(d2)));
+            }
+        }
+    }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+ShLattice::ShLattice(const Bounds3& bounds, int resolution, int order) : order_(order) {
+    if (resolution < 1 || resolution > kMaxResolution)
+        throw InvalidArgument(format_message(kClassName, ": resolution = ", resolution,
+                                             " must be in [1, ", kMaxResolution, "]"));
+    if (order < 1 || order > 2)
+        throw InvalidArgument(format_message(kClassName, ": order = ", order,
+                                             " must be 1 (L1, 4 coefficients) or 2 (L2, 9)"));
+    if (bounds.empty())
+        throw InvalidArgument(format_message(kClassName, ": bounds are empty (lower ",
+                                             glm::to_string(bounds.lower), " exceeds upper ",
+                                             glm::to_string(bounds.upper), ")"));
+    if (!is_finite(bounds.lower) || !is_finite(bounds.upper) || !is_finite(bounds.extent()))
+        throw InvalidArgument(format_message(kClassName, ": bounds ", glm::to_string(bounds.lower),
+                                             " to ", glm::to_string(bounds.upper),
+                                             " are not finite"));
+    // Cell size from the longest side grown by the margin; per axis, just enough cells to hold
+    // the extent (an extent of exactly k cells gets k, not k + 1 for its margin); then the cells
+    // grow by the tiny amount that gives every axis the margin, and the grid is centred.
+    const vec3 extent = bounds.extent();
+    const double longest = glm::compMax(extent);
+    const double margin =
+        std::max(double(kBoundsMarginFraction) * longest, double(kMinBoundsMargin));
+    const double base_cell_size = (longest + 2.0 * margin) / resolution;
+    double cell_size = base_cell_size;
+    uint64_t cells = 1;
+    for (int a = 0; a < 3; ++a) {
+        const double count = std::ceil(double(extent[a]) / base_cell_size - kCellCountSlack);
+        dims_[a] = std::max(1, int(count));
+        cell_size = std::max(cell_size, (double(extent[a]) + 2.0 * margin) / dims_[a]);
+        cells *= uint64_t(dims_[a]);
+    }
+    cell_size_ = float(cell_size);
+    const glm::dvec3 centre = 0.5 * (glm::dvec3(bounds.lower) + glm::dvec3(bounds.upper));
+    origin_ = vec3(centre - 0.5 * cell_size * glm::dvec3(dims_));
+    if (cells > kMaxCells)
+        throw InvalidArgument(format_message(
+            kClassName, ": resolution = ", resolution, " over bounds of extent ",
+            glm::to_string(extent), " gives ", dims_.x, " x ", dims_.y, " x ", dims_.z, " = ",
+            cells, " cells, more than ", kMaxCells, "; lower the resolution"));
+    coeffs_.assign(cells * size_t(num_coefficients()) * 3, 0.0f);
+    surface_index_.assign(cells, kNoSurface);
+}
+
+ivec3 ShLattice::cell_of(const vec3& p) const {
+    const ivec3 outside(-1);
+    if (!is_finite(p)) return outside;
+    const vec3 f = (p - origin_) / cell_size_;
+    if (glm::any(glm::lessThan(f, vec3(0.0f))) || glm::any(glm::greaterThanEqual(f, vec3(dims_))))
+        return outside;
+    return ivec3(glm::floor(f));
+}
+
+void ShLattice::check_cell(size_t cell, const char* what) const {
+    if (cell >= cell_count())
+        throw InvalidArgument(format_message(kClassName, "::", what, ": cell = ", cell,
+                                             " but the lattice has ", cell_count(), " cells"));
+}
+
+float ShLattice::surface_area(size_t cell) const {
+    check_cell(cell, "surface_area");
+    return cell_area(cell);
+}
+
+float ShLattice::projected_area(size_t cell, const vec3& dir) const {
+    check_cell(cell, "projected_area");
+    const CellSurface* surface = cell_surface(cell);
+    return surface ? surface->projected_area(dir) : 0.0f;
+}
+
+// Triangles are clipped in parallel chunks; each chunk lists its fragments in triangle order and
+// the chunks are merged in chunk order, so the float sums do not depend on the thread count.
+// Chunks are processed in batches to bound the fragments held at once.
+void ShLattice::measure_surfaces(const Scene& scene, Progress* progress) {
+    if (!scene.committed())
+        throw InvalidArgument(format_message(kClassName, "::measure_surfaces: the scene was edited "
+                                             "or never committed; call commit() first"));
+    const InstancedTriangles triangles(scene);
+    const uint64_t total = cell_count() == 0 ? 0 : triangles.count();  // default-constructed
+    const uint64_t chunk_count = (total + kTrianglesPerChunk - 1) / kTrianglesPerChunk;
+    std::vector<uint32_t> surface_index(cell_count(), kNoSurface);
+    std::vector<BinSums> sums;  // per cell with surface, in order of its first fragment
+    std::vector<std::vector<SurfaceFragment>> fragments(std::min(chunk_count, kChunksPerBatch));
+    std::atomic<uint64_t> done{0};
+
+    for (uint64_t batch = 0; batch < chunk_count; batch += kChunksPerBatch) {
+        const uint64_t batch_end = std::min(chunk_count, batch + kChunksPerBatch);
+        parallel_for(batch, batch_end, 1, [&](uint64_t begin, uint64_t end) {
+            throw_if_cancelled(progress);
+            for (uint64_t chunk = begin; chunk < end; ++chunk) {
+                const uint64_t first = chunk * kTrianglesPerChunk;
+                const uint64_t last = std::min(total, first + kTrianglesPerChunk);
+                clip_triangles(triangles, first, last, *this, fragments[chunk - batch]);
+                if (progress) progress->report(done += last - first, total);
+            }
+        });
+        for (uint64_t chunk = batch; chunk < batch_end; ++chunk) {
+            for (const SurfaceFragment& fragment : fragments[chunk - batch]) {
+                uint32_t& index = surface_index[fragment.cell];
+                if (index == kNoSurface) {
+                    index = uint32_t(sums.size());
+                    sums.emplace_back();
+                }
+                sums[index].add(fragment);
+            }
+        }
+    }
+    std::vector<CellSurface> surfaces(sums.size());
+    for (size_t i = 0; i < sums.size(); ++i) {
+        for (int b = 0; b < 3; ++b) {
+            const float length = glm::length(sums[i].normal[b]);
+            if (length > 0.0f)
+                surfaces[i].projected[b] = sums[i].normal[b] * (sums[i].area[b] / length);
+            surfaces[i].area += sums[i].area[b];
+        }
+    }
+    surface_index_ = std::move(surface_index);
+    surfaces_ = std::move(surfaces);
+    if (progress) progress->set_fraction(1.0f);
+}
+
+// Photons are counting-sorted by cell (stable, so each cell keeps photon order) and each cell
+// sums its photons alone: the result is the same for any thread count.
+uint64_t ShLattice::inject(const std::vector<Photon>& photons, float scale, Progress* progress) {
+    if (!std::isfinite(scale))
+        throw InvalidArgument(format_message(kClassName, "::inject: scale = ", scale,
+                                             " must be finite"));
+    if (photons.size() >= kNoCell)
+        throw InvalidArgument(format_message(kClassName, "::inject: ", photons.size(),
+                                             " photons in one call; pass fewer than ", kNoCell));
+    throw_if_cancelled(progress);
+    const size_t cells = cell_count();
+    std::vector<uint32_t> photon_cell(photons.size());
+    parallel_for(0, photons.size(), kPhotonsPerChunk, [&](uint64_t begin, uint64_t end) {
+        for (uint64_t i = begin; i < end; ++i) {
+            const Photon& photon = photons[i];
+            const ivec3 cell = cell_of(photon.position);
+            photon_cell[i] = kNoCell;
+            if (cell.x < 0 || !is_finite(photon.power) || !is_finite(photon.direction)) continue;
+            const size_t index = cell_index(cell);
+            if (cell_surface(index)) photon_cell[i] = uint32_t(index);
+        }
+    });
+
+    const PhotonsByCell sorted = sort_by_cell(photon_cell, cells);
+    photon_cell = {};
+
+    const int n_coeffs = num_coefficients();
+    parallel_for(
+        0, cells, kCellsPerChunk,
+        [&](uint64_t begin, uint64_t end) {
+            for (uint64_t cell = begin; cell < end; ++cell) {
+                if (sorted.start[cell] == sorted.start[cell + 1]) continue;
+                const CellSurface& surface = *cell_surface(cell);
+                const float min_projected = kMinProjectedFraction * surface.area;
+                std::array<double, kMaxCoefficients> sum{};
+                for (uint32_t k = sorted.start[cell]; k < sorted.start[cell + 1]; ++k) {
+                    const Photon& photon = photons[sorted.order[k]];
+                    const float projected =
+                        std::max(surface.projected_area(photon.direction), min_projected);
+                    const vec3 weighted = (scale / projected) * photon.power;
+                    float basis[kMaxShCoefficients];
+                    sh_eval(order_, photon.direction, basis);
+                    for (int i = 0; i < n_coeffs; ++i)
+                        for (int c = 0; c < 3; ++c)
+                            sum[3 * i + c] += double(weighted[c]) * double(basis[i]);
+                }
+                float* out = coeffs_.data() + cell * size_t(n_coeffs) * 3;
+                for (int i = 0; i < 3 * n_coeffs; ++i) out[i] += float(sum[i]);
+            }
+        },
+        progress);
+    return sorted.order.size();
+}
+
+void ShLattice::clear() { std::fill(coeffs_.begin(), coeffs_.end(), 0.0f); }
+
+void ShLattice::scale(float factor) {
+    if (!std::isfinite(factor))
+        throw InvalidArgument(format_message(kClassName, "::scale: factor = ", factor,
+                                             " must be finite"));
+    for (float& c : coeffs_) c *= factor;
+}
+
+// One pass: L'(c) = Σ_{n≠c} P_cn L(n) + (1 − Σ_{n≠c} P_cn) L(c), P_cn = A_n min(1/S_c, 1/S_n)
+// (header comment). A_c and 1/S_c do not change between passes and are computed once.
+void ShLattice::blur(int passes) {
+    if (passes < 0)
+        throw InvalidArgument(format_message(kClassName, "::blur: passes = ", passes,
+                                             " must be >= 0"));
+    const size_t cells = cell_count();
+    if (passes == 0 || cells == 0) return;
+    std::vector<float> area(cells), inv_neighbourhood(cells, 0.0f);
+    for (size_t c = 0; c < cells; ++c) area[c] = cell_area(c);
+
+    // Calls body(neighbour index) for the (up to) 27 cells of c's 3x3x3 block, c included.
+    auto for_each_neighbour = [&](size_t c, auto&& body) {
+        const ivec3 cell(int(c % size_t(dims_.x)), int((c / size_t(dims_.x)) % size_t(dims_.y)),
+                         int(c / (size_t(dims_.x) * size_t(dims_.y))));
+        const ivec3 lo = glm::max(cell - 1, ivec3(0)), hi = glm::min(cell + 1, dims_ - 1);
+        for (int z = lo.z; z <= hi.z; ++z)
+            for (int y = lo.y; y <= hi.y; ++y)
+                for (int x = lo.x; x <= hi.x; ++x) body(cell_index(ivec3(x, y, z)));
+    };
+    parallel_for(0, cells, kCellsPerChunk, [&](uint64_t begin, uint64_t end) {
+        for (size_t c = begin; c < end; ++c) {
+            if (area[c] <= 0.0f) continue;
+            float sum = 0.0f;
+            for_each_neighbour(c, [&](size_t n) { sum += area[n]; });
+            inv_neighbourhood[c] = 1.0f / sum;
+        }
+    });
+
+    const size_t stride = size_t(num_coefficients()) * 3;
+    std::vector<float> next(coeffs_.size());
+    for (int pass = 0; pass < passes; ++pass) {
+        parallel_for(0, cells, kCellsPerChunk, [&](uint64_t begin, uint64_t end) {
+            for (size_t c = begin; c < end; ++c) {
+                float* out = next.data() + c * stride;
+                std::fill(out, out + stride, 0.0f);
+                if (area[c] <= 0.0f) continue;  // cells without surface stay empty
+                // In double: P_cc = 1 − Σ P_cn cancels most of its digits.
+                double others = 0.0;
+                for_each_neighbour(c, [&](size_t n) {
+                    if (n == c || area[n] <= 0.0f) return;
+                    const float weight =
+                        area[n] * std::min(inv_neighbourhood[c], inv_neighbourhood[n]);
+                    const float* in = coeffs_.data() + n * stride;
+                    for (size_t i = 0; i < stride; ++i) out[i] += weight * in[i];
+                    others += weight;
+                });
+                const float self = float(1.0 - others);
+                const float* in = coeffs_.data() + c * stride;
+                for (size_t i = 0; i < stride; ++i) out[i] += self * in[i];
+            }
+        });
+        coeffs_.swap(next);
+    }
+}
+
+ShRgb ShLattice::cell_radiance(size_t cell) const {
+    check_cell(cell, "cell_radiance");
+    ShRgb radiance(order_);
+    std::copy_n(cell_coefficients(cell), num_coefficients() * 3, radiance.data());
+    return radiance;
+}
+
+void ShLattice::set_cell_radiance(size_t cell, const ShRgb& radiance) {
+    check_cell(cell, "set_cell_radiance");
+    if (radiance.order != order_)
+        throw InvalidArgument(format_message(kClassName, "::set_cell_radiance: radiance.order = ",
+                                             radiance.order, " but the lattice has order ",
+                                             order_));
+    const size_t stride = size_t(num_coefficients()) * 3;
+    std::copy_n(radiance.data(), stride, coeffs_.data() + cell * stride);
+}
+
+template <typename ForEachCell>
+ShRgb ShLattice::blend(const vec3& n, ForEachCell&& for_each_cell) const {
+    const auto density = [&](size_t cell) {
+        const CellSurface* surface = cell_surface(cell);
+        return surface ? surface->projected_area(n) : 0.0f;
+    };
+    if (order_ == 1)
+        return blend_cells<4 * 3>(order_, coeffs_.data(), for_each_cell, density);
+    return blend_cells<9 * 3>(order_, coeffs_.data(), for_each_cell, density);
+}
+
+ShRgb ShLattice::sample_trilinear(const vec3& p, const vec3& n, float normal_offset) const {
+    vec3 cells(0.0f);
+    const bool finite = sample_coordinates(p, n, normal_offset, origin_, cell_size_, dims_, cells);
+    return blend(n, [&](auto&& visit) {
+        if (finite) for_each_trilinear_cell(cells, dims_, visit);
+    });
+}
+
+ShRgb ShLattice::sample_cubic(const vec3& p, const vec3& n, float normal_offset) const {
+    vec3 cells(0.0f);
+    const bool finite = sample_coordinates(p, n, normal_offset, origin_, cell_size_, dims_, cells);
+    return blend(n, [&](auto&& visit) {
+        if (finite) for_each_cubic_cell(cells, dims_, visit);
+    });
+}
+
+size_t ShLattice::memory_bytes() const {
+    return sizeof(*this) + coeffs_.capacity() * sizeof(float) +
+           surface_index_.capacity() * sizeof(uint32_t) +
+           surfaces_.capacity() * sizeof(CellSurface);
+}
+
+}  // namespace shgi

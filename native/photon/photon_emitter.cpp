@@ -1,0 +1,169 @@
+#include "photon/photon_emitter.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "render/light_sampler.h"
+#include "render/shading.h"
+#include "util/error.h"
+
+namespace shgi {
+namespace {
+
+// Sun and world disks sit this many bounding radii from the centre: clear of the sphere (and of
+// geometry touching it) by a full radius, so no rounding puts an origin inside the scene.
+constexpr float kDiskDistanceInRadii = 2.0f;
+
+// Moments of the smoothstep S(t) = 3t^2 - 2t^3 on [0, 1]: integral of S and of t S.
+constexpr float kSmoothstepMean = 0.5f;
+constexpr float kSmoothstepFirstMoment = 7.0f / 20.0f;
+
+// Largest float below 1: a stratified u must stay in [0, 1) after rounding to float.
+constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
+
+vec3 light_power(const Light& light, float bounding_radius) {
+    const float disk_area = kPi * bounding_radius * bounding_radius;
+    switch (light.type) {
+        case LightType::Point: return light.color * light.power;
+        case LightType::Spot: return spot_light_power(light);
+        case LightType::Sun: return light.color * (light.strength * disk_area);
+        case LightType::Area:
+            // Radiance P / (4A) over the area A, Lambertian one-sided: pi L A.
+            return light.color * (kPi * light.power / 4.0f);
+    }
+    return vec3(0.0f);
+}
+
+}  // namespace
+
+vec3 spot_light_power(const Light& light) {
+    // Integral over the cone of cos(a) x smoothstep((cos(a) - cos_half) / smooth), in c = cos(a):
+    // 2 pi [ smooth (cos_half S0 + smooth S1) + (1 - (cos_half + smooth)^2) / 2 ].
+    const float cos_half = std::cos(0.5f * light.spot_size);
+    const float smooth = (1.0f - cos_half) * light.spot_blend;
+    const float edge = cos_half + smooth;
+    const float cosine_integral =
+        kTwoPi * (smooth * (cos_half * kSmoothstepMean + smooth * kSmoothstepFirstMoment) +
+                  0.5f * (1.0f - edge * edge));
+    return light.color * (point_intensity_from_power(light.power) * cosine_integral);
+}
+
+PhotonEmitter::PhotonEmitter(const Scene& scene) : scene_(&scene) {
+    if (!scene.committed())
+        throw InvalidArgument("PhotonEmitter: the scene is not committed; call commit() first");
+    if (!scene.empty()) {
+        const Bounds3 bounds = scene.bounds();
+        bounding_center_ = 0.5f * (bounds.lower + bounds.upper);
+        bounding_radius_ = 0.5f * glm::length(bounds.extent());
+    }
+    std::vector<float> weights;
+    auto add = [&](Kind kind, uint32_t index, const vec3& power) {
+        const float weight = luminance(power);
+        if (!(weight > 0.0f)) return;  // zero flux (or an empty scene's sun and world)
+        emitters_.push_back({kind, index, power});
+        weights.push_back(weight);
+        total_power_ += power;
+    };
+    for (uint32_t i = 0; i < scene.lights().size(); ++i)
+        add(Kind::Light, i, light_power(scene.lights()[i], bounding_radius_));
+    const auto& triangles = scene.emissive_triangles();
+    for (uint32_t i = 0; i < triangles.size(); ++i)
+        add(Kind::Triangle, i, triangles[i].radiance * (kTwoPi * triangles[i].area));
+    const float disk_area = kPi * bounding_radius_ * bounding_radius_;
+    add(Kind::World, 0, scene.world().radiance() * (kFourPi * disk_area));
+    if (!weights.empty()) distribution_ = DiscreteDistribution(weights);
+}
+
+bool PhotonEmitter::emit(uint64_t index, uint64_t count, Pcg32& rng, EmittedPhoton* out) const {
+    if (empty()) return false;
+    const double stratum = (double(index) + double(rng.next_float())) / double(count);
+    const float u_select = std::min(float(stratum), kOneMinusEpsilon);
+    const uint32_t chosen = distribution_.sample(u_select);
+    if (!sample_emitter(emitters_[chosen], rng, out)) return false;
+    out->power /= float(double(count) * double(distribution_.pdf(chosen)));
+    return is_finite(out->power) && max_component(out->power) > 0.0f;
+}
+
+bool PhotonEmitter::sample_emitter(const Emitter& emitter, Pcg32& rng, EmittedPhoton* out) const {
+    *out = EmittedPhoton{};
+    switch (emitter.kind) {
+        case Kind::Light:
+            sample_light(scene_->lights()[emitter.index], emitter.power, rng, out);
+            break;
+        case Kind::Triangle:
+            sample_triangle(scene_->emissive_triangles()[emitter.index], emitter.power, rng, out);
+            break;
+        case Kind::World: {
+            const vec3 direction = sample_uniform_sphere(rng.next_vec2());
+            out->ray = ray_through_bounding_disk(direction, rng.next_vec2());
+            out->power = emitter.power;
+            out->from_world = true;
+            break;
+        }
+    }
+    return max_component(out->power) > 0.0f;
+}
+
+void PhotonEmitter::sample_light(const Light& light, const vec3& power, Pcg32& rng,
+                                 EmittedPhoton* out) const {
+    const vec3 axis = light.direction();
+    const Frame frame = Frame::from_z(axis);
+    const vec2 u = rng.next_vec2();
+    out->power = power;
+    switch (light.type) {
+        case LightType::Point:
+            out->ray.origin = light.position();
+            out->ray.direction = sample_uniform_sphere(u);
+            break;
+        case LightType::Spot: {
+            // Uniform in the cone: the sample's flux estimate is I(w) / pdf(w), I the spot's
+            // attenuated intensity.
+            const float cos_half = std::cos(0.5f * light.spot_size);
+            const vec3 local = sample_uniform_cone(u, cos_half);
+            out->ray.origin = light.position();
+            out->ray.direction = frame.to_world(local);
+            out->power = light.color * (point_intensity_from_power(light.power) *
+                                        spot_attenuation(light, local.z) /
+                                        sample_uniform_cone_pdf(cos_half));
+            break;
+        }
+        case LightType::Sun: {
+            const float cos_max = light.angle > 0.0f ? std::cos(0.5f * light.angle) : 1.0f;
+            const vec3 direction =
+                light.angle > 0.0f ? frame.to_world(sample_uniform_cone(u, cos_max)) : axis;
+            out->ray = ray_through_bounding_disk(direction, rng.next_vec2());
+            break;
+        }
+        case LightType::Area: {
+            vec3 ex, ey;
+            area_half_axes(light, &ex, &ey);
+            const vec2 local = is_round(light.shape) ? sample_uniform_disk(u) : 2.0f * u - 1.0f;
+            out->ray.origin = light.position() + local.x * ex + local.y * ey;
+            out->ray.direction = frame.to_world(sample_cosine_hemisphere(rng.next_vec2()));
+            break;
+        }
+    }
+}
+
+void PhotonEmitter::sample_triangle(const EmissiveTriangle& triangle, const vec3& power,
+                                    Pcg32& rng, EmittedPhoton* out) const {
+    const vec3 b = sample_uniform_triangle(rng.next_vec2());
+    const vec3 position = b.x * triangle.p0 + b.y * triangle.p1 + b.z * triangle.p2;
+    vec3 normal = glm::normalize(glm::cross(triangle.p1 - triangle.p0, triangle.p2 - triangle.p0));
+    if (rng.next_float() < 0.5f) normal = -normal;  // two-sided: each side emits half
+    out->ray.origin = offset_origin(position, normal);  // off its own triangle
+    out->ray.direction = Frame::from_z(normal).to_world(sample_cosine_hemisphere(rng.next_vec2()));
+    out->power = power;
+}
+
+Ray PhotonEmitter::ray_through_bounding_disk(const vec3& direction, const vec2& u) const {
+    const Frame frame = Frame::from_z(direction);
+    const vec2 d = sample_uniform_disk(u) * bounding_radius_;
+    Ray ray;
+    ray.origin = bounding_center_ - direction * (kDiskDistanceInRadii * bounding_radius_) +
+                 d.x * frame.x + d.y * frame.y;
+    ray.direction = direction;
+    return ray;
+}
+
+}  // namespace shgi

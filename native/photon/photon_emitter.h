@@ -1,0 +1,86 @@
+// PhotonEmitter: where photons start. Every emitter of a Scene (lights, emissive triangles, the
+// world) with its exact flux in Cycles' units (render/light_sampler.h), chosen per photon in
+// proportion to that flux (seed 000 §5.1), and a sampler of one photon's ray and power.
+//
+// Flux of each emitter (linear RGB, W) and how a photon leaves it:
+//   point   colour x P; from the light's position, uniform over the sphere (radius ignored)
+//   spot    colour x P/(4 pi) x integral of spot_attenuation over the cone; uniform in the cone,
+//           each photon weighted by the attenuation in its direction
+//   sun     colour x S x pi R^2; direction uniform in the sun's cone (its axis when angle = 0),
+//           origin uniform on a disk of radius R perpendicular to that direction, outside the
+//           scene's bounding sphere (centre c, radius R). A disk per direction covers the whole
+//           sphere for every direction, and a surface facing the sun receives S (1 + cos)/2 as
+//           Cycles' (the mean cosine over the cone)
+//   area    colour x P/(4A) x pi A; uniform point on the rectangle or ellipse, cosine-weighted
+//           around the light's -Z (one-sided)
+//   emissive triangle  2 pi Le A; uniform point, either side with probability 1/2, cosine
+//           weighted around that side's normal
+//   world   Lw x 4 pi x pi R^2; direction uniform over the sphere, origin on a disk of radius R
+//           perpendicular to it outside the bounding sphere
+// Emitters with zero flux are left out; an empty scene has no bounding sphere, so its sun and
+// world emit nothing.
+//
+// Photon i of N picks its emitter with u = (i + xi) / N through the flux distribution (stratified)
+// and carries power = flux estimate of its sample / (N x selection probability): the N photons'
+// powers sum to an unbiased estimate of total_power().
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "scene/scene.h"
+#include "util/math.h"
+#include "util/rng.h"
+#include "util/sampling.h"
+
+namespace shgi {
+
+struct EmittedPhoton {
+    Ray ray;             // unit direction, starting on (or just off) the emitter
+    vec3 power{0.0f};    // W
+    bool from_world = false;
+};
+
+class PhotonEmitter {
+  public:
+    // The scene must be committed (InvalidArgument otherwise).
+    explicit PhotonEmitter(const Scene& scene);
+
+    bool empty() const { return emitters_.empty(); }
+    // Exact sum of the emitters' flux (W).
+    vec3 total_power() const { return total_power_; }
+
+    // Photon `index` of `count` (index < count), its random numbers drawn from `rng`. False when
+    // the sample carries no power (a spot photon at the cone's edge) or there is no emitter.
+    bool emit(uint64_t index, uint64_t count, Pcg32& rng, EmittedPhoton* out) const;
+
+  private:
+    enum class Kind : uint8_t { Light, Triangle, World };
+    struct Emitter {
+        Kind kind;
+        uint32_t index;  // into scene lights / emissive triangles
+        vec3 power;      // flux, W
+    };
+
+    // A sample of one emitter: ray and an unbiased estimate of that emitter's whole flux.
+    bool sample_emitter(const Emitter& emitter, Pcg32& rng, EmittedPhoton* out) const;
+    void sample_light(const Light& light, const vec3& power, Pcg32& rng,
+                      EmittedPhoton* out) const;
+    void sample_triangle(const EmissiveTriangle& triangle, const vec3& power, Pcg32& rng,
+                         EmittedPhoton* out) const;
+    // A ray along `direction` from a uniform point of the disk of radius R perpendicular to
+    // it, outside the bounding sphere.
+    Ray ray_through_bounding_disk(const vec3& direction, const vec2& u) const;
+
+    const Scene* scene_;
+    vec3 bounding_center_{0.0f};
+    float bounding_radius_ = 0.0f;  // m; 0 for an empty scene
+    std::vector<Emitter> emitters_;
+    DiscreteDistribution distribution_;
+    vec3 total_power_{0.0f};
+};
+
+// Flux (W) of a spot light: colour x P/(4 pi) x the integral of spot_attenuation over its cone.
+vec3 spot_light_power(const Light& light);
+
+}  // namespace shgi

@@ -1,0 +1,58 @@
+// IndirectField: what every solver produces and every consumer (preview renderer, baker) reads —
+// indirect incident light at a surface point, independent of how it was solved (DESIGN.md,
+// "Data flow").
+//
+// Units: radiance in W m^-2 sr^-1, irradiance in W m^-2. A field carries only indirect light
+// (light that scattered at least once after leaving an emitter); consumers add direct light
+// exactly with shadow rays. Queries are const and thread-safe.
+//
+// lookup() returns the SH at (p, n) plus any irradiance the SH does not carry (a photon map's
+// density estimate of caustics); renderers call it once per shading point and derive both
+// answers from it: irradiance = max(0, clamped-cosine convolution of the SH) (sh/sh_irradiance.h)
+// + the extra irradiance; glossy = the split-sum pre-filtered radiance of the fitted GGX ZH lobe
+// in the reflected direction (seed 002 §4.2.2 and Appendix A, sh/ggx_zh.h), which the consumer
+// multiplies by the lobe's directional albedo.
+#pragma once
+
+#include "sh/sh_coeffs.h"
+#include "util/math.h"
+
+namespace shgi {
+
+struct FieldLookup {
+    ShRgb radiance;                  // incident radiance SH, W m^-2 sr^-1
+    vec3 extra_irradiance{0.0f};     // W m^-2 not represented in `radiance`
+
+    // E(n), >= 0.
+    vec3 irradiance(const vec3& n) const;
+    // Pre-filtered radiance leaving towards wo (unit, on n's side) for a GGX lobe, >= 0.
+    vec3 glossy(const vec3& n, const vec3& wo, float roughness) const;
+};
+
+class IndirectField {
+  public:
+    virtual ~IndirectField() = default;
+
+    // Incident indirect radiance around p as SH (order of the field), for a surface with unit
+    // normal n (fields use n to pick the samples that belong to that surface).
+    virtual ShRgb radiance_sh(const vec3& p, const vec3& n) const = 0;
+    // Everything a shading point needs; the default has no extra irradiance.
+    virtual FieldLookup lookup(const vec3& p, const vec3& n) const;
+
+    // True when the field also carries the world's direct light (photons from the world stored
+    // at their first hit): consumers then leave the world out of next-event estimation.
+    virtual bool includes_world_direct() const { return false; }
+
+    vec3 irradiance(const vec3& p, const vec3& n) const { return lookup(p, n).irradiance(n); }
+    vec3 glossy(const vec3& p, const vec3& n, const vec3& wo, float roughness) const {
+        return lookup(p, n).glossy(n, wo, roughness);
+    }
+};
+
+// No indirect light: what the preview renderer uses when it is given no field.
+class ZeroField : public IndirectField {
+  public:
+    ShRgb radiance_sh(const vec3&, const vec3&) const override { return ShRgb(1); }
+};
+
+}  // namespace shgi

@@ -1,0 +1,212 @@
+#include "render/path_integrator.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace shgi {
+namespace {
+
+float power_heuristic(float pdf_a, float pdf_b) {
+    const float a2 = pdf_a * pdf_a;
+    const float sum = a2 + pdf_b * pdf_b;
+    return sum > 0.0f ? a2 / sum : 0.0f;
+}
+
+const Pass kDirectPass[kLobeClassCount] = {Pass::DiffDir, Pass::GlossDir, Pass::TransDir};
+const Pass kIndirectPass[kLobeClassCount] = {Pass::DiffInd, Pass::GlossInd, Pass::TransInd};
+const Pass kColorPass[kLobeClassCount] = {Pass::DiffCol, Pass::GlossCol, Pass::TransCol};
+
+// Adds the seconds from construction to destruction to a clock field (no-op without a clock).
+class ScopedTimer {
+  public:
+    explicit ScopedTimer(double* total)
+        : total_(total), start_(total ? std::chrono::steady_clock::now()
+                                      : std::chrono::steady_clock::time_point{}) {}
+    ~ScopedTimer() {
+        if (total_ != nullptr)
+            *total_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_)
+                           .count();
+    }
+    ScopedTimer(const ScopedTimer&) = delete;
+    ScopedTimer& operator=(const ScopedTimer&) = delete;
+
+  private:
+    double* total_;
+    std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace
+
+void PathIntegrator::trace(const Ray& ray) { trace(ray, scene_.intersect(ray)); }
+
+void PathIntegrator::trace(const Ray& camera_ray, const Hit& first_hit) {
+    Ray ray = camera_ray;
+    Hit hit = first_hit;
+    bool terminate_on_next_surface = false;
+    for (;;) {
+        find_emission(ray, hit);
+        if (!hit.valid() || terminate_on_next_surface) break;
+        const SurfacePoint sp = scene_.surface_point(ray, hit);
+        const Shading shading = make_shading(scene_, sp, ray.direction);
+        if (vertex_ == 0) record_first_hit(shading, ray, hit);
+        if (shading.bsdf.has_smooth_lobes()) sample_direct(shading);
+        if (field_ != nullptr) add_field(shading);
+        if (!scatter(shading, &ray)) break;
+        const int total = bounces_[0] + bounces_[1] + bounces_[2];
+        terminate_on_next_surface = total > settings_.max_bounces ||
+                                    bounces_[0] > settings_.diffuse_bounces ||
+                                    bounces_[1] > settings_.glossy_bounces ||
+                                    bounces_[2] > settings_.transmission_bounces;
+        if (vertex_ >= settings_.russian_roulette_depth && !terminate_on_next_surface) {
+            const float survive = std::min(1.0f, max_component(throughput_));
+            if (rng_.next_float() >= survive) break;
+            throughput_ /= survive;
+        }
+        hit = scene_.intersect(ray);
+    }
+}
+
+// Adds what the ray meets: point/spot disks and area lights in front of the hit, the hit's own
+// emission, or the world and suns when it escapes.
+void PathIntegrator::find_emission(const Ray& ray, const Hit& hit) {
+    EmissionHit light_hit;
+    const bool camera_ray = vertex_ == 0;
+    if (lights_.intersect_lights(ray.origin, ray.direction, hit.valid() ? hit.t : kInfinity,
+                                 camera_ray, &light_hit)) {
+        add_emission(light_hit.radiance, light_hit.light_pdf, false);
+    } else if (hit.valid()) {
+        const EmissionHit surface = lights_.triangle_emission(hit, ray.direction);
+        if (max_component(surface.radiance) > 0.0f)
+            add_emission(surface.radiance, surface.light_pdf, false);
+    } else {
+        for (const EmissionHit& escaped : lights_.escaped(last_normal_, ray.direction, camera_ray))
+            add_emission(escaped.radiance, escaped.light_pdf, true);
+    }
+}
+
+void PathIntegrator::add_emission(const vec3& radiance, float light_pdf, bool is_world) {
+    const float weight = last_delta_ ? 1.0f : power_heuristic(last_pdf_, light_pdf);
+    const vec3 contribution = throughput_ * radiance * weight;
+    if (vertex_ == 0) {
+        out_[is_world ? Pass::Env : Pass::Emit] += contribution;
+        out_[Pass::Combined] += contribution;
+        return;
+    }
+    add_split(contribution, vertex_ == 1);
+}
+
+// A contribution reaching the camera through the first scattering: split by the class
+// fractions of that scattering into Dir (one scattering) or Ind passes.
+void PathIntegrator::add_split(const vec3& contribution, bool direct) {
+    for (int c = 0; c < kLobeClassCount; ++c)
+        if (class_fraction_[c] > 0.0f) add_light(contribution * class_fraction_[c], c, direct);
+}
+
+void PathIntegrator::add_light(const vec3& contribution, int lobe_class, bool direct) {
+    vec3 value = contribution;
+    if (!direct && settings_.clamp_indirect > 0.0f) {
+        const float peak = max_component(value);
+        if (peak > settings_.clamp_indirect) value *= settings_.clamp_indirect / peak;
+    }
+    if (!is_finite(value)) return;
+    out_[direct ? kDirectPass[lobe_class] : kIndirectPass[lobe_class]] += value;
+    out_[Pass::Combined] += value;
+}
+
+void PathIntegrator::record_first_hit(const Shading& shading, const Ray& ray, const Hit& hit) {
+    for (int c = 0; c < kLobeClassCount; ++c)
+        out_[kColorPass[c]] += shading.bsdf.class_color(LobeClass(c));
+    out_[Pass::Normal] += shading.frame.z;
+    const Camera& camera = scene_.camera();
+    const vec3 forward = glm::normalize(-vec3(camera.world_from_camera[2]));
+    const vec3 position = ray.origin + hit.t * ray.direction;
+    out_[Pass::Depth].x += glm::dot(position - vec3(camera.world_from_camera[3]), forward);
+}
+
+// Next-event estimation at one surface, MIS-weighted against BSDF sampling.
+void PathIntegrator::sample_direct(const Shading& shading) {
+    ScopedTimer timer(clock_ != nullptr ? &clock_->direct : nullptr);
+    LightSample ls;
+    const float u_select = rng_.next_float();
+    const vec2 u = rng_.next_vec2();
+    if (!lights_.sample(shading.position, shading.frame.z, u_select, u, &ls)) return;
+    const vec3 wi = shading.frame.to_local(ls.wi);
+    const bool geometric_above = glm::dot(ls.wi, shading.geometric_normal) > 0.0f;
+    if (geometric_above != (wi.z > 0.0f)) return;  // shading and geometric normals disagree
+    const BsdfEval eval = field_ != nullptr ? shading.bsdf.eval_field(shading.wo, wi)
+                                            : shading.bsdf.eval(shading.wo, wi);
+    if (max_component(eval.total()) <= 0.0f) return;
+    Ray shadow;
+    shadow.origin = offset_origin(shading.position,
+                                  geometric_above ? shading.geometric_normal
+                                                  : -shading.geometric_normal);
+    shadow.direction = ls.wi;
+    shadow.tmax = std::isinf(ls.distance) ? kInfinity : ls.distance * (1.0f - kShadowShorten);
+    if (scene_.occluded(shadow)) return;
+    const bool mis = !ls.delta && field_ == nullptr;
+    const float weight = mis ? power_heuristic(ls.pdf, shading.bsdf.pdf(shading.wo, wi)) : 1.0f;
+    const vec3 scale = throughput_ * ls.radiance * (weight / ls.pdf);
+    if (vertex_ == 0) {  // direct light at the first surface, split by the lobes it lit
+        for (int c = 0; c < kLobeClassCount; ++c) add_light(eval.by_class[c] * scale, c, true);
+        return;
+    }
+    add_split(eval.total() * scale, false);
+}
+
+// Indirect light from the field through the field lobes (see the header).
+void PathIntegrator::add_field(const Shading& shading) {
+    const vec3 n = shading.frame.z;
+    const vec3 diffuse = shading.bsdf.field_diffuse(shading.wo);
+    PrincipledBsdf::GlossyLobe lobes[2];
+    const int count = shading.bsdf.field_glossy_lobes(shading.wo, lobes);
+    if (max_component(diffuse) <= 0.0f && count == 0) return;
+    const FieldLookup field = field_->lookup(shading.position, n);
+    vec3 by_class[2] = {diffuse * field.irradiance(n) * kInvPi, vec3(0.0f)};
+    if (count > 0) {
+        const vec3 wo = shading.frame.to_world(shading.wo);
+        for (int i = 0; i < count; ++i)
+            by_class[1] += lobes[i].albedo * field.glossy(n, wo, lobes[i].roughness);
+    }
+    if (vertex_ == 0) {
+        for (int c = 0; c < 2; ++c) add_light(throughput_ * by_class[c], c, false);
+        return;
+    }
+    add_split(throughput_ * (by_class[0] + by_class[1]), false);
+}
+
+// Samples the BSDF, updates throughput, bounce counts and MIS state; false ends the path.
+bool PathIntegrator::scatter(const Shading& shading, Ray* ray) {
+    BsdfSample bs;
+    const float u_lobe = rng_.next_float();
+    const vec2 u = rng_.next_vec2();
+    const bool sampled = field_ != nullptr ? shading.bsdf.sample_traced(shading.wo, u_lobe, u, &bs)
+                                           : shading.bsdf.sample(shading.wo, u_lobe, u, &bs);
+    if (!sampled) return false;
+    const vec3 wi = shading.frame.to_world(bs.wi);
+    const bool geometric_above = glm::dot(wi, shading.geometric_normal) > 0.0f;
+    if (geometric_above != (bs.wi.z > 0.0f)) return false;
+    if (vertex_ == 0) {
+        // Cycles' pass_diffuse_weight / pass_glossy_weight: the classes' shares of the BSDF.
+        const vec3 total = bs.eval.total();
+        const float sum = total.x + total.y + total.z;
+        for (int c = 0; c < kLobeClassCount; ++c) {
+            const vec3 part = bs.eval.by_class[c];
+            class_fraction_[c] = sum > 0.0f ? (part.x + part.y + part.z) / sum : 0.0f;
+        }
+    }
+    ++bounces_[int(bs.lobe_class)];
+    throughput_ *= bs.weight;
+    last_delta_ = bs.delta || field_ != nullptr;  // a field path's NEE skips traced lobes
+    last_pdf_ = bs.pdf;
+    last_normal_ = shading.frame.z;
+    ++vertex_;
+    ray->origin = offset_origin(shading.position, geometric_above ? shading.geometric_normal
+                                                                  : -shading.geometric_normal);
+    ray->direction = wi;
+    ray->tmin = 0.0f;
+    ray->tmax = kInfinity;
+    return max_component(throughput_) > 0.0f;
+}
+
+}  // namespace shgi

@@ -1,0 +1,142 @@
+// Bindings for native/lattice: the PhotonLattice solver (lattice/photon_lattice.h) and its
+// settings, mirrored field by field with the same names and defaults.
+//
+// A PhotonLattice keeps its Scene alive; solve() releases the GIL and reports progress. It is a
+// shgi.IndirectField, so shgi.render_preview and the PreviewRenderer take it directly.
+#include <pybind11/pybind11.h>
+
+#include "lattice/photon_lattice.h"
+#include "numpy_convert.h"
+#include "scene_use.h"
+#include "struct_fields.h"
+#include "util/progress.h"
+
+namespace py = pybind11;
+
+namespace shgi::python {
+namespace {
+
+py::dict timings_to_dict(const PhotonLatticeTimings& timings) {
+    py::dict out;
+    out["emit_trace"] = timings.emit_trace;
+    out["injection"] = timings.injection;
+    out["blur"] = timings.blur;
+    out["photons_emitted"] = timings.photons_emitted;
+    out["photons_stored"] = timings.photons_stored;
+    out["bounces"] = timings.bounces;
+    return out;
+}
+
+void bind_settings(py::module_& m) {
+    py::enum_<CausticMode>(m, "CausticMode", "Where caustic photons (light → specular+ → diffuse) go.")
+        .value("OFF", CausticMode::Off)
+        .value("LATTICE", CausticMode::Lattice)
+        .value("PHOTON_MAP", CausticMode::PhotonMap);
+    py::enum_<LatticeInterpolation>(m, "LatticeInterpolation", "How lattices are sampled.")
+        .value("TRILINEAR", LatticeInterpolation::Trilinear)
+        .value("CUBIC", LatticeInterpolation::Cubic);
+
+    using S = PhotonLatticeSettings;
+    py::class_<S> cls(m, "PhotonLatticeSettings",
+                      "Settings of the PhotonLattice solver; every field has a default.");
+    cls.def(py::init(&from_kwargs<S>),
+            "PhotonLatticeSettings(**fields), e.g. PhotonLatticeSettings(photons=100000).")
+        .def_property(
+            "photons", [](const S& s) { return s.photons; },
+            [](S& s, int64_t v) {
+                if (v < 1) throw_value_error("photons", "must be >= 1, got " + std::to_string(v));
+                s.photons = uint64_t(v);
+            },
+            "Photons emitted per solve() (200000).")
+        .def_property(
+            "seed", [](const S& s) { return s.seed; },
+            [](S& s, int64_t v) {
+                if (v < 0) throw_value_error("seed", "must be >= 0, got " + std::to_string(v));
+                s.seed = uint64_t(v);
+            },
+            "Random seed (0).")
+        .def_readwrite("max_bounces", &S::max_bounces, "Photon scatterings after emission; 4 matches Cycles' default diffuse bounces (4).")
+        .def_readwrite("specular_roughness", &S::specular_roughness,
+                       "Lobes up to this roughness make caustic paths (0.1).")
+        .def_readwrite("world_in_field", &S::world_in_field,
+                       "The lattices carry the world's direct light; renderers skip the world "
+                       "in next-event estimation; that light then lands in the Ind passes (False).")
+        .def_readwrite("resolution", &S::resolution,
+                       "Global lattice: cells along the bounds' longest side (16).")
+        .def_readwrite("order", &S::order, "Global lattice SH order, 1 or 2 (2).")
+        .def_readwrite("blur_passes", &S::blur_passes, "3x3x3 blurs of the global lattice (0: blurring darkens corners).")
+        .def_readwrite("caustics", &S::caustics, "CausticMode (LATTICE).")
+        .def_readwrite("caustic_resolution", &S::caustic_resolution,
+                       "Caustic lattice: cells along the longest side (64).")
+        .def_readwrite("caustic_order", &S::caustic_order, "Caustic lattice SH order (1).")
+        .def_readwrite("caustic_blur_passes", &S::caustic_blur_passes,
+                       "3x3x3 blurs of the caustic lattice (0).")
+        .def_readwrite("caustic_neighbours", &S::caustic_neighbours,
+                       "Photons per density estimate, PHOTON_MAP mode (50).")
+        .def_readwrite("caustic_radius", &S::caustic_radius,
+                       "Max radius (m) of the density estimate; 0 = 2% of the bounds' diagonal.")
+        .def_readwrite("interpolation", &S::interpolation, "LatticeInterpolation (CUBIC).")
+        .def_readwrite("normal_offset", &S::normal_offset,
+                       "Cells along the normal before sampling, against self-lighting (0.25).")
+        .def_readwrite("use_bounds", &S::use_bounds,
+                       "Use bounds_min/bounds_max instead of the scene's bounds (False).");
+    def_vec3(cls, "bounds_min", &S::bounds_min, "Lower corner (m) when use_bounds.");
+    def_vec3(cls, "bounds_max", &S::bounds_max, "Upper corner (m) when use_bounds.");
+    cls.def("validate", &validate_photon_lattice_settings,
+            "Raises ValueError naming the first invalid field.");
+}
+
+void bind_photon_lattice(py::module_& m) {
+    py::class_<PhotonLattice, IndirectField>(m, "PhotonLattice", R"doc(
+The ISLLPM solver (seed 000): photons traced from the lights, injected into SH lattices.
+
+Interactive: call solve() repeatedly; each call traces `photons` more and the lattices
+average all passes. Non-interactive: one solve() with many photons, then render any camera.
+After editing and re-committing the scene, call reset().)doc")
+        .def(py::init([](const Scene& scene, const PhotonLatticeSettings& settings,
+                         Progress* progress) {
+                 validate_photon_lattice_settings(settings);
+                 SceneUse use(scene, SceneUse::Kind::Query, "PhotonLattice");
+                 py::gil_scoped_release release;
+                 return std::make_unique<PhotonLattice>(scene, settings, progress);
+             }),
+             py::arg("scene"), py::arg("settings") = PhotonLatticeSettings{},
+             py::arg("progress") = py::none(), py::keep_alive<1, 2>(),
+             "Measures the surface inside the lattices' cells (the scene must be committed).")
+        .def(
+            "solve",
+            [](PhotonLattice& lattice, Progress* progress) {
+                SceneUse use(lattice.scene(), SceneUse::Kind::Query, "solve (PhotonLattice)");
+                py::gil_scoped_release release;
+                lattice.solve(progress);
+            },
+            py::arg("progress") = py::none(),
+            "Traces one more pass of photons and rebuilds the lattices (GIL released). Raises "
+            "shgi.Cancelled on cancel, keeping the previous solution.")
+        .def(
+            "reset",
+            [](PhotonLattice& lattice, Progress* progress) {
+                SceneUse use(lattice.scene(), SceneUse::Kind::Query, "reset (PhotonLattice)");
+                py::gil_scoped_release release;
+                lattice.reset(progress);
+            },
+            py::arg("progress") = py::none(),
+            "Forgets every pass and re-measures the (re-committed) scene.")
+        .def_property_readonly("passes", &PhotonLattice::passes, "Solve passes averaged so far.")
+        .def_property_readonly("settings", &PhotonLattice::settings, "A copy of the settings.")
+        .def_property_readonly(
+            "timings", [](const PhotonLattice& l) { return timings_to_dict(l.timings()); },
+            "The last solve: seconds of emit_trace, injection, blur; photons_emitted, "
+            "photons_stored, bounces.")
+        .def_property_readonly("memory_bytes", &PhotonLattice::memory_bytes,
+                               "Bytes held by the lattices and photon map.");
+}
+
+}  // namespace
+
+void bind_lattice(py::module_& m) {
+    bind_settings(m);
+    bind_photon_lattice(m);
+}
+
+}  // namespace shgi::python

@@ -1,0 +1,329 @@
+// trace_photons against closed forms: the flux a furnace stores bounce by bounce (Russian
+// roulette must not bias it), the caustic/global split behind a mirror sphere, determinism across
+// thread counts, cancel and bad settings.
+#include "photon/photon_tracer.h"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <string>
+#include <utility>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "photon/photon_emitter.h"
+#include "render/render_test_scenes.h"
+#include "util/error.h"
+
+namespace shgi {
+namespace {
+
+// Five standard errors: a false failure has probability ~6e-7 per comparison.
+constexpr double kSigmas = 5.0;
+
+double total_power(const std::vector<Photon>& photons) {
+    double sum = 0.0;
+    for (const Photon& photon : photons) sum += photon.power.x;
+    return sum;
+}
+
+Light point_light(const vec3& position, float power) {
+    Light light;
+    light.type = LightType::Point;
+    light.power = power;
+    light.world_from_light = glm::translate(mat4(1.0f), position);
+    return light;
+}
+
+// Closed box [-1, 1]^3 seen from inside, Lambert albedo `albedo`, a point light in it.
+Scene furnace(float albedo, float power) {
+    Scene scene;
+    scene.add_material(test::lambert(albedo));
+    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
+    scene.set_world(test::black_world());
+    scene.add_light(point_light(vec3(0.1f, -0.2f, 0.3f), power));
+    scene.commit();
+    return scene;
+}
+
+// In the furnace every photon carries Phi/N; it is stored after its k-th scattering with
+// probability a^k (k = 1..M), so the stored total is Phi sum a^k and the count K of a photon's
+// stored copies has E[K] = sum a^k, E[K^2] = sum (2k - 1) a^k.
+void expect_furnace_total(float albedo, int max_bounces, uint64_t photons) {
+    const float power = 100.0f;
+    const Scene scene = furnace(albedo, power);
+    PhotonTracerSettings settings;
+    settings.photons = photons;
+    settings.max_bounces = max_bounces;
+    const PhotonMaps maps = trace_photons(scene, settings, 0);
+    double mean = 0.0, mean_square = 0.0;
+    for (int k = 1; k <= max_bounces; ++k) {
+        mean += std::pow(albedo, k);
+        mean_square += (2.0 * k - 1.0) * std::pow(albedo, k);
+    }
+    const double error = power * std::sqrt((mean_square - mean * mean) / double(photons));
+    EXPECT_NEAR(total_power(maps.global), power * mean, kSigmas * error)
+        << "albedo " << albedo << ", max_bounces " << max_bounces;
+    EXPECT_TRUE(maps.caustic.empty()) << "diffuse-only scene stored caustic photons";
+    EXPECT_EQ(maps.emitted, photons);
+    EXPECT_EQ(maps.emitted_power, vec3(power));
+    for (const Photon& photon : maps.global) {
+        // On a wall, its normal facing into the box, arriving from inside.
+        EXPECT_NEAR(std::max({std::fabs(photon.position.x), std::fabs(photon.position.y),
+                              std::fabs(photon.position.z)}),
+                    1.0f, 1e-4f);
+        EXPECT_LT(glm::dot(photon.normal, photon.position), 0.0f);
+        EXPECT_GT(glm::dot(photon.normal, photon.direction), 0.0f);
+        EXPECT_NEAR(glm::length(photon.direction), 1.0f, 1e-5f);
+    }
+}
+
+// Albedo 0.5, no practical bounce limit: Phi (a + a^2 + ...) = Phi a / (1 - a) = Phi.
+TEST(PhotonTracer, FurnaceStoresGeometricSeriesUnderRussianRoulette) {
+    expect_furnace_total(0.5f, 64, 40000);
+}
+
+// The sum truncated by max_bounces: Phi (a + a^2) for M = 2.
+TEST(PhotonTracer, FurnaceTruncatedByMaxBounces) {
+    expect_furnace_total(0.7f, 2, 20000);
+    expect_furnace_total(0.7f, 1, 20000);
+}
+
+TEST(PhotonTracer, BlackSurfacesStoreNothing) {
+    const Scene scene = furnace(0.0f, 10.0f);
+    PhotonTracerSettings settings;
+    settings.photons = 5000;
+    const PhotonMaps maps = trace_photons(scene, settings, 0);
+    EXPECT_TRUE(maps.global.empty());
+    EXPECT_TRUE(maps.caustic.empty());
+    EXPECT_EQ(maps.bounces, settings.photons);  // one ray each, absorbed at the first wall
+    EXPECT_EQ(maps.emitted_power, vec3(10.0f));
+}
+
+// A diffuse floor at z = 0 (albedo 0.5), a metal sphere of radius 0.5 at (0, 0, 1) with the
+// given roughness, and a point light beside it.
+constexpr float kSphereRadius = 0.5f;
+const vec3 kSphereCenter(0.0f, 0.0f, 1.0f);
+const vec3 kLightPosition(1.5f, 0.0f, 1.5f);
+
+Scene sphere_over_floor(float roughness) {
+    Scene scene;
+    scene.add_material(test::lambert(0.5f));
+    Material metal;
+    metal.base_color = vec3(1.0f);
+    metal.metallic = 1.0f;
+    metal.roughness = roughness;
+    const uint32_t metal_id = scene.add_material(metal);
+    scene.add_instance(scene.add_mesh(test::plane(5.0f)), mat4(1.0f), "floor");
+    Mesh sphere = test::uv_sphere(kSphereRadius, 48, 96);
+    sphere.material_indices.assign(sphere.triangles.size(), metal_id);
+    scene.add_instance(scene.add_mesh(sphere), glm::translate(mat4(1.0f), kSphereCenter),
+                       "sphere");
+    scene.set_world(test::black_world());
+    scene.add_light(point_light(kLightPosition, 100.0f));
+    scene.commit();
+    return scene;
+}
+
+constexpr uint32_t kSphereInstance = 1;
+// Below this |cos| to the sphere's normal a retraced ray grazes the sphere (~84 degrees).
+constexpr float kGrazingCos = 0.1f;
+
+// A mirror reflects light to the floor: those photons (L S D) are caustic; photons that reach
+// the floor again after a diffuse bounce and the mirror (L D S D) are global. Both arrive from
+// the sphere, which is checked by tracing back along their `direction`; reflecting that
+// direction in the sphere's shading normal must lead to the light for caustic photons and back
+// down to the floor for global ones.
+TEST(PhotonTracer, MirrorSphereCausticsAndGlobalPhotons) {
+    const Scene scene = sphere_over_floor(0.0f);
+    PhotonTracerSettings settings;
+    settings.photons = 100000;
+    const PhotonMaps maps = trace_photons(scene, settings, 0);
+    ASSERT_GT(maps.caustic.size(), 100u);
+    ASSERT_GT(maps.global.size(), 100u);
+    size_t reflections_checked = 0;
+    auto check = [&](const Photon& photon, bool caustic) {
+        // A Dirac sphere stores nothing: every photon lies on the floor, seen from above.
+        EXPECT_NEAR(photon.position.z, 0.0f, 1e-5f);
+        EXPECT_EQ(photon.normal, vec3(0.0f, 0.0f, 1.0f));
+        EXPECT_GT(photon.direction.z, 0.0f);
+        Ray back;
+        back.origin = photon.position + 1e-4f * photon.normal;
+        back.direction = photon.direction;
+        const Hit hit = scene.intersect(back);
+        ASSERT_TRUE(hit.valid());
+        ASSERT_EQ(hit.instance_id, kSphereInstance);
+        const SurfacePoint sp = scene.surface_point(back, hit);
+        const vec3 n = sp.shading_normal;
+        const vec3 out = -photon.direction;  // the direction it left the sphere in
+        const vec3 in = glm::reflect(out, n);  // reversed: towards where it came from
+        const vec3 from = -in;
+        // Tracing back along a direction that grazes the faceted sphere can land on a
+        // neighbouring facet (another interpolated normal): check the reflection elsewhere.
+        if (std::fabs(glm::dot(n, photon.direction)) < kGrazingCos) return;
+        ++reflections_checked;
+        if (caustic) {
+            EXPECT_GT(glm::dot(from, glm::normalize(kLightPosition - sp.position)), 0.9999f);
+        } else {
+            EXPECT_LT(from.z, 0.0f);  // arrived at the sphere from the floor below
+        }
+    };
+    for (const Photon& photon : maps.caustic) check(photon, true);
+    for (const Photon& photon : maps.global) check(photon, false);
+    EXPECT_GT(reflections_checked, (maps.caustic.size() + maps.global.size()) * 9 / 10);
+}
+
+// Glossy metal of roughness 0.05 counts as specular for specular_roughness 0.1 and as diffuse
+// for 0: the same photons (same RNG streams), only classified differently.
+TEST(PhotonTracer, SpecularRoughnessDecidesCaustics) {
+    const Scene scene = sphere_over_floor(0.05f);
+    PhotonTracerSettings settings;
+    settings.photons = 40000;
+    settings.specular_roughness = 0.1f;
+    const PhotonMaps glossy_caustics = trace_photons(scene, settings, 0);
+    settings.specular_roughness = 0.0f;
+    const PhotonMaps no_caustics = trace_photons(scene, settings, 0);
+    EXPECT_GT(glossy_caustics.caustic.size(), 100u);
+    EXPECT_TRUE(no_caustics.caustic.empty());
+    EXPECT_EQ(no_caustics.global.size(),
+              glossy_caustics.global.size() + glossy_caustics.caustic.size());
+    // The glossy sphere now has a non-Dirac lobe: light reaching it after the floor is stored.
+    size_t on_sphere = 0;
+    for (const Photon& photon : no_caustics.global)
+        if (glm::distance(photon.position, kSphereCenter) < kSphereRadius + 1e-3f) ++on_sphere;
+    EXPECT_GT(on_sphere, 0u);
+}
+
+bool same_photons(const std::vector<Photon>& a, const std::vector<Photon>& b) {
+    if (a.size() != b.size()) return false;
+    for (size_t i = 0; i < a.size(); ++i)
+        if (a[i].position != b[i].position || a[i].power != b[i].power ||
+            a[i].normal != b[i].normal || a[i].direction != b[i].direction)
+            return false;
+    return true;
+}
+
+PhotonMaps trace_with_threads(const Scene& scene, int threads, uint64_t pass) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+    PhotonTracerSettings settings;
+    settings.photons = 2 * 4096 + 123;  // three chunks, the last one partial
+    settings.seed = 11;
+    return trace_photons(scene, settings, pass);
+}
+
+// Every emitter kind and every lobe kind: a closed room with a rough metal and a glass sphere,
+// lit by a point and an area light inside and by the world outside.
+Scene mixed_scene() {
+    Scene scene;
+    scene.add_material(test::lambert(0.6f));
+    Material metal;
+    metal.metallic = 1.0f;
+    metal.roughness = 0.3f;
+    Material glass;
+    glass.transmission = 1.0f;
+    glass.roughness = 0.0f;
+    const uint32_t metal_id = scene.add_material(metal), glass_id = scene.add_material(glass);
+    scene.add_instance(scene.add_mesh(test::inward_box(3.0f)), mat4(1.0f));
+    for (const auto& [material_id, center] : {std::pair(metal_id, vec3(0.0f, 0.0f, -2.0f)),
+                                              std::pair(glass_id, vec3(1.5f, 1.0f, -2.0f))}) {
+        Mesh sphere = test::uv_sphere(0.7f);
+        sphere.material_indices.assign(sphere.triangles.size(), material_id);
+        scene.add_instance(scene.add_mesh(sphere), glm::translate(mat4(1.0f), center));
+    }
+    World world;
+    world.color = vec3(0.2f);
+    scene.set_world(world);
+    scene.add_light(point_light(vec3(1.0f, -1.0f, 1.0f), 100.0f));
+    Light area;
+    area.type = LightType::Area;
+    area.power = 50.0f;
+    area.world_from_light = glm::translate(mat4(1.0f), vec3(-1.0f, 0.5f, 2.5f));
+    scene.add_light(area);
+    scene.commit();
+    return scene;
+}
+
+TEST(PhotonTracer, DeterministicAcrossThreadCounts) {
+    const Scene scene = mixed_scene();
+    const PhotonMaps one = trace_with_threads(scene, 1, 0);
+    const PhotonMaps two = trace_with_threads(scene, 2, 0);
+    EXPECT_GT(one.global.size(), 1000u);
+    EXPECT_GT(one.caustic.size(), 10u);
+    EXPECT_TRUE(same_photons(one.global, two.global));
+    EXPECT_TRUE(same_photons(one.caustic, two.caustic));
+    EXPECT_EQ(one.bounces, two.bounces);
+    EXPECT_EQ(one.emitted_power, two.emitted_power);
+    // Another pass draws other streams.
+    const PhotonMaps next = trace_with_threads(scene, 2, 1);
+    EXPECT_FALSE(same_photons(one.global, next.global));
+}
+
+TEST(PhotonTracer, EmptySceneAndSceneWithoutEmittersGiveEmptyMaps) {
+    Scene lights_only;
+    lights_only.add_light(point_light(vec3(0.0f), 10.0f));
+    lights_only.commit();
+    PhotonTracerSettings settings;
+    settings.photons = 100;
+    PhotonMaps maps = trace_photons(lights_only, settings, 0);
+    EXPECT_TRUE(maps.global.empty() && maps.caustic.empty());
+    EXPECT_EQ(maps.emitted, 0u);
+
+    Scene dark;
+    dark.add_material(test::lambert(0.5f));
+    dark.add_instance(dark.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
+    dark.set_world(test::black_world());
+    dark.commit();
+    maps = trace_photons(dark, settings, 0);
+    EXPECT_TRUE(maps.global.empty() && maps.caustic.empty());
+    EXPECT_EQ(maps.emitted_power, vec3(0.0f));
+}
+
+TEST(PhotonTracer, CancelledProgressThrowsCancelled) {
+    const Scene scene = furnace(0.5f, 10.0f);
+    PhotonTracerSettings settings;
+    settings.photons = 8 * 4096;  // chunks left to skip after the first report
+    Progress cancelled_before;
+    cancelled_before.cancel();
+    EXPECT_THROW(trace_photons(scene, settings, 0, &cancelled_before), Cancelled);
+    // Cancelled by the first progress report, while chunks are being traced.
+    Progress* self = nullptr;
+    Progress cancelled_during([&](float, const std::string&) { self->cancel(); }, 0.0);
+    self = &cancelled_during;
+    EXPECT_THROW(trace_photons(scene, settings, 0, &cancelled_during), Cancelled);
+}
+
+void expect_invalid(const PhotonTracerSettings& settings, const std::string& expected) {
+    try {
+        validate_photon_tracer_settings(settings);
+        ADD_FAILURE() << "no exception for " << expected;
+    } catch (const InvalidArgument& error) {
+        EXPECT_NE(std::string(error.what()).find(expected), std::string::npos) << error.what();
+    }
+}
+
+TEST(PhotonTracer, BadSettingsNameTheField) {
+    PhotonTracerSettings settings;
+    settings.photons = 0;
+    expect_invalid(settings, "PhotonTracerSettings.photons is 0; it must be in [1, 2^40]");
+    settings.photons = (uint64_t(1) << 40) + 1;
+    expect_invalid(settings, "PhotonTracerSettings.photons is 1099511627777");
+    settings = PhotonTracerSettings{};
+    settings.max_bounces = 0;
+    expect_invalid(settings, "PhotonTracerSettings.max_bounces is 0");
+    settings = PhotonTracerSettings{};
+    settings.specular_roughness = std::nanf("");
+    expect_invalid(settings, "PhotonTracerSettings.specular_roughness is nan");
+    settings.specular_roughness = 1.5f;
+    expect_invalid(settings, "PhotonTracerSettings.specular_roughness is 1.5");
+    EXPECT_NO_THROW(validate_photon_tracer_settings(PhotonTracerSettings{}));
+
+    const Scene scene = furnace(0.5f, 1.0f);
+    settings.specular_roughness = -0.5f;
+    EXPECT_THROW(trace_photons(scene, settings, 0), InvalidArgument);
+    Scene uncommitted;
+    EXPECT_THROW(trace_photons(uncommitted, PhotonTracerSettings{}, 0), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace shgi
