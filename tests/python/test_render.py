@@ -92,7 +92,7 @@ def test_bad_settings_raise_value_error_naming_the_field(field, value):
 def test_bad_arguments():
     with pytest.raises(ValueError, match="samples"):
         shgi.PathTracerSettings(samples=0)
-    with pytest.raises(ValueError, match="not_a_field"):
+    with pytest.raises(TypeError, match="no field .not_a_field."):
         shgi.PathTracerSettings(not_a_field=1)
     with pytest.raises(ValueError, match="commit"):
         shgi.PathTracer(shgi.Scene())
