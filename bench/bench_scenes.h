@@ -1,7 +1,6 @@
 // Scenes and timing helpers shared by the benchmarks.
 #pragma once
 
-#include <chrono>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -9,6 +8,7 @@
 #include "scene/scene.h"
 #include "util/rng.h"
 #include "util/sampling.h"
+#include "util/timer.h"
 
 namespace shgi::bench {
 
@@ -65,10 +65,6 @@ inline Scene cornell_box(uint32_t width = 128, uint32_t height = 128) {
     return scene;
 }
 
-inline double seconds_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 // Raw Embree rate: random origins inside the box, uniformly random directions, traced through
 // Scene::intersect's batch interface (ray streams, all threads). Rays per second.
 inline double incoherent_ray_rate(const Scene& scene, size_t count = size_t(1) << 21) {
@@ -81,7 +77,7 @@ inline double incoherent_ray_rate(const Scene& scene, size_t count = size_t(1) <
     }
     std::vector<Hit> hits;
     scene.intersect(rays, hits);  // warm-up
-    const auto start = std::chrono::steady_clock::now();
+    const auto start = now();
     scene.intersect(rays, hits);
     return double(count) / seconds_since(start);
 }

@@ -32,9 +32,9 @@ int main() {
     settings.samples = kSamples;
     PathTracer tracer(scene, settings);
     tracer.render(1);  // warm-up
-    const auto start = std::chrono::steady_clock::now();
+    const auto start = now();
     tracer.render(kSamples);
-    const double path_seconds = bench::seconds_since(start);
+    const double path_seconds = seconds_since(start);
     const double paths = double(kResolution) * kResolution * kSamples;
     const double paths_per_second = paths / path_seconds;
     const double rays_per_second = bench::incoherent_ray_rate(scene);

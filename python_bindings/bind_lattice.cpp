@@ -39,23 +39,13 @@ void bind_settings(py::module_& m) {
     using S = PhotonLatticeSettings;
     py::class_<S> cls(m, "PhotonLatticeSettings",
                       "Settings of the PhotonLattice solver; every field has a default.");
+    def_uint64(cls, "photons", &S::photons, 1, "Photons emitted per solve() (200000).");
+    def_uint64(cls, "seed", &S::seed, 0, "Random seed (0).");
     cls.def(py::init(&from_kwargs<S>),
             "PhotonLatticeSettings(**fields), e.g. PhotonLatticeSettings(photons=100000).")
-        .def_property(
-            "photons", [](const S& s) { return s.photons; },
-            [](S& s, int64_t v) {
-                if (v < 1) throw_value_error("photons", "must be >= 1, got " + std::to_string(v));
-                s.photons = uint64_t(v);
-            },
-            "Photons emitted per solve() (200000).")
-        .def_property(
-            "seed", [](const S& s) { return s.seed; },
-            [](S& s, int64_t v) {
-                if (v < 0) throw_value_error("seed", "must be >= 0, got " + std::to_string(v));
-                s.seed = uint64_t(v);
-            },
-            "Random seed (0).")
-        .def_readwrite("max_bounces", &S::max_bounces, "Photon scatterings after emission; 4 matches Cycles' default diffuse bounces (4).")
+        .def_readwrite("max_bounces", &S::max_bounces,
+                       "Photon scatterings after emission; 4 matches Cycles' default diffuse "
+                       "bounces (4).")
         .def_readwrite("specular_roughness", &S::specular_roughness,
                        "Lobes up to this roughness make caustic paths (0.1).")
         .def_readwrite("world_in_field", &S::world_in_field,

@@ -55,19 +55,14 @@ void bind_settings(py::module_& m) {
     using S = PathTracerSettings;
     py::class_<S> cls(m, "PathTracerSettings",
                       "Settings of the reference path tracer; every field has a default.");
+    def_uint64(cls, "seed", &S::seed, 0,
+               "Random seed; the image is a pure function of it (default 0).");
     cls.def(py::init(&from_kwargs<S>),
             "PathTracerSettings(**fields), e.g. PathTracerSettings(samples=16, seed=3).")
         .def_property(
             "samples", [](const S& s) { return s.samples; },
             [](S& s, int64_t v) { s.samples = checked_samples(v, "samples"); },
             "Samples per pixel rendered by render_path_traced (default 64).")
-        .def_property(
-            "seed", [](const S& s) { return s.seed; },
-            [](S& s, int64_t v) {
-                if (v < 0) throw_value_error("seed", "must be >= 0, got " + std::to_string(v));
-                s.seed = uint64_t(v);
-            },
-            "Random seed; the image is a pure function of it (default 0).")
         .def_readwrite("max_bounces", &S::max_bounces, "Total bounce limit, Cycles' (12).")
         .def_readwrite("diffuse_bounces", &S::diffuse_bounces, "Diffuse bounce limit (4).")
         .def_readwrite("glossy_bounces", &S::glossy_bounces, "Glossy bounce limit (4).")
@@ -184,19 +179,13 @@ void bind_preview(py::module_& m) {
     using S = PreviewSettings;
     py::class_<S> cls(m, "PreviewSettings",
                       "Settings of the preview renderer; every field has a default.");
+    def_uint64(cls, "seed", &S::seed, 0, "Random seed (default 0).");
     cls.def(py::init(&from_kwargs<S>),
             "PreviewSettings(**fields), e.g. PreviewSettings(samples=4, seed=1).")
         .def_property(
             "samples", [](const S& s) { return s.samples; },
             [](S& s, int64_t v) { s.samples = checked_samples(v, "samples"); },
             "Samples per pixel rendered by render_preview (default 16).")
-        .def_property(
-            "seed", [](const S& s) { return s.seed; },
-            [](S& s, int64_t v) {
-                if (v < 0) throw_value_error("seed", "must be >= 0, got " + std::to_string(v));
-                s.seed = uint64_t(v);
-            },
-            "Random seed (default 0).")
         .def_readwrite("max_specular_bounces", &S::max_specular_bounces,
                        "Mirror/glass bounces followed per path (8).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,

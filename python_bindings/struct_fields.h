@@ -25,6 +25,21 @@ void def_vec3(pybind11::class_<T>& cls, const char* name, vec3 T::*field, const 
         doc);
 }
 
+// A uint64_t field exposed as an int that must be >= `minimum` (ValueError naming the field).
+template <typename T>
+void def_uint64(pybind11::class_<T>& cls, const char* name, uint64_t T::*field, int64_t minimum,
+                const char* doc) {
+    cls.def_property(
+        name, [field](const T& self) { return self.*field; },
+        [field, name, minimum](T& self, int64_t value) {
+            if (value < minimum)
+                throw_value_error(name, "must be >= " + std::to_string(minimum) + ", got " +
+                                            std::to_string(value));
+            self.*field = uint64_t(value);
+        },
+        doc);
+}
+
 // Constructor from keyword arguments naming fields: Material(roughness=0.2, name="Red"). An
 // unknown field is a TypeError naming it.
 template <typename T>

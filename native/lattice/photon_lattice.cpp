@@ -1,20 +1,16 @@
 #include "lattice/photon_lattice.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include "util/error.h"
+#include "util/timer.h"
 
 namespace shgi {
 namespace {
 
 // Share of the bounds' diagonal used as the caustic density estimate's radius by default.
 constexpr float kDefaultCausticRadiusFraction = 0.02f;
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 PhotonTracerSettings tracer_settings(const PhotonLatticeSettings& settings) {
     PhotonTracerSettings tracer;
@@ -132,7 +128,7 @@ void PhotonLattice::check_scene(const char* what) const {
 void PhotonLattice::solve(Progress* progress) {
     check_scene("solve");
     PhotonLatticeTimings timings;
-    auto start = std::chrono::steady_clock::now();
+    auto start = now();
     if (progress != nullptr) progress->begin_stage("photons", 0.0f, 0.8f);
     const PhotonMaps maps = trace_photons(*scene_, tracer_settings(settings_), passes_, progress);
     timings.emit_trace = seconds_since(start);
@@ -142,7 +138,7 @@ void PhotonLattice::solve(Progress* progress) {
 
     // Work on copies so that a cancel keeps the previous solution.
     if (progress != nullptr) progress->begin_stage("injection", 0.8f, 0.95f);
-    start = std::chrono::steady_clock::now();
+    start = now();
     ShLattice global_raw = global_raw_;
     global_raw.inject(maps.global, 1.0f, progress);
     ShLattice caustic_raw = caustic_raw_;
@@ -157,7 +153,7 @@ void PhotonLattice::solve(Progress* progress) {
     timings.injection = seconds_since(start);
 
     if (progress != nullptr) progress->begin_stage("blur", 0.95f, 1.0f);
-    start = std::chrono::steady_clock::now();
+    start = now();
     const float average = 1.0f / float(passes_ + 1);
     ShLattice global = global_raw;
     global.scale(average);

@@ -42,107 +42,77 @@ vec3 refraction_half_vector(const vec3& wo, const vec3& wi, float eta) {
     return h.z < 0.0f ? -h : h;
 }
 
-// Directional albedo of a GGX reflection lobe with colour 1 (`total`) and with the colour fh of
-// interpolate_fresnel_color (`fresnel`, for Specular 0.5: ior 1.5, F0 0.04), tabulated over
-// cos(N.V) and roughness by stratified visible-normal sampling (f cos / pdf = G1(wi) for
-// separable Smith GGX) and interpolated bilinearly.
-struct GgxAlbedo {
-    float total = 0.0f, fresnel = 0.0f;
-};
-
+// Directional albedos tabulated over cos(N.V) x roughness (32 x 32), each entry the mean of an
+// integrand over 16 x 16 stratified samples, looked up bilinearly. Built once, on first use.
 constexpr int kAlbedoTableSize = 32;
 constexpr int kAlbedoTableStrata = 16;
 
-struct GgxAlbedoTable {
-    GgxAlbedo entries[kAlbedoTableSize][kAlbedoTableSize];  // [cos_nv][roughness]
+class AlbedoTable {
+  public:
+    // integrand(wo, roughness, u) -> up to two albedo estimates for one sample.
+    template <typename Integrand>
+    explicit AlbedoTable(Integrand integrand) {
+        for (int i = 0; i < kAlbedoTableSize; ++i) {
+            const float cos_nv = std::max(float(i) / float(kAlbedoTableSize - 1), 1e-3f);
+            const vec3 wo(std::sqrt(1.0f - cos_nv * cos_nv), 0.0f, cos_nv);
+            for (int j = 0; j < kAlbedoTableSize; ++j) {
+                const float roughness = float(j) / float(kAlbedoTableSize - 1);
+                glm::dvec2 sum(0.0);
+                for (int a = 0; a < kAlbedoTableStrata; ++a)
+                    for (int b = 0; b < kAlbedoTableStrata; ++b)
+                        sum += glm::dvec2(integrand(wo, roughness,
+                                                    vec2((float(a) + 0.5f) / kAlbedoTableStrata,
+                                                         (float(b) + 0.5f) / kAlbedoTableStrata)));
+                entries_[i][j] = vec2(sum / double(kAlbedoTableStrata * kAlbedoTableStrata));
+            }
+        }
+    }
 
-    GgxAlbedoTable() {
+    vec2 lookup(float cos_nv, float roughness) const {
+        const float x = std::clamp(cos_nv, 0.0f, 1.0f) * float(kAlbedoTableSize - 1);
+        const float y = std::clamp(roughness, 0.0f, 1.0f) * float(kAlbedoTableSize - 1);
+        const int x0 = std::min(int(x), kAlbedoTableSize - 2);
+        const int y0 = std::min(int(y), kAlbedoTableSize - 2);
+        const float tx = x - float(x0), ty = y - float(y0);
+        const vec2 bottom = glm::mix(entries_[x0][y0], entries_[x0 + 1][y0], tx);
+        const vec2 top = glm::mix(entries_[x0][y0 + 1], entries_[x0 + 1][y0 + 1], tx);
+        return glm::mix(bottom, top, ty);
+    }
+
+  private:
+    vec2 entries_[kAlbedoTableSize][kAlbedoTableSize];  // [cos_nv][roughness]
+};
+
+// Directional albedo of a GGX reflection lobe: x with colour 1, y with the colour fh of
+// interpolate_fresnel_color (for Specular 0.5: ior 1.5, F0 0.04), by visible-normal sampling
+// (f cos / pdf = G1(wi) for separable Smith GGX).
+vec2 ggx_albedo(float cos_nv, float roughness) {
+    static const AlbedoTable table([](const vec3& wo, float r, const vec2& u) {
         const float f0 = kSpecularF0Scale * 0.5f;
         const float ior = 2.0f / (1.0f - std::sqrt(f0)) - 1.0f;
-        for (int i = 0; i < kAlbedoTableSize; ++i) {
-            const float cos_nv = std::max(float(i) / float(kAlbedoTableSize - 1), 1e-3f);
-            const vec3 wo(std::sqrt(1.0f - cos_nv * cos_nv), 0.0f, cos_nv);
-            for (int j = 0; j < kAlbedoTableSize; ++j) {
-                const float roughness = float(j) / float(kAlbedoTableSize - 1);
-                const float alpha = std::max(roughness * roughness, kDeltaAlpha);
-                double total = 0.0, fresnel = 0.0;
-                for (int a = 0; a < kAlbedoTableStrata; ++a) {
-                    for (int b = 0; b < kAlbedoTableStrata; ++b) {
-                        const vec2 u((float(a) + 0.5f) / kAlbedoTableStrata,
-                                     (float(b) + 0.5f) / kAlbedoTableStrata);
-                        const vec3 h = sample_ggx_visible_normal(wo, alpha, u);
-                        const vec3 wi = 2.0f * glm::dot(wo, h) * h - wo;
-                        if (wi.z <= 0.0f) continue;
-                        const float weight = ggx_g1(wi, alpha);
-                        const float fh = (fresnel_dielectric(glm::dot(wi, h), ior) - f0) /
-                                         (1.0f - f0);
-                        total += weight;
-                        fresnel += weight * fh;
-                    }
-                }
-                const double n = double(kAlbedoTableStrata * kAlbedoTableStrata);
-                entries[i][j] = GgxAlbedo{float(total / n), float(fresnel / n)};
-            }
-        }
-    }
-};
-
-// Directional albedo of Cycles' principled diffuse (Burley, with retro-reflection) for a view
-// cos(N.V) and roughness, by stratified cosine sampling; Lambert's is 1.
-struct BurleyAlbedoTable {
-    float entries[kAlbedoTableSize][kAlbedoTableSize];  // [cos_nv][roughness]
-
-    BurleyAlbedoTable() {
-        for (int i = 0; i < kAlbedoTableSize; ++i) {
-            const float cos_nv = std::max(float(i) / float(kAlbedoTableSize - 1), 1e-3f);
-            const vec3 wo(std::sqrt(1.0f - cos_nv * cos_nv), 0.0f, cos_nv);
-            const float fv = schlick_weight(cos_nv);
-            for (int j = 0; j < kAlbedoTableSize; ++j) {
-                const float roughness = float(j) / float(kAlbedoTableSize - 1);
-                double sum = 0.0;
-                for (int a = 0; a < kAlbedoTableStrata; ++a) {
-                    for (int b = 0; b < kAlbedoTableStrata; ++b) {
-                        const vec3 wi = sample_cosine_hemisphere(
-                            vec2((float(a) + 0.5f) / kAlbedoTableStrata,
-                                 (float(b) + 0.5f) / kAlbedoTableStrata));
-                        const float fl = schlick_weight(wi.z);
-                        const float cos_lh = glm::dot(wi, glm::normalize(wo + wi));
-                        const float rr = 2.0f * roughness * cos_lh * cos_lh;
-                        sum += (1.0f - 0.5f * fl) * (1.0f - 0.5f * fv) +
-                               rr * (fl + fv + fl * fv * (rr - 1.0f));
-                    }
-                }
-                entries[i][j] = float(sum / double(kAlbedoTableStrata * kAlbedoTableStrata));
-            }
-        }
-    }
-};
-
-float burley_albedo(float cos_nv, float roughness) {
-    static const BurleyAlbedoTable table;
-    const float x = std::clamp(cos_nv, 0.0f, 1.0f) * float(kAlbedoTableSize - 1);
-    const float y = std::clamp(roughness, 0.0f, 1.0f) * float(kAlbedoTableSize - 1);
-    const int x0 = std::min(int(x), kAlbedoTableSize - 2), y0 = std::min(int(y), kAlbedoTableSize - 2);
-    const float tx = x - float(x0), ty = y - float(y0);
-    const float bottom = (1.0f - tx) * table.entries[x0][y0] + tx * table.entries[x0 + 1][y0];
-    const float top = (1.0f - tx) * table.entries[x0][y0 + 1] + tx * table.entries[x0 + 1][y0 + 1];
-    return (1.0f - ty) * bottom + ty * top;
+        const float alpha = std::max(r * r, kDeltaAlpha);
+        const vec3 h = sample_ggx_visible_normal(wo, alpha, u);
+        const vec3 wi = 2.0f * glm::dot(wo, h) * h - wo;
+        if (wi.z <= 0.0f) return vec2(0.0f);
+        const float weight = ggx_g1(wi, alpha);
+        const float fh = (fresnel_dielectric(glm::dot(wi, h), ior) - f0) / (1.0f - f0);
+        return vec2(weight, weight * fh);
+    });
+    return table.lookup(cos_nv, roughness);
 }
 
-GgxAlbedo ggx_albedo(float cos_nv, float roughness) {
-    static const GgxAlbedoTable table;
-    const float x = std::clamp(cos_nv, 0.0f, 1.0f) * float(kAlbedoTableSize - 1);
-    const float y = std::clamp(roughness, 0.0f, 1.0f) * float(kAlbedoTableSize - 1);
-    const int x0 = std::min(int(x), kAlbedoTableSize - 2), y0 = std::min(int(y), kAlbedoTableSize - 2);
-    const float tx = x - float(x0), ty = y - float(y0);
-    auto lerp = [&](auto member) {
-        const float bottom = (1.0f - tx) * table.entries[x0][y0].*member +
-                             tx * table.entries[x0 + 1][y0].*member;
-        const float top = (1.0f - tx) * table.entries[x0][y0 + 1].*member +
-                          tx * table.entries[x0 + 1][y0 + 1].*member;
-        return (1.0f - ty) * bottom + ty * top;
-    };
-    return GgxAlbedo{lerp(&GgxAlbedo::total), lerp(&GgxAlbedo::fresnel)};
+// Directional albedo of Cycles' principled diffuse (Burley, with retro-reflection), by cosine
+// sampling; Lambert's is 1.
+float burley_albedo(float cos_nv, float roughness) {
+    static const AlbedoTable table([](const vec3& wo, float r, const vec2& u) {
+        const vec3 wi = sample_cosine_hemisphere(u);
+        const float fl = schlick_weight(wi.z), fv = schlick_weight(wo.z);
+        const float cos_lh = glm::dot(wi, glm::normalize(wo + wi));
+        const float rr = 2.0f * r * cos_lh * cos_lh;
+        return vec2((1.0f - 0.5f * fl) * (1.0f - 0.5f * fv) + rr * (fl + fv + fl * fv * (rr - 1.0f)),
+                    0.0f);
+    });
+    return table.lookup(cos_nv, roughness).x;
 }
 
 }  // namespace
@@ -435,11 +405,11 @@ int PrincipledBsdf::field_glossy_lobes(const vec3& wo, GlossyLobe out[2]) const 
     for (int i = 0; i < lobe_count_ && count < 2; ++i) {
         const Lobe& lobe = lobes_[i];
         if (lobe.traced() || lobe.kind == LobeKind::Diffuse) continue;
-        const GgxAlbedo albedo = ggx_albedo(wo.z, roughness_);
+        const vec2 albedo = ggx_albedo(wo.z, roughness_);  // (colour 1, colour fh)
         // Specular colour = cspec0 (1 - fh) + fh, so its albedo is cspec0 (a - a_fh) + a_fh.
         const vec3 color = lobe.kind == LobeKind::Specular
-                               ? cspec0_ * (albedo.total - albedo.fresnel) + vec3(albedo.fresnel)
-                               : vec3(albedo.total);
+                               ? cspec0_ * (albedo.x - albedo.y) + vec3(albedo.y)
+                               : vec3(albedo.x);
         out[count++] = GlossyLobe{lobe.weight * color, roughness_};
     }
     return count;

@@ -1,8 +1,9 @@
 #include "render/path_integrator.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
+
+#include "util/timer.h"
 
 namespace shgi {
 namespace {
@@ -16,25 +17,6 @@ float power_heuristic(float pdf_a, float pdf_b) {
 const Pass kDirectPass[kLobeClassCount] = {Pass::DiffDir, Pass::GlossDir, Pass::TransDir};
 const Pass kIndirectPass[kLobeClassCount] = {Pass::DiffInd, Pass::GlossInd, Pass::TransInd};
 const Pass kColorPass[kLobeClassCount] = {Pass::DiffCol, Pass::GlossCol, Pass::TransCol};
-
-// Adds the seconds from construction to destruction to a clock field (no-op without a clock).
-class ScopedTimer {
-  public:
-    explicit ScopedTimer(double* total)
-        : total_(total), start_(total ? std::chrono::steady_clock::now()
-                                      : std::chrono::steady_clock::time_point{}) {}
-    ~ScopedTimer() {
-        if (total_ != nullptr)
-            *total_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_)
-                           .count();
-    }
-    ScopedTimer(const ScopedTimer&) = delete;
-    ScopedTimer& operator=(const ScopedTimer&) = delete;
-
-  private:
-    double* total_;
-    std::chrono::steady_clock::time_point start_;
-};
 
 }  // namespace
 

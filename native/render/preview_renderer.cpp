@@ -1,11 +1,11 @@
 #include "render/preview_renderer.h"
 
 #include <algorithm>
-#include <chrono>
 #include <vector>
 
 #include "render/path_integrator.h"
 #include "util/error.h"
+#include "util/timer.h"
 #include "util/parallel.h"
 #include "util/rng.h"
 
@@ -14,10 +14,6 @@ namespace {
 
 // Camera samples traced per batch: bounds the memory of the G-buffer (rays and hits).
 constexpr uint64_t kMaxBatchSamples = uint64_t(1) << 20;
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 // The path tracer settings that make PathIntegrator follow only specular chains: every
 // scattering of a field path is a traced lobe (Dirac or refraction).
@@ -89,7 +85,7 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
     const ZeroField no_field;
     if (field == nullptr) field = &no_field;  // direct light only, still in preview mode
     const LightSampler& lights = field->includes_world_direct() ? lights_without_world_ : lights_;
-    const auto frame_start = std::chrono::steady_clock::now();
+    const auto frame_start = now();
     PreviewTimings timings;
     const int width = film_.width(), height = film_.height();
     const uint64_t pixels = uint64_t(width) * uint64_t(height);
@@ -100,7 +96,7 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
     for (uint64_t batch = first; batch < first + samples; batch += samples_per_batch) {
         const uint64_t batch_samples = std::min<uint64_t>(samples_per_batch, first + samples - batch);
         // Primary: camera rays of the batch, sample-major per pixel, intersected as streams.
-        auto stage_start = std::chrono::steady_clock::now();
+        auto stage_start = now();
         rays.resize(pixels * batch_samples);
         parallel_for(0, pixels, 4096, [&](uint64_t begin, uint64_t end) {
             for (uint64_t pixel = begin; pixel < end; ++pixel) {
@@ -115,14 +111,14 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
         timings.primary += seconds_since(stage_start);
 
         // Shading: tiles of pixels, each sample continuing from its primary hit.
-        stage_start = std::chrono::steady_clock::now();
+        stage_start = now();
         const int tile = settings_.tile_size;
         const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
         std::vector<IntegratorClock> clocks(size_t(tiles_x) * size_t(tiles_y));
         std::vector<double> busy(clocks.size(), 0.0);
         parallel_for(0, uint64_t(tiles_x) * uint64_t(tiles_y), 1, [&](uint64_t begin, uint64_t end) {
             for (uint64_t t = begin; t < end; ++t) {
-                const auto tile_start = std::chrono::steady_clock::now();
+                const auto tile_start = now();
                 const int x0 = int(t % uint64_t(tiles_x)) * tile;
                 const int y0 = int(t / uint64_t(tiles_x)) * tile;
                 for (int y = y0; y < std::min(y0 + tile, height); ++y) {
