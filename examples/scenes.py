@@ -126,6 +126,14 @@ def sun_room(scale=1.0):
     b_dir /= np.linalg.norm(b_dir)
     sun.world_from_light = look_at((0, 0, 0), b_dir).astype(np.float32)
     b.scene.add_light(sun)
+    # A portal over the window (Cycles' area light Portal), facing into the room: sky light is
+    # sampled through the opening instead of over the whole hemisphere.
+    window_center = (x0, 0.5 * sum(win_y), 0.5 * sum(win_z))
+    portal = shgi.Light(name="window_portal", type=shgi.LightType.AREA, portal=True,
+                        shape=shgi.AreaShape.RECTANGLE, size_x=win_y[1] - win_y[0],
+                        size_y=win_z[1] - win_z[0])
+    portal.world_from_light = look_at(window_center, np.add(window_center, (1.0, 0.0, 0.0)))
+    b.scene.add_light(portal)
     b.scene.set_world(shgi.World(color=(0.35, 0.5, 0.8), strength=1.0))
     b.camera(eye=(1.7, 0.25, 1.5), target=(-0.8, 2.6, 0.8), lens=16.0, width=256, height=192,
              scale=scale)

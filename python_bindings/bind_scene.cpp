@@ -244,7 +244,10 @@ void bind_light(py::module_& m) {
         .def_readwrite("size_y", &Light::size_y, "m: area light size along local Y.")
         .def_readwrite("visible_camera", &Light::visible_camera,
                        "Blender's Object.visible_camera: camera rays see the light (False, as "
-                       "Blender's lights).");
+                       "Blender's lights).")
+        .def_readwrite("portal", &Light::portal,
+                       "Cycles' area light Portal: emits nothing, aims world light through an "
+                       "opening (area lights only).");
     def_vec3(cls, "color", &Light::color, "Linear RGB, each >= 0.");
     def_mat4(cls, "world_from_light", &Light::world_from_light,
              "(4, 4) row-major matrix_world; the light emits along its local -Z.");

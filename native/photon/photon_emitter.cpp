@@ -18,10 +18,8 @@ constexpr float kDiskDistanceInRadii = 2.0f;
 constexpr float kSmoothstepMean = 0.5f;
 constexpr float kSmoothstepFirstMoment = 7.0f / 20.0f;
 
-// Largest float below 1: a stratified u must stay in [0, 1) after rounding to float.
-constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
-
 vec3 light_power(const Light& light, float bounding_radius) {
+    if (light.portal) return vec3(0.0f);  // marks an opening, emits nothing
     const float disk_area = kPi * bounding_radius * bounding_radius;
     switch (light.type) {
         case LightType::Point: return light.color * light.power;
@@ -64,8 +62,11 @@ PhotonEmitter::PhotonEmitter(const Scene& scene) : scene_(&scene) {
         weights.push_back(weight);
         total_power_ += power;
     };
-    for (uint32_t i = 0; i < scene.lights().size(); ++i)
-        add(Kind::Light, i, light_power(scene.lights()[i], bounding_radius_));
+    for (uint32_t i = 0; i < scene.lights().size(); ++i) {
+        const Light& light = scene.lights()[i];
+        if (light.portal && area_light_area(light) > 0.0f) portals_.push_back(i);
+        add(Kind::Light, i, light_power(light, bounding_radius_));
+    }
     const auto& triangles = scene.emissive_triangles();
     for (uint32_t i = 0; i < triangles.size(); ++i)
         add(Kind::Triangle, i, triangles[i].radiance * (kTwoPi * triangles[i].area));
@@ -93,13 +94,9 @@ bool PhotonEmitter::sample_emitter(const Emitter& emitter, Pcg32& rng, EmittedPh
         case Kind::Triangle:
             sample_triangle(scene_->emissive_triangles()[emitter.index], emitter.power, rng, out);
             break;
-        case Kind::World: {
-            const vec3 direction = sample_uniform_sphere(rng.next_vec2());
-            out->ray = ray_through_bounding_disk(direction, rng.next_vec2());
-            out->power = emitter.power;
-            out->from_world = true;
+        case Kind::World:
+            sample_world(rng, out);
             break;
-        }
     }
     return max_component(out->power) > 0.0f;
 }
@@ -127,13 +124,9 @@ void PhotonEmitter::sample_light(const Light& light, const vec3& power, Pcg32& r
                                         sample_uniform_cone_pdf(cos_half));
             break;
         }
-        case LightType::Sun: {
-            const float cos_max = light.angle > 0.0f ? std::cos(0.5f * light.angle) : 1.0f;
-            const vec3 direction =
-                light.angle > 0.0f ? frame.to_world(sample_uniform_cone(u, cos_max)) : axis;
-            out->ray = ray_through_bounding_disk(direction, rng.next_vec2());
+        case LightType::Sun:
+            sample_sun(light, u, rng, out);
             break;
-        }
         case LightType::Area: {
             vec3 ex, ey;
             area_half_axes(light, &ex, &ey);
@@ -154,6 +147,86 @@ void PhotonEmitter::sample_triangle(const EmissiveTriangle& triangle, const vec3
     out->ray.origin = offset_origin(position, normal);  // off its own triangle
     out->ray.direction = Frame::from_z(normal).to_world(sample_cosine_hemisphere(rng.next_vec2()));
     out->power = power;
+}
+
+void PhotonEmitter::sample_sun(const Light& light, const vec2& u, Pcg32& rng,
+                               EmittedPhoton* out) const {
+    const vec3 axis = light.direction();
+    const float cos_max = light.angle > 0.0f ? std::cos(0.5f * light.angle) : 1.0f;
+    const vec3 direction =
+        light.angle > 0.0f ? Frame::from_z(axis).to_world(sample_uniform_cone(u, cos_max)) : axis;
+    if (draw_portal_strategy(rng)) {
+        const Light& portal = draw_portal(rng);
+        const vec3 point = area_light_point(portal, rng.next_vec2());
+        if (glm::dot(direction, portal.direction()) <= 0.0f) return;  // cannot enter: wasted
+        out->ray = ray_through_point(direction, point);
+    } else {
+        out->ray = ray_through_bounding_disk(direction, rng.next_vec2());
+    }
+    // Radiance over the cone's density is the sun's strength S (irradiance facing it).
+    const float density = mixed(portal_density(out->ray, false), disk_density(out->ray));
+    if (density > 0.0f) out->power = light.color * (light.strength / density);
+}
+
+void PhotonEmitter::sample_world(Pcg32& rng, EmittedPhoton* out) const {
+    out->from_world = true;
+    if (draw_portal_strategy(rng)) {
+        const Light& portal = draw_portal(rng);
+        const vec3 point = area_light_point(portal, rng.next_vec2());
+        const vec3 direction =
+            Frame::from_z(portal.direction()).to_world(sample_cosine_hemisphere(rng.next_vec2()));
+        out->ray = ray_through_point(direction, point);
+    } else {
+        const vec3 direction = sample_uniform_sphere(rng.next_vec2());
+        out->ray = ray_through_bounding_disk(direction, rng.next_vec2());
+    }
+    const float density = mixed(portal_density(out->ray, true),
+                                disk_density(out->ray) * sample_uniform_sphere_pdf());
+    if (density > 0.0f) out->power = scene_->world().radiance() / density;
+}
+
+bool PhotonEmitter::draw_portal_strategy(Pcg32& rng) const {
+    return !portals_.empty() && rng.next_float() < kPortalFraction;
+}
+
+const Light& PhotonEmitter::draw_portal(Pcg32& rng) const {
+    const size_t count = portals_.size();
+    const size_t k = std::min(size_t(rng.next_float() * float(count)), count - 1);
+    return scene_->lights()[portals_[k]];
+}
+
+float PhotonEmitter::disk_density(const Ray& ray) const {
+    const vec3 offset = ray.origin - bounding_center_;
+    const vec3 across = offset - glm::dot(offset, ray.direction) * ray.direction;
+    if (glm::dot(across, across) > bounding_radius_ * bounding_radius_) return 0.0f;
+    return 1.0f / (kPi * bounding_radius_ * bounding_radius_);
+}
+
+float PhotonEmitter::portal_density(const Ray& ray, bool cosine_directions) const {
+    float density = 0.0f;
+    for (uint32_t index : portals_) {
+        const Light& portal = scene_->lights()[index];
+        float t, cos_axis;
+        if (!area_light_crossing(portal, ray.origin, ray.direction, &t, &cos_axis) ||
+            !(cos_axis > 0.0f))
+            continue;  // misses it, or crosses it outwards
+        const float area = area_light_area(portal);
+        density += cosine_directions ? kInvPi / area : 1.0f / (area * cos_axis);
+    }
+    return density / float(std::max<size_t>(portals_.size(), 1));
+}
+
+float PhotonEmitter::mixed(float portal, float disk) const {
+    if (portals_.empty()) return disk;
+    return kPortalFraction * portal + (1.0f - kPortalFraction) * disk;
+}
+
+Ray PhotonEmitter::ray_through_point(const vec3& direction, const vec3& point) const {
+    Ray ray;
+    ray.origin = point - direction * (glm::dot(point - bounding_center_, direction) +
+                                      kDiskDistanceInRadii * bounding_radius_);
+    ray.direction = direction;
+    return ray;
 }
 
 Ray PhotonEmitter::ray_through_bounding_disk(const vec3& direction, const vec2& u) const {

@@ -17,6 +17,13 @@
 //           weighted around that side's normal
 //   world   Lw x 4 pi x pi R^2; direction uniform over the sphere, origin on a disk of radius R
 //           perpendicular to it outside the bounding sphere
+// Portals (Light.portal) emit nothing. With portals in the scene, a sun or world photon takes,
+// with probability kPortalFraction (render/light_sampler.h), a uniformly chosen portal's way in:
+// a uniform point on it, the direction from the sun's cone (sun) or cosine-weighted into the
+// room (world), the ray started on the same far plane as the disk's; otherwise the disk's way.
+// Its power is the radiance over the mixture's density of that ray (per unit area across the
+// ray and per unit solid angle), so photons are unbiased for light entering anywhere, and most
+// of them come through the window instead of landing on the building's outside.
 // Emitters with zero flux are left out; an empty scene has no bounding sphere, so its sun and
 // world emit nothing.
 //
@@ -71,11 +78,27 @@ class PhotonEmitter {
     // A ray along `direction` from a uniform point of the disk of radius R perpendicular to
     // it, outside the bounding sphere.
     Ray ray_through_bounding_disk(const vec3& direction, const vec2& u) const;
+    // The ray along `direction` through `point`, starting on the plane of those disks.
+    Ray ray_through_point(const vec3& direction, const vec3& point) const;
+    // Sun and world photons (see above): ray and power.
+    void sample_sun(const Light& light, const vec2& u, Pcg32& rng, EmittedPhoton* out) const;
+    void sample_world(Pcg32& rng, EmittedPhoton* out) const;
+    // Whether the portal strategy is drawn for this photon, and which portal (uniform).
+    bool draw_portal_strategy(Pcg32& rng) const;
+    const Light& draw_portal(Pcg32& rng) const;
+    // Densities of each strategy for a ray, per m^2 across the ray: the disk's (uniform over
+    // its area, 0 for rays outside it) and the portals' (1/K per portal the ray enters through,
+    // over its projected area A cos; with cosine_directions, times the direction density
+    // cos / pi, i.e. 1 / (pi A)). mixed() combines them with kPortalFraction.
+    float disk_density(const Ray& ray) const;
+    float portal_density(const Ray& ray, bool cosine_directions) const;
+    float mixed(float portal, float disk) const;
 
     const Scene* scene_;
     vec3 bounding_center_{0.0f};
     float bounding_radius_ = 0.0f;  // m; 0 for an empty scene
     std::vector<Emitter> emitters_;
+    std::vector<uint32_t> portals_;  // scene light indices of portals with area
     DiscreteDistribution distribution_;
     vec3 total_power_{0.0f};
 };

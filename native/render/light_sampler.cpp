@@ -47,6 +47,38 @@ void area_half_axes(const Light& light, vec3* ex, vec3* ey) {
     *ey = vec3(light.world_from_light[1]) * (0.5f * size_y);
 }
 
+bool area_light_crossing(const Light& light, const vec3& p, const vec3& wi, float* t,
+                         float* cos_axis) {
+    const vec3 center = light.position();
+    const vec3 axis = light.direction();
+    const float denom = glm::dot(wi, axis);
+    if (denom == 0.0f || !std::isfinite(denom)) return false;
+    const float distance = glm::dot(center - p, axis) / denom;
+    if (!(distance > 0.0f)) return false;
+    vec3 ex, ey;
+    area_half_axes(light, &ex, &ey);
+    const vec3 q = p + distance * wi - center;
+    const float s = glm::dot(q, ex) / glm::dot(ex, ex);
+    const float r = glm::dot(q, ey) / glm::dot(ey, ey);
+    const bool inside = is_round(light.shape) ? s * s + r * r <= 1.0f
+                                              : std::fabs(s) <= 1.0f && std::fabs(r) <= 1.0f;
+    if (!inside) return false;
+    *t = distance;
+    *cos_axis = denom;
+    return true;
+}
+
+bool in_front_of_area_light(const Light& light, const vec3& p) {
+    return glm::dot(p - light.position(), light.direction()) > 0.0f;
+}
+
+vec3 area_light_point(const Light& light, const vec2& u) {
+    vec3 ex, ey;
+    area_half_axes(light, &ex, &ey);
+    const vec2 local = is_round(light.shape) ? sample_uniform_disk(u) : 2.0f * u - vec2(1.0f);
+    return light.position() + local.x * ex + local.y * ey;
+}
+
 float area_light_area(const Light& light) {
     vec3 ex, ey;
     area_half_axes(light, &ex, &ey);
@@ -65,6 +97,10 @@ LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, boo
     light_emitter_.assign(scene.lights().size(), kInvalidId);
     for (uint32_t i = 0; i < scene.lights().size(); ++i) {
         const Light& light = scene.lights()[i];
+        if (light.portal) {
+            if (area_light_area(light) > 0.0f) portals_.push_back(i);
+            continue;
+        }
         const float power = light.type == LightType::Sun
                                 ? light.strength * disk_area
                                 : light.power;
@@ -103,14 +139,7 @@ bool LightSampler::sample(const vec3& p, const vec3& n, float u_select, const ve
     } else if (emitter.kind == Kind::Triangle) {
         ok = sample_triangle(scene_->emissive_triangles()[emitter.index], p, u, out);
     } else {
-        const vec3 local = world_sampling_ == WorldSampling::Cosine ? sample_cosine_hemisphere(u)
-                                                                    : sample_uniform_sphere(u);
-        out->wi = Frame::from_z(n).to_world(local);
-        out->distance = kInfinity;
-        out->radiance = scene_->world().radiance();
-        out->pdf = world_pdf(n, out->wi);
-        out->delta = false;
-        ok = out->pdf > 0.0f;
+        ok = sample_world(p, n, u, out);
     }
     if (!ok) return false;
     out->pdf *= selection_pdf(chosen);
@@ -166,13 +195,9 @@ bool LightSampler::sample_point(const Light& light, const vec3& p, const vec2& u
 
 bool LightSampler::sample_area(const Light& light, const vec3& p, const vec2& u,
                                LightSample* out) const {
+    if (!in_front_of_area_light(light, p)) return false;  // behind the one-sided emitter
     const vec3 normal = area_emit_normal(light);
-    const vec3 center = light.position();
-    if (glm::dot(p - center, normal) <= 0.0f) return false;  // behind the one-sided emitter
-    vec3 ex, ey;
-    area_half_axes(light, &ex, &ey);
-    const vec2 local = is_round(light.shape) ? sample_uniform_disk(u) : 2.0f * u - vec2(1.0f);
-    const vec3 offset = center + local.x * ex + local.y * ey - p;
+    const vec3 offset = area_light_point(light, u) - p;
     out->distance = glm::length(offset);
     out->wi = offset / out->distance;
     const float cos_light = -glm::dot(out->wi, normal);
@@ -203,6 +228,45 @@ bool LightSampler::sample_sun(const Light& light, const vec2& u, LightSample* ou
     return true;
 }
 
+bool LightSampler::sample_world(const vec3& p, const vec3& n, vec2 u, LightSample* out) const {
+    const uint32_t facing = facing_portal_count(p);
+    if (facing > 0 && u.x < kPortalFraction) {
+        // Through the k-th facing portal, u.x rescaled to pick k and then reused.
+        const float scaled = u.x / kPortalFraction * float(facing);
+        const uint32_t k = std::min(uint32_t(scaled), facing - 1);
+        u.x = std::min(scaled - float(k), kOneMinusEpsilon);
+        const vec3 offset = area_light_point(facing_portal(p, k), u) - p;
+        const float distance = glm::length(offset);
+        if (!(distance > 0.0f)) return false;
+        out->wi = offset / distance;
+    } else {
+        if (facing > 0)
+            u.x = std::min((u.x - kPortalFraction) / (1.0f - kPortalFraction), kOneMinusEpsilon);
+        const vec3 local = world_sampling_ == WorldSampling::Cosine ? sample_cosine_hemisphere(u)
+                                                                    : sample_uniform_sphere(u);
+        out->wi = Frame::from_z(n).to_world(local);
+    }
+    out->distance = kInfinity;
+    out->radiance = scene_->world().radiance();
+    out->pdf = world_pdf(p, n, out->wi);
+    out->delta = false;
+    return out->pdf > 0.0f;
+}
+
+uint32_t LightSampler::facing_portal_count(const vec3& p) const {
+    uint32_t count = 0;
+    for (uint32_t index : portals_) count += in_front_of_area_light(scene_->lights()[index], p);
+    return count;
+}
+
+const Light& LightSampler::facing_portal(const vec3& p, uint32_t k) const {
+    for (uint32_t index : portals_) {
+        const Light& portal = scene_->lights()[index];
+        if (in_front_of_area_light(portal, p) && k-- == 0) return portal;
+    }
+    throw Internal("LightSampler::facing_portal: fewer facing portals than counted");
+}
+
 bool LightSampler::sample_triangle(const EmissiveTriangle& tri, const vec3& p, const vec2& u,
                                    LightSample* out) const {
     const vec3 b = sample_uniform_triangle(u);
@@ -220,9 +284,22 @@ bool LightSampler::sample_triangle(const EmissiveTriangle& tri, const vec3& p, c
     return true;
 }
 
-float LightSampler::world_pdf(const vec3& n, const vec3& wi) const {
-    if (world_sampling_ == WorldSampling::Uniform) return sample_uniform_sphere_pdf();
-    return std::max(0.0f, glm::dot(n, wi)) * kInvPi;
+float LightSampler::world_pdf(const vec3& p, const vec3& n, const vec3& wi) const {
+    const float base = world_sampling_ == WorldSampling::Uniform
+                           ? sample_uniform_sphere_pdf()
+                           : std::max(0.0f, glm::dot(n, wi)) * kInvPi;
+    uint32_t facing = 0;
+    float through_portals = 0.0f;  // sum over facing portals of their solid-angle pdfs
+    for (uint32_t index : portals_) {
+        const Light& portal = scene_->lights()[index];
+        if (!in_front_of_area_light(portal, p)) continue;
+        ++facing;
+        float t, cos_axis;
+        if (area_light_crossing(portal, p, wi, &t, &cos_axis) && cos_axis < 0.0f)
+            through_portals += t * t / (-cos_axis * area_light_area(portal));
+    }
+    if (facing == 0) return base;
+    return kPortalFraction * through_portals / float(facing) + (1.0f - kPortalFraction) * base;
 }
 
 bool LightSampler::intersect_lights(const vec3& p, const vec3& wi, float t_max, bool camera_ray,
@@ -231,52 +308,52 @@ bool LightSampler::intersect_lights(const vec3& p, const vec3& wi, float t_max, 
     bool found = false;
     for (uint32_t i = 0; i < scene_->lights().size(); ++i) {
         if (light_emitter_[i] == kInvalidId) continue;
-        const Light& light = scene_->lights()[i];
+        const Light& light = scene_->lights()[i];  // portals have no emitter: skipped above
         if (camera_ray && !light.visible_camera) continue;
         const bool disk = (light.type == LightType::Point || light.type == LightType::Spot) &&
                           light.radius > 0.0f;
-        if (!disk && light.type != LightType::Area) continue;
-        const vec3 center = light.position();
-        const vec3 normal = disk ? glm::normalize(p - center) : area_emit_normal(light);
-        const float denom = glm::dot(wi, normal);
-        if (!(denom < 0.0f)) continue;  // parallel, or the back of an area light
-        const float t = glm::dot(center - p, normal) / denom;
-        if (!(t > 0.0f && t < best_t)) continue;
-        const vec3 q = p + t * wi - center;
-        float area;
+        float t, cos_light, area;
         vec3 radiance;
         if (disk) {
+            // The disk faces p: its plane is perpendicular to p - centre.
+            const vec3 center = light.position();
+            const vec3 normal = glm::normalize(p - center);
+            const float denom = glm::dot(wi, normal);
+            if (!(denom < 0.0f)) continue;
+            t = glm::dot(center - p, normal) / denom;
+            const vec3 q = p + t * wi - center;
             if (glm::dot(q, q) > light.radius * light.radius) continue;
+            cos_light = -denom;
             area = kPi * light.radius * light.radius;
             radiance = light.color * point_intensity_from_power(light.power) / area;
             if (light.type == LightType::Spot)
                 radiance *= spot_attenuation(light, glm::dot(light.direction(), -wi));
-        } else {
-            vec3 ex, ey;
-            area_half_axes(light, &ex, &ey);
-            const float s = glm::dot(q, ex) / glm::dot(ex, ex);
-            const float r = glm::dot(q, ey) / glm::dot(ey, ey);
-            const bool inside = is_round(light.shape) ? s * s + r * r <= 1.0f
-                                                      : std::fabs(s) <= 1.0f && std::fabs(r) <= 1.0f;
-            if (!inside) continue;
+        } else if (light.type == LightType::Area) {
+            float cos_axis;
+            if (!area_light_crossing(light, p, wi, &t, &cos_axis) || !(cos_axis < 0.0f))
+                continue;  // missed, or met from behind (one-sided)
+            cos_light = -cos_axis;
             area = area_light_area(light);
             radiance = light.color * area_radiance_from_power(light.power, area);
+        } else {
+            continue;
         }
+        if (!(t > 0.0f && t < best_t)) continue;
         best_t = t;
         found = true;
         out->radiance = radiance;
-        out->light_pdf = selection_pdf(light_emitter_[i]) * t * t / (-denom * area);
+        out->light_pdf = selection_pdf(light_emitter_[i]) * t * t / (cos_light * area);
     }
     return found;
 }
 
-std::vector<EmissionHit> LightSampler::escaped(const vec3& n, const vec3& wi,
+std::vector<EmissionHit> LightSampler::escaped(const vec3& p, const vec3& n, const vec3& wi,
                                                bool camera_ray) const {
     std::vector<EmissionHit> hits;
     const vec3 world = scene_->world().radiance();
     if (glm::any(glm::greaterThan(world, vec3(0.0f))))
         hits.push_back({world, world_emitter_ != kInvalidId
-                                   ? selection_pdf(world_emitter_) * world_pdf(n, wi)
+                                   ? selection_pdf(world_emitter_) * world_pdf(p, n, wi)
                                    : 0.0f});
     for (uint32_t i = 0; i < scene_->lights().size(); ++i) {
         const Light& light = scene_->lights()[i];

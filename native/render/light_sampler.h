@@ -27,6 +27,13 @@
 // light has visible_camera (Blender's Object.visible_camera, False by default for lights:
 // Cycles' camera then sees through it; measured, case light_camera_default).
 //
+// Portals (Light.portal, Cycles' area light Portal): they emit nothing, are not seen, and change
+// only how the world is sampled. For a shading point in front of at least one portal (on the
+// side it faces), a world sample goes through a uniformly chosen facing portal (uniform point on
+// it) with probability kPortalFraction, and is cosine (or uniform) otherwise; the world's pdf is
+// that mixture, so the estimate stays unbiased for light that enters elsewhere. Suns are not
+// affected (their cone is sampled directly).
+//
 // Selection: one emitter per NEE sample, chosen with probability proportional to an estimate of
 // its power (util DiscreteDistribution). Returned pdfs include that selection probability and are
 // per unit solid angle at the shading point; delta emitters (r = 0 point/spot, angle = 0 sun)
@@ -42,6 +49,9 @@
 #include "util/sampling.h"
 
 namespace shgi {
+
+// Share of world samples aimed through portals when a shading point faces at least one.
+inline constexpr float kPortalFraction = 0.8f;
 
 enum class WorldSampling : uint8_t {
     Cosine,   // cosine-weighted around the shading normal (pdf = cos/pi, 0 below)
@@ -82,7 +92,8 @@ class LightSampler {
     // What a ray leaving p (normal n) along wi sees when it misses the scene: world and suns
     // (for a camera ray, only suns with visible_camera). Returns the emissions separately so
     // each gets its own MIS weight.
-    std::vector<EmissionHit> escaped(const vec3& n, const vec3& wi, bool camera_ray) const;
+    std::vector<EmissionHit> escaped(const vec3& p, const vec3& n, const vec3& wi,
+                                     bool camera_ray) const;
     // An emissive triangle hit at `hit` from p.
     EmissionHit triangle_emission(const Hit& hit, const vec3& wi) const;
 
@@ -99,7 +110,11 @@ class LightSampler {
     bool sample_sun(const Light& light, const vec2& u, LightSample* out) const;
     bool sample_triangle(const EmissiveTriangle& tri, const vec3& p, const vec2& u,
                          LightSample* out) const;
-    float world_pdf(const vec3& n, const vec3& wi) const;
+    bool sample_world(const vec3& p, const vec3& n, vec2 u, LightSample* out) const;
+    float world_pdf(const vec3& p, const vec3& n, const vec3& wi) const;
+    // Portals whose facing side p is on, in scene order; facing_portal(p, k) is the k-th.
+    uint32_t facing_portal_count(const vec3& p) const;
+    const Light& facing_portal(const vec3& p, uint32_t k) const;
     float selection_pdf(uint32_t emitter) const { return distribution_.pdf(emitter); }
 
     const Scene* scene_;
@@ -108,6 +123,7 @@ class LightSampler {
     std::vector<uint32_t> light_emitter_;  // scene light index -> emitter index (or kInvalidId)
     std::unordered_map<uint64_t, uint32_t> triangle_emitter_;  // (instance << 32 | tri) -> emitter
     uint32_t world_emitter_ = kInvalidId;
+    std::vector<uint32_t> portals_;  // scene light indices
     DiscreteDistribution distribution_;
 };
 
@@ -122,6 +138,15 @@ float spot_attenuation(const Light& light, float cos_angle);
 float area_light_area(const Light& light);
 // Disk and ellipse area lights (their surface is the ellipse inscribed in the half axes).
 bool is_round(AreaShape shape);
+// Where the line p + t wi (t > 0) crosses the area light's surface: *t, and the cosine
+// dot(wi, light.direction()) (< 0 when the ray meets its emitting front). False when the line is
+// parallel to it, crosses behind p, or misses the rectangle/ellipse.
+bool area_light_crossing(const Light& light, const vec3& p, const vec3& wi, float* t,
+                         float* cos_axis);
+// Whether p is on the side an area light (or portal) faces.
+bool in_front_of_area_light(const Light& light, const vec3& p);
+// A uniform point on an area light's surface (u in [0, 1)^2).
+vec3 area_light_point(const Light& light, const vec2& u);
 // Half extents of an area light along its local X and Y, in world space (object scale included,
 // as Cycles multiplies the light's size by its transform).
 void area_half_axes(const Light& light, vec3* ex, vec3* ey);

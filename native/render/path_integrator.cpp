@@ -62,7 +62,8 @@ void PathIntegrator::find_emission(const Ray& ray, const Hit& hit) {
         if (max_component(surface.radiance) > 0.0f)
             add_emission(surface.radiance, surface.light_pdf, false);
     } else {
-        for (const EmissionHit& escaped : lights_.escaped(last_normal_, ray.direction, camera_ray))
+        for (const EmissionHit& escaped : lights_.escaped(ray.origin, last_normal_, ray.direction,
+                                                                camera_ray))
             add_emission(escaped.radiance, escaped.light_pdf, true);
     }
 }

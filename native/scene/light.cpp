@@ -14,6 +14,9 @@ void validate_light(const Light& light) {
     require_non_negative(item, "strength", light.strength);
     require_transform(item, "world_from_light", light.world_from_light);
     require_non_negative(item, "radius", light.radius);
+    if (light.portal && light.type != LightType::Area)
+        throw InvalidArgument(format_message(item, ": portal is set on a light that is not an "
+                                             "area light; only area lights can be portals"));
     switch (light.type) {
         case LightType::Point:
             break;

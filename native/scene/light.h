@@ -36,6 +36,11 @@ struct Light {
     // cone. False by default, as for every light object Blender 3.4 creates; it never changes
     // the light a surface receives.
     bool visible_camera = false;
+    // Blender's Cycles "Portal" (area lights only, light.cycles.is_portal): the light emits
+    // nothing and is invisible; it marks an opening (a window) through which the world's light
+    // enters, placed like an area light facing into the room. Samplers then aim world light
+    // through it (render/light_sampler.h, photon/photon_emitter.h): less noise, same result.
+    bool portal = false;
 
     vec3 position() const { return vec3(world_from_light[3]); }
     // Unit emission axis in world space (the light's local -Z).

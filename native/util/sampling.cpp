@@ -105,7 +105,7 @@ uint32_t DiscreteDistribution::sample(float u, float* u_remapped) const {
     if (u_remapped) {
         const double width = cdf_[index + 1] - cdf_[index];
         const double t = width > 0.0 ? (u - cdf_[index]) / width : 0.0;
-        *u_remapped = std::min(static_cast<float>(t), 0x1.fffffep-1f);
+        *u_remapped = std::min(static_cast<float>(t), kOneMinusEpsilon);
     }
     return index;
 }

@@ -13,6 +13,9 @@
 
 namespace shgi {
 
+// Largest float below 1: a remapped or stratified u must stay in [0, 1) after rounding.
+inline constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
+
 // Uniform over the unit sphere; pdf = 1/(4 pi).
 vec3 sample_uniform_sphere(const vec2& u);
 float sample_uniform_sphere_pdf();

@@ -140,6 +140,7 @@ def build_scene():
     add_light("RectLight", "AREA", (3, 2, 3), energy=20.0, shape="RECTANGLE", size=2.0,
               size_y=0.5)
     add_light("DiskLight", "AREA", (4, 2, 3), energy=30.0, shape="DISK", size=1.5)
+    add_light("WindowPortal", "AREA", (5, 2, 3), energy=10.0, size=1.0).data.cycles.is_portal = True
     camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("CameraData"))
     camera.location = (0.0, -30.0, 10.0)
     bpy.context.scene.collection.objects.link(camera)
@@ -264,6 +265,8 @@ def check_lights(result):
     if (rect.shape, disk.shape, sun.type) != (shgi.AreaShape.RECTANGLE, shgi.AreaShape.DISK,
                                               shgi.LightType.SUN):
         raise AssertionError(f"light enums: {rect.shape}, {disk.shape}, {sun.type}")
+    if not lights["WindowPortal"].portal or rect.portal:
+        raise AssertionError("cycles.is_portal was not exported as Light.portal")
     matrix = np.array(bpy.data.objects["PointLight"].matrix_world)
     setup.check_close("point world_from_light", point.world_from_light.ravel(), matrix.ravel(),
                       TOLERANCE)

@@ -135,6 +135,15 @@ def test_area_light_sizes(shape, size_y):
     assert (light.power, light.size_x, light.size_y) == (20.0, 2.0, size_y)
 
 
+def test_portal_is_kept_for_area_lights_only():
+    portal = shgi.Light(**conversions.light_fields("AREA", 0.0, (1, 1, 1), IDENTITY, portal=True))
+    assert portal.portal
+    # Blender keeps cycles.is_portal on every light but uses it only for area lights.
+    point = shgi.Light(**conversions.light_fields("POINT", 10.0, (1, 1, 1), IDENTITY,
+                                                  portal=True))
+    assert not point.portal
+
+
 def test_unknown_light_type_names_it():
     with pytest.raises(ValueError, match="'PROBE'"):
         conversions.light_fields("PROBE", 1.0, (1, 1, 1), IDENTITY)

@@ -196,13 +196,15 @@ def texture_colorspace_is_known(colorspace_name):
 
 def light_fields(light_type, energy, color, matrix_world, *, shadow_soft_size=0.0,
                  spot_size=math.pi / 4, spot_blend=0.15, angle=0.0, shape="SQUARE", size=1.0,
-                 size_y=1.0, visible_camera=False, name="light"):
+                 size_y=1.0, visible_camera=False, portal=False, name="light"):
     """shgi.Light fields from a Blender light's properties (Blender's names and units).
 
     energy: ``Light.energy`` — W for point, spot and area ("Power"), W/m² for the sun
     ("Strength"). shadow_soft_size: the point/spot "Radius" in m. spot_size, angle: radians.
     size, size_y: the area light's sides or diameters in m (size_y only for RECTANGLE/ELLIPSE).
     visible_camera: the object's ``visible_camera`` (False for Blender's lights by default).
+    portal: Cycles' ``light.cycles.is_portal`` (area lights only; ignored for other types, as
+    Blender shows the option only for area lights).
     """
     if light_type not in LIGHT_TYPES:
         raise ValueError(f"light {name!r}: type {light_type!r} is not one of {list(LIGHT_TYPES)}")
@@ -222,7 +224,8 @@ def light_fields(light_type, energy, color, matrix_world, *, shadow_soft_size=0.
             raise ValueError(f"light {name!r}: area shape {shape!r} is not one of "
                              f"{list(AREA_SHAPES)}")
         second_side = size_y if shape in AREA_SHAPES_WITH_SIZE_Y else size
-        fields.update(shape=AREA_SHAPES[shape], size_x=float(size), size_y=float(second_side))
+        fields.update(shape=AREA_SHAPES[shape], size_x=float(size), size_y=float(second_side),
+                      portal=bool(portal))
     return fields
 
 

@@ -26,7 +26,8 @@ def light_from_object(obj, matrix_world):
         spot_size=getattr(data, "spot_size", 0.0), spot_blend=getattr(data, "spot_blend", 0.0),
         angle=getattr(data, "angle", 0.0), shape=getattr(data, "shape", "SQUARE"),
         size=getattr(data, "size", 0.0), size_y=getattr(data, "size_y", 0.0),
-        visible_camera=getattr(obj, "visible_camera", False), name=obj.name)
+        visible_camera=getattr(obj, "visible_camera", False),
+        portal=getattr(getattr(data, "cycles", None), "is_portal", False), name=obj.name)
     return shgi.Light(**fields)
 
 

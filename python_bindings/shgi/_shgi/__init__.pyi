@@ -471,6 +471,14 @@ class Light:
     def name(self, arg0: str) -> None:
         ...
     @property
+    def portal(self) -> bool:
+        """
+        Cycles' area light Portal: emits nothing, aims world light through an opening (area lights only).
+        """
+    @portal.setter
+    def portal(self, arg0: bool) -> None:
+        ...
+    @property
     def power(self) -> float:
         """
         W (point, spot, area).
