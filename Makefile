@@ -108,6 +108,7 @@ demo: install
 bench: build
 	$(BUILD_DIR)/bench/path_tracer_bench
 	$(BUILD_DIR)/bench/photon_lattice_bench
+	$(BUILD_DIR)/bench/preview_convergence_bench
 
 clean:
 	rm -rf $(BUILD_DIR)

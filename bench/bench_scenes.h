@@ -65,6 +65,40 @@ inline Scene cornell_box(uint32_t width = 128, uint32_t height = 128) {
     return scene;
 }
 
+inline Mesh uv_sphere(float radius, int rings, int segments) {
+    Mesh mesh;
+    for (int r = 0; r <= rings; ++r) {
+        const float theta = kPi * float(r) / float(rings);
+        for (int s = 0; s < segments; ++s) {
+            const float phi = kTwoPi * float(s) / float(segments);
+            mesh.positions.push_back(radius * vec3(std::sin(theta) * std::cos(phi),
+                                                   std::sin(theta) * std::sin(phi),
+                                                   std::cos(theta)));
+        }
+    }
+    for (int r = 0; r < rings; ++r)
+        for (int s = 0; s < segments; ++s) {
+            const uint32_t a = uint32_t(r * segments + s);
+            const uint32_t b = uint32_t(r * segments + (s + 1) % segments);
+            const uint32_t c = a + uint32_t(segments), d = b + uint32_t(segments);
+            if (r > 0) mesh.triangles.push_back(uvec3(a, c, b));
+            if (r + 1 < rings) mesh.triangles.push_back(uvec3(b, c, d));
+        }
+    return mesh;
+}
+
+// The Cornell-like room holding an orange UV sphere of 502,636 triangles (r = 0.3 m).
+inline Scene cornell_box_with_dense_sphere(uint32_t width, uint32_t height) {
+    Scene scene = cornell_box(width, height);
+    Material material;
+    material.base_color = vec3(0.8f, 0.6f, 0.3f);
+    const uint32_t material_id = scene.add_material(material);
+    Mesh sphere = uv_sphere(0.3f, 360, 700);
+    sphere.material_indices.assign(sphere.triangles.size(), material_id);
+    scene.add_instance(scene.add_mesh(sphere), glm::translate(mat4(1.0f), vec3(0.3f, 0.4f, 0.2f)));
+    return scene;
+}
+
 // Raw Embree rate: random origins inside the box, uniformly random directions, traced through
 // Scene::intersect's batch interface (ray streams, all threads). Rays per second.
 inline double incoherent_ray_rate(const Scene& scene, size_t count = size_t(1) << 21) {

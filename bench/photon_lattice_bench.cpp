@@ -20,28 +20,6 @@ namespace {
 
 constexpr int kRuns = 3;
 
-Mesh uv_sphere(float radius, int rings, int segments) {
-    Mesh mesh;
-    for (int r = 0; r <= rings; ++r) {
-        const float theta = kPi * float(r) / float(rings);
-        for (int s = 0; s < segments; ++s) {
-            const float phi = kTwoPi * float(s) / float(segments);
-            mesh.positions.push_back(radius * vec3(std::sin(theta) * std::cos(phi),
-                                                   std::sin(theta) * std::sin(phi),
-                                                   std::cos(theta)));
-        }
-    }
-    for (int r = 0; r < rings; ++r)
-        for (int s = 0; s < segments; ++s) {
-            const uint32_t a = uint32_t(r * segments + s);
-            const uint32_t b = uint32_t(r * segments + (s + 1) % segments);
-            const uint32_t c = a + uint32_t(segments), d = b + uint32_t(segments);
-            if (r > 0) mesh.triangles.push_back(uvec3(a, c, b));
-            if (r + 1 < rings) mesh.triangles.push_back(uvec3(b, c, d));
-        }
-    return mesh;
-}
-
 void run(const char* name, Scene& scene) {
     scene.commit();
     const double raw = bench::incoherent_ray_rate(scene);
@@ -86,13 +64,7 @@ void run(const char* name, Scene& scene) {
 int main() {
     Scene cornell = bench::cornell_box(640, 360);
     run("cornell box", cornell);
-    Scene dense = bench::cornell_box(640, 360);
-    Material material;
-    material.base_color = vec3(0.8f, 0.6f, 0.3f);
-    const uint32_t material_id = dense.add_material(material);
-    Mesh sphere = uv_sphere(0.3f, 360, 700);
-    sphere.material_indices.assign(sphere.triangles.size(), material_id);
-    dense.add_instance(dense.add_mesh(sphere), glm::translate(mat4(1.0f), vec3(0.3f, 0.4f, 0.2f)));
+    Scene dense = bench::cornell_box_with_dense_sphere(640, 360);
     run("cornell box + dense sphere", dense);
     return 0;
 }
