@@ -1,8 +1,10 @@
 """SHGI: spherical-harmonics global illumination for Blender (the add-on).
 
-This module only describes and registers the add-on; the work lives in its packages (export/
-turns Blender scenes into shgi.Scene). It imports without bpy so that bpy-free parts of the
-add-on can be tested with pytest.
+This module only describes and registers the add-on; the work lives in its packages:
+properties.py (scene.shgi), engine/ (the SHGI render engine, F12), operators/ (quality presets,
+frozen lattice solutions), ui/ (panels), export/ (Blender scenes → shgi.Scene). It imports
+without bpy so that the bpy-free parts can be tested with pytest, and registers even when the
+native module ``shgi`` cannot be imported (the render panel then shows why and the fix).
 """
 
 bl_info = {
@@ -15,21 +17,24 @@ bl_info = {
     "category": "Render",
 }
 
-# Classes to register, in order (the render engine, properties and panels come in later issues).
-_CLASSES = ()
+# Registered in this order, unregistered in reverse: properties before the engine and the
+# panels that read them.
+_PACKAGES = ("properties", "engine", "operators", "ui")
+
+
+def _modules():
+    import importlib
+
+    return [importlib.import_module(f"{__name__}.{name}") for name in _PACKAGES]
 
 
 def register():
-    """Registers the add-on's classes with Blender."""
-    import bpy
-
-    for cls in _CLASSES:
-        bpy.utils.register_class(cls)
+    """Registers the add-on's properties, render engine, operators and panels."""
+    for module in _modules():
+        module.register()
 
 
 def unregister():
-    """Unregisters the add-on's classes, in reverse order."""
-    import bpy
-
-    for cls in reversed(_CLASSES):
-        bpy.utils.unregister_class(cls)
+    """Unregisters everything register() registered, in reverse order."""
+    for module in reversed(_modules()):
+        module.unregister()

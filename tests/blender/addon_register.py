@@ -1,10 +1,16 @@
-"""The add-on enables, disables and enables again in Blender (register/unregister twice).
+"""The add-on enables, disables and enables again in Blender (register/unregister three times).
+
+While enabled: the SHGI render engine, scene.shgi with the implemented methods only, the
+operators, SHGI in the stock light/material/world panels, presets that set the counts, and
+every SHGI panel draws (into recording_layout.RecordingLayout, which checks property and
+operator names). After each disable: none of it is left behind (and stock panels lose SHGI).
 
 Prints ADDON_REGISTER_OK when every check passed.
 """
 
 import os
 import sys
+from types import SimpleNamespace
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import blender_test_setup as setup  # noqa: E402
@@ -13,24 +19,98 @@ setup.add_import_paths()
 
 import addon_utils  # noqa: E402
 import bpy  # noqa: E402
+from recording_layout import draw_panel  # noqa: E402
 
 MODULE = "shgi_blender"
+ENGINE = "SHGI"
+METHODS = {"PATH_TRACE", "PHOTON_LATTICE"}
+STOCK_PANELS = ("EEVEE_MATERIAL_PT_surface", "EEVEE_WORLD_PT_surface", "RENDER_PT_format",
+                "RENDER_PT_color_management", "DATA_PT_context_light")
+OWN_CLASSES = ("SHGI_RENDER_PT_method", "SHGI_RENDER_PT_photon_lattice", "SHGI_LIGHT_PT_light",
+               "SHGI_VIEWLAYER_PT_passes", "SHGI_OT_lattice_solve", "SHGI_OT_lattice_clear",
+               "SHGI_OT_quality_preset")
 
 
 def enabled():
     return MODULE in bpy.context.preferences.addons
 
 
+def engine_registered():
+    return bpy.types.RenderEngine.bl_rna_get_subclass_py(ENGINE) is not None
+
+
+def check_registered():
+    if not engine_registered():
+        raise AssertionError("the SHGI render engine is not registered")
+    scene = bpy.context.scene
+    scene.render.engine = ENGINE
+    methods = {item.identifier for item in
+               scene.shgi.bl_rna.properties["method"].enum_items}
+    if methods != METHODS:
+        raise AssertionError(f"scene.shgi.method offers {methods}, expected {METHODS}")
+    for panel in STOCK_PANELS:
+        if ENGINE not in getattr(bpy.types, panel).COMPAT_ENGINES:
+            raise AssertionError(f"{panel} does not show under SHGI")
+    for name in OWN_CLASSES:
+        if not hasattr(bpy.types, name):
+            raise AssertionError(f"{name} is not registered")
+    bpy.ops.shgi.quality_preset(preset="PRODUCTION")
+    if (scene.shgi.samples, scene.shgi.photons) != (1024, 4_000_000):
+        raise AssertionError(f"the Production preset set {scene.shgi.samples} samples, "
+                             f"{scene.shgi.photons} photons")
+    bpy.ops.shgi.quality_preset(preset="PREVIEW")
+    if scene.shgi.samples != 16:
+        raise AssertionError(f"the Preview preset set {scene.shgi.samples} samples")
+    check_panels_draw(scene)
+    scene.render.engine = "BLENDER_EEVEE"
+
+
+def check_panels_draw(scene):
+    """Every SHGI panel draws for each method; the light panel shows the Portal option."""
+    light = bpy.data.lights.new("panel_light", "AREA")
+    light_object = bpy.data.objects.new("panel_light", light)
+    context = SimpleNamespace(scene=scene, engine=ENGINE, light=light, object=light_object,
+                              view_layer=scene.view_layers[0], screen=None)
+    for method in sorted(METHODS):
+        scene.shgi.method = method
+        for name in ("SHGI_RENDER_PT_method", "SHGI_RENDER_PT_light_paths",
+                     "SHGI_RENDER_PT_last_render", "SHGI_VIEWLAYER_PT_passes"):
+            draw_panel(name, context)
+    draw_panel("SHGI_RENDER_PT_photon_lattice", context)
+    draw_panel("SHGI_LIGHT_PT_light", context)
+    scene.view_layers[0].use_pass_mist = True
+    if "Mist" not in draw_panel("SHGI_VIEWLAYER_PT_passes", context):
+        raise AssertionError("the passes panel does not name the Mist pass SHGI leaves out")
+    scene.view_layers[0].use_pass_mist = False
+    bpy.data.objects.remove(light_object)
+    bpy.data.lights.remove(light)
+
+
+def check_unregistered():
+    if engine_registered():
+        raise AssertionError("the SHGI render engine is still registered")
+    if hasattr(bpy.types.Scene, "shgi"):
+        raise AssertionError("scene.shgi is still defined")
+    for panel in STOCK_PANELS:
+        if ENGINE in getattr(bpy.types, panel).COMPAT_ENGINES:
+            raise AssertionError(f"{panel} still lists SHGI")
+    for name in OWN_CLASSES:
+        if hasattr(bpy.types, name):
+            raise AssertionError(f"{name} is still registered")
+
+
 def main():
-    for attempt in range(2):
+    for attempt in range(3):
         module = addon_utils.enable(MODULE, default_set=True, handle_error=None)
         if module is None or not enabled():
             raise AssertionError(f"enable #{attempt + 1} failed")
         if module.bl_info["name"] != "SHGI" or tuple(module.bl_info["blender"]) > (3, 4, 1):
             raise AssertionError(f"bl_info: {module.bl_info}")
+        check_registered()
         addon_utils.disable(MODULE, default_set=True, handle_error=None)
         if enabled():
             raise AssertionError(f"disable #{attempt + 1} left the add-on enabled")
+        check_unregistered()
     import shgi_blender.export
     if not callable(shgi_blender.export.export_scene):
         raise AssertionError("shgi_blender.export.export_scene is missing")

@@ -1,0 +1,233 @@
+"""F12: RenderEngine.render for one view layer (bpy side, Blender's main thread only).
+
+Steps: export the render depsgraph (export/), start a RenderJob on a worker thread (commit,
+solve, progressive sampling, all in native calls that release the GIL), then poll it every
+POLL_SECONDS: Esc (``test_break``) cancels the job, progress and the stage go to Blender's
+status, each new snapshot's Combined goes to the image editor, and at the end every pass the
+view layer enables is written with Cycles' names. Export warnings, native warnings and
+unsupported passes are reported as WARNING; a failure is set with ``error_set`` and reported as
+ERROR (bpy.ops.render.render then raises RuntimeError in scripts).
+
+With a lattice method and a frozen solution for the scene (solution_cache, the Solve operator),
+only the camera is exported and the frozen solution is rendered from it.
+"""
+
+import logging
+import queue
+import time
+
+from .. import native, settings
+from . import passes, scene_checks, solution_cache
+from .render_job import RenderJob
+
+POLL_SECONDS = 0.05
+logger = logging.getLogger("shgi_blender.engine")
+BYTES_PER_MEGABYTE = 1024.0 * 1024.0
+
+# What the last render did (method, samples, seconds, warnings, cancelled, error): shown in the
+# render panel and read by the headless tests.
+_last_render = {}
+
+
+def last_render():
+    """A copy of the record of the last final render of this session."""
+    return dict(_last_render)
+
+
+class _NativeLogQueue(logging.Handler):
+    """Collects the shgi logger's warnings from any thread for the main thread to report."""
+
+    def __init__(self):
+        super().__init__(level=logging.WARNING)
+        self.messages = queue.SimpleQueue()
+
+    def emit(self, record):
+        self.messages.put(record.getMessage())
+
+    def drain(self):
+        while not self.messages.empty():
+            yield self.messages.get()
+
+
+class FinalRender:
+    """One view layer's final render driven from the main thread.
+
+    engine: the RenderEngine (begin_result, test_break, report, ... are called on it).
+    """
+
+    def __init__(self, engine, depsgraph):
+        self.engine = engine
+        self.depsgraph = depsgraph
+        self.scene = depsgraph.scene
+        self.view_layer = depsgraph.view_layer
+        self.width, self.height = engine.resolution_x, engine.resolution_y
+        self.record = {"method": self.scene.shgi.method, "warnings": [], "errors": [],
+                       "cancelled": False, "samples": 0, "timings": {},
+                       "size": (self.width, self.height), "frozen_solution": False}
+
+    # --- reports ---------------------------------------------------------------------------------
+
+    def warn(self, message):
+        if message not in self.record["warnings"]:
+            self.record["warnings"].append(message)
+            self.engine.report({"WARNING"}, message)
+
+    def fail(self, message):
+        self.record["errors"].append(message)
+        self.engine.error_set(message)
+        self.engine.report({"ERROR"}, message)
+
+    # --- the render ------------------------------------------------------------------------------
+
+    def run(self):
+        start = time.perf_counter()
+        log = _NativeLogQueue()
+        logging.getLogger("shgi").addHandler(log)
+        try:
+            self._render(log)
+        except ValueError as error:  # bad settings or scene, named by the native checks
+            self.fail(f"SHGI: {error}")
+        except Exception as error:  # a bug: report it rather than leave Blender mid-render
+            logger.exception("SHGI render failed")
+            self.fail(f"SHGI: internal error, {type(error).__name__}: {error} (traceback in the "
+                      "console)")
+        finally:
+            logging.getLogger("shgi").removeHandler(log)
+            self.record["timings"]["total"] = time.perf_counter() - start
+            _last_render.clear()
+            _last_render.update(self.record)
+
+    def _render(self, log):
+        shgi = native.module()
+        if shgi is None:
+            self.fail(native.error())
+            return
+        for name in passes.unsupported_enabled_passes(self.view_layer):
+            self.warn(f"view layer {self.view_layer.name!r}: the {name} pass is not computed "
+                      "by SHGI; it is left out")
+        if self.scene.render.use_border:
+            self.warn("Render Region is ignored by SHGI: the full frame is rendered")
+        job = self._start_job(shgi)
+        if job is not None:
+            self._follow(job, log)
+
+    def _start_job(self, shgi):
+        """Exports and starts the RenderJob of the scene's method (None after a failure)."""
+        props = self.scene.shgi
+        method = settings.METHODS_BY_ID.get(props.method)
+        if method is None:
+            self.fail(f"SHGI: render method {props.method!r} is not available in this version")
+            return None
+        solution = (solution_cache.get(self.scene.name_full) if method.uses_lattice else None)
+        if solution is not None:
+            return self._start_frozen_job(shgi, props, solution)
+        from ..export import export_scene  # imports shgi: only once it is known to import
+
+        export_start = time.perf_counter()
+        export = export_scene(self.depsgraph, self.scene, report=self._export_warning)
+        self.record["timings"]["export"] = time.perf_counter() - export_start
+        if not export.scene.has_camera:
+            self.fail("SHGI: the scene has no usable camera (see the warnings)")
+            return None
+        for message in scene_checks.scene_warnings(export.scene):
+            self.warn(f"SHGI: {message}")
+        if method.uses_lattice:
+            # Without geometry there is nothing to solve: direct light (the world) only.
+            lattice_settings = (None if export.scene.empty
+                                else settings.photon_lattice_settings(props, shgi))
+            job = RenderJob(shgi, export.scene, props.samples,
+                            preview_settings=settings.preview_settings(props, shgi),
+                            lattice_settings=lattice_settings)
+        else:
+            job = RenderJob(shgi, export.scene, props.samples,
+                            path_tracer_settings=settings.path_tracer_settings(props, shgi))
+        return job.start()
+
+    def _export_warning(self, _level, message):
+        self.warn(message)
+
+    def _start_frozen_job(self, shgi, props, solution):
+        """A job rendering the scene's frozen lattice solution from the current camera."""
+        from ..export.camera import camera_from_scene
+        from ..export.result import WarningLog
+
+        camera = camera_from_scene(self.scene, self.depsgraph, WarningLog(self._export_warning))
+        if camera is None:
+            self.fail("SHGI: the scene has no usable camera (see the warnings)")
+            return None
+        self.record["frozen_solution"] = True
+        self._report_memory(solution.memory_bytes)
+        self.engine.report({"INFO"}, "SHGI: rendering the frozen photon lattice solved at "
+                           f"{time.strftime('%H:%M:%S', time.localtime(solution.solved_at))}; "
+                           "Clear it to see later scene edits")
+        return RenderJob(shgi, solution.scene, props.samples,
+                         preview_settings=settings.preview_settings(props, shgi),
+                         field=solution.lattice, camera=camera).start()
+
+    def _follow(self, job, log):
+        """Polls the job until it ends, then writes the result and reports the outcome."""
+        result = self.engine.begin_result(0, 0, self.width, self.height,
+                                          layer=self.view_layer.name)
+        try:
+            while not job.wait(POLL_SECONDS):
+                if self.engine.test_break():
+                    job.cancel()
+                self.engine.update_progress(job.fraction)
+                self.engine.update_stats("", f"SHGI | {job.stage}")
+                self._report_native_warnings(log)
+                snapshot = job.take_snapshot()
+                if snapshot is not None:
+                    self._write(result, snapshot, ("Combined",))
+                    self.engine.update_result(result)
+            self._report_native_warnings(log)
+            snapshot = job.last_snapshot()
+            if snapshot is not None:
+                self._write(result, snapshot, None)
+        finally:
+            if job.running:  # an exception on this side: stop the worker before leaving
+                job.cancel()
+                job.wait()
+            self.engine.end_result(result)
+        self._record_job(job)
+
+    def _report_memory(self, lattice_bytes):
+        """Blender's memory statistics show the lattice's bytes (render buffers are Blender's)."""
+        megabytes = lattice_bytes / BYTES_PER_MEGABYTE
+        self.engine.update_memory_stats(memory_used=megabytes, memory_peak=megabytes)
+
+    def _report_native_warnings(self, log):
+        for message in log.drain():
+            self.warn(f"SHGI: {message}")
+
+    def _write(self, result, snapshot, names):
+        """Copies the snapshot's passes (all, or those in `names`) into the render result."""
+        layer = result.layers[0]
+        for render_pass in layer.passes:
+            if names is not None and render_pass.name not in names:
+                continue
+            pixels = snapshot.passes.get(render_pass.name)
+            if pixels is None:
+                continue
+            if pixels.shape[:2] != (self.height, self.width):
+                raise ValueError(f"pass {render_pass.name}: {pixels.shape[1]}x{pixels.shape[0]} "
+                                 f"pixels for a {self.width}x{self.height} render")
+            render_pass.rect = passes.blender_rect(pixels, render_pass.channels)
+
+    def _record_job(self, job):
+        self.record["samples"] = job.samples_done
+        self.record["timings"].update(job.timings)
+        self.record["cancelled"] = job.cancelled
+        if job.solution is not None:
+            self.record["lattice_timings"] = dict(job.solution.timings)
+            self.record["lattice_memory_bytes"] = job.solution.memory_bytes
+            self._report_memory(job.solution.memory_bytes)
+        if job.error is not None:
+            self.fail(f"SHGI: {job.error}")
+        elif job.cancelled:
+            self.engine.report({"INFO"}, f"SHGI: render cancelled after {job.samples_done} of "
+                               f"{job.samples} samples")
+
+
+def render(engine, depsgraph):
+    """RenderEngine.render: renders the depsgraph's view layer into a new render result."""
+    FinalRender(engine, depsgraph).run()

@@ -1,0 +1,33 @@
+"""SHGI_OT_quality_preset: sets the counts of scene.shgi from a quality preset (presets.py)."""
+
+import bpy
+from bpy.props import EnumProperty
+
+from .. import presets
+
+PRESET_ITEMS = [(name, presets.PRESET_LABELS[name],
+                 ", ".join(f"{field} {value:,}" for field, value in values.items()))
+                for name, values in presets.QUALITY_PRESETS.items()]
+
+
+class SHGI_OT_quality_preset(bpy.types.Operator):
+    """Set samples, photons and lattice resolutions for a level of quality"""
+
+    bl_idname = "shgi.quality_preset"
+    bl_label = "SHGI Quality Preset"
+    bl_options = {"REGISTER", "UNDO"}
+
+    preset: EnumProperty(name="Preset", items=PRESET_ITEMS, default="MEDIUM")
+
+    @classmethod
+    def description(cls, _context, properties):
+        values = presets.QUALITY_PRESETS[properties.preset]
+        return f"{presets.PRESET_LABELS[properties.preset]}: " + ", ".join(
+            f"{field.replace('_', ' ')} {value:,}" for field, value in values.items())
+
+    def execute(self, context):
+        presets.apply_preset(context.scene.shgi, self.preset)
+        return {"FINISHED"}
+
+
+CLASSES = (SHGI_OT_quality_preset,)

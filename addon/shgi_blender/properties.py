@@ -1,0 +1,92 @@
+"""``scene.shgi``: the render settings of the SHGI engine (a PropertyGroup).
+
+Property names are the native settings' field names and their defaults the native defaults
+(settings.py holds both tables and the mapping to PathTracerSettings, PreviewSettings and
+PhotonLatticeSettings). Enum tables are module-level so Blender keeps them alive.
+"""
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty
+
+from . import settings
+
+D = settings.PROPERTY_DEFAULTS
+
+METHOD_ITEMS = [(m.identifier, m.label, m.description, m.number) for m in settings.METHODS]
+WORLD_SAMPLING_ITEMS = list(settings.ENUM_ITEMS["world_sampling"])
+CAUSTICS_ITEMS = list(settings.ENUM_ITEMS["caustics"])
+INTERPOLATION_ITEMS = list(settings.ENUM_ITEMS["interpolation"])
+
+class ShgiSceneSettings(bpy.types.PropertyGroup):
+    """SHGI render settings of a scene (``scene.shgi``)."""
+
+    method: EnumProperty(
+        name="Method", items=METHOD_ITEMS, default=settings.METHODS[0].identifier,
+        description="How indirect light is computed")
+    samples: IntProperty(
+        name="Samples", default=D["samples"], min=1, soft_max=4096,
+        description="Samples per pixel of a final render")
+    seed: IntProperty(
+        name="Seed", default=D["seed"], min=0,
+        description="Random seed; a render is a pure function of it")
+    max_bounces: IntProperty(
+        name="Total", default=D["max_bounces"], min=0, max=1024,
+        description="Total bounce limit of a path (Cycles' Max Bounces > Total)")
+    diffuse_bounces: IntProperty(
+        name="Diffuse", default=D["diffuse_bounces"], min=0, max=1024,
+        description="Diffuse bounces of camera paths, and photon scatterings of the lattices")
+    glossy_bounces: IntProperty(
+        name="Glossy", default=D["glossy_bounces"], min=0, max=1024,
+        description="Glossy bounce limit")
+    transmission_bounces: IntProperty(
+        name="Transmission", default=D["transmission_bounces"], min=0, max=1024,
+        description="Transmission bounce limit")
+    clamp_indirect: FloatProperty(
+        name="Clamp Indirect", default=D["clamp_indirect"], min=0.0, soft_max=100.0,
+        description="Largest colour component of an indirect sample; 0 disables clamping")
+    world_sampling: EnumProperty(
+        name="World Sampling", items=WORLD_SAMPLING_ITEMS, default=D["world_sampling"],
+        description="How direct light from the world is sampled")
+    max_specular_bounces: IntProperty(
+        name="Specular Bounces", default=D["max_specular_bounces"], min=0, max=64,
+        description="Mirror and glass bounces followed by the lattice renderer")
+    photons: IntProperty(
+        name="Photons", default=D["photons"], min=1, soft_max=50_000_000,
+        description="Photons emitted per solve")
+    resolution: IntProperty(
+        name="Resolution", default=D["resolution"], min=1, soft_max=256,
+        description="Cells along the longest side of the global lattice")
+    order: IntProperty(
+        name="SH Order", default=D["order"], min=1, max=2,
+        description="Spherical-harmonics order of the global lattice (1: 4, 2: 9 coefficients)")
+    caustics: EnumProperty(
+        name="Caustics", items=CAUSTICS_ITEMS, default=D["caustics"],
+        description="Where light -> specular -> diffuse photons go")
+    caustic_resolution: IntProperty(
+        name="Caustic Resolution", default=D["caustic_resolution"], min=1, soft_max=512,
+        description="Cells along the longest side of the caustic lattice")
+    interpolation: EnumProperty(
+        name="Interpolation", items=INTERPOLATION_ITEMS, default=D["interpolation"],
+        description="How the lattice is sampled between cells")
+    blur_passes: IntProperty(
+        name="Blur Passes", default=D["blur_passes"], min=0, max=16,
+        description="3x3x3 blurs of the global lattice (smoother, darker corners)")
+    world_in_field: BoolProperty(
+        name="World in Lattice", default=D["world_in_field"],
+        description="The lattice carries the world's direct light (less noise, blurrier)")
+
+
+_CLASSES = (ShgiSceneSettings,)
+
+
+def register():
+    for cls in _CLASSES:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.shgi = PointerProperty(type=ShgiSceneSettings, name="SHGI",
+                                           description="SHGI render settings")
+
+
+def unregister():
+    del bpy.types.Scene.shgi
+    for cls in reversed(_CLASSES):
+        bpy.utils.unregister_class(cls)

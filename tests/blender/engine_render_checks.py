@@ -1,0 +1,216 @@
+"""F12 with the SHGI engine against F12 with Cycles on the project's two scenes (issue 5).
+
+For the Cornell box and the sun room (examples/blender_scenes.py at SCALE) this script
+1. checks that exporting the bpy scene gives the scene examples/scenes.py builds;
+2. renders Cycles (CYCLES_SAMPLES spp) and SHGI with each method through F12 and records, per
+   method: Combined PSNR after auto-exposure and sRGB, the Combined mean ratio, the
+   DiffInd x DiffCol mean ratio, the pass names of both results and the render record;
+3. solves a frozen photon lattice with the Solve operator, checks the panel's figures, renders
+   it through F12 from the scene camera and from a moved camera, and clears it;
+4. turns view-layer passes off and on and checks that F12's result follows them.
+The pytest side (tests/python/test_blender_engine.py) asserts the figures; this script asserts
+only what needs Blender (the export, the frozen solution) and prints ENGINE_RENDER_OK.
+"""
+
+import json
+import os
+import sys
+import tempfile
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import engine_common as common  # noqa: E402
+from blender_test_setup import check_close  # noqa: E402
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+import shgi  # noqa: E402
+import scenes  # noqa: E402  (examples/scenes.py, on the path through engine_common)
+from mathutils import Matrix  # noqa: E402
+from recording_layout import draw_panel  # noqa: E402
+from shgi_blender.engine import final_render, passes, solution_cache  # noqa: E402
+from shgi_blender.export import export_scene  # noqa: E402
+
+SCALE = 0.25  # 64 x 64 (Cornell box) and 64 x 48 (sun room) pixels
+CYCLES_SAMPLES = 1024
+# Samples of the path tracer; the lattice renders with the Medium quality preset (64 spp,
+# 400k photons, a 24-cell lattice), what an artist would pick for a final preview.
+PATH_TRACE_SAMPLES = 1024
+QUALITY_PRESET = "MEDIUM"
+SEED = 1
+# Data passes enabled besides the calibration reset's light passes.
+EXTRA_PASS_FLAGS = ("use_pass_z", "use_pass_normal")
+# Export agreement with examples/scenes.py: float32 round trips of the same arithmetic.
+EXPORT_TOLERANCE = 1e-5
+CAMERA_NUDGE = Matrix.Translation((0.05, 0.0, 0.0))
+PASS_TOGGLE_CASE = ("Depth", "DiffInd")
+
+
+def check_export_matches_scripting_api(name, scene):
+    """The exported bpy scene equals examples/scenes.py's scene (lights, materials, camera...)."""
+    exported = export_scene(bpy.context.evaluated_depsgraph_get(), scene).scene
+    expected = getattr(scenes, name)(SCALE).scene
+    exported.commit()
+    expected.commit()
+    for index, (a, b) in enumerate(zip(exported.bounds(), expected.bounds())):
+        check_close(f"{name}: bounds[{index}]", a, b, EXPORT_TOLERANCE)
+    triangles = [sum(len(mesh.triangles) for mesh in s.meshes) for s in (exported, expected)]
+    if triangles[0] != triangles[1]:
+        raise AssertionError(f"{name}: {triangles[0]} triangles exported, {triangles[1]} built")
+    colors = [sorted(tuple(round(c, 5) for c in m.base_color) for m in s.materials)
+              for s in (exported, expected)]
+    if colors[0] != colors[1]:
+        raise AssertionError(f"{name}: material colours {colors[0]} != {colors[1]}")
+    for field in ("roughness", "specular", "metallic", "ior"):
+        values = {round(getattr(m, field), 5) for s in (exported, expected) for m in s.materials}
+        if len(values) != 1:
+            raise AssertionError(f"{name}: material {field} differs: {values}")
+    _check_lights(name, exported.lights, expected.lights)
+    for field in ("lens", "sensor_width", "resolution_x", "resolution_y"):
+        check_close(f"{name}: camera.{field}",
+                                             getattr(exported.camera, field),
+                                             getattr(expected.camera, field), EXPORT_TOLERANCE)
+    check_close(
+        f"{name}: camera matrix", np.ravel(exported.camera.world_from_camera),
+        np.ravel(expected.camera.world_from_camera), EXPORT_TOLERANCE)
+    check_close(
+        f"{name}: world", (*exported.world.color, exported.world.strength),
+        (*expected.world.color, expected.world.strength), EXPORT_TOLERANCE)
+
+
+def _check_lights(name, exported, expected):
+    by_name = {light.name: light for light in exported}
+    if sorted(by_name) != sorted(light.name for light in expected):
+        raise AssertionError(f"{name}: lights {sorted(by_name)} != "
+                             f"{sorted(light.name for light in expected)}")
+    for light in expected:
+        other = by_name[light.name]
+        fields = ["type", "visible_camera", "portal"]
+        fields += ["strength", "angle"] if light.type == shgi.LightType.SUN else [
+            "shape", "size_x", "size_y"] + ([] if light.portal else ["power"])
+        for field in fields:
+            a, b = getattr(other, field), getattr(light, field)
+            if isinstance(a, float):
+                check_close(f"{name}: {light.name}.{field}", a, b,
+                                                     EXPORT_TOLERANCE)
+            elif a != b:
+                raise AssertionError(f"{name}: {light.name}.{field} is {a}, expected {b}")
+        check_close(
+            f"{name}: {light.name} matrix", np.ravel(other.world_from_light),
+            np.ravel(light.world_from_light), EXPORT_TOLERANCE)
+
+
+def compare(reference, image):
+    """The figures of one SHGI render against the Cycles reference."""
+    def lit_diffuse(passes):
+        return common.mean_rgb(passes["DiffInd"] * passes["DiffCol"])
+
+    return {"psnr": common.psnr(reference["Combined"], image["Combined"]),
+            "mean_ratio": common.mean_rgb(image["Combined"]) / common.mean_rgb(
+                reference["Combined"]),
+            "diffind_ratio": lit_diffuse(image) / lit_diffuse(reference),
+            "passes": sorted(image)}
+
+
+def render_method(scene, method, reference, tmpdir, label=None):
+    scene.shgi.method = method
+    bpy.ops.shgi.quality_preset(preset=QUALITY_PRESET)
+    if method == "PATH_TRACE":
+        scene.shgi.samples = PATH_TRACE_SAMPLES
+    scene.shgi.seed = SEED
+    start = time.perf_counter()
+    image = common.render_f12(scene, "SHGI", os.path.join(tmpdir, f"{label or method}.exr"))
+    row = compare(reference, image)
+    row["seconds"] = time.perf_counter() - start
+    row["record"] = final_render.last_render()
+    return row, image
+
+
+def check_frozen_solution(scene, reference, tmpdir, results):
+    """Solve once, render the frozen lattice from two cameras, clear (non-interactive mode)."""
+    key = scene.name_full
+    status = bpy.ops.shgi.lattice_solve("INVOKE_DEFAULT")  # no window: it runs to the end
+    if status != {"FINISHED"} or solution_cache.get(key) is None:
+        raise AssertionError("Solve did not store a frozen solution")
+    solution = solution_cache.get(key)
+    if solution.memory_bytes <= 0 or "emit_trace" not in solution.timings:
+        raise AssertionError(f"frozen solution lacks figures: {solution.timings}")
+    panel = draw_panel("SHGI_RENDER_PT_photon_lattice")
+    if not all(text in panel for text in ("Frozen solution", "Emit + trace", "Memory")):
+        raise AssertionError(f"the photon lattice panel lacks the solution's figures: {panel}")
+    row, image = render_method(scene, "PHOTON_LATTICE", reference, tmpdir, "frozen")
+    if not row["record"]["frozen_solution"] or "export" in row["record"]["timings"]:
+        raise AssertionError(f"F12 did not render the frozen solution: {row['record']}")
+    results["PHOTON_LATTICE frozen"] = row
+    scene.camera.matrix_world = CAMERA_NUDGE @ scene.camera.matrix_world
+    _, moved = render_method(scene, "PHOTON_LATTICE", reference, tmpdir, "frozen_moved")
+    if not final_render.last_render()["frozen_solution"] or np.allclose(
+            moved["Combined"], image["Combined"]):
+        raise AssertionError("a camera move did not change the frozen solution's render")
+    scene.camera.matrix_world = CAMERA_NUDGE.inverted() @ scene.camera.matrix_world
+    if bpy.ops.shgi.lattice_clear() != {"FINISHED"} or solution_cache.get(key) is not None:
+        raise AssertionError("Clear left the frozen solution")
+
+
+def check_pass_toggles(scene, tmpdir):
+    """F12's result holds exactly Combined and the passes the view layer enables."""
+    layer = scene.view_layers[0]
+    for info in passes.PASSES[1:]:
+        setattr(layer, info.view_layer_flag, info.name in PASS_TOGGLE_CASE)
+    scene.shgi.method = "PATH_TRACE"
+    scene.shgi.samples = 2
+    names = set(common.render_f12(scene, "SHGI", os.path.join(tmpdir, "toggles.exr")))
+    if names != {"Combined", *PASS_TOGGLE_CASE}:
+        raise AssertionError(f"with {PASS_TOGGLE_CASE} enabled F12 gave {sorted(names)}")
+
+
+def run_scene(name, tmpdir):
+    scene = common.new_scene(name, SCALE)
+    for flag in EXTRA_PASS_FLAGS:
+        setattr(scene.view_layers[0], flag, True)
+    check_export_matches_scripting_api(name, scene)
+    scene.cycles.samples = CYCLES_SAMPLES
+    scene.cycles.seed = SEED
+    start = time.perf_counter()
+    reference = common.render_f12(scene, "CYCLES", os.path.join(tmpdir, f"{name}_cycles.exr"))
+    results = {"cycles": {"seconds": time.perf_counter() - start, "passes": sorted(reference),
+                          "samples": CYCLES_SAMPLES,
+                          "size": list(reference["Combined"].shape[1::-1])}}
+    for method in ("PATH_TRACE", "PHOTON_LATTICE"):
+        results[method], _ = render_method(scene, method, reference, tmpdir)
+    if name == "sun_room":
+        check_frozen_solution(scene, reference, tmpdir, results)
+    else:
+        check_pass_toggles(scene, tmpdir)
+    return results
+
+
+def print_table(results):
+    print(f"\n{'scene':<12}{'method':<24}{'spp':>6}{'PSNR dB':>9}{'mean':>8}"
+          f"{'DiffInd*Col':>13}{'seconds':>9}")
+    for name, rows in results.items():
+        cycles = rows["cycles"]
+        print(f"{name:<12}{'Cycles':<24}{cycles['samples']:>6}{'':>9}{'1':>8}{'1':>13}"
+              f"{cycles['seconds']:>9.2f}")
+        for method, row in rows.items():
+            if method == "cycles":
+                continue
+            print(f"{name:<12}{method:<24}{row['record']['samples']:>6}{row['psnr']:>9.2f}"
+                  f"{row['mean_ratio']:>8.4f}{row['diffind_ratio']:>13.4f}{row['seconds']:>9.2f}")
+
+
+def main():
+    out = common.results_path("shgi_engine_render.json")
+    shgi.set_max_threads(common.calibration.THREADS)
+    start = time.perf_counter()
+    results = {}
+    with tempfile.TemporaryDirectory(prefix="shgi_engine_") as tmpdir:
+        for name in ("cornell_box", "sun_room"):
+            results[name] = run_scene(name, tmpdir)
+    print_table(results)
+    with open(out, "w") as f:
+        json.dump(results, f, indent=1, default=str)
+    print(f"\nENGINE_RENDER_OK in {time.perf_counter() - start:.1f} s -> {out}", flush=True)
+
+
+main()

@@ -1,0 +1,301 @@
+"""The SHGI render engine (issue 5): its bpy-free parts here, F12 inside Blender.
+
+Outside Blender (/usr/bin/python3): the settings tables against the native structs, presets,
+the pass layout, the worker-thread render job (same image as one native call, prompt cancel),
+the scene checks. Inside Blender (tests/blender/engine_*.py, one Blender start each; the
+register/unregister cycles run in test_blender_export.py's addon_register.py): F12 of the
+project's Cornell box and sun room with each method against Cycles
+(Combined PSNR >= 28 dB after auto-exposure and sRGB; Combined mean within 10%, 2% for the
+path tracer; DiffInd x DiffCol mean within 10%; Cycles' pass names), the frozen lattice
+solution, Esc, broken scenes rendering with warnings, and a missing native module.
+"""
+
+import json
+import subprocess
+import sys
+import time
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import shgi
+from blender_support import BLENDER, blender_env, run_blender
+from conftest import REPO_ROOT
+
+sys.path.insert(0, str(REPO_ROOT / "addon"))
+sys.path.insert(0, str(REPO_ROOT / "examples"))
+
+import scenes  # noqa: E402
+from shgi_blender import native, presets, settings  # noqa: E402
+from shgi_blender.engine import passes, scene_checks  # noqa: E402
+from shgi_blender.engine.render_job import RenderJob, sample_rounds  # noqa: E402
+
+BLENDER_SCRIPTS = REPO_ROOT / "tests" / "blender"
+ADDON_DIR = REPO_ROOT / "addon"
+needs_blender = pytest.mark.skipif(BLENDER is None,
+                                   reason="Blender is not installed (make deps installs it)")
+
+# Issue 5's acceptance figures against Cycles.
+MIN_PSNR_DB = 28.0
+MEAN_TOLERANCE = {"PATH_TRACE": 0.02, "PHOTON_LATTICE": 0.10, "PHOTON_LATTICE frozen": 0.10}
+DIFFUSE_INDIRECT_TOLERANCE = 0.10
+# DESIGN.md: cancel returns within 0.2 s; the engine polls every 0.05 s.
+CANCEL_LATENCY = 0.5
+
+
+def default_props(**overrides):
+    """scene.shgi as a plain object with the property defaults."""
+    return SimpleNamespace(**dict(settings.PROPERTY_DEFAULTS, method="PATH_TRACE", **overrides))
+
+
+def committed(builder):
+    builder.scene.commit()
+    return builder.scene
+
+
+# --- settings, presets, passes (no Blender) ----------------------------------------------------
+
+@pytest.mark.parametrize("struct, fields", [
+    (shgi.PathTracerSettings, settings.PATH_TRACER_FIELDS),
+    (shgi.PreviewSettings, settings.PREVIEW_FIELDS),
+    (shgi.PhotonLatticeSettings, settings.PHOTON_LATTICE_FIELDS),
+])
+def test_property_defaults_are_the_native_defaults(struct, fields):
+    native_defaults = struct()
+    built = {shgi.PathTracerSettings: settings.path_tracer_settings,
+             shgi.PreviewSettings: settings.preview_settings,
+             shgi.PhotonLatticeSettings: settings.photon_lattice_settings}[struct](
+                 default_props(), shgi)
+    for native_name, prop_name in fields.items():
+        expected = getattr(native_defaults, native_name)
+        if (struct, native_name) == (shgi.PreviewSettings, "samples"):
+            expected = settings.PROPERTY_DEFAULTS["samples"]  # one samples for every method
+        assert getattr(built, native_name) == expected, (struct.__name__, native_name, prop_name)
+
+
+def test_settings_follow_the_properties():
+    props = default_props(samples=7, seed=3, caustics="PHOTON_MAP", interpolation="TRILINEAR",
+                          diffuse_bounces=2, world_sampling="UNIFORM")
+    path = settings.path_tracer_settings(props, shgi)
+    lattice = settings.photon_lattice_settings(props, shgi)
+    preview = settings.preview_settings(props, shgi)
+    assert (path.samples, path.seed, path.diffuse_bounces) == (7, 3, 2)
+    assert path.world_sampling == preview.world_sampling == shgi.WorldSampling.UNIFORM
+    assert lattice.caustics == shgi.CausticMode.PHOTON_MAP
+    assert lattice.interpolation == shgi.LatticeInterpolation.TRILINEAR
+    assert lattice.max_bounces == 2  # photon scatterings follow the diffuse bounce limit
+    assert settings.lattice_signature(props) != settings.lattice_signature(
+        default_props(photons=5))
+
+
+def test_enum_properties_offer_the_native_members():
+    for prop, type_name in settings.ENUM_FIELDS.items():
+        identifiers = {item[0] for item in settings.ENUM_ITEMS[prop]}
+        assert identifiers == set(getattr(shgi, type_name).__members__), prop
+
+
+def test_methods_implemented_and_reserved():
+    identifiers = [method.identifier for method in settings.METHODS]
+    assert identifiers == ["PATH_TRACE", "PHOTON_LATTICE"]
+    numbers = [method.number for method in settings.METHODS]
+    numbers += list(settings.RESERVED_METHODS.values())
+    assert len(set(numbers)) == len(numbers)
+    assert not set(identifiers) & set(settings.RESERVED_METHODS)
+
+
+def test_quality_presets_grow_and_are_recognised():
+    previous = None
+    for name in ("PREVIEW", "MEDIUM", "HIGH", "PRODUCTION"):
+        props = default_props()
+        presets.apply_preset(props, name)
+        assert presets.matching_preset(props) == name
+        counts = tuple(presets.QUALITY_PRESETS[name].values())
+        assert previous is None or all(a > b for a, b in zip(counts, previous))
+        previous = counts
+    props = default_props()
+    presets.apply_preset(props, "HIGH")
+    props.samples += 1
+    assert presets.matching_preset(props) is None
+    with pytest.raises(KeyError, match="ULTRA"):
+        presets.apply_preset(props, "ULTRA")
+
+
+def test_blender_rect_flips_rows_and_fits_channels():
+    pixels = np.arange(2 * 3 * 3, dtype=np.float32).reshape(2, 3, 3)  # row 0 on top
+    rect = passes.blender_rect(pixels, 4)
+    assert rect.shape == (6, 4) and rect.dtype == np.float32
+    np.testing.assert_array_equal(rect[:3, :3], pixels[1])  # Blender stores the bottom row first
+    assert not rect[:, 3].any()
+    np.testing.assert_array_equal(passes.top_down(passes.blender_rect(pixels, 3), 3, 2), pixels)
+    depth = passes.blender_rect(np.ones((2, 3), np.float32), 1)
+    assert depth.shape == (6, 1)
+
+
+def test_enabled_passes_follow_the_view_layer():
+    layer = SimpleNamespace(use_pass_z=True, use_pass_diffuse_indirect=True, use_pass_mist=True)
+    names = [info.name for info in passes.enabled_passes(layer)]
+    assert names == ["Combined", "Depth", "DiffInd"]
+    assert passes.unsupported_enabled_passes(layer) == ["Mist"]
+    renderer_passes = shgi.render_path_traced(
+        committed(scenes.cornell_box(0.03)), shgi.PathTracerSettings(samples=1))
+    for info in passes.PASSES:  # every registered pass is one the renderers fill
+        assert renderer_passes[info.name].shape[2] == info.channels, info.name
+
+
+def test_scene_checks_warn_about_black_and_empty_scenes():
+    lit = committed(scenes.cornell_box(0.03))
+    assert scene_checks.scene_warnings(lit) == []
+    dark = shgi.Scene()
+    dark.set_world(shgi.World(color=(1, 1, 1), strength=0.0))
+    warnings = scene_checks.scene_warnings(dark)
+    assert len(warnings) == 2 and "no geometry" in warnings[0] and "black" in warnings[1]
+    portal_only = shgi.Scene()
+    portal_only.set_world(shgi.World(strength=0.0))
+    portal_only.add_light(shgi.Light(type=shgi.LightType.AREA, portal=True))
+    assert not scene_checks.emits_light(portal_only)
+
+
+def test_native_module_imports_here():
+    assert native.available() and native.error() is None
+
+
+# --- the render job (no Blender) ---------------------------------------------------------------
+
+def test_sample_rounds_start_small_and_sum_up():
+    assert sample_rounds(1) == [1]
+    assert sample_rounds(64) == [1, 2, 4, 8, 8, 8, 8, 8, 8, 8, 1]
+    for total in (3, 16, 100, 1024):
+        rounds = sample_rounds(total)
+        assert sum(rounds) == total and rounds[0] == 1 and max(rounds) <= max(1, total // 8)
+
+
+def test_path_trace_job_equals_one_native_render():
+    scene = committed(scenes.cornell_box(0.06))
+    path_settings = shgi.PathTracerSettings(samples=12, seed=4)
+    job = RenderJob(shgi, scene, 12, path_tracer_settings=path_settings).start()
+    assert job.wait(60) and job.error is None and not job.cancelled
+    expected = shgi.render_path_traced(scene, path_settings)
+    snapshot = job.last_snapshot()
+    assert snapshot.samples == job.samples_done == 12
+    for name, pixels in expected.items():
+        np.testing.assert_array_equal(snapshot.passes[name], pixels, err_msg=name)
+    assert job.fraction == pytest.approx(1.0)
+
+
+def test_lattice_job_solves_then_renders_and_reuses_a_field_for_new_cameras():
+    builder = scenes.cornell_box(0.06)
+    scene = builder.scene  # committed by the job
+    job = RenderJob(shgi, scene, 4, preview_settings=shgi.PreviewSettings(seed=2),
+                    lattice_settings=shgi.PhotonLatticeSettings(photons=20000, seed=2)).start()
+    assert job.wait(60) and job.error is None
+    assert job.solution.timings["photons_emitted"] == 20000 and job.solution.memory_bytes > 0
+    assert set(job.timings) == {"commit", "solve", "render"}
+    camera = scene.camera
+    camera.resolution_x, camera.resolution_y = 20, 10
+    frozen = RenderJob(shgi, scene, 2, preview_settings=shgi.PreviewSettings(seed=2),
+                       field=job.field, camera=camera).start()
+    assert frozen.wait(60) and frozen.error is None and "solve" not in frozen.timings
+    assert frozen.last_snapshot().passes["Combined"].shape == (10, 20, 4)
+
+
+@pytest.mark.parametrize("stage, job_args", [
+    ("Path tracing", {"path_tracer_settings": shgi.PathTracerSettings()}),
+    ("Tracing photons", {"preview_settings": shgi.PreviewSettings(),
+                         "lattice_settings": shgi.PhotonLatticeSettings(photons=200_000_000)}),
+])
+def test_cancel_stops_a_job_promptly(stage, job_args):
+    scene = committed(scenes.cornell_box(0.25))
+    job = RenderJob(shgi, scene, 1_000_000, **job_args).start()
+    deadline = time.perf_counter() + 30
+    while not job.stage.startswith(stage) and time.perf_counter() < deadline:
+        time.sleep(0.01)
+    time.sleep(0.3)  # well inside the stage
+    assert job.stage.startswith(stage), job.stage
+    cancelled_at = time.perf_counter()
+    job.cancel()
+    assert job.wait(10)
+    latency = time.perf_counter() - cancelled_at
+    assert job.cancelled and job.error is None
+    assert latency < CANCEL_LATENCY, latency
+    assert job.samples_done < job.samples
+
+
+def test_job_errors_are_kept_for_the_engine():
+    scene = shgi.Scene()
+    scene.commit()  # no camera: the path tracer refuses
+    job = RenderJob(shgi, scene, 1, path_tracer_settings=shgi.PathTracerSettings()).start()
+    assert job.wait(10)
+    assert isinstance(job.error, ValueError) and not job.cancelled
+
+
+# --- inside Blender ----------------------------------------------------------------------------
+
+_RUNS = {}
+# Scripts that break a render on purpose (Esc, an ERROR report): Blender then quits with exit
+# code 1 (G.is_break) however the script ended, so these run with --python-exit-code 2 and pass
+# with exit code 0 or 1 plus their success marker.
+BREAKING_SCRIPTS = {"engine_no_native.py", "engine_cancel.py"}
+SCRIPT_FAILURE_EXIT_CODE = 2
+
+
+def run_script(script, build_python_dir, tmp_path_factory, marker):
+    """Runs a Blender script once per session; (stdout, results JSON or None)."""
+    if script not in _RUNS:
+        out = tmp_path_factory.mktemp("engine") / (script[:-3] + ".json")
+        start = time.perf_counter()
+        passing_codes = {0}
+        if script in BREAKING_SCRIPTS:
+            passing_codes = {0, 1}
+            result = subprocess.run(
+                [BLENDER, "-b", "--factory-startup", "--python-exit-code",
+                 str(SCRIPT_FAILURE_EXIT_CODE), "--python", str(BLENDER_SCRIPTS / script),
+                 "--", str(build_python_dir), str(ADDON_DIR), str(out)],
+                capture_output=True, text=True, timeout=600, env=blender_env())
+        else:
+            result = run_blender(BLENDER_SCRIPTS / script, build_python_dir, ADDON_DIR, out,
+                                 timeout=600)
+        seconds = time.perf_counter() - start
+        log = result.stdout[-6000:] + result.stderr[-3000:]
+        if result.returncode not in passing_codes or marker not in result.stdout:
+            _RUNS[script] = AssertionError(f"{script} failed (exit {result.returncode}, "
+                                           f"{seconds:.1f} s):\n{log}")
+        else:
+            print(f"\n{script}: {seconds:.1f} s")
+            print("\n".join(line for line in result.stdout.splitlines()
+                            if not line.startswith(("Fra:", "Saved:", " Time:"))))
+            _RUNS[script] = (result.stdout, json.loads(out.read_text()) if out.exists()
+                             else None)
+    if isinstance(_RUNS[script], Exception):
+        raise _RUNS[script]
+    return _RUNS[script]
+
+
+@needs_blender
+@pytest.mark.parametrize("script, marker", [
+    ("engine_no_native.py", "ENGINE_NO_NATIVE_OK"),
+    ("engine_robustness.py", "ENGINE_ROBUSTNESS_OK"),
+    ("engine_cancel.py", "ENGINE_CANCEL_OK"),
+])
+def test_blender_engine_script(script, marker, build_python_dir, tmp_path_factory):
+    run_script(script, build_python_dir, tmp_path_factory, marker)
+
+
+RENDER_CASES = [(scene, method) for scene in ("cornell_box", "sun_room")
+                for method in ("PATH_TRACE", "PHOTON_LATTICE")] + [
+    ("sun_room", "PHOTON_LATTICE frozen")]
+
+
+@needs_blender
+@pytest.mark.parametrize("scene, method", RENDER_CASES)
+def test_f12_matches_cycles(scene, method, build_python_dir, tmp_path_factory):
+    _, results = run_script("engine_render_checks.py", build_python_dir, tmp_path_factory,
+                            "ENGINE_RENDER_OK")
+    row, cycles = results[scene][method], results[scene]["cycles"]
+    assert not row["record"]["errors"] and not row["record"]["cancelled"], row["record"]
+    assert row["passes"] == cycles["passes"], "SHGI's passes are not Cycles' passes"
+    assert row["psnr"] >= MIN_PSNR_DB, f"Combined PSNR {row['psnr']:.2f} dB"
+    assert abs(row["mean_ratio"] - 1.0) <= MEAN_TOLERANCE[method], (
+        f"Combined mean ratio {row['mean_ratio']:.4f}")
+    assert abs(row["diffind_ratio"] - 1.0) <= DIFFUSE_INDIRECT_TOLERANCE, (
+        f"DiffInd x DiffCol mean ratio {row['diffind_ratio']:.4f}")
