@@ -83,9 +83,23 @@ PROPERTY_DEFAULTS = {
     "caustics": "LATTICE",
     "caustic_resolution": 64,
     "interpolation": "CUBIC",
-    "blur_passes": 0,
+    "blur_passes": 1,
     "world_in_field": False,
 }
+
+# Properties of the live viewport only (no native struct has them), as Cycles keeps its
+# viewport samples apart: samples per pixel a viewport accumulates before it stops, photon passes
+# it solves (each traces `photons`; 1 = the lattice F12 solves), and whether the lattice overlay
+# draws its sample spheres.
+VIEWPORT_PROPERTY_DEFAULTS = {
+    "viewport_samples": 64,
+    "viewport_photon_passes": 1,
+    "show_lattice_samples": False,
+}
+# The properties a viewport render depends on (a change restarts it); the overlay toggle is not
+# one of them.
+VIEWPORT_RENDER_PROPERTIES = ("method", *PROPERTY_DEFAULTS, "viewport_samples",
+                              "viewport_photon_passes")
 
 # Native struct -> {native field: scene.shgi property}.
 PATH_TRACER_FIELDS = {name: name for name in (
@@ -130,3 +144,9 @@ def lattice_signature(props):
     """The values a PhotonLattice solve depends on (to tell a frozen solution is out of date)."""
     return tuple((name, getattr(props, prop)) for name, prop in
                  sorted(PHOTON_LATTICE_FIELDS.items()))
+
+
+def render_property_values(props):
+    """((name, value), ...) of the VIEWPORT_RENDER_PROPERTIES: plain values a worker thread can
+    read and compare (scene.shgi itself must stay on Blender's main thread)."""
+    return tuple((name, getattr(props, name)) for name in VIEWPORT_RENDER_PROPERTIES)

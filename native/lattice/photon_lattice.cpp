@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "util/error.h"
 #include "util/timer.h"
@@ -55,7 +56,16 @@ const PhotonLatticeSettings& validated(const PhotonLatticeSettings& settings) {
 }  // namespace
 
 void validate_photon_lattice_settings(const PhotonLatticeSettings& settings) {
-    validate_photon_tracer_settings(tracer_settings(settings));
+    // The tracer's checks, naming the fields as the caller knows them (the names are the same).
+    try {
+        validate_photon_tracer_settings(tracer_settings(settings));
+    } catch (const InvalidArgument& error) {
+        std::string message = error.what();
+        const std::string tracer = "PhotonTracerSettings.", lattice = "PhotonLatticeSettings.";
+        if (message.compare(0, tracer.size(), tracer) == 0)
+            message.replace(0, tracer.size(), lattice);
+        throw InvalidArgument(message);
+    }
     check_range(settings.resolution, 1, 1024, "resolution");
     check_range(settings.order, 1, 2, "order");
     check_range(settings.blur_passes, 0, 64, "blur_passes");
@@ -187,13 +197,15 @@ ShRgb PhotonLattice::sample(const ShLattice& lattice, const vec3& p, const vec3&
                : lattice.sample_trilinear(p, n, settings_.normal_offset);
 }
 
+// Called for every shading point of every preview frame: the global sample is the result (no
+// zeroed sum to add it to, no copy), and a caustic lattice without photons is not sampled.
 ShRgb PhotonLattice::radiance_sh(const vec3& p, const vec3& n) const {
     const int order = settings_.caustics == CausticMode::Lattice
                           ? std::max(settings_.order, settings_.caustic_order)
                           : settings_.order;
-    ShRgb result(order);
-    if (passes_ == 0) return result;
-    add_sh(result, sample(global_, p, n));
+    if (passes_ == 0) return ShRgb(order);
+    ShRgb result = sample(global_, p, n);
+    result.order = order;  // at least the global lattice's; the extra coefficients are zero
     if (settings_.caustics == CausticMode::Lattice && caustic_photons_injected_ > 0)
         add_sh(result, sample(caustic_, p, n));
     return result;

@@ -267,19 +267,34 @@ PhotonsByCell sort_by_cell(const std::vector<uint32_t>& photon_cell, size_t cell
 
 // ---------------------------------------------------------------------------------------------
 // Sampling
+//
+// A lookup runs for every shading point of every preview frame and visits up to 27 cells, so it
+// avoids work that cannot change its result: no heap allocation (fixed-size sums), cells outside
+// the filter's reach tested first (three multiplications), then cells without surface or facing
+// away from n (D_c(n) = 0, one load and three dot products), and the filter weight (a square root)
+// computed last; ShLattice::sample_* also return at once when no cell of the neighbourhood holds
+// radiance. Only exactly-zero terms are left out, so results are those of the plain weighted sum.
 
-// Σ w_c L(c) / Σ w_c over the cells a sample visits, without heap allocation. kFloats
-// (3 × coefficients) is a compile-time count so that the accumulation unrolls.
+// All zero, of the lattice's order (validated at construction, so ShRgb's checking constructor,
+// which is not inline, is not needed).
+ShRgb zero_radiance(int order) {
+    ShRgb radiance;
+    radiance.order = order;
+    return radiance;
+}
+
+// Σ w_c L(c) / Σ w_c over the cells a sample visits. kFloats (3 × coefficients) is a
+// compile-time count so that the accumulation unrolls.
 template <int kFloats>
 class WeightedCellSum {
   public:
     void add(const float* coefficients, float weight) {
+        if (!(weight > 0.0f)) return;
         for (int i = 0; i < kFloats; ++i) sum_[i] += weight * coefficients[i];
         total_ += weight;
     }
     ShRgb result(int order) const {
-        ShRgb radiance;  // all zero; the order is the lattice's, already checked
-        radiance.order = order;
+        ShRgb radiance = zero_radiance(order);
         if (total_ <= 0.0f) return radiance;
         const float inv_total = 1.0f / total_;
         float* out = radiance.data();
@@ -292,15 +307,14 @@ class WeightedCellSum {
     std::array<float, kFloats> sum_{};
 };
 
-// Normalised blend of the cells `for_each_cell` visits, each weighted by its filter weight times
-// density(cell) = D_c(n) (zero for cells without surface).
-template <int kFloats, typename ForEachCell, typename Density>
+// Normalised blend of the cells `for_each_cell(facing, visit)` visits: it calls visit(cell,
+// filter weight × facing(cell)) for the cells with facing(cell) = D_c(n) > 0.
+template <int kFloats, typename ForEachCell, typename Facing>
 ShRgb blend_cells(int order, const float* coefficients, ForEachCell&& for_each_cell,
-                  Density&& density) {
+                  Facing&& facing) {
     WeightedCellSum<kFloats> sum;
-    for_each_cell([&](size_t cell, float filter_weight) {
-        const float weight = filter_weight * density(cell);
-        if (weight > 0.0f) sum.add(coefficients + cell * kFloats, weight);
+    for_each_cell(facing, [&](size_t cell, float weight) {
+        sum.add(coefficients + cell * kFloats, weight);
     });
     return sum.result(order);
 }
@@ -324,10 +338,11 @@ bool sample_coordinates(const vec3& p, const vec3& n, float normal_offset, const
     return true;
 }
 
-// visit(cell index, weight) for the lattice cells among the 8 whose centres surround `cells`,
-// with their trilinear weights.
-template <typename Visit>
-void for_each_trilinear_cell(const vec3& cells, const ivec3& dims, Visit&& visit) {
+// visit(cell index, trilinear weight × facing(cell)) for the lattice cells among the 8 whose
+// centres surround `cells` and that face the normal (facing(cell) > 0).
+template <typename Facing, typename Visit>
+void for_each_trilinear_cell(const vec3& cells, const ivec3& dims, Facing&& facing,
+                             Visit&& visit) {
     const vec3 f = cells - 0.5f;  // relative to cell centres
     const ivec3 base(glm::floor(f));
     const vec3 t = f - vec3(base);
@@ -337,16 +352,19 @@ void for_each_trilinear_cell(const vec3& cells, const ivec3& dims, Visit&& visit
         for (int y = lo.y; y <= hi.y; ++y) {
             const float wyz = (y == base.y ? 1.0f - t.y : t.y) * wz;
             const size_t row = size_t(dims.x) * (size_t(y) + size_t(dims.y) * size_t(z));
-            for (int x = lo.x; x <= hi.x; ++x)
-                visit(row + size_t(x), (x == base.x ? 1.0f - t.x : t.x) * wyz);
+            for (int x = lo.x; x <= hi.x; ++x) {
+                const size_t cell = row + size_t(x);
+                const float density = facing(cell);
+                if (density > 0.0f) visit(cell, (x == base.x ? 1.0f - t.x : t.x) * wyz * density);
+            }
         }
     }
 }
 
-// visit(cell index, w(d)) for the lattice cells of the 3x3x3 block around the cell holding
-// `cells` whose centres are closer than kCubicRadiusCells.
-template <typename Visit>
-void for_each_cubic_cell(const vec3& cells, const ivec3& dims, Visit&& visit) {
+// visit(cell index, w(d) × facing(cell)) for the lattice cells of the 3x3x3 block around the
+// cell holding `cells` whose centres are closer than kCubicRadiusCells and that face the normal.
+template <typename Facing, typename Visit>
+void for_each_cubic_cell(const vec3& cells, const ivec3& dims, Facing&& facing, Visit&& visit) {
     constexpr float r2 = kCubicRadiusCells * kCubicRadiusCells;
     const ivec3 centre(glm::floor(cells));
     const ivec3 lo = glm::max(centre - 1, ivec3(0)), hi = glm::min(centre + 1, dims - 1);
@@ -359,9 +377,27 @@ void for_each_cubic_cell(const vec3& cells, const ivec3& dims, Visit&& visit) {
             for (int x = lo.x; x <= hi.x; ++x) {
                 const float dx = cells.x - (float(x) + 0.5f);
                 const float d2 = dx * dx + dyz2;
-                if (d2 < r2) visit(row + size_t(x), cubic_weight(std::sqrt(d2)));
+                if (d2 >= r2) continue;
+                const size_t cell = row + size_t(x);
+                const float density = facing(cell);
+                if (density > 0.0f) visit(cell, cubic_weight(std::sqrt(d2)) * density);
             }
         }
+    }
+}
+
+// out[c] = in[c - 1] | in[c] | in[c + 1] along `axis` (cells outside the lattice count as 0).
+void dilate_along(const std::vector<uint8_t>& in, const ivec3& dims, int axis,
+                  std::vector<uint8_t>& out) {
+    const size_t stride =
+        axis == 0 ? 1 : axis == 1 ? size_t(dims.x) : size_t(dims.x) * size_t(dims.y);
+    const size_t length = size_t(dims[axis]);
+    for (size_t c = 0; c < in.size(); ++c) {
+        const size_t i = (c / stride) % length;  // c's coordinate along the axis
+        uint8_t near = in[c];
+        if (i > 0) near |= in[c - stride];
+        if (i + 1 < length) near |= in[c + stride];
+        out[c] = near;
     }
 }
 
@@ -410,6 +446,7 @@ ShLattice::ShLattice(const Bounds3& bounds, int resolution, int order) : order_(
             cells, " cells, more than ", kMaxCells, "; lower the resolution"));
     coeffs_.assign(cells * size_t(num_coefficients()) * 3, 0.0f);
     surface_index_.assign(cells, kNoSurface);
+    radiance_near_.assign(cells, 0);
 }
 
 ivec3 ShLattice::cell_of(const vec3& p) const {
@@ -436,6 +473,30 @@ float ShLattice::projected_area(size_t cell, const vec3& dir) const {
     check_cell(cell, "projected_area");
     const CellSurface* surface = cell_surface(cell);
     return surface ? surface->projected_area(dir) : 0.0f;
+}
+
+uint8_t ShLattice::receiving_sides(size_t cell) const {
+    check_cell(cell, "receiving_sides");
+    const CellSurface* surface = cell_surface(cell);
+    return surface ? surface->receiving : 0;
+}
+
+// Compares cosines, |n̄_b · normal| = |projected_b · normal| / |projected_b|, so that a bin's
+// area does not decide; a photon's normal is that of the triangle it hit, up to its sign and
+// rounding, so the bin holding that triangle wins unless another bin's mean is nearly parallel.
+uint8_t ShLattice::CellSurface::side_facing(const vec3& normal) const {
+    uint8_t side = 0;
+    float best = 0.0f;
+    for (int b = 0; b < 3; ++b) {
+        const float length = glm::length(projected[b]);
+        if (!(length > 0.0f)) continue;
+        const float cosine = glm::dot(projected[b], normal) / length;
+        if (std::fabs(cosine) > best) {
+            best = std::fabs(cosine);
+            side = side_bit(b, cosine > 0.0f);
+        }
+    }
+    return side;
 }
 
 // Triangles are clipped in parallel chunks; each chunk lists its fragments in triangle order and
@@ -475,14 +536,21 @@ void ShLattice::measure_surfaces(const Scene& scene, Progress* progress) {
             }
         }
     }
-    std::vector<CellSurface> surfaces(sums.size());
-    for (size_t i = 0; i < sums.size(); ++i) {
+    // Stored in cell order, so that neighbouring cells' surfaces, which a lookup reads together,
+    // are close in memory too.
+    std::vector<CellSurface> surfaces;
+    surfaces.reserve(sums.size());
+    for (uint32_t& index : surface_index) {
+        if (index == kNoSurface) continue;
+        const BinSums& sum = sums[index];
+        CellSurface surface;
         for (int b = 0; b < 3; ++b) {
-            const float length = glm::length(sums[i].normal[b]);
-            if (length > 0.0f)
-                surfaces[i].projected[b] = sums[i].normal[b] * (sums[i].area[b] / length);
-            surfaces[i].area += sums[i].area[b];
+            const float length = glm::length(sum.normal[b]);
+            if (length > 0.0f) surface.projected[b] = sum.normal[b] * (sum.area[b] / length);
+            surface.area += sum.area[b];
         }
+        index = uint32_t(surfaces.size());
+        surfaces.push_back(surface);
     }
     surface_index_ = std::move(surface_index);
     surfaces_ = std::move(surfaces);
@@ -490,7 +558,7 @@ void ShLattice::measure_surfaces(const Scene& scene, Progress* progress) {
 }
 
 // Photons are counting-sorted by cell (stable, so each cell keeps photon order) and each cell
-// sums its photons alone: the result is the same for any thread count.
+// marks its sides and sums its photons alone: the result is the same for any thread count.
 uint64_t ShLattice::inject(const std::vector<Photon>& photons, float scale, Progress* progress) {
     if (!std::isfinite(scale))
         throw InvalidArgument(format_message(kClassName, "::inject: scale = ", scale,
@@ -515,35 +583,54 @@ uint64_t ShLattice::inject(const std::vector<Photon>& photons, float scale, Prog
     const PhotonsByCell sorted = sort_by_cell(photon_cell, cells);
     photon_cell = {};
 
-    const int n_coeffs = num_coefficients();
-    parallel_for(
-        0, cells, kCellsPerChunk,
-        [&](uint64_t begin, uint64_t end) {
-            for (uint64_t cell = begin; cell < end; ++cell) {
-                if (sorted.start[cell] == sorted.start[cell + 1]) continue;
-                const CellSurface& surface = *cell_surface(cell);
-                const float min_projected = kMinProjectedFraction * surface.area;
-                std::array<double, kMaxCoefficients> sum{};
-                for (uint32_t k = sorted.start[cell]; k < sorted.start[cell + 1]; ++k) {
-                    const Photon& photon = photons[sorted.order[k]];
-                    const float projected =
-                        std::max(surface.projected_area(photon.direction), min_projected);
-                    const vec3 weighted = (scale / projected) * photon.power;
-                    float basis[kMaxShCoefficients];
-                    sh_eval(order_, photon.direction, basis);
-                    for (int i = 0; i < n_coeffs; ++i)
-                        for (int c = 0; c < 3; ++c)
-                            sum[3 * i + c] += double(weighted[c]) * double(basis[i]);
+    try {
+        parallel_for(
+            0, cells, kCellsPerChunk,
+            [&](uint64_t begin, uint64_t end) {
+                for (uint64_t cell = begin; cell < end; ++cell) {
+                    const uint32_t first = sorted.start[cell];
+                    const uint32_t count = sorted.start[cell + 1] - first;
+                    if (count > 0)
+                        inject_cell(cell, photons, sorted.order.data() + first, count, scale);
                 }
-                float* out = coeffs_.data() + cell * size_t(n_coeffs) * 3;
-                for (int i = 0; i < 3 * n_coeffs; ++i) out[i] += float(sum[i]);
-            }
-        },
-        progress);
+            },
+            progress);
+    } catch (const Cancelled&) {
+        update_radiance_near();  // some cells already hold their photons
+        throw;
+    }
+    update_radiance_near();
     return sorted.order.size();
 }
 
-void ShLattice::clear() { std::fill(coeffs_.begin(), coeffs_.end(), 0.0f); }
+// The cell's sides first (an OR, so photon order does not matter), then the estimate with D_c
+// over every side known to receive, summed in double in photon order.
+void ShLattice::inject_cell(size_t cell, const std::vector<Photon>& photons, const uint32_t* order,
+                            uint32_t count, float scale) {
+    CellSurface& surface = *cell_surface(cell);
+    for (uint32_t k = 0; k < count; ++k)
+        surface.receiving |= surface.side_facing(photons[order[k]].normal);
+    const float min_projected = kMinProjectedFraction * surface.area;
+    const int n_coeffs = num_coefficients();
+    std::array<double, kMaxCoefficients> sum{};
+    for (uint32_t k = 0; k < count; ++k) {
+        const Photon& photon = photons[order[k]];
+        const float projected = std::max(surface.projected_area(photon.direction), min_projected);
+        const vec3 weighted = (scale / projected) * photon.power;
+        float basis[kMaxShCoefficients];
+        sh_eval(order_, photon.direction, basis);
+        for (int i = 0; i < n_coeffs; ++i)
+            for (int c = 0; c < 3; ++c) sum[3 * i + c] += double(weighted[c]) * double(basis[i]);
+    }
+    float* out = coeffs_.data() + cell * size_t(n_coeffs) * 3;
+    for (int i = 0; i < 3 * n_coeffs; ++i) out[i] += float(sum[i]);
+}
+
+void ShLattice::clear() {
+    std::fill(coeffs_.begin(), coeffs_.end(), 0.0f);
+    std::fill(radiance_near_.begin(), radiance_near_.end(), uint8_t(0));
+    for (CellSurface& surface : surfaces_) surface.receiving = 0;
+}
 
 void ShLattice::scale(float factor) {
     if (!std::isfinite(factor))
@@ -553,7 +640,8 @@ void ShLattice::scale(float factor) {
 }
 
 // One pass: L'(c) = Σ_{n≠c} P_cn L(n) + (1 − Σ_{n≠c} P_cn) L(c), P_cn = A_n min(1/S_c, 1/S_n)
-// (header comment). A_c and 1/S_c do not change between passes and are computed once.
+// over the neighbours n with c's receiving sides (header comment). A_c, the sides and 1/S_c do
+// not change between passes and are computed once.
 void ShLattice::blur(int passes) {
     if (passes < 0)
         throw InvalidArgument(format_message(kClassName, "::blur: passes = ", passes,
@@ -561,22 +649,30 @@ void ShLattice::blur(int passes) {
     const size_t cells = cell_count();
     if (passes == 0 || cells == 0) return;
     std::vector<float> area(cells), inv_neighbourhood(cells, 0.0f);
-    for (size_t c = 0; c < cells; ++c) area[c] = cell_area(c);
+    std::vector<uint8_t> sides(cells, 0);
+    for (size_t c = 0; c < cells; ++c) {
+        area[c] = cell_area(c);
+        if (const CellSurface* surface = cell_surface(c)) sides[c] = surface->receiving;
+    }
 
-    // Calls body(neighbour index) for the (up to) 27 cells of c's 3x3x3 block, c included.
-    auto for_each_neighbour = [&](size_t c, auto&& body) {
+    // Calls body(neighbour index) for the cells of c's 3x3x3 block, c included, that have
+    // surface and the same receiving sides as c.
+    auto for_each_like_neighbour = [&](size_t c, auto&& body) {
         const ivec3 cell(int(c % size_t(dims_.x)), int((c / size_t(dims_.x)) % size_t(dims_.y)),
                          int(c / (size_t(dims_.x) * size_t(dims_.y))));
         const ivec3 lo = glm::max(cell - 1, ivec3(0)), hi = glm::min(cell + 1, dims_ - 1);
         for (int z = lo.z; z <= hi.z; ++z)
             for (int y = lo.y; y <= hi.y; ++y)
-                for (int x = lo.x; x <= hi.x; ++x) body(cell_index(ivec3(x, y, z)));
+                for (int x = lo.x; x <= hi.x; ++x) {
+                    const size_t n = cell_index(ivec3(x, y, z));
+                    if (area[n] > 0.0f && sides[n] == sides[c]) body(n);
+                }
     };
     parallel_for(0, cells, kCellsPerChunk, [&](uint64_t begin, uint64_t end) {
         for (size_t c = begin; c < end; ++c) {
             if (area[c] <= 0.0f) continue;
             float sum = 0.0f;
-            for_each_neighbour(c, [&](size_t n) { sum += area[n]; });
+            for_each_like_neighbour(c, [&](size_t n) { sum += area[n]; });
             inv_neighbourhood[c] = 1.0f / sum;
         }
     });
@@ -591,8 +687,8 @@ void ShLattice::blur(int passes) {
                 if (area[c] <= 0.0f) continue;  // cells without surface stay empty
                 // In double: P_cc = 1 − Σ P_cn cancels most of its digits.
                 double others = 0.0;
-                for_each_neighbour(c, [&](size_t n) {
-                    if (n == c || area[n] <= 0.0f) return;
+                for_each_like_neighbour(c, [&](size_t n) {
+                    if (n == c) return;
                     const float weight =
                         area[n] * std::min(inv_neighbourhood[c], inv_neighbourhood[n]);
                     const float* in = coeffs_.data() + n * stride;
@@ -606,6 +702,7 @@ void ShLattice::blur(int passes) {
         });
         coeffs_.swap(next);
     }
+    update_radiance_near();
 }
 
 ShRgb ShLattice::cell_radiance(size_t cell) const {
@@ -623,39 +720,75 @@ void ShLattice::set_cell_radiance(size_t cell, const ShRgb& radiance) {
                                              order_));
     const size_t stride = size_t(num_coefficients()) * 3;
     std::copy_n(radiance.data(), stride, coeffs_.data() + cell * stride);
+    // Mark the 3x3x3 block; a zero radiance leaves the marks (they may be conservative).
+    if (std::all_of(radiance.data(), radiance.data() + stride, [](float x) { return x == 0.0f; }))
+        return;
+    const ivec3 at(int(cell % size_t(dims_.x)), int((cell / size_t(dims_.x)) % size_t(dims_.y)),
+                   int(cell / (size_t(dims_.x) * size_t(dims_.y))));
+    const ivec3 lo = glm::max(at - 1, ivec3(0)), hi = glm::min(at + 1, dims_ - 1);
+    for (int z = lo.z; z <= hi.z; ++z)
+        for (int y = lo.y; y <= hi.y; ++y)
+            for (int x = lo.x; x <= hi.x; ++x) radiance_near_[cell_index(ivec3(x, y, z))] = 1;
 }
 
 template <typename ForEachCell>
 ShRgb ShLattice::blend(const vec3& n, ForEachCell&& for_each_cell) const {
-    const auto density = [&](size_t cell) {
+    const auto facing = [&](size_t cell) {  // D_c(n)
         const CellSurface* surface = cell_surface(cell);
         return surface ? surface->projected_area(n) : 0.0f;
     };
-    if (order_ == 1)
-        return blend_cells<4 * 3>(order_, coeffs_.data(), for_each_cell, density);
-    return blend_cells<9 * 3>(order_, coeffs_.data(), for_each_cell, density);
+    if (order_ == 1) return blend_cells<4 * 3>(order_, coeffs_.data(), for_each_cell, facing);
+    return blend_cells<9 * 3>(order_, coeffs_.data(), for_each_cell, facing);
+}
+
+inline bool ShLattice::radiance_near(const vec3& cells) const {
+    if (radiance_near_.empty()) return false;
+    // Trilinear and cubic samples read cells of the 3x3x3 block around the cell holding `cells`;
+    // clamped into the lattice, that block's flag covers every lattice cell they read.
+    const ivec3 centre = glm::clamp(ivec3(glm::floor(cells)), ivec3(0), dims_ - 1);
+    return radiance_near_[cell_index(centre)] != 0;
 }
 
 ShRgb ShLattice::sample_trilinear(const vec3& p, const vec3& n, float normal_offset) const {
     vec3 cells(0.0f);
-    const bool finite = sample_coordinates(p, n, normal_offset, origin_, cell_size_, dims_, cells);
-    return blend(n, [&](auto&& visit) {
-        if (finite) for_each_trilinear_cell(cells, dims_, visit);
+    if (!sample_coordinates(p, n, normal_offset, origin_, cell_size_, dims_, cells) ||
+        !radiance_near(cells))
+        return zero_radiance(order_);
+    return blend(n, [&](auto&& facing, auto&& visit) {
+        for_each_trilinear_cell(cells, dims_, facing, visit);
     });
 }
 
 ShRgb ShLattice::sample_cubic(const vec3& p, const vec3& n, float normal_offset) const {
     vec3 cells(0.0f);
-    const bool finite = sample_coordinates(p, n, normal_offset, origin_, cell_size_, dims_, cells);
-    return blend(n, [&](auto&& visit) {
-        if (finite) for_each_cubic_cell(cells, dims_, visit);
+    if (!sample_coordinates(p, n, normal_offset, origin_, cell_size_, dims_, cells) ||
+        !radiance_near(cells))
+        return zero_radiance(order_);
+    return blend(n, [&](auto&& facing, auto&& visit) {
+        for_each_cubic_cell(cells, dims_, facing, visit);
     });
+}
+
+// Sequential: inject() also calls it from its handler for Cancelled.
+void ShLattice::update_radiance_near() {
+    const size_t cells = cell_count();
+    const size_t stride = size_t(num_coefficients()) * 3;
+    std::vector<uint8_t> lit(cells), dilated(cells);
+    for (size_t c = 0; c < cells; ++c) {
+        const float* coefficients = cell_coefficients(c);
+        lit[c] = std::any_of(coefficients, coefficients + stride,
+                             [](float x) { return x != 0.0f; });
+    }
+    dilate_along(lit, dims_, 0, dilated);
+    dilate_along(dilated, dims_, 1, lit);
+    dilate_along(lit, dims_, 2, dilated);
+    radiance_near_ = std::move(dilated);
 }
 
 size_t ShLattice::memory_bytes() const {
     return sizeof(*this) + coeffs_.capacity() * sizeof(float) +
            surface_index_.capacity() * sizeof(uint32_t) +
-           surfaces_.capacity() * sizeof(CellSurface);
+           surfaces_.capacity() * sizeof(CellSurface) + radiance_near_.capacity();
 }
 
 }  // namespace shgi

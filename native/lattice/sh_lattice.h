@@ -16,28 +16,55 @@
 // Density estimate (why the lattice's irradiance agrees with the path tracer): a photon of power
 // Φ arriving from direction ω on a surface inside cell c estimates the radiance arriving from ω
 // at the cell's surfaces. The flux the cell's surfaces receive from a small cone dω around ω is
-// L_i(ω) D_c(ω) dω, where D_c(ω) = Σ_triangles A_t |n_t · ω| is the projected area of the
-// surface inside the cell seen from ω (both sides of every triangle receive). So
+// L_i(ω) D_c(ω) dω, where D_c(ω) is the projected area, seen from ω, of the cell's surface sides
+// that receive light and face ω. So
 //     L_lm(c) += Φ Y_lm(ω) / D_c(ω)
 // is an unbiased estimate of the projection of L_i wherever D_c(ω) > 0 (for a single plane of
-// area A it is the familiar Φ / (A cos θ)). measure_surfaces() computes each cell's surface
-// exactly (triangles clipped to the cell box) and keeps D_c compactly: three orientation bins
-// per cell (by the dominant axis of the normal, sign-folded) with their areas and area-weighted
-// mean normals, D_c(ω) ≈ Σ_b A_b |n̄_b · ω| (exact for axis-aligned walls). D is floored at
-// kMinProjectedFraction × A_c so grazing photons cannot blow up.
+// area A it is the familiar Φ / (A cos θ)). Counting sides that cannot receive from ω biases it
+// low: at a room's floor/wall edge, a photon reaching the floor while travelling away from the
+// wall could never have reached the wall's inner side, and counting the wall there (both sides
+// of every triangle, as an unsigned |n · ω| does) gave 0.81 π L instead of π L in a uniform field.
+//
+// measure_surfaces() computes each cell's surface exactly (triangles clipped to the cell box)
+// and keeps D_c compactly: three orientation bins per cell (by the dominant axis of the normal)
+// with their areas A_b and area-weighted mean normals n̄_b, folded so that n̄_b points along +axis.
+// Each bin has two sides, outward normals +n̄_b and −n̄_b. inject() records which sides receive:
+// a photon's stored normal is the outward normal of the side it arrived on (photon/photon.h), and
+// it marks the side of the bin whose mean normal is closest to that normal (largest |cos|), in
+// its cell. Then
+//     D_c(ω) = Σ_b [+ side receives] A_b max(0, n̄_b · ω) + [− side receives] A_b max(0, −n̄_b · ω)
+// (ω pointing back towards where the light came from), exact for axis-aligned walls lit on any
+// set of sides; a thin panel lit on both sides has both sides marked and counts |n̄_b · ω|. A cell
+// none of whose sides has received a photon counts every side. An inject() call marks the sides
+// its photons reach before it adds any of them, so one call must hold a complete estimate (all
+// photons of a tracing pass): photons of one estimate split over several calls would be divided
+// by the sides known so far and come out too bright. The marks are ORed per cell, so they do not
+// depend on the thread count, and they accumulate across calls until clear() or
+// measure_surfaces(): each interactive pass (PhotonLattice sums passes) injects with every side
+// known so far, and a side first reached in pass k changes D only for passes >= k, a bias that
+// fades as 1/passes instead of recurring every pass. The sides are per bin, not per triangle: in
+// a cell holding a floor (lit from above) and a shelf lit from below, the floor's underside counts
+// as receiving too. D is floored at kMinProjectedFraction × A_c so grazing photons cannot blow up.
 //
 // Sampling at (p, n): the position p + normal_offset · cell_size · n picks the neighbour cells
 // (trilinear: the 8 around it; cubic: the 27 around its cell, w(d) = 2d³/r³ − 3d²/r² + 1 for
 // d < r = 1.75 cells, d the distance to the cell centre in cells). Each neighbour's weight is
-// multiplied by D_c(n), how much of the cell's surface faces like the shading point, and the
+// multiplied by D_c(n), how much of the cell's receiving surface faces like the shading point
+// (receiving sides whose outward normal is within 90° of n, weighted by the cosine), and the
 // weights are normalised: empty cells and cells whose surfaces face elsewhere (the floor cell
-// next to a wall point) do not darken or bias the result. All zero weights give zero radiance.
+// next to a wall point, the ceiling cell above a floor point) do not darken or bias the result.
+// All zero weights give zero radiance.
 //
-// Blur: one pass mixes each cell with its 26 neighbours with symmetric weights
-// P_cn = A_n min(1/S_c, 1/S_n), S_c = Σ_{m in 3x3x3(c)} A_m, P_cc = 1 − Σ_{n≠c} P_cn
+// Blur: one pass mixes each cell with those of its 26 neighbours that have the same receiving
+// sides (like(c)), with symmetric weights
+//     P_cn = A_n min(1/S_c, 1/S_n) for n in like(c), S_c = Σ_{m in 3x3x3(c) ∩ like(c)} A_m,
+//     P_cc = 1 − Σ_{n≠c} P_cn
 // (A = surface area per cell). In a uniformly covered region this is the seed's uniform 3x3x3
 // kernel; everywhere it keeps a uniform field uniform and preserves the total Σ_c A_c L(c)
-// (the energy the cells' surfaces receive) exactly. Cells without surface stay empty.
+// exactly. Cells without surface stay empty. A cell's SH holds only the directions its own sides
+// receive from (zero elsewhere: a floor cell's only the upper hemisphere), so mixing a floor cell
+// with a wall or corner cell would mix in zeros and darken both; floors blur with floors, corners
+// with corners. Cells that have not received photons (sides unknown) blur with each other.
 #pragma once
 
 #include <cmath>
@@ -77,16 +104,28 @@ class ShLattice {
     // must be committed. Cancellable (the previous surfaces are then kept).
     void measure_surfaces(const Scene& scene, Progress* progress = nullptr);
     float surface_area(size_t cell) const;
-    // D_c(dir): projected surface area of the cell seen from unit direction dir (both sides).
+    // D_c(dir): projected area, seen from unit direction dir, of the cell's receiving sides that
+    // face dir (every side while the cell has received no photon); see above.
     float projected_area(size_t cell, const vec3& dir) const;
+    // The sides of the cell's orientation bins that photons have arrived on (bits of side_bit()),
+    // 0 when none has.
+    uint8_t receiving_sides(size_t cell) const;
+    // The bit of the side of the bin of `axis` whose outward normal points along +axis
+    // (positive) or −axis.
+    static constexpr uint8_t side_bit(int axis, bool positive) {
+        return uint8_t(1u << (2 * axis + (positive ? 0 : 1)));
+    }
+    static constexpr uint8_t kAllSides = 0x3F;
 
-    // Adds scale × Φ Y(ω) / max(D_c(ω), kMinProjectedFraction A_c) per photon to its cell.
-    // Photons outside the lattice or in cells without surface are skipped; returns how many were
-    // injected. Deterministic (per-cell sums in photon order) and parallel. Fewer than 2^32
-    // photons per call. Cancellable; after Cancelled some cells hold their photons and others do
-    // not, so clear() before injecting again.
+    // Marks the sides the photons arrive on, then adds scale × Φ Y(ω) / max(D_c(ω),
+    // kMinProjectedFraction A_c) per photon to its cell; `photons` must be a complete estimate
+    // (see above). Photons outside the lattice or in cells without surface are skipped; returns
+    // how many were injected. Deterministic (per-cell sums in photon order) and parallel. Fewer
+    // than 2^32 photons per call. Cancellable; after Cancelled some cells hold their photons and
+    // others do not, so clear() before injecting again.
     uint64_t inject(const std::vector<Photon>& photons, float scale, Progress* progress = nullptr);
-    void clear();                  // all coefficients to zero (surfaces are kept)
+    // All coefficients to zero and every side back to "no photon yet" (surfaces are kept).
+    void clear();
     void scale(float factor);      // all coefficients times factor
     void blur(int passes);         // see above
 
@@ -103,16 +142,26 @@ class ShLattice {
 
   private:
     // The surface of a cell that has one: A_c and, per orientation bin, A_b n̄_b (the bin's area
-    // times the unit mean of its sign-folded normals), so that D_c(ω) = Σ_b |(A_b n̄_b) · ω| costs
-    // three dot products. Surfaces are 2D, so only an index is stored per cell.
+    // times the unit mean of its normals folded to +axis), so that D_c(ω) costs three dot
+    // products; and the bin sides photons have arrived on. Surfaces are 2D, so only an index is
+    // stored per cell.
     struct CellSurface {
         float area = 0.0f;
         vec3 projected[3] = {vec3(0.0f), vec3(0.0f), vec3(0.0f)};
+        uint8_t receiving = 0;  // side_bit()s
 
         float projected_area(const vec3& dir) const {  // D_c(dir)
-            return std::fabs(glm::dot(projected[0], dir)) + std::fabs(glm::dot(projected[1], dir)) +
-                   std::fabs(glm::dot(projected[2], dir));
+            const uint8_t counted = receiving != 0 ? receiving : kAllSides;
+            float sum = 0.0f;
+            for (int b = 0; b < 3; ++b) {
+                const float cosine_area = glm::dot(projected[b], dir);
+                if (counted & side_bit(b, cosine_area >= 0.0f)) sum += std::fabs(cosine_area);
+            }
+            return sum;
         }
+        // The side of the bin whose mean normal is closest to ±normal (largest |cos|), or 0 when
+        // no bin has a component along it.
+        uint8_t side_facing(const vec3& normal) const;
     };
     static constexpr uint32_t kNoSurface = 0xFFFFFFFFu;
 
@@ -121,13 +170,23 @@ class ShLattice {
         const uint32_t index = surface_index_[cell];
         return index == kNoSurface ? nullptr : &surfaces_[index];
     }
+    CellSurface* cell_surface(size_t cell) {
+        const uint32_t index = surface_index_[cell];
+        return index == kNoSurface ? nullptr : &surfaces_[index];
+    }
     float cell_area(size_t cell) const {  // A_c, no range check
         const CellSurface* surface = cell_surface(cell);
         return surface ? surface->area : 0.0f;
     }
-    // Normalised blend of the cells for_each_cell(visit) visits, weighted by D_c(n) (sampling).
+    // Marks the sides photons[order[0 .. count)] arrive on in `cell`, then adds their estimate.
+    void inject_cell(size_t cell, const std::vector<Photon>& photons, const uint32_t* order,
+                     uint32_t count, float scale);
+    // Normalised blend of the cells for_each_cell(facing, visit) visits, weighted by D_c(n).
     template <typename ForEachCell>
     ShRgb blend(const vec3& n, ForEachCell&& for_each_cell) const;
+    // False when no cell a sample at lattice coordinates `cells` reads holds radiance.
+    bool radiance_near(const vec3& cells) const;
+    void update_radiance_near();  // recomputes radiance_near_ from the coefficients
     const float* cell_coefficients(size_t cell) const {
         return coeffs_.data() + cell * size_t(num_coefficients()) * 3;
     }
@@ -138,7 +197,11 @@ class ShLattice {
     float cell_size_ = 1.0f;
     std::vector<float> coeffs_;
     std::vector<uint32_t> surface_index_;  // per cell: index into surfaces_, or kNoSurface
-    std::vector<CellSurface> surfaces_;    // cells with surface, in order of first measurement
+    std::vector<CellSurface> surfaces_;    // cells with surface, in cell order
+    // Per cell: 1 when a cell of its 3x3x3 block may hold nonzero radiance; 0 guarantees that all
+    // of them are zero, so that samples there return zero at once (a caustic lattice away from
+    // its caustics). Kept by every operation that changes coefficients.
+    std::vector<uint8_t> radiance_near_;
 };
 
 }  // namespace shgi

@@ -1,0 +1,525 @@
+// PhotonLattice against closed forms: the emissive white furnace (every wall of a closed box
+// emits Le and reflects albedo a), where the indirect light is uniform and known bounce by bounce;
+// plus interactive passes, reset, scene edits, cancel, thread-count independence, caustic modes
+// and settings checks.
+//
+// Furnace: the box [-1, 1]^3 seen from inside, Lambert albedo a, emission Le on the inner side of
+// every wall (emissive triangles also emit from their outer side; those photons leave the scene).
+// The radiance leaving every wall is Le / (1 - a) (with unlimited bounces). The photon tracer
+// does not store the first hit after emission (that is direct light, which renderers compute
+// exactly), and stores a photon after each of its m = 1..M scatterings (M = max_bounces), so the
+// field holds the uniform incident radiance
+//     L_ind = Le (a + a^2 + ... + a^M)
+// over each wall's hemisphere and the lattice irradiance at any wall point is pi L_ind.
+//
+// Noise is estimated from independent solves (seeds), each averaged over many probe points;
+// comparisons allow kSigmas standard errors of that mean plus the density estimate's documented
+// grazing-floor bias (lattice/sh_lattice.h: at most pi L f / 4, f = kMinProjectedFraction).
+#include "lattice/photon_lattice.h"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "lattice/lattice_test_scenes.h"
+#include "render/render_test_scenes.h"
+#include "util/error.h"
+
+namespace shgi {
+namespace {
+
+// Five standard errors: a false failure has probability ~6e-7 per comparison.
+constexpr double kSigmas = 5.0;
+// Relative bias the grazing floor of the density estimate may leave on a uniform field
+// (sh_lattice.h; the injection tests show it is at most f / 4 of pi L).
+constexpr double kFloorBias = kMinProjectedFraction / 4.0;
+
+constexpr float kFurnaceAlbedo = 0.5f;
+constexpr int kFurnaceBounces = 4;
+const vec3 kFurnaceEmission(1.0f, 0.5f, 0.25f);  // Le, W m^-2 sr^-1
+constexpr int kFurnaceResolution = 8;            // cells of 0.25 m
+constexpr uint64_t kFurnacePhotons = 100000;
+constexpr int kFurnaceSolves = 6;                // independent seeds for the standard error
+
+// Closed box [-1, 1]^3, inner faces emitting `emission` with Lambert albedo `albedo`.
+Scene emissive_furnace(float albedo, const vec3& emission) {
+    Scene scene;
+    Material material = test::lambert(albedo);
+    material.emission_color = emission;
+    material.emission_strength = 1.0f;
+    scene.add_material(material);
+    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
+    scene.set_world(test::black_world());
+    scene.commit();
+    return scene;
+}
+
+// Le (a + ... + a^M): the incident radiance of light that scattered 1..M times.
+vec3 furnace_indirect_radiance(float albedo, const vec3& emission, int max_bounces) {
+    double sum = 0.0;
+    for (int m = 1; m <= max_bounces; ++m) sum += std::pow(double(albedo), m);
+    return emission * float(sum);
+}
+
+PhotonLatticeSettings furnace_settings(uint64_t seed) {
+    PhotonLatticeSettings settings;
+    settings.photons = kFurnacePhotons;
+    settings.seed = seed;
+    settings.max_bounces = kFurnaceBounces;
+    settings.resolution = kFurnaceResolution;
+    return settings;
+}
+
+struct Probe {
+    vec3 position;
+    vec3 normal;  // into the box
+};
+
+// Points on the inner side of every wall of the box [-1, 1]^3 at in-wall coordinates (u, v) for
+// every pair in `uv` (the same on all six walls).
+std::vector<Probe> wall_probes(const std::vector<vec2>& uv) {
+    std::vector<Probe> probes;
+    for (int axis = 0; axis < 3; ++axis)
+        for (float side : {-1.0f, 1.0f})
+            for (const vec2& coords : uv) {
+                Probe probe;
+                probe.position[axis] = side;
+                probe.position[(axis + 1) % 3] = coords.x;
+                probe.position[(axis + 2) % 3] = coords.y;
+                probe.normal = vec3(0.0f);
+                probe.normal[axis] = -side;
+                probes.push_back(probe);
+            }
+    return probes;
+}
+
+// 3 x 3 points per wall, at least 2.5 cells (0.625 m) from every edge at resolution 8: their
+// cubic neighbourhoods hold cells of that wall only.
+std::vector<Probe> face_centre_probes() {
+    std::vector<vec2> uv;
+    for (float u : {-0.375f, 0.0f, 0.375f})
+        for (float v : {-0.375f, 0.0f, 0.375f}) uv.push_back(vec2(u, v));
+    return wall_probes(uv);
+}
+
+// Per wall, 3 points along each of its 4 edges, 0.1 m (0.4 cells) from the edge: their cells
+// also hold the neighbouring wall.
+std::vector<Probe> edge_probes() {
+    std::vector<vec2> uv;
+    for (float along : {-0.375f, 0.0f, 0.375f})
+        for (float edge : {-0.9f, 0.9f}) {
+            uv.push_back(vec2(edge, along));
+            uv.push_back(vec2(along, edge));
+        }
+    return wall_probes(uv);
+}
+
+// Per wall, its 4 corners at 0.1 m (0.4 cells) from both edges: their cells hold three walls.
+std::vector<Probe> corner_probes() {
+    std::vector<vec2> uv;
+    for (float u : {-0.9f, 0.9f})
+        for (float v : {-0.9f, 0.9f}) uv.push_back(vec2(u, v));
+    return wall_probes(uv);
+}
+
+vec3 mean_irradiance(const IndirectField& field, const std::vector<Probe>& probes) {
+    glm::dvec3 sum(0.0);
+    for (const Probe& probe : probes)
+        sum += glm::dvec3(field.irradiance(probe.position, probe.normal));
+    return vec3(sum / double(probes.size()));
+}
+
+// Mean and standard error of the mean of independent estimates, per channel.
+struct ChannelStats {
+    glm::dvec3 sum{0.0}, sum2{0.0};
+    int count = 0;
+
+    void add(const vec3& value) {
+        sum += glm::dvec3(value);
+        sum2 += glm::dvec3(value) * glm::dvec3(value);
+        ++count;
+    }
+    double mean(int c) const { return sum[c] / count; }
+    double standard_error(int c) const {
+        const double m = mean(c);
+        return std::sqrt(std::max(0.0, sum2[c] / count - m * m) / (count - 1));
+    }
+};
+
+// The probe-averaged irradiance of kFurnaceSolves independently seeded one-pass lattices.
+ChannelStats furnace_irradiance(const Scene& scene, const std::vector<Probe>& probes) {
+    ChannelStats stats;
+    for (int solve = 0; solve < kFurnaceSolves; ++solve) {
+        PhotonLattice lattice(scene, furnace_settings(uint64_t(solve) + 1));
+        lattice.solve();
+        stats.add(mean_irradiance(lattice, probes));
+    }
+    return stats;
+}
+
+void expect_furnace_irradiance(const ChannelStats& stats, const char* where) {
+    const vec3 expected =
+        kPi * furnace_indirect_radiance(kFurnaceAlbedo, kFurnaceEmission, kFurnaceBounces);
+    for (int c = 0; c < 3; ++c) {
+        const double tolerance = kSigmas * stats.standard_error(c) + kFloorBias * expected[c];
+        EXPECT_NEAR(stats.mean(c), expected[c], tolerance)
+            << where << ", channel " << c << ": measured/expected = "
+            << stats.mean(c) / expected[c] << ", standard error " << stats.standard_error(c);
+    }
+}
+
+TEST(PhotonLattice, FurnaceIrradianceAtFaceCentres) {
+    const Scene scene = emissive_furnace(kFurnaceAlbedo, kFurnaceEmission);
+    expect_furnace_irradiance(furnace_irradiance(scene, face_centre_probes()), "face centres");
+}
+
+// The furnace's indirect light is uniform, so points next to an edge, whose lattice cells also
+// hold the perpendicular wall, must receive pi L_ind as well.
+TEST(PhotonLattice, FurnaceIrradianceNextToEdges) {
+    const Scene scene = emissive_furnace(kFurnaceAlbedo, kFurnaceEmission);
+    expect_furnace_irradiance(furnace_irradiance(scene, edge_probes()), "next to edges");
+}
+
+// Likewise at the corners, where three walls share a cell.
+TEST(PhotonLattice, FurnaceIrradianceNextToCorners) {
+    const Scene scene = emissive_furnace(kFurnaceAlbedo, kFurnaceEmission);
+    expect_furnace_irradiance(furnace_irradiance(scene, corner_probes()), "next to corners");
+}
+
+// --- settings and scene checks ---
+
+// A closed room with a point light and a mirror sphere (caustic photons), diffuse walls.
+Scene room_with_mirror_sphere() {
+    Scene scene;
+    scene.add_material(test::lambert(0.7f));
+    Material mirror;
+    mirror.name = "mirror";
+    mirror.base_color = vec3(1.0f);
+    mirror.metallic = 1.0f;
+    mirror.roughness = 0.0f;
+    scene.add_material(mirror);
+    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
+    Mesh sphere = test::uv_sphere(0.3f, 8, 16);
+    sphere.material_indices.assign(sphere.triangles.size(), 1);
+    scene.add_instance(scene.add_mesh(sphere), glm::translate(mat4(1.0f), vec3(0.2f, 0.0f, -0.5f)));
+    Light light;
+    light.type = LightType::Point;
+    light.power = 100.0f;
+    light.world_from_light = glm::translate(mat4(1.0f), vec3(-0.1f, 0.2f, 0.6f));
+    scene.add_light(light);
+    scene.set_world(test::black_world());
+    scene.commit();
+    return scene;
+}
+
+PhotonLatticeSettings small_settings() {
+    PhotonLatticeSettings settings;
+    settings.photons = 20000;
+    settings.seed = 3;
+    settings.resolution = 8;
+    settings.caustic_resolution = 16;
+    return settings;
+}
+
+TEST(PhotonLattice, RejectsInvalidSettingsNamingTheField) {
+    const Scene scene = room_with_mirror_sphere();
+    const auto expect_rejected = [&](const PhotonLatticeSettings& settings,
+                                     const std::string& name) {
+        test::expect_invalid_argument([&] { validate_photon_lattice_settings(settings); }, name);
+        test::expect_invalid_argument([&] { PhotonLattice lattice(scene, settings); }, name);
+    };
+    PhotonLatticeSettings s = small_settings();
+    s.order = 3;
+    expect_rejected(s, "PhotonLatticeSettings.order is 3");
+    s = small_settings();
+    s.order = 0;
+    expect_rejected(s, "PhotonLatticeSettings.order is 0");
+    s = small_settings();
+    s.resolution = 0;
+    expect_rejected(s, "PhotonLatticeSettings.resolution is 0");
+    s = small_settings();
+    s.resolution = 1025;
+    expect_rejected(s, "PhotonLatticeSettings.resolution is 1025");
+    s = small_settings();
+    s.blur_passes = -1;
+    expect_rejected(s, "PhotonLatticeSettings.blur_passes");
+    s = small_settings();
+    s.caustic_resolution = 0;
+    expect_rejected(s, "PhotonLatticeSettings.caustic_resolution");
+    s = small_settings();
+    s.caustic_order = 3;
+    expect_rejected(s, "PhotonLatticeSettings.caustic_order");
+    s = small_settings();
+    s.caustic_blur_passes = 65;
+    expect_rejected(s, "PhotonLatticeSettings.caustic_blur_passes");
+    s = small_settings();
+    s.caustic_neighbours = 0;
+    expect_rejected(s, "PhotonLatticeSettings.caustic_neighbours");
+    s = small_settings();
+    s.caustic_radius = -1.0f;
+    expect_rejected(s, "PhotonLatticeSettings.caustic_radius");
+    s = small_settings();
+    s.caustic_radius = std::nanf("");
+    expect_rejected(s, "PhotonLatticeSettings.caustic_radius");
+    s = small_settings();
+    s.normal_offset = 2.5f;
+    expect_rejected(s, "PhotonLatticeSettings.normal_offset");
+    s = small_settings();
+    s.use_bounds = true;
+    s.bounds_min = vec3(0.0f);
+    s.bounds_max = vec3(1.0f, 0.0f, 1.0f);  // empty along y
+    expect_rejected(s, "PhotonLatticeSettings.bounds_min/bounds_max");
+    // Fields forwarded to the photon tracer: the message names the field.
+    s = small_settings();
+    s.photons = 0;
+    expect_rejected(s, "photons");
+    s = small_settings();
+    s.max_bounces = 0;
+    expect_rejected(s, "max_bounces");
+    s = small_settings();
+    s.specular_roughness = 1.5f;
+    expect_rejected(s, "specular_roughness");
+}
+
+// The caller sets PhotonLatticeSettings (in C++, Python and the add-on), so the fields the
+// solver forwards to the photon tracer must be reported under that name too (STYLE.md, habit 6:
+// errors name the bad input).
+TEST(PhotonLattice, ForwardedTracerSettingsAreNamedAsPhotonLatticeSettings) {
+    PhotonLatticeSettings s = small_settings();
+    s.photons = 0;
+    test::expect_invalid_argument([&] { validate_photon_lattice_settings(s); },
+                                  "PhotonLatticeSettings.photons");
+    s = small_settings();
+    s.max_bounces = 0;
+    test::expect_invalid_argument([&] { validate_photon_lattice_settings(s); },
+                                  "PhotonLatticeSettings.max_bounces");
+    s = small_settings();
+    s.specular_roughness = -0.5f;
+    test::expect_invalid_argument([&] { validate_photon_lattice_settings(s); },
+                                  "PhotonLatticeSettings.specular_roughness");
+}
+
+TEST(PhotonLattice, RefusesEmptyAndUncommittedScenes) {
+    Scene empty;
+    empty.commit();
+    test::expect_invalid_argument([&] { PhotonLattice lattice(empty, small_settings()); },
+                                  "no geometry");
+    Scene uncommitted;
+    uncommitted.add_material(test::lambert(0.5f));
+    uncommitted.add_instance(uncommitted.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
+    test::expect_invalid_argument([&] { PhotonLattice lattice(uncommitted, small_settings()); },
+                                  "commit");
+}
+
+// --- passes, determinism, reset, edits, cancel ---
+
+std::vector<float> global_coefficients(const PhotonLattice& lattice) {
+    return lattice.global_lattice().coefficients();
+}
+
+// Two passes with 1 and with 2 threads: every lattice coefficient and the caustic photon map's
+// density estimate are bit-identical (DESIGN.md, "Determinism").
+TEST(PhotonLattice, BitIdenticalForAnyThreadCount) {
+    const Scene scene = room_with_mirror_sphere();
+    const std::vector<Probe> probes = face_centre_probes();
+    for (CausticMode mode : {CausticMode::Lattice, CausticMode::PhotonMap}) {
+        PhotonLatticeSettings settings = small_settings();
+        settings.caustics = mode;
+        const auto solve_twice = [&](int threads) {
+            tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                      size_t(threads));
+            auto lattice = std::make_unique<PhotonLattice>(scene, settings);
+            lattice->solve();
+            lattice->solve();
+            return lattice;
+        };
+        const auto one = solve_twice(1);
+        const auto two = solve_twice(2);
+        EXPECT_EQ(one->passes(), 2u);
+        EXPECT_EQ(global_coefficients(*one), global_coefficients(*two));
+        EXPECT_EQ(one->caustic_lattice().coefficients(), two->caustic_lattice().coefficients());
+        EXPECT_EQ(one->caustic_map().size(), two->caustic_map().size());
+        // The mirror sphere focuses caustic photons into the caustic lattice or map.
+        if (mode == CausticMode::Lattice) {
+            const std::vector<float>& caustic = one->caustic_lattice().coefficients();
+            EXPECT_TRUE(std::any_of(caustic.begin(), caustic.end(),
+                                    [](float c) { return c != 0.0f; }));
+        } else {
+            EXPECT_GT(one->caustic_map().size(), 0u);
+        }
+        for (const Probe& probe : probes) {
+            const FieldLookup a = one->lookup(probe.position, probe.normal);
+            const FieldLookup b = two->lookup(probe.position, probe.normal);
+            EXPECT_EQ(a.extra_irradiance, b.extra_irradiance);
+            EXPECT_EQ(a.irradiance(probe.normal), b.irradiance(probe.normal));
+        }
+    }
+}
+
+// The lattices hold the average of all passes: two solves equal (bit for bit) the two photon
+// passes of trace_photons injected into one lattice, halved and blurred, and differ from one pass.
+TEST(PhotonLattice, InteractivePassesHoldTheAverageOfAllPasses) {
+    const Scene scene = room_with_mirror_sphere();
+    const PhotonLatticeSettings settings = small_settings();
+    PhotonLattice lattice(scene, settings);
+    lattice.solve();
+    const std::vector<float> one_pass = global_coefficients(lattice);
+    lattice.solve();
+    EXPECT_EQ(lattice.passes(), 2u);
+    EXPECT_EQ(lattice.timings().photons_emitted, settings.photons);
+    EXPECT_NE(global_coefficients(lattice), one_pass);
+
+    PhotonTracerSettings tracer;
+    tracer.photons = settings.photons;
+    tracer.seed = settings.seed;
+    tracer.max_bounces = settings.max_bounces;
+    tracer.specular_roughness = settings.specular_roughness;
+    ShLattice expected(scene.bounds(), settings.resolution, settings.order);
+    expected.measure_surfaces(scene);
+    for (uint64_t pass = 0; pass < 2; ++pass)
+        expected.inject(trace_photons(scene, tracer, pass).global, 1.0f);
+    expected.scale(0.5f);
+    expected.blur(settings.blur_passes);
+    EXPECT_EQ(global_coefficients(lattice), expected.coefficients());
+}
+
+// Statistically, two passes of N photons are one pass of 2N: the furnace's mean face-centre
+// irradiance agrees within the noise (estimated from the spread of the six walls' means), and
+// both agree with pi L_ind.
+TEST(PhotonLattice, TwoPassesOfNPhotonsMatchOnePassOf2N) {
+    const Scene scene = emissive_furnace(kFurnaceAlbedo, kFurnaceEmission);
+    const std::vector<Probe> probes = face_centre_probes();
+    const size_t per_wall = probes.size() / 6;
+    const auto wall_means = [&](const PhotonLattice& lattice) {
+        std::vector<double> means(6, 0.0);
+        for (size_t i = 0; i < probes.size(); ++i)
+            means[i / per_wall] +=
+                lattice.irradiance(probes[i].position, probes[i].normal).x / double(per_wall);
+        return means;
+    };
+    PhotonLattice two_passes(scene, furnace_settings(11));
+    two_passes.solve();
+    two_passes.solve();
+    PhotonLatticeSettings doubled = furnace_settings(11);
+    doubled.photons *= 2;
+    PhotonLattice one_pass(scene, doubled);
+    one_pass.solve();
+
+    const std::vector<double> a = wall_means(two_passes), b = wall_means(one_pass);
+    double sum_a = 0, sum_b = 0, sum_d2 = 0;
+    for (int w = 0; w < 6; ++w) {
+        sum_a += a[w];
+        sum_b += b[w];
+    }
+    const double mean_a = sum_a / 6.0, mean_b = sum_b / 6.0;
+    for (int w = 0; w < 6; ++w) sum_d2 += std::pow((a[w] - b[w]) - (mean_a - mean_b), 2);
+    const double standard_error = std::sqrt(sum_d2 / 5.0 / 6.0);
+    EXPECT_NE(mean_a, mean_b);
+    EXPECT_NEAR(mean_a, mean_b, kSigmas * standard_error)
+        << "two passes " << mean_a << ", one pass of 2N " << mean_b;
+    const double expected =
+        kPi * furnace_indirect_radiance(kFurnaceAlbedo, kFurnaceEmission, kFurnaceBounces).x;
+    for (double measured : {mean_a, mean_b})
+        EXPECT_NEAR(measured, expected, kSigmas * standard_error + kFloorBias * expected);
+}
+
+TEST(PhotonLattice, ResetForgetsEveryPass) {
+    const Scene scene = room_with_mirror_sphere();
+    PhotonLattice lattice(scene, small_settings());
+    lattice.solve();
+    const std::vector<float> first = global_coefficients(lattice);
+    lattice.solve();
+    lattice.reset();
+    EXPECT_EQ(lattice.passes(), 0u);
+    for (float c : global_coefficients(lattice)) ASSERT_EQ(c, 0.0f);
+    for (float c : lattice.caustic_lattice().coefficients()) ASSERT_EQ(c, 0.0f);
+    for (const Probe& probe : face_centre_probes())
+        EXPECT_EQ(lattice.irradiance(probe.position, probe.normal), vec3(0.0f));
+    // The pass count starts over, so the next solve repeats the first pass exactly.
+    lattice.solve();
+    EXPECT_EQ(lattice.passes(), 1u);
+    EXPECT_EQ(global_coefficients(lattice), first);
+}
+
+TEST(PhotonLattice, SolveAfterASceneEditThrowsUntilReset) {
+    Scene scene = room_with_mirror_sphere();
+    PhotonLattice lattice(scene, small_settings());
+    lattice.solve();
+    const std::vector<float> before = global_coefficients(lattice);
+    Light extra;
+    extra.world_from_light = glm::translate(mat4(1.0f), vec3(0.5f, 0.5f, 0.5f));
+    scene.add_light(extra);  // un-commits the scene
+    test::expect_invalid_argument([&] { lattice.solve(); }, "edited");
+    scene.commit();
+    test::expect_invalid_argument([&] { lattice.solve(); }, "call reset()");
+    EXPECT_EQ(lattice.passes(), 1u);
+    EXPECT_EQ(global_coefficients(lattice), before);
+    lattice.reset();
+    lattice.solve();
+    EXPECT_EQ(lattice.passes(), 1u);
+    EXPECT_NE(global_coefficients(lattice), before);  // the extra light adds photons
+}
+
+// A cancel in any stage of solve() throws Cancelled and keeps the previous solution bit for bit;
+// the next solve then continues as if the cancelled one never happened.
+TEST(PhotonLattice, CancelKeepsThePreviousSolution) {
+    const Scene scene = room_with_mirror_sphere();
+    PhotonLatticeSettings settings = small_settings();
+    PhotonLattice reference(scene, settings);
+    reference.solve();
+    reference.solve();
+    for (const char* stage : {"photons", "injection", "blur"}) {
+        PhotonLattice lattice(scene, settings);
+        lattice.solve();
+        const std::vector<float> before = global_coefficients(lattice);
+        const std::vector<float> caustic_before = lattice.caustic_lattice().coefficients();
+        Progress* self = nullptr;
+        Progress progress([&](float, const std::string& name) {
+            if (name == stage) self->cancel();
+        });
+        self = &progress;
+        EXPECT_THROW(lattice.solve(&progress), Cancelled) << "stage " << stage;
+        EXPECT_EQ(lattice.passes(), 1u) << "stage " << stage;
+        EXPECT_EQ(global_coefficients(lattice), before) << "stage " << stage;
+        EXPECT_EQ(lattice.caustic_lattice().coefficients(), caustic_before) << "stage " << stage;
+        lattice.solve();
+        EXPECT_EQ(global_coefficients(lattice), global_coefficients(reference))
+            << "stage " << stage;
+    }
+}
+
+// Without specular surfaces there are no caustic photons: Off, Lattice and PhotonMap give the
+// same global lattice and the same irradiance everywhere, with no extra irradiance.
+TEST(PhotonLattice, CausticModesAgreeWithoutSpecularSurfaces) {
+    const Scene scene = emissive_furnace(kFurnaceAlbedo, kFurnaceEmission);
+    std::vector<std::unique_ptr<PhotonLattice>> lattices;
+    for (CausticMode mode : {CausticMode::Off, CausticMode::Lattice, CausticMode::PhotonMap}) {
+        PhotonLatticeSettings settings = furnace_settings(5);
+        settings.photons = 20000;
+        settings.caustics = mode;
+        lattices.push_back(std::make_unique<PhotonLattice>(scene, settings));
+        lattices.back()->solve();
+    }
+    EXPECT_EQ(lattices[2]->caustic_map().size(), 0u);
+    const std::vector<Probe> probes = edge_probes();
+    for (size_t m = 1; m < lattices.size(); ++m) {
+        EXPECT_EQ(global_coefficients(*lattices[m]), global_coefficients(*lattices[0]));
+        for (const Probe& probe : probes) {
+            const FieldLookup lookup = lattices[m]->lookup(probe.position, probe.normal);
+            EXPECT_EQ(lookup.extra_irradiance, vec3(0.0f));
+            EXPECT_EQ(lookup.irradiance(probe.normal),
+                      lattices[0]->irradiance(probe.position, probe.normal))
+                << "mode " << m;
+        }
+    }
+}
+
+}  // namespace
+}  // namespace shgi
