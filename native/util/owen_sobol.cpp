@@ -1,0 +1,64 @@
+#include "util/owen_sobol.h"
+
+namespace shgi {
+namespace {
+
+uint32_t reverse_bits(uint32_t x) {
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
+    x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
+    return (x >> 16) | (x << 16);
+}
+
+// Laine and Karras' hash: each output bit depends only on itself and the bits below it, which is
+// what makes the reversed application below an Owen (nested uniform) scramble.
+uint32_t laine_karras_permutation(uint32_t x, uint32_t seed) {
+    x += seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return x;
+}
+
+// Owen scramble of the binary fraction x / 2^32 (bits read from the most significant).
+uint32_t nested_uniform_scramble(uint32_t x, uint32_t seed) {
+    return reverse_bits(laine_karras_permutation(reverse_bits(x), seed));
+}
+
+// The first two Sobol' dimensions as 32-bit binary fractions.
+uint32_t sobol_dimension0(uint32_t index) { return reverse_bits(index); }
+
+uint32_t sobol_dimension1(uint32_t index) {
+    uint32_t result = 0;
+    for (uint32_t v = 1u << 31; index != 0; index >>= 1, v ^= v >> 1)
+        if (index & 1u) result ^= v;
+    return result;
+}
+
+float to_unit_float(uint32_t fraction) { return float(fraction >> 8) * 0x1p-24f; }
+
+}  // namespace
+
+uint32_t hash_seed(uint64_t a, uint64_t b) {
+    // SplitMix64 finaliser over a combination of both.
+    uint64_t z = a * 0x9E3779B97F4A7C15ull + b + 0x632BE59BD9B4E019ull;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return uint32_t((z ^ (z >> 31)) >> 32);
+}
+
+float owen_sobol_1d(uint32_t index, uint32_t seed) {
+    const uint32_t shuffled = nested_uniform_scramble(index, seed);
+    return to_unit_float(nested_uniform_scramble(sobol_dimension0(shuffled), hash_seed(seed, 1)));
+}
+
+vec2 owen_sobol_2d(uint32_t index, uint32_t seed) {
+    const uint32_t shuffled = nested_uniform_scramble(index, seed);
+    return vec2(
+        to_unit_float(nested_uniform_scramble(sobol_dimension0(shuffled), hash_seed(seed, 1))),
+        to_unit_float(nested_uniform_scramble(sobol_dimension1(shuffled), hash_seed(seed, 2))));
+}
+
+}  // namespace shgi

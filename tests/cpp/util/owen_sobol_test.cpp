@@ -1,0 +1,77 @@
+// Owen-scrambled Sobol' points: the (0, m, 2)-net property of every power-of-two prefix and of
+// aligned blocks, 1D stratification, and uniformity of each point over seeds.
+#include "util/owen_sobol.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+namespace shgi {
+namespace {
+
+// Each of the 2^m elementary boxes of shape 2^-a x 2^-(m-a) holds exactly one point.
+void expect_net(uint32_t first, uint32_t m, uint32_t seed) {
+    const uint32_t count = 1u << m;
+    for (uint32_t a = 0; a <= m; ++a) {
+        std::vector<int> boxes(count, 0);
+        for (uint32_t i = first; i < first + count; ++i) {
+            const vec2 p = owen_sobol_2d(i, seed);
+            const uint32_t x = uint32_t(p.x * float(1u << a));
+            const uint32_t y = uint32_t(p.y * float(1u << (m - a)));
+            ++boxes[(x << (m - a)) | y];
+        }
+        for (uint32_t box = 0; box < count; ++box)
+            ASSERT_EQ(boxes[box], 1) << "m " << m << " a " << a << " seed " << seed
+                                     << " first " << first << " box " << box;
+    }
+}
+
+TEST(OwenSobol, EveryPowerOfTwoPrefixIsANet) {
+    for (uint32_t seed : {0u, 1u, 12345u, hash_seed(7, 3)})
+        for (uint32_t m = 0; m <= 10; ++m) expect_net(0, m, seed);
+}
+
+TEST(OwenSobol, AlignedBlocksAreNetsToo) {
+    for (uint32_t seed : {5u, 99u}) {
+        expect_net(16, 4, seed);
+        expect_net(256, 6, seed);
+        expect_net(1024, 8, seed);
+    }
+}
+
+TEST(OwenSobol, OneDimensionalPrefixesAreStratified) {
+    for (uint32_t seed : {3u, 77u})
+        for (uint32_t m = 0; m <= 12; ++m) {
+            std::vector<int> bins(1u << m, 0);
+            for (uint32_t i = 0; i < (1u << m); ++i)
+                ++bins[uint32_t(owen_sobol_1d(i, seed) * float(1u << m))];
+            for (int count : bins) ASSERT_EQ(count, 1) << "m " << m;
+        }
+}
+
+// Over seeds, a fixed point is uniform on [0,1)^2: chi-square over 8 x 8 bins.
+TEST(OwenSobol, EachPointIsUniformOverSeeds) {
+    for (uint32_t index : {0u, 1u, 5u, 1000u}) {
+        const int bins = 8, samples = 64000;
+        std::vector<int> counts(bins * bins, 0);
+        for (int s = 0; s < samples; ++s) {
+            const vec2 p = owen_sobol_2d(index, hash_seed(uint64_t(s), 17));
+            ASSERT_TRUE(p.x >= 0.0f && p.x < 1.0f && p.y >= 0.0f && p.y < 1.0f);
+            ++counts[int(p.x * bins) * bins + int(p.y * bins)];
+        }
+        const double expected = double(samples) / (bins * bins);
+        double chi2 = 0.0;
+        for (int c : counts) chi2 += (c - expected) * (c - expected) / expected;
+        // 63 degrees of freedom: P(chi2 > 120) ~ 2e-5.
+        EXPECT_LT(chi2, 120.0) << "index " << index;
+    }
+}
+
+TEST(OwenSobol, SeedsGiveDifferentSequences) {
+    EXPECT_NE(owen_sobol_2d(3, 1).x, owen_sobol_2d(3, 2).x);
+    EXPECT_NE(hash_seed(1, 2), hash_seed(2, 1));
+}
+
+}  // namespace
+}  // namespace shgi
