@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "photon/photon_emitter.h"
 #include "render/shading.h"
@@ -16,75 +17,164 @@ namespace {
 constexpr uint64_t kMaxPhotonsPerPass = uint64_t(1) << 40;
 // Photons per chunk of work: fixed, so chunk boundaries (and the order in which the chunks'
 // photons are concatenated) never depend on the thread count; ~10^4-10^5 rays, a few ms, so a
-// cancel is noticed quickly.
+// cancel is noticed quickly. A chunk is also one wavefront: all its photons are in flight at
+// once, so each step hands Embree a ray stream of up to this many rays.
 constexpr uint64_t kPhotonsPerChunk = 4096;
 
-// What one chunk of photons produced, merged in chunk order.
+// A stored photon and the photon of its chunk (index from the chunk's start) that stored it.
+struct StagedPhoton {
+    Photon photon;
+    uint32_t owner;
+};
+
+// What one chunk of photons produced, in the order a photon-by-photon trace stores them: by
+// photon index, then by bounce. Merged in chunk order.
 struct ChunkResult {
     std::vector<Photon> global;
     std::vector<Photon> caustic;
     uint64_t bounces = 0;
 };
 
-// Follows one photon from its emitter until it is absorbed, leaves the scene or reaches
-// max_bounces scatterings, storing it at every surface after the first that has a non-Dirac lobe.
-class PhotonPath {
-  public:
-    PhotonPath(const Scene& scene, const PhotonTracerSettings& settings, Pcg32& rng,
-               ChunkResult& out)
-        : scene_(scene), settings_(settings), rng_(rng), out_(out) {}
+// One photon in flight: its own RNG stream and the state of its path.
+struct PhotonState {
+    Pcg32 rng;
+    vec3 power{0.0f};
+    uint32_t owner = 0;          // index from the chunk's start
+    int scatterings = 0;
+    bool specular_path = true;   // every scattering so far was specular
+    bool from_world = false;
+};
 
-    void trace(const EmittedPhoton& emitted);
+// Traces the photons of one chunk as a wavefront (seed 000 §5.2's paths, breadth first): each
+// step intersects the current ray of every photon still in flight with one batch query (an
+// Embree ray stream), then shades each hit in turn, stores the photon there and scatters it, and
+// compacts the survivors with their next rays. A photon meets the same random numbers and the
+// same operations as when traced alone (path by path), so the maps come out bit-identical to a
+// path-by-path trace once the stores, made bounce by bounce, are put back in photon order.
+class ChunkTracer {
+  public:
+    ChunkTracer(const Scene& scene, const PhotonTracerSettings& settings,
+                const PhotonEmitter& emitter)
+        : scene_(scene), settings_(settings), emitter_(emitter) {}
+
+    ChunkResult trace(uint64_t pass, uint64_t begin, uint64_t end);
 
   private:
-    void store(const Shading& shading, const Ray& ray);
-    bool scatter(const Shading& shading, const Material& material, Ray* ray);
+    void emit(uint64_t pass, uint64_t begin, uint64_t end);
+    // Shades the hit of every photon in flight; the survivors move to the front with their next
+    // rays, in the same order. Misses leave the scene.
+    void shade_all();
+    // One surface interaction at sp, reached along *ray: stores the photon if it should, then
+    // scatters it. False ends the path; otherwise *ray is its next ray.
+    bool shade(PhotonState& photon, const SurfacePoint& sp, Ray* ray);
+    void store(const PhotonState& photon, const Shading& shading, const Ray& ray);
+    bool scatter(PhotonState& photon, const Shading& shading, const Material& material,
+                 Ray* ray);
 
     const Scene& scene_;
     const PhotonTracerSettings& settings_;
-    Pcg32& rng_;
-    ChunkResult& out_;
-
-    vec3 power_{0.0f};
-    int scatterings_ = 0;
-    bool specular_path_ = true;  // every scattering so far was specular
-    bool from_world_ = false;
+    const PhotonEmitter& emitter_;
+    // In flight: photons_[i] travels along rays_[i], which hit hits_[i] at points_[i].
+    std::vector<PhotonState> photons_;
+    std::vector<Ray> rays_;
+    std::vector<Hit> hits_;
+    std::vector<SurfacePoint> points_;
+    std::vector<StagedPhoton> global_, caustic_;  // in the order stored: bounce-major
+    uint64_t bounces_ = 0;
 };
 
-void PhotonPath::trace(const EmittedPhoton& emitted) {
-    power_ = emitted.power;
-    from_world_ = emitted.from_world;
-    Ray ray = emitted.ray;
-    for (;;) {
-        const Hit hit = scene_.intersect(ray);
-        ++out_.bounces;
-        if (!hit.valid()) return;
-        const SurfacePoint sp = scene_.surface_point(ray, hit);
-        const Shading shading = make_shading(scene_, sp, ray.direction);
-        // The first hit is direct light, which every consumer computes exactly.
-        const bool direct = scatterings_ == 0 && !(from_world_ && settings_.store_world_direct);
-        if (!direct && shading.bsdf.has_smooth_lobes()) store(shading, ray);
-        if (scatterings_ >= settings_.max_bounces) return;
-        if (!scatter(shading, scene_.materials()[sp.material_id], &ray)) return;
+// Staged photons (bounce-major) in photon order: a stable counting sort on their owner keeps
+// each photon's stores in bounce order.
+std::vector<Photon> in_photon_order(const std::vector<StagedPhoton>& staged,
+                                    size_t photon_count) {
+    std::vector<uint32_t> offsets(photon_count + 1, 0);
+    for (const StagedPhoton& s : staged) ++offsets[s.owner + 1];
+    for (size_t i = 1; i <= photon_count; ++i) offsets[i] += offsets[i - 1];
+    std::vector<Photon> photons(staged.size());
+    for (const StagedPhoton& s : staged) photons[offsets[s.owner]++] = s.photon;
+    return photons;
+}
+
+ChunkResult ChunkTracer::trace(uint64_t pass, uint64_t begin, uint64_t end) {
+    emit(pass, begin, end);
+    while (!rays_.empty()) {
+        // A parallel_for of its own, nested in trace_photons' (TBB allows it); as long as
+        // kPhotonsPerChunk <= Scene::kRaysPerChunk the wavefront is one piece of it, traced on
+        // this thread.
+        scene_.intersect(rays_, hits_);
+        bounces_ += rays_.size();
+        shade_all();
+    }
+    ChunkResult result;
+    result.global = in_photon_order(global_, size_t(end - begin));
+    result.caustic = in_photon_order(caustic_, size_t(end - begin));
+    result.bounces = bounces_;
+    return result;
+}
+
+// Photons [begin, end) of the pass, each on its own RNG stream.
+void ChunkTracer::emit(uint64_t pass, uint64_t begin, uint64_t end) {
+    photons_.reserve(size_t(end - begin));
+    rays_.reserve(size_t(end - begin));
+    for (uint64_t i = begin; i < end; ++i) {
+        PhotonState photon;
+        photon.rng = Pcg32(settings_.seed, stream_id(pass, i));
+        EmittedPhoton emitted;
+        if (!emitter_.emit(i, settings_.photons, photon.rng, &emitted)) continue;
+        photon.power = emitted.power;
+        photon.from_world = emitted.from_world;
+        photon.owner = uint32_t(i - begin);
+        photons_.push_back(photon);
+        rays_.push_back(emitted.ray);
     }
 }
 
-void PhotonPath::store(const Shading& shading, const Ray& ray) {
-    Photon photon;
-    photon.position = shading.position;
-    photon.power = power_;
-    photon.normal = shading.geometric_normal;  // already flipped to the arrival side
-    photon.direction = -ray.direction;
+void ChunkTracer::shade_all() {
+    // Surface points first, in a loop of their own: on a large mesh each one misses the cache
+    // (vertex data), and a short loop lets the processor overlap those misses.
+    points_.resize(photons_.size());
+    for (size_t i = 0; i < photons_.size(); ++i)
+        if (hits_[i].valid()) points_[i] = scene_.surface_point(rays_[i], hits_[i]);
+    size_t alive = 0;
+    for (size_t i = 0; i < photons_.size(); ++i) {
+        Ray ray = rays_[i];
+        if (!hits_[i].valid() || !shade(photons_[i], points_[i], &ray)) continue;
+        photons_[alive] = photons_[i];
+        rays_[alive] = ray;
+        ++alive;
+    }
+    photons_.resize(alive);
+    rays_.resize(alive);
+}
+
+bool ChunkTracer::shade(PhotonState& photon, const SurfacePoint& sp, Ray* ray) {
+    const Shading shading = make_shading(scene_, sp, ray->direction);
+    // The first hit is direct light, which every consumer computes exactly.
+    const bool direct =
+        photon.scatterings == 0 && !(photon.from_world && settings_.store_world_direct);
+    if (!direct && shading.bsdf.has_smooth_lobes()) store(photon, shading, *ray);
+    if (photon.scatterings >= settings_.max_bounces) return false;
+    return scatter(photon, shading, scene_.materials()[sp.material_id], ray);
+}
+
+void ChunkTracer::store(const PhotonState& photon, const Shading& shading, const Ray& ray) {
+    StagedPhoton staged;
+    staged.photon.position = shading.position;
+    staged.photon.power = photon.power;
+    staged.photon.normal = shading.geometric_normal;  // already flipped to the arrival side
+    staged.photon.direction = -ray.direction;
+    staged.owner = photon.owner;
     // Only specular scatterings since emission: a caustic path L S+ D.
-    (specular_path_ ? out_.caustic : out_.global).push_back(photon);
+    (photon.specular_path ? caustic_ : global_).push_back(staged);
 }
 
 // Samples the BSDF towards the photon's next direction (wo = towards where it came from, which
 // the BSDF's reciprocity allows), applies Russian roulette and moves the ray. False ends the path.
-bool PhotonPath::scatter(const Shading& shading, const Material& material, Ray* ray) {
+bool ChunkTracer::scatter(PhotonState& photon, const Shading& shading, const Material& material,
+                          Ray* ray) {
     BsdfSample bs;
-    const float u_lobe = rng_.next_float();
-    const vec2 u = rng_.next_vec2();
+    const float u_lobe = photon.rng.next_float();
+    const vec2 u = photon.rng.next_vec2();
     if (!shading.bsdf.sample(shading.wo, u_lobe, u, &bs)) return false;
     const vec3 wi = glm::normalize(shading.frame.to_world(bs.wi));
     if (!is_finite(wi)) return false;
@@ -93,31 +183,17 @@ bool PhotonPath::scatter(const Shading& shading, const Material& material, Ray* 
     // PrincipledBsdf gives every glossy and refraction lobe the material's roughness.
     const bool specular = bs.delta || (bs.lobe_class != LobeClass::Diffuse &&
                                        material.roughness <= settings_.specular_roughness);
-    specular_path_ = specular_path_ && specular;
+    photon.specular_path = photon.specular_path && specular;
     const float survive = std::min(1.0f, max_component(bs.weight));
-    if (!(survive > 0.0f) || rng_.next_float() >= survive) return false;
-    power_ *= bs.weight / survive;
-    if (!is_finite(power_) || !(max_component(power_) > 0.0f)) return false;
-    ++scatterings_;
+    if (!(survive > 0.0f) || photon.rng.next_float() >= survive) return false;
+    photon.power *= bs.weight / survive;
+    if (!is_finite(photon.power) || !(max_component(photon.power) > 0.0f)) return false;
+    ++photon.scatterings;
     ray->origin = shading.spawn_origin(wi);
     ray->direction = wi;
     ray->tmin = 0.0f;
     ray->tmax = kInfinity;
     return true;
-}
-
-// Photons [begin, end) of the pass, each on its own RNG stream.
-ChunkResult trace_chunk(const Scene& scene, const PhotonTracerSettings& settings,
-                        const PhotonEmitter& emitter, uint64_t pass, uint64_t begin,
-                        uint64_t end) {
-    ChunkResult result;
-    for (uint64_t i = begin; i < end; ++i) {
-        Pcg32 rng(settings.seed, stream_id(pass, i));
-        EmittedPhoton emitted;
-        if (!emitter.emit(i, settings.photons, rng, &emitted)) continue;
-        PhotonPath(scene, settings, rng, result).trace(emitted);
-    }
-    return result;
 }
 
 void append(std::vector<Photon>& to, const std::vector<Photon>& from) {
@@ -157,7 +233,7 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
             for (uint64_t c = chunk_begin; c < chunk_end; ++c) {
                 const uint64_t begin = c * kPhotonsPerChunk;
                 const uint64_t end = std::min(begin + kPhotonsPerChunk, settings.photons);
-                chunks[c] = trace_chunk(scene, settings, emitter, pass, begin, end);
+                chunks[c] = ChunkTracer(scene, settings, emitter).trace(pass, begin, end);
             }
         },
         progress);

@@ -23,10 +23,15 @@
 // (survival = min(1, max component of the sampled BSDF weight), the survivor's power divided by
 // it) or when they leave the scene.
 //
-// Determinism: photon i of pass k uses RNG stream stream_id(k, i) (util/rng.h) and photons are
-// processed in fixed chunks whose outputs are concatenated in chunk order, so the maps are
-// bit-identical whatever the thread count. Multithreaded with util/parallel.h, cancellable and
-// with progress.
+// Tracing is a wavefront (stream) per chunk of photons: all photons of a chunk are in flight
+// together, each step intersects all their rays with one batch query (Embree ray streams), then
+// shades, stores and scatters every hit and keeps the survivors for the next step.
+//
+// Determinism: photon i of pass k uses RNG stream stream_id(k, i) (util/rng.h) and meets the same
+// random numbers and operations as if traced alone. The maps list stored photons by photon index,
+// each photon's stores in bounce order; chunks are fixed and concatenated in chunk order, so the
+// maps are bit-identical whatever the thread count. Multithreaded with util/parallel.h,
+// cancellable and with progress (polled between chunks).
 #pragma once
 
 #include <cstdint>
