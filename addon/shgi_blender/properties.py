@@ -11,6 +11,7 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, Po
 from . import settings
 
 D = settings.PROPERTY_DEFAULTS
+V = settings.VIEWPORT_PROPERTY_DEFAULTS
 
 METHOD_ITEMS = [(m.identifier, m.label, m.description, m.number) for m in settings.METHODS]
 WORLD_SAMPLING_ITEMS = list(settings.ENUM_ITEMS["world_sampling"])
@@ -74,6 +75,17 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
     world_in_field: BoolProperty(
         name="World in Lattice", default=D["world_in_field"],
         description="The lattice carries the world's direct light (less noise, blurrier)")
+    viewport_samples: IntProperty(
+        name="Viewport Samples", default=V["viewport_samples"], min=1, soft_max=4096,
+        description="Samples per pixel the Rendered viewport accumulates before it stops")
+    viewport_photon_passes: IntProperty(
+        name="Viewport Photon Passes", default=V["viewport_photon_passes"], min=1, soft_max=64,
+        description="Photon passes the Rendered viewport solves, each tracing Photons (1 gives "
+                    "the lattice of a final render; more give a smoother viewport)")
+    show_lattice_samples: BoolProperty(
+        name="Lattice Samples", default=V["show_lattice_samples"],
+        description="Draw the photon lattice's cells that hold surface as small spheres shaded "
+                    "by their indirect light (Rendered viewport or frozen solution)")
 
 
 _CLASSES = (ShgiSceneSettings,)

@@ -1,9 +1,14 @@
-"""The SHGI render engine: F12 renders with Cycles' passes, frozen lattice solutions.
+"""The SHGI render engine: F12 renders with Cycles' passes, frozen lattice solutions, and the
+live viewport (Rendered shading).
 
 * bpy-free: passes.py (pass table, pixel layout), render_job.py (the worker-thread render),
   solution_cache.py (frozen PhotonLattice solutions per scene), scene_checks.py (warnings
-  about scenes that render black);
-* bpy: render_engine.py (the RenderEngine class, registration), final_render.py (F12).
+  about scenes that render black); for the viewport sync_plan.py (what an edit invalidates),
+  viewport_camera.py (the view as a shgi.Camera), viewport_worker.py (the worker thread:
+  build, commit, solve, progressive frames), lattice_samples.py (the lattice overlay's spheres);
+* bpy: render_engine.py (the RenderEngine class, registration), final_render.py (F12),
+  viewport.py (view_update / view_draw sessions), viewport_sync.py (depsgraph updates ->
+  scene snapshots), frame_display.py (gpu drawing of frames).
 """
 
 

@@ -25,11 +25,15 @@ class MaterialExporter:
     """Adds each Blender material (and image) once to an shgi.Scene and remembers its id."""
 
     def __init__(self, scene, log):
+        """scene: an shgi.Scene, or anything with add_material and add_texture (and, for
+        invalidate(), set_material and set_texture: export/scene_snapshot.MaterialTable)."""
         self._scene = scene
         self._log = log
         self._material_ids = {}
         self._texture_ids = {}
         self._fallback_id = None
+        self._stale = set()  # material and image keys to convert again, in place
+        self.conversions = 0  # materials converted so far (the viewport's sync counts them)
 
     @property
     def texture_count(self):
@@ -61,21 +65,45 @@ class MaterialExporter:
                 ids.append(self.material_id(slot.material))
         return ids
 
+    def invalidate(self, material_keys=None):
+        """Marks materials (by ``original.name_full``; None: all materials and images) to be
+        converted again on their next use, keeping their ids (the viewport's edits)."""
+        if material_keys is None:
+            self._stale.update(("MATERIAL", key) for key in self._material_ids)
+            self._stale.update(("IMAGE", key) for key in self._texture_ids)
+        else:
+            self._stale.update(("MATERIAL", key) for key in material_keys)
+
     def material_id(self, material):
-        """Scene id of a Blender material, converting it on first use."""
+        """Scene id of a Blender material, converting it on first use; a stale material is
+        converted again in place, at the id it has, so the meshes using that id see the edit."""
         key = material.original.name_full
-        if key not in self._material_ids:
-            fields = self._material_fields(material)
-            if fields is None:
-                self._material_ids[key] = self.fallback_id()
-            else:
-                clamped, changed = conversions.clamp_material_fields(fields)
-                if changed:
-                    self._log.warn(f"material {material.name!r}: {', '.join(changed)} clamped to "
-                                   "the range SHGI accepts")
-                self._material_ids[key] = self._scene.add_material(
-                    shgi.Material(name=material.name, **clamped))
+        if key in self._material_ids and ("MATERIAL", key) not in self._stale:
+            return self._material_ids[key]
+        self._stale.discard(("MATERIAL", key))
+        self.conversions += 1
+        converted = self._convert(material)
+        own_id = self._material_ids.get(key)  # set only for a stale material
+        if own_id is not None and own_id != self._fallback_id:
+            if converted is None:
+                converted = self._scene.materials[self.fallback_id()]
+            self._scene.set_material(own_id, converted)
+        elif converted is None:
+            self._material_ids[key] = self.fallback_id()
+        else:
+            self._material_ids[key] = self._scene.add_material(converted)
         return self._material_ids[key]
+
+    def _convert(self, material):
+        """shgi.Material of a Blender material, or None (after a warning) for the fallback."""
+        fields = self._material_fields(material)
+        if fields is None:
+            return None
+        clamped, changed = conversions.clamp_material_fields(fields)
+        if changed:
+            self._log.warn(f"material {material.name!r}: {', '.join(changed)} clamped to the "
+                           "range SHGI accepts")
+        return shgi.Material(name=material.name, **clamped)
 
     def _material_fields(self, material):
         """shgi.Material fields of a material, or None (after a warning) for the fallback."""
@@ -134,16 +162,27 @@ class MaterialExporter:
         key = image.name_full
         if key not in self._texture_ids:
             self._texture_ids[key] = self._add_texture(image, material_name)
+        elif ("IMAGE", key) in self._stale:
+            self._stale.discard(("IMAGE", key))
+            texture = self._read_texture(image, material_name)
+            if texture is not None and self._texture_ids[key] is not None:
+                self._scene.set_texture(self._texture_ids[key], texture)
+            elif texture is not None:
+                self._texture_ids[key] = self._scene.add_texture(texture)
         return self._texture_ids[key]
 
     def _add_texture(self, image, material_name):
+        texture = self._read_texture(image, material_name)
+        return None if texture is None else self._scene.add_texture(texture)
+
+    def _read_texture(self, image, material_name):
+        """The image as an shgi.Texture, or None (after a warning) when it has no pixels."""
         width, height = image.size
         if width == 0 or height == 0 or image.channels == 0:
             self._log.warn(f"material {material_name!r}: image {image.name!r} has no pixels "
                            "(missing file?); base colour untextured")
             return None
-        pixels = image_pixels(image, self._log)
-        return self._scene.add_texture(shgi.Texture(pixels, name=image.name))
+        return shgi.Texture(image_pixels(image, self._log), name=image.name)
 
 
 def image_pixels(image, log):

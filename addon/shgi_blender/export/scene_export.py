@@ -14,6 +14,7 @@ skipped.
 """
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import shgi
@@ -62,13 +63,17 @@ def export_scene(depsgraph, scene=None, *, report=None, for_render=None):
 class _SceneExporter:
     """The state of one export: the shgi.Scene being built and what was converted already."""
 
-    def __init__(self, depsgraph, log, for_render):
+    def __init__(self, depsgraph, log, for_render, target=None, materials=None):
+        """target: what receives the export (a new shgi.Scene, or a SceneSnapshot: anything
+        with shgi.Scene's building calls); materials: a MaterialExporter kept between exports
+        (default: a new one adding to `target`)."""
         self.depsgraph = depsgraph
         self.log = log
         self.for_render = for_render
-        self.shgi_scene = shgi.Scene()
+        self.shgi_scene = target if target is not None else shgi.Scene()
         self.stats = ExportStats()
-        self.materials = MaterialExporter(self.shgi_scene, log)
+        self.materials = materials if materials is not None else MaterialExporter(
+            self.shgi_scene, log)
         self._mesh_ids = {}  # (geometry key, material ids) -> mesh id, or None when skipped
 
     def export_instances(self):
@@ -99,10 +104,16 @@ class _SceneExporter:
 
     def export_world_and_camera(self, scene):
         """Sets the world and, when the scene has a usable camera, the camera."""
+        self.export_world(scene)
+        self.export_camera(scene)
+
+    def export_world(self, scene):
         try:
             self.shgi_scene.set_world(world_from_blender(scene.world, self.log))
         except ValueError as error:
             self.log.warn(f"world: {error}; SHGI's default world is used")
+
+    def export_camera(self, scene):
         camera = camera_from_scene(scene, self.depsgraph, self.log)
         try:
             if camera is not None:
@@ -132,7 +143,7 @@ class _SceneExporter:
         material_ids = tuple(self.materials.slot_ids(obj))
         key = (self._geometry_key(obj), material_ids)
         if key not in self._mesh_ids:
-            self._mesh_ids[key] = self._add_mesh(obj, key[0][1], material_ids)
+            self._mesh_ids[key] = self._add_mesh(obj, key[0], material_ids)
         mesh_id = self._mesh_ids[key]
         if mesh_id is None:
             return
@@ -154,26 +165,51 @@ class _SceneExporter:
             return ("DATA", obj.data.original.name_full)
         return ("OBJECT", original.name_full)
 
-    def _add_mesh(self, obj, name, material_ids):
+    def _add_mesh(self, obj, geometry_key, material_ids):
         """Id of the new shgi mesh of an evaluated object, or None (empty or skipped)."""
+        geometry = self._read_geometry(obj, geometry_key)
+        if geometry is None:
+            return None
+        try:
+            mesh_id = self.shgi_scene.add_mesh(
+                self._shgi_mesh(geometry, geometry_key, material_ids))
+        except ValueError as error:
+            self.log.warn(f"object {obj.name!r}: {error}; skipped")
+            self.stats.skipped_objects += 1
+            return None
+        self.stats.meshes += 1
+        self.stats.triangles += len(geometry.split.triangles)
+        return mesh_id
+
+    def _read_geometry(self, obj, geometry_key):
+        """The evaluated object's triangles as a MeshGeometry, or None (empty or skipped)."""
         mesh = obj.to_mesh()
         try:
             if mesh is None or not mesh.polygons:
                 return None
-            split, blender_indices = read_mesh(mesh, name)
-            # Cycles clamps material indices beyond the last slot to the last slot.
-            slot_count = len(material_ids)
-            material_indices = np.asarray(material_ids, dtype=np.int32)[
-                np.clip(blender_indices, 0, slot_count - 1)]
-            mesh_id = self.shgi_scene.add_mesh(
-                positions=split.positions, triangles=split.triangles, normals=split.normals,
-                uvs=split.uvs or None, material_indices=material_indices, name=name)
+            split, blender_indices = read_mesh(mesh, geometry_key[1])
+            return MeshGeometry(split, blender_indices)
         except ValueError as error:
             self.log.warn(f"object {obj.name!r}: {error}; skipped")
             self.stats.skipped_objects += 1
             return None
         finally:
             obj.to_mesh_clear()
-        self.stats.meshes += 1
-        self.stats.triangles += len(split.triangles)
-        return mesh_id
+
+    def _shgi_mesh(self, geometry, geometry_key, material_ids):
+        """The shgi.Mesh of a geometry whose material slots hold scene materials material_ids."""
+        # Cycles clamps material indices beyond the last slot to the last slot.
+        material_indices = np.asarray(material_ids, dtype=np.int32)[
+            np.clip(geometry.blender_material_indices, 0, len(material_ids) - 1)]
+        split = geometry.split
+        return shgi.Mesh(positions=split.positions, triangles=split.triangles,
+                         normals=split.normals, uvs=split.uvs or None,
+                         material_indices=material_indices, name=geometry_key[1])
+
+
+@dataclass
+class MeshGeometry:
+    """An evaluated object's triangles before material slots are resolved."""
+
+    split: object                     # mesh_split.SplitMesh
+    blender_material_indices: object  # (T,) int32 material slot per triangle

@@ -1,22 +1,25 @@
 """Panels: render settings (render_panels.py), light and view-layer passes (data_panels.py),
-and the stock Blender panels shown under SHGI as under Cycles (compat.py)."""
+the stock Blender panels shown under SHGI as under Cycles (compat.py), and the lattice overlay
+of the 3D views (lattice_overlay.py)."""
 
 
 def register():
     import bpy
 
-    from . import compat, data_panels, render_panels
+    from . import compat, data_panels, lattice_overlay, render_panels
 
     for cls in render_panels.CLASSES + data_panels.CLASSES:
         bpy.utils.register_class(cls)
     compat.add_engine_to_stock_panels()
+    lattice_overlay.register()
 
 
 def unregister():
     import bpy
 
-    from . import compat, data_panels, render_panels
+    from . import compat, data_panels, lattice_overlay, render_panels
 
+    lattice_overlay.unregister()
     compat.remove_engine_from_stock_panels()
     for cls in reversed(render_panels.CLASSES + data_panels.CLASSES):
         bpy.utils.unregister_class(cls)

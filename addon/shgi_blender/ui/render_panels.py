@@ -50,7 +50,8 @@ class SHGI_RENDER_PT_method(ShgiRenderPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         column = layout.column(align=True)
-        column.prop(props, "samples")
+        column.prop(props, "viewport_samples", text="Viewport Samples")
+        column.prop(props, "samples", text="Render Samples")
         column.prop(props, "seed")
 
 
@@ -101,6 +102,9 @@ class SHGI_RENDER_PT_photon_lattice(ShgiRenderPanel, bpy.types.Panel):
         sub.active = props.caustics != "OFF"
         sub.prop(props, "caustic_resolution")
         layout.prop(props, "world_in_field")
+        column = layout.column(align=True)
+        column.prop(props, "viewport_photon_passes", text="Viewport Passes")
+        column.prop(props, "show_lattice_samples", text="Show Lattice Samples")
 
     @staticmethod
     def _draw_solution(layout, props, solution):

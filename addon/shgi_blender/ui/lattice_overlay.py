@@ -1,0 +1,102 @@
+"""The lattice overlay: the photon lattice's cells that hold surface, as small shaded spheres.
+
+Drawn in every 3D view (a SpaceView3D POST_VIEW draw handler) when ``scene.shgi
+show_lattice_samples`` is on and the scene renders with SHGI. The spheres come from the lattice
+the scene's Rendered viewport is solving (its worker computes them after each photon pass), or
+else from the scene's frozen solution (computed once, here). engine/lattice_samples.py makes the
+geometry and colours; this module only uploads them as one GPU batch (rebuilt when the overlay
+changes) and draws it with back faces culled. The overlay's toggle also shows in the viewport's
+Overlays popover.
+"""
+
+import bpy
+import gpu
+from gpu_extras.batch import batch_for_shader
+
+from ..engine import solution_cache, viewport
+from ..engine.frame_display import builtin_shader
+
+ENGINE = "SHGI"
+SMOOTH_COLOR_SHADER_NAMES = ("SMOOTH_COLOR", "3D_SMOOTH_COLOR")
+
+_state = {"handle": None, "batch": None, "overlay": None, "frozen": None, "draws": 0,
+          "spheres": 0}
+
+
+def stats():
+    """{"draws": overlay draws so far, "spheres": spheres in the last draw}."""
+    return {"draws": _state["draws"], "spheres": _state["spheres"]}
+
+
+def overlay_for(scene):
+    """The LatticeOverlay to draw for `scene`, or None."""
+    for session in viewport.sessions():
+        if session.scene_key == scene.name_full:
+            overlay = session.worker.latest_overlay()
+            if overlay is not None:
+                return overlay
+    solution = solution_cache.get(scene.name_full)
+    if solution is None:
+        return None
+    frozen = _state["frozen"]
+    if frozen is None or frozen[0] is not solution:
+        from ..engine import lattice_samples  # imports shgi, present when a solution exists
+
+        # A committed shgi.Scene offers the instances and meshes a snapshot does.
+        overlay = lattice_samples.lattice_overlay(solution.lattice, solution.scene,
+                                                  solution.scene,
+                                                  solution.lattice.settings.resolution)
+        _state["frozen"] = frozen = (solution, overlay)
+    return frozen[1]
+
+
+def draw_lattice_samples():
+    """The draw handler (POST_VIEW, world space)."""
+    scene = bpy.context.scene
+    if scene is None or scene.render.engine != ENGINE or not scene.shgi.show_lattice_samples:
+        return
+    overlay = overlay_for(scene)
+    if overlay is None:
+        return
+    shader = builtin_shader(SMOOTH_COLOR_SHADER_NAMES)
+    if _state["overlay"] is not overlay:
+        _state["batch"] = batch_for_shader(shader, "TRIS", {"pos": overlay.positions,
+                                                            "color": overlay.colors},
+                                           indices=overlay.indices)
+        _state["overlay"] = overlay
+    # Back faces culled: handlers may draw without a depth buffer (Rendered shading), and the
+    # spheres' triangles face outwards (counter-clockwise).
+    gpu.state.face_culling_set("BACK")
+    gpu.state.depth_test_set("LESS_EQUAL")
+    gpu.state.depth_mask_set(True)
+    try:
+        _state["batch"].draw(shader)
+    finally:
+        gpu.state.depth_mask_set(False)
+        gpu.state.depth_test_set("NONE")
+        gpu.state.face_culling_set("NONE")
+    _state["draws"] += 1
+    _state["spheres"] = len(overlay.centres)
+
+
+def draw_overlay_popover(self, context):
+    """Appended to the viewport's Overlays popover (VIEW3D_PT_overlay)."""
+    if context.engine != ENGINE:
+        return
+    layout = self.layout
+    layout.label(text="SHGI")
+    layout.prop(context.scene.shgi, "show_lattice_samples")
+
+
+def register():
+    if _state["handle"] is None:
+        _state["handle"] = bpy.types.SpaceView3D.draw_handler_add(
+            draw_lattice_samples, (), "WINDOW", "POST_VIEW")
+    bpy.types.VIEW3D_PT_overlay.append(draw_overlay_popover)
+
+
+def unregister():
+    bpy.types.VIEW3D_PT_overlay.remove(draw_overlay_popover)
+    if _state["handle"] is not None:
+        bpy.types.SpaceView3D.draw_handler_remove(_state["handle"], "WINDOW")
+    _state.update(handle=None, batch=None, overlay=None, frozen=None)
