@@ -1,5 +1,7 @@
 #include "render/film.h"
 
+#include <algorithm>
+
 #include "util/error.h"
 
 namespace shgi {
@@ -47,8 +49,21 @@ Film::Film(int width, int height) : width_(width), height_(height) {
 }
 
 void Film::add(int x, int y, const PassValues& values) {
+    accumulate(x, y, *this, values);
+}
+
+void Film::accumulate(int x, int y, const Film& base, const PassValues& values) {
+    const size_t count = pixel_count();
     const size_t pixel = size_t(y) * size_t(width_) + size_t(x);
-    for (int p = 0; p < kPassCount; ++p) sums_[size_t(p) * pixel_count() + pixel] += values.value[p];
+    const vec3* from = base.sums_.data() + pixel;
+    vec3* to = sums_.data() + pixel;
+    for (size_t p = 0; p < size_t(kPassCount); ++p)
+        to[p * count] = from[p * count] + values.value[p];
+}
+
+void Film::clear() {
+    std::fill(sums_.begin(), sums_.end(), vec3(0.0f));
+    samples_ = 0;
 }
 
 vec3 Film::normalised(Pass pass, size_t pixel) const {

@@ -55,7 +55,13 @@ class Film {
 
     // Adds one sample's values to pixel (x, y) (y = 0 is the top row).
     void add(int x, int y, const PassValues& values);
+    // Sets pixel (x, y) to `base`'s sums there plus one sample's values (base may be this film;
+    // it must have the same size). A render that must leave its film untouched until it
+    // completes sums into a second film this way, without first copying the whole film.
+    void accumulate(int x, int y, const Film& base, const PassValues& values);
     void set_samples(uint32_t samples) { samples_ = samples; }
+    // Every sum back to zero, samples() to 0.
+    void clear();
 
     // Normalised pixels of one pass, interleaved (height, width, channels) top row first.
     std::vector<float> pixels(Pass pass) const;

@@ -23,29 +23,43 @@ const Pass kColorPass[kLobeClassCount] = {Pass::DiffCol, Pass::GlossCol, Pass::T
 void PathIntegrator::trace(const Ray& ray) { trace(ray, scene_.intersect(ray)); }
 
 void PathIntegrator::trace(const Ray& camera_ray, const Hit& first_hit) {
-    Ray ray = camera_ray;
-    Hit hit = first_hit;
-    bool terminate_on_next_surface = false;
+    if (!begin(camera_ray, first_hit)) return;
+    sample_direct();
+    finish();
+}
+
+bool PathIntegrator::begin(const Ray& camera_ray, const Hit& first_hit) {
+    ray_ = camera_ray;
+    return enter_surface(first_hit);
+}
+
+// What ray_ meets up to `hit`, then the shading of that surface; false when the path ends here.
+bool PathIntegrator::enter_surface(const Hit& hit) {
+    find_emission(ray_, hit);
+    if (!hit.valid() || terminate_on_next_surface_) return false;
+    shading_.emplace(make_shading(scene_, scene_.surface_point(ray_, hit), ray_.direction));
+    if (vertex_ == 0) record_first_hit(*shading_, ray_, hit);
+    return true;
+}
+
+// Each vertex: direct light (already done for the current surface when this is called), field
+// light, then the BSDF chooses whether and where the path continues.
+void PathIntegrator::finish() {
     for (;;) {
-        find_emission(ray, hit);
-        if (!hit.valid() || terminate_on_next_surface) break;
-        const SurfacePoint sp = scene_.surface_point(ray, hit);
-        const Shading shading = make_shading(scene_, sp, ray.direction);
-        if (vertex_ == 0) record_first_hit(shading, ray, hit);
-        if (shading.bsdf.has_smooth_lobes()) sample_direct(shading);
-        if (field_ != nullptr) add_field(shading);
-        if (!scatter(shading, &ray)) break;
+        if (field_ != nullptr) add_field(*shading_);
+        if (!scatter(*shading_, &ray_)) return;
         const int total = bounces_[0] + bounces_[1] + bounces_[2];
-        terminate_on_next_surface = total > settings_.max_bounces ||
-                                    bounces_[0] > settings_.diffuse_bounces ||
-                                    bounces_[1] > settings_.glossy_bounces ||
-                                    bounces_[2] > settings_.transmission_bounces;
-        if (vertex_ >= settings_.russian_roulette_depth && !terminate_on_next_surface) {
+        terminate_on_next_surface_ = total > settings_.max_bounces ||
+                                     bounces_[0] > settings_.diffuse_bounces ||
+                                     bounces_[1] > settings_.glossy_bounces ||
+                                     bounces_[2] > settings_.transmission_bounces;
+        if (vertex_ >= settings_.russian_roulette_depth && !terminate_on_next_surface_) {
             const float survive = std::min(1.0f, max_component(throughput_));
-            if (rng_.next_float() >= survive) break;
+            if (rng_.next_float() >= survive) return;
             throughput_ /= survive;
         }
-        hit = scene_.intersect(ray);
+        if (!enter_surface(scene_.intersect(ray_))) return;
+        sample_direct();
     }
 }
 
@@ -58,6 +72,7 @@ void PathIntegrator::find_emission(const Ray& ray, const Hit& hit) {
                                  camera_ray, &light_hit)) {
         add_emission(light_hit.radiance, light_hit.light_pdf, false);
     } else if (hit.valid()) {
+        if (scene_.emissive_triangles().empty()) return;  // spares a table lookup per hit
         const EmissionHit surface = lights_.triangle_emission(hit, ray.direction);
         if (max_component(surface.radiance) > 0.0f)
             add_emission(surface.radiance, surface.light_pdf, false);
@@ -101,40 +116,55 @@ void PathIntegrator::record_first_hit(const Shading& shading, const Ray& ray, co
     for (int c = 0; c < kLobeClassCount; ++c)
         out_[kColorPass[c]] += shading.bsdf.class_color(LobeClass(c));
     out_[Pass::Normal] += shading.frame.z;
-    const Camera& camera = scene_.camera();
-    const vec3 forward = glm::normalize(-vec3(camera.world_from_camera[2]));
+    const vec3 forward = glm::normalize(-vec3(camera_.world_from_camera[2]));
     const vec3 position = ray.origin + hit.t * ray.direction;
-    out_[Pass::Depth].x += glm::dot(position - vec3(camera.world_from_camera[3]), forward);
+    out_[Pass::Depth].x += glm::dot(position - vec3(camera_.world_from_camera[3]), forward);
 }
 
-// Next-event estimation at one surface, MIS-weighted against BSDF sampling.
-void PathIntegrator::sample_direct(const Shading& shading) {
+// Next-event estimation at the current surface, MIS-weighted against BSDF sampling.
+void PathIntegrator::sample_direct() {
     ScopedTimer timer(clock_ != nullptr ? &clock_->direct : nullptr);
+    Ray shadow;
+    if (prepare_direct(&shadow) && !scene_.occluded(shadow)) add_direct();
+}
+
+bool PathIntegrator::prepare_direct(Ray* shadow) {
+    const Shading& shading = *shading_;
+    if (!shading.bsdf.has_smooth_lobes()) return false;  // a Dirac lobe never meets a light sample
     LightSample ls;
     const float u_select = rng_.next_float();
     const vec2 u = rng_.next_vec2();
-    if (!lights_.sample(shading.position, shading.frame.z, u_select, u, &ls)) return;
+    if (!lights_.sample(shading.position, shading.frame.z, u_select, u, &ls)) return false;
     const vec3 wi = shading.frame.to_local(ls.wi);
     const bool geometric_above = glm::dot(ls.wi, shading.geometric_normal) > 0.0f;
-    if (geometric_above != (wi.z > 0.0f)) return;  // shading and geometric normals disagree
-    const BsdfEval eval = field_ != nullptr ? shading.bsdf.eval_field(shading.wo, wi)
-                                            : shading.bsdf.eval(shading.wo, wi);
-    if (max_component(eval.total()) <= 0.0f) return;
-    Ray shadow;
-    shadow.origin = offset_origin(shading.position,
-                                  geometric_above ? shading.geometric_normal
-                                                  : -shading.geometric_normal);
-    shadow.direction = ls.wi;
-    shadow.tmax = std::isinf(ls.distance) ? kInfinity : ls.distance * (1.0f - kShadowShorten);
-    if (scene_.occluded(shadow)) return;
+    if (geometric_above != (wi.z > 0.0f)) return false;  // shading and geometric normals disagree
+    pending_.eval = field_ != nullptr ? shading.bsdf.eval_field(shading.wo, wi)
+                                      : shading.bsdf.eval(shading.wo, wi);
+    if (max_component(pending_.eval.total()) <= 0.0f) return false;
+    shadow->origin = offset_origin(shading.position,
+                                   geometric_above ? shading.geometric_normal
+                                                   : -shading.geometric_normal);
+    shadow->direction = ls.wi;
+    shadow->tmin = 0.0f;
+    shadow->tmax = std::isinf(ls.distance) ? kInfinity : ls.distance * (1.0f - kShadowShorten);
+    pending_.light = ls;
+    pending_.wi = wi;
+    return true;
+}
+
+void PathIntegrator::add_direct() {
+    const Shading& shading = *shading_;
+    const LightSample& ls = pending_.light;
     const bool mis = !ls.delta && field_ == nullptr;
-    const float weight = mis ? power_heuristic(ls.pdf, shading.bsdf.pdf(shading.wo, wi)) : 1.0f;
+    const float weight =
+        mis ? power_heuristic(ls.pdf, shading.bsdf.pdf(shading.wo, pending_.wi)) : 1.0f;
     const vec3 scale = throughput_ * ls.radiance * (weight / ls.pdf);
     if (vertex_ == 0) {  // direct light at the first surface, split by the lobes it lit
-        for (int c = 0; c < kLobeClassCount; ++c) add_light(eval.by_class[c] * scale, c, true);
+        for (int c = 0; c < kLobeClassCount; ++c)
+            add_light(pending_.eval.by_class[c] * scale, c, true);
         return;
     }
-    add_split(eval.total() * scale, false);
+    add_split(pending_.eval.total() * scale, false);
 }
 
 // Indirect light from the field through the field lobes (see the header).

@@ -10,8 +10,17 @@
 // refraction) continue the path, which then sees emitters with weight 1. Field light has
 // scattered at least twice on its way to the camera, so it lands in the Ind passes.
 //
+// Steps: trace() runs a whole path. A renderer that traces many paths at once can instead run
+// each path's steps itself: begin() (what the camera ray meets, the first surface's shading),
+// prepare_direct() (next-event estimation up to its shadow ray), add_direct() (only when that
+// ray was not occluded), finish() (field light and the rest of the path); and trace the shadow
+// rays of many paths as one Embree stream between the second and third step. The random numbers
+// and the order of every addition are those of trace(), so the result is bit-identical.
+//
 // Not thread-safe: one integrator per path, on one thread.
 #pragma once
+
+#include <optional>
 
 #include "render/bsdf.h"
 #include "render/film.h"
@@ -19,6 +28,7 @@
 #include "render/light_sampler.h"
 #include "render/path_tracer.h"
 #include "render/shading.h"
+#include "scene/camera.h"
 #include "scene/scene.h"
 #include "util/rng.h"
 
@@ -32,29 +42,53 @@ struct IntegratorClock {
 
 class PathIntegrator {
   public:
-    // `field` null: reference path tracing. `clock` null: no timing.
-    PathIntegrator(const Scene& scene, const LightSampler& lights,
+    // `camera` is the one whose rays are traced (its view axis gives the Depth pass). `field`
+    // null: reference path tracing. `clock` null: no timing.
+    PathIntegrator(const Scene& scene, const Camera& camera, const LightSampler& lights,
                    const PathTracerSettings& settings, const IndirectField* field, Pcg32& rng,
                    PassValues& out, IntegratorClock* clock = nullptr)
-        : scene_(scene), lights_(lights), settings_(settings), field_(field), rng_(rng),
-          out_(out), clock_(clock) {}
+        : scene_(scene), camera_(camera), lights_(lights), settings_(settings), field_(field),
+          rng_(rng), out_(out), clock_(clock) {}
 
     // Traces a camera ray.
     void trace(const Ray& ray);
     // Traces a camera ray whose first hit is already known (batched primary rays).
     void trace(const Ray& ray, const Hit& first_hit);
 
+    // --- trace(ray, first_hit) in steps (see the header comment) ---
+    // Adds what the camera ray meets and shades its first surface; false when the path ends
+    // there (a miss). The steps below may be called only after it returned true.
+    bool begin(const Ray& camera_ray, const Hit& first_hit);
+    // Samples a light for the current surface and evaluates the BSDF: true when a contribution
+    // waits on the shadow ray written to *shadow.
+    bool prepare_direct(Ray* shadow);
+    // Adds the waiting contribution; call it after prepare_direct() returned true and only when
+    // the shadow ray was not occluded.
+    void add_direct();
+    // Indirect light at the current surface and the rest of the path.
+    void finish();
+
   private:
+    // A next-event estimate waiting on its shadow ray: the light sample, its direction in the
+    // shading frame and f |cos| by class there.
+    struct PendingDirect {
+        LightSample light;
+        vec3 wi{0.0f};
+        BsdfEval eval;
+    };
+
+    bool enter_surface(const Hit& hit);
     void find_emission(const Ray& ray, const Hit& hit);
     void add_emission(const vec3& radiance, float light_pdf, bool is_world);
     void record_first_hit(const Shading& shading, const Ray& ray, const Hit& hit);
-    void sample_direct(const Shading& shading);
+    void sample_direct();
     void add_field(const Shading& shading);
     bool scatter(const Shading& shading, Ray* ray);
     void add_light(const vec3& contribution, int lobe_class, bool direct);
     void add_split(const vec3& contribution, bool direct);
 
     const Scene& scene_;
+    const Camera& camera_;
     const LightSampler& lights_;
     const PathTracerSettings& settings_;
     const IndirectField* field_;
@@ -62,6 +96,10 @@ class PathIntegrator {
     PassValues& out_;
     IntegratorClock* clock_;
 
+    Ray ray_;                          // the ray that reached the current surface
+    std::optional<Shading> shading_;   // the current surface (Shading has no empty state)
+    PendingDirect pending_;
+    bool terminate_on_next_surface_ = false;
     vec3 throughput_{1.0f};
     int vertex_ = 0;                   // surfaces shaded so far
     int bounces_[kLobeClassCount] = {0, 0, 0};

@@ -77,7 +77,8 @@ void PathTracer::render(uint32_t samples, Progress* progress) {
                         Pcg32 rng(settings_.seed, stream_id(s, pixel));
                         const vec2 jitter = rng.next_vec2();
                         PassValues values;
-                        PathIntegrator integrator(*scene_, lights_, settings_, nullptr, rng, values);
+                        PathIntegrator integrator(*scene_, camera, lights_, settings_, nullptr,
+                                                  rng, values);
                         integrator.trace(camera.generate_ray(vec2(float(x), float(y)) + jitter));
                         scratch.add(x, y, values);
                     }

@@ -1,6 +1,9 @@
 #include "render/preview_renderer.h"
 
 #include <algorithm>
+#include <chrono>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "render/path_integrator.h"
@@ -12,8 +15,196 @@
 namespace shgi {
 namespace {
 
-// Camera samples traced per batch: bounds the memory of the G-buffer (rays and hits).
-constexpr uint64_t kMaxBatchSamples = uint64_t(1) << 20;
+// Pixels whose paths go through the stages together: their camera rays and their first shadow
+// rays are each one Embree stream. 256 is one 16 x 16 tile (PreviewSettings' default): coherent
+// enough for Embree's packets, small enough that the wave's state (~0.7 KB per path: integrator,
+// pass values, rays, hits; ~180 KB) stays in a core's L2 between the stages.
+constexpr size_t kWavePixels = 256;
+// Pixels per parallel work unit (a run of whole tiles): a 640 x 360 frame gives a few hundred
+// units, plenty to balance the threads, and the per-unit setup stays negligible.
+constexpr uint64_t kChunkPixels = 1024;
+
+double seconds_between(TimePoint start, TimePoint end) {
+    return std::chrono::duration<double>(end - start).count();
+}
+
+// Seconds one work unit spent in each stage.
+struct StageSeconds {
+    double primary = 0.0, direct = 0.0, indirect = 0.0;
+};
+
+// The frame's tiles, row-major; the last column and row may be cut by the image border.
+struct TileGrid {
+    TileGrid(int image_width, int image_height, int tile_size)
+        : width(image_width), height(image_height), tile(tile_size),
+          columns((int64_t(image_width) + tile_size - 1) / tile_size),
+          rows((int64_t(image_height) + tile_size - 1) / tile_size) {}
+    uint64_t count() const { return uint64_t(columns) * uint64_t(rows); }
+    // Pixel bounds [x0, x1) x [y0, y1) of tile t.
+    void bounds(uint64_t t, int* x0, int* x1, int* y0, int* y1) const {
+        const int64_t left = int64_t(t % uint64_t(columns)) * tile;
+        const int64_t top = int64_t(t / uint64_t(columns)) * tile;
+        *x0 = int(left);
+        *y0 = int(top);
+        *x1 = int(std::min<int64_t>(left + tile, width));
+        *y1 = int(std::min<int64_t>(top + tile, height));
+    }
+
+    int width, height, tile;
+    int64_t columns, rows;
+};
+
+// The stages' wall times: `wall` split in proportion to the threads' seconds in each stage.
+PreviewTimings split_wall_time(double wall, const std::vector<StageSeconds>& busy) {
+    StageSeconds sum;
+    for (const StageSeconds& unit : busy) {  // a fixed order: the same split for any run
+        sum.primary += unit.primary;
+        sum.direct += unit.direct;
+        sum.indirect += unit.indirect;
+    }
+    PreviewTimings timings;
+    const double total = sum.primary + sum.direct + sum.indirect;
+    if (total > 0.0) {
+        timings.primary = wall * sum.primary / total;
+        timings.direct = wall * sum.direct / total;
+        timings.indirect = wall * sum.indirect / total;
+    }
+    return timings;
+}
+
+// A wave's buffers, sized once per work unit: each PathIntegrator refers to its rng and values
+// entries, so these vectors never reallocate while paths are in flight.
+struct Wave {
+    explicit Wave(size_t capacity)
+        : x(capacity), y(capacity), rngs(capacity), values(capacity), paths(capacity),
+          live(capacity) {
+        rays.reserve(capacity);
+        hits.reserve(capacity);
+        shadow_rays.reserve(capacity);
+        shadow_paths.reserve(capacity);
+        occluded.reserve(capacity);
+    }
+    size_t capacity() const { return x.size(); }
+
+    size_t count = 0;  // pixels in the wave
+    std::vector<int> x, y;
+    std::vector<Pcg32> rngs;
+    std::vector<PassValues> values;
+    std::vector<std::optional<PathIntegrator>> paths;
+    std::vector<uint8_t> live;  // the path has a first surface to shade
+    std::vector<Ray> rays;
+    std::vector<Hit> hits;
+    std::vector<Ray> shadow_rays;
+    std::vector<uint32_t> shadow_paths;  // the path each shadow ray belongs to
+    std::vector<uint8_t> occluded;
+};
+
+// One render() call: samples [first, first + count) of every pixel, summed onto `base` into
+// `target` (which may be base). Threads share it read-only; a work unit writes only its own
+// pixels of `target`.
+class FrameWork {
+  public:
+    FrameWork(const Scene& scene, const Camera& camera, const LightSampler& lights,
+              const PathTracerSettings& settings, const IndirectField& field, const TileGrid& grid,
+              uint64_t first, uint64_t count, const Film& base, Film& target, Progress* progress)
+        : scene_(scene), camera_(camera), lights_(lights), settings_(settings), field_(field),
+          grid_(grid), first_(first), count_(count), base_(base), target_(&target),
+          progress_(progress) {}
+
+    // Renders tiles [begin, end) of the grid, pixels in tile order, in waves.
+    void render_tiles(uint64_t begin, uint64_t end, StageSeconds* seconds) const {
+        const uint64_t tile_pixels = uint64_t(grid_.tile) * uint64_t(grid_.tile);
+        Wave wave(size_t(std::min<uint64_t>(kWavePixels, (end - begin) * tile_pixels)));
+        IntegratorClock clock;
+        for (uint64_t t = begin; t < end; ++t) {
+            int x0, x1, y0, y1;
+            grid_.bounds(t, &x0, &x1, &y0, &y1);
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    wave.x[wave.count] = x;
+                    wave.y[wave.count] = y;
+                    if (++wave.count == wave.capacity()) render_wave(wave, clock, seconds);
+                }
+        }
+        if (wave.count > 0) render_wave(wave, clock, seconds);
+    }
+
+  private:
+    // Every sample of the wave's pixels, one sample index at a time (each pixel's samples are
+    // summed in order, as the path tracer does); empties the wave.
+    void render_wave(Wave& wave, IntegratorClock& clock, StageSeconds* seconds) const {
+        for (uint64_t s = first_; s < first_ + count_; ++s) {
+            throw_if_cancelled(progress_);
+            const TimePoint primary_start = now();
+            trace_primary(wave, s, clock);
+            const TimePoint direct_start = now();
+            trace_direct(wave);
+            const TimePoint shading_start = now();
+            seconds->primary += seconds_between(primary_start, direct_start);
+            seconds->direct += seconds_between(direct_start, shading_start);
+            // Next-event estimation where a specular chain lands is direct light too: the
+            // integrators add its time to `clock`.
+            const double chain_direct = clock.direct;
+            const Film& sums = s == first_ ? base_ : *target_;
+            for (size_t i = 0; i < wave.count; ++i) {
+                if (wave.live[i]) wave.paths[i]->finish();
+                target_->accumulate(wave.x[i], wave.y[i], sums, wave.values[i]);
+            }
+            const double shading = seconds_since(shading_start);
+            const double chained = clock.direct - chain_direct;
+            seconds->direct += chained;
+            seconds->indirect += shading - chained;
+        }
+        wave.count = 0;
+    }
+
+    // Camera rays of sample s as one stream, then each first surface's shading (the G-buffer).
+    void trace_primary(Wave& wave, uint64_t s, IntegratorClock& clock) const {
+        const uint64_t width = uint64_t(target_->width());
+        wave.rays.resize(wave.count);
+        for (size_t i = 0; i < wave.count; ++i) {
+            const uint64_t pixel = uint64_t(wave.y[i]) * width + uint64_t(wave.x[i]);
+            wave.rngs[i] = Pcg32(settings_.seed, stream_id(s, pixel));
+            const vec2 jitter = wave.rngs[i].next_vec2();
+            wave.rays[i] = camera_.generate_ray(vec2(float(wave.x[i]), float(wave.y[i])) + jitter);
+        }
+        scene_.intersect(wave.rays, wave.hits);
+        for (size_t i = 0; i < wave.count; ++i) {
+            wave.values[i] = PassValues{};
+            PathIntegrator& path = wave.paths[i].emplace(scene_, camera_, lights_, settings_,
+                                                         &field_, wave.rngs[i], wave.values[i],
+                                                         &clock);
+            wave.live[i] = path.begin(wave.rays[i], wave.hits[i]);
+        }
+    }
+
+    // Next-event estimation at every first surface, its shadow rays as one occlusion stream.
+    void trace_direct(Wave& wave) const {
+        wave.shadow_rays.clear();
+        wave.shadow_paths.clear();
+        Ray shadow;
+        for (size_t i = 0; i < wave.count; ++i) {
+            if (!wave.live[i] || !wave.paths[i]->prepare_direct(&shadow)) continue;
+            wave.shadow_rays.push_back(shadow);
+            wave.shadow_paths.push_back(uint32_t(i));
+        }
+        if (wave.shadow_rays.empty()) return;
+        scene_.occluded(wave.shadow_rays, wave.occluded);
+        for (size_t j = 0; j < wave.shadow_rays.size(); ++j)
+            if (!wave.occluded[j]) wave.paths[wave.shadow_paths[j]]->add_direct();
+    }
+
+    const Scene& scene_;
+    const Camera& camera_;
+    const LightSampler& lights_;
+    const PathTracerSettings& settings_;
+    const IndirectField& field_;
+    const TileGrid& grid_;
+    uint64_t first_, count_;
+    const Film& base_;
+    Film* target_;  // written by the work units, each in its own pixels
+    Progress* progress_;
+};
 
 // The path tracer settings that make PathIntegrator follow only specular chains: every
 // scattering of a field path is a traced lobe (Dirac or refraction).
@@ -64,10 +255,16 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const Camera& camera,
       camera_(camera),
       settings_(validated(settings)),
       path_settings_(path_settings_for(settings)),
-      lights_(scene, settings.world_sampling),
-      lights_without_world_(scene, settings.world_sampling, false) {
+      lights_(scene, settings.world_sampling) {
     validate_camera(camera_);
     film_ = Film(int(camera_.resolution_x), int(camera_.resolution_y));
+}
+
+const LightSampler& PreviewRenderer::lights_for(const IndirectField& field) {
+    if (!field.includes_world_direct()) return lights_;
+    if (!lights_without_world_)
+        lights_without_world_.emplace(*scene_, settings_.world_sampling, false);
+    return *lights_without_world_;
 }
 
 void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progress* progress) {
@@ -84,74 +281,32 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
                                              kMaxPathTracerSamples, " per pixel"));
     const ZeroField no_field;
     if (field == nullptr) field = &no_field;  // direct light only, still in preview mode
-    const LightSampler& lights = field->includes_world_direct() ? lights_without_world_ : lights_;
-    const auto frame_start = now();
-    PreviewTimings timings;
-    const int width = film_.width(), height = film_.height();
-    const uint64_t pixels = uint64_t(width) * uint64_t(height);
-    const uint64_t samples_per_batch = std::max<uint64_t>(1, kMaxBatchSamples / pixels);
-    Film scratch = film_;  // committed only when every batch finished
-    std::vector<Ray> rays;
-    std::vector<Hit> hits;
-    for (uint64_t batch = first; batch < first + samples; batch += samples_per_batch) {
-        const uint64_t batch_samples = std::min<uint64_t>(samples_per_batch, first + samples - batch);
-        // Primary: camera rays of the batch, sample-major per pixel, intersected as streams.
-        auto stage_start = now();
-        rays.resize(pixels * batch_samples);
-        parallel_for(0, pixels, 4096, [&](uint64_t begin, uint64_t end) {
-            for (uint64_t pixel = begin; pixel < end; ++pixel) {
-                const vec2 position(float(pixel % uint64_t(width)), float(pixel / uint64_t(width)));
-                for (uint64_t s = 0; s < batch_samples; ++s) {
-                    Pcg32 rng(settings_.seed, stream_id(batch + s, pixel));
-                    rays[pixel * batch_samples + s] = camera_.generate_ray(position + rng.next_vec2());
-                }
-            }
+    const TimePoint frame_start = now();
+    const LightSampler& lights = lights_for(*field);
+    // An empty film is summed in place (a failed render just clears it again); otherwise into
+    // next_film_, which replaces film_ once every tile is done.
+    const bool in_place = first == 0;
+    if (!in_place && (next_film_.width() != film_.width() || next_film_.height() != film_.height()))
+        next_film_ = Film(film_.width(), film_.height());
+    Film& target = in_place ? film_ : next_film_;
+    const TileGrid grid(film_.width(), film_.height(), settings_.tile_size);
+    const FrameWork work(*scene_, camera_, lights, path_settings_, *field, grid, first, samples,
+                         film_, target, progress);
+    const uint64_t tile_pixels = uint64_t(grid.tile) * uint64_t(grid.tile);
+    const uint64_t tiles_per_unit = std::max<uint64_t>(1, kChunkPixels / tile_pixels);
+    std::vector<StageSeconds> busy(grid.count());  // per work unit, at its first tile
+    const TimePoint tiles_start = now();
+    try {
+        parallel_for(0, grid.count(), tiles_per_unit, [&](uint64_t begin, uint64_t end) {
+            work.render_tiles(begin, end, &busy[begin]);
         }, progress);
-        scene_->intersect(rays, hits, progress);
-        timings.primary += seconds_since(stage_start);
-
-        // Shading: tiles of pixels, each sample continuing from its primary hit.
-        stage_start = now();
-        const int tile = settings_.tile_size;
-        const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
-        std::vector<IntegratorClock> clocks(size_t(tiles_x) * size_t(tiles_y));
-        std::vector<double> busy(clocks.size(), 0.0);
-        parallel_for(0, uint64_t(tiles_x) * uint64_t(tiles_y), 1, [&](uint64_t begin, uint64_t end) {
-            for (uint64_t t = begin; t < end; ++t) {
-                const auto tile_start = now();
-                const int x0 = int(t % uint64_t(tiles_x)) * tile;
-                const int y0 = int(t / uint64_t(tiles_x)) * tile;
-                for (int y = y0; y < std::min(y0 + tile, height); ++y) {
-                    for (int x = x0; x < std::min(x0 + tile, width); ++x) {
-                        const uint64_t pixel = uint64_t(y) * uint64_t(width) + uint64_t(x);
-                        for (uint64_t s = 0; s < batch_samples; ++s) {
-                            throw_if_cancelled(progress);
-                            Pcg32 rng(settings_.seed, stream_id(batch + s, pixel));
-                            rng.next_vec2();  // the jitter the primary stage used
-                            PassValues values;
-                            PathIntegrator integrator(*scene_, lights, path_settings_, field,
-                                                      rng, values, &clocks[t]);
-                            const uint64_t index = pixel * batch_samples + s;
-                            integrator.trace(rays[index], hits[index]);
-                            scratch.add(x, y, values);
-                        }
-                    }
-                }
-                busy[t] = seconds_since(tile_start);
-            }
-        }, progress);
-        const double shading = seconds_since(stage_start);
-        double direct = 0.0, total_busy = 0.0;
-        for (size_t t = 0; t < clocks.size(); ++t) {
-            direct += clocks[t].direct;
-            total_busy += busy[t];
-        }
-        const double direct_share = total_busy > 0.0 ? std::min(1.0, direct / total_busy) : 0.0;
-        timings.direct += shading * direct_share;
-        timings.indirect += shading * (1.0 - direct_share);
+    } catch (...) {
+        if (in_place) film_.clear();
+        throw;
     }
-    scratch.set_samples(uint32_t(first + samples));
-    film_ = std::move(scratch);
+    PreviewTimings timings = split_wall_time(seconds_since(tiles_start), busy);
+    target.set_samples(uint32_t(first + samples));
+    if (!in_place) std::swap(film_, next_film_);
     timings.total = seconds_since(frame_start);
     timings_ = timings;
 }

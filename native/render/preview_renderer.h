@@ -1,20 +1,33 @@
 // PreviewRenderer: frames from any IndirectField (seed 000 §5.4: G-buffer, exact direct light,
 // indirect light from the solved field), with the passes of the reference path tracer.
 //
-// Stages (timed as seed 000 Tables 5 and 6): primary — every camera ray of the frame is built
-// and intersected as Embree ray streams (Scene::intersect batches); shading — per pixel sample,
-// PathIntegrator in field mode (render/path_integrator.h): next-event estimation with a shadow
-// ray for direct light (area lights give soft shadows over samples), indirect diffuse and glossy
-// from the field, and Dirac / refraction lobes followed by tracing (mirrors and glass show what
-// they reflect and refract, up to max_specular_bounces). The shading stage's wall time is split
-// into direct and indirect by the threads' time in next-event estimation.
+// Work: the frame is cut into tiles (settings.tile_size), handed to the threads a few tiles at a
+// time; inside a chunk of tiles, up to 256 pixels ("a wave", one 16 x 16 tile by default) move
+// through the stages together, one sample index at a time:
+// - primary (seed 000 Tables 5/6 "Screen G Buffer"): the wave's camera rays are built and
+//   intersected as one Embree ray stream, and each first hit is shaded (surface point, BSDF,
+//   emission the camera sees, the Col/Normal/Depth passes);
+// - direct: next-event estimation at each first hit (area lights give soft shadows over
+//   samples), with all the wave's shadow rays traced as one occlusion stream;
+// - indirect: indirect diffuse and glossy light from the field, Dirac / refraction lobes followed
+//   by tracing (mirrors and glass show what they reflect and refract, up to
+//   max_specular_bounces; next-event estimation where such a chain lands counts as direct), and
+//   the sums into the film.
+// PathIntegrator (render/path_integrator.h, field mode) does the per-path work in these steps.
+// Each stage's wall time is the frame's time split in proportion to the threads' time in it.
 //
 // With a null field the renderer shows direct light only (plus specular chains). Determinism:
-// sample s of pixel i uses the stream (seed, stream_id(s, i)) as the path tracer does, so frames
-// are identical for any thread count. Progressive: render() adds samples to the film.
+// sample s of pixel i uses the stream (seed, stream_id(s, i)) as the path tracer does, and the
+// waves depend only on the image and tile sizes, so frames are identical for any thread count.
+// Progressive: render() adds samples to the film, and a render that fails or is cancelled leaves
+// the film as it was. So a film that already holds samples is not summed in place: each pixel's
+// old sums plus the new samples go to a second film, which takes the first one's place when the
+// render completes; the two are swapped, not copied, and kept between calls (an empty film is
+// summed in place and cleared again on failure).
 #pragma once
 
 #include <cstdint>
+#include <optional>
 
 #include "io/image.h"
 #include "render/film.h"
@@ -38,11 +51,11 @@ struct PreviewSettings {
 
 void validate_preview_settings(const PreviewSettings& settings);
 
-// Wall-clock seconds of the last render() call.
+// Wall-clock seconds of the last render() call (stages as in the header comment).
 struct PreviewTimings {
-    double primary = 0.0;   // building and intersecting camera rays
-    double direct = 0.0;    // next-event estimation (share of the shading stage)
-    double indirect = 0.0;  // field lookups and traced specular chains (the rest of shading)
+    double primary = 0.0;   // camera rays, their intersection and the G-buffer of first hits
+    double direct = 0.0;    // next-event estimation and its shadow rays
+    double indirect = 0.0;  // field lookups, traced specular chains and the film sums
     double total = 0.0;
 };
 
@@ -64,14 +77,18 @@ class PreviewRenderer {
     const Scene& scene() const { return *scene_; }
 
   private:
+    const LightSampler& lights_for(const IndirectField& field);
+
     const Scene* scene_;
     uint64_t scene_revision_;
     Camera camera_;
     PreviewSettings settings_;
     PathTracerSettings path_settings_;
     LightSampler lights_;
-    LightSampler lights_without_world_;  // for fields that carry the world's direct light
+    // For fields that carry the world's direct light; built by the first render with such a field.
+    std::optional<LightSampler> lights_without_world_;
     Film film_;
+    Film next_film_;  // where a render sums film_ + its samples (see the header comment)
     PreviewTimings timings_;
 };
 

@@ -1,0 +1,520 @@
+// PreviewRenderer against closed forms: exact direct light from a point light over a Lambert
+// plane (with no field, with a ZeroField, and next to the reference path tracer), indirect light
+// from a constant field (DiffInd = the field's radiance), a mirror that shows the field on the
+// surface it reflects, and a field that carries the world's direct light; plus progressive
+// accumulation, thread-count independence, cancel, scene edits and settings checks.
+//
+// Pass definitions (render/film.h): DiffDir and DiffInd are the light reaching the camera through
+// the diffuse lobe divided by DiffCol, so on a Lambert surface of albedo rho under a point light
+// of intensity I at distance d and incidence angle theta, DiffDir = E / pi with E = I cos(theta)
+// / d^2, and under a uniform incident radiance L (SH field) DiffInd = (rho E / pi) / rho = L.
+#include "render/preview_renderer.h"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "lattice/photon_lattice.h"
+#include "render_test_scenes.h"
+#include "util/error.h"
+
+namespace shgi {
+namespace {
+
+// Five standard errors: a false failure has probability ~6e-7 per comparison.
+constexpr double kSigmas = 5.0;
+// Float rounding of per-pixel sums over a few dozen samples and of SH evaluation.
+constexpr double kRoundingTolerance = 1e-5;
+// Sub-pixel quadrature points per axis for the expected pixel averages.
+constexpr int kPixelQuadrature = 16;
+
+// Uniform incident radiance L from every direction as SH: only L00 = L sqrt(4 pi) (the
+// projection of a constant), whose irradiance is pi L at every normal.
+class ConstantField : public IndirectField {
+  public:
+    explicit ConstantField(const vec3& radiance, bool world_direct = false)
+        : world_direct_(world_direct) {
+        sh_[0] = radiance * std::sqrt(kFourPi);
+    }
+    ShRgb radiance_sh(const vec3&, const vec3&) const override { return sh_; }
+    bool includes_world_direct() const override { return world_direct_; }
+
+  private:
+    ShRgb sh_{2};
+    bool world_direct_;
+};
+
+// Wraps a field and cancels `progress` at its `cancel_at`-th lookup: a cancel in the middle of
+// the shading stage, after some samples were accumulated.
+class CancellingField : public IndirectField {
+  public:
+    CancellingField(const IndirectField& inner, Progress& progress, uint64_t cancel_at)
+        : inner_(inner), progress_(progress), cancel_at_(cancel_at) {}
+    ShRgb radiance_sh(const vec3& p, const vec3& n) const override {
+        if (++lookups_ == cancel_at_) progress_.cancel();
+        return inner_.radiance_sh(p, n);
+    }
+    uint64_t lookups() const { return lookups_.load(); }
+
+  private:
+    const IndirectField& inner_;
+    Progress& progress_;
+    uint64_t cancel_at_;
+    mutable std::atomic<uint64_t> lookups_{0};
+};
+
+// --- a Lambert plane under a point light ---
+
+constexpr float kPlaneAlbedo = 0.8f;
+constexpr float kLightPower = 100.0f;  // W
+const vec3 kLightPosition(0.3f, -0.2f, 1.0f);
+constexpr uint32_t kPlaneResolution = 8;
+
+// The plane z = 0 seen from above by an orthographic camera covering 2 m: pixels of 0.25 m, over
+// which the irradiance varies by a factor of ~8 across the image.
+Scene point_light_scene() {
+    Scene scene;
+    scene.add_material(test::lambert(kPlaneAlbedo));
+    scene.add_instance(scene.add_mesh(test::plane(50.0f)), mat4(1.0f));
+    scene.set_world(test::black_world());
+    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 2.0f), 2.0f, kPlaneResolution));
+    Light light;
+    light.type = LightType::Point;
+    light.power = kLightPower;
+    light.world_from_light = glm::translate(mat4(1.0f), kLightPosition);
+    scene.add_light(light);
+    scene.commit();
+    return scene;
+}
+
+// E / pi at a point of the plane: I cos(theta) / (pi d^2), I = P / (4 pi).
+double point_light_diffdir(const vec3& p) {
+    const glm::dvec3 to_light = glm::dvec3(kLightPosition) - glm::dvec3(p);
+    const double d2 = glm::dot(to_light, to_light);
+    const double cos_theta = to_light.z / std::sqrt(d2);
+    return double(kLightPower) / (4.0 * kPiD) * cos_theta / d2 / kPiD;
+}
+
+// The expected DiffDir of each pixel (the average over uniform jitter in the pixel) and the
+// standard deviation of one jittered sample, by midpoint quadrature over the pixel.
+struct PixelExpectation {
+    double mean = 0.0, sample_deviation = 0.0;
+};
+
+std::vector<PixelExpectation> expected_diffdir(const Camera& camera) {
+    std::vector<PixelExpectation> pixels;
+    for (uint32_t y = 0; y < camera.resolution_y; ++y)
+        for (uint32_t x = 0; x < camera.resolution_x; ++x) {
+            double sum = 0.0, sum2 = 0.0;
+            for (int j = 0; j < kPixelQuadrature; ++j)
+                for (int i = 0; i < kPixelQuadrature; ++i) {
+                    const vec2 film(float(x) + (float(i) + 0.5f) / kPixelQuadrature,
+                                    float(y) + (float(j) + 0.5f) / kPixelQuadrature);
+                    const Ray ray = camera.generate_ray(film);
+                    const vec3 p = ray.origin - ray.origin.z / ray.direction.z * ray.direction;
+                    const double value = point_light_diffdir(p);
+                    sum += value;
+                    sum2 += value * value;
+                }
+            const double n = double(kPixelQuadrature * kPixelQuadrature);
+            PixelExpectation pixel;
+            pixel.mean = sum / n;
+            pixel.sample_deviation = std::sqrt(std::max(0.0, sum2 / n - pixel.mean * pixel.mean));
+            pixels.push_back(pixel);
+        }
+    return pixels;
+}
+
+PreviewSettings preview_settings(uint32_t samples, uint64_t seed = 7) {
+    PreviewSettings settings;
+    settings.samples = samples;
+    settings.seed = seed;
+    return settings;
+}
+
+// Every pixel of `diffdir` within kSigmas standard errors of its jitter average.
+void expect_point_light_diffdir(const std::vector<float>& diffdir, const Camera& camera,
+                                uint32_t samples, const char* what) {
+    const std::vector<PixelExpectation> expected = expected_diffdir(camera);
+    ASSERT_EQ(diffdir.size(), expected.size() * 3);
+    for (size_t i = 0; i < expected.size(); ++i) {
+        const double tolerance = kSigmas * expected[i].sample_deviation / std::sqrt(samples) +
+                                 kRoundingTolerance * expected[i].mean;
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(diffdir[i * 3 + size_t(c)], expected[i].mean, tolerance)
+                << what << ", pixel " << i << " channel " << c;
+    }
+}
+
+// Every colour channel of a pass is exactly zero (Combined's alpha, always 1, is skipped).
+void expect_black(const Film& film, Pass pass, const char* what) {
+    const std::vector<float> pixels = film.pixels(pass);
+    const size_t channels = pass_suffixes(pass).size();
+    for (size_t i = 0; i < pixels.size(); ++i) {
+        if (i % channels == 3) continue;
+        ASSERT_EQ(pixels[i], 0.0f) << what << " [" << i << "]";
+    }
+}
+
+// With no field the preview shows direct light only: DiffDir is the point light's irradiance /
+// pi at every pixel, the Ind passes are exactly zero, Combined = albedo x DiffDir.
+TEST(PreviewRenderer, NullFieldGivesExactDirectLightAndNoIndirect) {
+    const Scene scene = point_light_scene();
+    const uint32_t samples = 16;
+    PreviewRenderer renderer(scene, preview_settings(samples));
+    renderer.render(nullptr, samples);
+    const Film& film = renderer.film();
+    EXPECT_EQ(film.samples(), samples);
+    const std::vector<float> diffdir = film.pixels(Pass::DiffDir);
+    expect_point_light_diffdir(diffdir, scene.camera(), samples, "preview DiffDir");
+    for (Pass pass : {Pass::DiffInd, Pass::GlossInd, Pass::TransInd, Pass::GlossDir, Pass::Emit,
+                      Pass::Env})
+        expect_black(film, pass, pass_name(pass));
+    const std::vector<float> combined = film.pixels(Pass::Combined);
+    for (size_t i = 0; i < diffdir.size() / 3; ++i)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(combined[i * 4 + size_t(c)], kPlaneAlbedo * diffdir[i * 3 + size_t(c)],
+                        kRoundingTolerance * diffdir[i * 3 + size_t(c)]);
+}
+
+// The preview's direct light is the reference path tracer's: both match the closed form pixel by
+// pixel, and their image means agree within the jitter noise.
+TEST(PreviewRenderer, DirectLightAgreesWithThePathTracer) {
+    const Scene scene = point_light_scene();
+    const uint32_t samples = 16;
+    PreviewRenderer preview(scene, preview_settings(samples, 3));
+    preview.render(nullptr, samples);
+    PathTracerSettings path_settings = test::settings_with_samples(samples);
+    path_settings.seed = 11;  // independent of the preview's samples
+    PathTracer tracer(scene, path_settings);
+    tracer.render(samples);
+    const std::vector<float> reference = tracer.film().pixels(Pass::DiffDir);
+    expect_point_light_diffdir(reference, scene.camera(), samples, "path tracer DiffDir");
+
+    const std::vector<float> diffdir = preview.film().pixels(Pass::DiffDir);
+    const std::vector<PixelExpectation> expected = expected_diffdir(scene.camera());
+    double difference = 0.0, variance = 0.0;
+    for (size_t i = 0; i < expected.size(); ++i) {
+        difference += double(diffdir[i * 3]) - double(reference[i * 3]);
+        variance += 2.0 * std::pow(expected[i].sample_deviation, 2) / samples;
+    }
+    const double n = double(expected.size());
+    EXPECT_NEAR(difference / n, 0.0, kSigmas * std::sqrt(variance) / n);
+}
+
+// ZeroField is what a null field means: every pass is bit-identical.
+TEST(PreviewRenderer, ZeroFieldEqualsNullField) {
+    const Scene scene = point_light_scene();
+    const ZeroField zero;
+    PreviewRenderer with_null(scene, preview_settings(4));
+    with_null.render(nullptr, 4);
+    PreviewRenderer with_zero(scene, preview_settings(4));
+    with_zero.render(&zero, 4);
+    for (int p = 0; p < kPassCount; ++p)
+        EXPECT_EQ(with_zero.film().pixels(Pass(p)), with_null.film().pixels(Pass(p)))
+            << pass_name(Pass(p));
+    expect_black(with_zero.film(), Pass::DiffInd, "DiffInd");
+}
+
+// A uniform incident radiance L gives irradiance pi L on the plane, so DiffInd = L exactly; the
+// direct light is unchanged (the field draws no random numbers) and Combined = albedo x (DiffDir
+// + DiffInd).
+TEST(PreviewRenderer, ConstantFieldGivesDiffIndEqualToItsRadiance) {
+    const Scene scene = point_light_scene();
+    const vec3 radiance(0.3f, 0.6f, 0.9f);
+    const ConstantField field(radiance);
+    PreviewRenderer lit(scene, preview_settings(4));
+    lit.render(&field, 4);
+    PreviewRenderer direct_only(scene, preview_settings(4));
+    direct_only.render(nullptr, 4);
+    const Film& film = lit.film();
+    EXPECT_EQ(film.pixels(Pass::DiffDir), direct_only.film().pixels(Pass::DiffDir));
+    const std::vector<float> diffind = film.pixels(Pass::DiffInd);
+    const std::vector<float> diffdir = film.pixels(Pass::DiffDir);
+    const std::vector<float> combined = film.pixels(Pass::Combined);
+    for (size_t i = 0; i < diffind.size() / 3; ++i)
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_NEAR(diffind[i * 3 + size_t(c)], radiance[c],
+                        kRoundingTolerance * radiance[c])
+                << "pixel " << i << " channel " << c;
+            const double expected =
+                kPlaneAlbedo * (double(diffdir[i * 3 + size_t(c)]) + radiance[c]);
+            EXPECT_NEAR(combined[i * 4 + size_t(c)], expected, kRoundingTolerance * expected);
+        }
+    expect_black(film, Pass::GlossInd, "GlossInd");
+}
+
+// A field carrying the world's direct light takes the world out of next-event estimation: under
+// a uniform world of radiance Lw the plane's DiffDir is Lw (cosine-sampled world: every sample is
+// exactly Lw) without it, and exactly zero with it.
+TEST(PreviewRenderer, FieldCarryingWorldLightTakesTheWorldOutOfDirectLight) {
+    Scene scene;
+    scene.add_material(test::lambert(kPlaneAlbedo));
+    scene.add_instance(scene.add_mesh(test::plane(50.0f)), mat4(1.0f));
+    World world;
+    world.color = vec3(0.2f, 0.4f, 0.6f);
+    world.strength = 1.5f;
+    scene.set_world(world);
+    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 1.0f), 1.0f, 4));
+    scene.commit();
+    const ConstantField without_world(vec3(0.0f), false), with_world(vec3(0.0f), true);
+    PreviewRenderer nee(scene, preview_settings(4));
+    nee.render(&without_world, 4);
+    const std::vector<float> diffdir = nee.film().pixels(Pass::DiffDir);
+    for (size_t i = 0; i < diffdir.size(); ++i)
+        EXPECT_NEAR(diffdir[i], world.radiance()[int(i % 3)],
+                    kRoundingTolerance * world.radiance()[int(i % 3)])
+            << "[" << i << "]";
+    PreviewRenderer field_only(scene, preview_settings(4));
+    field_only.render(&with_world, 4);
+    expect_black(field_only.film(), Pass::DiffDir, "DiffDir with world in the field");
+    expect_black(field_only.film(), Pass::Combined, "Combined with world in the field");
+}
+
+// A perfect mirror floor (metallic, roughness 0, white) under a Lambert ceiling facing down, no
+// lights: the camera sees the ceiling's field light through the mirror, albedo x L, in the glossy
+// passes; with max_specular_bounces = 0 the mirror is not followed and the image is black.
+TEST(PreviewRenderer, MirrorShowsTheFieldOnTheSurfaceItReflects) {
+    const float ceiling_albedo = 0.5f;
+    Scene scene;
+    Material mirror;
+    mirror.name = "mirror";
+    mirror.base_color = vec3(1.0f);
+    mirror.metallic = 1.0f;
+    mirror.roughness = 0.0f;
+    scene.add_material(mirror);
+    scene.add_material(test::lambert(ceiling_albedo));
+    scene.add_instance(scene.add_mesh(test::plane(50.0f)), mat4(1.0f));
+    Mesh ceiling = test::plane(50.0f);
+    ceiling.material_indices.assign(ceiling.triangles.size(), 1);
+    scene.add_instance(scene.add_mesh(ceiling),
+                       glm::rotate(glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, 1.0f)), kPi,
+                                   vec3(1.0f, 0.0f, 0.0f)));
+    scene.set_world(test::black_world());
+    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.5f), 1.0f, 4));
+    scene.commit();
+    const vec3 radiance(0.3f, 0.6f, 0.9f);
+    const ConstantField field(radiance);
+
+    PreviewRenderer renderer(scene, preview_settings(4));
+    renderer.render(&field, 4);
+    const std::vector<float> combined = renderer.film().pixels(Pass::Combined);
+    const std::vector<float> glossind = renderer.film().pixels(Pass::GlossInd);
+    const std::vector<float> glosscol = renderer.film().pixels(Pass::GlossCol);
+    for (size_t i = 0; i < combined.size() / 4; ++i)
+        for (int c = 0; c < 3; ++c) {
+            const double expected = ceiling_albedo * radiance[c];
+            EXPECT_NEAR(combined[i * 4 + size_t(c)], expected, kRoundingTolerance * expected)
+                << "pixel " << i << " channel " << c;
+            EXPECT_NEAR(double(glossind[i * 3 + size_t(c)]) * glosscol[i * 3 + size_t(c)],
+                        expected, kRoundingTolerance * expected);
+        }
+    expect_black(renderer.film(), Pass::DiffInd, "DiffInd");
+
+    PreviewSettings no_chains = preview_settings(4);
+    no_chains.max_specular_bounces = 0;
+    PreviewRenderer unfollowed(scene, no_chains);
+    unfollowed.render(&field, 4);
+    expect_black(unfollowed.film(), Pass::Combined, "Combined without specular bounces");
+}
+
+// --- a room lit by a point light, its indirect light from a solved PhotonLattice ---
+
+// Closed box [-1, 1]^3 (diffuse + glossy walls), a mirror sphere and a point light; an
+// orthographic camera inside the box looking down at the floor.
+Scene room_scene() {
+    Scene scene;
+    Material walls = test::lambert(0.7f);
+    walls.specular = 0.5f;  // a glossy lobe too: GlossDir / GlossInd are exercised
+    walls.roughness = 0.4f;
+    scene.add_material(walls);
+    Material mirror;
+    mirror.name = "mirror";
+    mirror.base_color = vec3(0.9f);
+    mirror.metallic = 1.0f;
+    mirror.roughness = 0.0f;
+    scene.add_material(mirror);
+    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
+    Mesh sphere = test::uv_sphere(0.3f, 8, 16);
+    sphere.material_indices.assign(sphere.triangles.size(), 1);
+    scene.add_instance(scene.add_mesh(sphere),
+                       glm::translate(mat4(1.0f), vec3(0.2f, 0.0f, -0.7f)));
+    Light light;
+    light.type = LightType::Point;
+    light.power = 100.0f;
+    light.world_from_light = glm::translate(mat4(1.0f), vec3(-0.1f, 0.2f, 0.6f));
+    scene.add_light(light);
+    scene.set_world(test::black_world());
+    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.9f), 1.8f, 12));
+    scene.commit();
+    return scene;
+}
+
+std::unique_ptr<PhotonLattice> solved_lattice(const Scene& scene) {
+    PhotonLatticeSettings settings;
+    settings.photons = 20000;
+    settings.seed = 2;
+    settings.resolution = 8;
+    settings.caustic_resolution = 16;
+    auto lattice = std::make_unique<PhotonLattice>(scene, settings);
+    lattice->solve();
+    return lattice;
+}
+
+void expect_same_film(const Film& a, const Film& b) {
+    EXPECT_EQ(a.samples(), b.samples());
+    for (int p = 0; p < kPassCount; ++p)
+        EXPECT_EQ(a.pixels(Pass(p)), b.pixels(Pass(p))) << pass_name(Pass(p));
+}
+
+// render(1) + render(3) adds the same samples in the same order as render(4): bit-identical, and
+// render_preview returns the same passes.
+TEST(PreviewRenderer, ProgressiveEqualsOneShot) {
+    const Scene scene = room_scene();
+    const auto lattice = solved_lattice(scene);
+    PreviewRenderer progressive(scene, preview_settings(4));
+    progressive.render(lattice.get(), 1);
+    progressive.render(lattice.get(), 0);  // adds nothing
+    progressive.render(lattice.get(), 3);
+    PreviewRenderer one_shot(scene, preview_settings(4));
+    one_shot.render(lattice.get(), 4);
+    expect_same_film(progressive.film(), one_shot.film());
+    std::vector<float> diffind = one_shot.film().pixels(Pass::DiffInd);
+    EXPECT_GT(*std::max_element(diffind.begin(), diffind.end()), 0.0f);
+
+    const Image image = render_preview(scene, lattice.get(), preview_settings(4));
+    const Image progressive_image = progressive.image();
+    for (int p = 0; p < kPassCount; ++p) {
+        const char* name = pass_name(Pass(p));
+        EXPECT_EQ(image.layer_pixels(name), progressive_image.layer_pixels(name)) << name;
+    }
+}
+
+TEST(PreviewRenderer, BitIdenticalForAnyThreadCountAndTileSize) {
+    const Scene scene = room_scene();
+    const auto lattice = solved_lattice(scene);
+    const auto render = [&](int threads, int tile_size) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+        PreviewSettings settings = preview_settings(4);
+        settings.tile_size = tile_size;
+        auto renderer = std::make_unique<PreviewRenderer>(scene, settings);
+        renderer->render(lattice.get(), 4);
+        return renderer;
+    };
+    const auto one = render(1, 16);
+    const auto two = render(2, 5);
+    expect_same_film(one->film(), two->film());
+}
+
+// A cancel before the first chunk, or in the middle of shading (some samples already summed),
+// throws Cancelled and leaves the film as it was; rendering then continues as if it never
+// happened.
+TEST(PreviewRenderer, CancelLeavesTheFilmUnchanged) {
+    const Scene scene = room_scene();
+    const auto lattice = solved_lattice(scene);
+    PreviewRenderer reference(scene, preview_settings(3));
+    reference.render(lattice.get(), 3);
+
+    PreviewRenderer renderer(scene, preview_settings(3));
+    renderer.render(lattice.get(), 1);
+    const Film before = renderer.film();
+    Progress cancelled;
+    cancelled.cancel();
+    EXPECT_THROW(renderer.render(lattice.get(), 2, &cancelled), Cancelled);
+    expect_same_film(renderer.film(), before);
+
+    Progress progress;
+    const uint64_t pixels = 12 * 12;
+    const CancellingField cancelling(*lattice, progress, pixels / 2);
+    EXPECT_THROW(renderer.render(&cancelling, 2, &progress), Cancelled);
+    EXPECT_GE(cancelling.lookups(), pixels / 2);
+    expect_same_film(renderer.film(), before);
+
+    renderer.render(lattice.get(), 2);
+    expect_same_film(renderer.film(), reference.film());
+}
+
+// A renderer caches light tables and a film sized for the scene it was built on; after an edit it
+// refuses to render and keeps its film.
+TEST(PreviewRenderer, RefusesASceneEditedAfterConstruction) {
+    Scene scene = point_light_scene();
+    PreviewRenderer renderer(scene, preview_settings(1));
+    renderer.render(nullptr, 1);
+    const Film before = renderer.film();
+    Light extra;
+    extra.world_from_light = glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, 3.0f));
+    scene.add_light(extra);
+    for (bool commit : {false, true}) {
+        if (commit) scene.commit();
+        try {
+            renderer.render(nullptr, 1);
+            ADD_FAILURE() << "render after an edit did not throw (commit " << commit << ")";
+        } catch (const InvalidArgument& error) {
+            EXPECT_NE(std::string(error.what()).find("edited after this renderer"),
+                      std::string::npos)
+                << error.what();
+        }
+        expect_same_film(renderer.film(), before);
+    }
+}
+
+TEST(PreviewRenderer, RejectsInvalidSettingsNamingTheField) {
+    const Scene scene = point_light_scene();
+    const auto expect_message = [&](const PreviewSettings& settings, const std::string& name) {
+        for (int call = 0; call < 3; ++call) {
+            try {
+                if (call == 0) validate_preview_settings(settings);
+                if (call == 1) PreviewRenderer renderer(scene, settings);
+                if (call == 2) render_preview(scene, nullptr, settings);
+                ADD_FAILURE() << "no error for " << name << " (call " << call << ")";
+            } catch (const InvalidArgument& error) {
+                EXPECT_NE(std::string(error.what()).find(name), std::string::npos)
+                    << error.what();
+            }
+        }
+    };
+    PreviewSettings s;
+    s.samples = 0;
+    expect_message(s, "PreviewSettings.samples is 0");
+    s = {};
+    s.samples = uint32_t(kMaxPathTracerSamples + 1);
+    expect_message(s, "PreviewSettings.samples");
+    s = {};
+    s.max_specular_bounces = -1;
+    expect_message(s, "PreviewSettings.max_specular_bounces is -1");
+    s = {};
+    s.clamp_indirect = -1.0f;
+    expect_message(s, "PreviewSettings.clamp_indirect");
+    s = {};
+    s.clamp_indirect = std::nanf("");
+    expect_message(s, "PreviewSettings.clamp_indirect");
+    s = {};
+    s.tile_size = 0;
+    expect_message(s, "PreviewSettings.tile_size is 0");
+
+    // More samples than a film may hold, in two calls.
+    PreviewRenderer renderer(scene, preview_settings(1));
+    renderer.render(nullptr, 1);
+    try {
+        renderer.render(nullptr, uint32_t(kMaxPathTracerSamples));
+        ADD_FAILURE() << "no error past the sample limit";
+    } catch (const InvalidArgument& error) {
+        EXPECT_NE(std::string(error.what()).find("exceed"), std::string::npos) << error.what();
+    }
+    EXPECT_EQ(renderer.film().samples(), 1u);
+
+    Camera camera = scene.camera();
+    camera.resolution_x = 0;
+    EXPECT_THROW(PreviewRenderer(scene, camera, PreviewSettings{}), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace shgi
