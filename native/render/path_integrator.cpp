@@ -3,9 +3,17 @@
 #include <algorithm>
 #include <cmath>
 
+#include "util/owen_sobol.h"
 #include "util/timer.h"
 
 namespace shgi {
+
+PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample) {
+    const uint32_t base = hash_seed(seed, pixel);
+    const uint32_t index = uint32_t(sample);
+    return {owen_sobol_2d(index, hash_seed(base, 0)), owen_sobol_1d(index, hash_seed(base, 1)),
+            owen_sobol_2d(index, hash_seed(base, 2))};
+}
 namespace {
 
 float power_heuristic(float pdf_a, float pdf_b) {
@@ -132,8 +140,12 @@ bool PathIntegrator::prepare_direct(Ray* shadow) {
     const Shading& shading = *shading_;
     if (!shading.bsdf.has_smooth_lobes()) return false;  // a Dirac lobe never meets a light sample
     LightSample ls;
-    const float u_select = rng_.next_float();
-    const vec2 u = rng_.next_vec2();
+    float u_select = rng_.next_float();
+    vec2 u = rng_.next_vec2();
+    if (vertex_ == 0 && first_light_sample_) {
+        u_select = first_light_sample_->u_select;
+        u = first_light_sample_->u;
+    }
     if (!lights_.sample(shading.position, shading.frame.z, u_select, u, &ls)) return false;
     const vec3 wi = shading.frame.to_local(ls.wi);
     const bool geometric_above = glm::dot(ls.wi, shading.geometric_normal) > 0.0f;

@@ -40,6 +40,16 @@ struct IntegratorClock {
     double indirect = 0.0;
 };
 
+// The stratified numbers of sample s of a pixel: its jitter inside the pixel and its first
+// light sample, each from the pixel's own Owen-scrambled Sobol' sequence (util/owen_sobol.h), so
+// that every power-of-two count of samples covers the pixel and the lights evenly.
+struct PixelSample {
+    vec2 jitter{0.5f};
+    float u_select = 0.0f;
+    vec2 u_light{0.0f};
+};
+PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample);
+
 class PathIntegrator {
   public:
     // `camera` is the one whose rays are traced (its view axis gives the Depth pass). `field`
@@ -68,7 +78,20 @@ class PathIntegrator {
     // Indirect light at the current surface and the rest of the path.
     void finish();
 
+    // Stratified numbers for next-event estimation at the first surface (light selection and
+    // the light's 2D sample), e.g. one pixel's Owen-scrambled Sobol' points: they replace the
+    // path's random numbers there (which are still drawn, so the rest of the path is unchanged).
+    void set_first_light_sample(float u_select, const vec2& u) {
+        first_light_sample_ = FirstLightSample{u_select, u};
+    }
+
   private:
+    struct FirstLightSample {
+        float u_select;
+        vec2 u;
+    };
+    std::optional<FirstLightSample> first_light_sample_;
+
     // A next-event estimate waiting on its shadow ray: the light sample, its direction in the
     // shading frame and f |cos| by class there.
     struct PendingDirect {

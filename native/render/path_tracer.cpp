@@ -75,11 +75,14 @@ void PathTracer::render(uint32_t samples, Progress* progress) {
                     for (uint64_t s = first; s < first + samples; ++s) {
                         throw_if_cancelled(progress);  // one relaxed atomic load per path
                         Pcg32 rng(settings_.seed, stream_id(s, pixel));
-                        const vec2 jitter = rng.next_vec2();
+                        const PixelSample stratified = pixel_sample(settings_.seed, pixel, s);
                         PassValues values;
                         PathIntegrator integrator(*scene_, camera, lights_, settings_, nullptr,
                                                   rng, values);
-                        integrator.trace(camera.generate_ray(vec2(float(x), float(y)) + jitter));
+                        integrator.set_first_light_sample(stratified.u_select,
+                                                          stratified.u_light);
+                        integrator.trace(camera.generate_ray(vec2(float(x), float(y)) +
+                                                             stratified.jitter));
                         scratch.add(x, y, values);
                     }
                 }

@@ -76,8 +76,8 @@ PreviewTimings split_wall_time(double wall, const std::vector<StageSeconds>& bus
 // entries, so these vectors never reallocate while paths are in flight.
 struct Wave {
     explicit Wave(size_t capacity)
-        : x(capacity), y(capacity), rngs(capacity), values(capacity), paths(capacity),
-          live(capacity) {
+        : x(capacity), y(capacity), rngs(capacity), samples(capacity), values(capacity),
+          paths(capacity), live(capacity) {
         rays.reserve(capacity);
         hits.reserve(capacity);
         shadow_rays.reserve(capacity);
@@ -89,6 +89,7 @@ struct Wave {
     size_t count = 0;  // pixels in the wave
     std::vector<int> x, y;
     std::vector<Pcg32> rngs;
+    std::vector<PixelSample> samples;  // stratified jitter and first light sample
     std::vector<PassValues> values;
     std::vector<std::optional<PathIntegrator>> paths;
     std::vector<uint8_t> live;  // the path has a first surface to shade
@@ -165,8 +166,9 @@ class FrameWork {
         for (size_t i = 0; i < wave.count; ++i) {
             const uint64_t pixel = uint64_t(wave.y[i]) * width + uint64_t(wave.x[i]);
             wave.rngs[i] = Pcg32(settings_.seed, stream_id(s, pixel));
-            const vec2 jitter = wave.rngs[i].next_vec2();
-            wave.rays[i] = camera_.generate_ray(vec2(float(wave.x[i]), float(wave.y[i])) + jitter);
+            wave.samples[i] = pixel_sample(settings_.seed, pixel, s);
+            wave.rays[i] = camera_.generate_ray(vec2(float(wave.x[i]), float(wave.y[i])) +
+                                                wave.samples[i].jitter);
         }
         scene_.intersect(wave.rays, wave.hits);
         for (size_t i = 0; i < wave.count; ++i) {
@@ -174,6 +176,7 @@ class FrameWork {
             PathIntegrator& path = wave.paths[i].emplace(scene_, camera_, lights_, settings_,
                                                          &field_, wave.rngs[i], wave.values[i],
                                                          &clock);
+            path.set_first_light_sample(wave.samples[i].u_select, wave.samples[i].u_light);
             wave.live[i] = path.begin(wave.rays[i], wave.hits[i]);
         }
     }

@@ -64,13 +64,7 @@ def test_indirect_diffuse_agrees_with_path_tracer(name):
     assert abs(measured / expected - 1.0) < 0.10, (measured, expected)
 
 
-@pytest.mark.parametrize("name", [
-    "cornell_box",
-    pytest.param("sun_room", marks=pytest.mark.xfail(strict=True, reason=(
-        "measured 23.6 dB at 16 spp (26.4 dB at 64): the sky's direct light through the window "
-        "is sampled by next-event estimation alone, a few percent of whose cosine-distributed "
-        "samples pass the window; DiffInd agrees within 10%"))),
-])
+@pytest.mark.parametrize("name", ["cornell_box", "sun_room"])
 def test_combined_psnr_against_path_tracer(name):
     reference, preview = agreement(name)
     assert psnr(reference["Combined"], preview["Combined"]) >= 30.0
