@@ -1,9 +1,10 @@
 """The SHGI render engine: F12 renders with Cycles' passes, frozen lattice solutions, and the
 live viewport (Rendered shading).
 
-* bpy-free: passes.py (pass table, pixel layout), render_job.py (the worker-thread render),
-  solution_cache.py (frozen PhotonLattice solutions per scene), scene_checks.py (warnings
-  about scenes that render black); for the viewport sync_plan.py (what an edit invalidates),
+* bpy-free: passes.py (pass table, pixel layout), native_task.py (a cancellable worker
+  thread), render_job.py (the worker-thread render; make_renderer), solution_cache.py (frozen
+  PhotonLattice solutions per scene), scene_checks.py (warnings about scenes that render
+  black); for the viewport sync_plan.py (what an edit invalidates),
   viewport_camera.py (the view as a shgi.Camera), viewport_worker.py (the worker thread:
   build, commit, solve, progressive frames), lattice_samples.py (the lattice overlay's spheres);
 * bpy: render_engine.py (the RenderEngine class, registration), final_render.py (F12),

@@ -22,7 +22,6 @@ from .render_job import RenderJob
 
 POLL_SECONDS = 0.05
 logger = logging.getLogger("shgi_blender.engine")
-BYTES_PER_MEGABYTE = 1024.0 * 1024.0
 
 # What the last render did (method, samples, seconds, warnings, cancelled, error): shown in the
 # render panel and read by the headless tests.
@@ -192,8 +191,8 @@ class FinalRender:
 
     def _report_memory(self, lattice_bytes):
         """Blender's memory statistics show the lattice's bytes (render buffers are Blender's)."""
-        megabytes = lattice_bytes / BYTES_PER_MEGABYTE
-        self.engine.update_memory_stats(memory_used=megabytes, memory_peak=megabytes)
+        mebibytes = lattice_bytes / solution_cache.BYTES_PER_MIB
+        self.engine.update_memory_stats(memory_used=mebibytes, memory_peak=mebibytes)
 
     def _report_native_warnings(self, log):
         for message in log.drain():
@@ -218,8 +217,6 @@ class FinalRender:
         self.record["timings"].update(job.timings)
         self.record["cancelled"] = job.cancelled
         if job.solution is not None:
-            self.record["lattice_timings"] = dict(job.solution.timings)
-            self.record["lattice_memory_bytes"] = job.solution.memory_bytes
             self._report_memory(job.solution.memory_bytes)
         if job.error is not None:
             self.fail(f"SHGI: {job.error}")

@@ -36,7 +36,11 @@ class FrameDisplay:
         self._frame_id = None
         self._quad = None         # (width, height, batch)
         self._shader = None
-        self.uploads = 0
+
+    @property
+    def frame_id(self):
+        """The frame_id of the frame in the texture (None before the first draw)."""
+        return self._frame_id
 
     def draw(self, engine, scene, frame, width, height):
         """Draws `frame` over a width x height region (pixel space, as view_draw sets it)."""
@@ -66,7 +70,6 @@ class FrameDisplay:
         self._texture = gpu.types.GPUTexture((width, height), format=TEXTURE_FORMAT,
                                              data=buffer)
         self._frame_id = frame.frame_id
-        self.uploads += 1
 
     def free(self):
         self._texture = self._quad = None

@@ -75,10 +75,11 @@ def surface_cell_centres(snapshot, bounds, resolution):
     origin, cell, dims = lattice_grid(bounds[0], bounds[1], resolution)
     object_samples = {}
     occupied = set()
+    meshes = snapshot.meshes  # a shgi.Scene copies every mesh on each read of .meshes
     for record in snapshot.instances:
         mesh_id = record.mesh_id
         if mesh_id not in object_samples:
-            mesh = snapshot.meshes[mesh_id]
+            mesh = meshes[mesh_id]
             object_samples[mesh_id] = (mesh.positions.astype(np.float64),
                                        mesh.triangles.astype(np.int64))
         positions, triangles = object_samples[mesh_id]

@@ -44,7 +44,6 @@ PASSES = (
     PassInfo("Emit", "RGB", "COLOR", "use_pass_emit"),
     PassInfo("Env", "RGB", "COLOR", "use_pass_environment"),
 )
-PASSES_BY_NAME = {info.name: info for info in PASSES}
 
 # View-layer passes Blender offers that SHGI does not compute: {toggle: Cycles' pass name}.
 # An enabled one is reported once per render and left out of the result.

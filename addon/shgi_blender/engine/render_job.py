@@ -3,14 +3,17 @@
 The render engine exports the scene on Blender's main thread (bpy is not thread-safe), starts a
 RenderJob, and then polls it from the main thread: it forwards Esc (``test_break``) to
 ``cancel()``, shows ``fraction`` and ``stage``, and copies each new snapshot into the render
-result. Every native call the job makes releases the GIL, so the main thread stays responsive;
+result. The thread, the cancel and the outcome are a NativeTask's (native_task.py): every
+native call the job makes releases the GIL, so the main thread stays responsive, and
 ``cancel()`` makes the running call raise ``shgi.Cancelled`` within one chunk of work (< 0.2 s,
-DESIGN.md), and the job keeps the last complete snapshot, so an interrupted render still shows
+DESIGN.md). The job keeps the last complete snapshot, so an interrupted render still shows
 every sample finished before Esc.
 
 Sampling runs in rounds (``sample_rounds``): the first round is one sample per pixel so that an
 image appears at once; rounds then double, up to an eighth of the total. Both renderers give the
 same image however the samples are split between calls, so rounds cost only their snapshots.
+``make_renderer`` builds either one as a Renderer (add samples, read passes); the viewport
+worker renders through it too.
 """
 
 import threading
@@ -18,6 +21,7 @@ import time
 from dataclasses import dataclass
 
 from . import solution_cache
+from .native_task import NativeTask
 
 # Shares of the progress bar taken by the stages before sampling, when they run.
 COMMIT_SHARE = 0.05
@@ -48,8 +52,33 @@ class Snapshot:
     samples: int
 
 
-class RenderJob:
-    """Renders a shgi.Scene with one method on a worker thread.
+@dataclass
+class Renderer:
+    """A renderer as the render job and the viewport worker drive it."""
+
+    add: object      # add(count): adds `count` samples per pixel
+    passes: object   # passes(): {name: float32 (H, W, C)}, row 0 on top
+
+
+def make_renderer(shgi, scene, progress, *, path_tracer_settings=None, preview_settings=None,
+                  field=None, camera=None):
+    """The Renderer of a committed shgi.Scene; its native calls poll `progress`.
+
+    path_tracer_settings: renders with the reference path tracer (from the scene's camera).
+    preview_settings: else renders with the preview renderer over `field` (None: direct light
+        only) from `camera` (None: the scene's).
+    """
+    if path_tracer_settings is not None:
+        tracer = shgi.PathTracer(scene, path_tracer_settings)
+        return Renderer(lambda count: tracer.render(count, progress=progress), tracer.passes)
+    preview = shgi.PreviewRenderer(scene, preview_settings, camera=camera)
+    return Renderer(lambda count: preview.render(field, count, progress=progress),
+                    preview.passes)
+
+
+class RenderJob(NativeTask):
+    """Renders a shgi.Scene with one method on a worker thread (start, cancel, wait, running,
+    error and cancelled as NativeTask has them).
 
     scene: a shgi.Scene (committed by the job if it is not yet).
     samples: samples per pixel in total.
@@ -64,7 +93,7 @@ class RenderJob:
                  preview_settings=None, lattice_settings=None, field=None, camera=None):
         if (path_tracer_settings is None) == (preview_settings is None):
             raise ValueError("give exactly one of path_tracer_settings and preview_settings")
-        self._shgi = shgi
+        super().__init__(shgi, "shgi-render")
         self.scene = scene
         self.samples = samples
         self._path_tracer_settings = path_tracer_settings
@@ -72,44 +101,23 @@ class RenderJob:
         self._lattice_settings = lattice_settings
         self.field = field
         self._camera = camera
-        self._progress = shgi.Progress()
         self._lock = threading.Lock()
         self._snapshot = None
         self._snapshot_taken = True
         self._span = (0.0, COMMIT_SHARE)
         self._stage = "Starting"
-        self._thread = threading.Thread(target=self._run, name="shgi-render", daemon=True)
-        self.error = None       # the exception that ended the job, other than Cancelled
-        self.cancelled = False
         self.samples_done = 0
         self.timings = {}       # seconds per stage: commit, solve, render
         self.solution = None    # the LatticeSolution the job solved, if any (not cached)
 
     # --- main thread ---------------------------------------------------------------------------
 
-    def start(self):
-        self._thread.start()
-        return self
-
-    def cancel(self):
-        """Asks the running native call to stop (it raises Cancelled within one chunk)."""
-        self._progress.cancel()
-
-    def wait(self, timeout=None):
-        """Waits up to `timeout` seconds; True when the job has ended."""
-        self._thread.join(timeout)
-        return not self._thread.is_alive()
-
-    @property
-    def running(self):
-        return self._thread.is_alive()
-
     @property
     def fraction(self):
         """Overall progress in [0, 1]."""
         with self._lock:
             lo, hi = self._span
-        return lo + (hi - lo) * min(max(self._progress.fraction, 0.0), 1.0)
+        return lo + (hi - lo) * min(max(self.progress.fraction, 0.0), 1.0)
 
     @property
     def stage(self):
@@ -131,21 +139,16 @@ class RenderJob:
 
     # --- worker thread -------------------------------------------------------------------------
 
-    def _run(self):
-        try:
-            render_start = COMMIT_SHARE
-            if not self.scene.committed:
-                self._timed("commit", "Building BVH", (0.0, COMMIT_SHARE),
-                            lambda: self.scene.commit(progress=self._progress))
-            if self._lattice_settings is not None and self.field is None:
-                render_start = COMMIT_SHARE + SOLVE_SHARE
-                self._timed("solve", "Tracing photons", (COMMIT_SHARE, render_start),
-                            self._solve_lattice)
-            self._sample(render_start)
-        except self._shgi.Cancelled:
-            self.cancelled = True
-        except Exception as error:  # reported by the engine on the main thread
-            self.error = error
+    def _work(self):
+        render_start = COMMIT_SHARE
+        if not self.scene.committed:
+            self._timed("commit", "Building BVH", (0.0, COMMIT_SHARE),
+                        lambda: self.scene.commit(progress=self.progress))
+        if self._lattice_settings is not None and self.field is None:
+            render_start = COMMIT_SHARE + SOLVE_SHARE
+            self._timed("solve", "Tracing photons", (COMMIT_SHARE, render_start),
+                        self._solve_lattice)
+        self._sample(render_start)
 
     def _timed(self, name, stage, span, work):
         with self._lock:
@@ -158,26 +161,20 @@ class RenderJob:
 
     def _solve_lattice(self):
         self.solution = solution_cache.solve(self._shgi, self.scene, self._lattice_settings,
-                                             signature=None, progress=self._progress)
+                                             signature=None, progress=self.progress)
         self.field = self.solution.lattice
 
     def _sample(self, render_start):
-        shgi = self._shgi
-        if self._path_tracer_settings is not None:
-            renderer = shgi.PathTracer(self.scene, self._path_tracer_settings)
-            add_samples = lambda count: renderer.render(count, progress=self._progress)  # noqa
-            name = "Path tracing"
-        else:
-            renderer = shgi.PreviewRenderer(self.scene, self._preview_settings,
-                                            camera=self._camera)
-            add_samples = lambda count: renderer.render(  # noqa: E731
-                self.field, count, progress=self._progress)
-            name = "Rendering"
+        renderer = make_renderer(self._shgi, self.scene, self.progress,
+                                 path_tracer_settings=self._path_tracer_settings,
+                                 preview_settings=self._preview_settings, field=self.field,
+                                 camera=self._camera)
+        name = "Path tracing" if self._path_tracer_settings is not None else "Rendering"
         for count in sample_rounds(self.samples):
             lo = render_start + (1.0 - render_start) * self.samples_done / self.samples
             hi = render_start + (1.0 - render_start) * (self.samples_done + count) / self.samples
             stage = f"{name}, sample {self.samples_done + count}/{self.samples}"
-            self._timed("render", stage, (lo, hi), lambda: add_samples(count))
+            self._timed("render", stage, (lo, hi), lambda: renderer.add(count))
             self.samples_done += count
             snapshot = Snapshot(renderer.passes(), self.samples_done)
             with self._lock:

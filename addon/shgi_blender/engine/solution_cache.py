@@ -13,6 +13,9 @@ scene's ``name_full``, and loading a file clears it (properties.py registers the
 import time
 from dataclasses import dataclass, field
 
+# Bytes in a mebibyte: memory figures are shown in MiB.
+BYTES_PER_MIB = 2**20
+
 # Timings shown in the panel, in order: {key in LatticeSolution.timings: label}.
 TIMING_LABELS = {
     "export": "Export",
@@ -35,6 +38,7 @@ class LatticeSolution:
     memory_bytes: int      # held by the lattices (PhotonLattice.memory_bytes)
     warnings: list = field(default_factory=list)  # export warnings
     solved_at: float = field(default_factory=time.time)
+    overlay: object = None  # its lattice_samples.LatticeOverlay (the Solve operator's), or None
 
     @property
     def photons_emitted(self):
@@ -80,7 +84,3 @@ def clear(key):
 
 def clear_all():
     _solutions.clear()
-
-
-def keys():
-    return list(_solutions)

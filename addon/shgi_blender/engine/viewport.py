@@ -40,7 +40,6 @@ class ViewportSession:
         self.scene_key = None
         self.properties = None
         self.view = None
-        self.drawn_frame_id = None
         self.drawn_status = None
         _sessions.add(self)
         if not bpy.app.timers.is_registered(_poll_sessions):
@@ -62,9 +61,13 @@ class ViewportSession:
         frame = self.worker.latest_frame()
         if frame is not None:
             self.display.draw(engine, depsgraph.scene, frame, region.width, region.height)
-            self.drawn_frame_id = frame.frame_id
         self.drawn_status = self.worker.status
         engine.update_stats("", f"SHGI | {self.drawn_status}")
+
+    @property
+    def drawn_frame_id(self):
+        """The frame_id of the frame drawn last (None before the first draw)."""
+        return self.display.frame_id
 
     def _request(self):
         if self.view is not None and self.sync.snapshot is not None:

@@ -78,10 +78,13 @@ def scaled_fields(fields, divisor):
 
 def shgi_camera(shgi, fields):
     """shgi.Camera of fields from camera_fields_from_view."""
+    # Imported here: conversions imports shgi, and viewport.py imports this module before the
+    # native module is known to import.
+    from ..export.conversions import CAMERA_TYPES, SENSOR_FITS
+
     values = dict(fields)
-    values["type"] = {"PERSP": shgi.CameraType.PERSPECTIVE,
-                      "ORTHO": shgi.CameraType.ORTHOGRAPHIC}[values["type"]]
-    values["sensor_fit"] = getattr(shgi.SensorFit, values["sensor_fit"])
+    values["type"] = CAMERA_TYPES[values["type"]]
+    values["sensor_fit"] = SENSOR_FITS[values["sensor_fit"]]
     return shgi.Camera(**values)
 
 

@@ -33,7 +33,7 @@ import numpy as np
 from .. import settings
 from ..export.scene_snapshot import DIFFERENT, EDITABLE, SAME
 from . import lattice_samples, viewport_camera
-from .render_job import sample_rounds
+from .render_job import make_renderer, sample_rounds
 
 logger = logging.getLogger("shgi_blender.viewport")
 
@@ -217,7 +217,7 @@ class ViewportWorker:
             if lattice_key != self._lattice_key:
                 self._lattice = None
             self._lattice_key = lattice_key
-        context = _RenderContext(request, props, progress, uses_lattice)
+        context = _RenderContext(request, progress, uses_lattice)
         if method.uses_lattice:
             context.preview_settings = settings.preview_settings(props, shgi)
         else:
@@ -276,25 +276,23 @@ class ViewportWorker:
             self._publish(renderer.passes(), done, step.samples, step.divisor)
 
     def _renderer(self, context, divisor, use_field):
-        """A _Renderer of the request's view at 1/divisor resolution."""
-        shgi = self._shgi
+        """A render_job.Renderer of the request's view at 1/divisor resolution."""
         fields = viewport_camera.scaled_fields(context.request.view, divisor)
-        camera = viewport_camera.shgi_camera(shgi, fields)
+        camera = viewport_camera.shgi_camera(self._shgi, fields)
         progress = context.progress.frames
         if context.path_tracer_settings is not None:
+            # The path tracer renders the scene's camera: the view goes into the scene.
             key = viewport_camera.view_key(fields)
             if key != self._scene_camera:
                 self._scene.set_camera(camera)
                 self._scene.commit(progress=progress)  # the top level only
                 self._scene_camera = key
                 self._lattice = None  # a solved lattice refuses an edited scene
-            tracer = shgi.PathTracer(self._scene, context.path_tracer_settings)
-            return _Renderer(lambda count: tracer.render(count, progress=progress),
-                             tracer.passes)
-        preview = shgi.PreviewRenderer(self._scene, context.preview_settings, camera=camera)
         field = self._lattice if (use_field and context.uses_lattice) else None
-        return _Renderer(lambda count: preview.render(field, count, progress=progress),
-                         preview.passes)
+        return make_renderer(self._shgi, self._scene, progress,
+                             path_tracer_settings=context.path_tracer_settings,
+                             preview_settings=context.preview_settings, field=field,
+                             camera=camera)
 
     def _publish(self, passes, samples, target_samples, divisor):
         pixels = np.ascontiguousarray(passes["Combined"][::-1], dtype=np.float32)
@@ -363,17 +361,10 @@ class _RunProgress:
 @dataclass
 class _RenderContext:
     request: Request
-    props: SimpleNamespace
     progress: _RunProgress
     uses_lattice: bool
     preview_settings: object = None
     path_tracer_settings: object = None
-
-
-@dataclass
-class _Renderer:
-    add: object      # add(count): adds `count` samples per pixel
-    passes: object   # passes(): {name: (H, W, C)}
 
 
 def _same_scene(a, b):

@@ -14,10 +14,8 @@ are cheap to read) and returns a frozen SceneSnapshot. Meshes no export used any
 dropped. ``meshes_read`` counts the geometries read since the start (the tests' hook).
 """
 
-import time
-
 from .material import MaterialExporter
-from .result import ExportStats, WarningLog
+from .result import WarningLog
 from .scene_export import _SceneExporter
 from .scene_snapshot import MaterialTable, SceneSnapshot
 
@@ -36,7 +34,6 @@ class IncrementalExport:
         self.meshes = {}       # (geometry key, material ids) -> shgi.Mesh
         self.world = None
         self.meshes_read = 0
-        self.stats = ExportStats()
 
     # --- invalidation (from the depsgraph's updates) ---------------------------------------------
 
@@ -59,7 +56,6 @@ class IncrementalExport:
 
     def export(self, depsgraph, scene):
         """A frozen SceneSnapshot of the depsgraph, without a camera (the viewport has its own)."""
-        start = time.perf_counter()
         snapshot = SceneSnapshot(self.table)
         walk = _CachedWalk(self, depsgraph, snapshot)
         walk.export_instances()
@@ -70,8 +66,6 @@ class IncrementalExport:
         used = walk.used_geometries
         self.geometries = {key: value for key, value in self.geometries.items() if key in used}
         self.meshes = {key: value for key, value in self.meshes.items() if key[0] in used}
-        walk.stats.seconds = time.perf_counter() - start
-        self.stats = walk.stats
         return snapshot.freeze()
 
 

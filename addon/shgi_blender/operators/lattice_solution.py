@@ -3,50 +3,41 @@
 SHGI_OT_lattice_solve exports the scene (Blender's main thread), then commits and solves on a
 worker thread: from the UI (invoke) it runs modal, polled by a timer, Esc cancels and the status
 bar shows progress; from a script or in background mode (execute) it waits for the thread. The
-solution goes to engine/solution_cache.py under the scene's name; F12 renders it from the
-current camera until SHGI_OT_lattice_clear.
+solution, with its lattice overlay (made on the same thread), goes to engine/solution_cache.py
+under the scene's name; F12 renders it from the current camera until SHGI_OT_lattice_clear.
 """
 
-import threading
 import time
 
 import bpy
 
 from .. import native, settings
 from ..engine import solution_cache
+from ..engine.native_task import NativeTask
 
 TIMER_SECONDS = 0.1
 
 
-class _SolveTask:
-    """solution_cache.solve on a worker thread, with a cancellable shgi.Progress."""
+class _SolveTask(NativeTask):
+    """solution_cache.solve on a worker thread, then the solution's lattice overlay (so that
+    the 3D views' draw handler only uploads it)."""
 
     def __init__(self, shgi, scene, lattice_settings, signature, timings, warnings):
-        self.progress = shgi.Progress()
+        super().__init__(shgi, "shgi-lattice-solve")
+        self._arguments = (scene, lattice_settings, signature, timings, warnings)
         self.solution = None
-        self.error = None
-        self.cancelled = False
-        self._shgi = shgi
-        self._thread = threading.Thread(
-            target=self._run, args=(scene, lattice_settings, signature, timings, warnings),
-            name="shgi-lattice-solve", daemon=True)
-        self._thread.start()
 
-    def _run(self, scene, lattice_settings, signature, timings, warnings):
-        try:
-            self.solution = solution_cache.solve(self._shgi, scene, lattice_settings, signature,
-                                                 self.progress, timings, warnings)
-        except self._shgi.Cancelled:
-            self.cancelled = True
-        except Exception as error:  # reported by the operator on the main thread
-            self.error = error
+    def _work(self):
+        from ..engine import lattice_samples  # imports shgi, available per poll()
 
-    @property
-    def running(self):
-        return self._thread.is_alive()
-
-    def wait(self):
-        self._thread.join()
+        scene, lattice_settings, signature, timings, warnings = self._arguments
+        solution = solution_cache.solve(self._shgi, scene, lattice_settings, signature,
+                                        self.progress, timings, warnings)
+        # A committed shgi.Scene offers the instances and meshes a snapshot does.
+        solution.overlay = lattice_samples.lattice_overlay(
+            solution.lattice, solution.scene, solution.scene,
+            solution.lattice.settings.resolution)
+        self.solution = solution
 
 
 class SHGI_OT_lattice_solve(bpy.types.Operator):
@@ -81,7 +72,7 @@ any camera without solving again, until Clear"""
 
     def modal(self, context, event):
         if event.type == "ESC":
-            self._task.progress.cancel()
+            self._task.cancel()
             return {"RUNNING_MODAL"}
         if event.type == "TIMER":
             if self._task.running:
@@ -111,7 +102,8 @@ any camera without solving again, until Clear"""
             return None
         self._scene_key = scene.name_full
         return _SolveTask(shgi, export.scene, lattice_settings,
-                          settings.lattice_signature(scene.shgi), timings, export.warnings)
+                          settings.lattice_signature(scene.shgi), timings,
+                          export.warnings).start()
 
     def _finish(self, context, task):
         if task.cancelled:
@@ -125,7 +117,7 @@ any camera without solving again, until Clear"""
         seconds = sum(timings.get(name, 0.0) for name in solution_cache.TIMING_LABELS)
         self.report({"INFO"}, f"SHGI: photon lattice solved in {seconds:.2f} s "
                     f"({task.solution.photons_emitted:,} photons, "
-                    f"{task.solution.memory_bytes / 2**20:.1f} MiB)")
+                    f"{task.solution.memory_bytes / solution_cache.BYTES_PER_MIB:.1f} MiB)")
         for area in context.screen.areas if context.screen else ():
             area.tag_redraw()
         return {"FINISHED"}

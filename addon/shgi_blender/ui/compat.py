@@ -1,4 +1,4 @@
-"""Blender's stock panels shown under SHGI, as they are under Cycles.
+"""Blender's stock panels shown under SHGI as under Cycles, and the mixin of SHGI's own panels.
 
 Cycles adds itself to every panel that lists the internal 'BLENDER_RENDER' engine (output,
 dimensions, colour management, object, mesh, camera, ... panels), except those it replaces; SHGI
@@ -6,12 +6,14 @@ does the same with the same exceptions (but keeps the spot-shape panel, which Cy
 own light panels), plus EEVEE's material and world surface panels (the node trees SHGI exports).
 Cycles' own panels are not reused: they share one COMPAT_ENGINES set, so adding SHGI to one
 would show all of Cycles' settings. Only the panels SHGI was added to are restored on
-unregister.
+unregister. SHGI's own Properties panels take ShgiPanel: shown only while SHGI renders.
 """
 
 import bpy
 
-ENGINE = "SHGI"
+from ..engine.render_engine import ShgiRenderEngine
+
+ENGINE = ShgiRenderEngine.bl_idname
 # Panels listing BLENDER_RENDER that SHGI leaves out: Cycles' exclusions (its ui.get_panels)
 # but DATA_PT_spot; SHGI replaces them with its own light and pass panels or does not support them.
 EXCLUDED_PANELS = {
@@ -26,6 +28,18 @@ EXTRA_PANELS = (
 )
 
 _added = []
+
+
+class ShgiPanel:
+    """Mixin of SHGI's Properties editor panels (each sets bl_context): shown under SHGI only."""
+
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    COMPAT_ENGINES = {ENGINE}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES
 
 
 def stock_panels():

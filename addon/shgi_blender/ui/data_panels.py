@@ -3,8 +3,8 @@
 import bpy
 
 from ..engine import passes
+from .compat import ShgiPanel
 
-ENGINE = "SHGI"
 # (heading, [(view layer toggle, label)]): the toggles of passes.PASSES, grouped as in Cycles'
 # Data and Light pass panels.
 PASS_GROUPS = (
@@ -21,18 +21,15 @@ PASS_GROUPS = (
 )
 
 
-class SHGI_LIGHT_PT_light(bpy.types.Panel):
+class SHGI_LIGHT_PT_light(ShgiPanel, bpy.types.Panel):
     """Cycles' light panel without its Cycles-only options; Portal is Cycles' own property."""
 
     bl_label = "Light"
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
     bl_context = "data"
-    COMPAT_ENGINES = {ENGINE}
 
     @classmethod
     def poll(cls, context):
-        return context.light is not None and context.engine in cls.COMPAT_ENGINES
+        return context.light is not None and super().poll(context)
 
     def draw(self, context):
         layout = self.layout
@@ -63,18 +60,11 @@ class SHGI_LIGHT_PT_light(bpy.types.Panel):
             column.prop(context.object, "visible_camera", text="Visible to Camera")
 
 
-class SHGI_VIEWLAYER_PT_passes(bpy.types.Panel):
+class SHGI_VIEWLAYER_PT_passes(ShgiPanel, bpy.types.Panel):
     """The view-layer pass toggles of the passes SHGI fills (passes.PASSES)."""
 
     bl_label = "Passes"
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
     bl_context = "view_layer"
-    COMPAT_ENGINES = {ENGINE}
-
-    @classmethod
-    def poll(cls, context):
-        return context.engine in cls.COMPAT_ENGINES
 
     def draw(self, context):
         layout = self.layout

@@ -3,10 +3,10 @@
 Drawn in every 3D view (a SpaceView3D POST_VIEW draw handler) when ``scene.shgi
 show_lattice_samples`` is on and the scene renders with SHGI. The spheres come from the lattice
 the scene's Rendered viewport is solving (its worker computes them after each photon pass), or
-else from the scene's frozen solution (computed once, here). engine/lattice_samples.py makes the
-geometry and colours; this module only uploads them as one GPU batch (rebuilt when the overlay
-changes) and draws it with back faces culled. The overlay's toggle also shows in the viewport's
-Overlays popover.
+else from the scene's frozen solution (computed once, by the Solve operator's worker thread).
+engine/lattice_samples.py makes the geometry and colours; this module only uploads them as one
+GPU batch (rebuilt when the overlay changes) and draws it with back faces culled. The overlay's
+toggle also shows in the viewport's Overlays popover.
 """
 
 import bpy
@@ -15,12 +15,11 @@ from gpu_extras.batch import batch_for_shader
 
 from ..engine import solution_cache, viewport
 from ..engine.frame_display import builtin_shader
+from .compat import ENGINE
 
-ENGINE = "SHGI"
 SMOOTH_COLOR_SHADER_NAMES = ("SMOOTH_COLOR", "3D_SMOOTH_COLOR")
 
-_state = {"handle": None, "batch": None, "overlay": None, "frozen": None, "draws": 0,
-          "spheres": 0}
+_state = {"handle": None, "batch": None, "overlay": None, "draws": 0, "spheres": 0}
 
 
 def stats():
@@ -36,18 +35,7 @@ def overlay_for(scene):
             if overlay is not None:
                 return overlay
     solution = solution_cache.get(scene.name_full)
-    if solution is None:
-        return None
-    frozen = _state["frozen"]
-    if frozen is None or frozen[0] is not solution:
-        from ..engine import lattice_samples  # imports shgi, present when a solution exists
-
-        # A committed shgi.Scene offers the instances and meshes a snapshot does.
-        overlay = lattice_samples.lattice_overlay(solution.lattice, solution.scene,
-                                                  solution.scene,
-                                                  solution.lattice.settings.resolution)
-        _state["frozen"] = frozen = (solution, overlay)
-    return frozen[1]
+    return solution.overlay if solution is not None else None
 
 
 def draw_lattice_samples():
@@ -99,4 +87,4 @@ def unregister():
     bpy.types.VIEW3D_PT_overlay.remove(draw_overlay_popover)
     if _state["handle"] is not None:
         bpy.types.SpaceView3D.draw_handler_remove(_state["handle"], "WINDOW")
-    _state.update(handle=None, batch=None, overlay=None, frozen=None)
+    _state.update(handle=None, batch=None, overlay=None)

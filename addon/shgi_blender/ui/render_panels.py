@@ -9,9 +9,9 @@ import bpy
 
 from .. import native, presets, settings
 from ..engine import final_render, solution_cache
+from .compat import ShgiPanel
 
 WRAP_COLUMNS = 56  # characters per line of long messages in a panel of default width
-ENGINE = "SHGI"
 
 
 def draw_wrapped(layout, text, icon="NONE"):
@@ -21,19 +21,9 @@ def draw_wrapped(layout, text, icon="NONE"):
         column.label(text=line, icon=icon if index == 0 else "BLANK1")
 
 
-class ShgiRenderPanel:
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
-    bl_context = "render"
-    COMPAT_ENGINES = {ENGINE}
-
-    @classmethod
-    def poll(cls, context):
-        return context.engine in cls.COMPAT_ENGINES
-
-
-class SHGI_RENDER_PT_method(ShgiRenderPanel, bpy.types.Panel):
+class SHGI_RENDER_PT_method(ShgiPanel, bpy.types.Panel):
     bl_label = "SHGI"
+    bl_context = "render"
 
     def draw(self, context):
         layout = self.layout
@@ -55,8 +45,9 @@ class SHGI_RENDER_PT_method(ShgiRenderPanel, bpy.types.Panel):
         column.prop(props, "seed")
 
 
-class SHGI_RENDER_PT_light_paths(ShgiRenderPanel, bpy.types.Panel):
+class SHGI_RENDER_PT_light_paths(ShgiPanel, bpy.types.Panel):
     bl_label = "Light Paths"
+    bl_context = "render"
     bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
@@ -74,8 +65,9 @@ class SHGI_RENDER_PT_light_paths(ShgiRenderPanel, bpy.types.Panel):
             column.prop(props, "max_specular_bounces")
 
 
-class SHGI_RENDER_PT_photon_lattice(ShgiRenderPanel, bpy.types.Panel):
+class SHGI_RENDER_PT_photon_lattice(ShgiPanel, bpy.types.Panel):
     bl_label = "Photon Lattice"
+    bl_context = "render"
 
     @classmethod
     def poll(cls, context):
@@ -124,11 +116,12 @@ class SHGI_RENDER_PT_photon_lattice(ShgiRenderPanel, bpy.types.Panel):
         grid.label(text=f"{solution.photons_emitted:,} / "
                         f"{int(solution.timings.get('photons_stored', 0)):,}")
         grid.label(text="Memory")
-        grid.label(text=f"{solution.memory_bytes / 2**20:.2f} MiB")
+        grid.label(text=f"{solution.memory_bytes / solution_cache.BYTES_PER_MIB:.2f} MiB")
 
 
-class SHGI_RENDER_PT_last_render(ShgiRenderPanel, bpy.types.Panel):
+class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
     bl_label = "Last Render"
+    bl_context = "render"
     bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, _context):

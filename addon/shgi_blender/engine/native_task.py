@@ -1,0 +1,58 @@
+"""Native work on a worker thread, cancellable and polled from Blender's main thread. No bpy.
+
+A NativeTask runs its subclass's ``_work()`` on a daemon thread. Every native call in it takes
+the task's ``progress`` (a shgi.Progress) and releases the GIL, so the main thread stays
+responsive and reads ``progress.fraction`` / ``progress.stage`` while it runs. ``cancel()``
+makes the running call raise ``shgi.Cancelled`` within one chunk of work (< 0.2 s,
+DESIGN.md); the task then ends with ``cancelled`` set. Any other exception ends it with
+``error`` set, for the main thread to report (a worker thread must not call bpy).
+"""
+
+import threading
+
+
+class NativeTask:
+    """A worker thread running ``self._work()`` with a cancellable shgi.Progress.
+
+    thread_name: the worker thread's name (it shows in debuggers and tracebacks).
+    """
+
+    def __init__(self, shgi, thread_name):
+        self._shgi = shgi
+        self.progress = shgi.Progress()
+        self._thread = threading.Thread(target=self._run, name=thread_name, daemon=True)
+        self.error = None       # the exception that ended the task, other than Cancelled
+        self.cancelled = False
+
+    # --- main thread ---------------------------------------------------------------------------
+
+    def start(self):
+        self._thread.start()
+        return self
+
+    def cancel(self):
+        """Asks the running native call to stop (it raises Cancelled within one chunk)."""
+        self.progress.cancel()
+
+    def wait(self, timeout=None):
+        """Waits up to `timeout` seconds (None: until the end); True when the task has ended."""
+        self._thread.join(timeout)
+        return not self._thread.is_alive()
+
+    @property
+    def running(self):
+        return self._thread.is_alive()
+
+    # --- worker thread -------------------------------------------------------------------------
+
+    def _run(self):
+        try:
+            self._work()
+        except self._shgi.Cancelled:
+            self.cancelled = True
+        except Exception as error:  # reported by the caller on the main thread
+            self.error = error
+
+    def _work(self):
+        """The task's native work (runs on the worker thread; no bpy)."""
+        raise NotImplementedError
