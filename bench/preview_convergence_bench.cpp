@@ -43,11 +43,11 @@ std::vector<float> combined_rgb(const Image& image) {
 }
 
 double psnr(const std::vector<float>& reference, const std::vector<float>& image) {
-    double luminance = 0.0;
+    double mean_luminance = 0.0;
     for (size_t i = 0; i < reference.size(); i += 3)
-        luminance += 0.2126 * reference[i] + 0.7152 * reference[i + 1] +
-                     0.0722 * reference[i + 2];
-    const float exposure = float(kMiddleGrey / (luminance / double(reference.size() / 3)));
+        mean_luminance += luminance(vec3(reference[i], reference[i + 1], reference[i + 2]));
+    mean_luminance /= double(reference.size() / 3);
+    const float exposure = float(kMiddleGrey / mean_luminance);
     auto display = [&](float linear) {
         return std::clamp(srgb_from_linear(std::max(0.0f, linear * exposure)), 0.0f, 1.0f);
     };

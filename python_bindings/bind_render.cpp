@@ -9,6 +9,8 @@
 // The PathTracer keeps its Scene alive, but the scene must not be edited or re-committed while
 // a render runs in another thread.
 #include <cstring>
+#include <memory>
+#include <optional>
 #include <string>
 
 #include <pybind11/numpy.h>
@@ -78,6 +80,14 @@ void bind_settings(py::module_& m) {
              "Raises ValueError naming the first invalid field.");
 }
 
+// A preview renderer of the scene's camera, or of `camera` when given (validates the settings).
+std::unique_ptr<PreviewRenderer> make_preview_renderer(const Scene& scene,
+                                                       const PreviewSettings& settings,
+                                                       const Camera* camera) {
+    return std::make_unique<PreviewRenderer>(scene, camera != nullptr ? *camera : scene.camera(),
+                                             settings);
+}
+
 void bind_path_tracer(py::module_& m) {
     py::class_<PathTracer>(m, "PathTracer", R"doc(
 Progressive reference path tracer over a committed Scene with a camera.
@@ -86,6 +96,8 @@ render(samples) adds samples to the film; passes() returns every pass so far. Th
 depends only on the seed and the total sample count, not on threads or how the samples
 were split between render() calls.)doc")
         .def(py::init([](const Scene& scene, const PathTracerSettings& settings) {
+                 // The tracer reads the scene (lights, camera, revision): not mid-commit.
+                 SceneUse use(scene, SceneUse::Kind::Query, "PathTracer");
                  return std::make_unique<PathTracer>(scene, settings);
              }),
              py::arg("scene"), py::arg("settings") = PathTracerSettings{}, py::keep_alive<1, 2>(),
@@ -112,14 +124,14 @@ were split between render() calls.)doc")
     m.def(
         "render_path_traced",
         [](const Scene& scene, const PathTracerSettings& settings, Progress* progress) {
-            validate_path_tracer_settings(settings);
-            PathTracer tracer(scene, settings);
+            std::optional<PathTracer> tracer;
             {
                 SceneUse use(scene, SceneUse::Kind::Query, "render (render_path_traced)");
+                tracer.emplace(scene, settings);  // validates the settings
                 py::gil_scoped_release release;
-                tracer.render(settings.samples, progress);
+                tracer->render(settings.samples, progress);
             }
-            return passes_to_dict(tracer.film());
+            return passes_to_dict(tracer->film());
         },
         py::arg("scene"), py::arg("settings") = PathTracerSettings{},
         py::arg("progress") = py::none(),
@@ -202,8 +214,8 @@ render(field, samples) adds samples; passes() returns the passes (as the path tr
 timings is the last render's stage times in seconds (primary, direct, indirect, total).)doc")
         .def(py::init([](const Scene& scene, const PreviewSettings& settings,
                          const Camera* camera) {
-                 return camera != nullptr ? std::make_unique<PreviewRenderer>(scene, *camera, settings)
-                                          : std::make_unique<PreviewRenderer>(scene, settings);
+                 SceneUse use(scene, SceneUse::Kind::Query, "PreviewRenderer");
+                 return make_preview_renderer(scene, settings, camera);
              }),
              py::arg("scene"), py::arg("settings") = PreviewSettings{},
              py::arg("camera") = py::none(), py::keep_alive<1, 2>(),
@@ -231,12 +243,10 @@ timings is the last render's stage times in seconds (primary, direct, indirect, 
         "render_preview",
         [](const Scene& scene, const IndirectField* field, const PreviewSettings& settings,
            const Camera* camera, Progress* progress) {
-            validate_preview_settings(settings);
-            std::unique_ptr<PreviewRenderer> renderer =
-                camera != nullptr ? std::make_unique<PreviewRenderer>(scene, *camera, settings)
-                                  : std::make_unique<PreviewRenderer>(scene, settings);
+            std::unique_ptr<PreviewRenderer> renderer;
             {
                 SceneUse use(scene, SceneUse::Kind::Query, "render (render_preview)");
+                renderer = make_preview_renderer(scene, settings, camera);  // validates
                 py::gil_scoped_release release;
                 renderer->render(field, settings.samples, progress);
             }

@@ -31,6 +31,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
+#include "io/png_image.h"
 #include "util/error.h"
 #include "util/log.h"
 
@@ -58,11 +59,6 @@ vec3 blender_from_gltf_vector(const vec3& v) { return vec3(v.x, -v.z, v.y); }
 std::string trimmed(std::string text) {
     while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
     return text;
-}
-
-// sRGB transfer function, IEC 61966-2-1, as Blender's "sRGB" colour space decodes 8-bit images.
-float srgb_to_linear(float c) {
-    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -340,7 +336,7 @@ Texture texture_from_image(const tinygltf::Image& image, const std::string& name
                 c[1] = c[2] = c[0];
             }
             texture.texels[y * texture.width + x] = vec4(
-                srgb_to_linear(c[0]), srgb_to_linear(c[1]), srgb_to_linear(c[2]), c[3]);
+                linear_from_srgb(c[0]), linear_from_srgb(c[1]), linear_from_srgb(c[2]), c[3]);
         }
     }
     return texture;

@@ -57,15 +57,7 @@ const PhotonLatticeSettings& validated(const PhotonLatticeSettings& settings) {
 
 void validate_photon_lattice_settings(const PhotonLatticeSettings& settings) {
     // The tracer's checks, naming the fields as the caller knows them (the names are the same).
-    try {
-        validate_photon_tracer_settings(tracer_settings(settings));
-    } catch (const InvalidArgument& error) {
-        std::string message = error.what();
-        const std::string tracer = "PhotonTracerSettings.", lattice = "PhotonLatticeSettings.";
-        if (message.compare(0, tracer.size(), tracer) == 0)
-            message.replace(0, tracer.size(), lattice);
-        throw InvalidArgument(message);
-    }
+    validate_photon_tracer_settings(tracer_settings(settings), "PhotonLatticeSettings");
     check_range(settings.resolution, 1, 1024, "resolution");
     check_range(settings.order, 1, 2, "order");
     check_range(settings.blur_passes, 0, 64, "blur_passes");
@@ -119,7 +111,6 @@ void PhotonLattice::reset(Progress* progress) {
     global_ = std::move(global);
     caustic_raw_ = caustic;
     caustic_ = std::move(caustic);
-    caustic_photons_.clear();
     caustic_map_ = PhotonMap();
     caustic_photons_injected_ = 0;
     passes_ = 0;
@@ -157,7 +148,7 @@ void PhotonLattice::solve(Progress* progress) {
     if (settings_.caustics == CausticMode::Lattice) {
         caustic_injected += caustic_raw.inject(maps.caustic, 1.0f, progress);
     } else if (settings_.caustics == CausticMode::PhotonMap) {
-        caustic_photons = caustic_photons_;
+        caustic_photons = caustic_map_.photons();  // all passes so far, unscaled
         caustic_photons.insert(caustic_photons.end(), maps.caustic.begin(), maps.caustic.end());
     }
     timings.injection = seconds_since(start);
@@ -175,7 +166,7 @@ void PhotonLattice::solve(Progress* progress) {
     }
     PhotonMap caustic_map;
     if (settings_.caustics == CausticMode::PhotonMap)
-        caustic_map = PhotonMap(caustic_photons, average);
+        caustic_map = PhotonMap(std::move(caustic_photons), average);
     timings.blur = seconds_since(start);
     throw_if_cancelled(progress);
 
@@ -183,7 +174,6 @@ void PhotonLattice::solve(Progress* progress) {
     caustic_raw_ = std::move(caustic_raw);
     global_ = std::move(global);
     caustic_ = std::move(caustic);
-    caustic_photons_ = std::move(caustic_photons);
     caustic_map_ = std::move(caustic_map);
     caustic_photons_injected_ = caustic_injected;
     ++passes_;
@@ -221,7 +211,7 @@ FieldLookup PhotonLattice::lookup(const vec3& p, const vec3& n) const {
 
 size_t PhotonLattice::memory_bytes() const {
     return global_raw_.memory_bytes() + global_.memory_bytes() + caustic_raw_.memory_bytes() +
-           caustic_.memory_bytes() + caustic_photons_.size() * sizeof(Photon) * 2;
+           caustic_.memory_bytes() + caustic_map_.size() * sizeof(Photon);
 }
 
 }  // namespace shgi

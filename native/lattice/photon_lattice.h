@@ -28,7 +28,6 @@
 #pragma once
 
 #include <cstdint>
-#include <memory>
 
 #include "lattice/sh_lattice.h"
 #include "photon/photon_map.h"
@@ -125,7 +124,6 @@ class PhotonLattice : public IndirectField {
     uint64_t passes_ = 0;
     ShLattice global_raw_, caustic_raw_;  // sums over passes, unblurred
     ShLattice global_, caustic_;          // averaged and blurred: what queries read
-    std::vector<Photon> caustic_photons_; // all passes (PhotonMap mode)
     PhotonMap caustic_map_;
     float caustic_radius_ = 0.0f;
     uint64_t caustic_photons_injected_ = 0;  // over all passes: 0 skips the caustic lattice

@@ -484,11 +484,16 @@ uint8_t ShLattice::receiving_sides(size_t cell) const {
 // Compares cosines, |n̄_b · normal| = |projected_b · normal| / |projected_b|, so that a bin's
 // area does not decide; a photon's normal is that of the triangle it hit, up to its sign and
 // rounding, so the bin holding that triangle wins unless another bin's mean is nearly parallel.
-uint8_t ShLattice::CellSurface::side_facing(const vec3& normal) const {
+std::array<float, 3> ShLattice::CellSurface::bin_lengths() const {
+    return {glm::length(projected[0]), glm::length(projected[1]), glm::length(projected[2])};
+}
+
+uint8_t ShLattice::CellSurface::side_facing(const vec3& normal,
+                                            const std::array<float, 3>& lengths) const {
     uint8_t side = 0;
     float best = 0.0f;
     for (int b = 0; b < 3; ++b) {
-        const float length = glm::length(projected[b]);
+        const float length = lengths[b];
         if (!(length > 0.0f)) continue;
         const float cosine = glm::dot(projected[b], normal) / length;
         if (std::fabs(cosine) > best) {
@@ -608,8 +613,9 @@ uint64_t ShLattice::inject(const std::vector<Photon>& photons, float scale, Prog
 void ShLattice::inject_cell(size_t cell, const std::vector<Photon>& photons, const uint32_t* order,
                             uint32_t count, float scale) {
     CellSurface& surface = *cell_surface(cell);
+    const std::array<float, 3> lengths = surface.bin_lengths();
     for (uint32_t k = 0; k < count; ++k)
-        surface.receiving |= surface.side_facing(photons[order[k]].normal);
+        surface.receiving |= surface.side_facing(photons[order[k]].normal, lengths);
     const float min_projected = kMinProjectedFraction * surface.area;
     const int n_coeffs = num_coefficients();
     std::array<double, kMaxCoefficients> sum{};

@@ -67,6 +67,7 @@
 // with corners. Cells that have not received photons (sides unknown) blur with each other.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -159,9 +160,11 @@ class ShLattice {
             }
             return sum;
         }
+        // |A_b n̄_b| per bin: computed once per cell for side_facing's per-photon test.
+        std::array<float, 3> bin_lengths() const;
         // The side of the bin whose mean normal is closest to ±normal (largest |cos|), or 0 when
-        // no bin has a component along it.
-        uint8_t side_facing(const vec3& normal) const;
+        // no bin has a component along it; `lengths` = bin_lengths().
+        uint8_t side_facing(const vec3& normal, const std::array<float, 3>& lengths) const;
     };
     static constexpr uint32_t kNoSurface = 0xFFFFFFFFu;
 

@@ -7,7 +7,6 @@
 // (the incident direction ω_i of the radiance it carries), so dot(normal, direction) > 0.
 #pragma once
 
-#include <vector>
 
 #include "util/math.h"
 

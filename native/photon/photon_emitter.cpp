@@ -62,11 +62,9 @@ PhotonEmitter::PhotonEmitter(const Scene& scene) : scene_(&scene) {
         weights.push_back(weight);
         total_power_ += power;
     };
-    for (uint32_t i = 0; i < scene.lights().size(); ++i) {
-        const Light& light = scene.lights()[i];
-        if (light.portal && area_light_area(light) > 0.0f) portals_.push_back(i);
-        add(Kind::Light, i, light_power(light, bounding_radius_));
-    }
+    for (uint32_t i = 0; i < scene.lights().size(); ++i)
+        add(Kind::Light, i, light_power(scene.lights()[i], bounding_radius_));
+    portals_ = scene_portals(scene);
     const auto& triangles = scene.emissive_triangles();
     for (uint32_t i = 0; i < triangles.size(); ++i)
         add(Kind::Triangle, i, triangles[i].radiance * (kTwoPi * triangles[i].area));
@@ -103,8 +101,6 @@ bool PhotonEmitter::sample_emitter(const Emitter& emitter, Pcg32& rng, EmittedPh
 
 void PhotonEmitter::sample_light(const Light& light, const vec3& power, Pcg32& rng,
                                  EmittedPhoton* out) const {
-    const vec3 axis = light.direction();
-    const Frame frame = Frame::from_z(axis);
     const vec2 u = rng.next_vec2();
     out->power = power;
     switch (light.type) {
@@ -118,7 +114,7 @@ void PhotonEmitter::sample_light(const Light& light, const vec3& power, Pcg32& r
             const float cos_half = std::cos(0.5f * light.spot_size);
             const vec3 local = sample_uniform_cone(u, cos_half);
             out->ray.origin = light.position();
-            out->ray.direction = frame.to_world(local);
+            out->ray.direction = Frame::from_z(light.direction()).to_world(local);
             out->power = light.color * (point_intensity_from_power(light.power) *
                                         spot_attenuation(light, local.z) /
                                         sample_uniform_cone_pdf(cos_half));
@@ -127,14 +123,11 @@ void PhotonEmitter::sample_light(const Light& light, const vec3& power, Pcg32& r
         case LightType::Sun:
             sample_sun(light, u, rng, out);
             break;
-        case LightType::Area: {
-            vec3 ex, ey;
-            area_half_axes(light, &ex, &ey);
-            const vec2 local = is_round(light.shape) ? sample_uniform_disk(u) : 2.0f * u - 1.0f;
-            out->ray.origin = light.position() + local.x * ex + local.y * ey;
-            out->ray.direction = frame.to_world(sample_cosine_hemisphere(rng.next_vec2()));
+        case LightType::Area:
+            out->ray.origin = area_light_point(light, u);
+            out->ray.direction = Frame::from_z(light.direction())
+                                     .to_world(sample_cosine_hemisphere(rng.next_vec2()));
             break;
-        }
     }
 }
 
@@ -192,7 +185,7 @@ bool PhotonEmitter::draw_portal_strategy(Pcg32& rng) const {
 const Light& PhotonEmitter::draw_portal(Pcg32& rng) const {
     const size_t count = portals_.size();
     const size_t k = std::min(size_t(rng.next_float() * float(count)), count - 1);
-    return scene_->lights()[portals_[k]];
+    return scene_->lights()[portals_[k].light];
 }
 
 float PhotonEmitter::disk_density(const Ray& ray) const {
@@ -204,14 +197,13 @@ float PhotonEmitter::disk_density(const Ray& ray) const {
 
 float PhotonEmitter::portal_density(const Ray& ray, bool cosine_directions) const {
     float density = 0.0f;
-    for (uint32_t index : portals_) {
-        const Light& portal = scene_->lights()[index];
+    for (const Portal& portal : portals_) {
         float t, cos_axis;
-        if (!area_light_crossing(portal, ray.origin, ray.direction, &t, &cos_axis) ||
+        if (!area_light_crossing(scene_->lights()[portal.light], ray.origin, ray.direction, &t,
+                                 &cos_axis) ||
             !(cos_axis > 0.0f))
             continue;  // misses it, or crosses it outwards
-        const float area = area_light_area(portal);
-        density += cosine_directions ? kInvPi / area : 1.0f / (area * cos_axis);
+        density += cosine_directions ? kInvPi / portal.area : 1.0f / (portal.area * cos_axis);
     }
     return density / float(std::max<size_t>(portals_.size(), 1));
 }

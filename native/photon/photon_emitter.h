@@ -35,6 +35,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "render/light_sampler.h"
 #include "scene/scene.h"
 #include "util/math.h"
 #include "util/rng.h"
@@ -98,7 +99,7 @@ class PhotonEmitter {
     vec3 bounding_center_{0.0f};
     float bounding_radius_ = 0.0f;  // m; 0 for an empty scene
     std::vector<Emitter> emitters_;
-    std::vector<uint32_t> portals_;  // scene light indices of portals with area
+    std::vector<Portal> portals_;
     DiscreteDistribution distribution_;
     vec3 total_power_{0.0f};
 };

@@ -202,15 +202,16 @@ void append(std::vector<Photon>& to, const std::vector<Photon>& from) {
 
 }  // namespace
 
-void validate_photon_tracer_settings(const PhotonTracerSettings& settings) {
+void validate_photon_tracer_settings(const PhotonTracerSettings& settings,
+                                     const char* struct_name) {
     if (settings.photons == 0 || settings.photons > kMaxPhotonsPerPass)
-        throw InvalidArgument(format_message("PhotonTracerSettings.photons is ", settings.photons,
+        throw InvalidArgument(format_message(struct_name, ".photons is ", settings.photons,
                                              "; it must be in [1, 2^40]"));
     if (settings.max_bounces < 1)
-        throw InvalidArgument(format_message("PhotonTracerSettings.max_bounces is ",
+        throw InvalidArgument(format_message(struct_name, ".max_bounces is ",
                                              settings.max_bounces, "; it must be >= 1"));
     if (!(settings.specular_roughness >= 0.0f && settings.specular_roughness <= 1.0f))
-        throw InvalidArgument(format_message("PhotonTracerSettings.specular_roughness is ",
+        throw InvalidArgument(format_message(struct_name, ".specular_roughness is ",
                                              settings.specular_roughness,
                                              "; it must be in [0, 1]"));
 }

@@ -4,15 +4,8 @@
 // diffuse, GGX glossy, mirror, refraction with IOR and Fresnel) and Russian roulette by albedo,
 // and stored where they land.
 //
-// Emission (flux of each emitter, linear RGB, W):
-//   point  colour x P, uniform directions from its position (a radius is ignored for emission)
-//   spot   colour x P/(4 pi) x spot_attenuation over the cone, uniform directions in the cone
-//   sun    colour x S x pi R^2: parallel photons (directions uniform in the sun's cone when it has
-//          an angle) through a disk of the scene's bounding-sphere radius R perpendicular to each
-//          photon's direction (a surface facing the sun then receives S (1 + cos(angle/2)) / 2)
-//   area   colour x P/(4A) x pi A = colour x pi P / 4, one-sided, cosine-weighted directions
-//   emissive triangles  2 pi Le A (two-sided), world  Lw x 4 pi x pi R^2 (disk per direction)
-// The emitter of photon i is chosen stratified: u = (i + rng) / N through the power CDF.
+// Emission: photon/photon_emitter.h (each emitter's flux, how its photons leave it, portals, and
+// the stratified choice of emitter).
 //
 // Storage: the first surface a photon hits after emission is not stored (the renderers compute
 // direct light exactly); each later hit on a surface whose BSDF has a non-Dirac lobe stores a
@@ -55,7 +48,9 @@ struct PhotonTracerSettings {
 
 // Throws InvalidArgument naming the field (photons 0 or > 2^40, max_bounces < 1, roughness
 // outside [0, 1] or NaN).
-void validate_photon_tracer_settings(const PhotonTracerSettings& settings);
+// `struct_name` names the settings in messages: PhotonLatticeSettings forwards these fields.
+void validate_photon_tracer_settings(const PhotonTracerSettings& settings,
+                                     const char* struct_name = "PhotonTracerSettings");
 
 struct PhotonMaps {
     std::vector<Photon> global;

@@ -342,12 +342,6 @@ bool PrincipledBsdf::has_smooth_lobes() const {
     return false;
 }
 
-bool PrincipledBsdf::has_traced_lobes() const {
-    for (int i = 0; i < lobe_count_; ++i)
-        if (lobes_[i].traced()) return true;
-    return false;
-}
-
 bool PrincipledBsdf::sample_traced(const vec3& wo, float u_lobe, const vec2& u,
                                    BsdfSample* out) const {
     if (wo.z <= 0.0f) return false;

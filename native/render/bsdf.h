@@ -86,7 +86,6 @@ class PrincipledBsdf {
     // non-Dirac diffuse and glossy reflection lobes, whose indirect light comes from an
     // IndirectField; "traced lobes" are every Dirac lobe and every refraction lobe, which the
     // renderer follows by tracing a ray.
-    bool has_traced_lobes() const;
     // Samples one traced lobe, chosen in proportion to the selection weights of the traced lobes;
     // weight = that lobe's f |cos| / (choice probability x its pdf), or its closure weight over
     // the choice probability for a Dirac lobe. False without traced lobes or for an invalid

@@ -68,6 +68,16 @@ bool area_light_crossing(const Light& light, const vec3& p, const vec3& wi, floa
     return true;
 }
 
+std::vector<Portal> scene_portals(const Scene& scene) {
+    std::vector<Portal> portals;
+    for (uint32_t i = 0; i < scene.lights().size(); ++i) {
+        const Light& light = scene.lights()[i];
+        const float area = light.portal ? area_light_area(light) : 0.0f;
+        if (area > 0.0f) portals.push_back({i, area});
+    }
+    return portals;
+}
+
 bool in_front_of_area_light(const Light& light, const vec3& p) {
     return glm::dot(p - light.position(), light.direction()) > 0.0f;
 }
@@ -97,10 +107,7 @@ LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, boo
     light_emitter_.assign(scene.lights().size(), kInvalidId);
     for (uint32_t i = 0; i < scene.lights().size(); ++i) {
         const Light& light = scene.lights()[i];
-        if (light.portal) {
-            if (area_light_area(light) > 0.0f) portals_.push_back(i);
-            continue;
-        }
+        if (light.portal) continue;  // marks an opening: see scene_portals
         const float power = light.type == LightType::Sun
                                 ? light.strength * disk_area
                                 : light.power;
@@ -125,6 +132,7 @@ LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, boo
         emitters_.push_back({Kind::World, 0});
         weights.push_back(world_weight);
     }
+    portals_ = scene_portals(scene);
     if (!weights.empty()) distribution_ = DiscreteDistribution(weights);
 }
 
@@ -255,14 +263,15 @@ bool LightSampler::sample_world(const vec3& p, const vec3& n, vec2 u, LightSampl
 
 uint32_t LightSampler::facing_portal_count(const vec3& p) const {
     uint32_t count = 0;
-    for (uint32_t index : portals_) count += in_front_of_area_light(scene_->lights()[index], p);
+    for (const Portal& portal : portals_)
+        count += in_front_of_area_light(scene_->lights()[portal.light], p);
     return count;
 }
 
 const Light& LightSampler::facing_portal(const vec3& p, uint32_t k) const {
-    for (uint32_t index : portals_) {
-        const Light& portal = scene_->lights()[index];
-        if (in_front_of_area_light(portal, p) && k-- == 0) return portal;
+    for (const Portal& portal : portals_) {
+        const Light& light = scene_->lights()[portal.light];
+        if (in_front_of_area_light(light, p) && k-- == 0) return light;
     }
     throw Internal("LightSampler::facing_portal: fewer facing portals than counted");
 }
@@ -290,13 +299,13 @@ float LightSampler::world_pdf(const vec3& p, const vec3& n, const vec3& wi) cons
                            : std::max(0.0f, glm::dot(n, wi)) * kInvPi;
     uint32_t facing = 0;
     float through_portals = 0.0f;  // sum over facing portals of their solid-angle pdfs
-    for (uint32_t index : portals_) {
-        const Light& portal = scene_->lights()[index];
-        if (!in_front_of_area_light(portal, p)) continue;
+    for (const Portal& portal : portals_) {
+        const Light& light = scene_->lights()[portal.light];
+        if (!in_front_of_area_light(light, p)) continue;
         ++facing;
         float t, cos_axis;
-        if (area_light_crossing(portal, p, wi, &t, &cos_axis) && cos_axis < 0.0f)
-            through_portals += t * t / (-cos_axis * area_light_area(portal));
+        if (area_light_crossing(light, p, wi, &t, &cos_axis) && cos_axis < 0.0f)
+            through_portals += t * t / (-cos_axis * portal.area);
     }
     if (facing == 0) return base;
     return kPortalFraction * through_portals / float(facing) + (1.0f - kPortalFraction) * base;
@@ -350,26 +359,12 @@ bool LightSampler::intersect_lights(const vec3& p, const vec3& wi, float t_max, 
 std::vector<EmissionHit> LightSampler::escaped(const vec3& p, const vec3& n, const vec3& wi,
                                                bool camera_ray) const {
     std::vector<EmissionHit> hits;
-    const vec3 world = scene_->world().radiance();
-    if (glm::any(glm::greaterThan(world, vec3(0.0f))))
-        hits.push_back({world, world_emitter_ != kInvalidId
-                                   ? selection_pdf(world_emitter_) * world_pdf(p, n, wi)
-                                   : 0.0f});
-    for (uint32_t i = 0; i < scene_->lights().size(); ++i) {
-        const Light& light = scene_->lights()[i];
-        if (light_emitter_[i] == kInvalidId || light.type != LightType::Sun || light.angle <= 0.0f)
-            continue;
-        if (camera_ray && !light.visible_camera) continue;
-        const float cos_max = std::cos(0.5f * light.angle);
-        if (glm::dot(wi, -light.direction()) < cos_max) continue;
-        const float solid_angle = kTwoPi * (1.0f - cos_max);
-        hits.push_back({light.color * (light.strength / solid_angle),
-                        selection_pdf(light_emitter_[i]) / solid_angle});
-    }
+    for_each_escaped(p, n, wi, camera_ray, [&](const EmissionHit& hit) { hits.push_back(hit); });
     return hits;
 }
 
 EmissionHit LightSampler::triangle_emission(const Hit& hit, const vec3& wi) const {
+    if (triangle_emitter_.empty()) return {};  // spares a hash lookup per hit in most scenes
     const auto found = triangle_emitter_.find(triangle_key(hit.instance_id, hit.triangle_id));
     if (found == triangle_emitter_.end()) return {};
     const EmissiveTriangle& tri = scene_->emissive_triangles()[emitters_[found->second].index];

@@ -40,6 +40,7 @@
 // return the incident radiance scale (intensity / d^2 or irradiance) with delta = true.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <unordered_map>
 #include <vector>
@@ -52,6 +53,13 @@ namespace shgi {
 
 // Share of world samples aimed through portals when a shading point faces at least one.
 inline constexpr float kPortalFraction = 0.8f;
+
+// A portal light of a scene (Light.portal with a positive area) and its area.
+struct Portal {
+    uint32_t light;  // index into Scene::lights()
+    float area;      // m^2, area_light_area
+};
+std::vector<Portal> scene_portals(const Scene& scene);
 
 enum class WorldSampling : uint8_t {
     Cosine,   // cosine-weighted around the shading normal (pdf = cos/pi, 0 below)
@@ -90,8 +98,13 @@ class LightSampler {
     bool intersect_lights(const vec3& p, const vec3& wi, float t_max, bool camera_ray,
                           EmissionHit* out) const;
     // What a ray leaving p (normal n) along wi sees when it misses the scene: world and suns
-    // (for a camera ray, only suns with visible_camera). Returns the emissions separately so
-    // each gets its own MIS weight.
+    // (for a camera ray, only suns with visible_camera). Calls add(const EmissionHit&) for each
+    // emission separately, so each gets its own MIS weight; nothing is allocated (this runs for
+    // every ray that escapes).
+    template <typename Add>
+    void for_each_escaped(const vec3& p, const vec3& n, const vec3& wi, bool camera_ray,
+                          Add&& add) const;
+    // The same, collected (tests).
     std::vector<EmissionHit> escaped(const vec3& p, const vec3& n, const vec3& wi,
                                      bool camera_ray) const;
     // An emissive triangle hit at `hit` from p.
@@ -123,9 +136,30 @@ class LightSampler {
     std::vector<uint32_t> light_emitter_;  // scene light index -> emitter index (or kInvalidId)
     std::unordered_map<uint64_t, uint32_t> triangle_emitter_;  // (instance << 32 | tri) -> emitter
     uint32_t world_emitter_ = kInvalidId;
-    std::vector<uint32_t> portals_;  // scene light indices
+    std::vector<Portal> portals_;
     DiscreteDistribution distribution_;
 };
+
+template <typename Add>
+void LightSampler::for_each_escaped(const vec3& p, const vec3& n, const vec3& wi, bool camera_ray,
+                                    Add&& add) const {
+    const vec3 world = scene_->world().radiance();
+    if (glm::any(glm::greaterThan(world, vec3(0.0f))))
+        add(EmissionHit{world, world_emitter_ != kInvalidId
+                                   ? selection_pdf(world_emitter_) * world_pdf(p, n, wi)
+                                   : 0.0f});
+    for (uint32_t i = 0; i < scene_->lights().size(); ++i) {
+        const Light& light = scene_->lights()[i];
+        if (light_emitter_[i] == kInvalidId || light.type != LightType::Sun || light.angle <= 0.0f)
+            continue;
+        if (camera_ray && !light.visible_camera) continue;
+        const float cos_max = std::cos(0.5f * light.angle);
+        if (glm::dot(wi, -light.direction()) < cos_max) continue;
+        const float solid_angle = kTwoPi * (1.0f - cos_max);
+        add(EmissionHit{light.color * (light.strength / solid_angle),
+                        selection_pdf(light_emitter_[i]) / solid_angle});
+    }
+}
 
 // --- Cycles' light unit conversions (see the measurements above) ---
 // Radiant intensity (W/sr) of a point or spot light of power P (W).

@@ -80,14 +80,14 @@ void PathIntegrator::find_emission(const Ray& ray, const Hit& hit) {
                                  camera_ray, &light_hit)) {
         add_emission(light_hit.radiance, light_hit.light_pdf, false);
     } else if (hit.valid()) {
-        if (scene_.emissive_triangles().empty()) return;  // spares a table lookup per hit
         const EmissionHit surface = lights_.triangle_emission(hit, ray.direction);
         if (max_component(surface.radiance) > 0.0f)
             add_emission(surface.radiance, surface.light_pdf, false);
     } else {
-        for (const EmissionHit& escaped : lights_.escaped(ray.origin, last_normal_, ray.direction,
-                                                                camera_ray))
-            add_emission(escaped.radiance, escaped.light_pdf, true);
+        lights_.for_each_escaped(ray.origin, last_normal_, ray.direction, camera_ray,
+                                 [&](const EmissionHit& escaped) {
+                                     add_emission(escaped.radiance, escaped.light_pdf, true);
+                                 });
     }
 }
 
@@ -153,9 +153,7 @@ bool PathIntegrator::prepare_direct(Ray* shadow) {
     pending_.eval = field_ != nullptr ? shading.bsdf.eval_field(shading.wo, wi)
                                       : shading.bsdf.eval(shading.wo, wi);
     if (max_component(pending_.eval.total()) <= 0.0f) return false;
-    shadow->origin = offset_origin(shading.position,
-                                   geometric_above ? shading.geometric_normal
-                                                   : -shading.geometric_normal);
+    shadow->origin = shading.spawn_origin(ls.wi);
     shadow->direction = ls.wi;
     shadow->tmin = 0.0f;
     shadow->tmax = std::isinf(ls.distance) ? kInfinity : ls.distance * (1.0f - kShadowShorten);
@@ -226,8 +224,7 @@ bool PathIntegrator::scatter(const Shading& shading, Ray* ray) {
     last_pdf_ = bs.pdf;
     last_normal_ = shading.frame.z;
     ++vertex_;
-    ray->origin = offset_origin(shading.position, geometric_above ? shading.geometric_normal
-                                                                  : -shading.geometric_normal);
+    ray->origin = shading.spawn_origin(wi);
     ray->direction = wi;
     ray->tmin = 0.0f;
     ray->tmax = kInfinity;

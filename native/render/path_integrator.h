@@ -34,10 +34,9 @@
 
 namespace shgi {
 
-// Seconds spent by one thread in the direct-light and indirect-light parts of its paths.
+// Seconds spent by one thread in the direct-light part of its paths (next-event estimation).
 struct IntegratorClock {
     double direct = 0.0;
-    double indirect = 0.0;
 };
 
 // The stratified numbers of sample s of a pixel: its jitter inside the pixel and its first

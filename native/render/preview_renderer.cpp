@@ -1,7 +1,6 @@
 #include "render/preview_renderer.h"
 
 #include <algorithm>
-#include <chrono>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -23,10 +22,6 @@ constexpr size_t kWavePixels = 256;
 // Pixels per parallel work unit (a run of whole tiles): a 640 x 360 frame gives a few hundred
 // units, plenty to balance the threads, and the per-unit setup stays negligible.
 constexpr uint64_t kChunkPixels = 1024;
-
-double seconds_between(TimePoint start, TimePoint end) {
-    return std::chrono::duration<double>(end - start).count();
-}
 
 // Seconds one work unit spent in each stage.
 struct StageSeconds {
@@ -221,7 +216,6 @@ PathTracerSettings path_settings_for(const PreviewSettings& settings) {
     path.russian_roulette_depth = settings.max_specular_bounces + 1;  // chains are short
     path.clamp_indirect = settings.clamp_indirect;
     path.world_sampling = settings.world_sampling;
-    path.tile_size = settings.tile_size;
     return path;
 }
 

@@ -2,13 +2,18 @@
 
 namespace shgi {
 
-bool is_valid_ray(const Ray& ray) {
-    if (!is_finite(ray.origin) || !is_finite(ray.direction)) return false;
-    if (ray.direction.x == 0.0f && ray.direction.y == 0.0f && ray.direction.z == 0.0f) return false;
+const char* ray_problem(const Ray& ray) {
+    if (!is_finite(ray.origin)) return "origin is not finite";
+    if (!is_finite(ray.direction)) return "direction is not finite";
+    if (ray.direction.x == 0.0f && ray.direction.y == 0.0f && ray.direction.z == 0.0f)
+        return "direction is zero";
     // tmax may be +inf (an unbounded ray) but never NaN; tmin must be finite.
-    if (!std::isfinite(ray.tmin) || ray.tmin < 0.0f) return false;
-    if (std::isnan(ray.tmax) || ray.tmax < ray.tmin) return false;
-    return true;
+    if (!std::isfinite(ray.tmin) || ray.tmin < 0.0f) return "tmin must be finite and >= 0";
+    if (std::isnan(ray.tmax)) return "tmax is NaN";
+    if (ray.tmax < ray.tmin) return "tmax is less than tmin";
+    return nullptr;
 }
+
+bool is_valid_ray(const Ray& ray) { return ray_problem(ray) == nullptr; }
 
 }  // namespace shgi

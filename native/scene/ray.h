@@ -25,6 +25,8 @@ struct Ray {
 // True if the ray may be traced: finite origin and direction, non-zero direction,
 // 0 <= tmin <= tmax (tmax may be +inf), tmin finite.
 bool is_valid_ray(const Ray& ray);
+// Why is_valid_ray rejects `ray` ("direction is zero", ...), or nullptr for a valid ray.
+const char* ray_problem(const Ray& ray);
 
 struct Hit {
     float t = kInfinity;

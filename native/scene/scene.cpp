@@ -38,20 +38,11 @@ std::string instance_label(const std::vector<Instance>& instances, size_t i) {
                         : format_message("instance ", i, " '", name, "'");
 }
 
-// Why is_valid_ray rejects `ray`, in the order is_valid_ray checks.
-const char* ray_problem(const Ray& ray) {
-    if (!is_finite(ray.origin)) return "origin is not finite";
-    if (!is_finite(ray.direction)) return "direction is not finite";
-    if (ray.direction == vec3(0.0f)) return "direction is zero";
-    if (!std::isfinite(ray.tmin) || ray.tmin < 0.0f) return "tmin must be finite and >= 0";
-    if (std::isnan(ray.tmax)) return "tmax is NaN";
-    if (ray.tmax < ray.tmin) return "tmax is less than tmin";
-    return "is invalid";
-}
-
-void check_ray(const Ray& ray, const std::string& name) {
-    if (is_valid_ray(ray)) return;
-    throw InvalidArgument(format_message(name, ": ", ray_problem(ray), " (origin ",
+// `name` is a const char* so that the per-ray call of a valid ray builds no string.
+void check_ray(const Ray& ray, const char* name) {
+    const char* problem = ray_problem(ray);
+    if (problem == nullptr) return;
+    throw InvalidArgument(format_message(name, ": ", problem, " (origin ",
                                          to_string(ray.origin), ", direction ",
                                          to_string(ray.direction), ", tmin ", ray.tmin,
                                          ", tmax ", ray.tmax, ")"));
@@ -61,7 +52,7 @@ void check_ray(const Ray& ray, const std::string& name) {
 // the chunking.
 void check_rays(const std::vector<Ray>& rays) {
     for (size_t i = 0; i < rays.size(); ++i)
-        if (!is_valid_ray(rays[i])) check_ray(rays[i], format_message("rays[", i, "]"));
+        if (!is_valid_ray(rays[i])) check_ray(rays[i], format_message("rays[", i, "]").c_str());
 }
 
 // det(M) * M^-T, whose columns are cross products of M's columns; times sign(det) so that a

@@ -1,7 +1,6 @@
 #include "scene/validation.h"
 
 #include <cmath>
-#include <sstream>
 
 #include "util/error.h"
 

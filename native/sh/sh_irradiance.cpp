@@ -4,7 +4,11 @@
 
 namespace shgi {
 
-BandFactors cosine_lobe_band_factors() { return zonal_band_factors(cosine_lobe_zh()); }
+BandFactors cosine_lobe_band_factors() {
+    // Constants (pi, 2 pi / 3, pi / 4, ...) that every irradiance lookup needs: computed once.
+    static const BandFactors factors = zonal_band_factors(cosine_lobe_zh());
+    return factors;
+}
 
 void sh_convolve_cosine(ShRgb& sh) { sh_scale_bands(sh, cosine_lobe_band_factors()); }
 

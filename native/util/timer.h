@@ -10,9 +10,11 @@ using TimePoint = std::chrono::steady_clock::time_point;
 
 inline TimePoint now() { return std::chrono::steady_clock::now(); }
 
-inline double seconds_since(TimePoint start) {
-    return std::chrono::duration<double>(now() - start).count();
+inline double seconds_between(TimePoint start, TimePoint end) {
+    return std::chrono::duration<double>(end - start).count();
 }
+
+inline double seconds_since(TimePoint start) { return seconds_between(start, now()); }
 
 // Adds the seconds from construction to destruction to *total (no-op when total is null, so a
 // hot path pays for the clock only when someone asked for timings).
