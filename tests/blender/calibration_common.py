@@ -46,13 +46,6 @@ COLOR_OF = {"DiffDir": "DiffCol", "DiffInd": "DiffCol", "GlossDir": "GlossCol",
             "GlossInd": "GlossCol", "TransDir": "TransCol", "TransInd": "TransCol"}
 
 
-def script_args():
-    """(results json path, [selected case names]) from the arguments after '--'."""
-    args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    out = args[2] if len(args) > 2 else os.path.join(tempfile.gettempdir(), "shgi_calib.json")
-    return out, args[3:]
-
-
 # --- scene building -------------------------------------------------------------------------
 
 def reset_scene(world_color=(0.0, 0.0, 0.0), world_strength=0.0):
@@ -335,7 +328,8 @@ def print_case(case, result):
 
 def run_cases(cases, marker):
     """Runs the selected cases {name: function(tmpdir, results)} and writes the JSON."""
-    out, selected = script_args()
+    out = setup.results_path("shgi_calib.json")
+    selected = setup.script_args()[3:]  # case names after the results path; none: every case
     shgi.set_max_threads(THREADS)
     results = {}
     start = time.perf_counter()

@@ -22,6 +22,7 @@ from types import SimpleNamespace
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import engine_common as common  # noqa: E402
+from blender_test_setup import results_path  # noqa: E402
 
 import bpy  # noqa: E402
 from shgi_blender.engine import final_render  # noqa: E402
@@ -126,7 +127,7 @@ def cancel_f12_with_sigint(tmpdir):
 
 
 def main():
-    out = common.results_path("shgi_engine_cancel.json")
+    out = results_path("shgi_engine_cancel.json")
     results = {}
     for method, expect_image in (("PHOTON_LATTICE", False), ("PATH_TRACE", True)):
         record, latency, stub = cancel_with_stub(method)

@@ -20,11 +20,12 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import engine_common as common  # noqa: E402
-from blender_test_setup import check_close  # noqa: E402
+from blender_test_setup import check_close, results_path  # noqa: E402
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 import shgi  # noqa: E402
+from image_metrics import psnr  # noqa: E402
 import scenes  # noqa: E402  (examples/scenes.py, on the path through engine_common)
 from mathutils import Matrix  # noqa: E402
 from recording_layout import draw_panel  # noqa: E402
@@ -105,7 +106,7 @@ def compare(reference, image):
     def lit_diffuse(passes):
         return common.mean_rgb(passes["DiffInd"] * passes["DiffCol"])
 
-    return {"psnr": common.psnr(reference["Combined"], image["Combined"]),
+    return {"psnr": psnr(reference["Combined"], image["Combined"]),
             "mean_ratio": common.mean_rgb(image["Combined"]) / common.mean_rgb(
                 reference["Combined"]),
             "diffind_ratio": lit_diffuse(image) / lit_diffuse(reference),
@@ -200,7 +201,7 @@ def print_table(results):
 
 
 def main():
-    out = common.results_path("shgi_engine_render.json")
+    out = results_path("shgi_engine_render.json")
     shgi.set_max_threads(common.calibration.THREADS)
     start = time.perf_counter()
     results = {}

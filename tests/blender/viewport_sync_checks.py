@@ -23,6 +23,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import engine_common as common  # noqa: E402
+from blender_test_setup import results_path  # noqa: E402
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
@@ -128,7 +129,7 @@ def main():
     bpy.app.handlers.depsgraph_update_post.remove(recorder)
     check_incremental_equals_full(recorder, scene)
     check_panels()
-    with open(common.results_path("shgi_viewport_sync.json"), "w") as handle:
+    with open(results_path("shgi_viewport_sync.json"), "w") as handle:
         json.dump(results, handle, indent=1)
     print("VIEWPORT_SYNC_OK")
 

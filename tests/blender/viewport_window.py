@@ -29,7 +29,6 @@ import json
 import math
 import os
 import sys
-import tempfile
 import time
 import traceback
 
@@ -39,13 +38,11 @@ import blender_test_setup as setup  # noqa: E402
 setup.add_import_paths()
 sys.path.insert(0, str(setup.REPO_ROOT / "examples"))
 
-import addon_utils  # noqa: E402
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 from bpy_extras import view3d_utils  # noqa: E402
 from mathutils import Matrix, Vector  # noqa: E402
 
-ADDON = "shgi_blender"
 STEP_SECONDS = 0.25
 CONVERGE_TIMEOUT_SECONDS = 120.0
 SCALE = 0.5                    # F12 at 128 x 128 pixels
@@ -64,21 +61,9 @@ OTHER_OVERLAYS = ("show_floor", "show_axis_x", "show_axis_y", "show_axis_z", "sh
 OVERLAY_CHANGE = 0.05          # display-value change that counts as a drawn overlay pixel
 OVERLAY_TIMEOUT_SECONDS = 30.0
 SESSION_END_TIMEOUT_SECONDS = 10.0
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+RESULTS_PATH = setup.results_path("shgi_viewport_window.json")  # screenshots go beside it
 
 RESULTS = {}
-
-
-def results_path():
-    args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    return args[2] if len(args) > 2 else os.path.join(tempfile.gettempdir(),
-                                                      "shgi_viewport_window.json")
-
-
-def enable_addon():
-    if ADDON not in bpy.context.preferences.addons:
-        if addon_utils.enable(ADDON, default_set=True, handle_error=None) is None:
-            raise AssertionError("the shgi_blender add-on did not enable")
 
 
 # --- the scene and the view -------------------------------------------------------------------
@@ -160,7 +145,7 @@ def wait_for_samples(samples, timeout, since=0):
 def screenshot(name):
     """The 3D view's region as float RGB (H, W, 3) display values, row 0 at the bottom."""
     window, _area, region, _space = view3d()
-    path = os.path.join(os.path.dirname(results_path()), f"viewport_{name}.png")
+    path = os.path.join(os.path.dirname(RESULTS_PATH), f"viewport_{name}.png")
     with bpy.context.temp_override(window=window):
         bpy.ops.screen.screenshot(filepath=path)
     image = bpy.data.images.load(path)
@@ -199,12 +184,6 @@ def block_means(image, blocks):
     cols = np.linspace(0, width, blocks + 1).astype(int)
     return np.array([[image[rows[i]:rows[i + 1], cols[j]:cols[j + 1]].reshape(-1, 3).mean(0)
                       for j in range(blocks)] for i in range(blocks)])
-
-
-def display(linear):
-    import shgi
-    return np.asarray(shgi.srgb_from_linear(np.ascontiguousarray(
-        np.clip(linear, 0.0, None), np.float32)), np.float64)
 
 
 # --- the steps ---------------------------------------------------------------------------------
@@ -246,7 +225,7 @@ def check_camera_alignment():
 def steps():
     """Every step in order (generators yield the seconds to wait before going on)."""
     start = time.perf_counter()
-    enable_addon()
+    setup.enable_addon()
     scene = build_scene()
     set_up_view()
     yield STEP_SECONDS
@@ -280,16 +259,18 @@ def converge(scene):
 
 def compare_with_f12(scene, before, box):
     """F12 of the same camera, displayed as the viewport displays it (Standard view, sRGB)."""
+    import image_metrics
     import shgi
 
     start = time.perf_counter()
     bpy.ops.render.render(write_still=False)
     RESULTS["f12_seconds"] = time.perf_counter() - start
-    path = os.path.join(os.path.dirname(results_path()), "viewport_f12.exr")
+    path = os.path.join(os.path.dirname(RESULTS_PATH), "viewport_f12.exr")
     bpy.data.images["Render Result"].save_render(path, scene=scene)
     layers = shgi.read_exr(path)
     combined = next(pixels for name, pixels in layers.items() if name.endswith("Combined"))
-    f12 = display(np.asarray(combined[::-1, :, :3], np.float64))  # bottom row first
+    # Bottom row first, as the screenshot; Standard view: sRGB, no exposure.
+    f12 = image_metrics.display(combined[::-1], 1.0)
     viewport_blocks = crop_blocks(before, box, BLOCKS)
     f12_blocks = block_means(f12, BLOCKS)
     RESULTS["f12_mean"] = float(f12_blocks.mean())
@@ -300,6 +281,8 @@ def compare_with_f12(scene, before, box):
 
 def move_light(before, box):
     """Moves the ceiling light to the right; luminance of the frame's thirds before/after."""
+    from image_metrics import LUMINANCE
+
     last_frame = session().worker.latest_frame().frame_id
     bpy.data.objects["ceiling_light"].location.x = LIGHT_X[1]
     frames, seconds = yield from wait_for_samples(SAMPLES, CONVERGE_TIMEOUT_SECONDS,
@@ -382,7 +365,7 @@ _steps = steps()
 
 
 def finish(code):
-    with open(results_path(), "w") as handle:
+    with open(RESULTS_PATH, "w") as handle:
         json.dump(RESULTS, handle, indent=1)
     print(json.dumps(RESULTS, indent=1))
     if code == 0:

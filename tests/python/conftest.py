@@ -1,4 +1,5 @@
-"""pytest setup: import shgi from the build tree (make test sets PYTHONPATH=build/python)."""
+"""pytest setup: import shgi from the build tree (make test sets PYTHONPATH=build/python), and
+the bpy-free modules of tests/blender (image_metrics) that tests share with the Blender scripts."""
 
 import os
 import pathlib
@@ -6,7 +7,7 @@ import sys
 
 import pytest
 
-REPO_ROOT = pathlib.Path(__file__).resolve().parents[2]
+from blender_support import BLENDER_SCRIPTS, REPO_ROOT
 
 
 def _build_python_dir():
@@ -22,6 +23,7 @@ def _build_python_dir():
 BUILD_PYTHON = _build_python_dir()
 if (BUILD_PYTHON / "shgi").is_dir():
     sys.path.insert(0, str(BUILD_PYTHON))
+sys.path.append(str(BLENDER_SCRIPTS))
 
 
 @pytest.fixture(scope="session")

@@ -10,8 +10,6 @@ path tracer; DiffInd x DiffCol mean within 10%; Cycles' pass names), the frozen 
 solution, Esc, broken scenes rendering with warnings, and a missing native module.
 """
 
-import json
-import subprocess
 import sys
 import time
 from types import SimpleNamespace
@@ -20,8 +18,8 @@ import numpy as np
 import pytest
 
 import shgi
-from blender_support import BLENDER, blender_env, run_blender
-from conftest import REPO_ROOT
+from blender_support import REPO_ROOT, needs_blender, run_script_once
+from scene_support import committed
 
 sys.path.insert(0, str(REPO_ROOT / "addon"))
 sys.path.insert(0, str(REPO_ROOT / "examples"))
@@ -30,11 +28,6 @@ import scenes  # noqa: E402
 from shgi_blender import native, presets, settings  # noqa: E402
 from shgi_blender.engine import passes, scene_checks  # noqa: E402
 from shgi_blender.engine.render_job import RenderJob, sample_rounds  # noqa: E402
-
-BLENDER_SCRIPTS = REPO_ROOT / "tests" / "blender"
-ADDON_DIR = REPO_ROOT / "addon"
-needs_blender = pytest.mark.skipif(BLENDER is None,
-                                   reason="Blender is not installed (make deps installs it)")
 
 # Issue 5's acceptance figures against Cycles.
 MIN_PSNR_DB = 28.0
@@ -47,11 +40,6 @@ CANCEL_LATENCY = 0.5
 def default_props(**overrides):
     """scene.shgi as a plain object with the property defaults."""
     return SimpleNamespace(**dict(settings.PROPERTY_DEFAULTS, method="PATH_TRACE", **overrides))
-
-
-def committed(builder):
-    builder.scene.commit()
-    return builder.scene
 
 
 # --- settings, presets, passes (no Blender) ----------------------------------------------------
@@ -231,7 +219,6 @@ def test_job_errors_are_kept_for_the_engine():
 
 # --- inside Blender ----------------------------------------------------------------------------
 
-_RUNS = {}
 # Scripts that break a render on purpose (Esc, an ERROR report): Blender then quits with exit
 # code 1 (G.is_break) however the script ended, so these run with --python-exit-code 2 and pass
 # with exit code 0 or 1 plus their success marker.
@@ -239,36 +226,14 @@ BREAKING_SCRIPTS = {"engine_no_native.py", "engine_cancel.py"}
 SCRIPT_FAILURE_EXIT_CODE = 2
 
 
-def run_script(script, build_python_dir, tmp_path_factory, marker):
-    """Runs a Blender script once per session; (stdout, results JSON or None)."""
-    if script not in _RUNS:
-        out = tmp_path_factory.mktemp("engine") / (script[:-3] + ".json")
-        start = time.perf_counter()
-        passing_codes = {0}
-        if script in BREAKING_SCRIPTS:
-            passing_codes = {0, 1}
-            result = subprocess.run(
-                [BLENDER, "-b", "--factory-startup", "--python-exit-code",
-                 str(SCRIPT_FAILURE_EXIT_CODE), "--python", str(BLENDER_SCRIPTS / script),
-                 "--", str(build_python_dir), str(ADDON_DIR), str(out)],
-                capture_output=True, text=True, timeout=600, env=blender_env())
-        else:
-            result = run_blender(BLENDER_SCRIPTS / script, build_python_dir, ADDON_DIR, out,
-                                 timeout=600)
-        seconds = time.perf_counter() - start
-        log = result.stdout[-6000:] + result.stderr[-3000:]
-        if result.returncode not in passing_codes or marker not in result.stdout:
-            _RUNS[script] = AssertionError(f"{script} failed (exit {result.returncode}, "
-                                           f"{seconds:.1f} s):\n{log}")
-        else:
-            print(f"\n{script}: {seconds:.1f} s")
-            print("\n".join(line for line in result.stdout.splitlines()
-                            if not line.startswith(("Fra:", "Saved:", " Time:"))))
-            _RUNS[script] = (result.stdout, json.loads(out.read_text()) if out.exists()
-                             else None)
-    if isinstance(_RUNS[script], Exception):
-        raise _RUNS[script]
-    return _RUNS[script]
+def run_engine_script(script, marker, build_python_dir, tmp_path_factory):
+    """run_script_once for the engine scripts; prints their output without Blender's progress."""
+    breaking = script in BREAKING_SCRIPTS
+    return run_script_once(
+        script, marker, build_python_dir, tmp_path_factory,
+        exit_code=SCRIPT_FAILURE_EXIT_CODE if breaking else 1,
+        passing_codes={0, 1} if breaking else {0},
+        shown_line=lambda line: not line.startswith(("Fra:", "Saved:", " Time:")))
 
 
 @needs_blender
@@ -278,7 +243,7 @@ def run_script(script, build_python_dir, tmp_path_factory, marker):
     ("engine_cancel.py", "ENGINE_CANCEL_OK"),
 ])
 def test_blender_engine_script(script, marker, build_python_dir, tmp_path_factory):
-    run_script(script, build_python_dir, tmp_path_factory, marker)
+    run_engine_script(script, marker, build_python_dir, tmp_path_factory)
 
 
 RENDER_CASES = [(scene, method) for scene in ("cornell_box", "sun_room")
@@ -289,8 +254,8 @@ RENDER_CASES = [(scene, method) for scene in ("cornell_box", "sun_room")
 @needs_blender
 @pytest.mark.parametrize("scene, method", RENDER_CASES)
 def test_f12_matches_cycles(scene, method, build_python_dir, tmp_path_factory):
-    _, results = run_script("engine_render_checks.py", build_python_dir, tmp_path_factory,
-                            "ENGINE_RENDER_OK")
+    results = run_engine_script("engine_render_checks.py", "ENGINE_RENDER_OK", build_python_dir,
+                                tmp_path_factory)
     row, cycles = results[scene][method], results[scene]["cycles"]
     assert not row["record"]["errors"] and not row["record"]["cancelled"], row["record"]
     assert row["passes"] == cycles["passes"], "SHGI's passes are not Cycles' passes"

@@ -4,14 +4,9 @@ Each script builds its scenes with bpy from scratch, checks the exported shgi.Sc
 success marker; a failed check raises, so Blender exits with 1 (--python-exit-code 1).
 """
 
-import pathlib
-
 import pytest
 
-from blender_support import BLENDER, run_blender
-
-BLENDER_SCRIPTS = pathlib.Path(__file__).resolve().parents[1] / "blender"
-ADDON_DIR = pathlib.Path(__file__).resolve().parents[2] / "addon"
+from blender_support import ADDON_DIR, BLENDER_SCRIPTS, needs_blender, run_blender
 
 SCRIPTS = {
     "addon_register.py": "ADDON_REGISTER_OK",
@@ -20,7 +15,7 @@ SCRIPTS = {
 }
 
 
-@pytest.mark.skipif(BLENDER is None, reason="Blender is not installed (make deps installs it)")
+@needs_blender
 @pytest.mark.parametrize("script", sorted(SCRIPTS))
 def test_blender_script(script, build_python_dir):
     result = run_blender(BLENDER_SCRIPTS / script, build_python_dir, ADDON_DIR, timeout=300)

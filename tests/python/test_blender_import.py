@@ -1,8 +1,6 @@
 """shgi imports and works inside Debian's Blender (its embedded Python 3.11)."""
 
-import pytest
-
-from blender_support import BLENDER, run_blender
+from blender_support import needs_blender, run_blender
 
 SCRIPT = """
 import sys
@@ -21,7 +19,7 @@ print("SHGI_IN_BLENDER", shgi.__version__, shgi.__file__)
 """
 
 
-@pytest.mark.skipif(BLENDER is None, reason="Blender is not installed (make deps installs it)")
+@needs_blender
 def test_shgi_imports_and_traces_inside_blender(build_python_dir, tmp_path):
     script = tmp_path / "import_shgi.py"
     script.write_text(SCRIPT.format(path=str(build_python_dir)))

@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 
 import shgi
-from blender_support import BLENDER, blender_env, run_blender
-from conftest import REPO_ROOT
+from blender_support import (ADDON_DIR, BLENDER, BLENDER_SCRIPTS, REPO_ROOT, blender_env,
+                             needs_blender, run_blender)
 
 sys.path.insert(0, str(REPO_ROOT / "addon"))
 sys.path.insert(0, str(REPO_ROOT / "examples"))
@@ -35,11 +35,7 @@ from shgi_blender.export import conversions  # noqa: E402
 from shgi_blender.export.scene_snapshot import (  # noqa: E402
     DIFFERENT, EDITABLE, SAME, InstanceRecord, MaterialTable, SceneSnapshot)
 
-BLENDER_SCRIPTS = REPO_ROOT / "tests" / "blender"
-ADDON_DIR = REPO_ROOT / "addon"
 XVFB_RUN = shutil.which("xvfb-run")
-needs_blender = pytest.mark.skipif(BLENDER is None,
-                                   reason="Blender is not installed (make deps installs it)")
 needs_xvfb = pytest.mark.skipif(XVFB_RUN is None or BLENDER is None,
                                 reason="xvfb-run or Blender is missing (make deps installs both)")
 

@@ -11,16 +11,11 @@ both renderers' standard errors of those means are below a quarter of the tolera
 the comparison is meaningful).
 """
 
-import json
 import math
-import pathlib
 
 import pytest
 
-from blender_support import BLENDER, run_blender
-
-BLENDER_SCRIPTS = pathlib.Path(__file__).resolve().parents[1] / "blender"
-ADDON_DIR = pathlib.Path(__file__).resolve().parents[2] / "addon"
+from blender_support import needs_blender, run_script_once
 
 SCRIPTS = {
     "calibration_lights.py": ("CALIBRATION_LIGHTS_DONE", [
@@ -35,31 +30,13 @@ CASES = [(script, case) for script, (_, cases) in SCRIPTS.items() for case in ca
 
 
 def _param(script, case):
-    marks = [pytest.mark.skipif(BLENDER is None,
-                                reason="Blender is not installed (make deps installs it)")]
-    return pytest.param(script, case, marks=marks, id=f"{script[:-3]}-{case}")
-
-
-_RESULTS = {}
+    return pytest.param(script, case, marks=[needs_blender], id=f"{script[:-3]}-{case}")
 
 
 def _script_results(script, build_python_dir, tmp_path_factory):
     """Runs a calibration script once per session and returns its per-case results."""
-    if script not in _RESULTS:
-        out = tmp_path_factory.mktemp("calibration") / (script[:-3] + ".json")
-        result = run_blender(BLENDER_SCRIPTS / script, build_python_dir, ADDON_DIR, out,
-                             timeout=600)
-        log = result.stdout[-6000:] + result.stderr[-3000:]
-        if result.returncode != 0 or SCRIPTS[script][0] not in result.stdout:
-            _RESULTS[script] = RuntimeError(f"{script} failed (exit {result.returncode}):\n{log}")
-        else:
-            table = "\n".join(line for line in result.stdout.splitlines()
-                              if line.startswith(("==", "   ")))
-            print(table)
-            _RESULTS[script] = json.loads(out.read_text())
-    if isinstance(_RESULTS[script], Exception):
-        raise _RESULTS[script]
-    return _RESULTS[script]
+    return run_script_once(script, SCRIPTS[script][0], build_python_dir, tmp_path_factory,
+                           shown_line=lambda line: line.startswith(("==", "   ")))
 
 
 @pytest.mark.parametrize("script, case", [_param(s, c) for s, c in CASES])

@@ -6,7 +6,7 @@ import numpy as np
 
 import shgi
 
-from conftest import REPO_ROOT
+from blender_support import REPO_ROOT
 
 sys.path.insert(0, str(REPO_ROOT / "examples"))
 import demo  # noqa: E402  (examples/ is not a package)

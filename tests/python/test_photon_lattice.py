@@ -12,31 +12,15 @@ import numpy as np
 import pytest
 
 import shgi
-
-from conftest import REPO_ROOT
+from blender_support import REPO_ROOT
+from image_metrics import psnr  # tests/blender/image_metrics.py: the figure Blender tests use
+from scene_support import committed
 
 sys.path.insert(0, str(REPO_ROOT / "examples"))
 import scenes  # noqa: E402  (examples/ is not a package)
 
 SCALE = 0.25            # 64 x 64 (Cornell box) and 64 x 48 (sun room) pixels
 REFERENCE_SAMPLES = 2048
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
-
-
-def committed(builder):
-    builder.scene.commit()
-    return builder.scene
-
-
-def display(image, exposure):
-    return np.clip(shgi.srgb_from_linear(np.clip(image[..., :3] * exposure, 0.0, None)), 0.0, 1.0)
-
-
-def psnr(reference, image):
-    """PSNR (dB) of sRGB images after the reference's auto-exposure (mean luminance -> 0.18)."""
-    exposure = 0.18 / float((reference[..., :3] @ LUMINANCE).mean())
-    mse = float(np.mean((display(reference, exposure) - display(image, exposure)) ** 2))
-    return 10.0 * np.log10(1.0 / mse)
 
 
 _AGREEMENT = {}
