@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "support/expect_error.h"
 #include "support/test_folder.h"
 #include "util/error.h"
 
@@ -24,6 +25,8 @@ namespace fs = std::filesystem;
 
 // Half keeps 11 significant bits: round to nearest is within 2^-11 relative (normal range).
 constexpr float kHalfRelativeError = 1.0f / 2048.0f;
+
+using testing::expect_error;
 
 
 std::vector<std::string> folder_entries(const fs::path& folder) {
@@ -201,20 +204,6 @@ TEST(ExrImage, ChannelNamesSplitAtTheLastDot) {
     EXPECT_EQ(channel_suffix("R"), "R");
     EXPECT_EQ(channel_name("", "Z"), "Z");
     EXPECT_EQ(channel_name("Depth", "Z"), "Depth.Z");
-}
-
-// Runs `action`, expects an exception of type E whose message contains every part.
-template <typename E, typename Action>
-void expect_error(Action action, const std::vector<std::string>& parts) {
-    try {
-        action();
-        ADD_FAILURE() << "expected an exception mentioning " << parts.front();
-    } catch (const E& error) {
-        for (const std::string& part : parts) {
-            EXPECT_NE(std::string(error.what()).find(part), std::string::npos)
-                << "message \"" << error.what() << "\" does not mention \"" << part << "\"";
-        }
-    }
 }
 
 TEST(ExrImage, InvalidImagesAreRejectedWithTheReason) {

@@ -8,14 +8,14 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
 #include <string>
 #include <vector>
 
-#include "util/error.h"
-#include "util/log.h"
+#include "support/expect_error.h"
 #include "support/log_capture.h"
 #include "support/test_folder.h"
+#include "util/error.h"
+#include "util/log.h"
 
 namespace shgi {
 namespace {
@@ -28,17 +28,8 @@ constexpr const char* kPng2x2 =
     "iVBORw0KGgoAAAANSUhEUgAAAAIAAAACCAYAAABytg0kAAAAFElEQVR4nGP4z8DwHwyB9P8GIAAARNIH+zqrED4AAAA"
     "ASUVORK5CYII=";
 
-// Files go to this test's own folder: ctest runs tests of one binary in parallel processes.
-std::string tmp_path(const std::string& name) {
-    static const std::string folder = testing::test_folder("gltf").string();
-    return folder + "/" + name;
-}
-
-void write_file(const std::string& path, const std::string& contents) {
-    std::ofstream file(path, std::ios::binary);
-    file << contents;
-    ASSERT_TRUE(file.good()) << path;
-}
+using testing::test_file_path;
+using testing::write_file;
 
 std::string base64(const std::vector<uint8_t>& bytes) {
     static const char* alphabet =
@@ -153,22 +144,15 @@ void expect_near(const vec3& actual, const vec3& expected, float tolerance = kTo
 
 // Loads `json` from a file and expects an IoError whose message contains the path and `needle`.
 void expect_io_error(const std::string& name, const std::string& json, const std::string& needle) {
-    const std::string path = tmp_path(name);
+    const std::string path = test_file_path("gltf", name);
     write_file(path, json);
-    try {
-        load_gltf(path);
-        ADD_FAILURE() << name << ": expected IoError";
-    } catch (const IoError& error) {
-        const std::string message = error.what();
-        EXPECT_NE(message.find(path), std::string::npos) << message;
-        EXPECT_NE(message.find(needle), std::string::npos) << message;
-    }
+    testing::expect_error<IoError>([&] { load_gltf(path); }, {path, needle});
 }
 
 class GltfLoaderTest : public ::testing::Test {
   protected:
     void SetUp() override {
-        path_ = tmp_path("gltf_loader_scene.gltf");
+        path_ = test_file_path("gltf", "gltf_loader_scene.gltf");
         write_file(path_, scene_json());
         scene_ = load_gltf(path_);
     }
@@ -313,7 +297,7 @@ TEST(GltfLoader, LightingModesFollowBlendersImporter) {
 }
 
 TEST(GltfLoader, OptionsSkipLightsCameraAndTextures) {
-    const std::string path = tmp_path("gltf_loader_options.gltf");
+    const std::string path = test_file_path("gltf", "gltf_loader_options.gltf");
     write_file(path, scene_json());
     GltfLoadOptions options;
     options.import_lights = false;
@@ -331,7 +315,7 @@ TEST(GltfLoader, OptionsSkipLightsCameraAndTextures) {
 
 TEST(GltfLoader, UndecodableImageCostsOnlyTheTexture) {
     LogCapture log;
-    const std::string path = tmp_path("gltf_loader_bad_image.gltf");
+    const std::string path = test_file_path("gltf", "gltf_loader_bad_image.gltf");
     write_file(path, scene_json(3, base64({'n', 'o', 't', ' ', 'a', ' ', 'p', 'n', 'g'})));
     const Scene scene = load_gltf(path);
     EXPECT_TRUE(scene.textures().empty());
@@ -358,7 +342,7 @@ TEST(GltfLoader, BinaryGlbWithByteIndices) {
     glb.insert(glb.end(), json.begin(), json.end());
     append<uint32_t>(glb, {uint32_t(bin.size()), 0x004E4942u});   // "BIN\0"
     glb.insert(glb.end(), bin.begin(), bin.end());
-    const std::string path = tmp_path("gltf_loader_triangle.glb");
+    const std::string path = test_file_path("gltf", "gltf_loader_triangle.glb");
     write_file(path, std::string(glb.begin(), glb.end()));
 
     const Scene scene = load_gltf(path);
@@ -369,13 +353,8 @@ TEST(GltfLoader, BinaryGlbWithByteIndices) {
 }
 
 TEST(GltfLoaderErrors, MissingFileNamesThePath) {
-    const std::string path = tmp_path("no_such_file.gltf");
-    try {
-        load_gltf(path);
-        ADD_FAILURE() << "expected IoError";
-    } catch (const IoError& error) {
-        EXPECT_NE(std::string(error.what()).find(path), std::string::npos) << error.what();
-    }
+    const std::string path = test_file_path("gltf", "no_such_file.gltf");
+    testing::expect_error<IoError>([&] { load_gltf(path); }, {path});
 }
 
 TEST(GltfLoaderErrors, MalformedJson) {
@@ -425,7 +404,7 @@ TEST(GltfLoaderErrors, DeepHierarchyDoesNotOverflowTheStack) {
                                 R"("scenes": [{"nodes": [6]}],)");
     json = replaced(json, R"({"name": "Cam", "camera": 0, "translation": [0, 1, 5]})",
                     R"({"name": "Cam", "camera": 0, "translation": [0, 1, 5]},)" + nodes);
-    const std::string path = tmp_path("gltf_loader_deep.gltf");
+    const std::string path = test_file_path("gltf", "gltf_loader_deep.gltf");
     write_file(path, json);
     const Scene scene = load_gltf(path);
     ASSERT_EQ(scene.instances().size(), 1u);

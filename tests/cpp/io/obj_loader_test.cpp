@@ -5,30 +5,21 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <fstream>
 #include <string>
 
-#include "util/error.h"
-#include "util/log.h"
+#include "support/expect_error.h"
 #include "support/log_capture.h"
 #include "support/test_folder.h"
+#include "util/error.h"
+#include "util/log.h"
 
 namespace shgi {
 namespace {
 
 constexpr float kTolerance = 1e-6f;
 
-// Files go to this test's own folder: ctest runs tests of one binary in parallel processes.
-std::string tmp_path(const std::string& name) {
-    static const std::string folder = testing::test_folder("obj").string();
-    return folder + "/" + name;
-}
-
-void write_file(const std::string& path, const std::string& contents) {
-    std::ofstream file(path, std::ios::binary);
-    file << contents;
-    ASSERT_TRUE(file.good()) << path;
-}
+using testing::test_file_path;
+using testing::write_file;
 
 // A floor quad (OBJ y = 1 plane, facing +Y) and an emissive triangle, Y-up as OBJ files are.
 constexpr const char* kObj = R"(# test scene
@@ -81,9 +72,9 @@ using testing::LogCapture;
 class ObjLoaderTest : public ::testing::Test {
   protected:
     void SetUp() override {
-        write_file(tmp_path("obj_loader_two.mtl"), kMtl);
-        write_file(tmp_path("obj_loader_two.obj"), kObj);
-        scene_ = load_obj(tmp_path("obj_loader_two.obj"));
+        write_file(test_file_path("obj", "obj_loader_two.mtl"), kMtl);
+        write_file(test_file_path("obj", "obj_loader_two.obj"), kObj);
+        scene_ = load_obj(test_file_path("obj", "obj_loader_two.obj"));
     }
     Scene scene_;
 };
@@ -155,10 +146,10 @@ TEST(ObjLoader, RoughnessFromSpecularExponent) {
 }
 
 TEST(ObjLoader, ZUpOptionKeepsCoordinates) {
-    write_file(tmp_path("obj_loader_zup.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    write_file(test_file_path("obj", "obj_loader_zup.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     ObjLoadOptions options;
     options.up_axis = ObjUpAxis::Z;
-    const Scene scene = load_obj(tmp_path("obj_loader_zup.obj"), options);
+    const Scene scene = load_obj(test_file_path("obj", "obj_loader_zup.obj"), options);
     ASSERT_EQ(scene.meshes().size(), 1u);
     expect_near(scene.meshes()[0].positions[2], vec3(0, 1, 0));
     EXPECT_EQ(scene.materials().size(), 1u);  // default material for faces without usemtl
@@ -166,34 +157,23 @@ TEST(ObjLoader, ZUpOptionKeepsCoordinates) {
 
 TEST(ObjLoader, MissingMtlIsAWarning) {
     LogCapture log;
-    write_file(tmp_path("obj_loader_no_mtl.obj"),
+    write_file(test_file_path("obj", "obj_loader_no_mtl.obj"),
                "mtllib obj_loader_absent.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl X\nf 1 2 3\n");
-    const Scene scene = load_obj(tmp_path("obj_loader_no_mtl.obj"));
+    const Scene scene = load_obj(test_file_path("obj", "obj_loader_no_mtl.obj"));
     EXPECT_EQ(scene.meshes().size(), 1u);
     EXPECT_EQ(scene.materials().size(), 1u);
     EXPECT_NE(log.warnings.find("obj_loader_absent.mtl"), std::string::npos) << log.warnings;
 }
 
 void expect_io_error(const std::string& name, const std::string& text, const std::string& needle) {
-    const std::string path = tmp_path(name);
+    const std::string path = test_file_path("obj", name);
     write_file(path, text);
-    try {
-        load_obj(path);
-        ADD_FAILURE() << name << ": expected IoError";
-    } catch (const IoError& error) {
-        const std::string message = error.what();
-        EXPECT_NE(message.find(path), std::string::npos) << message;
-        EXPECT_NE(message.find(needle), std::string::npos) << message;
-    }
+    testing::expect_error<IoError>([&] { load_obj(path); }, {path, needle});
 }
 
 TEST(ObjLoaderErrors, MissingFile) {
-    try {
-        load_obj(tmp_path("no_such_file.obj"));
-        ADD_FAILURE() << "expected IoError";
-    } catch (const IoError& error) {
-        EXPECT_NE(std::string(error.what()).find("no_such_file.obj"), std::string::npos);
-    }
+    testing::expect_error<IoError>([] { load_obj(test_file_path("obj", "no_such_file.obj")); },
+                                   {"no_such_file.obj"});
 }
 
 TEST(ObjLoaderErrors, VertexIndexOutOfRangeIsAnErrorNotACrash) {

@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -30,16 +31,15 @@
 
 #include "lattice/lattice_test_scenes.h"
 #include "render/render_test_scenes.h"
+#include "support/expect_error.h"
+#include "support/noise_stats.h"
 #include "util/error.h"
 
 namespace shgi {
 namespace {
 
-// Five standard errors: a false failure has probability ~6e-7 per comparison.
-constexpr double kSigmas = 5.0;
-// Relative bias the grazing floor of the density estimate may leave on a uniform field
-// (sh_lattice.h; the injection tests show it is at most f / 4 of pi L).
-constexpr double kFloorBias = kMinProjectedFraction / 4.0;
+using test::kFloorBias;
+using testing::BatchStats;
 
 constexpr float kFurnaceAlbedo = 0.5f;
 constexpr int kFurnaceBounces = 4;
@@ -47,19 +47,6 @@ const vec3 kFurnaceEmission(1.0f, 0.5f, 0.25f);  // Le, W m^-2 sr^-1
 constexpr int kFurnaceResolution = 8;            // cells of 0.25 m
 constexpr uint64_t kFurnacePhotons = 100000;
 constexpr int kFurnaceSolves = 6;                // independent seeds for the standard error
-
-// Closed box [-1, 1]^3, inner faces emitting `emission` with Lambert albedo `albedo`.
-Scene emissive_furnace(float albedo, const vec3& emission) {
-    Scene scene;
-    Material material = test::lambert(albedo);
-    material.emission_color = emission;
-    material.emission_strength = 1.0f;
-    scene.add_material(material);
-    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
-    scene.set_world(test::black_world());
-    scene.commit();
-    return scene;
-}
 
 // Le (a + ... + a^M): the incident radiance of light that scattered 1..M times.
 vec3 furnace_indirect_radiance(float albedo, const vec3& emission, int max_bounces) {
@@ -136,26 +123,10 @@ vec3 mean_irradiance(const IndirectField& field, const std::vector<Probe>& probe
     return vec3(sum / double(probes.size()));
 }
 
-// Mean and standard error of the mean of independent estimates, per channel.
-struct ChannelStats {
-    glm::dvec3 sum{0.0}, sum2{0.0};
-    int count = 0;
-
-    void add(const vec3& value) {
-        sum += glm::dvec3(value);
-        sum2 += glm::dvec3(value) * glm::dvec3(value);
-        ++count;
-    }
-    double mean(int c) const { return sum[c] / count; }
-    double standard_error(int c) const {
-        const double m = mean(c);
-        return std::sqrt(std::max(0.0, sum2[c] / count - m * m) / (count - 1));
-    }
-};
-
-// The probe-averaged irradiance of kFurnaceSolves independently seeded one-pass lattices.
-ChannelStats furnace_irradiance(const Scene& scene, const std::vector<Probe>& probes) {
-    ChannelStats stats;
+// The probe-averaged irradiance of kFurnaceSolves independently seeded one-pass lattices, per
+// channel.
+BatchStats furnace_irradiance(const Scene& scene, const std::vector<Probe>& probes) {
+    BatchStats stats;
     for (int solve = 0; solve < kFurnaceSolves; ++solve) {
         PhotonLattice lattice(scene, furnace_settings(uint64_t(solve) + 1));
         lattice.solve();
@@ -164,32 +135,33 @@ ChannelStats furnace_irradiance(const Scene& scene, const std::vector<Probe>& pr
     return stats;
 }
 
-void expect_furnace_irradiance(const ChannelStats& stats, const char* where) {
+void expect_furnace_irradiance(const BatchStats& stats, const char* where) {
     const vec3 expected =
         kPi * furnace_indirect_radiance(kFurnaceAlbedo, kFurnaceEmission, kFurnaceBounces);
     for (int c = 0; c < 3; ++c) {
-        const double tolerance = kSigmas * stats.standard_error(c) + kFloorBias * expected[c];
-        EXPECT_NEAR(stats.mean(c), expected[c], tolerance)
-            << where << ", channel " << c << ": measured/expected = "
-            << stats.mean(c) / expected[c] << ", standard error " << stats.standard_error(c);
+        testing::expect_within_noise(stats.mean(c), stats.standard_error(c), expected[c],
+                                     kFloorBias * expected[c],
+                                     std::string(where) + ", channel " + std::to_string(c) +
+                                         ": measured/expected = " +
+                                         std::to_string(stats.mean(c) / expected[c]));
     }
 }
 
 TEST(PhotonLattice, FurnaceIrradianceAtFaceCentres) {
-    const Scene scene = emissive_furnace(kFurnaceAlbedo, kFurnaceEmission);
+    const Scene scene = test::emissive_furnace(kFurnaceAlbedo, kFurnaceEmission, 1.0f);
     expect_furnace_irradiance(furnace_irradiance(scene, face_centre_probes()), "face centres");
 }
 
 // The furnace's indirect light is uniform, so points next to an edge, whose lattice cells also
 // hold the perpendicular wall, must receive pi L_ind as well.
 TEST(PhotonLattice, FurnaceIrradianceNextToEdges) {
-    const Scene scene = emissive_furnace(kFurnaceAlbedo, kFurnaceEmission);
+    const Scene scene = test::emissive_furnace(kFurnaceAlbedo, kFurnaceEmission, 1.0f);
     expect_furnace_irradiance(furnace_irradiance(scene, edge_probes()), "next to edges");
 }
 
 // Likewise at the corners, where three walls share a cell.
 TEST(PhotonLattice, FurnaceIrradianceNextToCorners) {
-    const Scene scene = emissive_furnace(kFurnaceAlbedo, kFurnaceEmission);
+    const Scene scene = test::emissive_furnace(kFurnaceAlbedo, kFurnaceEmission, 1.0f);
     expect_furnace_irradiance(furnace_irradiance(scene, corner_probes()), "next to corners");
 }
 
@@ -199,21 +171,12 @@ TEST(PhotonLattice, FurnaceIrradianceNextToCorners) {
 Scene room_with_mirror_sphere() {
     Scene scene;
     scene.add_material(test::lambert(0.7f));
-    Material mirror;
-    mirror.name = "mirror";
-    mirror.base_color = vec3(1.0f);
-    mirror.metallic = 1.0f;
-    mirror.roughness = 0.0f;
-    scene.add_material(mirror);
+    scene.add_material(test::mirror(1.0f));
     scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
     Mesh sphere = test::uv_sphere(0.3f, 8, 16);
     sphere.material_indices.assign(sphere.triangles.size(), 1);
     scene.add_instance(scene.add_mesh(sphere), glm::translate(mat4(1.0f), vec3(0.2f, 0.0f, -0.5f)));
-    Light light;
-    light.type = LightType::Point;
-    light.power = 100.0f;
-    light.world_from_light = glm::translate(mat4(1.0f), vec3(-0.1f, 0.2f, 0.6f));
-    scene.add_light(light);
+    scene.add_light(test::point_light(vec3(-0.1f, 0.2f, 0.6f), 100.0f));
     scene.set_world(test::black_world());
     scene.commit();
     return scene;
@@ -230,92 +193,69 @@ PhotonLatticeSettings small_settings() {
 
 TEST(PhotonLattice, RejectsInvalidSettingsNamingTheField) {
     const Scene scene = room_with_mirror_sphere();
-    const auto expect_rejected = [&](const PhotonLatticeSettings& settings,
-                                     const std::string& name) {
-        test::expect_invalid_argument([&] { validate_photon_lattice_settings(settings); }, name);
-        test::expect_invalid_argument([&] { PhotonLattice lattice(scene, settings); }, name);
+    // Each edit of small_settings() must be rejected by the validator and by the constructor, with
+    // a message containing `expected`.
+    const struct {
+        std::function<void(PhotonLatticeSettings&)> edit;
+        const char* expected;
+    } cases[] = {
+        {[](PhotonLatticeSettings& s) { s.order = 3; }, "PhotonLatticeSettings.order is 3"},
+        {[](PhotonLatticeSettings& s) { s.order = 0; }, "PhotonLatticeSettings.order is 0"},
+        {[](PhotonLatticeSettings& s) { s.resolution = 0; },
+         "PhotonLatticeSettings.resolution is 0"},
+        {[](PhotonLatticeSettings& s) { s.resolution = 1025; },
+         "PhotonLatticeSettings.resolution is 1025"},
+        {[](PhotonLatticeSettings& s) { s.blur_passes = -1; }, "PhotonLatticeSettings.blur_passes"},
+        {[](PhotonLatticeSettings& s) { s.caustic_resolution = 0; },
+         "PhotonLatticeSettings.caustic_resolution"},
+        {[](PhotonLatticeSettings& s) { s.caustic_order = 3; },
+         "PhotonLatticeSettings.caustic_order"},
+        {[](PhotonLatticeSettings& s) { s.caustic_blur_passes = 65; },
+         "PhotonLatticeSettings.caustic_blur_passes"},
+        {[](PhotonLatticeSettings& s) { s.caustic_neighbours = 0; },
+         "PhotonLatticeSettings.caustic_neighbours"},
+        {[](PhotonLatticeSettings& s) { s.caustic_radius = -1.0f; },
+         "PhotonLatticeSettings.caustic_radius"},
+        {[](PhotonLatticeSettings& s) { s.caustic_radius = std::nanf(""); },
+         "PhotonLatticeSettings.caustic_radius"},
+        {[](PhotonLatticeSettings& s) { s.normal_offset = 2.5f; },
+         "PhotonLatticeSettings.normal_offset"},
+        {[](PhotonLatticeSettings& s) {
+             s.use_bounds = true;
+             s.bounds_min = vec3(0.0f);
+             s.bounds_max = vec3(1.0f, 0.0f, 1.0f);  // empty along y
+         },
+         "PhotonLatticeSettings.bounds_min/bounds_max"},
+        // Fields forwarded to the photon tracer: the caller sets PhotonLatticeSettings (in C++,
+        // Python and the add-on), so the message names them under that name too (STYLE.md,
+        // habit 6: errors name the bad input).
+        {[](PhotonLatticeSettings& s) { s.photons = 0; }, "PhotonLatticeSettings.photons"},
+        {[](PhotonLatticeSettings& s) { s.max_bounces = 0; }, "PhotonLatticeSettings.max_bounces"},
+        {[](PhotonLatticeSettings& s) { s.specular_roughness = 1.5f; },
+         "PhotonLatticeSettings.specular_roughness"},
+        {[](PhotonLatticeSettings& s) { s.specular_roughness = -0.5f; },
+         "PhotonLatticeSettings.specular_roughness"},
     };
-    PhotonLatticeSettings s = small_settings();
-    s.order = 3;
-    expect_rejected(s, "PhotonLatticeSettings.order is 3");
-    s = small_settings();
-    s.order = 0;
-    expect_rejected(s, "PhotonLatticeSettings.order is 0");
-    s = small_settings();
-    s.resolution = 0;
-    expect_rejected(s, "PhotonLatticeSettings.resolution is 0");
-    s = small_settings();
-    s.resolution = 1025;
-    expect_rejected(s, "PhotonLatticeSettings.resolution is 1025");
-    s = small_settings();
-    s.blur_passes = -1;
-    expect_rejected(s, "PhotonLatticeSettings.blur_passes");
-    s = small_settings();
-    s.caustic_resolution = 0;
-    expect_rejected(s, "PhotonLatticeSettings.caustic_resolution");
-    s = small_settings();
-    s.caustic_order = 3;
-    expect_rejected(s, "PhotonLatticeSettings.caustic_order");
-    s = small_settings();
-    s.caustic_blur_passes = 65;
-    expect_rejected(s, "PhotonLatticeSettings.caustic_blur_passes");
-    s = small_settings();
-    s.caustic_neighbours = 0;
-    expect_rejected(s, "PhotonLatticeSettings.caustic_neighbours");
-    s = small_settings();
-    s.caustic_radius = -1.0f;
-    expect_rejected(s, "PhotonLatticeSettings.caustic_radius");
-    s = small_settings();
-    s.caustic_radius = std::nanf("");
-    expect_rejected(s, "PhotonLatticeSettings.caustic_radius");
-    s = small_settings();
-    s.normal_offset = 2.5f;
-    expect_rejected(s, "PhotonLatticeSettings.normal_offset");
-    s = small_settings();
-    s.use_bounds = true;
-    s.bounds_min = vec3(0.0f);
-    s.bounds_max = vec3(1.0f, 0.0f, 1.0f);  // empty along y
-    expect_rejected(s, "PhotonLatticeSettings.bounds_min/bounds_max");
-    // Fields forwarded to the photon tracer: the message names the field.
-    s = small_settings();
-    s.photons = 0;
-    expect_rejected(s, "photons");
-    s = small_settings();
-    s.max_bounces = 0;
-    expect_rejected(s, "max_bounces");
-    s = small_settings();
-    s.specular_roughness = 1.5f;
-    expect_rejected(s, "specular_roughness");
-}
-
-// The caller sets PhotonLatticeSettings (in C++, Python and the add-on), so the fields the
-// solver forwards to the photon tracer must be reported under that name too (STYLE.md, habit 6:
-// errors name the bad input).
-TEST(PhotonLattice, ForwardedTracerSettingsAreNamedAsPhotonLatticeSettings) {
-    PhotonLatticeSettings s = small_settings();
-    s.photons = 0;
-    test::expect_invalid_argument([&] { validate_photon_lattice_settings(s); },
-                                  "PhotonLatticeSettings.photons");
-    s = small_settings();
-    s.max_bounces = 0;
-    test::expect_invalid_argument([&] { validate_photon_lattice_settings(s); },
-                                  "PhotonLatticeSettings.max_bounces");
-    s = small_settings();
-    s.specular_roughness = -0.5f;
-    test::expect_invalid_argument([&] { validate_photon_lattice_settings(s); },
-                                  "PhotonLatticeSettings.specular_roughness");
+    for (const auto& c : cases) {
+        PhotonLatticeSettings settings = small_settings();
+        c.edit(settings);
+        testing::expect_invalid_argument([&] { validate_photon_lattice_settings(settings); },
+                                         c.expected);
+        testing::expect_invalid_argument([&] { PhotonLattice lattice(scene, settings); },
+                                         c.expected);
+    }
 }
 
 TEST(PhotonLattice, RefusesEmptyAndUncommittedScenes) {
     Scene empty;
     empty.commit();
-    test::expect_invalid_argument([&] { PhotonLattice lattice(empty, small_settings()); },
-                                  "no geometry");
+    testing::expect_invalid_argument([&] { PhotonLattice lattice(empty, small_settings()); },
+                                     "no geometry");
     Scene uncommitted;
     uncommitted.add_material(test::lambert(0.5f));
     uncommitted.add_instance(uncommitted.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
-    test::expect_invalid_argument([&] { PhotonLattice lattice(uncommitted, small_settings()); },
-                                  "commit");
+    testing::expect_invalid_argument(
+        [&] { PhotonLattice lattice(uncommitted, small_settings()); }, "commit");
 }
 
 // --- passes, determinism, reset, edits, cancel ---
@@ -394,7 +334,7 @@ TEST(PhotonLattice, InteractivePassesHoldTheAverageOfAllPasses) {
 // irradiance agrees within the noise (estimated from the spread of the six walls' means), and
 // both agree with pi L_ind.
 TEST(PhotonLattice, TwoPassesOfNPhotonsMatchOnePassOf2N) {
-    const Scene scene = emissive_furnace(kFurnaceAlbedo, kFurnaceEmission);
+    const Scene scene = test::emissive_furnace(kFurnaceAlbedo, kFurnaceEmission, 1.0f);
     const std::vector<Probe> probes = face_centre_probes();
     const size_t per_wall = probes.size() / 6;
     const auto wall_means = [&](const PhotonLattice& lattice) {
@@ -422,12 +362,13 @@ TEST(PhotonLattice, TwoPassesOfNPhotonsMatchOnePassOf2N) {
     for (int w = 0; w < 6; ++w) sum_d2 += std::pow((a[w] - b[w]) - (mean_a - mean_b), 2);
     const double standard_error = std::sqrt(sum_d2 / 5.0 / 6.0);
     EXPECT_NE(mean_a, mean_b);
-    EXPECT_NEAR(mean_a, mean_b, kSigmas * standard_error)
-        << "two passes " << mean_a << ", one pass of 2N " << mean_b;
+    testing::expect_within_noise(mean_a, standard_error, mean_b, 0.0,
+                                 "two passes vs one pass of 2N");
     const double expected =
         kPi * furnace_indirect_radiance(kFurnaceAlbedo, kFurnaceEmission, kFurnaceBounces).x;
     for (double measured : {mean_a, mean_b})
-        EXPECT_NEAR(measured, expected, kSigmas * standard_error + kFloorBias * expected);
+        testing::expect_within_noise(measured, standard_error, expected, kFloorBias * expected,
+                                     "mean face-centre irradiance");
 }
 
 TEST(PhotonLattice, ResetForgetsEveryPass) {
@@ -456,9 +397,9 @@ TEST(PhotonLattice, SolveAfterASceneEditThrowsUntilReset) {
     Light extra;
     extra.world_from_light = glm::translate(mat4(1.0f), vec3(0.5f, 0.5f, 0.5f));
     scene.add_light(extra);  // un-commits the scene
-    test::expect_invalid_argument([&] { lattice.solve(); }, "edited");
+    testing::expect_invalid_argument([&] { lattice.solve(); }, "edited");
     scene.commit();
-    test::expect_invalid_argument([&] { lattice.solve(); }, "call reset()");
+    testing::expect_invalid_argument([&] { lattice.solve(); }, "call reset()");
     EXPECT_EQ(lattice.passes(), 1u);
     EXPECT_EQ(global_coefficients(lattice), before);
     lattice.reset();
@@ -498,7 +439,7 @@ TEST(PhotonLattice, CancelKeepsThePreviousSolution) {
 // Without specular surfaces there are no caustic photons: Off, Lattice and PhotonMap give the
 // same global lattice and the same irradiance everywhere, with no extra irradiance.
 TEST(PhotonLattice, CausticModesAgreeWithoutSpecularSurfaces) {
-    const Scene scene = emissive_furnace(kFurnaceAlbedo, kFurnaceEmission);
+    const Scene scene = test::emissive_furnace(kFurnaceAlbedo, kFurnaceEmission, 1.0f);
     std::vector<std::unique_ptr<PhotonLattice>> lattices;
     for (CausticMode mode : {CausticMode::Off, CausticMode::Lattice, CausticMode::PhotonMap}) {
         PhotonLatticeSettings settings = furnace_settings(5);

@@ -26,49 +26,28 @@
 #include "render/render_test_scenes.h"
 #include "sh/sh_irradiance.h"
 #include "sh/sphere_quadrature.h"
+#include "support/noise_stats.h"
 
 namespace shgi {
 namespace {
 
-// Five standard errors: a false failure has probability ~6e-7 per comparison.
-constexpr double kSigmas = 5.0;
+using test::kFloorBias;
+using testing::BatchStats;
+
 constexpr int kBatches = 16;
 constexpr int kPhotonsPerBatch = 40000;
 // Float sums of 2e4 photons and the quadrature of the expected values stay below this
 // (relative to the radiance).
 constexpr double kRelativeFloor = 1e-4;
-// Relative bias the grazing floor f A_c may leave on π L at L2: at most f / 4 for one plane (the
-// first test below); by quadrature 0.5% for one plane, 0.6% for two or three perpendicular
-// planes of equal area.
-constexpr double kFloorBias = kMinProjectedFraction / 4.0;
 
 const vec3 kRadiance(1.0f, 2.0f, 0.5f);  // W m^-2 sr^-1
 
-// Mean and standard error of the mean of independent batch results, per float.
-struct BatchStats {
-    std::vector<double> sum, sum2;
-    int batches = 0;
-
-    void add(const std::vector<float>& values) {
-        sum.resize(values.size(), 0.0);
-        sum2.resize(values.size(), 0.0);
-        for (size_t i = 0; i < values.size(); ++i) {
-            sum[i] += values[i];
-            sum2[i] += double(values[i]) * values[i];
-        }
-        ++batches;
-    }
-    double mean(size_t i) const { return sum[i] / batches; }
-    double standard_error(size_t i) const {
-        const double m = mean(i);
-        return std::sqrt(std::max(0.0, sum2[i] / batches - m * m) / (batches - 1));
-    }
-};
-
+// Batch mean i within the noise of the batches plus float accumulation (kRelativeFloor of
+// `scale`).
 void expect_near_stats(const BatchStats& stats, size_t i, double expected, double scale,
                        const std::string& what) {
-    EXPECT_NEAR(stats.mean(i), expected, kSigmas * stats.standard_error(i) + kRelativeFloor * scale)
-        << what << ": standard error " << stats.standard_error(i);
+    testing::expect_within_noise(stats.mean(i), stats.standard_error(i), expected,
+                                 kRelativeFloor * scale, what);
 }
 
 // The photons of one batch go into one inject() call: the sides they mark apply to all of them
@@ -342,11 +321,11 @@ TEST(ShLatticeInjection, ClosedBoxInAUniformFieldGivesPiLAtFacesEdgesAndCorners)
             for (const char* method : {"cubic", "trilinear"})
                 for (int ch = 0; ch < 3; ++ch, ++i) {
                     const double expected = kPi * kRadiance[ch];
-                    EXPECT_NEAR(stats.mean(i), expected,
-                                kSigmas * stats.standard_error(i) + kFloorBias * expected)
-                        << "wall " << w << ", " << place << ", " << method << ", channel " << ch
-                        << ": E / (π L) = " << stats.mean(i) / expected << ", standard error "
-                        << stats.standard_error(i);
+                    testing::expect_within_noise(
+                        stats.mean(i), stats.standard_error(i), expected, kFloorBias * expected,
+                        "wall " + std::to_string(w) + ", " + place + ", " + method +
+                            ", channel " + std::to_string(ch) +
+                            ": E / (π L) = " + std::to_string(stats.mean(i) / expected));
                 }
 }
 

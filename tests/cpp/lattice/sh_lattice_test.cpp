@@ -14,6 +14,7 @@
 
 #include "lattice/lattice_test_scenes.h"
 #include "render/render_test_scenes.h"
+#include "support/expect_error.h"
 #include "util/rng.h"
 #include "util/sampling.h"
 
@@ -70,28 +71,28 @@ TEST(ShLattice, DefaultConstructedLatticeIsEmpty) {
 
 TEST(ShLattice, BadArgumentsThrowNamingThem) {
     const Bounds3 unit{vec3(0.0f), vec3(1.0f)};
-    test::expect_invalid_argument([&] { ShLattice(unit, 0, 1); }, "resolution = 0");
-    test::expect_invalid_argument([&] { ShLattice(unit, 1025, 1); }, "resolution = 1025");
-    test::expect_invalid_argument([&] { ShLattice(unit, 4, 0); }, "order = 0");
-    test::expect_invalid_argument([&] { ShLattice(unit, 4, 3); }, "order = 3");
-    test::expect_invalid_argument([&] { ShLattice(Bounds3{}, 4, 1); }, "bounds are empty");
-    test::expect_invalid_argument(
+    testing::expect_invalid_argument([&] { ShLattice(unit, 0, 1); }, "resolution = 0");
+    testing::expect_invalid_argument([&] { ShLattice(unit, 1025, 1); }, "resolution = 1025");
+    testing::expect_invalid_argument([&] { ShLattice(unit, 4, 0); }, "order = 0");
+    testing::expect_invalid_argument([&] { ShLattice(unit, 4, 3); }, "order = 3");
+    testing::expect_invalid_argument([&] { ShLattice(Bounds3{}, 4, 1); }, "bounds are empty");
+    testing::expect_invalid_argument(
         [&] { ShLattice(Bounds3{vec3(0.0f), vec3(1.0f, INFINITY, 1.0f)}, 4, 1); }, "not finite");
-    test::expect_invalid_argument([&] { ShLattice(unit, 1024, 1); }, "cells, more than");
+    testing::expect_invalid_argument([&] { ShLattice(unit, 1024, 1); }, "cells, more than");
 
     ShLattice lattice(unit, 2, 1);
     Scene uncommitted;
     uncommitted.add_instance(uncommitted.add_mesh(test::plane(0.5f)), mat4(1.0f));
-    test::expect_invalid_argument([&] { lattice.measure_surfaces(uncommitted); }, "commit()");
-    test::expect_invalid_argument([&] { lattice.inject({}, NAN); }, "scale = nan");
-    test::expect_invalid_argument([&] { lattice.scale(INFINITY); }, "factor = inf");
-    test::expect_invalid_argument([&] { lattice.blur(-1); }, "passes = -1");
-    test::expect_invalid_argument([&] { lattice.cell_radiance(8); }, "cell = 8");
-    test::expect_invalid_argument([&] { lattice.surface_area(9); }, "cell = 9");
-    test::expect_invalid_argument([&] { lattice.projected_area(8, kUp); }, "cell = 8");
-    test::expect_invalid_argument([&] { lattice.set_cell_radiance(0, ShRgb(2)); },
-                                  "radiance.order = 2");
-    test::expect_invalid_argument([&] { lattice.set_cell_radiance(8, ShRgb(1)); }, "cell = 8");
+    testing::expect_invalid_argument([&] { lattice.measure_surfaces(uncommitted); }, "commit()");
+    testing::expect_invalid_argument([&] { lattice.inject({}, NAN); }, "scale = nan");
+    testing::expect_invalid_argument([&] { lattice.scale(INFINITY); }, "factor = inf");
+    testing::expect_invalid_argument([&] { lattice.blur(-1); }, "passes = -1");
+    testing::expect_invalid_argument([&] { lattice.cell_radiance(8); }, "cell = 8");
+    testing::expect_invalid_argument([&] { lattice.surface_area(9); }, "cell = 9");
+    testing::expect_invalid_argument([&] { lattice.projected_area(8, kUp); }, "cell = 8");
+    testing::expect_invalid_argument([&] { lattice.set_cell_radiance(0, ShRgb(2)); },
+                                     "radiance.order = 2");
+    testing::expect_invalid_argument([&] { lattice.set_cell_radiance(8, ShRgb(1)); }, "cell = 8");
 }
 
 // ----- measure_surfaces ---------------------------------------------------------------------

@@ -11,13 +11,15 @@
 
 #include "render/light_sampler.h"
 #include "render/render_test_scenes.h"
+#include "support/noise_stats.h"
 #include "util/error.h"
 
 namespace shgi {
 namespace {
 
-// Five standard errors: a false failure has probability ~6e-7 per comparison.
-constexpr double kSigmas = 5.0;
+using testing::kSigmas;
+using testing::standard_error_of_sum;
+
 // Float accumulation of 10^5 photon powers stays well below this relative error.
 constexpr double kRelativeFloor = 1e-4;
 constexpr uint64_t kPhotons = 100000;
@@ -30,10 +32,6 @@ struct Tally {
     double hit = 0.0, hit_error = 0.0;
     uint64_t emitted = 0;
 };
-
-double standard_error_of_sum(double sum, double sum_squares, uint64_t n) {
-    return std::sqrt(std::max(0.0, sum_squares - sum * sum / double(n)));
-}
 
 Tally emit_photons(const Scene& scene, uint64_t count,
                    const std::function<void(const EmittedPhoton&)>& visit = {}) {
@@ -61,9 +59,10 @@ Tally emit_photons(const Scene& scene, uint64_t count,
     return tally;
 }
 
+// A photon power sum within the noise of its photons plus float accumulation (kRelativeFloor).
 void expect_within_noise(double value, double error, double expected, const char* what) {
-    EXPECT_NEAR(value, expected, kSigmas * error + kRelativeFloor * std::fabs(expected))
-        << what << ": standard error " << error;
+    testing::expect_within_noise(value, error, expected, kRelativeFloor * std::fabs(expected),
+                                 what);
 }
 
 // A black square of half-width `half` at z = 0 facing +Z: the surface photons are counted on.

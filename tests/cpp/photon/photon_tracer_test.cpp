@@ -14,26 +14,19 @@
 
 #include "photon/photon_emitter.h"
 #include "render/render_test_scenes.h"
+#include "support/expect_error.h"
+#include "support/noise_stats.h"
 #include "util/error.h"
 
 namespace shgi {
 namespace {
 
-// Five standard errors: a false failure has probability ~6e-7 per comparison.
-constexpr double kSigmas = 5.0;
+using test::point_light;
 
 double total_power(const std::vector<Photon>& photons) {
     double sum = 0.0;
     for (const Photon& photon : photons) sum += photon.power.x;
     return sum;
-}
-
-Light point_light(const vec3& position, float power) {
-    Light light;
-    light.type = LightType::Point;
-    light.power = power;
-    light.world_from_light = glm::translate(mat4(1.0f), position);
-    return light;
 }
 
 // Closed box [-1, 1]^3 seen from inside, Lambert albedo `albedo`, a point light in it.
@@ -63,8 +56,9 @@ void expect_furnace_total(float albedo, int max_bounces, uint64_t photons) {
         mean_square += (2.0 * k - 1.0) * std::pow(albedo, k);
     }
     const double error = power * std::sqrt((mean_square - mean * mean) / double(photons));
-    EXPECT_NEAR(total_power(maps.global), power * mean, kSigmas * error)
-        << "albedo " << albedo << ", max_bounces " << max_bounces;
+    testing::expect_within_noise(total_power(maps.global), error, power * mean, 0.0,
+                                 "albedo " + std::to_string(albedo) + ", max_bounces " +
+                                     std::to_string(max_bounces));
     EXPECT_TRUE(maps.caustic.empty()) << "diffuse-only scene stored caustic photons";
     EXPECT_EQ(maps.emitted, photons);
     EXPECT_EQ(maps.emitted_power, vec3(power));
@@ -320,12 +314,7 @@ TEST(PhotonTracer, CancelledProgressThrowsCancelled) {
 }
 
 void expect_invalid(const PhotonTracerSettings& settings, const std::string& expected) {
-    try {
-        validate_photon_tracer_settings(settings);
-        ADD_FAILURE() << "no exception for " << expected;
-    } catch (const InvalidArgument& error) {
-        EXPECT_NE(std::string(error.what()).find(expected), std::string::npos) << error.what();
-    }
+    testing::expect_invalid_argument([&] { validate_photon_tracer_settings(settings); }, expected);
 }
 
 TEST(PhotonTracer, BadSettingsNameTheField) {

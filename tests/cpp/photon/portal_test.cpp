@@ -5,46 +5,40 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 #include "photon/photon_emitter.h"
 #include "render/light_sampler.h"
 #include "render/render_test_scenes.h"
+#include "support/noise_stats.h"
 #include "util/error.h"
 #include "util/rng.h"
 
 namespace shgi {
 namespace {
 
-constexpr double kSigmas = 5.0;
 constexpr float kRoomHalf = 1.0f;    // room [-1, 1]^2 x [0, 2]
 constexpr float kRoomHeight = 2.0f;
 constexpr float kHoleHalf = 0.25f;   // opening [-0.25, 0.25]^2 in the ceiling
 constexpr float kSky = 1.0f;         // world radiance
 
-Mesh quad(const vec3& corner, const vec3& u, const vec3& v) {  // front: u x v
-    Mesh mesh;
-    mesh.positions = {corner, corner + u, corner + u + v, corner + v};
-    mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
-    return mesh;
-}
-
-// The room (black walls facing inwards) under a uniform sky; with `portal`, a portal fills the
-// opening, facing down into the room.
+// The room (black walls facing inwards: the front of test::quad(corner, u, v) is u x v) under a
+// uniform sky; with `portal`, a portal fills the opening, facing down into the room.
 Scene room_with_skylight(bool portal) {
     Scene scene;
     scene.add_material(test::lambert(0.0f));
     const float a = kRoomHalf, h = kRoomHeight, b = kHoleHalf;
     const Mesh parts[] = {
-        quad({-a, -a, 0}, {2 * a, 0, 0}, {0, 2 * a, 0}),   // floor
-        quad({-a, -a, 0}, {0, 2 * a, 0}, {0, 0, h}),       // x = -a
-        quad({a, -a, 0}, {0, 0, h}, {0, 2 * a, 0}),        // x = +a
-        quad({-a, -a, 0}, {0, 0, h}, {2 * a, 0, 0}),       // y = -a
-        quad({-a, a, 0}, {2 * a, 0, 0}, {0, 0, h}),        // y = +a
+        test::quad({-a, -a, 0}, {2 * a, 0, 0}, {0, 2 * a, 0}),   // floor
+        test::quad({-a, -a, 0}, {0, 2 * a, 0}, {0, 0, h}),       // x = -a
+        test::quad({a, -a, 0}, {0, 0, h}, {0, 2 * a, 0}),        // x = +a
+        test::quad({-a, -a, 0}, {0, 0, h}, {2 * a, 0, 0}),       // y = -a
+        test::quad({-a, a, 0}, {2 * a, 0, 0}, {0, 0, h}),        // y = +a
         // Ceiling (facing down) around the opening.
-        quad({-a, -a, h}, {0, 2 * a, 0}, {a - b, 0, 0}),
-        quad({b, -a, h}, {0, 2 * a, 0}, {a - b, 0, 0}),
-        quad({-b, -a, h}, {0, a - b, 0}, {2 * b, 0, 0}),
-        quad({-b, b, h}, {0, a - b, 0}, {2 * b, 0, 0}),
+        test::quad({-a, -a, h}, {0, 2 * a, 0}, {a - b, 0, 0}),
+        test::quad({b, -a, h}, {0, 2 * a, 0}, {a - b, 0, 0}),
+        test::quad({-b, -a, h}, {0, a - b, 0}, {2 * b, 0, 0}),
+        test::quad({-b, b, h}, {0, a - b, 0}, {2 * b, 0, 0}),
     };
     for (const Mesh& part : parts) scene.add_instance(scene.add_mesh(part), mat4(1.0f));
     World world;
@@ -119,8 +113,8 @@ TEST(Portal, NextEventEstimationThroughASkylightIsUnbiasedAndLessNoisy) {
         p, vec3(0, 0, 1), {{-b, -b, h}, {b, -b, h}, {b, b, h}, {-b, b, h}}, kSky);
     const Estimate plain = floor_irradiance(room_with_skylight(false), p, 200000);
     const Estimate portal = floor_irradiance(room_with_skylight(true), p, 200000);
-    EXPECT_NEAR(plain.mean, exact, kSigmas * plain.error) << "without portal";
-    EXPECT_NEAR(portal.mean, exact, kSigmas * portal.error) << "with portal";
+    testing::expect_within_noise(plain.mean, plain.error, exact, 0.0, "without portal");
+    testing::expect_within_noise(portal.mean, portal.error, exact, 0.0, "with portal");
     EXPECT_LT(portal.error, 0.2 * plain.error);
 }
 
@@ -159,7 +153,7 @@ Estimate flux_through_opening(const Scene& scene, uint64_t count) {
         sum += photon.power.x;
         sum2 += double(photon.power.x) * photon.power.x;
     }
-    return {sum, std::sqrt(std::max(0.0, sum2 - sum * sum / double(count)))};
+    return {sum, testing::standard_error_of_sum(sum, sum2, count)};
 }
 
 TEST(Portal, WorldPhotonsCarryTheSkyFluxThroughTheOpening) {
@@ -167,8 +161,8 @@ TEST(Portal, WorldPhotonsCarryTheSkyFluxThroughTheOpening) {
     const double exact = kPiD * kSky * area;  // a uniform sky over the whole upper hemisphere
     const Estimate plain = flux_through_opening(room_with_skylight(false), 200000);
     const Estimate portal = flux_through_opening(room_with_skylight(true), 200000);
-    EXPECT_NEAR(plain.mean, exact, kSigmas * plain.error) << "without portal";
-    EXPECT_NEAR(portal.mean, exact, kSigmas * portal.error) << "with portal";
+    testing::expect_within_noise(plain.mean, plain.error, exact, 0.0, "without portal");
+    testing::expect_within_noise(portal.mean, portal.error, exact, 0.0, "with portal");
     EXPECT_LT(portal.error, 0.2 * plain.error);
     // Portals emit nothing: the total flux is the world's alone.
     EXPECT_FLOAT_EQ(PhotonEmitter(room_with_skylight(true)).total_power().x,
@@ -188,7 +182,8 @@ TEST(Portal, SunPhotonsThroughTheOpeningCarryItsIrradianceTimesArea) {
         scene.commit();
         const double exact = sun.strength * 4.0 * kHoleHalf * kHoleHalf * std::cos(zenith);
         const Estimate flux = flux_through_opening(scene, 100000);
-        EXPECT_NEAR(flux.mean, exact, kSigmas * flux.error + 1e-4 * exact) << "portal " << portal;
+        testing::expect_within_noise(flux.mean, flux.error, exact, 1e-4 * exact,
+                                     "portal " + std::to_string(portal));
     }
 }
 

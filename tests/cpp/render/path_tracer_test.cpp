@@ -12,6 +12,8 @@
 
 #include "render/path_tracer.h"
 #include "render_test_scenes.h"
+#include "support/expect_error.h"
+#include "support/noise_stats.h"
 #include "util/error.h"
 
 namespace shgi {
@@ -19,35 +21,19 @@ namespace {
 
 using test::PixelStats;
 
-// Five standard errors: a false failure has probability ~6e-7 per comparison.
-constexpr double kSigmas = 5.0;
 // Float accumulation and the deterministic parts (jitter inside a tiny view) stay below this.
 constexpr double kRelativeFloor = 2e-3;
 
 void expect_near_stats(const PixelStats& stats, double expected, const char* what) {
-    const double tolerance = kSigmas * stats.standard_error + kRelativeFloor * std::fabs(expected);
-    EXPECT_NEAR(stats.mean, expected, tolerance)
-        << what << ": standard error " << stats.standard_error;
-}
-
-// A closed unit box, inside faces emitting `emission` with Lambert albedo `albedo`, black world,
-// seen by a 16x16 orthographic camera centred at `camera_center`.
-void build_emissive_furnace(Scene& scene, float albedo, float emission, const vec3& camera_center) {
-    Material material = test::lambert(albedo);
-    material.emission_color = vec3(1.0f);
-    material.emission_strength = emission;
-    scene.add_material(material);
-    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
-    scene.set_world(test::black_world());
-    scene.set_camera(test::ortho_camera_down(camera_center, 1.0f, 16));
-    scene.commit();
+    testing::expect_within_noise(stats.mean, stats.standard_error, expected,
+                                 kRelativeFloor * std::fabs(expected), what);
 }
 
 // Closed box, uniform emission Le and Lambert albedo a on every wall: L = Le / (1 - a) everywhere.
 TEST(PathTracer, WhiteFurnaceClosedBox) {
     const float albedo = 0.5f, emission = 0.3f;
-    Scene scene;
-    build_emissive_furnace(scene, albedo, emission, vec3(0.1f, 0.2f, 0.3f));
+    const Scene scene = test::emissive_furnace(
+        albedo, vec3(1.0f), emission, test::ortho_camera_down(vec3(0.1f, 0.2f, 0.3f), 1.0f, 16));
     PathTracerSettings settings = test::settings_with_samples(16);
     settings.max_bounces = settings.diffuse_bounces = 64;  // a^65 is far below the noise
     PathTracer tracer(scene, settings);
@@ -63,8 +49,8 @@ TEST(PathTracer, WhiteFurnaceClosedBox) {
 // Bounce limits: max_bounces = 1 keeps Le (1 + a + a^2).
 TEST(PathTracer, FurnaceTruncatedByMaxBounces) {
     const float albedo = 0.5f, emission = 1.0f;
-    Scene scene;
-    build_emissive_furnace(scene, albedo, emission, vec3(0.0f));
+    const Scene scene = test::emissive_furnace(albedo, vec3(1.0f), emission,
+                                               test::ortho_camera_down(vec3(0.0f), 1.0f, 16));
     PathTracerSettings settings = test::settings_with_samples(16);
     settings.max_bounces = 1;
     PathTracer tracer(scene, settings);
@@ -117,11 +103,7 @@ TEST(PathTracer, WhiteSphereUnderUniformWorld) {
 TEST(PathTracer, PointLightOverLambertPlane) {
     const float albedo = 0.8f, power = 100.0f, height = 2.0f;
     Scene scene = test::plane_scene(albedo);
-    Light light;
-    light.type = LightType::Point;
-    light.power = power;
-    light.world_from_light = glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, height));
-    scene.add_light(light);
+    scene.add_light(test::point_light(vec3(0.0f, 0.0f, height), power));
     scene.commit();
     PathTracer tracer(scene, test::settings_with_samples(4));
     tracer.render(4);
@@ -201,11 +183,8 @@ TEST(PathTracer, CameraSeesLightsOnlyWhenVisibleToCamera) {
     // Emits along its local -Z, turned to face +Z (the camera above).
     area.world_from_light = glm::rotate(glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, 0.25f)), kPi,
                                         vec3(1.0f, 0.0f, 0.0f));
-    Light point;
-    point.type = LightType::Point;
+    Light point = test::point_light(vec3(0.0f, 0.0f, 0.25f), power);
     point.radius = radius;
-    point.power = power;
-    point.world_from_light = glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, 0.25f));
     const float disk_area = kPi * radius * radius;
     const struct {
         Light light;
@@ -344,26 +323,14 @@ TEST(PathTracer, RefusesASceneEditedAfterConstruction) {
     tracer.render(1);
     scene.add_light(Light{});
     scene.commit();
-    try {
-        tracer.render(1);
-        ADD_FAILURE() << "render after an edit did not throw";
-    } catch (const InvalidArgument& error) {
-        EXPECT_NE(std::string(error.what()).find("edited after this PathTracer"),
-                  std::string::npos)
-            << error.what();
-    }
+    testing::expect_invalid_argument([&] { tracer.render(1); }, "edited after this PathTracer");
     EXPECT_EQ(tracer.samples_done(), 1u);
 }
 
 TEST(PathTracer, RejectsInvalidSettings) {
     const Scene scene = mixed_scene();
     auto expect_message = [&](PathTracerSettings settings, const std::string& field) {
-        try {
-            PathTracer tracer(scene, settings);
-            ADD_FAILURE() << "no error for " << field;
-        } catch (const InvalidArgument& error) {
-            EXPECT_NE(std::string(error.what()).find(field), std::string::npos) << error.what();
-        }
+        testing::expect_invalid_argument([&] { PathTracer tracer(scene, settings); }, field);
     };
     PathTracerSettings s;
     s.max_bounces = -1;

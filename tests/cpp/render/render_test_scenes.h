@@ -1,8 +1,11 @@
 // Small scenes with closed-form answers for the render tests: a closed box seen from inside
-// (furnace), a UV sphere, a large plane under an orthographic camera looking straight down.
+// (furnace), a UV sphere, a large plane under an orthographic camera looking straight down; and
+// the pieces they are built from (rectangles, triangles, Lambert and mirror materials, point
+// lights), shared with the photon and lattice tests.
 #pragma once
 
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -49,6 +52,23 @@ inline Mesh uv_sphere(float radius, int rings = 24, int segments = 48) {
     return mesh;
 }
 
+// The rectangle corner + [0,1] edge_u + [0,1] edge_v as two triangles, facing edge_u x edge_v.
+inline Mesh quad(const vec3& corner, const vec3& edge_u, const vec3& edge_v) {
+    Mesh mesh;
+    mesh.name = "quad";
+    mesh.positions = {corner, corner + edge_u, corner + edge_u + edge_v, corner + edge_v};
+    mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+    return mesh;
+}
+
+inline Mesh triangle(const vec3& p0, const vec3& p1, const vec3& p2) {
+    Mesh mesh;
+    mesh.name = "triangle";
+    mesh.positions = {p0, p1, p2};
+    mesh.triangles = {{0, 1, 2}};
+    return mesh;
+}
+
 // Square in the z = 0 plane, facing +Z.
 inline Mesh plane(float half) {
     Mesh mesh;
@@ -68,6 +88,25 @@ inline Material lambert(float albedo) {
     return material;
 }
 
+// A smooth metal mirror: metallic, roughness 0, base colour `reflectance`.
+inline Material mirror(float reflectance) {
+    Material material;
+    material.name = "mirror";
+    material.base_color = vec3(reflectance);
+    material.metallic = 1.0f;
+    material.roughness = 0.0f;
+    return material;
+}
+
+// Point light of `power` watts at `position`.
+inline Light point_light(const vec3& position, float power) {
+    Light light;
+    light.type = LightType::Point;
+    light.power = power;
+    light.world_from_light = glm::translate(mat4(1.0f), position);
+    return light;
+}
+
 // Orthographic camera at `position` looking down -Z, covering `scale` metres.
 inline Camera ortho_camera_down(const vec3& position, float scale, uint32_t resolution) {
     Camera camera;
@@ -83,6 +122,22 @@ inline World black_world() {
     World world;
     world.strength = 0.0f;
     return world;
+}
+
+// Closed box [-1, 1]^3 seen from inside, every inner face emitting emission_color x
+// emission_strength with Lambert albedo `albedo`, black world, `camera` if given; committed.
+inline Scene emissive_furnace(float albedo, const vec3& emission_color, float emission_strength,
+                              const std::optional<Camera>& camera = std::nullopt) {
+    Scene scene;
+    Material material = lambert(albedo);
+    material.emission_color = emission_color;
+    material.emission_strength = emission_strength;
+    scene.add_material(material);
+    scene.add_instance(scene.add_mesh(inward_box(1.0f)), mat4(1.0f));
+    scene.set_world(black_world());
+    if (camera) scene.set_camera(*camera);
+    scene.commit();
+    return scene;
 }
 
 // Plane of Lambert albedo `albedo` at z = 0 seen from above through a narrow orthographic view.

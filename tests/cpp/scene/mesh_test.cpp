@@ -7,6 +7,8 @@
 #include <string>
 
 #include "scene/mesh.h"
+#include "scene/scene_test_meshes.h"
+#include "support/expect_error.h"
 #include "util/error.h"
 
 namespace shgi {
@@ -15,34 +17,23 @@ namespace {
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-// A unit quad in the XY plane facing +Z, two triangles, named "Quad".
-Mesh unit_quad() {
-    Mesh mesh;
-    mesh.name = "Quad";
-    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
-    mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
-    mesh.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
-    mesh.uv_sets = {{"UVMap", {{0, 0}, {1, 0}, {1, 1}, {0, 1}}}};
+using testing::expect_contains;
+
+// test::unit_quad ("Quad") with its two triangles on materials 0 and 1.
+Mesh two_material_quad() {
+    Mesh mesh = test::unit_quad();
     mesh.material_indices = {0, 1};
     return mesh;
 }
 
-// Runs validate_mesh and returns the InvalidArgument message ("" when nothing was thrown).
+// Runs validate_mesh on a copy and returns the InvalidArgument message ("" when nothing was
+// thrown).
 std::string rejection(Mesh mesh, uint32_t material_count = 2) {
-    try {
-        validate_mesh(mesh, material_count);
-    } catch (const InvalidArgument& error) {
-        return error.what();
-    }
-    return "";
-}
-
-void expect_contains(const std::string& message, const std::string& part) {
-    EXPECT_NE(message.find(part), std::string::npos) << "message: '" << message << "'";
+    return testing::rejection([&] { validate_mesh(mesh, material_count); });
 }
 
 TEST(MeshValidation, AcceptsAValidQuadUnchanged) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     const MeshReport report = validate_mesh(mesh, 2);
     EXPECT_EQ(report.dropped_degenerate, 0u);
     EXPECT_EQ(report.fixed_normals, 0u);
@@ -50,25 +41,25 @@ TEST(MeshValidation, AcceptsAValidQuadUnchanged) {
 }
 
 TEST(MeshValidation, RejectsNaNPositionNamingMeshArrayIndexAndValue) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     mesh.positions[2] = vec3(kNaN, 0, 1);
     expect_contains(rejection(mesh), "mesh 'Quad': positions[2] = (nan, 0, 1) is not finite");
 }
 
 TEST(MeshValidation, RejectsInfNormal) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     mesh.normals[3] = vec3(0, kInf, 0);
     expect_contains(rejection(mesh), "mesh 'Quad': normals[3] = (0, inf, 0) is not finite");
 }
 
 TEST(MeshValidation, RejectsNaNUv) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     mesh.uv_sets[0].coords[1] = vec2(kNaN, 0);
     expect_contains(rejection(mesh), "uv set 'UVMap'[1] = (nan, 0) is not finite");
 }
 
 TEST(MeshValidation, RejectsHugeCoordinates) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     mesh.positions[1] = vec3(2e15f, 0, 0);
     const std::string message = rejection(mesh);
     expect_contains(message, "positions[1]");
@@ -76,45 +67,45 @@ TEST(MeshValidation, RejectsHugeCoordinates) {
 }
 
 TEST(MeshValidation, RejectsOutOfRangeVertexIndexWithBothValues) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     mesh.triangles[1] = uvec3(0, 2, 9);
     expect_contains(rejection(mesh),
                     "triangles[1] = (0, 2, 9) indexes vertex 9 but the mesh has 4 vertices");
 }
 
 TEST(MeshValidation, RejectsNormalCountMismatch) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     mesh.normals.pop_back();
     expect_contains(rejection(mesh), "normals has 3 elements but positions has 4");
 }
 
 TEST(MeshValidation, RejectsUvCountMismatch) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     mesh.uv_sets[0].coords.push_back(vec2(0));
     expect_contains(rejection(mesh), "uv set 'UVMap' has 5 elements but positions has 4");
 }
 
 TEST(MeshValidation, RejectsMaterialIndexCountMismatch) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     mesh.material_indices = {0};
     expect_contains(rejection(mesh), "material_indices has 1 elements but triangles has 2");
 }
 
 TEST(MeshValidation, RejectsMaterialIndexOutOfRange) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     mesh.material_indices = {0, 5};
     expect_contains(rejection(mesh, 2), "material_indices[1] = 5 but the scene has 2 materials");
 }
 
 TEST(MeshValidation, UnnamedMeshIsLabelledAsSuch) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     mesh.name.clear();
     mesh.positions[0].x = kNaN;
     expect_contains(rejection(mesh), "mesh (unnamed): positions[0]");
 }
 
 TEST(MeshValidation, DropsDegenerateTrianglesAndKeepsMaterialsInSync) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     mesh.positions.push_back(vec3(2, 0, 0));  // collinear with vertices 0 and 1
     mesh.normals.push_back(vec3(0, 0, 1));
     mesh.uv_sets[0].coords.push_back(vec2(0));
@@ -130,7 +121,7 @@ TEST(MeshValidation, DropsDegenerateTrianglesAndKeepsMaterialsInSync) {
 }
 
 TEST(MeshValidation, DropsNearZeroAreaSliver) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     mesh.positions[3] = vec3(0.5f, 1e-9f, 0);  // height 1e-9 over the edge from 0 to 1
     mesh.triangles[1] = uvec3(0, 1, 3);
     const MeshReport report = validate_mesh(mesh, 2);
@@ -139,7 +130,7 @@ TEST(MeshValidation, DropsNearZeroAreaSliver) {
 }
 
 TEST(MeshValidation, FixesZeroLengthNormalsFromAdjacentFaces) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     mesh.normals[1] = vec3(0);
     const MeshReport report = validate_mesh(mesh, 2);
     EXPECT_EQ(report.fixed_normals, 1u);
@@ -148,7 +139,7 @@ TEST(MeshValidation, FixesZeroLengthNormalsFromAdjacentFaces) {
 }
 
 TEST(MeshValidation, TriangleAreaIsHalfTheCrossProduct) {
-    Mesh mesh = unit_quad();
+    Mesh mesh = two_material_quad();
     mesh.positions[2] = vec3(3, 2, 0);
     EXPECT_FLOAT_EQ(triangle_area(mesh, 0), 1.0f);  // base 1 along x, height 2
     EXPECT_THROW(triangle_area(mesh, 2), InvalidArgument);

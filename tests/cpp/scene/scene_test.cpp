@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <functional>
 #include <limits>
 #include <random>
 #include <string>
@@ -13,6 +12,8 @@
 
 #include "scene/embree_scene.h"
 #include "scene/scene.h"
+#include "scene/scene_test_meshes.h"
+#include "support/expect_error.h"
 #include "util/error.h"
 #include "util/log.h"
 
@@ -23,16 +24,9 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 // Embree's robust watertight intersection is accurate to a few float ulps at unit scale.
 constexpr float kTolerance = 1e-5f;
 
-// Unit quad in the XY plane, facing +Z: triangle 0 = (0,0),(1,0),(1,1); triangle 1 the rest.
-Mesh unit_quad(std::string name = "Quad") {
-    Mesh mesh;
-    mesh.name = std::move(name);
-    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
-    mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
-    mesh.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
-    mesh.uv_sets = {{"UVMap", {{0, 0}, {1, 0}, {1, 1}, {0, 1}}}};
-    return mesh;
-}
+using test::unit_quad;
+using testing::expect_contains;
+using testing::rejection;
 
 // Closed unit cube [0,1]^3, outward-facing, 12 triangles.
 Mesh unit_cube() {
@@ -66,20 +60,6 @@ Ray make_ray(vec3 origin, vec3 direction, float tmin = 0.0f, float tmax = kInfin
     ray.tmin = tmin;
     ray.tmax = tmax;
     return ray;
-}
-
-template <typename Error>
-std::string rejection(const std::function<void()>& action) {
-    try {
-        action();
-    } catch (const Error& error) {
-        return error.what();
-    }
-    return "";
-}
-
-void expect_contains(const std::string& message, const std::string& part) {
-    EXPECT_NE(message.find(part), std::string::npos) << "message: '" << message << "'";
 }
 
 void expect_near(const vec3& actual, const vec3& expected, float tolerance = kTolerance) {

@@ -9,6 +9,7 @@
 #include "scene/camera.h"
 #include "scene/light.h"
 #include "scene/material.h"
+#include "support/expect_error.h"
 #include "util/error.h"
 
 namespace shgi {
@@ -16,18 +17,8 @@ namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-std::string rejection(const std::function<void()>& check) {
-    try {
-        check();
-    } catch (const InvalidArgument& error) {
-        return error.what();
-    }
-    return "";
-}
-
-void expect_contains(const std::string& message, const std::string& part) {
-    EXPECT_NE(message.find(part), std::string::npos) << "message: '" << message << "'";
-}
+using testing::expect_contains;
+using testing::rejection;
 
 TEST(MaterialValidation, DefaultIsValid) {
     EXPECT_EQ(rejection([] { validate_material(Material{}, 0); }), "");

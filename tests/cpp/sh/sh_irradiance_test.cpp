@@ -23,8 +23,6 @@ namespace {
 constexpr float kIrradianceTolerance = 1e-4f;
 constexpr int kRandomNormals = 50;
 
-ShRgb random_field(int order, uint64_t seed) { return testing::random_sh_field(order, seed); }
-
 // ∫ L(ω) max(0, n·ω) dω over the hemisphere around n, exact for band-limited L.
 glm::dvec3 brute_force_irradiance(const ShRgb& radiance, const vec3& normal) {
     const SphereQuadrature local = sphere_quadrature(8, 16, 0.0, 1.0);
@@ -51,7 +49,7 @@ TEST(ShIrradiance, MatchesBruteForceForL2AndL4Fields) {
     Pcg32 rng(3, 4);
     for (int order : {2, 4}) {
         for (uint64_t seed = 0; seed < 4; ++seed) {
-            const ShRgb radiance = random_field(order, 100 * order + seed);
+            const ShRgb radiance = testing::random_sh_field(order, 100 * order + seed);
             for (int k = 0; k < kRandomNormals; ++k) {
                 const vec3 n = sample_uniform_sphere(rng.next_vec2());
                 const vec3 fast = sh_irradiance(radiance, n);
@@ -94,7 +92,7 @@ TEST(ShIrradiance, ConstantFieldGivesPiTimesRadiance) {
 }
 
 TEST(ShIrradiance, ConvolveCosineThenEvaluateEqualsIrradiance) {
-    ShRgb sh = random_field(3, 42);
+    ShRgb sh = testing::random_sh_field(3, 42);
     const vec3 n = glm::normalize(vec3(-0.2f, 0.7f, 0.1f));
     const vec3 direct = sh_irradiance(sh, n);
     sh_convolve_cosine(sh);

@@ -5,12 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "sh/sphere_quadrature.h"
 #include "util/error.h"
 #include "util/rng.h"
 #include "util/sampling.h"
+#include "support/noise_stats.h"
 #include "support/sh_fields.h"
 
 namespace shgi {
@@ -20,15 +22,10 @@ namespace {
 // evaluation and float radiance (~1e-6 relative to coefficients of size ~1).
 constexpr float kExactProjectionTolerance = 1e-5f;
 constexpr int kMonteCarloSamples = 200000;
-// Five standard errors: a correct estimator fails with probability ~6e-7 per coefficient (and
-// the seed is fixed), while a wrong weight or pdf is off by many standard errors.
-constexpr double kMonteCarloSigmas = 5.0;
-
-ShRgb random_field(int order, uint64_t seed) { return testing::random_sh_field(order, seed); }
 
 TEST(ShProjection, QuadratureRecoversBandLimitedField) {
     for (int order = 0; order <= kMaxShOrder; ++order) {
-        const ShRgb truth = random_field(order, 11 + order);
+        const ShRgb truth = testing::random_sh_field(order, 11 + order);
         const SphereQuadrature quadrature = sphere_quadrature(12, 24);
         std::vector<vec3> directions, radiance;
         std::vector<float> weights;
@@ -50,7 +47,7 @@ TEST(ShProjection, QuadratureRecoversBandLimitedField) {
 }
 
 TEST(ShProjection, ScalarMatchesRgbChannel) {
-    const ShRgb truth = random_field(3, 5);
+    const ShRgb truth = testing::random_sh_field(3, 5);
     const SphereQuadrature quadrature = sphere_quadrature(10, 20);
     std::vector<vec3> directions, radiance;
     std::vector<float> weights, green;
@@ -85,9 +82,11 @@ TEST(ShProjection, StreamingSamplesMatchBatch) {
 }
 
 // The estimator of seed 004 §3.2: weights 1 / (N p) with uniform-sphere samples. The tolerance
-// is kMonteCarloSigmas standard errors, with the standard error estimated from the samples.
+// is kSigmas standard errors (noise_stats.h), with the standard error estimated from the
+// samples: a correct estimator fails with probability ~6e-7 per coefficient (and the seed is
+// fixed), while a wrong weight or pdf is off by many standard errors.
 TEST(ShProjection, MonteCarloEstimatorConverges) {
-    const ShCoeffs truth = sh_channel(random_field(2, 99), 0);
+    const ShCoeffs truth = sh_channel(testing::random_sh_field(2, 99), 0);
     Pcg32 rng(2024, 0);
     ShCoeffs estimate(2);
     const float weight = 1.0f / (kMonteCarloSamples * sample_uniform_sphere_pdf());
@@ -106,8 +105,8 @@ TEST(ShProjection, MonteCarloEstimatorConverges) {
     for (int i = 0; i < truth.num_coefficients(); ++i) {
         const double variance = sum_sq[i] / kMonteCarloSamples - truth.coeffs[i] * truth.coeffs[i];
         const double standard_error = std::sqrt(variance / kMonteCarloSamples);
-        EXPECT_NEAR(estimate.coeffs[i], truth.coeffs[i], kMonteCarloSigmas * standard_error)
-            << "coefficient " << i;
+        testing::expect_within_noise(estimate.coeffs[i], standard_error, truth.coeffs[i], 0.0,
+                                     "coefficient " + std::to_string(i));
     }
 }
 
@@ -141,8 +140,8 @@ TEST(ShProjection, RejectsBadSamples) {
 }
 
 TEST(ShCoeffs, DotIsTheIntegralOfTheProduct) {
-    const ShRgb a = random_field(4, 1);
-    const ShCoeffs b = sh_channel(random_field(2, 2), 0);
+    const ShRgb a = testing::random_sh_field(4, 1);
+    const ShCoeffs b = sh_channel(testing::random_sh_field(2, 2), 0);
     const SphereQuadrature quadrature = sphere_quadrature(12, 24);
     glm::dvec3 integral(0.0);
     for (size_t k = 0; k < quadrature.directions.size(); ++k) {
