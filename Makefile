@@ -11,7 +11,7 @@ PYTHON := /usr/bin/python3
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release -DSHGI_WERROR=ON
 DEB_PACKAGES := build-essential cmake pkg-config libembree-dev libglm-dev libopenexr-dev \
 	libimath-dev pybind11-dev libtbb-dev libgtest-dev libtinygltf-dev \
-	libtinyobjloader-dev libpcg-cpp-dev libpng-dev libnanoflann-dev python3-dev python3-numpy python3-pytest \
+	libtinyobjloader-dev libpcg-cpp-dev libpng-dev libnanoflann-dev nlohmann-json3-dev python3-dev python3-numpy python3-pytest \
 	blender xvfb xauth
 SITE_DIR := /usr/local/lib/python3.11/dist-packages
 # Debian's Blender adopts the Python home of the first python3 on PATH, so run it without pyenv.

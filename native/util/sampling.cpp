@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include <glm/gtc/quaternion.hpp>
+
 #include "util/error.h"
 
 namespace shgi {
@@ -108,6 +110,22 @@ uint32_t DiscreteDistribution::sample(float u, float* u_remapped) const {
         *u_remapped = std::min(static_cast<float>(t), kOneMinusEpsilon);
     }
     return index;
+}
+
+vec3 fibonacci_sphere(uint32_t i, uint32_t n) {
+    constexpr double kInvGoldenRatio = 0.6180339887498949;  // 1 / phi = phi - 1
+    const float z = 1.0f - (2.0f * float(i) + 1.0f) / float(n);
+    const double turns = double(i) * kInvGoldenRatio;
+    const float phi = float(kTwoPi * (turns - std::floor(turns)));
+    return spherical_direction(std::sqrt(std::max(0.0f, 1.0f - z * z)), z, phi);
+}
+
+mat3 sample_uniform_rotation(const vec3& u) {
+    // A uniform unit quaternion (x, y, z, w), then its matrix.
+    const float r1 = std::sqrt(1.0f - u.x), r2 = std::sqrt(u.x);
+    const float t1 = kTwoPi * u.y, t2 = kTwoPi * u.z;
+    const glm::quat q(r2 * std::cos(t2), r1 * std::sin(t1), r1 * std::cos(t1), r2 * std::sin(t2));
+    return glm::mat3_cast(q);
 }
 
 }  // namespace shgi

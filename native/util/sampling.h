@@ -45,6 +45,16 @@ float sample_uniform_disk_pdf();
 // (Heitz 2019 low-distortion map); pdf = 1/area.
 vec3 sample_uniform_triangle(const vec2& u);
 
+// Point i of the n-point spherical Fibonacci lattice (Keinert et al. 2015, "Spherical Fibonacci
+// Mapping"): z = 1 - (2i + 1)/n, azimuth 2 pi i / golden ratio. The points cover the sphere
+// evenly, each standing for 4 pi / n sr; seed 002 §4.1.1 picks probe rays from it. i < n.
+vec3 fibonacci_sphere(uint32_t i, uint32_t n);
+
+// A rotation drawn uniformly from SO(3) (Shoemake 1992, "Uniform random rotations"), as a 3x3
+// matrix, from three uniform numbers in [0, 1).
+mat3 sample_uniform_rotation(const vec3& u);
+
+
 // Piecewise-constant discrete distribution over non-negative weights (e.g. light powers).
 // sample() returns an index with probability weight[i] / sum; pdf(i) returns that probability.
 class DiscreteDistribution {

@@ -1,0 +1,377 @@
+#include "probes/probe_grid.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "probes/probe_visibility.h"
+#include "render/light_sampler.h"
+#include "render/path_integrator.h"
+#include "sh/sh_projection.h"
+#include "util/error.h"
+#include "util/parallel.h"
+#include "util/rng.h"
+#include "util/sampling.h"
+#include "util/timer.h"
+
+namespace shgi {
+namespace {
+
+// Largest grid a ProbeGrid accepts (all volumes): 2^21 probes of L2 with 8x8 visibility maps
+// hold ~1.3 GB; a larger request is almost certainly a spacing typed in the wrong unit.
+constexpr size_t kMaxProbes = size_t(1) << 21;
+// Relocation: a probe this close (spacings) to a front face steps away from it.
+constexpr float kMinFrontDistance = 0.1f;
+constexpr int kRelocationSteps = 3;
+// Probes are grouped this many per task; each probe traces rays_per_probe paths.
+constexpr uint64_t kProbesPerTask = 2;
+// Seeds the per-probe rotations apart from the per-ray path streams (same stream ids).
+constexpr uint64_t kRotationSeed = 0x9e3779b97f4a7c15ull;
+
+ProbeVolume fitted_volume(const Scene& scene, float spacing) {
+    const Bounds3 bounds = scene.bounds();
+    vec3 extent = bounds.extent();
+    const float longest = std::max(extent.x, std::max(extent.y, extent.z));
+    const float step = spacing > 0.0f ? spacing : longest / 8.0f;
+    ProbeVolume volume;
+    for (int a = 0; a < 3; ++a) {
+        const double count = std::ceil(double(extent[a]) / double(step) - 1e-3);
+        if (count > double(kMaxProbesPerAxis))
+            throw InvalidArgument(format_message(
+                "ProbeGridSettings.spacing ", step, " m puts ", count, " probes along axis ", a,
+                " of the scene (", extent[a], " m); use a spacing of at least ",
+                extent[a] / float(kMaxProbesPerAxis), " m"));
+        volume.resolution[a] = std::max(1, int(count));
+        extent[a] = std::max(extent[a], step);  // a flat scene still gets a layer of probes
+    }
+    const vec3 centre = 0.5f * (bounds.lower + bounds.upper);
+    volume.world_from_volume = glm::translate(mat4(1.0f), centre) *
+                               glm::scale(mat4(1.0f), 0.5f * extent);
+    return volume;
+}
+
+// The probe paths' limits: the renderer's own surface is the first bounce (Cycles' defaults).
+PathTracerSettings probe_path_settings(const ProbeGridSettings& settings) {
+    PathTracerSettings path;
+    path.max_bounces -= 1;
+    path.transmission_bounces -= 1;
+    path.diffuse_bounces = settings.bounces;
+    path.glossy_bounces = settings.bounces;
+    path.russian_roulette_depth -= 1;
+    return path;
+}
+
+float max_scene_distance(const Scene& scene, const std::vector<vec3>& positions) {
+    Bounds3 bounds = scene.bounds();
+    for (const vec3& p : positions) bounds.extend(p);
+    return 2.0f * glm::length(bounds.extent()) + 1e-3f;
+}
+
+// What placement_rays rays from p meet: the share of back-face hits and the nearest back and
+// front faces.
+struct Surroundings {
+    float backface_fraction = 0.0f;
+    float back_t = kInfinity, front_t = kInfinity;
+    vec3 back_dir{0.0f}, front_dir{0.0f};
+};
+
+Surroundings look_around(const Scene& scene, const vec3& p, uint32_t rays) {
+    Surroundings s;
+    uint32_t backfaces = 0;
+    for (uint32_t r = 0; r < rays; ++r) {
+        Ray ray;
+        ray.origin = p;
+        ray.direction = fibonacci_sphere(r, rays);
+        const Hit hit = scene.intersect(ray);
+        if (!hit.valid()) continue;
+        if (glm::dot(hit.geometric_normal, ray.direction) > 0.0f) {
+            ++backfaces;
+            if (hit.t < s.back_t) s.back_t = hit.t, s.back_dir = ray.direction;
+        } else if (hit.t < s.front_t) {
+            s.front_t = hit.t, s.front_dir = ray.direction;
+        }
+    }
+    s.backface_fraction = float(backfaces) / float(rays);
+    return s;
+}
+
+}  // namespace
+
+void validate_probe_grid_settings(const ProbeGridSettings& s) {
+    const char* name = "ProbeGridSettings";
+    check_sh_order(s.order, "ProbeGridSettings.order");
+    if (s.order < 1)
+        throw InvalidArgument("ProbeGridSettings.order is 0; probes need order 1..4");
+    for (size_t v = 0; v < s.volumes.size(); ++v) {
+        const std::string what = format_message(name, ".volumes[", v, "]");
+        validate_probe_volume(s.volumes[v], what.c_str());
+    }
+    if (!(s.spacing >= 0.0f && std::isfinite(s.spacing)))
+        throw InvalidArgument(format_message(name, ".spacing is ", s.spacing,
+                                             "; use metres > 0, or 0 for longest side / 8"));
+    if (s.rays_per_probe < 1 || s.rays_per_probe > 65536)
+        throw InvalidArgument(format_message(name, ".rays_per_probe is ", s.rays_per_probe,
+                                             "; use 1..65536"));
+    if (!(s.hysteresis >= 0.0f && s.hysteresis < 1.0f))
+        throw InvalidArgument(format_message(name, ".hysteresis is ", s.hysteresis,
+                                             "; use a value in [0, 1)"));
+    if (!(s.clamp >= 0.0f && std::isfinite(s.clamp)))
+        throw InvalidArgument(format_message(name, ".clamp is ", s.clamp, "; use >= 0 (0 = off)"));
+    if (s.bounces < 0 || s.bounces > 64)
+        throw InvalidArgument(format_message(name, ".bounces is ", s.bounces, "; use 0..64"));
+    if (s.visibility_resolution < 1 || s.visibility_resolution > 64)
+        throw InvalidArgument(format_message(name, ".visibility_resolution is ",
+                                             s.visibility_resolution, "; use 1..64"));
+    if (!(s.visibility_blur >= 0.01f && s.visibility_blur <= 2.0f))
+        throw InvalidArgument(format_message(name, ".visibility_blur is ", s.visibility_blur,
+                                             "; use 0.01..2 (radians)"));
+    validate_probe_lookup_settings({s.visibility, s.normal_bias, s.bleed_bias}, name);
+    if (!(s.max_offset >= 0.0f && s.max_offset <= 0.5f))
+        throw InvalidArgument(format_message(name, ".max_offset is ", s.max_offset,
+                                             "; use 0..0.5 probe spacings"));
+    if (!(s.backface_threshold > 0.0f && s.backface_threshold <= 1.0f))
+        throw InvalidArgument(format_message(name, ".backface_threshold is ",
+                                             s.backface_threshold, "; use a value in (0, 1]"));
+    if (s.placement_rays < 4 || s.placement_rays > 65536)
+        throw InvalidArgument(format_message(name, ".placement_rays is ", s.placement_rays,
+                                             "; use 4..65536"));
+}
+
+ProbeGrid::ProbeGrid(const Scene& scene, const ProbeGridSettings& settings, Progress* progress)
+    : scene_(&scene), settings_(settings) {
+    validate_probe_grid_settings(settings_);
+    if (!scene.committed())
+        throw InvalidArgument("ProbeGrid: the scene is not committed; call commit() first");
+    if (scene.empty())
+        throw InvalidArgument("ProbeGrid: the scene has no geometry; add a mesh first");
+    lookup_ = {settings_.visibility, settings_.normal_bias, settings_.bleed_bias};
+    reset(progress);
+}
+
+ProbeGrid::ProbeGrid(const Scene& scene, const ProbeGridSettings& settings,
+                     const ProbeGridData& data)
+    : scene_(&scene), settings_(settings) {
+    validate_probe_grid_settings(settings_);
+    validate_probe_grid_data(data);
+    if (!scene.committed())
+        throw InvalidArgument("ProbeGrid: the scene is not committed; call commit() first");
+    settings_.order = data.order;
+    settings_.volumes = data.volumes;
+    settings_.visibility_resolution = data.visibility_resolution;
+    lookup_ = {settings_.visibility, settings_.normal_bias, settings_.bleed_bias};
+    scene_revision_ = scene.revision();
+    publish(std::make_shared<ProbeGridData>(data));
+}
+
+void ProbeGrid::check_scene(const char* what) const {
+    if (scene_->revision() != scene_revision_ || !scene_->committed())
+        throw InvalidArgument(format_message(
+            "ProbeGrid::", what, ": the scene was edited after the probes were placed "
+            "(revision ", scene_revision_, ", now ", scene_->revision(),
+            "); commit it and call reset()"));
+}
+
+void ProbeGrid::publish(std::shared_ptr<const ProbeGridData> data) {
+    auto field = std::make_shared<const ProbeField>(std::move(data), lookup_);
+    std::lock_guard<std::mutex> lock(field_mutex_);
+    field_ = std::move(field);
+}
+
+std::shared_ptr<const ProbeField> ProbeGrid::field() const {
+    std::lock_guard<std::mutex> lock(field_mutex_);
+    return field_;
+}
+
+void ProbeGrid::reset(Progress* progress) {
+    if (!scene_->committed())
+        throw InvalidArgument("ProbeGrid::reset: the scene is not committed; call commit() first");
+    if (scene_->empty())
+        throw InvalidArgument("ProbeGrid: the scene has no geometry; add a mesh first");
+    if (settings_.volumes.empty()) {
+        settings_.volumes.push_back(fitted_volume(*scene_, settings_.spacing));
+        fitted_ = true;
+    } else if (fitted_) {
+        settings_.volumes[0] = fitted_volume(*scene_, settings_.spacing);
+    }
+    const auto start = now();
+    auto data = std::make_shared<ProbeGridData>(place(progress));
+    timings_.placement = seconds_since(start);
+    scene_revision_ = scene_->revision();
+    publish(std::move(data));
+}
+
+ProbeGridData ProbeGrid::place(Progress* progress) const {
+    ProbeGridData data;
+    data.order = settings_.order;
+    data.volumes = settings_.volumes;
+    data.visibility_resolution = settings_.visibility_resolution;
+    data.includes_direct = settings_.include_direct;
+    if (data.volume_offset(data.volumes.size()) > kMaxProbes)
+        throw InvalidArgument(format_message(
+            "ProbeGridSettings.volumes hold ", data.volume_offset(data.volumes.size()),
+            " probes; the limit is ", kMaxProbes, ": lower the resolutions"));
+    const std::vector<vec3> base = probe_base_positions(data.volumes);
+    const size_t count = base.size();
+    data.positions = base;
+    data.active.assign(count, 1);
+    data.sh.assign(count, ShRgb(data.order));
+    data.variance.assign(count, std::numeric_limits<float>::infinity());
+    const float far = max_scene_distance(*scene_, base);
+    data.visibility.assign(count * size_t(data.visibility_resolution) * data.visibility_resolution,
+                           vec2(far, far * far));
+
+    // Volume of each probe, for its spacing and axes.
+    std::vector<uint32_t> volume_of(count);
+    for (size_t v = 0, i = 0; v < data.volumes.size(); ++v) {
+        const ivec3 r = data.volumes[v].resolution;
+        for (size_t k = 0; k < size_t(r.x) * r.y * r.z; ++k) volume_of[i++] = uint32_t(v);
+    }
+    if (progress) progress->begin_stage("placing probes");
+    parallel_for(
+        0, count, 16,
+        [&](uint64_t begin, uint64_t end) {
+            for (uint64_t i = begin; i < end; ++i) {
+                const ProbeVolume& volume = data.volumes[volume_of[i]];
+                const vec3 spacing = probe_spacing(volume);
+                const float min_spacing = std::min(spacing.x, std::min(spacing.y, spacing.z));
+                const mat3 axes(volume.world_from_volume);
+                const mat3 local_from_world = glm::inverse(axes);
+                // Bound on the offset in the volume's local units (its axes span [-1, 1]).
+                const vec3 bound = settings_.max_offset * 2.0f / vec3(volume.resolution);
+                vec3 offset(0.0f);
+                Surroundings s = look_around(*scene_, base[i], settings_.placement_rays);
+                for (int step = 0; settings_.relocate && step < kRelocationSteps; ++step) {
+                    vec3 move(0.0f);
+                    if (s.backface_fraction > settings_.backface_threshold && s.back_t < kInfinity)
+                        move = s.back_dir * (s.back_t + kMinFrontDistance * min_spacing);
+                    else if (s.front_t < kMinFrontDistance * min_spacing)
+                        move = -s.front_dir * (kMinFrontDistance * min_spacing - s.front_t);
+                    else
+                        break;
+                    const vec3 local = glm::clamp(local_from_world * (offset + move), -bound, bound);
+                    offset = axes * local;
+                    s = look_around(*scene_, base[i] + offset, settings_.placement_rays);
+                }
+                data.positions[i] = base[i] + offset;
+                data.active[i] = s.backface_fraction > settings_.backface_threshold ? 0 : 1;
+            }
+        },
+        progress);
+    return data;
+}
+
+void ProbeGrid::update(Progress* progress) {
+    check_scene("update");
+    const auto start = now();
+    const ProbeGridData& old = data();
+    auto next = std::make_shared<ProbeGridData>(old);
+    const uint64_t pass = old.passes;
+    const float a = std::max(1.0f - settings_.hysteresis, 1.0f / float(pass + 1));
+    const uint32_t n = settings_.rays_per_probe;
+    const float far = max_scene_distance(*scene_, old.positions);
+    const LightSampler lights(*scene_, WorldSampling::Cosine);
+    const PathTracerSettings path_settings = probe_path_settings(settings_);
+    const Camera camera;  // probe rays are not camera rays; only the unused Depth pass reads it
+    const int vis_texels = old.visibility_resolution * old.visibility_resolution;
+    const float sample_weight = kFourPi / float(n);
+    constexpr float kDcScale = 0.28209479177387814f * kFourPi;  // Y00 * 4 pi
+
+    std::atomic<uint64_t> paths{0};
+    if (progress) progress->begin_stage("updating probes");
+    parallel_for(
+        0, old.probe_count(), kProbesPerTask,
+        [&](uint64_t begin, uint64_t end) {
+            VisibilityFilter filter(old.visibility_resolution, settings_.visibility_blur);
+            std::vector<vec2> moments(vis_texels);
+            for (uint64_t probe = begin; probe < end; ++probe) {
+                if (!old.active[probe]) continue;
+                Pcg32 rotation_rng(settings_.seed ^ kRotationSeed, stream_id(pass, probe));
+                const mat3 rotation = sample_uniform_rotation(
+                    vec3(rotation_rng.next_float(), rotation_rng.next_float(),
+                         rotation_rng.next_float()));
+                ShRgb estimate(old.order);
+                double dc_sum = 0.0, dc_sum2 = 0.0;
+                filter.clear();
+                for (uint32_t r = 0; r < n; ++r) {
+                    Ray ray;
+                    ray.origin = old.positions[probe];
+                    ray.direction = glm::normalize(rotation * fibonacci_sphere(r, n));
+                    const Hit hit = scene_->intersect(ray);
+                    filter.add(ray.direction, hit.valid() ? hit.t : far);
+                    Pcg32 rng(settings_.seed, stream_id(pass, probe * n + r));
+                    PassValues values;
+                    PathIntegrator(*scene_, camera, lights, path_settings, nullptr, rng, values)
+                        .trace(ray, hit);
+                    vec3 radiance = values[Pass::Combined];
+                    if (!settings_.include_direct)
+                        radiance -= values[Pass::Emit] + values[Pass::Env];
+                    radiance = glm::max(radiance, vec3(0.0f));
+                    if (settings_.clamp > 0.0f) {
+                        const float peak = max_component(radiance);
+                        if (peak > settings_.clamp) radiance *= settings_.clamp / peak;
+                    }
+                    if (!is_finite(radiance)) radiance = vec3(0.0f);
+                    sh_add_sample(estimate, ray.direction, radiance * sample_weight);
+                    const double dc = double(kDcScale * luminance(radiance));
+                    dc_sum += dc;
+                    dc_sum2 += dc * dc;
+                }
+                paths.fetch_add(n, std::memory_order_relaxed);
+
+                ShRgb& sh = next->sh[probe];
+                for (int i = 0; i < sh.num_coefficients(); ++i)
+                    sh[i] = (1.0f - a) * sh[i] + a * estimate[i];
+                const double mean = dc_sum / n;
+                const double sample_variance =
+                    n > 1 ? std::max(0.0, (dc_sum2 - dc_sum * mean) / (n - 1)) : 0.0;
+                const float old_variance = pass == 0 ? 0.0f : old.variance[probe];
+                next->variance[probe] = (1.0f - a) * (1.0f - a) * old_variance +
+                                        a * a * float(sample_variance / n);
+                const vec2* old_map = old.visibility_map(probe);
+                filter.moments(old_map, moments.data());
+                vec2* map = next->visibility.data() + probe * size_t(vis_texels);
+                for (int t = 0; t < vis_texels; ++t)
+                    map[t] = pass == 0 ? moments[t] : (1.0f - a) * old_map[t] + a * moments[t];
+            }
+        },
+        progress);
+    next->passes = pass + 1;
+    timings_.update = seconds_since(start);
+    timings_.paths = paths.load();
+    publish(std::move(next));
+}
+
+size_t ProbeGrid::active_count() const {
+    const ProbeGridData& d = data();
+    return size_t(std::count(d.active.begin(), d.active.end(), uint8_t(1)));
+}
+
+std::vector<float> ProbeGrid::relative_error() const {
+    const ProbeGridData& d = data();
+    std::vector<float> out(d.probe_count());
+    for (size_t i = 0; i < out.size(); ++i) {
+        if (d.passes == 0) {
+            out[i] = std::numeric_limits<float>::infinity();
+            continue;
+        }
+        const float dc = luminance(d.sh[i][0]);
+        out[i] = dc > 0.0f ? std::sqrt(d.variance[i]) / dc : 0.0f;
+    }
+    return out;
+}
+
+size_t ProbeGrid::memory_bytes() const {
+    const ProbeGridData& d = data();
+    return d.probe_count() * (sizeof(vec3) + 1 + sizeof(float) +
+                              size_t(sh_num_coefficients(d.order)) * sizeof(vec3)) +
+           d.visibility.size() * sizeof(vec2);
+}
+
+ShRgb ProbeGrid::radiance_sh(const vec3& p, const vec3& n) const {
+    return field_->radiance_sh(p, n);
+}
+
+}  // namespace shgi
