@@ -138,3 +138,31 @@ def sun_room(scale=1.0):
     b.camera(eye=(1.7, 0.25, 1.5), target=(-0.8, 2.6, 0.8), lens=16.0, width=256, height=192,
              scale=scale)
     return b
+
+
+def two_rooms(scale=1.0):
+    """Two closed rooms side by side, split by a solid wall 0.1 m thick: the left room lit by a
+    bright lamp, the right one by a dim lamp. The camera stands in the dim room facing the wall.
+    The leak test of probe grids (issue 6): light must not cross the wall. 128 x 96 px x scale."""
+    b = SceneBuilder()
+    sx, sy, sz = 6.0, 3.0, 2.5  # the shell spans x in [-3, 3]
+    shell = [  # six faces of the shell, facing in
+        ("floor", (-3, 0, 0), (0, sy, 0), (sx, 0, 0)),
+        ("ceiling", (-3, 0, sz), (sx, 0, 0), (0, sy, 0)),
+        ("front", (-3, 0, 0), (sx, 0, 0), (0, 0, sz)),
+        ("back", (-3, sy, 0), (0, 0, sz), (sx, 0, 0)),
+        ("left", (-3, 0, 0), (0, 0, sz), (0, sy, 0)),
+        ("right", (3, 0, 0), (0, sy, 0), (0, 0, sz)),
+    ]
+    for name, corner, u, v in shell:
+        b.part(name, quad(corner, u, v), "plaster", WHITE)
+    b.part("wall", box((0.0, sy / 2, 0.0), 0.1, sy, sz, 0.0), "plaster", WHITE)
+    for name, x, power in [("bright_lamp", -1.5, 2000.0), ("dim_lamp", 1.5, 20.0)]:
+        lamp = shgi.Light(name=name, type=shgi.LightType.POINT, power=power, radius=0.05)
+        lamp.world_from_light = np.array([[1, 0, 0, x], [0, 1, 0, sy / 2], [0, 0, 1, 2.0],
+                                          [0, 0, 0, 1]], np.float32)
+        b.scene.add_light(lamp)
+    b.scene.set_world(shgi.World(color=(0.0, 0.0, 0.0), strength=0.0))
+    b.camera(eye=(2.9, 0.2, 1.4), target=(0.0, 2.2, 1.0), lens=18.0, width=128, height=96,
+             scale=scale)
+    return b

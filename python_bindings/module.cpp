@@ -11,6 +11,7 @@ void bind_io(py::module_& m);
 void bind_loaders(py::module_& m);
 void bind_render(py::module_& m);
 void bind_lattice(py::module_& m);
+void bind_probes(py::module_& m);
 }  // namespace shgi::python
 
 PYBIND11_MODULE(_shgi, m) {
@@ -23,4 +24,5 @@ PYBIND11_MODULE(_shgi, m) {
     shgi::python::bind_loaders(m);  // needs Scene from bind_scene
     shgi::python::bind_render(m);
     shgi::python::bind_lattice(m);  // PhotonLattice derives from IndirectField (bind_render)
+    shgi::python::bind_probes(m);   // so do ProbeGrid and ProbeField
 }

@@ -202,8 +202,9 @@ ShRgb ProbeField::radiance_sh(const vec3& p, const vec3& n) const {
             if (distance > 0.0f) {
                 const vec2 moments =
                     sample_visibility(data.visibility_map(probe), res, from_probe / distance);
-                weight *= std::max(chebyshev_visibility(moments, distance, settings_.bleed_bias),
-                                   kMinVisibility);
+                const float visible =
+                    chebyshev_visibility(moments, distance, settings_.bleed_bias);
+                weight *= std::max(visible * visible * visible, kMinVisibility);
             }
             if (weight < kCrushThreshold)
                 weight *= weight * weight / (kCrushThreshold * kCrushThreshold);

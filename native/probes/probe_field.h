@@ -18,8 +18,8 @@
 //   - a back-face weight ((1 + n·ω)/2)² + 0.2, ω the direction from p to the probe, which
 //     favours probes in front of the surface, and
 //   - the Chebyshev visibility of the biased point seen from the probe (probes/probe_visibility.h),
-//     floored at 0.05, with weights below 0.2 crushed (w³ / 0.04) so that a probe behind a wall
-//     contributes almost nothing (DDGI's constants);
+//     cubed for contrast and floored at 0.05, with weights below 0.2 crushed (w³ / 0.04) so that
+//     a probe behind a wall contributes almost nothing (DDGI's constants and steps);
 // SH coefficients are blended with the normalised weights. visibility = false is plain trilinear
 // interpolation over the active probes (the leak-prone baseline the tests compare against).
 #pragma once

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <unordered_map>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -70,6 +72,44 @@ float max_scene_distance(const Scene& scene, const std::vector<vec3>& positions)
     return 2.0f * glm::length(bounds.extent()) + 1e-3f;
 }
 
+// True when every edge of the mesh (vertices welded by exact position, as split normals and UV
+// seams duplicate them) is shared by exactly one other triangle running it the other way: a
+// closed, consistently wound surface, whose back faces mean "inside". Single-sided walls and
+// planes are open: which way they face is an accident of modelling (Cycles shades both sides
+// alike), so their back faces say nothing about being inside.
+bool is_closed_surface(const Mesh& mesh) {
+    std::unordered_map<uint64_t, uint32_t> welded;
+    std::vector<uint32_t> vertex(mesh.positions.size());
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+        const vec3& p = mesh.positions[i];
+        uint32_t bits[3];
+        std::memcpy(bits, &p, sizeof(bits));
+        const uint64_t key = (uint64_t(bits[0]) * 0x9e3779b97f4a7c15ull) ^
+                             (uint64_t(bits[1]) * 0xc2b2ae3d27d4eb4full) ^
+                             (uint64_t(bits[2]) * 0x165667b19e3779f9ull);
+        // Hash collisions of distinct points would only merge two vertices: a mesh could then
+        // be taken as open (its back faces ignored), never the other way round in practice.
+        vertex[i] = welded.emplace(key, uint32_t(welded.size())).first->second;
+    }
+    std::unordered_map<uint64_t, int> edges;  // directed edge -> count (reverse subtracts)
+    for (const uvec3& t : mesh.triangles) {
+        const uint32_t v[3] = {vertex[t.x], vertex[t.y], vertex[t.z]};
+        for (int e = 0; e < 3; ++e) {
+            const uint32_t a = v[e], b = v[(e + 1) % 3];
+            if (a == b) return false;
+            const uint64_t forward = (uint64_t(a) << 32) | b;
+            const uint64_t backward = (uint64_t(b) << 32) | a;
+            auto it = edges.find(backward);
+            if (it != edges.end()) {
+                if (--it->second == 0) edges.erase(it);
+            } else if (++edges[forward] > 1) {
+                return false;  // the same edge twice the same way: inconsistent winding
+            }
+        }
+    }
+    return edges.empty() && !mesh.triangles.empty();
+}
+
 // What placement_rays rays from p meet: the share of back-face hits and the nearest back and
 // front faces.
 struct Surroundings {
@@ -78,7 +118,8 @@ struct Surroundings {
     vec3 back_dir{0.0f}, front_dir{0.0f};
 };
 
-Surroundings look_around(const Scene& scene, const vec3& p, uint32_t rays) {
+Surroundings look_around(const Scene& scene, const std::vector<uint8_t>& closed_instance,
+                         const vec3& p, uint32_t rays) {
     Surroundings s;
     uint32_t backfaces = 0;
     for (uint32_t r = 0; r < rays; ++r) {
@@ -87,7 +128,8 @@ Surroundings look_around(const Scene& scene, const vec3& p, uint32_t rays) {
         ray.direction = fibonacci_sphere(r, rays);
         const Hit hit = scene.intersect(ray);
         if (!hit.valid()) continue;
-        if (glm::dot(hit.geometric_normal, ray.direction) > 0.0f) {
+        if (closed_instance[hit.instance_id] &&
+            glm::dot(hit.geometric_normal, ray.direction) > 0.0f) {
             ++backfaces;
             if (hit.t < s.back_t) s.back_t = hit.t, s.back_dir = ray.direction;
         } else if (hit.t < s.front_t) {
@@ -102,9 +144,9 @@ Surroundings look_around(const Scene& scene, const vec3& p, uint32_t rays) {
 
 void validate_probe_grid_settings(const ProbeGridSettings& s) {
     const char* name = "ProbeGridSettings";
-    check_sh_order(s.order, "ProbeGridSettings.order");
-    if (s.order < 1)
-        throw InvalidArgument("ProbeGridSettings.order is 0; probes need order 1..4");
+    if (s.order < 1 || s.order > kMaxShOrder)
+        throw InvalidArgument(format_message(name, ".order is ", s.order, "; use 1..",
+                                             kMaxShOrder));
     for (size_t v = 0; v < s.volumes.size(); ++v) {
         const std::string what = format_message(name, ".volumes[", v, "]");
         validate_probe_volume(s.volumes[v], what.c_str());
@@ -229,6 +271,12 @@ ProbeGridData ProbeGrid::place(Progress* progress) const {
         const ivec3 r = data.volumes[v].resolution;
         for (size_t k = 0; k < size_t(r.x) * r.y * r.z; ++k) volume_of[i++] = uint32_t(v);
     }
+    std::vector<uint8_t> closed_mesh(scene_->meshes().size());
+    for (size_t m = 0; m < closed_mesh.size(); ++m)
+        closed_mesh[m] = is_closed_surface(scene_->meshes()[m]) ? 1 : 0;
+    std::vector<uint8_t> closed_instance;
+    for (const Instance& instance : scene_->instances())
+        closed_instance.push_back(closed_mesh[instance.mesh_id]);
     if (progress) progress->begin_stage("placing probes");
     parallel_for(
         0, count, 16,
@@ -242,7 +290,7 @@ ProbeGridData ProbeGrid::place(Progress* progress) const {
                 // Bound on the offset in the volume's local units (its axes span [-1, 1]).
                 const vec3 bound = settings_.max_offset * 2.0f / vec3(volume.resolution);
                 vec3 offset(0.0f);
-                Surroundings s = look_around(*scene_, base[i], settings_.placement_rays);
+                Surroundings s = look_around(*scene_, closed_instance, base[i], settings_.placement_rays);
                 for (int step = 0; settings_.relocate && step < kRelocationSteps; ++step) {
                     vec3 move(0.0f);
                     if (s.backface_fraction > settings_.backface_threshold && s.back_t < kInfinity)
@@ -253,7 +301,8 @@ ProbeGridData ProbeGrid::place(Progress* progress) const {
                         break;
                     const vec3 local = glm::clamp(local_from_world * (offset + move), -bound, bound);
                     offset = axes * local;
-                    s = look_around(*scene_, base[i] + offset, settings_.placement_rays);
+                    s = look_around(*scene_, closed_instance, base[i] + offset,
+                                    settings_.placement_rays);
                 }
                 data.positions[i] = base[i] + offset;
                 data.active[i] = s.backface_fraction > settings_.backface_threshold ? 0 : 1;

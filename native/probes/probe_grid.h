@@ -3,8 +3,10 @@
 //
 // Placement (constructor, reset): probes at the cell centres of each volume (probes/probe_field.h;
 // no volumes: one volume fitted to the scene bounds with probes `spacing` apart). Each probe
-// casts placement_rays rays of a fixed Fibonacci lattice; a probe that sees back faces in more
-// than backface_threshold of them is inside geometry. With relocate, it steps through the
+// casts placement_rays rays of a fixed Fibonacci lattice; a probe that sees back faces of closed
+// meshes (watertight and consistently wound: solids) in more than backface_threshold of them is
+// inside geometry. Back faces of open meshes (single-sided walls, planes) do not count: their
+// winding is arbitrary in Blender scenes, as Cycles shades both sides alike. With relocate, it steps through the
 // nearest back face (and a probe closer than 0.1 spacing to a front face steps away from it),
 // up to 3 times, by at most max_offset spacings along each volume axis; a probe still inside is
 // made inactive (never updated, never read).

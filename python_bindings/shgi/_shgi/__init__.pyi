@@ -2,12 +2,13 @@
 SHGI native core: SH maths, scenes on Embree, EXR/PNG I/O, glTF/OBJ loading (see the shgi package).
 """
 from __future__ import annotations
+import collections.abc
 import numpy
 import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LogLevel', 'Material', 'Mesh', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'Progress', 'Scene', 'SensorFit', 'Texture', 'World', 'WorldSampling', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'max_threads', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LogLevel', 'Material', 'Mesh', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'Scene', 'SensorFit', 'Texture', 'World', 'WorldSampling', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'max_threads', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -1277,6 +1278,408 @@ class PreviewSettings:
         """
     @world_sampling.setter
     def world_sampling(self, arg0: WorldSampling) -> None:
+        ...
+class ProbeField(IndirectField):
+    """
+    
+    An immutable snapshot of SH probes, read as an IndirectField (render_preview, PreviewRenderer).
+    From ProbeGrid.field(), ProbeField.load(path) or ProbeField.import_exr(json_path).
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @staticmethod
+    def import_exr(json_path: str, lookup: ProbeLookupSettings = ...) -> ProbeField:
+        """
+        Reads an EXR + JSON export written by export().
+        """
+    @staticmethod
+    def load(path: str, lookup: ProbeLookupSettings = ...) -> ProbeField:
+        """
+        Reads a binary cache written by save() (OSError naming a bad file).
+        """
+    def export(self, json_path: str) -> None:
+        """
+        Writes <stem>.json and per volume <stem>_volume<v>.exr (float SH, positions, active, variance) and <stem>_volume<v>_visibility.exr; the JSON states basis, units and layout.
+        """
+    def save(self, path: str) -> None:
+        """
+        Writes the compact binary cache (SH at half precision: 56 bytes per L2 probe).
+        """
+    def with_lookup(self, lookup: ProbeLookupSettings) -> ProbeField:
+        """
+        The same probes read with other lookup settings.
+        """
+    @property
+    def active(self) -> numpy.typing.NDArray[numpy.bool]:
+        """
+        (N,) bool: False for probes inside geometry (never updated or read).
+        """
+    @property
+    def order(self) -> int:
+        """
+        SH order of the probes (1..4).
+        """
+    @property
+    def passes(self) -> int:
+        """
+        Update passes blended into these probes.
+        """
+    @property
+    def positions(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (N, 3) float32 probe positions after relocation (m, world).
+        """
+    @property
+    def probe_count(self) -> int:
+        """
+        Probes in all volumes (active or not).
+        """
+    @property
+    def sh(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (N, coefficients, 3) float32 incident radiance SH per probe (W m^-2 sr^-1), index l(l+1)+m, no Condon-Shortley phase.
+        """
+    @property
+    def variance(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (N,) float32 variance of each probe's DC luminance estimate.
+        """
+    @property
+    def volumes(self) -> list[ProbeVolume]:
+        """
+        The ProbeVolumes, in probe order.
+        """
+class ProbeGrid(IndirectField):
+    """
+    
+    SH probe grids updated by path tracing (seed 002), with DDGI-style relocation and visibility.
+    
+    Each update() traces rays_per_probe paths per active probe and blends them into the probes
+    (running mean, then an exponential blend with `hysteresis`). field() returns a snapshot for
+    rendering that later updates leave untouched. After editing and re-committing the scene, call
+    reset().
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @staticmethod
+    def from_field(scene: Scene, settings: ProbeGridSettings, field: ProbeField) -> ProbeGrid:
+        """
+        Continues refining stored probes (their volumes and order replace the settings').
+        """
+    def __init__(self, scene: Scene, settings: ProbeGridSettings = ..., progress: Progress = None) -> None:
+        """
+        Places the probes (the scene must be committed).
+        """
+    def export(self, json_path: str) -> None:
+        """
+        Writes <stem>.json and per volume <stem>_volume<v>.exr (float SH, positions, active, variance) and <stem>_volume<v>_visibility.exr; the JSON states basis, units and layout.
+        """
+    def field(self) -> ProbeField:
+        """
+        An immutable ProbeField of the current probes (safe to render while update() runs on another thread).
+        """
+    def relative_error(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (N,) sqrt(variance) / DC luminance per probe (inf before the first update).
+        """
+    def reset(self, progress: Progress = None) -> None:
+        """
+        Forgets every pass and re-places the probes.
+        """
+    def save(self, path: str) -> None:
+        """
+        Writes the compact binary cache (SH at half precision: 56 bytes per L2 probe).
+        """
+    def update(self, progress: Progress = None) -> None:
+        """
+        One update pass (GIL released). Raises shgi.Cancelled on cancel, keeping the previous probes.
+        """
+    @property
+    def active(self) -> numpy.typing.NDArray[numpy.bool]:
+        """
+        (N,) bool: False for probes inside geometry (never updated or read).
+        """
+    @property
+    def active_count(self) -> int:
+        """
+        Probes outside geometry.
+        """
+    @property
+    def memory_bytes(self) -> int:
+        """
+        Bytes held by the probes.
+        """
+    @property
+    def order(self) -> int:
+        """
+        SH order of the probes (1..4).
+        """
+    @property
+    def passes(self) -> int:
+        """
+        Update passes blended in.
+        """
+    @property
+    def positions(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (N, 3) float32 probe positions after relocation (m, world).
+        """
+    @property
+    def probe_count(self) -> int:
+        """
+        Probes in all volumes (active or not).
+        """
+    @property
+    def settings(self) -> ProbeGridSettings:
+        """
+        A copy of the settings.
+        """
+    @property
+    def sh(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (N, coefficients, 3) float32 incident radiance SH per probe (W m^-2 sr^-1), index l(l+1)+m, no Condon-Shortley phase.
+        """
+    @property
+    def timings(self) -> dict:
+        """
+        Seconds of the last placement and update; paths (and rays) of the last update.
+        """
+    @property
+    def variance(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (N,) float32 variance of each probe's DC luminance estimate.
+        """
+    @property
+    def volumes(self) -> list[ProbeVolume]:
+        """
+        The ProbeVolumes, in probe order.
+        """
+class ProbeGridSettings:
+    """
+    Settings of the ProbeGrid solver; every field has a default.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        ProbeGridSettings(**fields), e.g. ProbeGridSettings(order=1).
+        """
+    def validate(self) -> None:
+        """
+        Raises ValueError naming the first invalid field.
+        """
+    @property
+    def backface_threshold(self) -> float:
+        """
+        Share of back-face hits marking a probe as inside geometry (0.25).
+        """
+    @backface_threshold.setter
+    def backface_threshold(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def bleed_bias(self) -> float:
+        """
+        Chebyshev cut-off (0; EEVEE's Bleed Bias).
+        """
+    @bleed_bias.setter
+    def bleed_bias(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def bounces(self) -> int:
+        """
+        Diffuse and glossy scatterings along a probe path (3: with the renderer's surface, Cycles' default 4).
+        """
+    @bounces.setter
+    def bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def clamp(self) -> float:
+        """
+        Max component of a radiance sample against fireflies; 0 = off (0).
+        """
+    @clamp.setter
+    def clamp(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def hysteresis(self) -> float:
+        """
+        History weight of the exponential blend, in [0, 1) (0.95).
+        """
+    @hysteresis.setter
+    def hysteresis(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def include_direct(self) -> bool:
+        """
+        Keep emitters and world seen straight from the probes (False).
+        """
+    @include_direct.setter
+    def include_direct(self, arg0: bool) -> None:
+        ...
+    @property
+    def max_offset(self) -> float:
+        """
+        Largest relocation, in probe spacings per axis (0.45).
+        """
+    @max_offset.setter
+    def max_offset(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def normal_bias(self) -> float:
+        """
+        Probe spacings along the shading normal (0.25; EEVEE's Bias).
+        """
+    @normal_bias.setter
+    def normal_bias(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def order(self) -> int:
+        """
+        SH order of the probes, 1..4 (2).
+        """
+    @order.setter
+    def order(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def placement_rays(self) -> int:
+        """
+        Rays per probe for placement (128).
+        """
+    @placement_rays.setter
+    def placement_rays(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def rays_per_probe(self) -> int:
+        """
+        Paths per probe per update (256).
+        """
+    @rays_per_probe.setter
+    def rays_per_probe(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def relocate(self) -> bool:
+        """
+        Move probes out of geometry before disabling them (True).
+        """
+    @relocate.setter
+    def relocate(self, arg0: bool) -> None:
+        ...
+    @property
+    def seed(self) -> int:
+        """
+        Random seed (0).
+        """
+    @seed.setter
+    def seed(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def spacing(self) -> float:
+        """
+        Probe spacing (m) of the fitted volume; 0 = longest side / 8.
+        """
+    @spacing.setter
+    def spacing(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def visibility(self) -> bool:
+        """
+        Leak prevention weights (True).
+        """
+    @visibility.setter
+    def visibility(self, arg0: bool) -> None:
+        ...
+    @property
+    def visibility_blur(self) -> float:
+        """
+        Angular radius (rad) of the distance filter (0.15; EEVEE's Blur).
+        """
+    @visibility_blur.setter
+    def visibility_blur(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def visibility_resolution(self) -> int:
+        """
+        Octahedral visibility texels per side per probe (8).
+        """
+    @visibility_resolution.setter
+    def visibility_resolution(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def volumes(self) -> list[ProbeVolume]:
+        """
+        List of ProbeVolume; empty: one volume fitted to the scene bounds.
+        """
+    @volumes.setter
+    def volumes(self, arg0: collections.abc.Sequence[ProbeVolume]) -> None:
+        ...
+class ProbeLookupSettings:
+    """
+    How shading points read probes (EEVEE: Bias, Bleed Bias).
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        ProbeLookupSettings(**fields).
+        """
+    @property
+    def bleed_bias(self) -> float:
+        """
+        Chebyshev weights below it become 0, against light bleeding (0).
+        """
+    @bleed_bias.setter
+    def bleed_bias(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def normal_bias(self) -> float:
+        """
+        Probe spacings the shading point moves along its normal (0.25).
+        """
+    @normal_bias.setter
+    def normal_bias(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def visibility(self) -> bool:
+        """
+        Back-face and Chebyshev visibility weights; False = plain trilinear (True).
+        """
+    @visibility.setter
+    def visibility(self, arg0: bool) -> None:
+        ...
+class ProbeVolume:
+    """
+    
+    A box of probes: the cube [-1, 1]^3 of world_from_volume (like Blender's irradiance volume
+    object), with resolution probes along each local axis at the cell centres.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        ProbeVolume(world_from_volume=4x4, resolution=(nx, ny, nz)).
+        """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def resolution(self) -> tuple[int, int, int]:
+        """
+        Probes along the local x, y, z axes, each >= 1.
+        """
+    @resolution.setter
+    def resolution(self, arg1: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex]) -> None:
+        ...
+    @property
+    def world_from_volume(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        4x4 matrix (row-major, Blender's matrix_world) mapping [-1,1]^3 to the world.
+        """
+    @world_from_volume.setter
+    def world_from_volume(self, arg1: typing.Any) -> None:
         ...
 class Progress:
     """
