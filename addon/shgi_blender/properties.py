@@ -1,8 +1,9 @@
 """``scene.shgi``: the render settings of the SHGI engine (a PropertyGroup).
 
 Property names are the native settings' field names and their defaults the native defaults
-(settings.py holds both tables and the mapping to PathTracerSettings, PreviewSettings and
-PhotonLatticeSettings). Enum tables are module-level so Blender keeps them alive.
+(settings.py holds the tables and the mapping to PathTracerSettings, PreviewSettings,
+PhotonLatticeSettings and, through the ``scene.shgi.probe_grid`` group, ProbeGridSettings).
+Enum tables are module-level so Blender keeps them alive.
 """
 
 import bpy
@@ -11,12 +12,71 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, Po
 from . import settings
 
 D = settings.PROPERTY_DEFAULTS
+P = settings.PROBE_GRID_DEFAULTS
+S = settings.SOLVE_PROPERTY_DEFAULTS
 V = settings.VIEWPORT_PROPERTY_DEFAULTS
 
 METHOD_ITEMS = [(m.identifier, m.label, m.description, m.number) for m in settings.METHODS]
 WORLD_SAMPLING_ITEMS = list(settings.ENUM_ITEMS["world_sampling"])
 CAUSTICS_ITEMS = list(settings.ENUM_ITEMS["caustics"])
 INTERPOLATION_ITEMS = list(settings.ENUM_ITEMS["interpolation"])
+
+
+class ShgiProbeGridSettings(bpy.types.PropertyGroup):
+    """ProbeGridSettings of the PROBE_GRID method (``scene.shgi.probe_grid``)."""
+
+    order: IntProperty(
+        name="SH Order", default=P["order"], min=1, max=4,
+        description="Spherical-harmonics order of the probes (1: 4, 2: 9, 4: 25 coefficients)")
+    spacing: FloatProperty(
+        name="Spacing", default=P["spacing"], min=0.0, soft_max=10.0, unit="LENGTH",
+        description="Probe spacing of the volume fitted to the scene when it has no Irradiance "
+                    "Volume; 0 puts 8 probes along its longest side")
+    rays_per_probe: IntProperty(
+        name="Rays per Probe", default=P["rays_per_probe"], min=1, soft_max=4096,
+        description="Paths traced per probe and update pass")
+    hysteresis: FloatProperty(
+        name="Hysteresis", default=P["hysteresis"], min=0.0, max=0.999,
+        description="Weight of the history when a pass is blended in (higher: smoother, "
+                    "slower to follow edits)")
+    clamp: FloatProperty(
+        name="Clamp", default=P["clamp"], min=0.0, soft_max=100.0,
+        description="Largest colour component of a probe's radiance sample against "
+                    "fireflies; 0 disables clamping")
+    bounces: IntProperty(
+        name="Bounces", default=P["bounces"], min=1, max=64,
+        description="Diffuse and glossy scatterings along a probe's path")
+    visibility: BoolProperty(
+        name="Visibility", default=P["visibility"],
+        description="Weight probes by what they see (distance moments, back faces) so that "
+                    "light does not leak through walls")
+    visibility_resolution: IntProperty(
+        name="Visibility Resolution", default=P["visibility_resolution"], min=2, max=64,
+        description="Texels per side of each probe's octahedral distance map")
+    visibility_blur: FloatProperty(
+        name="Blur", default=P["visibility_blur"], min=0.0, max=1.5, subtype="ANGLE",
+        description="Angular radius of the distance filter (EEVEE's Visibility Blur)")
+    normal_bias: FloatProperty(
+        name="Bias", default=P["normal_bias"], min=0.0, max=1.0,
+        description="Probe spacings a shading point moves along its normal before it reads "
+                    "the probes (EEVEE's Visibility Bias)")
+    bleed_bias: FloatProperty(
+        name="Bleed Bias", default=P["bleed_bias"], min=0.0, max=1.0,
+        description="Visibility weights below it become 0, against light bleeding (EEVEE's "
+                    "Bleed Bias)")
+    relocate: BoolProperty(
+        name="Relocate", default=P["relocate"],
+        description="Move probes inside geometry out of it before disabling them")
+    max_offset: FloatProperty(
+        name="Max Offset", default=P["max_offset"], min=0.0, max=0.5,
+        description="Largest relocation, in probe spacings per axis")
+    backface_threshold: FloatProperty(
+        name="Back-face Threshold", default=P["backface_threshold"], min=0.0, max=1.0,
+        description="Share of back-face hits that marks a probe as inside geometry")
+    placement_rays: IntProperty(
+        name="Placement Rays", default=P["placement_rays"], min=1, soft_max=4096,
+        description="Rays per probe that find probes inside geometry")
+
 
 class ShgiSceneSettings(bpy.types.PropertyGroup):
     """SHGI render settings of a scene (``scene.shgi``)."""
@@ -82,13 +142,27 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
         name="Viewport Photon Passes", default=V["viewport_photon_passes"], min=1, soft_max=64,
         description="Photon passes the Rendered viewport solves, each tracing Photons (1 gives "
                     "the lattice of a final render; more give a smoother viewport)")
+    probe_grid: PointerProperty(type=ShgiProbeGridSettings, name="Probe Grid",
+                                description="Settings of the Probe Grid method")
+    probe_passes: IntProperty(
+        name="Render Passes", default=S["probe_passes"], min=1, soft_max=256,
+        description="Probe update passes of an F12 render or a Solve")
+    viewport_probe_passes: IntProperty(
+        name="Viewport Passes", default=V["viewport_probe_passes"], min=1, soft_max=1024,
+        description="Probe update passes the Rendered viewport runs in the background, a new "
+                    "frame after each, before it stops refining")
+    show_probes: BoolProperty(
+        name="Probes", default=V["show_probes"],
+        description="Draw the active probes as small spheres shaded by their irradiance "
+                    "(Rendered viewport or frozen solution)")
     show_lattice_samples: BoolProperty(
         name="Lattice Samples", default=V["show_lattice_samples"],
         description="Draw the photon lattice's cells that hold surface as small spheres shaded "
                     "by their indirect light (Rendered viewport or frozen solution)")
 
 
-_CLASSES = (ShgiSceneSettings,)
+# Registered in this order: a PointerProperty's group before the group holding it.
+_CLASSES = (ShgiProbeGridSettings, ShgiSceneSettings)
 
 
 def register():

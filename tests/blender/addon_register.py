@@ -23,12 +23,16 @@ from recording_layout import draw_panel  # noqa: E402
 
 MODULE = "shgi_blender"
 ENGINE = "SHGI"
-METHODS = {"PATH_TRACE", "PHOTON_LATTICE"}
+METHODS = {"PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID"}
 STOCK_PANELS = ("EEVEE_MATERIAL_PT_surface", "EEVEE_WORLD_PT_surface", "RENDER_PT_format",
                 "RENDER_PT_color_management", "DATA_PT_context_light")
-OWN_CLASSES = ("SHGI_RENDER_PT_method", "SHGI_RENDER_PT_photon_lattice", "SHGI_LIGHT_PT_light",
-               "SHGI_VIEWLAYER_PT_passes", "SHGI_OT_lattice_solve", "SHGI_OT_lattice_clear",
-               "SHGI_OT_quality_preset")
+OWN_CLASSES = ("SHGI_RENDER_PT_method", "SHGI_RENDER_PT_photon_lattice",
+               "SHGI_RENDER_PT_probe_grid", "SHGI_RENDER_PT_probe_grid_visibility",
+               "SHGI_LIGHT_PT_light", "SHGI_VIEWLAYER_PT_passes", "SHGI_OT_solve",
+               "SHGI_OT_clear_solution", "SHGI_OT_quality_preset")
+# scene.shgi.probe_grid mirrors ProbeGridSettings: its Visibility panel shows EEVEE's names.
+VISIBILITY_PROPERTIES = {"normal_bias": "Bias", "bleed_bias": "Bleed Bias",
+                         "visibility_blur": "Blur"}
 
 
 def enabled():
@@ -76,7 +80,13 @@ def check_panels_draw(scene):
         for name in ("SHGI_RENDER_PT_method", "SHGI_RENDER_PT_light_paths",
                      "SHGI_RENDER_PT_last_render", "SHGI_VIEWLAYER_PT_passes"):
             draw_panel(name, context)
+    scene.shgi.method = "PHOTON_LATTICE"
     draw_panel("SHGI_RENDER_PT_photon_lattice", context)
+    scene.shgi.method = "PROBE_GRID"
+    if "fitted to the scene" not in draw_panel("SHGI_RENDER_PT_probe_grid", context):
+        raise AssertionError("the probe grid panel does not say its volume is fitted")
+    draw_panel("SHGI_RENDER_PT_probe_grid_visibility", context)
+    check_probe_grid_properties(scene)
     draw_panel("SHGI_LIGHT_PT_light", context)
     scene.view_layers[0].use_pass_mist = True
     if "Mist" not in draw_panel("SHGI_VIEWLAYER_PT_passes", context):
@@ -84,6 +94,23 @@ def check_panels_draw(scene):
     scene.view_layers[0].use_pass_mist = False
     bpy.data.objects.remove(light_object)
     bpy.data.lights.remove(light)
+
+
+def check_probe_grid_properties(scene):
+    """scene.shgi.probe_grid holds ProbeGridSettings' defaults; the UI names are EEVEE's."""
+    import shgi
+
+    native = shgi.ProbeGridSettings()
+    grid = scene.shgi.probe_grid
+    for name in ("order", "spacing", "rays_per_probe", "hysteresis", "clamp", "bounces",
+                 "normal_bias", "bleed_bias", "visibility_blur", "visibility", "relocate"):
+        if abs(float(getattr(grid, name)) - float(getattr(native, name))) > 1e-6:
+            raise AssertionError(f"probe_grid.{name} is {getattr(grid, name)}, native "
+                                 f"default {getattr(native, name)}")
+    for name, label in VISIBILITY_PROPERTIES.items():
+        if grid.bl_rna.properties[name].name != label:
+            raise AssertionError(f"probe_grid.{name} is labelled "
+                                 f"{grid.bl_rna.properties[name].name!r}, not {label!r}")
 
 
 def check_unregistered():

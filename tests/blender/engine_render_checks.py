@@ -2,12 +2,16 @@
 
 For the Cornell box and the sun room (examples/blender_scenes.py at SCALE) this script
 1. checks that exporting the bpy scene gives the scene examples/scenes.py builds;
-2. renders Cycles (CYCLES_SAMPLES spp) and SHGI with each method through F12 and records, per
-   method: Combined PSNR after auto-exposure and sRGB, the Combined mean ratio, the
-   DiffInd x DiffCol mean ratio, the pass names of both results and the render record;
-3. solves a frozen photon lattice with the Solve operator, checks the panel's figures, renders
-   it through F12 from the scene camera and from a moved camera, and clears it;
-4. turns view-layer passes off and on and checks that F12's result follows them.
+2. renders Cycles (CYCLES_SAMPLES spp) and SHGI with each method through F12 (PROBE_GRID on
+   the Cornell box only) and records, per method: Combined PSNR after auto-exposure and sRGB,
+   the Combined mean ratio, the DiffInd x DiffCol mean ratio, the pass names of both results
+   and the render record;
+3. sun room: solves a frozen photon lattice with the Solve operator, checks the panel's
+   figures, renders it through F12 from the scene camera and from a moved camera, and clears it;
+4. Cornell box: adds an Irradiance Volume object, renders PROBE_GRID through F12 ("PROBE_GRID
+   volume") and with a frozen solution, and records where the probes went against the
+   object's cells;
+5. turns view-layer passes off and on and checks that F12's result follows them.
 The pytest side (tests/python/test_blender_engine.py) asserts the figures; this script asserts
 only what needs Blender (the export, the frozen solution) and prints ENGINE_RENDER_OK.
 """
@@ -31,6 +35,7 @@ from mathutils import Matrix  # noqa: E402
 from recording_layout import draw_panel  # noqa: E402
 from shgi_blender.engine import final_render, passes, solution_cache  # noqa: E402
 from shgi_blender.export import export_scene  # noqa: E402
+from shgi_blender.export.light_probe import IRRADIANCE_VOLUME_TYPES  # noqa: E402
 
 SCALE = 0.25  # 64 x 64 (Cornell box) and 64 x 48 (sun room) pixels
 CYCLES_SAMPLES = 1024
@@ -45,6 +50,15 @@ EXTRA_PASS_FLAGS = ("use_pass_z", "use_pass_normal")
 EXPORT_TOLERANCE = 1e-5
 CAMERA_NUDGE = Matrix.Translation((0.05, 0.0, 0.0))
 PASS_TOGGLE_CASE = ("Depth", "DiffInd")
+METHODS = {"cornell_box": ("PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID"),
+           "sun_room": ("PATH_TRACE", "PHOTON_LATTICE")}
+# The Irradiance Volume object of the Cornell box: 7 x 6 x 5 probes in most of the room (the
+# box spans x -1..1, y 0..2, z 0..2); some fall inside the blocks and get relocated or disabled.
+VOLUME_LOCATION = (0.0, 1.0, 1.0)
+VOLUME_SCALE = (0.95, 0.9, 0.92)
+VOLUME_RESOLUTION = (7, 6, 5)
+# float32 round trips of the object's matrix, in metres.
+VOLUME_MATRIX_TOLERANCE = 1e-5
 
 
 def check_export_matches_scripting_api(name, scene):
@@ -130,7 +144,8 @@ def render_method(scene, method, reference, tmpdir, label=None):
 def check_frozen_solution(scene, reference, tmpdir, results):
     """Solve once, render the frozen lattice from two cameras, clear (non-interactive mode)."""
     key = scene.name_full
-    status = bpy.ops.shgi.lattice_solve("INVOKE_DEFAULT")  # no window: it runs to the end
+    scene.shgi.method = "PHOTON_LATTICE"
+    status = bpy.ops.shgi.solve("INVOKE_DEFAULT")  # no window: it runs to the end
     if status != {"FINISHED"} or solution_cache.get(key) is None:
         raise AssertionError("Solve did not store a frozen solution")
     solution = solution_cache.get(key)
@@ -149,8 +164,69 @@ def check_frozen_solution(scene, reference, tmpdir, results):
             moved["Combined"], image["Combined"]):
         raise AssertionError("a camera move did not change the frozen solution's render")
     scene.camera.matrix_world = CAMERA_NUDGE.inverted() @ scene.camera.matrix_world
-    if bpy.ops.shgi.lattice_clear() != {"FINISHED"} or solution_cache.get(key) is not None:
+    if bpy.ops.shgi.clear_solution() != {"FINISHED"} or solution_cache.get(key) is not None:
         raise AssertionError("Clear left the frozen solution")
+
+
+def add_irradiance_volume(scene):
+    """An Irradiance Volume light probe object ('GRID' in Blender 3.x, 'VOLUME' in 4.x)."""
+    types = bpy.types.LightProbe.bl_rna.properties["type"].enum_items.keys()
+    data = bpy.data.lightprobes.new("probe_volume",
+                                    next(t for t in IRRADIANCE_VOLUME_TYPES if t in types))
+    data.grid_resolution_x, data.grid_resolution_y, data.grid_resolution_z = VOLUME_RESOLUTION
+    obj = bpy.data.objects.new("probe_volume", data)
+    scene.collection.objects.link(obj)
+    obj.location, obj.scale = VOLUME_LOCATION, VOLUME_SCALE
+    bpy.context.view_layer.update()
+    return obj
+
+
+def probe_placement(positions, obj, max_offset):
+    """Where probes went against the object's cell centres: the largest per-axis offset from
+    the nearest centre in probe spacings, and how many sit on a centre."""
+    matrix = np.array(obj.matrix_world, np.float64)
+    counts = np.array(VOLUME_RESOLUTION)
+    axes = [(2.0 * np.arange(n) + 1.0) / n - 1.0 for n in counts]
+    local = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    centres = local @ matrix[:3, :3].T + matrix[:3, 3]
+    spacing = 2.0 * np.linalg.norm(matrix[:3, :3], axis=0) / counts
+    positions = np.asarray(positions, np.float64)
+    offsets = np.abs(positions[:, None, :] - centres[None, :, :]) / spacing
+    nearest = offsets.max(axis=2).min(axis=1)
+    return {"expected_probes": int(counts.prod()), "relocation_bound_spacings": max_offset,
+            "max_offset_spacings": float(nearest.max()),
+            "at_centre": int((nearest < 1e-4).sum())}
+
+
+def check_irradiance_volume(scene, reference, tmpdir, results):
+    """The Irradiance Volume object becomes the probe grid's volume, in F12 and in Solve."""
+    obj = add_irradiance_volume(scene)
+    row, image = render_method(scene, "PROBE_GRID", reference, tmpdir, "probe_volume")
+    results["PROBE_GRID volume"] = row
+    placement = probe_placement(row["record"]["probe_positions"], obj,
+                                scene.shgi.probe_grid.max_offset)
+    placement.update(resolution=list(VOLUME_RESOLUTION),
+                     f12_probes=len(row["record"]["probe_positions"]))
+    if bpy.ops.shgi.solve() != {"FINISHED"}:
+        raise AssertionError("Solve failed for PROBE_GRID")
+    solution = solution_cache.get(scene.name_full, "PROBE_GRID")
+    volume = solution.field.volumes[0]
+    placement["solve_probes"] = solution.field.probe_count
+    placement["volume_matrix_error"] = float(np.abs(
+        np.asarray(volume.world_from_volume) - np.array(obj.matrix_world)).max())
+    if tuple(volume.resolution) != VOLUME_RESOLUTION:
+        raise AssertionError(f"the grid's volume has {volume.resolution} probes, the object "
+                             f"{VOLUME_RESOLUTION}")
+    if "Irradiance Volume place" not in draw_panel("SHGI_RENDER_PT_probe_grid"):
+        raise AssertionError("the probe grid panel does not name the Irradiance Volume")
+    _, frozen = render_method(scene, "PROBE_GRID", reference, tmpdir, "probe_volume_frozen")
+    record = final_render.last_render()
+    if not record["frozen_solution"] or not np.allclose(frozen["Combined"], image["Combined"],
+                                                        atol=0.05):
+        raise AssertionError(f"F12 did not render the frozen probe grid like F12: {record}")
+    bpy.ops.shgi.clear_solution()
+    bpy.data.objects.remove(obj)
+    results["irradiance_volume"] = placement
 
 
 def check_pass_toggles(scene, tmpdir):
@@ -177,11 +253,12 @@ def run_scene(name, tmpdir):
     results = {"cycles": {"seconds": time.perf_counter() - start, "passes": sorted(reference),
                           "samples": CYCLES_SAMPLES,
                           "size": list(reference["Combined"].shape[1::-1])}}
-    for method in ("PATH_TRACE", "PHOTON_LATTICE"):
+    for method in METHODS[name]:
         results[method], _ = render_method(scene, method, reference, tmpdir)
     if name == "sun_room":
         check_frozen_solution(scene, reference, tmpdir, results)
     else:
+        check_irradiance_volume(scene, reference, tmpdir, results)
         check_pass_toggles(scene, tmpdir)
     return results
 
@@ -194,7 +271,7 @@ def print_table(results):
         print(f"{name:<12}{'Cycles':<24}{cycles['samples']:>6}{'':>9}{'1':>8}{'1':>13}"
               f"{cycles['seconds']:>9.2f}")
         for method, row in rows.items():
-            if method == "cycles":
+            if method in ("cycles", "irradiance_volume"):
                 continue
             print(f"{name:<12}{method:<24}{row['record']['samples']:>6}{row['psnr']:>9.2f}"
                   f"{row['mean_ratio']:>8.4f}{row['diffind_ratio']:>13.4f}{row['seconds']:>9.2f}")

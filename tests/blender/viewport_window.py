@@ -19,8 +19,11 @@ PHOTON_LATTICE, and then:
 4. moves the light to the right: the sync must read no geometry, and the new screenshot must
    be darker on the left and brighter on the right;
 5. turns the lattice overlay on and checks that it drew spheres into the screenshot;
-6. switches to PATH_TRACE (a few samples: the image is not black), then leaves Rendered shading
-   and checks that the viewport session ended with its engine.
+6. switches to PATH_TRACE (a few samples: the image is not black);
+7. switches to PROBE_GRID with the probe overlay on: the grid refines in the background (a
+   frame per update pass), the overlay draws its probes; then an Irradiance Volume object is
+   added and moved, and each time the worker starts a new grid with the object's probes;
+8. leaves Rendered shading and checks that the viewport session ended with its engine.
 Results go to the JSON file; tests/python/test_blender_viewport.py asserts the figures. A
 failed step writes its error there and exits Blender with 1 (exceptions in timers do not).
 """
@@ -53,6 +56,9 @@ LIGHT_X = (-0.6, 0.6)          # the ceiling light, before and after the move
 BLOCKS = 8                     # comparison blocks per side of the camera frame
 BORDER_INSET = 2               # pixels left out along the camera border (its anti-aliased edge)
 PATH_TRACE_SAMPLES = 4
+PROBE_SAMPLES = 4              # viewport samples of the probe grid step
+PROBE_PASSES = 3               # its background update passes
+PROBE_VOLUME_RESOLUTION = (4, 3, 3)
 BLOCK_NUDGE = 0.1              # m the short block moves along X
 # Everything the viewport's overlays draw besides draw handlers (the grid, axes, texts...).
 OTHER_OVERLAYS = ("show_floor", "show_axis_x", "show_axis_y", "show_axis_z", "show_text",
@@ -238,6 +244,7 @@ def steps():
     after = yield from move_block()
     yield from show_overlay(scene, after, box)
     yield from path_trace(scene, box)
+    yield from probe_grid(scene, box)
     yield from leave_rendered_shading()
     RESULTS["total_seconds"] = time.perf_counter() - start
 
@@ -308,7 +315,7 @@ def move_block():
 def show_overlay(scene, without, box):
     """The lattice overlay draws spheres inside the camera frame. Draw handlers draw with the
     viewport's overlays, so those are on with everything else they would draw off."""
-    from shgi_blender.ui import lattice_overlay
+    from shgi_blender.ui import field_overlay
 
     _window, _area, region, space = view3d()
     for name in OTHER_OVERLAYS:
@@ -316,16 +323,16 @@ def show_overlay(scene, without, box):
     space.overlay.show_overlays = True
     scene.shgi.show_lattice_samples = True
     deadline = time.perf_counter() + OVERLAY_TIMEOUT_SECONDS
-    draws = lattice_overlay.stats()["draws"]
-    while lattice_overlay.stats()["draws"] < draws + 2:
+    draws = field_overlay.stats()["draws"]
+    while field_overlay.stats()["draws"] < draws + 2:
         if time.perf_counter() > deadline:
-            raise AssertionError(f"the overlay did not draw: {lattice_overlay.stats()}")
+            raise AssertionError(f"the overlay did not draw: {field_overlay.stats()}")
         region.tag_redraw()
         yield STEP_SECONDS
     changed = np.abs(screenshot("overlay") - without).max(axis=2) > OVERLAY_CHANGE
     x0, y0, x1, y1 = (int(v) for v in box)
     inside = changed[y0:y1, x0:x1]
-    RESULTS["overlay"] = dict(lattice_overlay.stats(), changed_inside=float(inside.mean()),
+    RESULTS["overlay"] = dict(field_overlay.stats(), changed_inside=float(inside.mean()),
                               changed_outside=float(changed.sum() - inside.sum()) / changed.size)
     scene.shgi.show_lattice_samples = False
     space.overlay.show_overlays = False
@@ -338,6 +345,60 @@ def path_trace(scene, box):
     last_frame = session().worker.latest_frame().frame_id
     yield from wait_for_samples(PATH_TRACE_SAMPLES, CONVERGE_TIMEOUT_SECONDS, since=last_frame)
     RESULTS["path_trace_mean"] = float(crop_blocks(screenshot("path_trace"), box, BLOCKS).mean())
+
+
+def probe_grid(scene, box):
+    """PROBE_GRID refines in the background with its overlay on; an added, then moved,
+    Irradiance Volume object restarts the grid with the object's probes."""
+    from shgi_blender.export.light_probe import IRRADIANCE_VOLUME_TYPES
+    from shgi_blender.ui import field_overlay
+
+    _window, _area, region, space = view3d()
+    for name in OTHER_OVERLAYS:
+        setattr(space.overlay, name, False)
+    space.overlay.show_overlays = True
+    props = scene.shgi
+    props.method = "PROBE_GRID"
+    props.viewport_samples = PROBE_SAMPLES
+    props.viewport_probe_passes = PROBE_PASSES
+    props.show_probes = True
+    last_frame = session().worker.latest_frame().frame_id
+    frames, _ = yield from wait_for_samples(PROBE_SAMPLES, CONVERGE_TIMEOUT_SECONDS,
+                                            since=last_frame)
+    worker = session().worker
+    RESULTS["probe_grid"] = {"frames": frames, "passes": worker._solver.passes,
+                             "probes": worker._solver.grid.probe_count,
+                             "mean": float(crop_blocks(screenshot("probe_grid"), box,
+                                                       BLOCKS).mean())}
+    draws = field_overlay.stats()["draws"]
+    while field_overlay.stats()["draws"] < draws + 2:
+        region.tag_redraw()
+        yield STEP_SECONDS
+    RESULTS["probe_grid"]["overlay_spheres"] = field_overlay.stats()["spheres"]
+    RESULTS["probe_grid"]["active"] = worker._solver.grid.active_count
+    types = bpy.types.LightProbe.bl_rna.properties["type"].enum_items.keys()
+    data = bpy.data.lightprobes.new("probe_volume",
+                                    next(t for t in IRRADIANCE_VOLUME_TYPES if t in types))
+    data.grid_resolution_x, data.grid_resolution_y, data.grid_resolution_z = \
+        PROBE_VOLUME_RESOLUTION
+    volume = bpy.data.objects.new("probe_volume", data)
+    scene.collection.objects.link(volume)
+    volume.location, volume.scale = (0.0, 1.0, 1.0), (0.9, 0.9, 0.9)
+    grids = []
+    for step in ("added", "moved"):
+        if step == "moved":
+            volume.location.z += 0.1
+        last_frame = worker.latest_frame().frame_id
+        yield from wait_for_samples(PROBE_SAMPLES, CONVERGE_TIMEOUT_SECONDS, since=last_frame)
+        grid = worker._solver.grid
+        grids.append(grid)
+        RESULTS["probe_grid"][step] = {
+            "probes": grid.probe_count, "passes": grid.passes,
+            "volume_z": float(np.asarray(grid.volumes[0].world_from_volume)[2, 3]),
+            "new_grid": len(grids) == 1 or grids[-1] is not grids[-2]}
+    bpy.data.objects.remove(volume)
+    props.show_probes = False
+    space.overlay.show_overlays = False
 
 
 def leave_rendered_shading():

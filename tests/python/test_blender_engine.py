@@ -1,4 +1,4 @@
-"""The SHGI render engine (issue 5): its bpy-free parts here, F12 inside Blender.
+"""The SHGI render engine (issues 5 and 6): its bpy-free parts here, F12 inside Blender.
 
 Outside Blender (/usr/bin/python3): the settings tables against the native structs, presets,
 the pass layout, the worker-thread render job (same image as one native call, prompt cancel),
@@ -6,8 +6,9 @@ the scene checks. Inside Blender (tests/blender/engine_*.py, one Blender start e
 register/unregister cycles run in test_blender_export.py's addon_register.py): F12 of the
 project's Cornell box and sun room with each method against Cycles
 (Combined PSNR >= 28 dB after auto-exposure and sRGB; Combined mean within 10%, 2% for the
-path tracer; DiffInd x DiffCol mean within 10%; Cycles' pass names), the frozen lattice
-solution, Esc, broken scenes rendering with warnings, and a missing native module.
+path tracer; DiffInd x DiffCol mean within 10%; Cycles' pass names), PROBE_GRID on the Cornell
+box with a fitted volume and with an Irradiance Volume object (whose cells the probes fill),
+the frozen solutions, Esc, broken scenes rendering with warnings, and a missing native module.
 """
 
 import sys
@@ -26,12 +27,13 @@ sys.path.insert(0, str(REPO_ROOT / "examples"))
 
 import scenes  # noqa: E402
 from shgi_blender import native, presets, settings  # noqa: E402
-from shgi_blender.engine import passes, scene_checks  # noqa: E402
+from shgi_blender.engine import field_solvers, field_spheres, passes, scene_checks  # noqa: E402
 from shgi_blender.engine.render_job import RenderJob, sample_rounds  # noqa: E402
 
 # Issue 5's acceptance figures against Cycles.
 MIN_PSNR_DB = 28.0
-MEAN_TOLERANCE = {"PATH_TRACE": 0.02, "PHOTON_LATTICE": 0.10, "PHOTON_LATTICE frozen": 0.10}
+MEAN_TOLERANCE = {"PATH_TRACE": 0.02, "PHOTON_LATTICE": 0.10, "PHOTON_LATTICE frozen": 0.10,
+                  "PROBE_GRID": 0.10, "PROBE_GRID volume": 0.10}
 DIFFUSE_INDIRECT_TOLERANCE = 0.10
 # DESIGN.md: cancel returns within 0.2 s; the engine polls every 0.05 s.
 CANCEL_LATENCY = 0.5
@@ -39,7 +41,11 @@ CANCEL_LATENCY = 0.5
 
 def default_props(**overrides):
     """scene.shgi as a plain object with the property defaults."""
-    return SimpleNamespace(**dict(settings.PROPERTY_DEFAULTS, method="PATH_TRACE", **overrides))
+    values = dict(settings.PROPERTY_DEFAULTS, **settings.SOLVE_PROPERTY_DEFAULTS,
+                  **settings.VIEWPORT_PROPERTY_DEFAULTS, method="PATH_TRACE",
+                  probe_grid=SimpleNamespace(**settings.PROBE_GRID_DEFAULTS))
+    values.update(overrides)
+    return SimpleNamespace(**values)
 
 
 # --- settings, presets, passes (no Blender) ----------------------------------------------------
@@ -62,6 +68,19 @@ def test_property_defaults_are_the_native_defaults(struct, fields):
         assert getattr(built, native_name) == expected, (struct.__name__, native_name, prop_name)
 
 
+def test_probe_grid_properties_mirror_the_native_settings():
+    native_defaults = shgi.ProbeGridSettings()
+    built = settings.probe_grid_settings(default_props(seed=4), shgi)
+    for name, value in settings.PROBE_GRID_DEFAULTS.items():
+        assert getattr(native_defaults, name) == pytest.approx(value), name
+        assert getattr(built, name) == pytest.approx(value), name
+    assert built.seed == 4 and built.volumes == [] and not built.include_direct
+    mirrored = set(settings.PROBE_GRID_DEFAULTS) | {"seed", "volumes", "include_direct"}
+    native_fields = {name for name in dir(native_defaults)
+                     if not name.startswith("_") and name != "validate"}
+    assert native_fields == mirrored  # a new native field needs a property (or a reason)
+
+
 def test_settings_follow_the_properties():
     props = default_props(samples=7, seed=3, caustics="PHOTON_MAP", interpolation="TRILINEAR",
                           diffuse_bounces=2, world_sampling="UNIFORM")
@@ -73,8 +92,17 @@ def test_settings_follow_the_properties():
     assert lattice.caustics == shgi.CausticMode.PHOTON_MAP
     assert lattice.interpolation == shgi.LatticeInterpolation.TRILINEAR
     assert lattice.max_bounces == 2  # photon scatterings follow the diffuse bounce limit
-    assert settings.lattice_signature(props) != settings.lattice_signature(
+    assert settings.solver_signature(props) != settings.solver_signature(
         default_props(photons=5))
+    grid_props = default_props(method="PROBE_GRID")
+    grid_props.probe_grid.normal_bias = 0.5
+    assert settings.solver_signature(grid_props) != settings.solver_signature(
+        default_props(method="PROBE_GRID"))
+    values = settings.render_property_values(grid_props)
+    assert settings.properties_from_values(values).probe_grid.normal_bias == 0.5
+    assert not settings.overlay_wanted(grid_props)
+    grid_props.show_probes = True
+    assert settings.overlay_wanted(grid_props)
 
 
 def test_enum_properties_offer_the_native_members():
@@ -85,7 +113,8 @@ def test_enum_properties_offer_the_native_members():
 
 def test_methods_implemented_and_reserved():
     identifiers = [method.identifier for method in settings.METHODS]
-    assert identifiers == ["PATH_TRACE", "PHOTON_LATTICE"]
+    assert identifiers == ["PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID"]
+    assert [method.number for method in settings.METHODS] == [0, 1, 2]  # file values stay
     numbers = [method.number for method in settings.METHODS]
     numbers += list(settings.RESERVED_METHODS.values())
     assert len(set(numbers)) == len(numbers)
@@ -174,8 +203,10 @@ def test_path_trace_job_equals_one_native_render():
 def test_lattice_job_solves_then_renders_and_reuses_a_field_for_new_cameras():
     builder = scenes.cornell_box(0.06)
     scene = builder.scene  # committed by the job
+    recipe = field_solvers.SolverRecipe(field_solvers.LatticeSolver,
+                                        shgi.PhotonLatticeSettings(photons=20000, seed=2), 1)
     job = RenderJob(shgi, scene, 4, preview_settings=shgi.PreviewSettings(seed=2),
-                    lattice_settings=shgi.PhotonLatticeSettings(photons=20000, seed=2)).start()
+                    solver_recipe=recipe).start()
     assert job.wait(60) and job.error is None
     assert job.solution.timings["photons_emitted"] == 20000 and job.solution.memory_bytes > 0
     assert set(job.timings) == {"commit", "solve", "render"}
@@ -187,10 +218,61 @@ def test_lattice_job_solves_then_renders_and_reuses_a_field_for_new_cameras():
     assert frozen.last_snapshot().passes["Combined"].shape == (10, 20, 4)
 
 
+def test_probe_grid_job_renders_the_grid_of_its_passes():
+    """F12's PROBE_GRID job: placement, `passes` updates, then the preview renderer over the
+    grid's snapshot; the same image as those native calls made directly."""
+    scene = committed(scenes.cornell_box(0.06))
+    volume = shgi.ProbeVolume(resolution=(3, 3, 3), world_from_volume=np.array(
+        [[0.9, 0, 0, 0], [0, 0.9, 0, 1.0], [0, 0, 0.9, 1.0], [0, 0, 0, 1]], np.float32))
+    grid_settings = shgi.ProbeGridSettings(rays_per_probe=32, seed=3, volumes=[volume])
+    recipe = field_solvers.SolverRecipe(field_solvers.ProbeGridSolver, grid_settings, 2)
+    job = RenderJob(shgi, scene, 3, preview_settings=shgi.PreviewSettings(seed=2),
+                    solver_recipe=recipe).start()
+    assert job.wait(60) and job.error is None, job.error
+    solver = job.solution.solver
+    assert solver.passes == 2 and job.solution.field.probe_count == 27
+    assert job.solution.timings["update"] > 0.0 and job.solution.memory_bytes > 0
+    grid = shgi.ProbeGrid(scene, grid_settings)
+    grid.update()
+    grid.update()
+    expected, _ = shgi.render_preview(scene, grid.field(), shgi.PreviewSettings(samples=3, seed=2))
+    for name, pixels in expected.items():
+        np.testing.assert_array_equal(job.last_snapshot().passes[name], pixels, err_msg=name)
+
+
+def test_probe_overlay_shows_each_probe_s_own_irradiance():
+    """A sphere's six irradiances are its probe's SH convolved with the clamped cosine
+    (L1: E(n) = pi Y00 L00 + 2pi/3 * 0.488603 (n . L1), negative ringing clamped to 0), inactive
+    probes are left out."""
+    scene = committed(scenes.cornell_box(0.06))
+    grid = shgi.ProbeGrid(scene, shgi.ProbeGridSettings(order=1, relocate=False,
+                                                        rays_per_probe=32, seed=1))
+    grid.update()
+    field = grid.field()
+    overlay = field_solvers.probe_overlay(shgi, field)
+    assert len(overlay.centres) == field.active.sum() > 0
+    assert overlay.spacing == pytest.approx(2.0 / 8, rel=0.05)  # 8 probes along 2 m
+    sh = field.sh[field.active]                                  # (K, 4, 3): Y00, y, z, x
+    linear = np.stack([sh[:, 3], sh[:, 1], sh[:, 2]], axis=1)    # (K, xyz, rgb)
+    band1 = 2.0 * np.pi / 3.0 * 0.488603
+    expected = np.empty_like(overlay.irradiance)
+    for index, axis in enumerate(field_spheres.AXES):
+        expected[:, index] = np.pi * 0.282095 * sh[:, 0] + band1 * np.einsum(
+            "d,kdc->kc", axis, linear)
+    expected = np.maximum(expected, 0.0)
+    np.testing.assert_allclose(overlay.irradiance, expected, rtol=2e-3, atol=1e-5)
+
+
 @pytest.mark.parametrize("stage, job_args", [
     ("Path tracing", {"path_tracer_settings": shgi.PathTracerSettings()}),
     ("Tracing photons", {"preview_settings": shgi.PreviewSettings(),
-                         "lattice_settings": shgi.PhotonLatticeSettings(photons=200_000_000)}),
+                         "solver_recipe": field_solvers.SolverRecipe(
+                             field_solvers.LatticeSolver,
+                             shgi.PhotonLatticeSettings(photons=200_000_000), 1)}),
+    ("Updating probes", {"preview_settings": shgi.PreviewSettings(),
+                         "solver_recipe": field_solvers.SolverRecipe(
+                             field_solvers.ProbeGridSolver,
+                             shgi.ProbeGridSettings(rays_per_probe=65536), 4)}),
 ])
 def test_cancel_stops_a_job_promptly(stage, job_args):
     scene = committed(scenes.cornell_box(0.25))
@@ -248,7 +330,8 @@ def test_blender_engine_script(script, marker, build_python_dir, tmp_path_factor
 
 RENDER_CASES = [(scene, method) for scene in ("cornell_box", "sun_room")
                 for method in ("PATH_TRACE", "PHOTON_LATTICE")] + [
-    ("sun_room", "PHOTON_LATTICE frozen")]
+    ("sun_room", "PHOTON_LATTICE frozen"), ("cornell_box", "PROBE_GRID"),
+    ("cornell_box", "PROBE_GRID volume")]
 
 
 @needs_blender
@@ -264,3 +347,19 @@ def test_f12_matches_cycles(scene, method, build_python_dir, tmp_path_factory):
         f"Combined mean ratio {row['mean_ratio']:.4f}")
     assert abs(row["diffind_ratio"] - 1.0) <= DIFFUSE_INDIRECT_TOLERANCE, (
         f"DiffInd x DiffCol mean ratio {row['diffind_ratio']:.4f}")
+
+
+@needs_blender
+def test_irradiance_volume_object_places_the_probes(build_python_dir, tmp_path_factory):
+    """The Cornell box with an Irradiance Volume object: F12 and Solve fill its cells with
+    probes (each probe within the relocation bound of a cell centre of the object's matrix)."""
+    results = run_engine_script("engine_render_checks.py", "ENGINE_RENDER_OK", build_python_dir,
+                                tmp_path_factory)
+    volume = results["cornell_box"]["irradiance_volume"]
+    print(f"Irradiance Volume {volume['resolution']}: F12 {volume['f12_probes']} probes, "
+          f"{volume['at_centre']} at a cell centre, largest offset "
+          f"{volume['max_offset_spacings']:.3f} spacings")
+    assert volume["f12_probes"] == volume["solve_probes"] == volume["expected_probes"]
+    assert volume["max_offset_spacings"] <= volume["relocation_bound_spacings"] + 1e-3
+    assert volume["at_centre"] >= volume["expected_probes"] // 2
+    assert volume["volume_matrix_error"] < 1e-5

@@ -4,10 +4,12 @@ Outside Blender (/usr/bin/python3): the viewport camera read back from Blender's
 matrices, the frame schedule, the sync plan of depsgraph updates, scene snapshots (build,
 compare), the worker thread (its last frame equals one native render of the same view; a moved
 object reuses the scene; a view change never cancels a photon pass; a scene change cancels
-promptly) and the lattice overlay's geometry.
+promptly; a probe grid refines in the background and starts afresh when its irradiance volume
+moves) and the lattice overlay's geometry.
 Inside Blender: tests/blender/viewport_sync_checks.py (background: which edits read geometry
 again, and an incremental export equal to a full one) and tests/blender/viewport_window.py (a
-real window under Xvfb: Rendered shading, screenshots, F12, a moved light, the overlay).
+real window under Xvfb: Rendered shading, screenshots, F12, a moved light, the overlay, the
+probe grid refining with its probes drawn and restarting when its Irradiance Volume moves).
 """
 
 import json
@@ -29,9 +31,11 @@ sys.path.insert(0, str(REPO_ROOT / "examples"))
 
 import scenes  # noqa: E402
 from shgi_blender import settings  # noqa: E402
-from shgi_blender.engine import lattice_samples, sync_plan, viewport_camera  # noqa: E402
+from shgi_blender.engine import (  # noqa: E402
+    field_spheres, lattice_samples, sync_plan, viewport_camera)
 from shgi_blender.engine.viewport_worker import Step, ViewportWorker, frame_schedule  # noqa
 from shgi_blender.export import conversions  # noqa: E402
+from shgi_blender.export.light_probe import ProbeVolumeRecord  # noqa: E402
 from shgi_blender.export.scene_snapshot import (  # noqa: E402
     DIFFERENT, EDITABLE, SAME, InstanceRecord, MaterialTable, SceneSnapshot)
 
@@ -209,10 +213,12 @@ def view_of(scene, width, height):
             "world_from_camera": np.asarray(camera.world_from_camera, np.float64)}
 
 
-def properties(**overrides):
+def properties(probe_grid=None, **overrides):
     values = dict(settings.PROPERTY_DEFAULTS, **settings.VIEWPORT_PROPERTY_DEFAULTS,
                   method="PHOTON_LATTICE")
     values.update(overrides)
+    values["probe_grid"] = SimpleNamespace(**dict(settings.PROBE_GRID_DEFAULTS,
+                                                  **(probe_grid or {})))
     return settings.render_property_values(SimpleNamespace(**values))
 
 
@@ -313,6 +319,50 @@ def test_worker_edits_the_scene_in_place_and_ignores_equal_requests():
     assert third.pixels[..., :3].mean() > second.pixels[..., :3].mean()  # the sky lights it
 
 
+def with_volume(snapshot, centre_z):
+    """A copy of `snapshot` (same scene content) whose one irradiance volume, 3 x 3 x 3 probes
+    in a 1.6 m cube, is centred at (0, 1, centre_z)."""
+    copy = moved(snapshot, 0, (0, 0, 0))
+    matrix = np.array([[0.8, 0, 0, 0], [0, 0.8, 0, 1.0], [0, 0, 0.8, centre_z], [0, 0, 0, 1]],
+                      np.float32)
+    copy.probe_volumes = (ProbeVolumeRecord(matrix, (3, 3, 3), "volume"),)
+    return copy
+
+
+def test_probe_grid_refines_in_the_background_and_restarts_when_its_volume_moves():
+    """The viewport's probe grid runs viewport_probe_passes updates, a frame after each, and
+    ends with the image of that grid; moving the volume keeps the scene but places new probes."""
+    scene = scenes.cornell_box(0.1).scene
+    view = view_of(scene, 24, 24)
+    snapshot = with_volume(snapshot_of(scene), 1.0)
+    props = properties(method="PROBE_GRID", viewport_samples=2, viewport_probe_passes=3, seed=2,
+                       probe_grid={"rays_per_probe": 16})
+    worker = ViewportWorker(shgi)
+    try:
+        worker.request(snapshot, view, props)
+        first = final_frame(worker, 2)
+        after_first = dict(worker.counters)
+        raised = with_volume(snapshot, 1.1)
+        assert worker.request(raised, view, props)
+        second = final_frame(worker, 2, after=first.frame_id)
+        counters = dict(worker.counters)
+    finally:
+        worker.stop()
+    assert after_first["solves"] == 3 and after_first["frames"] >= 3 + 2
+    assert counters["solves"] == 6 and counters["scene_builds"] == 1
+    scene.set_camera(viewport_camera.shgi_camera(shgi, view))
+    scene.commit()
+    volume = shgi.ProbeVolume(world_from_volume=raised.probe_volumes[0].world_from_volume,
+                              resolution=(3, 3, 3))
+    grid = shgi.ProbeGrid(scene, settings.probe_grid_settings(
+        settings.properties_from_values(props), shgi, [volume]))
+    for _ in range(3):
+        grid.update()
+    expected, _ = shgi.render_preview(scene, grid.field(), shgi.PreviewSettings(samples=2, seed=2))
+    np.testing.assert_array_equal(second.pixels, expected["Combined"][::-1])
+    assert not np.array_equal(first.pixels, second.pixels)
+
+
 def test_a_view_change_keeps_the_photon_pass_and_a_scene_change_cancels_it():
     scene = scenes.cornell_box(0.25).scene
     view, snapshot = view_of(scene, 24, 24), snapshot_of(scene)
@@ -358,11 +408,11 @@ def test_lattice_grid_and_surface_cells():
 
 
 def test_icosphere_faces_outwards_and_ambient_cube_weights_sum_to_one():
-    vertices, faces = lattice_samples.icosphere(1)
+    vertices, faces = field_spheres.icosphere(1)
     assert vertices.shape == (42, 3) and faces.shape == (80, 3)
     a, b, c = (vertices[faces[:, i]] for i in range(3))
     assert (np.einsum("ij,ij->i", np.cross(b - a, c - a), a + b + c) > 0).all()
-    weights = lattice_samples.ambient_cube_weights(vertices)
+    weights = field_spheres.ambient_cube_weights(vertices)
     np.testing.assert_allclose(weights.sum(axis=1), 1.0, rtol=1e-5)
 
 
@@ -376,7 +426,7 @@ def test_lattice_overlay_shades_spheres_by_irradiance():
     assert spheres > 0 and overlay.positions.shape == (spheres * 42, 3)
     assert overlay.indices.max() == len(overlay.positions) - 1
     # The six irradiances are the lattice's, towards the six axes.
-    expected = lattice.irradiance(overlay.centres[:1].repeat(6, 0), lattice_samples.AXES)
+    expected = lattice.irradiance(overlay.centres[:1].repeat(6, 0), field_spheres.AXES)
     np.testing.assert_allclose(overlay.irradiance[0], expected, rtol=1e-6)
     assert 0.0 < overlay.colors[:, :3].mean() < 1.0 and (overlay.colors[:, 3] == 1).all()
 
@@ -444,4 +494,10 @@ def test_viewport_in_a_window(build_python_dir, tmp_path):
     assert r["block_move_sync"]["worker"]["in_place_updates"] == 1
     assert r["overlay"]["spheres"] > 100 and r["overlay"]["changed_inside"] > 0.01
     assert r["path_trace_mean"] > 0.1
+    probes = r["probe_grid"]
+    assert probes["passes"] == 3 and probes["mean"] > 0.1, probes
+    assert probes["overlay_spheres"] == probes["active"] > 0, probes
+    for step, z in (("added", 1.0), ("moved", 1.1)):  # each edit of the volume: a new grid
+        assert probes[step]["probes"] == 4 * 3 * 3 and probes[step]["new_grid"], probes
+        assert probes[step]["passes"] == 3 and abs(probes[step]["volume_z"] - z) < 1e-5
     assert r["sessions_after_solid"] == 0

@@ -8,8 +8,10 @@ view layer enables is written with Cycles' names. Export warnings, native warnin
 unsupported passes are reported as WARNING; a failure is set with ``error_set`` and reported as
 ERROR (bpy.ops.render.render then raises RuntimeError in scripts).
 
-With a lattice method and a frozen solution for the scene (solution_cache, the Solve operator),
-only the camera is exported and the frozen solution is rendered from it.
+The field methods (PHOTON_LATTICE, PROBE_GRID) solve their field on the job's thread before
+sampling (field_solvers.py); PROBE_GRID's probes fill the scene's Irradiance Volume objects, or
+one volume fitted to the scene. With a frozen solution of the scene's method (solution_cache,
+the Solve operator), only the camera is exported and the frozen solution is rendered from it.
 """
 
 import logging
@@ -62,7 +64,8 @@ class FinalRender:
         self.width, self.height = engine.resolution_x, engine.resolution_y
         self.record = {"method": self.scene.shgi.method, "warnings": [], "errors": [],
                        "cancelled": False, "samples": 0, "timings": {},
-                       "size": (self.width, self.height), "frozen_solution": False}
+                       "size": (self.width, self.height), "frozen_solution": False,
+                       "figures": {}}
 
     # --- reports ---------------------------------------------------------------------------------
 
@@ -117,7 +120,8 @@ class FinalRender:
         if method is None:
             self.fail(f"SHGI: render method {props.method!r} is not available in this version")
             return None
-        solution = (solution_cache.get(self.scene.name_full) if method.uses_lattice else None)
+        solution = (solution_cache.get(self.scene.name_full, method.identifier)
+                    if method.uses_field else None)
         if solution is not None:
             return self._start_frozen_job(shgi, props, solution)
         from ..export import export_scene  # imports shgi: only once it is known to import
@@ -130,13 +134,15 @@ class FinalRender:
             return None
         for message in scene_checks.scene_warnings(export.scene):
             self.warn(f"SHGI: {message}")
-        if method.uses_lattice:
+        if method.uses_field:
+            from .field_solvers import solver_recipe
+
             # Without geometry there is nothing to solve: direct light (the world) only.
-            lattice_settings = (None if export.scene.empty
-                                else settings.photon_lattice_settings(props, shgi))
+            recipe = (None if export.scene.empty
+                      else solver_recipe(props, shgi, export.probe_volumes))
             job = RenderJob(shgi, export.scene, props.samples,
                             preview_settings=settings.preview_settings(props, shgi),
-                            lattice_settings=lattice_settings)
+                            solver_recipe=recipe)
         else:
             job = RenderJob(shgi, export.scene, props.samples,
                             path_tracer_settings=settings.path_tracer_settings(props, shgi))
@@ -146,7 +152,7 @@ class FinalRender:
         self.warn(message)
 
     def _start_frozen_job(self, shgi, props, solution):
-        """A job rendering the scene's frozen lattice solution from the current camera."""
+        """A job rendering the scene's frozen solution from the current camera."""
         from ..export.camera import camera_from_scene
         from ..export.result import WarningLog
 
@@ -155,13 +161,13 @@ class FinalRender:
             self.fail("SHGI: the scene has no usable camera (see the warnings)")
             return None
         self.record["frozen_solution"] = True
-        self._report_memory(solution.memory_bytes)
-        self.engine.report({"INFO"}, "SHGI: rendering the frozen photon lattice solved at "
+        self._record_solution(solution)
+        self.engine.report({"INFO"}, "SHGI: rendering the frozen solution solved at "
                            f"{time.strftime('%H:%M:%S', time.localtime(solution.solved_at))}; "
                            "Clear it to see later scene edits")
         return RenderJob(shgi, solution.scene, props.samples,
                          preview_settings=settings.preview_settings(props, shgi),
-                         field=solution.lattice, camera=camera).start()
+                         field=solution.field, camera=camera).start()
 
     def _follow(self, job, log):
         """Polls the job until it ends, then writes the result and reports the outcome."""
@@ -189,10 +195,15 @@ class FinalRender:
             self.engine.end_result(result)
         self._record_job(job)
 
-    def _report_memory(self, lattice_bytes):
-        """Blender's memory statistics show the lattice's bytes (render buffers are Blender's)."""
-        mebibytes = lattice_bytes / solution_cache.BYTES_PER_MIB
+    def _record_solution(self, solution):
+        """Blender's memory statistics show the solver's bytes (render buffers are Blender's);
+        the record keeps the solver's figures and, for a probe grid, the probes it rendered."""
+        mebibytes = solution.memory_bytes / solution_cache.BYTES_PER_MIB
         self.engine.update_memory_stats(memory_used=mebibytes, memory_peak=mebibytes)
+        self.record["figures"] = dict(solution.solver.figures())
+        positions = getattr(solution.field, "positions", None)
+        if positions is not None:  # the tests check where the probes went
+            self.record["probe_positions"] = positions.tolist()
 
     def _report_native_warnings(self, log):
         for message in log.drain():
@@ -217,7 +228,7 @@ class FinalRender:
         self.record["timings"].update(job.timings)
         self.record["cancelled"] = job.cancelled
         if job.solution is not None:
-            self._report_memory(job.solution.memory_bytes)
+            self._record_solution(job.solution)
         if job.error is not None:
             self.fail(f"SHGI: {job.error}")
         elif job.cancelled:

@@ -1,4 +1,4 @@
-"""One final (F12) render on a worker thread: commit, solve, progressive sampling. No bpy.
+"""One final (F12) render on a worker thread: commit, solve a field, progressive sampling. No bpy.
 
 The render engine exports the scene on Blender's main thread (bpy is not thread-safe), starts a
 RenderJob, and then polls it from the main thread: it forwards Esc (``test_break``) to
@@ -83,14 +83,15 @@ class RenderJob(NativeTask):
     scene: a shgi.Scene (committed by the job if it is not yet).
     samples: samples per pixel in total.
     path_tracer_settings: renders with the reference path tracer when given.
-    preview_settings: renders with the preview renderer over `field`, or over a PhotonLattice
-        solved first with `lattice_settings` when `field` is None, or with direct light only
-        when both are None (a scene without geometry has nothing to solve).
+    preview_settings: renders with the preview renderer over `field`, or over the field
+        solved first by `solver_recipe` (a field_solvers.SolverRecipe: a PhotonLattice, a
+        ProbeGrid and its update passes) when `field` is None, or with direct light only when
+        both are None (a scene without geometry has nothing to solve).
     camera: a shgi.Camera replacing the scene's (a frozen solution seen from a new camera).
     """
 
     def __init__(self, shgi, scene, samples, *, path_tracer_settings=None,
-                 preview_settings=None, lattice_settings=None, field=None, camera=None):
+                 preview_settings=None, solver_recipe=None, field=None, camera=None):
         if (path_tracer_settings is None) == (preview_settings is None):
             raise ValueError("give exactly one of path_tracer_settings and preview_settings")
         super().__init__(shgi, "shgi-render")
@@ -98,7 +99,7 @@ class RenderJob(NativeTask):
         self.samples = samples
         self._path_tracer_settings = path_tracer_settings
         self._preview_settings = preview_settings
-        self._lattice_settings = lattice_settings
+        self._solver_recipe = solver_recipe
         self.field = field
         self._camera = camera
         self._lock = threading.Lock()
@@ -108,7 +109,7 @@ class RenderJob(NativeTask):
         self._stage = "Starting"
         self.samples_done = 0
         self.timings = {}       # seconds per stage: commit, solve, render
-        self.solution = None    # the LatticeSolution the job solved, if any (not cached)
+        self.solution = None    # the solution_cache.Solution the job solved, if any (not cached)
 
     # --- main thread ---------------------------------------------------------------------------
 
@@ -144,10 +145,10 @@ class RenderJob(NativeTask):
         if not self.scene.committed:
             self._timed("commit", "Building BVH", (0.0, COMMIT_SHARE),
                         lambda: self.scene.commit(progress=self.progress))
-        if self._lattice_settings is not None and self.field is None:
+        if self._solver_recipe is not None and self.field is None:
             render_start = COMMIT_SHARE + SOLVE_SHARE
-            self._timed("solve", "Tracing photons", (COMMIT_SHARE, render_start),
-                        self._solve_lattice)
+            self._timed("solve", self._solver_recipe.solver.BUILD_STAGE,
+                        (COMMIT_SHARE, render_start), self._solve_field)
         self._sample(render_start)
 
     def _timed(self, name, stage, span, work):
@@ -159,10 +160,16 @@ class RenderJob(NativeTask):
         finally:  # a cancelled stage still shows the time it ran
             self.timings[name] = self.timings.get(name, 0.0) + time.perf_counter() - start
 
-    def _solve_lattice(self):
-        self.solution = solution_cache.solve(self._shgi, self.scene, self._lattice_settings,
-                                             signature=None, progress=self.progress)
-        self.field = self.solution.lattice
+    def _solve_field(self):
+        def on_stage(stage, lo, hi):  # the solve's share of the progress bar, split by stage
+            span = COMMIT_SHARE + SOLVE_SHARE * lo, COMMIT_SHARE + SOLVE_SHARE * hi
+            with self._lock:
+                self._stage, self._span = stage, span
+
+        self.solution = solution_cache.solve(self._shgi, self.scene, self._solver_recipe,
+                                             signature=None, progress=self.progress,
+                                             on_stage=on_stage)
+        self.field = self.solution.field
 
     def _sample(self, render_start):
         renderer = make_renderer(self._shgi, self.scene, self.progress,

@@ -1,13 +1,16 @@
-"""Frozen photon-lattice solutions, one per Blender scene, kept between renders. No bpy.
+"""Frozen field solutions, one per Blender scene, kept between renders. No bpy.
 
 Non-interactive mode (DESIGN.md, use 2c; seed 000 §6.5): the Solve operator exports the scene,
-solves a PhotonLattice once with the scene's photon count and stores it here with the committed
-shgi.Scene it was solved on. F12 renders of that Blender scene then render the frozen solution
-from the current camera without exporting the geometry or solving again, until Clear. Edits
-made after the solve are not seen (the panel says so).
+solves the method's field once (a PhotonLattice with the scene's photon count, or a ProbeGrid
+with its render passes; field_solvers.py) and stores it here with the committed shgi.Scene it
+was solved on. F12 renders of that Blender scene with the same method then render the frozen
+solution from the current camera without exporting the geometry or solving again, until Clear.
+Edits made after the solve are not seen (the panel says so).
+
+``solve`` is also how F12 solves a field when nothing is frozen (render_job.RenderJob).
 
 The cache is module state of the add-on (it cannot live in the .blend file); its key is the
-scene's ``name_full``, and loading a file clears it (properties.py registers the handler).
+scene's ``name_full``, and loading a file clears it (render_engine.py registers the handler).
 """
 
 import time
@@ -15,8 +18,10 @@ from dataclasses import dataclass, field
 
 # Bytes in a mebibyte: memory figures are shown in MiB.
 BYTES_PER_MIB = 2**20
+# Share of a solve's progress taken by the solver's construction (measure, placement).
+BUILD_SHARE = 0.1
 
-# Timings shown in the panel, in order: {key in LatticeSolution.timings: label}.
+# Timings shown in the panel, in order: {key in Solution.timings: label}.
 TIMING_LABELS = {
     "export": "Export",
     "commit": "BVH",
@@ -24,45 +29,62 @@ TIMING_LABELS = {
     "emit_trace": "Emit + trace",
     "injection": "Injection",
     "blur": "Blur",
+    "placement": "Probe placement",
+    "update": "Probe updates",
 }
 
 
 @dataclass
-class LatticeSolution:
-    """A solved PhotonLattice with the scene it was solved on."""
+class Solution:
+    """A solved field with the scene it was solved on."""
 
+    method: str            # the method identifier it was solved for (settings.METHODS)
     scene: object          # the committed shgi.Scene
-    lattice: object        # the solved shgi.PhotonLattice (an IndirectField)
-    signature: tuple       # settings.lattice_signature() at solve time
-    timings: dict          # seconds per stage (TIMING_LABELS) and the lattice's counters
-    memory_bytes: int      # held by the lattices (PhotonLattice.memory_bytes)
+    solver: object         # the field_solvers FieldSolver (LatticeSolver, ProbeGridSolver)
+    field: object          # the IndirectField to render (solver.field() after the last pass)
+    signature: tuple       # settings.solver_signature() at solve time (None: not compared)
+    timings: dict          # seconds per stage (TIMING_LABELS) and the solver's counters
+    memory_bytes: int      # held by the solver
     warnings: list = field(default_factory=list)  # export warnings
     solved_at: float = field(default_factory=time.time)
-    overlay: object = None  # its lattice_samples.LatticeOverlay (the Solve operator's), or None
+    overlay: object = None  # its field_spheres.FieldSpheres (the Solve operator's), or None
 
     @property
-    def photons_emitted(self):
-        return int(self.timings.get("photons_emitted", 0))
+    def seconds(self):
+        """Wall time of the stages shown in the panel."""
+        return sum(self.timings.get(name, 0.0) for name in TIMING_LABELS)
 
 
-def solve(shgi, scene, lattice_settings, signature, progress=None, timings=None, warnings=()):
-    """Commits `scene` (if needed), solves a PhotonLattice on it once; a LatticeSolution.
+def solve(shgi, scene, recipe, signature, progress=None, timings=None, warnings=(),
+          on_stage=None):
+    """Commits `scene` (if needed), builds the recipe's solver and runs its passes; a Solution.
 
     Runs on any thread (no bpy); raises shgi.Cancelled when `progress` is cancelled.
+    recipe: a field_solvers.SolverRecipe.
     timings: stage seconds measured before (the export), kept in the solution's timings.
+    on_stage: called as on_stage(stage name, lo, hi) when a stage starts, [lo, hi] being its
+        share of the whole solve (for a progress bar).
     """
+    on_stage = on_stage or (lambda _stage, _lo, _hi: None)
     timings = dict(timings or {})
     start = time.perf_counter()
     if not scene.committed:
+        on_stage("Building BVH", 0.0, 0.0)
         scene.commit(progress=progress)
     timings["commit"] = time.perf_counter() - start
+    on_stage(recipe.solver.BUILD_STAGE, 0.0, BUILD_SHARE)
     start = time.perf_counter()
-    lattice = shgi.PhotonLattice(scene, lattice_settings, progress=progress)
-    timings["measure"] = time.perf_counter() - start
-    lattice.solve(progress=progress)
-    timings.update(lattice.timings)
-    return LatticeSolution(scene=scene, lattice=lattice, signature=signature, timings=timings,
-                           memory_bytes=lattice.memory_bytes, warnings=list(warnings))
+    solver = recipe.build(shgi, scene, progress)
+    timings[recipe.solver.BUILD_TIMING] = time.perf_counter() - start
+    for index in range(recipe.passes):
+        share = (1.0 - BUILD_SHARE) / recipe.passes
+        on_stage(f"{solver.pass_stage(index + 1)}/{recipe.passes}",
+                 BUILD_SHARE + index * share, BUILD_SHARE + (index + 1) * share)
+        solver.update(progress)
+    timings.update(solver.timings)
+    return Solution(method=recipe.solver.METHOD, scene=scene, solver=solver,
+                    field=solver.field(), signature=signature, timings=timings,
+                    memory_bytes=solver.memory_bytes, warnings=list(warnings))
 
 
 _solutions = {}
@@ -72,9 +94,12 @@ def store(key, solution):
     _solutions[key] = solution
 
 
-def get(key):
-    """The frozen solution of scene `key`, or None."""
-    return _solutions.get(key)
+def get(key, method=None):
+    """The frozen solution of scene `key` (solved for `method` when given), or None."""
+    solution = _solutions.get(key)
+    if solution is not None and method is not None and solution.method != method:
+        return None
+    return solution
 
 
 def clear(key):

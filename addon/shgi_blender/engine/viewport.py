@@ -50,7 +50,7 @@ class ViewportSession:
         self.scene_key = scene.name_full
         self.sync.sync(depsgraph)
         self.properties = settings.render_property_values(scene.shgi)
-        self.worker.set_overlay_wanted(scene.shgi.show_lattice_samples)
+        self.worker.set_overlay_wanted(settings.overlay_wanted(scene.shgi))
         self._request()
 
     def view_draw(self, engine, context, depsgraph):

@@ -2,22 +2,27 @@
 
 The main thread (viewport.py) sends requests — the scene snapshot, the view (camera fields),
 the render properties — and reads back the newest Frame. The worker thread owns every native
-object it renders with (shgi.Scene, PhotonLattice, renderers); the main thread never touches
+object it renders with (shgi.Scene, the field solver, renderers); the main thread never touches
 them, which is what lets Blender's UI keep running while native calls hold no GIL.
 
 A new request cancels the running native call and the worker starts over with the newest
 request, redoing only what changed. Each run has two shgi.Progress objects: one for the scene
-(commit, lattice measure and solve), cancelled when the scene or the settings change, and one
-for frames, cancelled by any change: orbiting the view never throws away a photon pass in
-flight, it only waits for it. What is redone:
+(commit, the solver's construction and passes), cancelled when the scene, its irradiance
+volumes or the settings change, and one for frames, cancelled by any change: orbiting the view
+never throws away a photon pass or a probe update in flight, it only waits for it. What is
+redone:
 * moved objects, an edited world: edited in place (``set_instance_transform``, ``set_world``)
   and committed (top-level BVH only); anything else in the snapshot (meshes, materials, lights):
   a new shgi.Scene and a full commit;
-* the lattice is solved again after any scene change or lattice setting change, never for a
-  view change (the preview renderer takes the view as a camera);
-* frames follow frame_schedule(): direct light at 1/4 resolution while the first photon pass
-  is traced, then 1/4 and 1/2 resolution frames with indirect light, any further photon passes,
-  then full resolution samples in rounds (render_job.sample_rounds), each round a new Frame.
+* the field solver (field_solvers.py: a PhotonLattice, or a ProbeGrid placed in the scene's
+  Irradiance Volumes) starts afresh after any scene change, solver setting change or, for a
+  probe grid, moved or resized volume; never for a view change (the preview renderer takes
+  the view as a camera), so its passes carry on from where they were;
+* frames follow frame_schedule(): direct light at 1/4 resolution while the first pass runs,
+  then 1/4 and 1/2 resolution frames with indirect light, each further pass followed by a new
+  1/2 resolution frame of the refined field (the probe grid's background refinement: up to
+  viewport_probe_passes updates while the artist works), then full resolution samples in
+  rounds (render_job.sample_rounds), each round a new Frame.
 
 The path tracer renders the scene's camera, so for PATH_TRACE the view goes into the scene
 (``set_camera``, a top-level commit) for each resolution.
@@ -26,13 +31,14 @@ The path tracer renders the scene's camera, so for PATH_TRACE the view goes into
 import logging
 import threading
 from dataclasses import dataclass
-from types import SimpleNamespace
 
 import numpy as np
 
 from .. import settings
+from ..export.light_probe import volumes_key
 from ..export.scene_snapshot import DIFFERENT, EDITABLE, SAME
-from . import lattice_samples, viewport_camera
+from . import viewport_camera
+from .field_solvers import solver_recipe
 from .render_job import make_renderer, sample_rounds
 
 logger = logging.getLogger("shgi_blender.viewport")
@@ -46,23 +52,23 @@ STOP_TIMEOUT_SECONDS = 2.0
 @dataclass(frozen=True)
 class Step:
     """One step of a viewport render: "direct" (a frame without indirect light), "solve" (one
-    photon pass), "frame" (one sample per pixel) or "samples" (accumulate `samples` at full
-    resolution)."""
+    pass of the field solver), "frame" (one sample per pixel) or "samples" (accumulate
+    `samples` at full resolution)."""
 
     kind: str
     divisor: int = 1
     samples: int = 1
 
 
-def frame_schedule(uses_lattice, samples, photon_passes, passes_done):
-    """The Steps of a render, given the photon passes the current lattice already holds."""
+def frame_schedule(uses_field, samples, solver_passes, passes_done):
+    """The Steps of a render, given the passes the current field solver already ran."""
     steps = []
-    if uses_lattice and passes_done == 0:
+    if uses_field and passes_done == 0:
         steps += [Step("direct", PREVIEW_DIVISORS[0]), Step("solve")]
         passes_done = 1
     steps += [Step("frame", divisor) for divisor in PREVIEW_DIVISORS]
-    if uses_lattice:
-        for _ in range(passes_done, photon_passes):
+    if uses_field:
+        for _ in range(passes_done, solver_passes):
             steps += [Step("solve"), Step("frame", PREVIEW_DIVISORS[-1])]
     steps.append(Step("samples", 1, samples))
     return steps
@@ -112,8 +118,8 @@ class ViewportWorker:
         self._snapshot = None
         self._scene = None
         self._scene_camera = None
-        self._lattice = None
-        self._lattice_key = None
+        self._solver = None
+        self._solver_key = None
         self._overlay_source = None
         self.error = None
         self.counters = {"scene_builds": 0, "in_place_updates": 0, "solves": 0, "frames": 0}
@@ -142,7 +148,8 @@ class ViewportWorker:
         return True
 
     def set_overlay_wanted(self, wanted):
-        """Whether the worker computes the lattice overlay (lattice_samples) after solves."""
+        """Whether the worker computes the field's overlay (lattice samples, probes) after
+        each pass."""
         with self._condition:
             self._overlay_wanted = bool(wanted)
             self._condition.notify_all()
@@ -203,31 +210,36 @@ class ViewportWorker:
             logger.exception("SHGI viewport render failed")
             self.error = f"{type(error).__name__}: {error}"
             self._set_status(f"Error: {self.error}")
-            self._scene = self._snapshot = self._lattice = None
+            self._scene = self._snapshot = None
+            self._drop_solver()
 
     def _render(self, request, progress):
         self.error = None
         shgi = self._shgi
-        props = SimpleNamespace(**dict(request.properties))
+        props = settings.properties_from_values(request.properties)
         method = settings.METHODS_BY_ID[props.method]
         self._prepare_scene(request.snapshot, request.view, progress.scene)
-        uses_lattice = method.uses_lattice and not self._scene.empty
-        if uses_lattice:
-            lattice_key = settings.lattice_signature(props)
-            if lattice_key != self._lattice_key:
-                self._lattice = None
-            self._lattice_key = lattice_key
-        context = _RenderContext(request, progress, uses_lattice)
-        if method.uses_lattice:
+        uses_field = method.uses_field and not self._scene.empty
+        context = _RenderContext(request, progress, uses_field)
+        if uses_field:
+            context.recipe = solver_recipe(props, shgi, request.snapshot.probe_volumes,
+                                           viewport=True)
+            solver_key = (settings.solver_signature(props),
+                          volumes_key(request.snapshot.probe_volumes))
+            if solver_key != self._solver_key:
+                self._drop_solver()
+            self._solver_key = solver_key
+        if method.uses_field:
             context.preview_settings = settings.preview_settings(props, shgi)
         else:
             context.path_tracer_settings = settings.path_tracer_settings(props, shgi)
-        passes_done = self._lattice.passes if (uses_lattice and self._lattice) else 0
-        for step in frame_schedule(uses_lattice, props.viewport_samples,
-                                   props.viewport_photon_passes, passes_done):
+        passes_done = self._solver.passes if (uses_field and self._solver) else 0
+        solver_passes = context.recipe.passes if uses_field else 0
+        for step in frame_schedule(uses_field, props.viewport_samples, solver_passes,
+                                   passes_done):
             self._check(progress)
             if step.kind == "solve":
-                self._solve(props, progress.scene)
+                self._solve(context.recipe, progress.scene)
             elif step.kind == "samples":
                 self._accumulate(context, step)
             else:
@@ -248,20 +260,18 @@ class ViewportWorker:
             self._scene_camera = viewport_camera.view_key(view)
             self.counters["scene_builds"] += 1
         if change != SAME:
-            self._lattice = None  # a lattice refuses an edited scene
+            self._drop_solver()  # a solver refuses an edited scene
         self._snapshot = snapshot
         if not self._scene.committed:
             self._set_status("Building BVH")
             self._scene.commit(progress=progress)
 
-    def _solve(self, props, progress):
-        shgi = self._shgi
-        if self._lattice is None:
-            self._set_status("Measuring lattice cells")
-            self._lattice = shgi.PhotonLattice(
-                self._scene, settings.photon_lattice_settings(props, shgi), progress=progress)
-        self._set_status(f"Tracing photons, pass {self._lattice.passes + 1}")
-        self._lattice.solve(progress=progress)
+    def _solve(self, recipe, progress):
+        if self._solver is None:
+            self._set_status(recipe.solver.BUILD_STAGE)
+            self._solver = recipe.build(self._shgi, self._scene, progress)
+        self._set_status(f"{self._solver.pass_stage(self._solver.passes + 1)}/{recipe.passes}")
+        self._solver.update(progress)
         self.counters["solves"] += 1
         self._update_overlay()
 
@@ -287,8 +297,8 @@ class ViewportWorker:
                 self._scene.set_camera(camera)
                 self._scene.commit(progress=progress)  # the top level only
                 self._scene_camera = key
-                self._lattice = None  # a solved lattice refuses an edited scene
-        field = self._lattice if (use_field and context.uses_lattice) else None
+                self._drop_solver()  # a solver refuses an edited scene
+        field = self._solver.field() if (use_field and context.uses_field) else None
         return make_renderer(self._shgi, self._scene, progress,
                              path_tracer_settings=context.path_tracer_settings,
                              preview_settings=context.preview_settings, field=field,
@@ -310,23 +320,28 @@ class ViewportWorker:
         with self._condition:
             self._status = text
 
-    def _overlay_due(self):
-        """(Lock held.) The overlay is wanted and the current lattice has none yet."""
-        return (self._overlay_wanted and self._lattice is not None
-                and self._overlay_source != self._lattice_state())
+    def _drop_solver(self):
+        """Forgets the field solver and its overlay (the next solve starts afresh)."""
+        self._solver = None
+        with self._condition:
+            self._overlay = self._overlay_source = None
 
-    def _lattice_state(self):
-        return (self._lattice, self._lattice.passes) if self._lattice is not None else None
+    def _overlay_due(self):
+        """(Lock held.) The overlay is wanted and the current solver's pass has none yet."""
+        return (self._overlay_wanted and self._solver is not None
+                and self._overlay_source != self._solver_state())
+
+    def _solver_state(self):
+        return (self._solver, self._solver.passes) if self._solver is not None else None
 
     def _update_overlay(self):
-        """Computes the overlay of the current lattice when it is wanted and out of date."""
+        """Computes the overlay of the current solver when it is wanted and out of date."""
         with self._condition:
             due = self._overlay_due()
         if not due:
             return
-        state = self._lattice_state()
-        overlay = lattice_samples.lattice_overlay(self._lattice, self._snapshot, self._scene,
-                                                  self._lattice.settings.resolution)
+        state = self._solver_state()
+        overlay = self._solver.overlay(self._snapshot, self._scene)
         with self._condition:
             self._overlay_source = state
             self._overlay = overlay
@@ -362,16 +377,19 @@ class _RunProgress:
 class _RenderContext:
     request: Request
     progress: _RunProgress
-    uses_lattice: bool
+    uses_field: bool
+    recipe: object = None   # field_solvers.SolverRecipe when uses_field
     preview_settings: object = None
     path_tracer_settings: object = None
 
 
 def _same_scene(a, b):
-    """True when requests a and b render the same scene with the same settings (a selection
-    change, a redraw, a view change)."""
-    return a.properties == b.properties and (a.snapshot is b.snapshot
-                                             or b.snapshot.compare(a.snapshot) == SAME)
+    """True when requests a and b render the same scene with the same settings and irradiance
+    volumes (a selection change, a redraw, a view change)."""
+    return a.properties == b.properties and (
+        a.snapshot is b.snapshot
+        or (b.snapshot.compare(a.snapshot) == SAME
+            and volumes_key(b.snapshot.probe_volumes) == volumes_key(a.snapshot.probe_volumes)))
 
 
 def _same_view(a, b):

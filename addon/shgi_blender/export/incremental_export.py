@@ -59,6 +59,7 @@ class IncrementalExport:
         snapshot = SceneSnapshot(self.table)
         walk = _CachedWalk(self, depsgraph, snapshot)
         walk.export_instances()
+        snapshot.probe_volumes = tuple(walk.probe_volumes)
         if self.world is None:
             walk.export_world(scene)
             self.world = snapshot.world

@@ -24,11 +24,13 @@ class ExportStats:
 
 @dataclass
 class ExportResult:
-    """An uncommitted shgi.Scene with the warnings raised while building it."""
+    """An uncommitted shgi.Scene with the warnings raised while building it, and the scene's
+    irradiance volumes (light_probe.ProbeVolumeRecord, for the PROBE_GRID method)."""
 
     scene: shgi.Scene
     warnings: list = field(default_factory=list)
     stats: ExportStats = field(default_factory=ExportStats)
+    probe_volumes: list = field(default_factory=list)
 
 
 class WarningLog:

@@ -5,6 +5,8 @@ instances alike). Each distinct geometry — an original mesh data without rende
 modifiers, else the object itself — with its material slots is converted once (``to_mesh`` on
 the evaluated object, so modifiers are applied) and placed by one shgi instance per object
 instance with its matrix_world. Lights keep their units; the world and the scene camera follow.
+Irradiance Volume light probes are not scene content: they are returned beside the scene as
+the volumes of the PROBE_GRID method (light_probe.py).
 
 Visibility is the depsgraph's: a render depsgraph (the engine's F12 depsgraph) already leaves
 out objects and collections disabled for render. For a viewport depsgraph with
@@ -22,6 +24,7 @@ import shgi
 from . import conversions
 from .camera import camera_from_scene
 from .light import light_from_object, world_from_blender
+from .light_probe import is_irradiance_volume, probe_volume_from_object
 from .material import MaterialExporter
 from .mesh import read_mesh
 from .result import ExportResult, ExportStats, WarningLog
@@ -46,7 +49,7 @@ def export_scene(depsgraph, scene=None, *, report=None, for_render=None):
     report: a callable like ``Operator.report`` that also receives every warning.
     for_render: leave out objects hidden for render (default: True for a render depsgraph,
         False for a viewport one, which already holds only the viewport-visible objects).
-    Returns ExportResult(scene, warnings, stats).
+    Returns ExportResult(scene, warnings, stats, probe_volumes).
     """
     start = time.perf_counter()
     scene = scene if scene is not None else depsgraph.scene
@@ -57,7 +60,7 @@ def export_scene(depsgraph, scene=None, *, report=None, for_render=None):
     exporter.export_world_and_camera(scene)
     exporter.stats.seconds = time.perf_counter() - start
     return ExportResult(scene=exporter.shgi_scene, warnings=list(exporter.log.messages),
-                        stats=exporter.stats)
+                        stats=exporter.stats, probe_volumes=exporter.probe_volumes)
 
 
 class _SceneExporter:
@@ -75,9 +78,10 @@ class _SceneExporter:
         self.materials = materials if materials is not None else MaterialExporter(
             self.shgi_scene, log)
         self._mesh_ids = {}  # (geometry key, material ids) -> mesh id, or None when skipped
+        self.probe_volumes = []  # light_probe.ProbeVolumeRecord of the irradiance volumes
 
     def export_instances(self):
-        """Adds every visible object instance's geometry or light."""
+        """Adds every visible object instance's geometry or light; records irradiance volumes."""
         evaluated_as_mesh = self._objects_evaluated_as_mesh_instances()
         for instance in self.depsgraph.object_instances:
             obj = instance.object
@@ -87,6 +91,8 @@ class _SceneExporter:
                 continue
             if obj.type == "LIGHT":
                 self._add_light(obj, instance.matrix_world)
+            elif is_irradiance_volume(obj):
+                self.probe_volumes.append(probe_volume_from_object(obj, instance.matrix_world))
             elif obj.type in MESH_CONVERTIBLE_TYPES:
                 self._add_geometry(instance)
             elif obj.type in UNSUPPORTED_GEOMETRY_TYPES:

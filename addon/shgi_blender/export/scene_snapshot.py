@@ -16,6 +16,8 @@ worker whether two snapshots differ not at all, only in what an shgi.Scene edits
 (instance transforms: ``set_instance_transform``; the world: ``set_world``; both keep the
 per-mesh BVHs, so the next commit rebuilds only the top level), or in anything else (meshes,
 materials, textures, lights: shgi.Scene has no call to replace them, so a new scene is built).
+A snapshot also records the scene's irradiance volumes (``probe_volumes``): they are not scene
+content (compare() leaves them out) but the volumes of a probe grid solved on it.
 """
 
 import logging
@@ -80,6 +82,7 @@ class SceneSnapshot:
         self.lights = []        # shgi.Light
         self.world = shgi.World()
         self.camera = None
+        self.probe_volumes = ()  # light_probe.ProbeVolumeRecord
 
     # --- shgi.Scene's building calls -------------------------------------------------------------
 

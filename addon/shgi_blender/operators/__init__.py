@@ -1,20 +1,20 @@
-"""Operators: quality presets (quality_preset.py), solve and clear a frozen photon lattice
-(lattice_solution.py)."""
+"""Operators: quality presets (quality_preset.py), solve and clear a frozen solution of the
+method's field (frozen_solution.py)."""
 
 
 def register():
     import bpy
 
-    from . import lattice_solution, quality_preset
+    from . import frozen_solution, quality_preset
 
-    for cls in quality_preset.CLASSES + lattice_solution.CLASSES:
+    for cls in quality_preset.CLASSES + frozen_solution.CLASSES:
         bpy.utils.register_class(cls)
 
 
 def unregister():
     import bpy
 
-    from . import lattice_solution, quality_preset
+    from . import frozen_solution, quality_preset
 
-    for cls in reversed(quality_preset.CLASSES + lattice_solution.CLASSES):
+    for cls in reversed(quality_preset.CLASSES + frozen_solution.CLASSES):
         bpy.utils.unregister_class(cls)

@@ -1,25 +1,25 @@
 """Panels: render settings (render_panels.py), light and view-layer passes (data_panels.py),
-the stock Blender panels shown under SHGI as under Cycles (compat.py), and the lattice overlay
-of the 3D views (lattice_overlay.py)."""
+the stock Blender panels shown under SHGI as under Cycles (compat.py), and the field overlay
+of the 3D views (field_overlay.py: lattice samples or probes)."""
 
 
 def register():
     import bpy
 
-    from . import compat, data_panels, lattice_overlay, render_panels
+    from . import compat, data_panels, field_overlay, render_panels
 
     for cls in render_panels.CLASSES + data_panels.CLASSES:
         bpy.utils.register_class(cls)
     compat.add_engine_to_stock_panels()
-    lattice_overlay.register()
+    field_overlay.register()
 
 
 def unregister():
     import bpy
 
-    from . import compat, data_panels, lattice_overlay, render_panels
+    from . import compat, data_panels, field_overlay, render_panels
 
-    lattice_overlay.unregister()
+    field_overlay.unregister()
     compat.remove_engine_from_stock_panels()
     for cls in reversed(render_panels.CLASSES + data_panels.CLASSES):
         bpy.utils.unregister_class(cls)

@@ -1,6 +1,7 @@
 """Properties > Render panels of the SHGI engine: method and samples (with the native module's
-import error when it fails), light paths, the photon lattice with its frozen solution, and the
-last render's figures."""
+import error when it fails), light paths, the photon lattice or the probe grid (with its
+Visibility sub-panel, laid out as EEVEE's irradiance volume settings) with the frozen solution,
+and the last render's figures."""
 
 import textwrap
 import time
@@ -61,28 +62,63 @@ class SHGI_RENDER_PT_light_paths(ShgiPanel, bpy.types.Panel):
         column = layout.column(align=True)
         column.prop(props, "clamp_indirect")
         column.prop(props, "world_sampling")
-        if settings.METHODS_BY_ID[props.method].uses_lattice:
+        if settings.METHODS_BY_ID[props.method].uses_field:
             column.prop(props, "max_specular_bounces")
 
 
-class SHGI_RENDER_PT_photon_lattice(ShgiPanel, bpy.types.Panel):
-    bl_label = "Photon Lattice"
+def draw_frozen_solution(layout, context):
+    """The Solve and Clear buttons, and the figures of the scene's frozen solution."""
+    props = context.scene.shgi
+    row = layout.row(align=True)
+    row.operator("shgi.solve", icon="LIGHT_SUN")
+    row.operator("shgi.clear_solution", icon="X")
+    solution = solution_cache.get(context.scene.name_full)
+    if solution is None:
+        return
+    box = layout.box()
+    solved_at = time.strftime("%H:%M:%S", time.localtime(solution.solved_at))
+    if solution.method != props.method:
+        box.label(text=f"Frozen {settings.METHODS_BY_ID[solution.method].label} solution "
+                       f"({solved_at}): not used by this method", icon="INFO")
+        return
+    box.label(text=f"Frozen solution ({solved_at}): F12 renders it from any camera",
+              icon="FREEZE")
+    box.label(text="Scene edits made since are not seen: Solve again or Clear")
+    if solution.signature != settings.solver_signature(props):
+        box.label(text="Settings changed since the solve: Solve again to apply them",
+                  icon="ERROR")
+    grid = box.grid_flow(columns=2, even_columns=True, align=True)
+    for key, label in solution_cache.TIMING_LABELS.items():
+        if key in solution.timings:
+            grid.label(text=label)
+            grid.label(text=f"{1000.0 * solution.timings[key]:.1f} ms")
+    for label, text in solution.solver.figures():
+        grid.label(text=label)
+        grid.label(text=text)
+    grid.label(text="Memory")
+    grid.label(text=f"{solution.memory_bytes / solution_cache.BYTES_PER_MIB:.2f} MiB")
+
+
+class _FieldPanel(ShgiPanel):
+    """A panel shown when the scene's method solves with the solver SOLVER."""
+
     bl_context = "render"
+    SOLVER = ""
 
     @classmethod
     def poll(cls, context):
         return (super().poll(context)
-                and settings.METHODS_BY_ID[context.scene.shgi.method].uses_lattice)
+                and settings.METHODS_BY_ID[context.scene.shgi.method].solver == cls.SOLVER)
+
+
+class SHGI_RENDER_PT_photon_lattice(_FieldPanel, bpy.types.Panel):
+    bl_label = "Photon Lattice"
+    SOLVER = "PHOTON_LATTICE"
 
     def draw(self, context):
         layout = self.layout
         props = context.scene.shgi
-        row = layout.row(align=True)
-        row.operator("shgi.lattice_solve", icon="LIGHT_SUN")
-        row.operator("shgi.lattice_clear", icon="X")
-        solution = solution_cache.get(context.scene.name_full)
-        if solution is not None:
-            self._draw_solution(layout.box(), props, solution)
+        draw_frozen_solution(layout, context)
         layout.use_property_split = True
         layout.use_property_decorate = False
         column = layout.column(align=True)
@@ -98,25 +134,70 @@ class SHGI_RENDER_PT_photon_lattice(ShgiPanel, bpy.types.Panel):
         column.prop(props, "viewport_photon_passes", text="Viewport Passes")
         column.prop(props, "show_lattice_samples", text="Show Lattice Samples")
 
-    @staticmethod
-    def _draw_solution(layout, props, solution):
-        solved_at = time.strftime("%H:%M:%S", time.localtime(solution.solved_at))
-        layout.label(text=f"Frozen solution ({solved_at}): F12 renders it from any camera",
-                     icon="FREEZE")
-        layout.label(text="Scene edits made since are not seen: Solve again or Clear")
-        if solution.signature != settings.lattice_signature(props):
-            layout.label(text="Settings changed since the solve: Solve again to apply them",
-                         icon="ERROR")
-        grid = layout.grid_flow(columns=2, even_columns=True, align=True)
-        for key, label in solution_cache.TIMING_LABELS.items():
-            if key in solution.timings:
-                grid.label(text=label)
-                grid.label(text=f"{1000.0 * solution.timings[key]:.1f} ms")
-        grid.label(text="Photons emitted / stored")
-        grid.label(text=f"{solution.photons_emitted:,} / "
-                        f"{int(solution.timings.get('photons_stored', 0)):,}")
-        grid.label(text="Memory")
-        grid.label(text=f"{solution.memory_bytes / solution_cache.BYTES_PER_MIB:.2f} MiB")
+
+class SHGI_RENDER_PT_probe_grid(_FieldPanel, bpy.types.Panel):
+    """The probe grid's settings; its volumes are the scene's Irradiance Volume objects."""
+
+    bl_label = "Probe Grid"
+    SOLVER = "PROBE_GRID"
+
+    def draw(self, context):
+        layout = self.layout
+        props = context.scene.shgi
+        grid = props.probe_grid
+        draw_frozen_solution(layout, context)
+        volumes = irradiance_volume_count(context.scene)
+        layout.label(icon="OUTLINER_OB_LIGHTPROBE", text=(
+            f"{volumes} Irradiance Volume{'s' if volumes != 1 else ''} place the probes"
+            if volumes else "No Irradiance Volume: one volume fitted to the scene"))
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        column = layout.column(align=True)
+        sub = column.column(align=True)
+        sub.active = volumes == 0
+        sub.prop(grid, "spacing")
+        for name in ("order", "rays_per_probe", "hysteresis", "clamp", "bounces"):
+            column.prop(grid, name)
+        column = layout.column(align=True)
+        column.prop(props, "probe_passes", text="Render Passes")
+        column.prop(props, "viewport_probe_passes", text="Viewport Passes")
+        column = layout.column(align=True, heading="Relocation")
+        column.prop(grid, "relocate", text="Move Out of Geometry")
+        sub = column.column(align=True)
+        sub.active = grid.relocate
+        sub.prop(grid, "max_offset")
+        column.prop(grid, "backface_threshold")
+        layout.prop(props, "show_probes", text="Show Probes")
+
+
+class SHGI_RENDER_PT_probe_grid_visibility(_FieldPanel, bpy.types.Panel):
+    """EEVEE's irradiance volume Visibility panel: Bias, Bleed Bias, Blur."""
+
+    bl_label = "Visibility"
+    bl_parent_id = "SHGI_RENDER_PT_probe_grid"
+    SOLVER = "PROBE_GRID"
+
+    def draw_header(self, context):
+        self.layout.prop(context.scene.shgi.probe_grid, "visibility", text="")
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        grid = context.scene.shgi.probe_grid
+        column = layout.column(align=True)
+        column.active = grid.visibility
+        column.prop(grid, "normal_bias", text="Bias")
+        column.prop(grid, "bleed_bias", text="Bleed Bias")
+        column.prop(grid, "visibility_blur", text="Blur")
+        column.prop(grid, "visibility_resolution", text="Resolution")
+
+
+def irradiance_volume_count(scene):
+    """Irradiance Volume objects of the scene that render."""
+    from ..export.light_probe import is_irradiance_volume
+
+    return sum(1 for obj in scene.objects if is_irradiance_volume(obj) and not obj.hide_render)
 
 
 class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
@@ -144,4 +225,5 @@ class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
 
 
 CLASSES = (SHGI_RENDER_PT_method, SHGI_RENDER_PT_light_paths, SHGI_RENDER_PT_photon_lattice,
+           SHGI_RENDER_PT_probe_grid, SHGI_RENDER_PT_probe_grid_visibility,
            SHGI_RENDER_PT_last_render)

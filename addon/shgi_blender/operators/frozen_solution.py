@@ -1,10 +1,12 @@
-"""Solve a photon lattice once and keep it (non-interactive mode), or clear it.
+"""Solve the method's field once and keep it (non-interactive mode), or clear it.
 
-SHGI_OT_lattice_solve exports the scene (Blender's main thread), then commits and solves on a
-worker thread: from the UI (invoke) it runs modal, polled by a timer, Esc cancels and the status
-bar shows progress; from a script or in background mode (execute) it waits for the thread. The
-solution, with its lattice overlay (made on the same thread), goes to engine/solution_cache.py
-under the scene's name; F12 renders it from the current camera until SHGI_OT_lattice_clear.
+SHGI_OT_solve exports the scene (Blender's main thread), then commits and solves on a worker
+thread the field of the scene's method (a photon lattice, or a probe grid in the scene's
+Irradiance Volumes with its render passes; engine/field_solvers.py): from the UI (invoke) it
+runs modal, polled by a timer, Esc cancels and the status bar shows progress; from a script or
+in background mode (execute) it waits for the thread. The solution, with its overlay (made on
+the same thread), goes to engine/solution_cache.py under the scene's name; F12 renders it from
+the current camera until SHGI_OT_clear_solution.
 """
 
 import time
@@ -19,38 +21,35 @@ TIMER_SECONDS = 0.1
 
 
 class _SolveTask(NativeTask):
-    """solution_cache.solve on a worker thread, then the solution's lattice overlay (so that
-    the 3D views' draw handler only uploads it)."""
+    """solution_cache.solve on a worker thread, then the solution's overlay (so that the 3D
+    views' draw handler only uploads it)."""
 
-    def __init__(self, shgi, scene, lattice_settings, signature, timings, warnings):
-        super().__init__(shgi, "shgi-lattice-solve")
-        self._arguments = (scene, lattice_settings, signature, timings, warnings)
+    def __init__(self, shgi, scene, recipe, signature, timings, warnings):
+        super().__init__(shgi, "shgi-solve")
+        self._arguments = (scene, recipe, signature, timings, warnings)
         self.solution = None
 
     def _work(self):
-        from ..engine import lattice_samples  # imports shgi, available per poll()
-
-        scene, lattice_settings, signature, timings, warnings = self._arguments
-        solution = solution_cache.solve(self._shgi, scene, lattice_settings, signature,
-                                        self.progress, timings, warnings)
+        scene, recipe, signature, timings, warnings = self._arguments
+        solution = solution_cache.solve(self._shgi, scene, recipe, signature, self.progress,
+                                        timings, warnings)
         # A committed shgi.Scene offers the instances and meshes a snapshot does.
-        solution.overlay = lattice_samples.lattice_overlay(
-            solution.lattice, solution.scene, solution.scene,
-            solution.lattice.settings.resolution)
+        solution.overlay = solution.solver.overlay(solution.scene, solution.scene)
         self.solution = solution
 
 
-class SHGI_OT_lattice_solve(bpy.types.Operator):
-    """Solve the photon lattice once with the scene's settings and keep it: F12 renders it from \
-any camera without solving again, until Clear"""
+class SHGI_OT_solve(bpy.types.Operator):
+    """Solve the method's indirect light once with the scene's settings and keep it: F12 \
+renders it from any camera without solving again, until Clear"""
 
-    bl_idname = "shgi.lattice_solve"
+    bl_idname = "shgi.solve"
     bl_label = "Solve"
     bl_options = {"REGISTER"}
 
     @classmethod
     def poll(cls, context):
-        return context.scene is not None and native.available()
+        return (context.scene is not None and native.available()
+                and settings.METHODS_BY_ID[context.scene.shgi.method].uses_field)
 
     def execute(self, context):
         task = self._start(context)
@@ -88,22 +87,26 @@ any camera without solving again, until Clear"""
     def _start(self, context):
         """Exports the scene and starts the solve (None, with a report, on failure)."""
         shgi = native.module()
-        from ..export import export_scene  # imports shgi, available per poll()
+        from ..engine.field_solvers import solver_recipe  # imports shgi, available per poll()
+        from ..export import export_scene
 
         scene = context.scene
         start = time.perf_counter()
         export = export_scene(context.evaluated_depsgraph_get(), scene, report=self.report,
                               for_render=True)
         timings = {"export": time.perf_counter() - start}
+        if export.scene.empty:
+            self.report({"ERROR"}, "SHGI: the scene has no geometry SHGI can render; nothing "
+                        "to solve")
+            return None
         try:
-            lattice_settings = settings.photon_lattice_settings(scene.shgi, shgi)
+            recipe = solver_recipe(scene.shgi, shgi, export.probe_volumes)
         except ValueError as error:
             self.report({"ERROR"}, f"SHGI: {error}")
             return None
         self._scene_key = scene.name_full
-        return _SolveTask(shgi, export.scene, lattice_settings,
-                          settings.lattice_signature(scene.shgi), timings,
-                          export.warnings).start()
+        return _SolveTask(shgi, export.scene, recipe, settings.solver_signature(scene.shgi),
+                          timings, export.warnings).start()
 
     def _finish(self, context, task):
         if task.cancelled:
@@ -112,21 +115,20 @@ any camera without solving again, until Clear"""
         if task.error is not None:
             self.report({"ERROR"}, f"SHGI: {task.error}")
             return {"CANCELLED"}
-        solution_cache.store(self._scene_key, task.solution)
-        timings = task.solution.timings
-        seconds = sum(timings.get(name, 0.0) for name in solution_cache.TIMING_LABELS)
-        self.report({"INFO"}, f"SHGI: photon lattice solved in {seconds:.2f} s "
-                    f"({task.solution.photons_emitted:,} photons, "
-                    f"{task.solution.memory_bytes / solution_cache.BYTES_PER_MIB:.1f} MiB)")
+        solution = task.solution
+        solution_cache.store(self._scene_key, solution)
+        figures = ", ".join(f"{label} {text}" for label, text in solution.solver.figures())
+        self.report({"INFO"}, f"SHGI: solved in {solution.seconds:.2f} s ({figures}, "
+                    f"{solution.memory_bytes / solution_cache.BYTES_PER_MIB:.1f} MiB)")
         for area in context.screen.areas if context.screen else ():
             area.tag_redraw()
         return {"FINISHED"}
 
 
-class SHGI_OT_lattice_clear(bpy.types.Operator):
-    """Forget the scene's frozen photon lattice: F12 exports and solves again"""
+class SHGI_OT_clear_solution(bpy.types.Operator):
+    """Forget the scene's frozen solution: F12 exports and solves again"""
 
-    bl_idname = "shgi.lattice_clear"
+    bl_idname = "shgi.clear_solution"
     bl_label = "Clear"
     bl_options = {"REGISTER"}
 
@@ -140,4 +142,4 @@ class SHGI_OT_lattice_clear(bpy.types.Operator):
         return {"FINISHED"}
 
 
-CLASSES = (SHGI_OT_lattice_solve, SHGI_OT_lattice_clear)
+CLASSES = (SHGI_OT_solve, SHGI_OT_clear_solution)

@@ -1,18 +1,22 @@
-"""The lattice overlay: the photon lattice's cells that hold surface, as small shaded spheres.
+"""The field overlay: small spheres shaded by the indirect light of the method's field.
 
-Drawn in every 3D view (a SpaceView3D POST_VIEW draw handler) when ``scene.shgi
-show_lattice_samples`` is on and the scene renders with SHGI. The spheres come from the lattice
-the scene's Rendered viewport is solving (its worker computes them after each photon pass), or
-else from the scene's frozen solution (computed once, by the Solve operator's worker thread).
-engine/lattice_samples.py makes the geometry and colours; this module only uploads them as one
-GPU batch (rebuilt when the overlay changes) and draws it with back faces culled. The overlay's
-toggle also shows in the viewport's Overlays popover.
+PHOTON_LATTICE draws a sphere per lattice cell holding surface (``scene.shgi
+show_lattice_samples``), PROBE_GRID one per active probe (``show_probes``; probes disabled
+inside geometry are not drawn). Drawn in every 3D view (a SpaceView3D POST_VIEW draw handler)
+when the method's toggle is on and the scene renders with SHGI. The spheres come from the field
+the scene's Rendered viewport is solving (its worker computes them after each pass, so the
+probes brighten as the grid refines), or else from the scene's frozen solution of the method
+(computed once, by the Solve operator's worker thread). engine/field_spheres.py makes the
+geometry and colours; this module only uploads them as one GPU batch (rebuilt when the overlay
+changes) and draws it with back faces culled. The toggles also show in the viewport's Overlays
+popover.
 """
 
 import bpy
 import gpu
 from gpu_extras.batch import batch_for_shader
 
+from .. import settings
 from ..engine import solution_cache, viewport
 from ..engine.frame_display import builtin_shader
 from .compat import ENGINE
@@ -28,20 +32,20 @@ def stats():
 
 
 def overlay_for(scene):
-    """The LatticeOverlay to draw for `scene`, or None."""
+    """The FieldSpheres to draw for `scene`, or None."""
     for session in viewport.sessions():
         if session.scene_key == scene.name_full:
             overlay = session.worker.latest_overlay()
             if overlay is not None:
                 return overlay
-    solution = solution_cache.get(scene.name_full)
+    solution = solution_cache.get(scene.name_full, scene.shgi.method)
     return solution.overlay if solution is not None else None
 
 
-def draw_lattice_samples():
+def draw_field_overlay():
     """The draw handler (POST_VIEW, world space)."""
     scene = bpy.context.scene
-    if scene is None or scene.render.engine != ENGINE or not scene.shgi.show_lattice_samples:
+    if scene is None or scene.render.engine != ENGINE or not settings.overlay_wanted(scene.shgi):
         return
     overlay = overlay_for(scene)
     if overlay is None:
@@ -73,13 +77,17 @@ def draw_overlay_popover(self, context):
         return
     layout = self.layout
     layout.label(text="SHGI")
-    layout.prop(context.scene.shgi, "show_lattice_samples")
+    solver = settings.METHODS_BY_ID[context.scene.shgi.method].solver
+    if solver == "PHOTON_LATTICE":
+        layout.prop(context.scene.shgi, "show_lattice_samples")
+    elif solver == "PROBE_GRID":
+        layout.prop(context.scene.shgi, "show_probes")
 
 
 def register():
     if _state["handle"] is None:
         _state["handle"] = bpy.types.SpaceView3D.draw_handler_add(
-            draw_lattice_samples, (), "WINDOW", "POST_VIEW")
+            draw_field_overlay, (), "WINDOW", "POST_VIEW")
     bpy.types.VIEW3D_PT_overlay.append(draw_overlay_popover)
 
 

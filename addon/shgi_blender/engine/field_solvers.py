@@ -1,0 +1,187 @@
+"""The solvers of the field methods as the engine drives them: build, update passes, field. No bpy.
+
+PHOTON_LATTICE and PROBE_GRID both solve an IndirectField that the preview renderer renders
+(render_job.make_renderer). They differ in how they are built and refined; a FieldSolver hides
+that from F12 (render_job.RenderJob), frozen solutions (solution_cache.solve, the Solve
+operator) and the viewport worker, which all drive it the same way:
+
+* construction (``SolverRecipe.build``) on a committed scene: LatticeSolver measures the
+  lattice's cells; ProbeGridSolver places the probes (relocation out of geometry, DDGI);
+* ``update(progress)``: one pass, a photon pass (PhotonLattice.solve) or a probe update pass
+  (ProbeGrid.update: rays_per_probe paths per active probe, blended in with hysteresis);
+* ``field()``: what to render, the lattice itself or an immutable ProbeField snapshot of the
+  grid, which later updates leave untouched (seed 002 Fig. 4.1: update decoupled from use);
+* ``overlay(snapshot, scene)``: the field_spheres.FieldSpheres the 3D views draw.
+
+Every native call takes a shgi.Progress and releases the GIL; none of this touches bpy.
+"""
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import settings
+from ..export.light_probe import native_volumes
+
+
+class LatticeSolver:
+    """A PhotonLattice (seed 000) as a FieldSolver."""
+
+    METHOD = "PHOTON_LATTICE"
+    BUILD_STAGE = "Measuring lattice cells"
+    BUILD_TIMING = "measure"
+
+    def __init__(self, shgi, scene, lattice_settings, progress=None):
+        self.lattice = shgi.PhotonLattice(scene, lattice_settings, progress=progress)
+
+    @staticmethod
+    def pass_stage(number):
+        return f"Tracing photons, pass {number}"
+
+    @property
+    def passes(self):
+        return self.lattice.passes
+
+    def update(self, progress=None):
+        self.lattice.solve(progress=progress)
+
+    def field(self):
+        return self.lattice
+
+    @property
+    def memory_bytes(self):
+        return self.lattice.memory_bytes
+
+    @property
+    def timings(self):
+        """Seconds per stage and the photon counters (PhotonLattice.timings)."""
+        return dict(self.lattice.timings)
+
+    def figures(self):
+        """(label, text) rows describing the solution, for the panel and reports."""
+        timings = self.lattice.timings
+        return [("Photons emitted / stored", f"{int(timings.get('photons_emitted', 0)):,} / "
+                                             f"{int(timings.get('photons_stored', 0)):,}")]
+
+    def overlay(self, snapshot, scene):
+        from .lattice_samples import lattice_overlay
+
+        return lattice_overlay(self.lattice, snapshot, scene, self.lattice.settings.resolution)
+
+
+class ProbeGridSolver:
+    """A ProbeGrid (seed 002) as a FieldSolver."""
+
+    METHOD = "PROBE_GRID"
+    BUILD_STAGE = "Placing probes"
+    BUILD_TIMING = "placement"
+
+    def __init__(self, shgi, scene, grid_settings, progress=None):
+        self._shgi = shgi
+        self.grid = shgi.ProbeGrid(scene, grid_settings, progress=progress)
+        self._update_seconds = 0.0
+        self._snapshot = None
+
+    @staticmethod
+    def pass_stage(number):
+        return f"Updating probes, pass {number}"
+
+    @property
+    def passes(self):
+        return self.grid.passes
+
+    def update(self, progress=None):
+        start = time.perf_counter()
+        try:
+            self.grid.update(progress=progress)
+        finally:  # a cancelled pass still took its time
+            self._update_seconds += time.perf_counter() - start
+
+    def field(self):
+        """The ProbeField of the current pass (one snapshot per pass)."""
+        if self._snapshot is None or self._snapshot.passes != self.grid.passes:
+            self._snapshot = self.grid.field()
+        return self._snapshot
+
+    @property
+    def memory_bytes(self):
+        return self.grid.memory_bytes
+
+    @property
+    def timings(self):
+        """Seconds of all update passes ("update") and the paths of the last one."""
+        return {"update": self._update_seconds, "paths": self.grid.timings["paths"]}
+
+    def figures(self):
+        grid = self.grid
+        error = grid.relative_error()[grid.active]
+        finite = error[np.isfinite(error)]
+        rows = [("Probes active / total", f"{grid.active_count:,} / {grid.probe_count:,}"),
+                ("Update passes", f"{grid.passes}")]
+        if len(finite):
+            rows.append(("Median relative error", f"{100.0 * float(np.median(finite)):.1f}%"))
+        return rows
+
+    def overlay(self, _snapshot, _scene):
+        return probe_overlay(self._shgi, self.field())
+
+
+def probe_overlay(shgi, probe_field):
+    """The FieldSpheres of the active probes of a ProbeField, or None when none is active.
+
+    Each sphere shows its probe's own irradiance: the field is read at the probe's position
+    without normal bias and visibility weights, where trilinear interpolation gives that probe
+    the whole weight (a relocated probe, off its cell centre, shows a blend of its neighbours,
+    as a surface there would).
+    """
+    from .field_spheres import field_spheres
+
+    active = probe_field.active
+    if not active.any():
+        return None
+    lookup = probe_field.with_lookup(shgi.ProbeLookupSettings(normal_bias=0.0, visibility=False))
+    return field_spheres(lookup, probe_field.positions[active], probe_spacing(probe_field.volumes))
+
+
+def probe_spacing(volumes):
+    """The smallest distance (m) between neighbouring probes of the volumes: 2 × (length of
+    the volume's axis) / probes along it, over every axis and volume."""
+    spacings = []
+    for volume in volumes:
+        matrix = np.asarray(volume.world_from_volume, np.float64)
+        lengths = np.linalg.norm(matrix[:3, :3], axis=0)  # the images of the local axes
+        spacings.extend(2.0 * lengths / np.asarray(volume.resolution, np.float64))
+    return float(min(spacings))
+
+
+@dataclass(frozen=True)
+class SolverRecipe:
+    """What to solve: a FieldSolver class, its native settings and the update passes to run."""
+
+    solver: type
+    settings: object
+    passes: int
+
+    def build(self, shgi, scene, progress=None):
+        """The solver on a committed scene (runs on any thread; raises shgi.Cancelled)."""
+        return self.solver(shgi, scene, self.settings, progress)
+
+
+def solver_recipe(props, shgi, volumes=(), viewport=False):
+    """The SolverRecipe of scene.shgi's method (props: scene.shgi or its values as a namespace).
+
+    volumes: the scene's irradiance volumes (export/light_probe.ProbeVolumeRecord).
+    viewport: the passes are the viewport's (viewport_photon_passes, viewport_probe_passes);
+        else one photon pass, or probe_passes update passes (F12, Solve).
+    ValueError for a method that solves no field, or a bad volume.
+    """
+    solver = settings.METHODS_BY_ID[props.method].solver
+    if solver == LatticeSolver.METHOD:
+        return SolverRecipe(LatticeSolver, settings.photon_lattice_settings(props, shgi),
+                            props.viewport_photon_passes if viewport else 1)
+    if solver == ProbeGridSolver.METHOD:
+        grid_settings = settings.probe_grid_settings(props, shgi, native_volumes(volumes, shgi))
+        return SolverRecipe(ProbeGridSolver, grid_settings,
+                            props.viewport_probe_passes if viewport else props.probe_passes)
+    raise ValueError(f"method {props.method!r} solves no field")

@@ -1,0 +1,61 @@
+"""Blender's Irradiance Volume light probes → the volumes of a probe grid (no bpy import).
+
+An Irradiance Volume is a Light Probe object whose data type is 'GRID' (Blender 2.8 to 3.6) or
+'VOLUME' (4.x, EEVEE Next). It spans the cube [-1, 1]^3 of its matrix_world and holds
+grid_resolution_x × _y × _z probes at the cell centres, exactly what shgi.ProbeVolume is, so the
+artist places, turns and sizes the PROBE_GRID method's probes by moving and scaling the object
+and sets their counts in its Object Data panel. Volumes are recorded as plain values
+(ProbeVolumeRecord) on Blender's main thread and turned into shgi.ProbeVolume on any thread.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import conversions
+
+# LightProbe.type of an irradiance volume, by Blender version.
+IRRADIANCE_VOLUME_TYPES = ("GRID", "VOLUME")
+
+
+@dataclass(frozen=True)
+class ProbeVolumeRecord:
+    """An irradiance volume: world_from_volume (4, 4) float32 row-major, resolution (nx, ny, nz)."""
+
+    world_from_volume: np.ndarray
+    resolution: tuple
+    name: str
+
+    def key(self):
+        """Hashable values that tell two volumes apart (for comparisons)."""
+        return (self.world_from_volume.tobytes(), self.resolution)
+
+
+def is_irradiance_volume(obj):
+    """True for a Light Probe object that is an irradiance volume."""
+    return obj.type == "LIGHT_PROBE" and obj.data is not None \
+        and obj.data.type in IRRADIANCE_VOLUME_TYPES
+
+
+def probe_volume_from_object(obj, matrix_world):
+    """The ProbeVolumeRecord of an irradiance volume object placed at `matrix_world`."""
+    data = obj.data
+    resolution = (data.grid_resolution_x, data.grid_resolution_y, data.grid_resolution_z)
+    matrix = np.asarray(conversions.row_major(matrix_world), np.float32).reshape(4, 4)
+    return ProbeVolumeRecord(matrix, tuple(int(n) for n in resolution), obj.name)
+
+
+def native_volumes(records, shgi):
+    """[shgi.ProbeVolume] of ProbeVolumeRecords (ValueError names a bad one)."""
+    volumes = []
+    for record in records:
+        try:
+            volumes.append(shgi.ProbeVolume(world_from_volume=record.world_from_volume,
+                                            resolution=record.resolution))
+        except ValueError as error:
+            raise ValueError(f"irradiance volume {record.name!r}: {error}") from error
+    return volumes
+
+
+def volumes_key(records):
+    return tuple(record.key() for record in records)
