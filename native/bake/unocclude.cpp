@@ -1,0 +1,83 @@
+#include "bake/unocclude.h"
+
+#include <atomic>
+#include <cmath>
+
+#include "render/shading.h"
+#include "util/error.h"
+#include "util/parallel.h"
+
+namespace shgi {
+namespace {
+
+constexpr uint32_t kMaxRayCount = 64;
+// Samples per parallel chunk: ray_count rays each, a few ms per chunk (polls cancel often).
+constexpr uint64_t kSamplesPerChunk = 1024;
+
+void check_settings(const Scene& scene, const UnoccludeSettings& settings) {
+    if (!scene.committed())
+        throw InvalidArgument("unocclude: the scene is not committed; call Scene::commit() first");
+    if (settings.ray_count < 1 || settings.ray_count > kMaxRayCount)
+        throw InvalidArgument(format_message("UnoccludeSettings.ray_count = ", settings.ray_count,
+                                             " is outside [1, ", kMaxRayCount, "]"));
+    if (!(std::isfinite(settings.search_radius) && settings.search_radius > 0.0f))
+        throw InvalidArgument(format_message("UnoccludeSettings.search_radius = ",
+                                             settings.search_radius,
+                                             " must be a finite number of texels > 0"));
+    if (!(std::isfinite(settings.push_distance) && settings.push_distance >= 0.0f))
+        throw InvalidArgument(format_message("UnoccludeSettings.push_distance = ",
+                                             settings.push_distance,
+                                             " must be a finite number of texels >= 0"));
+}
+
+// Moves one sample's ray origin out of the geometry it lies in; returns whether it moved.
+bool unocclude_sample(const Scene& scene, const UnoccludeSettings& settings,
+                      TexelSample& sample) {
+    // Start from the unmoved origin (so a second call does not move the sample twice).
+    const vec3 origin = offset_origin(sample.position, sample.geometric_normal);
+    const Frame frame = Frame::from_z(sample.geometric_normal);
+    float nearest = kInfinity;
+    vec3 nearest_direction{0.0f}, nearest_normal{0.0f};
+    for (uint32_t k = 0; k < settings.ray_count; ++k) {
+        const float phi = kTwoPi * (float(k) + 0.5f) / float(settings.ray_count);
+        Ray ray;
+        ray.origin = origin;
+        ray.direction = std::cos(phi) * frame.x + std::sin(phi) * frame.y;
+        ray.tmax = settings.search_radius * sample.texel_size;
+        const Hit hit = scene.intersect(ray);
+        // A back face: the ray leaves closed geometry there, so the origin was inside it.
+        if (hit.valid() && hit.t < nearest && glm::dot(hit.geometric_normal, ray.direction) > 0) {
+            nearest = hit.t;
+            nearest_direction = ray.direction;
+            nearest_normal = glm::normalize(hit.geometric_normal);
+        }
+    }
+    if (nearest == kInfinity) return false;
+    const vec3 exit = origin + nearest * nearest_direction;
+    sample.ray_origin = offset_origin(
+        exit + nearest_normal * (settings.push_distance * sample.texel_size), nearest_normal);
+    return true;
+}
+
+}  // namespace
+
+UnoccludeReport unocclude(const Scene& scene, TexelMap& map, const UnoccludeSettings& settings,
+                          Progress* progress) {
+    check_settings(scene, settings);
+    std::atomic<uint64_t> moved{0};
+    parallel_for(
+        0, map.samples.size(), kSamplesPerChunk,
+        [&](uint64_t begin, uint64_t end) {
+            uint64_t moved_here = 0;
+            for (uint64_t i = begin; i < end; ++i)
+                moved_here += unocclude_sample(scene, settings, map.samples[i]);
+            moved += moved_here;
+        },
+        progress);
+    UnoccludeReport report;
+    report.samples = map.samples.size();
+    report.moved_samples = moved.load();
+    return report;
+}
+
+}  // namespace shgi
