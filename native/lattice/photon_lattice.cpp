@@ -188,15 +188,16 @@ ShRgb PhotonLattice::sample(const ShLattice& lattice, const vec3& p, const vec3&
 }
 
 // Called for every shading point of every preview frame: the global sample is the result (no
-// zeroed sum to add it to, no copy), and a caustic lattice without photons is not sampled.
+// zeroed sum to add it to, no copy: one named result, so that it is built in the caller's
+// place), and a caustic lattice without photons is not sampled.
 ShRgb PhotonLattice::radiance_sh(const vec3& p, const vec3& n) const {
     const int order = settings_.caustics == CausticMode::Lattice
                           ? std::max(settings_.order, settings_.caustic_order)
                           : settings_.order;
-    if (passes_ == 0) return ShRgb(order);
-    ShRgb result = sample(global_, p, n);
+    ShRgb result = passes_ == 0 ? ShRgb(order) : sample(global_, p, n);
     result.order = order;  // at least the global lattice's; the extra coefficients are zero
-    if (settings_.caustics == CausticMode::Lattice && caustic_photons_injected_ > 0)
+    if (passes_ > 0 && settings_.caustics == CausticMode::Lattice &&
+        caustic_photons_injected_ > 0)
         add_sh(result, sample(caustic_, p, n));
     return result;
 }

@@ -111,6 +111,7 @@ class PhotonLattice : public IndirectField {
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
     FieldLookup lookup(const vec3& p, const vec3& n) const override;
     bool includes_world_direct() const override { return settings_.world_in_field; }
+    bool is_zero() const override { return passes_ == 0; }  // nothing solved yet
 
   private:
     void check_scene(const char* what) const;

@@ -283,40 +283,45 @@ ShRgb zero_radiance(int order) {
     return radiance;
 }
 
-// Σ w_c L(c) / Σ w_c over the cells a sample visits. kFloats (3 × coefficients) is a
-// compile-time count so that the accumulation unrolls.
-template <int kFloats>
-class WeightedCellSum {
-  public:
-    void add(const float* coefficients, float weight) {
-        if (!(weight > 0.0f)) return;
-        for (int i = 0; i < kFloats; ++i) sum_[i] += weight * coefficients[i];
-        total_ += weight;
-    }
-    ShRgb result(int order) const {
-        ShRgb radiance = zero_radiance(order);
-        if (total_ <= 0.0f) return radiance;
-        const float inv_total = 1.0f / total_;
-        float* out = radiance.data();
-        for (int i = 0; i < kFloats; ++i) out[i] = sum_[i] * inv_total;
-        return radiance;
-    }
+// The cells a sample reads with their weights w_c (filter weight x D_c(n)), in visiting order;
+// cells whose weight is not positive are left out. At most 27 (the cubic filter's block).
+struct CellWeights {
+    static constexpr int kCapacity = 27;
+    int count = 0;
+    std::array<size_t, kCapacity> cell;
+    std::array<float, kCapacity> weight;
 
-  private:
-    float total_ = 0.0f;
-    std::array<float, kFloats> sum_{};
+    void add(size_t c, float w) {
+        if (!(w > 0.0f)) return;
+        cell[count] = c;
+        weight[count] = w;
+        ++count;
+    }
 };
 
-// Normalised blend of the cells `for_each_cell(facing, visit)` visits: it calls visit(cell,
-// filter weight × facing(cell)) for the cells with facing(cell) = D_c(n) > 0.
-template <int kFloats, typename ForEachCell, typename Facing>
-ShRgb blend_cells(int order, const float* coefficients, ForEachCell&& for_each_cell,
-                  Facing&& facing) {
-    WeightedCellSum<kFloats> sum;
-    for_each_cell(facing, [&](size_t cell, float weight) {
-        sum.add(coefficients + cell * kFloats, weight);
-    });
-    return sum.result(order);
+// Σ w_c L(c) / Σ w_c. Done after every weight is known, so that the loop over cells holds only
+// the sums, which then stay in vector registers: kFloats (3 x coefficients) is a compile-time
+// count and the inner loop is unrolled completely. The pragma makes sure it is: without it,
+// GCC 12 at -O3 jams the inner loops of two cells into one scalar loop over memory (unroll and
+// jam), three times the instructions. The sums are taken in visiting order.
+template <int kFloats>
+ShRgb blend_cells(int order, const float* coefficients, const CellWeights& cells) {
+    static_assert(kFloats <= kMaxCoefficients, "the unroll count below covers every cell size");
+    std::array<float, kFloats> sum{};
+    float total = 0.0f;
+    for (int k = 0; k < cells.count; ++k) {
+        const float weight = cells.weight[k];
+        const float* cell = coefficients + cells.cell[k] * kFloats;
+#pragma GCC unroll 27
+        for (int i = 0; i < kFloats; ++i) sum[i] += weight * cell[i];
+        total += weight;
+    }
+    ShRgb radiance = zero_radiance(order);
+    if (total <= 0.0f) return radiance;
+    const float inv_total = 1.0f / total;
+    float* out = radiance.data();
+    for (int i = 0; i < kFloats; ++i) out[i] = sum[i] * inv_total;
+    return radiance;
 }
 
 // Smooth falloff of the 27-neighbour filter (seed 001 §4.1): 1 at d = 0, 0 with zero slope at
@@ -368,17 +373,25 @@ void for_each_cubic_cell(const vec3& cells, const ivec3& dims, Facing&& facing, 
     constexpr float r2 = kCubicRadiusCells * kCubicRadiusCells;
     const ivec3 centre(glm::floor(cells));
     const ivec3 lo = glm::max(centre - 1, ivec3(0)), hi = glm::min(centre + 1, dims - 1);
+    // Squared distances along x to the centres of the (up to) three columns, computed once
+    // instead of once per row.
+    float dx2[3];
+    for (int x = lo.x; x <= hi.x; ++x) {
+        const float dx = cells.x - (float(x) + 0.5f);
+        dx2[x - lo.x] = dx * dx;
+    }
+    const int columns = hi.x - lo.x + 1;
     for (int z = lo.z; z <= hi.z; ++z) {
         const float dz = cells.z - (float(z) + 0.5f);
         for (int y = lo.y; y <= hi.y; ++y) {
             const float dy = cells.y - (float(y) + 0.5f);
             const float dyz2 = dy * dy + dz * dz;
-            const size_t row = size_t(dims.x) * (size_t(y) + size_t(dims.y) * size_t(z));
-            for (int x = lo.x; x <= hi.x; ++x) {
-                const float dx = cells.x - (float(x) + 0.5f);
-                const float d2 = dx * dx + dyz2;
+            const size_t row =
+                size_t(dims.x) * (size_t(y) + size_t(dims.y) * size_t(z)) + size_t(lo.x);
+            for (int i = 0; i < columns; ++i) {
+                const float d2 = dx2[i] + dyz2;
                 if (d2 >= r2) continue;
-                const size_t cell = row + size_t(x);
+                const size_t cell = row + size_t(i);
                 const float density = facing(cell);
                 if (density > 0.0f) visit(cell, cubic_weight(std::sqrt(d2)) * density);
             }
@@ -552,6 +565,7 @@ void ShLattice::measure_surfaces(const Scene& scene, Progress* progress) {
         for (int b = 0; b < 3; ++b) {
             const float length = glm::length(sum.normal[b]);
             if (length > 0.0f) surface.projected[b] = sum.normal[b] * (sum.area[b] / length);
+            if (surface.projected[b] != vec3(0.0f)) surface.bins |= uint8_t(1u << b);
             surface.area += sum.area[b];
         }
         index = uint32_t(surfaces.size());
@@ -743,8 +757,10 @@ ShRgb ShLattice::blend(const vec3& n, ForEachCell&& for_each_cell) const {
         const CellSurface* surface = cell_surface(cell);
         return surface ? surface->projected_area(n) : 0.0f;
     };
-    if (order_ == 1) return blend_cells<4 * 3>(order_, coeffs_.data(), for_each_cell, facing);
-    return blend_cells<9 * 3>(order_, coeffs_.data(), for_each_cell, facing);
+    CellWeights cells;
+    for_each_cell(facing, [&](size_t cell, float weight) { cells.add(cell, weight); });
+    if (order_ == 1) return blend_cells<4 * 3>(order_, coeffs_.data(), cells);
+    return blend_cells<9 * 3>(order_, coeffs_.data(), cells);
 }
 
 inline bool ShLattice::radiance_near(const vec3& cells) const {

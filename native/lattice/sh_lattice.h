@@ -143,20 +143,26 @@ class ShLattice {
 
   private:
     // The surface of a cell that has one: A_c and, per orientation bin, A_b n̄_b (the bin's area
-    // times the unit mean of its normals folded to +axis), so that D_c(ω) costs three dot
-    // products; and the bin sides photons have arrived on. Surfaces are 2D, so only an index is
-    // stored per cell.
+    // times the unit mean of its normals folded to +axis), so that D_c(ω) costs a dot product
+    // per bin that holds surface (most cells hold one wall: one bin); and the bin sides photons
+    // have arrived on. Surfaces are 2D, so only an index is stored per cell.
     struct CellSurface {
         float area = 0.0f;
         vec3 projected[3] = {vec3(0.0f), vec3(0.0f), vec3(0.0f)};
+        uint8_t bins = 0;       // bit b: projected[b] is not zero
         uint8_t receiving = 0;  // side_bit()s
 
         float projected_area(const vec3& dir) const {  // D_c(dir)
             const uint8_t counted = receiving != 0 ? receiving : kAllSides;
             float sum = 0.0f;
             for (int b = 0; b < 3; ++b) {
+                // An empty bin would add |0 · dir| = 0: skipping it leaves the sum's bits as
+                // they are.
+                if (!(bins & (1u << b))) continue;
                 const float cosine_area = glm::dot(projected[b], dir);
-                if (counted & side_bit(b, cosine_area >= 0.0f)) sum += std::fabs(cosine_area);
+                // Both bits are constants once the loop is unrolled (a select, not a shift).
+                const uint8_t side = cosine_area >= 0.0f ? side_bit(b, true) : side_bit(b, false);
+                if (counted & side) sum += std::fabs(cosine_area);
             }
             return sum;
         }

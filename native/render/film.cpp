@@ -1,6 +1,7 @@
 #include "render/film.h"
 
 #include <algorithm>
+#include <utility>
 
 #include "util/error.h"
 
@@ -43,9 +44,11 @@ std::vector<std::string> pass_suffixes(Pass pass) {
     }
 }
 
-Film::Film(int width, int height) : width_(width), height_(height) {
+Film::Film(int width, int height, FilmPasses passes)
+    : width_(width), height_(height), passes_(passes),
+      pass_count_(passes == FilmPasses::All ? size_t(kPassCount) : 1) {
     check_image_size(width, height, "film");
-    sums_.assign(size_t(kPassCount) * pixel_count(), vec3(0.0f));
+    sums_.assign(pass_count_ * pixel_count(), vec3(0.0f));
 }
 
 void Film::add(int x, int y, const PassValues& values) {
@@ -53,12 +56,10 @@ void Film::add(int x, int y, const PassValues& values) {
 }
 
 void Film::accumulate(int x, int y, const Film& base, const PassValues& values) {
-    const size_t count = pixel_count();
-    const size_t pixel = size_t(y) * size_t(width_) + size_t(x);
-    const vec3* from = base.sums_.data() + pixel;
-    vec3* to = sums_.data() + pixel;
-    for (size_t p = 0; p < size_t(kPassCount); ++p)
-        to[p * count] = from[p * count] + values.value[p];
+    const size_t first = (size_t(y) * size_t(width_) + size_t(x)) * pass_count_;
+    const vec3* from = base.sums_.data() + first;
+    vec3* to = sums_.data() + first;
+    for (size_t p = 0; p < pass_count_; ++p) to[p] = from[p] + values.value[p];
 }
 
 void Film::clear() {
@@ -79,6 +80,9 @@ vec3 Film::normalised(Pass pass, size_t pixel) const {
 }
 
 std::vector<float> Film::pixels(Pass pass) const {
+    if (!has_pass(pass))
+        throw InvalidArgument(format_message("Film::pixels: the film sums only Combined, not ",
+                                             pass_name(pass), "; render with every pass"));
     const size_t channels = pass_suffixes(pass).size();
     std::vector<float> out(pixel_count() * channels);
     for (size_t i = 0; i < pixel_count(); ++i) {
@@ -90,9 +94,31 @@ std::vector<float> Film::pixels(Pass pass) const {
 
 Image Film::image() const {
     Image image(width_, height_);
-    for (int p = 0; p < kPassCount; ++p)
+    for (size_t p = 0; p < pass_count_; ++p)
         image.add_layer(pass_name(Pass(p)), pass_suffixes(Pass(p)), pixels(Pass(p)));
     return image;
+}
+
+ProgressiveFilm::ProgressiveFilm(int width, int height, FilmPasses passes)
+    : film_(width, height, passes) {}
+
+Film& ProgressiveFilm::begin() {
+    in_place_ = film_.samples() == 0;
+    if (in_place_) return film_;
+    if (next_.width() != film_.width() || next_.height() != film_.height() ||
+        next_.passes() != film_.passes())
+        next_ = Film(film_.width(), film_.height(), film_.passes());
+    return next_;
+}
+
+void ProgressiveFilm::commit(uint32_t samples) {
+    Film& target = in_place_ ? film_ : next_;
+    target.set_samples(samples);
+    if (!in_place_) std::swap(film_, next_);
+}
+
+void ProgressiveFilm::abandon() {
+    if (in_place_) film_.clear();
 }
 
 }  // namespace shgi

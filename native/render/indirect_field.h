@@ -42,6 +42,9 @@ class IndirectField {
     // True when the field also carries the world's direct light (photons from the world stored
     // at their first hit): consumers then leave the world out of next-event estimation.
     virtual bool includes_world_direct() const { return false; }
+    // True when the field holds no light anywhere (no field; a solver before its first solve):
+    // consumers may then skip its lookups, whose answers would all be zero.
+    virtual bool is_zero() const { return false; }
 
     vec3 irradiance(const vec3& p, const vec3& n) const { return lookup(p, n).irradiance(n); }
     vec3 glossy(const vec3& p, const vec3& n, const vec3& wo, float roughness) const {
@@ -53,6 +56,7 @@ class IndirectField {
 class ZeroField : public IndirectField {
   public:
     ShRgb radiance_sh(const vec3&, const vec3&) const override { return ShRgb(1); }
+    bool is_zero() const override { return true; }
 };
 
 }  // namespace shgi

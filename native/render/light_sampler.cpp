@@ -22,6 +22,11 @@ uint64_t triangle_key(uint32_t instance_id, uint32_t triangle_id) {
 
 vec3 area_emit_normal(const Light& light) { return light.direction(); }
 
+// Whether p is on the side the plane through `center` with normal `axis` faces.
+bool in_front_of_plane(const vec3& p, const vec3& center, const vec3& axis) {
+    return glm::dot(p - center, axis) > 0.0f;
+}
+
 float scene_radius(const Scene& scene) {
     if (scene.empty()) return 1.0f;
     return std::max(0.5f * glm::length(scene.bounds().extent()), 1e-3f);
@@ -79,7 +84,7 @@ std::vector<Portal> scene_portals(const Scene& scene) {
 }
 
 bool in_front_of_area_light(const Light& light, const vec3& p) {
-    return glm::dot(p - light.position(), light.direction()) > 0.0f;
+    return in_front_of_plane(p, light.position(), light.direction());
 }
 
 vec3 area_light_point(const Light& light, const vec2& u) {
@@ -117,6 +122,15 @@ LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, boo
         emitters_.push_back({Kind::Light, i});
         weights.push_back(weight);
     }
+    area_emission_.resize(scene.lights().size());
+    for (uint32_t i = 0; i < scene.lights().size(); ++i) {
+        const Light& light = scene.lights()[i];
+        if (light_emitter_[i] == kInvalidId || light.type != LightType::Area) continue;
+        AreaEmission& emission = area_emission_[i];
+        emission.normal = area_emit_normal(light);
+        emission.area = area_light_area(light);
+        emission.radiance = light.color * area_radiance_from_power(light.power, emission.area);
+    }
     const auto& triangles = scene.emissive_triangles();
     for (uint32_t i = 0; i < triangles.size(); ++i) {
         const float weight = luminance(triangles[i].radiance) * kPi * triangles[i].area;
@@ -143,7 +157,7 @@ bool LightSampler::sample(const vec3& p, const vec3& n, float u_select, const ve
     const Emitter& emitter = emitters_[chosen];
     bool ok = false;
     if (emitter.kind == Kind::Light) {
-        ok = sample_light(scene_->lights()[emitter.index], p, u, out);
+        ok = sample_light(emitter.index, p, u, out);
     } else if (emitter.kind == Kind::Triangle) {
         ok = sample_triangle(scene_->emissive_triangles()[emitter.index], p, u, out);
     } else {
@@ -154,12 +168,13 @@ bool LightSampler::sample(const vec3& p, const vec3& n, float u_select, const ve
     return out->pdf > 0.0f && is_finite(out->radiance);
 }
 
-bool LightSampler::sample_light(const Light& light, const vec3& p, const vec2& u,
+bool LightSampler::sample_light(uint32_t index, const vec3& p, const vec2& u,
                                 LightSample* out) const {
+    const Light& light = scene_->lights()[index];
     switch (light.type) {
         case LightType::Point:
         case LightType::Spot: return sample_point(light, p, u, out);
-        case LightType::Area: return sample_area(light, p, u, out);
+        case LightType::Area: return sample_area(index, p, u, out);
         case LightType::Sun: return sample_sun(light, u, out);
     }
     return false;
@@ -201,18 +216,19 @@ bool LightSampler::sample_point(const Light& light, const vec3& p, const vec2& u
     return true;
 }
 
-bool LightSampler::sample_area(const Light& light, const vec3& p, const vec2& u,
+bool LightSampler::sample_area(uint32_t index, const vec3& p, const vec2& u,
                                LightSample* out) const {
-    if (!in_front_of_area_light(light, p)) return false;  // behind the one-sided emitter
-    const vec3 normal = area_emit_normal(light);
+    const Light& light = scene_->lights()[index];
+    const AreaEmission& emission = area_emission_[index];
+    // Behind the one-sided emitter (in_front_of_area_light with the axis computed once).
+    if (!in_front_of_plane(p, light.position(), emission.normal)) return false;
     const vec3 offset = area_light_point(light, u) - p;
     out->distance = glm::length(offset);
     out->wi = offset / out->distance;
-    const float cos_light = -glm::dot(out->wi, normal);
+    const float cos_light = -glm::dot(out->wi, emission.normal);
     if (cos_light <= 0.0f) return false;
-    const float area = area_light_area(light);
-    out->radiance = light.color * area_radiance_from_power(light.power, area);
-    out->pdf = out->distance * out->distance / (cos_light * area);
+    out->radiance = emission.radiance;
+    out->pdf = out->distance * out->distance / (cos_light * emission.area);
     out->delta = false;
     return true;
 }

@@ -117,9 +117,9 @@ class LightSampler {
         uint32_t index;  // into scene lights / emissive triangles
     };
 
-    bool sample_light(const Light& light, const vec3& p, const vec2& u, LightSample* out) const;
+    bool sample_light(uint32_t index, const vec3& p, const vec2& u, LightSample* out) const;
     bool sample_point(const Light& light, const vec3& p, const vec2& u, LightSample* out) const;
-    bool sample_area(const Light& light, const vec3& p, const vec2& u, LightSample* out) const;
+    bool sample_area(uint32_t index, const vec3& p, const vec2& u, LightSample* out) const;
     bool sample_sun(const Light& light, const vec2& u, LightSample* out) const;
     bool sample_triangle(const EmissiveTriangle& tri, const vec3& p, const vec2& u,
                          LightSample* out) const;
@@ -134,6 +134,14 @@ class LightSampler {
     WorldSampling world_sampling_;
     std::vector<Emitter> emitters_;
     std::vector<uint32_t> light_emitter_;  // scene light index -> emitter index (or kInvalidId)
+    // Per scene light (used for area lights): what sample_area needs that depends on the light
+    // alone, computed once instead of per sample.
+    struct AreaEmission {
+        vec3 normal{0.0f};    // emission axis, light.direction()
+        float area = 0.0f;    // m^2, area_light_area
+        vec3 radiance{0.0f};  // W m^-2 sr^-1
+    };
+    std::vector<AreaEmission> area_emission_;
     std::unordered_map<uint64_t, uint32_t> triangle_emitter_;  // (instance << 32 | tri) -> emitter
     uint32_t world_emitter_ = kInvalidId;
     std::vector<Portal> portals_;

@@ -179,6 +179,7 @@ void PathIntegrator::add_direct() {
 
 // Indirect light from the field through the field lobes (see the header).
 void PathIntegrator::add_field(const Shading& shading) {
+    if (field_->is_zero()) return;  // every term below would be zero
     const vec3 n = shading.frame.z;
     const vec3 diffuse = shading.bsdf.field_diffuse(shading.wo);
     PrincipledBsdf::GlossyLobe lobes[2];

@@ -47,7 +47,7 @@ PathTracer::PathTracer(const Scene& scene, const PathTracerSettings& settings)
       settings_(validated(settings)),
       lights_(scene, settings.world_sampling) {
     const Camera& camera = scene.camera();
-    film_ = Film(int(camera.resolution_x), int(camera.resolution_y));
+    film_ = ProgressiveFilm(int(camera.resolution_x), int(camera.resolution_y));
 }
 
 void PathTracer::render(uint32_t samples, Progress* progress) {
@@ -56,16 +56,18 @@ void PathTracer::render(uint32_t samples, Progress* progress) {
             "PathTracer::render: the scene was edited after this PathTracer was created "
             "(revision ", scene_revision_, ", now ", scene_->revision(),
             "); commit it and create a new PathTracer"));
-    const uint64_t first = film_.samples();
+    const uint64_t first = film_.film().samples();
     if (samples == 0) return;
     if (first + samples > kMaxPathTracerSamples)
         throw InvalidArgument(format_message("PathTracer::render: ", first, " + ", samples,
                                              " samples exceed the limit of ",
                                              kMaxPathTracerSamples, " per pixel"));
     const Camera& camera = scene_->camera();
-    const int width = film_.width(), height = film_.height(), tile = settings_.tile_size;
+    const CameraRayGenerator camera_rays(camera);
+    Film& target = film_.begin();  // committed only when every tile finished
+    const Film& base = film_.base();
+    const int width = target.width(), height = target.height(), tile = settings_.tile_size;
     const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
-    Film scratch = film_;  // committed only when every tile finished
     auto render_tile = [&](uint64_t begin, uint64_t end) {
         for (uint64_t t = begin; t < end; ++t) {
             const int x0 = int(t % uint64_t(tiles_x)) * tile, y0 = int(t / uint64_t(tiles_x)) * tile;
@@ -81,17 +83,24 @@ void PathTracer::render(uint32_t samples, Progress* progress) {
                                                   rng, values);
                         integrator.set_first_light_sample(stratified.u_select,
                                                           stratified.u_light);
-                        integrator.trace(camera.generate_ray(vec2(float(x), float(y)) +
-                                                             stratified.jitter));
-                        scratch.add(x, y, values);
+                        integrator.trace(camera_rays.generate_ray(vec2(float(x), float(y)) +
+                                                                  stratified.jitter));
+                        if (s == first)  // onto the sums as they were before this render
+                            target.accumulate(x, y, base, values);
+                        else
+                            target.add(x, y, values);
                     }
                 }
             }
         }
     };
-    parallel_for(0, uint64_t(tiles_x) * uint64_t(tiles_y), 1, render_tile, progress);
-    scratch.set_samples(uint32_t(first + samples));
-    film_ = std::move(scratch);
+    try {
+        parallel_for(0, uint64_t(tiles_x) * uint64_t(tiles_y), 1, render_tile, progress);
+    } catch (...) {
+        film_.abandon();
+        throw;
+    }
+    film_.commit(uint32_t(first + samples));
 }
 
 Image render_path_traced(const Scene& scene, const PathTracerSettings& settings,

@@ -61,18 +61,18 @@ class PathTracer {
     // was edited since construction: the light tables and film no longer match it.
     void render(uint32_t samples, Progress* progress = nullptr);
 
-    const Film& film() const { return film_; }
-    uint32_t samples_done() const { return film_.samples(); }
+    const Film& film() const { return film_.film(); }
+    uint32_t samples_done() const { return film_.film().samples(); }
     const PathTracerSettings& settings() const { return settings_; }
     const Scene& scene() const { return *scene_; }
-    Image image() const { return film_.image(); }
+    Image image() const { return film_.film().image(); }
 
   private:
     const Scene* scene_;
     uint64_t scene_revision_;  // Scene::revision() the light tables and film were built for
     PathTracerSettings settings_;
     LightSampler lights_;
-    Film film_;
+    ProgressiveFilm film_;  // a failed render leaves it as it was, without copying it
 };
 
 // Renders settings.samples samples per pixel and returns every pass (render/film.h).

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <optional>
-#include <utility>
 #include <vector>
 
 #include "render/path_integrator.h"
@@ -100,12 +99,13 @@ struct Wave {
 // pixels of `target`.
 class FrameWork {
   public:
-    FrameWork(const Scene& scene, const Camera& camera, const LightSampler& lights,
-              const PathTracerSettings& settings, const IndirectField& field, const TileGrid& grid,
-              uint64_t first, uint64_t count, const Film& base, Film& target, Progress* progress)
-        : scene_(scene), camera_(camera), lights_(lights), settings_(settings), field_(field),
-          grid_(grid), first_(first), count_(count), base_(base), target_(&target),
-          progress_(progress) {}
+    FrameWork(const Scene& scene, const Camera& camera, const CameraRayGenerator& camera_rays,
+              const LightSampler& lights, const PathTracerSettings& settings,
+              const IndirectField& field, const TileGrid& grid, uint64_t first, uint64_t count,
+              const Film& base, Film& target, Progress* progress)
+        : scene_(scene), camera_(camera), camera_rays_(camera_rays), lights_(lights),
+          settings_(settings), field_(field), grid_(grid), first_(first), count_(count),
+          base_(base), target_(&target), progress_(progress) {}
 
     // Renders tiles [begin, end) of the grid, pixels in tile order, in waves.
     void render_tiles(uint64_t begin, uint64_t end, StageSeconds* seconds) const {
@@ -162,8 +162,8 @@ class FrameWork {
             const uint64_t pixel = uint64_t(wave.y[i]) * width + uint64_t(wave.x[i]);
             wave.rngs[i] = Pcg32(settings_.seed, stream_id(s, pixel));
             wave.samples[i] = pixel_sample(settings_.seed, pixel, s);
-            wave.rays[i] = camera_.generate_ray(vec2(float(wave.x[i]), float(wave.y[i])) +
-                                                wave.samples[i].jitter);
+            wave.rays[i] = camera_rays_.generate_ray(vec2(float(wave.x[i]), float(wave.y[i])) +
+                                                     wave.samples[i].jitter);
         }
         scene_.intersect(wave.rays, wave.hits);
         for (size_t i = 0; i < wave.count; ++i) {
@@ -194,6 +194,7 @@ class FrameWork {
 
     const Scene& scene_;
     const Camera& camera_;
+    const CameraRayGenerator& camera_rays_;
     const LightSampler& lights_;
     const PathTracerSettings& settings_;
     const IndirectField& field_;
@@ -224,6 +225,11 @@ const PreviewSettings& validated(const PreviewSettings& settings) {
     return settings;
 }
 
+const Camera& validated(const Camera& camera) {
+    validate_camera(camera);
+    return camera;
+}
+
 }  // namespace
 
 void validate_preview_settings(const PreviewSettings& settings) {
@@ -249,12 +255,13 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const Camera& camera,
                                  const PreviewSettings& settings)
     : scene_(&scene),
       scene_revision_(scene.revision()),
-      camera_(camera),
+      camera_(validated(camera)),
+      camera_rays_(camera),
       settings_(validated(settings)),
       path_settings_(path_settings_for(settings)),
       lights_(scene, settings.world_sampling) {
-    validate_camera(camera_);
-    film_ = Film(int(camera_.resolution_x), int(camera_.resolution_y));
+    film_ = ProgressiveFilm(int(camera_.resolution_x), int(camera_.resolution_y),
+                            settings.combined_only ? FilmPasses::CombinedOnly : FilmPasses::All);
 }
 
 const LightSampler& PreviewRenderer::lights_for(const IndirectField& field) {
@@ -270,7 +277,7 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
             "PreviewRenderer::render: the scene was edited after this renderer was created "
             "(revision ", scene_revision_, ", now ", scene_->revision(),
             "); commit it and create a new PreviewRenderer"));
-    const uint64_t first = film_.samples();
+    const uint64_t first = film_.film().samples();
     if (samples == 0) return;
     if (first + samples > kMaxPathTracerSamples)
         throw InvalidArgument(format_message("PreviewRenderer::render: ", first, " + ", samples,
@@ -280,15 +287,10 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
     if (field == nullptr) field = &no_field;  // direct light only, still in preview mode
     const TimePoint frame_start = now();
     const LightSampler& lights = lights_for(*field);
-    // An empty film is summed in place (a failed render just clears it again); otherwise into
-    // next_film_, which replaces film_ once every tile is done.
-    const bool in_place = first == 0;
-    if (!in_place && (next_film_.width() != film_.width() || next_film_.height() != film_.height()))
-        next_film_ = Film(film_.width(), film_.height());
-    Film& target = in_place ? film_ : next_film_;
-    const TileGrid grid(film_.width(), film_.height(), settings_.tile_size);
-    const FrameWork work(*scene_, camera_, lights, path_settings_, *field, grid, first, samples,
-                         film_, target, progress);
+    Film& target = film_.begin();
+    const TileGrid grid(target.width(), target.height(), settings_.tile_size);
+    const FrameWork work(*scene_, camera_, camera_rays_, lights, path_settings_, *field, grid,
+                         first, samples, film_.base(), target, progress);
     const uint64_t tile_pixels = uint64_t(grid.tile) * uint64_t(grid.tile);
     const uint64_t tiles_per_unit = std::max<uint64_t>(1, kChunkPixels / tile_pixels);
     std::vector<StageSeconds> busy(grid.count());  // per work unit, at its first tile
@@ -298,12 +300,11 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
             work.render_tiles(begin, end, &busy[begin]);
         }, progress);
     } catch (...) {
-        if (in_place) film_.clear();
+        film_.abandon();
         throw;
     }
     PreviewTimings timings = split_wall_time(seconds_since(tiles_start), busy);
-    target.set_samples(uint32_t(first + samples));
-    if (!in_place) std::swap(film_, next_film_);
+    film_.commit(uint32_t(first + samples));
     timings.total = seconds_since(frame_start);
     timings_ = timings;
 }

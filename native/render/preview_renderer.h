@@ -20,10 +20,9 @@
 // sample s of pixel i uses the stream (seed, stream_id(s, i)) as the path tracer does, and the
 // waves depend only on the image and tile sizes, so frames are identical for any thread count.
 // Progressive: render() adds samples to the film, and a render that fails or is cancelled leaves
-// the film as it was. So a film that already holds samples is not summed in place: each pixel's
-// old sums plus the new samples go to a second film, which takes the first one's place when the
-// render completes; the two are swapped, not copied, and kept between calls (an empty film is
-// summed in place and cleared again on failure).
+// the film as it was, without the film being copied (render/film.h, ProgressiveFilm).
+// The viewport shows only Combined: with combined_only the film sums nothing else, which saves
+// most of the film's memory traffic per frame.
 #pragma once
 
 #include <cstdint>
@@ -47,6 +46,7 @@ struct PreviewSettings {
     float clamp_indirect = 0.0f;        // as PathTracerSettings.clamp_indirect; 0 = off
     WorldSampling world_sampling = WorldSampling::Cosine;
     int tile_size = 16;
+    bool combined_only = false;         // sum only the Combined pass (the viewport's)
 };
 
 void validate_preview_settings(const PreviewSettings& settings);
@@ -70,8 +70,8 @@ class PreviewRenderer {
     // leaves the film as it was. InvalidArgument if the scene was edited since construction.
     void render(const IndirectField* field, uint32_t samples, Progress* progress = nullptr);
 
-    const Film& film() const { return film_; }
-    Image image() const { return film_.image(); }
+    const Film& film() const { return film_.film(); }
+    Image image() const { return film_.film().image(); }
     const PreviewTimings& timings() const { return timings_; }
     const Camera& camera() const { return camera_; }
     const Scene& scene() const { return *scene_; }
@@ -82,17 +82,18 @@ class PreviewRenderer {
     const Scene* scene_;
     uint64_t scene_revision_;
     Camera camera_;
+    CameraRayGenerator camera_rays_;  // camera_'s, made once
     PreviewSettings settings_;
     PathTracerSettings path_settings_;
     LightSampler lights_;
     // For fields that carry the world's direct light; built by the first render with such a field.
     std::optional<LightSampler> lights_without_world_;
-    Film film_;
-    Film next_film_;  // where a render sums film_ + its samples (see the header comment)
+    ProgressiveFilm film_;
     PreviewTimings timings_;
 };
 
-// Renders settings.samples samples per pixel and returns every pass (render/film.h).
+// Renders settings.samples samples per pixel and returns every pass (render/film.h), or only
+// Combined with settings.combined_only.
 Image render_preview(const Scene& scene, const IndirectField* field,
                      const PreviewSettings& settings, Progress* progress = nullptr,
                      PreviewTimings* timings = nullptr);

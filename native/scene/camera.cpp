@@ -46,29 +46,45 @@ mat4 unscaled(const mat4& world_from_camera) {
 }  // namespace
 
 Ray Camera::generate_ray(const vec2& film) const {
-    const Viewplane plane = compute_viewplane(*this);
-    const float u = film.x / static_cast<float>(resolution_x);
-    const float v = film.y / static_cast<float>(resolution_y);
+    return CameraRayGenerator(*this).generate_ray(film);
+}
+
+CameraRayGenerator::CameraRayGenerator(const Camera& camera)
+    : type_(camera.type),
+      frame_(unscaled(camera.world_from_camera)),
+      width_(static_cast<float>(camera.resolution_x)),
+      height_(static_cast<float>(camera.resolution_y)),
+      clip_start_(camera.clip_start),
+      clip_end_(camera.clip_end) {
+    const Viewplane plane = compute_viewplane(camera);
+    xmin_ = plane.xmin;
+    xmax_ = plane.xmax;
+    ymin_ = plane.ymin;
+    ymax_ = plane.ymax;
+}
+
+Ray CameraRayGenerator::generate_ray(const vec2& film) const {
+    const float u = film.x / width_;
+    const float v = film.y / height_;
     // Film y grows downwards, camera y upwards.
-    const float x = plane.xmin + u * (plane.xmax - plane.xmin);
-    const float y = plane.ymax - v * (plane.ymax - plane.ymin);
-    const mat4 frame = unscaled(world_from_camera);
+    const float x = xmin_ + u * (xmax_ - xmin_);
+    const float y = ymax_ - v * (ymax_ - ymin_);
     Ray ray;
-    if (type == CameraType::Orthographic) {
-        ray.origin = vec3(frame * vec4(x, y, 0.0f, 1.0f));
-        ray.direction = glm::normalize(-vec3(frame[2]));
-        ray.tmin = clip_start;
-        ray.tmax = clip_end;
+    if (type_ == CameraType::Orthographic) {
+        ray.origin = vec3(frame_ * vec4(x, y, 0.0f, 1.0f));
+        ray.direction = glm::normalize(-vec3(frame_[2]));
+        ray.tmin = clip_start_;
+        ray.tmax = clip_end_;
         return ray;
     }
     const vec3 local(x, y, -1.0f);
     // Clip planes are distances along the view axis; along a ray whose view-axis component is
     // 1 / |local| per unit length they are |local| times longer.
     const float axis_to_ray = glm::length(local);
-    ray.origin = vec3(frame[3]);
-    ray.direction = glm::normalize(vec3(frame * vec4(local, 0.0f)));
-    ray.tmin = clip_start * axis_to_ray;
-    ray.tmax = clip_end * axis_to_ray;
+    ray.origin = vec3(frame_[3]);
+    ray.direction = glm::normalize(vec3(frame_ * vec4(local, 0.0f)));
+    ray.tmin = clip_start_ * axis_to_ray;
+    ray.tmax = clip_end_ * axis_to_ray;
     return ray;
 }
 

@@ -37,6 +37,23 @@ struct Camera {
     bool project(const vec3& p, vec2* film) const;
 };
 
+// Camera::generate_ray for many film points: the image rectangle on the viewplane and the
+// camera frame without its scale, which generate_ray derives from the camera's fields on every
+// call, are computed once here (renderers build one per frame). Rays are bit-identical to
+// generate_ray's; the generator keeps copies, so later edits of the camera do not reach it.
+class CameraRayGenerator {
+  public:
+    explicit CameraRayGenerator(const Camera& camera);
+    Ray generate_ray(const vec2& film) const;
+
+  private:
+    CameraType type_;
+    mat4 frame_;  // world_from_camera without scale
+    float xmin_, xmax_, ymin_, ymax_;  // the viewplane (camera space)
+    float width_, height_;  // resolution in pixels
+    float clip_start_, clip_end_;
+};
+
 // Throws InvalidArgument naming the field (NaN/Inf transform, non-positive lens or sensor,
 // zero resolution, clip_start >= clip_end, ...).
 void validate_camera(const Camera& camera);

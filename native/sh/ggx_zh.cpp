@@ -1,6 +1,7 @@
 #include "sh/ggx_zh.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "sh/sphere_quadrature.h"
@@ -90,11 +91,30 @@ BandFactors ggx_specular_zh_reference(float roughness) {
     return factors;
 }
 
+BandFactors ggx_specular_zh_tabulated(float roughness) {
+    check_roughness(roughness, "ggx_specular_zh_tabulated");
+    using Table = std::array<BandFactors, kGgxZhTableIntervals + 1>;
+    static const Table table = [] {
+        Table nodes{};
+        for (int i = 0; i <= kGgxZhTableIntervals; ++i)
+            nodes[i] = ggx_specular_zh(float(i) / float(kGgxZhTableIntervals));
+        return nodes;
+    }();
+    const float x = roughness * float(kGgxZhTableIntervals);
+    const int i = std::min(int(x), kGgxZhTableIntervals - 1);  // roughness 1: the last interval
+    const float t = x - float(i);
+    const BandFactors& lo = table[i];
+    const BandFactors& hi = table[i + 1];
+    BandFactors factors{};
+    for (int l = 0; l <= kMaxShOrder; ++l) factors[l] = lo[l] + t * (hi[l] - lo[l]);
+    return factors;
+}
+
 vec3 sh_specular_radiance(const ShRgb& radiance, const vec3& reflected, float roughness) {
-    ShRgb filtered = radiance;
-    sh_scale_bands(filtered, ggx_specular_zh(roughness));
     // Ringing (negative k_4, fitted overshoot) can push the sum below zero: clamp at use.
-    return glm::max(sh_evaluate(filtered, reflected), vec3(0.0f));
+    return glm::max(
+        sh_evaluate_scaled(radiance, ggx_specular_zh_tabulated(roughness), reflected),
+        vec3(0.0f));
 }
 
 }  // namespace shgi

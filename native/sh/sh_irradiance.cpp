@@ -13,9 +13,7 @@ BandFactors cosine_lobe_band_factors() {
 void sh_convolve_cosine(ShRgb& sh) { sh_scale_bands(sh, cosine_lobe_band_factors()); }
 
 vec3 sh_irradiance(const ShRgb& radiance, const vec3& normal) {
-    ShRgb irradiance = radiance;
-    sh_convolve_cosine(irradiance);
-    return sh_evaluate(irradiance, normal);
+    return sh_evaluate_scaled(radiance, cosine_lobe_band_factors(), normal);
 }
 
 }  // namespace shgi

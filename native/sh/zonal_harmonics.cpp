@@ -35,4 +35,32 @@ void sh_scale_bands(ShRgb& sh, const BandFactors& factors) {
         for (int m = -l; m <= l; ++m) sh.coeffs[sh_index(l, m)] *= factors[l];
 }
 
+namespace {
+
+// sh_evaluate_scaled for a compile-time order: the loops unroll into straight-line code.
+template <int kOrder>
+vec3 evaluate_scaled(const ShRgb& sh, const BandFactors& factors, const float* basis) {
+    vec3 sum(0.0f);
+    for (int l = 0; l <= kOrder; ++l)
+        for (int m = -l; m <= l; ++m) {
+            const int i = sh_index(l, m);
+            sum += (sh.coeffs[i] * factors[l]) * basis[i];
+        }
+    return sum;
+}
+
+}  // namespace
+
+vec3 sh_evaluate_scaled(const ShRgb& sh, const BandFactors& factors, const vec3& dir) {
+    float basis[kMaxShCoefficients];
+    sh_eval(sh.order, dir, basis);  // checks the order
+    switch (sh.order) {
+        case 0: return evaluate_scaled<0>(sh, factors, basis);
+        case 1: return evaluate_scaled<1>(sh, factors, basis);
+        case 2: return evaluate_scaled<2>(sh, factors, basis);
+        case 3: return evaluate_scaled<3>(sh, factors, basis);
+        default: return evaluate_scaled<4>(sh, factors, basis);
+    }
+}
+
 }  // namespace shgi

@@ -39,4 +39,10 @@ ShCoeffs sh_rotate_zonal(int order, const ZhCoeffs& zh, const vec3& axis);
 void sh_scale_bands(ShCoeffs& sh, const BandFactors& factors);
 void sh_scale_bands(ShRgb& sh, const BandFactors& factors);
 
+// Σ_lm factors[l] c_lm Y_lm(dir) per channel at the unit direction `dir`: sh_evaluate of the
+// band-scaled expansion without forming it (irradiance and glossy lookups run once per shading
+// point). The float operations and their order are those of sh_scale_bands followed by
+// sh_evaluate, so the result is bit-identical to that pair.
+vec3 sh_evaluate_scaled(const ShRgb& sh, const BandFactors& factors, const vec3& dir);
+
 }  // namespace shgi

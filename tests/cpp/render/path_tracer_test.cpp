@@ -313,6 +313,26 @@ TEST(PathTracer, CancelThrowsPromptly) {
     EXPECT_EQ(tracer.samples_done(), 0u);  // the film is left as it was
 }
 
+// A cancel while the film already holds samples (summed into the second film, not in place)
+// leaves it as it was, and rendering continues as if the cancelled call never happened.
+TEST(PathTracer, CancelLeavesAFilmWithSamplesUnchanged) {
+    const Scene scene = mixed_scene();
+    PathTracerSettings settings;
+    settings.seed = 3;
+    PathTracer tracer(scene, settings);
+    tracer.render(1);
+    const std::vector<float> before = tracer.film().pixels(Pass::Combined);
+    Progress cancelled;
+    cancelled.cancel();
+    EXPECT_THROW(tracer.render(2, &cancelled), Cancelled);
+    EXPECT_EQ(tracer.samples_done(), 1u);
+    EXPECT_EQ(tracer.film().pixels(Pass::Combined), before);
+    tracer.render(2);
+    PathTracer one_shot(scene, settings);
+    one_shot.render(3);
+    EXPECT_EQ(tracer.film().pixels(Pass::Combined), one_shot.film().pixels(Pass::Combined));
+}
+
 // A tracer caches light tables and a film sized for the scene it was built on; after an edit
 // (here: one more light, recommitted) it must refuse to render rather than index stale tables.
 TEST(PathTracer, RefusesASceneEditedAfterConstruction) {

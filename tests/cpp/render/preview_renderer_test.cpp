@@ -398,6 +398,29 @@ TEST(PreviewRenderer, BitIdenticalForAnyThreadCountAndTileSize) {
     expect_same_film(one->film(), two->film());
 }
 
+// The viewport's film sums only Combined: the same Combined bits as a film with every pass, and
+// no other pass to read.
+TEST(PreviewRenderer, CombinedOnlyGivesTheSameCombined) {
+    const Scene scene = room_scene();
+    const auto lattice = solved_lattice(scene);
+    PreviewSettings settings = preview_settings(2);
+    PreviewRenderer all(scene, settings);
+    settings.combined_only = true;
+    PreviewRenderer combined(scene, settings);
+    for (int round = 0; round < 2; ++round) {  // in place, then onto a film holding samples
+        all.render(lattice.get(), 1);
+        combined.render(lattice.get(), 1);
+        EXPECT_EQ(combined.film().samples(), all.film().samples());
+        EXPECT_EQ(combined.film().pixels(Pass::Combined), all.film().pixels(Pass::Combined));
+    }
+    EXPECT_FALSE(combined.film().has_pass(Pass::DiffInd));
+    testing::expect_invalid_argument([&] { combined.film().pixels(Pass::DiffInd); },
+                                     "only Combined");
+    const Image image = combined.image();
+    EXPECT_NE(image.find_channel("Combined.R"), nullptr);
+    EXPECT_EQ(image.find_channel("DiffInd.R"), nullptr);
+}
+
 // A cancel before the first chunk, or in the middle of shading (some samples already summed),
 // throws Cancelled and leaves the film as it was; rendering then continues as if it never
 // happened.

@@ -104,6 +104,32 @@ TEST(Camera, ProjectInvertsGenerateRay) {
     }
 }
 
+void expect_same_ray(const Ray& actual, const Ray& expected) {
+    EXPECT_EQ(actual.origin, expected.origin);
+    EXPECT_EQ(actual.direction, expected.direction);
+    EXPECT_EQ(actual.tmin, expected.tmin);
+    EXPECT_EQ(actual.tmax, expected.tmax);
+}
+
+// A generator is a snapshot: editing the camera afterwards (a viewport moving on while a frame
+// renders) does not change the rays of a generator built before.
+TEST(Camera, RayGeneratorKeepsTheCameraItWasBuiltFrom) {
+    for (const CameraType type : {CameraType::Perspective, CameraType::Orthographic}) {
+        Camera camera;
+        camera.type = type;
+        camera.shift_y = -0.1f;
+        camera.world_from_camera = glm::rotate(mat4(1.0f), 0.7f, vec3(0, 0, 1)) *
+                                   glm::scale(mat4(1.0f), vec3(2.0f));  // scale is ignored
+        const Camera before = camera;
+        const CameraRayGenerator rays(camera);
+        camera.lens = 24.0f;
+        camera.ortho_scale = 3.0f;
+        camera.world_from_camera = mat4(1.0f);
+        for (const vec2 film : {vec2(0, 0), vec2(320.25f, 240.75f), vec2(640, 480)})
+            expect_same_ray(rays.generate_ray(film), before.generate_ray(film));
+    }
+}
+
 TEST(Camera, ProjectRejectsPointsBehind) {
     Camera camera;
     vec2 film;

@@ -98,6 +98,25 @@ TEST(ZonalHarmonics, ConvolutionByBandFactorsMatchesBruteForce) {
     }
 }
 
+// The fused form is the same float arithmetic as scaling a copy and evaluating it: equal bits.
+TEST(ZonalHarmonics, EvaluateScaledIsScaleThenEvaluate) {
+    Pcg32 rng(29, 0);
+    const BandFactors factors = zonal_band_factors(phong_zh(5.0f));
+    for (int order = 0; order <= kMaxShOrder; ++order) {
+        ShRgb field(order);
+        for (int i = 0; i < field.num_coefficients(); ++i)
+            field.coeffs[i] = 2.0f * vec3(rng.next_float(), rng.next_float(), rng.next_float()) -
+                              1.0f;
+        ShRgb scaled = field;
+        sh_scale_bands(scaled, factors);
+        for (int k = 0; k < kRandomAxes; ++k) {
+            const vec3 d = sample_uniform_sphere(rng.next_vec2());
+            EXPECT_EQ(sh_evaluate_scaled(field, factors, d), sh_evaluate(scaled, d))
+                << "order " << order;
+        }
+    }
+}
+
 TEST(ZonalHarmonics, RejectsBadInput) {
     EXPECT_THROW(sh_rotate_zonal(2, cosine_lobe_zh(), vec3(0, 0, 2)), InvalidArgument);
     EXPECT_THROW(sh_rotate_zonal(5, cosine_lobe_zh(), vec3(0, 0, 1)), InvalidArgument);
