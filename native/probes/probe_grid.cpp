@@ -328,12 +328,13 @@ void ProbeGrid::update(Progress* progress) {
     const float sample_weight = kFourPi / float(n);
     constexpr float kDcScale = 0.28209479177387814f * kFourPi;  // Y00 * 4 pi
 
-    std::atomic<uint64_t> paths{0};
+    std::atomic<uint64_t> paths{0}, rays{0};
     if (progress) progress->begin_stage("updating probes");
     parallel_for(
         0, old.probe_count(), kProbesPerTask,
         [&](uint64_t begin, uint64_t end) {
             VisibilityFilter filter(old.visibility_resolution, settings_.visibility_blur);
+            IntegratorClock clock;
             std::vector<vec2> moments(vis_texels);
             for (uint64_t probe = begin; probe < end; ++probe) {
                 if (!old.active[probe]) continue;
@@ -352,7 +353,8 @@ void ProbeGrid::update(Progress* progress) {
                     filter.add(ray.direction, hit.valid() ? hit.t : far);
                     Pcg32 rng(settings_.seed, stream_id(pass, probe * n + r));
                     PassValues values;
-                    PathIntegrator(*scene_, camera, lights, path_settings, nullptr, rng, values)
+                    PathIntegrator(*scene_, camera, lights, path_settings, nullptr, rng, values,
+                                   &clock)
                         .trace(ray, hit);
                     vec3 radiance = values[Pass::Combined];
                     if (!settings_.include_direct)
@@ -369,6 +371,8 @@ void ProbeGrid::update(Progress* progress) {
                     dc_sum2 += dc * dc;
                 }
                 paths.fetch_add(n, std::memory_order_relaxed);
+                rays.fetch_add(n + clock.rays, std::memory_order_relaxed);  // + probe rays
+                clock.rays = 0;
 
                 ShRgb& sh = next->sh[probe];
                 for (int i = 0; i < sh.num_coefficients(); ++i)
@@ -390,6 +394,7 @@ void ProbeGrid::update(Progress* progress) {
     next->passes = pass + 1;
     timings_.update = seconds_since(start);
     timings_.paths = paths.load();
+    timings_.rays = rays.load();
     publish(std::move(next));
 }
 

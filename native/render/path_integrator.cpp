@@ -66,6 +66,7 @@ void PathIntegrator::finish() {
             if (rng_.next_float() >= survive) return;
             throughput_ /= survive;
         }
+        if (clock_ != nullptr) ++clock_->rays;
         if (!enter_surface(scene_.intersect(ray_))) return;
         sample_direct();
     }
@@ -133,7 +134,9 @@ void PathIntegrator::record_first_hit(const Shading& shading, const Ray& ray, co
 void PathIntegrator::sample_direct() {
     ScopedTimer timer(clock_ != nullptr ? &clock_->direct : nullptr);
     Ray shadow;
-    if (prepare_direct(&shadow) && !scene_.occluded(shadow)) add_direct();
+    if (!prepare_direct(&shadow)) return;
+    if (clock_ != nullptr) ++clock_->rays;
+    if (!scene_.occluded(shadow)) add_direct();
 }
 
 bool PathIntegrator::prepare_direct(Ray* shadow) {

@@ -34,9 +34,12 @@
 
 namespace shgi {
 
-// Seconds spent by one thread in the direct-light part of its paths (next-event estimation).
+// Seconds spent by one thread in the direct-light part of its paths (next-event estimation), and
+// the rays its integrators traced themselves (path continuations and shadow rays of trace() and
+// finish(); not the rays a caller traces for them, such as batched camera or shadow rays).
 struct IntegratorClock {
     double direct = 0.0;
+    uint64_t rays = 0;
 };
 
 // The stratified numbers of sample s of a pixel: its jitter inside the pixel and its first
