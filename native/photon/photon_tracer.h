@@ -18,7 +18,9 @@
 //
 // Tracing is a wavefront (stream) per chunk of photons: all photons of a chunk are in flight
 // together, each step intersects all their rays with one batch query (Embree ray streams), then
-// shades, stores and scatters every hit and keeps the survivors for the next step.
+// shades, stores and scatters every hit and keeps the survivors for the next step. Hits are
+// shaded in small batches, one stage (set-up, store, BSDF sample, roulette) at a time, and each
+// worker reuses its buffers from chunk to chunk.
 //
 // Determinism: photon i of pass k uses RNG stream stream_id(k, i) (util/rng.h) and meets the same
 // random numbers and operations as if traced alone. The maps list stored photons by photon index,

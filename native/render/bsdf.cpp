@@ -13,7 +13,8 @@ constexpr float kSpecularF0Scale = 0.08f;
 // Lobes whose closure weight averages below this are dropped (Cycles' CLOSURE_WEIGHT_CUTOFF).
 constexpr float kClosureWeightCutoff = 1e-5f;
 
-float average(const vec3& v) { return (v.x + v.y + v.z) / 3.0f; }
+constexpr float kOneThird = 1.0f / 3.0f;
+float average(const vec3& v) { return (v.x + v.y + v.z) * kOneThird; }
 
 // (1 - x)^5, the Schlick weight of Burley's diffuse.
 float schlick_weight(float x) {
@@ -126,10 +127,12 @@ float ggx_d(const vec3& h, float alpha) {
 }
 
 float ggx_g1(const vec3& w, float alpha) {
-    const float c2 = w.z * w.z;
-    if (c2 <= 0.0f) return 0.0f;
-    const float tan2 = std::max(0.0f, 1.0f - c2) / c2;
-    return 2.0f / (1.0f + std::sqrt(1.0f + alpha * alpha * tan2));
+    // 2 / (1 + sqrt(1 + alpha^2 tan^2)) with tan^2 = (1 - c^2) / c^2, multiplied through by c:
+    // one division instead of two.
+    const float c = std::min(std::fabs(w.z), 1.0f);
+    if (!(c > 0.0f)) return 0.0f;
+    const float a2 = alpha * alpha;
+    return 2.0f * c / (c + std::sqrt(a2 + (1.0f - a2) * c * c));
 }
 
 vec3 sample_ggx_visible_normal(const vec3& w, float alpha, const vec2& u) {
@@ -152,9 +155,12 @@ float fresnel_dielectric(float cos_i, float eta) {
     float g = eta * eta - 1.0f + c * c;
     if (g <= 0.0f) return 1.0f;
     g = std::sqrt(g);
-    const float a = (g - c) / (g + c);
-    const float b = (c * (g + c) - 1.0f) / (c * (g - c) + 1.0f);
-    return 0.5f * a * a * (1.0f + b * b);
+    // 0.5 a^2 (1 + b^2) with a = (g - c) / (g + c) and b = (c (g + c) - 1) / (c (g - c) + 1),
+    // over one common denominator: one division instead of two on every shading's critical path.
+    const float a_num = g - c, a_den = g + c;
+    const float b_num = c * a_den - 1.0f, b_den = c * a_num + 1.0f;
+    return 0.5f * a_num * a_num * (b_den * b_den + b_num * b_num) /
+           (a_den * a_den * b_den * b_den);
 }
 
 LobeClass PrincipledBsdf::Lobe::lobe_class() const {
@@ -175,6 +181,7 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const vec3& base_color,
 
     const float f0_dielectric = kSpecularF0Scale * std::clamp(material.specular, 0.0f, 1.0f);
     specular_f0_ = f0_dielectric;
+    inv_one_minus_f0_ = f0_dielectric < 1.0f ? 1.0f / (1.0f - f0_dielectric) : 0.0f;
     specular_ior_ = 2.0f / (1.0f - std::sqrt(f0_dielectric)) - 1.0f;
     cspec0_ = glm::mix(vec3(f0_dielectric), base_color, metallic);
 
@@ -184,9 +191,13 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const vec3& base_color,
     // is 0 and it has no grazing-angle reflection).
     if (material.specular > kClosureWeightCutoff || metallic > kClosureWeightCutoff)
         add_lobe(LobeKind::Specular, vec3(1.0f - transmission), alpha);
-    const float fresnel = fresnel_dielectric(cos_nv, eta_);
-    add_lobe(LobeKind::GlassReflection, vec3(transmission * fresnel), alpha);
-    add_lobe(LobeKind::Refraction, transmission * (1.0f - fresnel) * base_color, alpha);
+    // Both glass lobes have zero weight without transmission (add_lobe would drop them): skip
+    // their Fresnel term, the common case.
+    if (transmission > 0.0f) {
+        const float fresnel = fresnel_dielectric(cos_nv, eta_);
+        add_lobe(LobeKind::GlassReflection, vec3(transmission * fresnel), alpha);
+        add_lobe(LobeKind::Refraction, transmission * (1.0f - fresnel) * base_color, alpha);
+    }
 
     // Lobe selection by average closure weight as Cycles, except that the specular lobe is
     // weighted by its colour at normal view so a 4% dielectric coat does not take half the samples.
@@ -197,8 +208,8 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const vec3& base_color,
         if (lobe.kind == LobeKind::Specular) lobe.select_prob *= average(specular_color(cos_nv));
         total += lobe.select_prob;
     }
-    for (int i = 0; i < lobe_count_; ++i)
-        lobes_[i].select_prob = total > 0.0f ? lobes_[i].select_prob / total : 0.0f;
+    const float inv_total = total > 0.0f ? 1.0f / total : 0.0f;
+    for (int i = 0; i < lobe_count_; ++i) lobes_[i].select_prob *= inv_total;
 }
 
 void PrincipledBsdf::add_lobe(LobeKind kind, const vec3& weight, float alpha) {
@@ -212,61 +223,101 @@ void PrincipledBsdf::add_lobe(LobeKind kind, const vec3& weight, float alpha) {
 vec3 PrincipledBsdf::specular_color(float cos_lh) const {
     // Cycles' interpolate_fresnel_color: Fresnel of specular_ior_, renormalised to [F0, 1].
     if (specular_f0_ >= 1.0f) return vec3(1.0f);
-    const float fh = (fresnel_dielectric(cos_lh, specular_ior_) - specular_f0_) /
-                     (1.0f - specular_f0_);
+    const float fh = (fresnel_dielectric(cos_lh, specular_ior_) - specular_f0_) * inv_one_minus_f0_;
     return cspec0_ * (1.0f - fh) + vec3(fh);
 }
 
-float PrincipledBsdf::diffuse_brdf(const vec3& wo, const vec3& wi) const {
+float PrincipledBsdf::diffuse_brdf(const vec3& wo, const vec3& wi, float cos_lh) const {
     if (diffuse_model_ == DiffuseModel::Lambert) return kInvPi;
     const float fl = schlick_weight(wi.z);
     const float fv = schlick_weight(wo.z);
-    const vec3 h = glm::normalize(wo + wi);
-    const float cos_lh = glm::dot(wi, h);
     const float rr = 2.0f * roughness_ * cos_lh * cos_lh;
     const float lambert = (1.0f - 0.5f * fl) * (1.0f - 0.5f * fv);
     const float retro = rr * (fl + fv + fl * fv * (rr - 1.0f));
     return kInvPi * (lambert + retro);
 }
 
-vec3 PrincipledBsdf::lobe_eval(const Lobe& lobe, const vec3& wo, const vec3& wi) const {
-    if (lobe.delta() || wo.z <= 0.0f) return vec3(0.0f);
-    if (lobe.kind == LobeKind::Refraction) {
-        if (wi.z >= 0.0f) return vec3(0.0f);
-        const vec3 h = refraction_half_vector(wo, wi, eta_);
-        const float cos_oh = glm::dot(wo, h), cos_ih = glm::dot(wi, h);
-        if (cos_oh <= 0.0f || cos_ih >= 0.0f) return vec3(0.0f);
-        const float denom = cos_oh + eta_ * cos_ih;
-        const float g = ggx_g1(wo, lobe.alpha) * ggx_g1(wi, lobe.alpha);
-        const float value = eta_ * eta_ * ggx_d(h, lobe.alpha) * g * std::fabs(cos_ih) * cos_oh /
-                            (wo.z * denom * denom);
-        return lobe.weight * value;
+// What every non-Dirac lobe's f |cos| and pdf share for one pair (wo, wi): the half vector and
+// the GGX terms (all GGX lobes of a PrincipledBsdf have the same alpha), computed once.
+struct PrincipledBsdf::PairTerms {
+    bool reflection = false;  // wi above the surface (reflection lobes), else below (refraction)
+    vec3 h{0.0f};             // half vector on wo's side (the refraction one below the surface)
+    float cos_oh = 0.0f, cos_ih = 0.0f;
+    bool ggx_ready = false;
+    float d = 0.0f, g1_o = 0.0f, g1_i = 0.0f;
+    float refraction_denom = 0.0f;  // cos_oh + eta cos_ih (refraction only)
+};
+
+// Fills `terms` for the pair; false when no non-Dirac lobe can be non-zero (grazing wi, or a
+// refraction pair without a valid half vector).
+bool PrincipledBsdf::pair_terms(const vec3& wo, const vec3& wi, PairTerms* terms) const {
+    if (wo.z <= 0.0f || wi.z == 0.0f) return false;
+    terms->reflection = wi.z > 0.0f;
+    if (terms->reflection) {
+        terms->h = glm::normalize(wo + wi);
+        terms->cos_ih = glm::dot(wi, terms->h);
+        return true;
     }
-    if (wi.z <= 0.0f) return vec3(0.0f);
-    if (lobe.kind == LobeKind::Diffuse) return lobe.weight * (diffuse_brdf(wo, wi) * wi.z);
-    const vec3 h = glm::normalize(wo + wi);
-    const float g = ggx_g1(wo, lobe.alpha) * ggx_g1(wi, lobe.alpha);
-    const float value = ggx_d(h, lobe.alpha) * g / (4.0f * wo.z);
-    const vec3 color = lobe.kind == LobeKind::Specular ? specular_color(glm::dot(wi, h))
-                                                       : vec3(1.0f);
-    return lobe.weight * color * value;
+    terms->h = refraction_half_vector(wo, wi, eta_);
+    terms->cos_oh = glm::dot(wo, terms->h);
+    terms->cos_ih = glm::dot(wi, terms->h);
+    if (terms->cos_oh <= 0.0f || terms->cos_ih >= 0.0f) return false;
+    terms->refraction_denom = terms->cos_oh + eta_ * terms->cos_ih;
+    return true;
 }
 
-float PrincipledBsdf::lobe_pdf(const Lobe& lobe, const vec3& wo, const vec3& wi) const {
-    if (lobe.delta() || wo.z <= 0.0f) return 0.0f;
-    if (lobe.kind == LobeKind::Diffuse) return wi.z > 0.0f ? wi.z * kInvPi : 0.0f;
-    if (lobe.kind == LobeKind::Refraction) {
-        if (wi.z >= 0.0f) return 0.0f;
-        const vec3 h = refraction_half_vector(wo, wi, eta_);
-        const float cos_oh = glm::dot(wo, h), cos_ih = glm::dot(wi, h);
-        if (cos_oh <= 0.0f || cos_ih >= 0.0f) return 0.0f;
-        const float denom = cos_oh + eta_ * cos_ih;
-        const float visible = ggx_g1(wo, lobe.alpha) * ggx_d(h, lobe.alpha) * cos_oh / wo.z;
-        return visible * eta_ * eta_ * std::fabs(cos_ih) / (denom * denom);
+void PrincipledBsdf::ggx_terms(const vec3& wo, const vec3& wi, float alpha,
+                               PairTerms* terms) const {
+    if (terms->ggx_ready) return;
+    terms->d = ggx_d(terms->h, alpha);
+    terms->g1_o = ggx_g1(wo, alpha);
+    terms->g1_i = ggx_g1(wi, alpha);
+    terms->ggx_ready = true;
+}
+
+// One lobe's f |cos| and pdf (not yet times its selection probability) for the pair.
+void PrincipledBsdf::lobe_eval_pdf(const Lobe& lobe, const vec3& wo, const vec3& wi,
+                                   PairTerms* terms, vec3* f, float* pdf) const {
+    *f = vec3(0.0f);
+    *pdf = 0.0f;
+    if (lobe.delta() || terms->reflection != (lobe.kind != LobeKind::Refraction)) return;
+    if (lobe.kind == LobeKind::Diffuse) {
+        *f = lobe.weight * (diffuse_brdf(wo, wi, terms->cos_ih) * wi.z);
+        *pdf = wi.z * kInvPi;
+        return;
     }
-    if (wi.z <= 0.0f) return 0.0f;
-    const vec3 h = glm::normalize(wo + wi);
-    return ggx_g1(wo, lobe.alpha) * ggx_d(h, lobe.alpha) / (4.0f * wo.z);
+    ggx_terms(wo, wi, lobe.alpha, terms);
+    if (lobe.kind == LobeKind::Refraction) {
+        // Walter et al. 2007 eq. 21 (Fresnel in the weight) and the visible-normal pdf mapped
+        // through the refraction Jacobian.
+        const float jacobian = eta_ * eta_ * std::fabs(terms->cos_ih) /
+                               (terms->refraction_denom * terms->refraction_denom);
+        const float visible = terms->g1_o * terms->d * terms->cos_oh / wo.z;
+        *f = lobe.weight * (visible * terms->g1_i * jacobian);
+        *pdf = visible * jacobian;
+        return;
+    }
+    // Reflection: D G1(wo) G1(wi) / (4 wo.z); the visible-normal pdf is D G1(wo) / (4 wo.z).
+    *pdf = terms->g1_o * terms->d / (4.0f * wo.z);
+    const vec3 color = lobe.kind == LobeKind::Specular ? specular_color(terms->cos_ih) : vec3(1.0f);
+    *f = lobe.weight * color * (*pdf * terms->g1_i);
+}
+
+void PrincipledBsdf::eval_pdf(const vec3& wo, const vec3& wi, bool field_only, BsdfEval* eval,
+                              float* pdf) const {
+    *eval = BsdfEval{};
+    *pdf = 0.0f;
+    PairTerms terms;
+    if (!pair_terms(wo, wi, &terms)) return;
+    for (int i = 0; i < lobe_count_; ++i) {
+        const Lobe& lobe = lobes_[i];
+        if (field_only && lobe.traced()) continue;
+        vec3 f;
+        float lobe_pdf;
+        lobe_eval_pdf(lobe, wo, wi, &terms, &f, &lobe_pdf);
+        eval->by_class[int(lobe.lobe_class())] += f;
+        *pdf += lobe.select_prob * lobe_pdf;
+    }
 }
 
 bool PrincipledBsdf::lobe_sample(const Lobe& lobe, const vec3& wo, const vec2& u,
@@ -287,15 +338,15 @@ bool PrincipledBsdf::lobe_sample(const Lobe& lobe, const vec3& wo, const vec2& u
 
 BsdfEval PrincipledBsdf::eval(const vec3& wo, const vec3& wi) const {
     BsdfEval result;
-    for (int i = 0; i < lobe_count_; ++i)
-        result.by_class[int(lobes_[i].lobe_class())] += lobe_eval(lobes_[i], wo, wi);
+    float pdf;
+    eval_pdf(wo, wi, false, &result, &pdf);
     return result;
 }
 
 float PrincipledBsdf::pdf(const vec3& wo, const vec3& wi) const {
-    float pdf = 0.0f;
-    for (int i = 0; i < lobe_count_; ++i)
-        pdf += lobes_[i].select_prob * lobe_pdf(lobes_[i], wo, wi);
+    BsdfEval eval;
+    float pdf;
+    eval_pdf(wo, wi, false, &eval, &pdf);
     return pdf;
 }
 
@@ -321,10 +372,9 @@ bool PrincipledBsdf::sample(const vec3& wo, float u_lobe, const vec2& u, BsdfSam
         out->pdf = 0.0f;
         out->eval.by_class[int(out->lobe_class)] = out->weight;
     } else {
-        out->eval = eval(wo, out->wi);
-        out->pdf = pdf(wo, out->wi);
+        eval_pdf(wo, out->wi, false, &out->eval, &out->pdf);
         if (out->pdf <= 0.0f) return false;
-        out->weight = out->eval.total() / out->pdf;
+        out->weight = out->eval.total() * (1.0f / out->pdf);
     }
     return is_finite(out->weight) && glm::any(glm::greaterThan(out->weight, vec3(0.0f)));
 }
@@ -371,8 +421,11 @@ bool PrincipledBsdf::sample_lobe(const Lobe& lobe, float choice_prob, const vec3
         out->weight = lobe.weight * color / choice_prob;
         out->pdf = 0.0f;
     } else {
-        const vec3 f = lobe_eval(lobe, wo, out->wi);
-        out->pdf = choice_prob * lobe_pdf(lobe, wo, out->wi);
+        PairTerms terms;
+        if (!pair_terms(wo, out->wi, &terms)) return false;
+        vec3 f;
+        lobe_eval_pdf(lobe, wo, out->wi, &terms, &f, &out->pdf);
+        out->pdf *= choice_prob;
         if (!(out->pdf > 0.0f)) return false;
         out->weight = f / out->pdf;
     }
@@ -388,9 +441,8 @@ vec3 PrincipledBsdf::field_diffuse(const vec3& wo) const {
 
 BsdfEval PrincipledBsdf::eval_field(const vec3& wo, const vec3& wi) const {
     BsdfEval result;
-    for (int i = 0; i < lobe_count_; ++i)
-        if (!lobes_[i].traced())
-            result.by_class[int(lobes_[i].lobe_class())] += lobe_eval(lobes_[i], wo, wi);
+    float pdf;
+    eval_pdf(wo, wi, true, &result, &pdf);
     return result;
 }
 

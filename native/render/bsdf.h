@@ -70,6 +70,8 @@ class PrincipledBsdf {
     // The diffuse lobe follows material.diffuse_model.
     PrincipledBsdf(const Material& material, const vec3& base_color, bool back_face,
                    float cos_nv);
+    // No lobes (black: eval 0, sample fails); a placeholder in arrays of Shading to assign later.
+    PrincipledBsdf() = default;
 
     BsdfEval eval(const vec3& wo, const vec3& wi) const;
     float pdf(const vec3& wo, const vec3& wi) const;
@@ -122,17 +124,27 @@ class PrincipledBsdf {
                      BsdfSample* out) const;
 
     void add_lobe(LobeKind kind, const vec3& weight, float alpha);
-    vec3 lobe_eval(const Lobe& lobe, const vec3& wo, const vec3& wi) const;
-    float lobe_pdf(const Lobe& lobe, const vec3& wo, const vec3& wi) const;
+    // f |cos| and pdf share their half vector and GGX terms: eval(), pdf() and sample() all go
+    // through eval_pdf, which computes both in one pass over the lobes (field_only: skip the
+    // traced lobes, for eval_field).
+    struct PairTerms;
+    bool pair_terms(const vec3& wo, const vec3& wi, PairTerms* terms) const;
+    void ggx_terms(const vec3& wo, const vec3& wi, float alpha, PairTerms* terms) const;
+    void lobe_eval_pdf(const Lobe& lobe, const vec3& wo, const vec3& wi, PairTerms* terms,
+                       vec3* f, float* pdf) const;
+    void eval_pdf(const vec3& wo, const vec3& wi, bool field_only, BsdfEval* eval,
+                  float* pdf) const;
     bool lobe_sample(const Lobe& lobe, const vec3& wo, const vec2& u, vec3* wi) const;
     vec3 specular_color(float cos_lh) const;
-    float diffuse_brdf(const vec3& wo, const vec3& wi) const;
+    // cos_lh: cosine between wi and the reflection half vector.
+    float diffuse_brdf(const vec3& wo, const vec3& wi, float cos_lh) const;
 
     std::array<Lobe, 4> lobes_{};
     int lobe_count_ = 0;
     vec3 cspec0_{0.0f};
     float specular_ior_ = 1.0f;  // ior whose Fresnel drives the specular colour
     float specular_f0_ = 0.0f;
+    float inv_one_minus_f0_ = 1.0f;  // 1 / (1 - specular_f0_), for specular_color
     float eta_ = 1.45f;          // relative ior across the surface (inverted on back faces)
     float roughness_ = 0.5f;
     DiffuseModel diffuse_model_ = DiffuseModel::Principled;
