@@ -134,6 +134,8 @@ object), with resolution probes along each local axis at the cell centres.)doc")
                        "Back-face and Chebyshev visibility weights; False = plain trilinear (True).")
         .def_readwrite("normal_bias", &L::normal_bias,
                        "Probe spacings the shading point moves along its normal (0.25).")
+        .def_readwrite("view_bias", &L::view_bias,
+                       "Probe spacings the shading point moves towards the viewer (0).")
         .def_readwrite("bleed_bias", &L::bleed_bias,
                        "Chebyshev weights below it become 0, against light bleeding (0).");
 
@@ -164,6 +166,8 @@ object), with resolution probes along each local axis at the cell centres.)doc")
                        "Angular radius (rad) of the distance filter (0.15; EEVEE's Blur).")
         .def_readwrite("normal_bias", &S::normal_bias,
                        "Probe spacings along the shading normal (0.25; EEVEE's Bias).")
+        .def_readwrite("view_bias", &S::view_bias,
+                       "Probe spacings towards the viewer (0; DDGI's view bias).")
         .def_readwrite("bleed_bias", &S::bleed_bias, "Chebyshev cut-off (0; EEVEE's Bleed Bias).")
         .def_readwrite("relocate", &S::relocate,
                        "Move probes out of geometry before disabling them (True).")

@@ -60,6 +60,10 @@ class ShgiProbeGridSettings(bpy.types.PropertyGroup):
         name="Bias", default=P["normal_bias"], min=0.0, max=1.0,
         description="Probe spacings a shading point moves along its normal before it reads "
                     "the probes (EEVEE's Visibility Bias)")
+    view_bias: FloatProperty(
+        name="View Bias", default=P["view_bias"], min=0.0, max=1.0,
+        description="Probe spacings a shading point moves towards the viewer before it reads "
+                    "the probes (DDGI's view bias)")
     bleed_bias: FloatProperty(
         name="Bleed Bias", default=P["bleed_bias"], min=0.0, max=1.0,
         description="Visibility weights below it become 0, against light bleeding (EEVEE's "

@@ -119,6 +119,7 @@ PROBE_GRID_DEFAULTS = {
     "visibility_resolution": 8,
     "visibility_blur": 0.15,
     "normal_bias": 0.25,
+    "view_bias": 0.0,
     "bleed_bias": 0.0,
     "relocate": True,
     "max_offset": 0.45,

@@ -56,6 +56,9 @@ void validate_probe_lookup_settings(const ProbeLookupSettings& settings, const c
     if (!(settings.normal_bias >= 0.0f && settings.normal_bias <= 2.0f))
         throw InvalidArgument(format_message(struct_name, ".normal_bias is ", settings.normal_bias,
                                              "; use 0..2 probe spacings"));
+    if (!(settings.view_bias >= 0.0f && settings.view_bias <= 2.0f))
+        throw InvalidArgument(format_message(struct_name, ".view_bias is ", settings.view_bias,
+                                             "; use 0..2 probe spacings"));
     if (!(settings.bleed_bias >= 0.0f && settings.bleed_bias < 1.0f))
         throw InvalidArgument(format_message(struct_name, ".bleed_bias is ", settings.bleed_bias,
                                              "; use a value in [0, 1)"));
@@ -162,9 +165,18 @@ size_t ProbeField::volume_at(const vec3& p) const {
 }
 
 ShRgb ProbeField::radiance_sh(const vec3& p, const vec3& n) const {
+    return radiance_sh(p, n, vec3(0.0f));
+}
+
+FieldLookup ProbeField::view_lookup(const vec3& p, const vec3& n, const vec3& wo) const {
+    return FieldLookup{radiance_sh(p, n, wo), vec3(0.0f)};
+}
+
+ShRgb ProbeField::radiance_sh(const vec3& p, const vec3& n, const vec3& wo) const {
     const ProbeGridData& data = *data_;
     const VolumeFrame& frame = frames_[volume_at(p)];
-    const vec3 biased = p + n * (settings_.normal_bias * frame.min_spacing);
+    const vec3 biased =
+        p + (n * settings_.normal_bias + wo * settings_.view_bias) * frame.min_spacing;
     const vec3 local = vec3(frame.volume_from_world * vec4(biased, 1.0f));
     const vec3 grid = (local + 1.0f) * frame.grid_scale - 0.5f;
     ivec3 base;

@@ -12,8 +12,8 @@
 // octahedral visibility map (probes/probe_visibility.h).
 //
 // Lookup at (p, n): the volume containing p with the smallest probe spacing (p outside every
-// volume: the nearest, clamped to its outer probes); the 8 probes around p + n * normal_bias *
-// spacing (trilinear weights from base positions, as DDGI does, so relocation does not distort
+// volume: the nearest, clamped to its outer probes); the 8 probes around p + (n * normal_bias +
+// wo * view_bias) * spacing, wo towards the viewer when the renderer gives it (trilinear weights from base positions, as DDGI does, so relocation does not distort
 // the interpolation); each active probe's weight is the trilinear weight times
 //   - a back-face weight ((1 + n·ω)/2)² + 0.2, ω the direction from p to the probe, which
 //     favours probes in front of the surface, and
@@ -54,6 +54,7 @@ vec3 probe_spacing(const ProbeVolume& volume);
 struct ProbeLookupSettings {
     bool visibility = true;     // back-face and Chebyshev weights; false = plain trilinear
     float normal_bias = 0.25f;  // shading points move this many probe spacings along the normal
+    float view_bias = 0.0f;     // ... and this many towards the viewer (renderers' view_lookup)
     float bleed_bias = 0.0f;    // in [0, 1): Chebyshev weights below it become 0
 };
 void validate_probe_lookup_settings(const ProbeLookupSettings& settings, const char* struct_name);
@@ -97,6 +98,9 @@ class ProbeField : public IndirectField {
     const ProbeLookupSettings& lookup_settings() const { return settings_; }
 
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
+    FieldLookup view_lookup(const vec3& p, const vec3& n, const vec3& wo) const override;
+    // radiance_sh with the view bias: wo unit towards the viewer (zero: no view bias).
+    ShRgb radiance_sh(const vec3& p, const vec3& n, const vec3& wo) const;
 
     // The volume whose probes light p (see the header comment).
     size_t volume_at(const vec3& p) const;

@@ -170,7 +170,8 @@ void validate_probe_grid_settings(const ProbeGridSettings& s) {
     if (!(s.visibility_blur >= 0.01f && s.visibility_blur <= 2.0f))
         throw InvalidArgument(format_message(name, ".visibility_blur is ", s.visibility_blur,
                                              "; use 0.01..2 (radians)"));
-    validate_probe_lookup_settings({s.visibility, s.normal_bias, s.bleed_bias}, name);
+    validate_probe_lookup_settings({s.visibility, s.normal_bias, s.view_bias, s.bleed_bias},
+                                   name);
     if (!(s.max_offset >= 0.0f && s.max_offset <= 0.5f))
         throw InvalidArgument(format_message(name, ".max_offset is ", s.max_offset,
                                              "; use 0..0.5 probe spacings"));
@@ -189,7 +190,8 @@ ProbeGrid::ProbeGrid(const Scene& scene, const ProbeGridSettings& settings, Prog
         throw InvalidArgument("ProbeGrid: the scene is not committed; call commit() first");
     if (scene.empty())
         throw InvalidArgument("ProbeGrid: the scene has no geometry; add a mesh first");
-    lookup_ = {settings_.visibility, settings_.normal_bias, settings_.bleed_bias};
+    lookup_ = {settings_.visibility, settings_.normal_bias, settings_.view_bias,
+               settings_.bleed_bias};
     reset(progress);
 }
 
@@ -203,7 +205,8 @@ ProbeGrid::ProbeGrid(const Scene& scene, const ProbeGridSettings& settings,
     settings_.order = data.order;
     settings_.volumes = data.volumes;
     settings_.visibility_resolution = data.visibility_resolution;
-    lookup_ = {settings_.visibility, settings_.normal_bias, settings_.bleed_bias};
+    lookup_ = {settings_.visibility, settings_.normal_bias, settings_.view_bias,
+               settings_.bleed_bias};
     scene_revision_ = scene.revision();
     publish(std::make_shared<ProbeGridData>(data));
 }
@@ -426,6 +429,10 @@ size_t ProbeGrid::memory_bytes() const {
 
 ShRgb ProbeGrid::radiance_sh(const vec3& p, const vec3& n) const {
     return field_->radiance_sh(p, n);
+}
+
+FieldLookup ProbeGrid::view_lookup(const vec3& p, const vec3& n, const vec3& wo) const {
+    return field_->view_lookup(p, n, wo);
 }
 
 }  // namespace shgi

@@ -64,6 +64,7 @@ struct ProbeGridSettings {
     int visibility_resolution = 8;      // octahedral texels per side, per probe
     float visibility_blur = 0.15f;      // ~ angular radius (rad) of the distance filter
     float normal_bias = 0.25f;          // probe spacings along the shading normal
+    float view_bias = 0.0f;             // probe spacings towards the viewer
     float bleed_bias = 0.0f;
     // Placement.
     bool relocate = true;
@@ -110,6 +111,7 @@ class ProbeGrid : public IndirectField {
     std::shared_ptr<const ProbeField> field() const;
 
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
+    FieldLookup view_lookup(const vec3& p, const vec3& n, const vec3& wo) const override;
 
   private:
     void check_scene(const char* what) const;

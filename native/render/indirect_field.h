@@ -38,6 +38,13 @@ class IndirectField {
     virtual ShRgb radiance_sh(const vec3& p, const vec3& n) const = 0;
     // Everything a shading point needs; the default has no extra irradiance.
     virtual FieldLookup lookup(const vec3& p, const vec3& n) const;
+    // The same for a point seen along unit wo (towards the viewer, world space): fields that
+    // bias their lookup towards the viewer (probe grids' view_bias) override it; by default wo
+    // is ignored. Renderers call this one.
+    virtual FieldLookup view_lookup(const vec3& p, const vec3& n, const vec3& wo) const {
+        static_cast<void>(wo);
+        return lookup(p, n);
+    }
 
     // True when the field also carries the world's direct light (photons from the world stored
     // at their first hit): consumers then leave the world out of next-event estimation.

@@ -188,10 +188,10 @@ void PathIntegrator::add_field(const Shading& shading) {
     PrincipledBsdf::GlossyLobe lobes[2];
     const int count = shading.bsdf.field_glossy_lobes(shading.wo, lobes);
     if (max_component(diffuse) <= 0.0f && count == 0) return;
-    const FieldLookup field = field_->lookup(shading.position, n);
+    const vec3 wo = shading.frame.to_world(shading.wo);
+    const FieldLookup field = field_->view_lookup(shading.position, n, wo);
     vec3 by_class[2] = {diffuse * field.irradiance(n) * kInvPi, vec3(0.0f)};
     if (count > 0) {
-        const vec3 wo = shading.frame.to_world(shading.wo);
         for (int i = 0; i < count; ++i)
             by_class[1] += lobes[i].albedo * field.glossy(n, wo, lobes[i].roughness);
     }

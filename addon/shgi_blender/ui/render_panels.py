@@ -188,6 +188,7 @@ class SHGI_RENDER_PT_probe_grid_visibility(_FieldPanel, bpy.types.Panel):
         column = layout.column(align=True)
         column.active = grid.visibility
         column.prop(grid, "normal_bias", text="Bias")
+        column.prop(grid, "view_bias", text="View Bias")
         column.prop(grid, "bleed_bias", text="Bleed Bias")
         column.prop(grid, "visibility_blur", text="Blur")
         column.prop(grid, "visibility_resolution", text="Resolution")

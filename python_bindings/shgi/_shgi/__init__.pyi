@@ -1584,6 +1584,14 @@ class ProbeGridSettings:
     def spacing(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
+    def view_bias(self) -> float:
+        """
+        Probe spacings towards the viewer (0; DDGI's view bias).
+        """
+    @view_bias.setter
+    def view_bias(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
     def visibility(self) -> bool:
         """
         Leak prevention weights (True).
@@ -1641,6 +1649,14 @@ class ProbeLookupSettings:
         """
     @normal_bias.setter
     def normal_bias(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def view_bias(self) -> float:
+        """
+        Probe spacings the shading point moves towards the viewer (0).
+        """
+    @view_bias.setter
+    def view_bias(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def visibility(self) -> bool:

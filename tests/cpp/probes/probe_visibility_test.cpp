@@ -86,5 +86,31 @@ TEST(ProbeVisibility, ChebyshevKillsTheProbeBehindAWall) {
     EXPECT_GT(trilinear, 20.0f) << "plain trilinear interpolation should leak here";
 }
 
+// Two probes 1 m apart along x read at the midpoint: the view bias moves the lookup half a
+// spacing towards the viewer, onto the second probe.
+TEST(ProbeField, ViewBiasMovesTheLookupTowardsTheViewer) {
+    ProbeGridData data;
+    data.order = 1;
+    ProbeVolume volume;
+    volume.resolution = ivec3(2, 1, 1);  // probes at x = -0.5 and 0.5 (spacing 1 m)
+    data.volumes = {volume};
+    data.positions = probe_base_positions(data.volumes);
+    data.active = {1, 1};
+    data.sh = {ShRgb(1), ShRgb(1)};
+    data.sh[1][0] = vec3(1.0f);
+    data.variance = {0.0f, 0.0f};
+    data.visibility_resolution = 1;
+    data.visibility = {vec2(10.0f, 100.0f), vec2(10.0f, 100.0f)};
+    const auto shared = std::make_shared<const ProbeGridData>(data);
+    ProbeLookupSettings lookup;
+    lookup.visibility = false;
+    lookup.view_bias = 0.5f;
+    const ProbeField field(shared, lookup);
+    const vec3 p(0.0f), n(0.0f, 0.0f, 1.0f);
+    EXPECT_FLOAT_EQ(field.radiance_sh(p, n)[0].x, 0.5f);
+    EXPECT_FLOAT_EQ(field.view_lookup(p, n, vec3(1.0f, 0.0f, 0.0f)).radiance[0].x, 1.0f);
+    EXPECT_FLOAT_EQ(field.view_lookup(p, n, vec3(-1.0f, 0.0f, 0.0f)).radiance[0].x, 0.0f);
+}
+
 }  // namespace
 }  // namespace shgi
