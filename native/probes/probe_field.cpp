@@ -145,6 +145,7 @@ ProbeField::ProbeField(std::shared_ptr<const ProbeGridData> data,
 }
 
 size_t ProbeField::volume_at(const vec3& p) const {
+    if (frames_.size() == 1) return 0;  // the common case: no choice to make per lookup
     size_t best = 0;
     float best_outside = kInfinity, best_spacing = kInfinity;
     for (size_t v = 0; v < frames_.size(); ++v) {

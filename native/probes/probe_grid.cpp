@@ -142,6 +142,10 @@ Surroundings look_around(const Scene& scene, const std::vector<uint8_t>& closed_
 
 }  // namespace
 
+ProbeLookupSettings probe_lookup_settings(const ProbeGridSettings& s) {
+    return {s.visibility, s.normal_bias, s.view_bias, s.bleed_bias};
+}
+
 void validate_probe_grid_settings(const ProbeGridSettings& s) {
     const char* name = "ProbeGridSettings";
     if (s.order < 1 || s.order > kMaxShOrder)
@@ -170,8 +174,7 @@ void validate_probe_grid_settings(const ProbeGridSettings& s) {
     if (!(s.visibility_blur >= 0.01f && s.visibility_blur <= 2.0f))
         throw InvalidArgument(format_message(name, ".visibility_blur is ", s.visibility_blur,
                                              "; use 0.01..2 (radians)"));
-    validate_probe_lookup_settings({s.visibility, s.normal_bias, s.view_bias, s.bleed_bias},
-                                   name);
+    validate_probe_lookup_settings(probe_lookup_settings(s), name);
     if (!(s.max_offset >= 0.0f && s.max_offset <= 0.5f))
         throw InvalidArgument(format_message(name, ".max_offset is ", s.max_offset,
                                              "; use 0..0.5 probe spacings"));
@@ -190,8 +193,6 @@ ProbeGrid::ProbeGrid(const Scene& scene, const ProbeGridSettings& settings, Prog
         throw InvalidArgument("ProbeGrid: the scene is not committed; call commit() first");
     if (scene.empty())
         throw InvalidArgument("ProbeGrid: the scene has no geometry; add a mesh first");
-    lookup_ = {settings_.visibility, settings_.normal_bias, settings_.view_bias,
-               settings_.bleed_bias};
     reset(progress);
 }
 
@@ -205,8 +206,6 @@ ProbeGrid::ProbeGrid(const Scene& scene, const ProbeGridSettings& settings,
     settings_.order = data.order;
     settings_.volumes = data.volumes;
     settings_.visibility_resolution = data.visibility_resolution;
-    lookup_ = {settings_.visibility, settings_.normal_bias, settings_.view_bias,
-               settings_.bleed_bias};
     scene_revision_ = scene.revision();
     publish(std::make_shared<ProbeGridData>(data));
 }
@@ -220,7 +219,8 @@ void ProbeGrid::check_scene(const char* what) const {
 }
 
 void ProbeGrid::publish(std::shared_ptr<const ProbeGridData> data) {
-    auto field = std::make_shared<const ProbeField>(std::move(data), lookup_);
+    auto field = std::make_shared<const ProbeField>(std::move(data),
+                                                    probe_lookup_settings(settings_));
     std::lock_guard<std::mutex> lock(field_mutex_);
     field_ = std::move(field);
 }

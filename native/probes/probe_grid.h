@@ -75,6 +75,9 @@ struct ProbeGridSettings {
 
 void validate_probe_grid_settings(const ProbeGridSettings& settings);
 
+// The lookup part of the settings (visibility, normal_bias, view_bias, bleed_bias).
+ProbeLookupSettings probe_lookup_settings(const ProbeGridSettings& settings);
+
 struct ProbeGridTimings {
     double placement = 0.0;   // seconds of the last construction or reset()
     double update = 0.0;      // seconds of the last update()
@@ -122,7 +125,6 @@ class ProbeGrid : public IndirectField {
     uint64_t scene_revision_ = 0;
     ProbeGridSettings settings_;
     bool fitted_ = false;             // settings_.volumes[0] was fitted to the scene
-    ProbeLookupSettings lookup_;
     mutable std::mutex field_mutex_;  // guards field_ between update() and field()
     std::shared_ptr<const ProbeField> field_;
     ProbeGridTimings timings_;

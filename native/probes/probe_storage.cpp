@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <nlohmann/json.hpp>
@@ -65,22 +66,15 @@ std::string two_digits(int i) {
 }
 
 std::string file_name(const std::string& path) {
-    const size_t slash = path.find_last_of('/');
-    return slash == std::string::npos ? path : path.substr(slash + 1);
-}
-
-std::string folder_of(const std::string& path) {
-    const size_t slash = path.find_last_of('/');
-    return slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
+    return std::filesystem::path(path).filename().string();
 }
 
 std::string json_stem(const std::string& json_path) {
-    const std::string suffix = ".json";
-    if (json_path.size() <= suffix.size() ||
-        json_path.compare(json_path.size() - suffix.size(), suffix.size(), suffix) != 0)
+    std::filesystem::path path(json_path);
+    if (path.extension() != ".json" || path.stem().empty())
         throw InvalidArgument(format_message("probe export path \"", json_path,
                                              "\" must end in .json"));
-    return json_path.substr(0, json_path.size() - suffix.size());
+    return path.replace_extension().string();
 }
 
 }  // namespace
@@ -308,7 +302,7 @@ ProbeGridData import_probe_grid(const std::string& json_path) {
     } catch (const nlohmann::json::exception& e) {
         throw IoError(format_message("\"", json_path, "\" is not valid JSON: ", e.what()));
     }
-    const std::string folder = folder_of(json_path);
+    const std::filesystem::path folder = std::filesystem::path(json_path).parent_path();
     try {
         if (doc.value("format", "") != kFormatName)
             throw IoError(format_message("\"", json_path, "\" is not an SHGI probe grid (format \"",
@@ -340,8 +334,11 @@ ProbeGridData import_probe_grid(const std::string& json_path) {
             validate_probe_volume(volume, "volume");
             const ivec3 n = volume.resolution;
             const size_t count = size_t(n.x) * n.y * n.z;
-            const std::string sh_path = folder + entry.at("sh_file").get<std::string>();
-            const std::string vis_path = folder + entry.at("visibility_file").get<std::string>();
+            const auto path_of = [&](const char* key) {
+                return (folder / entry.at(key).get<std::string>()).string();
+            };
+            const std::string sh_path = path_of("sh_file");
+            const std::string vis_path = path_of("visibility_file");
             const Image sh_image = read_exr(sh_path);
             const Image vis_image = read_exr(vis_path);
             if (sh_image.width() != n.x || sh_image.height() != n.y * n.z ||
