@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <numeric>
+#include <unordered_map>
 #include <utility>
 
 #include "render/shading.h"
@@ -229,6 +232,7 @@ dvec2 closest_on_polygon(const Polygon& polygon, const dvec2& p) {
 struct WorldTriangle {
     std::array<dvec3, 3> position;
     std::array<vec3, 3> normal;  // world space, not normalised; unused without vertex normals
+    std::array<int, 3> corner;   // the mesh triangle's corner of each vertex
     bool has_normals = false;
     vec3 geometric_normal;
     uint32_t triangle_id;
@@ -265,6 +269,9 @@ TexelSample make_sample(const WorldTriangle& world, const dvec3& edges, const dv
         if (length > 0.0f) sample.normal = n / length;
     }
     sample.ray_origin = offset_origin(sample.position, sample.geometric_normal);
+    float mesh_order[3];
+    for (int k = 0; k < 3; ++k) mesh_order[world.corner[k]] = float(b[k]);
+    sample.barycentrics = vec2(mesh_order[1], mesh_order[2]);
     sample.uv = vec2(float(p_texel.x / settings.width), float(p_texel.y / settings.height));
     sample.triangle_id = world.triangle_id;
     sample.texel_size = world.texel_size;
@@ -342,6 +349,7 @@ bool world_triangle(const Mesh& mesh, const mat4& world_from_object,
     const uvec3& indices = mesh.triangles[triangle_id];
     for (int k = 0; k < 3; ++k) {
         const uint32_t vertex = indices[uv.corner[k]];
+        world->corner[k] = uv.corner[k];
         world->position[k] = dvec3(world_from_object * vec4(mesh.positions[vertex], 1.0f));
         if (!mesh.normals.empty()) world->normal[k] = normals_to_world * mesh.normals[vertex];
     }
@@ -396,8 +404,63 @@ TriangleResult rasterize_triangle(const Mesh& mesh, const UvSet& uv_set,
     return result;
 }
 
+// A corner's identity for chart building: the bits of its position and lightmap UV (with -0
+// made +0, so the two zeros match).
+struct CornerKey {
+    std::array<uint32_t, 5> bits;
+    bool operator==(const CornerKey& other) const { return bits == other.bits; }
+};
+struct CornerKeyHash {
+    size_t operator()(const CornerKey& key) const {
+        uint64_t h = 0x9e3779b97f4a7c15ull;
+        for (uint32_t b : key.bits) h = (h ^ b) * 0x100000001b3ull;
+        return size_t(h ^ (h >> 29));
+    }
+};
+uint32_t float_bits(float value) {
+    value += 0.0f;
+    uint32_t bits;
+    std::memcpy(&bits, &value, sizeof bits);
+    return bits;
+}
+
+// The chart of every triangle (see TexelMap::chart), by union-find over shared corners.
+std::vector<uint32_t> triangle_charts(const Mesh& mesh, const UvSet& uv_set, uint32_t* count) {
+    const size_t n = mesh.triangles.size();
+    std::vector<uint32_t> parent(n);
+    std::iota(parent.begin(), parent.end(), 0u);
+    auto find = [&](uint32_t t) {
+        while (parent[t] != t) t = parent[t] = parent[parent[t]];
+        return t;
+    };
+    std::unordered_map<CornerKey, uint32_t, CornerKeyHash> first_triangle;
+    first_triangle.reserve(mesh.positions.size());
+    for (uint32_t t = 0; t < n; ++t)
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t v = mesh.triangles[t][k];
+            const vec3& p = mesh.positions[v];
+            const vec2& uv = uv_set.coords[v];
+            const CornerKey key{{float_bits(p.x), float_bits(p.y), float_bits(p.z),
+                                 float_bits(uv.x), float_bits(uv.y)}};
+            const auto [it, inserted] = first_triangle.emplace(key, t);
+            if (inserted) continue;
+            const uint32_t a = find(it->second), b = find(t);
+            if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the root is the lowest id
+        }
+    std::vector<uint32_t> chart(n), label(n, kInvalidId);
+    uint32_t next = 0;
+    for (uint32_t t = 0; t < n; ++t) {
+        const uint32_t root = find(t);
+        if (label[root] == kInvalidId) label[root] = next++;
+        chart[t] = label[root];
+    }
+    *count = next;
+    return chart;
+}
+
 // Sorts the fragments into texels (stable: by triangle, then stratum) and sums the coverage.
-TexelMap gather(std::vector<TriangleResult>& results, const TexelRasterSettings& settings) {
+TexelMap gather(std::vector<TriangleResult>& results, const TexelRasterSettings& settings,
+                const std::vector<uint32_t>& charts) {
     TexelMap map;
     map.width = settings.width;
     map.height = settings.height;
@@ -415,10 +478,17 @@ TexelMap gather(std::vector<TriangleResult>& results, const TexelRasterSettings&
     }
 
     map.coverage.assign(texels, 0.0f);
+    map.chart.assign(texels, kInvalidId);
     for (uint64_t t = 0; t < texels; ++t) {
         double sum = 0.0;
-        for (const TexelSample* s = map.samples_begin(t); s != map.samples_end(t); ++s)
+        float heaviest = -1.0f;
+        for (const TexelSample* s = map.samples_begin(t); s != map.samples_end(t); ++s) {
             sum += s->weight;
+            if (s->weight > heaviest) {
+                heaviest = s->weight;
+                map.chart[t] = charts[s->triangle_id];
+            }
+        }
         map.coverage[t] = float(std::min(sum, 1.0));
         if (sum > 1.0 + kOverlapTolerance) ++map.report.overlapping_texels;
     }
@@ -454,7 +524,10 @@ TexelMap rasterize_texels(const Mesh& mesh, const mat4& world_from_object,
         report.clipped_triangles += result.clipped;
         report.conservative_samples += result.conservative_samples;
     }
-    TexelMap map = gather(results, settings);
+    uint32_t chart_count = 0;
+    const std::vector<uint32_t> charts = triangle_charts(mesh, uv_set, &chart_count);
+    TexelMap map = gather(results, settings, charts);
+    map.chart_count = chart_count;
     report.overlapping_texels = map.report.overlapping_texels;
     map.report = report;
     return map;

@@ -63,6 +63,9 @@ struct TexelSample {
     // along the geometric normal (render/shading.h); unocclude() may move it out of walls.
     vec3 ray_origin{0.0f};
     vec2 uv{0.0f};                 // lightmap UV of the sample
+    // (b1, b2) in the mesh triangle's own vertex order, as Hit::barycentrics: the sample is a
+    // hit on triangle_id that Scene::surface_point can shade (materials, textures).
+    vec2 barycentrics{0.0f};
     uint32_t triangle_id = kInvalidId;
     float weight = 0.0f;           // fraction of the texel's area this sample stands for
     // World-space edge length (m) of one texel on this sample's triangle: sqrt(world area /
@@ -88,6 +91,13 @@ struct TexelMap {
     std::vector<uint64_t> sample_offsets;  // width * height + 1
     std::vector<TexelSample> samples;
     std::vector<float> coverage;  // width * height, fraction of each texel covered, in [0, 1]
+    // UV charts: triangles that share a corner with the same world position and the same
+    // lightmap UV are one chart (a seam, where the UVs of a shared edge differ, separates them).
+    // chart[t] is the chart of the sample with the largest weight in texel t (kInvalidId where
+    // nothing is covered); charts are numbered 0.. in order of their lowest triangle id.
+    // Filters that must not blur across seams compare these.
+    std::vector<uint32_t> chart;
+    uint32_t chart_count = 0;
     TexelRasterReport report;
 
     uint64_t texel_count() const { return uint64_t(width) * height; }

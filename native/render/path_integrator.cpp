@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "util/owen_sobol.h"
+#include "util/sampling.h"
 #include "util/timer.h"
 
 namespace shgi {
@@ -15,12 +16,6 @@ PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample) {
             owen_sobol_2d(index, hash_seed(base, 2))};
 }
 namespace {
-
-float power_heuristic(float pdf_a, float pdf_b) {
-    const float a2 = pdf_a * pdf_a;
-    const float sum = a2 + pdf_b * pdf_b;
-    return sum > 0.0f ? a2 / sum : 0.0f;
-}
 
 const Pass kDirectPass[kLobeClassCount] = {Pass::DiffDir, Pass::GlossDir, Pass::TransDir};
 const Pass kIndirectPass[kLobeClassCount] = {Pass::DiffInd, Pass::GlossInd, Pass::TransInd};

@@ -78,4 +78,12 @@ class DiscreteDistribution {
     double total_ = 0.0;
 };
 
+// Veach's power heuristic (beta = 2): the MIS weight of a sample drawn with pdf_a against a
+// second strategy of pdf_b (both per unit solid angle).
+inline float power_heuristic(float pdf_a, float pdf_b) {
+    const float a2 = pdf_a * pdf_a;
+    const float sum = a2 + pdf_b * pdf_b;
+    return sum > 0.0f ? a2 / sum : 0.0f;
+}
+
 }  // namespace shgi

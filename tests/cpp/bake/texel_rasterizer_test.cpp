@@ -341,8 +341,9 @@ TEST(TexelRasterizer, IdenticalForAnyThreadCount) {
     ASSERT_EQ(one.samples.size(), many.samples.size());
     EXPECT_EQ(one.sample_offsets, many.sample_offsets);
     EXPECT_EQ(one.coverage, many.coverage);
+    EXPECT_EQ(one.chart, many.chart);
     // TexelSample holds only 4-byte fields, so it has no padding: compare the bytes.
-    static_assert(sizeof(TexelSample) == 17 * 4, "TexelSample gained padding or a field");
+    static_assert(sizeof(TexelSample) == 19 * 4, "TexelSample gained padding or a field");
     EXPECT_EQ(std::memcmp(one.samples.data(), many.samples.data(),
                           one.samples.size() * sizeof(TexelSample)),
               0);

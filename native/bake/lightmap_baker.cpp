@@ -1,0 +1,420 @@
+#include "bake/lightmap_baker.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include "render/light_sampler.h"
+#include "render/path_integrator.h"
+#include "render/shading.h"
+#include "sh/sh_irradiance.h"
+#include "sh/sh_projection.h"
+#include "util/error.h"
+#include "util/parallel.h"
+#include "util/rng.h"
+#include "util/sampling.h"
+
+namespace shgi {
+
+namespace {
+
+constexpr uint32_t kMaxSamples = 1u << 20;
+// Mixed into the seed with the instance id, so that objects baked with one seed do not share
+// their noise pattern (texel indices restart at 0 on every object).
+constexpr uint64_t kInstanceSeedMix = 0x9e3779b97f4a7c15ull;
+
+const char* const kContentNames[] = {"INDIRECT", "DIRECT", "DIRECT_INDIRECT", "FULL"};
+
+bool wants_direct(LightmapContent content) { return content != LightmapContent::Indirect; }
+bool wants_indirect(LightmapContent content) { return content != LightmapContent::Direct; }
+
+// What the path continues with after the texel's own (diffuse) bounce: every limit one lower,
+// as the PathIntegrator counts the first surface it meets as its first bounce.
+PathTracerSettings continuation_settings(const LightmapSettings& settings) {
+    PathTracerSettings path;
+    path.max_bounces = settings.max_bounces - 1;
+    path.diffuse_bounces = settings.diffuse_bounces - 1;
+    path.glossy_bounces = settings.glossy_bounces;
+    path.transmission_bounces = settings.transmission_bounces;
+    path.russian_roulette_depth = std::max(0, path.russian_roulette_depth - 1);
+    path.clamp_indirect = settings.clamp_indirect;
+    return path;
+}
+
+// The texel's surface as Cycles' bake sees it: a camera ray along the shading normal.
+struct TexelSurface {
+    Frame frame;            // shading frame (z = shading normal, on the front side)
+    vec3 geometric_normal;  // front side
+    PrincipledBsdf bsdf;
+    vec3 wo{0.0f, 0.0f, 1.0f};
+    vec3 diffuse_color{0.0f};  // DiffCol
+    int color_channel = -1;    // the channel the diffuse response is read from; -1: Lambert
+
+    // f_diffuse |cos| / DiffCol for world direction wi (Lambert: cos / pi).
+    float diffuse_response(const vec3& wi) const {
+        const vec3 local = frame.to_local(wi);
+        if (local.z <= 0.0f) return 0.0f;
+        if (color_channel < 0) return local.z * kInvPi;
+        const BsdfEval eval = bsdf.eval(wo, local);
+        return eval.by_class[0][color_channel] / diffuse_color[color_channel];
+    }
+};
+
+TexelSurface texel_surface(const Scene& scene, uint32_t instance, const TexelSample& sample) {
+    Hit hit;
+    hit.instance_id = instance;
+    hit.triangle_id = sample.triangle_id;
+    hit.barycentrics = sample.barycentrics;
+    hit.geometric_normal = sample.geometric_normal;
+    hit.t = 1e-3f;
+    Ray ray;
+    ray.origin = sample.position + 1e-3f * sample.normal;
+    ray.direction = -sample.normal;
+    const Shading shading = make_shading(scene, scene.surface_point(ray, hit), ray.direction);
+    TexelSurface surface{shading.frame, shading.geometric_normal, shading.bsdf, shading.wo};
+    surface.diffuse_color = shading.bsdf.class_color(LobeClass::Diffuse);
+    const float peak = max_component(surface.diffuse_color);
+    if (peak > 0.0f && shading.wo.z > 0.0f)
+        surface.color_channel = surface.diffuse_color.x == peak   ? 0
+                                : surface.diffuse_color.y == peak ? 1
+                                                                  : 2;
+    return surface;
+}
+
+// Sums of one sample position.
+struct PositionSums {
+    vec3 value{0.0f};
+    ShRgb sh{1};
+    double luminance = 0.0, luminance2 = 0.0;
+};
+
+class TexelBaker {
+  public:
+    TexelBaker(const Scene& scene, const TexelMap& map, const IndirectField* field,
+               const LightmapSettings& settings)
+        : scene_(scene), map_(map), field_(field), settings_(settings),
+          lights_(scene, WorldSampling::Cosine,
+                  field == nullptr || !field->includes_world_direct()),
+          path_settings_(continuation_settings(settings)),
+          seed_(settings.seed ^ (kInstanceSeedMix * (uint64_t(map.instance_id) + 1))),
+          direct_(wants_direct(settings.content)),
+          indirect_(wants_indirect(settings.content) && settings.max_bounces > 0 &&
+                    settings.diffuse_bounces > 0) {}
+
+    void bake_texel(uint64_t texel, LightmapTexels& out) const {
+        const uint64_t positions = map_.sample_count(texel);
+        if (positions == 0) return;
+        const uint32_t per_position =
+            std::max<uint32_t>(1, settings_.samples / uint32_t(std::min<uint64_t>(
+                                                          positions, settings_.samples)));
+        const TexelSample* samples = map_.samples_begin(texel);
+        double weight_sum = 0.0;
+        for (uint64_t k = 0; k < positions; ++k) weight_sum += samples[k].weight;
+        vec3 color(0.0f);
+        ShRgb sh(1);
+        double variance = 0.0;
+        for (uint64_t k = 0; k < positions; ++k) {
+            // The sample's global index in the map names its random streams.
+            const PositionSums sums =
+                bake_position(samples[k], map_.sample_offsets[texel] + k, per_position);
+            const float w = float(samples[k].weight / weight_sum);
+            const float scale = w / float(per_position);
+            color += sums.value * scale;
+            sh_add_scaled(sh, sums.sh, scale);
+            const double mean = sums.luminance / per_position;
+            const double sample_variance =
+                per_position > 1
+                    ? std::max(0.0, (sums.luminance2 - sums.luminance * mean) / (per_position - 1))
+                    : 0.0;
+            variance += double(w) * w * sample_variance / per_position;
+        }
+        float* c = &out.color[3 * texel];
+        for (int i = 0; i < 3; ++i) c[i] = color[i];
+        out.variance[texel] = float(variance);
+        if (settings_.directional) {
+            float* s = &out.sh[kLightmapShFloats * texel];
+            for (int j = 0; j < kLightmapShCoefficients; ++j)
+                for (int i = 0; i < 3; ++i) s[3 * j + i] = sh[j][i];
+        }
+        out.baked[texel] = 1;
+    }
+
+  private:
+    PositionSums bake_position(const TexelSample& sample, uint64_t stream, uint32_t count) const {
+        const TexelSurface surface = texel_surface(scene_, map_.instance_id, sample);
+        const vec3 n = surface.frame.z;
+        const vec3 color_scale =
+            settings_.content == LightmapContent::Full ? surface.diffuse_color : vec3(1.0f);
+        PositionSums sums;
+        // The field's light is the same for every sample of the position.
+        vec3 field_value(0.0f);
+        ShRgb field_sh(1);
+        if (field_ != nullptr && indirect_ && !field_->is_zero()) {
+            const FieldLookup lookup = field_->lookup(sample.ray_origin, n);
+            const vec3 irradiance = lookup.irradiance(n);
+            const float response = surface.color_channel < 0
+                                       ? 1.0f
+                                       : surface.bsdf.field_diffuse(surface.wo)[surface.color_channel] /
+                                             surface.diffuse_color[surface.color_channel];
+            field_value = irradiance * (kInvPi * response);
+            if (settings_.directional) {
+                const int carried =
+                    std::min(kLightmapShCoefficients, lookup.radiance.num_coefficients());
+                for (int j = 0; j < carried; ++j) field_sh[j] = lookup.radiance[j];
+                // Irradiance the SH does not carry (caustics): as uniform radiance E / pi over the
+                // upper hemisphere, whose L1 SH is (E / pi) (2 pi Y00, pi k1 n).
+                const vec3 extra = lookup.extra_irradiance * kInvPi;
+                field_sh[0] += extra * (kTwoPi * 0.28209479177387814f);
+                const float k1 = kPi * 0.4886025119029199f;
+                field_sh[1] += extra * (k1 * n.y);
+                field_sh[2] += extra * (k1 * n.z);
+                field_sh[3] += extra * (k1 * n.x);
+            }
+        }
+        const bool trace_hemisphere = field_ == nullptr && (indirect_ || direct_);
+        const Camera camera;  // the continuation's Depth pass is not read
+        for (uint32_t i = 0; i < count; ++i) {
+            const PixelSample ps = pixel_sample(seed_, stream, i);
+            Pcg32 rng(seed_, stream_id(i, stream));
+            vec3 value = field_value;
+            ShRgb* sh = settings_.directional ? &sums.sh : nullptr;
+            if (sh) sh_add_scaled(*sh, field_sh, 1.0f);
+            // Hemisphere direction (needed first: NEE's MIS weight uses its pdf).
+            const auto hemisphere_pdf = [&](float cos_theta) {
+                return settings_.directional ? sample_uniform_hemisphere_pdf()
+                                             : sample_cosine_hemisphere_pdf(cos_theta);
+            };
+            if (direct_) {
+                LightSample ls;
+                if (lights_.sample(sample.ray_origin, n, ps.u_select, ps.u_light, &ls) &&
+                    glm::dot(ls.wi, surface.geometric_normal) > 0.0f) {
+                    const float cos_theta = glm::dot(ls.wi, n);
+                    if (cos_theta > 0.0f) {
+                        Ray shadow;
+                        shadow.origin = sample.ray_origin;
+                        shadow.direction = ls.wi;
+                        shadow.tmax = std::isinf(ls.distance) ? kInfinity
+                                                              : ls.distance * (1.0f - kShadowShorten);
+                        if (!scene_.occluded(shadow)) {
+                            const float mis = ls.delta || !trace_hemisphere
+                                                  ? 1.0f
+                                                  : power_heuristic(ls.pdf, hemisphere_pdf(cos_theta));
+                            const vec3 incident = ls.radiance * (mis / ls.pdf);
+                            value += incident * surface.diffuse_response(ls.wi);
+                            if (sh) sh_add_sample(*sh, ls.wi, incident);
+                        }
+                    }
+                }
+            }
+            if (trace_hemisphere) {
+                const vec3 local = settings_.directional ? sample_uniform_hemisphere(ps.jitter)
+                                                         : sample_cosine_hemisphere(ps.jitter);
+                const float pdf = hemisphere_pdf(local.z);
+                const vec3 wi = glm::normalize(surface.frame.to_world(local));
+                if (pdf > 0.0f && glm::dot(wi, surface.geometric_normal) > 0.0f) {
+                    Ray ray;
+                    ray.origin = sample.ray_origin;
+                    ray.direction = wi;
+                    const Hit hit = scene_.intersect(ray);
+                    vec3 radiance(0.0f);
+                    if (direct_) radiance += emission(ray, hit, n, pdf);
+                    if (indirect_) radiance += continuation(ray, hit, camera, rng);
+                    const vec3 incident = radiance / pdf;
+                    value += incident * surface.diffuse_response(wi);
+                    if (sh) sh_add_sample(*sh, wi, incident);
+                }
+            }
+            if (!is_finite(value)) value = vec3(0.0f);
+            value *= color_scale;
+            sums.value += value;
+            const double y = luminance(value);
+            sums.luminance += y;
+            sums.luminance2 += y * y;
+        }
+        if (settings_.directional)
+            for (int j = 0; j < kLightmapShCoefficients; ++j) {
+                sums.sh[j] *= color_scale;
+                if (!is_finite(sums.sh[j])) sums.sh[j] = vec3(0.0f);
+            }
+        return sums;
+    }
+
+    // Emitters the hemisphere ray meets first, weighted against next-event estimation.
+    vec3 emission(const Ray& ray, const Hit& hit, const vec3& n, float pdf) const {
+        vec3 sum(0.0f);
+        const auto add = [&](const EmissionHit& e) {
+            sum += e.radiance * power_heuristic(pdf, e.light_pdf);
+        };
+        EmissionHit e;
+        if (lights_.intersect_lights(ray.origin, ray.direction, hit.valid() ? hit.t : kInfinity,
+                                     false, &e)) {
+            add(e);
+        } else if (hit.valid()) {
+            e = lights_.triangle_emission(hit, ray.direction);
+            if (max_component(e.radiance) > 0.0f) add(e);
+        } else {
+            lights_.for_each_escaped(ray.origin, n, ray.direction, false, add);
+        }
+        return sum;
+    }
+
+    // Light that scattered at least once and arrives along the ray: the reference path from
+    // its first hit, less what that path's first segment sees directly.
+    vec3 continuation(const Ray& ray, const Hit& hit, const Camera& camera, Pcg32& rng) const {
+        if (!hit.valid()) return vec3(0.0f);
+        PassValues values;
+        PathIntegrator(scene_, camera, lights_, path_settings_, nullptr, rng, values)
+            .trace(ray, hit);
+        vec3 radiance =
+            glm::max(values[Pass::Combined] - values[Pass::Emit] - values[Pass::Env], vec3(0.0f));
+        if (settings_.clamp_indirect > 0.0f) {
+            const float peak = max_component(radiance);
+            if (peak > settings_.clamp_indirect) radiance *= settings_.clamp_indirect / peak;
+        }
+        return is_finite(radiance) ? radiance : vec3(0.0f);
+    }
+
+    const Scene& scene_;
+    const TexelMap& map_;
+    const IndirectField* field_;
+    const LightmapSettings& settings_;
+    LightSampler lights_;
+    PathTracerSettings path_settings_;
+    uint64_t seed_;
+    bool direct_, indirect_;
+};
+
+uint32_t tiles_along(uint32_t texels, uint32_t tile_size) {
+    return (texels + tile_size - 1) / tile_size;
+}
+
+}  // namespace
+
+const char* lightmap_content_name(LightmapContent content) {
+    return kContentNames[size_t(content)];
+}
+
+LightmapContent lightmap_content_from_name(const std::string& name) {
+    for (size_t i = 0; i < std::size(kContentNames); ++i)
+        if (name == kContentNames[i]) return LightmapContent(i);
+    throw InvalidArgument(format_message("lightmap content '", name,
+                                         "' is not one of INDIRECT, DIRECT, DIRECT_INDIRECT, FULL"));
+}
+
+void validate_lightmap_settings(const LightmapSettings& s) {
+    if (s.samples < 1 || s.samples > kMaxSamples)
+        throw InvalidArgument(format_message("LightmapSettings.samples = ", s.samples,
+                                             ": use 1 .. ", kMaxSamples));
+    if (s.tile_size < 4 || s.tile_size > 1024)
+        throw InvalidArgument(format_message("LightmapSettings.tile_size = ", s.tile_size,
+                                             ": use 4 .. 1024 texels"));
+    const std::pair<const char*, int> limits[] = {{"max_bounces", s.max_bounces},
+                                                   {"diffuse_bounces", s.diffuse_bounces},
+                                                   {"glossy_bounces", s.glossy_bounces},
+                                                   {"transmission_bounces", s.transmission_bounces}};
+    for (const auto& [name, value] : limits)
+        if (value < 0 || value > 1024)
+            throw InvalidArgument(
+                format_message("LightmapSettings.", name, " = ", value, ": use 0 .. 1024"));
+    if (!(s.clamp_indirect >= 0.0f) || !std::isfinite(s.clamp_indirect))
+        throw InvalidArgument(format_message("LightmapSettings.clamp_indirect = ",
+                                             s.clamp_indirect, ": use 0 (off) or a positive value"));
+    if (size_t(s.content) >= std::size(kContentNames))
+        throw InvalidArgument("LightmapSettings.content is not a LightmapContent");
+}
+
+uint32_t lightmap_tile_count(uint32_t width, uint32_t height, uint32_t tile_size) {
+    if (tile_size == 0) throw InvalidArgument("lightmap tile_size must be positive");
+    return tiles_along(width, tile_size) * tiles_along(height, tile_size);
+}
+
+std::vector<uint32_t> lightmap_shard_tiles(uint32_t width, uint32_t height, uint32_t tile_size,
+                                           uint32_t shard, uint32_t shards) {
+    if (shards == 0 || shard >= shards)
+        throw InvalidArgument(format_message("shard ", shard, "/", shards,
+                                             ": use i/N with N >= 1 and 0 <= i < N"));
+    std::vector<uint32_t> tiles;
+    const uint32_t count = lightmap_tile_count(width, height, tile_size);
+    for (uint32_t i = shard; i < count; i += shards) tiles.push_back(i);
+    return tiles;
+}
+
+LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const IndirectField* field,
+                             const LightmapSettings& settings, const std::vector<uint32_t>& tiles,
+                             Progress* progress) {
+    validate_lightmap_settings(settings);
+    if (!scene.committed()) throw InvalidArgument("bake_lightmap: commit the scene first");
+    if (map.instance_id >= scene.instances().size())
+        throw InvalidArgument(format_message(
+            "bake_lightmap: the texel map is of instance ", map.instance_id,
+            " but the scene has ", scene.instances().size(),
+            " instances; rasterize it from this scene (rasterize_texels(scene, instance, ...))"));
+    if (map.sample_offsets.size() != map.texel_count() + 1)
+        throw InvalidArgument("bake_lightmap: the texel map is incomplete");
+    const uint32_t tile_count = lightmap_tile_count(map.width, map.height, settings.tile_size);
+    std::vector<uint32_t> work = tiles;
+    if (work.empty())
+        for (uint32_t i = 0; i < tile_count; ++i) work.push_back(i);
+    for (uint32_t tile : work)
+        if (tile >= tile_count)
+            throw InvalidArgument(format_message("bake_lightmap: tile ", tile, " but a ", map.width,
+                                                 " x ", map.height, " lightmap has ", tile_count,
+                                                 " tiles of ", settings.tile_size, " texels"));
+
+    LightmapTexels out;
+    out.width = map.width;
+    out.height = map.height;
+    out.directional = settings.directional;
+    out.color.assign(3 * map.texel_count(), 0.0f);
+    if (settings.directional) out.sh.assign(kLightmapShFloats * map.texel_count(), 0.0f);
+    out.variance.assign(map.texel_count(), 0.0f);
+    out.baked.assign(map.texel_count(), 0);
+
+    const TexelBaker baker(scene, map, field, settings);
+    const uint32_t tiles_x = tiles_along(map.width, settings.tile_size);
+    std::atomic<uint64_t> done{0};
+    if (progress) progress->begin_stage("baking lightmap");
+    parallel_for(
+        0, work.size(), 1,
+        [&](uint64_t begin, uint64_t end) {
+            for (uint64_t w = begin; w < end; ++w) {
+                const uint32_t tile = work[w];
+                const uint32_t x0 = (tile % tiles_x) * settings.tile_size;
+                const uint32_t y0 = (tile / tiles_x) * settings.tile_size;
+                const uint32_t x1 = std::min(map.width, x0 + settings.tile_size);
+                const uint32_t y1 = std::min(map.height, y0 + settings.tile_size);
+                for (uint32_t y = y0; y < y1; ++y) {
+                    throw_if_cancelled(progress);
+                    for (uint32_t x = x0; x < x1; ++x) baker.bake_texel(map.texel_index(x, y), out);
+                }
+                const uint64_t finished = done.fetch_add(1) + 1;
+                if (progress) progress->report(finished, work.size());
+            }
+        },
+        progress);
+    return out;
+}
+
+void merge_lightmap(LightmapTexels& into, const LightmapTexels& part) {
+    if (into.width != part.width || into.height != part.height ||
+        into.directional != part.directional)
+        throw InvalidArgument(format_message(
+            "merge_lightmap: a ", part.width, " x ", part.height,
+            part.directional ? " directional" : "", " part does not fit a ", into.width, " x ",
+            into.height, into.directional ? " directional" : "", " lightmap"));
+    for (uint64_t t = 0; t < part.texel_count(); ++t) {
+        if (!part.baked[t]) continue;
+        if (into.baked[t])
+            throw InvalidArgument(format_message("merge_lightmap: texel ", t % part.width, ", ",
+                                                 t / part.width,
+                                                 " was baked twice; shards must not overlap"));
+        into.baked[t] = 1;
+        std::copy_n(&part.color[3 * t], 3, &into.color[3 * t]);
+        into.variance[t] = part.variance[t];
+        if (part.directional)
+            std::copy_n(&part.sh[kLightmapShFloats * t], kLightmapShFloats,
+                        &into.sh[kLightmapShFloats * t]);
+    }
+}
+
+}  // namespace shgi
