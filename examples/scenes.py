@@ -13,6 +13,8 @@ import numpy as np
 import shgi
 
 WHITE, RED, GREEN = (0.73, 0.73, 0.73), (0.65, 0.05, 0.05), (0.12, 0.45, 0.15)
+# Lightmap UVs of a quad's corners c, c + u, c + u + v, c + v.
+UNIT_SQUARE = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32)
 
 
 def quad(corner, edge_u, edge_v):
@@ -49,9 +51,10 @@ def look_at(eye, target, up=(0, 0, 1)):
 class SceneBuilder:
     """Adds named parts to a shgi.Scene, sharing one material per name."""
 
-    def __init__(self):
+    def __init__(self, lightmap=False):
         self.scene = shgi.Scene()
         self.materials = {}
+        self.lightmap = lightmap
 
     def material(self, name, color, **fields):
         if name not in self.materials:
@@ -60,9 +63,15 @@ class SceneBuilder:
         return self.materials[name]
 
     def part(self, name, geometry, material, color):
+        """With `lightmap`, a quad (a wall) is turned to face the other way, into the room, and
+        gets the UV map "LightmapUV" spanning the unit square: bakes see a surface's front."""
         positions, triangles = geometry
+        uvs = None
+        if self.lightmap and len(positions) == 4:
+            uvs = {"LightmapUV": UNIT_SQUARE}
+            triangles = triangles[:, ::-1]
         mesh_id = self.scene.add_mesh(
-            positions=positions, triangles=triangles, name=name,
+            positions=positions, triangles=triangles, name=name, uvs=uvs,
             material_indices=np.full(len(triangles), self.material(material, color)))
         return self.scene.add_instance(mesh_id, np.eye(4), name)
 
@@ -73,11 +82,11 @@ class SceneBuilder:
         self.scene.set_camera(camera)
 
 
-def cornell_box(scale=1.0):
-    """256 x 256 pixels times `scale`."""
-    b = SceneBuilder()
+def cornell_box(scale=1.0, lightmap=False):
+    """256 x 256 pixels times `scale`. lightmap: walls face into the box, with LightmapUV."""
+    b = SceneBuilder(lightmap)
     size = 2.0
-    walls = [  # normals point into the box
+    walls = [  # u x v points out of the box (lightmap=True turns them inwards)
         ("floor", WHITE, (-1, 0, 0), (0, size, 0), (size, 0, 0)),
         ("ceiling", WHITE, (-1, 0, size), (size, 0, 0), (0, size, 0)),
         ("back", WHITE, (-1, size, 0), (0, 0, size), (size, 0, 0)),
@@ -101,9 +110,9 @@ def cornell_box(scale=1.0):
     return b
 
 
-def sun_room(scale=1.0):
-    """256 x 192 pixels times `scale`."""
-    b = SceneBuilder()
+def sun_room(scale=1.0, lightmap=False):
+    """256 x 192 pixels times `scale`. lightmap: walls face into the room, with LightmapUV."""
+    b = SceneBuilder(lightmap)
     room_x, room_y, room_z = 4.0, 4.0, 2.6
     x0, y0 = -room_x / 2, 0.0
     b.part("floor", quad((x0, y0, 0), (0, room_y, 0), (room_x, 0, 0)), "plaster", WHITE)

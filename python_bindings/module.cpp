@@ -12,6 +12,7 @@ void bind_loaders(py::module_& m);
 void bind_render(py::module_& m);
 void bind_lattice(py::module_& m);
 void bind_probes(py::module_& m);
+void bind_bake(py::module_& m);
 }  // namespace shgi::python
 
 PYBIND11_MODULE(_shgi, m) {
@@ -25,4 +26,5 @@ PYBIND11_MODULE(_shgi, m) {
     shgi::python::bind_render(m);
     shgi::python::bind_lattice(m);  // PhotonLattice derives from IndirectField (bind_render)
     shgi::python::bind_probes(m);   // so do ProbeGrid and ProbeField
+    shgi::python::bind_bake(m);     // takes any IndirectField
 }

@@ -8,7 +8,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LogLevel', 'Material', 'Mesh', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'Scene', 'SensorFit', 'Texture', 'World', 'WorldSampling', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'max_threads', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'Material', 'Mesh', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'max_threads', 'merge_lightmap', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -622,6 +622,186 @@ class LightType:
         ...
     @property
     def value(self) -> int:
+        ...
+class LightmapFilterSettings:
+    """
+    Edge-aware a-trous filter that never crosses UV charts.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        LightmapFilterSettings(**fields)
+        """
+    @property
+    def iterations(self) -> int:
+        """
+        A-trous passes, 0 = off (2).
+        """
+    @iterations.setter
+    def iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def luminance_sigma(self) -> float:
+        """
+        Standard deviations of luminance before weight 1/e (4).
+        """
+    @luminance_sigma.setter
+    def luminance_sigma(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def normal_power(self) -> float:
+        """
+        Normal weight sharpness (64).
+        """
+    @normal_power.setter
+    def normal_power(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def position_sigma(self) -> float:
+        """
+        Texels off the texel's plane before weight 1/e (1).
+        """
+    @position_sigma.setter
+    def position_sigma(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+class LightmapSettings:
+    """
+    
+    What and how a lightmap is baked; every field has a default. Content (Cycles' DIFFUSE bake):
+    'DIRECT_INDIRECT' (pass_filter {DIRECT, INDIRECT}), 'DIRECT', 'INDIRECT', or 'FULL' (also COLOR).
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        LightmapSettings(**fields)
+        """
+    def validate(self) -> None:
+        """
+        Raises ValueError naming the first invalid field.
+        """
+    @property
+    def clamp_indirect(self) -> float:
+        """
+        Max component of an indirect sample; 0 = off (0).
+        """
+    @clamp_indirect.setter
+    def clamp_indirect(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def content(self) -> str:
+        """
+        'DIRECT_INDIRECT' (default), 'DIRECT', 'INDIRECT' or 'FULL'.
+        """
+    @content.setter
+    def content(self, arg1: str) -> None:
+        ...
+    @property
+    def diffuse_bounces(self) -> int:
+        """
+        Cycles' Diffuse bounces (4).
+        """
+    @diffuse_bounces.setter
+    def diffuse_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def directional(self) -> bool:
+        """
+        Also bake the L1 SH of the incident radiance (False).
+        """
+    @directional.setter
+    def directional(self, arg0: bool) -> None:
+        ...
+    @property
+    def glossy_bounces(self) -> int:
+        """
+        Cycles' Glossy bounces (4).
+        """
+    @glossy_bounces.setter
+    def glossy_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def max_bounces(self) -> int:
+        """
+        Cycles' Total bounces (12).
+        """
+    @max_bounces.setter
+    def max_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def samples(self) -> int:
+        """
+        Samples per texel (256).
+        """
+    @samples.setter
+    def samples(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def seed(self) -> int:
+        """
+        Random seed (0).
+        """
+    @seed.setter
+    def seed(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def tile_size(self) -> int:
+        """
+        Texels per tile side: the unit of work and of shards (16).
+        """
+    @tile_size.setter
+    def tile_size(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def transmission_bounces(self) -> int:
+        """
+        Cycles' Transmission bounces (12).
+        """
+    @transmission_bounces.setter
+    def transmission_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+class LightmapTexels:
+    """
+    
+    A baked lightmap: arrays (height, width, ...) with row 0 at v = 0 (Blender's Image.pixels order).
+    LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a shard file).
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, color: numpy.ndarray, variance: numpy.ndarray, baked: numpy.ndarray, sh: typing.Any = None) -> None:
+        ...
+    @property
+    def baked(self) -> numpy.typing.NDArray[numpy.bool]:
+        """
+        (H, W) bool: texels this bake computed.
+        """
+    @property
+    def color(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (H, W, 3) float32 light per texel (units: LightmapSettings.content).
+        """
+    @property
+    def directional(self) -> bool:
+        ...
+    @property
+    def height(self) -> int:
+        ...
+    @property
+    def sh(self) -> typing.Any:
+        """
+        (H, W, 4, 3) float32 L1 SH of incident radiance (index l(l+1)+m), or None.
+        """
+    @property
+    def variance(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (H, W) float32 variance of each texel's luminance (confidence).
+        """
+    @property
+    def width(self) -> int:
         ...
 class LogLevel:
     """
@@ -1905,6 +2085,90 @@ class SensorFit:
     @property
     def value(self) -> int:
         ...
+class TexelMap:
+    """
+    
+    The sample positions of every texel of one object's lightmap (rasterize_texels). Arrays are
+    (height, width) with row 0 at v = 0.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @property
+    def chart(self) -> numpy.typing.NDArray[numpy.int32]:
+        """
+        (H, W) int32 UV chart of each texel, -1 where nothing is covered.
+        """
+    @property
+    def chart_count(self) -> int:
+        """
+        UV charts (islands) of the mesh.
+        """
+    @property
+    def coverage(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (H, W) float32 fraction of each texel the UV layout covers.
+        """
+    @property
+    def height(self) -> int:
+        ...
+    @property
+    def instance_id(self) -> int:
+        ...
+    @property
+    def report(self) -> dict:
+        """
+        What rasterizing skipped or clipped (dict of counts).
+        """
+    @property
+    def sample_count(self) -> int:
+        ...
+    @property
+    def width(self) -> int:
+        ...
+class TexelRasterSettings:
+    """
+    Where lightmap texels lie: resolution, UV map and samples per texel.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        TexelRasterSettings(**fields)
+        """
+    @property
+    def height(self) -> int:
+        """
+        Texels along v (256).
+        """
+    @height.setter
+    def height(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def samples_per_axis(self) -> int:
+        """
+        Sample positions per texel side, 1..16 (2: 4 per texel).
+        """
+    @samples_per_axis.setter
+    def samples_per_axis(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def uv_set(self) -> str:
+        """
+        The lightmap UV map's name ('LightmapUV').
+        """
+    @uv_set.setter
+    def uv_set(self, arg0: str) -> None:
+        ...
+    @property
+    def width(self) -> int:
+        """
+        Texels along u (256).
+        """
+    @width.setter
+    def width(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
 class Texture:
     """
     A linear RGBA image; row 0 is the bottom row (Blender).
@@ -1939,6 +2203,41 @@ class Texture:
         """
         Width in pixels.
         """
+class UnoccludeSettings:
+    """
+    Moving texel samples out of walls (Godot's unocclude).
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        UnoccludeSettings(**fields)
+        """
+    @property
+    def push_distance(self) -> float:
+        """
+        Texels past the wall (0.05).
+        """
+    @push_distance.setter
+    def push_distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def ray_count(self) -> int:
+        """
+        Tangent-plane rays per sample (8).
+        """
+    @ray_count.setter
+    def ray_count(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def search_radius(self) -> float:
+        """
+        Texels searched for walls (1).
+        """
+    @search_radius.setter
+    def search_radius(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
 class World:
     """
     Uniform background light: color * strength.
@@ -2016,6 +2315,24 @@ class WorldSampling:
     @property
     def value(self) -> int:
         ...
+def bake_lightmap(scene: Scene, map: TexelMap, settings: LightmapSettings = ..., field: IndirectField = None, tiles: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex] = [], progress: Progress = None) -> LightmapTexels:
+    """
+    Bakes `tiles` (all when empty) of the texel map: with the path tracer when `field` is None, else with the field's indirect light.
+    """
+def dilate_lightmap(texels: LightmapTexels, padding: typing.SupportsInt | typing.SupportsIndex = 4, progress: Progress = None) -> numpy.typing.NDArray[numpy.bool]:
+    """
+    Spreads every layer `padding` texels beyond the charts in place; returns the (H, W) bool mask of texels holding a value.
+    """
+def filter_lightmap(map: TexelMap, texels: LightmapTexels, settings: LightmapFilterSettings = ..., progress: Progress = None) -> None:
+    """
+    Filters the baked texels in place.
+    """
+def lightmap_shard_tiles(width: typing.SupportsInt | typing.SupportsIndex, height: typing.SupportsInt | typing.SupportsIndex, tile_size: typing.SupportsInt | typing.SupportsIndex, shard: typing.SupportsInt | typing.SupportsIndex, shards: typing.SupportsInt | typing.SupportsIndex) -> list[int]:
+    """
+    Tiles shard i of N bakes: every tile t with t % N == i.
+    """
+def lightmap_tile_count(width: typing.SupportsInt | typing.SupportsIndex, height: typing.SupportsInt | typing.SupportsIndex, tile_size: typing.SupportsInt | typing.SupportsIndex) -> int:
+    ...
 def linear_from_srgb(encoded: typing.Annotated[numpy.typing.ArrayLike, numpy.float32]) -> typing.Any:
     """
     Inverse sRGB transfer function: x / 12.92 up to 0.04045, ((x + 0.055) / 1.055)**2.4 above.
@@ -2060,6 +2377,14 @@ def max_threads() -> int:
     """
     The number of worker threads SHGI may use.
     """
+def merge_lightmap(into: LightmapTexels, part: LightmapTexels) -> None:
+    """
+    Copies the texels `part` baked into `into` (ValueError when shards overlap).
+    """
+def rasterize_texels(scene: Scene, instance: typing.SupportsInt | typing.SupportsIndex, settings: TexelRasterSettings = ..., progress: Progress = None) -> TexelMap:
+    """
+    Rasterizes instance `instance`'s lightmap UV map; ValueError naming the object when the UV map is missing (listing the ones it has) or the mesh is bad.
+    """
 def read_exr(path: os.PathLike | str | bytes, max_pixels: typing.SupportsInt | typing.SupportsIndex = 268435456) -> dict:
     """
     Reads an OpenEXR file into a dict of layer name -> float32 array (H, W, C), row 0 at the top.
@@ -2102,6 +2427,10 @@ def srgb_from_linear(linear: typing.Annotated[numpy.typing.ArrayLike, numpy.floa
     """
     sRGB transfer function (IEC 61966-2-1): 12.92 x up to 0.0031308, 1.055 x**(1/2.4) - 0.055
     above. Input is clamped to [0, 1] (NaN -> 0). Accepts a float or an array (float32 result).
+    """
+def unocclude(scene: Scene, map: TexelMap, settings: UnoccludeSettings = ..., progress: Progress = None) -> dict:
+    """
+    Moves the ray origins of samples inside other geometry out of it; returns counts.
     """
 def version() -> str:
     """
