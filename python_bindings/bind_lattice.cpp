@@ -5,6 +5,9 @@
 // shgi.IndirectField, so shgi.render_preview and the PreviewRenderer take it directly.
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
+#include <stdexcept>
+
 #include "lattice/photon_lattice.h"
 #include "numpy_convert.h"
 #include "scene_use.h"
@@ -15,6 +18,24 @@ namespace py = pybind11;
 
 namespace shgi::python {
 namespace {
+
+py::dict lattice_dict(const ShLattice& lattice) {
+    py::dict d;
+    const vec3 origin = lattice.origin();
+    const ivec3 dims = lattice.dims();
+    d["origin"] = py::make_tuple(origin.x, origin.y, origin.z);
+    d["cell_size"] = lattice.cell_size();
+    d["dims"] = py::make_tuple(dims.x, dims.y, dims.z);
+    d["order"] = lattice.order();
+    const std::vector<float>& c = lattice.coefficients();
+    if (c.size() != lattice.cell_count() * size_t(lattice.num_coefficients()) * 3)
+        throw std::runtime_error("PhotonLattice.lattices: the lattice is not built yet");
+    py::array_t<float> sh({py::ssize_t(dims.z), py::ssize_t(dims.y), py::ssize_t(dims.x),
+                           py::ssize_t(lattice.num_coefficients()), py::ssize_t(3)});
+    std::copy(c.begin(), c.end(), sh.mutable_data());
+    d["sh"] = sh;
+    return d;
+}
 
 py::dict timings_to_dict(const PhotonLatticeTimings& timings) {
     py::dict out;
@@ -119,7 +140,20 @@ After editing and re-committing the scene, call reset().)doc")
             "The last solve: seconds of emit_trace, injection, blur; photons_emitted, "
             "photons_stored, bounces.")
         .def_property_readonly("memory_bytes", &PhotonLattice::memory_bytes,
-                               "Bytes held by the lattices and photon map.");
+                               "Bytes held by the lattices and photon map.")
+        .def_property_readonly(
+            "lattices",
+            [](const PhotonLattice& l) {
+                py::dict out;
+                out["global"] = lattice_dict(l.global_lattice());
+                out["caustic"] = lattice_dict(l.caustic_lattice());
+                return out;
+            },
+            "The solved (averaged, blurred) lattices as {'global': ..., 'caustic': ...}, each a "
+            "dict: origin (x, y, z) of the lower corner (m), cell_size (m), dims (nx, ny, nz), "
+            "order, sh: float32 array (nz, ny, nx, coefficients, 3) of incident radiance "
+            "(W m^-2 sr^-1, index l(l+1)+m, no Condon-Shortley phase), cell (i, j, k) centred at "
+            "origin + (i + 0.5, j + 0.5, k + 0.5) cell_size.");
 }
 
 }  // namespace

@@ -6,6 +6,7 @@ PSNR >= 30 dB after auto-exposure (mean luminance of the reference mapped to 0.1
 The references are rendered in the test at a small size with Cycles' default bounce limits.
 """
 
+import pathlib
 import sys
 
 import numpy as np
@@ -145,3 +146,34 @@ def test_preview_renders_any_camera_and_refines_progressively():
                                          camera=camera)
     np.testing.assert_array_equal(direct_only["DiffInd"], 0.0)
     np.testing.assert_array_equal(direct_only["DiffDir"], one_shot["DiffDir"])
+
+
+def test_lattice_export_writes_every_coefficient_and_documents_the_layout(tmp_path):
+    import json
+
+    from shgi.volume_export import export_lattice
+
+    scene = committed(scenes.cornell_box(0.1))
+    lattice = shgi.PhotonLattice(scene, shgi.PhotonLatticeSettings(photons=20000, seed=3))
+    with pytest.raises(ValueError, match="solve"):
+        export_lattice(lattice, tmp_path / "unsolved.json")
+    lattice.solve()
+    paths = export_lattice(lattice, tmp_path / "cornell.json")
+    doc = json.loads(pathlib.Path(paths[0]).read_text())
+    assert doc["format"] == "shgi-sh-lattice" and doc["version"] == 1
+    assert "Condon-Shortley" in doc["sh"]["basis"] and "W m^-2 sr^-1" in doc["sh"]["unit"]
+    solved = lattice.lattices
+    for entry in doc["lattices"]:
+        data = solved[entry["name"]]
+        nx, ny, nz = entry["dims"]
+        assert tuple(entry["dims"]) == tuple(data["dims"])
+        image = shgi.read_exr(tmp_path / entry["sh_file"])
+        assert len(image) == entry["coefficients"] == (data["order"] + 1) ** 2
+        for c in range(entry["coefficients"]):
+            pixels = image[f"sh{c:02d}"]
+            assert pixels.shape == (ny * nz, nx, 3)
+            # Cell (i, j, k) at column i, row j + ny * k.
+            np.testing.assert_array_equal(pixels.reshape(nz, ny, nx, 3), data["sh"][..., c, :])
+    assert np.abs(solved["global"]["sh"]).max() > 0.0
+    with pytest.raises(ValueError, match=".json"):
+        export_lattice(lattice, tmp_path / "cornell.exr")

@@ -1182,6 +1182,11 @@ class PhotonLattice(IndirectField):
         Traces one more pass of photons and rebuilds the lattices (GIL released). Raises shgi.Cancelled on cancel, keeping the previous solution.
         """
     @property
+    def lattices(self) -> dict:
+        """
+        The solved (averaged, blurred) lattices as {'global': ..., 'caustic': ...}, each a dict: origin (x, y, z) of the lower corner (m), cell_size (m), dims (nx, ny, nz), order, sh: float32 array (nz, ny, nx, coefficients, 3) of incident radiance (W m^-2 sr^-1, index l(l+1)+m, no Condon-Shortley phase), cell (i, j, k) centred at origin + (i + 0.5, j + 0.5, k + 0.5) cell_size.
+        """
+    @property
     def memory_bytes(self) -> int:
         """
         Bytes held by the lattices and photon map.
