@@ -16,7 +16,8 @@ PASSES = {"Combined", "DiffDir", "DiffInd", "DiffCol", "GlossDir", "GlossInd", "
 
 
 def test_demo_writes_every_pass_and_a_png_for_both_scenes(tmp_path, capsys):
-    assert demo.main(["--out", str(tmp_path), "--samples", "2", "--scale", "0.125"]) == 0
+    assert demo.main(["--out", str(tmp_path), "--samples", "2", "--scale", "0.125",
+                      "--bake-resolution", "16", "--bake-samples", "4"]) == 0
     summary = capsys.readouterr().out
     for name, size in (("cornell_box", (32, 32)), ("sun_room", (24, 32))):
         layers = shgi.read_exr(str(tmp_path / f"{name}.exr"))
@@ -26,3 +27,11 @@ def test_demo_writes_every_pass_and_a_png_for_both_scenes(tmp_path, capsys):
         assert np.isfinite(combined).all() and combined[..., :3].mean() > 0.0
         assert (tmp_path / f"{name}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
         assert f"{name:12s} {size[1]}x{size[0]} px, 2 spp" in summary
+
+    # The bake: a lightmap per baked object, lit (the sun room's floor sees the sun patch).
+    assert "bake         sun room, 5 lightmaps of 16x16, 4 samples/texel" in summary
+    floor = shgi.read_exr(str(tmp_path / "lightmaps" / "floor.exr"))
+    assert set(floor) == {"Lightmap", "Variance", "Coverage"}
+    assert floor["Lightmap"].shape == (16, 16, 3)
+    assert np.isfinite(floor["Lightmap"]).all() and floor["Lightmap"].max() > 1.0
+    assert (tmp_path / "lightmaps" / "floor.png").exists()
