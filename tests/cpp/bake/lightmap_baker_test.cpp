@@ -123,6 +123,39 @@ TEST(LightmapBaker, DirectionalDataIsTheL1ShOfTheUniformHemisphere) {
     EXPECT_NEAR(mean.color.x, sky, 0.01f * sky);
 }
 
+// A sun (a delta light of irradiance S): its SH is S Y(towards the sun), so the L1 vector
+// (c11, c1-1, c10) points at the sun with length S Y1 (what normal-mapped shading reads), while
+// the plain value stays S cos(zenith) / pi.
+TEST(LightmapBaker, DirectionalDataPointsAtTheSun) {
+    Scene scene;
+    scene.add_material(test::lambert(0.5f));
+    scene.add_instance(scene.add_mesh(floor_mesh()), mat4(1.0f), "Floor");
+    Light sun;
+    sun.type = LightType::Sun;
+    sun.strength = 3.0f;
+    const float zenith = kPi / 3.0f;
+    sun.world_from_light = glm::rotate(mat4(1.0f), zenith, vec3(1.0f, 0.0f, 0.0f));
+    scene.add_light(sun);
+    scene.set_world(test::black_world());
+    scene.commit();
+    const vec3 towards_sun = -sun.direction();
+    const TexelMap map = rasterize(scene, 0, 4);
+    LightmapSettings settings;
+    settings.samples = 4;
+    settings.content = LightmapContent::Direct;
+    settings.directional = true;
+    const LightmapTexels texels = bake_lightmap(scene, map, nullptr, settings);
+    for (uint64_t t = 0; t < texels.texel_count(); ++t) {
+        const float* sh = &texels.sh[kLightmapShFloats * t];
+        // Green channel: coefficients c0..c3 at sh[3 * c + 1].
+        EXPECT_NEAR(sh[1], sun.strength * kY00, 1e-4f);
+        const vec3 l1(sh[3 * 3 + 1], sh[1 * 3 + 1], sh[2 * 3 + 1]);
+        EXPECT_NEAR(glm::dot(glm::normalize(l1), towards_sun), 1.0f, 1e-5f);
+        EXPECT_NEAR(glm::length(l1), sun.strength * kY1, 1e-4f);
+        EXPECT_NEAR(texels.color[3 * t + 1], sun.strength * std::cos(zenith) * kInvPi, 1e-5f);
+    }
+}
+
 TEST(LightmapBaker, PointLightIsExactPerTexel) {
     Scene scene;
     scene.add_material(test::lambert(0.5f));
