@@ -2,9 +2,10 @@
 
 This module only describes and registers the add-on; the work lives in its packages:
 properties.py (scene.shgi), engine/ (the SHGI render engine, F12), operators/ (quality presets,
-frozen lattice solutions), ui/ (panels), export/ (Blender scenes → shgi.Scene). It imports
-without bpy so that the bpy-free parts can be tested with pytest, and registers even when the
-native module ``shgi`` cannot be imported (the render panel then shows why and the fix).
+frozen lattice solutions, lightmap bakes, volume export), ui/ (panels), export/ (Blender scenes
+→ shgi.Scene). It imports without bpy so that the bpy-free parts can be tested with pytest, and
+registers even when the native module ``shgi`` cannot be imported (the render panel then shows
+why and the fix).
 """
 
 bl_info = {

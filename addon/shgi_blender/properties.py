@@ -2,14 +2,17 @@
 
 Property names are the native settings' field names and their defaults the native defaults
 (settings.py holds the tables and the mapping to PathTracerSettings, PreviewSettings,
-PhotonLatticeSettings and, through the ``scene.shgi.probe_grid`` group, ProbeGridSettings).
-Enum tables are module-level so Blender keeps them alive.
+PhotonLatticeSettings and, through the ``scene.shgi.probe_grid`` group, ProbeGridSettings;
+bake_settings.py those of the lightmap bake in ``scene.shgi.bake``, whose properties the bake
+operators carry too: bake_properties()). Enum tables are module-level so Blender keeps them
+alive.
 """
 
 import bpy
-from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty
+from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty,
+                       StringProperty)
 
-from . import settings
+from . import bake_settings, settings
 
 D = settings.PROPERTY_DEFAULTS
 P = settings.PROBE_GRID_DEFAULTS
@@ -20,6 +23,9 @@ METHOD_ITEMS = [(m.identifier, m.label, m.description, m.number) for m in settin
 WORLD_SAMPLING_ITEMS = list(settings.ENUM_ITEMS["world_sampling"])
 CAUSTICS_ITEMS = list(settings.ENUM_ITEMS["caustics"])
 INTERPOLATION_ITEMS = list(settings.ENUM_ITEMS["interpolation"])
+B = bake_settings.BAKE_PROPERTY_DEFAULTS
+BAKE_SOURCE_ITEMS = list(bake_settings.SOURCE_ITEMS)
+BAKE_CONTENT_ITEMS = list(bake_settings.CONTENT_ITEMS)
 
 
 class ShgiProbeGridSettings(bpy.types.PropertyGroup):
@@ -80,6 +86,77 @@ class ShgiProbeGridSettings(bpy.types.PropertyGroup):
     placement_rays: IntProperty(
         name="Placement Rays", default=P["placement_rays"], min=1, soft_max=4096,
         description="Rays per probe that find probes inside geometry")
+
+
+def bake_properties():
+    """{name: property definition} of the lightmap bake, made anew on each call: the
+    ShgiBakeSettings group and each bake operator hold their own (bake_settings.py)."""
+    return {
+        "uv_map": StringProperty(
+            name="UV Map", default=B["uv_map"],
+            description="The UV map the lightmap is laid out in (one per object, inside the "
+                        "unit square, without overlaps)"),
+        "create_uv": BoolProperty(
+            name="Create UV Map", default=B["create_uv"],
+            description="Give objects without the UV map one, laid out by Lightmap Pack"),
+        "resolution": IntProperty(
+            name="Resolution", default=B["resolution"], min=0, soft_max=4096,
+            description="Texels per side of each object's lightmap; 0 sizes each lightmap "
+                        "from the texel density"),
+        "texel_density": FloatProperty(
+            name="Texel Density", default=B["texel_density"], min=0.0, soft_max=1024.0,
+            description="Texels per metre of surface, used when the resolution is 0"),
+        "samples": IntProperty(
+            name="Samples", default=B["samples"], min=1, soft_max=4096,
+            description="Samples per texel"),
+        "content": EnumProperty(
+            name="Content", items=BAKE_CONTENT_ITEMS, default=B["content"],
+            description="What the texels hold, in the units of Cycles' Diffuse bake"),
+        "source": EnumProperty(
+            name="Indirect Light", items=BAKE_SOURCE_ITEMS, default=B["source"],
+            description="Where the indirect light comes from"),
+        "directional": BoolProperty(
+            name="Directional", default=B["directional"],
+            description="Also write the L1 spherical harmonics of the incident light per "
+                        "texel (EXR layers SH.c0..c3), for normal-mapped surfaces"),
+        "filter": BoolProperty(
+            name="Denoise", default=B["filter"],
+            description="Edge-aware filter of the baked texels that never crosses UV charts"),
+        "padding": IntProperty(
+            name="Padding", default=B["padding"], min=0, max=64,
+            description="Texels the lightmap is extended beyond the UV charts, against seams "
+                        "when it is filtered"),
+        "tile_size": IntProperty(
+            name="Tile Size", default=B["tile_size"], min=4, max=1024,
+            description="Texels per side of the tiles a lightmap is baked in: the unit of work "
+                        "of threads and of shards"),
+        "output_folder": StringProperty(
+            name="Output Folder", default=B["output_folder"], subtype="DIR_PATH",
+            description="Where <object>.exr and <object>.png are written (// is the .blend "
+                        "file's folder)"),
+        "shard_index": IntProperty(
+            name="Shard", default=B["shard_index"], min=0,
+            description="Which shard this bake writes, 0 .. Shards - 1"),
+        "shard_count": IntProperty(
+            name="Shards", default=B["shard_count"], min=1, soft_max=1024,
+            description="Split the bake into this many shards for a render farm (each writes "
+                        "raw shard files; Merge Shards writes the lightmaps); 1 bakes whole "
+                        "lightmaps"),
+        "hook_up_material": BoolProperty(
+            name="Show in Materials", default=B["hook_up_material"],
+            description="Add the lightmap to each object's materials (nodes named SHGI "
+                        "Lightmap) so that EEVEE and Workbench show it"),
+    }
+
+
+class ShgiBakeSettings(bpy.types.PropertyGroup):
+    """Lightmap bake settings (``scene.shgi.bake``) that the Bake panel shows."""
+
+    __annotations__ = dict(
+        bake_properties(),
+        volume_path=StringProperty(
+            name="Volume File", default=bake_settings.VOLUME_PATH_DEFAULT, subtype="FILE_PATH",
+            description="The JSON file Export Volume writes (its EXR files go beside it)"))
 
 
 class ShgiSceneSettings(bpy.types.PropertyGroup):
@@ -148,6 +225,8 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
                     "the lattice of a final render; more give a smoother viewport)")
     probe_grid: PointerProperty(type=ShgiProbeGridSettings, name="Probe Grid",
                                 description="Settings of the Probe Grid method")
+    bake: PointerProperty(type=ShgiBakeSettings, name="Bake",
+                          description="Lightmap bake settings")
     probe_passes: IntProperty(
         name="Render Passes", default=S["probe_passes"], min=1, soft_max=256,
         description="Probe update passes of an F12 render or a Solve")
@@ -166,7 +245,7 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
 
 
 # Registered in this order: a PointerProperty's group before the group holding it.
-_CLASSES = (ShgiProbeGridSettings, ShgiSceneSettings)
+_CLASSES = (ShgiProbeGridSettings, ShgiBakeSettings, ShgiSceneSettings)
 
 
 def register():

@@ -5,10 +5,11 @@ viewport (Rendered shading).
   thread), render_job.py (the worker-thread render; make_renderer), field_solvers.py (the
   PhotonLattice and ProbeGrid solvers driven alike: build, update passes, field),
   solution_cache.py (solves, and frozen solutions per scene), scene_checks.py (warnings about
-  scenes that render black); for the viewport sync_plan.py (what an edit invalidates),
-  viewport_camera.py (the view as a shgi.Camera), viewport_worker.py (the worker thread:
-  build, commit, solve or refine in the background, progressive frames), field_spheres.py and
-  lattice_samples.py (the overlays' spheres: lattice cells, probes);
+  scenes that render black), lightmap_bake.py (lightmap bakes on a worker thread); for the
+  viewport sync_plan.py (what an edit invalidates), viewport_camera.py (the view as a
+  shgi.Camera), viewport_worker.py (the worker thread: build, commit, solve or refine in the
+  background, progressive frames), field_spheres.py and lattice_samples.py (the overlays'
+  spheres: lattice cells, probes);
 * bpy: render_engine.py (the RenderEngine class, registration), final_render.py (F12),
   viewport.py (view_update / view_draw sessions), viewport_sync.py (depsgraph updates ->
   scene snapshots), frame_display.py (gpu drawing of frames).

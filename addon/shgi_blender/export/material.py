@@ -1,9 +1,10 @@
 """Blender materials and images → shgi.Material and shgi.Texture (bpy side).
 
-Reads the node feeding the active Material Output's Surface input: a Principled BSDF, an
-Emission shader or a Diffuse BSDF. Socket names and units are mapped in conversions.py. An Image
-Texture node linked to the Principled Base Color becomes an shgi.Texture with base_color = 1
-(SHGI multiplies texture × base_color). Anything else gets the documented fallback material
+Reads the node feeding the active Material Output's Surface input (through the Mix Shader of a
+lightmap preview, bake_settings.LIGHTMAP_MIX_NODE): a Principled BSDF, an Emission shader or a
+Diffuse BSDF. Socket names and units are mapped in conversions.py. An Image Texture node linked
+to the Principled Base Color becomes an shgi.Texture with base_color = 1 (SHGI multiplies
+texture × base_color). Anything else gets the documented fallback material
 (conversions.fallback_material_fields) and a warning naming the material.
 """
 
@@ -11,6 +12,7 @@ import bpy
 import numpy as np
 import shgi
 
+from ..bake_settings import LIGHTMAP_MIX_NODE
 from . import conversions, node_tree
 
 MATERIAL_OUTPUT_NODE = "ShaderNodeOutputMaterial"
@@ -209,6 +211,8 @@ def _surface_node(material):
     if output is None:
         return None, "has no Material Output node"
     surface = node_tree.linked_node(output.inputs["Surface"])
+    if surface is not None and surface.name == LIGHTMAP_MIX_NODE:
+        surface = node_tree.linked_node(surface.inputs[1])
     if surface is None:
         return None, "has nothing connected to the Material Output's Surface"
     return surface, None

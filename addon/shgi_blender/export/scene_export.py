@@ -39,7 +39,7 @@ NON_MESH_GEOMETRY_TYPES = ("CURVE", "SURFACE", "FONT", "META")
 UNSUPPORTED_GEOMETRY_TYPES = ("CURVES", "POINTCLOUD", "VOLUME", "GPENCIL")
 
 
-def export_scene(depsgraph, scene=None, *, report=None, for_render=None):
+def export_scene(depsgraph, scene=None, *, report=None, for_render=None, with_camera=True):
     """Converts an evaluated depsgraph into a new, uncommitted shgi.Scene.
 
     depsgraph: an evaluated Depsgraph (the render engine's, or
@@ -49,6 +49,8 @@ def export_scene(depsgraph, scene=None, *, report=None, for_render=None):
     report: a callable like ``Operator.report`` that also receives every warning.
     for_render: leave out objects hidden for render (default: True for a render depsgraph,
         False for a viewport one, which already holds only the viewport-visible objects).
+    with_camera: export the scene camera (False for bakes, which need none: no warning about
+        a scene without one).
     Returns ExportResult(scene, warnings, stats, probe_volumes).
     """
     start = time.perf_counter()
@@ -57,7 +59,9 @@ def export_scene(depsgraph, scene=None, *, report=None, for_render=None):
         for_render = depsgraph.mode == "RENDER"
     exporter = _SceneExporter(depsgraph, WarningLog(report), for_render)
     exporter.export_instances()
-    exporter.export_world_and_camera(scene)
+    exporter.export_world(scene)
+    if with_camera:
+        exporter.export_camera(scene)
     exporter.stats.seconds = time.perf_counter() - start
     return ExportResult(scene=exporter.shgi_scene, warnings=list(exporter.log.messages),
                         stats=exporter.stats, probe_volumes=exporter.probe_volumes)
@@ -107,11 +111,6 @@ class _SceneExporter:
                 for instance in self.depsgraph.object_instances
                 if instance.is_instance and instance.object.type == "MESH"
                 and instance.parent.type in NON_MESH_GEOMETRY_TYPES}
-
-    def export_world_and_camera(self, scene):
-        """Sets the world and, when the scene has a usable camera, the camera."""
-        self.export_world(scene)
-        self.export_camera(scene)
 
     def export_world(self, scene):
         try:

@@ -1,7 +1,7 @@
 """Properties > Render panels of the SHGI engine: method and samples (with the native module's
 import error when it fails), light paths, the photon lattice or the probe grid (with its
 Visibility sub-panel, laid out as EEVEE's irradiance volume settings) with the frozen solution,
-and the last render's figures."""
+lightmap bakes and the volume export (scene.shgi.bake), and the last render's figures."""
 
 import textwrap
 import time
@@ -201,6 +201,56 @@ def irradiance_volume_count(scene):
     return sum(1 for obj in scene.objects if is_irradiance_volume(obj) and not obj.hide_render)
 
 
+class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
+    """Lightmaps of the selected objects (scene.shgi.bake, the bake operators' settings) and
+    the export of the solved field as a volume."""
+
+    bl_label = "Bake"
+    bl_context = "render"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        bake = context.scene.shgi.bake
+        meshes = sum(1 for obj in getattr(context, "selected_objects", ()) if obj.type == "MESH")
+        layout.label(text=f"{meshes} selected mesh object{'s' if meshes != 1 else ''} to bake",
+                     icon="OBJECT_DATA")
+        row = layout.row(align=True)
+        row.operator("shgi.bake_lightmaps", icon="RENDER_STILL")
+        if bake.shard_count > 1:
+            row.operator("shgi.merge_lightmap_shards", icon="NODE_COMPOSITING")
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        column = layout.column(align=True)
+        for name in ("source", "content", "samples"):
+            column.prop(bake, name)
+        column = layout.column(align=True)
+        column.prop(bake, "uv_map")
+        column.prop(bake, "create_uv")
+        column = layout.column(align=True)
+        column.prop(bake, "resolution")
+        sub = column.column(align=True)
+        sub.active = bake.resolution == 0
+        sub.prop(bake, "texel_density")
+        column.prop(bake, "padding")
+        column = layout.column(align=True)
+        for name in ("directional", "filter", "hook_up_material"):
+            column.prop(bake, name)
+        layout.prop(bake, "output_folder")
+        column = layout.column(align=True, heading="Farm")
+        column.prop(bake, "shard_count")
+        sub = column.column(align=True)
+        sub.active = bake.shard_count > 1
+        sub.prop(bake, "shard_index")
+        column.prop(bake, "tile_size")
+        layout.operator("shgi.remove_lightmap_nodes", icon="X")
+        layout.separator()
+        layout.prop(bake, "volume_path")
+        row = layout.row()
+        row.active = settings.METHODS_BY_ID[context.scene.shgi.method].uses_field
+        row.operator("shgi.export_volume", icon="EXPORT")
+
+
 class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
     bl_label = "Last Render"
     bl_context = "render"
@@ -227,4 +277,4 @@ class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
 
 CLASSES = (SHGI_RENDER_PT_method, SHGI_RENDER_PT_light_paths, SHGI_RENDER_PT_photon_lattice,
            SHGI_RENDER_PT_probe_grid, SHGI_RENDER_PT_probe_grid_visibility,
-           SHGI_RENDER_PT_last_render)
+           SHGI_RENDER_PT_bake, SHGI_RENDER_PT_last_render)

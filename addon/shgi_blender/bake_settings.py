@@ -1,0 +1,136 @@
+"""The lightmap bake settings of ``scene.shgi.bake`` and the shgi.bake options they fill, no bpy.
+
+``scene.shgi.bake`` (properties.py, ShgiBakeSettings) holds what the Bake panel shows; the
+operators ``shgi.bake_lightmaps`` and ``shgi.merge_lightmap_shards`` carry the same properties
+and take every one a caller did not set from that group (operators/bake_lightmaps.py), so a
+script or a farm job overrides only what it names.
+
+Names are the native ones where a native field exists (DESIGN.md: settings mirrored 1:1):
+``content``, ``samples``, ``directional``, ``tile_size`` are LightmapSettings fields; ``filter``
+and ``padding`` are BakeOptions fields. The one rename is BakeOptions ``uv_set``, shown as
+``uv_map`` (Blender's word for it). The light-path limits and the seed are not repeated here:
+a bake uses the render settings' (``scene.shgi``: the Light Paths panel and the seed), as a
+Cycles bake uses Cycles' render settings. Not mirrored: BakeOptions ``samples_per_axis``,
+``unocclude``, ``filter_settings``, ``png`` and ``exposure`` keep shgi.bake's defaults (an
+artist-facing panel needs none of them; ``python -m shgi bake`` does not expose them either).
+
+Everything here takes any object with the property names as attributes (the PropertyGroup, an
+operator, or a SimpleNamespace in tests).
+"""
+
+import math
+
+# Where the indirect light of a bake comes from: identifier, label, description. The field
+# sources solve scene.shgi's photon lattice or probe grid (engine/field_solvers.py), whose
+# render-method identifiers they share.
+SOURCE_ITEMS = (
+    ("PATH_TRACER", "Path Tracer",
+     "Reference path tracer per texel: matches a Cycles bake, slowest"),
+    ("PHOTON_LATTICE", "Photon Lattice",
+     "Indirect light from a photon lattice solved with the Photon Lattice settings; exact "
+     "direct light"),
+    ("PROBE_GRID", "Probe Grid",
+     "Indirect light from a probe grid solved with the Probe Grid settings (Irradiance Volume "
+     "objects place it); exact direct light"),
+)
+FIELD_SOURCES = ("PHOTON_LATTICE", "PROBE_GRID")
+
+# LightmapSettings.content: what a texel holds, in Cycles' Diffuse bake units.
+CONTENT_ITEMS = (
+    ("DIRECT_INDIRECT", "Direct + Indirect",
+     "Cycles' Diffuse bake with Direct and Indirect: the light a white Lambert surface "
+     "reflects (irradiance / pi), without the surface's colour"),
+    ("DIRECT", "Direct", "Cycles' Diffuse bake with Direct only: light straight from emitters"),
+    ("INDIRECT", "Indirect",
+     "Cycles' Diffuse bake with Indirect only: light that scattered at least once"),
+    ("FULL", "Full",
+     "Cycles' Diffuse bake with Direct, Indirect and Color: the surface's diffuse radiance"),
+)
+
+# Every property of scene.shgi.bake (and of the bake operators) with its default. The native
+# ones are checked against LightmapSettings and BakeOptions by tests/python/test_blender_bake.py.
+BAKE_PROPERTY_DEFAULTS = {
+    "uv_map": "LightmapUV",
+    "create_uv": False,
+    "resolution": 0,
+    "texel_density": 32.0,
+    "samples": 256,
+    "content": "DIRECT_INDIRECT",
+    "source": "PATH_TRACER",
+    "directional": False,
+    "filter": False,
+    "padding": 4,
+    "tile_size": 16,
+    "output_folder": "//lightmaps",
+    "shard_index": 0,
+    "shard_count": 1,
+    "hook_up_material": False,
+}
+# Where Export Volume writes when its operator's filepath is not set (scene.shgi.bake only).
+VOLUME_PATH_DEFAULT = "//shgi_volume.json"
+
+# LightmapSettings field -> scene.shgi.bake property.
+LIGHTMAP_FIELDS = {name: name for name in ("content", "samples", "directional", "tile_size")}
+# LightmapSettings field -> scene.shgi property (the render settings' light paths and seed).
+LIGHT_PATH_FIELDS = {name: name for name in (
+    "seed", "max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
+    "clamp_indirect")}
+# BakeOptions field -> scene.shgi.bake property.
+OPTION_FIELDS = {"uv_set": "uv_map", "filter": "filter", "padding": "padding"}
+
+# The Mix Shader that "Show in Materials" (hook_up_material) puts between a material's surface and
+# its output (operators/lightmap_images.py); SHGI's export reads the surface through it
+# (export/material.py), so a preview of baked light never changes what SHGI renders or bakes.
+LIGHTMAP_MIX_NODE = "SHGI Lightmap Mix"
+
+# Lightmap sizes from a texel density stay within these (shgi.bake.resolution_for_density's).
+MIN_DENSITY_RESOLUTION = 16
+MAX_DENSITY_RESOLUTION = 4096
+
+
+def lightmap_settings(bake, props, shgi):
+    """shgi.LightmapSettings of scene.shgi.bake (`bake`) and scene.shgi (`props`)."""
+    values = {field: getattr(bake, prop) for field, prop in LIGHTMAP_FIELDS.items()}
+    values.update({field: getattr(props, prop) for field, prop in LIGHT_PATH_FIELDS.items()})
+    return shgi.LightmapSettings(**values)
+
+
+def bake_options(bake, props, shgi):
+    """shgi.bake.BakeOptions of scene.shgi.bake and scene.shgi (ValueError for a bad setting,
+    naming it)."""
+    from shgi import bake as shgi_bake
+
+    settings = lightmap_settings(bake, props, shgi)
+    settings.validate()
+    return shgi_bake.BakeOptions(
+        settings=settings, **{field: getattr(bake, prop) for field, prop in OPTION_FIELDS.items()})
+
+
+def shard(bake):
+    """(index, count) of the shard to bake, or None for a whole bake (shard_count 1).
+    ValueError when the index is not below the count."""
+    if bake.shard_count <= 1:
+        return None
+    if not 0 <= bake.shard_index < bake.shard_count:
+        raise ValueError(f"shard {bake.shard_index} of {bake.shard_count}: the shard index must "
+                         f"lie in 0..{bake.shard_count - 1}")
+    return (bake.shard_index, bake.shard_count)
+
+
+def lightmap_size(bake, scene, instance):
+    """Texels per side of an instance's lightmap: `resolution` when positive, else from
+    `texel_density` (texels per metre, shgi.bake.resolution_for_density). ValueError when both
+    are 0."""
+    if bake.resolution > 0:
+        return bake.resolution
+    if not (bake.texel_density > 0.0 and math.isfinite(bake.texel_density)):
+        raise ValueError("resolution and texel density are both 0: set one of them")
+    from shgi import bake as shgi_bake
+
+    return shgi_bake.resolution_for_density(scene, instance, bake.texel_density,
+                                            MIN_DENSITY_RESOLUTION, MAX_DENSITY_RESOLUTION)
+
+
+def uses_field(bake):
+    """True when the bake's indirect light comes from a solved field, not the path tracer."""
+    return bake.source in FIELD_SOURCES

@@ -1,0 +1,317 @@
+"""Bake lightmaps of the selected mesh objects, merge a farm bake's shards, remove the
+lightmap nodes (bpy).
+
+SHGI_OT_bake_lightmaps, on Blender's main thread: checks the request (native module, a mesh
+among the selected objects, a usable output folder, the lightmap UV map on every object,
+created by Lightmap Pack when asked), exports the scene (export_scene on the evaluated
+depsgraph, instances named after their objects), finds each object's instance, checks that
+something emits light and sizes each lightmap. A BakeTask (engine/lightmap_bake.py) then
+commits, solves the field of a field source and runs shgi.bake.bake_scene on a worker thread.
+From the UI (invoke) it runs modal: a timer shows progress in the status bar and turns each
+finished lightmap into an image as it comes; Esc cancels and keeps the lightmaps finished
+before. From a script or in background mode (execute) it waits, so
+``blender -b file.blend --python-expr "bpy.ops.shgi.bake_lightmaps()"`` bakes headless and
+fails with the report's message (RuntimeError) when the bake cannot run.
+
+Results: the files shgi.bake writes into the output folder (``<object>.exr`` and ``.png``;
+with Shards > 1 the raw shard files of shard Shard, which SHGI_OT_merge_lightmap_shards merges
+into the same files a whole bake writes) and the images ``<object>_shgi_lightmap``
+(operators/lightmap_images.py), optionally shown in the objects' materials.
+
+Settings: every operator property the caller does not set comes from ``scene.shgi.bake`` (the
+Bake panel); light-path limits and the seed from ``scene.shgi`` (bake_settings.py).
+"""
+
+import os
+import time
+from types import SimpleNamespace
+
+import bpy
+
+from .. import bake_settings, native, properties
+from ..engine import scene_checks
+from ..engine.lightmap_bake import BakeRequest, BakeTask
+from . import lightmap_images
+
+TIMER_SECONDS = 0.1
+REPORT_PREFIX = "SHGI bake: "
+# Lightmap Pack's margin between faces, in % of the unit square: its largest.
+LIGHTMAP_PACK_MARGIN = 1.0
+NO_LIGHT_MESSAGE = ("the scene has no light (no lamp, no emissive material, a black world): a "
+                    "bake would be black; add a light")
+
+
+class BakeError(Exception):
+    """A request the bake refuses; the message names the input and the fix."""
+
+
+class _MethodOf:
+    """scene.shgi as solver_recipe reads it, with the bake's source as the method."""
+
+    def __init__(self, props, method):
+        self._props = props
+        self.method = method
+
+    def __getattr__(self, name):
+        return getattr(self._props, name)
+
+
+def bake_values(operator, scene):
+    """The settings of one operator call: the properties the caller set, the others from
+    scene.shgi.bake (a namespace with bake_settings.BAKE_PROPERTY_DEFAULTS' names)."""
+    group = scene.shgi.bake
+    return SimpleNamespace(**{
+        name: getattr(operator, name) if operator.properties.is_property_set(name)
+        else getattr(group, name) for name in bake_settings.BAKE_PROPERTY_DEFAULTS})
+
+
+def selected_meshes(context):
+    """The selected mesh objects, in name order (the bake order); BakeError when none."""
+    objects = sorted((obj for obj in context.selected_objects if obj.type == "MESH"),
+                     key=lambda obj: obj.name)
+    if not objects:
+        raise BakeError("nothing to bake: no mesh object is selected; select the objects to "
+                        "bake lightmaps for")
+    return objects
+
+
+def output_dir(folder):
+    """The absolute output folder; BakeError for a relative one in an unsaved file."""
+    if not folder:
+        raise BakeError("no output folder: set Output Folder")
+    if folder.startswith("//") and not bpy.data.filepath:
+        raise BakeError(f"the output folder {folder!r} is relative to the .blend file, which "
+                        "has not been saved: save the file first, or choose an absolute folder")
+    return os.path.normpath(bpy.path.abspath(folder))
+
+
+def prepare_uv_maps(context, objects, values):
+    """Makes sure every object's mesh has the lightmap UV map: creates it when asked, else
+    BakeError naming the objects without it and the fixes."""
+    missing = [obj for obj in objects if values.uv_map not in obj.data.uv_layers]
+    if not missing:
+        return
+    if not values.create_uv:
+        names = ", ".join(repr(obj.name) for obj in missing)
+        raise BakeError(
+            f"{names} {'has' if len(missing) == 1 else 'have'} no UV map {values.uv_map!r}: "
+            "turn on Create UV Map (Lightmap Pack lays one out), add that UV map, or set UV "
+            "Map to one the objects have")
+    done = set()
+    for obj in missing:
+        if obj.data.name_full not in done:
+            create_lightmap_uv(context, obj, values.uv_map)
+            done.add(obj.data.name_full)
+
+
+def create_lightmap_uv(context, obj, name):
+    """Adds UV map `name` to the object's mesh, laid out by Lightmap Pack (each face its own
+    box in the unit square); the mesh's active UV map stays the one it was."""
+    mesh = obj.data
+    if mesh.library is not None:
+        raise BakeError(f"object {obj.name!r}: its mesh {mesh.name!r} is linked from a library "
+                        f"and cannot get a UV map {name!r}; add it in the library file")
+    previous = mesh.uv_layers.active
+    layer = mesh.uv_layers.new(name=name, do_init=False)
+    if layer is None:
+        raise BakeError(f"object {obj.name!r}: its mesh has the most UV maps Blender allows; "
+                        f"remove one or set UV Map to an existing one")
+    mesh.uv_layers.active = layer
+    with context.temp_override(active_object=obj, object=obj, selected_objects=[obj],
+                               selected_editable_objects=[obj]):
+        bpy.ops.uv.lightmap_pack(PREF_CONTEXT="ALL_FACES", PREF_PACK_IN_ONE=False,
+                                 PREF_NEW_UVLAYER=False, PREF_APPLY_IMAGE=False,
+                                 PREF_MARGIN_DIV=LIGHTMAP_PACK_MARGIN)
+    if previous is not None:
+        mesh.uv_layers.active = previous
+
+
+def bake_jobs(scene, objects, values):
+    """A shgi.bake.BakeJob per object: its instance in the exported scene (the first one
+    named after it), its name, its lightmap size."""
+    from shgi.bake import BakeJob
+
+    instances = {}
+    for index, instance in enumerate(scene.instances):
+        instances.setdefault(instance.name, index)
+    jobs = []
+    for obj in objects:
+        if obj.name not in instances:
+            raise BakeError(f"object {obj.name!r} is not in the exported scene (hidden for "
+                            "render, or without faces): make it renderable or deselect it")
+        index = instances[obj.name]
+        size = bake_settings.lightmap_size(values, scene, index)
+        jobs.append(BakeJob(instance=index, name=obj.name, width=size, height=size))
+    return jobs
+
+
+def prepare_bake(context, values, report, merge=False):
+    """The BakeRequest of a bake (or, with `merge`, of a merge of shard files) of the
+    selected objects; BakeError when it cannot run."""
+    shgi = native.module()
+    if shgi is None:
+        raise BakeError(native.error())
+    from ..engine.field_solvers import solver_recipe
+    from ..export import export_scene
+
+    if merge and values.shard_count <= 1:
+        raise BakeError("Shards is 1: there are no shard files to merge; set Shards to the "
+                        "number of shards the farm baked")
+    objects = selected_meshes(context)
+    out_dir = output_dir(values.output_folder)
+    if context.mode != "OBJECT":  # edit-mode changes reach the mesh only in object mode
+        bpy.ops.object.mode_set(mode="OBJECT")
+    prepare_uv_maps(context, objects, values)
+    scene = context.scene
+    export = export_scene(context.evaluated_depsgraph_get(), scene, report=report,
+                          for_render=True, with_camera=False)
+    if not scene_checks.emits_light(export.scene):
+        raise BakeError(NO_LIGHT_MESSAGE)
+    try:
+        jobs = bake_jobs(export.scene, objects, values)
+        options = bake_settings.bake_options(values, scene.shgi, shgi)
+        if merge:
+            return BakeRequest(export.scene, jobs, options, out_dir,
+                               merge_shards=values.shard_count)
+        recipe = None
+        if bake_settings.uses_field(values):
+            recipe = solver_recipe(_MethodOf(scene.shgi, values.source), shgi,
+                                   export.probe_volumes)
+        return BakeRequest(export.scene, jobs, options, out_dir, recipe,
+                           bake_settings.shard(values))
+    except ValueError as error:
+        raise BakeError(str(error)) from None
+
+
+class _BakeOperator:
+    """Shared body of the bake and merge operators: checks, a BakeTask, modal or waiting."""
+
+    bl_options = {"REGISTER"}
+    MERGE = False
+
+    @classmethod
+    def poll(cls, context):
+        return context.scene is not None
+
+    def execute(self, context):
+        task = self._start(context)
+        if task is None:
+            return {"CANCELLED"}
+        task.wait()
+        return self._finish(context, task)
+
+    def invoke(self, context, _event):
+        if context.window is None:  # no window to poll from (background mode): wait instead
+            return self.execute(context)
+        self._task = self._start(context)
+        if self._task is None:
+            return {"CANCELLED"}
+        window_manager = context.window_manager
+        self._timer = window_manager.event_timer_add(TIMER_SECONDS, window=context.window)
+        window_manager.progress_begin(0.0, 1.0)
+        window_manager.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def modal(self, context, event):
+        if event.type == "ESC" and event.value == "PRESS":
+            self._task.cancel()
+            return {"RUNNING_MODAL"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        self._store_finished(self._task)
+        window_manager = context.window_manager
+        if self._task.running:
+            window_manager.progress_update(self._task.fraction)
+            context.workspace.status_text_set(
+                f"SHGI bake: {self._task.stage or 'starting'} "
+                f"{100 * self._task.fraction:.0f}% (Esc cancels)")
+            return {"PASS_THROUGH"}
+        window_manager.event_timer_remove(self._timer)
+        window_manager.progress_end()
+        context.workspace.status_text_set(None)
+        return self._finish(context, self._task)
+
+    def _start(self, context):
+        """Checks and starts the bake (None, with an ERROR report, when it cannot run)."""
+        self._values = bake_values(self, context.scene)
+        self._images = []
+        self._started = time.perf_counter()
+        try:
+            request = prepare_bake(context, self._values, self.report, merge=self.MERGE)
+        except BakeError as error:
+            self.report({"ERROR"}, f"{REPORT_PREFIX}{error}")
+            return None
+        return BakeTask(native.module(), request).start()
+
+    def _store_finished(self, task):
+        """Images (and material nodes) of the lightmaps finished since the last call."""
+        values = self._values
+        for lightmap in task.take_finished():
+            image = lightmap_images.store_lightmap_image(lightmap)
+            self._images.append(image.name)
+            obj = bpy.data.objects.get(lightmap.name)
+            if values.hook_up_material and obj is not None:
+                for warning in lightmap_images.hook_up_lightmap(
+                        obj, image, values.uv_map, values.content != "FULL"):
+                    self.report({"WARNING"}, f"{REPORT_PREFIX}{warning}")
+
+    def _finish(self, _context, task):
+        self._store_finished(task)
+        if task.error is not None:
+            self.report({"ERROR"}, f"{REPORT_PREFIX}{task.error}")
+            return {"CANCELLED"}
+        if task.cancelled:
+            self.report({"WARNING"}, f"{REPORT_PREFIX}cancelled; the {len(self._images)} "
+                        "lightmaps finished before are kept")
+            return {"CANCELLED"}
+        seconds = time.perf_counter() - self._started
+        request = task.request
+        if request.shard is not None:
+            self.report({"INFO"}, f"{REPORT_PREFIX}shard {request.shard[0]} of "
+                        f"{request.shard[1]}: {len(task.results)} shard files in "
+                        f"{request.out_dir} ({seconds:.2f} s); merge them with Merge Shards")
+        else:
+            self.report({"INFO"}, f"{REPORT_PREFIX}{len(self._images)} lightmaps in "
+                        f"{request.out_dir} ({seconds:.2f} s)")
+        return {"FINISHED"}
+
+
+class SHGI_OT_bake_lightmaps(_BakeOperator, bpy.types.Operator):
+    """Bake lightmaps of the selected mesh objects into images and EXR/PNG files"""
+
+    bl_idname = "shgi.bake_lightmaps"
+    bl_label = "Bake Lightmaps"
+    __annotations__ = properties.bake_properties()
+
+
+class SHGI_OT_merge_lightmap_shards(_BakeOperator, bpy.types.Operator):
+    """Merge the shard files a farm baked for the selected objects into their lightmaps, \
+exactly as one whole bake writes them"""
+
+    bl_idname = "shgi.merge_lightmap_shards"
+    bl_label = "Merge Shards"
+    MERGE = True
+    __annotations__ = properties.bake_properties()
+
+
+class SHGI_OT_remove_lightmap_nodes(bpy.types.Operator):
+    """Remove the SHGI Lightmap nodes from the selected objects' materials, giving back the \
+surfaces they had"""
+
+    bl_idname = "shgi.remove_lightmap_nodes"
+    bl_label = "Remove Lightmap Nodes"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return bool(context.selected_objects)
+
+    def execute(self, context):
+        materials = {slot.material for obj in context.selected_objects
+                     for slot in obj.material_slots if slot.material is not None}
+        removed = sum(lightmap_images.remove_lightmap_nodes(material) for material in materials)
+        self.report({"INFO"}, f"{REPORT_PREFIX}lightmap nodes removed from {removed} materials")
+        return {"FINISHED"}
+
+
+CLASSES = (SHGI_OT_bake_lightmaps, SHGI_OT_merge_lightmap_shards, SHGI_OT_remove_lightmap_nodes)
