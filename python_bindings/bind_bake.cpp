@@ -48,6 +48,19 @@ void copy_in(const py::handle& obj, const char* name, size_t count, std::vector<
     for (size_t i = 0; i < count; ++i) out[i] = T(src[i]);
 }
 
+py::array_t<float> texel_geometry_array(const TexelMap& map, bool normals) {
+    const std::vector<TexelGeometry> geometry = texel_geometry(map);
+    py::array_t<float> out({py::ssize_t(map.height), py::ssize_t(map.width), py::ssize_t(3)});
+    float* dst = out.mutable_data();
+    for (const TexelGeometry& g : geometry) {
+        const vec3& v = normals ? g.normal : g.position;
+        *dst++ = v.x;
+        *dst++ = v.y;
+        *dst++ = v.z;
+    }
+    return out;
+}
+
 py::dict raster_report(const TexelRasterReport& r) {
     py::dict d;
     d["triangles"] = r.triangles;
@@ -90,6 +103,16 @@ The sample positions of every texel of one object's lightmap (rasterize_texels).
                 return grid_array<int32_t>(chart, map.width, map.height);
             },
             "(H, W) int32 UV chart of each texel, -1 where nothing is covered.")
+        .def_property_readonly(
+            "normals",
+            [](const TexelMap& map) { return texel_geometry_array(map, true); },
+            "(H, W, 3) float32 mean shading normal of each texel (+Z where nothing is covered): "
+            "a denoiser's normal guide.")
+        .def_property_readonly(
+            "positions",
+            [](const TexelMap& map) { return texel_geometry_array(map, false); },
+            "(H, W, 3) float32 mean world position (m) of each texel (0 where nothing is "
+            "covered).")
         .def_property_readonly("sample_count",
                                [](const TexelMap& map) { return map.samples.size(); })
         .def_property_readonly("report",

@@ -15,36 +15,30 @@ constexpr float kKernel[5] = {1.0f / 16.0f, 1.0f / 4.0f, 3.0f / 8.0f, 1.0f / 4.0
 // Keeps the luminance weight finite where the variance is 0 (a noise-free texel).
 constexpr float kLuminanceEpsilon = 1e-4f;
 
-// A texel's mean sample position, normal and texel size.
-struct TexelGeometry {
-    vec3 position{0.0f};
-    vec3 normal{0.0f};
-    float texel_size = 0.0f;
-};
+}  // namespace
 
 std::vector<TexelGeometry> texel_geometry(const TexelMap& map) {
     std::vector<TexelGeometry> out(map.texel_count());
     for (uint64_t t = 0; t < map.texel_count(); ++t) {
         double weight = 0.0;
-        TexelGeometry g;
+        vec3 position(0.0f), normal(0.0f);
+        float texel_size = 0.0f;
         for (const TexelSample* s = map.samples_begin(t); s != map.samples_end(t); ++s) {
-            g.position += s->position * s->weight;
-            g.normal += s->normal * s->weight;
-            g.texel_size += s->texel_size * s->weight;
+            position += s->position * s->weight;
+            normal += s->normal * s->weight;
+            texel_size += s->texel_size * s->weight;
             weight += s->weight;
         }
         if (weight > 0.0) {
-            g.position /= float(weight);
-            g.texel_size /= float(weight);
-            const float length = glm::length(g.normal);
-            g.normal = length > 0.0f ? g.normal / length : vec3(0.0f, 0.0f, 1.0f);
+            TexelGeometry& g = out[t];
+            g.position = position / float(weight);
+            g.texel_size = texel_size / float(weight);
+            const float length = glm::length(normal);
+            if (length > 0.0f) g.normal = normal / length;
         }
-        out[t] = g;
     }
     return out;
 }
-
-}  // namespace
 
 void validate_lightmap_filter_settings(const LightmapFilterSettings& s) {
     if (s.iterations > 10)

@@ -29,6 +29,15 @@
 
 namespace shgi {
 
+// A texel's samples averaged by weight: position (m), unit normal and texel size (m); zero
+// position and +Z normal where nothing is covered.
+struct TexelGeometry {
+    vec3 position{0.0f};
+    vec3 normal{0.0f, 0.0f, 1.0f};
+    float texel_size = 0.0f;
+};
+std::vector<TexelGeometry> texel_geometry(const TexelMap& map);
+
 struct LightmapFilterSettings {
     // A-trous passes, 0 = off; k passes span 4 * 2^k - 3 texels. Two keep the light's own
     // gradients (a blur is a bias where the light changes within a few texels).

@@ -2121,6 +2121,16 @@ class TexelMap:
     def instance_id(self) -> int:
         ...
     @property
+    def normals(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (H, W, 3) float32 mean shading normal of each texel (+Z where nothing is covered): a denoiser's normal guide.
+        """
+    @property
+    def positions(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (H, W, 3) float32 mean world position (m) of each texel (0 where nothing is covered).
+        """
+    @property
     def report(self) -> dict:
         """
         What rasterizing skipped or clipped (dict of counts).
