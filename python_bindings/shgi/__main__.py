@@ -20,10 +20,34 @@ def _shard(text: str):
     try:
         i, n = (int(part) for part in text.split("/"))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"--shard {text!r}: use i/N, e.g. 0/4")
+        raise argparse.ArgumentTypeError(f"{text!r}: use i/N, e.g. 0/4") from None
     if not (n >= 1 and 0 <= i < n):
-        raise argparse.ArgumentTypeError(f"--shard {text}: need N >= 1 and 0 <= i < N")
+        raise argparse.ArgumentTypeError(f"{text!r}: need N >= 1 and 0 <= i < N")
     return i, n
+
+
+def _whole(minimum: int):
+    """argparse type: an int >= minimum."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"{value} is less than {minimum}")
+        return value
+    return parse
+
+
+def _positive(text: str) -> float:
+    """argparse type: a finite float > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (value > 0.0 and value != float("inf")):
+        raise argparse.ArgumentTypeError(f"{text} is not a positive number")
+    return value
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -38,23 +62,22 @@ def _parser() -> argparse.ArgumentParser:
     bake.add_argument("--objects", default=None,
                       help="comma-separated object names (default: every object with the UV map)")
     size = bake.add_mutually_exclusive_group()
-    size.add_argument("--resolution", type=int, default=0, help="texels per side (256)")
-    size.add_argument("--density", type=float, default=0.0, help="texels per metre")
-    bake.add_argument("--samples", type=int, default=256, help="samples per texel (256)")
+    size.add_argument("--resolution", type=_whole(1), default=0, help="texels per side (256)")
+    size.add_argument("--density", type=_positive, default=0.0, help="texels per metre")
+    bake.add_argument("--samples", type=_whole(1), default=256, help="samples per texel (256)")
     bake.add_argument("--content", default="DIRECT_INDIRECT",
                       choices=["DIRECT_INDIRECT", "DIRECT", "INDIRECT", "FULL"])
-    bake.add_argument("--method", default="PATH_TRACER",
-                      choices=["PATH_TRACER", "PHOTON_LATTICE", "PROBE_GRID"],
+    bake.add_argument("--method", default="PATH_TRACER", choices=_bake.SOURCES,
                       help="source of indirect light (PATH_TRACER: ground truth)")
     bake.add_argument("--directional", action="store_true", help="also write L1 SH layers")
     bake.add_argument("--filter", action="store_true", help="edge-aware denoising filter")
-    bake.add_argument("--padding", type=int, default=4, help="dilation texels (4)")
-    bake.add_argument("--seed", type=int, default=0)
-    bake.add_argument("--threads", type=int, default=0, help="0: all cores")
+    bake.add_argument("--padding", type=_whole(0), default=4, help="dilation texels (4)")
+    bake.add_argument("--seed", type=_whole(0), default=0)
+    bake.add_argument("--threads", type=_whole(0), default=0, help="0: all cores")
     farm = bake.add_mutually_exclusive_group()
     farm.add_argument("--shard", type=_shard, default=None,
                       help="bake only shard i of N (i/N) into OUT/shards")
-    farm.add_argument("--merge", type=int, default=0, metavar="N",
+    farm.add_argument("--merge", type=_whole(1), default=0, metavar="N",
                       help="merge the N shard files in OUT/shards into the lightmaps")
     bake.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser
@@ -74,11 +97,14 @@ def _load(path: str):
 
 
 def _uv_set(scene, requested):
-    if requested:
-        return requested
     names = set()
     for mesh in scene.meshes:
         names.update(mesh.uv_sets)
+    if requested:
+        if requested not in names:
+            raise ValueError(f"no mesh has the UV map '{requested}'; the scene has "
+                             f"{sorted(names) or 'no UV maps'}")
+        return requested
     for candidate in ("LightmapUV", "UVMap.001"):
         if candidate in names:
             return candidate
@@ -87,25 +113,13 @@ def _uv_set(scene, requested):
                      "--uv-set NAME")
 
 
-def _field(scene, method: str, seed: int, progress):
-    if method == "PATH_TRACER":
-        return None
-    if method == "PHOTON_LATTICE":
-        lattice = _shgi.PhotonLattice(scene, _shgi.PhotonLatticeSettings(seed=seed))
-        lattice.solve(progress.native(0.0, 0.0, "photon lattice"))
-        return lattice
-    grid = _shgi.ProbeGrid(scene, _shgi.ProbeGridSettings(seed=seed),
-                           progress.native(0.0, 0.0, "probe grid"))
-    for _ in range(8):
-        grid.update(progress.native(0.0, 0.0, "probe grid"))
-    return grid.field()
-
-
 class _Bar:
     """A one-line progress bar on stderr, redrawn at most 10 times a second."""
 
     def __init__(self, enabled: bool):
-        self.enabled = enabled and sys.stderr.isatty() or enabled and "SHGI_PROGRESS" in os.environ
+        # On a terminal, or where SHGI_PROGRESS=1 asks for it (a farm's log, a test).
+        forced = os.environ.get("SHGI_PROGRESS", "0") not in ("", "0")
+        self.enabled = enabled and (sys.stderr.isatty() or forced)
         self.last = 0.0
 
     def __call__(self, fraction: float, stage: str) -> None:
@@ -123,12 +137,12 @@ class _Bar:
             sys.stderr.write("\n")
 
 
-def _bake(args) -> int:
+def _bake_command(args) -> int:
     if args.threads:
         _shgi.set_max_threads(args.threads)
     scene = _load(args.scene)
     uv_set = _uv_set(scene, args.uv_set)
-    names = [n.strip() for n in args.objects.split(",")] if args.objects else None
+    names = [n.strip() for n in args.objects.split(",") if n.strip()] if args.objects else None
     jobs = _bake.jobs_for_scene(scene, uv_set, args.resolution, args.density, names)
     settings = _shgi.LightmapSettings(samples=args.samples, content=args.content,
                                       directional=args.directional, seed=args.seed)
@@ -136,36 +150,24 @@ def _bake(args) -> int:
                                 padding=args.padding)
     bar = _Bar(not args.quiet)
     progress = _bake.BakeProgress(bar)
-    result = {}
 
     def work():
-        try:
-            if args.merge:
-                result["value"] = _bake.merge_shards(scene, jobs, options, args.out, args.merge,
-                                                     progress)
-            else:
-                field = _field(scene, args.method, args.seed, progress)
-                result["value"] = _bake.bake_scene(scene, jobs, options, args.out, field,
-                                                   args.shard, progress)
-        except BaseException as error:  # handed to the main thread
-            result["error"] = error
+        if args.merge:
+            return _bake.merge_shards(scene, jobs, options, args.out, args.merge, progress)
+        field = _bake.solve_field(scene, args.method, args.seed, progress)
+        return _bake.bake_scene(scene, jobs, options, args.out, field, args.shard, progress)
 
-    # The bake runs on a worker so that Ctrl-C on the main thread can cancel it.
-    worker = threading.Thread(target=work, name="shgi-bake")
-    worker.start()
+    interrupted = False
     try:
-        while worker.is_alive():
-            worker.join(0.1)
+        results = _run_on_worker(work, progress)
     except KeyboardInterrupt:
-        progress.cancel()
-        worker.join()
-        bar.done()
+        interrupted = True
+    finally:
+        bar.done()  # ends the bar's line before anything else is printed
+    if interrupted:
         print("cancelled", file=sys.stderr)
         return 130
-    bar.done()
-    if "error" in result:
-        raise result["error"]
-    for item in result["value"]:
+    for item in results:
         if isinstance(item, str):
             print(item)
         else:
@@ -173,10 +175,48 @@ def _bake(args) -> int:
     return 0
 
 
+def _run_on_worker(work, progress):
+    """Runs work() on a worker thread, so that Ctrl-C on the main thread can cancel it through
+    `progress`; returns what work() returned or raises what it raised. After a Ctrl-C, waits
+    until the cancelled work has stopped and raises KeyboardInterrupt."""
+    outcome = {}
+    finished = threading.Event()
+
+    def run():
+        try:
+            outcome["value"] = work()
+        except BaseException as error:  # handed to the main thread
+            outcome["error"] = error
+        finally:
+            finished.set()
+
+    worker = threading.Thread(target=run, name="shgi-bake")
+    worker.start()
+    # Event.wait, not Thread.join(timeout): in Python 3.11 a KeyboardInterrupt landing inside
+    # join() marks the thread as stopped while it still runs; the interpreter then exits under
+    # a running bake and the process aborts (std::terminate).
+    try:
+        while not finished.wait(0.1):
+            pass
+    except KeyboardInterrupt:
+        progress.cancel()
+        while not finished.is_set():
+            try:
+                finished.wait()
+            except KeyboardInterrupt:  # another Ctrl-C: the cancel is already on its way
+                pass
+        worker.join()
+        raise
+    worker.join()
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome["value"]
+
+
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     try:
-        return _bake(args)
+        return _bake_command(args)
     except _shgi.Cancelled:
         print("cancelled", file=sys.stderr)
         return 130

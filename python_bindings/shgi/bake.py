@@ -22,17 +22,21 @@ Files (rows top first, as EXR and PNG store them; in memory row 0 is v = 0):
     an 8-bit sRGB preview of ``Lightmap`` (clamped to [0, 1]).
 
 Shards: ``shard=(i, n)`` bakes every tile whose index, counted over all objects in order, is
-i modulo n, and saves the raw texels as ``<out>/shards/<name>.shard-<i>-of-<n>.npz``;
-``merge_shards`` reads every shard of every object, merges and finishes them. Texels depend only
-on the seed, the object and the texel, so the merged files are byte-identical to a single bake.
+i modulo n, and saves the raw texels as ``<out>/shards/<name>.shard-<i>-of-<n>.npz`` together
+with what decides their values (size, UV map, LightmapSettings, source of indirect light);
+``merge_shards`` reads every shard of every object, checks that they were baked alike, merges and
+finishes them. Texels depend only on the seed, the object and the texel, so the merged files are
+byte-identical to a single bake.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import os
 import re
+import zipfile
 from typing import Callable, Iterable, Optional, Sequence
 
 import numpy as np
@@ -51,9 +55,31 @@ __all__ = [
     "bake_scene",
     "merge_shards",
     "shard_path",
+    "jobs_for_scene",
+    "solve_field",
+    "SOURCES",
 ]
 
 SH_LAYERS = ("SH.c0", "SH.c1", "SH.c2", "SH.c3")
+# Lightmap sides chosen from a texel density are clamped to this range (texels).
+MIN_RESOLUTION, MAX_RESOLUTION = 16, 4096
+
+# Shares of one object's progress: rasterizing its UV map and unoccluding the samples are quick
+# next to baking the texels; filtering, dilation and writing the files take the rest.
+_RASTER_SHARE = 0.05
+_FINISH_SHARE = 0.1
+
+# Where the indirect light of a bake comes from (the CLI's --method, the add-on's source).
+SOURCES = ("PATH_TRACER", "PHOTON_LATTICE", "PROBE_GRID")
+# Update passes of a PROBE_GRID source before baking: the grid keeps the exact running mean of
+# its passes this early (hysteresis blending starts later, probes/probe_grid.h).
+PROBE_GRID_PASSES = 8
+
+# Version of the shard file layout (the arrays and the "meta" JSON below).
+_SHARD_FORMAT = 1
+# The LightmapSettings fields that decide a texel's value: every shard of a bake must agree.
+_SHARD_SETTINGS = ("content", "samples", "seed", "directional", "max_bounces", "diffuse_bounces",
+                   "glossy_bounces", "transmission_bounces", "clamp_indirect", "tile_size")
 
 
 @dataclasses.dataclass
@@ -128,7 +154,7 @@ class BakeProgress:
 
         def report(fraction: float, stage: str) -> None:
             self.fraction = lo + (hi - lo) * fraction
-            self.stage = f"{label}: {stage}"
+            self.stage = f"{label}: {stage}" if stage else label
             if self.callback is not None:
                 self.callback(self.fraction, self.stage)
 
@@ -137,18 +163,33 @@ class BakeProgress:
             self._current.cancel()
         return self._current
 
+    def stages(self, lo: float, hi: float, label: str) -> Callable[[float, float], _shgi.Progress]:
+        """For one object that owns [lo, hi] of the bake: stage(a, b) is the native Progress of
+        the step that owns [a, b] of the object's own [0, 1]."""
+        return lambda a, b: self.native(lo + a * (hi - lo), lo + b * (hi - lo), label)
+
+    def done(self) -> None:
+        """Reports the end of the whole bake (fraction 1)."""
+        self.fraction, self.stage = 1.0, "done"
+        if self.callback is not None:
+            self.callback(self.fraction, self.stage)
+
 
 def resolution_for_density(scene: _shgi.Scene, instance: int, texels_per_metre: float,
-                           minimum: int = 16, maximum: int = 4096) -> int:
+                           minimum: int = MIN_RESOLUTION, maximum: int = MAX_RESOLUTION) -> int:
     """Square lightmap size giving about `texels_per_metre` on the object's surface.
 
     The UV layout is assumed to use about half of the square (lightmap packs with margins
     reach 0.5-0.8), so the side is sqrt(2 * area) * density, rounded up to a multiple of 4.
     """
+    inst = scene.instances[instance]
+    return _side_for_density(scene.meshes[inst.mesh_id], inst, texels_per_metre, minimum,
+                             maximum)
+
+
+def _side_for_density(mesh, inst, texels_per_metre: float, minimum: int, maximum: int) -> int:
     if not (texels_per_metre > 0.0 and math.isfinite(texels_per_metre)):
         raise ValueError(f"texels_per_metre must be positive, got {texels_per_metre}")
-    inst = scene.instances[instance]
-    mesh = scene.meshes[inst.mesh_id]
     m = np.asarray(inst.world_from_object, dtype=np.float64)
     p = np.asarray(mesh.positions, dtype=np.float64) @ m[:3, :3].T + m[:3, 3]
     t = np.asarray(mesh.triangles, dtype=np.int64)
@@ -178,16 +219,26 @@ def _texel_map(scene, job: BakeJob, options: BakeOptions, progress) -> _shgi.Tex
 
 def bake_object(scene, job: BakeJob, options: BakeOptions, field=None, tiles: Sequence[int] = (),
                 progress=None):
-    """Rasterizes and bakes one object; returns (TexelMap, raw LightmapTexels)."""
-    texel_map = _texel_map(scene, job, options, progress)
-    texels = _shgi.bake_lightmap(scene, texel_map, options.settings, field, list(tiles), progress)
+    """Rasterizes and bakes one object (`tiles` only, all when empty); returns (TexelMap, raw
+    LightmapTexels). `progress`: a native shgi.Progress, reused by every step."""
+    return _bake_object(scene, job, options, field, tiles, lambda a, b: progress, 1.0)
+
+
+def _bake_object(scene, job, options, field, tiles, stage, bake_end):
+    """bake_object with stage(a, b) (BakeProgress.stages) giving each step its share, the bake
+    ending at `bake_end` of the object's progress."""
+    texel_map = _texel_map(scene, job, options, stage(0.0, _RASTER_SHARE))
+    texels = _shgi.bake_lightmap(scene, texel_map, options.settings, field, list(tiles),
+                                 stage(_RASTER_SHARE, bake_end))
     return texel_map, texels
 
 
 def finish(texel_map, texels, options: BakeOptions, name: str, progress=None) -> Lightmap:
-    """Filters (optional) and dilates a complete bake into a Lightmap."""
+    """Filters (optional) and dilates a complete bake into a Lightmap. `progress` (a native
+    shgi.Progress) counts the filter when there is one (dilation is quick), else dilation."""
     if options.filter:
         _shgi.filter_lightmap(texel_map, texels, options.filter_settings, progress)
+        progress = None
     filled = _shgi.dilate_lightmap(texels, options.padding, progress)
     return Lightmap(name=name, color=texels.color, variance=texels.variance,
                     coverage=texel_map.coverage, filled=filled, sh=texels.sh,
@@ -198,23 +249,27 @@ def write_lightmap(lightmap: Lightmap, out_dir: str, options: BakeOptions) -> li
     """Writes <name>.exr (and <name>.png); returns the paths."""
     os.makedirs(out_dir, exist_ok=True)
     stem = os.path.join(out_dir, _file_name(lightmap.name))
-    flip = lambda a: np.ascontiguousarray(a[::-1])  # noqa: E731  (row 0 = v 0 -> top row first)
     layers = {
-        "Lightmap": flip(lightmap.color).astype(np.float16),
-        "Variance": flip(lightmap.variance).astype(np.float32),
-        "Coverage": flip(lightmap.coverage).astype(np.float32),
+        "Lightmap": _top_row_first(lightmap.color).astype(np.float16),
+        "Variance": _top_row_first(lightmap.variance).astype(np.float32),
+        "Coverage": _top_row_first(lightmap.coverage).astype(np.float32),
     }
     names = {"Variance": "V", "Coverage": "V"}
     if lightmap.sh is not None:
         for c, layer in enumerate(SH_LAYERS):
-            layers[layer] = flip(lightmap.sh[:, :, c, :]).astype(np.float32)
+            layers[layer] = _top_row_first(lightmap.sh[:, :, c, :]).astype(np.float32)
     paths = [stem + ".exr"]
     _shgi.write_exr(paths[0], layers, channel_names=names)
     if options.png:
         paths.append(stem + ".png")
-        _shgi.write_png(paths[1], flip(lightmap.color), exposure=options.exposure)
+        _shgi.write_png(paths[1], _top_row_first(lightmap.color), exposure=options.exposure)
     lightmap.paths = paths
     return paths
+
+
+def _top_row_first(array: np.ndarray) -> np.ndarray:
+    """Rows of an in-memory lightmap (row 0 at v = 0) in the order files store them."""
+    return np.ascontiguousarray(array[::-1])
 
 
 def _file_name(name: str) -> str:
@@ -254,10 +309,24 @@ def _check_jobs(scene, jobs: Sequence[BakeJob]) -> None:
         if not 0 <= job.instance < count:
             raise ValueError(f"object '{job.name}': instance {job.instance} is not in the scene "
                              f"({count} instances)")
-    if not scene.lights and max(scene.world.color) * scene.world.strength <= 0.0 and not any(
+    # A portal only guides the sampling of the world: it emits nothing of its own.
+    lamps = [light for light in scene.lights if not light.portal]
+    world = scene.world
+    if not lamps and max(world.color) * world.strength <= 0.0 and not any(
             m.is_emissive() for m in scene.materials):
         raise ValueError("the scene has no light (no lamp, no emissive material, a black world): "
                          "a bake would be black; add a light")
+
+
+def _spans(weights: Sequence[float]) -> list:
+    """Each job's [lo, hi] of the whole bake's progress, in proportion to its weight."""
+    total = float(sum(weights)) or 1.0
+    spans, lo = [], 0.0
+    for weight in weights:
+        hi = lo + weight / total
+        spans.append((lo, min(hi, 1.0)))
+        lo = hi
+    return spans
 
 
 def bake_scene(scene, jobs: Sequence[BakeJob], options: BakeOptions, out_dir: str, field=None,
@@ -266,32 +335,46 @@ def bake_scene(scene, jobs: Sequence[BakeJob], options: BakeOptions, out_dir: st
     """Bakes every job into out_dir. Without a shard: finishes and writes each lightmap and
     returns the Lightmaps (on_lightmap(lightmap) is called as each one completes, so a
     cancelled bake keeps what finished). With shard=(i, n): writes raw shard files and returns
-    their paths."""
+    their paths. `field`: None for the path tracer, else the IndirectField giving the indirect
+    light (every shard of a bake must use the same)."""
     _check_jobs(scene, jobs)
     options.settings.validate()
+    _check_padding(options)
     progress = progress or BakeProgress()
-    count = len(jobs)
-    tiles = _shard_tiles(jobs, options, *shard) if shard else [[] for _ in jobs]
+    if shard:
+        tiles = _shard_tiles(jobs, options, *shard)
+        weights = [len(t) for t in tiles]
+    else:
+        tiles = [[] for _ in jobs]  # every tile
+        weights = [job.width * job.height for job in jobs]
     results = []
-    for k, job in enumerate(jobs):
-        native = progress.native(k / count, (k + 1) / count, job.name)
-        if shard and not tiles[k]:
-            # Nothing of this object in this shard: an empty shard file keeps merging simple.
-            texels = _empty_texels(job, options)
-        else:
-            texel_map, texels = bake_object(scene, job, options, field, tiles[k], native)
+    for job, job_tiles, (lo, hi) in zip(jobs, tiles, _spans(weights)):
+        stage = progress.stages(lo, hi, job.name)
         if shard:
+            if job_tiles:
+                _, texels = _bake_object(scene, job, options, field, job_tiles, stage, 1.0)
+            else:
+                # Nothing of this object in this shard: an empty shard file keeps merging simple.
+                texels = _empty_texels(job, options)
             path = shard_path(out_dir, job.name, *shard)
-            _save_shard(path, texels)
+            meta = _shard_meta(jobs, job, options, *shard, _source_name(field))
+            _save_shard(path, texels, meta)
             results.append(path)
             continue
-        lightmap = finish(texel_map, texels, options, job.name, native)
+        texel_map, texels = _bake_object(scene, job, options, field, (), stage,
+                                         1.0 - _FINISH_SHARE)
+        lightmap = finish(texel_map, texels, options, job.name, stage(1.0 - _FINISH_SHARE, 1.0))
         write_lightmap(lightmap, out_dir, options)
         results.append(lightmap)
         if on_lightmap is not None:
             on_lightmap(lightmap)
-    progress.fraction = 1.0
+    progress.done()
     return results
+
+
+def _check_padding(options: BakeOptions) -> None:
+    if not (isinstance(options.padding, int) and options.padding >= 0):
+        raise ValueError(f"padding must be a whole number of texels >= 0, got {options.padding!r}")
 
 
 def _empty_texels(job: BakeJob, options: BakeOptions) -> _shgi.LightmapTexels:
@@ -301,47 +384,130 @@ def _empty_texels(job: BakeJob, options: BakeOptions) -> _shgi.LightmapTexels:
                                 np.zeros((h, w), bool), sh)
 
 
-def _save_shard(path: str, texels) -> None:
+def _source_name(field) -> str:
+    """What gave the indirect light: PATH_TRACER, or the field's type (PhotonLattice, ...)."""
+    return "PATH_TRACER" if field is None else type(field).__name__
+
+
+def _shard_meta(jobs: Sequence[BakeJob], job: BakeJob, options: BakeOptions, shard: int,
+                shards: int, source: Optional[str]) -> dict:
+    """Everything that decides a shard's texels, saved with them and checked when merging:
+    also every object of the bake and its size, since they decide which tiles a shard bakes.
+    `source` None: not known (a merge does not bake; it checks the shards agree)."""
+    settings = options.settings
+    return {
+        "format": _SHARD_FORMAT, "object": job.name, "width": job.width, "height": job.height,
+        "objects": [[other.name, other.width, other.height] for other in jobs],
+        "shard": shard, "shards": shards, "uv_set": options.uv_set,
+        "samples_per_axis": options.samples_per_axis, "unocclude": options.unocclude,
+        "source": source,
+        "settings": {name: getattr(settings, name) for name in _SHARD_SETTINGS},
+    }
+
+
+def _save_shard(path: str, texels, meta: dict) -> None:
     os.makedirs(os.path.dirname(path), exist_ok=True)
-    arrays = {"color": texels.color, "variance": texels.variance, "baked": texels.baked}
+    arrays = {"color": texels.color, "variance": texels.variance, "baked": texels.baked,
+              "meta": np.array(json.dumps(meta, sort_keys=True))}
     if texels.directional:
         arrays["sh"] = texels.sh
+    # Written under another name and renamed, so a shard killed mid-write leaves no file that
+    # looks complete.
     temp = path + ".partial.npz"
     np.savez(temp, **arrays)
     os.replace(temp, path)
 
 
-def _load_shard(path: str) -> _shgi.LightmapTexels:
+def _load_shard(path: str):
+    """(LightmapTexels, meta dict) of a shard file; OSError naming it when missing or damaged."""
     try:
         with np.load(path) as data:
-            return _shgi.LightmapTexels(data["color"], data["variance"], data["baked"],
-                                        data["sh"] if "sh" in data else None)
-    except (OSError, KeyError, ValueError) as error:
+            meta = json.loads(str(data["meta"]))
+            texels = _shgi.LightmapTexels(data["color"], data["variance"], data["baked"],
+                                          data["sh"] if "sh" in data else None)
+    except (OSError, KeyError, ValueError, zipfile.BadZipFile) as error:
         raise OSError(f"shard file {path} is missing or damaged ({error}); bake that shard "
                       "again") from error
+    return texels, meta
+
+
+def _check_shard_meta(path: str, meta: dict, expected: dict) -> None:
+    """Raises ValueError naming the shard file and what differs from this merge's settings."""
+    if meta.get("format") != _SHARD_FORMAT:
+        raise ValueError(f"shard file {path} has layout {meta.get('format')}, this version of "
+                         f"shgi reads {_SHARD_FORMAT}; bake the shards again")
+    # "source" is not compared: a merge bakes nothing; the shards must agree among themselves.
+    differences = [f"{key} {meta.get(key)!r} (merge: {value!r})"
+                   for key, value in expected.items()
+                   if key not in ("settings", "source") and meta.get(key) != value]
+    settings = meta.get("settings") or {}
+    differences += [f"{key} {settings.get(key)!r} (merge: {value!r})"
+                    for key, value in sorted(expected["settings"].items())
+                    if settings.get(key) != value]
+    if differences:
+        raise ValueError(f"shard file {path} was baked with {', '.join(differences)}; bake every "
+                         "shard and merge with the same objects, resolution and settings")
 
 
 def merge_shards(scene, jobs: Sequence[BakeJob], options: BakeOptions, out_dir: str,
                  shards: int, progress: Optional[BakeProgress] = None) -> list:
     """Merges the shard files of `shards` shards in out_dir/shards and writes the lightmaps
-    exactly as a single bake would."""
+    exactly as a single bake would. Raises OSError naming a missing or damaged shard file and
+    ValueError when a file was baked with other settings or shards overlap."""
     _check_jobs(scene, jobs)
+    if not (isinstance(shards, int) and shards >= 1):
+        raise ValueError(f"shards must be a whole number >= 1, got {shards!r}")
+    options.settings.validate()
+    _check_padding(options)
     progress = progress or BakeProgress()
     results = []
-    for k, job in enumerate(jobs):
-        native = progress.native(k / len(jobs), (k + 1) / len(jobs), job.name)
+    spans = _spans([job.width * job.height for job in jobs])
+    for job, (lo, hi) in zip(jobs, spans):
+        stage = progress.stages(lo, hi, job.name)
         merged = _empty_texels(job, options)
+        sources = {}
         for i in range(shards):
-            _shgi.merge_lightmap(merged, _load_shard(shard_path(out_dir, job.name, i, shards)))
-        texel_map = _texel_map(scene, job, options, native)
+            path = shard_path(out_dir, job.name, i, shards)
+            part, meta = _load_shard(path)
+            _check_shard_meta(path, meta, _shard_meta(jobs, job, options, i, shards, None))
+            sources.setdefault(meta["source"], path)
+            if len(sources) > 1:
+                raise ValueError(f"shard files {' and '.join(sources.values())} took their "
+                                 f"indirect light from different sources ({', '.join(sources)})")
+            try:
+                _shgi.merge_lightmap(merged, part)
+            except ValueError as error:
+                raise ValueError(f"shard file {path}: {error}") from error
+        texel_map = _texel_map(scene, job, options, stage(0.0, _RASTER_SHARE))
         missing = int(((texel_map.coverage > 0) & ~merged.baked).sum())
         if missing:
             raise ValueError(f"object '{job.name}': {missing} texels are in no shard file; were "
                              f"all {shards} shards baked with the same settings?")
-        lightmap = finish(texel_map, merged, options, job.name, native)
+        lightmap = finish(texel_map, merged, options, job.name, stage(_RASTER_SHARE, 1.0))
         write_lightmap(lightmap, out_dir, options)
         results.append(lightmap)
+    progress.done()
     return results
+
+
+def solve_field(scene, source: str, seed: int = 0, progress: Optional[BakeProgress] = None):
+    """The IndirectField a bake takes its indirect light from: None for PATH_TRACER, else a
+    photon lattice or probe grid of the (committed) scene solved with default settings and
+    `seed`. The solve owns no share of `progress` (its bar waits); cancel works."""
+    if source not in SOURCES:
+        raise ValueError(f"source {source!r}: use one of {', '.join(SOURCES)}")
+    if source == "PATH_TRACER":
+        return None
+    progress = progress or BakeProgress()
+    if source == "PHOTON_LATTICE":
+        lattice = _shgi.PhotonLattice(scene, _shgi.PhotonLatticeSettings(seed=seed))
+        lattice.solve(progress.native(0.0, 0.0, "photon lattice"))
+        return lattice
+    grid = _shgi.ProbeGrid(scene, _shgi.ProbeGridSettings(seed=seed),
+                           progress.native(0.0, 0.0, "probe grid"))
+    for _ in range(PROBE_GRID_PASSES):
+        grid.update(progress.native(0.0, 0.0, "probe grid"))
+    return grid.field()
 
 
 def jobs_for_scene(scene, uv_set: str, resolution: int = 0, texels_per_metre: float = 0.0,
@@ -365,9 +531,10 @@ def jobs_for_scene(scene, uv_set: str, resolution: int = 0, texels_per_metre: fl
         if resolution > 0:
             size = resolution
         elif texels_per_metre > 0:
-            size = resolution_for_density(scene, index, texels_per_metre)
+            size = _side_for_density(meshes[inst.mesh_id], inst, texels_per_metre,
+                                     MIN_RESOLUTION, MAX_RESOLUTION)
         else:
-            size = 256
+            size = BakeJob.width
         jobs.append(BakeJob(instance=index, name=name, width=size, height=size))
     if missing:
         raise ValueError(f"no UV map '{uv_set}' on {', '.join(missing)}: add one or choose "

@@ -1,0 +1,583 @@
+"""Tests of shgi.bake (lightmaps to files, shards, merging) and of ``python -m shgi bake``.
+
+Ground truth first: a Lambert plane under a uniform world bakes to the world's radiance exactly
+(native/bake/lightmap_baker.h: the texel holds E / pi). The file layout is checked against the
+in-memory lightmap (rows flipped to top-first), shard bakes against the single bake byte for
+byte (DESIGN.md, determinism), and every error against the message a user would read.
+Sizes and sample counts are small: the whole file runs in well under a minute on two cores.
+"""
+
+import base64
+import dataclasses
+import json
+import math
+import os
+import re
+import shutil
+import signal
+import struct
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import shgi
+from shgi import bake
+from blender_support import REPO_ROOT
+from test_io import decode_png
+
+sys.path.insert(0, str(REPO_ROOT / "examples"))
+import scenes  # noqa: E402  (examples/scenes.py, the project's test scenes)
+
+# Radiance of the uniform world in the physical checks (W m^-2 sr^-1): colour x strength.
+WORLD_COLOR, WORLD_STRENGTH = (0.2, 0.4, 0.8), 2.0
+WORLD_RADIANCE = np.array(WORLD_COLOR) * WORLD_STRENGTH
+ALBEDO = (0.5, 0.6, 0.7)
+# With a Lambert lobe and cosine-distributed hemisphere rays, next-event estimation of a uniform
+# world and the hemisphere ray both return L for every sample (f cos / pdf = 1): the bake is
+# exact up to float32 round-off in the sums. (The Principled BSDF's Burley diffuse is not: its
+# retro-reflection gives an albedo of about 1.006 at roughness 0.5, as in Cycles.)
+ROUND_OFF = 1e-5
+# A statistical check passes when the estimate lies within this many standard errors of the
+# truth: an unbiased estimator fails it about once in 1.7 million seeds.
+STANDARD_ERRORS = 5.0
+# Real SH basis constants (shgi.sh conventions): Y00 and the factor of the l = 1 functions.
+Y00, Y1 = 0.282095, 0.488603
+# Lightmap half-float layers hold about 3 significant digits.
+HALF = np.float16
+
+SMALL_SETTINGS = dict(samples=8, seed=3)
+
+
+def plane_scene(uvs=None, world=(WORLD_COLOR, WORLD_STRENGTH), lights=()):
+    """A 2 x 2 m Lambert plane at z = 0 facing +Z whose LightmapUV maps (x, y) to
+    ((x+1)/2, (y+1)/2) (or `uvs`), under a uniform world, committed."""
+    scene = shgi.Scene()
+    material = scene.add_material(shgi.Material(name="paint", base_color=ALBEDO,
+                                                diffuse_model=shgi.DiffuseModel.LAMBERT))
+    positions = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float32)
+    if uvs is None:
+        uvs = (positions[:, :2] + 1.0) / 2.0
+    mesh = scene.add_mesh(positions=positions, triangles=np.array([[0, 1, 2], [0, 2, 3]]),
+                          name="plane", uvs={"LightmapUV": np.asarray(uvs, np.float32)},
+                          material_indices=np.full(2, material))
+    scene.add_instance(mesh, np.eye(4), "plane")
+    color, strength = world
+    scene.set_world(shgi.World(color=color, strength=strength))
+    for light in lights:
+        scene.add_light(light)
+    scene.commit()
+    return scene
+
+
+def point_light(x, y, z, power):
+    light = shgi.Light(name="lamp", type=shgi.LightType.POINT, power=power, radius=0.0)
+    light.world_from_light = np.array([[1, 0, 0, x], [0, 1, 0, y], [0, 0, 1, z], [0, 0, 0, 1]],
+                                      np.float32)
+    return light
+
+
+def options(**settings):
+    return bake.BakeOptions(settings=shgi.LightmapSettings(**{**SMALL_SETTINGS, **settings}))
+
+
+def plane_job(size=8):
+    return bake.BakeJob(instance=0, name="plane", width=size, height=size)
+
+
+def written_files(folder):
+    """{file name: bytes} of the lightmaps (EXR, PNG) in a folder."""
+    return {name: (folder / name).read_bytes() for name in sorted(os.listdir(folder))
+            if name.endswith((".exr", ".png"))}
+
+
+# --- the physics: a plane under a uniform world ---------------------------------------------------
+
+@pytest.mark.parametrize("content, expected", [
+    ("DIRECT_INDIRECT", WORLD_RADIANCE),
+    ("DIRECT", WORLD_RADIANCE),
+    ("INDIRECT", np.zeros(3)),  # nothing for the world's light to scatter from
+    ("FULL", np.array(ALBEDO) * WORLD_RADIANCE),  # Cycles' COLOR times the light
+])
+def test_plane_under_a_uniform_world_bakes_to_its_radiance(tmp_path, content, expected):
+    scene = plane_scene()
+    [lightmap] = bake.bake_scene(scene, [plane_job()], options(content=content), str(tmp_path))
+    color = lightmap.color.reshape(-1, 3)
+    np.testing.assert_allclose(color, np.broadcast_to(expected, color.shape), rtol=ROUND_OFF,
+                               atol=ROUND_OFF)
+    # What the file holds is the same light, to half precision.
+    stored = shgi.read_exr(tmp_path / "plane.exr")["Lightmap"].reshape(-1, 3)
+    np.testing.assert_array_equal(stored, color.astype(HALF).astype(np.float32))
+
+
+def test_directional_sh_of_a_uniform_world_over_the_upper_hemisphere():
+    """The L1 SH of radiance L over the hemisphere z > 0: c0 = L Y00 2 pi, c2 (z) = L Y1 pi,
+    c1 (y) = c3 (x) = 0. Directional bakes sample the hemisphere uniformly, so the texels scatter
+    around these values; their mean must lie within STANDARD_ERRORS of them."""
+    scene = plane_scene()
+    _, texels = bake.bake_object(scene, plane_job(), options(samples=256, directional=True))
+    sh = texels.sh.reshape(-1, 4, 3) / WORLD_RADIANCE  # per unit radiance
+    expected = [Y00 * 2 * math.pi, 0.0, Y1 * math.pi, 0.0]
+    for coefficient, truth in enumerate(expected):
+        values = sh[:, coefficient, :]
+        standard_error = values.std(axis=0) / math.sqrt(len(values))
+        error = np.abs(values.mean(axis=0) - truth)
+        assert np.all(error <= STANDARD_ERRORS * standard_error + ROUND_OFF), (
+            f"SH c{coefficient}: mean {values.mean(axis=0)}, expected {truth} "
+            f"+- {STANDARD_ERRORS} x {standard_error}")
+
+
+# --- the file layout ------------------------------------------------------------------------------
+
+def test_exr_layers_pixel_types_row_order_and_png(tmp_path):
+    # A lamp just above the plane's v = 0 edge (y = -1): the bottom rows of the lightmap (row 0
+    # in memory) are far brighter than the top ones. The UV square is inset by 2 texels so the
+    # border is padding (coverage 0, light from dilation).
+    size, border_texels = 16, 2
+    inset = border_texels / size
+    uvs = np.array([[inset, inset], [1 - inset, inset], [1 - inset, 1 - inset],
+                    [inset, 1 - inset]])
+    scene = plane_scene(uvs=uvs, world=((0.0, 0.0, 0.0), 0.0),
+                        lights=[point_light(0.0, -0.9, 0.3, 50.0)])
+    [lightmap] = bake.bake_scene(scene, [plane_job(size)], options(directional=True),
+                                 str(tmp_path))
+    exr, png = tmp_path / "plane.exr", tmp_path / "plane.png"
+    assert lightmap.paths == [str(exr), str(png)]
+
+    info = shgi.read_exr_info(exr)
+    assert (info["width"], info["height"]) == (size, size)
+    expected_channels = ([(f"Lightmap.{c}", "half") for c in "RGB"]
+                         + [("Variance.V", "float"), ("Coverage.V", "float")]
+                         + [(f"SH.c{i}.{c}", "float") for i in range(4) for c in "RGB"])
+    assert info["channels"] == expected_channels
+
+    # In memory row 0 is v = 0: the lit edge comes first.
+    luminance = lightmap.color.mean(axis=2)
+    first, last = border_texels, size - border_texels - 1  # covered rows
+    assert luminance[first].mean() > 4 * luminance[last].mean()
+    layers = shgi.read_exr(exr)
+    # In the file the top row comes first: every layer is the in-memory one upside down.
+    np.testing.assert_array_equal(layers["Lightmap"],
+                                  lightmap.color[::-1].astype(HALF).astype(np.float32))
+    np.testing.assert_array_equal(layers["Variance"][:, :, 0], lightmap.variance[::-1])
+    np.testing.assert_array_equal(layers["Coverage"][:, :, 0], lightmap.coverage[::-1])
+    for i in range(4):
+        np.testing.assert_array_equal(layers[f"SH.c{i}"], lightmap.sh[::-1, :, i, :])
+    assert layers["Lightmap"][last].mean() > 4 * layers["Lightmap"][first].mean()  # lit edge last
+    # The padding: no coverage, but dilated light, so bilinear lookups never read black.
+    border = np.ones((size, size), bool)
+    border[first:last + 1, first:last + 1] = False
+    assert np.all(lightmap.coverage[border] == 0.0) and np.all(lightmap.coverage[~border] > 0.0)
+    assert np.all(lightmap.color[border].max(axis=1) > 0.0)
+
+    pixels, _ = decode_png(png)
+    assert pixels.shape == (size, size, 3)
+    expected = np.round(255 * shgi.srgb_from_linear(lightmap.color[::-1].copy()))
+    assert np.abs(pixels.astype(int) - expected).max() <= 1
+
+
+def test_no_png_when_not_asked(tmp_path):
+    scene = plane_scene()
+    bake.bake_scene(scene, [plane_job()], dataclasses.replace(options(), png=False), str(tmp_path))
+    assert sorted(os.listdir(tmp_path)) == ["plane.exr"]
+
+
+# --- progress -------------------------------------------------------------------------------------
+
+def test_progress_only_moves_forward_and_ends_at_one(tmp_path):
+    scene = plane_scene()
+    reports = []
+    progress = bake.BakeProgress(lambda fraction, stage: reports.append((fraction, stage)))
+    jobs = [plane_job(16)]
+    bake.bake_scene(scene, jobs, dataclasses.replace(options(), filter=True), str(tmp_path),
+                    progress=progress)
+    fractions = [fraction for fraction, _ in reports]
+    assert all(b >= a for a, b in zip(fractions, fractions[1:])), fractions
+    assert reports[-1] == (1.0, "done") and progress.fraction == 1.0
+    assert any("baking" in stage for _, stage in reports)
+
+
+# --- shards ---------------------------------------------------------------------------------------
+
+SUN_ROOM_JOBS = [("floor", 48, 32), ("back", 32, 32), ("left_wall_2", 16, 16)]
+SHARDS = 4
+
+
+@pytest.fixture(scope="module")
+def sun_room():
+    """The sun room with inward walls and LightmapUV, and three objects of different sizes:
+    6 + 4 + 1 tiles of 16 texels, so some shards hold nothing of the small wall."""
+    scene = scenes.sun_room(0.25, lightmap=True).scene
+    scene.commit()
+    index = {inst.name: i for i, inst in enumerate(scene.instances)}
+    jobs = [bake.BakeJob(index[name], name, w, h) for name, w, h in SUN_ROOM_JOBS]
+    return scene, jobs
+
+
+def sun_room_options(**settings):
+    """Directional and filtered: the merge must reproduce every layer and the filter's input."""
+    return dataclasses.replace(options(directional=True, tile_size=16, **settings), filter=True)
+
+
+@pytest.fixture(scope="module")
+def sharded_bake(sun_room, tmp_path_factory):
+    """A single bake and a 4-shard bake + merge of the sun room: (single dir, farm dir)."""
+    scene, jobs = sun_room
+    single = tmp_path_factory.mktemp("single")
+    farm = tmp_path_factory.mktemp("farm")
+    bake.bake_scene(scene, jobs, sun_room_options(), str(single))
+    for shard in range(SHARDS):
+        paths = bake.bake_scene(scene, jobs, sun_room_options(), str(farm), shard=(shard, SHARDS))
+        assert paths == [bake.shard_path(str(farm), job.name, shard, SHARDS) for job in jobs]
+    bake.merge_shards(scene, jobs, sun_room_options(), str(farm), SHARDS)
+    return single, farm
+
+
+def test_merged_shards_are_byte_identical_to_a_single_bake(sharded_bake):
+    single, farm = sharded_bake
+    expected = written_files(single)
+    assert sorted(expected) == sorted(f"{name}.{ext}" for name, _, _ in SUN_ROOM_JOBS
+                                      for ext in ("exr", "png"))
+    merged = written_files(farm)
+    assert sorted(merged) == sorted(expected)
+    for name in expected:
+        assert merged[name] == expected[name], f"{name} differs between the merge and the bake"
+    # The bake is not trivially black: the sun lights the floor through the window.
+    floor = shgi.read_exr(single / "floor.exr")["Lightmap"]
+    assert floor.max() > 10 * np.median(floor) > 0.0
+
+
+def copy_farm(farm, tmp_path):
+    """A copy of the shard files (tests below damage them)."""
+    copy = tmp_path / "farm"
+    shutil.copytree(farm / "shards", copy / "shards")
+    return copy
+
+
+def test_merge_with_a_missing_shard_file_names_it(sun_room, sharded_bake, tmp_path):
+    scene, jobs = sun_room
+    farm = copy_farm(sharded_bake[1], tmp_path)
+    missing = bake.shard_path(str(farm), "back", 2, SHARDS)
+    os.remove(missing)
+    with pytest.raises(OSError) as info:
+        bake.merge_shards(scene, jobs, sun_room_options(), str(farm), SHARDS)
+    assert missing in str(info.value) and "bake that shard again" in str(info.value)
+
+
+def test_merge_with_a_damaged_shard_file_names_it(sun_room, sharded_bake, tmp_path):
+    scene, jobs = sun_room
+    farm = copy_farm(sharded_bake[1], tmp_path)
+    damaged = bake.shard_path(str(farm), "floor", 1, SHARDS)
+    with open(damaged, "r+b") as file:
+        file.truncate(100)
+    with pytest.raises(OSError, match="damaged") as info:
+        bake.merge_shards(scene, jobs, sun_room_options(), str(farm), SHARDS)
+    assert damaged in str(info.value)
+
+
+def test_merge_refuses_a_duplicated_shard(sun_room, sharded_bake, tmp_path):
+    """Shard 0's file copied over shard 1's: its texels would overlap shard 0's and shard 1's
+    would be missing."""
+    scene, jobs = sun_room
+    farm = copy_farm(sharded_bake[1], tmp_path)
+    duplicate = bake.shard_path(str(farm), "floor", 1, SHARDS)
+    shutil.copyfile(bake.shard_path(str(farm), "floor", 0, SHARDS), duplicate)
+    with pytest.raises(ValueError) as info:
+        bake.merge_shards(scene, jobs, sun_room_options(), str(farm), SHARDS)
+    assert duplicate in str(info.value) and "shard 0 (merge: 1)" in str(info.value)
+
+
+def test_merging_overlapping_texels_is_refused(sun_room):
+    """The native merge itself: the same shard merged twice overlaps itself."""
+    scene, jobs = sun_room
+    tiles = shgi.lightmap_shard_tiles(jobs[0].width, jobs[0].height, 16, 0, SHARDS)
+    _, part = bake.bake_object(scene, jobs[0], sun_room_options(samples=1), tiles=tiles)
+    h, w = part.height, part.width
+    merged = shgi.LightmapTexels(np.zeros((h, w, 3)), np.zeros((h, w)), np.zeros((h, w), bool),
+                                 np.zeros((h, w, 4, 3)))
+    shgi.merge_lightmap(merged, part)
+    with pytest.raises(ValueError, match="baked twice; shards must not overlap"):
+        shgi.merge_lightmap(merged, part)
+
+
+def test_merge_refuses_shards_baked_with_other_settings(sun_room, sharded_bake, tmp_path):
+    scene, jobs = sun_room
+    farm = copy_farm(sharded_bake[1], tmp_path)
+    # Shard 3 baked again with more samples: its texels would not match the other shards'.
+    bake.bake_scene(scene, jobs, sun_room_options(samples=16), str(farm), shard=(3, SHARDS))
+    with pytest.raises(ValueError) as info:
+        bake.merge_shards(scene, jobs, sun_room_options(), str(farm), SHARDS)
+    message = str(info.value)
+    assert bake.shard_path(str(farm), "floor", 3, SHARDS) in message
+    assert "samples 16 (merge: 8)" in message
+    # A shard baked with fewer objects deals the tiles out differently: refused too.
+    bake.bake_scene(scene, jobs[:2], sun_room_options(), str(farm), shard=(3, SHARDS))
+    with pytest.raises(ValueError, match=r"objects \[\['floor', 48, 32\], \['back', 32, 32\]\]"):
+        bake.merge_shards(scene, jobs, sun_room_options(), str(farm), SHARDS)
+    # Merging with another resolution than the shards were baked at is refused the same way.
+    bigger = [bake.BakeJob(job.instance, job.name, 2 * job.width, job.height) for job in jobs]
+    with pytest.raises(ValueError, match=r"width 48 \(merge: 96\)"):
+        bake.merge_shards(scene, bigger, sun_room_options(), str(sharded_bake[1]), SHARDS)
+
+
+def test_bad_shard_numbers_are_refused(sun_room, tmp_path):
+    scene, jobs = sun_room
+    for shard in [(4, 4), (-1, 4), (0, 0)]:
+        with pytest.raises(ValueError, match="use i/N"):
+            bake.bake_scene(scene, jobs, sun_room_options(), str(tmp_path), shard=shard)
+    with pytest.raises(ValueError, match="shards must be a whole number >= 1, got 0"):
+        bake.merge_shards(scene, jobs, sun_room_options(), str(tmp_path), 0)
+
+
+def test_shards_split_tiles_over_all_objects():
+    """Tiles are counted over the objects in order and dealt out i mod N: every tile lands in
+    exactly one shard."""
+    jobs = [bake.BakeJob(0, name, w, h) for name, w, h in SUN_ROOM_JOBS]
+    opts = options(tile_size=16)
+    split = [bake._shard_tiles(jobs, opts, shard, SHARDS) for shard in range(SHARDS)]
+    for k, job in enumerate(jobs):
+        count = shgi.lightmap_tile_count(job.width, job.height, 16)
+        dealt = sorted(tile for shard in split for tile in shard[k])
+        assert dealt == list(range(count))
+    assert [len(split[s][2]) for s in range(SHARDS)] == [0, 0, 1, 0]  # global tile 10
+
+
+# --- errors from bake_scene -----------------------------------------------------------------------
+
+def test_nothing_to_bake(tmp_path):
+    with pytest.raises(ValueError, match="nothing to bake"):
+        bake.bake_scene(plane_scene(), [], options(), str(tmp_path))
+
+
+def test_a_scene_without_light_is_refused(tmp_path):
+    dark = plane_scene(world=((0.0, 0.0, 0.0), 0.0))
+    with pytest.raises(ValueError, match="the scene has no light"):
+        bake.bake_scene(dark, [plane_job()], options(), str(tmp_path))
+    # A portal only guides world sampling; with a black world it lights nothing.
+    portal = shgi.Light(name="portal", type=shgi.LightType.AREA, portal=True, size_x=1.0)
+    dark_with_portal = plane_scene(world=((0.0, 0.0, 0.0), 0.0), lights=[portal])
+    with pytest.raises(ValueError, match="the scene has no light"):
+        bake.bake_scene(dark_with_portal, [plane_job()], options(), str(tmp_path))
+    assert os.listdir(tmp_path) == []
+
+
+def test_an_object_whose_uv_map_covers_nothing(tmp_path):
+    outside = np.array([[2.0, 2.0], [3.0, 2.0], [3.0, 3.0], [2.0, 3.0]])  # all beyond [0, 1]
+    with pytest.raises(ValueError, match="object 'plane': its UV map 'LightmapUV' covers no "
+                                         "texel of the 8 x 8 lightmap"):
+        bake.bake_scene(plane_scene(uvs=outside), [plane_job()], options(), str(tmp_path))
+
+
+def test_bad_padding_and_settings_are_value_errors(tmp_path):
+    scene = plane_scene()
+    with pytest.raises(ValueError, match="padding"):
+        bake.bake_scene(scene, [plane_job()], dataclasses.replace(options(), padding=-1),
+                        str(tmp_path))
+    with pytest.raises(ValueError, match="samples"):
+        bake.bake_scene(scene, [plane_job()], options(samples=0), str(tmp_path))
+
+
+# --- the command line -----------------------------------------------------------------------------
+
+# glTF constants (glTF 2.0 spec, 3.6.2): component types and the point light's units.
+FLOAT, UNSIGNED_SHORT = 5126, 5123
+PBR_WATTS_TO_LUMENS = 683.0  # Blender's glTF importer: lm per W
+LAMP_POWER = 300.0  # W
+
+
+def face(center, normal, tangent, half):
+    """4 corners (glTF coordinates) of a square facing `normal` (CCW seen from the front)."""
+    c, n, u = (np.asarray(v, np.float64) for v in (center, normal, tangent))
+    v = np.cross(n, u)  # u x v = n
+    return [c + half * (-u - v), c + half * (u - v), c + half * (u + v), c + half * (-u + v)]
+
+
+def room_gltf(lightmap_uv=True):
+    """A glTF (Y up) of a 4 x 4 m floor and a 0.8 m box on it, each with TEXCOORD_0 (every face
+    on the whole unit square: overlapping, useless for a lightmap) and TEXCOORD_1 (a lightmap
+    layout without overlaps), lit by a KHR_lights_punctual point light 2.5 m up."""
+    floor = face((0, 0, 0), (0, 1, 0), (1, 0, 0), 2.0)
+    box = []
+    for axis in range(3):
+        for sign in (1.0, -1.0):
+            normal = np.zeros(3)
+            normal[axis] = sign
+            tangent = np.zeros(3)
+            tangent[(axis + 1) % 3] = 1.0
+            box += face(np.array((0.5, 0.4, 0.3)) + 0.4 * normal, normal, tangent, 0.4)
+    unit = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    # The box's faces in a 3 x 2 grid of cells, each face inset by a tenth of its cell.
+    atlas = [((k % 3 + 0.1 + 0.8 * u) / 3, (k // 3 + 0.1 + 0.8 * v) / 2)
+             for k in range(6) for u, v in unit]
+    meshes = [("Floor", floor, unit, unit), ("Box", box, unit * 6, atlas)]
+    data, views, accessors, gltf_meshes = b"", [], [], []
+
+    def add(values, fmt, kind, count, component, bounds=False):
+        nonlocal data
+        blob = struct.pack(f"<{len(values)}{fmt}", *values)
+        blob += b"\0" * (-len(blob) % 4)
+        views.append({"buffer": 0, "byteOffset": len(data), "byteLength": len(blob)})
+        accessor = {"bufferView": len(views) - 1, "componentType": component, "count": count,
+                    "type": kind}
+        if bounds:
+            points = np.reshape(values, (count, 3))
+            accessor["min"], accessor["max"] = points.min(0).tolist(), points.max(0).tolist()
+        accessors.append(accessor)
+        data += blob
+        return len(accessors) - 1
+
+    for name, corners, uv0, uv1 in meshes:
+        attributes = {
+            "POSITION": add(np.ravel(corners).tolist(), "f", "VEC3", len(corners), FLOAT, True),
+            "TEXCOORD_0": add(np.ravel(uv0).tolist(), "f", "VEC2", len(uv0), FLOAT),
+        }
+        if lightmap_uv:
+            attributes["TEXCOORD_1"] = add(np.ravel(uv1).tolist(), "f", "VEC2", len(uv1), FLOAT)
+        indices = [q + i for q in range(0, len(corners), 4) for i in (0, 1, 2, 0, 2, 3)]
+        gltf_meshes.append({"name": name, "primitives": [{
+            "attributes": attributes, "material": 0,
+            "indices": add(indices, "H", "SCALAR", len(indices), UNSIGNED_SHORT)}]})
+    return {
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1, 2]}],
+        "nodes": [{"name": "Floor", "mesh": 0}, {"name": "Box", "mesh": 1},
+                  {"name": "Lamp", "translation": [0.8, 2.5, -0.6],
+                   "extensions": {"KHR_lights_punctual": {"light": 0}}}],
+        "extensions": {"KHR_lights_punctual": {"lights": [{
+            "name": "Lamp", "type": "point",
+            "intensity": LAMP_POWER * PBR_WATTS_TO_LUMENS / (4 * math.pi)}]}},
+        "materials": [{"name": "Plaster", "pbrMetallicRoughness": {
+            "baseColorFactor": [0.7, 0.7, 0.7, 1.0], "metallicFactor": 0.0}}],
+        "meshes": gltf_meshes,
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{"byteLength": len(data), "uri": "data:application/octet-stream;base64,"
+                     + base64.b64encode(data).decode()}],
+    }
+
+
+@pytest.fixture(scope="module")
+def room_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("gltf") / "room.gltf"
+    path.write_text(json.dumps(room_gltf()))
+    return path
+
+
+def run_cli(build_python_dir, *args, progress=False):
+    """`python -m shgi bake ...` with this interpreter, as a farm would run it (not a tty)."""
+    env = dict(os.environ, PYTHONPATH=str(build_python_dir))
+    env.pop("SHGI_PROGRESS", None)
+    if progress:
+        env["SHGI_PROGRESS"] = "1"
+    command = [sys.executable, "-m", "shgi", "bake", *map(str, args)]
+    return subprocess.run(command, capture_output=True, text=True, env=env, timeout=120)
+
+
+CLI_BAKE = ["--resolution", "32", "--samples", "8", "--seed", "5"]
+# DESIGN.md: a cancelled call returns within 0.2 s; the process also has to exit. Generous, as
+# the machine may be loaded.
+CANCEL_SECONDS = 10.0
+
+
+def test_cli_bake_writes_the_lightmaps_with_a_progress_bar(build_python_dir, room_file, tmp_path):
+    out = tmp_path / "out"
+    result = run_cli(build_python_dir, room_file, "--out", out, *CLI_BAKE, progress=True)
+    assert result.returncode == 0, result.stderr
+    assert sorted(os.listdir(out)) == ["Box.exr", "Box.png", "Floor.exr", "Floor.png"]
+    assert f"Floor: {out / 'Floor.exr'} {out / 'Floor.png'}" in result.stdout
+    # The bar on stderr, finishing at 100% (text mode reads its carriage returns as newlines).
+    bars = re.findall(r"\[(#*)(\.*)\] +(\d+\.\d)% ", result.stderr)
+    assert bars and all(len(done) + len(left) == 30 for done, left, _ in bars)
+    assert bars[-1][2] == "100.0" and "100.0% done" in result.stderr
+    # TEXCOORD_1 ('UVMap.001') was baked, not the overlapping TEXCOORD_0: the box's cells.
+    coverage = shgi.read_exr(out / "Box.exr")["Coverage"][:, :, 0]
+    assert 0.4 < (coverage > 0).mean() < 0.8
+    # The floor is lit but for the box's footprint (0.64 of its 16 m^2, no light gets under).
+    dark = (shgi.read_exr(out / "Floor.exr")["Lightmap"].max(axis=2) == 0.0).mean()
+    assert 0.0 < dark < 0.64 / 16
+
+
+def test_cli_shards_then_merge_equal_a_plain_bake(build_python_dir, room_file, tmp_path):
+    plain, farm = tmp_path / "plain", tmp_path / "farm"
+    result = run_cli(build_python_dir, room_file, "--out", plain, *CLI_BAKE)
+    assert result.returncode == 0, result.stderr
+    assert result.stderr == ""  # no bar when stderr is not a terminal and none was asked for
+    for shard in ("0/2", "1/2"):
+        result = run_cli(build_python_dir, room_file, "--out", farm, *CLI_BAKE, "--shard", shard)
+        assert result.returncode == 0, result.stderr
+        assert os.listdir(farm) == ["shards"]  # a shard writes no lightmap
+    result = run_cli(build_python_dir, room_file, "--out", farm, *CLI_BAKE, "--merge", "2")
+    assert result.returncode == 0, result.stderr
+    expected = written_files(plain)
+    assert len(expected) == 4 and written_files(farm) == expected
+
+
+def test_cli_missing_file(build_python_dir, tmp_path):
+    missing = tmp_path / "nowhere.gltf"
+    result = run_cli(build_python_dir, missing, "--out", tmp_path / "out")
+    assert result.returncode == 1
+    assert "shgi bake: error:" in result.stderr and str(missing) in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_cli_scene_without_the_lightmap_uv_map(build_python_dir, tmp_path):
+    path = tmp_path / "no_lightmap_uv.gltf"
+    path.write_text(json.dumps(room_gltf(lightmap_uv=False)))
+    result = run_cli(build_python_dir, path, "--out", tmp_path / "out")
+    assert result.returncode == 1
+    assert "no mesh has a lightmap UV map" in result.stderr
+    assert "TEXCOORD_1" in result.stderr and "['UVMap']" in result.stderr
+    result = run_cli(build_python_dir, path, "--out", tmp_path / "out", "--uv-set", "Bake")
+    assert result.returncode == 1 and "no mesh has the UV map 'Bake'" in result.stderr
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("arguments, message", [
+    (["--shard", "2/2"], "argument --shard: '2/2': need N >= 1 and 0 <= i < N"),
+    (["--shard", "one/2"], "argument --shard: 'one/2': use i/N"),
+    (["--shard", "0/2", "--merge", "2"], "not allowed with argument"),
+    (["--merge", "0"], "argument --merge: 0 is less than 1"),
+    (["--padding", "-1"], "argument --padding: -1 is less than 0"),
+    (["--density", "0"], "argument --density: 0 is not a positive number"),
+])
+def test_cli_bad_arguments(build_python_dir, room_file, tmp_path, arguments, message):
+    result = run_cli(build_python_dir, room_file, "--out", tmp_path / "out", *arguments)
+    assert result.returncode == 2
+    assert message in result.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_cli_ctrl_c_cancels_the_bake(build_python_dir, room_file, tmp_path):
+    """SIGINT while a long bake runs: exit 130 with "cancelled" within a moment, no crash (the
+    bake runs on a worker thread that the main thread cancels)."""
+    env = dict(os.environ, PYTHONPATH=str(build_python_dir), SHGI_PROGRESS="1")
+    command = [sys.executable, "-m", "shgi", "bake", str(room_file), "--out", str(tmp_path),
+               "--resolution", "512", "--samples", "2048"]  # minutes of work in short tiles
+    # The child gets the default SIGINT action (a shell may have left it ignored).
+    process = subprocess.Popen(command, env=env, stderr=subprocess.PIPE, text=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        for line in process.stderr:  # bar redraws end in "\r": a line each in text mode
+            if "baking lightmap" in line:
+                break
+        process.send_signal(signal.SIGINT)
+        sent = time.monotonic()
+        _, rest = process.communicate(timeout=CANCEL_SECONDS)
+        waited = time.monotonic() - sent
+    finally:
+        process.kill()
+        process.wait()
+    assert process.returncode == 130, rest
+    assert rest.rstrip().endswith("cancelled") and "terminate" not in rest
+    assert waited < CANCEL_SECONDS
+    assert not (tmp_path / "Floor.exr").exists()
+
+
+def test_cli_merge_without_shards_names_the_missing_file(build_python_dir, room_file, tmp_path):
+    result = run_cli(build_python_dir, room_file, "--out", tmp_path, *CLI_BAKE, "--merge", "3")
+    assert result.returncode == 1
+    assert str(tmp_path / "shards" / "Floor.shard-0-of-3.npz") in result.stderr
