@@ -12,8 +12,13 @@ CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release -DSHGI_WERROR=ON
 DEB_PACKAGES := build-essential cmake pkg-config libembree-dev libglm-dev libopenexr-dev \
 	libimath-dev pybind11-dev libtbb-dev libgtest-dev libtinygltf-dev \
 	libtinyobjloader-dev libpcg-cpp-dev libpng-dev libnanoflann-dev nlohmann-json3-dev python3-dev python3-numpy python3-pytest \
-	blender xvfb xauth
+	python3-pip python3-cffi blender xvfb xauth
 SITE_DIR := /usr/local/lib/python3.11/dist-packages
+# shgi's optional PyPI modules (shgi.uv_atlas, shgi.denoise), pinned: docs/baking.md's figures
+# were measured with these. PIP_CHECK exits 0 when each is installed at its pinned version.
+PIP_MODULES := xatlas==0.0.11 pyoidn==2.5.1.0
+PIP_CHECK := import sys, importlib.metadata as m; \
+	sys.exit(any(m.version(n) != v for n, v in (a.split("==") for a in sys.argv[1:])))
 # Debian's Blender adopts the Python home of the first python3 on PATH, so run it without pyenv.
 SYSTEM_PATH := /usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
 
@@ -43,6 +48,17 @@ deps:
 	@if command -v python3 >/dev/null && python3 -m pip --version >/dev/null 2>&1 && \
 	   ! python3 -c 'import pybind11_stubgen' 2>/dev/null; then \
 		python3 -m pip install -q 'pybind11-stubgen==2.5.1'; \
+	fi
+	@# The optional modules for Debian's Python, which Debian's Blender runs: as root into
+	@# SITE_DIR beside shgi (Blender 3.4 ignores user site-packages); Debian marks its Python
+	@# externally managed, and python3-numpy / python3-cffi already satisfy their dependencies.
+	@$(PYTHON) -c '$(PIP_CHECK)' $(PIP_MODULES) 2>/dev/null || \
+		$(PYTHON) -m pip install -q --root-user-action=ignore --break-system-packages $(PIP_MODULES)
+	@# ... and for the python3 on PATH when it is another interpreter (pyenv).
+	@other=$$(command -v python3); \
+	if [ -n "$$other" ] && [ "$$(readlink -f $$other)" != "$$(readlink -f $(PYTHON))" ] && \
+	   $$other -m pip --version >/dev/null 2>&1 && ! $$other -c '$(PIP_CHECK)' $(PIP_MODULES) 2>/dev/null; then \
+		$$other -m pip install -q --root-user-action=ignore $(PIP_MODULES); \
 	fi
 
 $(BUILD_DIR)/CMakeCache.txt: | deps

@@ -59,6 +59,7 @@ BAKE_PROPERTY_DEFAULTS = {
     "source": "PATH_TRACER",
     "directional": False,
     "filter": False,
+    "denoiser": "SHGI",
     "padding": 4,
     "tile_size": 16,
     "output_folder": "//lightmaps",
@@ -68,6 +69,13 @@ BAKE_PROPERTY_DEFAULTS = {
 }
 # Where Export Volume writes when its operator's filepath is not set (scene.shgi.bake only).
 VOLUME_PATH_DEFAULT = "//shgi_volume.json"
+
+# Denoiser of "Denoise" (scene.shgi.bake.denoiser): shgi.bake.BakeOptions.denoise methods.
+DENOISER_ITEMS = (
+    ("SHGI", "SHGI Filter", "SHGI's edge-aware filter (never crosses UV charts)"),
+    ("OIDN", "OpenImageDenoise", "Intel OpenImageDenoise, lightmap filter, per UV chart (needs "
+                                 "the pyoidn module: make deps installs it)"),
+)
 
 # LightmapSettings field -> scene.shgi.bake property.
 LIGHTMAP_FIELDS = {name: name for name in ("content", "samples", "directional", "tile_size")}
@@ -102,8 +110,11 @@ def bake_options(bake, props, shgi):
 
     settings = lightmap_settings(bake, props, shgi)
     settings.validate()
-    return shgi_bake.BakeOptions(
+    options = shgi_bake.BakeOptions(
         settings=settings, **{field: getattr(bake, prop) for field, prop in OPTION_FIELDS.items()})
+    if bake.filter and bake.denoiser == "OIDN":  # Denoise with OpenImageDenoise, not SHGI's filter
+        options.filter, options.denoise = False, "OIDN"
+    return options
 
 
 def shard(bake):

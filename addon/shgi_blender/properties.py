@@ -121,7 +121,10 @@ def bake_properties():
                         "texel (EXR layers SH.c0..c3), for normal-mapped surfaces"),
         "filter": BoolProperty(
             name="Denoise", default=B["filter"],
-            description="Edge-aware filter of the baked texels that never crosses UV charts"),
+            description="Denoise the baked texels (never across UV charts) with the Denoiser"),
+        "denoiser": EnumProperty(
+            name="Denoiser", items=list(bake_settings.DENOISER_ITEMS), default=B["denoiser"],
+            description="What Denoise uses"),
         "padding": IntProperty(
             name="Padding", default=B["padding"], min=0, max=64,
             description="Texels the lightmap is extended beyond the UV charts, against seams "

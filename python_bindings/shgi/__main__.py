@@ -70,7 +70,11 @@ def _parser() -> argparse.ArgumentParser:
     bake.add_argument("--method", default="PATH_TRACER", choices=_bake.SOURCES,
                       help="source of indirect light (PATH_TRACER: ground truth)")
     bake.add_argument("--directional", action="store_true", help="also write L1 SH layers")
-    bake.add_argument("--filter", action="store_true", help="edge-aware denoising filter")
+    bake.add_argument("--filter", action="store_true",
+                      help="SHGI's edge-aware denoising filter (the same as --denoise SHGI)")
+    bake.add_argument("--denoise", default="NONE", choices=["NONE", "SHGI", "OIDN"],
+                      help="denoiser before dilation: OIDN = OpenImageDenoise per UV chart "
+                           "(needs the pyoidn module)")
     bake.add_argument("--padding", type=_whole(0), default=4, help="dilation texels (4)")
     bake.add_argument("--seed", type=_whole(0), default=0)
     bake.add_argument("--threads", type=_whole(0), default=0, help="0: all cores")
@@ -146,7 +150,7 @@ def _bake_command(args) -> int:
     jobs = _bake.jobs_for_scene(scene, uv_set, args.resolution, args.density, names)
     settings = _shgi.LightmapSettings(samples=args.samples, content=args.content,
                                       directional=args.directional, seed=args.seed)
-    options = _bake.BakeOptions(settings=settings, uv_set=uv_set, filter=args.filter,
+    options = _bake.BakeOptions(settings=settings, uv_set=uv_set, filter=args.filter, denoise=args.denoise,
                                 padding=args.padding)
     bar = _Bar(not args.quiet)
     progress = _bake.BakeProgress(bar)
@@ -220,7 +224,7 @@ def main(argv=None) -> int:
     except _shgi.Cancelled:
         print("cancelled", file=sys.stderr)
         return 130
-    except (ValueError, OSError, RuntimeError) as error:
+    except (ValueError, OSError, RuntimeError, ImportError) as error:
         print(f"shgi bake: error: {error}", file=sys.stderr)
         return 1
 

@@ -90,10 +90,14 @@ class BakeOptions:
     uv_set: str = "LightmapUV"
     samples_per_axis: int = 2  # sample positions per texel side
     unocclude: bool = True
-    filter: bool = False  # the edge-aware filter (shgi.LightmapFilterSettings)
+    filter: bool = False  # the edge-aware filter (shgi.LightmapFilterSettings); = denoise "SHGI"
     filter_settings: _shgi.LightmapFilterSettings = dataclasses.field(
         default_factory=_shgi.LightmapFilterSettings
     )
+    # "NONE", "SHGI" (the edge-aware filter) or "OIDN" (OpenImageDenoise per UV chart,
+    # shgi.denoise; needs the pyoidn module), applied before dilation.
+    denoise: str = "NONE"
+    oidn_filter: str = "RTLightmap"
     padding: int = 4  # texels of dilation beyond the UV charts
     png: bool = True
     exposure: float = 0.0  # stops, for the PNG preview only
@@ -233,11 +237,34 @@ def _bake_object(scene, job, options, field, tiles, stage, bake_end):
     return texel_map, texels
 
 
+DENOISE_METHODS = ("NONE", "SHGI", "OIDN")
+
+
+def denoise_method(options: BakeOptions) -> str:
+    """The denoiser `options` ask for ("filter" is the older spelling of "SHGI"); ValueError
+    for an unknown one, ImportError naming the pip command when OIDN's module is missing."""
+    method = options.denoise.upper()
+    if method not in DENOISE_METHODS:
+        raise ValueError(f"denoise {options.denoise!r}: use one of {', '.join(DENOISE_METHODS)}")
+    if method == "NONE" and options.filter:
+        method = "SHGI"
+    if method == "OIDN":
+        from .denoise import import_optional
+        import_optional("pyoidn", "denoising lightmaps with OpenImageDenoise")
+    return method
+
+
 def finish(texel_map, texels, options: BakeOptions, name: str, progress=None) -> Lightmap:
     """Filters (optional) and dilates a complete bake into a Lightmap. `progress` (a native
     shgi.Progress) counts the filter when there is one (dilation is quick), else dilation."""
-    if options.filter:
+    method = denoise_method(options)
+    if method == "SHGI":
         _shgi.filter_lightmap(texel_map, texels, options.filter_settings, progress)
+        progress = None
+    elif method == "OIDN":
+        from .denoise import denoise_lightmap
+        texels = denoise_lightmap(texel_map, texels, "OIDN", oidn_filter=options.oidn_filter,
+                                  progress=progress)
         progress = None
     filled = _shgi.dilate_lightmap(texels, options.padding, progress)
     return Lightmap(name=name, color=texels.color, variance=texels.variance,
@@ -339,6 +366,8 @@ def bake_scene(scene, jobs: Sequence[BakeJob], options: BakeOptions, out_dir: st
     light (every shard of a bake must use the same)."""
     _check_jobs(scene, jobs)
     options.settings.validate()
+    if not shard:
+        denoise_method(options)  # fail before baking, not after
     _check_padding(options)
     progress = progress or BakeProgress()
     if shard:
@@ -458,6 +487,7 @@ def merge_shards(scene, jobs: Sequence[BakeJob], options: BakeOptions, out_dir: 
     if not (isinstance(shards, int) and shards >= 1):
         raise ValueError(f"shards must be a whole number >= 1, got {shards!r}")
     options.settings.validate()
+    denoise_method(options)
     _check_padding(options)
     progress = progress or BakeProgress()
     results = []

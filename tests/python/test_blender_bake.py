@@ -120,6 +120,11 @@ def test_bake_options_follow_the_properties():
         12, "INDIRECT", True, 8)
     assert (lightmap.seed, lightmap.diffuse_bounces, lightmap.max_bounces) == (5, 2, 3)
     assert (options.uv_set, options.filter, options.padding) == ("Bake", True, 2)
+    assert options.denoise == "NONE"  # Denoise with the SHGI filter: BakeOptions.filter
+    oidn = bake_settings.bake_options(bake_props(filter=True, denoiser="OIDN"), scene_props(), shgi)
+    assert (oidn.filter, oidn.denoise) == (False, "OIDN")
+    off = bake_settings.bake_options(bake_props(filter=False, denoiser="OIDN"), scene_props(), shgi)
+    assert (off.filter, off.denoise) == (False, "NONE")
     with pytest.raises(ValueError, match="tile_size"):
         bake_settings.bake_options(bake_props(tile_size=2), scene_props(), shgi)
 

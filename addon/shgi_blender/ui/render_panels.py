@@ -234,8 +234,12 @@ class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
         sub.prop(bake, "texel_density")
         column.prop(bake, "padding")
         column = layout.column(align=True)
-        for name in ("directional", "filter", "hook_up_material"):
+        for name in ("directional", "filter"):
             column.prop(bake, name)
+        sub = column.column(align=True)
+        sub.active = bake.filter
+        sub.prop(bake, "denoiser")
+        column.prop(bake, "hook_up_material")
         layout.prop(bake, "output_folder")
         column = layout.column(align=True, heading="Farm")
         column.prop(bake, "shard_count")
