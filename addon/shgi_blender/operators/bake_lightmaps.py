@@ -32,8 +32,8 @@ from .. import bake_settings, native, properties
 from ..engine import scene_checks
 from ..engine.lightmap_bake import BakeRequest, BakeTask
 from . import lightmap_images
+from .modal_task import ModalTaskOperator
 
-TIMER_SECONDS = 0.1
 REPORT_PREFIX = "SHGI bake: "
 # Lightmap Pack's margin between faces, in % of the unit square: its largest.
 LIGHTMAP_PACK_MARGIN = 1.0
@@ -183,53 +183,24 @@ def prepare_bake(context, values, report, merge=False):
         raise BakeError(str(error)) from None
 
 
-class _BakeOperator:
+class _BakeOperator(ModalTaskOperator):
     """Shared body of the bake and merge operators: checks, a BakeTask, modal or waiting."""
 
     bl_options = {"REGISTER"}
     MERGE = False
+    STATUS_PREFIX = "SHGI bake: "
+    STATUS_IDLE = "starting"
+    PROGRESS_BAR = True
 
     @classmethod
     def poll(cls, context):
         return context.scene is not None
 
-    def execute(self, context):
-        task = self._start(context)
-        if task is None:
-            return {"CANCELLED"}
-        task.wait()
-        return self._finish(context, task)
+    def _progress(self, task):
+        return task.fraction, task.stage
 
-    def invoke(self, context, _event):
-        if context.window is None:  # no window to poll from (background mode): wait instead
-            return self.execute(context)
-        self._task = self._start(context)
-        if self._task is None:
-            return {"CANCELLED"}
-        window_manager = context.window_manager
-        self._timer = window_manager.event_timer_add(TIMER_SECONDS, window=context.window)
-        window_manager.progress_begin(0.0, 1.0)
-        window_manager.modal_handler_add(self)
-        return {"RUNNING_MODAL"}
-
-    def modal(self, context, event):
-        if event.type == "ESC" and event.value == "PRESS":
-            self._task.cancel()
-            return {"RUNNING_MODAL"}
-        if event.type != "TIMER":
-            return {"PASS_THROUGH"}
-        self._store_finished(self._task)
-        window_manager = context.window_manager
-        if self._task.running:
-            window_manager.progress_update(self._task.fraction)
-            context.workspace.status_text_set(
-                f"SHGI bake: {self._task.stage or 'starting'} "
-                f"{100 * self._task.fraction:.0f}% (Esc cancels)")
-            return {"PASS_THROUGH"}
-        window_manager.event_timer_remove(self._timer)
-        window_manager.progress_end()
-        context.workspace.status_text_set(None)
-        return self._finish(context, self._task)
+    def _tick(self, _context, task):
+        self._store_finished(task)
 
     def _start(self, context):
         """Checks and starts the bake (None, with an ERROR report, when it cannot run)."""

@@ -16,8 +16,7 @@ import bpy
 from .. import native, settings
 from ..engine import solution_cache
 from ..engine.native_task import NativeTask
-
-TIMER_SECONDS = 0.1
+from .modal_task import ModalTaskOperator
 
 
 class _SolveTask(NativeTask):
@@ -38,10 +37,11 @@ class _SolveTask(NativeTask):
         self.solution = solution
 
 
-class SHGI_OT_solve(bpy.types.Operator):
+class SHGI_OT_solve(ModalTaskOperator, bpy.types.Operator):
     """Solve the method's indirect light once with the scene's settings and keep it: F12 \
 renders it from any camera without solving again, until Clear"""
 
+    STATUS_IDLE = "solving"
     bl_idname = "shgi.solve"
     bl_label = "Solve"
     bl_options = {"REGISTER"}
@@ -51,38 +51,8 @@ renders it from any camera without solving again, until Clear"""
         return (context.scene is not None and native.available()
                 and settings.METHODS_BY_ID[context.scene.shgi.method].uses_field)
 
-    def execute(self, context):
-        task = self._start(context)
-        if task is None:
-            return {"CANCELLED"}
-        task.wait()
-        return self._finish(context, task)
-
-    def invoke(self, context, _event):
-        if context.window is None:  # no window to poll from (background mode): wait instead
-            return self.execute(context)
-        self._task = self._start(context)
-        if self._task is None:
-            return {"CANCELLED"}
-        window_manager = context.window_manager
-        self._timer = window_manager.event_timer_add(TIMER_SECONDS, window=context.window)
-        window_manager.modal_handler_add(self)
-        return {"RUNNING_MODAL"}
-
-    def modal(self, context, event):
-        if event.type == "ESC":
-            self._task.cancel()
-            return {"RUNNING_MODAL"}
-        if event.type == "TIMER":
-            if self._task.running:
-                context.workspace.status_text_set(
-                    f"SHGI: {self._task.progress.stage or 'solving'} "
-                    f"{100 * self._task.progress.fraction:.0f}% (Esc cancels)")
-                return {"PASS_THROUGH"}
-            context.window_manager.event_timer_remove(self._timer)
-            context.workspace.status_text_set(None)
-            return self._finish(context, self._task)
-        return {"PASS_THROUGH"}
+    def _progress(self, task):
+        return task.progress.fraction, task.progress.stage
 
     def _start(self, context):
         """Exports the scene and starts the solve (None, with a report, on failure)."""
