@@ -37,8 +37,7 @@ PathTracerSettings continuation_settings(const LightmapSettings& settings) {
     path.glossy_bounces = settings.glossy_bounces;
     path.transmission_bounces = settings.transmission_bounces;
     path.russian_roulette_depth = std::max(0, path.russian_roulette_depth - 1);
-    path.clamp_indirect = settings.clamp_indirect;
-    return path;
+    return path;  // clamp_indirect applies to the whole continuation (path_radiance), not inside
 }
 
 // The texel's surface as Cycles' bake sees it: a camera ray along the shading normal.
@@ -104,9 +103,7 @@ class TexelBaker {
     void bake_texel(uint64_t texel, LightmapTexels& out) const {
         const uint64_t positions = map_.sample_count(texel);
         if (positions == 0) return;
-        const uint32_t per_position =
-            std::max<uint32_t>(1, settings_.samples / uint32_t(std::min<uint64_t>(
-                                                          positions, settings_.samples)));
+        const uint32_t per_position = uint32_t(std::max<uint64_t>(1, settings_.samples / positions));
         const TexelSample* samples = map_.samples_begin(texel);
         double weight_sum = 0.0;
         for (uint64_t k = 0; k < positions; ++k) weight_sum += samples[k].weight;
@@ -242,19 +239,10 @@ class TexelBaker {
     // Emitters the hemisphere ray meets first, weighted against next-event estimation.
     vec3 emission(const Ray& ray, const Hit& hit, const vec3& n, float pdf) const {
         vec3 sum(0.0f);
-        const auto add = [&](const EmissionHit& e) {
-            sum += e.radiance * power_heuristic(pdf, e.light_pdf);
-        };
-        EmissionHit e;
-        if (lights_.intersect_lights(ray.origin, ray.direction, hit.valid() ? hit.t : kInfinity,
-                                     false, &e)) {
-            add(e);
-        } else if (hit.valid()) {
-            e = lights_.triangle_emission(hit, ray.direction);
-            if (max_component(e.radiance) > 0.0f) add(e);
-        } else {
-            lights_.for_each_escaped(ray.origin, n, ray.direction, false, add);
-        }
+        lights_.for_each_emission(ray.origin, n, ray.direction, hit, false,
+                                  [&](const EmissionHit& e, bool) {
+                                      sum += e.radiance * power_heuristic(pdf, e.light_pdf);
+                                  });
         return sum;
     }
 
@@ -265,13 +253,7 @@ class TexelBaker {
         PassValues values;
         PathIntegrator(scene_, camera, lights_, path_settings_, nullptr, rng, values)
             .trace(ray, hit);
-        vec3 radiance =
-            glm::max(values[Pass::Combined] - values[Pass::Emit] - values[Pass::Env], vec3(0.0f));
-        if (settings_.clamp_indirect > 0.0f) {
-            const float peak = max_component(radiance);
-            if (peak > settings_.clamp_indirect) radiance *= settings_.clamp_indirect / peak;
-        }
-        return is_finite(radiance) ? radiance : vec3(0.0f);
+        return path_radiance(values, false, settings_.clamp_indirect);
     }
 
     const Scene& scene_;

@@ -359,15 +359,8 @@ void ProbeGrid::update(Progress* progress) {
                     PathIntegrator(*scene_, camera, lights, path_settings, nullptr, rng, values,
                                    &clock)
                         .trace(ray, hit);
-                    vec3 radiance = values[Pass::Combined];
-                    if (!settings_.include_direct)
-                        radiance -= values[Pass::Emit] + values[Pass::Env];
-                    radiance = glm::max(radiance, vec3(0.0f));
-                    if (settings_.clamp > 0.0f) {
-                        const float peak = max_component(radiance);
-                        if (peak > settings_.clamp) radiance *= settings_.clamp / peak;
-                    }
-                    if (!is_finite(radiance)) radiance = vec3(0.0f);
+                    const vec3 radiance =
+                        path_radiance(values, settings_.include_direct, settings_.clamp);
                     sh_add_sample(estimate, ray.direction, radiance * sample_weight);
                     const double dc = double(kDcScale * luminance(radiance));
                     dc_sum += dc;

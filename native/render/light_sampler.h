@@ -109,6 +109,13 @@ class LightSampler {
                                      bool camera_ray) const;
     // An emissive triangle hit at `hit` from p.
     EmissionHit triangle_emission(const Hit& hit, const vec3& wi) const;
+    // Everything a ray from p (shading normal n) along wi meets as emission up to its scene hit
+    // `hit`: a point/spot disk or area light in front of the hit; else the hit triangle's own
+    // emission; else, for a miss, the world and suns (for_each_escaped). Calls
+    // add(const EmissionHit&, bool is_world) for each.
+    template <typename Add>
+    void for_each_emission(const vec3& p, const vec3& n, const vec3& wi, const Hit& hit,
+                           bool camera_ray, Add&& add) const;
 
   private:
     enum class Kind : uint8_t { Light, Triangle, World };
@@ -166,6 +173,22 @@ void LightSampler::for_each_escaped(const vec3& p, const vec3& n, const vec3& wi
         const float solid_angle = kTwoPi * (1.0f - cos_max);
         add(EmissionHit{light.color * (light.strength / solid_angle),
                         selection_pdf(light_emitter_[i]) / solid_angle});
+    }
+}
+
+template <typename Add>
+void LightSampler::for_each_emission(const vec3& p, const vec3& n, const vec3& wi, const Hit& hit,
+                                     bool camera_ray, Add&& add) const {
+    EmissionHit light_hit;
+    if (intersect_lights(p, wi, hit.valid() ? hit.t : kInfinity, camera_ray, &light_hit)) {
+        add(light_hit, false);
+    } else if (hit.valid()) {
+        const EmissionHit surface = triangle_emission(hit, wi);
+        if (surface.radiance.x > 0.0f || surface.radiance.y > 0.0f || surface.radiance.z > 0.0f)
+            add(surface, false);
+    } else {
+        for_each_escaped(p, n, wi, camera_ray,
+                         [&](const EmissionHit& escaped) { add(escaped, true); });
     }
 }
 

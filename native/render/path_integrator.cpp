@@ -15,6 +15,13 @@ PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample) {
     return {owen_sobol_2d(index, hash_seed(base, 0)), owen_sobol_1d(index, hash_seed(base, 1)),
             owen_sobol_2d(index, hash_seed(base, 2))};
 }
+vec3 path_radiance(const PassValues& values, bool include_direct, float clamp) {
+    vec3 radiance = values[Pass::Combined];
+    if (!include_direct) radiance -= values[Pass::Emit] + values[Pass::Env];
+    radiance = clamp_peak(glm::max(radiance, vec3(0.0f)), clamp);
+    return is_finite(radiance) ? radiance : vec3(0.0f);
+}
+
 namespace {
 
 const Pass kDirectPass[kLobeClassCount] = {Pass::DiffDir, Pass::GlossDir, Pass::TransDir};
@@ -70,21 +77,10 @@ void PathIntegrator::finish() {
 // Adds what the ray meets: point/spot disks and area lights in front of the hit, the hit's own
 // emission, or the world and suns when it escapes.
 void PathIntegrator::find_emission(const Ray& ray, const Hit& hit) {
-    EmissionHit light_hit;
-    const bool camera_ray = vertex_ == 0;
-    if (lights_.intersect_lights(ray.origin, ray.direction, hit.valid() ? hit.t : kInfinity,
-                                 camera_ray, &light_hit)) {
-        add_emission(light_hit.radiance, light_hit.light_pdf, false);
-    } else if (hit.valid()) {
-        const EmissionHit surface = lights_.triangle_emission(hit, ray.direction);
-        if (max_component(surface.radiance) > 0.0f)
-            add_emission(surface.radiance, surface.light_pdf, false);
-    } else {
-        lights_.for_each_escaped(ray.origin, last_normal_, ray.direction, camera_ray,
-                                 [&](const EmissionHit& escaped) {
-                                     add_emission(escaped.radiance, escaped.light_pdf, true);
-                                 });
-    }
+    lights_.for_each_emission(ray.origin, last_normal_, ray.direction, hit, vertex_ == 0,
+                              [&](const EmissionHit& emission, bool is_world) {
+                                  add_emission(emission.radiance, emission.light_pdf, is_world);
+                              });
 }
 
 void PathIntegrator::add_emission(const vec3& radiance, float light_pdf, bool is_world) {
@@ -106,11 +102,7 @@ void PathIntegrator::add_split(const vec3& contribution, bool direct) {
 }
 
 void PathIntegrator::add_light(const vec3& contribution, int lobe_class, bool direct) {
-    vec3 value = contribution;
-    if (!direct && settings_.clamp_indirect > 0.0f) {
-        const float peak = max_component(value);
-        if (peak > settings_.clamp_indirect) value *= settings_.clamp_indirect / peak;
-    }
+    const vec3 value = direct ? contribution : clamp_peak(contribution, settings_.clamp_indirect);
     if (!is_finite(value)) return;
     out_[direct ? kDirectPass[lobe_class] : kIndirectPass[lobe_class]] += value;
     out_[Pass::Combined] += value;

@@ -52,6 +52,13 @@ struct PixelSample {
 };
 PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample);
 
+// The radiance a path started with PathIntegrator::trace(ray, first_hit) brought back along its
+// ray, for tracers whose rays leave a surface or a probe rather than a camera (probe updates,
+// lightmap texels): Combined, less what its first segment met straight from emitters (Emit,
+// Env) unless include_direct (then only light that scattered at least once is left), floored
+// at 0, its peak clamped to `clamp` (0: off); 0 when not finite.
+vec3 path_radiance(const PassValues& values, bool include_direct, float clamp);
+
 class PathIntegrator {
   public:
     // `camera` is the one whose rays are traced (its view axis gives the Depth pass). `field`

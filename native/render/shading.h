@@ -21,6 +21,12 @@ inline constexpr float kRayOffset = 1e-4f;
 inline constexpr float kShadowShorten = 1e-3f;
 
 inline float max_component(const vec3& v) { return std::max(v.x, std::max(v.y, v.z)); }
+// v scaled down so that its largest component is at most `limit` (a firefly clamp; limit <= 0:
+// off, v unchanged).
+inline vec3 clamp_peak(const vec3& v, float limit) {
+    const float peak = max_component(v);
+    return limit > 0.0f && peak > limit ? v * (limit / peak) : v;
+}
 
 // p moved off its surface along `normal` (the side the new ray leaves towards).
 vec3 offset_origin(const vec3& p, const vec3& normal);

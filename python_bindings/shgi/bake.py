@@ -56,6 +56,7 @@ __all__ = [
     "merge_shards",
     "shard_path",
     "jobs_for_scene",
+    "emits_light",
     "solve_field",
     "SOURCES",
 ]
@@ -324,6 +325,21 @@ def _shard_tiles(jobs: Sequence[BakeJob], options: BakeOptions, shard: int, shar
     return result
 
 
+NO_LIGHT_MESSAGE = ("the scene has no light (no lamp, no emissive material, a black world): a "
+                    "bake would be black; add a light")
+
+
+def emits_light(scene) -> bool:
+    """True when a light, a material or the world of a shgi.Scene emits (a portal only guides
+    the sampling of the world: it emits nothing of its own)."""
+    if any(not light.portal for light in scene.lights):
+        return True
+    if any(material.is_emissive() for material in scene.materials):
+        return True
+    world = scene.world
+    return world.strength > 0.0 and max(world.color) > 0.0
+
+
 def _check_jobs(scene, jobs: Sequence[BakeJob]) -> None:
     if not jobs:
         raise ValueError("nothing to bake: select at least one mesh object with a lightmap UV map")
@@ -336,13 +352,8 @@ def _check_jobs(scene, jobs: Sequence[BakeJob]) -> None:
         if not 0 <= job.instance < count:
             raise ValueError(f"object '{job.name}': instance {job.instance} is not in the scene "
                              f"({count} instances)")
-    # A portal only guides the sampling of the world: it emits nothing of its own.
-    lamps = [light for light in scene.lights if not light.portal]
-    world = scene.world
-    if not lamps and max(world.color) * world.strength <= 0.0 and not any(
-            m.is_emissive() for m in scene.materials):
-        raise ValueError("the scene has no light (no lamp, no emissive material, a black world): "
-                         "a bake would be black; add a light")
+    if not emits_light(scene):
+        raise ValueError(NO_LIGHT_MESSAGE)
 
 
 def _spans(weights: Sequence[float]) -> list:

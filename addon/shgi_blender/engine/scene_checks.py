@@ -6,13 +6,11 @@ engine warns and renders instead of failing, as Cycles does.
 
 
 def emits_light(scene):
-    """True when a light (portals only guide sampling), a material or the world emits."""
-    if any(not light.portal for light in scene.lights):
-        return True
-    if any(material.is_emissive() for material in scene.materials):
-        return True
-    world = scene.world
-    return world.strength > 0.0 and max(world.color) > 0.0
+    """True when a light (portals only guide sampling), a material or the world of the shgi.Scene
+    emits: shgi.bake.emits_light, the one test renders and bakes share."""
+    from shgi.bake import emits_light as scene_emits_light  # `scene` is a shgi.Scene: shgi loaded
+
+    return scene_emits_light(scene)
 
 
 def scene_warnings(scene):

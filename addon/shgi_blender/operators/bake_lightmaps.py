@@ -29,7 +29,6 @@ from types import SimpleNamespace
 import bpy
 
 from .. import bake_settings, native, properties
-from ..engine import scene_checks
 from ..engine.lightmap_bake import BakeRequest, BakeTask
 from . import lightmap_images
 from .modal_task import ModalTaskOperator
@@ -37,8 +36,6 @@ from .modal_task import ModalTaskOperator
 REPORT_PREFIX = "SHGI bake: "
 # Lightmap Pack's margin between faces, in % of the unit square: its largest.
 LIGHTMAP_PACK_MARGIN = 1.0
-NO_LIGHT_MESSAGE = ("the scene has no light (no lamp, no emissive material, a black world): a "
-                    "bake would be black; add a light")
 
 
 class BakeError(Exception):
@@ -165,8 +162,10 @@ def prepare_bake(context, values, report, merge=False):
     scene = context.scene
     export = export_scene(context.evaluated_depsgraph_get(), scene, report=report,
                           for_render=True, with_camera=False)
-    if not scene_checks.emits_light(export.scene):
-        raise BakeError(NO_LIGHT_MESSAGE)
+    from shgi import bake as shgi_bake  # shgi is loaded (native.module() above)
+
+    if not shgi_bake.emits_light(export.scene):
+        raise BakeError(shgi_bake.NO_LIGHT_MESSAGE)
     try:
         jobs = bake_jobs(export.scene, objects, values)
         options = bake_settings.bake_options(values, scene.shgi, shgi)
