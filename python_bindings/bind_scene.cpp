@@ -410,7 +410,12 @@ void bind_scene_building(py::class_<Scene>& cls) {
                                              to_mat4(world_from_object, "world_from_object"));
             },
             py::arg("instance_id"), py::arg("world_from_object"),
-            "Moves an instance; the next commit() rebuilds only the top-level BVH.");
+            "Moves an instance; the next commit() rebuilds only the top-level BVH.")
+        .def("set_mesh", edit("set_mesh", &Scene::set_mesh), py::arg("mesh_id"), py::arg("mesh"),
+             "Replaces mesh `mesh_id` (an shgi.Mesh, checked and cleaned as add_mesh does) for "
+             "every instance of it, e.g. with one that has a new lightmap UV map; the next "
+             "commit() rebuilds its BVH. ValueError naming the id and the mesh count for a bad "
+             "mesh_id.");
 }
 
 // --- commit, inspection ------------------------------------------------------------------------

@@ -101,6 +101,18 @@ uint32_t Scene::add_mesh(Mesh mesh) {
     return static_cast<uint32_t>(meshes_.size() - 1);
 }
 
+void Scene::set_mesh(uint32_t mesh_id, Mesh mesh) {
+    if (mesh_id >= meshes_.size())
+        throw InvalidArgument(format_message("set_mesh: mesh_id = ", mesh_id, " but the scene has ",
+                                             meshes_.size(), " meshes; add_mesh() adds a new one"));
+    // Validated before anything changes, so a rejected mesh leaves the scene as it was.
+    const MeshReport report = validate_mesh(mesh, kAnyMaterialCount);
+    meshes_[mesh_id] = std::move(mesh);
+    mesh_reports_[mesh_id] = report;
+    geometry_dirty_ = true;
+    invalidate();
+}
+
 uint32_t Scene::add_instance(uint32_t mesh_id, const mat4& world_from_object, std::string name) {
     const std::string item = name.empty() ? format_message("instance ", instances_.size())
                                           : format_message("instance '", name, "'");

@@ -7,7 +7,8 @@
 // a scene without materials gets one default Material so every triangle has one), gathers
 // emissive triangles, and builds the BVH: one Embree geometry per mesh, instanced once
 // per Instance, so a mesh used a thousand times is stored once. Any edit un-commits the scene;
-// set_instance_transform() keeps the per-mesh BVHs and re-commits only the top level.
+// set_instance_transform() keeps the per-mesh BVHs and re-commits only the top level, set_mesh()
+// (a mesh replaced for all its instances) rebuilds them.
 //
 // Queries: intersect/occluded for single rays and for batches (Embree ray streams), callable
 // from many threads at once on a committed scene. Every ray is validated first; an invalid ray
@@ -109,6 +110,10 @@ class Scene {
     void set_world(const World& world);
     void set_camera(const Camera& camera);
     void set_instance_transform(uint32_t instance_id, const mat4& world_from_object);
+    // Replaces mesh `mesh_id` (validated and cleaned as add_mesh does; its MeshReport replaced)
+    // in every instance of it, e.g. by one with a new lightmap UV set. The next commit()
+    // rebuilds the per-mesh BVHs.
+    void set_mesh(uint32_t mesh_id, Mesh mesh);
 
     const std::vector<Mesh>& meshes() const { return meshes_; }
     const std::vector<MeshReport>& mesh_reports() const { return mesh_reports_; }

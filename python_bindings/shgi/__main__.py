@@ -59,8 +59,14 @@ def _parser() -> argparse.ArgumentParser:
     bake.add_argument("--uv-set", default=None,
                       help="lightmap UV map (default: LightmapUV, else a glTF's TEXCOORD_1 "
                            "'UVMap.001')")
+    bake.add_argument("--uv", type=str.upper, default="EXISTING",
+                      choices=_bake.LIGHTMAP_UV_SOURCES,
+                      help="where the lightmap UV map comes from: EXISTING (objects without it "
+                           "are skipped) or XATLAS (objects without it get one from xatlas; "
+                           "prints each one's chart count and utilization)")
     bake.add_argument("--objects", default=None,
-                      help="comma-separated object names (default: every object with the UV map)")
+                      help="comma-separated object names (default: every object with the UV map; "
+                           "with --uv xatlas every object)")
     size = bake.add_mutually_exclusive_group()
     size.add_argument("--resolution", type=_whole(1), default=0, help="texels per side (256)")
     size.add_argument("--density", type=_positive, default=0.0, help="texels per metre")
@@ -100,21 +106,26 @@ def _load(path: str):
     return scene
 
 
-def _uv_set(scene, requested):
+def _uv_set(scene, requested, lightmap_uvs: str):
+    """The UV map to bake: `requested`, else LightmapUV, else a glTF's TEXCOORD_1; with XATLAS
+    any name (meshes without it get it), LightmapUV when the scene has neither."""
+    generate = lightmap_uvs == "XATLAS"
     names = set()
     for mesh in scene.meshes:
         names.update(mesh.uv_sets)
     if requested:
-        if requested not in names:
+        if requested not in names and not generate:
             raise ValueError(f"no mesh has the UV map '{requested}'; the scene has "
                              f"{sorted(names) or 'no UV maps'}")
         return requested
     for candidate in ("LightmapUV", "UVMap.001"):
         if candidate in names:
             return candidate
+    if generate:
+        return "LightmapUV"
     raise ValueError("no mesh has a lightmap UV map ('LightmapUV', or a second glTF UV set "
                      f"TEXCOORD_1); the scene has {sorted(names) or 'no UV maps'}; pass "
-                     "--uv-set NAME")
+                     "--uv-set NAME, or --uv xatlas to lay one out")
 
 
 class _Bar:
@@ -145,25 +156,29 @@ def _bake_command(args) -> int:
     if args.threads:
         _shgi.set_max_threads(args.threads)
     scene = _load(args.scene)
-    uv_set = _uv_set(scene, args.uv_set)
+    uv_set = _uv_set(scene, args.uv_set, args.uv)
     names = [n.strip() for n in args.objects.split(",") if n.strip()] if args.objects else None
-    jobs = _bake.jobs_for_scene(scene, uv_set, args.resolution, args.density, names)
+    jobs = _bake.jobs_for_scene(scene, uv_set, args.resolution, args.density, names, args.uv)
     settings = _shgi.LightmapSettings(samples=args.samples, content=args.content,
                                       directional=args.directional, seed=args.seed)
-    options = _bake.BakeOptions(settings=settings, uv_set=uv_set, filter=args.filter, denoise=args.denoise,
-                                padding=args.padding)
+    options = _bake.BakeOptions(settings=settings, uv_set=uv_set, filter=args.filter,
+                                denoise=args.denoise, padding=args.padding, lightmap_uvs=args.uv)
     bar = _Bar(not args.quiet)
     progress = _bake.BakeProgress(bar)
 
     def work():
+        # UV layouts first: a solved field belongs to the scene with its final meshes.
+        laid_out = _bake.generate_lightmap_uvs(scene, jobs, options, progress)
         if args.merge:
-            return _bake.merge_shards(scene, jobs, options, args.out, args.merge, progress)
+            return laid_out, _bake.merge_shards(scene, laid_out, options, args.out, args.merge,
+                                                progress)
         field = _bake.solve_field(scene, args.method, args.seed, progress)
-        return _bake.bake_scene(scene, jobs, options, args.out, field, args.shard, progress)
+        return laid_out, _bake.bake_scene(scene, laid_out, options, args.out, field, args.shard,
+                                          progress)
 
     interrupted = False
     try:
-        results = _run_on_worker(work, progress)
+        laid_out, results = _run_on_worker(work, progress)
     except KeyboardInterrupt:
         interrupted = True
     finally:
@@ -171,6 +186,9 @@ def _bake_command(args) -> int:
     if interrupted:
         print("cancelled", file=sys.stderr)
         return 130
+    for job in laid_out:
+        if job.uv_layout is not None:
+            print(f"{job.name}: {_bake.describe_uv_layout(job.uv_layout)}")
     for item in results:
         if isinstance(item, str):
             print(item)

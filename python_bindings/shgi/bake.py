@@ -9,6 +9,11 @@ One object's bake: rasterize its lightmap UV map into a texel map, move samples 
 (unocclude), bake the texels (all of them, or one shard's tiles), then *finish*: filter
 (optional), dilate into the padding, write ``<name>.exr`` and ``<name>.png``.
 
+Lightmap UV maps: ``BakeOptions.lightmap_uvs`` "EXISTING" bakes only meshes that have the UV
+map; "XATLAS" first gives each mesh without it one laid out by xatlas (``shgi.uv_atlas``,
+``generate_lightmap_uvs``) and puts the mesh back into the scene (``Scene.set_mesh``). A mesh
+several objects share gets one layout, packed for the smallest of their lightmaps.
+
 Files (rows top first, as EXR and PNG store them; in memory row 0 is v = 0):
 
 ``<name>.exr``
@@ -23,7 +28,8 @@ Files (rows top first, as EXR and PNG store them; in memory row 0 is v = 0):
 
 Shards: ``shard=(i, n)`` bakes every tile whose index, counted over all objects in order, is
 i modulo n, and saves the raw texels as ``<out>/shards/<name>.shard-<i>-of-<n>.npz`` together
-with what decides their values (size, UV map, LightmapSettings, source of indirect light);
+with what decides their values (size, UV map and where it came from, LightmapSettings, source
+of indirect light);
 ``merge_shards`` reads every shard of every object, checks that they were baked alike, merges and
 finishes them. Texels depend only on the seed, the object and the texel, so the merged files are
 byte-identical to a single bake.
@@ -32,6 +38,7 @@ byte-identical to a single bake.
 from __future__ import annotations
 
 import dataclasses
+import importlib.metadata
 import json
 import math
 import os
@@ -41,7 +48,8 @@ from typing import Callable, Iterable, Optional, Sequence
 
 import numpy as np
 
-from . import _shgi
+from . import _shgi, uv_atlas
+from .denoise import import_optional
 
 __all__ = [
     "BakeOptions",
@@ -59,6 +67,9 @@ __all__ = [
     "emits_light",
     "solve_field",
     "SOURCES",
+    "LIGHTMAP_UV_SOURCES",
+    "generate_lightmap_uvs",
+    "describe_uv_layout",
 ]
 
 SH_LAYERS = ("SH.c0", "SH.c1", "SH.c2", "SH.c3")
@@ -76,8 +87,12 @@ SOURCES = ("PATH_TRACER", "PHOTON_LATTICE", "PROBE_GRID")
 # its passes this early (hysteresis blending starts later, probes/probe_grid.h).
 PROBE_GRID_PASSES = 8
 
-# Version of the shard file layout (the arrays and the "meta" JSON below).
-_SHARD_FORMAT = 1
+# Where an object's lightmap UV map comes from (BakeOptions.lightmap_uvs, the CLI's --uv):
+# the mesh's own, or one laid out by xatlas for meshes without it.
+LIGHTMAP_UV_SOURCES = ("EXISTING", "XATLAS")
+
+# Version of the shard file layout (the arrays and the "meta" JSON below). 2: lightmap UV source.
+_SHARD_FORMAT = 2
 # The LightmapSettings fields that decide a texel's value: every shard of a bake must agree.
 _SHARD_SETTINGS = ("content", "samples", "seed", "directional", "max_bounces", "diffuse_bounces",
                    "glossy_bounces", "transmission_bounces", "clamp_indirect", "tile_size")
@@ -100,18 +115,25 @@ class BakeOptions:
     denoise: str = "NONE"
     oidn_filter: str = "RTLightmap"
     padding: int = 4  # texels of dilation beyond the UV charts
+    # Where `uv_set` comes from (LIGHTMAP_UV_SOURCES): "EXISTING", each mesh's own; "XATLAS", a
+    # layout from xatlas for meshes without it (generate_lightmap_uvs), with `uv_padding` empty
+    # texels around each chart (2 x uv_padding between charts: room for `padding`'s dilation).
+    lightmap_uvs: str = "EXISTING"
+    uv_padding: int = 2
     png: bool = True
     exposure: float = 0.0  # stops, for the PNG preview only
 
 
 @dataclasses.dataclass
 class BakeJob:
-    """One object to bake: its scene instance, file name and lightmap size."""
+    """One object to bake: its scene instance, file name and lightmap size; `uv_layout`, the
+    report of the xatlas layout generate_lightmap_uvs made for its mesh (None: the mesh's own)."""
 
     instance: int
     name: str
     width: int = 256
     height: int = 256
+    uv_layout: Optional[dict] = None
 
 
 @dataclasses.dataclass
@@ -124,6 +146,8 @@ class Lightmap:
     coverage: np.ndarray  # (H, W) float32, 0 outside the charts
     filled: np.ndarray  # (H, W) bool: baked or dilated
     sh: Optional[np.ndarray] = None  # (H, W, 4, 3) float32 with directional
+    # The rasterizer's report and chart count ("charts"); "uv_layout": BakeJob.uv_layout when
+    # xatlas laid out the UV map (chart_count, utilization, ...).
     report: dict = dataclasses.field(default_factory=dict)
     paths: list = dataclasses.field(default_factory=list)
 
@@ -172,6 +196,15 @@ class BakeProgress:
         """For one object that owns [lo, hi] of the bake: stage(a, b) is the native Progress of
         the step that owns [a, b] of the object's own [0, 1]."""
         return lambda a, b: self.native(lo + a * (hi - lo), lo + b * (hi - lo), label)
+
+    def note(self, stage: str) -> None:
+        """Reports a step that owns no share of the bake (the fraction stays where it is), such
+        as a UV layout; raises shgi.Cancelled after cancel()."""
+        if self._cancelled:
+            raise _shgi.Cancelled("bake cancelled")
+        self.stage = stage
+        if self.callback is not None:
+            self.callback(self.fraction, self.stage)
 
     def done(self) -> None:
         """Reports the end of the whole bake (fraction 1)."""
@@ -225,7 +258,8 @@ def _texel_map(scene, job: BakeJob, options: BakeOptions, progress) -> _shgi.Tex
 def bake_object(scene, job: BakeJob, options: BakeOptions, field=None, tiles: Sequence[int] = (),
                 progress=None):
     """Rasterizes and bakes one object (`tiles` only, all when empty); returns (TexelMap, raw
-    LightmapTexels). `progress`: a native shgi.Progress, reused by every step."""
+    LightmapTexels). `progress`: a native shgi.Progress, reused by every step. The mesh must
+    have options.uv_set already (generate_lightmap_uvs lays out missing ones)."""
     return _bake_object(scene, job, options, field, tiles, lambda a, b: progress, 1.0)
 
 
@@ -347,13 +381,106 @@ def _check_jobs(scene, jobs: Sequence[BakeJob]) -> None:
     duplicates = {n for n in names if names.count(n) > 1}
     if duplicates:
         raise ValueError(f"objects {sorted(duplicates)} would write the same files; rename them")
+    _check_instances(scene, jobs)
+    if not emits_light(scene):
+        raise ValueError(NO_LIGHT_MESSAGE)
+
+
+def _check_instances(scene, jobs: Sequence[BakeJob]) -> None:
     count = len(scene.instances)
     for job in jobs:
         if not 0 <= job.instance < count:
             raise ValueError(f"object '{job.name}': instance {job.instance} is not in the scene "
                              f"({count} instances)")
-    if not emits_light(scene):
-        raise ValueError(NO_LIGHT_MESSAGE)
+
+
+def _lightmap_uv_source(value: str) -> str:
+    """BakeOptions.lightmap_uvs / jobs_for_scene's lightmap_uvs, checked (any case)."""
+    source = str(value).upper()
+    if source not in LIGHTMAP_UV_SOURCES:
+        raise ValueError(f"lightmap_uvs {value!r}: use one of {', '.join(LIGHTMAP_UV_SOURCES)}")
+    return source
+
+
+def _meshes_without_uv_set(scene, jobs: Sequence[BakeJob], uv_set: str) -> dict:
+    """{mesh id: [indices into jobs]} of the jobs whose mesh lacks `uv_set`, in jobs order."""
+    meshes, instances = scene.meshes, scene.instances
+    missing = {}
+    for k, job in enumerate(jobs):
+        mesh_id = instances[job.instance].mesh_id
+        if uv_set not in meshes[mesh_id].uv_sets:
+            missing.setdefault(mesh_id, []).append(k)
+    return missing
+
+
+def _job_names(jobs: Sequence[BakeJob], missing: dict) -> str:
+    """'a', 'b': the names of the jobs _meshes_without_uv_set found."""
+    return ", ".join(f"'{jobs[k].name}'" for members in missing.values() for k in members)
+
+
+def generate_lightmap_uvs(scene, jobs: Sequence[BakeJob], options: BakeOptions,
+                          progress: Optional[BakeProgress] = None) -> list:
+    """Gives every job's mesh that lacks the UV map `options.uv_set` one laid out by xatlas
+    (options.lightmap_uvs "XATLAS"), puts the new mesh into the scene with Scene.set_mesh and
+    commits it again. Returns the jobs, each whose mesh was laid out here with the layout's
+    report in `uv_layout` (uv_atlas.LightmapUVs.report: chart_count, utilization, uv_coverage,
+    texels_per_metre, width, height, padding; plus `objects`, the jobs sharing the layout), and
+    reports each through `progress`. Jobs whose mesh has the UV map are returned as they were,
+    so a second call changes nothing.
+
+    The layout is packed into a square of min(width, height) texels, the job's size, at the
+    highest density that fits, with `options.uv_padding` empty texels around each chart.
+    A mesh that several jobs' instances share gets one layout (the UV map belongs to the mesh):
+    packed for the smallest of their lightmaps, so that every one keeps at least uv_padding
+    texels around each chart (a larger lightmap only widens the gaps), with the first job's
+    world_from_object deciding the charts' relative sizes (the same for every instance that
+    differs only by a rotation, a translation or a uniform scale).
+
+    Call it before solving an indirect-light field (solve_field): a field belongs to the scene
+    as it was when solved. "EXISTING": ValueError naming the objects without the UV map.
+    ImportError naming the pip command when xatlas is not installed.
+    """
+    source = _lightmap_uv_source(options.lightmap_uvs)
+    _check_instances(scene, jobs)
+    missing = _meshes_without_uv_set(scene, jobs, options.uv_set)
+    if not missing:
+        return list(jobs)
+    if source == "EXISTING":
+        raise ValueError(f"no UV map '{options.uv_set}' on {_job_names(jobs, missing)}: add "
+                         "one, choose another UV map, or let xatlas lay one out "
+                         "(BakeOptions.lightmap_uvs='XATLAS', the command line's --uv xatlas)")
+    if not (isinstance(options.uv_padding, int) and options.uv_padding >= 0):
+        raise ValueError(f"uv_padding must be a whole number of texels >= 0, got "
+                         f"{options.uv_padding!r}")
+    # Before any mesh changes: without xatlas the scene stays as it was.
+    import_optional("xatlas", "laying out lightmap UVs (lightmap_uvs 'XATLAS', --uv xatlas)")
+    progress = progress or BakeProgress()
+    jobs = list(jobs)
+    meshes, instances = scene.meshes, scene.instances
+    for mesh_id, members in missing.items():
+        first = jobs[members[0]]
+        progress.note(f"{first.name}: lightmap UVs (xatlas)")
+        resolution = min(min(jobs[k].width, jobs[k].height) for k in members)
+        try:
+            mesh, layout = uv_atlas.add_lightmap_uvs(
+                meshes[mesh_id], uv_set=options.uv_set,
+                world_from_object=instances[first.instance].world_from_object,
+                resolution=resolution, padding=options.uv_padding)
+        except ValueError as error:
+            raise ValueError(f"object '{first.name}': {error}") from error
+        scene.set_mesh(mesh_id, mesh)
+        report = dict(layout.report, objects=[jobs[k].name for k in members])
+        for k in members:
+            jobs[k] = dataclasses.replace(jobs[k], uv_layout=report)
+            progress.note(f"{jobs[k].name}: {describe_uv_layout(report)}")
+    scene.commit()
+    return jobs
+
+
+def describe_uv_layout(report: dict) -> str:
+    """One line for people: "lightmap UVs by xatlas: 6 charts, utilization 0.71 (48 x 48)"."""
+    return (f"lightmap UVs by xatlas: {report['chart_count']} charts, utilization "
+            f"{report['utilization']:.2f} ({report['width']} x {report['height']})")
 
 
 def _spans(weights: Sequence[float]) -> list:
@@ -374,13 +501,25 @@ def bake_scene(scene, jobs: Sequence[BakeJob], options: BakeOptions, out_dir: st
     returns the Lightmaps (on_lightmap(lightmap) is called as each one completes, so a
     cancelled bake keeps what finished). With shard=(i, n): writes raw shard files and returns
     their paths. `field`: None for the path tracer, else the IndirectField giving the indirect
-    light (every shard of a bake must use the same)."""
+    light (every shard of a bake must use the same).
+
+    With options.lightmap_uvs "XATLAS", meshes without the UV map get one first
+    (generate_lightmap_uvs, which must run before the field is solved when there is one); each
+    such Lightmap's report holds the layout's in "uv_layout"."""
     _check_jobs(scene, jobs)
     options.settings.validate()
     if not shard:
         denoise_method(options)  # fail before baking, not after
     _check_padding(options)
+    if field is not None and _lightmap_uv_source(options.lightmap_uvs) == "XATLAS":
+        missing = _meshes_without_uv_set(scene, jobs, options.uv_set)
+        if missing:
+            raise ValueError(f"no UV map '{options.uv_set}' on {_job_names(jobs, missing)} yet, "
+                             "and the indirect light field was solved for the scene without "
+                             "it: call generate_lightmap_uvs(scene, jobs, options) before "
+                             "solve_field and bake the jobs it returns")
     progress = progress or BakeProgress()
+    jobs = generate_lightmap_uvs(scene, jobs, options, progress)
     if shard:
         tiles = _shard_tiles(jobs, options, *shard)
         weights = [len(t) for t in tiles]
@@ -403,13 +542,23 @@ def bake_scene(scene, jobs: Sequence[BakeJob], options: BakeOptions, out_dir: st
             continue
         texel_map, texels = _bake_object(scene, job, options, field, (), stage,
                                          1.0 - _FINISH_SHARE)
-        lightmap = finish(texel_map, texels, options, job.name, stage(1.0 - _FINISH_SHARE, 1.0))
-        write_lightmap(lightmap, out_dir, options)
+        lightmap = _finish_job(texel_map, texels, options, job, out_dir,
+                               stage(1.0 - _FINISH_SHARE, 1.0))
         results.append(lightmap)
         if on_lightmap is not None:
             on_lightmap(lightmap)
     progress.done()
     return results
+
+
+def _finish_job(texel_map, texels, options: BakeOptions, job: BakeJob, out_dir: str,
+                progress) -> Lightmap:
+    """finish() and write_lightmap() for a job, its UV layout's report added."""
+    lightmap = finish(texel_map, texels, options, job.name, progress)
+    if job.uv_layout is not None:
+        lightmap.report["uv_layout"] = job.uv_layout
+    write_lightmap(lightmap, out_dir, options)
+    return lightmap
 
 
 def _check_padding(options: BakeOptions) -> None:
@@ -433,16 +582,31 @@ def _shard_meta(jobs: Sequence[BakeJob], job: BakeJob, options: BakeOptions, sha
                 shards: int, source: Optional[str]) -> dict:
     """Everything that decides a shard's texels, saved with them and checked when merging:
     also every object of the bake and its size, since they decide which tiles a shard bakes.
-    `source` None: not known (a merge does not bake; it checks the shards agree)."""
+    `source` None: not known (a merge does not bake; it checks the shards agree). With xatlas
+    layouts: their padding and xatlas's version, since every shard and the merge lay the meshes
+    out again and must get the same charts (the layout is deterministic for a given version)."""
     settings = options.settings
+    uv_source = _lightmap_uv_source(options.lightmap_uvs)
+    xatlas = uv_source == "XATLAS"
     return {
         "format": _SHARD_FORMAT, "object": job.name, "width": job.width, "height": job.height,
         "objects": [[other.name, other.width, other.height] for other in jobs],
         "shard": shard, "shards": shards, "uv_set": options.uv_set,
         "samples_per_axis": options.samples_per_axis, "unocclude": options.unocclude,
         "source": source,
+        "lightmap_uvs": uv_source,
+        "uv_padding": options.uv_padding if xatlas else None,
+        "xatlas": _xatlas_version() if xatlas else None,
         "settings": {name: getattr(settings, name) for name in _SHARD_SETTINGS},
     }
+
+
+def _xatlas_version() -> Optional[str]:
+    """The installed xatlas's version, None without it (a bake that needed it has failed)."""
+    try:
+        return importlib.metadata.version("xatlas")
+    except importlib.metadata.PackageNotFoundError:
+        return None
 
 
 def _save_shard(path: str, texels, meta: dict) -> None:
@@ -501,6 +665,7 @@ def merge_shards(scene, jobs: Sequence[BakeJob], options: BakeOptions, out_dir: 
     denoise_method(options)
     _check_padding(options)
     progress = progress or BakeProgress()
+    jobs = generate_lightmap_uvs(scene, jobs, options, progress)  # as the shards laid them out
     results = []
     spans = _spans([job.width * job.height for job in jobs])
     for job, (lo, hi) in zip(jobs, spans):
@@ -524,9 +689,8 @@ def merge_shards(scene, jobs: Sequence[BakeJob], options: BakeOptions, out_dir: 
         if missing:
             raise ValueError(f"object '{job.name}': {missing} texels are in no shard file; were "
                              f"all {shards} shards baked with the same settings?")
-        lightmap = finish(texel_map, merged, options, job.name, stage(_RASTER_SHARE, 1.0))
-        write_lightmap(lightmap, out_dir, options)
-        results.append(lightmap)
+        results.append(_finish_job(texel_map, merged, options, job, out_dir,
+                                   stage(_RASTER_SHARE, 1.0)))
     progress.done()
     return results
 
@@ -552,12 +716,15 @@ def solve_field(scene, source: str, seed: int = 0, progress: Optional[BakeProgre
 
 
 def jobs_for_scene(scene, uv_set: str, resolution: int = 0, texels_per_metre: float = 0.0,
-                   names: Optional[Iterable[str]] = None) -> list:
-    """A BakeJob for every instance whose mesh has the UV map `uv_set` (or only `names`).
+                   names: Optional[Iterable[str]] = None, lightmap_uvs: str = "EXISTING") -> list:
+    """A BakeJob for every instance whose mesh has the UV map `uv_set` (or only `names`); with
+    lightmap_uvs "XATLAS" for every instance (generate_lightmap_uvs lays out the missing maps).
 
-    Size: `resolution` when positive, else from `texels_per_metre`; raises ValueError naming
-    objects that lack the UV map when they were asked for by name.
+    Size: `resolution` when positive, else from `texels_per_metre` (resolution_for_density;
+    an xatlas layout is then packed into that square); raises ValueError naming objects that
+    lack the UV map when they were asked for by name.
     """
+    generate = _lightmap_uv_source(lightmap_uvs) == "XATLAS"
     wanted = set(names) if names is not None else None
     jobs, missing = [], []
     meshes = scene.meshes
@@ -565,7 +732,7 @@ def jobs_for_scene(scene, uv_set: str, resolution: int = 0, texels_per_metre: fl
         name = inst.name or f"instance_{index}"
         if wanted is not None and name not in wanted:
             continue
-        if uv_set not in meshes[inst.mesh_id].uv_sets:
+        if uv_set not in meshes[inst.mesh_id].uv_sets and not generate:
             if wanted is not None:
                 missing.append(f"'{name}' (has {sorted(meshes[inst.mesh_id].uv_sets)})")
             continue
@@ -578,8 +745,8 @@ def jobs_for_scene(scene, uv_set: str, resolution: int = 0, texels_per_metre: fl
             size = BakeJob.width
         jobs.append(BakeJob(instance=index, name=name, width=size, height=size))
     if missing:
-        raise ValueError(f"no UV map '{uv_set}' on {', '.join(missing)}: add one or choose "
-                         "another UV map")
+        raise ValueError(f"no UV map '{uv_set}' on {', '.join(missing)}: add one, choose "
+                         "another UV map or let xatlas lay one out (lightmap_uvs='XATLAS')")
     if wanted is not None:
         unknown = wanted - {job.name for job in jobs}
         if unknown:

@@ -1,14 +1,16 @@
 """Tests of shgi.bake (lightmaps to files, shards, merging) and of ``python -m shgi bake``.
 
 Ground truth first: a Lambert plane under a uniform world bakes to the world's radiance exactly
-(native/bake/lightmap_baker.h: the texel holds E / pi). The file layout is checked against the
-in-memory lightmap (rows flipped to top-first), shard bakes against the single bake byte for
-byte (DESIGN.md, determinism), and every error against the message a user would read.
+(native/bake/lightmap_baker.h: the texel holds E / pi), also through a UV map that xatlas lays out
+for a mesh without one (BakeOptions.lightmap_uvs, the CLI's --uv xatlas). The file layout is
+checked against the in-memory lightmap (rows flipped to top-first), shard bakes against the single
+bake byte for byte (DESIGN.md, determinism), and every error against the message a user would read.
 Sizes and sample counts are small: the whole file runs in well under a minute on two cores.
 """
 
 import base64
 import dataclasses
+import importlib.util
 import json
 import math
 import os
@@ -51,9 +53,11 @@ HALF = np.float16
 SMALL_SETTINGS = dict(samples=8, seed=3)
 
 
-def plane_scene(uvs=None, world=(WORLD_COLOR, WORLD_STRENGTH), lights=()):
+def plane_scene(uvs=None, world=(WORLD_COLOR, WORLD_STRENGTH), lights=(), lightmap_uv=True,
+                placements=(("plane", np.eye(4)),)):
     """A 2 x 2 m Lambert plane at z = 0 facing +Z whose LightmapUV maps (x, y) to
-    ((x+1)/2, (y+1)/2) (or `uvs`), under a uniform world, committed."""
+    ((x+1)/2, (y+1)/2) (or `uvs`; no UV map at all without `lightmap_uv`), under a uniform
+    world, committed; one object per (name, world_from_object) of `placements`."""
     scene = shgi.Scene()
     material = scene.add_material(shgi.Material(name="paint", base_color=ALBEDO,
                                                 diffuse_model=shgi.DiffuseModel.LAMBERT))
@@ -61,9 +65,11 @@ def plane_scene(uvs=None, world=(WORLD_COLOR, WORLD_STRENGTH), lights=()):
     if uvs is None:
         uvs = (positions[:, :2] + 1.0) / 2.0
     mesh = scene.add_mesh(positions=positions, triangles=np.array([[0, 1, 2], [0, 2, 3]]),
-                          name="plane", uvs={"LightmapUV": np.asarray(uvs, np.float32)},
+                          name="plane",
+                          uvs={"LightmapUV": np.asarray(uvs, np.float32)} if lightmap_uv else None,
                           material_indices=np.full(2, material))
-    scene.add_instance(mesh, np.eye(4), "plane")
+    for name, world_from_object in placements:
+        scene.add_instance(mesh, world_from_object, name)
     color, strength = world
     scene.set_world(shgi.World(color=color, strength=strength))
     for light in lights:
@@ -362,6 +368,163 @@ def test_shards_split_tiles_over_all_objects():
     assert [len(split[s][2]) for s in range(SHARDS)] == [0, 0, 1, 0]  # global tile 10
 
 
+# --- lightmap UVs laid out by xatlas --------------------------------------------------------------
+
+needs_xatlas = pytest.mark.skipif(
+    importlib.util.find_spec("xatlas") is None,
+    reason="xatlas is not installed for this Python: run `make deps` or "
+           "`python3 -m pip install xatlas`")
+# Texels per metre for the 2 x 2 m plane: resolution_for_density gives sqrt(2 x 4 m^2) x 8 = 22.6,
+# rounded up to 24 texels a side.
+XATLAS_DENSITY, XATLAS_SIDE = 8.0, 24
+# A plane scaled by 2 (16 m^2): sqrt(32) x 8 = 45.3, rounded up to 48.
+LARGE_SIDE = 48
+SCALE_2_AT_X_5 = np.array([[2, 0, 0, 5], [0, 2, 0, 0], [0, 0, 2, 0], [0, 0, 0, 1]], np.float32)
+
+
+def xatlas_options(**settings):
+    return dataclasses.replace(options(**settings), lightmap_uvs="XATLAS")
+
+
+def assert_world_radiance_on_the_charts(lightmap):
+    """Every texel the UV map covers holds the uniform world's radiance (E / pi, exact)."""
+    color = lightmap.color[lightmap.coverage > 0]
+    assert len(color) > 0
+    np.testing.assert_allclose(color, np.broadcast_to(WORLD_RADIANCE, color.shape),
+                               rtol=ROUND_OFF, atol=ROUND_OFF)
+
+
+def assert_coverage_is_the_reported_layout(lightmap):
+    """The rasterizer's coverage of the baked UV map adds up to the reported layout's UV area,
+    without overlaps: the lightmap was baked through that layout."""
+    layout = lightmap.report["uv_layout"]
+    height, width = lightmap.coverage.shape
+    assert lightmap.report["overlapping_texels"] == 0
+    assert lightmap.coverage.sum() == pytest.approx(layout["uv_coverage"] * width * height,
+                                                    rel=1e-4)
+
+
+def test_a_mesh_without_the_uv_map_is_refused_unless_xatlas_is_asked_for(tmp_path):
+    scene = plane_scene(lightmap_uv=False)
+    assert bake.jobs_for_scene(scene, "LightmapUV", texels_per_metre=XATLAS_DENSITY) == []
+    with pytest.raises(ValueError, match=r"no UV map 'LightmapUV' on 'plane' \(has \[\]\): .*"
+                                         "lightmap_uvs='XATLAS'"):
+        bake.jobs_for_scene(scene, "LightmapUV", names=["plane"])
+    with pytest.raises(ValueError, match="no UV map 'LightmapUV' on 'plane': add one, choose "
+                                         "another UV map, or let xatlas lay one out"):
+        bake.bake_scene(scene, [plane_job()], options(), str(tmp_path))
+    with pytest.raises(ValueError, match="lightmap_uvs 'BLENDER': use one of EXISTING, XATLAS"):
+        bake.bake_scene(scene, [plane_job()], dataclasses.replace(options(),
+                                                                  lightmap_uvs="BLENDER"),
+                        str(tmp_path))
+    assert os.listdir(tmp_path) == [] and scene.meshes[0].uv_sets == {}
+
+
+@needs_xatlas
+def test_xatlas_lays_out_a_plane_without_uvs_that_bakes_to_its_radiance(tmp_path):
+    scene = plane_scene(lightmap_uv=False)
+    jobs = bake.jobs_for_scene(scene, "LightmapUV", texels_per_metre=XATLAS_DENSITY,
+                               lightmap_uvs="XATLAS")
+    assert jobs == [bake.BakeJob(0, "plane", XATLAS_SIDE, XATLAS_SIDE)]
+    stages = []
+    progress = bake.BakeProgress(lambda fraction, stage: stages.append(stage))
+    [lightmap] = bake.bake_scene(scene, jobs, xatlas_options(), str(tmp_path), progress=progress)
+
+    assert_world_radiance_on_the_charts(lightmap)
+    assert_coverage_is_the_reported_layout(lightmap)
+    layout = lightmap.report["uv_layout"]
+    # One flat quad: one chart, as the rasterizer counts it too.
+    assert layout["chart_count"] == 1 == lightmap.report["charts"]
+    assert 0.0 < layout["uv_coverage"] <= layout["utilization"] <= 1.0
+    assert (layout["width"], layout["height"]) == (XATLAS_SIDE, XATLAS_SIDE)
+    assert layout["padding"] == bake.BakeOptions().uv_padding and layout["objects"] == ["plane"]
+    # Packed as densely as the lightmap allows: at least the density asked for.
+    assert layout["texels_per_metre"] >= XATLAS_DENSITY
+    assert (f"plane: lightmap UVs by xatlas: 1 charts, utilization "
+            f"{layout['utilization']:.2f} (24 x 24)") in stages
+    # The mesh in the scene now has the UV map; a second bake lays out nothing again.
+    assert list(scene.meshes[0].uv_sets) == ["LightmapUV"]
+    assert bake.generate_lightmap_uvs(scene, jobs, xatlas_options()) == jobs
+    stored = shgi.read_exr(tmp_path / "plane.exr")["Lightmap"]
+    np.testing.assert_array_equal(stored, lightmap.color[::-1].astype(HALF).astype(np.float32))
+
+
+@needs_xatlas
+def test_a_mesh_two_objects_share_gets_one_layout_packed_for_the_smaller_lightmap(tmp_path):
+    """The plane's mesh placed twice, once scaled by 2 (side by side, coplanar: neither shades
+    the other): one layout, packed at the small object's 24 texels, serves both lightmaps."""
+    scene = plane_scene(lightmap_uv=False,
+                        placements=[("small", np.eye(4)), ("large", SCALE_2_AT_X_5)])
+    jobs = bake.jobs_for_scene(scene, "LightmapUV", texels_per_metre=XATLAS_DENSITY,
+                               lightmap_uvs="XATLAS")
+    assert [(job.name, job.width) for job in jobs] == [("small", XATLAS_SIDE),
+                                                        ("large", LARGE_SIDE)]
+    small, large = bake.bake_scene(scene, jobs, xatlas_options(), str(tmp_path))
+    assert small.report["uv_layout"] == large.report["uv_layout"]
+    layout = small.report["uv_layout"]
+    assert layout["width"] == XATLAS_SIDE and layout["objects"] == ["small", "large"]
+    assert scene.stats()["meshes"] == 1
+    for lightmap in (small, large):
+        assert_world_radiance_on_the_charts(lightmap)
+        assert_coverage_is_the_reported_layout(lightmap)
+    assert large.coverage.shape == (LARGE_SIDE, LARGE_SIDE)
+
+
+@needs_xatlas
+def test_xatlas_shards_merge_like_a_single_bake_and_refuse_other_uv_options(tmp_path):
+    """Every shard and the merge lay the mesh out again (here on fresh scenes): the layout is
+    deterministic, so the merge is byte-identical to a single bake; shard files record the UV
+    option and padding, so a merge with others is refused."""
+    def fresh_jobs():
+        scene = plane_scene(lightmap_uv=False)
+        return scene, bake.jobs_for_scene(scene, "LightmapUV", texels_per_metre=XATLAS_DENSITY,
+                                          lightmap_uvs="XATLAS")
+
+    tiled = xatlas_options(tile_size=16)  # 4 tiles of the 24 x 24 lightmap
+    bake.bake_scene(*fresh_jobs(), tiled, str(tmp_path / "single"))
+    for shard in range(2):
+        bake.bake_scene(*fresh_jobs(), tiled, str(tmp_path / "farm"), shard=(shard, 2))
+    scene, jobs = fresh_jobs()
+    with pytest.raises(ValueError, match="no UV map 'LightmapUV' on 'plane'"):
+        bake.merge_shards(scene, jobs, options(tile_size=16), str(tmp_path / "farm"), 2)
+    [merged] = bake.merge_shards(scene, jobs, tiled, str(tmp_path / "farm"), 2)
+    assert merged.report["uv_layout"]["chart_count"] == 1
+    assert written_files(tmp_path / "farm") == written_files(tmp_path / "single")
+    # The scene now has the UV map, so only the shard files' record tells the bakes apart.
+    with pytest.raises(ValueError, match=r"lightmap_uvs 'XATLAS' \(merge: 'EXISTING'\)"):
+        bake.merge_shards(scene, jobs, options(tile_size=16), str(tmp_path / "farm"), 2)
+    with pytest.raises(ValueError, match=r"uv_padding 2 \(merge: 3\)"):
+        bake.merge_shards(scene, jobs, dataclasses.replace(tiled, uv_padding=3),
+                          str(tmp_path / "farm"), 2)
+
+
+@needs_xatlas
+def test_uv_layouts_come_before_solving_an_indirect_light_field(tmp_path):
+    """A field belongs to the scene it was solved for: laying out UVs after solving it is
+    refused; laid out first, the bake through the field is exact as well."""
+    scene = plane_scene(lightmap_uv=False)
+    jobs = bake.jobs_for_scene(scene, "LightmapUV", resolution=16, lightmap_uvs="XATLAS")
+    stale = bake.solve_field(scene, "PHOTON_LATTICE")
+    with pytest.raises(ValueError, match="call generate_lightmap_uvs\\(scene, jobs, options\\) "
+                                         "before solve_field"):
+        bake.bake_scene(scene, jobs, xatlas_options(), str(tmp_path), stale)
+    assert scene.meshes[0].uv_sets == {}
+    jobs = bake.generate_lightmap_uvs(scene, jobs, xatlas_options())
+    field = bake.solve_field(scene, "PHOTON_LATTICE")
+    [lightmap] = bake.bake_scene(scene, jobs, xatlas_options(), str(tmp_path), field)
+    assert_world_radiance_on_the_charts(lightmap)
+    assert lightmap.report["uv_layout"]["width"] == 16
+
+
+def test_xatlas_option_without_xatlas_raises_naming_the_pip_command(monkeypatch, tmp_path):
+    monkeypatch.setitem(sys.modules, "xatlas", None)  # makes `import xatlas` fail
+    scene = plane_scene(lightmap_uv=False)
+    with pytest.raises(ImportError, match=r"-m pip install( --break-system-packages)? xatlas"):
+        bake.bake_scene(scene, [plane_job()], xatlas_options(), str(tmp_path))
+    assert scene.meshes[0].uv_sets == {} and scene.committed
+    assert os.listdir(tmp_path) == []
+
+
 # --- errors from bake_scene -----------------------------------------------------------------------
 
 def test_nothing_to_bake(tmp_path):
@@ -554,6 +717,37 @@ def test_cli_scene_without_the_lightmap_uv_map(build_python_dir, tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+def test_cli_uv_xatlas_lays_out_objects_without_lightmap_uvs(build_python_dir, tmp_path):
+    """The room without TEXCOORD_1: --uv xatlas lays out the floor (one chart) and the box (a
+    chart per face, its faces share no vertices), prints each layout, bakes both; shards and a
+    merge lay them out alike and give the same files."""
+    path = tmp_path / "no_lightmap_uv.gltf"
+    path.write_text(json.dumps(room_gltf(lightmap_uv=False)))
+    plain, farm = tmp_path / "plain", tmp_path / "farm"
+    result = run_cli(build_python_dir, path, "--out", plain, *CLI_BAKE, "--uv", "xatlas")
+    assert result.returncode == 0, result.stderr
+    layouts = dict(re.findall(r"^(\w+): lightmap UVs by xatlas: (\d+) charts, utilization "
+                              r"(?:0\.\d\d|1\.00) \(32 x 32\)$", result.stdout, re.MULTILINE))
+    assert layouts == {"Floor": "1", "Box": "6"}, result.stdout
+    assert f"Box: {plain / 'Box.exr'} {plain / 'Box.png'}" in result.stdout
+    assert sorted(os.listdir(plain)) == ["Box.exr", "Box.png", "Floor.exr", "Floor.png"]
+    # The floor is lit but for the box's footprint (0.64 of its 16 m^2).
+    dark = (shgi.read_exr(plain / "Floor.exr")["Lightmap"].max(axis=2) == 0.0).mean()
+    assert 0.0 < dark < 0.64 / 16
+    assert shgi.read_exr(plain / "Box.exr")["Coverage"].max() <= 1.0
+
+    for shard in ("0/2", "1/2"):
+        result = run_cli(build_python_dir, path, "--out", farm, *CLI_BAKE, "--uv", "XATLAS",
+                         "--shard", shard)
+        assert result.returncode == 0, result.stderr
+    result = run_cli(build_python_dir, path, "--out", farm, *CLI_BAKE, "--merge", "2")
+    assert result.returncode == 1 and "--uv xatlas to lay one out" in result.stderr
+    result = run_cli(build_python_dir, path, "--out", farm, *CLI_BAKE, "--uv", "xatlas",
+                     "--merge", "2")
+    assert result.returncode == 0, result.stderr
+    assert written_files(farm) == written_files(plain)
+
+
 @pytest.mark.parametrize("arguments, message", [
     (["--shard", "2/2"], "argument --shard: '2/2': need N >= 1 and 0 <= i < N"),
     (["--shard", "one/2"], "argument --shard: 'one/2': use i/N"),
@@ -561,6 +755,7 @@ def test_cli_scene_without_the_lightmap_uv_map(build_python_dir, tmp_path):
     (["--merge", "0"], "argument --merge: 0 is less than 1"),
     (["--padding", "-1"], "argument --padding: -1 is less than 0"),
     (["--density", "0"], "argument --density: 0 is not a positive number"),
+    (["--uv", "blender"], "argument --uv: invalid choice: 'BLENDER'"),
 ])
 def test_cli_bad_arguments(build_python_dir, room_file, tmp_path, arguments, message):
     result = run_cli(build_python_dir, room_file, "--out", tmp_path / "out", *arguments)

@@ -264,6 +264,49 @@ def test_intersect_known_quad():
     assert occluded.dtype == np.bool_
 
 
+def test_set_mesh_replaces_the_mesh_of_every_instance_at_the_next_commit():
+    """The quad replaced by one moved 2 m along x that carries a UV map and a degenerate
+    triangle: rays find it there after commit(), for both instances, and the stats count the
+    new mesh's dropped triangle."""
+    scene = quad_scene()
+    scene.add_instance(0, translation(0, 0, -2), name="Lower")
+    scene.commit()
+    origins = np.array([[0.75, 0.25, 1.0], [2.75, 0.25, 1.0]], np.float32)
+    directions = np.tile(np.array([0, 0, -1], np.float32), (2, 1))
+    np.testing.assert_array_equal(scene.intersect(origins, directions)["hit"], [True, False])
+
+    positions, triangles = quad_arrays()
+    moved = shgi.Mesh(positions + [2, 0, 0], np.vstack([triangles, [[0, 0, 1]]]),
+                      uvs={"LightmapUV": positions[:, :2]}, name="Moved")
+    scene.set_mesh(0, moved)
+    assert not scene.committed
+    with pytest.raises(ValueError, match="call commit\\(\\) first"):
+        scene.intersect(origins, directions)
+    scene.commit()
+    hits = scene.intersect(origins, directions)
+    np.testing.assert_array_equal(hits["hit"], [False, True])
+    np.testing.assert_allclose(hits["t"][1], 1.0, atol=TOLERANCE)
+    below = scene.intersect(origins[1:], directions[1:], tmin=1.5)  # past the first instance
+    np.testing.assert_allclose(below["t"], [3.0], atol=TOLERANCE)
+    assert scene.meshes[0].name == "Moved" and list(scene.meshes[0].uv_sets) == ["LightmapUV"]
+    stats = scene.stats()
+    assert (stats["meshes"], stats["triangles"], stats["dropped_degenerate"]) == (1, 2, 1)
+
+
+def test_set_mesh_rejects_a_bad_id_or_mesh_and_keeps_the_scene():
+    scene = quad_scene()
+    positions, triangles = quad_arrays()
+    with pytest.raises(ValueError, match="set_mesh: mesh_id = 5 but the scene has 1 meshes"):
+        scene.set_mesh(5, shgi.Mesh(positions, triangles))
+    broken = shgi.Mesh(positions, [[0, 1, 7]], name="Broken")  # checked by set_mesh, not Mesh
+    with pytest.raises(ValueError, match="mesh 'Broken': triangles\\[0\\] = \\(0, 1, 7\\) "
+                                         "indexes vertex 7 but the mesh has 4 vertices"):
+        scene.set_mesh(0, broken)
+    with pytest.raises(TypeError):
+        scene.set_mesh(0, "not a mesh")
+    assert scene.committed and scene.meshes[0].name == "Quad"
+
+
 def test_empty_scene_misses_and_has_no_bounds():
     scene = shgi.Scene()
     scene.commit()
@@ -335,6 +378,8 @@ def test_cancel_from_another_thread_returns_promptly():
     # Edits are refused while another thread queries the scene.
     with pytest.raises(RuntimeError, match="being committed or queried in another thread"):
         scene.add_material(shgi.Material())
+    with pytest.raises(RuntimeError, match="being committed or queried in another thread"):
+        scene.set_mesh(0, scene.meshes[0])
     cancelled_at = time.monotonic()
     progress.cancel()
     worker.join(timeout=5.0)

@@ -1979,6 +1979,10 @@ class Scene:
         """
         Moves an instance; the next commit() rebuilds only the top-level BVH.
         """
+    def set_mesh(self, mesh_id: typing.SupportsInt | typing.SupportsIndex, mesh: Mesh) -> None:
+        """
+        Replaces mesh `mesh_id` (an shgi.Mesh, checked and cleaned as add_mesh does) for every instance of it, e.g. with one that has a new lightmap UV map; the next commit() rebuilds its BVH. ValueError naming the id and the mesh count for a bad mesh_id.
+        """
     def set_world(self, world: World) -> None:
         """
         Sets the World (uniform background light).

@@ -1,6 +1,6 @@
 // Scene on Embree: hits on known geometry (exact t, barycentrics, normals) through instance
 // transforms, batch == single, every bad input rejected with its own message, memory budget,
-// empty scenes, emissive triangles, cancel.
+// empty scenes, emissive triangles, cancel, meshes replaced by set_mesh.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -374,6 +374,59 @@ TEST(SceneValidation, QueriesBeforeCommitAreRejected) {
     EXPECT_TRUE(scene.occluded(ray));
     scene.add_material(Material{});  // any edit un-commits
     EXPECT_FALSE(scene.committed());
+}
+
+TEST(SceneSetMesh, ReplacesTheMeshOfEveryInstanceAtTheNextCommit) {
+    // Two instances of a unit quad, at z = 0 and z = 2; the quad is then replaced by one moved
+    // to x in [2, 3] with a degenerate triangle, as a relaid-out mesh would be put back.
+    Scene scene;
+    const uint32_t mesh = scene.add_mesh(unit_quad());
+    scene.add_instance(mesh, mat4(1.0f), "Low");
+    scene.add_instance(mesh, glm::translate(mat4(1.0f), vec3(0, 0, 2)), "High");
+    scene.commit();
+    const Ray old_place = make_ray(vec3(0.75f, 0.25f, 10), vec3(0, 0, -1));
+    const Ray new_place = make_ray(vec3(2.75f, 0.25f, 10), vec3(0, 0, -1));
+    EXPECT_TRUE(scene.intersect(old_place).valid());
+    EXPECT_FALSE(scene.intersect(new_place).valid());
+    const uint64_t revision = scene.revision();
+
+    Mesh moved = unit_quad("Moved");
+    for (vec3& p : moved.positions) p.x += 2.0f;
+    moved.triangles.push_back(uvec3(0, 0, 1));
+    scene.set_mesh(mesh, moved);
+    EXPECT_FALSE(scene.committed());
+    EXPECT_GT(scene.revision(), revision);
+    expect_contains(rejection<InvalidArgument>([&] { scene.intersect(new_place); }),
+                    "call commit() first");
+    EXPECT_EQ(scene.meshes()[mesh].name, "Moved");
+    EXPECT_EQ(scene.mesh_reports()[mesh].dropped_degenerate, 1u);
+    EXPECT_EQ(scene.meshes()[mesh].triangles.size(), 2u);
+
+    scene.commit();
+    EXPECT_FALSE(scene.intersect(old_place).valid());
+    const Hit hit = scene.intersect(new_place);
+    ASSERT_TRUE(hit.valid());
+    EXPECT_EQ(hit.instance_id, 1u);  // the z = 2 instance moved with its mesh
+    EXPECT_NEAR(hit.t, 8.0f, kTolerance);
+    EXPECT_EQ(scene.stats().meshes, 1u);
+    EXPECT_EQ(scene.stats().dropped_degenerate, 1u);
+    EXPECT_EQ(scene.stats().instanced_triangles, 4u);
+}
+
+TEST(SceneSetMesh, BadIdOrMeshIsRejectedAndLeavesTheSceneCommitted) {
+    Scene scene;
+    scene.add_instance(scene.add_mesh(unit_quad()), mat4(1.0f));
+    scene.commit();
+    const std::string message = rejection<InvalidArgument>([&] { scene.set_mesh(3, unit_quad()); });
+    expect_contains(message, "mesh_id = 3");
+    expect_contains(message, "the scene has 1 meshes");
+    Mesh nan_mesh = unit_quad("Broken");
+    nan_mesh.positions[2].y = kNaN;
+    expect_contains(rejection<InvalidArgument>([&] { scene.set_mesh(0, nan_mesh); }),
+                    "mesh 'Broken': positions[2] = (1, nan, 0) is not finite");
+    EXPECT_TRUE(scene.committed());
+    EXPECT_EQ(scene.meshes()[0].name, "Quad");
+    EXPECT_TRUE(scene.intersect(make_ray(vec3(0.5f, 0.5f, 1), vec3(0, 0, -1))).valid());
 }
 
 TEST(SceneStats, CountsDroppedDegenerateTriangles) {
