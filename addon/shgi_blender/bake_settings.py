@@ -52,6 +52,7 @@ CONTENT_ITEMS = (
 BAKE_PROPERTY_DEFAULTS = {
     "uv_map": "LightmapUV",
     "create_uv": False,
+    "uv_layout": "LIGHTMAP_PACK",
     "resolution": 0,
     "texel_density": 32.0,
     "samples": 256,
@@ -69,6 +70,13 @@ BAKE_PROPERTY_DEFAULTS = {
 }
 # Where Export Volume writes when its operator's filepath is not set (scene.shgi.bake only).
 VOLUME_PATH_DEFAULT = "//shgi_volume.json"
+
+# How Create UV Map lays out a missing UV map (scene.shgi.bake.uv_layout).
+UV_LAYOUT_ITEMS = (
+    ("LIGHTMAP_PACK", "Lightmap Pack", "Blender's Lightmap Pack: each face its own box"),
+    ("XATLAS", "xatlas", "xatlas charts packed into the lightmap's size with padding between "
+                         "them (needs the xatlas module: make deps installs it)"),
+)
 
 # Denoiser of "Denoise" (scene.shgi.bake.denoiser): shgi.bake.BakeOptions.denoise methods.
 DENOISER_ITEMS = (

@@ -98,7 +98,10 @@ def bake_properties():
                         "unit square, without overlaps)"),
         "create_uv": BoolProperty(
             name="Create UV Map", default=B["create_uv"],
-            description="Give objects without the UV map one, laid out by Lightmap Pack"),
+            description="Give objects without the UV map one, laid out by the Layout"),
+        "uv_layout": EnumProperty(
+            name="Layout", items=list(bake_settings.UV_LAYOUT_ITEMS), default=B["uv_layout"],
+            description="How Create UV Map lays out the new UV map"),
         "resolution": IntProperty(
             name="Resolution", default=B["resolution"], min=0, soft_max=4096,
             description="Texels per side of each object's lightmap; 0 sizes each lightmap "

@@ -57,6 +57,7 @@ __all__ = [
     "Lightmap",
     "BakeProgress",
     "resolution_for_density",
+    "resolution_for_area",
     "bake_object",
     "finish",
     "write_lightmap",
@@ -225,16 +226,23 @@ def resolution_for_density(scene: _shgi.Scene, instance: int, texels_per_metre: 
                              maximum)
 
 
-def _side_for_density(mesh, inst, texels_per_metre: float, minimum: int, maximum: int) -> int:
+def resolution_for_area(area: float, texels_per_metre: float, minimum: int = MIN_RESOLUTION,
+                        maximum: int = MAX_RESOLUTION) -> int:
+    """Square lightmap size giving about `texels_per_metre` on `area` square metres of
+    surface (resolution_for_density's rule, for surfaces not in a Scene yet)."""
     if not (texels_per_metre > 0.0 and math.isfinite(texels_per_metre)):
         raise ValueError(f"texels_per_metre must be positive, got {texels_per_metre}")
+    side = math.sqrt(2.0 * area) * texels_per_metre
+    return int(min(maximum, max(minimum, 4 * math.ceil(side / 4.0))))
+
+
+def _side_for_density(mesh, inst, texels_per_metre: float, minimum: int, maximum: int) -> int:
     m = np.asarray(inst.world_from_object, dtype=np.float64)
     p = np.asarray(mesh.positions, dtype=np.float64) @ m[:3, :3].T + m[:3, 3]
     t = np.asarray(mesh.triangles, dtype=np.int64)
     area = 0.5 * np.linalg.norm(np.cross(p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]),
                                 axis=1).sum()
-    side = math.sqrt(2.0 * area) * texels_per_metre
-    return int(min(maximum, max(minimum, 4 * math.ceil(side / 4.0))))
+    return resolution_for_area(area, texels_per_metre, minimum, maximum)
 
 
 def _raster_settings(job: BakeJob, options: BakeOptions) -> _shgi.TexelRasterSettings:

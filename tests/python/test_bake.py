@@ -382,6 +382,20 @@ LARGE_SIDE = 48
 SCALE_2_AT_X_5 = np.array([[2, 0, 0, 5], [0, 2, 0, 0], [0, 0, 2, 0], [0, 0, 0, 1]], np.float32)
 
 
+def test_resolution_for_density_counts_world_metres():
+    """sqrt(2 x area) x density, rounded up to a multiple of 4, clamped; the same from the
+    area alone (resolution_for_area: for surfaces not in a Scene yet, like the add-on's)."""
+    scene = plane_scene(placements=(("plane", np.eye(4)), ("large", SCALE_2_AT_X_5)))
+    assert bake.resolution_for_density(scene, 0, XATLAS_DENSITY) == XATLAS_SIDE
+    assert bake.resolution_for_density(scene, 1, XATLAS_DENSITY) == LARGE_SIDE
+    assert bake.resolution_for_area(4.0, XATLAS_DENSITY) == XATLAS_SIDE
+    assert bake.resolution_for_area(16.0, XATLAS_DENSITY) == LARGE_SIDE
+    assert bake.resolution_for_area(16.0, XATLAS_DENSITY, 64, 128) == 64
+    assert bake.resolution_for_area(1e6, XATLAS_DENSITY, 16, 128) == 128
+    with pytest.raises(ValueError, match="texels_per_metre must be positive"):
+        bake.resolution_for_area(4.0, 0.0)
+
+
 def xatlas_options(**settings):
     return dataclasses.replace(options(**settings), lightmap_uvs="XATLAS")
 

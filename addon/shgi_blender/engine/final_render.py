@@ -2,11 +2,12 @@
 
 Steps: export the render depsgraph (export/), start a RenderJob on a worker thread (commit,
 solve, progressive sampling, all in native calls that release the GIL), then poll it every
-POLL_SECONDS: Esc (``test_break``) cancels the job, progress and the stage go to Blender's
-status, each new snapshot's Combined goes to the image editor, and at the end every pass the
-view layer enables is written with Cycles' names. Export warnings, native warnings and
-unsupported passes are reported as WARNING; a failure is set with ``error_set`` and reported as
-ERROR (bpy.ops.render.render then raises RuntimeError in scripts).
+POLL_SECONDS: Esc (``test_break``; Ctrl-C under the bpy module) cancels the job, progress and
+the stage go to Blender's status, each new snapshot's Combined goes to the image editor, and at
+the end every pass the view layer enables is written with Cycles' names (those of the running
+Blender, passes.py). Export warnings, native warnings and unsupported passes are reported as
+WARNING; a failure is set with ``error_set`` and reported as ERROR (bpy.ops.render.render then
+raises RuntimeError in scripts).
 
 The field methods (PHOTON_LATTICE, PROBE_GRID) solve their field on the job's thread before
 sampling (field_solvers.py); PROBE_GRID's probes fill the scene's Irradiance Volume objects, or
@@ -17,6 +18,8 @@ the Solve operator), only the camera is exported and the frozen solution is rend
 import logging
 import queue
 import time
+
+import bpy
 
 from .. import native, settings
 from . import passes, scene_checks, solution_cache
@@ -174,16 +177,13 @@ class FinalRender:
         result = self.engine.begin_result(0, 0, self.width, self.height,
                                           layer=self.view_layer.name)
         try:
-            while not job.wait(POLL_SECONDS):
-                if self.engine.test_break():
-                    job.cancel()
-                self.engine.update_progress(job.fraction)
-                self.engine.update_stats("", f"SHGI | {job.stage}")
-                self._report_native_warnings(log)
-                snapshot = job.take_snapshot()
-                if snapshot is not None:
-                    self._write(result, snapshot, ("Combined",))
-                    self.engine.update_result(result)
+            try:
+                self._poll_until_done(job, result, log)
+            except KeyboardInterrupt:
+                # Blender as a Python module (bpy) has no Esc: Ctrl-C (SIGINT) raises here, where
+                # background Blender turns the first SIGINT into Esc. Stop as Esc does.
+                job.cancel()
+                job.wait()
             self._report_native_warnings(log)
             snapshot = job.last_snapshot()
             if snapshot is not None:
@@ -194,6 +194,20 @@ class FinalRender:
                 job.wait()
             self.engine.end_result(result)
         self._record_job(job)
+
+    def _poll_until_done(self, job, result, log):
+        """Every POLL_SECONDS until the job ends: Esc cancels it; progress, stage, native
+        warnings and each new snapshot's Combined go to Blender."""
+        while not job.wait(POLL_SECONDS):
+            if self.engine.test_break():
+                job.cancel()
+            self.engine.update_progress(job.fraction)
+            self.engine.update_stats("", f"SHGI | {job.stage}")
+            self._report_native_warnings(log)
+            snapshot = job.take_snapshot()
+            if snapshot is not None:
+                self._write(result, snapshot, ("Combined",))
+                self.engine.update_result(result)
 
     def _record_solution(self, solution):
         """Blender's memory statistics show the solver's bytes (render buffers are Blender's);
@@ -210,12 +224,15 @@ class FinalRender:
             self.warn(f"SHGI: {message}")
 
     def _write(self, result, snapshot, names):
-        """Copies the snapshot's passes (all, or those in `names`) into the render result."""
+        """Copies the snapshot's passes (all, or those in `names`: the renderers' names) into
+        the render result, whose passes carry this Blender's names."""
         layer = result.layers[0]
+        renderer_names = passes.names_from_blender_names(bpy.app.version)
         for render_pass in layer.passes:
-            if names is not None and render_pass.name not in names:
+            name = renderer_names.get(render_pass.name)
+            if name is None or (names is not None and name not in names):
                 continue
-            pixels = snapshot.passes.get(render_pass.name)
+            pixels = snapshot.passes.get(name)
             if pixels is None:
                 continue
             if pixels.shape[:2] != (self.height, self.width):

@@ -6,6 +6,10 @@ responsive and reads ``progress.fraction`` / ``progress.stage`` while it runs. `
 makes the running call raise ``shgi.Cancelled`` within one chunk of work (< 0.2 s,
 DESIGN.md); the task then ends with ``cancelled`` set. Any other exception ends it with
 ``error`` set, for the main thread to report (a worker thread must not call bpy).
+
+``wait`` and ``running`` read an Event the worker sets as it ends, not Thread.join: CPython
+3.11's join, interrupted by a KeyboardInterrupt (Ctrl-C under the bpy module), releases the
+lock the running thread holds and marks it stopped (threading.py, the bpo-45274 handler).
 """
 
 import threading
@@ -21,6 +25,7 @@ class NativeTask:
         self._shgi = shgi
         self.progress = shgi.Progress()
         self._thread = threading.Thread(target=self._run, name=thread_name, daemon=True)
+        self._ended = threading.Event()
         self.error = None       # the exception that ended the task, other than Cancelled
         self.cancelled = False
 
@@ -36,12 +41,11 @@ class NativeTask:
 
     def wait(self, timeout=None):
         """Waits up to `timeout` seconds (None: until the end); True when the task has ended."""
-        self._thread.join(timeout)
-        return not self._thread.is_alive()
+        return self._ended.wait(timeout)
 
     @property
     def running(self):
-        return self._thread.is_alive()
+        return self._thread.ident is not None and not self._ended.is_set()
 
     # --- worker thread -------------------------------------------------------------------------
 
@@ -52,6 +56,8 @@ class NativeTask:
             self.cancelled = True
         except Exception as error:  # reported by the caller on the main thread
             self.error = error
+        finally:
+            self._ended.set()
 
     def _work(self):
         """The task's native work (runs on the worker thread; no bpy)."""

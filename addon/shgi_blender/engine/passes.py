@@ -1,11 +1,12 @@
 """The render passes SHGI fills, with Cycles' names, channels and view-layer toggles (no bpy).
 
-The renderers return {pass name: float32 (H, W, C)} with row 0 at the top; Blender's render
-result stores rows bottom-up, flattened to (H * W, C) (``blender_rect``). The engine registers
-the enabled passes exactly as Cycles does (``RenderEngine.register_pass`` from
-``update_render_passes``, same names, channel ids and types) so that the view layer's pass
-toggles, the compositor's Render Layers node and multilayer EXR files see the same layers under
-both engines.
+The renderers return {pass name: float32 (H, W, C)} with row 0 at the top, named as Cycles
+named its passes up to Blender 4.x ("DiffDir"); Blender's render result stores rows bottom-up,
+flattened to (H * W, C) (``blender_rect``). The engine registers the enabled passes exactly as
+Cycles does (``RenderEngine.register_pass`` from ``update_render_passes``, same names, channel
+ids and types) so that the view layer's pass toggles, the compositor's Render Layers node and
+multilayer EXR files see the same layers under both engines. Blender 5.0 renamed the passes
+after their UI labels ("Diffuse Direct"): ``PassInfo.blender_name`` gives a version's name.
 """
 
 from dataclasses import dataclass
@@ -13,18 +14,30 @@ from dataclasses import dataclass
 import numpy as np
 
 
+# Blender 5.0 names render passes by their UI labels (Cycles' engine.py, list_render_passes).
+LABEL_PASS_NAMES_VERSION = (5, 0, 0)
+
+
 @dataclass(frozen=True)
 class PassInfo:
-    """A render pass: Cycles' name, channel ids, channel type and the ViewLayer toggle."""
+    """A render pass: its name in the renderers' results (Cycles' before Blender 5.0), channel
+    ids, channel type, the ViewLayer toggle and, when it differs, Blender 5's name."""
 
     name: str
     channel_ids: str
     channel_type: str    # 'COLOR', 'VECTOR' or 'VALUE', as RenderEngine.register_pass wants
     view_layer_flag: str  # the ViewLayer boolean that enables it ("" = always on)
+    label: str = ""      # the name from Blender 5.0 on ("" = `name`)
 
     @property
     def channels(self):
         return len(self.channel_ids)
+
+    def blender_name(self, blender_version):
+        """The pass's name in the render results of a Blender version, e.g. (5, 0, 1)."""
+        if self.label and tuple(blender_version) >= LABEL_PASS_NAMES_VERSION:
+            return self.label
+        return self.name
 
 
 # Cycles' order (intern/cycles/blender/addon/engine.py, list_render_passes).
@@ -32,17 +45,18 @@ PASSES = (
     PassInfo("Combined", "RGBA", "COLOR", ""),
     PassInfo("Depth", "Z", "VALUE", "use_pass_z"),
     PassInfo("Normal", "XYZ", "VECTOR", "use_pass_normal"),
-    PassInfo("DiffDir", "RGB", "COLOR", "use_pass_diffuse_direct"),
-    PassInfo("DiffInd", "RGB", "COLOR", "use_pass_diffuse_indirect"),
-    PassInfo("DiffCol", "RGB", "COLOR", "use_pass_diffuse_color"),
-    PassInfo("GlossDir", "RGB", "COLOR", "use_pass_glossy_direct"),
-    PassInfo("GlossInd", "RGB", "COLOR", "use_pass_glossy_indirect"),
-    PassInfo("GlossCol", "RGB", "COLOR", "use_pass_glossy_color"),
-    PassInfo("TransDir", "RGB", "COLOR", "use_pass_transmission_direct"),
-    PassInfo("TransInd", "RGB", "COLOR", "use_pass_transmission_indirect"),
-    PassInfo("TransCol", "RGB", "COLOR", "use_pass_transmission_color"),
-    PassInfo("Emit", "RGB", "COLOR", "use_pass_emit"),
-    PassInfo("Env", "RGB", "COLOR", "use_pass_environment"),
+    PassInfo("DiffDir", "RGB", "COLOR", "use_pass_diffuse_direct", "Diffuse Direct"),
+    PassInfo("DiffInd", "RGB", "COLOR", "use_pass_diffuse_indirect", "Diffuse Indirect"),
+    PassInfo("DiffCol", "RGB", "COLOR", "use_pass_diffuse_color", "Diffuse Color"),
+    PassInfo("GlossDir", "RGB", "COLOR", "use_pass_glossy_direct", "Glossy Direct"),
+    PassInfo("GlossInd", "RGB", "COLOR", "use_pass_glossy_indirect", "Glossy Indirect"),
+    PassInfo("GlossCol", "RGB", "COLOR", "use_pass_glossy_color", "Glossy Color"),
+    PassInfo("TransDir", "RGB", "COLOR", "use_pass_transmission_direct", "Transmission Direct"),
+    PassInfo("TransInd", "RGB", "COLOR", "use_pass_transmission_indirect",
+             "Transmission Indirect"),
+    PassInfo("TransCol", "RGB", "COLOR", "use_pass_transmission_color", "Transmission Color"),
+    PassInfo("Emit", "RGB", "COLOR", "use_pass_emit", "Emission"),
+    PassInfo("Env", "RGB", "COLOR", "use_pass_environment", "Environment"),
 )
 
 # View-layer passes Blender offers that SHGI does not compute: {toggle: Cycles' pass name}.
@@ -63,6 +77,11 @@ def enabled_passes(view_layer):
     """The PassInfo of every pass the view layer enables that SHGI fills, Combined first."""
     return [info for info in PASSES
             if not info.view_layer_flag or getattr(view_layer, info.view_layer_flag, False)]
+
+
+def names_from_blender_names(blender_version):
+    """{pass name in a Blender version's render results: the renderers' name} for PASSES."""
+    return {info.blender_name(blender_version): info.name for info in PASSES}
 
 
 def unsupported_enabled_passes(view_layer):

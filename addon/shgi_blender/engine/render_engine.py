@@ -46,8 +46,8 @@ class ShgiRenderEngine(bpy.types.RenderEngine):
 
     def update_render_passes(self, scene=None, renderlayer=None):
         for info in passes.enabled_passes(renderlayer):
-            self.register_pass(scene, renderlayer, info.name, info.channels, info.channel_ids,
-                               info.channel_type)
+            self.register_pass(scene, renderlayer, info.blender_name(bpy.app.version),
+                               info.channels, info.channel_ids, info.channel_type)
 
 
 @bpy.app.handlers.persistent

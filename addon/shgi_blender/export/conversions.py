@@ -23,9 +23,13 @@ emission_strength  "Emission Strength"   "Emission Strength"
 Units: SHGI's material is Blender 3.4's Principled (dielectric F0 = 0.08 · specular). Blender 4's
 "Specular IOR Level" scales the Fresnel reflectance given by the IOR, as Cycles 4 does:
 F0 = ((ior − 1) / (ior + 1))² · 2 · level (0.5 = the IOR's own reflectance), so
-specular = F0 / 0.08. Lights: point, spot and area "Power" in W → ``power``; the sun's
-"Strength" in W/m² → ``strength`` (both are Blender's ``Light.energy``); angles in radians as
-Blender stores them. Matrices are Blender's ``matrix_world`` as row-major 4 × 4 numpy arrays.
+specular = F0 / 0.08. Blender 4's Principled diffuse is Lambertian (3.4's is Burley's, with
+roughness retro-reflection): from 4.0 it exports as ``diffuse_model`` LAMBERT. Lights: point,
+spot and area "Power" in W → ``power``; the sun's "Strength" in W/m² → ``strength`` (both are
+Blender's ``Light.energy``); angles in radians as Blender stores them. SHGI's lights are Blender
+3.4's; Blender 4.0 changed one unit, the area light's radiance L = P / (4 A) to L = P / (π A)
+(blender/blender issue 109404), so from 4.0 an area light's power is exported × 4 / π. Matrices
+are Blender's ``matrix_world`` as row-major 4 × 4 numpy arrays.
 """
 
 import math
@@ -33,8 +37,16 @@ import math
 import numpy as np
 import shgi
 
-# Blender 4.0 renamed the Principled BSDF's inputs (its "Principled v2").
+# Blender 4.0 renamed the Principled BSDF's inputs and made its diffuse Lambertian ("Principled
+# v2").
 PRINCIPLED_V2_VERSION = (4, 0, 0)
+# The Blender whose light units SHGI's native lights use (native/render/light_sampler.h).
+NATIVE_LIGHT_UNITS_VERSION = (3, 4, 1)
+# Blender 4.0 made an area light of power P a Lambertian emitter of radiance P / (π A); Blender
+# 3.4's (and SHGI's) is P / (4 A). Measured: on-axis irradiance under a 5 cm square light at 2 m
+# is 0.785 · P / (π d²) in Blender 3.4.1 and 1.000 · P / (π d²) in Blender 5.0.1.
+AREA_LIGHT_PI_VERSION = (4, 0, 0)
+AREA_POWER_TO_NATIVE_FROM_4_0 = 4.0 / math.pi
 
 _PRINCIPLED_SOCKETS_3X = {
     "base_color": "Base Color",
@@ -109,6 +121,24 @@ def specular_from_ior_level(specular_ior_level, ior):
     return f0 / SPECULAR_F0_SCALE
 
 
+def ior_level_from_specular(specular, ior):
+    """Blender 3.4's "Specular" (0..1) → Blender 4's "Specular IOR Level" at this IOR.
+
+    The inverse of ``specular_from_ior_level``: the level whose F0 = ((ior − 1) / (ior + 1))² ·
+    2 · level equals 0.08 · specular. An IOR of 1 or less reflects nothing whatever the level,
+    so a non-zero specular has no level there (ValueError).
+    """
+    ior = max(float(ior), MIN_IOR)
+    f0_from_ior = ((ior - 1.0) / (ior + 1.0)) ** 2
+    f0 = SPECULAR_F0_SCALE * float(specular)
+    if f0 == 0.0:
+        return 0.0
+    if f0_from_ior == 0.0:
+        raise ValueError(f"specular {specular} needs an IOR above {MIN_IOR} in Blender 4's "
+                         f"Principled BSDF (F0 comes from the IOR); got IOR {ior}")
+    return f0 / f0_from_ior * NEUTRAL_SPECULAR_IOR_LEVEL
+
+
 def rgb(color):
     """The first three components of a colour (Blender colour sockets are RGBA)."""
     return tuple(float(c) for c in tuple(color)[:3])
@@ -133,6 +163,7 @@ def material_fields_from_principled(values, blender_version):
     specular = float(values[names["specular"]])
     if tuple(blender_version) >= PRINCIPLED_V2_VERSION:
         specular = specular_from_ior_level(specular, fields["ior"])
+        fields["diffuse_model"] = shgi.DiffuseModel.LAMBERT
     fields["specular"] = specular
     return fields
 
@@ -196,11 +227,14 @@ def texture_colorspace_is_known(colorspace_name):
 
 def light_fields(light_type, energy, color, matrix_world, *, shadow_soft_size=0.0,
                  spot_size=math.pi / 4, spot_blend=0.15, angle=0.0, shape="SQUARE", size=1.0,
-                 size_y=1.0, visible_camera=False, portal=False, name="light"):
+                 size_y=1.0, visible_camera=False, portal=False, name="light",
+                 blender_version=NATIVE_LIGHT_UNITS_VERSION):
     """shgi.Light fields from a Blender light's properties (Blender's names and units).
 
     energy: ``Light.energy`` — W for point, spot and area ("Power"), W/m² for the sun
-    ("Strength"). shadow_soft_size: the point/spot "Radius" in m. spot_size, angle: radians.
+    ("Strength"), in the units of `blender_version` (an area light's power is converted to
+    SHGI's, Blender 3.4's, from Blender 4.0 on). shadow_soft_size: the point/spot "Radius" in m.
+    spot_size, angle: radians.
     size, size_y: the area light's sides or diameters in m (size_y only for RECTANGLE/ELLIPSE).
     visible_camera: the object's ``visible_camera`` (False for Blender's lights by default).
     portal: Cycles' ``light.cycles.is_portal`` (area lights only; ignored for other types, as
@@ -226,6 +260,8 @@ def light_fields(light_type, energy, color, matrix_world, *, shadow_soft_size=0.
         second_side = size_y if shape in AREA_SHAPES_WITH_SIZE_Y else size
         fields.update(shape=AREA_SHAPES[shape], size_x=float(size), size_y=float(second_side),
                       portal=bool(portal))
+        if tuple(blender_version) >= AREA_LIGHT_PI_VERSION:
+            fields["power"] *= AREA_POWER_TO_NATIVE_FROM_4_0
     return fields
 
 
@@ -291,10 +327,12 @@ def row_major(matrix):
 
 
 # Principled inputs SHGI does not render, with the value at which they have no effect
-# (3.x and 4.x names). A material using them gets a warning naming them.
+# (3.x and 4.x names; Blender 4.3 added "Diffuse Roughness", an Oren–Nayar diffuse). A material
+# using them gets a warning naming them.
 IGNORED_PRINCIPLED_INPUTS = {
     "Subsurface": 0.0, "Subsurface Weight": 0.0, "Sheen": 0.0, "Sheen Weight": 0.0,
     "Clearcoat": 0.0, "Coat Weight": 0.0, "Anisotropic": 0.0, "Alpha": 1.0,
+    "Diffuse Roughness": 0.0,
 }
 
 

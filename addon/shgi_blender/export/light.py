@@ -1,10 +1,12 @@
 """Blender lights and the world → shgi.Light and shgi.World (bpy side; units in conversions.py).
 
-Lights keep Blender's units (W, W/m²) and frame (matrix_world, emitting along local -Z). The
-world is uniform: the Background node's Color × Strength, or World.color without nodes. A
-textured world colour is replaced by the image's solid-angle weighted average, with a warning.
+Lights keep Blender's units (W, W/m²; an area light's power in Blender 3.4's) and frame
+(matrix_world, emitting along local -Z). The world is uniform: the Background node's Color ×
+Strength, or World.color without nodes. A textured world colour is replaced by the image's
+solid-angle weighted average, with a warning.
 """
 
+import bpy
 import shgi
 
 from . import conversions, node_tree
@@ -27,7 +29,8 @@ def light_from_object(obj, matrix_world):
         angle=getattr(data, "angle", 0.0), shape=getattr(data, "shape", "SQUARE"),
         size=getattr(data, "size", 0.0), size_y=getattr(data, "size_y", 0.0),
         visible_camera=getattr(obj, "visible_camera", False),
-        portal=getattr(getattr(data, "cycles", None), "is_portal", False), name=obj.name)
+        portal=getattr(getattr(data, "cycles", None), "is_portal", False), name=obj.name,
+        blender_version=bpy.app.version)
     return shgi.Light(**fields)
 
 

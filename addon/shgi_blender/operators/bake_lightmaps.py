@@ -3,7 +3,7 @@ lightmap nodes (bpy).
 
 SHGI_OT_bake_lightmaps, on Blender's main thread: checks the request (native module, a mesh
 among the selected objects, a usable output folder, the lightmap UV map on every object,
-created by Lightmap Pack when asked), exports the scene (export_scene on the evaluated
+created by Lightmap Pack or xatlas when asked), exports the scene (export_scene on the evaluated
 depsgraph, instances named after their objects), finds each object's instance, checks that
 something emits light and sizes each lightmap. A BakeTask (engine/lightmap_bake.py) then
 commits, solves the field of a field source and runs shgi.bake.bake_scene on a worker thread.
@@ -30,7 +30,7 @@ import bpy
 
 from .. import bake_settings, native, properties
 from ..engine.lightmap_bake import BakeRequest, BakeTask
-from . import lightmap_images
+from . import lightmap_images, xatlas_uv
 from .modal_task import ModalTaskOperator
 
 REPORT_PREFIX = "SHGI bake: "
@@ -82,9 +82,10 @@ def output_dir(folder):
     return os.path.normpath(bpy.path.abspath(folder))
 
 
-def prepare_uv_maps(context, objects, values):
-    """Makes sure every object's mesh has the lightmap UV map: creates it when asked, else
-    BakeError naming the objects without it and the fixes."""
+def prepare_uv_maps(context, objects, values, report):
+    """Makes sure every object's mesh has the lightmap UV map: creates it when asked (by
+    Lightmap Pack or xatlas, values.uv_layout; xatlas's chart count and utilisation go to
+    `report`), else BakeError naming the objects without it and the fixes."""
     missing = [obj for obj in objects if values.uv_map not in obj.data.uv_layers]
     if not missing:
         return
@@ -92,35 +93,67 @@ def prepare_uv_maps(context, objects, values):
         names = ", ".join(repr(obj.name) for obj in missing)
         raise BakeError(
             f"{names} {'has' if len(missing) == 1 else 'have'} no UV map {values.uv_map!r}: "
-            "turn on Create UV Map (Lightmap Pack lays one out), add that UV map, or set UV "
-            "Map to one the objects have")
+            "turn on Create UV Map (Lightmap Pack or xatlas lays one out), add that UV map, or "
+            "set UV Map to one the objects have")
     done = set()
     for obj in missing:
         if obj.data.name_full not in done:
-            create_lightmap_uv(context, obj, values.uv_map)
+            create_lightmap_uv(context, obj, values, report)
             done.add(obj.data.name_full)
 
 
-def create_lightmap_uv(context, obj, name):
-    """Adds UV map `name` to the object's mesh, laid out by Lightmap Pack (each face its own
-    box in the unit square); the mesh's active UV map stays the one it was."""
+def create_lightmap_uv(context, obj, values, report):
+    """Adds UV map values.uv_map to the object's mesh, laid out by Lightmap Pack (each face its
+    own box in the unit square) or by xatlas (operators/xatlas_uv.py, at the object's lightmap
+    size); the mesh's active UV map stays the one it was."""
+    name = values.uv_map
     mesh = obj.data
     if mesh.library is not None:
         raise BakeError(f"object {obj.name!r}: its mesh {mesh.name!r} is linked from a library "
                         f"and cannot get a UV map {name!r}; add it in the library file")
-    previous = mesh.uv_layers.active
+    # By name: Lightmap Pack's trip through Edit Mode rebuilds the UV layers, and in Blender 5.0
+    # a reference taken before it makes another layer active.
+    previous = mesh.uv_layers.active.name if mesh.uv_layers.active is not None else None
     layer = mesh.uv_layers.new(name=name, do_init=False)
     if layer is None:
         raise BakeError(f"object {obj.name!r}: its mesh has the most UV maps Blender allows; "
                         f"remove one or set UV Map to an existing one")
     mesh.uv_layers.active = layer
+    if values.uv_layout == "XATLAS":
+        _xatlas_layout(obj, layer, values, report)
+    else:
+        _lightmap_pack(context, obj)
+    if previous is not None:
+        mesh.uv_layers.active = mesh.uv_layers[previous]
+
+
+def _xatlas_layout(obj, layer, values, report):
+    from shgi import bake as shgi_bake
+
+    try:
+        layout, disagreeing = xatlas_uv.lay_out(
+            obj, layer, values.resolution, values.texel_density,
+            (bake_settings.MIN_DENSITY_RESOLUTION, bake_settings.MAX_DENSITY_RESOLUTION))
+    except (ImportError, ValueError) as error:
+        obj.data.uv_layers.remove(layer)
+        raise BakeError(f"object {obj.name!r}: xatlas could not lay out {values.uv_map!r}: "
+                        f"{error}") from None
+    report({"INFO"}, f"{REPORT_PREFIX}{obj.name}: {shgi_bake.describe_uv_layout(layout)}")
+    if disagreeing:
+        report({"WARNING"}, f"{REPORT_PREFIX}{obj.name}: {disagreeing} face corners of "
+                            "non-planar polygons lie in two xatlas charts and took one chart's "
+                            "UV; triangulate those polygons for a clean layout")
+
+
+def _lightmap_pack(context, obj):
+    options = {"PREF_CONTEXT": "ALL_FACES", "PREF_PACK_IN_ONE": False,
+               "PREF_NEW_UVLAYER": False, "PREF_MARGIN_DIV": LIGHTMAP_PACK_MARGIN}
+    # Blender 3.4's "New Image" (an unused image per mesh) is off; Blender 5.0 has no such option.
+    if "PREF_APPLY_IMAGE" in bpy.ops.uv.lightmap_pack.get_rna_type().properties:
+        options["PREF_APPLY_IMAGE"] = False
     with context.temp_override(active_object=obj, object=obj, selected_objects=[obj],
                                selected_editable_objects=[obj]):
-        bpy.ops.uv.lightmap_pack(PREF_CONTEXT="ALL_FACES", PREF_PACK_IN_ONE=False,
-                                 PREF_NEW_UVLAYER=False, PREF_APPLY_IMAGE=False,
-                                 PREF_MARGIN_DIV=LIGHTMAP_PACK_MARGIN)
-    if previous is not None:
-        mesh.uv_layers.active = previous
+        bpy.ops.uv.lightmap_pack(**options)
 
 
 def bake_jobs(scene, objects, values):
@@ -158,7 +191,7 @@ def prepare_bake(context, values, report, merge=False):
     out_dir = output_dir(values.output_folder)
     if context.mode != "OBJECT":  # edit-mode changes reach the mesh only in object mode
         bpy.ops.object.mode_set(mode="OBJECT")
-    prepare_uv_maps(context, objects, values)
+    prepare_uv_maps(context, objects, values, report)
     scene = context.scene
     export = export_scene(context.evaluated_depsgraph_get(), scene, report=report,
                           for_render=True, with_camera=False)

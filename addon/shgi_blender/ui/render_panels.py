@@ -227,6 +227,9 @@ class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
         column = layout.column(align=True)
         column.prop(bake, "uv_map")
         column.prop(bake, "create_uv")
+        sub = column.column(align=True)
+        sub.active = bake.create_uv
+        sub.prop(bake, "uv_layout")
         column = layout.column(align=True)
         column.prop(bake, "resolution")
         sub = column.column(align=True)
