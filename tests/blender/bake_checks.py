@@ -342,6 +342,76 @@ def refusal_checks(tmpdir, results):
 
 # --- UV maps, materials, shards, volumes ---------------------------------------------------------
 
+def overlapping_samples(uv, corners, grid):
+    """Sample points of a grid x grid lattice over the unit square inside more than one of the
+    UV triangles `corners` (T, 3 loop indices into `uv`)."""
+    centres = (np.stack(np.meshgrid(np.arange(grid), np.arange(grid)), -1).reshape(-1, 2)
+               + 0.5) / grid
+    inside = np.zeros(len(centres), np.int32)
+    for a, b, c in uv[corners]:
+        d = (b[1] - c[1]) * (a[0] - c[0]) + (c[0] - b[0]) * (a[1] - c[1])
+        if abs(d) < 1e-12:
+            continue
+        l1 = ((b[1] - c[1]) * (centres[:, 0] - c[0]) + (c[0] - b[0]) * (centres[:, 1] - c[1])) / d
+        l2 = ((c[1] - a[1]) * (centres[:, 0] - c[0]) + (a[0] - c[0]) * (centres[:, 1] - c[1])) / d
+        inside += (l1 > 0) & (l2 > 0) & (1 - l1 - l2 > 0)
+    return int(np.count_nonzero(inside > 1)), float(np.count_nonzero(inside) / len(centres))
+
+
+def roughness(texels):
+    """Mean absolute difference of horizontally neighbouring texels (noise, plus edges)."""
+    return float(np.abs(np.diff(texels, axis=1)).mean())
+
+
+def denoised_bake(tmpdir, results):
+    """The floor at 4 samples per texel, raw and denoised by OpenImageDenoise inside this
+    Blender (pyoidn's library beside Blender's own copy): same light, far less noise."""
+    layers = {}
+    for name, arguments in (("raw", {"filter": False}),
+                            ("oidn", {"filter": True, "denoiser": "OIDN"})):
+        folder = os.path.join(tmpdir, f"oidn_{name}")
+        bake("floor", resolution=SHARD_RESOLUTION, samples=4, output_folder=folder, **arguments)
+        exr = shgi.read_exr(os.path.join(folder, "floor.exr"))
+        covered = np.asarray(exr["Coverage"])[..., 0] > 0
+        layers[name] = np.where(covered[..., None], np.asarray(exr["Lightmap"], np.float64), 0)
+    results["oidn"] = {name: {"mean": float(texels.mean()), "roughness": roughness(texels)}
+                       for name, texels in layers.items()}
+
+
+def xatlas_layout(tmpdir, results):
+    """Create UV Map with the xatlas layout on a copy of the box without the UV map: a
+    lightmap UV map inside the unit square whose triangles do not overlap, then the bake."""
+    box = bpy.data.objects["box"]
+    copy = box.copy()
+    copy.data = box.data.copy()
+    copy.name = "box_xatlas"
+    copy.data.uv_layers.remove(copy.data.uv_layers[UV_MAP])
+    copy.location.x += 0.01  # beside the box, in the same light
+    bpy.context.scene.collection.objects.link(copy)
+    folder = os.path.join(tmpdir, "xatlas")
+    bake("box_xatlas", create_uv=True, uv_layout="XATLAS", resolution=SHARD_RESOLUTION,
+         samples=SHARD_SAMPLES, output_folder=folder)
+    mesh = copy.data
+    uv = np.empty(len(mesh.loops) * 2, np.float32)
+    mesh.uv_layers[UV_MAP].data.foreach_get("uv", uv)
+    mesh.calc_loop_triangles()
+    corners = np.empty(len(mesh.loop_triangles) * 3, np.int32)
+    mesh.loop_triangles.foreach_get("loops", corners)
+    overlapping, covered = overlapping_samples(uv.reshape(-1, 2), corners.reshape(-1, 3), 256)
+    a, b, c = (uv.reshape(-1, 2)[corners.reshape(-1, 3)[:, k]].astype(np.float64)
+               for k in range(3))
+    uv_area = 0.5 * float(np.abs((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1])
+                                 - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])).sum())
+    lightmap = shgi.read_exr(os.path.join(folder, "box_xatlas.exr"))
+    results["xatlas"] = {
+        "uv_maps": [layer.name for layer in mesh.uv_layers],
+        "uv_range": [float(uv.min()), float(uv.max())],
+        "overlapping_samples": overlapping, "covered_share": covered, "uv_area": uv_area,
+        "files": sorted(os.listdir(folder)),
+        "lightmap_mean": float(np.asarray(lightmap["Lightmap"]).mean())}
+    bpy.data.objects.remove(copy, do_unlink=True)
+
+
 def create_uv_and_materials(tmpdir, results):
     """Create UV Map on the box with Show in Materials; a shared material is left alone; Remove
     Lightmap Nodes gives the material back."""
@@ -455,6 +525,8 @@ def background_main():
     results["comparison_seconds"] = time.perf_counter() - start
     refusal_checks(tmpdir, results)
     create_uv_and_materials(tmpdir, results)
+    xatlas_layout(tmpdir, results)
+    denoised_bake(tmpdir, results)
     shard_checks(tmpdir, results)
     export_volume_checks(scene, tmpdir, results)
     with open(setup.results_path("bake_checks.json"), "w") as out:

@@ -1,5 +1,6 @@
 """Shared start of the Blender test scripts: their arguments, paths to shgi and the add-on,
-enabling the add-on, and a scene reset.
+enabling the add-on, a scene reset, and the settings whose API differs between Blender 3.4 and
+Blender 4.x / 5.x (Principled BSDF inputs, multilayer EXR output).
 
 Scripts run as ``blender -b --factory-startup --python-exit-code 1 --python <script> --
 <build python dir> <addon dir> [<results json> ...]``; the two folders may also come from the
@@ -14,9 +15,12 @@ import tempfile
 
 import addon_utils
 import bpy
+import numpy as np
 
 REPO_ROOT = pathlib.Path(__file__).resolve().parents[2]
 ADDON = "shgi_blender"
+# Principled BSDF colour inputs (RGBA sockets), by shgi.Material field name.
+PRINCIPLED_COLOR_FIELDS = ("base_color", "emission_color")
 
 
 def script_args():
@@ -52,6 +56,83 @@ def clear_scene():
     """Removes every object of the factory scene (keeps its world and render settings)."""
     for obj in list(bpy.data.objects):
         bpy.data.objects.remove(obj, do_unlink=True)
+
+
+def set_principled_inputs(node, **fields):
+    """Sets a Principled BSDF node's inputs from shgi.Material field names, in Blender 3.4's
+    units, on any Blender version.
+
+    The add-on's own table (conversions.principled_socket_names) names the sockets. `specular`
+    is Blender 3.4's "Specular" (F0 = 0.08 · specular); from Blender 4 it becomes the "Specular
+    IOR Level" giving that F0 at the node's IOR (`ior` of the same call, else the node's).
+    Colours may be RGB (alpha 1 is added).
+    """
+    from shgi_blender.export import conversions  # after add_import_paths
+
+    names = conversions.principled_socket_names(bpy.app.version)
+    values = dict(fields)
+    if "specular" in values and bpy.app.version >= conversions.PRINCIPLED_V2_VERSION:
+        ior = values.get("ior", node.inputs[names["ior"]].default_value)
+        values["specular"] = conversions.ior_level_from_specular(values["specular"], ior)
+    for field, value in values.items():
+        if field in PRINCIPLED_COLOR_FIELDS:
+            value = (*value[:3], 1.0)
+        node.inputs[names[field]].default_value = value
+
+
+def native_area_power(power):
+    """An area light's "Power" in this Blender's units (W) as SHGI's light takes it: Blender 4
+    changed the area light's radiance (conversions.light_fields converts)."""
+    from shgi_blender.export import conversions  # after add_import_paths
+
+    return conversions.light_fields("AREA", power, (1.0, 1.0, 1.0), np.eye(4),
+                                    blender_version=bpy.app.version)["power"]
+
+
+def add_irradiance_volume(scene, name, resolution):
+    """An Irradiance Volume light probe object with `resolution` probes along x, y, z (its type
+    and property names depend on the Blender version: shgi_blender.export.light_probe)."""
+    from shgi_blender.export import light_probe  # after add_import_paths
+
+    types = bpy.types.LightProbe.bl_rna.properties["type"].enum_items.keys()
+    data = bpy.data.lightprobes.new(
+        name, next(t for t in light_probe.IRRADIANCE_VOLUME_TYPES if t in types))
+    for prop, count in zip(light_probe.resolution_properties(data), resolution):
+        setattr(data, prop, count)
+    obj = bpy.data.objects.new(name, data)
+    scene.collection.objects.link(obj)
+    return obj
+
+
+def use_multilayer_exr(image_settings):
+    """Render output as 32-bit float, ZIP-compressed multilayer OpenEXR (every pass a layer),
+    in one part, as read_render_exr reads it.
+
+    Blender 5.0 made "multilayer" a media type (its file format then reads OPEN_EXR_MULTILAYER,
+    the file format itself in Blender 3.4) and writes one EXR part per pass unless told to
+    interleave them as Blender 3.4 does; shgi.read_exr reads the first part of a file only.
+    """
+    if hasattr(image_settings, "media_type"):
+        image_settings.media_type = "MULTI_LAYER_IMAGE"
+    image_settings.file_format = "OPEN_EXR_MULTILAYER"
+    image_settings.color_depth = "32"
+    image_settings.exr_codec = "ZIP"
+    if hasattr(image_settings, "use_exr_interleave"):
+        image_settings.use_exr_interleave = True
+
+
+def read_render_exr(path):
+    """{pass: float64 (H, W, C)} of a multilayer EXR written as use_multilayer_exr sets, keyed
+    by the renderers' pass names ("DiffDir", also where Blender 5 says "Diffuse Direct")."""
+    import shgi
+    from shgi_blender.engine import passes  # after add_import_paths
+
+    names = passes.names_from_blender_names(bpy.app.version)
+    result = {}
+    for layer, pixels in shgi.read_exr(path).items():
+        blender_name = layer.split(".")[-1]  # multilayer EXR layers are "<view layer>.<pass>"
+        result[names.get(blender_name, blender_name)] = np.asarray(pixels, np.float64)
+    return result
 
 
 def check_close(what, actual, expected, tolerance):

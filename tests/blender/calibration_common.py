@@ -84,10 +84,7 @@ def reset_scene(world_color=(0.0, 0.0, 0.0), world_strength=0.0):
     scene.view_settings.look = "None"
     scene.view_settings.exposure = 0.0
     scene.view_settings.gamma = 1.0
-    settings = scene.render.image_settings
-    settings.file_format = "OPEN_EXR_MULTILAYER"
-    settings.color_depth = "32"
-    settings.exr_codec = "ZIP"
+    setup.use_multilayer_exr(scene.render.image_settings)
     layer = scene.view_layers[0]
     for name in ("diffuse_direct", "diffuse_indirect", "diffuse_color", "glossy_direct",
                  "glossy_indirect", "glossy_color", "transmission_direct",
@@ -106,12 +103,10 @@ def principled(name, base_color, roughness=0.5, specular=0.0, metallic=0.0, tran
                ior=1.45, emission=(0.0, 0.0, 0.0), emission_strength=0.0):
     material = bpy.data.materials.new(name)
     material.use_nodes = True
-    node = material.node_tree.nodes["Principled BSDF"]
-    values = {"Base Color": (*base_color, 1.0), "Roughness": roughness, "Specular": specular,
-              "Metallic": metallic, "Transmission": transmission, "IOR": ior,
-              "Emission": (*emission, 1.0), "Emission Strength": emission_strength}
-    for socket, value in values.items():
-        node.inputs[socket].default_value = value
+    setup.set_principled_inputs(
+        material.node_tree.nodes["Principled BSDF"], base_color=base_color, roughness=roughness,
+        ior=ior, specular=specular, metallic=metallic, transmission=transmission,
+        emission_color=emission, emission_strength=emission_strength)
     return material
 
 
@@ -225,10 +220,7 @@ def render_cycles(samples, tmpdir):
         path = os.path.join(tmpdir, f"cycles_{batch}.exr")
         scene.render.filepath = path
         bpy.ops.render.render(write_still=True)
-        layers = shgi.read_exr(path)
-        # Multilayer EXR layers are "<view layer>.<pass>".
-        batches.append({name.split(".")[-1]: np.asarray(px, np.float64)
-                        for name, px in layers.items()})
+        batches.append(setup.read_render_exr(path))
     return batches
 
 

@@ -3,7 +3,8 @@
 1. Real F12 (bpy.ops.render.render) of a path-traced render of 10^6 samples per pixel: a timer
    thread sends SIGINT to Blender, which in background mode is Blender's own Esc (it sets the
    break flag that RenderEngine.test_break reads and prints "Sent an internal break event").
-   A second SIGINT would kill Blender, so this is done once per process.
+   A second SIGINT would kill Blender, so this is done once per process. Under the bpy module
+   SIGINT raises KeyboardInterrupt in the engine's polling loop, which stops the render as Esc.
 2. The engine's F12 code (engine/final_render.py) driven directly with a stub RenderEngine whose
    test_break turns True after a delay, once while the photon lattice is being solved and once
    while the path tracer samples.

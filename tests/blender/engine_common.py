@@ -26,8 +26,6 @@ setup.enable_addon()
 import blender_scenes  # noqa: E402
 import bpy  # noqa: E402
 import calibration_common as calibration  # noqa: E402
-import numpy as np  # noqa: E402
-import shgi  # noqa: E402
 
 
 def new_scene(name, scale):
@@ -45,9 +43,7 @@ def render_f12(scene, engine, path):
     scene.render.engine = engine
     bpy.ops.render.render(write_still=False)
     bpy.data.images["Render Result"].save_render(path, scene=scene)
-    # Multilayer EXR layers are "<view layer>.<pass>".
-    return {name.split(".")[-1]: np.asarray(pixels, np.float64)
-            for name, pixels in shgi.read_exr(path).items()}
+    return setup.read_render_exr(path)
 
 
 def mean_rgb(image):

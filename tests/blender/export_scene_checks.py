@@ -21,9 +21,10 @@ from shgi_blender.export import export_scene  # noqa: E402
 
 TOLERANCE = 1e-5           # float32 round trips of Blender's float properties
 TEXEL_TOLERANCE = 1e-4     # sRGB decode of byte texels, float32
-PRINCIPLED = {"Base Color": (0.2, 0.4, 0.6, 1.0), "Metallic": 0.3, "Specular": 0.7,
-              "Roughness": 0.25, "Transmission": 0.1, "IOR": 1.33,
-              "Emission": (0.5, 0.25, 0.125, 1.0), "Emission Strength": 2.0}
+# shgi.Material fields in Blender 3.4's units (setup.set_principled_inputs sets any version's).
+PRINCIPLED = {"base_color": (0.2, 0.4, 0.6), "metallic": 0.3, "specular": 0.7,
+              "roughness": 0.25, "transmission": 0.1, "ior": 1.33,
+              "emission_color": (0.5, 0.25, 0.125), "emission_strength": 2.0}
 EMISSION_COLOR, EMISSION_STRENGTH = (1.0, 0.5, 0.25), 3.0
 DIFFUSE_COLOR = (0.7, 0.6, 0.5, 1.0)
 WORLD_COLOR, WORLD_STRENGTH = (0.1, 0.2, 0.3), 2.0
@@ -71,10 +72,16 @@ def node_material(name, shader_idname, inputs):
     return material, shader
 
 
+def principled_material(name, **fields):
+    """A Principled BSDF material with shgi.Material `fields` (Blender 3.4's units)."""
+    material, shader = node_material(name, "ShaderNodeBsdfPrincipled", {})
+    setup.set_principled_inputs(shader, **fields)
+    return material, shader
+
+
 def textured_material():
     """Principled whose Base Color is an Image Texture of a 2 x 2 sRGB byte image."""
-    material, principled = node_material("Textured", "ShaderNodeBsdfPrincipled",
-                                         {"Base Color": (0.3, 0.3, 0.3, 1.0)})
+    material, principled = principled_material("Textured", base_color=(0.3, 0.3, 0.3))
     image = bpy.data.images.new("Checker", 2, 2)
     image.pixels[:] = [0.0, 0.2, 0.5, 1.0, 1.0, 0.8, 0.6, 1.0,
                        0.1, 0.3, 0.9, 1.0, 0.7, 0.0, 0.4, 1.0]
@@ -104,7 +111,7 @@ def nan_object():
 def build_scene():
     """Every case of the issue in one scene; returns what the checks need."""
     setup.clear_scene()
-    principled, _ = node_material("Principled", "ShaderNodeBsdfPrincipled", PRINCIPLED)
+    principled, _ = principled_material("Principled", **PRINCIPLED)
     cube = add_mesh_object("ModCube", cube_mesh("CubeMesh"), materials=[principled])
     array = cube.modifiers.new("Array", "ARRAY")
     array.count, array.relative_offset_displace = 2, (1.0, 0.0, 0.0)
@@ -215,14 +222,8 @@ def check_materials(result, image):
     scene = result.scene
     materials = {material.name: material for material in scene.materials}
     p = materials["Principled"]
-    for field, socket in (("metallic", "Metallic"), ("specular", "Specular"),
-                          ("roughness", "Roughness"), ("transmission", "Transmission"),
-                          ("ior", "IOR"), ("emission_strength", "Emission Strength")):
-        setup.check_close(f"Principled {field}", getattr(p, field), PRINCIPLED[socket], TOLERANCE)
-    setup.check_close("Principled base_color", p.base_color, PRINCIPLED["Base Color"][:3],
-                      TOLERANCE)
-    setup.check_close("Principled emission_color", p.emission_color,
-                      PRINCIPLED["Emission"][:3], TOLERANCE)
+    for field, expected in PRINCIPLED.items():
+        setup.check_close(f"Principled {field}", getattr(p, field), expected, TOLERANCE)
     glow = materials["Glow"]
     setup.check_close("Glow emission", (*glow.emission_color, glow.emission_strength),
                       (*EMISSION_COLOR, EMISSION_STRENGTH), TOLERANCE)
@@ -260,8 +261,10 @@ def check_lights(result):
     setup.check_close("spot", (spot.power, spot.spot_size, spot.spot_blend, spot.radius),
                       (50.0, 0.8, 0.3, 0.1), TOLERANCE)
     setup.check_close("sun", (sun.strength, sun.angle), (3.0, 0.1), TOLERANCE)
-    setup.check_close("rect", (rect.power, rect.size_x, rect.size_y), (20.0, 2.0, 0.5), TOLERANCE)
-    setup.check_close("disk", (disk.power, disk.size_x, disk.size_y), (30.0, 1.5, 1.5), TOLERANCE)
+    setup.check_close("rect", (rect.power, rect.size_x, rect.size_y),
+                      (setup.native_area_power(20.0), 2.0, 0.5), TOLERANCE)
+    setup.check_close("disk", (disk.power, disk.size_x, disk.size_y),
+                      (setup.native_area_power(30.0), 1.5, 1.5), TOLERANCE)
     if (rect.shape, disk.shape, sun.type) != (shgi.AreaShape.RECTANGLE, shgi.AreaShape.DISK,
                                               shgi.LightType.SUN):
         raise AssertionError(f"light enums: {rect.shape}, {disk.shape}, {sun.type}")

@@ -89,8 +89,7 @@ def build_scene():
     scene.view_settings.look = "None"
     scene.view_settings.exposure = 0.0
     scene.view_settings.gamma = 1.0
-    scene.render.image_settings.file_format = "OPEN_EXR_MULTILAYER"
-    scene.render.image_settings.color_depth = "32"
+    setup.use_multilayer_exr(scene.render.image_settings)
     props = scene.shgi
     props.method = "PHOTON_LATTICE"
     props.samples = props.viewport_samples = SAMPLES
@@ -350,7 +349,6 @@ def path_trace(scene, box):
 def probe_grid(scene, box):
     """PROBE_GRID refines in the background with its overlay on; an added, then moved,
     Irradiance Volume object restarts the grid with the object's probes."""
-    from shgi_blender.export.light_probe import IRRADIANCE_VOLUME_TYPES
     from shgi_blender.ui import field_overlay
 
     _window, _area, region, space = view3d()
@@ -376,13 +374,7 @@ def probe_grid(scene, box):
         yield STEP_SECONDS
     RESULTS["probe_grid"]["overlay_spheres"] = field_overlay.stats()["spheres"]
     RESULTS["probe_grid"]["active"] = worker._solver.grid.active_count
-    types = bpy.types.LightProbe.bl_rna.properties["type"].enum_items.keys()
-    data = bpy.data.lightprobes.new("probe_volume",
-                                    next(t for t in IRRADIANCE_VOLUME_TYPES if t in types))
-    data.grid_resolution_x, data.grid_resolution_y, data.grid_resolution_z = \
-        PROBE_VOLUME_RESOLUTION
-    volume = bpy.data.objects.new("probe_volume", data)
-    scene.collection.objects.link(volume)
+    volume = setup.add_irradiance_volume(scene, "probe_volume", PROBE_VOLUME_RESOLUTION)
     volume.location, volume.scale = (0.0, 1.0, 1.0), (0.9, 0.9, 0.9)
     grids = []
     for step in ("added", "moved"):

@@ -1,13 +1,17 @@
-"""pytest setup: import shgi from the build tree (make test sets PYTHONPATH=build/python), and
-the bpy-free modules of tests/blender (image_metrics) that tests share with the Blender scripts."""
+"""pytest setup: import shgi from the build tree (make test sets PYTHONPATH=build/python), the
+bpy-free modules of tests/blender (image_metrics) that tests share with the Blender scripts, the
+`blender` fixture (each Blender of blender_support.BLENDERS in turn) and, after the run, a
+summary of the Blender tests per Blender version."""
 
+import collections
 import os
+import re
 import pathlib
 import sys
 
 import pytest
 
-from blender_support import BLENDER_SCRIPTS, REPO_ROOT
+from blender_support import BLENDER_SCRIPTS, BLENDERS, REPO_ROOT, blender_params
 
 
 def _build_python_dir():
@@ -30,3 +34,41 @@ sys.path.append(str(BLENDER_SCRIPTS))
 def build_python_dir():
     """The folder holding the freshly built shgi package."""
     return BUILD_PYTHON
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "blender: runs Blender (the program or the bpy module)")
+    config.addinivalue_line("markers", "dist: installs the packages of `make dist`")
+
+
+@pytest.fixture(params=blender_params())
+def blender(request):
+    """A blender_support.Blender: the test runs once per Blender version."""
+    return request.param
+
+
+def pytest_terminal_summary(terminalreporter):
+    """Per Blender: how many of its tests passed, failed or were skipped, and the tests whose
+    outcome differs between the Blenders (the same tests must pass on each)."""
+    names = [b.name for b in BLENDERS]
+    outcomes = collections.defaultdict(dict)  # test id without the Blender -> {blender: outcome}
+    for outcome in ("passed", "failed", "error", "skipped", "xfailed", "xpassed"):
+        for report in terminalreporter.stats.get(outcome, []):
+            nodeid = getattr(report, "nodeid", "")
+            for name in names:
+                pattern = rf"(?<=[\[-]){re.escape(name)}(?=[\]-])"
+                if re.search(pattern, nodeid) and report.when in ("call", "setup"):
+                    test = re.sub(pattern, "*", nodeid)
+                    if outcomes[test].get(name) in (None, "passed"):
+                        outcomes[test][name] = outcome
+    if not outcomes:
+        return
+    terminalreporter.section("Blender versions")
+    for name in names:
+        counts = collections.Counter(o[name] for o in outcomes.values() if name in o)
+        terminalreporter.write_line(
+            f"{name}: " + ", ".join(f"{counts[k]} {k}" for k in sorted(counts)))
+    differing = sorted(test for test, o in outcomes.items()
+                       if len(o) == len(names) and len(set(o.values())) > 1)
+    for test in differing:
+        terminalreporter.write_line(f"  differs: {test} {outcomes[test]}")

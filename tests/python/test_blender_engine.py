@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import shgi
-from blender_support import REPO_ROOT, needs_blender, run_script_once
+from blender_support import REPO_ROOT, expect_cycles_4_gap, run_script_once
 from scene_support import committed
 
 sys.path.insert(0, str(REPO_ROOT / "addon"))
@@ -308,24 +308,23 @@ BREAKING_SCRIPTS = {"engine_no_native.py", "engine_cancel.py"}
 SCRIPT_FAILURE_EXIT_CODE = 2
 
 
-def run_engine_script(script, marker, build_python_dir, tmp_path_factory):
+def run_engine_script(script, marker, blender, build_python_dir, tmp_path_factory):
     """run_script_once for the engine scripts; prints their output without Blender's progress."""
     breaking = script in BREAKING_SCRIPTS
     return run_script_once(
-        script, marker, build_python_dir, tmp_path_factory,
+        script, marker, build_python_dir, tmp_path_factory, blender=blender,
         exit_code=SCRIPT_FAILURE_EXIT_CODE if breaking else 1,
         passing_codes={0, 1} if breaking else {0},
         shown_line=lambda line: not line.startswith(("Fra:", "Saved:", " Time:")))
 
 
-@needs_blender
 @pytest.mark.parametrize("script, marker", [
     ("engine_no_native.py", "ENGINE_NO_NATIVE_OK"),
     ("engine_robustness.py", "ENGINE_ROBUSTNESS_OK"),
     ("engine_cancel.py", "ENGINE_CANCEL_OK"),
 ])
-def test_blender_engine_script(script, marker, build_python_dir, tmp_path_factory):
-    run_engine_script(script, marker, build_python_dir, tmp_path_factory)
+def test_blender_engine_script(script, marker, blender, build_python_dir, tmp_path_factory):
+    run_engine_script(script, marker, blender, build_python_dir, tmp_path_factory)
 
 
 RENDER_CASES = [(scene, method) for scene in ("cornell_box", "sun_room")
@@ -334,11 +333,12 @@ RENDER_CASES = [(scene, method) for scene in ("cornell_box", "sun_room")
     ("cornell_box", "PROBE_GRID volume")]
 
 
-@needs_blender
 @pytest.mark.parametrize("scene, method", RENDER_CASES)
-def test_f12_matches_cycles(scene, method, build_python_dir, tmp_path_factory):
-    results = run_engine_script("engine_render_checks.py", "ENGINE_RENDER_OK", build_python_dir,
-                                tmp_path_factory)
+def test_f12_matches_cycles(scene, method, blender, build_python_dir, tmp_path_factory,
+                            request):
+    expect_cycles_4_gap(request, blender, "principled_v2")
+    results = run_engine_script("engine_render_checks.py", "ENGINE_RENDER_OK", blender,
+                                build_python_dir, tmp_path_factory)
     row, cycles = results[scene][method], results[scene]["cycles"]
     assert not row["record"]["errors"] and not row["record"]["cancelled"], row["record"]
     assert row["passes"] == cycles["passes"], "SHGI's passes are not Cycles' passes"
@@ -349,12 +349,11 @@ def test_f12_matches_cycles(scene, method, build_python_dir, tmp_path_factory):
         f"DiffInd x DiffCol mean ratio {row['diffind_ratio']:.4f}")
 
 
-@needs_blender
-def test_irradiance_volume_object_places_the_probes(build_python_dir, tmp_path_factory):
+def test_irradiance_volume_object_places_the_probes(blender, build_python_dir, tmp_path_factory):
     """The Cornell box with an Irradiance Volume object: F12 and Solve fill its cells with
     probes (each probe within the relocation bound of a cell centre of the object's matrix)."""
-    results = run_engine_script("engine_render_checks.py", "ENGINE_RENDER_OK", build_python_dir,
-                                tmp_path_factory)
+    results = run_engine_script("engine_render_checks.py", "ENGINE_RENDER_OK", blender,
+                                build_python_dir, tmp_path_factory)
     volume = results["cornell_box"]["irradiance_volume"]
     print(f"Irradiance Volume {volume['resolution']}: F12 {volume['f12_probes']} probes, "
           f"{volume['at_centre']} at a cell centre, largest offset "

@@ -1,6 +1,6 @@
-"""shgi imports and works inside Debian's Blender (its embedded Python 3.11)."""
+"""shgi imports and works inside each Blender (Debian's 3.4.1 and the bpy module)."""
 
-from blender_support import needs_blender, run_blender
+from blender_support import run_blender
 
 SCRIPT = """
 import sys
@@ -19,10 +19,9 @@ print("SHGI_IN_BLENDER", shgi.__version__, shgi.__file__)
 """
 
 
-@needs_blender
-def test_shgi_imports_and_traces_inside_blender(build_python_dir, tmp_path):
+def test_shgi_imports_and_traces_inside_blender(blender, build_python_dir, tmp_path):
     script = tmp_path / "import_shgi.py"
     script.write_text(SCRIPT.format(path=str(build_python_dir)))
-    result = run_blender(script, timeout=300)
+    result = run_blender(script, blender=blender, timeout=300)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
     assert "SHGI_IN_BLENDER" in result.stdout

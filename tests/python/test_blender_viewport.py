@@ -13,7 +13,6 @@ probe grid refining with its probes drawn and restarting when its Irradiance Vol
 """
 
 import json
-import shutil
 import subprocess
 import sys
 import time
@@ -23,8 +22,8 @@ import numpy as np
 import pytest
 
 import shgi
-from blender_support import (ADDON_DIR, BLENDER, BLENDER_SCRIPTS, REPO_ROOT, blender_env,
-                             needs_blender, run_blender)
+from blender_support import (ADDON_DIR, BLENDER, BLENDER_SCRIPTS, REPO_ROOT, XVFB_RUN,
+                             blender_env, needs_window, run_blender)
 
 sys.path.insert(0, str(REPO_ROOT / "addon"))
 sys.path.insert(0, str(REPO_ROOT / "examples"))
@@ -39,9 +38,6 @@ from shgi_blender.export.light_probe import ProbeVolumeRecord  # noqa: E402
 from shgi_blender.export.scene_snapshot import (  # noqa: E402
     DIFFERENT, EDITABLE, SAME, InstanceRecord, MaterialTable, SceneSnapshot)
 
-XVFB_RUN = shutil.which("xvfb-run")
-needs_xvfb = pytest.mark.skipif(XVFB_RUN is None or BLENDER is None,
-                                reason="xvfb-run or Blender is missing (make deps installs both)")
 
 # Projections agree to float32 rounding of pixel coordinates.
 PROJECTION_TOLERANCE_PX = 1e-3
@@ -433,11 +429,10 @@ def test_lattice_overlay_shades_spheres_by_irradiance():
 
 # --- inside Blender ----------------------------------------------------------------------------
 
-@needs_blender
-def test_viewport_sync_in_blender(build_python_dir, tmp_path):
+def test_viewport_sync_in_blender(blender, build_python_dir, tmp_path):
     out = tmp_path / "viewport_sync.json"
     result = run_blender(BLENDER_SCRIPTS / "viewport_sync_checks.py", build_python_dir,
-                         ADDON_DIR, out, timeout=300)
+                         ADDON_DIR, out, blender=blender, timeout=300)
     log = result.stdout[-6000:] + result.stderr[-3000:]
     assert result.returncode == 0 and "VIEWPORT_SYNC_OK" in result.stdout, log
     results = json.loads(out.read_text())
@@ -466,7 +461,7 @@ LIGHT_MOVE_CHANGE = 0.15
 WINDOW = (640, 520)
 
 
-@needs_xvfb
+@needs_window
 def test_viewport_in_a_window(build_python_dir, tmp_path):
     out = tmp_path / "viewport_window.json"
     width, height = WINDOW
