@@ -58,6 +58,7 @@ __all__ = [
     "BakeProgress",
     "resolution_for_density",
     "resolution_for_area",
+    "surface_area",
     "bake_object",
     "finish",
     "write_lightmap",
@@ -236,13 +237,19 @@ def resolution_for_area(area: float, texels_per_metre: float, minimum: int = MIN
     return int(min(maximum, max(minimum, 4 * math.ceil(side / 4.0))))
 
 
+def surface_area(positions, triangles) -> float:
+    """Total area of the triangles (T, 3 vertex indices) over `positions` (N, 3)."""
+    p = np.asarray(positions, dtype=np.float64)
+    t = np.asarray(triangles, dtype=np.int64)
+    return float(0.5 * np.linalg.norm(np.cross(p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]),
+                                      axis=1).sum())
+
+
 def _side_for_density(mesh, inst, texels_per_metre: float, minimum: int, maximum: int) -> int:
     m = np.asarray(inst.world_from_object, dtype=np.float64)
-    p = np.asarray(mesh.positions, dtype=np.float64) @ m[:3, :3].T + m[:3, 3]
-    t = np.asarray(mesh.triangles, dtype=np.int64)
-    area = 0.5 * np.linalg.norm(np.cross(p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]),
-                                axis=1).sum()
-    return resolution_for_area(area, texels_per_metre, minimum, maximum)
+    world = np.asarray(mesh.positions, dtype=np.float64) @ m[:3, :3].T + m[:3, 3]
+    return resolution_for_area(surface_area(world, mesh.triangles), texels_per_metre, minimum,
+                               maximum)
 
 
 def _raster_settings(job: BakeJob, options: BakeOptions) -> _shgi.TexelRasterSettings:

@@ -101,7 +101,6 @@ WINDOWED_BLENDER = _program_blender()
 BLENDERS = [WINDOWED_BLENDER, _module_blender()]
 BLENDER = WINDOWED_BLENDER.prefix[0] if WINDOWED_BLENDER.missing is None else None
 
-needs_blender = WINDOWED_BLENDER.skip_mark
 XVFB_RUN = shutil.which("xvfb-run")
 
 
@@ -110,6 +109,17 @@ def needs_window(test):
     skip = pytest.mark.skipif(XVFB_RUN is None or BLENDER is None,
                               reason="xvfb-run or Blender is missing (make deps installs both)")
     return pytest.mark.blender(skip(test))
+
+
+def run_in_window(script, size, *args, options=(), timeout=300):
+    """Runs BLENDER_SCRIPTS/`script` in a Blender window of `size` (width, height) on a virtual
+    screen (xvfb-run), with Blender `options` before --python and `args` after '--'."""
+    width, height = size
+    command = [XVFB_RUN, "-a", "-s", f"-screen 0 {width + 160}x{height + 80}x24", BLENDER,
+               "--factory-startup", *options, "--window-geometry", "0", "0", str(width),
+               str(height), "--python", str(BLENDER_SCRIPTS / script), "--", *map(str, args)]
+    return subprocess.run(command, capture_output=True, text=True, timeout=timeout,
+                          env=blender_env())
 
 
 # What Cycles 4.0+ renders differently from Cycles 3.4, which SHGI's renderer (Blender 3.4's

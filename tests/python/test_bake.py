@@ -388,6 +388,8 @@ def test_resolution_for_density_counts_world_metres():
     scene = plane_scene(placements=(("plane", np.eye(4)), ("large", SCALE_2_AT_X_5)))
     assert bake.resolution_for_density(scene, 0, XATLAS_DENSITY) == XATLAS_SIDE
     assert bake.resolution_for_density(scene, 1, XATLAS_DENSITY) == LARGE_SIDE
+    square = np.array([[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]], np.float32)
+    assert bake.surface_area(square, [[0, 1, 2], [0, 2, 3]]) == pytest.approx(4.0)
     assert bake.resolution_for_area(4.0, XATLAS_DENSITY) == XATLAS_SIDE
     assert bake.resolution_for_area(16.0, XATLAS_DENSITY) == LARGE_SIDE
     assert bake.resolution_for_area(16.0, XATLAS_DENSITY, 64, 128) == 64

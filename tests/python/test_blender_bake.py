@@ -19,7 +19,6 @@ over all covered texels and over the visible ones (not under the box).
 
 import json
 import pathlib
-import subprocess
 import sys
 import time
 from types import SimpleNamespace
@@ -29,9 +28,8 @@ import pytest
 
 import shgi
 from shgi import bake as shgi_bake
-from blender_support import (ADDON_DIR, BLENDER, BLENDER_SCRIPTS, REPO_ROOT, XVFB_RUN,
-                             blender_env, expect_cycles_4_gap, needs_window,
-                             run_script_once)
+from blender_support import (ADDON_DIR, REPO_ROOT, expect_cycles_4_gap, needs_window,
+                             run_in_window, run_script_once)
 
 sys.path.insert(0, str(REPO_ROOT / "addon"))
 sys.path.insert(0, str(REPO_ROOT / "examples"))
@@ -391,13 +389,8 @@ def test_headless_bake_without_the_native_module(blender, build_python_dir, tmp_
 @needs_window
 def test_modal_bake_shows_results_as_they_come_and_esc_cancels(build_python_dir, tmp_path):
     out = tmp_path / "bake_window.json"
-    width, height = WINDOW
-    command = [XVFB_RUN, "-a", "-s", f"-screen 0 {width + 160}x{height + 80}x24", BLENDER,
-               "--factory-startup", "--enable-event-simulate", "--window-geometry", "0", "0",
-               str(width), str(height), "--python", str(BLENDER_SCRIPTS / "bake_checks.py"),
-               "--", str(build_python_dir), str(ADDON_DIR), str(out), "window"]
-    result = subprocess.run(command, capture_output=True, text=True, timeout=300,
-                            env=blender_env())
+    result = run_in_window("bake_checks.py", WINDOW, build_python_dir, ADDON_DIR, out, "window",
+                           options=("--enable-event-simulate",))
     assert result.returncode == 0 and "BAKE_WINDOW_OK" in result.stdout, \
         result.stdout[-4000:] + result.stderr[-2000:]
     r = json.loads(out.read_text())

@@ -13,7 +13,6 @@ probe grid refining with its probes drawn and restarting when its Irradiance Vol
 """
 
 import json
-import subprocess
 import sys
 import time
 from types import SimpleNamespace
@@ -22,8 +21,8 @@ import numpy as np
 import pytest
 
 import shgi
-from blender_support import (ADDON_DIR, BLENDER, BLENDER_SCRIPTS, REPO_ROOT, XVFB_RUN,
-                             blender_env, needs_window, run_blender)
+from blender_support import (ADDON_DIR, BLENDER_SCRIPTS, REPO_ROOT, needs_window,
+                             run_blender, run_in_window)
 
 sys.path.insert(0, str(REPO_ROOT / "addon"))
 sys.path.insert(0, str(REPO_ROOT / "examples"))
@@ -464,13 +463,7 @@ WINDOW = (640, 520)
 @needs_window
 def test_viewport_in_a_window(build_python_dir, tmp_path):
     out = tmp_path / "viewport_window.json"
-    width, height = WINDOW
-    command = [XVFB_RUN, "-a", "-s", f"-screen 0 {width + 160}x{height + 80}x24", BLENDER,
-               "--factory-startup", "--window-geometry", "0", "0", str(width), str(height),
-               "--python", str(BLENDER_SCRIPTS / "viewport_window.py"), "--",
-               str(build_python_dir), str(ADDON_DIR), str(out)]
-    result = subprocess.run(command, capture_output=True, text=True, timeout=300,
-                            env=blender_env())
+    result = run_in_window("viewport_window.py", WINDOW, build_python_dir, ADDON_DIR, out)
     log = result.stdout[-6000:] + result.stderr[-3000:]
     assert result.returncode == 0 and "VIEWPORT_WINDOW_OK" in result.stdout, log
     r = json.loads(out.read_text())

@@ -53,6 +53,9 @@ class _NativeLogQueue(logging.Handler):
             yield self.messages.get()
 
 
+# {this Blender's pass name: the renderers' name} (passes.py; Blender 5.0 renamed the passes).
+_RENDERER_PASS_NAMES = passes.names_from_blender_names(bpy.app.version)
+
 class FinalRender:
     """One view layer's final render driven from the main thread.
 
@@ -227,9 +230,8 @@ class FinalRender:
         """Copies the snapshot's passes (all, or those in `names`: the renderers' names) into
         the render result, whose passes carry this Blender's names."""
         layer = result.layers[0]
-        renderer_names = passes.names_from_blender_names(bpy.app.version)
         for render_pass in layer.passes:
-            name = renderer_names.get(render_pass.name)
+            name = _RENDERER_PASS_NAMES.get(render_pass.name)
             if name is None or (names is not None and name not in names):
                 continue
             pixels = snapshot.passes.get(name)

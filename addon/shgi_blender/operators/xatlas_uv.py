@@ -31,12 +31,6 @@ def loop_triangles(obj):
     return positions, triangles.reshape(-1, 3).astype(np.int64), loops.reshape(-1, 3)
 
 
-def surface_area(positions, triangles):
-    """Total area of the triangles, in the positions' units squared."""
-    a, b, c = (positions[triangles[:, k]] for k in range(3))
-    return float(0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())
-
-
 def lay_out(obj, layer, resolution, texel_density, size_limits):
     """Fills UV layer `layer` of the object's mesh with an xatlas layout; (report, disagreeing
     corners). `resolution` > 0 is the lightmap's size; else the size follows from
@@ -49,7 +43,7 @@ def lay_out(obj, layer, resolution, texel_density, size_limits):
     if len(triangles) == 0:
         raise ValueError(f"object {obj.name!r} has no faces to lay out")
     if resolution <= 0:
-        resolution = shgi_bake.resolution_for_area(surface_area(positions, triangles),
+        resolution = shgi_bake.resolution_for_area(shgi_bake.surface_area(positions, triangles),
                                                    texel_density, *size_limits)
     layout = uv_atlas.lightmap_uvs(positions, triangles, resolution=resolution,
                                    padding=shgi_bake.BakeOptions().uv_padding)
