@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <map>
 #include <tuple>
 #include <utility>
 
@@ -10,8 +11,10 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
-#include <ImfInputFile.h>
+#include <ImfInputPart.h>
+#include <ImfMultiPartInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfPartType.h>
 #include <ImfStringVectorAttribute.h>
 #include <half.h>
 
@@ -113,32 +116,115 @@ void order_channels(const Imf::Header& header, std::vector<ExrChannelInfo>& chan
     sort_channels_blender_style(channels);
 }
 
-// The channels of a header that SHGI can read, in read order.
-std::vector<ExrChannelInfo> readable_channels(const std::string& path, const Imf::Header& header) {
-    std::vector<ExrChannelInfo> channels;
-    for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
-        const Imf::Channel& channel = it.channel();
-        if (channel.type != Imf::HALF && channel.type != Imf::FLOAT) {
-            throw IoError(format_message("cannot read EXR \"", path, "\": channel \"", it.name(),
-                                         "\" holds unsigned integers; SHGI reads only half and "
-                                         "float channels"));
-        }
-        if (channel.xSampling != 1 || channel.ySampling != 1) {
-            throw IoError(format_message("cannot read EXR \"", path, "\": channel \"", it.name(),
-                                         "\" is subsampled (", channel.xSampling, " x ",
-                                         channel.ySampling, "); SHGI reads only full-resolution "
-                                         "channels"));
-        }
-        channels.push_back(ExrChannelInfo{
-            it.name(), channel.type == Imf::HALF ? PixelType::Half : PixelType::Float});
+// "part 2 \"ViewLayer.Depth\"" for error messages; parts need not have a name.
+std::string part_label(const Imf::Header& header, int part) {
+    if (!header.hasName()) return format_message("part ", part);
+    return format_message("part ", part, " \"", header.name(), "\"");
+}
+
+std::string format_window(const Imath::Box2i& window) {
+    return format_message("(", window.min.x, ", ", window.min.y, ") - (", window.max.x, ", ",
+                          window.max.y, ")");
+}
+
+// The name read_exr gives channel `name` of a part called `part_name`. Blender 5.0 writes one
+// part per pass, named "ViewLayer.Combined", whose channels carry the full name
+// "ViewLayer.Combined.R"; other writers (Houdini) name the channel "R" and leave the layer to
+// the part name. Like Blender's reader, prefix the part name unless the channel already has it,
+// so that both give the names of the single-part file with the same passes.
+std::string layer_channel_name(const std::string& part_name, const std::string& name) {
+    if (part_name.empty() || name.rfind(part_name + ".", 0) == 0) return name;
+    return part_name + "." + name;
+}
+
+// Throws unless SHGI can read `channel`: half or float, not subsampled.
+void check_readable_channel(const std::string& path, const std::string& name,
+                            const Imf::Channel& channel) {
+    if (channel.type != Imf::HALF && channel.type != Imf::FLOAT) {
+        throw IoError(format_message("cannot read EXR \"", path, "\": channel \"", name,
+                                     "\" holds unsigned integers; SHGI reads only half and "
+                                     "float channels"));
     }
-    order_channels(header, channels);
-    return channels;
+    if (channel.xSampling != 1 || channel.ySampling != 1) {
+        throw IoError(format_message("cannot read EXR \"", path, "\": channel \"", name,
+                                     "\" is subsampled (", channel.xSampling, " x ",
+                                     channel.ySampling, "); SHGI reads only full-resolution "
+                                     "channels"));
+    }
+}
+
+// Throws unless part `part` holds flat (scanline or tiled) pixels in the data window of part 0.
+void check_readable_part(const std::string& path, const Imf::MultiPartInputFile& file,
+                         int part) {
+    const Imf::Header& header = file.header(part);
+    if (header.hasType() && Imf::isDeepData(header.type())) {
+        throw IoError(format_message("cannot read EXR \"", path, "\": ",
+                                     part_label(header, part), " holds deep data (",
+                                     header.type(), "); SHGI reads only flat scanline and tiled "
+                                     "images, one value per channel and pixel"));
+    }
+    const Imath::Box2i& window = header.dataWindow();
+    const Imath::Box2i& first_window = file.header(0).dataWindow();
+    if (window != first_window) {
+        throw IoError(format_message(
+            "cannot read EXR \"", path, "\": ", part_label(header, part), " has the data window ",
+            format_window(window), " but ", part_label(file.header(0), 0), " has ",
+            format_window(first_window), "; SHGI reads only files whose parts share one data "
+            "window (crop or pad the passes to one size when writing)"));
+    }
+}
+
+// Where the pixels of one channel of read_exr's Image are in the file.
+struct ChannelSource {
+    int part = 0;
+    std::string name_in_part;  // without the part-name prefix layer_channel_name may add
+};
+
+// The channels of every part of a file, checked readable and named as read_exr returns them.
+struct ExrLayout {
+    Imath::Box2i data_window;              // the same in every part
+    std::vector<ExrChannelInfo> channels;  // in read order
+    std::map<std::string, ChannelSource> sources;  // by ExrChannelInfo::name
+};
+
+ExrLayout read_layout(const std::string& path, const Imf::MultiPartInputFile& file) {
+    ExrLayout layout;
+    layout.data_window = file.header(0).dataWindow();
+    // A single-part file keeps its channel names whatever its name attribute says, so files
+    // SHGI and Blender 3.4 write read as before.
+    const bool prefix_part_names = file.parts() > 1;
+    for (int part = 0; part < file.parts(); ++part) {
+        check_readable_part(path, file, part);
+        const Imf::Header& header = file.header(part);
+        const std::string part_name =
+            prefix_part_names && header.hasName() ? header.name() : std::string();
+        for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
+            const std::string name = layer_channel_name(part_name, it.name());
+            check_readable_channel(path, name, it.channel());
+            const auto [found, inserted] =
+                layout.sources.emplace(name, ChannelSource{part, it.name()});
+            if (!inserted) {
+                throw IoError(format_message(
+                    "cannot read EXR \"", path, "\": channel \"", name, "\" is in both ",
+                    part_label(file.header(found->second.part), found->second.part), " and ",
+                    part_label(header, part), "; SHGI needs unique channel names: rename one "
+                    "when writing the file"));
+            }
+            layout.channels.push_back(ExrChannelInfo{
+                name, it.channel().type == Imf::HALF ? PixelType::Half : PixelType::Float});
+        }
+    }
+    // By name, as the channel list of a single-part file with these channels is, then in the
+    // order SHGI wrote them or in Blender's: a multi-part file reads as its single-part twin.
+    std::sort(layout.channels.begin(), layout.channels.end(),
+              [](const ExrChannelInfo& a, const ExrChannelInfo& b) { return a.name < b.name; });
+    order_channels(file.header(0), layout.channels);
+    return layout;
 }
 
 // Width and height of the data window, checked to be a valid, non-empty box.
-std::pair<int64_t, int64_t> data_window_size(const std::string& path, const Imf::Header& header) {
-    const Imath::Box2i& window = header.dataWindow();
+std::pair<int64_t, int64_t> data_window_size(const std::string& path,
+                                             const Imath::Box2i& window) {
     const int64_t width = int64_t(window.max.x) - int64_t(window.min.x) + 1;
     const int64_t height = int64_t(window.max.y) - int64_t(window.min.y) + 1;
     if (width < 1 || height < 1 || width > kMaxImageDimension || height > kMaxImageDimension) {
@@ -236,23 +322,29 @@ void write_exr(const std::string& path, const Image& image, const ExrWriteSettin
 
 Image read_exr(const std::string& path, int64_t max_pixels) {
     try {
-        Imf::InputFile file(path.c_str());
-        const Imf::Header& header = file.header();
-        const auto [width, height] = data_window_size(path, header);
-        const std::vector<ExrChannelInfo> channels = readable_channels(path, header);
+        Imf::MultiPartInputFile file(path.c_str());
+        const ExrLayout layout = read_layout(path, file);
+        const Imath::Box2i& window = layout.data_window;
+        const auto [width, height] = data_window_size(path, window);
+        const std::vector<ExrChannelInfo>& channels = layout.channels;
         check_read_budget(path, width, height, channels.size(), max_pixels);
 
-        // OpenEXR converts half channels to the float slices while reading.
-        const Imath::Box2i& window = header.dataWindow();
+        // One frame buffer per part; OpenEXR converts half channels to the float slices.
         std::vector<std::vector<float>> buffers(channels.size());
-        Imf::FrameBuffer frame_buffer;
+        std::vector<Imf::FrameBuffer> frame_buffers(size_t(file.parts()));
         for (size_t c = 0; c < channels.size(); ++c) {
             buffers[c].resize(size_t(width * height));
-            frame_buffer.insert(channels[c].name,
-                                Imf::Slice::Make(Imf::FLOAT, buffers[c].data(), window));
+            const ChannelSource& source = layout.sources.at(channels[c].name);
+            frame_buffers[size_t(source.part)].insert(
+                source.name_in_part, Imf::Slice::Make(Imf::FLOAT, buffers[c].data(), window));
         }
-        file.setFrameBuffer(frame_buffer);
-        file.readPixels(window.min.y, window.max.y);
+        for (int part = 0; part < file.parts(); ++part) {
+            const Imf::FrameBuffer& frame_buffer = frame_buffers[size_t(part)];
+            if (frame_buffer.begin() == frame_buffer.end()) continue;  // a part without channels
+            Imf::InputPart input(file, part);
+            input.setFrameBuffer(frame_buffer);
+            input.readPixels(window.min.y, window.max.y);
+        }
 
         Image image(static_cast<int>(width), static_cast<int>(height));
         for (size_t c = 0; c < channels.size(); ++c) {
@@ -268,14 +360,14 @@ Image read_exr(const std::string& path, int64_t max_pixels) {
 
 ExrInfo read_exr_info(const std::string& path) {
     try {
-        Imf::InputFile file(path.c_str());
-        const Imf::Header& header = file.header();
-        const auto [width, height] = data_window_size(path, header);
+        Imf::MultiPartInputFile file(path.c_str());
+        const ExrLayout layout = read_layout(path, file);
+        const auto [width, height] = data_window_size(path, layout.data_window);
         ExrInfo info;
         info.width = int(width);
         info.height = int(height);
-        info.compression = imf_compression_name(header.compression());
-        info.channels = readable_channels(path, header);
+        info.compression = imf_compression_name(file.header(0).compression());
+        info.channels = layout.channels;
         return info;
     } catch (const Iex::BaseExc& error) {
         throw IoError(format_message("cannot read EXR \"", path, "\": ", error.what()));

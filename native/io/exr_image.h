@@ -15,10 +15,20 @@
 //   name) with the channels of each layer in Blender's order R, G, B, A, then X, Y, Z, W, then
 //   U, V, then any other suffix by name.
 //
-// Reading accepts scanline or tiled single-part files (the first part of a multipart file) with
-// HALF or FLOAT channels at full resolution; UINT or subsampled channels, deep data, and
-// images larger than a caller-given pixel budget are rejected with an IoError naming the file.
-// Every OpenEXR exception becomes an shgi::IoError naming the path.
+// Reading accepts single-part and multi-part files (OpenEXR 2), their parts scanline or tiled,
+// with HALF or FLOAT channels at full resolution. Every part is read; all must share the data
+// window of the first. Blender 5.0 writes a multilayer EXR as one part per pass (part
+// "ViewLayer.Combined" holding "ViewLayer.Combined.R", ...), other writers leave the layer to
+// the part name (part "ViewLayer.Depth" holding "Z"): a channel of a multi-part file is named
+// "<part name>.<channel name>" unless its name already starts with "<part name>." (as Blender's
+// reader does), and the channels of all parts come back in the order described above, so a
+// multi-part file reads exactly as the single-part file with the same passes (what Blender
+// writes with "interleave" on, and Blender 3.4 always).
+// Single-part files keep their channel names, and "shgiChannelOrder" is read from the first
+// part. UINT or subsampled channels, deep parts, parts with another data window, two parts
+// giving the same channel name, and images larger than a caller-given pixel budget are rejected
+// with an IoError naming the file (and the part). Every OpenEXR exception becomes an
+// shgi::IoError naming the path.
 #pragma once
 
 #include <cstdint>
@@ -56,8 +66,9 @@ struct ExrChannelInfo {
 struct ExrInfo {
     int width = 0;   // of the data window
     int height = 0;
-    std::string compression;  // "zip", "piz", ... or a lossy codec of another writer ("dwaa")
-    std::vector<ExrChannelInfo> channels;  // in the order read_exr returns them
+    // Of the first part: "zip", "piz", ... or a lossy codec of another writer ("dwaa").
+    std::string compression;
+    std::vector<ExrChannelInfo> channels;  // of every part, in the order read_exr returns them
 };
 
 // Writes `image` to `path` atomically (a temporary file in the same folder, then a rename).
@@ -65,9 +76,10 @@ struct ExrInfo {
 // cannot be written.
 void write_exr(const std::string& path, const Image& image, const ExrWriteSettings& settings = {});
 
-// Reads every channel of `path`. Throws IoError naming the path for a missing, unreadable or
-// corrupt file, for unsupported channels, and when width * height exceeds max_pixels (raise it
-// only for trusted files) or the channels together exceed kMaxExrValuesPerPixel * max_pixels.
+// Reads every channel of every part of `path`. Throws IoError naming the path for a missing,
+// unreadable or corrupt file, for unsupported channels or parts, and when width * height exceeds
+// max_pixels (raise it only for trusted files) or the channels of all parts together exceed
+// kMaxExrValuesPerPixel * max_pixels.
 Image read_exr(const std::string& path, int64_t max_pixels = kDefaultMaxExrPixels);
 
 // Reads only the header of `path` (same errors as read_exr, without the size checks).

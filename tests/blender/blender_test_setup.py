@@ -105,20 +105,18 @@ def add_irradiance_volume(scene, name, resolution):
 
 
 def use_multilayer_exr(image_settings):
-    """Render output as 32-bit float, ZIP-compressed multilayer OpenEXR (every pass a layer),
-    in one part, as read_render_exr reads it.
+    """Render output as 32-bit float, ZIP-compressed multilayer OpenEXR (every pass a layer).
 
     Blender 5.0 made "multilayer" a media type (its file format then reads OPEN_EXR_MULTILAYER,
     the file format itself in Blender 3.4) and writes one EXR part per pass unless told to
-    interleave them as Blender 3.4 does; shgi.read_exr reads the first part of a file only.
+    interleave them as Blender 3.4 does. Its default, multi-part, is kept: shgi.read_exr reads
+    every part under the layer names of the single-part file.
     """
     if hasattr(image_settings, "media_type"):
         image_settings.media_type = "MULTI_LAYER_IMAGE"
     image_settings.file_format = "OPEN_EXR_MULTILAYER"
     image_settings.color_depth = "32"
     image_settings.exr_codec = "ZIP"
-    if hasattr(image_settings, "use_exr_interleave"):
-        image_settings.use_exr_interleave = True
 
 
 def read_render_exr(path):

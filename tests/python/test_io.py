@@ -117,6 +117,64 @@ def test_exr_bare_and_many_channel_layers(tmp_path):
     np.testing.assert_array_equal(read["Lattice"], coefficients)
 
 
+# A multi-part file as Blender 5.0 and Houdini write them, made with OpenEXR's
+# Imf::MultiPartOutputFile (3.1.5, no compression, 3 x 2 pixels): part "ViewLayer.Combined"
+# (float "ViewLayer.Combined.R", ".G", ".B", ".A": the channel carries the part name), part
+# "ViewLayer.Depth" (float "Z") and tiled part "ViewLayer.DiffInd" (half "R", "G", "B": the part
+# name gives the layer). Channel k, in that order, holds 100 k + 10 y + x + 0.5 at pixel (x, y).
+# The same bytes as kThreePartExr in tests/cpp/io/exr_image_test.cpp.
+THREE_PART_EXR = (
+    b"v/1\x01\x02\x10\0\0channels\0chlist\0\x95\0\0\0ViewLayer.Combined.A\0\x02\0\0\0\0\0\0\0\x01\0"
+    b"\0\0\x01\0\0\0ViewLayer.Combined.B\0\x02\0\0\0\0\0\0\0\x01\0\0\0\x01\0\0\0ViewLayer.Combined."
+    b"G\0\x02\0\0\0\0\0\0\0\x01\0\0\0\x01\0\0\0ViewLayer.Combined.R\0\x02\0\0\0\0\0\0\0\x01\0\0\0"
+    b"\x01\0\0\0\0chunkCount\0int\0\x04\0\0\0\x02\0\0\0compression\0compression\0\x01\0\0\0\0dataWi"
+    b"ndow\0box2i\0\x10\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0\x01\0\0\0displayWindow\0box2i\0\x10\0\0\0\0"
+    b"\0\0\0\0\0\0\0\x02\0\0\0\x01\0\0\0lineOrder\0lineOrder\0\x01\0\0\0\0name\0string\0\x12\0\0\0V"
+    b"iewLayer.CombinedpixelAspectRatio\0float\0\x04\0\0\0\0\0\x80?screenWindowCenter\0v2f\0\x08\0"
+    b"\0\0\0\0\0\0\0\0\0\0screenWindowWidth\0float\0\x04\0\0\0\0\0\x80?type\0string\0\x0d\0\0\0scan"
+    b"lineimage\0channels\0chlist\0\x13\0\0\0Z\0\x02\0\0\0\0\0\0\0\x01\0\0\0\x01\0\0\0\0chunkCount"
+    b"\0int\0\x04\0\0\0\x02\0\0\0compression\0compression\0\x01\0\0\0\0dataWindow\0box2i\0\x10\0\0"
+    b"\0\0\0\0\0\0\0\0\0\x02\0\0\0\x01\0\0\0displayWindow\0box2i\0\x10\0\0\0\0\0\0\0\0\0\0\0\x02\0"
+    b"\0\0\x01\0\0\0lineOrder\0lineOrder\0\x01\0\0\0\0name\0string\0\x0f\0\0\0ViewLayer.DepthpixelA"
+    b"spectRatio\0float\0\x04\0\0\0\0\0\x80?screenWindowCenter\0v2f\0\x08\0\0\0\0\0\0\0\0\0\0\0scre"
+    b"enWindowWidth\0float\0\x04\0\0\0\0\0\x80?type\0string\0\x0d\0\0\0scanlineimage\0channels\0chl"
+    b"ist\x007\0\0\0B\0\x01\0\0\0\0\0\0\0\x01\0\0\0\x01\0\0\0G\0\x01\0\0\0\0\0\0\0\x01\0\0\0\x01\0"
+    b"\0\0R\0\x01\0\0\0\0\0\0\0\x01\0\0\0\x01\0\0\0\0chunkCount\0int\0\x04\0\0\0\x02\0\0\0compressi"
+    b"on\0compression\0\x01\0\0\0\0dataWindow\0box2i\0\x10\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0\x01\0\0"
+    b"\0displayWindow\0box2i\0\x10\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0\x01\0\0\0lineOrder\0lineOrder\0"
+    b"\x01\0\0\0\0name\0string\0\x11\0\0\0ViewLayer.DiffIndpixelAspectRatio\0float\0\x04\0\0\0\0\0"
+    b"\x80?screenWindowCenter\0v2f\0\x08\0\0\0\0\0\0\0\0\0\0\0screenWindowWidth\0float\0\x04\0\0\0"
+    b"\0\0\x80?tiles\0tiledesc\0\x09\0\0\0\x02\0\0\0\x02\0\0\0\0type\0string\0\x0a\0\0\0tiledimage"
+    b"\0\0\x1d\x05\0\0\0\0\0\0Y\x05\0\0\0\0\0\0\x95\x05\0\0\0\0\0\0\xad\x05\0\0\0\0\0\0\xc5\x05\0\0"
+    b"\0\0\0\0\xf5\x05\0\0\0\0\0\0\0\0\0\0\0\0\0\x000\0\0\0\0@\x96C\0\xc0\x96C\0@\x97C\0\x80HC\0"
+    b"\x80IC\0\x80JC\0\0\xc9B\0\0\xcbB\0\0\xcdB\0\0\0?\0\0\xc0?\0\0 @\0\0\0\0\x01\0\0\x000\0\0\0\0@"
+    b"\x9bC\0\xc0\x9bC\0@\x9cC\0\x80RC\0\x80SC\0\x80TC\0\0\xddB\0\0\xdfB\0\0\xe1B\0\0(A\0\08A\0\0HA"
+    b"\x01\0\0\0\0\0\0\0\x0c\0\0\0\0@\xc8C\0\xc0\xc8C\0@\xc9C\x01\0\0\0\x01\0\0\0\x0c\0\0\0\0@\xcdC"
+    b"\0\xc0\xcdC\0@\xceC\x02\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x18\0\0\0ya{a\xb1`\xb3`\xd2_"
+    b"\xd6_\x8da\x8fa\xc5`\xc7`\xfa_\xfe_\x02\0\0\0\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x0c\0\0\0}a"
+    b"\xb5`\xda_\x91a\xc9`\x01`"
+)
+
+
+def test_read_exr_reads_every_part_of_a_multi_part_file(tmp_path):
+    path = tmp_path / "three_parts.exr"
+    path.write_bytes(THREE_PART_EXR)
+    y, x = np.mgrid[0:2, 0:3].astype(np.float32)
+    expected = {name: np.stack([100 * k + 10 * y + x + 0.5 for k in ks], axis=-1)
+                for name, ks in [("ViewLayer.Combined", range(0, 4)),
+                                 ("ViewLayer.Depth", range(4, 5)),
+                                 ("ViewLayer.DiffInd", range(5, 8))]}
+    layers = shgi.read_exr(path)
+    assert list(layers) == list(expected)  # as in the single-part file with these passes
+    for name, pixels in expected.items():
+        assert_bit_exact(layers[name], pixels)
+    info = shgi.read_exr_info(path)
+    assert (info["width"], info["height"]) == (3, 2)
+    assert info["channels"] == (
+        [(f"ViewLayer.Combined.{c}", "float") for c in "RGBA"] + [("ViewLayer.Depth.Z", "float")]
+        + [(f"ViewLayer.DiffInd.{c}", "half") for c in "RGB"])
+
+
 def test_read_exr_enforces_max_pixels(tmp_path):
     path = tmp_path / "big.exr"
     shgi.write_exr(path, {"Combined": np.zeros((8, 8, 4), np.float32)})

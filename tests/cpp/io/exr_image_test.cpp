@@ -187,6 +187,171 @@ TEST(ExrImage, LayerNamesAndChannelOrderArePreserved) {
     }
 }
 
+// Multi-part files as Blender 5.0 and other OpenEXR 2 writers make them. They were written with
+// Imf::MultiPartOutputFile (OpenEXR 3.1.5, NO_COMPRESSION, 3 x 2 pixels, data window = display
+// window = (0, 0) - (2, 1)) and are kept here as bytes because this test executable does not see
+// the OpenEXR headers (shgi_io links OpenEXR privately).
+//
+// kThreePartExr: part 0 "ViewLayer.Combined", scanline, float channels "ViewLayer.Combined.R",
+// ".G", ".B", ".A" (Blender 5.0's names: the channel carries the part name); part 1
+// "ViewLayer.Depth", scanline, float channel "Z"; part 2 "ViewLayer.DiffInd", tiled 2 x 2, half
+// channels "R", "G", "B" (Houdini's names: the part name gives the layer). Taking the channels
+// in that order, channel k holds multi_part_value(k, x, y) at pixel (x, y).
+constexpr char kThreePartExr[] =
+    "v/1\x01\x02\x10\0\0channels\0chlist\0\x95\0\0\0ViewLayer.Combined.A\0\x02\0\0\0\0\0\0\0\x01\0"
+    "\0\0\x01\0\0\0ViewLayer.Combined.B\0\x02\0\0\0\0\0\0\0\x01\0\0\0\x01\0\0\0ViewLayer.Combined.G"
+    "\0\x02\0\0\0\0\0\0\0\x01\0\0\0\x01\0\0\0ViewLayer.Combined.R\0\x02\0\0\0\0\0\0\0\x01\0\0\0\x01"
+    "\0\0\0\0chunkCount\0int\0\x04\0\0\0\x02\0\0\0compression\0compression\0\x01\0\0\0\0dataWindow"
+    "\0box2i\0\x10\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0\x01\0\0\0displayWindow\0box2i\0\x10\0\0\0\0\0\0"
+    "\0\0\0\0\0\x02\0\0\0\x01\0\0\0lineOrder\0lineOrder\0\x01\0\0\0\0name\0string\0\x12\0\0\0ViewLa"
+    "yer.CombinedpixelAspectRatio\0float\0\x04\0\0\0\0\0\x80\x3fscreenWindowCenter\0v2f\0\x08\0\0\0"
+    "\0\0\0\0\0\0\0\0screenWindowWidth\0float\0\x04\0\0\0\0\0\x80\x3ftype\0string\0\x0d\0\0\0scanli"
+    "neimage\0channels\0chlist\0\x13\0\0\0Z\0\x02\0\0\0\0\0\0\0\x01\0\0\0\x01\0\0\0\0chunkCount\0in"
+    "t\0\x04\0\0\0\x02\0\0\0compression\0compression\0\x01\0\0\0\0dataWindow\0box2i\0\x10\0\0\0\0\0"
+    "\0\0\0\0\0\0\x02\0\0\0\x01\0\0\0displayWindow\0box2i\0\x10\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0\x01"
+    "\0\0\0lineOrder\0lineOrder\0\x01\0\0\0\0name\0string\0\x0f\0\0\0ViewLayer.DepthpixelAspectRati"
+    "o\0float\0\x04\0\0\0\0\0\x80\x3fscreenWindowCenter\0v2f\0\x08\0\0\0\0\0\0\0\0\0\0\0screenWindo"
+    "wWidth\0float\0\x04\0\0\0\0\0\x80\x3ftype\0string\0\x0d\0\0\0scanlineimage\0channels\0chlist"
+    "\x00\x37\0\0\0B\0\x01\0\0\0\0\0\0\0\x01\0\0\0\x01\0\0\0G\0\x01\0\0\0\0\0\0\0\x01\0\0\0\x01\0\0"
+    "\0R\0\x01\0\0\0\0\0\0\0\x01\0\0\0\x01\0\0\0\0chunkCount\0int\0\x04\0\0\0\x02\0\0\0compression"
+    "\0compression\0\x01\0\0\0\0dataWindow\0box2i\0\x10\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0\x01\0\0\0di"
+    "splayWindow\0box2i\0\x10\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0\x01\0\0\0lineOrder\0lineOrder\0\x01\0"
+    "\0\0\0name\0string\0\x11\0\0\0ViewLayer.DiffIndpixelAspectRatio\0float\0\x04\0\0\0\0\0\x80\x3f"
+    "screenWindowCenter\0v2f\0\x08\0\0\0\0\0\0\0\0\0\0\0screenWindowWidth\0float\0\x04\0\0\0\0\0"
+    "\x80\x3ftiles\0tiledesc\0\x09\0\0\0\x02\0\0\0\x02\0\0\0\0type\0string\0\x0a\0\0\0tiledimage\0"
+    "\0\x1d\x05\0\0\0\0\0\0Y\x05\0\0\0\0\0\0\x95\x05\0\0\0\0\0\0\xad\x05\0\0\0\0\0\0\xc5\x05\0\0\0"
+    "\0\0\0\xf5\x05\0\0\0\0\0\0\0\0\0\0\0\0\0\x00\x30\0\0\0\0@\x96\x43\0\xc0\x96\x43\0@\x97\x43\0"
+    "\x80HC\0\x80IC\0\x80JC\0\0\xc9\x42\0\0\xcb\x42\0\0\xcd\x42\0\0\0\x3f\0\0\xc0\x3f\0\0 @\0\0\0\0"
+    "\x01\0\0\x00\x30\0\0\0\0@\x9b\x43\0\xc0\x9b\x43\0@\x9c\x43\0\x80RC\0\x80SC\0\x80TC\0\0\xdd\x42"
+    "\0\0\xdf\x42\0\0\xe1\x42\0\0(A\0\08A\0\0HA\x01\0\0\0\0\0\0\0\x0c\0\0\0\0@\xc8\x43\0\xc0\xc8"
+    "\x43\0@\xc9\x43\x01\0\0\0\x01\0\0\0\x0c\0\0\0\0@\xcd\x43\0\xc0\xcd\x43\0@\xce\x43\x02\0\0\0\0"
+    "\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x18\0\0\0ya{a\xb1`\xb3`\xd2_\xd6_\x8d\x61\x8f\x61\xc5`\xc7`\xfa"
+    "_\xfe_\x02\0\0\0\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x0c\0\0\0}a\xb5`\xda_\x91\x61\xc9`\x01`";
+
+// kMismatchedWindowExr: part 0 "ViewLayer.Combined" (channel "ViewLayer.Combined.R", data window
+// (0, 0) - (2, 1)) and part 1 "ViewLayer.Depth" (channel "ViewLayer.Depth.Z", one column wider:
+// (0, 0) - (3, 1)).
+constexpr char kMismatchedWindowExr[] =
+    "v/1\x01\x02\x10\0\0channels\0chlist\0&\0\0\0ViewLayer.Combined.R\0\x02\0\0\0\0\0\0\0\x01\0\0\0"
+    "\x01\0\0\0\0chunkCount\0int\0\x04\0\0\0\x02\0\0\0compression\0compression\0\x01\0\0\0\0dataWin"
+    "dow\0box2i\0\x10\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0\x01\0\0\0displayWindow\0box2i\0\x10\0\0\0\0\0"
+    "\0\0\0\0\0\0\x02\0\0\0\x01\0\0\0lineOrder\0lineOrder\0\x01\0\0\0\0name\0string\0\x12\0\0\0View"
+    "Layer.CombinedpixelAspectRatio\0float\0\x04\0\0\0\0\0\x80\x3fscreenWindowCenter\0v2f\0\x08\0\0"
+    "\0\0\0\0\0\0\0\0\0screenWindowWidth\0float\0\x04\0\0\0\0\0\x80\x3ftype\0string\0\x0d\0\0\0scan"
+    "lineimage\0channels\0chlist\0#\0\0\0ViewLayer.Depth.Z\0\x02\0\0\0\0\0\0\0\x01\0\0\0\x01\0\0\0"
+    "\0chunkCount\0int\0\x04\0\0\0\x02\0\0\0compression\0compression\0\x01\0\0\0\0dataWindow\0box2i"
+    "\0\x10\0\0\0\0\0\0\0\0\0\0\0\x03\0\0\0\x01\0\0\0displayWindow\0box2i\0\x10\0\0\0\0\0\0\0\0\0\0"
+    "\0\x02\0\0\0\x01\0\0\0lineOrder\0lineOrder\0\x01\0\0\0\0name\0string\0\x0f\0\0\0ViewLayer.Dept"
+    "hpixelAspectRatio\0float\0\x04\0\0\0\0\0\x80\x3fscreenWindowCenter\0v2f\0\x08\0\0\0\0\0\0\0\0"
+    "\0\0\0screenWindowWidth\0float\0\x04\0\0\0\0\0\x80\x3ftype\0string\0\x0d\0\0\0scanlineimage\0"
+    "\0\x0f\x03\0\0\0\0\0\0'\x03\0\0\0\0\0\0\x3f\x03\0\0\0\0\0\0[\x03\0\0\0\0\0\0\0\0\0\0\0\0\0\0"
+    "\x0c\0\0\0\0\0\x80\x3f\0\0\x80\x3f\0\0\x80\x3f\0\0\0\0\x01\0\0\0\x0c\0\0\0\0\0\x80\x3f\0\0\x80"
+    "\x3f\0\0\x80\x3f\x01\0\0\0\0\0\0\0\x10\0\0\0\0\0\0@\0\0\0@\0\0\0@\0\0\0@\x01\0\0\0\x01\0\0\0"
+    "\x10\0\0\0\0\0\0@\0\0\0@\0\0\0@\0\0\0@";
+
+// kDeepPartExr: part 0 "ViewLayer.Combined" (channel "ViewLayer.Combined.R") and part 1 "Deep",
+// a deep scanline part (channel "Z", no samples).
+constexpr char kDeepPartExr[] =
+    "v/1\x01\x02\x18\0\0channels\0chlist\0&\0\0\0ViewLayer.Combined.R\0\x02\0\0\0\0\0\0\0\x01\0\0\0"
+    "\x01\0\0\0\0chunkCount\0int\0\x04\0\0\0\x02\0\0\0compression\0compression\0\x01\0\0\0\0dataWin"
+    "dow\0box2i\0\x10\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0\x01\0\0\0displayWindow\0box2i\0\x10\0\0\0\0\0"
+    "\0\0\0\0\0\0\x02\0\0\0\x01\0\0\0lineOrder\0lineOrder\0\x01\0\0\0\0name\0string\0\x12\0\0\0View"
+    "Layer.CombinedpixelAspectRatio\0float\0\x04\0\0\0\0\0\x80\x3fscreenWindowCenter\0v2f\0\x08\0\0"
+    "\0\0\0\0\0\0\0\0\0screenWindowWidth\0float\0\x04\0\0\0\0\0\x80\x3ftype\0string\0\x0d\0\0\0scan"
+    "lineimage\0channels\0chlist\0\x13\0\0\0Z\0\x02\0\0\0\0\0\0\0\x01\0\0\0\x01\0\0\0\0chunkCount\0"
+    "int\0\x04\0\0\0\x02\0\0\0compression\0compression\0\x01\0\0\0\0dataWindow\0box2i\0\x10\0\0\0\0"
+    "\0\0\0\0\0\0\0\x02\0\0\0\x01\0\0\0displayWindow\0box2i\0\x10\0\0\0\0\0\0\0\0\0\0\0\x02\0\0\0"
+    "\x01\0\0\0lineOrder\0lineOrder\0\x01\0\0\0\0name\0string\0\x04\0\0\0DeeppixelAspectRatio\0floa"
+    "t\0\x04\0\0\0\0\0\x80\x3fscreenWindowCenter\0v2f\0\x08\0\0\0\0\0\0\0\0\0\0\0screenWindowWidth"
+    "\0float\0\x04\0\0\0\0\0\x80\x3ftype\0string\0\x0c\0\0\0deepscanlineversion\0int\0\x04\0\0\0"
+    "\x01\0\0\0\0\0\x07\x03\0\0\0\0\0\0\x1f\x03\0\0\0\0\0\x00\x37\x03\0\0\0\0\0\0c\x03\0\0\0\0\0\0"
+    "\0\0\0\0\0\0\0\0\x0c\0\0\0\0\0\x80\x3f\0\0\x80\x3f\0\0\x80\x3f\0\0\0\0\x01\0\0\0\x0c\0\0\0\0\0"
+    "\x80\x3f\0\0\x80\x3f\0\0\x80\x3f\x01\0\0\0\0\0\0\0\x0c\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0"
+    "\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x01\0\0\0\x01\0\0\0\x0c\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0"
+    "\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
+
+constexpr int kMultiPartWidth = 3;  // of every fixture above
+constexpr int kMultiPartHeight = 2;
+
+// The value kThreePartExr holds in its channel k at pixel (x, y); exact in half and float.
+float multi_part_value(int k, int x, int y) { return 100.0f * k + 10.0f * y + x + 0.5f; }
+
+// Writes the bytes of a fixture (without the literal's terminating '\0') to `path`.
+template <size_t N>
+void write_fixture(const std::string& path, const char (&bytes)[N]) {
+    std::ofstream(path, std::ios::binary).write(bytes, std::streamsize(N - 1));
+}
+
+TEST(ExrImage, MultiPartFilesReadEveryPartUnderItsLayerName) {
+    const fs::path folder = testing::test_folder("exr");
+    const std::string path = (folder / "three_parts.exr").string();
+    write_fixture(path, kThreePartExr);
+    const Image read = read_exr(path);
+    ASSERT_EQ(read.width(), kMultiPartWidth);
+    ASSERT_EQ(read.height(), kMultiPartHeight);
+    // The names and order of the single-part file with the same passes (Blender's interleaved
+    // multilayer EXR).
+    const std::vector<std::string> names = {
+        "ViewLayer.Combined.R", "ViewLayer.Combined.G", "ViewLayer.Combined.B",
+        "ViewLayer.Combined.A", "ViewLayer.Depth.Z",    "ViewLayer.DiffInd.R",
+        "ViewLayer.DiffInd.G",  "ViewLayer.DiffInd.B"};
+    ASSERT_EQ(channel_names(read), names);
+    EXPECT_EQ(read.layer_names(),
+              (std::vector<std::string>{"ViewLayer.Combined", "ViewLayer.Depth",
+                                        "ViewLayer.DiffInd"}));
+    const size_t float_channels = 5;  // Combined and Depth; DiffInd is half
+    for (int k = 0; k < int(names.size()); ++k) {
+        const ImageChannel& channel = read.channels()[size_t(k)];
+        EXPECT_EQ(channel.pixel_type,
+                  size_t(k) < float_channels ? PixelType::Float : PixelType::Half)
+            << channel.name;
+        for (int y = 0; y < kMultiPartHeight; ++y) {
+            for (int x = 0; x < kMultiPartWidth; ++x) {
+                EXPECT_EQ(channel.data[size_t(y * kMultiPartWidth + x)], multi_part_value(k, x, y))
+                    << channel.name << " at (" << x << ", " << y << ")";
+            }
+        }
+    }
+    // The budget counts the pixels once, however many parts hold them.
+    expect_error<IoError>([&] { read_exr(path, 5); }, {path, "6 pixels", "max_pixels = 5"});
+    EXPECT_EQ(read_exr(path, 6).channels().size(), names.size());
+}
+
+TEST(ExrImage, ReadExrInfoListsTheChannelsOfEveryPart) {
+    const fs::path folder = testing::test_folder("exr");
+    const std::string path = (folder / "three_parts.exr").string();
+    write_fixture(path, kThreePartExr);
+    const ExrInfo info = read_exr_info(path);
+    EXPECT_EQ(info.width, kMultiPartWidth);
+    EXPECT_EQ(info.height, kMultiPartHeight);
+    EXPECT_EQ(info.compression, "none");
+    const Image read = read_exr(path);
+    ASSERT_EQ(info.channels.size(), read.channels().size());
+    for (size_t c = 0; c < info.channels.size(); ++c) {
+        EXPECT_EQ(info.channels[c].name, read.channels()[c].name);
+        EXPECT_EQ(info.channels[c].pixel_type, read.channels()[c].pixel_type);
+    }
+}
+
+TEST(ExrImage, PartsWithAnotherDataWindowAreRejectedNamingBothParts) {
+    const fs::path folder = testing::test_folder("exr");
+    const std::string path = (folder / "mismatched_window.exr").string();
+    write_fixture(path, kMismatchedWindowExr);
+    const std::vector<std::string> expected = {
+        path, "part 1 \"ViewLayer.Depth\"", "(0, 0) - (3, 1)", "part 0 \"ViewLayer.Combined\"",
+        "(0, 0) - (2, 1)"};
+    expect_error<IoError>([&] { read_exr(path); }, expected);
+    expect_error<IoError>([&] { read_exr_info(path); }, expected);
+}
+
+TEST(ExrImage, DeepPartsAreRejectedNamingThePart) {
+    const fs::path folder = testing::test_folder("exr");
+    const std::string path = (folder / "deep_part.exr").string();
+    write_fixture(path, kDeepPartExr);
+    expect_error<IoError>([&] { read_exr(path); }, {path, "part 1 \"Deep\"", "deep data"});
+    expect_error<IoError>([&] { read_exr_info(path); }, {path, "part 1 \"Deep\"", "deep data"});
+}
+
 TEST(ExrImage, LayerPixelsInvertsAddLayer) {
     Image image(2, 1);
     const std::vector<float> rgba = {1, 2, 3, 4, 5, 6, 7, 8};
