@@ -149,6 +149,17 @@ void bind_material(py::module_& m) {
         .value("PRINCIPLED", DiffuseModel::Principled,
                "Principled BSDF's diffuse (Burley, with retro-reflection at high roughness)")
         .value("LAMBERT", DiffuseModel::Lambert, "Lambert, as Blender's Diffuse BSDF");
+    py::enum_<PrincipledModel>(m, "PrincipledModel",
+                               "How a Material's closures combine, as each Blender's Cycles.")
+        .value("V1", PrincipledModel::V1, "Blender 3.x: diffuse and specular added")
+        .value("V2", PrincipledModel::V2,
+               "Blender 4.0+: the specular layer dims the diffuse by its albedo; Glossy Color "
+               "holds that albedo");
+    py::enum_<MicrofacetDistribution>(m, "MicrofacetDistribution",
+                                      "The microfacet distribution of a Material's specular.")
+        .value("GGX", MicrofacetDistribution::GGX, "GGX, single scattering")
+        .value("MULTISCATTER_GGX", MicrofacetDistribution::MultiscatterGGX,
+               "Cycles 4's energy-preserving GGX (with principled_model V2)");
     py::class_<Material> cls(m, "Material",
                              "Principled BSDF subset (Blender 3.4 semantics), linear Rec.709.");
     cls.def(py::init(&from_kwargs<Material>),
@@ -167,6 +178,10 @@ void bind_material(py::module_& m) {
         .def_readwrite("emission_strength", &Material::emission_strength, ">= 0.")
         .def_readwrite("diffuse_model", &Material::diffuse_model,
                        "DiffuseModel (PRINCIPLED; the exporter sets LAMBERT for a Diffuse BSDF).")
+        .def_readwrite("principled_model", &Material::principled_model,
+                       "PrincipledModel (V1; the exporter sets V2 from Blender 4.0).")
+        .def_readwrite("distribution", &Material::distribution,
+                       "MicrofacetDistribution (GGX; Blender 4's default is MULTISCATTER_GGX).")
         .def("is_emissive", &Material::is_emissive, "True if the material emits light.");
     def_vec3(cls, "base_color", &Material::base_color, "Linear RGB albedo.");
     def_vec3(cls, "emission_color", &Material::emission_color,
@@ -238,6 +253,9 @@ void bind_light(py::module_& m) {
         .def_readwrite("radius", &Light::radius, "m: point/spot radius (0 = a true point).")
         .def_readwrite("spot_size", &Light::spot_size, "rad: full cone angle, (0, pi].")
         .def_readwrite("spot_blend", &Light::spot_blend, "[0, 1].")
+        .def_readwrite("spot_cone_cosine", &Light::spot_cone_cosine,
+                       "True (Blender 3.x): the spot's falloff includes cos(angle to its axis); "
+                       "the exporter sets False from Blender 4.0, whose Cycles drops it.")
         .def_readwrite("angle", &Light::angle, "rad: sun's angular diameter, [0, pi).")
         .def_readwrite("shape", &Light::shape, "AreaShape.")
         .def_readwrite("size_x", &Light::size_x, "m: area light size along local X.")

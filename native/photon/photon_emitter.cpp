@@ -35,15 +35,19 @@ vec3 light_power(const Light& light, float bounding_radius) {
 }  // namespace
 
 vec3 spot_light_power(const Light& light) {
-    // Integral over the cone of cos(a) x smoothstep((cos(a) - cos_half) / smooth), in c = cos(a):
-    // 2 pi [ smooth (cos_half S0 + smooth S1) + (1 - (cos_half + smooth)^2) / 2 ].
+    // Integral over the cone of the attenuation, in c = cos(a), with s = smoothstep((c -
+    // cos_half) / smooth): with the cone cosine (spot_cone_cosine), c s, which is
+    // 2 pi [ smooth (cos_half S0 + smooth S1) + (1 - (cos_half + smooth)^2) / 2 ]; without it, s,
+    // which is 2 pi [ smooth S0 + 1 - (cos_half + smooth) ].
     const float cos_half = std::cos(0.5f * light.spot_size);
     const float smooth = (1.0f - cos_half) * light.spot_blend;
     const float edge = cos_half + smooth;
-    const float cosine_integral =
-        kTwoPi * (smooth * (cos_half * kSmoothstepMean + smooth * kSmoothstepFirstMoment) +
-                  0.5f * (1.0f - edge * edge));
-    return light.color * (point_intensity_from_power(light.power) * cosine_integral);
+    const float cone_integral =
+        light.spot_cone_cosine
+            ? kTwoPi * (smooth * (cos_half * kSmoothstepMean + smooth * kSmoothstepFirstMoment) +
+                        0.5f * (1.0f - edge * edge))
+            : kTwoPi * (smooth * kSmoothstepMean + 1.0f - edge);
+    return light.color * (point_intensity_from_power(light.power) * cone_integral);
 }
 
 PhotonEmitter::PhotonEmitter(const Scene& scene) : scene_(&scene) {

@@ -177,14 +177,14 @@ void ChunkTracer::shade_batch(size_t begin, size_t end, size_t* alive) {
         if (!hits_[i].valid()) continue;  // left the scene
         PhotonState& photon = photons_[i];
         Shading& shading = shadings_[i - begin];
-        shading = make_shading(scene_, points_[i], rays_[i].direction);
+        shading = make_shading(scene_, points_[i], rays_[i].direction, PathOrigin::Light);
         const bool direct =
             photon.scatterings == 0 && !(photon.from_world && settings_.store_world_direct);
         if (!direct && shading.bsdf.has_smooth_lobes()) store(photon, shading, rays_[i]);
         sampled_[i - begin] = photon.scatterings < settings_.max_bounces;
     }
-    // The BSDF sample towards each photon's next direction (wo = towards where it came from,
-    // which the BSDF's reciprocity allows).
+    // The BSDF sample towards each photon's next direction (wo = towards where it came from; the
+    // BSDF evaluates its non-reciprocal Principled v2 terms toward the sampled direction).
     for (size_t i = begin; i < end; ++i) {
         if (!sampled_[i - begin]) continue;
         PhotonState& photon = photons_[i];

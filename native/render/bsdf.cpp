@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "util/sampling.h"
 
@@ -10,6 +11,10 @@ namespace {
 
 // Principled's "Specular" 0..1 maps to F0 = kSpecularF0Scale * specular (Blender manual).
 constexpr float kSpecularF0Scale = 0.08f;
+// Cycles 4's mean of Schlick's blend (1 - cos)^5 over the cosine-weighted hemisphere,
+// 2 ∫ mu (1 - mu)^5 dmu = 1/21: the metallic lobe's single-scattering mean Fresnel is
+// mix(base colour, 1, 1/21).
+constexpr float kSchlickAverageBlend = 1.0f / 21.0f;
 // Lobes whose closure weight averages below this are dropped (Cycles' CLOSURE_WEIGHT_CUTOFF).
 constexpr float kClosureWeightCutoff = 1e-5f;
 
@@ -116,6 +121,182 @@ float burley_albedo(float cos_nv, float roughness) {
     return table.lookup(cos_nv, roughness).x;
 }
 
+// --- Cycles 4's Principled v2 terms (PrincipledModel::V2) ---
+// Cycles 4 estimates a GGX reflection lobe's directional albedo, when its Fresnel term blends
+// F0..F90 by s(cos_ih), as mix(F0, F90, S) with S the lobe-weighted mean of s
+// (bsdf_microfacet_estimate_albedo; the lobe itself is assumed to keep all its energy), and its
+// energy-preserving GGX scales the single-scattering lobe by E's complement (Kulla and Conty
+// 2017). S, the single-scattering albedo E and its cosine-weighted mean E_avg are tabulated on
+// Cycles' grids (cycles_precompute.cpp: S 16 nodes per axis over roughness, cos(N.V) and a Fresnel
+// parameter z; E 32 x 32; E_avg 32; roughness and cos(N.V) clamped to >= 1e-4), read with linear
+// interpolation as Cycles reads them. Every entry is integrated here by visible-normal sampling
+// (16 x 16 strata) with Cycles' height-correlated Smith G2, whose sample weight is G2 / G1(wo).
+constexpr int kMomentStrata = 16;
+constexpr float kTableMin = 1e-4f;
+
+float ggx_lambda(const vec3& w, float alpha) {
+    const float c2 = w.z * w.z;
+    if (!(c2 > 0.0f)) return 1e30f;
+    return 0.5f * (std::sqrt(1.0f + alpha * alpha * std::max(1.0f / c2 - 1.0f, 0.0f)) - 1.0f);
+}
+
+// E (mean sample weight) and S (the weight-averaged blend) of a GGX reflection lobe.
+struct GgxMoments {
+    float albedo = 0.0f;
+    float blend = 0.0f;
+};
+
+template <typename Blend>  // blend(cos_ih) -> s in [0, 1]
+GgxMoments ggx_moments(float roughness, float cos_nv, Blend blend) {
+    const vec3 wo(std::sqrt(std::max(0.0f, 1.0f - cos_nv * cos_nv)), 0.0f, cos_nv);
+    const float alpha = roughness * roughness;
+    const float lambda_o = ggx_lambda(wo, alpha);
+    double sum_w = 0.0, sum_ws = 0.0;
+    for (int a = 0; a < kMomentStrata; ++a)
+        for (int b = 0; b < kMomentStrata; ++b) {
+            const vec2 u((float(a) + 0.5f) / kMomentStrata, (float(b) + 0.5f) / kMomentStrata);
+            const vec3 h = sample_ggx_visible_normal(wo, alpha, u);
+            const float cos_oh = glm::dot(wo, h);
+            const vec3 wi = 2.0f * cos_oh * h - wo;
+            if (wi.z <= 0.0f) continue;
+            const double w = (1.0f + lambda_o) / (1.0f + lambda_o + ggx_lambda(wi, alpha));
+            sum_w += w;
+            sum_ws += w * double(blend(cos_oh));
+        }
+    GgxMoments moments;
+    moments.albedo = float(sum_w / double(kMomentStrata * kMomentStrata));
+    moments.blend = sum_w > 0.0 ? float(sum_ws / sum_w) : 0.0f;
+    return moments;
+}
+
+// A table over [0, 1]^3 (x fastest), `nodes` per axis, read with linear interpolation.
+class LinearTable {
+  public:
+    // value(x, y, z) at the nodes' coordinates in [0, 1].
+    template <typename Value>
+    LinearTable(int nx, int ny, int nz, Value value) : n_{nx, ny, nz}, entries_(size_t(nx) * ny * nz) {
+        for (int k = 0; k < nz; ++k)
+            for (int j = 0; j < ny; ++j)
+                for (int i = 0; i < nx; ++i)
+                    entries_[index(i, j, k)] = value(node(i, nx), node(j, ny), node(k, nz));
+    }
+
+    float lookup(float x, float y = 0.0f, float z = 0.0f) const {
+        int i0, j0, k0;
+        float tx, ty, tz;
+        split(x, n_[0], &i0, &tx);
+        split(y, n_[1], &j0, &ty);
+        split(z, n_[2], &k0, &tz);
+        const int i1 = std::min(i0 + 1, n_[0] - 1), j1 = std::min(j0 + 1, n_[1] - 1),
+                  k1 = std::min(k0 + 1, n_[2] - 1);
+        auto plane = [&](int k) {
+            const float bottom = glm::mix(entries_[index(i0, j0, k)], entries_[index(i1, j0, k)], tx);
+            const float top = glm::mix(entries_[index(i0, j1, k)], entries_[index(i1, j1, k)], tx);
+            return glm::mix(bottom, top, ty);
+        };
+        return glm::mix(plane(k0), plane(k1), tz);
+    }
+
+  private:
+    static float node(int i, int n) { return n > 1 ? float(i) / float(n - 1) : 0.0f; }
+    static void split(float x, int n, int* i0, float* t) {
+        const float f = std::clamp(x, 0.0f, 1.0f) * float(n - 1);
+        *i0 = std::min(int(f), std::max(n - 2, 0));
+        *t = n > 1 ? f - float(*i0) : 0.0f;
+    }
+    size_t index(int i, int j, int k) const {
+        return (size_t(k) * size_t(n_[1]) + size_t(j)) * size_t(n_[0]) + size_t(i);
+    }
+    int n_[3];
+    std::vector<float> entries_;
+};
+
+float clamp_node(float x) { return std::clamp(x, kTableMin, 1.0f); }
+
+// S for the dielectric curve s = (F(cos_ih, eta) - F0(eta)) / (1 - F0(eta)) (Cycles' generalized
+// Schlick with a negative exponent), over z = sqrt((eta - 1) / (eta + 1)); the node at z has F0 =
+// z^4, eta = (1 + z^2) / (1 - z^2) (z clamped to [1e-4, 0.99]).
+float dielectric_fresnel_blend(float roughness, float cos_nv, float eta) {
+    static const LinearTable table(16, 16, 16, [](float x, float y, float z) {
+        const float zc = std::clamp(z, kTableMin, 0.99f);
+        const float f0 = zc * zc * zc * zc;
+        const float node_eta = (1.0f + zc * zc) / (1.0f - zc * zc);
+        return ggx_moments(clamp_node(x), clamp_node(y), [&](float cos_ih) {
+                   return std::clamp((fresnel_dielectric(cos_ih, node_eta) - f0) / (1.0f - f0),
+                                     0.0f, 1.0f);
+               }).blend;
+    });
+    return table.lookup(roughness, cos_nv, std::sqrt(std::fabs((eta - 1.0f) / (eta + 1.0f))));
+}
+
+// S for Schlick's curve, which Cycles 4 uses for the metallic lobe's estimate: it reads its
+// exponent table (z = 1 / (0.2 exponent + 1), 16 nodes) at z = 0.5, halfway between the nodes of
+// exponents 40/7 and 35/8, so those two curves are tabulated and averaged here.
+float schlick_fresnel_blend(float roughness, float cos_nv) {
+    static const LinearTable table(16, 16, 2, [](float x, float y, float z) {
+        const float exponent = z == 0.0f ? 40.0f / 7.0f : 35.0f / 8.0f;
+        return ggx_moments(clamp_node(x), clamp_node(y), [&](float cos_ih) {
+                   return std::pow(std::clamp(1.0f - cos_ih, 0.0f, 1.0f), exponent);
+               }).blend;
+    });
+    return table.lookup(roughness, cos_nv, 0.5f);
+}
+
+float no_blend(float) { return 0.0f; }
+
+// Single-scattering GGX albedo E(roughness, cos_nv) and its cosine-weighted mean E_avg(roughness)
+// = 2 ∫ E(mu) mu dmu (32 midpoints in mu).
+float ggx_single_albedo(float roughness, float cos_nv) {
+    static const LinearTable table(32, 32, 1, [](float x, float y, float) {
+        return ggx_moments(clamp_node(x), clamp_node(y), no_blend).albedo;
+    });
+    return table.lookup(roughness, cos_nv);
+}
+
+float ggx_average_albedo(float roughness) {
+    static const LinearTable table(32, 1, 1, [](float x, float, float) {
+        constexpr int kMu = 32;
+        double sum = 0.0;
+        for (int m = 0; m < kMu; ++m) {
+            const float mu = (float(m) + 0.5f) / kMu;
+            sum += 2.0 * mu * ggx_moments(clamp_node(x), mu, no_blend).albedo;
+        }
+        return float(sum / kMu);
+    });
+    return table.lookup(roughness);
+}
+
+// The hemispherical mean of the dielectric Fresnel, 2 ∫ F(mu, eta) mu dmu (256 midpoints).
+float dielectric_average_fresnel(float eta) {
+    constexpr int kMu = 256;
+    double sum = 0.0;
+    for (int m = 0; m < kMu; ++m) {
+        const float mu = (float(m) + 0.5f) / kMu;
+        sum += 2.0 * mu * fresnel_dielectric(mu, eta);
+    }
+    return float(sum / kMu);
+}
+
+// Cycles 4's energy-preserving GGX for a lobe of single-scattering mean Fresnel fss
+// (microfacet_ggx_preserve_energy): the lobe is scaled by 1 + Fms (1 - E) / E, and `darkening`
+// (that scale over 1 + (1 - E) / E) is what multiplies its closure weight, hence its albedo
+// estimate. E is taken toward the camera-side direction.
+struct EnergyPreservation {
+    vec3 scale{1.0f};
+    vec3 darkening{1.0f};
+};
+
+EnergyPreservation energy_preservation(float roughness, float cos_camera, const vec3& fss) {
+    const float e = std::max(ggx_single_albedo(roughness, cos_camera), 1e-4f);
+    const float e_avg = ggx_average_albedo(roughness);
+    const float missing = (1.0f - e) / e;
+    const vec3 fms = fss * e_avg / (vec3(1.0f) - fss * (1.0f - e_avg));
+    EnergyPreservation result;
+    result.scale = vec3(1.0f) + fms * missing;
+    result.darkening = result.scale / (1.0f + missing);
+    return result;
+}
+
 }  // namespace
 
 float ggx_d(const vec3& h, float alpha) {
@@ -172,8 +353,10 @@ LobeClass PrincipledBsdf::Lobe::lobe_class() const {
 }
 
 PrincipledBsdf::PrincipledBsdf(const Material& material, const vec3& base_color, bool back_face,
-                               float cos_nv)
-    : roughness_(material.roughness), diffuse_model_(material.diffuse_model) {
+                               float cos_nv, PathOrigin origin)
+    : roughness_(material.roughness),
+      diffuse_model_(material.diffuse_model),
+      height_correlated_(material.principled_model == PrincipledModel::V2) {
     const float metallic = std::clamp(material.metallic, 0.0f, 1.0f);
     const float transmission = (1.0f - metallic) * std::clamp(material.transmission, 0.0f, 1.0f);
     const float alpha = material.roughness * material.roughness;
@@ -185,12 +368,44 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const vec3& base_color,
     specular_ior_ = 2.0f / (1.0f - std::sqrt(f0_dielectric)) - 1.0f;
     cspec0_ = glm::mix(vec3(f0_dielectric), base_color, metallic);
 
-    add_lobe(LobeKind::Diffuse, (1.0f - metallic) * (1.0f - material.transmission) * base_color,
-             alpha);
     // Cycles adds no specular closure to a surface with Specular 0 and Metallic 0 (its GlossCol
     // is 0 and it has no grazing-angle reflection).
-    if (material.specular > kClosureWeightCutoff || metallic > kClosureWeightCutoff)
-        add_lobe(LobeKind::Specular, vec3(1.0f - transmission), alpha);
+    const bool specular = material.specular > kClosureWeightCutoff || metallic > kClosureWeightCutoff;
+    vec3 diffuse_weight = (1.0f - metallic) * (1.0f - material.transmission) * base_color;
+    vec3 specular_weight(1.0f - transmission);
+    if (material.principled_model == PrincipledModel::V2 && specular) {
+        // Cycles 4 splits 3.4's specular closure into a metallic one (weight metallic, F0 = base
+        // colour) and a dielectric layer (weight (1 - metallic)(1 - transmission), F0 =
+        // f0_dielectric, the Fresnel of specular_ior_); their sum is the lobe used here. The
+        // dielectric layer dims everything below it by its albedo toward the camera-side
+        // direction (closure_layering_weight), Multiscatter GGX scales both lobes by the energy
+        // single scattering misses, and GlossCol holds both lobes' albedo estimates.
+        v2_.active = true;
+        v2_.from_light = origin == PathOrigin::Light;
+        v2_.multiscatter = material.distribution == MicrofacetDistribution::MultiscatterGGX;
+        v2_.metallic = metallic;
+        v2_.dielectric_weight =
+            f0_dielectric > 0.0f
+                ? (1.0f - metallic) * (1.0f - std::clamp(material.transmission, 0.0f, 1.0f))
+                : 0.0f;
+        v2_.metal_fss = glm::mix(base_color, vec3(1.0f), kSchlickAverageBlend);
+        v2_.dielectric_fss = dielectric_average_fresnel(specular_ior_);
+        if (!v2_.from_light) {
+            diffuse_weight *= layer_transmittance(cos_nv);
+            specular_weight *= specular_energy_scale(cos_nv);
+        }
+        glossy_albedo_ = vec3(v2_.dielectric_weight * (1.0f - layer_transmittance(cos_nv)));
+        if (metallic > 0.0f) {
+            const vec3 darkening =
+                v2_.multiscatter ? energy_preservation(roughness_, cos_nv, v2_.metal_fss).darkening
+                                 : vec3(1.0f);
+            glossy_albedo_ += metallic * darkening *
+                              glm::mix(base_color, vec3(1.0f),
+                                       schlick_fresnel_blend(roughness_, cos_nv));
+        }
+    }
+    add_lobe(LobeKind::Diffuse, diffuse_weight, alpha);
+    if (specular) add_lobe(LobeKind::Specular, specular_weight, alpha);
     // Both glass lobes have zero weight without transmission (add_lobe would drop them): skip
     // their Fresnel term, the common case.
     if (transmission > 0.0f) {
@@ -218,6 +433,29 @@ void PrincipledBsdf::add_lobe(LobeKind kind, const vec3& weight, float alpha) {
     lobe.kind = kind;
     lobe.weight = weight;
     lobe.alpha = alpha;
+}
+
+float PrincipledBsdf::layer_transmittance(float cos_camera) const {
+    if (v2_.dielectric_weight <= 0.0f) return 1.0f;
+    // Cycles: weight * saturate(1 - albedo / weight), albedo / weight = darkening mix(F0, 1, S).
+    float albedo =
+        glm::mix(specular_f0_, 1.0f, dielectric_fresnel_blend(roughness_, cos_camera, specular_ior_));
+    if (v2_.multiscatter)
+        albedo *= energy_preservation(roughness_, cos_camera, vec3(v2_.dielectric_fss)).darkening.x;
+    return std::clamp(1.0f - albedo, 0.0f, 1.0f);
+}
+
+vec3 PrincipledBsdf::specular_energy_scale(float cos_camera) const {
+    if (!v2_.multiscatter) return vec3(1.0f);
+    // Each lobe's own scale, weighted by its share of the combined lobe's mean Fresnel (exact
+    // when the surface is wholly metallic or wholly dielectric).
+    const vec3 metal = v2_.metallic * v2_.metal_fss;
+    const vec3 dielectric(v2_.dielectric_weight * v2_.dielectric_fss);
+    const vec3 total = metal + dielectric;
+    if (!(std::max(total.x, std::max(total.y, total.z)) > 0.0f)) return vec3(1.0f);
+    return (metal * energy_preservation(roughness_, cos_camera, v2_.metal_fss).scale +
+            dielectric * energy_preservation(roughness_, cos_camera, vec3(v2_.dielectric_fss)).scale) /
+           glm::max(total, vec3(1e-20f));
 }
 
 vec3 PrincipledBsdf::specular_color(float cos_lh) const {
@@ -266,6 +504,13 @@ bool PrincipledBsdf::pair_terms(const vec3& wo, const vec3& wi, PairTerms* terms
     return true;
 }
 
+float PrincipledBsdf::masking_given_o(const PairTerms& terms) const {
+    if (!height_correlated_) return terms.g1_i;
+    // G2 / G1(wo) with G2 = 1 / (1 + L(wo) + L(wi)) and 1 + L = 1 / G1.
+    if (!(terms.g1_i > 0.0f) || !(terms.g1_o > 0.0f)) return 0.0f;
+    return 1.0f / (terms.g1_o * (1.0f / terms.g1_o + 1.0f / terms.g1_i - 1.0f));
+}
+
 void PrincipledBsdf::ggx_terms(const vec3& wo, const vec3& wi, float alpha,
                                PairTerms* terms) const {
     if (terms->ggx_ready) return;
@@ -282,7 +527,9 @@ void PrincipledBsdf::lobe_eval_pdf(const Lobe& lobe, const vec3& wo, const vec3&
     *pdf = 0.0f;
     if (lobe.delta() || terms->reflection != (lobe.kind != LobeKind::Refraction)) return;
     if (lobe.kind == LobeKind::Diffuse) {
-        *f = lobe.weight * (diffuse_brdf(wo, wi, terms->cos_ih) * wi.z);
+        float cos_factor = diffuse_brdf(wo, wi, terms->cos_ih) * wi.z;
+        if (v2_.from_light) cos_factor *= layer_transmittance(wi.z);
+        *f = lobe.weight * cos_factor;
         *pdf = wi.z * kInvPi;
         return;
     }
@@ -293,14 +540,18 @@ void PrincipledBsdf::lobe_eval_pdf(const Lobe& lobe, const vec3& wo, const vec3&
         const float jacobian = eta_ * eta_ * std::fabs(terms->cos_ih) /
                                (terms->refraction_denom * terms->refraction_denom);
         const float visible = terms->g1_o * terms->d * terms->cos_oh / wo.z;
-        *f = lobe.weight * (visible * terms->g1_i * jacobian);
+        *f = lobe.weight * (visible * masking_given_o(*terms) * jacobian);
         *pdf = visible * jacobian;
         return;
     }
     // Reflection: D G1(wo) G1(wi) / (4 wo.z); the visible-normal pdf is D G1(wo) / (4 wo.z).
     *pdf = terms->g1_o * terms->d / (4.0f * wo.z);
-    const vec3 color = lobe.kind == LobeKind::Specular ? specular_color(terms->cos_ih) : vec3(1.0f);
-    *f = lobe.weight * color * (*pdf * terms->g1_i);
+    vec3 color = vec3(1.0f);
+    if (lobe.kind == LobeKind::Specular) {
+        color = specular_color(terms->cos_ih);
+        if (v2_.from_light) color *= specular_energy_scale(wi.z);
+    }
+    *f = lobe.weight * color * (*pdf * masking_given_o(*terms));
 }
 
 void PrincipledBsdf::eval_pdf(const vec3& wo, const vec3& wi, bool field_only, BsdfEval* eval,
@@ -381,8 +632,11 @@ bool PrincipledBsdf::sample(const vec3& wo, float u_lobe, const vec2& u, BsdfSam
 
 vec3 PrincipledBsdf::class_color(LobeClass lobe_class) const {
     vec3 color(0.0f);
-    for (int i = 0; i < lobe_count_; ++i)
-        if (lobes_[i].lobe_class() == lobe_class) color += lobes_[i].weight;
+    for (int i = 0; i < lobe_count_; ++i) {
+        const Lobe& lobe = lobes_[i];
+        if (lobe.lobe_class() != lobe_class) continue;
+        color += lobe.kind == LobeKind::Specular && v2_.active ? glossy_albedo_ : lobe.weight;
+    }
     return color;
 }
 

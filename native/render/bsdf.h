@@ -1,5 +1,6 @@
 // PrincipledBsdf: the closures Cycles builds for Blender 3.4's Principled BSDF (GGX distribution,
-// no clearcoat/sheen/subsurface), evaluated and sampled in a local shading frame.
+// no clearcoat/sheen/subsurface), evaluated and sampled in a local shading frame, and Blender 4's
+// layering of them (PrincipledModel::V2, below).
 //
 // Lobes and their closure weights, as intern/cycles/kernel/svm/closure.h (3.4, principled v1):
 //   diffuse      weight = (1 - metallic)(1 - transmission) * base_color; Lambert (1/pi) or
@@ -13,7 +14,25 @@
 //   refraction   weight = (1 - metallic) transmission * (1 - F(N.V, ior)) * base_color; GGX BTDF
 //                (Walter et al. 2007, eq. 21 without the Fresnel term, which is in the weight)
 // Diffuse and specular are added, not layered (Cycles 3.x does the same: albedo may exceed 1 by
-// the specular's share). Refraction does not scale radiance by 1/eta^2, as Cycles: a sampled
+// the specular's share).
+//
+// PrincipledModel::V2, Blender 4.0+'s Principled BSDF as Cycles 4 builds it (svm/closure.h,
+// closure/bsdf_microfacet.h), changes four things and keeps the lobes above:
+//   - the dielectric specular layer (weight (1 - metallic)(1 - transmission), F0 = 0.08 specular)
+//     dims the diffuse below it by its estimated albedo toward the camera-side direction v:
+//     diffuse weight x (1 - mix(F0, 1, S(roughness, v.z, ior))), S the GGX-weighted mean of the
+//     Fresnel curve's blend factor, tabulated as Cycles does (closure_layering_weight);
+//   - GGX masking-shadowing is height-correlated, G2 = 1 / (1 + L(wo) + L(wi));
+//   - with Multiscatter GGX (Blender 4's default) each specular lobe is scaled by the energy
+//     single scattering misses, 1 + Fms (1 - E(v)) / E(v), and its albedo estimate by that over
+//     1 / E(v) (microfacet_ggx_preserve_energy);
+//   - GlossCol is the specular lobes' albedo estimate, not their closure weight.
+// The camera-side direction is wo on camera paths and the scattered wi on light paths
+// (PathOrigin): v2 is not reciprocal. Not modelled from Cycles 4: the metallic lobe's F82 Schlick
+// curve (3.4's interpolated Fresnel is kept), glass's sqrt(base colour) tint per interface and
+// its energy preservation, coat, sheen, subsurface and thin film.
+//
+// Refraction does not scale radiance by 1/eta^2, as Cycles: a sampled
 // smooth refraction has weight 1, and the rough BTDF's sampled weight tends to 1 with alpha.
 // Lobes with alpha below kDeltaAlpha are perfectly smooth (Dirac) lobes, as Cycles' threshold.
 //
@@ -63,13 +82,18 @@ vec3 sample_ggx_visible_normal(const vec3& w, float alpha, const vec2& u);
 // 1 under total internal reflection (Cycles' fresnel_dielectric_cos).
 float fresnel_dielectric(float cos_i, float eta);
 
+// Which end of a path the BSDF scatters for. Cycles 4's layered Principled BSDF is not reciprocal:
+// its diffuse is dimmed by the specular layer's albedo toward the camera-side direction, which is
+// wo on paths from the camera and the scattered wi on paths from a light (photons).
+enum class PathOrigin : uint8_t { Camera, Light };
+
 class PrincipledBsdf {
   public:
     // base_color is the material's base colour times its texture at the hit. back_face: the ray
     // hit the back of the surface (ior inverted). cos_nv: wo.z in the shading frame.
-    // The diffuse lobe follows material.diffuse_model.
+    // The diffuse lobe follows material.diffuse_model, the layering material.principled_model.
     PrincipledBsdf(const Material& material, const vec3& base_color, bool back_face,
-                   float cos_nv);
+                   float cos_nv, PathOrigin origin = PathOrigin::Camera);
     // No lobes (black: eval 0, sample fails); a placeholder in arrays of Shading to assign later.
     PrincipledBsdf() = default;
 
@@ -79,7 +103,9 @@ class PrincipledBsdf {
     // surface for a reflection lobe, total internal reflection, zero weight).
     bool sample(const vec3& wo, float u_lobe, const vec2& u, BsdfSample* out) const;
 
-    // Sum of closure weights per class: Cycles' DiffCol / GlossCol / TransCol for this hit.
+    // Sum of closure weights per class: Cycles' DiffCol / GlossCol / TransCol for this hit
+    // (PrincipledModel::V2: GlossCol is the specular lobes' estimated albedo toward wo, as
+    // Cycles 4 writes it).
     vec3 class_color(LobeClass lobe_class) const;
     // True when at least one lobe is not a Dirac lobe (light sampling can help).
     bool has_smooth_lobes() const;
@@ -130,12 +156,21 @@ class PrincipledBsdf {
     struct PairTerms;
     bool pair_terms(const vec3& wo, const vec3& wi, PairTerms* terms) const;
     void ggx_terms(const vec3& wo, const vec3& wi, float alpha, PairTerms* terms) const;
+    // The masking of wi given wo's: G1(wi) (separable Smith, Cycles 3.4) or G2 / G1(wo)
+    // (height-correlated, Cycles 4).
+    float masking_given_o(const PairTerms& terms) const;
     void lobe_eval_pdf(const Lobe& lobe, const vec3& wo, const vec3& wi, PairTerms* terms,
                        vec3* f, float* pdf) const;
     void eval_pdf(const vec3& wo, const vec3& wi, bool field_only, BsdfEval* eval,
                   float* pdf) const;
     bool lobe_sample(const Lobe& lobe, const vec3& wo, const vec2& u, vec3* wi) const;
     vec3 specular_color(float cos_lh) const;
+    // PrincipledModel::V2: the share of light the dielectric specular layer passes to the
+    // diffuse, 1 - its estimated albedo toward the camera-side direction (cos to the normal).
+    float layer_transmittance(float cos_camera) const;
+    // PrincipledModel::V2 with Multiscatter GGX: the specular lobe's energy-preservation scale
+    // toward the camera-side direction (1 otherwise).
+    vec3 specular_energy_scale(float cos_camera) const;
     // cos_lh: cosine between wi and the reflection half vector.
     float diffuse_brdf(const vec3& wo, const vec3& wi, float cos_lh) const;
 
@@ -148,6 +183,19 @@ class PrincipledBsdf {
     float eta_ = 1.45f;          // relative ior across the surface (inverted on back faces)
     float roughness_ = 0.5f;
     DiffuseModel diffuse_model_ = DiffuseModel::Principled;
+    bool height_correlated_ = false;  // PrincipledModel::V2's Smith G2
+    // PrincipledModel::V2 terms, which depend on the camera-side direction: folded into the lobe
+    // weights for PathOrigin::Camera, applied per scattered wi for PathOrigin::Light.
+    struct V2Terms {
+        bool active = false;       // V2 with a specular lobe
+        bool from_light = false;
+        bool multiscatter = false;
+        float metallic = 0.0f;
+        float dielectric_weight = 0.0f;  // of the dielectric layer; 0 without one (Specular 0)
+        float dielectric_fss = 0.0f;     // single-scattering mean Fresnel of each lobe
+        vec3 metal_fss{0.0f};
+    } v2_;
+    vec3 glossy_albedo_{0.0f};  // V2: GlossCol of the specular lobe (toward wo)
 };
 
 }  // namespace shgi

@@ -39,8 +39,9 @@ float spot_attenuation(const Light& light, float cos_angle) {
     const float t = cos_angle - cos_half;
     if (t <= 0.0f) return 0.0f;
     const float smooth = (1.0f - cos_half) * light.spot_blend;
-    if (smooth > 0.0f && t < smooth) return cos_angle * smoothstep01(t / smooth);
-    return cos_angle;
+    const float cone = light.spot_cone_cosine ? cos_angle : 1.0f;
+    if (smooth > 0.0f && t < smooth) return cone * smoothstep01(t / smooth);
+    return cone;
 }
 
 bool is_round(AreaShape shape) { return shape == AreaShape::Disk || shape == AreaShape::Ellipse; }

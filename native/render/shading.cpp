@@ -24,7 +24,8 @@ vec3 texture_bilinear(const Texture& texture, const vec2& uv) {
     return glm::mix(bottom, top, ty);
 }
 
-Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray_direction) {
+Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray_direction,
+                     PathOrigin origin) {
     vec3 ng = sp.geometric_normal, ns = sp.shading_normal;
     const bool back_face = glm::dot(ray_direction, ng) > 0.0f;
     if (back_face) {
@@ -40,7 +41,7 @@ Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray
     if (material.base_color_texture != kNoTexture)
         base_color *= texture_bilinear(scene.textures()[size_t(material.base_color_texture)], sp.uv);
     return Shading{sp.position, ng, frame, wo,
-                   PrincipledBsdf(material, base_color, back_face, wo.z)};
+                   PrincipledBsdf(material, base_color, back_face, wo.z, origin)};
 }
 
 vec3 Shading::spawn_origin(const vec3& wi) const {

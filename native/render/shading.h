@@ -45,6 +45,8 @@ struct Shading {
     vec3 spawn_origin(const vec3& wi) const;
 };
 
-Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray_direction);
+// origin: which end of the path the ray came from (PathOrigin::Light for photons).
+Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray_direction,
+                     PathOrigin origin = PathOrigin::Camera);
 
 }  // namespace shgi

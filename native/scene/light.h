@@ -28,6 +28,9 @@ struct Light {
     float radius = 0.0f;       // m: point and spot "Radius" (soft shadows); 0 = a true point
     float spot_size = 0.785398f;  // rad: full cone angle, (0, pi]
     float spot_blend = 0.15f;     // [0, 1]
+    // Blender 3.x's Cycles multiplies a spot's smoothstep falloff by cos(angle to its axis);
+    // Cycles 4.0+ does not (spot.h: smoothstep only). The exporter sets false from Blender 4.0.
+    bool spot_cone_cosine = true;
     float angle = 0.0f;           // rad: sun's angular diameter, [0, pi)
     AreaShape shape = AreaShape::Square;
     float size_x = 1.0f;       // m: side (square), width (rectangle), diameter (disk/ellipse)

@@ -1,5 +1,5 @@
-// Materials: the subset of Blender's Principled BSDF (3.4 semantics) that SHGI renders, and
-// textures for the base colour.
+// Materials: the subset of Blender's Principled BSDF that SHGI renders (3.4 semantics, or 4.x's
+// layering with principled_model V2), and textures for the base colour.
 //
 // Colours are linear Rec.709. `specular` is Principled's 0..1 "Specular" (F0 = 0.08 * specular
 // for dielectrics); Blender 4.x's "Specular IOR Level" maps onto it in the exporter. Emitted
@@ -23,6 +23,26 @@ enum class DiffuseModel : uint8_t {
     Lambert,     // f = albedo / pi (Blender's Diffuse BSDF with roughness 0)
 };
 
+// How the Principled BSDF's closures combine, as the Cycles of each Blender builds them.
+enum class PrincipledModel : uint8_t {
+    // Blender 3.x: the diffuse and specular closures are added (albedo may exceed 1 by the
+    // specular's share).
+    V1,
+    // Blender 4.0+ ("Principled v2"): the dielectric specular layer dims the diffuse below it by
+    // its directional albedo toward the viewer (render/bsdf.h), and the Glossy Color pass holds
+    // that albedo instead of the closure weight.
+    V2,
+};
+
+// The microfacet distribution of the specular lobes.
+enum class MicrofacetDistribution : uint8_t {
+    GGX,
+    // Cycles 4's energy-preserving GGX (Blender 4's default for the Principled BSDF): the lobe is
+    // scaled by the energy single scattering misses (Kulla and Conty 2017). Used with
+    // PrincipledModel::V2; Blender 3.x's Multiscatter GGX (a random walk) is rendered as GGX.
+    MultiscatterGGX,
+};
+
 struct Material {
     std::string name = "default";
     vec3 base_color{0.8f};
@@ -38,6 +58,8 @@ struct Material {
     vec3 emission_color{0.0f};
     float emission_strength = 1.0f;           // >= 0
     DiffuseModel diffuse_model = DiffuseModel::Principled;
+    PrincipledModel principled_model = PrincipledModel::V1;
+    MicrofacetDistribution distribution = MicrofacetDistribution::GGX;
 
     vec3 emission() const { return emission_color * emission_strength; }
     bool is_emissive() const {

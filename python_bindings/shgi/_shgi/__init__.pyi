@@ -8,7 +8,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'Material', 'Mesh', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'max_threads', 'merge_lightmap', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'Material', 'Mesh', 'MicrofacetDistribution', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'max_threads', 'merge_lightmap', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -528,6 +528,14 @@ class Light:
     def spot_blend(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
+    def spot_cone_cosine(self) -> bool:
+        """
+        True (Blender 3.x): the spot's falloff includes cos(angle to its axis); the exporter sets False from Blender 4.0, whose Cycles drops it.
+        """
+    @spot_cone_cosine.setter
+    def spot_cone_cosine(self, arg0: bool) -> None:
+        ...
+    @property
     def spot_size(self) -> float:
         """
         rad: full cone angle, (0, pi].
@@ -907,6 +915,14 @@ class Material:
     def diffuse_model(self, arg0: DiffuseModel) -> None:
         ...
     @property
+    def distribution(self) -> MicrofacetDistribution:
+        """
+        MicrofacetDistribution (GGX; Blender 4's default is MULTISCATTER_GGX).
+        """
+    @distribution.setter
+    def distribution(self, arg0: MicrofacetDistribution) -> None:
+        ...
+    @property
     def emission_color(self) -> tuple:
         """
         Linear RGB; emitted radiance = emission_color * emission_strength (W m^-2 sr^-1).
@@ -945,6 +961,14 @@ class Material:
         """
     @name.setter
     def name(self, arg0: str) -> None:
+        ...
+    @property
+    def principled_model(self) -> PrincipledModel:
+        """
+        PrincipledModel (V1; the exporter sets V2 from Blender 4.0).
+        """
+    @principled_model.setter
+    def principled_model(self, arg0: PrincipledModel) -> None:
         ...
     @property
     def roughness(self) -> float:
@@ -1032,6 +1056,56 @@ class Mesh:
         """
     @uv_sets.setter
     def uv_sets(self, arg1: typing.Any) -> None:
+        ...
+class MicrofacetDistribution:
+    """
+    The microfacet distribution of a Material's specular.
+    
+    Members:
+    
+      GGX : GGX, single scattering
+    
+      MULTISCATTER_GGX : Cycles 4's energy-preserving GGX (with principled_model V2)
+    """
+    GGX: typing.ClassVar[MicrofacetDistribution]  # value = <MicrofacetDistribution.GGX: 0>
+    MULTISCATTER_GGX: typing.ClassVar[MicrofacetDistribution]  # value = <MicrofacetDistribution.MULTISCATTER_GGX: 1>
+    __members__: typing.ClassVar[dict[str, MicrofacetDistribution]]  # value = {'GGX': <MicrofacetDistribution.GGX: 0>, 'MULTISCATTER_GGX': <MicrofacetDistribution.MULTISCATTER_GGX: 1>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: MicrofacetDistribution) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: MicrofacetDistribution) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
         ...
 class PathTracer:
     """
@@ -1463,6 +1537,56 @@ class PreviewSettings:
         """
     @world_sampling.setter
     def world_sampling(self, arg0: WorldSampling) -> None:
+        ...
+class PrincipledModel:
+    """
+    How a Material's closures combine, as each Blender's Cycles.
+    
+    Members:
+    
+      V1 : Blender 3.x: diffuse and specular added
+    
+      V2 : Blender 4.0+: the specular layer dims the diffuse by its albedo; Glossy Color holds that albedo
+    """
+    V1: typing.ClassVar[PrincipledModel]  # value = <PrincipledModel.V1: 0>
+    V2: typing.ClassVar[PrincipledModel]  # value = <PrincipledModel.V2: 1>
+    __members__: typing.ClassVar[dict[str, PrincipledModel]]  # value = {'V1': <PrincipledModel.V1: 0>, 'V2': <PrincipledModel.V2: 1>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: PrincipledModel) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: PrincipledModel) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
         ...
 class ProbeField(IndirectField):
     """

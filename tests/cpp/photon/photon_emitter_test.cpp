@@ -102,30 +102,35 @@ TEST(PhotonEmitter, PointLightFluxAndSolidAngle) {
     expect_within_noise(tally.hit, tally.hit_error, 30.0 / 6.0, "point onto the square");
 }
 
-// Spot: colour x P/(4 pi) x the integral of Cycles' attenuation over the cone, here checked
-// against a midpoint quadrature in cos(angle); a large floor below catches every photon.
+// Spot: colour x P/(4 pi) x the integral of Cycles' attenuation over the cone (with Cycles 3.x's
+// cone cosine and without it, as Cycles 4), here checked against a midpoint quadrature in
+// cos(angle); a large floor below catches every photon.
 TEST(PhotonEmitter, SpotLightFluxIsTheAttenuationIntegral) {
-    Scene scene = floor_scene(100.0f);
-    Light light = light_at(LightType::Spot, vec3(0.0f, 0.0f, 1.0f));
-    light.power = 40.0f;
-    light.spot_size = 1.2f;
-    light.spot_blend = 0.4f;
-    scene.add_light(light);
-    scene.commit();
-    const int steps = 100000;
-    const double cos_half = std::cos(0.5 * light.spot_size);
-    double integral = 0.0;
-    for (int i = 0; i < steps; ++i) {
-        const double c = cos_half + (1.0 - cos_half) * (i + 0.5) / steps;
-        integral += spot_attenuation(light, float(c)) * (1.0 - cos_half) / steps;
+    for (bool cone_cosine : {true, false}) {
+        SCOPED_TRACE(cone_cosine ? "cone cosine" : "smoothstep only");
+        Scene scene = floor_scene(100.0f);
+        Light light = light_at(LightType::Spot, vec3(0.0f, 0.0f, 1.0f));
+        light.power = 40.0f;
+        light.spot_size = 1.2f;
+        light.spot_blend = 0.4f;
+        light.spot_cone_cosine = cone_cosine;
+        scene.add_light(light);
+        scene.commit();
+        const int steps = 100000;
+        const double cos_half = std::cos(0.5 * light.spot_size);
+        double integral = 0.0;
+        for (int i = 0; i < steps; ++i) {
+            const double c = cos_half + (1.0 - cos_half) * (i + 0.5) / steps;
+            integral += spot_attenuation(light, float(c)) * (1.0 - cos_half) / steps;
+        }
+        const double expected = light.power / (4.0 * kPiD) * 2.0 * kPiD * integral;
+        EXPECT_NEAR(spot_light_power(light).x, expected, 1e-4 * expected);
+        const Tally tally = emit_photons(scene, kPhotons, [&](const EmittedPhoton& photon) {
+            EXPECT_GE(-photon.ray.direction.z, float(cos_half) - 1e-5f);  // inside the cone
+        });
+        expect_within_noise(tally.total, tally.total_error, expected, "spot total");
+        expect_within_noise(tally.hit, tally.hit_error, expected, "spot onto the floor");
     }
-    const double expected = light.power / (4.0 * kPiD) * 2.0 * kPiD * integral;
-    EXPECT_NEAR(spot_light_power(light).x, expected, 1e-4 * expected);
-    const Tally tally = emit_photons(scene, kPhotons, [&](const EmittedPhoton& photon) {
-        EXPECT_GE(-photon.ray.direction.z, float(cos_half) - 1e-5f);  // inside the cone
-    });
-    expect_within_noise(tally.total, tally.total_error, expected, "spot total");
-    expect_within_noise(tally.hit, tally.hit_error, expected, "spot onto the floor");
 }
 
 // Sun of strength S at 60 degrees from the zenith: a square of area A receives S A cos(60).

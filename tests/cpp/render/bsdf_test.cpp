@@ -76,6 +76,9 @@ void quadrature(const PrincipledBsdf& bsdf, const vec3& wo, vec3* albedo, float*
 struct Case {
     const char* name;
     float metallic, transmission, roughness;
+    PrincipledModel model = PrincipledModel::V1;
+    MicrofacetDistribution distribution = MicrofacetDistribution::GGX;
+    PathOrigin origin = PathOrigin::Camera;
 };
 
 class BsdfConsistency : public ::testing::TestWithParam<Case> {};
@@ -84,8 +87,10 @@ TEST_P(BsdfConsistency, SampledWeightsMatchQuadratureAndPdfIntegratesToValidFrac
     const Case c = GetParam();
     for (float theta : {0.2f, 0.8f, 1.3f}) {
         const vec3 wo = direction_from_angle(theta);
-        const PrincipledBsdf bsdf(make_material(c.metallic, c.transmission, c.roughness),
-                                  vec3(1.0f), false, wo.z);
+        Material material = make_material(c.metallic, c.transmission, c.roughness);
+        material.principled_model = c.model;
+        material.distribution = c.distribution;
+        const PrincipledBsdf bsdf(material, vec3(1.0f), false, wo.z, c.origin);
         const Estimates e = sample_estimates(bsdf, wo);
         vec3 albedo;
         float pdf_integral;
@@ -102,7 +107,19 @@ INSTANTIATE_TEST_SUITE_P(Lobes, BsdfConsistency,
                          ::testing::Values(Case{"metal_rough", 1.0f, 0.0f, 0.5f},
                                            Case{"metal_glossy", 1.0f, 0.0f, 0.3f},
                                            Case{"plastic", 0.0f, 0.0f, 0.4f},
-                                           Case{"rough_glass", 0.0f, 1.0f, 0.5f}),
+                                           Case{"rough_glass", 0.0f, 1.0f, 0.5f},
+                                           Case{"plastic_v2", 0.0f, 0.0f, 0.4f,
+                                                PrincipledModel::V2,
+                                                MicrofacetDistribution::MultiscatterGGX},
+                                           Case{"plastic_v2_from_light", 0.0f, 0.0f, 0.4f,
+                                                PrincipledModel::V2,
+                                                MicrofacetDistribution::MultiscatterGGX,
+                                                PathOrigin::Light},
+                                           Case{"metal_v2", 1.0f, 0.0f, 0.5f,
+                                                PrincipledModel::V2,
+                                                MicrofacetDistribution::MultiscatterGGX},
+                                           Case{"rough_glass_v2", 0.0f, 1.0f, 0.5f,
+                                                PrincipledModel::V2}),
                          [](const auto& test_info) { return std::string(test_info.param.name); });
 
 TEST(Bsdf, LambertAlbedoIsBaseColor) {
@@ -249,6 +266,100 @@ TEST(Bsdf, NoSpecularClosureWithoutSpecularOrMetallic) {
     material.metallic = 1.0f;
     const PrincipledBsdf metal(material, vec3(0.5f), false, grazing.z);
     EXPECT_EQ(metal.class_color(LobeClass::Glossy), vec3(1.0f));
+}
+
+// --- PrincipledModel::V2 (Cycles 4's layering) ---
+
+Material v2_material(float roughness, MicrofacetDistribution distribution) {
+    Material material = make_material(0.0f, 0.0f, roughness);
+    material.specular = 0.5f;  // F0 0.04, ior 1.5
+    material.principled_model = PrincipledModel::V2;
+    material.distribution = distribution;
+    return material;
+}
+
+// A smooth dielectric layer reflects F(cos) toward the viewer, so the diffuse below it gets
+// 1 - F(cos): exact at normal view (F0 = 0.04 whatever the table's ior interpolation) and within
+// the table's linear interpolation in ior elsewhere (cos = 0.4 is one of its nodes in N.V).
+TEST(BsdfV2, SmoothLayerDimsDiffuseByFresnel) {
+    const Material material = v2_material(0.0f, MicrofacetDistribution::GGX);
+    const PrincipledBsdf normal(material, vec3(1.0f), false, 1.0f);
+    EXPECT_NEAR(normal.class_color(LobeClass::Diffuse).x, 0.96f, 1e-4f);
+    EXPECT_NEAR(normal.class_color(LobeClass::Glossy).x, 0.04f, 1e-4f);
+    const PrincipledBsdf oblique(material, vec3(1.0f), false, 0.4f);
+    const float fresnel = fresnel_dielectric(0.4f, 1.5f);
+    EXPECT_NEAR(oblique.class_color(LobeClass::Diffuse).x, 1.0f - fresnel, 2e-3f);
+    EXPECT_NEAR(oblique.class_color(LobeClass::Glossy).x, fresnel, 2e-3f);
+
+    Material v1 = material;
+    v1.principled_model = PrincipledModel::V1;
+    EXPECT_EQ(PrincipledBsdf(v1, vec3(1.0f), false, 0.4f).class_color(LobeClass::Diffuse),
+              vec3(1.0f));
+}
+
+// A smooth metal's GlossCol is its reflectance at the view: Schlick's F(1) = base colour.
+TEST(BsdfV2, MetalGlossColorIsItsReflectance) {
+    Material material = v2_material(0.0f, MicrofacetDistribution::GGX);
+    material.metallic = 1.0f;
+    const PrincipledBsdf metal(material, vec3(0.5f, 0.6f, 0.7f), false, 1.0f);
+    const vec3 gloss = metal.class_color(LobeClass::Glossy);
+    EXPECT_NEAR(gloss.x, 0.5f, 1e-4f);
+    EXPECT_NEAR(gloss.z, 0.7f, 1e-4f);
+    EXPECT_EQ(metal.class_color(LobeClass::Diffuse), vec3(0.0f));
+}
+
+// With Multiscatter GGX a white v2 plastic reflects all the light it receives: the specular
+// layer takes exactly what it dims the diffuse by (its albedo with the energy-preservation
+// scale), so f cos integrates to 1 at every view angle and roughness, up to the tables'
+// interpolation. Single-scattering GGX loses the energy of the paths it misses; v1 adds the
+// specular on top of a full diffuse and exceeds 1.
+TEST(BsdfV2, WhiteMultiscatterPlasticConservesEnergy) {
+    for (float roughness : {0.2f, 0.5f, 0.9f}) {
+        for (float theta : {0.1f, 0.7f, 1.2f}) {
+            const vec3 wo = direction_from_angle(theta);
+            vec3 albedo;
+            float pdf_integral;
+            const Material multiscatter =
+                v2_material(roughness, MicrofacetDistribution::MultiscatterGGX);
+            quadrature(PrincipledBsdf(multiscatter, vec3(1.0f), false, wo.z), wo, &albedo,
+                       &pdf_integral);
+            EXPECT_NEAR(albedo.x, 1.0f, 5e-3f) << roughness << " " << theta;
+
+            quadrature(PrincipledBsdf(v2_material(roughness, MicrofacetDistribution::GGX),
+                                      vec3(1.0f), false, wo.z),
+                       wo, &albedo, &pdf_integral);
+            EXPECT_LT(albedo.x, 1.0f + 2e-3f) << roughness << " " << theta;
+            EXPECT_GT(albedo.x, 0.95f) << roughness << " " << theta;
+
+            Material v1 = multiscatter;
+            v1.principled_model = PrincipledModel::V1;
+            quadrature(PrincipledBsdf(v1, vec3(1.0f), false, wo.z), wo, &albedo, &pdf_integral);
+            EXPECT_GT(albedo.x, 1.01f) << roughness << " " << theta;  // + the specular's ~2-10%
+        }
+    }
+}
+
+// v2 is not reciprocal; a light path's BSDF is the camera path's with the directions swapped:
+// f_light(a -> b) = f_camera(b -> a), where the camera side is b.
+TEST(BsdfV2, LightPathsUseTheAdjointBsdf) {
+    Material material = v2_material(0.4f, MicrofacetDistribution::MultiscatterGGX);
+    material.metallic = 0.3f;
+    const vec3 color(0.5f, 0.7f, 0.9f);
+    Pcg32 rng(5, 6);
+    float largest_asymmetry = 0.0f;
+    for (int i = 0; i < 100; ++i) {
+        const vec3 a = sample_uniform_hemisphere(rng.next_vec2());
+        const vec3 b = sample_uniform_hemisphere(rng.next_vec2());
+        const PrincipledBsdf from_light(material, color, false, a.z, PathOrigin::Light);
+        const PrincipledBsdf from_camera(material, color, false, b.z, PathOrigin::Camera);
+        const vec3 f_light = from_light.eval(a, b).total() / b.z;
+        const vec3 f_camera = from_camera.eval(b, a).total() / a.z;
+        EXPECT_NEAR(f_light.y, f_camera.y, 1e-4f * (1.0f + f_camera.y));
+        const PrincipledBsdf camera_at_a(material, color, false, a.z, PathOrigin::Camera);
+        const vec3 f_ab = camera_at_a.eval(a, b).total() / b.z;
+        largest_asymmetry = std::max(largest_asymmetry, std::fabs(f_ab.y - f_camera.y));
+    }
+    EXPECT_GT(largest_asymmetry, 1e-3f);  // the swap matters
 }
 
 }  // namespace
