@@ -122,28 +122,6 @@ def run_in_window(script, size, *args, options=(), timeout=300):
                           env=blender_env())
 
 
-# What Cycles 4.0+ renders differently from Cycles 3.4, which SHGI's renderer (Blender 3.4's
-# models) does not follow yet. The tests that measure these against Cycles are expected to fail
-# on Blender 4+ and fail the suite once they pass (strict), so the list stays true. Figures:
-# README, "Blender versions".
-CYCLES_4_GAPS = {
-    "principled_v2": "Cycles 4+ dims the Principled BSDF's diffuse under its specular layer; "
-                     "SHGI renders Blender 3.4's Principled (diffuse colour 7-9% brighter than "
-                     "Cycles 5.0's, indirect light up to 22%)",
-    "spot_cone_cosine": "Cycles 3.4 weights a spot light by an extra cos(angle) inside its "
-                        "cone, Cycles 4+ does not; SHGI follows 3.4",
-    "glossy_color_pass": "Cycles 4+ fills Glossy Color with the specular layer's reflectance, "
-                         "3.4 with its tint; SHGI follows 3.4 (GlossDir x GlossCol agrees)",
-}
-
-
-def expect_cycles_4_gap(request, blender, gap):
-    """On Blender 4+, marks the running test as an expected failure for CYCLES_4_GAPS[gap]."""
-    if blender.version >= (4, 0, 0):
-        request.applymarker(pytest.mark.xfail(reason=f"{gap}: {CYCLES_4_GAPS[gap]}",
-                                              strict=True))
-
-
 def blender_params():
     """pytest.param per Blender, skipped with the reason when that Blender is missing."""
     return [pytest.param(b, id=b.name, marks=[b.skip_mark, pytest.mark.blender])

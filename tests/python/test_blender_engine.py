@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import shgi
-from blender_support import REPO_ROOT, expect_cycles_4_gap, run_script_once
+from blender_support import REPO_ROOT, run_script_once
 from scene_support import committed
 
 sys.path.insert(0, str(REPO_ROOT / "addon"))
@@ -334,9 +334,7 @@ RENDER_CASES = [(scene, method) for scene in ("cornell_box", "sun_room")
 
 
 @pytest.mark.parametrize("scene, method", RENDER_CASES)
-def test_f12_matches_cycles(scene, method, blender, build_python_dir, tmp_path_factory,
-                            request):
-    expect_cycles_4_gap(request, blender, "principled_v2")
+def test_f12_matches_cycles(scene, method, blender, build_python_dir, tmp_path_factory):
     results = run_engine_script("engine_render_checks.py", "ENGINE_RENDER_OK", blender,
                                 build_python_dir, tmp_path_factory)
     row, cycles = results[scene][method], results[scene]["cycles"]

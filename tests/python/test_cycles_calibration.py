@@ -15,7 +15,7 @@ import math
 
 import pytest
 
-from blender_support import BLENDERS, expect_cycles_4_gap, run_script_once
+from blender_support import BLENDERS, run_script_once
 
 SCRIPTS = {
     "calibration_lights.py": ("CALIBRATION_LIGHTS_DONE", [
@@ -26,9 +26,6 @@ SCRIPTS = {
         "glossy_metal", "glossy_metal_gloss_passes", "glass"]),
 }
 
-# The cases that measure what Cycles 4+ changed (blender_support.CYCLES_4_GAPS).
-CYCLES_4_GAPS = {"spot": "spot_cone_cosine", "diffuse_gloss_passes": "glossy_color_pass",
-                 "glossy_metal_gloss_passes": "glossy_color_pass"}
 CASES = [(script, case) for script, (_, cases) in SCRIPTS.items() for case in cases]
 
 
@@ -46,9 +43,7 @@ def _script_results(script, blender, build_python_dir, tmp_path_factory):
 
 @pytest.mark.parametrize("blender, script, case",
                          [_param(b, s, c) for b in BLENDERS for s, c in CASES])
-def test_cycles_calibration(blender, script, case, build_python_dir, tmp_path_factory, request):
-    if case in CYCLES_4_GAPS:
-        expect_cycles_4_gap(request, blender, CYCLES_4_GAPS[case])
+def test_cycles_calibration(blender, script, case, build_python_dir, tmp_path_factory):
     results = _script_results(script, blender, build_python_dir, tmp_path_factory)
     assert case in results, f"{script} did not report case {case!r}"
     rows = [row for row in results[case]["rows"] if row["tolerance"] is not None]

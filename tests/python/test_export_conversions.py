@@ -74,6 +74,26 @@ def test_principled_4_x_level_at_ior_1_5_is_specular_0_5():
     assert fields["transmission"] == pytest.approx(0.1)
 
 
+def test_principled_4_x_is_layered_with_the_node_distribution():
+    names = conversions.principled_socket_names(BLENDER_4_2)
+    default = shgi.Material(**conversions.material_fields_from_principled(
+        principled_values(names), BLENDER_4_2))
+    assert default.principled_model == shgi.PrincipledModel.V2
+    assert default.distribution == shgi.MicrofacetDistribution.MULTISCATTER_GGX
+    ggx = conversions.material_fields_from_principled(principled_values(names), BLENDER_4_2,
+                                                      "GGX")
+    assert ggx["distribution"] == shgi.MicrofacetDistribution.GGX
+    with pytest.raises(ValueError, match="BECKMANN"):
+        conversions.material_fields_from_principled(principled_values(names), BLENDER_4_2,
+                                                    "BECKMANN")
+    # Blender 3.4 keeps the added (v1) closures, whatever its node's distribution.
+    old = shgi.Material(**conversions.material_fields_from_principled(
+        principled_values(conversions.principled_socket_names(BLENDER_3_4)), BLENDER_3_4,
+        "MULTI_GGX"))
+    assert (old.principled_model, old.distribution) == (
+        shgi.PrincipledModel.V1, shgi.MicrofacetDistribution.GGX)
+
+
 def test_emission_and_diffuse_shaders():
     emission = conversions.material_fields_from_emission((2.0, 1.0, 0.5, 1.0), 4.0)
     assert emission["base_color"] == (0, 0, 0) and emission["specular"] == 0
@@ -120,6 +140,11 @@ def test_point_spot_sun_light_units():
     spot = shgi.Light(**conversions.light_fields("SPOT", 50.0, (1, 1, 1), IDENTITY,
                                                  spot_size=0.8, spot_blend=0.3))
     assert (spot.spot_size, spot.spot_blend) == (pytest.approx(0.8), pytest.approx(0.3))
+    # Blender 3.4's spot falloff includes the cone cosine; 4.0's does not.
+    assert spot.spot_cone_cosine
+    spot_4 = shgi.Light(**conversions.light_fields("SPOT", 50.0, (1, 1, 1), IDENTITY,
+                                                   blender_version=BLENDER_4_2))
+    assert not spot_4.spot_cone_cosine
     sun = shgi.Light(**conversions.light_fields("SUN", 3.0, (1, 1, 1), IDENTITY, angle=0.1))
     # The sun's energy is its strength in W/m^2, not a power.
     assert (sun.type, sun.strength) == (shgi.LightType.SUN, 3.0)

@@ -24,11 +24,16 @@ Units: SHGI's material is Blender 3.4's Principled (dielectric F0 = 0.08 · spec
 "Specular IOR Level" scales the Fresnel reflectance given by the IOR, as Cycles 4 does:
 F0 = ((ior − 1) / (ior + 1))² · 2 · level (0.5 = the IOR's own reflectance), so
 specular = F0 / 0.08. Blender 4's Principled diffuse is Lambertian (3.4's is Burley's, with
-roughness retro-reflection): from 4.0 it exports as ``diffuse_model`` LAMBERT. Lights: point,
+roughness retro-reflection): from 4.0 it exports as ``diffuse_model`` LAMBERT. From 4.0 Cycles
+also layers the specular over the diffuse ("Principled v2": ``principled_model`` V2, which dims the
+diffuse by the specular's albedo and fills Glossy Color with it), with the node's distribution
+(Blender 4's default "Multiscatter GGX" → ``distribution`` MULTISCATTER_GGX). Lights: point,
 spot and area "Power" in W → ``power``; the sun's "Strength" in W/m² → ``strength`` (both are
 Blender's ``Light.energy``); angles in radians as Blender stores them. SHGI's lights are Blender
 3.4's; Blender 4.0 changed one unit, the area light's radiance L = P / (4 A) to L = P / (π A)
-(blender/blender issue 109404), so from 4.0 an area light's power is exported × 4 / π. Matrices
+(blender/blender issue 109404), so from 4.0 an area light's power is exported × 4 / π; and 4.0
+dropped the cos(angle to the axis) that 3.4 multiplies a spot's falloff by (``spot_cone_cosine``
+False from 4.0). Matrices
 are Blender's ``matrix_world`` as row-major 4 × 4 numpy arrays.
 """
 
@@ -47,6 +52,14 @@ NATIVE_LIGHT_UNITS_VERSION = (3, 4, 1)
 # is 0.785 · P / (π d²) in Blender 3.4.1 and 1.000 · P / (π d²) in Blender 5.0.1.
 AREA_LIGHT_PI_VERSION = (4, 0, 0)
 AREA_POWER_TO_NATIVE_FROM_4_0 = 4.0 / math.pi
+# Blender 4.0's Cycles attenuates a spot light by the smoothstep of its blend only; 3.4's also by
+# cos(angle to the spot's axis) (intern/cycles/kernel/light/spot.h).
+SPOT_WITHOUT_CONE_COSINE_VERSION = (4, 0, 0)
+# Blender 4's Principled BSDF distributions → shgi.MicrofacetDistribution ("Multiscatter GGX" is
+# the default). Blender 3.x's distribution is not exported: SHGI renders its Principled as GGX.
+PRINCIPLED_DISTRIBUTIONS = {"GGX": shgi.MicrofacetDistribution.GGX,
+                            "MULTI_GGX": shgi.MicrofacetDistribution.MULTISCATTER_GGX}
+DEFAULT_PRINCIPLED_DISTRIBUTION = "MULTI_GGX"
 
 _PRINCIPLED_SOCKETS_3X = {
     "base_color": "Base Color",
@@ -144,11 +157,13 @@ def rgb(color):
     return tuple(float(c) for c in tuple(color)[:3])
 
 
-def material_fields_from_principled(values, blender_version):
+def material_fields_from_principled(values, blender_version,
+                                    distribution=DEFAULT_PRINCIPLED_DISTRIBUTION):
     """shgi.Material fields from a Principled BSDF's input values.
 
     values: {socket name: default value} for the node's inputs (colours as 3 or 4 floats).
-    Returns a dict of fields, not yet clamped to SHGI's ranges.
+    distribution: the node's ``distribution`` (used from Blender 4.0; ValueError for one SHGI
+    does not render). Returns a dict of fields, not yet clamped to SHGI's ranges.
     """
     names = principled_socket_names(blender_version)
     fields = {
@@ -163,7 +178,12 @@ def material_fields_from_principled(values, blender_version):
     specular = float(values[names["specular"]])
     if tuple(blender_version) >= PRINCIPLED_V2_VERSION:
         specular = specular_from_ior_level(specular, fields["ior"])
+        if distribution not in PRINCIPLED_DISTRIBUTIONS:
+            raise ValueError(f"Principled BSDF distribution {distribution!r} is not one of "
+                             f"{list(PRINCIPLED_DISTRIBUTIONS)}")
         fields["diffuse_model"] = shgi.DiffuseModel.LAMBERT
+        fields["principled_model"] = shgi.PrincipledModel.V2
+        fields["distribution"] = PRINCIPLED_DISTRIBUTIONS[distribution]
     fields["specular"] = specular
     return fields
 
@@ -252,7 +272,8 @@ def light_fields(light_type, energy, color, matrix_world, *, shadow_soft_size=0.
     if light_type in ("POINT", "SPOT"):
         fields["radius"] = float(shadow_soft_size)
     if light_type == "SPOT":
-        fields.update(spot_size=float(spot_size), spot_blend=float(spot_blend))
+        fields.update(spot_size=float(spot_size), spot_blend=float(spot_blend),
+                      spot_cone_cosine=tuple(blender_version) < SPOT_WITHOUT_CONE_COSINE_VERSION)
     if light_type == "AREA":
         if shape not in AREA_SHAPES:
             raise ValueError(f"light {name!r}: area shape {shape!r} is not one of "

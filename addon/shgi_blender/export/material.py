@@ -128,7 +128,13 @@ class MaterialExporter:
 
     def _principled_fields(self, material, node, values):
         """Fields of a Principled BSDF, with an Image Texture on Base Color as a texture."""
-        fields = conversions.material_fields_from_principled(values, bpy.app.version)
+        distribution = getattr(node, "distribution", conversions.DEFAULT_PRINCIPLED_DISTRIBUTION)
+        if distribution not in conversions.PRINCIPLED_DISTRIBUTIONS:
+            self._log.warn(f"material {material.name!r}: distribution {distribution!r} is not "
+                           "rendered by SHGI; using GGX")
+            distribution = "GGX"
+        fields = conversions.material_fields_from_principled(values, bpy.app.version,
+                                                             distribution)
         ignored = conversions.ignored_principled_inputs(values)
         if ignored:
             self._log.warn(f"material {material.name!r}: Principled inputs {', '.join(ignored)} "

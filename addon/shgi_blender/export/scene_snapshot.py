@@ -34,8 +34,9 @@ EDITABLE = "EDITABLE"       # only instance matrices and the world differ
 DIFFERENT = "DIFFERENT"
 
 # The shgi.Light fields that define a light (compared between snapshots).
-LIGHT_FIELDS = ("type", "power", "strength", "radius", "spot_size", "spot_blend", "angle",
-                "shape", "size_x", "size_y", "visible_camera", "portal", "color")
+LIGHT_FIELDS = ("type", "power", "strength", "radius", "spot_size", "spot_blend",
+                "spot_cone_cosine", "angle", "shape", "size_x", "size_y", "visible_camera",
+                "portal", "color")
 
 
 class MaterialTable:
