@@ -14,6 +14,8 @@ import math
 import os
 import sys
 
+import bpy
+
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import calibration_common as cal  # noqa: E402
 
@@ -34,6 +36,16 @@ def room_scene(**world):
 def point(name, tmpdir, results):
     room_scene()
     cal.add_light("POINT", (-0.6, -2.8, 2.8), energy=600.0, shadow_soft_size=0.1)
+    cal.compare(name, DIFFUSE_PASSES, SAMPLES, SAMPLES, tmpdir, results)
+
+
+def point_exposure(name, tmpdir, results):
+    # Blender 4.1's Light.exposure (x 2^exposure); the case is not run on older Blenders.
+    if "exposure" not in bpy.types.Light.bl_rna.properties:
+        return
+    room_scene()
+    cal.add_light("POINT", (-0.6, -2.8, 2.8), energy=200.0, shadow_soft_size=0.1,
+                  exposure=1.5)
     cal.compare(name, DIFFUSE_PASSES, SAMPLES, SAMPLES, tmpdir, results)
 
 
@@ -103,7 +115,7 @@ def light_camera_default(name, tmpdir, results):
     cal.compare(name, DIFFUSE_PASSES, SAMPLES, SAMPLES, tmpdir, results)
 
 
-CASES = {"point": point, "spot": spot, "sun": sun, "area": area, "area_disk": area_disk,
+CASES = {"point": point, "point_exposure": point_exposure, "spot": spot, "sun": sun, "area": area, "area_disk": area_disk,
          "emissive_mesh": emissive_mesh, "world": world,
          "light_camera_visible": light_camera_visible,
          "light_camera_default": light_camera_default}

@@ -151,6 +151,17 @@ def test_point_spot_sun_light_units():
     assert sun.angle == pytest.approx(0.1)
 
 
+def test_light_exposure_scales_the_energy_and_unrendered_settings_are_named():
+    # Blender 4.1's Light.exposure: energy x 2^exposure, for powers and the sun's strength.
+    point = conversions.light_fields("POINT", 100.0, (1, 1, 1), IDENTITY, exposure=1.5)
+    assert point["power"] == pytest.approx(100.0 * 2 ** 1.5)
+    sun = conversions.light_fields("SUN", 3.0, (1, 1, 1), IDENTITY, exposure=-1.0)
+    assert sun["strength"] == pytest.approx(1.5)
+    assert conversions.ignored_light_settings({"use_temperature": False, "normalize": True}) == []
+    assert conversions.ignored_light_settings({"use_temperature": True, "normalize": False}) == [
+        "use_temperature", "normalize"]
+
+
 @pytest.mark.parametrize("shape, size_y", [("SQUARE", 2.0), ("RECTANGLE", 0.5), ("DISK", 2.0),
                                            ("ELLIPSE", 0.5)])
 def test_area_light_sizes(shape, size_y):

@@ -248,12 +248,13 @@ def texture_colorspace_is_known(colorspace_name):
 def light_fields(light_type, energy, color, matrix_world, *, shadow_soft_size=0.0,
                  spot_size=math.pi / 4, spot_blend=0.15, angle=0.0, shape="SQUARE", size=1.0,
                  size_y=1.0, visible_camera=False, portal=False, name="light",
-                 blender_version=NATIVE_LIGHT_UNITS_VERSION):
+                 blender_version=NATIVE_LIGHT_UNITS_VERSION, exposure=0.0):
     """shgi.Light fields from a Blender light's properties (Blender's names and units).
 
     energy: ``Light.energy`` — W for point, spot and area ("Power"), W/m² for the sun
     ("Strength"), in the units of `blender_version` (an area light's power is converted to
-    SHGI's, Blender 3.4's, from Blender 4.0 on). shadow_soft_size: the point/spot "Radius" in m.
+    SHGI's, Blender 3.4's, from Blender 4.0 on). exposure: ``Light.exposure`` (Blender 4.1+),
+    which scales the energy by 2^exposure. shadow_soft_size: the point/spot "Radius" in m.
     spot_size, angle: radians.
     size, size_y: the area light's sides or diameters in m (size_y only for RECTANGLE/ELLIPSE).
     visible_camera: the object's ``visible_camera`` (False for Blender's lights by default).
@@ -265,10 +266,11 @@ def light_fields(light_type, energy, color, matrix_world, *, shadow_soft_size=0.
     fields = {"name": name, "type": LIGHT_TYPES[light_type], "color": rgb(color),
               "world_from_light": row_major(matrix_world),
               "visible_camera": bool(visible_camera)}
+    energy = float(energy) * 2.0 ** float(exposure)
     if light_type == "SUN":
-        fields.update(strength=float(energy), angle=float(angle))
+        fields.update(strength=energy, angle=float(angle))
         return fields
-    fields["power"] = float(energy)
+    fields["power"] = energy
     if light_type in ("POINT", "SPOT"):
         fields["radius"] = float(shadow_soft_size)
     if light_type == "SPOT":
@@ -284,6 +286,18 @@ def light_fields(light_type, energy, color, matrix_world, *, shadow_soft_size=0.
         if tuple(blender_version) >= AREA_LIGHT_PI_VERSION:
             fields["power"] *= AREA_POWER_TO_NATIVE_FROM_4_0
     return fields
+
+
+# Light settings of Blender 4.x/5.0 that SHGI does not render, with the value at which they
+# change nothing (their defaults).
+IGNORED_LIGHT_SETTINGS = {"use_temperature": False, "normalize": True}
+
+
+def ignored_light_settings(values):
+    """Names of the light settings in `values` ({property: value}) that SHGI ignores but that
+    are in use."""
+    return [name for name, neutral in IGNORED_LIGHT_SETTINGS.items()
+            if name in values and values[name] != neutral]
 
 
 def render_resolution(resolution_x, resolution_y, resolution_percentage):

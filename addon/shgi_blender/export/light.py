@@ -19,9 +19,15 @@ ENVIRONMENT_TEXTURE_NODES = ("ShaderNodeTexEnvironment", "ShaderNodeTexImage")
 NO_WORLD_COLOR = (0.0, 0.0, 0.0)
 
 
-def light_from_object(obj, matrix_world):
-    """shgi.Light of an evaluated light object placed at `matrix_world` (ValueError if invalid)."""
+def light_from_object(obj, matrix_world, log=None):
+    """shgi.Light of an evaluated light object placed at `matrix_world` (ValueError if invalid);
+    settings SHGI does not render are named in a warning on `log`."""
     data = obj.data
+    ignored = conversions.ignored_light_settings(
+        {name: getattr(data, name) for name in conversions.IGNORED_LIGHT_SETTINGS
+         if hasattr(data, name)})
+    if ignored and log is not None:
+        log.warn(f"light {obj.name!r}: {', '.join(ignored)} not rendered by SHGI and ignored")
     fields = conversions.light_fields(
         data.type, data.energy, data.color, matrix_world,
         shadow_soft_size=getattr(data, "shadow_soft_size", 0.0),
@@ -30,7 +36,7 @@ def light_from_object(obj, matrix_world):
         size=getattr(data, "size", 0.0), size_y=getattr(data, "size_y", 0.0),
         visible_camera=getattr(obj, "visible_camera", False),
         portal=getattr(getattr(data, "cycles", None), "is_portal", False), name=obj.name,
-        blender_version=bpy.app.version)
+        blender_version=bpy.app.version, exposure=getattr(data, "exposure", 0.0))
     return shgi.Light(**fields)
 
 

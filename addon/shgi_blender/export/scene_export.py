@@ -137,7 +137,7 @@ class _SceneExporter:
 
     def _add_light(self, obj, matrix_world):
         try:
-            self.shgi_scene.add_light(light_from_object(obj, matrix_world))
+            self.shgi_scene.add_light(light_from_object(obj, matrix_world, self.log))
             self.stats.lights += 1
         except ValueError as error:
             self.log.warn(f"light {obj.name!r}: {error}; skipped")
