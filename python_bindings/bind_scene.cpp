@@ -161,7 +161,8 @@ void bind_material(py::module_& m) {
         .value("MULTISCATTER_GGX", MicrofacetDistribution::MultiscatterGGX,
                "Cycles 4's energy-preserving GGX (with principled_model V2)");
     py::class_<Material> cls(m, "Material",
-                             "Principled BSDF subset (Blender 3.4 semantics), linear Rec.709.");
+                             "Principled BSDF subset (Blender 3.4 semantics, or 4.x's with "
+                             "principled_model V2), linear Rec.709.");
     cls.def(py::init(&from_kwargs<Material>),
             "Material(**fields): a default material with the given fields set, e.g. "
             "Material(name='Red', base_color=(0.8, 0.1, 0.1), roughness=0.3).")

@@ -869,7 +869,7 @@ class LogLevel:
         ...
 class Material:
     """
-    Principled BSDF subset (Blender 3.4 semantics), linear Rec.709.
+    Principled BSDF subset (Blender 3.4 semantics, or 4.x's with principled_model V2), linear Rec.709.
     """
     @staticmethod
     def _pybind11_conduit_v1_(*args, **kwargs):
