@@ -152,7 +152,7 @@ def test_point_spot_sun_light_units():
 
 
 def test_light_exposure_scales_the_energy_and_unrendered_settings_are_named():
-    # Blender 4.1's Light.exposure: energy x 2^exposure, for powers and the sun's strength.
+    # Blender 5.0's Light.exposure: energy x 2^exposure, for powers and the sun's strength.
     point = conversions.light_fields("POINT", 100.0, (1, 1, 1), IDENTITY, exposure=1.5)
     assert point["power"] == pytest.approx(100.0 * 2 ** 1.5)
     sun = conversions.light_fields("SUN", 3.0, (1, 1, 1), IDENTITY, exposure=-1.0)

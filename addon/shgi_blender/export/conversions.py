@@ -253,7 +253,7 @@ def light_fields(light_type, energy, color, matrix_world, *, shadow_soft_size=0.
 
     energy: ``Light.energy`` — W for point, spot and area ("Power"), W/m² for the sun
     ("Strength"), in the units of `blender_version` (an area light's power is converted to
-    SHGI's, Blender 3.4's, from Blender 4.0 on). exposure: ``Light.exposure`` (Blender 4.1+),
+    SHGI's, Blender 3.4's, from Blender 4.0 on). exposure: ``Light.exposure`` (Blender 5.0),
     which scales the energy by 2^exposure. shadow_soft_size: the point/spot "Radius" in m.
     spot_size, angle: radians.
     size, size_y: the area light's sides or diameters in m (size_y only for RECTANGLE/ELLIPSE).
