@@ -266,15 +266,22 @@ float ggx_average_albedo(float roughness) {
     return table.lookup(roughness);
 }
 
-// The hemispherical mean of the dielectric Fresnel, 2 ∫ F(mu, eta) mu dmu (256 midpoints).
+// The hemispherical mean of the dielectric Fresnel, 2 ∫ F(mu, eta) mu dmu (256 midpoints),
+// tabulated over z = sqrt((eta - 1) / (eta + 1)) (64 nodes, eta = (1 + z^2) / (1 - z^2), z
+// clamped to 0.99) so that shading a hit costs one lookup.
 float dielectric_average_fresnel(float eta) {
-    constexpr int kMu = 256;
-    double sum = 0.0;
-    for (int m = 0; m < kMu; ++m) {
-        const float mu = (float(m) + 0.5f) / kMu;
-        sum += 2.0 * mu * fresnel_dielectric(mu, eta);
-    }
-    return float(sum / kMu);
+    static const LinearTable table(64, 1, 1, [](float z, float, float) {
+        const float zc = std::min(z, 0.99f);
+        const float node_eta = (1.0f + zc * zc) / (1.0f - zc * zc);
+        constexpr int kMu = 256;
+        double sum = 0.0;
+        for (int m = 0; m < kMu; ++m) {
+            const float mu = (float(m) + 0.5f) / kMu;
+            sum += 2.0 * mu * fresnel_dielectric(mu, node_eta);
+        }
+        return float(sum / kMu);
+    });
+    return table.lookup(std::sqrt(std::fabs((eta - 1.0f) / (eta + 1.0f))));
 }
 
 // Cycles 4's energy-preserving GGX for a lobe of single-scattering mean Fresnel fss
@@ -389,7 +396,7 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const vec3& base_color,
                 ? (1.0f - metallic) * (1.0f - std::clamp(material.transmission, 0.0f, 1.0f))
                 : 0.0f;
         v2_.metal_fss = glm::mix(base_color, vec3(1.0f), kSchlickAverageBlend);
-        v2_.dielectric_fss = dielectric_average_fresnel(specular_ior_);
+        if (v2_.multiscatter) v2_.dielectric_fss = dielectric_average_fresnel(specular_ior_);
         if (!v2_.from_light) {
             diffuse_weight *= layer_transmittance(cos_nv);
             specular_weight *= specular_energy_scale(cos_nv);
