@@ -48,52 +48,85 @@ vec3 refraction_half_vector(const vec3& wo, const vec3& wi, float eta) {
     return h.z < 0.0f ? -h : h;
 }
 
-// Directional albedos tabulated over cos(N.V) x roughness (32 x 32), each entry the mean of an
-// integrand over 16 x 16 stratified samples, looked up bilinearly. Built once, on first use.
-constexpr int kAlbedoTableSize = 32;
-constexpr int kAlbedoTableStrata = 16;
+// --- Tables built once, on first use ---
+// Every entry is the mean of an integrand over 16 x 16 stratified samples of the unit square.
+constexpr int kStrata = 16;
 
-class AlbedoTable {
+template <typename Integrand>  // integrand(u) -> vec2
+vec2 stratified_mean(Integrand integrand) {
+    glm::dvec2 sum(0.0);
+    for (int a = 0; a < kStrata; ++a)
+        for (int b = 0; b < kStrata; ++b)
+            sum += glm::dvec2(
+                integrand(vec2((float(a) + 0.5f) / kStrata, (float(b) + 0.5f) / kStrata)));
+    return vec2(sum / double(kStrata * kStrata));
+}
+
+// A table of T over [0, 1]^3 (x fastest), nx x ny x nz nodes, read with linear interpolation.
+template <typename T>
+class LinearTable {
   public:
-    // integrand(wo, roughness, u) -> up to two albedo estimates for one sample.
-    template <typename Integrand>
-    explicit AlbedoTable(Integrand integrand) {
-        for (int i = 0; i < kAlbedoTableSize; ++i) {
-            const float cos_nv = std::max(float(i) / float(kAlbedoTableSize - 1), 1e-3f);
-            const vec3 wo(std::sqrt(1.0f - cos_nv * cos_nv), 0.0f, cos_nv);
-            for (int j = 0; j < kAlbedoTableSize; ++j) {
-                const float roughness = float(j) / float(kAlbedoTableSize - 1);
-                glm::dvec2 sum(0.0);
-                for (int a = 0; a < kAlbedoTableStrata; ++a)
-                    for (int b = 0; b < kAlbedoTableStrata; ++b)
-                        sum += glm::dvec2(integrand(wo, roughness,
-                                                    vec2((float(a) + 0.5f) / kAlbedoTableStrata,
-                                                         (float(b) + 0.5f) / kAlbedoTableStrata)));
-                entries_[i][j] = vec2(sum / double(kAlbedoTableStrata * kAlbedoTableStrata));
-            }
-        }
+    // value(x, y, z) at the nodes' coordinates in [0, 1].
+    template <typename Value>
+    LinearTable(int nx, int ny, int nz, Value value)
+        : n_{nx, ny, nz}, entries_(size_t(nx) * size_t(ny) * size_t(nz)) {
+        for (int k = 0; k < nz; ++k)
+            for (int j = 0; j < ny; ++j)
+                for (int i = 0; i < nx; ++i)
+                    entries_[index(i, j, k)] = value(node(i, nx), node(j, ny), node(k, nz));
     }
 
-    vec2 lookup(float cos_nv, float roughness) const {
-        const float x = std::clamp(cos_nv, 0.0f, 1.0f) * float(kAlbedoTableSize - 1);
-        const float y = std::clamp(roughness, 0.0f, 1.0f) * float(kAlbedoTableSize - 1);
-        const int x0 = std::min(int(x), kAlbedoTableSize - 2);
-        const int y0 = std::min(int(y), kAlbedoTableSize - 2);
-        const float tx = x - float(x0), ty = y - float(y0);
-        const vec2 bottom = glm::mix(entries_[x0][y0], entries_[x0 + 1][y0], tx);
-        const vec2 top = glm::mix(entries_[x0][y0 + 1], entries_[x0 + 1][y0 + 1], tx);
-        return glm::mix(bottom, top, ty);
+    T lookup(float x, float y = 0.0f, float z = 0.0f) const {
+        int i0, j0, k0;
+        float tx, ty, tz;
+        split(x, n_[0], &i0, &tx);
+        split(y, n_[1], &j0, &ty);
+        const int i1 = std::min(i0 + 1, n_[0] - 1), j1 = std::min(j0 + 1, n_[1] - 1);
+        auto plane = [&](int k) {
+            const T bottom = glm::mix(entries_[index(i0, j0, k)], entries_[index(i1, j0, k)], tx);
+            const T top = glm::mix(entries_[index(i0, j1, k)], entries_[index(i1, j1, k)], tx);
+            return glm::mix(bottom, top, ty);
+        };
+        if (n_[2] == 1) return plane(0);
+        split(z, n_[2], &k0, &tz);
+        return glm::mix(plane(k0), plane(k0 + 1), tz);
     }
 
   private:
-    vec2 entries_[kAlbedoTableSize][kAlbedoTableSize];  // [cos_nv][roughness]
+    static float node(int i, int n) { return n > 1 ? float(i) / float(n - 1) : 0.0f; }
+    static void split(float x, int n, int* i0, float* t) {
+        const float f = std::clamp(x, 0.0f, 1.0f) * float(n - 1);
+        *i0 = std::min(int(f), std::max(n - 2, 0));
+        *t = n > 1 ? f - float(*i0) : 0.0f;
+    }
+    size_t index(int i, int j, int k) const {
+        return (size_t(k) * size_t(n_[1]) + size_t(j)) * size_t(n_[0]) + size_t(i);
+    }
+    int n_[3];
+    std::vector<T> entries_;
 };
+
+// The view direction at cos(N.V) in the XZ plane.
+vec3 view_at(float cos_nv) {
+    return vec3(std::sqrt(std::max(0.0f, 1.0f - cos_nv * cos_nv)), 0.0f, cos_nv);
+}
+
+// --- Directional albedos of 3.4's lobes, over cos(N.V) x roughness (32 x 32; cos >= 1e-3) ---
+constexpr int kAlbedoTableSize = 32;
+
+template <typename Integrand>  // integrand(wo, roughness, u) -> vec2
+LinearTable<vec2> albedo_table(Integrand integrand) {
+    return LinearTable<vec2>(kAlbedoTableSize, kAlbedoTableSize, 1, [&](float x, float y, float) {
+        const vec3 wo = view_at(std::max(x, 1e-3f));
+        return stratified_mean([&](const vec2& u) { return integrand(wo, y, u); });
+    });
+}
 
 // Directional albedo of a GGX reflection lobe: x with colour 1, y with the colour fh of
 // interpolate_fresnel_color (for Specular 0.5: ior 1.5, F0 0.04), by visible-normal sampling
 // (f cos / pdf = G1(wi) for separable Smith GGX).
 vec2 ggx_albedo(float cos_nv, float roughness) {
-    static const AlbedoTable table([](const vec3& wo, float r, const vec2& u) {
+    static const LinearTable<vec2> table = albedo_table([](const vec3& wo, float r, const vec2& u) {
         const float f0 = kSpecularF0Scale * 0.5f;
         const float ior = 2.0f / (1.0f - std::sqrt(f0)) - 1.0f;
         const float alpha = std::max(r * r, kDeltaAlpha);
@@ -110,7 +143,7 @@ vec2 ggx_albedo(float cos_nv, float roughness) {
 // Directional albedo of Cycles' principled diffuse (Burley, with retro-reflection), by cosine
 // sampling; Lambert's is 1.
 float burley_albedo(float cos_nv, float roughness) {
-    static const AlbedoTable table([](const vec3& wo, float r, const vec2& u) {
+    static const LinearTable<vec2> table = albedo_table([](const vec3& wo, float r, const vec2& u) {
         const vec3 wi = sample_cosine_hemisphere(u);
         const float fl = schlick_weight(wi.z), fv = schlick_weight(wo.z);
         const float cos_lh = glm::dot(wi, glm::normalize(wo + wi));
@@ -130,114 +163,60 @@ float burley_albedo(float cos_nv, float roughness) {
 // Cycles' grids (cycles_precompute.cpp: S 16 nodes per axis over roughness, cos(N.V) and a Fresnel
 // parameter z; E 32 x 32; E_avg 32; roughness and cos(N.V) clamped to >= 1e-4), read with linear
 // interpolation as Cycles reads them. Every entry is integrated here by visible-normal sampling
-// (16 x 16 strata) with Cycles' height-correlated Smith G2, whose sample weight is G2 / G1(wo).
-constexpr int kMomentStrata = 16;
+// with Cycles' height-correlated Smith G2, whose sample weight is G2 / G1(wo).
 constexpr float kTableMin = 1e-4f;
-
-float ggx_lambda(const vec3& w, float alpha) {
-    const float c2 = w.z * w.z;
-    if (!(c2 > 0.0f)) return 1e30f;
-    return 0.5f * (std::sqrt(1.0f + alpha * alpha * std::max(1.0f / c2 - 1.0f, 0.0f)) - 1.0f);
-}
-
-// E (mean sample weight) and S (the weight-averaged blend) of a GGX reflection lobe.
-struct GgxMoments {
-    float albedo = 0.0f;
-    float blend = 0.0f;
-};
-
-template <typename Blend>  // blend(cos_ih) -> s in [0, 1]
-GgxMoments ggx_moments(float roughness, float cos_nv, Blend blend) {
-    const vec3 wo(std::sqrt(std::max(0.0f, 1.0f - cos_nv * cos_nv)), 0.0f, cos_nv);
-    const float alpha = roughness * roughness;
-    const float lambda_o = ggx_lambda(wo, alpha);
-    double sum_w = 0.0, sum_ws = 0.0;
-    for (int a = 0; a < kMomentStrata; ++a)
-        for (int b = 0; b < kMomentStrata; ++b) {
-            const vec2 u((float(a) + 0.5f) / kMomentStrata, (float(b) + 0.5f) / kMomentStrata);
-            const vec3 h = sample_ggx_visible_normal(wo, alpha, u);
-            const float cos_oh = glm::dot(wo, h);
-            const vec3 wi = 2.0f * cos_oh * h - wo;
-            if (wi.z <= 0.0f) continue;
-            const double w = (1.0f + lambda_o) / (1.0f + lambda_o + ggx_lambda(wi, alpha));
-            sum_w += w;
-            sum_ws += w * double(blend(cos_oh));
-        }
-    GgxMoments moments;
-    moments.albedo = float(sum_w / double(kMomentStrata * kMomentStrata));
-    moments.blend = sum_w > 0.0 ? float(sum_ws / sum_w) : 0.0f;
-    return moments;
-}
-
-// A table over [0, 1]^3 (x fastest), `nodes` per axis, read with linear interpolation.
-class LinearTable {
-  public:
-    // value(x, y, z) at the nodes' coordinates in [0, 1].
-    template <typename Value>
-    LinearTable(int nx, int ny, int nz, Value value) : n_{nx, ny, nz}, entries_(size_t(nx) * ny * nz) {
-        for (int k = 0; k < nz; ++k)
-            for (int j = 0; j < ny; ++j)
-                for (int i = 0; i < nx; ++i)
-                    entries_[index(i, j, k)] = value(node(i, nx), node(j, ny), node(k, nz));
-    }
-
-    float lookup(float x, float y = 0.0f, float z = 0.0f) const {
-        int i0, j0, k0;
-        float tx, ty, tz;
-        split(x, n_[0], &i0, &tx);
-        split(y, n_[1], &j0, &ty);
-        split(z, n_[2], &k0, &tz);
-        const int i1 = std::min(i0 + 1, n_[0] - 1), j1 = std::min(j0 + 1, n_[1] - 1),
-                  k1 = std::min(k0 + 1, n_[2] - 1);
-        auto plane = [&](int k) {
-            const float bottom = glm::mix(entries_[index(i0, j0, k)], entries_[index(i1, j0, k)], tx);
-            const float top = glm::mix(entries_[index(i0, j1, k)], entries_[index(i1, j1, k)], tx);
-            return glm::mix(bottom, top, ty);
-        };
-        return glm::mix(plane(k0), plane(k1), tz);
-    }
-
-  private:
-    static float node(int i, int n) { return n > 1 ? float(i) / float(n - 1) : 0.0f; }
-    static void split(float x, int n, int* i0, float* t) {
-        const float f = std::clamp(x, 0.0f, 1.0f) * float(n - 1);
-        *i0 = std::min(int(f), std::max(n - 2, 0));
-        *t = n > 1 ? f - float(*i0) : 0.0f;
-    }
-    size_t index(int i, int j, int k) const {
-        return (size_t(k) * size_t(n_[1]) + size_t(j)) * size_t(n_[0]) + size_t(i);
-    }
-    int n_[3];
-    std::vector<float> entries_;
-};
 
 float clamp_node(float x) { return std::clamp(x, kTableMin, 1.0f); }
 
+// Cycles' Fresnel table parameter z = sqrt((eta - 1) / (eta + 1)) (so z^4 = F0), and the eta of a
+// node z (clamped to 0.99).
+float fresnel_table_z(float eta) { return std::sqrt(std::fabs((eta - 1.0f) / (eta + 1.0f))); }
+float node_eta(float z) {
+    const float z2 = std::min(z, 0.99f) * std::min(z, 0.99f);
+    return (1.0f + z2) / (1.0f - z2);
+}
+
+// E (x: mean sample weight) and S (y: the weight-averaged blend) of a GGX reflection lobe.
+template <typename Blend>  // blend(cos_ih) -> s in [0, 1]
+vec2 ggx_moments(float roughness, float cos_nv, Blend blend) {
+    const vec3 wo = view_at(cos_nv);
+    const float alpha = roughness * roughness;
+    const float g1_o = ggx_g1(wo, alpha);
+    const vec2 mean = stratified_mean([&](const vec2& u) {
+        const vec3 h = sample_ggx_visible_normal(wo, alpha, u);
+        const float cos_oh = glm::dot(wo, h);
+        const vec3 wi = 2.0f * cos_oh * h - wo;
+        if (wi.z <= 0.0f) return vec2(0.0f);
+        const float w = height_correlated_masking(g1_o, ggx_g1(wi, alpha));
+        return vec2(w, w * blend(cos_oh));
+    });
+    return vec2(mean.x, mean.x > 0.0f ? mean.y / mean.x : 0.0f);
+}
+
 // S for the dielectric curve s = (F(cos_ih, eta) - F0(eta)) / (1 - F0(eta)) (Cycles' generalized
-// Schlick with a negative exponent), over z = sqrt((eta - 1) / (eta + 1)); the node at z has F0 =
-// z^4, eta = (1 + z^2) / (1 - z^2) (z clamped to [1e-4, 0.99]).
+// Schlick with a negative exponent), over fresnel_table_z (clamped to [1e-4, 0.99]).
 float dielectric_fresnel_blend(float roughness, float cos_nv, float eta) {
-    static const LinearTable table(16, 16, 16, [](float x, float y, float z) {
+    static const LinearTable<float> table(16, 16, 16, [](float x, float y, float z) {
         const float zc = std::clamp(z, kTableMin, 0.99f);
         const float f0 = zc * zc * zc * zc;
-        const float node_eta = (1.0f + zc * zc) / (1.0f - zc * zc);
+        const float eta_z = node_eta(zc);
         return ggx_moments(clamp_node(x), clamp_node(y), [&](float cos_ih) {
-                   return std::clamp((fresnel_dielectric(cos_ih, node_eta) - f0) / (1.0f - f0),
+                   return std::clamp((fresnel_dielectric(cos_ih, eta_z) - f0) / (1.0f - f0),
                                      0.0f, 1.0f);
-               }).blend;
+               }).y;
     });
-    return table.lookup(roughness, cos_nv, std::sqrt(std::fabs((eta - 1.0f) / (eta + 1.0f))));
+    return table.lookup(roughness, cos_nv, fresnel_table_z(eta));
 }
 
 // S for Schlick's curve, which Cycles 4 uses for the metallic lobe's estimate: it reads its
 // exponent table (z = 1 / (0.2 exponent + 1), 16 nodes) at z = 0.5, halfway between the nodes of
 // exponents 40/7 and 35/8, so those two curves are tabulated and averaged here.
 float schlick_fresnel_blend(float roughness, float cos_nv) {
-    static const LinearTable table(16, 16, 2, [](float x, float y, float z) {
+    static const LinearTable<float> table(16, 16, 2, [](float x, float y, float z) {
         const float exponent = z == 0.0f ? 40.0f / 7.0f : 35.0f / 8.0f;
         return ggx_moments(clamp_node(x), clamp_node(y), [&](float cos_ih) {
                    return std::pow(std::clamp(1.0f - cos_ih, 0.0f, 1.0f), exponent);
-               }).blend;
+               }).y;
     });
     return table.lookup(roughness, cos_nv, 0.5f);
 }
@@ -247,60 +226,67 @@ float no_blend(float) { return 0.0f; }
 // Single-scattering GGX albedo E(roughness, cos_nv) and its cosine-weighted mean E_avg(roughness)
 // = 2 ∫ E(mu) mu dmu (32 midpoints in mu).
 float ggx_single_albedo(float roughness, float cos_nv) {
-    static const LinearTable table(32, 32, 1, [](float x, float y, float) {
-        return ggx_moments(clamp_node(x), clamp_node(y), no_blend).albedo;
+    static const LinearTable<float> table(32, 32, 1, [](float x, float y, float) {
+        return ggx_moments(clamp_node(x), clamp_node(y), no_blend).x;
     });
     return table.lookup(roughness, cos_nv);
 }
 
+// The cosine-weighted hemispherical mean 2 ∫ f(mu) mu dmu, by the midpoint rule.
+template <typename F>
+float hemispherical_mean(int steps, F f) {
+    double sum = 0.0;
+    for (int m = 0; m < steps; ++m) {
+        const float mu = (float(m) + 0.5f) / float(steps);
+        sum += 2.0 * mu * f(mu);
+    }
+    return float(sum / steps);
+}
+
 float ggx_average_albedo(float roughness) {
-    static const LinearTable table(32, 1, 1, [](float x, float, float) {
-        constexpr int kMu = 32;
-        double sum = 0.0;
-        for (int m = 0; m < kMu; ++m) {
-            const float mu = (float(m) + 0.5f) / kMu;
-            sum += 2.0 * mu * ggx_moments(clamp_node(x), mu, no_blend).albedo;
-        }
-        return float(sum / kMu);
+    static const LinearTable<float> table(32, 1, 1, [](float x, float, float) {
+        return hemispherical_mean(32, [&](float mu) {
+            return ggx_moments(clamp_node(x), mu, no_blend).x;
+        });
     });
     return table.lookup(roughness);
 }
 
-// The hemispherical mean of the dielectric Fresnel, 2 ∫ F(mu, eta) mu dmu (256 midpoints),
-// tabulated over z = sqrt((eta - 1) / (eta + 1)) (64 nodes, eta = (1 + z^2) / (1 - z^2), z
-// clamped to 0.99) so that shading a hit costs one lookup.
+// The hemispherical mean of the dielectric Fresnel (256 midpoints), over fresnel_table_z (64
+// nodes) so that shading a hit costs one lookup.
 float dielectric_average_fresnel(float eta) {
-    static const LinearTable table(64, 1, 1, [](float z, float, float) {
-        const float zc = std::min(z, 0.99f);
-        const float node_eta = (1.0f + zc * zc) / (1.0f - zc * zc);
-        constexpr int kMu = 256;
-        double sum = 0.0;
-        for (int m = 0; m < kMu; ++m) {
-            const float mu = (float(m) + 0.5f) / kMu;
-            sum += 2.0 * mu * fresnel_dielectric(mu, node_eta);
-        }
-        return float(sum / kMu);
+    static const LinearTable<float> table(64, 1, 1, [](float z, float, float) {
+        const float eta_z = node_eta(z);
+        return hemispherical_mean(256, [&](float mu) { return fresnel_dielectric(mu, eta_z); });
     });
-    return table.lookup(std::sqrt(std::fabs((eta - 1.0f) / (eta + 1.0f))));
+    return table.lookup(fresnel_table_z(eta));
 }
 
-// Cycles 4's energy-preserving GGX for a lobe of single-scattering mean Fresnel fss
-// (microfacet_ggx_preserve_energy): the lobe is scaled by 1 + Fms (1 - E) / E, and `darkening`
+// Cycles 4's energy-preserving GGX (microfacet_ggx_preserve_energy) toward the camera-side
+// direction: the share single scattering misses, (1 - E) / E, and E_avg.
+struct GgxEnergy {
+    float missing = 0.0f;
+    float e_avg = 1.0f;
+};
+
+GgxEnergy ggx_energy(float roughness, float cos_camera) {
+    const float e = std::max(ggx_single_albedo(roughness, cos_camera), 1e-4f);
+    return GgxEnergy{(1.0f - e) / e, ggx_average_albedo(roughness)};
+}
+
+// A lobe of single-scattering mean Fresnel fss is scaled by 1 + Fms (1 - E) / E; `darkening`
 // (that scale over 1 + (1 - E) / E) is what multiplies its closure weight, hence its albedo
-// estimate. E is taken toward the camera-side direction.
+// estimate.
 struct EnergyPreservation {
     vec3 scale{1.0f};
     vec3 darkening{1.0f};
 };
 
-EnergyPreservation energy_preservation(float roughness, float cos_camera, const vec3& fss) {
-    const float e = std::max(ggx_single_albedo(roughness, cos_camera), 1e-4f);
-    const float e_avg = ggx_average_albedo(roughness);
-    const float missing = (1.0f - e) / e;
-    const vec3 fms = fss * e_avg / (vec3(1.0f) - fss * (1.0f - e_avg));
+EnergyPreservation energy_preservation(const GgxEnergy& energy, const vec3& fss) {
+    const vec3 fms = fss * energy.e_avg / (vec3(1.0f) - fss * (1.0f - energy.e_avg));
     EnergyPreservation result;
-    result.scale = vec3(1.0f) + fms * missing;
-    result.darkening = result.scale / (1.0f + missing);
+    result.scale = vec3(1.0f) + fms * energy.missing;
+    result.darkening = result.scale / (1.0f + energy.missing);
     return result;
 }
 
@@ -397,15 +383,17 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const vec3& base_color,
                 : 0.0f;
         v2_.metal_fss = glm::mix(base_color, vec3(1.0f), kSchlickAverageBlend);
         if (v2_.multiscatter) v2_.dielectric_fss = dielectric_average_fresnel(specular_ior_);
+        const float layer = layer_transmittance(cos_nv);
         if (!v2_.from_light) {
-            diffuse_weight *= layer_transmittance(cos_nv);
+            diffuse_weight *= layer;
             specular_weight *= specular_energy_scale(cos_nv);
         }
-        glossy_albedo_ = vec3(v2_.dielectric_weight * (1.0f - layer_transmittance(cos_nv)));
+        glossy_albedo_ = vec3(v2_.dielectric_weight * (1.0f - layer));
         if (metallic > 0.0f) {
             const vec3 darkening =
-                v2_.multiscatter ? energy_preservation(roughness_, cos_nv, v2_.metal_fss).darkening
-                                 : vec3(1.0f);
+                v2_.multiscatter
+                    ? energy_preservation(ggx_energy(roughness_, cos_nv), v2_.metal_fss).darkening
+                    : vec3(1.0f);
             glossy_albedo_ += metallic * darkening *
                               glm::mix(base_color, vec3(1.0f),
                                        schlick_fresnel_blend(roughness_, cos_nv));
@@ -447,8 +435,10 @@ float PrincipledBsdf::layer_transmittance(float cos_camera) const {
     // Cycles: weight * saturate(1 - albedo / weight), albedo / weight = darkening mix(F0, 1, S).
     float albedo =
         glm::mix(specular_f0_, 1.0f, dielectric_fresnel_blend(roughness_, cos_camera, specular_ior_));
-    if (v2_.multiscatter)
-        albedo *= energy_preservation(roughness_, cos_camera, vec3(v2_.dielectric_fss)).darkening.x;
+    if (v2_.multiscatter) {
+        albedo *= energy_preservation(ggx_energy(roughness_, cos_camera), vec3(v2_.dielectric_fss))
+                      .darkening.x;
+    }
     return std::clamp(1.0f - albedo, 0.0f, 1.0f);
 }
 
@@ -459,9 +449,10 @@ vec3 PrincipledBsdf::specular_energy_scale(float cos_camera) const {
     const vec3 metal = v2_.metallic * v2_.metal_fss;
     const vec3 dielectric(v2_.dielectric_weight * v2_.dielectric_fss);
     const vec3 total = metal + dielectric;
-    if (!(std::max(total.x, std::max(total.y, total.z)) > 0.0f)) return vec3(1.0f);
-    return (metal * energy_preservation(roughness_, cos_camera, v2_.metal_fss).scale +
-            dielectric * energy_preservation(roughness_, cos_camera, vec3(v2_.dielectric_fss)).scale) /
+    if (!(max_component(total) > 0.0f)) return vec3(1.0f);
+    const GgxEnergy energy = ggx_energy(roughness_, cos_camera);
+    return (metal * energy_preservation(energy, v2_.metal_fss).scale +
+            dielectric * energy_preservation(energy, vec3(v2_.dielectric_fss)).scale) /
            glm::max(total, vec3(1e-20f));
 }
 
@@ -511,11 +502,14 @@ bool PrincipledBsdf::pair_terms(const vec3& wo, const vec3& wi, PairTerms* terms
     return true;
 }
 
-float PrincipledBsdf::masking_given_o(const PairTerms& terms) const {
-    if (!height_correlated_) return terms.g1_i;
+float height_correlated_masking(float g1_o, float g1_i) {
     // G2 / G1(wo) with G2 = 1 / (1 + L(wo) + L(wi)) and 1 + L = 1 / G1.
-    if (!(terms.g1_i > 0.0f) || !(terms.g1_o > 0.0f)) return 0.0f;
-    return 1.0f / (terms.g1_o * (1.0f / terms.g1_o + 1.0f / terms.g1_i - 1.0f));
+    if (!(g1_i > 0.0f) || !(g1_o > 0.0f)) return 0.0f;
+    return 1.0f / (g1_o * (1.0f / g1_o + 1.0f / g1_i - 1.0f));
+}
+
+float PrincipledBsdf::masking_given_o(const PairTerms& terms) const {
+    return height_correlated_ ? height_correlated_masking(terms.g1_o, terms.g1_i) : terms.g1_i;
 }
 
 void PrincipledBsdf::ggx_terms(const vec3& wo, const vec3& wi, float alpha,

@@ -78,6 +78,9 @@ float ggx_g1(const vec3& w, float alpha);
 // Samples a visible normal for view direction w (w.z > 0), Heitz 2018 "Sampling the GGX
 // Distribution of Visible Normals", JCGT 7(4). pdf(h) = G1(w) max(0, w.h) D(h) / w.z.
 vec3 sample_ggx_visible_normal(const vec3& w, float alpha, const vec2& u);
+// Height-correlated Smith masking of wi given wo's, G2 / G1(wo) with G2 = 1 / (1 + L(wo) +
+// L(wi)), from the two G1 (Cycles 4; 0 when either is 0).
+float height_correlated_masking(float g1_o, float g1_i);
 // Dielectric Fresnel reflectance for cos_i = cos of the incident angle and relative ior eta;
 // 1 under total internal reflection (Cycles' fresnel_dielectric_cos).
 float fresnel_dielectric(float cos_i, float eta);

@@ -20,7 +20,6 @@ inline constexpr float kRayOffset = 1e-4f;
 // not occlude it.
 inline constexpr float kShadowShorten = 1e-3f;
 
-inline float max_component(const vec3& v) { return std::max(v.x, std::max(v.y, v.z)); }
 // v scaled down so that its largest component is at most `limit` (a firefly clamp; limit <= 0:
 // off, v unchanged).
 inline vec3 clamp_peak(const vec3& v, float limit) {

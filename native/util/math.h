@@ -4,6 +4,7 @@
 // Frame and units are Blender's: right-handed, Z up, metres. Colours are linear Rec.709 RGB.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -33,6 +34,8 @@ inline constexpr double kPiD = 3.14159265358979323846;
 inline float luminance(const vec3& rgb) {
     return 0.2126f * rgb.x + 0.7152f * rgb.y + 0.0722f * rgb.z;
 }
+
+inline float max_component(const vec3& v) { return std::max(v.x, std::max(v.y, v.z)); }
 
 inline bool is_finite(float v) { return std::isfinite(v); }
 inline bool is_finite(const vec2& v) { return std::isfinite(v.x) && std::isfinite(v.y); }

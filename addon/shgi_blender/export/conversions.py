@@ -296,8 +296,7 @@ IGNORED_LIGHT_SETTINGS = {"use_temperature": False, "normalize": True}
 def ignored_light_settings(values):
     """Names of the light settings in `values` ({property: value}) that SHGI ignores but that
     are in use."""
-    return [name for name, neutral in IGNORED_LIGHT_SETTINGS.items()
-            if name in values and values[name] != neutral]
+    return _in_use(values, IGNORED_LIGHT_SETTINGS)
 
 
 def render_resolution(resolution_x, resolution_y, resolution_percentage):
@@ -373,5 +372,11 @@ IGNORED_PRINCIPLED_INPUTS = {
 
 def ignored_principled_inputs(values):
     """Names of the Principled inputs in `values` that SHGI ignores but that are in use."""
-    return [name for name, neutral in IGNORED_PRINCIPLED_INPUTS.items()
-            if name in values and float(values[name]) != neutral]
+    return _in_use(values, IGNORED_PRINCIPLED_INPUTS)
+
+
+def _in_use(values, neutral_values):
+    """Names in `neutral_values` ({name: value that changes nothing}) whose value in `values`
+    differs from it."""
+    return [name for name, neutral in neutral_values.items()
+            if name in values and values[name] != neutral]
