@@ -28,11 +28,28 @@ uint32_t nested_uniform_scramble(uint32_t x, uint32_t seed) {
 }
 
 // The second Sobol' dimension as a 32-bit binary fraction (the first is reverse_bits(index)).
+// It is linear over GF(2) in the index's bits: index bit i contributes the direction number
+// v_i (v_0 = 2^31, v_(i+1) = v_i ^ (v_i >> 1)). The indices renderers pass are scrambled, so all
+// 32 bits are random; a loop over them mispredicts a branch on every other bit. Instead the
+// contributions are summed per byte of the index in four 256-entry tables.
+struct SobolDimension1Tables {
+    uint32_t byte[4][256];
+
+    SobolDimension1Tables() : byte{} {
+        uint32_t v[32];
+        v[0] = 1u << 31;
+        for (int i = 1; i < 32; ++i) v[i] = v[i - 1] ^ (v[i - 1] >> 1);
+        for (int k = 0; k < 4; ++k)
+            for (uint32_t b = 0; b < 256; ++b)
+                for (int j = 0; j < 8; ++j)
+                    if (b & (1u << j)) byte[k][b] ^= v[8 * k + j];
+    }
+};
+
 uint32_t sobol_dimension1(uint32_t index) {
-    uint32_t result = 0;
-    for (uint32_t v = 1u << 31; index != 0; index >>= 1, v ^= v >> 1)
-        if (index & 1u) result ^= v;
-    return result;
+    static const SobolDimension1Tables tables;
+    return tables.byte[0][index & 0xFFu] ^ tables.byte[1][(index >> 8) & 0xFFu] ^
+           tables.byte[2][(index >> 16) & 0xFFu] ^ tables.byte[3][index >> 24];
 }
 
 // Dimension 0 is the bit reversal of the index, so its scramble reverse(LK(reverse(reverse(i))))
