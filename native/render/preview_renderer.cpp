@@ -165,7 +165,7 @@ class FrameWork {
             wave.rays[i] = camera_rays_.generate_ray(vec2(float(wave.x[i]), float(wave.y[i])) +
                                                      wave.samples[i].jitter);
         }
-        scene_.intersect(wave.rays, wave.hits);
+        scene_.intersect(wave.rays, wave.hits, nullptr, RayCoherence::Coherent);
         for (size_t i = 0; i < wave.count; ++i) {
             wave.values[i] = PassValues{};
             PathIntegrator& path = wave.paths[i].emplace(scene_, camera_, lights_, settings_,
@@ -187,7 +187,7 @@ class FrameWork {
             wave.shadow_paths.push_back(uint32_t(i));
         }
         if (wave.shadow_rays.empty()) return;
-        scene_.occluded(wave.shadow_rays, wave.occluded);
+        scene_.occluded(wave.shadow_rays, wave.occluded, nullptr, RayCoherence::Coherent);
         for (size_t j = 0; j < wave.shadow_rays.size(); ++j)
             if (!wave.occluded[j]) wave.paths[wave.shadow_paths[j]]->add_direct();
     }

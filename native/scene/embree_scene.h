@@ -49,8 +49,10 @@ class EmbreeScene {
     void clear();
 
     // `count` rays at once (an Embree ray stream); thread-safe after a build.
-    void intersect(const Ray* rays, Hit* hits, size_t count) const;
-    void occluded(const Ray* rays, uint8_t* occluded, size_t count) const;
+    void intersect(const Ray* rays, Hit* hits, size_t count,
+                   RayCoherence coherence = RayCoherence::Incoherent) const;
+    void occluded(const Ray* rays, uint8_t* occluded, size_t count,
+                  RayCoherence coherence = RayCoherence::Incoherent) const;
 
   private:
     struct Impl;

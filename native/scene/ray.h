@@ -28,6 +28,11 @@ bool is_valid_ray(const Ray& ray);
 // Why is_valid_ray rejects `ray` ("direction is zero", ...), or nullptr for a valid ray.
 const char* ray_problem(const Ray& ray);
 
+// A hint for batches of rays: Coherent rays (a tile's camera rays, shadow rays from neighbouring
+// pixels to one light) start close together and point alike, so Embree traverses them as packets.
+// Results are the same either way; only the speed differs.
+enum class RayCoherence { Incoherent, Coherent };
+
 struct Hit {
     float t = kInfinity;
     uint32_t instance_id = kInvalidId;  // index into Scene::instances()

@@ -328,7 +328,7 @@ bool Scene::occluded(const Ray& ray) const {
 }
 
 void Scene::intersect(const std::vector<Ray>& rays, std::vector<Hit>& hits,
-                      Progress* progress) const {
+                      Progress* progress, RayCoherence coherence) const {
     require_committed("intersect");
     check_rays(rays);
     hits.assign(rays.size(), Hit{});
@@ -339,14 +339,14 @@ void Scene::intersect(const std::vector<Ray>& rays, std::vector<Hit>& hits,
     parallel_for(
         0, rays.size(), kRaysPerChunk,
         [&](uint64_t begin, uint64_t end) {
-            embree_->intersect(&rays[begin], &hits[begin], end - begin);
+            embree_->intersect(&rays[begin], &hits[begin], end - begin, coherence);
             for (uint64_t i = begin; i < end; ++i) finish_hit(hits[i]);
         },
         progress);
 }
 
 void Scene::occluded(const std::vector<Ray>& rays, std::vector<uint8_t>& occluded,
-                     Progress* progress) const {
+                     Progress* progress, RayCoherence coherence) const {
     require_committed("occluded");
     check_rays(rays);
     occluded.assign(rays.size(), 0);
@@ -357,7 +357,7 @@ void Scene::occluded(const std::vector<Ray>& rays, std::vector<uint8_t>& occlude
     parallel_for(
         0, rays.size(), kRaysPerChunk,
         [&](uint64_t begin, uint64_t end) {
-            embree_->occluded(&rays[begin], &occluded[begin], end - begin);
+            embree_->occluded(&rays[begin], &occluded[begin], end - begin, coherence);
         },
         progress);
 }

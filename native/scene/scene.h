@@ -145,9 +145,11 @@ class Scene {
     // Batches: hits/occluded are resized to rays.size(). All rays are validated before any is
     // traced; the work is then split into chunks of kRaysPerChunk that poll `progress`.
     void intersect(const std::vector<Ray>& rays, std::vector<Hit>& hits,
-                   Progress* progress = nullptr) const;
+                   Progress* progress = nullptr,
+                   RayCoherence coherence = RayCoherence::Incoherent) const;
     void occluded(const std::vector<Ray>& rays, std::vector<uint8_t>& occluded,
-                  Progress* progress = nullptr) const;
+                  Progress* progress = nullptr,
+                  RayCoherence coherence = RayCoherence::Incoherent) const;
     // Shading data at a valid hit (InvalidArgument for a miss or ids out of range).
     SurfacePoint surface_point(const Ray& ray, const Hit& hit) const;
 

@@ -201,26 +201,32 @@ TEST(SceneIntersect, BatchMatchesSingleRays) {
         const vec3 origin(1.5f + 4 * uniform(rng), 4 * uniform(rng), 3.0f + uniform(rng));
         rays.push_back(make_ray(origin, target - origin, 0.0f, i % 3 == 0 ? 0.7f : kInfinity));
     }
-    std::vector<Hit> hits;
-    std::vector<uint8_t> occluded;
-    scene.intersect(rays, hits);
-    scene.occluded(rays, occluded);
-    ASSERT_EQ(hits.size(), rays.size());
-    ASSERT_EQ(occluded.size(), rays.size());
-    int hit_count = 0;
-    for (size_t i = 0; i < rays.size(); ++i) {
-        const Hit single = scene.intersect(rays[i]);
-        ASSERT_EQ(hits[i].instance_id, single.instance_id) << "ray " << i;
-        EXPECT_EQ(hits[i].triangle_id, single.triangle_id);
-        EXPECT_EQ(hits[i].t, single.t);
-        EXPECT_EQ(hits[i].barycentrics, single.barycentrics);
-        EXPECT_EQ(hits[i].geometric_normal, single.geometric_normal);
-        EXPECT_EQ(occluded[i] != 0, scene.occluded(rays[i]));
-        EXPECT_EQ(occluded[i] != 0, single.valid());
-        hit_count += single.valid();
+    // Both traversals: Embree ray streams (incoherent) and 16-wide packets (coherent), the
+    // latter with a partial last packet (10000 = 625 x 16, so drop one ray).
+    for (RayCoherence coherence : {RayCoherence::Incoherent, RayCoherence::Coherent}) {
+        SCOPED_TRACE(coherence == RayCoherence::Coherent ? "coherent" : "incoherent");
+        const std::vector<Ray> batch(rays.begin(), rays.end() - 1);
+        std::vector<Hit> hits;
+        std::vector<uint8_t> occluded;
+        scene.intersect(batch, hits, nullptr, coherence);
+        scene.occluded(batch, occluded, nullptr, coherence);
+        ASSERT_EQ(hits.size(), batch.size());
+        ASSERT_EQ(occluded.size(), batch.size());
+        int hit_count = 0;
+        for (size_t i = 0; i < batch.size(); ++i) {
+            const Hit single = scene.intersect(batch[i]);
+            ASSERT_EQ(hits[i].instance_id, single.instance_id) << "ray " << i;
+            EXPECT_EQ(hits[i].triangle_id, single.triangle_id);
+            EXPECT_EQ(hits[i].t, single.t);
+            EXPECT_EQ(hits[i].barycentrics, single.barycentrics);
+            EXPECT_EQ(hits[i].geometric_normal, single.geometric_normal);
+            EXPECT_EQ(occluded[i] != 0, scene.occluded(batch[i]));
+            EXPECT_EQ(occluded[i] != 0, single.valid());
+            hit_count += single.valid();
+        }
+        EXPECT_GT(hit_count, 1000);  // the test would be vacuous if every ray missed
+        EXPECT_LT(hit_count, 9000);
     }
-    EXPECT_GT(hit_count, 1000);  // the test would be vacuous if every ray missed
-    EXPECT_LT(hit_count, 9000);
 }
 
 TEST(SceneIntersect, SurfacePointGivesMaterialAndInterpolatedNormal) {
