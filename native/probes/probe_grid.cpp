@@ -337,7 +337,8 @@ void ProbeGrid::update(Progress* progress) {
         0, old.probe_count(), kProbesPerTask,
         [&](uint64_t begin, uint64_t end) {
             VisibilityFilter filter(old.visibility_resolution, settings_.visibility_blur);
-            IntegratorClock clock;
+            IntegratorClock clock;  // counts the paths' rays; their time is not split
+            clock.time_direct = false;
             std::vector<vec2> moments(vis_texels);
             for (uint64_t probe = begin; probe < end; ++probe) {
                 if (!old.active[probe]) continue;

@@ -119,7 +119,7 @@ void PathIntegrator::record_first_hit(const Shading& shading, const Ray& ray, co
 
 // Next-event estimation at the current surface, MIS-weighted against BSDF sampling.
 void PathIntegrator::sample_direct() {
-    ScopedTimer timer(clock_ != nullptr ? &clock_->direct : nullptr);
+    ScopedTimer timer(clock_ != nullptr && clock_->time_direct ? &clock_->direct : nullptr);
     Ray shadow;
     if (!prepare_direct(&shadow)) return;
     if (clock_ != nullptr) ++clock_->rays;
