@@ -92,10 +92,11 @@ Hit from_embree(const RTCRayHit& in) {
     return hit;
 }
 
-// Coherent rays go through Embree's 8-wide packet traversal (rtcIntersect8/rtcOccluded8),
-// one packet of neighbouring rays at a time. Not the stream API's coherent flag: on Debian's
-// Embree 3.13.5, rtcOccluded1M with RTC_INTERSECT_CONTEXT_FLAG_COHERENT never returned for a
-// stream of point-light shadow rays in an instanced scene (PreviewRenderer tests).
+// Coherent rays go through Embree's packet traversal, 16 neighbouring rays at a time
+// (rtcIntersect16/rtcOccluded16, valid at any CPU's SIMD width); a partial last packet repeats
+// its last ray in the masked-off lanes. Not the stream API's coherent flag: on Debian's Embree
+// 3.13.5, rtcOccluded1M with RTC_INTERSECT_CONTEXT_FLAG_COHERENT never returned for a stream of
+// point-light shadow rays in an instanced scene (a PreviewRenderer test).
 constexpr size_t kPacket = 16;
 
 template <typename Packet>
