@@ -7,7 +7,8 @@
 // raw rate) and the rest; injection rate (stored photons per second); the
 // solve's stage times; and the frame time of a 640 x 360 preview with the solved field, at 1
 // sample per pixel (one progressive viewport frame) and 16 (PreviewSettings' default), with its
-// stage times, best of three runs each; and the best of 40 1-spp frames added to one renderer. A plain main printing figures: benchmarks are not tests.
+// stage times, best of three runs each; and the best of 40 1-spp frames added to one renderer.
+// A plain main printing figures: benchmarks are not tests.
 #include <algorithm>
 #include <cstdio>
 

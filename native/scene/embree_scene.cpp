@@ -81,6 +81,9 @@ void to_embree(const Ray& ray, RTCRayHit& out) {
     out.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
 }
 
+// Embree marks an occluded ray by setting its tfar to -inf.
+uint8_t occluded_flag(float tfar) { return tfar < 0.0f ? 1 : 0; }
+
 Hit from_embree(const RTCRayHit& in) {
     Hit hit;
     if (in.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
@@ -93,70 +96,70 @@ Hit from_embree(const RTCRayHit& in) {
 }
 
 // Coherent rays go through Embree's packet traversal, 16 neighbouring rays at a time
-// (rtcIntersect16/rtcOccluded16, valid at any CPU's SIMD width); a partial last packet repeats
-// its last ray in the masked-off lanes. Not the stream API's coherent flag: on Debian's Embree
-// 3.13.5, rtcOccluded1M with RTC_INTERSECT_CONTEXT_FLAG_COHERENT never returned for a stream of
-// point-light shadow rays in an instanced scene (a PreviewRenderer test).
-constexpr size_t kPacket = 16;
+// (rtcIntersect16/rtcOccluded16, valid at any CPU's SIMD width). Not the stream API's coherent
+// flag: on Debian's Embree 3.13.5, rtcOccluded1M with RTC_INTERSECT_CONTEXT_FLAG_COHERENT never
+// returned for a stream of point-light shadow rays in an instanced scene (a PreviewRenderer
+// test).
+constexpr unsigned kPacket = 16;
 
-template <typename Packet>
-void set_packet_ray(Packet& packet, size_t lane, const Ray& ray) {
-    packet.org_x[lane] = ray.origin.x;
-    packet.org_y[lane] = ray.origin.y;
-    packet.org_z[lane] = ray.origin.z;
-    packet.tnear[lane] = ray.tmin;
-    packet.dir_x[lane] = ray.direction.x;
-    packet.dir_y[lane] = ray.direction.y;
-    packet.dir_z[lane] = ray.direction.z;
-    packet.time[lane] = 0.0f;
-    packet.tfar[lane] = ray.tmax;
-    packet.mask[lane] = 0xFFFFFFFFu;
-    packet.id[lane] = 0;
-    packet.flags[lane] = 0;
+// Lane `lane` of a packet: RTCRayN holds each of RTCRay's twelve 4-byte fields, in RTCRay's
+// order, as an array of kPacket (Embree's RTCRayN_* accessors index it the same way).
+void copy_ray_to_packet(const RTCRay& ray, RTCRayN* packet, unsigned lane) {
+    static_assert(sizeof(RTCRay) == 12 * sizeof(float), "RTCRay: twelve 4-byte fields");
+    const char* in = reinterpret_cast<const char*>(&ray);
+    char* out = reinterpret_cast<char*>(packet);
+    for (unsigned field = 0; field < 12; ++field)
+        std::memcpy(out + (field * kPacket + lane) * sizeof(float), in + field * sizeof(float),
+                    sizeof(float));
+}
+
+// For each packet of up to kPacket consecutive rays: fill(lane, ray) for every lane (the
+// masked-off lanes of a partial last packet repeat its last ray), trace(valid), then
+// read(lane, index of the ray) for the packet's rays.
+template <typename Fill, typename Trace, typename Read>
+void for_each_packet(const Ray* rays, size_t count, Fill&& fill, Trace&& trace, Read&& read) {
+    alignas(64) int valid[kPacket];
+    for (size_t begin = 0; begin < count; begin += kPacket) {
+        const size_t size = std::min<size_t>(kPacket, count - begin);
+        for (unsigned lane = 0; lane < kPacket; ++lane) {
+            valid[lane] = lane < size ? -1 : 0;
+            fill(lane, rays[begin + std::min<size_t>(lane, size - 1)]);
+        }
+        trace(valid);
+        for (unsigned lane = 0; lane < size; ++lane) read(lane, begin + lane);
+    }
 }
 
 void intersect_packets(RTCScene scene, RTCIntersectContext* context, const Ray* rays, Hit* hits,
                        size_t count) {
     alignas(64) RTCRayHit16 packet;
-    alignas(64) int valid[kPacket];
-    for (size_t begin = 0; begin < count; begin += kPacket) {
-        const size_t size = std::min(kPacket, count - begin);
-        for (size_t lane = 0; lane < kPacket; ++lane) {
-            valid[lane] = lane < size ? -1 : 0;
-            set_packet_ray(packet.ray, lane, rays[begin + std::min(lane, size - 1)]);
-            packet.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
-            packet.hit.primID[lane] = RTC_INVALID_GEOMETRY_ID;
-            packet.hit.instID[0][lane] = RTC_INVALID_GEOMETRY_ID;
-        }
-        rtcIntersect16(valid, scene, context, &packet);
-        for (size_t lane = 0; lane < size; ++lane) {
-            Hit& hit = hits[begin + lane];
-            hit = Hit{};
-            if (packet.hit.geomID[lane] == RTC_INVALID_GEOMETRY_ID) continue;
-            hit.t = packet.ray.tfar[lane];
-            hit.instance_id = packet.hit.instID[0][lane];
-            hit.triangle_id = packet.hit.primID[lane];
-            hit.barycentrics = vec2(packet.hit.u[lane], packet.hit.v[lane]);
-            hit.geometric_normal =
-                vec3(packet.hit.Ng_x[lane], packet.hit.Ng_y[lane], packet.hit.Ng_z[lane]);
-        }
-    }
+    RTCRayHitN* packet_n = reinterpret_cast<RTCRayHitN*>(&packet);
+    for_each_packet(
+        rays, count,
+        [&](unsigned lane, const Ray& ray) {
+            RTCRayHit single{};
+            to_embree(ray, single);
+            copy_ray_to_packet(single.ray, RTCRayHitN_RayN(packet_n, kPacket), lane);
+            rtcCopyHitToHitN(RTCRayHitN_HitN(packet_n, kPacket), &single.hit, kPacket, lane);
+        },
+        [&](const int* valid) { rtcIntersect16(valid, scene, context, &packet); },
+        [&](unsigned lane, size_t i) {
+            hits[i] = from_embree(rtcGetRayHitFromRayHitN(packet_n, kPacket, lane));
+        });
 }
 
 void occluded_packets(RTCScene scene, RTCIntersectContext* context, const Ray* rays,
                       uint8_t* occluded, size_t count) {
     alignas(64) RTCRay16 packet;
-    alignas(64) int valid[kPacket];
-    for (size_t begin = 0; begin < count; begin += kPacket) {
-        const size_t size = std::min(kPacket, count - begin);
-        for (size_t lane = 0; lane < kPacket; ++lane) {
-            valid[lane] = lane < size ? -1 : 0;
-            set_packet_ray(packet, lane, rays[begin + std::min(lane, size - 1)]);
-        }
-        rtcOccluded16(valid, scene, context, &packet);
-        for (size_t lane = 0; lane < size; ++lane)
-            occluded[begin + lane] = packet.tfar[lane] < 0.0f ? 1 : 0;
-    }
+    for_each_packet(
+        rays, count,
+        [&](unsigned lane, const Ray& ray) {
+            RTCRay single;
+            to_embree(ray, single);
+            copy_ray_to_packet(single, reinterpret_cast<RTCRayN*>(&packet), lane);
+        },
+        [&](const int* valid) { rtcOccluded16(valid, scene, context, &packet); },
+        [&](unsigned lane, size_t i) { occluded[i] = occluded_flag(packet.tfar[lane]); });
 }
 
 }  // namespace
@@ -322,12 +325,11 @@ void EmbreeScene::occluded(const Ray* rays, uint8_t* occluded, size_t count,
         occluded_packets(impl_->top.get(), &context, rays, occluded, count);
         return;
     }
-    // Embree marks an occluded ray by setting tfar to -inf.
     if (count == 1) {
         RTCRay ray;
         to_embree(rays[0], ray);
         rtcOccluded1(impl_->top.get(), &context, &ray);
-        occluded[0] = ray.tfar < 0.0f ? 1 : 0;
+        occluded[0] = occluded_flag(ray.tfar);
         return;
     }
     std::array<RTCRay, kStreamSize> stream;
@@ -336,7 +338,7 @@ void EmbreeScene::occluded(const Ray* rays, uint8_t* occluded, size_t count,
         for (size_t i = 0; i < size; ++i) to_embree(rays[begin + i], stream[i]);
         rtcOccluded1M(impl_->top.get(), &context, stream.data(), static_cast<unsigned>(size),
                       sizeof(RTCRay));
-        for (size_t i = 0; i < size; ++i) occluded[begin + i] = stream[i].tfar < 0.0f ? 1 : 0;
+        for (size_t i = 0; i < size; ++i) occluded[begin + i] = occluded_flag(stream[i].tfar);
     }
 }
 

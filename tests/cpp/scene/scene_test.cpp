@@ -164,12 +164,18 @@ TEST(SceneIntersect, MirroringTransformKeepsTheFrontSide) {
     expect_near(point.shading_normal, vec3(0, 0, 1));
 }
 
-TEST(SceneIntersect, TwoInstancesOfOneMeshAndTransformUpdate) {
+// Mesh 0, a unit quad, instanced twice: "Low" at z = 0 and "High" at z = 2; committed.
+Scene two_quad_instances() {
     Scene scene;
     const uint32_t mesh = scene.add_mesh(unit_quad());
     scene.add_instance(mesh, mat4(1.0f), "Low");
     scene.add_instance(mesh, glm::translate(mat4(1.0f), vec3(0, 0, 2)), "High");
     scene.commit();
+    return scene;
+}
+
+TEST(SceneIntersect, TwoInstancesOfOneMeshAndTransformUpdate) {
+    Scene scene = two_quad_instances();
     const Ray down = make_ray(vec3(0.75f, 0.25f, 10), vec3(0, 0, -1));
     Hit hit = scene.intersect(down);
     EXPECT_EQ(hit.instance_id, 1u);
@@ -385,11 +391,8 @@ TEST(SceneValidation, QueriesBeforeCommitAreRejected) {
 TEST(SceneSetMesh, ReplacesTheMeshOfEveryInstanceAtTheNextCommit) {
     // Two instances of a unit quad, at z = 0 and z = 2; the quad is then replaced by one moved
     // to x in [2, 3] with a degenerate triangle, as a relaid-out mesh would be put back.
-    Scene scene;
-    const uint32_t mesh = scene.add_mesh(unit_quad());
-    scene.add_instance(mesh, mat4(1.0f), "Low");
-    scene.add_instance(mesh, glm::translate(mat4(1.0f), vec3(0, 0, 2)), "High");
-    scene.commit();
+    Scene scene = two_quad_instances();
+    const uint32_t mesh = 0;
     const Ray old_place = make_ray(vec3(0.75f, 0.25f, 10), vec3(0, 0, -1));
     const Ray new_place = make_ray(vec3(2.75f, 0.25f, 10), vec3(0, 0, -1));
     EXPECT_TRUE(scene.intersect(old_place).valid());
