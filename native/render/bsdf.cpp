@@ -383,20 +383,17 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const vec3& base_color,
                 : 0.0f;
         v2_.metal_fss = glm::mix(base_color, vec3(1.0f), kSchlickAverageBlend);
         if (v2_.multiscatter) v2_.dielectric_fss = dielectric_average_fresnel(specular_ior_);
-        const float layer = layer_transmittance(cos_nv);
+        // On light paths wo is not the camera side: the factors are applied per scattered wi
+        // (lobe_eval_pdf), and GlossCol, a camera pass, is not needed.
         if (!v2_.from_light) {
-            diffuse_weight *= layer;
-            specular_weight *= specular_energy_scale(cos_nv);
-        }
-        glossy_albedo_ = vec3(v2_.dielectric_weight * (1.0f - layer));
-        if (metallic > 0.0f) {
-            const vec3 darkening =
-                v2_.multiscatter
-                    ? energy_preservation(ggx_energy(roughness_, cos_nv), v2_.metal_fss).darkening
-                    : vec3(1.0f);
-            glossy_albedo_ += metallic * darkening *
-                              glm::mix(base_color, vec3(1.0f),
-                                       schlick_fresnel_blend(roughness_, cos_nv));
+            const CameraSide side = camera_side(cos_nv);
+            diffuse_weight *= side.layer_transmittance;
+            specular_weight *= side.specular_scale;
+            glossy_albedo_ = vec3(v2_.dielectric_weight * (1.0f - side.layer_transmittance));
+            if (metallic > 0.0f)
+                glossy_albedo_ += metallic * side.metal_darkening *
+                                  glm::mix(base_color, vec3(1.0f),
+                                           schlick_fresnel_blend(roughness_, cos_nv));
         }
     }
     add_lobe(LobeKind::Diffuse, diffuse_weight, alpha);
@@ -430,30 +427,34 @@ void PrincipledBsdf::add_lobe(LobeKind kind, const vec3& weight, float alpha) {
     lobe.alpha = alpha;
 }
 
-float PrincipledBsdf::layer_transmittance(float cos_camera) const {
-    if (v2_.dielectric_weight <= 0.0f) return 1.0f;
-    // Cycles: weight * saturate(1 - albedo / weight), albedo / weight = darkening mix(F0, 1, S).
-    float albedo =
-        glm::mix(specular_f0_, 1.0f, dielectric_fresnel_blend(roughness_, cos_camera, specular_ior_));
+PrincipledBsdf::CameraSide PrincipledBsdf::camera_side(float cos_camera) const {
+    CameraSide side;
+    EnergyPreservation metal, dielectric;
     if (v2_.multiscatter) {
-        albedo *= energy_preservation(ggx_energy(roughness_, cos_camera), vec3(v2_.dielectric_fss))
-                      .darkening.x;
+        const GgxEnergy energy = ggx_energy(roughness_, cos_camera);
+        metal = energy_preservation(energy, v2_.metal_fss);
+        dielectric = energy_preservation(energy, vec3(v2_.dielectric_fss));
+        side.metal_darkening = metal.darkening;
+        // Each lobe's own scale, weighted by its share of the combined lobe's mean Fresnel
+        // (exact when the surface is wholly metallic or wholly dielectric).
+        const vec3 metal_share = v2_.metallic * v2_.metal_fss;
+        const vec3 dielectric_share(v2_.dielectric_weight * v2_.dielectric_fss);
+        const vec3 total = metal_share + dielectric_share;
+        if (max_component(total) > 0.0f)
+            side.specular_scale =
+                (metal_share * metal.scale + dielectric_share * dielectric.scale) /
+                glm::max(total, vec3(1e-20f));
     }
-    return std::clamp(1.0f - albedo, 0.0f, 1.0f);
-}
-
-vec3 PrincipledBsdf::specular_energy_scale(float cos_camera) const {
-    if (!v2_.multiscatter) return vec3(1.0f);
-    // Each lobe's own scale, weighted by its share of the combined lobe's mean Fresnel (exact
-    // when the surface is wholly metallic or wholly dielectric).
-    const vec3 metal = v2_.metallic * v2_.metal_fss;
-    const vec3 dielectric(v2_.dielectric_weight * v2_.dielectric_fss);
-    const vec3 total = metal + dielectric;
-    if (!(max_component(total) > 0.0f)) return vec3(1.0f);
-    const GgxEnergy energy = ggx_energy(roughness_, cos_camera);
-    return (metal * energy_preservation(energy, v2_.metal_fss).scale +
-            dielectric * energy_preservation(energy, vec3(v2_.dielectric_fss)).scale) /
-           glm::max(total, vec3(1e-20f));
+    if (v2_.dielectric_weight > 0.0f) {
+        // Cycles: weight * saturate(1 - albedo / weight), albedo / weight = darkening
+        // mix(F0, 1, S).
+        const float albedo =
+            glm::mix(specular_f0_, 1.0f,
+                     dielectric_fresnel_blend(roughness_, cos_camera, specular_ior_)) *
+            dielectric.darkening.x;
+        side.layer_transmittance = std::clamp(1.0f - albedo, 0.0f, 1.0f);
+    }
+    return side;
 }
 
 vec3 PrincipledBsdf::specular_color(float cos_lh) const {
@@ -482,7 +483,18 @@ struct PrincipledBsdf::PairTerms {
     bool ggx_ready = false;
     float d = 0.0f, g1_o = 0.0f, g1_i = 0.0f;
     float refraction_denom = 0.0f;  // cos_oh + eta cos_ih (refraction only)
+    bool camera_side_ready = false;  // light paths of PrincipledModel::V2: camera_side(wi.z)
+    CameraSide camera_side;
 };
+
+const PrincipledBsdf::CameraSide& PrincipledBsdf::light_path_side(const vec3& wi,
+                                                                  PairTerms* terms) const {
+    if (!terms->camera_side_ready) {
+        terms->camera_side = camera_side(wi.z);
+        terms->camera_side_ready = true;
+    }
+    return terms->camera_side;
+}
 
 // Fills `terms` for the pair; false when no non-Dirac lobe can be non-zero (grazing wi, or a
 // refraction pair without a valid half vector).
@@ -529,7 +541,7 @@ void PrincipledBsdf::lobe_eval_pdf(const Lobe& lobe, const vec3& wo, const vec3&
     if (lobe.delta() || terms->reflection != (lobe.kind != LobeKind::Refraction)) return;
     if (lobe.kind == LobeKind::Diffuse) {
         float cos_factor = diffuse_brdf(wo, wi, terms->cos_ih) * wi.z;
-        if (v2_.from_light) cos_factor *= layer_transmittance(wi.z);
+        if (v2_.from_light) cos_factor *= light_path_side(wi, terms).layer_transmittance;
         *f = lobe.weight * cos_factor;
         *pdf = wi.z * kInvPi;
         return;
@@ -550,7 +562,7 @@ void PrincipledBsdf::lobe_eval_pdf(const Lobe& lobe, const vec3& wo, const vec3&
     vec3 color = vec3(1.0f);
     if (lobe.kind == LobeKind::Specular) {
         color = specular_color(terms->cos_ih);
-        if (v2_.from_light) color *= specular_energy_scale(wi.z);
+        if (v2_.from_light) color *= light_path_side(wi, terms).specular_scale;
     }
     *f = lobe.weight * color * (*pdf * masking_given_o(*terms));
 }

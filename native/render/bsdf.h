@@ -168,12 +168,18 @@ class PrincipledBsdf {
                   float* pdf) const;
     bool lobe_sample(const Lobe& lobe, const vec3& wo, const vec2& u, vec3* wi) const;
     vec3 specular_color(float cos_lh) const;
-    // PrincipledModel::V2: the share of light the dielectric specular layer passes to the
-    // diffuse, 1 - its estimated albedo toward the camera-side direction (cos to the normal).
-    float layer_transmittance(float cos_camera) const;
-    // PrincipledModel::V2 with Multiscatter GGX: the specular lobe's energy-preservation scale
-    // toward the camera-side direction (1 otherwise).
-    vec3 specular_energy_scale(float cos_camera) const;
+    // PrincipledModel::V2's factors toward the camera-side direction (cos_camera to the normal),
+    // from one lookup of the GGX energy tables: the share of light the dielectric specular layer
+    // passes to the diffuse (1 - its estimated albedo); with Multiscatter GGX the specular lobe's
+    // energy-preservation scale and the metallic lobe's albedo darkening (1 otherwise).
+    struct CameraSide {
+        float layer_transmittance = 1.0f;
+        vec3 specular_scale{1.0f};
+        vec3 metal_darkening{1.0f};
+    };
+    CameraSide camera_side(float cos_camera) const;
+    // camera_side(wi.z) for a light path's pair, computed once per pair (both lobes read it).
+    const CameraSide& light_path_side(const vec3& wi, PairTerms* terms) const;
     // cos_lh: cosine between wi and the reflection half vector.
     float diffuse_brdf(const vec3& wo, const vec3& wi, float cos_lh) const;
 
