@@ -56,6 +56,7 @@ class _NativeLogQueue(logging.Handler):
 # {this Blender's pass name: the renderers' name} (passes.py; Blender 5.0 renamed the passes).
 _RENDERER_PASS_NAMES = passes.names_from_blender_names(bpy.app.version)
 
+
 class FinalRender:
     """One view layer's final render driven from the main thread.
 
