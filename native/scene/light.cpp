@@ -1,5 +1,7 @@
 #include "scene/light.h"
 
+#include <algorithm>
+
 #include "scene/validation.h"
 #include "util/error.h"
 
@@ -43,6 +45,15 @@ void validate_light(const Light& light) {
             throw InvalidArgument(format_message(item, ": type = ",
                                                  static_cast<int>(light.type), " is unknown"));
     }
+    // Emitted rays start anywhere on the light: its reach must stay within the coordinates
+    // scene geometry may use, as its translation does.
+    float size = light.radius;
+    if (light.type == LightType::Area) size = std::max(light.size_x, light.size_y);
+    const double reach = double(size) * double(max_axis_scale(light.world_from_light));
+    if (!(reach <= double(kMaxCoordinate)))
+        throw InvalidArgument(format_message(
+            item, ": its size (", size, " m, times the scale of world_from_light) reaches ",
+            reach, " m, beyond ", kMaxCoordinate, " m; make the light smaller"));
 }
 
 void validate_world(const World& world) {

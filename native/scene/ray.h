@@ -22,8 +22,12 @@ struct Ray {
     float tmax = kInfinity;
 };
 
-// True if the ray may be traced: finite origin and direction, non-zero direction,
-// 0 <= tmin <= tmax (tmax may be +inf), tmin finite.
+// Embree's bound on a ray's origin and direction components (its FLT_LARGE, 1.844e18): Debian's
+// Embree is built with assertions and aborts the process on a ray beyond it, finite or not.
+inline constexpr float kMaxRayComponent = 1e18f;
+
+// True if the ray may be traced: finite origin and direction within kMaxRayComponent, non-zero
+// direction, 0 <= tmin <= tmax (tmax may be +inf), tmin finite.
 bool is_valid_ray(const Ray& ray);
 // Why is_valid_ray rejects `ray` ("direction is zero", ...), or nullptr for a valid ray.
 const char* ray_problem(const Ray& ray);

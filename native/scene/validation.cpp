@@ -80,11 +80,22 @@ void require_transform(const std::string& item, const char* field, const mat4& m
         throw InvalidArgument(format_message(
             item, ": ", field,
             " is singular (a scale of 0 flattens it); give every axis a non-zero scale"));
+    // A bottom row other than (0, 0, 0, 1) is a projective map, which no Blender object has; its
+    // inverse would divide positions by w.
+    if (m[0][3] != 0.0f || m[1][3] != 0.0f || m[2][3] != 0.0f || m[3][3] != 1.0f)
+        throw InvalidArgument(format_message(item, ": ", field, " has the bottom row (",
+                                             m[0][3], ", ", m[1][3], ", ", m[2][3], ", ", m[3][3],
+                                             "); an object transform's is (0, 0, 0, 1)"));
     const vec3 translation(m[3]);
     if (glm::any(glm::greaterThan(glm::abs(translation), vec3(kMaxCoordinate))))
         throw InvalidArgument(format_message(item, ": ", field, " translation ",
                                              to_string(translation), " exceeds ",
                                              kMaxCoordinate, " m"));
+}
+
+float max_axis_scale(const mat4& m) {
+    return std::max(glm::length(vec3(m[0])), std::max(glm::length(vec3(m[1])),
+                                                      glm::length(vec3(m[2]))));
 }
 
 }  // namespace shgi::scene_detail

@@ -4,7 +4,8 @@
 // Each check throws InvalidArgument with a message "<item>: <field> = <value> <what is wrong>"
 // so that the artist can find the object in Blender: the item is labelled by kind and name
 // ("material 'Red'"), the field by its Blender/SHGI name, and both compared values are printed.
-// Private to native/scene: other modules see only the validate_* functions.
+// Private to native/scene, except require_transform, which also checks probe volumes
+// (native/probes): other modules see only the validate_* functions.
 #pragma once
 
 #include <string>
@@ -39,7 +40,11 @@ void require_in_range(const std::string& item, const char* field, float value, f
 
 // True when the upper-left 3x3 of m is singular in the sense of kMinRelativeDeterminant.
 bool is_singular(const mat4& m);
-// Finite entries, non-singular linear part, translation within kMaxCoordinate.
+// Finite entries, non-singular linear part, translation within kMaxCoordinate, bottom row
+// (0, 0, 0, 1). (The scale is the caller's to bound: an instance's reach is checked on its world
+// bounds at commit, a light's on its size.)
 void require_transform(const std::string& item, const char* field, const mat4& m);
+// The largest length of the linear part's columns: how much m stretches an axis.
+float max_axis_scale(const mat4& m);
 
 }  // namespace shgi::scene_detail

@@ -348,6 +348,11 @@ TEST(SceneValidation, EachBadRayHasItsOwnMessage) {
                     "ray: origin is not finite (origin (nan, 0, 0), direction (0, 0, -1)");
     expect_contains(bad(make_ray(vec3(0), vec3(0, kInfinity, 0))), "ray: direction is not finite");
     expect_contains(bad(make_ray(vec3(0), vec3(0))), "ray: direction is zero");
+    // Finite but beyond Embree's FLT_LARGE: Debian's Embree asserts on these and aborts.
+    expect_contains(bad(make_ray(vec3(2e18f, 0, 1), vec3(0, 0, -1))),
+                    "ray: origin exceeds 1e18 in magnitude");
+    expect_contains(bad(make_ray(vec3(0, 0, 1), vec3(0, -3e18f, 0))),
+                    "ray: direction exceeds 1e18 in magnitude");
     expect_contains(bad(make_ray(vec3(0), vec3(0, 0, 1), -1.0f)),
                     "ray: tmin must be finite and >= 0");
     expect_contains(bad(make_ray(vec3(0), vec3(0, 0, 1), 2.0f, 1.0f)),

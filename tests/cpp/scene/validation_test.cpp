@@ -6,6 +6,8 @@
 #include <limits>
 #include <string>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include "scene/camera.h"
 #include "scene/light.h"
 #include "scene/material.h"
@@ -92,6 +94,21 @@ TEST(LightValidation, RejectsEachBadField) {
                     "size_y = -1 must be > 0");
     // A point light ignores the area size.
     EXPECT_EQ(bad(LightType::Point, [](Light& l) { l.size_x = 0.0f; }), "");
+    // Rays start anywhere on a light: beyond Embree's range its emission would abort the process.
+    expect_contains(bad(LightType::Area, [](Light& l) { l.size_x = 1e20f; }),
+                    "beyond 1e+15 m; make the light smaller");
+    expect_contains(bad(LightType::Area,
+                        [](Light& l) { l.world_from_light = glm::scale(mat4(1.0f), vec3(1e19f)); }),
+                    "reaches 1e+19 m");
+    expect_contains(bad(LightType::Point,
+                        [](Light& l) {
+                            l.radius = 1e8f;
+                            l.world_from_light = glm::scale(mat4(1.0f), vec3(1e8f));
+                        }),
+                    "reaches 1e+16 m");
+    // A projective bottom row is no object transform.
+    expect_contains(bad(LightType::Point, [](Light& l) { l.world_from_light[3].w = 0.0f; }),
+                    "world_from_light has the bottom row (0, 0, 0, 0)");
 }
 
 TEST(WorldValidation, RejectsNegativeStrength) {
