@@ -46,39 +46,40 @@ py::array_t<float> float_array(const std::vector<float>& values) {
     return out;
 }
 
-// The read-only probe arrays shared by ProbeGrid and ProbeField.
+// The read-only probe arrays shared by ProbeGrid and ProbeField; get(self) gives a shared_ptr to
+// the data, which each read keeps alive.
 template <typename Cls, typename GetData>
 void def_probe_arrays(Cls& cls, GetData get) {
     cls.def_property_readonly(
-           "order", [get](const typename Cls::type& self) { return get(self).order; },
+           "order", [get](const typename Cls::type& self) { return get(self)->order; },
            "SH order of the probes (1..4).")
         .def_property_readonly(
             "probe_count",
-            [get](const typename Cls::type& self) { return get(self).probe_count(); },
+            [get](const typename Cls::type& self) { return get(self)->probe_count(); },
             "Probes in all volumes (active or not).")
         .def_property_readonly(
             "positions",
-            [get](const typename Cls::type& self) { return to_numpy(get(self).positions); },
+            [get](const typename Cls::type& self) { return to_numpy(get(self)->positions); },
             "(N, 3) float32 probe positions after relocation (m, world).")
         .def_property_readonly(
-            "active", [get](const typename Cls::type& self) { return active_array(get(self)); },
+            "active", [get](const typename Cls::type& self) { return active_array(*get(self)); },
             "(N,) bool: False for probes inside geometry (never updated or read).")
         .def_property_readonly(
-            "sh", [get](const typename Cls::type& self) { return sh_array(get(self)); },
+            "sh", [get](const typename Cls::type& self) { return sh_array(*get(self)); },
             "(N, coefficients, 3) float32 incident radiance SH per probe (W m^-2 sr^-1), index "
             "l(l+1)+m, no Condon-Shortley phase.")
         .def_property_readonly(
             "variance",
-            [get](const typename Cls::type& self) { return float_array(get(self).variance); },
+            [get](const typename Cls::type& self) { return float_array(get(self)->variance); },
             "(N,) float32 variance of each probe's DC luminance estimate.")
         .def_property_readonly(
             "volumes",
-            [get](const typename Cls::type& self) { return get(self).volumes; },
+            [get](const typename Cls::type& self) { return get(self)->volumes; },
             "The ProbeVolumes, in probe order.")
         .def(
             "save",
             [get](const typename Cls::type& self, const std::string& path) {
-                ProbeGridData data = get(self);
+                ProbeGridData data = *get(self);
                 py::gil_scoped_release release;
                 save_probe_grid(path, data);
             },
@@ -87,7 +88,7 @@ void def_probe_arrays(Cls& cls, GetData get) {
         .def(
             "export",
             [get](const typename Cls::type& self, const std::string& json_path) {
-                ProbeGridData data = get(self);
+                ProbeGridData data = *get(self);
                 py::gil_scoped_release release;
                 export_probe_grid(json_path, data);
             },
@@ -184,7 +185,7 @@ void bind_field(py::module_& m) {
     py::class_<ProbeField, IndirectField> cls(m, "ProbeField", R"doc(
 An immutable snapshot of SH probes, read as an IndirectField (render_preview, PreviewRenderer).
 From ProbeGrid.field(), ProbeField.load(path) or ProbeField.import_exr(json_path).)doc");
-    def_probe_arrays(cls, [](const ProbeField& f) -> const ProbeGridData& { return f.data(); });
+    def_probe_arrays(cls, [](const ProbeField& f) { return f.shared_data(); });
     cls.def_property_readonly("passes", [](const ProbeField& f) { return f.data().passes; },
                               "Update passes blended into these probes.")
         .def_static(
@@ -234,7 +235,8 @@ Each update() traces rays_per_probe paths per active probe and blends them into 
 (running mean, then an exponential blend with `hysteresis`). field() returns a snapshot for
 rendering that later updates leave untouched. After editing and re-committing the scene, call
 reset().)doc");
-    def_probe_arrays(cls, [](const ProbeGrid& g) -> const ProbeGridData& { return g.data(); });
+    // A snapshot per read: update() on another thread may replace the grid's data.
+    def_probe_arrays(cls, [](const ProbeGrid& g) { return g.field()->shared_data(); });
     cls.def(py::init([](const Scene& scene, const ProbeGridSettings& settings,
                          Progress* progress) {
                  validate_probe_grid_settings(settings);

@@ -139,6 +139,33 @@ were split between render() calls.)doc")
         "{pass name: float32 array (H, W, C)}.");
 }
 
+// Field queries at scene points: within the coordinates a scene may hold (beyond them distances
+// overflow float), with normals that have a direction. Errors name the argument, and the row of
+// an array argument (`row` kNoRow for a single vector).
+constexpr float kMaxQueryCoordinate = 1e15f;
+constexpr size_t kNoRow = ~size_t(0);
+
+[[noreturn]] void throw_query_error(const char* name, size_t row, const vec3& v,
+                                    const std::string& problem) {
+    const std::string what =
+        row == kNoRow ? std::string(name) : format_message(name, "[", row, "]");
+    throw_value_error(what.c_str(),
+                      format_message("(", v.x, ", ", v.y, ", ", v.z, ") ", problem));
+}
+
+void check_query_point(const vec3& p, const char* name, size_t row = kNoRow) {
+    if (max_component(glm::abs(p)) > kMaxQueryCoordinate)
+        throw_query_error(name, row, p,
+                          format_message("is beyond ", kMaxQueryCoordinate, " m from the origin"));
+}
+
+vec3 query_normal(const vec3& n, const char* name, size_t row = kNoRow) {
+    const vec3 unit = glm::normalize(n);
+    if (!is_finite(unit))
+        throw_query_error(name, row, n, "has no direction; pass a non-zero normal");
+    return unit;
+}
+
 py::dict timings_to_dict(const PreviewTimings& timings) {
     py::dict out;
     out["primary"] = timings.primary;
@@ -162,11 +189,15 @@ exactly by the consumer). Queries take arrays of points and unit normals.)doc")
                 if (p.size() != n.size())
                     throw_value_error("normals", format_message("has ", n.size(),
                                                                 " rows but points has ", p.size()));
+                std::vector<vec3> unit(n.size());
+                for (size_t i = 0; i < p.size(); ++i) {
+                    check_query_point(p[i], "points", i);
+                    unit[i] = query_normal(n[i], "normals", i);
+                }
                 std::vector<vec3> out(p.size());
                 {
                     py::gil_scoped_release release;
-                    for (size_t i = 0; i < p.size(); ++i)
-                        out[i] = field.irradiance(p[i], glm::normalize(n[i]));
+                    for (size_t i = 0; i < p.size(); ++i) out[i] = field.irradiance(p[i], unit[i]);
                 }
                 return to_numpy(out);
             },
@@ -175,8 +206,10 @@ exactly by the consumer). Queries take arrays of points and unit normals.)doc")
         .def(
             "radiance_sh",
             [](const IndirectField& field, const py::object& point, const py::object& normal) {
-                const ShRgb sh = field.radiance_sh(to_vec3(point, "point"),
-                                                   glm::normalize(to_vec3(normal, "normal")));
+                const vec3 p = to_vec3(point, "point");
+                check_query_point(p, "point");
+                const ShRgb sh =
+                    field.radiance_sh(p, query_normal(to_vec3(normal, "normal"), "normal"));
                 py::array_t<float> out({py::ssize_t(sh.num_coefficients()), py::ssize_t(3)});
                 std::memcpy(out.mutable_data(), sh.data(),
                             size_t(sh.num_coefficients()) * 3 * sizeof(float));

@@ -6,6 +6,7 @@
 
 #include "probes/probe_visibility.h"
 #include "scene/ray.h"
+#include "scene/validation.h"
 #include "util/error.h"
 
 namespace shgi {
@@ -26,13 +27,16 @@ bool finite_sh(const ShRgb& sh) {
 }  // namespace
 
 void validate_probe_volume(const ProbeVolume& volume, const char* what) {
-    if (!is_finite(volume.world_from_volume))
-        throw InvalidArgument(format_message(what, ".world_from_volume is not finite"));
-    const float det = glm::determinant(mat3(volume.world_from_volume));
-    if (!(std::abs(det) > 1e-12f))
+    // The scene's object-transform checks: probe positions become ray origins, and lookups
+    // invert the matrix.
+    scene_detail::require_transform(what, "world_from_volume", volume.world_from_volume);
+    const mat4& m = volume.world_from_volume;
+    const double reach = double(max_component(glm::abs(vec3(m[3])))) + glm::length(vec3(m[0])) +
+                         glm::length(vec3(m[1])) + glm::length(vec3(m[2]));
+    if (!(reach <= double(scene_detail::kMaxCoordinate)))
         throw InvalidArgument(format_message(
-            what, ".world_from_volume is singular (determinant ", det,
-            "); give the volume a non-zero size along every axis"));
+            what, ".world_from_volume reaches ", reach, " m from the origin, beyond ",
+            scene_detail::kMaxCoordinate, " m (Embree's float range); make the volume smaller"));
     for (int a = 0; a < 3; ++a) {
         const int r = volume.resolution[a];
         if (r < 1 || r > kMaxProbesPerAxis)
@@ -180,6 +184,9 @@ ShRgb ProbeField::radiance_sh(const vec3& p, const vec3& n, const vec3& wo) cons
         p + (n * settings_.normal_bias + wo * settings_.view_bias) * frame.min_spacing;
     const vec3 local = vec3(frame.volume_from_world * vec4(biased, 1.0f));
     const vec3 grid = (local + 1.0f) * frame.grid_scale - 0.5f;
+    // A point or normal that is not finite has no place in the grid (and NaN would survive the
+    // clamps below into the probe indices): no light.
+    if (!is_finite(grid)) return ShRgb(data.order);
     ivec3 base;
     vec3 frac;
     for (int a = 0; a < 3; ++a) {

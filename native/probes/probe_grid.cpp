@@ -231,6 +231,7 @@ std::shared_ptr<const ProbeField> ProbeGrid::field() const {
 }
 
 void ProbeGrid::reset(Progress* progress) {
+    const std::lock_guard<std::mutex> serial(update_mutex_);
     if (!scene_->committed())
         throw InvalidArgument("ProbeGrid::reset: the scene is not committed; call commit() first");
     if (scene_->empty())
@@ -316,9 +317,11 @@ ProbeGridData ProbeGrid::place(Progress* progress) const {
 }
 
 void ProbeGrid::update(Progress* progress) {
+    const std::lock_guard<std::mutex> serial(update_mutex_);
     check_scene("update");
     const auto start = now();
-    const ProbeGridData& old = data();
+    const std::shared_ptr<const ProbeField> current = field();
+    const ProbeGridData& old = current->data();
     auto next = std::make_shared<ProbeGridData>(old);
     const uint64_t pass = old.passes;
     const float a = std::max(1.0f - settings_.hysteresis, 1.0f / float(pass + 1));
@@ -396,12 +399,14 @@ void ProbeGrid::update(Progress* progress) {
 }
 
 size_t ProbeGrid::active_count() const {
-    const ProbeGridData& d = data();
+    const std::shared_ptr<const ProbeField> current = field();
+    const ProbeGridData& d = current->data();
     return size_t(std::count(d.active.begin(), d.active.end(), uint8_t(1)));
 }
 
 std::vector<float> ProbeGrid::relative_error() const {
-    const ProbeGridData& d = data();
+    const std::shared_ptr<const ProbeField> current = field();
+    const ProbeGridData& d = current->data();
     std::vector<float> out(d.probe_count());
     for (size_t i = 0; i < out.size(); ++i) {
         if (d.passes == 0) {
@@ -415,18 +420,21 @@ std::vector<float> ProbeGrid::relative_error() const {
 }
 
 size_t ProbeGrid::memory_bytes() const {
-    const ProbeGridData& d = data();
+    const std::shared_ptr<const ProbeField> current = field();
+    const ProbeGridData& d = current->data();
     return d.probe_count() * (sizeof(vec3) + 1 + sizeof(float) +
                               size_t(sh_num_coefficients(d.order)) * sizeof(vec3)) +
            d.visibility.size() * sizeof(vec2);
 }
 
+// A snapshot per lookup, so that an update() on another thread cannot free the probes being
+// read; renderers that look up many points take field() once instead.
 ShRgb ProbeGrid::radiance_sh(const vec3& p, const vec3& n) const {
-    return field_->radiance_sh(p, n);
+    return field()->radiance_sh(p, n);
 }
 
 FieldLookup ProbeGrid::view_lookup(const vec3& p, const vec3& n, const vec3& wo) const {
-    return field_->view_lookup(p, n, wo);
+    return field()->view_lookup(p, n, wo);
 }
 
 }  // namespace shgi

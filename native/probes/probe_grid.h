@@ -101,15 +101,16 @@ class ProbeGrid : public IndirectField {
     const Scene& scene() const { return *scene_; }
     const ProbeGridSettings& settings() const { return settings_; }
     const ProbeGridTimings& timings() const { return timings_; }
-    uint64_t passes() const { return data().passes; }
-    size_t probe_count() const { return data().probe_count(); }
+    uint64_t passes() const { return field()->data().passes; }
+    size_t probe_count() const { return field()->data().probe_count(); }
     size_t active_count() const;
     // Per probe: sqrt(variance) / DC luminance (0 for a black probe, inf before any pass).
     std::vector<float> relative_error() const;
     size_t memory_bytes() const;
 
-    // The current state, shared with every field() taken from it.
-    const ProbeGridData& data() const { return field_->data(); }
+    // The current state, shared with every field() taken from it. Valid until the next update()
+    // or reset(): while another thread may call those, read field()->data() instead.
+    const ProbeGridData& data() const { return field()->data(); }
     // An immutable snapshot for renderers (valid after later updates; see the header).
     std::shared_ptr<const ProbeField> field() const;
 
@@ -125,7 +126,10 @@ class ProbeGrid : public IndirectField {
     uint64_t scene_revision_ = 0;
     ProbeGridSettings settings_;
     bool fitted_ = false;             // settings_.volumes[0] was fitted to the scene
-    mutable std::mutex field_mutex_;  // guards field_ between update() and field()
+    // update() and reset() run one at a time (they read the current probes and settings_ and
+    // replace them); field_mutex_ guards field_ itself, which lookups and field() read.
+    std::mutex update_mutex_;
+    mutable std::mutex field_mutex_;
     std::shared_ptr<const ProbeField> field_;
     ProbeGridTimings timings_;
 };

@@ -77,6 +77,17 @@ std::string json_stem(const std::string& json_path) {
     return path.replace_extension().string();
 }
 
+// Bytes from the stream's position to the end of the file; the position is kept.
+uint64_t remaining_bytes(std::ifstream& in, const std::string& path) {
+    const std::streampos here = in.tellg();
+    in.seekg(0, std::ios::end);
+    const std::streampos end = in.tellg();
+    in.seekg(here);
+    if (here < 0 || end < here || !in)
+        throw IoError(format_message("cannot find the size of probe file \"", path, "\""));
+    return uint64_t(end - here);
+}
+
 }  // namespace
 
 size_t packed_probe_bytes(int order) {
@@ -178,6 +189,17 @@ ProbeGridData load_probe_grid(const std::string& path) {
     if (probes != expected)
         throw IoError(format_message("probe file \"", path, "\" says ", probes,
                                      " probes; its volumes hold ", expected));
+    // The rest of the file must hold exactly those probes. Checked before anything is allocated,
+    // so that a damaged header cannot make a small file ask for gigabytes.
+    const uint64_t probe_bytes = sizeof(vec3) + 1 + sizeof(float) +
+                                 packed_probe_bytes(data.order) +
+                                 uint64_t(data.visibility_resolution) *
+                                     uint64_t(data.visibility_resolution) * sizeof(vec2);
+    const uint64_t remaining = remaining_bytes(in, path);
+    if (remaining % probe_bytes != 0 || remaining / probe_bytes != probes)
+        throw IoError(format_message("probe file \"", path, "\" says ", probes, " probes of ",
+                                     probe_bytes, " bytes, but ", remaining,
+                                     " bytes follow its header (truncated or damaged?)"));
     data.positions.resize(probes);
     r.bytes(data.positions.data(), probes * sizeof(vec3), "the positions");
     data.active.resize(probes);

@@ -154,6 +154,54 @@ def test_snapshot_renders_while_the_grid_updates():
     assert not np.array_equal(grid.field().sh, before)
 
 
+def test_concurrent_calls_on_one_grid_are_serialised():
+    """update() and reset() from two threads, and lookups beside them, neither crash the host nor
+    lose passes: the calls run one at a time and readers hold their own snapshot."""
+    scene = committed(scenes.cornell_box(0.1))
+    grid = solved_grid(scene, 0, rays_per_probe=4, placement_rays=8)
+    points = np.tile(np.array([[0.0, 0.0, 0.5]], np.float32), (2000, 1))
+    normals = np.tile(np.array([[0.0, 0.0, 1.0]], np.float32), (2000, 1))
+    errors = []
+
+    def repeat(call, times):
+        try:
+            for _ in range(times):
+                call()
+        except Exception as error:  # pragma: no cover - reported below
+            errors.append(error)
+
+    workers = [threading.Thread(target=repeat, args=(grid.update, 20)),
+               threading.Thread(target=repeat, args=(grid.update, 20)),
+               threading.Thread(target=repeat, args=(lambda: grid.irradiance(points, normals), 20)),
+               threading.Thread(target=repeat, args=(lambda: grid.sh, 20))]
+    for worker in workers:
+        worker.start()
+    for worker in workers:
+        worker.join()
+    assert not errors
+    assert grid.passes == 40
+    worker = threading.Thread(target=repeat, args=(grid.reset, 10))
+    worker.start()
+    repeat(grid.update, 10)
+    worker.join()
+    assert not errors
+    assert 0 <= grid.passes <= 10
+    assert np.isfinite(grid.irradiance(points, normals)).all()
+
+
+def test_lookups_reject_normals_without_direction_and_far_points():
+    """A zero normal once made NaN probe indices (a crash); far points overflowed distances."""
+    scene = committed(scenes.cornell_box(0.1))
+    grid = solved_grid(scene, 1, rays_per_probe=8)
+    for field in (grid, grid.field()):
+        with pytest.raises(ValueError, match=r"normals\[1\]: \(0, 0, 0\) has no direction"):
+            field.irradiance(np.array([[0, 0, 0.5], [0, 0, 0.5]]), np.array([[0, 0, 1.0], [0, 0, 0]]))
+        with pytest.raises(ValueError, match="normal: .* has no direction"):
+            field.radiance_sh(np.array([0, 0, 0.5]), np.array([1e-30, 0, 0]))
+        with pytest.raises(ValueError, match=r"points\[0\]: .* is beyond 1e\+15 m"):
+            field.irradiance(np.array([[1e20, 0, 0.5]]), np.array([[0, 0, 1.0]]))
+
+
 def test_files_round_trip_and_continue(tmp_path):
     scene = committed(scenes.cornell_box(0.05))
     grid = solved_grid(scene, 2, rays_per_probe=32)

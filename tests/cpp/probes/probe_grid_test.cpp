@@ -224,7 +224,19 @@ TEST(ProbeGrid, RejectsBadSettingsAndEditedScenes) {
     flat.world_from_volume = glm::scale(mat4(1.0f), vec3(1.0f, 1.0f, 0.0f));
     settings.volumes = {flat};
     expect_error<InvalidArgument>([&] { ProbeGrid(scene, settings); },
-                                  {"volumes[0].world_from_volume is singular"});
+                                  {"volumes[0]: world_from_volume is singular"});
+    // Lookups invert the matrix and probe positions become ray origins: no projective bottom
+    // row, nothing beyond Embree's range.
+    ProbeVolume projective;
+    projective.world_from_volume[3].w = 0.0f;
+    settings.volumes = {projective};
+    expect_error<InvalidArgument>([&] { ProbeGrid(scene, settings); },
+                                  {"volumes[0]: world_from_volume has the bottom row"});
+    ProbeVolume huge;
+    huge.world_from_volume = glm::scale(mat4(1.0f), vec3(1e30f));
+    settings.volumes = {huge};
+    expect_error<InvalidArgument>([&] { ProbeGrid(scene, settings); },
+                                  {"volumes[0].world_from_volume reaches", "make the volume smaller"});
     settings = {};
     ProbeGrid grid(scene, settings);
     scene.set_world(World{});

@@ -126,6 +126,23 @@ TEST(ProbeStorage, BinaryCacheRoundTripsAtHalfPrecision) {
     }
     expect_error<IoError>([&] { load_probe_grid(path); }, {"version 99"});
     expect_error<IoError>([&] { load_probe_grid(path + ".missing"); }, {"cannot open"});
+
+    // A header that promises more probes than the file holds is refused before anything that
+    // size is allocated: both volumes claim 256^3 probes (1.5 GB of data in a 1 KB file).
+    save_probe_grid(path, data);
+    {
+        std::fstream file(path, std::ios::binary | std::ios::in | std::ios::out);
+        const uint64_t probes = 2ull * 256 * 256 * 256;
+        file.seekp(36);  // after the magic (8), five uint32 fields and passes (8)
+        file.write(reinterpret_cast<const char*>(&probes), sizeof(probes));
+        const int32_t resolution[3] = {256, 256, 256};
+        for (int v = 0; v < 2; ++v) {
+            file.seekp(44 + v * (16 * 4 + 3 * 4) + 16 * 4);  // after the volume's matrix
+            file.write(reinterpret_cast<const char*>(resolution), sizeof(resolution));
+        }
+    }
+    expect_error<IoError>([&] { load_probe_grid(path); },
+                          {"grid.shprobes", "says 33554432 probes", "truncated or damaged"});
 }
 
 TEST(ProbeStorage, ExrJsonExportRoundTrips) {
