@@ -139,10 +139,9 @@ were split between render() calls.)doc")
         "{pass name: float32 array (H, W, C)}.");
 }
 
-// Field queries at scene points: within the coordinates a scene may hold (beyond them distances
-// overflow float), with normals that have a direction. Errors name the argument, and the row of
-// an array argument (`row` kNoRow for a single vector).
-constexpr float kMaxQueryCoordinate = 1e15f;
+// Field queries at scene points: within the coordinates a scene may hold (kMaxCoordinate; beyond
+// them distances overflow float), with normals that have a direction. Errors name the argument,
+// and the row of an array argument (`row` kNoRow for a single vector).
 constexpr size_t kNoRow = ~size_t(0);
 
 [[noreturn]] void throw_query_error(const char* name, size_t row, const vec3& v,
@@ -154,9 +153,9 @@ constexpr size_t kNoRow = ~size_t(0);
 }
 
 void check_query_point(const vec3& p, const char* name, size_t row = kNoRow) {
-    if (max_component(glm::abs(p)) > kMaxQueryCoordinate)
+    if (max_component(glm::abs(p)) > kMaxCoordinate)
         throw_query_error(name, row, p,
-                          format_message("is beyond ", kMaxQueryCoordinate, " m from the origin"));
+                          format_message("is beyond ", kMaxCoordinate, " m from the origin"));
 }
 
 vec3 query_normal(const vec3& n, const char* name, size_t row = kNoRow) {
@@ -197,7 +196,9 @@ exactly by the consumer). Queries take arrays of points and unit normals.)doc")
                 std::vector<vec3> out(p.size());
                 {
                     py::gil_scoped_release release;
-                    for (size_t i = 0; i < p.size(); ++i) out[i] = field.irradiance(p[i], unit[i]);
+                    const PinnedField pinned(&field);
+                    for (size_t i = 0; i < p.size(); ++i)
+                        out[i] = pinned.get()->irradiance(p[i], unit[i]);
                 }
                 return to_numpy(out);
             },

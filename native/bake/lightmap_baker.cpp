@@ -352,7 +352,8 @@ LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const Indi
     out.variance.assign(map.texel_count(), 0.0f);
     out.baked.assign(map.texel_count(), 0);
 
-    const TexelBaker baker(scene, map, field, settings);
+    const PinnedField pinned(field);  // one state of the field for the whole bake
+    const TexelBaker baker(scene, map, pinned.get(), settings);
     const uint32_t tiles_x = tiles_along(map.width, settings.tile_size);
     std::atomic<uint64_t> done{0};
     if (progress) progress->begin_stage("baking lightmap");

@@ -33,10 +33,10 @@ void validate_probe_volume(const ProbeVolume& volume, const char* what) {
     const mat4& m = volume.world_from_volume;
     const double reach = double(max_component(glm::abs(vec3(m[3])))) + glm::length(vec3(m[0])) +
                          glm::length(vec3(m[1])) + glm::length(vec3(m[2]));
-    if (!(reach <= double(scene_detail::kMaxCoordinate)))
+    if (!(reach <= double(kMaxCoordinate)))
         throw InvalidArgument(format_message(
             what, ".world_from_volume reaches ", reach, " m from the origin, beyond ",
-            scene_detail::kMaxCoordinate, " m (Embree's float range); make the volume smaller"));
+            kMaxCoordinate, " m (Embree's float range); make the volume smaller"));
     for (int a = 0; a < 3; ++a) {
         const int r = volume.resolution[a];
         if (r < 1 || r > kMaxProbesPerAxis)

@@ -428,7 +428,7 @@ size_t ProbeGrid::memory_bytes() const {
 }
 
 // A snapshot per lookup, so that an update() on another thread cannot free the probes being
-// read; renderers that look up many points take field() once instead.
+// read (see the header).
 ShRgb ProbeGrid::radiance_sh(const vec3& p, const vec3& n) const {
     return field()->radiance_sh(p, n);
 }

@@ -114,8 +114,11 @@ class ProbeGrid : public IndirectField {
     // An immutable snapshot for renderers (valid after later updates; see the header).
     std::shared_ptr<const ProbeField> field() const;
 
+    // Each call reads field() (safe beside update() on another thread, but it takes a lock):
+    // renderers read snapshot() instead, once per frame.
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
     FieldLookup view_lookup(const vec3& p, const vec3& n, const vec3& wo) const override;
+    std::shared_ptr<const IndirectField> snapshot() const override { return field(); }
 
   private:
     void check_scene(const char* what) const;

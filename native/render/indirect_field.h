@@ -14,6 +14,8 @@
 // multiplies by the lobe's directional albedo.
 #pragma once
 
+#include <memory>
+
 #include "sh/sh_coeffs.h"
 #include "util/math.h"
 
@@ -52,11 +54,30 @@ class IndirectField {
     // True when the field holds no light anywhere (no field; a solver before its first solve):
     // consumers may then skip its lookups, whose answers would all be zero.
     virtual bool is_zero() const { return false; }
+    // For a field another thread may change while it is read (ProbeGrid's update()): an
+    // immutable snapshot of its current state, which keeps that state alive. nullptr for fields
+    // that are read directly (the default). Consumers of many lookups take it once through
+    // PinnedField, rather than have each lookup pin the state again.
+    virtual std::shared_ptr<const IndirectField> snapshot() const { return nullptr; }
 
     vec3 irradiance(const vec3& p, const vec3& n) const { return lookup(p, n).irradiance(n); }
     vec3 glossy(const vec3& p, const vec3& n, const vec3& wo, float roughness) const {
         return lookup(p, n).glossy(n, wo, roughness);
     }
+};
+
+// A field held for one render, bake or batch of queries: its snapshot() when it has one (kept
+// alive here), else the field itself. get() is null for a null field.
+class PinnedField {
+  public:
+    explicit PinnedField(const IndirectField* field)
+        : snapshot_(field != nullptr ? field->snapshot() : nullptr),
+          field_(snapshot_ ? snapshot_.get() : field) {}
+    const IndirectField* get() const { return field_; }
+
+  private:
+    std::shared_ptr<const IndirectField> snapshot_;
+    const IndirectField* field_;
 };
 
 // No indirect light: what the preview renderer uses when it is given no field.

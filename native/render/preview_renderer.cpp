@@ -284,7 +284,8 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
                                              " samples exceed the limit of ",
                                              kMaxPathTracerSamples, " per pixel"));
     const ZeroField no_field;
-    if (field == nullptr) field = &no_field;  // direct light only, still in preview mode
+    const PinnedField pinned(field);  // one state of the field for the whole frame
+    field = pinned.get() != nullptr ? pinned.get() : &no_field;  // none: direct light only
     const TimePoint frame_start = now();
     const LightSampler& lights = lights_for(*field);
     Film& target = film_.begin();

@@ -19,6 +19,7 @@ void validate_light(const Light& light) {
     if (light.portal && light.type != LightType::Area)
         throw InvalidArgument(format_message(item, ": portal is set on a light that is not an "
                                              "area light; only area lights can be portals"));
+    float size = light.radius;  // the light's extent (m) before world_from_light's scale
     switch (light.type) {
         case LightType::Point:
             break;
@@ -38,8 +39,11 @@ void validate_light(const Light& light) {
         case LightType::Area:
             // A zero-size area light would need infinite radiance to emit its power.
             require_positive(item, "size_x", light.size_x);
-            if (light.shape == AreaShape::Rectangle || light.shape == AreaShape::Ellipse)
+            size = light.size_x;
+            if (light.shape == AreaShape::Rectangle || light.shape == AreaShape::Ellipse) {
                 require_positive(item, "size_y", light.size_y);
+                size = std::max(size, light.size_y);
+            }
             break;
         default:
             throw InvalidArgument(format_message(item, ": type = ",
@@ -47,8 +51,6 @@ void validate_light(const Light& light) {
     }
     // Emitted rays start anywhere on the light: its reach must stay within the coordinates
     // scene geometry may use, as its translation does.
-    float size = light.radius;
-    if (light.type == LightType::Area) size = std::max(light.size_x, light.size_y);
     const double reach = double(size) * double(max_axis_scale(light.world_from_light));
     if (!(reach <= double(kMaxCoordinate)))
         throw InvalidArgument(format_message(

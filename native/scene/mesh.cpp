@@ -9,7 +9,6 @@
 namespace shgi {
 namespace {
 
-using scene_detail::kMaxCoordinate;
 using scene_detail::to_string;
 
 // A triangle is degenerate when twice its area is below this fraction of its longest edge

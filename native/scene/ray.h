@@ -22,6 +22,11 @@ struct Ray {
     float tmax = kInfinity;
 };
 
+// Scene coordinates (vertices, instance bounds, lights, probes, field queries) stay within this
+// magnitude: beyond it Embree's float BVH arithmetic overflows (bounds and ray-box distances are
+// squared or multiplied in float32, whose range ends at 3.4e38).
+inline constexpr float kMaxCoordinate = 1e15f;
+
 // Embree's bound on a ray's origin and direction components (its FLT_LARGE, 1.844e18): Debian's
 // Embree is built with assertions and aborts the process on a ray beyond it, finite or not.
 inline constexpr float kMaxRayComponent = 1e18f;

@@ -10,13 +10,10 @@
 
 #include <string>
 
+#include "scene/ray.h"  // kMaxCoordinate
 #include "util/math.h"
 
 namespace shgi::scene_detail {
-
-// Coordinates beyond this magnitude overflow Embree's float BVH arithmetic (bounds, ray-box
-// distances are squared or multiplied in float32, whose range ends at 3.4e38).
-inline constexpr float kMaxCoordinate = 1e15f;
 
 // A 3x3 linear part whose |det| is below this fraction of the product of its column lengths is
 // treated as singular: it flattens space (e.g. a Blender scale of 0 along one axis).

@@ -206,6 +206,21 @@ TEST(ProbeGrid, CancelKeepsThePreviousState) {
     // A snapshot taken before an update still reads the old probes.
     EXPECT_EQ(snapshot->data().passes, 1u);
     EXPECT_EQ(grid.passes(), 2u);
+    // Renderers pin the grid through snapshot(): the current probes, held for the render, and
+    // read exactly as the grid itself reads them.
+    const PinnedField pinned(&grid);
+    ASSERT_NE(pinned.get(), &grid);
+    EXPECT_EQ(dynamic_cast<const ProbeField&>(*pinned.get()).shared_data(),
+              grid.field()->shared_data());
+    grid.update();
+    EXPECT_EQ(dynamic_cast<const ProbeField&>(*pinned.get()).data().passes, 2u);
+    const vec3 p(0.1f, 0.2f, 0.3f), n(0.0f, 0.0f, 1.0f);
+    const ShRgb direct = grid.radiance_sh(p, n);
+    const ShRgb via_snapshot = PinnedField(&grid).get()->radiance_sh(p, n);
+    for (int i = 0; i < direct.num_coefficients(); ++i) EXPECT_EQ(direct[i], via_snapshot[i]);
+    // Fields that are read directly have no snapshot.
+    const ZeroField zero;
+    EXPECT_EQ(PinnedField(&zero).get(), &zero);
 }
 
 TEST(ProbeGrid, RejectsBadSettingsAndEditedScenes) {

@@ -106,6 +106,8 @@ TEST(LightValidation, RejectsEachBadField) {
                             l.world_from_light = glm::scale(mat4(1.0f), vec3(1e8f));
                         }),
                     "reaches 1e+16 m");
+    // A square light's unused size_y does not count towards its reach.
+    EXPECT_EQ(bad(LightType::Area, [](Light& l) { l.size_y = 1e20f; }), "");
     // A projective bottom row is no object transform.
     expect_contains(bad(LightType::Point, [](Light& l) { l.world_from_light[3].w = 0.0f; }),
                     "world_from_light has the bottom row (0, 0, 0, 0)");
