@@ -5,7 +5,7 @@
 namespace shgi {
 
 vec3 offset_origin(const vec3& p, const vec3& normal) {
-    const float scale = 1.0f + max_component(glm::abs(p));
+    const float scale = 1.0f + max_abs_component(p);
     return p + normal * (kRayOffset * scale);
 }
 

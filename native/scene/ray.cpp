@@ -5,9 +5,9 @@ namespace shgi {
 const char* ray_problem(const Ray& ray) {
     if (!is_finite(ray.origin)) return "origin is not finite";
     if (!is_finite(ray.direction)) return "direction is not finite";
-    if (max_component(glm::abs(ray.origin)) > kMaxRayComponent)
+    if (max_abs_component(ray.origin) > kMaxRayComponent)
         return "origin exceeds 1e18 in magnitude (beyond Embree's range)";
-    if (max_component(glm::abs(ray.direction)) > kMaxRayComponent)
+    if (max_abs_component(ray.direction) > kMaxRayComponent)
         return "direction exceeds 1e18 in magnitude (beyond Embree's range)";
     if (ray.direction.x == 0.0f && ray.direction.y == 0.0f && ray.direction.z == 0.0f)
         return "direction is zero";
@@ -17,7 +17,5 @@ const char* ray_problem(const Ray& ray) {
     if (ray.tmax < ray.tmin) return "tmax is less than tmin";
     return nullptr;
 }
-
-bool is_valid_ray(const Ray& ray) { return ray_problem(ray) == nullptr; }
 
 }  // namespace shgi

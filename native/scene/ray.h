@@ -32,8 +32,22 @@ inline constexpr float kMaxCoordinate = 1e15f;
 inline constexpr float kMaxRayComponent = 1e18f;
 
 // True if the ray may be traced: finite origin and direction within kMaxRayComponent, non-zero
-// direction, 0 <= tmin <= tmax (tmax may be +inf), tmin finite.
-bool is_valid_ray(const Ray& ray);
+// direction, 0 <= tmin <= tmax (tmax may be +inf), tmin finite. Every traced ray passes here, so
+// it is inline and branch-free: each comparison is false for NaN, |x| <= kMaxRayComponent also
+// for ±inf, and the results are combined with & rather than &&.
+inline bool is_valid_ray(const Ray& ray) {
+    const vec3 o = ray.origin, d = ray.direction;
+    const bool origin_ok = (std::fabs(o.x) <= kMaxRayComponent) &
+                           (std::fabs(o.y) <= kMaxRayComponent) &
+                           (std::fabs(o.z) <= kMaxRayComponent);
+    const bool direction_ok = (std::fabs(d.x) <= kMaxRayComponent) &
+                              (std::fabs(d.y) <= kMaxRayComponent) &
+                              (std::fabs(d.z) <= kMaxRayComponent) &
+                              ((d.x != 0.0f) | (d.y != 0.0f) | (d.z != 0.0f));
+    const bool interval_ok = (ray.tmin >= 0.0f) & (ray.tmin <= std::numeric_limits<float>::max()) &
+                             (ray.tmax >= ray.tmin);
+    return origin_ok & direction_ok & interval_ok;
+}
 // Why is_valid_ray rejects `ray` ("direction is zero", ...), or nullptr for a valid ray.
 const char* ray_problem(const Ray& ray);
 

@@ -40,8 +40,8 @@ std::string instance_label(const std::vector<Instance>& instances, size_t i) {
 
 // `name` is a const char* so that the per-ray call of a valid ray builds no string.
 void check_ray(const Ray& ray, const char* name) {
+    if (is_valid_ray(ray)) return;  // the branch-free test; ray_problem only to name the fault
     const char* problem = ray_problem(ray);
-    if (problem == nullptr) return;
     throw InvalidArgument(format_message(name, ": ", problem, " (origin ",
                                          to_string(ray.origin), ", direction ",
                                          to_string(ray.direction), ", tmin ", ray.tmin,

@@ -375,6 +375,36 @@ TEST(SceneValidation, EachBadRayHasItsOwnMessage) {
                     "rays[6]: direction is not finite");
 }
 
+// is_valid_ray (branch-free, on every traced ray) and ray_problem (the message) are two codings
+// of one rule: they must agree on every ray, here every combination of edge values per field.
+TEST(SceneValidation, FastRayTestAgreesWithTheNamedProblem) {
+    const float max = std::numeric_limits<float>::max();
+    const float denormal = std::numeric_limits<float>::denorm_min();
+    const std::vector<float> values = {0.0f, -0.0f, denormal, -1.0f, 1.0f, 1e18f, -1e18f,
+                                       std::nextafter(1e18f, max), -2e18f, max, kInfinity,
+                                       -kInfinity, kNaN};
+    size_t checked = 0, valid = 0;
+    const auto agree = [&](const Ray& ray) {
+        const bool fast = is_valid_ray(ray);
+        EXPECT_EQ(fast, ray_problem(ray) == nullptr)
+            << "origin " << ray.origin.x << "," << ray.origin.y << "," << ray.origin.z
+            << " direction " << ray.direction.x << "," << ray.direction.y << ","
+            << ray.direction.z << " tmin " << ray.tmin << " tmax " << ray.tmax;
+        ++checked;
+        valid += fast ? 1 : 0;
+    };
+    for (float a : values)
+        for (float b : values) {
+            agree(make_ray(vec3(a, 1.0f, b), vec3(0, 0, 1)));      // origin
+            agree(make_ray(vec3(0.5f), vec3(a, b, 0.0f)));         // direction, incl. zero
+            agree(make_ray(vec3(0.5f), vec3(1, 0, 0), a, b));      // tmin, tmax
+            agree(make_ray(vec3(b, 0.0f, 0.0f), vec3(0, a, 0)));   // one of each
+        }
+    EXPECT_EQ(checked, 4 * values.size() * values.size());
+    EXPECT_GT(valid, 0u);
+    EXPECT_LT(valid, checked);
+}
+
 TEST(SceneValidation, QueriesBeforeCommitAreRejected) {
     Scene scene;
     scene.add_instance(scene.add_mesh(unit_quad()), mat4(1.0f));
