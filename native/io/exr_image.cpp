@@ -321,6 +321,7 @@ void write_exr(const std::string& path, const Image& image, const ExrWriteSettin
 }
 
 Image read_exr(const std::string& path, int64_t max_pixels) {
+    require_readable_file(path, "EXR");
     try {
         Imf::MultiPartInputFile file(path.c_str());
         const ExrLayout layout = read_layout(path, file);
@@ -359,6 +360,7 @@ Image read_exr(const std::string& path, int64_t max_pixels) {
 }
 
 ExrInfo read_exr_info(const std::string& path) {
+    require_readable_file(path, "EXR");
     try {
         Imf::MultiPartInputFile file(path.c_str());
         const ExrLayout layout = read_layout(path, file);

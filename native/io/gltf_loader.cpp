@@ -31,6 +31,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
+#include "io/image.h"
 #include "io/png_image.h"
 #include "util/error.h"
 #include "util/log.h"
@@ -87,6 +88,7 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
 }
 
 bool starts_with_glb_magic(const std::string& path) {
+    require_readable_file(path, "glTF");
     std::ifstream file(path, std::ios::binary);
     if (!file)
         throw IoError(format_message(path, ": cannot open the file (", std::strerror(errno), ")"));

@@ -157,9 +157,33 @@ std::string channel_name(const std::string& layer, const std::string& suffix) {
 
 namespace {
 
+void require_no_nul(const std::string& path, const char* action) {
+    const size_t nul = path.find('\0');
+    if (nul == std::string::npos) return;
+    throw InvalidArgument(format_message("cannot ", action, " \"", path.substr(0, nul),
+                                         "\\0...\": the path holds a NUL byte at position ", nul,
+                                         "; file names cannot contain one"));
+}
+
+}  // namespace
+
+void require_readable_file(const std::string& path, const char* what) {
+    require_no_nul(path, "read");
+    std::error_code error;
+    const fs::file_status status = fs::status(path, error);
+    if (error || !fs::exists(status) || fs::is_regular_file(status)) return;
+    throw IoError(format_message("cannot read ", what, " \"", path, "\": ",
+                                 fs::is_directory(status)
+                                     ? "it is a folder; pass a file"
+                                     : "it is not a regular file (a device, FIFO or socket)"));
+}
+
+namespace {
+
 // The folder `path` will be written to, checked to exist.
 fs::path checked_parent_folder(const std::string& path) {
     if (path.empty()) throw IoError("cannot write a file: the path is empty");
+    require_no_nul(path, "write");
     const fs::path target(path);
     if (!target.has_filename()) {
         throw IoError(format_message("cannot write \"", path,
@@ -175,6 +199,12 @@ fs::path checked_parent_folder(const std::string& path) {
     if (fs::is_directory(target, error)) {
         throw IoError(format_message("cannot write \"", path,
                                      "\": a folder of that name exists; choose a file name"));
+    }
+    const fs::file_status existing = fs::status(target, error);
+    if (!error && fs::exists(existing) && !fs::is_regular_file(existing)) {
+        throw IoError(format_message("cannot write \"", path, "\": it exists and is not a "
+                                     "regular file (a device, FIFO or socket), which the write "
+                                     "would replace; choose a file name"));
     }
     return parent;
 }

@@ -92,11 +92,18 @@ std::string channel_suffix(const std::string& name);
 // Joins a layer and a suffix ("" layer -> the bare suffix).
 std::string channel_name(const std::string& layer, const std::string& suffix);
 
+// Throws before a reader opens `path` (`what` names the kind of file, "EXR", "probe file"): an
+// IoError for a folder, or a device, FIFO or socket (a read could block or never end), and an
+// InvalidArgument for a path holding a NUL byte (the C library would read the name only up to
+// it, i.e. another file). A missing or unreadable file is left to the reader's own message.
+void require_readable_file(const std::string& path, const char* what);
+
 // Writes `path` atomically: calls write_temp(temp_path) with a new, empty file in the same
 // folder, then renames it over `path` (atomic on POSIX filesystems). If write_temp throws, or
 // the rename fails, the temporary file is removed and the error propagates. Throws IoError
 // naming the path when its folder does not exist or is not writable, or when `path` is a
-// folder.
+// folder or another non-regular file (a device such as /dev/null would be replaced by the
+// rename); InvalidArgument when it holds a NUL byte.
 void write_file_atomically(const std::string& path,
                            const std::function<void(const std::string& temp_path)>& write_temp);
 

@@ -23,6 +23,7 @@
 #include <utility>
 #include <vector>
 
+#include "io/image.h"
 #include "util/error.h"
 #include "util/log.h"
 
@@ -109,6 +110,7 @@ struct ObjData {
 };
 
 ObjData read_obj(const std::string& path) {
+    require_readable_file(path, "OBJ");
     std::ifstream file(path, std::ios::binary);
     if (!file)
         throw IoError(format_message(path, ": cannot open the file (", std::strerror(errno), ")"));

@@ -9,6 +9,8 @@
 #include <iomanip>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <type_traits>
+#include <vector>
 
 #include "io/exr_image.h"
 #include "io/image.h"
@@ -152,6 +154,7 @@ void save_probe_grid(const std::string& path, const ProbeGridData& data) {
 }
 
 ProbeGridData load_probe_grid(const std::string& path) {
+    require_readable_file(path, "probe file");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(format_message("cannot open probe file \"", path, "\""));
     Reader r(in, path);
@@ -315,7 +318,23 @@ void export_probe_grid(const std::string& json_path, const ProbeGridData& data) 
     });
 }
 
+namespace {
+
+// An integer field, exactly: nlohmann's get<int>() would truncate 1.5 to 1 and read true as 1.
+template <typename T>
+T json_integer(const nlohmann::json& value, const std::string& json_path, const char* key) {
+    const bool fits = std::is_signed_v<T> ? value.is_number_integer() : value.is_number_unsigned();
+    if (!fits)
+        throw IoError(format_message("\"", json_path, "\": ", key, " is ", value.dump(),
+                                     "; it must be ", std::is_signed_v<T> ? "an" : "a non-negative",
+                                     " integer"));
+    return value.get<T>();
+}
+
+}  // namespace
+
 ProbeGridData import_probe_grid(const std::string& json_path) {
+    require_readable_file(json_path, "probe grid JSON");
     std::ifstream in(json_path);
     if (!in) throw IoError(format_message("cannot open probe grid JSON \"", json_path, "\""));
     nlohmann::json doc;
@@ -329,17 +348,18 @@ ProbeGridData import_probe_grid(const std::string& json_path) {
         if (doc.value("format", "") != kFormatName)
             throw IoError(format_message("\"", json_path, "\" is not an SHGI probe grid (format \"",
                                          doc.value("format", ""), "\")"));
-        if (doc.at("version").get<uint32_t>() != kProbeFileVersion)
-            throw IoError(format_message("\"", json_path, "\" has version ",
-                                         doc.at("version").get<uint32_t>(), "; this SHGI reads ",
-                                         kProbeFileVersion));
+        const uint32_t version = json_integer<uint32_t>(doc.at("version"), json_path, "version");
+        if (version != kProbeFileVersion)
+            throw IoError(format_message("\"", json_path, "\" has version ", version,
+                                         "; this SHGI reads ", kProbeFileVersion));
         ProbeGridData data;
-        data.order = doc.at("sh").at("order").get<int>();
+        data.order = json_integer<int>(doc.at("sh").at("order"), json_path, "sh.order");
         check_sh_order(data.order, "sh.order");
         data.includes_direct =
             doc.at("sh").at("quantity").get<std::string>().find("direct and") != std::string::npos;
-        data.visibility_resolution = doc.at("visibility").at("resolution").get<int>();
-        data.passes = doc.at("passes").get<uint64_t>();
+        data.visibility_resolution = json_integer<int>(doc.at("visibility").at("resolution"),
+                                                       json_path, "visibility.resolution");
+        data.passes = json_integer<uint64_t>(doc.at("passes"), json_path, "passes");
         const int res = data.visibility_resolution;
         if (res < 1 || res > 64)
             throw IoError(format_message("\"", json_path, "\": visibility resolution ", res));
@@ -347,7 +367,9 @@ ProbeGridData import_probe_grid(const std::string& json_path) {
         for (const nlohmann::json& entry : doc.at("volumes")) {
             ProbeVolume volume;
             const auto matrix = entry.at("world_from_volume").get<std::vector<float>>();
-            const auto resolution = entry.at("resolution").get<std::vector<int>>();
+            std::vector<int> resolution;
+            for (const nlohmann::json& count : entry.at("resolution"))
+                resolution.push_back(json_integer<int>(count, json_path, "a volume's resolution"));
             if (matrix.size() != 16 || resolution.size() != 3)
                 throw IoError(format_message("\"", json_path, "\": a volume needs 16 matrix "
                                              "entries and 3 resolutions"));

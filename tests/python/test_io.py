@@ -5,6 +5,7 @@ struct alone (no PIL) and compared with the 8-bit sRGB levels the curve predicts
 """
 
 import math
+import os
 import pathlib
 import struct
 import zlib
@@ -193,6 +194,25 @@ def test_missing_and_corrupt_exr_raise_os_error_naming_the_file(tmp_path):
     corrupt.write_bytes(b"\x76\x2f\x31\x01" + b"\x00" * 40)  # EXR magic, then nonsense
     with pytest.raises(OSError, match="corrupt.exr"):
         shgi.read_exr(corrupt)
+
+
+def test_folders_special_files_and_nul_bytes_are_refused_by_name(tmp_path):
+    """A folder once made load_obj raise MemoryError; a FIFO would block a reader, and a write
+    would rename its file over it (as over /dev/null)."""
+    for read in (shgi.read_exr, shgi.read_exr_info, shgi.load_obj, shgi.load_gltf):
+        with pytest.raises(OSError, match="is a folder; pass a file"):
+            read(tmp_path)
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    for read in (shgi.read_exr, shgi.load_obj, shgi.load_gltf):
+        with pytest.raises(OSError, match="not a regular file"):
+            read(fifo)
+    pixels = np.zeros((2, 2, 3), np.float32)
+    with pytest.raises(OSError, match="not a regular file .* would replace"):
+        shgi.write_exr(fifo, {"Combined": pixels})
+    with pytest.raises(OSError, match="not a regular file .* would replace"):
+        shgi.write_png(fifo, pixels)
+    assert fifo.is_fifo()
 
 
 def test_write_exr_into_a_missing_folder_raises_os_error(tmp_path):

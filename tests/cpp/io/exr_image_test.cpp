@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include "support/expect_error.h"
 #include "support/test_folder.h"
@@ -467,6 +468,31 @@ TEST(ExrImage, UnwritablePathsRaiseIoErrorNamingThePath) {
     expect_error<IoError>([&] { write_exr(folder.string(), small_image()); },
                           {folder.string(), "folder"});
     expect_error<IoError>([&] { write_exr("", small_image()); }, {"empty"});
+    EXPECT_TRUE(folder_entries(folder).empty());
+}
+
+// Paths that are not files: refused by name before a reader opens them (a folder used to throw a
+// stream error, a FIFO would block) or before a write's rename replaces them (a device such as
+// /dev/null); a NUL byte would silently name another file.
+TEST(ExrImage, FoldersSpecialFilesAndNulBytesAreRefused) {
+    const fs::path folder = testing::test_folder("exr");
+    expect_error<IoError>([&] { read_exr(folder.string()); }, {folder.string(), "is a folder"});
+    expect_error<IoError>([&] { read_exr_info(folder.string()); }, {"is a folder"});
+    const std::string fifo = (folder / "fifo").string();
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    expect_error<IoError>([&] { read_exr(fifo); }, {fifo, "not a regular file"});
+    expect_error<IoError>([&] { write_exr(fifo, small_image()); },
+                          {fifo, "not a regular file", "would replace"});
+    EXPECT_TRUE(fs::is_fifo(fifo));
+    fs::remove(fifo);
+    const std::string real = (folder / "a.exr").string();
+    write_exr(real, small_image());
+    const std::string cut = real + std::string(1, '\0') + "b";  // the C library would read a.exr
+    expect_error<InvalidArgument>([&] { read_exr(cut); }, {"NUL byte at position"});
+    expect_error<InvalidArgument>([&] { write_exr(cut, small_image()); }, {"NUL byte"});
+    // A missing file keeps the reader's own message.
+    expect_error<IoError>([&] { read_exr((folder / "missing.exr").string()); }, {"missing.exr"});
+    fs::remove(real);
     EXPECT_TRUE(folder_entries(folder).empty());
 }
 
