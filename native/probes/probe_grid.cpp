@@ -10,6 +10,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "probes/probe_visibility.h"
+#include "scene/ray.h"
 #include "render/light_sampler.h"
 #include "render/path_integrator.h"
 #include "sh/sh_projection.h"
@@ -22,9 +23,16 @@
 namespace shgi {
 namespace {
 
-// Largest grid a ProbeGrid accepts (all volumes): 2^21 probes of L2 with 8x8 visibility maps
-// hold ~1.3 GB; a larger request is almost certainly a spacing typed in the wrong unit.
+// Largest grid a ProbeGrid accepts (all volumes): 2^21 probes with 8x8 visibility maps hold
+// ~1.7 GB; a larger request is almost certainly a spacing typed in the wrong unit.
 constexpr size_t kMaxProbes = size_t(1) << 21;
+// Bytes one probe's state takes in a ProbeGridData.
+size_t probe_bytes(int visibility_resolution) {
+    return sizeof(vec3) + sizeof(uint8_t) + sizeof(ShRgb) + sizeof(float) +
+           size_t(visibility_resolution) * size_t(visibility_resolution) * sizeof(vec2);
+}
+// The memory the probe cap allows at the default visibility maps: a finer map costs probes.
+const size_t kMaxProbeBytes = kMaxProbes * probe_bytes(ProbeGridSettings{}.visibility_resolution);
 // Relocation: a probe this close (spacings) to a front face steps away from it.
 constexpr float kMinFrontDistance = 0.1f;
 constexpr int kRelocationSteps = 3;
@@ -47,7 +55,9 @@ ProbeVolume fitted_volume(const Scene& scene, float spacing) {
                 " of the scene (", extent[a], " m); use a spacing of at least ",
                 extent[a] / float(kMaxProbesPerAxis), " m"));
         volume.resolution[a] = std::max(1, int(count));
-        extent[a] = std::max(extent[a], step);  // a flat scene still gets a layer of probes
+        // A flat scene still gets a layer of probes, at most as thick as the scene is long (a
+        // spacing beyond the scene's size gives one probe, not a volume of that size).
+        extent[a] = std::max(extent[a], longest > 0.0f ? std::min(step, longest) : step);
     }
     const vec3 centre = 0.5f * (bounds.lower + bounds.upper);
     volume.world_from_volume = glm::translate(mat4(1.0f), centre) *
@@ -155,9 +165,10 @@ void validate_probe_grid_settings(const ProbeGridSettings& s) {
         const std::string what = format_message(name, ".volumes[", v, "]");
         validate_probe_volume(s.volumes[v], what.c_str());
     }
-    if (!(s.spacing >= 0.0f && std::isfinite(s.spacing)))
+    if (!(s.spacing >= 0.0f && s.spacing <= kMaxCoordinate))
         throw InvalidArgument(format_message(name, ".spacing is ", s.spacing,
-                                             "; use metres > 0, or 0 for longest side / 8"));
+                                             "; use metres in (0, 1e15], or 0 for longest side "
+                                             "/ 8"));
     if (s.rays_per_probe < 1 || s.rays_per_probe > 65536)
         throw InvalidArgument(format_message(name, ".rays_per_probe is ", s.rays_per_probe,
                                              "; use 1..65536"));
@@ -259,6 +270,13 @@ ProbeGridData ProbeGrid::place(Progress* progress) const {
         throw InvalidArgument(format_message(
             "ProbeGridSettings.volumes hold ", data.volume_offset(data.volumes.size()),
             " probes; the limit is ", kMaxProbes, ": lower the resolutions"));
+    const size_t probes = data.volume_offset(data.volumes.size());
+    const double bytes = double(probes) * double(probe_bytes(data.visibility_resolution));
+    if (bytes > double(kMaxProbeBytes))
+        throw InvalidArgument(format_message(
+            "ProbeGridSettings: ", probes, " probes with visibility_resolution ",
+            data.visibility_resolution, " need ", bytes / 1e9, " GB; the limit is ",
+            double(kMaxProbeBytes) / 1e9, " GB: lower visibility_resolution or the resolutions"));
     const std::vector<vec3> base = probe_base_positions(data.volumes);
     const size_t count = base.size();
     data.positions = base;

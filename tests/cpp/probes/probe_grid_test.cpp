@@ -234,6 +234,17 @@ TEST(ProbeGrid, RejectsBadSettingsAndEditedScenes) {
     settings = {};
     settings.spacing = 1e-4f;
     expect_error<InvalidArgument>([&] { ProbeGrid(scene, settings); }, {"spacing", "at least"});
+    // Named as the spacing, not as the non-finite ray origin it once became.
+    settings.spacing = 1e30f;
+    expect_error<InvalidArgument>([&] { ProbeGrid(scene, settings); },
+                                  {"ProbeGridSettings.spacing is 1e+30", "(0, 1e15]"});
+    // Larger than the scene: one probe per axis in a volume the size of the scene.
+    settings.spacing = 1e14f;
+    const ProbeGrid single(scene, settings);
+    ASSERT_EQ(single.field()->data().probe_count(), 1u);
+    const vec3 extent = scene.bounds().extent();
+    const mat4& m = single.field()->data().volumes[0].world_from_volume;
+    for (int a = 0; a < 3; ++a) EXPECT_FLOAT_EQ(2.0f * m[a][a], extent[a]);
     settings = {};
     ProbeVolume flat;
     flat.world_from_volume = glm::scale(mat4(1.0f), vec3(1.0f, 1.0f, 0.0f));
@@ -252,6 +263,19 @@ TEST(ProbeGrid, RejectsBadSettingsAndEditedScenes) {
     settings.volumes = {huge};
     expect_error<InvalidArgument>([&] { ProbeGrid(scene, settings); },
                                   {"volumes[0].world_from_volume reaches", "make the volume smaller"});
+    // Too many probes, and (within the probe cap) maps too fine for the memory cap: refused by
+    // name before anything is allocated, not a bad_alloc.
+    ProbeVolume dense;
+    dense.resolution = ivec3(256, 256, 64);
+    settings.volumes = {dense};
+    expect_error<InvalidArgument>([&] { ProbeGrid(scene, settings); },
+                                  {"4194304 probes; the limit is 2097152"});
+    dense.resolution = ivec3(128, 128, 64);
+    settings.volumes = {dense};
+    settings.visibility_resolution = 64;
+    expect_error<InvalidArgument>(
+        [&] { ProbeGrid(scene, settings); },
+        {"1048576 probes with visibility_resolution 64 need", "lower visibility_resolution"});
     settings = {};
     ProbeGrid grid(scene, settings);
     scene.set_world(World{});
