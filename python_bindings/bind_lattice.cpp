@@ -60,8 +60,8 @@ void bind_settings(py::module_& m) {
     using S = PhotonLatticeSettings;
     py::class_<S> cls(m, "PhotonLatticeSettings",
                       "Settings of the PhotonLattice solver; every field has a default.");
-    def_uint64(cls, "photons", &S::photons, 1, "Photons emitted per solve() (200000).");
-    def_uint64(cls, "seed", &S::seed, 0, "Random seed (0).");
+    def_unsigned(cls, "photons", &S::photons, 1, "Photons emitted per solve() (200000).");
+    def_unsigned(cls, "seed", &S::seed, 0, "Random seed (0).");
     cls.def(py::init(&from_kwargs<S>),
             "PhotonLatticeSettings(**fields), e.g. PhotonLatticeSettings(photons=100000).")
         .def_readwrite("max_bounces", &S::max_bounces,

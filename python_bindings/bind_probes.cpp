@@ -143,14 +143,16 @@ object), with resolution probes along each local axis at the cell centres.)doc")
     using S = ProbeGridSettings;
     py::class_<S> cls(m, "ProbeGridSettings",
                       "Settings of the ProbeGrid solver; every field has a default.");
-    def_uint64(cls, "seed", &S::seed, 0, "Random seed (0).");
+    def_unsigned(cls, "seed", &S::seed, 0, "Random seed (0).");
+    def_unsigned(cls, "rays_per_probe", &S::rays_per_probe, 0, "Paths per probe per update (256).");
+    def_unsigned(cls, "placement_rays", &S::placement_rays, 0,
+                 "Rays per probe for placement (128).");
     cls.def(py::init(&from_kwargs<S>), "ProbeGridSettings(**fields), e.g. ProbeGridSettings(order=1).")
         .def_readwrite("order", &S::order, "SH order of the probes, 1..4 (2).")
         .def_readwrite("volumes", &S::volumes,
                        "List of ProbeVolume; empty: one volume fitted to the scene bounds.")
         .def_readwrite("spacing", &S::spacing,
                        "Probe spacing (m) of the fitted volume; 0 = longest side / 8.")
-        .def_readwrite("rays_per_probe", &S::rays_per_probe, "Paths per probe per update (256).")
         .def_readwrite("hysteresis", &S::hysteresis,
                        "History weight of the exponential blend, in [0, 1) (0.95).")
         .def_readwrite("clamp", &S::clamp,
@@ -176,7 +178,6 @@ object), with resolution probes along each local axis at the cell centres.)doc")
                        "Largest relocation, in probe spacings per axis (0.45).")
         .def_readwrite("backface_threshold", &S::backface_threshold,
                        "Share of back-face hits marking a probe as inside geometry (0.25).")
-        .def_readwrite("placement_rays", &S::placement_rays, "Rays per probe for placement (128).")
         .def("validate", &validate_probe_grid_settings,
              "Raises ValueError naming the first invalid field.");
 }

@@ -57,7 +57,7 @@ void bind_settings(py::module_& m) {
     using S = PathTracerSettings;
     py::class_<S> cls(m, "PathTracerSettings",
                       "Settings of the reference path tracer; every field has a default.");
-    def_uint64(cls, "seed", &S::seed, 0,
+    def_unsigned(cls, "seed", &S::seed, 0,
                "Random seed; the image is a pure function of it (default 0).");
     cls.def(py::init(&from_kwargs<S>),
             "PathTracerSettings(**fields), e.g. PathTracerSettings(samples=16, seed=3).")
@@ -225,7 +225,7 @@ void bind_preview(py::module_& m) {
     using S = PreviewSettings;
     py::class_<S> cls(m, "PreviewSettings",
                       "Settings of the preview renderer; every field has a default.");
-    def_uint64(cls, "seed", &S::seed, 0, "Random seed (default 0).");
+    def_unsigned(cls, "seed", &S::seed, 0, "Random seed (default 0).");
     cls.def(py::init(&from_kwargs<S>),
             "PreviewSettings(**fields), e.g. PreviewSettings(samples=4, seed=1).")
         .def_property(

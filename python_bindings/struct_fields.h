@@ -2,8 +2,11 @@
 // Python object mirrors its C++ struct with the same names and defaults (DESIGN.md).
 #pragma once
 
+#include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
+#include <type_traits>
 
 #include <pybind11/pybind11.h>
 
@@ -25,17 +28,28 @@ void def_vec3(pybind11::class_<T>& cls, const char* name, vec3 T::*field, const 
         doc);
 }
 
-// A uint64_t field exposed as an int that must be >= `minimum` (ValueError naming the field).
-template <typename T>
-void def_uint64(pybind11::class_<T>& cls, const char* name, uint64_t T::*field, int64_t minimum,
-                const char* doc) {
+// A Python int, or any object with __index__ (numpy's integers), kept at full size so that
+// def_unsigned can range-check it and name the field.
+struct IndexInt {
+    pybind11::int_ value;
+};
+
+// An unsigned integer field (uint32_t, uint64_t) exposed as an int that must be in
+// [minimum, the type's maximum]: -1 or 2**64 is a ValueError naming the field rather than
+// pybind's TypeError about incompatible arguments.
+template <typename T, typename U>
+void def_unsigned(pybind11::class_<T>& cls, const char* name, U T::*field, uint64_t minimum,
+                  const char* doc) {
+    static_assert(std::is_unsigned_v<U>, "def_unsigned is for unsigned fields");
     cls.def_property(
         name, [field](const T& self) { return self.*field; },
-        [field, name, minimum](T& self, int64_t value) {
-            if (value < minimum)
-                throw_value_error(name, "must be >= " + std::to_string(minimum) + ", got " +
-                                            std::to_string(value));
-            self.*field = uint64_t(value);
+        [field, name, minimum](T& self, const IndexInt& value) {
+            const uint64_t maximum = std::numeric_limits<U>::max();
+            if (value.value < pybind11::int_(minimum) || value.value > pybind11::int_(maximum))
+                throw_value_error(name, "must be in [" + std::to_string(minimum) + ", " +
+                                            std::to_string(maximum) + "], got " +
+                                            std::string(pybind11::str(value.value)));
+            self.*field = U(value.value.cast<uint64_t>());
         },
         doc);
 }
@@ -58,3 +72,25 @@ std::unique_ptr<T> from_kwargs(const pybind11::kwargs& kwargs) {
 }
 
 }  // namespace shgi::python
+
+namespace pybind11::detail {
+
+template <>
+struct type_caster<shgi::python::IndexInt> {
+    PYBIND11_TYPE_CASTER(shgi::python::IndexInt, const_name("typing.SupportsIndex"));
+
+    bool load(handle source, bool /*convert*/) {
+        PyObject* index = PyNumber_Index(source.ptr());
+        if (index == nullptr) {
+            PyErr_Clear();
+            return false;  // pybind's TypeError listing the accepted types
+        }
+        value.value = reinterpret_steal<int_>(index);
+        return true;
+    }
+    static handle cast(const shgi::python::IndexInt& source, return_value_policy, handle) {
+        return source.value.inc_ref();
+    }
+};
+
+}  // namespace pybind11::detail

@@ -7,6 +7,8 @@ the photon lattice. The leak test renders the dim one of two rooms split by a wa
 the probe spacing.
 """
 
+import json
+import os
 import sys
 import threading
 
@@ -85,6 +87,15 @@ def test_settings_mirror_cpp_defaults_and_validate():
     assert s.hysteresis == pytest.approx(0.95) and s.normal_bias == pytest.approx(0.25)
     with pytest.raises(TypeError, match="no field 'rays'"):
         shgi.ProbeGridSettings(rays=3)
+    # Unsigned fields take any int (numpy's too) and name the field when it does not fit,
+    # rather than pybind's TypeError about incompatible arguments.
+    assert shgi.ProbeGridSettings(seed=np.uint64(2**64 - 1)).seed == 2**64 - 1
+    with pytest.raises(ValueError, match=r"rays_per_probe: must be in \[0, 4294967295\], got -1"):
+        shgi.ProbeGridSettings(rays_per_probe=-1)
+    with pytest.raises(ValueError, match=r"seed: must be in \[0, 18446744073709551615\]"):
+        shgi.ProbeGridSettings(seed=2**64)
+    with pytest.raises(TypeError):
+        shgi.ProbeGridSettings(placement_rays=1.5)
     scene = committed(scenes.cornell_box(0.05))
     with pytest.raises(ValueError, match="ProbeGridSettings.order is 5"):
         shgi.ProbeGrid(scene, shgi.ProbeGridSettings(order=5))
@@ -228,6 +239,45 @@ def test_files_round_trip_and_continue(tmp_path):
     assert resumed.passes == 3
     with pytest.raises(OSError, match="grid.missing"):
         shgi.ProbeField.load(str(tmp_path / "grid.missing"))
+
+
+def test_bad_paths_and_loose_json_are_refused_by_name(tmp_path):
+    """Found by fuzzing: a folder raised a bare RuntimeError, a NUL byte cut the path short
+    (naming another file), JSON integers such as version 1.5 or true read as 1, and a save
+    renamed its file over a device or FIFO."""
+    scene = committed(scenes.cornell_box(0.05))
+    field = solved_grid(scene, 1, rays_per_probe=8).field()
+    with pytest.raises(OSError, match="is a folder"):
+        shgi.ProbeField.import_exr(str(tmp_path))
+    with pytest.raises(OSError, match="is a folder"):
+        shgi.ProbeField.load(str(tmp_path))
+    field.save(str(tmp_path / "grid.shprobes"))
+    with pytest.raises(ValueError, match="NUL byte"):
+        shgi.ProbeField.load(str(tmp_path / "grid.shprobes") + "\0.other")
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    with pytest.raises(OSError, match="not a regular file"):
+        field.save(str(fifo))
+    with pytest.raises(OSError, match="not a regular file"):
+        shgi.ProbeField.load(str(fifo))
+    assert fifo.is_fifo()
+
+    field.export(str(tmp_path / "grid.json"))
+    original = json.loads((tmp_path / "grid.json").read_text())
+    for key, value in [("version", 1.5), ("version", True), ("passes", -1), ("passes", 1.0)]:
+        doc = dict(original, **{key: value})
+        (tmp_path / "grid.json").write_text(json.dumps(doc))
+        with pytest.raises(OSError, match=f"{key} is {json.dumps(value)}; it must be"):
+            shgi.ProbeField.import_exr(str(tmp_path / "grid.json"))
+
+
+def test_grid_memory_is_capped_before_allocation():
+    """Fine visibility maps on many probes asked for ~9 GB and raised a bare MemoryError."""
+    scene = committed(scenes.cornell_box(0.05))
+    volume = shgi.ProbeVolume(resolution=(128, 128, 64))
+    with pytest.raises(ValueError, match="1048576 probes with visibility_resolution 64 need "
+                                         ".* GB; the limit is .* lower visibility_resolution"):
+        shgi.ProbeGrid(scene, shgi.ProbeGridSettings(volumes=[volume], visibility_resolution=64))
 
 
 def test_cancel_keeps_the_previous_probes():

@@ -648,7 +648,7 @@ class LightmapFilterSettings:
         A-trous passes, 0 = off (2).
         """
     @iterations.setter
-    def iterations(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def iterations(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def luminance_sigma(self) -> float:
@@ -745,7 +745,7 @@ class LightmapSettings:
         Samples per texel (256).
         """
     @samples.setter
-    def samples(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def samples(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def seed(self) -> int:
@@ -753,7 +753,7 @@ class LightmapSettings:
         Random seed (0).
         """
     @seed.setter
-    def seed(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def seed(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def tile_size(self) -> int:
@@ -761,7 +761,7 @@ class LightmapSettings:
         Texels per tile side: the unit of work and of shards (16).
         """
     @tile_size.setter
-    def tile_size(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def tile_size(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def transmission_bounces(self) -> int:
@@ -1205,7 +1205,7 @@ class PathTracerSettings:
         Random seed; the image is a pure function of it (default 0).
         """
     @seed.setter
-    def seed(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def seed(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def tile_size(self) -> int:
@@ -1405,7 +1405,7 @@ class PhotonLatticeSettings:
         Photons emitted per solve() (200000).
         """
     @photons.setter
-    def photons(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def photons(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def resolution(self) -> int:
@@ -1421,7 +1421,7 @@ class PhotonLatticeSettings:
         Random seed (0).
         """
     @seed.setter
-    def seed(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def seed(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def specular_roughness(self) -> float:
@@ -1520,7 +1520,7 @@ class PreviewSettings:
         Random seed (default 0).
         """
     @seed.setter
-    def seed(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def seed(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def tile_size(self) -> int:
@@ -1858,7 +1858,7 @@ class ProbeGridSettings:
         Rays per probe for placement (128).
         """
     @placement_rays.setter
-    def placement_rays(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def placement_rays(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def rays_per_probe(self) -> int:
@@ -1866,7 +1866,7 @@ class ProbeGridSettings:
         Paths per probe per update (256).
         """
     @rays_per_probe.setter
-    def rays_per_probe(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def rays_per_probe(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def relocate(self) -> bool:
@@ -1882,7 +1882,7 @@ class ProbeGridSettings:
         Random seed (0).
         """
     @seed.setter
-    def seed(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def seed(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def spacing(self) -> float:
@@ -2286,7 +2286,7 @@ class TexelRasterSettings:
         Texels along v (256).
         """
     @height.setter
-    def height(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def height(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def samples_per_axis(self) -> int:
@@ -2294,7 +2294,7 @@ class TexelRasterSettings:
         Sample positions per texel side, 1..16 (2: 4 per texel).
         """
     @samples_per_axis.setter
-    def samples_per_axis(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def samples_per_axis(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def uv_set(self) -> str:
@@ -2310,7 +2310,7 @@ class TexelRasterSettings:
         Texels along u (256).
         """
     @width.setter
-    def width(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def width(self, arg1: typing.SupportsIndex) -> None:
         ...
 class Texture:
     """
@@ -2371,7 +2371,7 @@ class UnoccludeSettings:
         Tangent-plane rays per sample (8).
         """
     @ray_count.setter
-    def ray_count(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def ray_count(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def search_radius(self) -> float:
