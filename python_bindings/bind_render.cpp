@@ -153,7 +153,7 @@ constexpr size_t kNoRow = ~size_t(0);
 }
 
 void check_query_point(const vec3& p, const char* name, size_t row = kNoRow) {
-    if (max_component(glm::abs(p)) > kMaxCoordinate)
+    if (max_abs_component(p) > kMaxCoordinate)
         throw_query_error(name, row, p,
                           format_message("is beyond ", kMaxCoordinate, " m from the origin"));
 }

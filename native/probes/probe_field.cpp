@@ -31,7 +31,7 @@ void validate_probe_volume(const ProbeVolume& volume, const char* what) {
     // invert the matrix.
     scene_detail::require_transform(what, "world_from_volume", volume.world_from_volume);
     const mat4& m = volume.world_from_volume;
-    const double reach = double(max_component(glm::abs(vec3(m[3])))) + glm::length(vec3(m[0])) +
+    const double reach = double(max_abs_component(vec3(m[3]))) + glm::length(vec3(m[0])) +
                          glm::length(vec3(m[1])) + glm::length(vec3(m[2]));
     if (!(reach <= double(kMaxCoordinate)))
         throw InvalidArgument(format_message(

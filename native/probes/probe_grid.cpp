@@ -10,9 +10,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "probes/probe_visibility.h"
-#include "scene/ray.h"
 #include "render/light_sampler.h"
 #include "render/path_integrator.h"
+#include "scene/ray.h"
 #include "sh/sh_projection.h"
 #include "util/error.h"
 #include "util/parallel.h"
@@ -26,7 +26,7 @@ namespace {
 // Largest grid a ProbeGrid accepts (all volumes): 2^21 probes with 8x8 visibility maps hold
 // ~1.7 GB; a larger request is almost certainly a spacing typed in the wrong unit.
 constexpr size_t kMaxProbes = size_t(1) << 21;
-// Bytes one probe's state takes in a ProbeGridData.
+// Bytes one probe's state takes in a ProbeGridData (the memory cap and memory_bytes()).
 size_t probe_bytes(int visibility_resolution) {
     return sizeof(vec3) + sizeof(uint8_t) + sizeof(ShRgb) + sizeof(float) +
            size_t(visibility_resolution) * size_t(visibility_resolution) * sizeof(vec2);
@@ -266,11 +266,11 @@ ProbeGridData ProbeGrid::place(Progress* progress) const {
     data.volumes = settings_.volumes;
     data.visibility_resolution = settings_.visibility_resolution;
     data.includes_direct = settings_.include_direct;
-    if (data.volume_offset(data.volumes.size()) > kMaxProbes)
-        throw InvalidArgument(format_message(
-            "ProbeGridSettings.volumes hold ", data.volume_offset(data.volumes.size()),
-            " probes; the limit is ", kMaxProbes, ": lower the resolutions"));
     const size_t probes = data.volume_offset(data.volumes.size());
+    if (probes > kMaxProbes)
+        throw InvalidArgument(format_message("ProbeGridSettings.volumes hold ", probes,
+                                             " probes; the limit is ", kMaxProbes,
+                                             ": lower the resolutions"));
     const double bytes = double(probes) * double(probe_bytes(data.visibility_resolution));
     if (bytes > double(kMaxProbeBytes))
         throw InvalidArgument(format_message(
@@ -440,9 +440,7 @@ std::vector<float> ProbeGrid::relative_error() const {
 size_t ProbeGrid::memory_bytes() const {
     const std::shared_ptr<const ProbeField> current = field();
     const ProbeGridData& d = current->data();
-    return d.probe_count() * (sizeof(vec3) + 1 + sizeof(float) +
-                              size_t(sh_num_coefficients(d.order)) * sizeof(vec3)) +
-           d.visibility.size() * sizeof(vec2);
+    return d.probe_count() * probe_bytes(d.visibility_resolution);
 }
 
 // A snapshot per lookup, so that an update() on another thread cannot free the probes being
