@@ -174,11 +174,18 @@ What and how a lightmap is baked; every field has a default. Content (Cycles' DI
             "'DIRECT_INDIRECT' (default), 'DIRECT', 'INDIRECT' or 'FULL'.")
         .def_readwrite("directional", &S::directional,
                        "Also bake the L1 SH of the incident radiance (False).")
-        .def_readwrite("max_bounces", &S::max_bounces, "Cycles' Total bounces (12).")
-        .def_readwrite("diffuse_bounces", &S::diffuse_bounces, "Cycles' Diffuse bounces (4).")
-        .def_readwrite("glossy_bounces", &S::glossy_bounces, "Cycles' Glossy bounces (4).")
-        .def_readwrite("transmission_bounces", &S::transmission_bounces,
-                       "Cycles' Transmission bounces (12).")
+        .def_property("max_bounces", field_getter(&S::max_bounces),
+                      integer_setter(&S::max_bounces, "max_bounces"),
+                      "Cycles' Total bounces (12).")
+        .def_property("diffuse_bounces", field_getter(&S::diffuse_bounces),
+                      integer_setter(&S::diffuse_bounces, "diffuse_bounces"),
+                      "Cycles' Diffuse bounces (4).")
+        .def_property("glossy_bounces", field_getter(&S::glossy_bounces),
+                      integer_setter(&S::glossy_bounces, "glossy_bounces"),
+                      "Cycles' Glossy bounces (4).")
+        .def_property("transmission_bounces", field_getter(&S::transmission_bounces),
+                      integer_setter(&S::transmission_bounces, "transmission_bounces"),
+                      "Cycles' Transmission bounces (12).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
                        "Max component of an indirect sample; 0 = off (0).")
         .def("validate", &validate_lightmap_settings,

@@ -148,7 +148,9 @@ object), with resolution probes along each local axis at the cell centres.)doc")
     def_unsigned(cls, "placement_rays", &S::placement_rays, 0,
                  "Rays per probe for placement (128).");
     cls.def(py::init(&from_kwargs<S>), "ProbeGridSettings(**fields), e.g. ProbeGridSettings(order=1).")
-        .def_readwrite("order", &S::order, "SH order of the probes, 1..4 (2).")
+        .def_property("order", field_getter(&S::order),
+                      integer_setter(&S::order, "order"),
+                      "SH order of the probes, 1..4 (2).")
         .def_readwrite("volumes", &S::volumes,
                        "List of ProbeVolume; empty: one volume fitted to the scene bounds.")
         .def_readwrite("spacing", &S::spacing,
@@ -159,12 +161,14 @@ object), with resolution probes along each local axis at the cell centres.)doc")
                        "Max component of a radiance sample against fireflies; 0 = off (0).")
         .def_readwrite("include_direct", &S::include_direct,
                        "Keep emitters and world seen straight from the probes (False).")
-        .def_readwrite("bounces", &S::bounces,
-                       "Diffuse and glossy scatterings along a probe path (3: with the "
-                       "renderer's surface, Cycles' default 4).")
+        .def_property("bounces", field_getter(&S::bounces),
+                      integer_setter(&S::bounces, "bounces"),
+                      "Diffuse and glossy scatterings along a probe path (3: with the "
+                      "renderer's surface, Cycles' default 4).")
         .def_readwrite("visibility", &S::visibility, "Leak prevention weights (True).")
-        .def_readwrite("visibility_resolution", &S::visibility_resolution,
-                       "Octahedral visibility texels per side per probe (8).")
+        .def_property("visibility_resolution", field_getter(&S::visibility_resolution),
+                      integer_setter(&S::visibility_resolution, "visibility_resolution"),
+                      "Octahedral visibility texels per side per probe (8).")
         .def_readwrite("visibility_blur", &S::visibility_blur,
                        "Angular radius (rad) of the distance filter (0.15; EEVEE's Blur).")
         .def_readwrite("normal_bias", &S::normal_bias,

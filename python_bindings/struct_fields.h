@@ -34,24 +34,38 @@ struct IndexInt {
     pybind11::int_ value;
 };
 
+// The getter of a plain field, for def_property.
+template <typename T, typename U>
+auto field_getter(U T::*field) {
+    return [field](const T& self) { return self.*field; };
+}
+
+// The setter of an integer field for def_property: takes any int (or object with __index__) in
+// [minimum, maximum], by default the type's range. Outside it (2**40 for an int, -1 for an
+// unsigned) it raises a ValueError naming the field, where def_readwrite let pybind raise a
+// TypeError about incompatible arguments that named neither the field nor the range. The
+// settings' own validation still checks what the solver accepts.
+template <typename T, typename U>
+auto integer_setter(U T::*field, const char* name, U minimum = std::numeric_limits<U>::min(),
+                    U maximum = std::numeric_limits<U>::max()) {
+    static_assert(std::is_integral_v<U> && !std::is_same_v<U, bool>,
+                  "integer_setter is for integer fields");
+    return [field, name, minimum, maximum](T& self, const IndexInt& value) {
+        if (value.value < pybind11::int_(minimum) || value.value > pybind11::int_(maximum))
+            throw_value_error(name, "must be in [" + std::to_string(minimum) + ", " +
+                                        std::to_string(maximum) + "], got " +
+                                        std::string(pybind11::str(value.value)));
+        self.*field = value.value.cast<U>();
+    };
+}
+
 // An unsigned integer field (uint32_t, uint64_t) exposed as an int that must be in
-// [minimum, the type's maximum]: -1 or 2**64 is a ValueError naming the field rather than
-// pybind's TypeError about incompatible arguments.
+// [minimum, the type's maximum].
 template <typename T, typename U>
 void def_unsigned(pybind11::class_<T>& cls, const char* name, U T::*field, uint64_t minimum,
                   const char* doc) {
     static_assert(std::is_unsigned_v<U>, "def_unsigned is for unsigned fields");
-    cls.def_property(
-        name, [field](const T& self) { return self.*field; },
-        [field, name, minimum](T& self, const IndexInt& value) {
-            const uint64_t maximum = std::numeric_limits<U>::max();
-            if (value.value < pybind11::int_(minimum) || value.value > pybind11::int_(maximum))
-                throw_value_error(name, "must be in [" + std::to_string(minimum) + ", " +
-                                            std::to_string(maximum) + "], got " +
-                                            std::string(pybind11::str(value.value)));
-            self.*field = U(value.value.cast<uint64_t>());
-        },
-        doc);
+    cls.def_property(name, field_getter(field), integer_setter(field, name, U(minimum)), doc);
 }
 
 // Constructor from keyword arguments naming fields: Material(roughness=0.2, name="Red"). An

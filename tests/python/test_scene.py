@@ -3,6 +3,7 @@
 Run with Debian's Python: PYTHONPATH=<build>/python /usr/bin/python3 -m pytest tests/python
 """
 
+import enum
 import threading
 import time
 
@@ -135,6 +136,57 @@ def test_settings_objects_mirror_cpp_fields():
     scene.set_world(shgi.World(strength=2.0))
     assert scene.world.strength == 2.0
     assert scene.lights[0].name == "Key"
+
+
+def integer_fields():
+    """(class name, field) of every writable int field of every default-constructible shgi
+    class, found by walking the module, so that a field bound later is covered too."""
+    fields = []
+    for name in dir(shgi):
+        cls = getattr(shgi, name)
+        if not isinstance(cls, type) or issubclass(cls, enum.Enum):
+            continue
+        try:
+            instance = cls()
+        except TypeError:  # needs arguments
+            continue
+        for field in dir(cls):
+            attribute = getattr(cls, field, None)
+            if field.startswith("_") or not isinstance(attribute, property) or \
+                    attribute.fset is None:
+                continue
+            if type(getattr(instance, field)) is int:  # not bool, not an enum
+                fields.append((name, field))
+    return fields
+
+
+def test_every_integer_field_range_checks_by_name():
+    fields = integer_fields()
+    # The walk finds the fields it must: signed, unsigned, 32- and 64-bit ones.
+    for expected in [("PhotonLatticeSettings", "order"), ("PhotonLatticeSettings", "photons"),
+                     ("PathTracerSettings", "max_bounces"), ("PreviewSettings", "samples"),
+                     ("ProbeGridSettings", "visibility_resolution"), ("Camera", "resolution_x"),
+                     ("Material", "base_color_texture"), ("LightmapSettings", "tile_size")]:
+        assert expected in fields
+    for class_name, field in fields:
+        instance = getattr(shgi, class_name)()
+        default = getattr(instance, field)
+        for bad in (2**70, -2**70):
+            # pybind's own int conversion raised TypeError without the field's name.
+            with pytest.raises(ValueError, match=rf"^{field}: must be in \["):
+                setattr(instance, field, bad)
+            assert getattr(instance, field) == default  # left as it was
+        setattr(instance, field, np.int32(default))  # numpy integers are ints
+        assert getattr(instance, field) == default
+    with pytest.raises(ValueError, match=r"order: must be in \[-2147483648, 2147483647\], "
+                                         r"got 2147483648"):
+        shgi.PhotonLatticeSettings(order=2**31)
+    with pytest.raises(ValueError, match=r"samples: must be in \[1, 16777216\], got 0"):
+        shgi.PreviewSettings(samples=0)
+    with pytest.raises(ValueError, match=r"resolution_x: must be in \[0, 4294967295\]"):
+        shgi.Camera().resolution_x = -1
+    with pytest.raises(TypeError):  # not an integer at all
+        shgi.PhotonLatticeSettings(order=1.5)
 
 
 def test_camera_rays_follow_blender_model():

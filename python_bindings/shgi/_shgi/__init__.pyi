@@ -126,7 +126,7 @@ class Camera:
         Render width in pixels.
         """
     @resolution_x.setter
-    def resolution_x(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def resolution_x(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def resolution_y(self) -> int:
@@ -134,7 +134,7 @@ class Camera:
         Render height in pixels.
         """
     @resolution_y.setter
-    def resolution_y(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def resolution_y(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def sensor_fit(self) -> SensorFit:
@@ -713,7 +713,7 @@ class LightmapSettings:
         Cycles' Diffuse bounces (4).
         """
     @diffuse_bounces.setter
-    def diffuse_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def diffuse_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def directional(self) -> bool:
@@ -729,7 +729,7 @@ class LightmapSettings:
         Cycles' Glossy bounces (4).
         """
     @glossy_bounces.setter
-    def glossy_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def glossy_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def max_bounces(self) -> int:
@@ -737,7 +737,7 @@ class LightmapSettings:
         Cycles' Total bounces (12).
         """
     @max_bounces.setter
-    def max_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def max_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def samples(self) -> int:
@@ -769,7 +769,7 @@ class LightmapSettings:
         Cycles' Transmission bounces (12).
         """
     @transmission_bounces.setter
-    def transmission_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def transmission_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
 class LightmapTexels:
     """
@@ -896,7 +896,7 @@ class Material:
         Index into the scene's textures, or -1 for none.
         """
     @base_color_texture.setter
-    def base_color_texture(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def base_color_texture(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def base_color_uv_set(self) -> str:
@@ -1165,7 +1165,7 @@ class PathTracerSettings:
         Diffuse bounce limit (4).
         """
     @diffuse_bounces.setter
-    def diffuse_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def diffuse_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def glossy_bounces(self) -> int:
@@ -1173,7 +1173,7 @@ class PathTracerSettings:
         Glossy bounce limit (4).
         """
     @glossy_bounces.setter
-    def glossy_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def glossy_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def max_bounces(self) -> int:
@@ -1181,7 +1181,7 @@ class PathTracerSettings:
         Total bounce limit, Cycles' (12).
         """
     @max_bounces.setter
-    def max_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def max_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def russian_roulette_depth(self) -> int:
@@ -1189,7 +1189,7 @@ class PathTracerSettings:
         Surfaces before Russian roulette may end a path (3).
         """
     @russian_roulette_depth.setter
-    def russian_roulette_depth(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def russian_roulette_depth(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def samples(self) -> int:
@@ -1197,7 +1197,7 @@ class PathTracerSettings:
         Samples per pixel rendered by render_path_traced (default 64).
         """
     @samples.setter
-    def samples(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def samples(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def seed(self) -> int:
@@ -1213,7 +1213,7 @@ class PathTracerSettings:
         Tile side in pixels (16).
         """
     @tile_size.setter
-    def tile_size(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def tile_size(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def transmission_bounces(self) -> int:
@@ -1221,7 +1221,7 @@ class PathTracerSettings:
         Transmission bounce limit (12).
         """
     @transmission_bounces.setter
-    def transmission_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def transmission_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def world_sampling(self) -> WorldSampling:
@@ -1301,7 +1301,7 @@ class PhotonLatticeSettings:
         3x3x3 blurs of the global lattice (0: blurring darkens corners).
         """
     @blur_passes.setter
-    def blur_passes(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def blur_passes(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def bounds_max(self) -> tuple:
@@ -1325,7 +1325,7 @@ class PhotonLatticeSettings:
         3x3x3 blurs of the caustic lattice (0).
         """
     @caustic_blur_passes.setter
-    def caustic_blur_passes(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def caustic_blur_passes(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def caustic_neighbours(self) -> int:
@@ -1333,7 +1333,7 @@ class PhotonLatticeSettings:
         Photons per density estimate, PHOTON_MAP mode (50).
         """
     @caustic_neighbours.setter
-    def caustic_neighbours(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def caustic_neighbours(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def caustic_order(self) -> int:
@@ -1341,7 +1341,7 @@ class PhotonLatticeSettings:
         Caustic lattice SH order (1).
         """
     @caustic_order.setter
-    def caustic_order(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def caustic_order(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def caustic_radius(self) -> float:
@@ -1357,7 +1357,7 @@ class PhotonLatticeSettings:
         Caustic lattice: cells along the longest side (64).
         """
     @caustic_resolution.setter
-    def caustic_resolution(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def caustic_resolution(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def caustics(self) -> CausticMode:
@@ -1381,7 +1381,7 @@ class PhotonLatticeSettings:
         Photon scatterings after emission; 4 matches Cycles' default diffuse bounces (4).
         """
     @max_bounces.setter
-    def max_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def max_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def normal_offset(self) -> float:
@@ -1397,7 +1397,7 @@ class PhotonLatticeSettings:
         Global lattice SH order, 1 or 2 (2).
         """
     @order.setter
-    def order(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def order(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def photons(self) -> int:
@@ -1413,7 +1413,7 @@ class PhotonLatticeSettings:
         Global lattice: cells along the bounds' longest side (16).
         """
     @resolution.setter
-    def resolution(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def resolution(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def seed(self) -> int:
@@ -1504,7 +1504,7 @@ class PreviewSettings:
         Mirror/glass bounces followed per path (8).
         """
     @max_specular_bounces.setter
-    def max_specular_bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def max_specular_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def samples(self) -> int:
@@ -1512,7 +1512,7 @@ class PreviewSettings:
         Samples per pixel rendered by render_preview (default 16).
         """
     @samples.setter
-    def samples(self, arg1: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def samples(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def seed(self) -> int:
@@ -1528,7 +1528,7 @@ class PreviewSettings:
         Tile side in pixels (16).
         """
     @tile_size.setter
-    def tile_size(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def tile_size(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def world_sampling(self) -> WorldSampling:
@@ -1802,7 +1802,7 @@ class ProbeGridSettings:
         Diffuse and glossy scatterings along a probe path (3: with the renderer's surface, Cycles' default 4).
         """
     @bounces.setter
-    def bounces(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def clamp(self) -> float:
@@ -1850,7 +1850,7 @@ class ProbeGridSettings:
         SH order of the probes, 1..4 (2).
         """
     @order.setter
-    def order(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def order(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def placement_rays(self) -> int:
@@ -1922,7 +1922,7 @@ class ProbeGridSettings:
         Octahedral visibility texels per side per probe (8).
         """
     @visibility_resolution.setter
-    def visibility_resolution(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+    def visibility_resolution(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def volumes(self) -> list[ProbeVolume]:
