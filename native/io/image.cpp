@@ -237,12 +237,37 @@ std::string create_temp_file(const fs::path& parent, const std::string& path) {
                                  "\""));
 }
 
+// Links followed before a write gives up, as the kernel's own limit (ELOOP) for a path.
+constexpr int kMaxSymlinkHops = 40;
+
+// The file a write of `path` lands in: at the end of its chain of symbolic links, if it is one
+// (a dangling link too: its target is created), so that the rename replaces the file the link
+// points to, as writing through the link would, rather than the link itself.
+std::string write_destination(const std::string& path) {
+    fs::path destination(path);
+    for (int hop = 0; hop < kMaxSymlinkHops; ++hop) {
+        std::error_code error;
+        if (!fs::is_symlink(fs::symlink_status(destination, error))) return destination.string();
+        const fs::path target = fs::read_symlink(destination, error);
+        if (error)
+            throw IoError(format_message("cannot write \"", path,
+                                         "\": reading the symbolic link \"",
+                                         destination.string(), "\" failed (", error.message(),
+                                         ")"));
+        destination = target.is_absolute() ? target : destination.parent_path() / target;
+    }
+    throw IoError(format_message("cannot write \"", path, "\": more than ", kMaxSymlinkHops,
+                                 " symbolic links in a chain (a loop?); pass the file itself"));
+}
+
 }  // namespace
 
 void write_file_atomically(const std::string& path,
                            const std::function<void(const std::string& temp_path)>& write_temp) {
-    const fs::path parent = checked_parent_folder(path);
-    const std::string temp = create_temp_file(parent, path);
+    require_no_nul(path, "write");
+    const std::string destination = write_destination(path);
+    const fs::path parent = checked_parent_folder(destination);
+    const std::string temp = create_temp_file(parent, destination);
     try {
         write_temp(temp);
     } catch (...) {
@@ -251,7 +276,7 @@ void write_file_atomically(const std::string& path,
         throw;
     }
     std::error_code error;
-    fs::rename(temp, path, error);
+    fs::rename(temp, destination, error);
     if (error) {
         std::error_code ignored;
         fs::remove(temp, ignored);

@@ -103,7 +103,8 @@ void require_readable_file(const std::string& path, const char* what);
 // the rename fails, the temporary file is removed and the error propagates. Throws IoError
 // naming the path when its folder does not exist or is not writable, or when `path` is a
 // folder or another non-regular file (a device such as /dev/null would be replaced by the
-// rename); InvalidArgument when it holds a NUL byte.
+// rename); InvalidArgument when it holds a NUL byte. A symbolic link is followed (to the end of
+// its chain): the file it points to is replaced and the link stays a link.
 void write_file_atomically(const std::string& path,
                            const std::function<void(const std::string& temp_path)>& write_temp);
 

@@ -496,5 +496,49 @@ TEST(ExrImage, FoldersSpecialFilesAndNulBytesAreRefused) {
     EXPECT_TRUE(folder_entries(folder).empty());
 }
 
+// A write through a symbolic link replaces the file it points to and keeps the link, as opening
+// the link for writing would; the rename used to replace the link with a file.
+TEST(ExrImage, WritesFollowSymbolicLinks) {
+    const fs::path folder = testing::test_folder("exr");
+    const fs::path real = folder / "real.exr";
+    write_exr(real.string(), small_image());
+    const fs::path link = folder / "link.exr";
+    fs::create_symlink("real.exr", link);  // relative to the link's folder
+    const fs::path chain = folder / "chain.exr";
+    fs::create_symlink(link, chain);  // absolute, to another link
+    Image changed(8, 8);
+    changed.add_layer("Combined", {"R", "G", "B", "A"}, std::vector<float>(8 * 8 * 4, 42.0f));
+    write_exr(chain.string(), changed);
+    EXPECT_TRUE(fs::is_symlink(fs::symlink_status(link)));
+    EXPECT_TRUE(fs::is_symlink(fs::symlink_status(chain)));
+    EXPECT_EQ(read_exr(real.string()).layer_pixels("Combined")[0], 42.0f);
+    // A dangling link: its target is created.
+    const fs::path dangling = folder / "dangling.exr";
+    fs::create_symlink("created.exr", dangling);
+    write_exr(dangling.string(), small_image());
+    EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dangling)));
+    EXPECT_TRUE(fs::is_regular_file(fs::symlink_status(folder / "created.exr")));
+    // A link to a missing folder, a loop, a link to a FIFO: refused by name, nothing replaced.
+    const fs::path nowhere = folder / "nowhere.exr";
+    fs::create_symlink("missing/x.exr", nowhere);
+    expect_error<IoError>([&] { write_exr(nowhere.string(), small_image()); },
+                          {"missing", "does not exist"});
+    const fs::path loop = folder / "loop.exr";
+    fs::create_symlink("loop.exr", loop);
+    expect_error<IoError>([&] { write_exr(loop.string(), small_image()); },
+                          {loop.string(), "symbolic links in a chain"});
+    const fs::path fifo = folder / "fifo";
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    const fs::path to_fifo = folder / "to_fifo.exr";
+    fs::create_symlink("fifo", to_fifo);
+    expect_error<IoError>([&] { write_exr(to_fifo.string(), small_image()); },
+                          {"not a regular file"});
+    EXPECT_TRUE(fs::is_fifo(fifo));
+    for (const fs::path& p : {real, link, chain, dangling, folder / "created.exr", nowhere, loop,
+                              fifo, to_fifo})
+        fs::remove(p);
+    EXPECT_TRUE(folder_entries(folder).empty());  // no temporary file left behind
+}
+
 }  // namespace
 }  // namespace shgi
