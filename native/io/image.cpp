@@ -180,29 +180,29 @@ void require_readable_file(const std::string& path, const char* what) {
 
 namespace {
 
-// The folder `path` will be written to, checked to exist.
-fs::path checked_parent_folder(const std::string& path) {
+// The folder the file `path` will be written to, checked to exist; `label` names the write in
+// messages (write_label).
+fs::path checked_parent_folder(const std::string& path, const std::string& label) {
     if (path.empty()) throw IoError("cannot write a file: the path is empty");
-    require_no_nul(path, "write");
     const fs::path target(path);
     if (!target.has_filename()) {
-        throw IoError(format_message("cannot write \"", path,
-                                     "\": the path names a folder; add a file name"));
+        throw IoError(format_message("cannot write ", label,
+                                     ": the path names a folder; add a file name"));
     }
     fs::path parent = target.parent_path();
     if (parent.empty()) parent = ".";
     std::error_code error;
     if (!fs::is_directory(parent, error)) {
-        throw IoError(format_message("cannot write \"", path, "\": folder \"", parent.string(),
+        throw IoError(format_message("cannot write ", label, ": folder \"", parent.string(),
                                      "\" does not exist; create it first"));
     }
     if (fs::is_directory(target, error)) {
-        throw IoError(format_message("cannot write \"", path,
-                                     "\": a folder of that name exists; choose a file name"));
+        throw IoError(format_message("cannot write ", label,
+                                     ": a folder of that name exists; choose a file name"));
     }
     const fs::file_status existing = fs::status(target, error);
     if (!error && fs::exists(existing) && !fs::is_regular_file(existing)) {
-        throw IoError(format_message("cannot write \"", path, "\": it exists and is not a "
+        throw IoError(format_message("cannot write ", label, ": it exists and is not a "
                                      "regular file (a device, FIFO or socket), which the write "
                                      "would replace; choose a file name"));
     }
@@ -211,7 +211,8 @@ fs::path checked_parent_folder(const std::string& path) {
 
 // Creates a new, empty, hidden temporary file next to `path` and returns its name. Exclusive
 // creation ("x") guarantees two writers never share a temporary file.
-std::string create_temp_file(const fs::path& parent, const std::string& path) {
+std::string create_temp_file(const fs::path& parent, const std::string& path,
+                             const std::string& label) {
     constexpr int kAttempts = 8;
     std::random_device entropy;
     for (int attempt = 0; attempt < kAttempts; ++attempt) {
@@ -226,14 +227,14 @@ std::string create_temp_file(const fs::path& parent, const std::string& path) {
             return temp.string();
         }
         if (errno != EEXIST) {
-            throw IoError(format_message("cannot write \"", path, "\": cannot create a file in "
+            throw IoError(format_message("cannot write ", label, ": cannot create a file in "
                                          "folder \"", parent.string(), "\" (",
                                          std::strerror(errno), "); check its permissions or "
                                          "choose another folder"));
         }
     }
-    throw IoError(format_message("cannot write \"", path,
-                                 "\": no free temporary file name in folder \"", parent.string(),
+    throw IoError(format_message("cannot write ", label,
+                                 ": no free temporary file name in folder \"", parent.string(),
                                  "\""));
 }
 
@@ -245,9 +246,13 @@ constexpr int kMaxSymlinkHops = 40;
 // points to, as writing through the link would, rather than the link itself.
 std::string write_destination(const std::string& path) {
     fs::path destination(path);
-    for (int hop = 0; hop < kMaxSymlinkHops; ++hop) {
+    for (int hops = 0;; ++hops) {
         std::error_code error;
         if (!fs::is_symlink(fs::symlink_status(destination, error))) return destination.string();
+        if (hops == kMaxSymlinkHops)
+            throw IoError(format_message("cannot write \"", path, "\": more than ",
+                                         kMaxSymlinkHops, " symbolic links in a chain (a loop?); "
+                                         "pass the file itself"));
         const fs::path target = fs::read_symlink(destination, error);
         if (error)
             throw IoError(format_message("cannot write \"", path,
@@ -256,8 +261,12 @@ std::string write_destination(const std::string& path) {
                                          ")"));
         destination = target.is_absolute() ? target : destination.parent_path() / target;
     }
-    throw IoError(format_message("cannot write \"", path, "\": more than ", kMaxSymlinkHops,
-                                 " symbolic links in a chain (a loop?); pass the file itself"));
+}
+
+// How messages name a write: the caller's path, and the file it lands in when that differs.
+std::string write_label(const std::string& path, const std::string& destination) {
+    if (destination == path) return format_message("\"", path, "\"");
+    return format_message("\"", path, "\" (a link to \"", destination, "\")");
 }
 
 }  // namespace
@@ -266,8 +275,9 @@ void write_file_atomically(const std::string& path,
                            const std::function<void(const std::string& temp_path)>& write_temp) {
     require_no_nul(path, "write");
     const std::string destination = write_destination(path);
-    const fs::path parent = checked_parent_folder(destination);
-    const std::string temp = create_temp_file(parent, destination);
+    const std::string label = write_label(path, destination);
+    const fs::path parent = checked_parent_folder(destination, label);
+    const std::string temp = create_temp_file(parent, destination, label);
     try {
         write_temp(temp);
     } catch (...) {
@@ -280,7 +290,7 @@ void write_file_atomically(const std::string& path,
     if (error) {
         std::error_code ignored;
         fs::remove(temp, ignored);
-        throw IoError(format_message("cannot write \"", path, "\": renaming the temporary file \"",
+        throw IoError(format_message("cannot write ", label, ": renaming the temporary file \"",
                                      temp, "\" failed (", error.message(), ")"));
     }
 }

@@ -518,11 +518,31 @@ TEST(ExrImage, WritesFollowSymbolicLinks) {
     write_exr(dangling.string(), small_image());
     EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dangling)));
     EXPECT_TRUE(fs::is_regular_file(fs::symlink_status(folder / "created.exr")));
+    // A relative target resolves against its link's folder, not the working folder.
+    const fs::path sub = folder / "sub";
+    fs::create_directory(sub);
+    const fs::path up = sub / "up.exr";
+    fs::create_symlink("../real.exr", up);
+    Image again(8, 8);
+    again.add_layer("Combined", {"R", "G", "B", "A"}, std::vector<float>(8 * 8 * 4, 7.0f));
+    write_exr(up.string(), again);
+    EXPECT_EQ(read_exr(real.string()).layer_pixels("Combined")[0], 7.0f);
+    // 40 links, the kernel's own limit, are followed; a 41st is refused.
+    std::vector<fs::path> hops;
+    for (int i = 0; i < 41; ++i) {
+        hops.push_back(folder / ("hop" + std::to_string(i) + ".exr"));
+        fs::create_symlink(i == 0 ? fs::path("real.exr") : hops[size_t(i) - 1].filename(),
+                           hops.back());
+    }
+    write_exr(hops[39].string(), small_image());
+    EXPECT_TRUE(fs::is_symlink(fs::symlink_status(hops[39])));
+    expect_error<IoError>([&] { write_exr(hops[40].string(), small_image()); },
+                          {"more than 40 symbolic links"});
     // A link to a missing folder, a loop, a link to a FIFO: refused by name, nothing replaced.
     const fs::path nowhere = folder / "nowhere.exr";
     fs::create_symlink("missing/x.exr", nowhere);
     expect_error<IoError>([&] { write_exr(nowhere.string(), small_image()); },
-                          {"missing", "does not exist"});
+                          {nowhere.string(), "a link to", "missing", "does not exist"});
     const fs::path loop = folder / "loop.exr";
     fs::create_symlink("loop.exr", loop);
     expect_error<IoError>([&] { write_exr(loop.string(), small_image()); },
@@ -532,11 +552,12 @@ TEST(ExrImage, WritesFollowSymbolicLinks) {
     const fs::path to_fifo = folder / "to_fifo.exr";
     fs::create_symlink("fifo", to_fifo);
     expect_error<IoError>([&] { write_exr(to_fifo.string(), small_image()); },
-                          {"not a regular file"});
+                          {to_fifo.string(), "a link to", "not a regular file"});
     EXPECT_TRUE(fs::is_fifo(fifo));
     for (const fs::path& p : {real, link, chain, dangling, folder / "created.exr", nowhere, loop,
-                              fifo, to_fifo})
+                              fifo, to_fifo, up, sub})
         fs::remove(p);
+    for (const fs::path& p : hops) fs::remove(p);
     EXPECT_TRUE(folder_entries(folder).empty());  // no temporary file left behind
 }
 
