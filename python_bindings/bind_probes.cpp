@@ -117,9 +117,11 @@ object), with resolution probes along each local axis at the cell centres.)doc")
             [](const ProbeVolume& v) {
                 return py::make_tuple(v.resolution.x, v.resolution.y, v.resolution.z);
             },
-            [](ProbeVolume& v, const std::vector<int>& r) {
+            [](ProbeVolume& v, const py::sequence& r) {
                 if (r.size() != 3) throw_value_error("resolution", "needs 3 integers");
-                v.resolution = ivec3(r[0], r[1], r[2]);
+                v.resolution = ivec3(checked_integer<int>(r[0], "resolution[0]"),
+                                     checked_integer<int>(r[1], "resolution[1]"),
+                                     checked_integer<int>(r[2], "resolution[2]"));
             },
             "Probes along the local x, y, z axes, each >= 1.")
         .def("__repr__", [](const ProbeVolume& v) {

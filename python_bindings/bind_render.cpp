@@ -43,11 +43,9 @@ py::dict passes_to_dict(const Film& film) {
     return out;
 }
 
-uint32_t checked_samples(int64_t samples, const char* arg_name) {
-    if (samples < 1 || uint64_t(samples) > kMaxPathTracerSamples)
-        throw_value_error(arg_name, format_message("must be in [1, ", kMaxPathTracerSamples,
-                                                   "], got ", samples));
-    return uint32_t(samples);
+// A render() call's sample count: any integer in [1, kMaxPathTracerSamples].
+uint32_t checked_samples(const py::handle& samples) {
+    return checked_integer<uint32_t>(samples, "samples", 1u, uint32_t(kMaxPathTracerSamples));
 }
 
 void bind_settings(py::module_& m) {
@@ -117,7 +115,7 @@ were split between render() calls.)doc")
             [](PathTracer& tracer, const py::object& samples, Progress* progress) {
                 const uint32_t count =
                     samples.is_none() ? tracer.settings().samples
-                                      : checked_samples(samples.cast<int64_t>(), "samples");
+                                      : checked_samples(samples);
                 SceneUse use(tracer.scene(), SceneUse::Kind::Query, "render (PathTracer)");
                 py::gil_scoped_release release;
                 tracer.render(count, progress);
@@ -272,7 +270,7 @@ timings is the last render's stage times in seconds (primary, direct, indirect, 
             [](PreviewRenderer& renderer, const IndirectField* field, const py::object& samples,
                Progress* progress) {
                 const uint32_t count =
-                    samples.is_none() ? 1u : checked_samples(samples.cast<int64_t>(), "samples");
+                    samples.is_none() ? 1u : checked_samples(samples);
                 SceneUse use(renderer.scene(), SceneUse::Kind::Query, "render (PreviewRenderer)");
                 py::gil_scoped_release release;
                 renderer.render(field, count, progress);

@@ -29,7 +29,7 @@ void def_vec3(pybind11::class_<T>& cls, const char* name, vec3 T::*field, const 
 }
 
 // A Python int, or any object with __index__ (numpy's integers), kept at full size so that
-// def_unsigned can range-check it and name the field.
+// integer_setter can range-check it and name the field.
 struct IndexInt {
     pybind11::int_ value;
 };
@@ -40,22 +40,38 @@ auto field_getter(U T::*field) {
     return [field](const T& self) { return self.*field; };
 }
 
-// The setter of an integer field for def_property: takes any int (or object with __index__) in
-// [minimum, maximum], by default the type's range. Outside it (2**40 for an int, -1 for an
-// unsigned) it raises a ValueError naming the field, where def_readwrite let pybind raise a
-// TypeError about incompatible arguments that named neither the field nor the range. The
-// settings' own validation still checks what the solver accepts.
+// `value` (an int, or any object with __index__) as a U in [minimum, maximum], by default the
+// type's range: outside it, a ValueError naming `name` and the range; not an integer at all
+// (1.5, "3"), a TypeError naming `name`.
+template <typename U>
+U checked_integer(const pybind11::handle& value, const char* name,
+                  U minimum = std::numeric_limits<U>::min(),
+                  U maximum = std::numeric_limits<U>::max()) {
+    static_assert(std::is_integral_v<U> && !std::is_same_v<U, bool>,
+                  "checked_integer is for integer types");
+    PyObject* index = PyNumber_Index(value.ptr());
+    if (index == nullptr) {
+        PyErr_Clear();
+        throw pybind11::type_error(std::string(name) + ": expected an integer, got " +
+                                   Py_TYPE(value.ptr())->tp_name);
+    }
+    const auto number = pybind11::reinterpret_steal<pybind11::int_>(index);
+    if (number < pybind11::int_(minimum) || number > pybind11::int_(maximum))
+        throw_value_error(name, "must be in [" + std::to_string(minimum) + ", " +
+                                    std::to_string(maximum) + "], got " +
+                                    std::string(pybind11::str(number)));
+    return number.cast<U>();
+}
+
+// The setter of an integer field for def_property, through checked_integer: 2**40 for an int
+// field or -1 for an unsigned one is a ValueError naming the field, where def_readwrite let
+// pybind raise a TypeError about incompatible arguments that named neither the field nor the
+// range. The settings' own validation still checks what the solver accepts.
 template <typename T, typename U>
 auto integer_setter(U T::*field, const char* name, U minimum = std::numeric_limits<U>::min(),
                     U maximum = std::numeric_limits<U>::max()) {
-    static_assert(std::is_integral_v<U> && !std::is_same_v<U, bool>,
-                  "integer_setter is for integer fields");
     return [field, name, minimum, maximum](T& self, const IndexInt& value) {
-        if (value.value < pybind11::int_(minimum) || value.value > pybind11::int_(maximum))
-            throw_value_error(name, "must be in [" + std::to_string(minimum) + ", " +
-                                        std::to_string(maximum) + "], got " +
-                                        std::string(pybind11::str(value.value)));
-        self.*field = value.value.cast<U>();
+        self.*field = checked_integer<U>(value.value, name, minimum, maximum);
     };
 }
 

@@ -96,6 +96,18 @@ def test_bad_arguments():
         shgi.PathTracerSettings(not_a_field=1)
     with pytest.raises(ValueError, match="commit"):
         shgi.PathTracer(shgi.Scene())
+    # render(samples) checks like the settings field: named, with the range, never a cast error.
+    scene = inward_box_scene(0.5, 1.0, resolution=4)
+    tracer = shgi.PathTracer(scene, shgi.PathTracerSettings(samples=1))
+    preview = shgi.PreviewRenderer(scene)
+    for render in (tracer.render, lambda samples: preview.render(None, samples)):
+        for bad in (0, 2**24 + 1, 2**70, -1):
+            with pytest.raises(ValueError, match=r"^samples: must be in \[1, 16777216\]"):
+                render(bad)
+        with pytest.raises(TypeError, match="^samples: expected an integer, got float"):
+            render(1.5)
+    tracer.render(np.uint8(1))
+    assert tracer.samples_done == 1
 
 
 def test_cancel_raises_promptly_and_keeps_the_film():

@@ -4,6 +4,7 @@ Run with Debian's Python: PYTHONPATH=<build>/python /usr/bin/python3 -m pytest t
 """
 
 import enum
+import re
 import threading
 import time
 
@@ -160,6 +161,12 @@ def integer_fields():
     return fields
 
 
+TYPE_RANGES = [(-2**31, 2**31 - 1), (0, 2**32 - 1), (0, 2**64 - 1)]  # int, uint32, uint64
+NARROWER_RANGES = {("PathTracerSettings", "samples"): (1, 2**24),
+                   ("PreviewSettings", "samples"): (1, 2**24),
+                   ("PhotonLatticeSettings", "photons"): (1, 2**64 - 1)}
+
+
 def test_every_integer_field_range_checks_by_name():
     fields = integer_fields()
     # The walk finds the fields it must: signed, unsigned, 32- and 64-bit ones.
@@ -171,11 +178,20 @@ def test_every_integer_field_range_checks_by_name():
     for class_name, field in fields:
         instance = getattr(shgi, class_name)()
         default = getattr(instance, field)
-        for bad in (2**70, -2**70):
-            # pybind's own int conversion raised TypeError without the field's name.
-            with pytest.raises(ValueError, match=rf"^{field}: must be in \["):
+        # pybind's own int conversion raised TypeError without the field's name.
+        with pytest.raises(ValueError, match=rf"^{field}: must be in \[") as error:
+            setattr(instance, field, 2**70)
+        low, high = map(int, re.search(r"\[(-?\d+), (\d+)\]", str(error.value)).groups())
+        # The range is the field's C++ type's, or the narrower one a few fields set.
+        assert (low, high) == NARROWER_RANGES.get((class_name, field)) or \
+            (class_name, field) not in NARROWER_RANGES and (low, high) in TYPE_RANGES
+        for bad in (-2**70, low - 1, high + 1):
+            with pytest.raises(ValueError, match=rf"^{field}: must be in \[{low}, {high}\]"):
                 setattr(instance, field, bad)
             assert getattr(instance, field) == default  # left as it was
+        for end in (low, high):
+            setattr(instance, field, end)
+            assert getattr(instance, field) == end
         setattr(instance, field, np.int32(default))  # numpy integers are ints
         assert getattr(instance, field) == default
     with pytest.raises(ValueError, match=r"order: must be in \[-2147483648, 2147483647\], "
@@ -187,6 +203,14 @@ def test_every_integer_field_range_checks_by_name():
         shgi.Camera().resolution_x = -1
     with pytest.raises(TypeError):  # not an integer at all
         shgi.PhotonLatticeSettings(order=1.5)
+    # Integer arguments and sequences check the same way.
+    volume = shgi.ProbeVolume()
+    with pytest.raises(ValueError, match=r"resolution\[1\]: must be in \[-2147483648"):
+        volume.resolution = (4, 2**31, 4)
+    with pytest.raises(TypeError, match=r"resolution\[2\]: expected an integer, got float"):
+        volume.resolution = (4, 4, 4.5)
+    volume.resolution = np.array([3, 4, 5])
+    assert volume.resolution == (3, 4, 5)
 
 
 def test_camera_rays_follow_blender_model():

@@ -1996,7 +1996,7 @@ class ProbeVolume:
         Probes along the local x, y, z axes, each >= 1.
         """
     @resolution.setter
-    def resolution(self, arg1: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex]) -> None:
+    def resolution(self, arg1: collections.abc.Sequence) -> None:
         ...
     @property
     def world_from_volume(self) -> numpy.typing.NDArray[numpy.float32]:
