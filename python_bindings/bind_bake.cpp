@@ -76,10 +76,10 @@ void bind_texel_map(py::module_& m) {
     using S = TexelRasterSettings;
     py::class_<S> raster_cls(m, "TexelRasterSettings",
                            "Where lightmap texels lie: resolution, UV map and samples per texel.");
-    def_unsigned(raster_cls, "width", &S::width, 0, "Texels along u (256).");
-    def_unsigned(raster_cls, "height", &S::height, 0, "Texels along v (256).");
-    def_unsigned(raster_cls, "samples_per_axis", &S::samples_per_axis, 0,
-                 "Sample positions per texel side, 1..16 (2: 4 per texel).");
+    def_integer(raster_cls, "width", &S::width, "Texels along u (256).");
+    def_integer(raster_cls, "height", &S::height, "Texels along v (256).");
+    def_integer(raster_cls, "samples_per_axis", &S::samples_per_axis,
+                "Sample positions per texel side, 1..16 (2: 4 per texel).");
     raster_cls.def(py::init(&from_kwargs<S>), "TexelRasterSettings(**fields)")
         .def_readwrite("uv_set", &S::uv_set, "The lightmap UV map's name ('LightmapUV').");
 
@@ -134,8 +134,8 @@ The sample positions of every texel of one object's lightmap (rasterize_texels).
     using U = UnoccludeSettings;
     py::class_<U> unocclude_settings(m, "UnoccludeSettings",
                                      "Moving texel samples out of walls (Godot's unocclude).");
-    def_unsigned(unocclude_settings, "ray_count", &U::ray_count, 0,
-                 "Tangent-plane rays per sample (8).");
+    def_integer(unocclude_settings, "ray_count", &U::ray_count,
+                "Tangent-plane rays per sample (8).");
     unocclude_settings.def(py::init(&from_kwargs<U>), "UnoccludeSettings(**fields)")
         .def_readwrite("search_radius", &U::search_radius, "Texels searched for walls (1).")
         .def_readwrite("push_distance", &U::push_distance, "Texels past the wall (0.05).");
@@ -163,10 +163,16 @@ void bind_lightmap(py::module_& m) {
     py::class_<S> settings_cls(m, "LightmapSettings", R"doc(
 What and how a lightmap is baked; every field has a default. Content (Cycles' DIFFUSE bake):
 'DIRECT_INDIRECT' (pass_filter {DIRECT, INDIRECT}), 'DIRECT', 'INDIRECT', or 'FULL' (also COLOR).)doc");
-    def_unsigned(settings_cls, "seed", &S::seed, 0, "Random seed (0).");
-    def_unsigned(settings_cls, "samples", &S::samples, 0, "Samples per texel (256).");
-    def_unsigned(settings_cls, "tile_size", &S::tile_size, 0,
-                 "Texels per tile side: the unit of work and of shards (16).");
+    def_integer(settings_cls, "seed", &S::seed, "Random seed (0).");
+    def_integer(settings_cls, "samples", &S::samples, "Samples per texel (256).");
+    def_integer(settings_cls, "tile_size", &S::tile_size,
+                "Texels per tile side: the unit of work and of shards (16).");
+    def_integer(settings_cls, "max_bounces", &S::max_bounces, "Cycles' Total bounces (12).");
+    def_integer(settings_cls, "diffuse_bounces", &S::diffuse_bounces,
+                "Cycles' Diffuse bounces (4).");
+    def_integer(settings_cls, "glossy_bounces", &S::glossy_bounces, "Cycles' Glossy bounces (4).");
+    def_integer(settings_cls, "transmission_bounces", &S::transmission_bounces,
+                "Cycles' Transmission bounces (12).");
     settings_cls.def(py::init(&from_kwargs<S>), "LightmapSettings(**fields)")
         .def_property(
             "content", [](const S& s) { return std::string(lightmap_content_name(s.content)); },
@@ -174,18 +180,6 @@ What and how a lightmap is baked; every field has a default. Content (Cycles' DI
             "'DIRECT_INDIRECT' (default), 'DIRECT', 'INDIRECT' or 'FULL'.")
         .def_readwrite("directional", &S::directional,
                        "Also bake the L1 SH of the incident radiance (False).")
-        .def_property("max_bounces", field_getter(&S::max_bounces),
-                      integer_setter(&S::max_bounces, "max_bounces"),
-                      "Cycles' Total bounces (12).")
-        .def_property("diffuse_bounces", field_getter(&S::diffuse_bounces),
-                      integer_setter(&S::diffuse_bounces, "diffuse_bounces"),
-                      "Cycles' Diffuse bounces (4).")
-        .def_property("glossy_bounces", field_getter(&S::glossy_bounces),
-                      integer_setter(&S::glossy_bounces, "glossy_bounces"),
-                      "Cycles' Glossy bounces (4).")
-        .def_property("transmission_bounces", field_getter(&S::transmission_bounces),
-                      integer_setter(&S::transmission_bounces, "transmission_bounces"),
-                      "Cycles' Transmission bounces (12).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
                        "Max component of an indirect sample; 0 = off (0).")
         .def("validate", &validate_lightmap_settings,
@@ -258,7 +252,7 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
     using F = LightmapFilterSettings;
     py::class_<F> filter(m, "LightmapFilterSettings",
                          "Edge-aware a-trous filter that never crosses UV charts.");
-    def_unsigned(filter, "iterations", &F::iterations, 0, "A-trous passes, 0 = off (2).");
+    def_integer(filter, "iterations", &F::iterations, "A-trous passes, 0 = off (2).");
     filter.def(py::init(&from_kwargs<F>), "LightmapFilterSettings(**fields)")
         .def_readwrite("normal_power", &F::normal_power, "Normal weight sharpness (64).")
         .def_readwrite("position_sigma", &F::position_sigma,

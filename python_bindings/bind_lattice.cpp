@@ -60,41 +60,31 @@ void bind_settings(py::module_& m) {
     using S = PhotonLatticeSettings;
     py::class_<S> cls(m, "PhotonLatticeSettings",
                       "Settings of the PhotonLattice solver; every field has a default.");
-    def_unsigned(cls, "photons", &S::photons, 1, "Photons emitted per solve() (200000).");
-    def_unsigned(cls, "seed", &S::seed, 0, "Random seed (0).");
+    def_integer(cls, "photons", &S::photons, "Photons emitted per solve() (200000).", 1);
+    def_integer(cls, "seed", &S::seed, "Random seed (0).");
+    def_integer(cls, "max_bounces", &S::max_bounces,
+                "Photon scatterings after emission; 4 matches Cycles' default diffuse "
+                "bounces (4).");
+    def_integer(cls, "resolution", &S::resolution,
+                "Global lattice: cells along the bounds' longest side (16).");
+    def_integer(cls, "order", &S::order, "Global lattice SH order, 1 or 2 (2).");
+    def_integer(cls, "blur_passes", &S::blur_passes,
+                "3x3x3 blurs of the global lattice (0: blurring darkens corners).");
+    def_integer(cls, "caustic_resolution", &S::caustic_resolution,
+                "Caustic lattice: cells along the longest side (64).");
+    def_integer(cls, "caustic_order", &S::caustic_order, "Caustic lattice SH order (1).");
+    def_integer(cls, "caustic_blur_passes", &S::caustic_blur_passes,
+                "3x3x3 blurs of the caustic lattice (0).");
+    def_integer(cls, "caustic_neighbours", &S::caustic_neighbours,
+                "Photons per density estimate, PHOTON_MAP mode (50).");
     cls.def(py::init(&from_kwargs<S>),
             "PhotonLatticeSettings(**fields), e.g. PhotonLatticeSettings(photons=100000).")
-        .def_property("max_bounces", field_getter(&S::max_bounces),
-                      integer_setter(&S::max_bounces, "max_bounces"),
-                      "Photon scatterings after emission; 4 matches Cycles' default diffuse "
-                      "bounces (4).")
         .def_readwrite("specular_roughness", &S::specular_roughness,
                        "Lobes up to this roughness make caustic paths (0.1).")
         .def_readwrite("world_in_field", &S::world_in_field,
                        "The lattices carry the world's direct light; renderers skip the world "
                        "in next-event estimation; that light then lands in the Ind passes (False).")
-        .def_property("resolution", field_getter(&S::resolution),
-                      integer_setter(&S::resolution, "resolution"),
-                      "Global lattice: cells along the bounds' longest side (16).")
-        .def_property("order", field_getter(&S::order),
-                      integer_setter(&S::order, "order"),
-                      "Global lattice SH order, 1 or 2 (2).")
-        .def_property("blur_passes", field_getter(&S::blur_passes),
-                      integer_setter(&S::blur_passes, "blur_passes"),
-                      "3x3x3 blurs of the global lattice (0: blurring darkens corners).")
         .def_readwrite("caustics", &S::caustics, "CausticMode (LATTICE).")
-        .def_property("caustic_resolution", field_getter(&S::caustic_resolution),
-                      integer_setter(&S::caustic_resolution, "caustic_resolution"),
-                      "Caustic lattice: cells along the longest side (64).")
-        .def_property("caustic_order", field_getter(&S::caustic_order),
-                      integer_setter(&S::caustic_order, "caustic_order"),
-                      "Caustic lattice SH order (1).")
-        .def_property("caustic_blur_passes", field_getter(&S::caustic_blur_passes),
-                      integer_setter(&S::caustic_blur_passes, "caustic_blur_passes"),
-                      "3x3x3 blurs of the caustic lattice (0).")
-        .def_property("caustic_neighbours", field_getter(&S::caustic_neighbours),
-                      integer_setter(&S::caustic_neighbours, "caustic_neighbours"),
-                      "Photons per density estimate, PHOTON_MAP mode (50).")
         .def_readwrite("caustic_radius", &S::caustic_radius,
                        "Max radius (m) of the density estimate; 0 = 2% of the bounds' diagonal.")
         .def_readwrite("interpolation", &S::interpolation, "LatticeInterpolation (CUBIC).")

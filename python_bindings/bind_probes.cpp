@@ -145,14 +145,16 @@ object), with resolution probes along each local axis at the cell centres.)doc")
     using S = ProbeGridSettings;
     py::class_<S> cls(m, "ProbeGridSettings",
                       "Settings of the ProbeGrid solver; every field has a default.");
-    def_unsigned(cls, "seed", &S::seed, 0, "Random seed (0).");
-    def_unsigned(cls, "rays_per_probe", &S::rays_per_probe, 0, "Paths per probe per update (256).");
-    def_unsigned(cls, "placement_rays", &S::placement_rays, 0,
-                 "Rays per probe for placement (128).");
+    def_integer(cls, "seed", &S::seed, "Random seed (0).");
+    def_integer(cls, "rays_per_probe", &S::rays_per_probe, "Paths per probe per update (256).");
+    def_integer(cls, "placement_rays", &S::placement_rays, "Rays per probe for placement (128).");
+    def_integer(cls, "order", &S::order, "SH order of the probes, 1..4 (2).");
+    def_integer(cls, "bounces", &S::bounces,
+                "Diffuse and glossy scatterings along a probe path (3: with the "
+                "renderer's surface, Cycles' default 4).");
+    def_integer(cls, "visibility_resolution", &S::visibility_resolution,
+                "Octahedral visibility texels per side per probe (8).");
     cls.def(py::init(&from_kwargs<S>), "ProbeGridSettings(**fields), e.g. ProbeGridSettings(order=1).")
-        .def_property("order", field_getter(&S::order),
-                      integer_setter(&S::order, "order"),
-                      "SH order of the probes, 1..4 (2).")
         .def_readwrite("volumes", &S::volumes,
                        "List of ProbeVolume; empty: one volume fitted to the scene bounds.")
         .def_readwrite("spacing", &S::spacing,
@@ -163,14 +165,7 @@ object), with resolution probes along each local axis at the cell centres.)doc")
                        "Max component of a radiance sample against fireflies; 0 = off (0).")
         .def_readwrite("include_direct", &S::include_direct,
                        "Keep emitters and world seen straight from the probes (False).")
-        .def_property("bounces", field_getter(&S::bounces),
-                      integer_setter(&S::bounces, "bounces"),
-                      "Diffuse and glossy scatterings along a probe path (3: with the "
-                      "renderer's surface, Cycles' default 4).")
         .def_readwrite("visibility", &S::visibility, "Leak prevention weights (True).")
-        .def_property("visibility_resolution", field_getter(&S::visibility_resolution),
-                      integer_setter(&S::visibility_resolution, "visibility_resolution"),
-                      "Octahedral visibility texels per side per probe (8).")
         .def_readwrite("visibility_blur", &S::visibility_blur,
                        "Angular radius (rad) of the distance filter (0.15; EEVEE's Blur).")
         .def_readwrite("normal_bias", &S::normal_bias,

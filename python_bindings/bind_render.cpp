@@ -55,35 +55,24 @@ void bind_settings(py::module_& m) {
     using S = PathTracerSettings;
     py::class_<S> cls(m, "PathTracerSettings",
                       "Settings of the reference path tracer; every field has a default.");
-    def_unsigned(cls, "seed", &S::seed, 0,
-               "Random seed; the image is a pure function of it (default 0).");
+    def_integer(cls, "seed", &S::seed,
+                "Random seed; the image is a pure function of it (default 0).");
+    def_integer(cls, "samples", &S::samples,
+                "Samples per pixel rendered by render_path_traced (default 64).", 1,
+                uint32_t(kMaxPathTracerSamples));
+    def_integer(cls, "max_bounces", &S::max_bounces, "Total bounce limit, Cycles' (12).");
+    def_integer(cls, "diffuse_bounces", &S::diffuse_bounces, "Diffuse bounce limit (4).");
+    def_integer(cls, "glossy_bounces", &S::glossy_bounces, "Glossy bounce limit (4).");
+    def_integer(cls, "transmission_bounces", &S::transmission_bounces,
+                "Transmission bounce limit (12).");
+    def_integer(cls, "russian_roulette_depth", &S::russian_roulette_depth,
+                "Surfaces before Russian roulette may end a path (3).");
+    def_integer(cls, "tile_size", &S::tile_size, "Tile side in pixels (16).");
     cls.def(py::init(&from_kwargs<S>),
             "PathTracerSettings(**fields), e.g. PathTracerSettings(samples=16, seed=3).")
-        .def_property("samples", field_getter(&S::samples),
-                      integer_setter(&S::samples, "samples", 1u,
-                                     uint32_t(kMaxPathTracerSamples)),
-            "Samples per pixel rendered by render_path_traced (default 64).")
-        .def_property("max_bounces", field_getter(&S::max_bounces),
-                      integer_setter(&S::max_bounces, "max_bounces"),
-                      "Total bounce limit, Cycles' (12).")
-        .def_property("diffuse_bounces", field_getter(&S::diffuse_bounces),
-                      integer_setter(&S::diffuse_bounces, "diffuse_bounces"),
-                      "Diffuse bounce limit (4).")
-        .def_property("glossy_bounces", field_getter(&S::glossy_bounces),
-                      integer_setter(&S::glossy_bounces, "glossy_bounces"),
-                      "Glossy bounce limit (4).")
-        .def_property("transmission_bounces", field_getter(&S::transmission_bounces),
-                      integer_setter(&S::transmission_bounces, "transmission_bounces"),
-                      "Transmission bounce limit (12).")
-        .def_property("russian_roulette_depth", field_getter(&S::russian_roulette_depth),
-                      integer_setter(&S::russian_roulette_depth, "russian_roulette_depth"),
-                      "Surfaces before Russian roulette may end a path (3).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
                        "Max component of an indirect sample's contribution; 0 = off (0).")
         .def_readwrite("world_sampling", &S::world_sampling, "WorldSampling (COSINE).")
-        .def_property("tile_size", field_getter(&S::tile_size),
-                      integer_setter(&S::tile_size, "tile_size"),
-                      "Tile side in pixels (16).")
         .def("validate", &validate_path_tracer_settings,
              "Raises ValueError naming the first invalid field.");
 }
@@ -233,22 +222,18 @@ void bind_preview(py::module_& m) {
     using S = PreviewSettings;
     py::class_<S> cls(m, "PreviewSettings",
                       "Settings of the preview renderer; every field has a default.");
-    def_unsigned(cls, "seed", &S::seed, 0, "Random seed (default 0).");
+    def_integer(cls, "seed", &S::seed, "Random seed (default 0).");
+    def_integer(cls, "samples", &S::samples,
+                "Samples per pixel rendered by render_preview (default 16).", 1,
+                uint32_t(kMaxPathTracerSamples));
+    def_integer(cls, "max_specular_bounces", &S::max_specular_bounces,
+                "Mirror/glass bounces followed per path (8).");
+    def_integer(cls, "tile_size", &S::tile_size, "Tile side in pixels (16).");
     cls.def(py::init(&from_kwargs<S>),
             "PreviewSettings(**fields), e.g. PreviewSettings(samples=4, seed=1).")
-        .def_property("samples", field_getter(&S::samples),
-                      integer_setter(&S::samples, "samples", 1u,
-                                     uint32_t(kMaxPathTracerSamples)),
-            "Samples per pixel rendered by render_preview (default 16).")
-        .def_property("max_specular_bounces", field_getter(&S::max_specular_bounces),
-                      integer_setter(&S::max_specular_bounces, "max_specular_bounces"),
-                      "Mirror/glass bounces followed per path (8).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
                        "Max component of an indirect contribution; 0 = off (0).")
         .def_readwrite("world_sampling", &S::world_sampling, "WorldSampling (COSINE).")
-        .def_property("tile_size", field_getter(&S::tile_size),
-                      integer_setter(&S::tile_size, "tile_size"),
-                      "Tile side in pixels (16).")
         .def("validate", &validate_preview_settings,
              "Raises ValueError naming the first invalid field.");
 

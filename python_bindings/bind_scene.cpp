@@ -163,13 +163,12 @@ void bind_material(py::module_& m) {
     py::class_<Material> cls(m, "Material",
                              "Principled BSDF subset (Blender 3.4 semantics, or 4.x's with "
                              "principled_model V2), linear Rec.709.");
+    def_integer(cls, "base_color_texture", &Material::base_color_texture,
+                "Index into the scene's textures, or -1 for none.");
     cls.def(py::init(&from_kwargs<Material>),
             "Material(**fields): a default material with the given fields set, e.g. "
             "Material(name='Red', base_color=(0.8, 0.1, 0.1), roughness=0.3).")
         .def_readwrite("name", &Material::name, "Blender's material name.")
-        .def_property("base_color_texture", field_getter(&Material::base_color_texture),
-                      integer_setter(&Material::base_color_texture, "base_color_texture"),
-                      "Index into the scene's textures, or -1 for none.")
         .def_readwrite("base_color_uv_set", &Material::base_color_uv_set,
                        "UV map used by the texture ('' = the first).")
         .def_readwrite("roughness", &Material::roughness, "0..1 (GGX alpha = roughness^2).")
@@ -290,6 +289,8 @@ void bind_camera(py::module_& m) {
         .value("HORIZONTAL", SensorFit::Horizontal)
         .value("VERTICAL", SensorFit::Vertical);
     py::class_<Camera> cls(m, "Camera", "A Blender camera (see scene/camera.h).");
+    def_integer(cls, "resolution_x", &Camera::resolution_x, "Render width in pixels.");
+    def_integer(cls, "resolution_y", &Camera::resolution_y, "Render height in pixels.");
     cls.def(py::init(&from_kwargs<Camera>), "Camera(**fields): Blender's default camera data.")
         .def_readwrite("type", &Camera::type, "CameraType.")
         .def_readwrite("lens", &Camera::lens, "Focal length in mm (perspective).")
@@ -301,12 +302,6 @@ void bind_camera(py::module_& m) {
         .def_readwrite("shift_y", &Camera::shift_y, "In units of the fitted dimension.")
         .def_readwrite("clip_start", &Camera::clip_start, "m.")
         .def_readwrite("clip_end", &Camera::clip_end, "m.")
-        .def_property("resolution_x", field_getter(&Camera::resolution_x),
-                      integer_setter(&Camera::resolution_x, "resolution_x"),
-                      "Render width in pixels.")
-        .def_property("resolution_y", field_getter(&Camera::resolution_y),
-                      integer_setter(&Camera::resolution_y, "resolution_y"),
-                      "Render height in pixels.")
         .def(
             "generate_ray",
             [](const Camera& camera, float x, float y) {

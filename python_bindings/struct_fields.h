@@ -29,33 +29,30 @@ void def_vec3(pybind11::class_<T>& cls, const char* name, vec3 T::*field, const 
 }
 
 // A Python int, or any object with __index__ (numpy's integers), kept at full size so that
-// integer_setter can range-check it and name the field.
+// def_integer can range-check it and name the field.
 struct IndexInt {
     pybind11::int_ value;
 };
 
-// The getter of a plain field, for def_property.
-template <typename T, typename U>
-auto field_getter(U T::*field) {
-    return [field](const T& self) { return self.*field; };
+// operator.index(value), or a null object when value is not an integer (1.5, "3").
+inline pybind11::object as_index(const pybind11::handle& value) {
+    PyObject* index = PyNumber_Index(value.ptr());
+    if (index == nullptr) PyErr_Clear();
+    return pybind11::reinterpret_steal<pybind11::object>(index);
 }
 
-// `value` (an int, or any object with __index__) as a U in [minimum, maximum], by default the
-// type's range: outside it, a ValueError naming `name` and the range; not an integer at all
-// (1.5, "3"), a TypeError naming `name`.
+// Spells a bound parameter's type without deducing it from the argument (C++20's
+// std::type_identity_t): def_integer(..., 1) for a uint64_t field must not deduce int.
 template <typename U>
-U checked_integer(const pybind11::handle& value, const char* name,
-                  U minimum = std::numeric_limits<U>::min(),
-                  U maximum = std::numeric_limits<U>::max()) {
+struct Exactly {
+    using type = U;
+};
+
+// `number` as a U if it is in [minimum, maximum]; else a ValueError naming `name` and the range.
+template <typename U>
+U range_checked(const pybind11::int_& number, const char* name, U minimum, U maximum) {
     static_assert(std::is_integral_v<U> && !std::is_same_v<U, bool>,
-                  "checked_integer is for integer types");
-    PyObject* index = PyNumber_Index(value.ptr());
-    if (index == nullptr) {
-        PyErr_Clear();
-        throw pybind11::type_error(std::string(name) + ": expected an integer, got " +
-                                   Py_TYPE(value.ptr())->tp_name);
-    }
-    const auto number = pybind11::reinterpret_steal<pybind11::int_>(index);
+                  "range_checked is for integer types");
     if (number < pybind11::int_(minimum) || number > pybind11::int_(maximum))
         throw_value_error(name, "must be in [" + std::to_string(minimum) + ", " +
                                     std::to_string(maximum) + "], got " +
@@ -63,25 +60,36 @@ U checked_integer(const pybind11::handle& value, const char* name,
     return number.cast<U>();
 }
 
-// The setter of an integer field for def_property, through checked_integer: 2**40 for an int
-// field or -1 for an unsigned one is a ValueError naming the field, where def_readwrite let
-// pybind raise a TypeError about incompatible arguments that named neither the field nor the
-// range. The settings' own validation still checks what the solver accepts.
-template <typename T, typename U>
-auto integer_setter(U T::*field, const char* name, U minimum = std::numeric_limits<U>::min(),
-                    U maximum = std::numeric_limits<U>::max()) {
-    return [field, name, minimum, maximum](T& self, const IndexInt& value) {
-        self.*field = checked_integer<U>(value.value, name, minimum, maximum);
-    };
+// `value` (an int, or any object with __index__) as a U in [minimum, maximum], by default the
+// type's range: outside it, a ValueError naming `name` and the range; not an integer at all, a
+// TypeError naming `name`. For arguments and sequence elements; fields use def_integer.
+template <typename U>
+U checked_integer(const pybind11::handle& value, const char* name,
+                  typename Exactly<U>::type minimum = std::numeric_limits<U>::min(),
+                  typename Exactly<U>::type maximum = std::numeric_limits<U>::max()) {
+    const pybind11::object index = as_index(value);
+    if (!index)
+        throw pybind11::type_error(std::string(name) + ": expected an integer, got " +
+                                   Py_TYPE(value.ptr())->tp_name);
+    return range_checked<U>(pybind11::reinterpret_borrow<pybind11::int_>(index), name, minimum,
+                            maximum);
 }
 
-// An unsigned integer field (uint32_t, uint64_t) exposed as an int that must be in
-// [minimum, the type's maximum].
+// An integer field (int, uint32_t, uint64_t) exposed as an int in [minimum, maximum], by default
+// the type's range. It takes any int or __index__ object (numpy's integers); outside the range
+// (2**40 for an int, -1 for an unsigned) it is a ValueError naming the field and the range,
+// where def_readwrite let pybind raise a TypeError about incompatible arguments that named
+// neither. The settings' own validation still checks what the solver accepts.
 template <typename T, typename U>
-void def_unsigned(pybind11::class_<T>& cls, const char* name, U T::*field, uint64_t minimum,
-                  const char* doc) {
-    static_assert(std::is_unsigned_v<U>, "def_unsigned is for unsigned fields");
-    cls.def_property(name, field_getter(field), integer_setter(field, name, U(minimum)), doc);
+void def_integer(pybind11::class_<T>& cls, const char* name, U T::*field, const char* doc,
+                 typename Exactly<U>::type minimum = std::numeric_limits<U>::min(),
+                 typename Exactly<U>::type maximum = std::numeric_limits<U>::max()) {
+    cls.def_property(
+        name, [field](const T& self) { return self.*field; },
+        [field, name, minimum, maximum](T& self, const IndexInt& value) {
+            self.*field = range_checked<U>(value.value, name, minimum, maximum);
+        },
+        doc);
 }
 
 // Constructor from keyword arguments naming fields: Material(roughness=0.2, name="Red"). An
@@ -110,12 +118,9 @@ struct type_caster<shgi::python::IndexInt> {
     PYBIND11_TYPE_CASTER(shgi::python::IndexInt, const_name("typing.SupportsIndex"));
 
     bool load(handle source, bool /*convert*/) {
-        PyObject* index = PyNumber_Index(source.ptr());
-        if (index == nullptr) {
-            PyErr_Clear();
-            return false;  // pybind's TypeError listing the accepted types
-        }
-        value.value = reinterpret_steal<int_>(index);
+        const object index = shgi::python::as_index(source);
+        if (!index) return false;  // pybind's TypeError listing the accepted types
+        value.value = reinterpret_borrow<int_>(index);
         return true;
     }
     static handle cast(const shgi::python::IndexInt& source, return_value_policy, handle) {
