@@ -237,6 +237,7 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
         "bake_lightmap",
         [](const Scene& scene, const TexelMap& map, const S& settings, const IndirectField* field,
            const std::vector<uint32_t>& tiles, Progress* progress) {
+            const ObjectUse reads = field_use(field, ObjectUse::Kind::Read, "bake_lightmap");
             SceneUse use(scene, SceneUse::Kind::Query, "bake_lightmap");
             py::gil_scoped_release release;
             return bake_lightmap(scene, map, field, settings, tiles, progress);

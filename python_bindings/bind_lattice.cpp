@@ -98,6 +98,12 @@ void bind_settings(py::module_& m) {
             "Raises ValueError naming the first invalid field.");
 }
 
+// The lattice as an IndirectField (the key renders and lookups guard it by).
+ObjectUse lattice_use(const PhotonLattice& lattice, ObjectUse::Kind kind, const char* method) {
+    return field_use(static_cast<const IndirectField*>(&lattice), kind,
+                     std::string("PhotonLattice.") + method);
+}
+
 void bind_photon_lattice(py::module_& m) {
     py::class_<PhotonLattice, IndirectField>(m, "PhotonLattice", R"doc(
 The ISLLPM solver (seed 000): photons traced from the lights, injected into SH lattices.
@@ -118,6 +124,7 @@ After editing and re-committing the scene, call reset().)doc")
         .def(
             "solve",
             [](PhotonLattice& lattice, Progress* progress) {
+                const ObjectUse writes = lattice_use(lattice, ObjectUse::Kind::Write, "solve");
                 SceneUse use(lattice.scene(), SceneUse::Kind::Query, "solve (PhotonLattice)");
                 py::gil_scoped_release release;
                 lattice.solve(progress);
@@ -128,23 +135,40 @@ After editing and re-committing the scene, call reset().)doc")
         .def(
             "reset",
             [](PhotonLattice& lattice, Progress* progress) {
+                const ObjectUse writes = lattice_use(lattice, ObjectUse::Kind::Write, "reset");
                 SceneUse use(lattice.scene(), SceneUse::Kind::Query, "reset (PhotonLattice)");
                 py::gil_scoped_release release;
                 lattice.reset(progress);
             },
             py::arg("progress") = py::none(),
             "Forgets every pass and re-measures the (re-committed) scene.")
-        .def_property_readonly("passes", &PhotonLattice::passes, "Solve passes averaged so far.")
+        .def_property_readonly(
+            "passes",
+            [](const PhotonLattice& l) {
+                const ObjectUse reads = lattice_use(l, ObjectUse::Kind::Check, "passes");
+                return l.passes();
+            },
+            "Solve passes averaged so far.")
         .def_property_readonly("settings", &PhotonLattice::settings, "A copy of the settings.")
         .def_property_readonly(
-            "timings", [](const PhotonLattice& l) { return timings_to_dict(l.timings()); },
+            "timings",
+            [](const PhotonLattice& l) {
+                const ObjectUse reads = lattice_use(l, ObjectUse::Kind::Check, "timings");
+                return timings_to_dict(l.timings());
+            },
             "The last solve: seconds of emit_trace, injection, blur; photons_emitted, "
             "photons_stored, bounces.")
-        .def_property_readonly("memory_bytes", &PhotonLattice::memory_bytes,
-                               "Bytes held by the lattices and photon map.")
+        .def_property_readonly(
+            "memory_bytes",
+            [](const PhotonLattice& l) {
+                const ObjectUse reads = lattice_use(l, ObjectUse::Kind::Check, "memory_bytes");
+                return l.memory_bytes();
+            },
+            "Bytes held by the lattices and photon map.")
         .def_property_readonly(
             "lattices",
             [](const PhotonLattice& l) {
+                const ObjectUse reads = lattice_use(l, ObjectUse::Kind::Check, "lattices");
                 py::dict out;
                 out["global"] = lattice_dict(l.global_lattice());
                 out["caustic"] = lattice_dict(l.caustic_lattice());

@@ -30,10 +30,37 @@ namespace py = pybind11;
 namespace shgi::python {
 namespace {
 
-py::dict passes_to_dict(const Film& film) {
+// The passes named in `names` (a sequence of pass names; None: every pass the film sums).
+std::vector<Pass> requested_passes(const Film& film, const py::object& names) {
+    std::vector<Pass> passes;
+    if (names.is_none()) {
+        for (int p = 0; p < kPassCount; ++p)
+            if (film.has_pass(Pass(p))) passes.push_back(Pass(p));
+        return passes;
+    }
+    if (py::isinstance<py::str>(names))
+        throw_value_error("names", "must be a sequence of pass names, e.g. ['Combined'], not "
+                                   "a string");
+    std::string known;
+    for (int p = 0; p < kPassCount; ++p) known += std::string(p ? ", " : "") + pass_name(Pass(p));
+    for (const py::handle item : py::iter(names)) {
+        const std::string name = py::str(item);
+        int found = -1;
+        for (int p = 0; p < kPassCount && found < 0; ++p)
+            if (name == pass_name(Pass(p))) found = p;
+        if (found < 0)
+            throw_value_error("names", "'" + name + "' is not a pass; passes are " + known);
+        if (!film.has_pass(Pass(found)))
+            throw_value_error("names", "'" + name + "' is not summed by this renderer, which "
+                                       "keeps only Combined (PreviewSettings.combined_only)");
+        passes.push_back(Pass(found));
+    }
+    return passes;
+}
+
+py::dict passes_to_dict(const Film& film, const py::object& names = py::none()) {
     py::dict out;
-    for (int p = 0; p < kPassCount; ++p) {
-        const Pass pass = Pass(p);
+    for (const Pass pass : requested_passes(film, names)) {
         const std::vector<float> pixels = film.pixels(pass);
         const py::ssize_t channels = py::ssize_t(pass_suffixes(pass).size());
         py::array_t<float> array({py::ssize_t(film.height()), py::ssize_t(film.width()), channels});
@@ -105,6 +132,7 @@ were split between render() calls.)doc")
                 const uint32_t count =
                     samples.is_none() ? tracer.settings().samples
                                       : checked_samples(samples);
+                const ObjectUse film = renderer_use(&tracer, "PathTracer", "render", true);
                 SceneUse use(tracer.scene(), SceneUse::Kind::Query, "render (PathTracer)");
                 py::gil_scoped_release release;
                 tracer.render(count, progress);
@@ -112,11 +140,23 @@ were split between render() calls.)doc")
             py::arg("samples") = py::none(), py::arg("progress") = py::none(),
             "Adds `samples` samples per pixel (default settings.samples) with the GIL released. "
             "Raises shgi.Cancelled when progress.cancel() is called; the film is then unchanged.")
-        .def("passes", [](const PathTracer& tracer) { return passes_to_dict(tracer.film()); },
-             "{pass name: float32 array (H, W, C)}: Combined (RGBA), DiffDir, ..., Normal (XYZ), "
-             "Depth (1 channel), with Cycles' meaning.")
-        .def_property_readonly("samples_done", &PathTracer::samples_done,
-                               "Samples per pixel accumulated so far.");
+        .def(
+            "passes",
+            [](const PathTracer& tracer, const py::object& names) {
+                const ObjectUse film = renderer_use(&tracer, "PathTracer", "passes", false);
+                return passes_to_dict(tracer.film(), names);
+            },
+            py::arg("names") = py::none(),
+            "{pass name: float32 array (H, W, C)}: Combined (RGBA), DiffDir, ..., Normal (XYZ), "
+            "Depth (1 channel), with Cycles' meaning; names, e.g. ['Combined'], converts only "
+            "those (a viewport needs Combined alone).")
+        .def_property_readonly(
+            "samples_done",
+            [](const PathTracer& tracer) {
+                const ObjectUse film = renderer_use(&tracer, "PathTracer", "samples_done", false);
+                return tracer.samples_done();
+            },
+            "Samples per pixel accumulated so far.");
 
     m.def(
         "render_path_traced",
@@ -192,6 +232,8 @@ exactly by the consumer). Queries take arrays of points and unit normals.)doc")
                 }
                 std::vector<vec3> out(p.size());
                 {
+                    const ObjectUse reads =
+                        field_use(&field, ObjectUse::Kind::Read, "IndirectField.irradiance");
                     py::gil_scoped_release release;
                     const PinnedField pinned(&field);
                     for (size_t i = 0; i < p.size(); ++i)
@@ -206,6 +248,8 @@ exactly by the consumer). Queries take arrays of points and unit normals.)doc")
             [](const IndirectField& field, const py::object& point, const py::object& normal) {
                 const vec3 p = to_vec3(point, "point");
                 check_query_point(p, "point");
+                const ObjectUse reads =
+                    field_use(&field, ObjectUse::Kind::Check, "IndirectField.radiance_sh");
                 const ShRgb sh =
                     field.radiance_sh(p, query_normal(to_vec3(normal, "normal"), "normal"));
                 py::array_t<float> out({py::ssize_t(sh.num_coefficients()), py::ssize_t(3)});
@@ -234,6 +278,9 @@ void bind_preview(py::module_& m) {
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
                        "Max component of an indirect contribution; 0 = off (0).")
         .def_readwrite("world_sampling", &S::world_sampling, "WorldSampling (COSINE).")
+        .def_readwrite("combined_only", &S::combined_only,
+                       "Sum only the Combined pass (False): what a viewport shows, without the "
+                       "other 13 passes' film traffic.")
         .def("validate", &validate_preview_settings,
              "Raises ValueError naming the first invalid field.");
 
@@ -256,6 +303,9 @@ timings is the last render's stage times in seconds (primary, direct, indirect, 
                Progress* progress) {
                 const uint32_t count =
                     samples.is_none() ? 1u : checked_samples(samples);
+                const ObjectUse film = renderer_use(&renderer, "PreviewRenderer", "render", true);
+                const ObjectUse reads =
+                    field_use(field, ObjectUse::Kind::Read, "PreviewRenderer.render");
                 SceneUse use(renderer.scene(), SceneUse::Kind::Query, "render (PreviewRenderer)");
                 py::gil_scoped_release release;
                 renderer.render(field, count, progress);
@@ -263,11 +313,22 @@ timings is the last render's stage times in seconds (primary, direct, indirect, 
             py::arg("field"), py::arg("samples") = py::none(), py::arg("progress") = py::none(),
             "Adds `samples` samples per pixel (default 1) lit indirectly by `field` (None: "
             "direct light only). The field must have been solved on the renderer's scene.")
-        .def("passes", [](const PreviewRenderer& r) { return passes_to_dict(r.film()); },
-             "{pass name: float32 array (H, W, C)}, as PathTracer.passes().")
-        .def_property_readonly("timings",
-                               [](const PreviewRenderer& r) { return timings_to_dict(r.timings()); },
-                               "Seconds of the last render: primary, direct, indirect, total.");
+        .def(
+            "passes",
+            [](const PreviewRenderer& r, const py::object& names) {
+                const ObjectUse film = renderer_use(&r, "PreviewRenderer", "passes", false);
+                return passes_to_dict(r.film(), names);
+            },
+            py::arg("names") = py::none(),
+            "{pass name: float32 array (H, W, C)}, as PathTracer.passes(): every pass the "
+            "renderer sums (only Combined with settings.combined_only), or those in `names`.")
+        .def_property_readonly(
+            "timings",
+            [](const PreviewRenderer& r) {
+                const ObjectUse film = renderer_use(&r, "PreviewRenderer", "timings", false);
+                return timings_to_dict(r.timings());
+            },
+            "Seconds of the last render: primary, direct, indirect, total.");
 
     m.def(
         "render_preview",
@@ -275,6 +336,7 @@ timings is the last render's stage times in seconds (primary, direct, indirect, 
            const Camera* camera, Progress* progress) {
             std::unique_ptr<PreviewRenderer> renderer;
             {
+                const ObjectUse reads = field_use(field, ObjectUse::Kind::Read, "render_preview");
                 SceneUse use(scene, SceneUse::Kind::Query, "render (render_preview)");
                 renderer = make_preview_renderer(scene, settings, camera);  // validates
                 py::gil_scoped_release release;

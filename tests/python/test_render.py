@@ -160,3 +160,152 @@ def test_scene_edits_are_refused_while_a_render_runs_in_another_thread():
         progress.cancel()
         worker.join()
     assert outcome.get("cancelled")
+
+
+# --- One renderer or lattice used from several threads ---------------------------------------
+
+# Samples per pixel of a preview render that the tests cancel: a work unit of the preview (1024
+# pixels) renders all of them before it reports progress, ~0.5 s on this machine.
+LONG_PREVIEW_SAMPLES = 1024
+
+
+def started_in_worker(call):
+    """Runs call(progress) in a thread until the main thread cancels it; returns (stop, outcome)
+    once the call is inside its native work (its progress callback has run)."""
+    inside = threading.Event()
+    progress = shgi.Progress(lambda fraction, stage: inside.set(), 0.0)
+    outcome = {}
+
+    def run():
+        try:
+            call(progress)
+            outcome["finished"] = True
+        except shgi.Cancelled:
+            outcome["cancelled"] = True
+
+    worker = threading.Thread(target=run)
+    worker.start()
+    assert inside.wait(60.0), "the call never reported progress"
+
+    def stop():
+        progress.cancel()
+        worker.join()
+    return stop, outcome
+
+
+def lit_box_and_lattice(resolution=128):
+    scene = inward_box_scene(0.5, 1.0, resolution=resolution)
+    lattice = shgi.PhotonLattice(scene, shgi.PhotonLatticeSettings(photons=2000, resolution=4))
+    lattice.solve()
+    return scene, lattice
+
+
+@pytest.mark.parametrize("kind", ["PathTracer", "PreviewRenderer"])
+def test_a_renderer_refuses_other_calls_while_it_renders_in_another_thread(kind):
+    scene, lattice = lit_box_and_lattice()
+    if kind == "PathTracer":
+        renderer = shgi.PathTracer(scene, shgi.PathTracerSettings(max_bounces=64,
+                                                                  diffuse_bounces=64))
+        render = lambda samples, progress=None: renderer.render(samples, progress)  # noqa: E731
+        long_render = 256  # a 16 x 16 tile's paths take ~30 ms, the frame seconds
+    else:
+        renderer = shgi.PreviewRenderer(scene)
+        render = lambda samples, progress=None: renderer.render(lattice, samples,  # noqa: E731
+                                                                progress)
+        long_render = LONG_PREVIEW_SAMPLES
+    stop, outcome = started_in_worker(lambda progress: render(long_render, progress))
+    busy = f"{kind}.%s: a render\\(\\) of this renderer is running in another thread"
+    try:
+        # Before the guard a second render summed into the film being swapped: lost samples,
+        # and a SIGSEGV in about one run of five with two threads of 100 renders each.
+        with pytest.raises(RuntimeError, match=busy % "render"):
+            render(1)
+        with pytest.raises(RuntimeError, match=busy % "passes"):
+            renderer.passes()
+        if kind == "PreviewRenderer":
+            with pytest.raises(RuntimeError, match=busy % "timings"):
+                renderer.timings
+    finally:
+        stop()
+    assert outcome.get("cancelled")
+    render(2)  # free again; the cancelled render left the film empty
+    assert renderer.passes(["Combined"])["Combined"].shape == (128, 128, 4)
+
+
+def test_a_photon_lattice_is_not_solved_while_another_thread_reads_it_nor_read_while_solved():
+    scene, lattice = lit_box_and_lattice()
+    renderer = shgi.PreviewRenderer(scene)
+    points, normals = np.zeros((4, 3), np.float32), np.tile([0, 0, 1], (4, 1)).astype(np.float32)
+    lattice_settings = shgi.PhotonLatticeSettings(photons=1 << 30, resolution=4)
+    busy_lattice = shgi.PhotonLattice(scene, lattice_settings)
+    stop, outcome = started_in_worker(busy_lattice.solve)
+    solving = "the field is being solved or reset in another thread"
+    try:
+        # Before the guard these read lattices that solve() was replacing.
+        with pytest.raises(RuntimeError, match="PreviewRenderer.render: " + solving):
+            renderer.render(busy_lattice, 1)
+        with pytest.raises(RuntimeError, match="IndirectField.irradiance: " + solving):
+            busy_lattice.irradiance(points, normals)
+        with pytest.raises(RuntimeError, match="PhotonLattice.lattices: " + solving):
+            busy_lattice.lattices
+        with pytest.raises(RuntimeError, match="render_preview: " + solving):
+            shgi.render_preview(scene, busy_lattice, shgi.PreviewSettings(samples=1))
+        with pytest.raises(RuntimeError, match="PhotonLattice.reset: the field is in use"):
+            busy_lattice.reset()
+    finally:
+        stop()
+    assert outcome.get("cancelled")
+    # The other way round: a render reading the lattice keeps solve() and reset() out.
+    stop, outcome = started_in_worker(
+        lambda progress: renderer.render(lattice, LONG_PREVIEW_SAMPLES, progress))
+    try:
+        with pytest.raises(RuntimeError, match="PhotonLattice.solve: the field is in use"):
+            lattice.solve()
+        assert lattice.irradiance(points, normals).shape == (4, 3)  # reads may overlap
+    finally:
+        stop()
+    assert outcome.get("cancelled")
+    lattice.solve()
+
+
+def test_a_progress_callback_calling_back_into_its_busy_renderer_gets_an_error_not_a_deadlock():
+    scene, lattice = lit_box_and_lattice(resolution=16)
+    renderer = shgi.PreviewRenderer(scene)
+    errors = []
+
+    def report(fraction, stage):
+        try:
+            renderer.passes()
+        except RuntimeError as error:
+            errors.append(str(error))
+
+    renderer.render(lattice, 2, shgi.Progress(report, 0.0))
+    assert errors and "PreviewRenderer.passes: a render() of this renderer is running" in errors[0]
+    assert renderer.passes()["Combined"].shape == (16, 16, 4)
+
+
+def test_passes_by_name_and_a_combined_only_preview():
+    scene, lattice = lit_box_and_lattice(resolution=16)
+    full = shgi.PreviewRenderer(scene, shgi.PreviewSettings(seed=3))
+    lean = shgi.PreviewRenderer(scene, shgi.PreviewSettings(seed=3, combined_only=True))
+    for renderer in (full, lean):
+        renderer.render(lattice, 2)
+        renderer.render(lattice, 1)
+    passes = full.passes()
+    assert set(passes) == set(PASS_CHANNELS)
+    assert set(lean.passes()) == {"Combined"}
+    named = full.passes(["Combined", "Depth"])
+    assert list(named) == ["Combined", "Depth"]
+    for name in named:
+        np.testing.assert_array_equal(named[name], passes[name])
+    # Summing one pass instead of fourteen changes nothing in it: same samples, same sums.
+    np.testing.assert_array_equal(lean.passes(["Combined"])["Combined"], passes["Combined"])
+    with pytest.raises(ValueError, match="names: 'DiffDir' is not summed by this renderer"):
+        lean.passes(["DiffDir"])
+    with pytest.raises(ValueError, match="names: 'Diffuse' is not a pass; passes are Combined, "):
+        full.passes(["Diffuse"])
+    with pytest.raises(ValueError, match="names: must be a sequence of pass names"):
+        full.passes("Combined")
+    tracer = shgi.PathTracer(scene)
+    tracer.render(1)
+    assert list(tracer.passes(["Normal"])) == ["Normal"]

@@ -57,7 +57,7 @@ class Renderer:
     """A renderer as the render job and the viewport worker drive it."""
 
     add: object      # add(count): adds `count` samples per pixel
-    passes: object   # passes(): {name: float32 (H, W, C)}, row 0 on top
+    passes: object   # passes(names=None): {name: float32 (H, W, C)}, row 0 on top
 
 
 def make_renderer(shgi, scene, progress, *, path_tracer_settings=None, preview_settings=None,

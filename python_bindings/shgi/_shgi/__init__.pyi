@@ -1123,9 +1123,9 @@ class PathTracer:
         """
         Checks the settings (ValueError) and prepares light sampling.
         """
-    def passes(self) -> dict:
+    def passes(self, names: typing.Any = None) -> dict:
         """
-        {pass name: float32 array (H, W, C)}: Combined (RGBA), DiffDir, ..., Normal (XYZ), Depth (1 channel), with Cycles' meaning.
+        {pass name: float32 array (H, W, C)}: Combined (RGBA), DiffDir, ..., Normal (XYZ), Depth (1 channel), with Cycles' meaning; names, e.g. ['Combined'], converts only those (a viewport needs Combined alone).
         """
     def render(self, samples: typing.Any = None, progress: Progress = None) -> None:
         """
@@ -1462,9 +1462,9 @@ class PreviewRenderer:
         """
         camera: a shgi.Camera replacing the scene's (any view of a solved field).
         """
-    def passes(self) -> dict:
+    def passes(self, names: typing.Any = None) -> dict:
         """
-        {pass name: float32 array (H, W, C)}, as PathTracer.passes().
+        {pass name: float32 array (H, W, C)}, as PathTracer.passes(): every pass the renderer sums (only Combined with settings.combined_only), or those in `names`.
         """
     def render(self, field: IndirectField, samples: typing.Any = None, progress: Progress = None) -> None:
         """
@@ -1497,6 +1497,14 @@ class PreviewSettings:
         """
     @clamp_indirect.setter
     def clamp_indirect(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def combined_only(self) -> bool:
+        """
+        Sum only the Combined pass (False): what a viewport shows, without the other 13 passes' film traffic.
+        """
+    @combined_only.setter
+    def combined_only(self, arg0: bool) -> None:
         ...
     @property
     def max_specular_bounces(self) -> int:
