@@ -123,8 +123,9 @@ The sample positions of every texel of one object's lightmap (rasterize_texels).
         "rasterize_texels",
         [](const Scene& scene, uint32_t instance, const S& settings, Progress* progress) {
             SceneUse use(scene, SceneUse::Kind::Query, "rasterize_texels");
+            const S copied = settings;  // a progress callback or thread may edit the original
             py::gil_scoped_release release;
-            return rasterize_texels(scene, instance, settings, progress);
+            return rasterize_texels(scene, instance, copied, progress);
         },
         py::arg("scene"), py::arg("instance"), py::arg("settings") = S{},
         py::arg("progress") = py::none(),
@@ -144,9 +145,10 @@ The sample positions of every texel of one object's lightmap (rasterize_texels).
         [](const Scene& scene, TexelMap& map, const U& settings, Progress* progress) {
             SceneUse use(scene, SceneUse::Kind::Query, "unocclude");
             UnoccludeReport report;
+            const U copied = settings;  // a progress callback or thread may edit the original
             {
                 py::gil_scoped_release release;
-                report = unocclude(scene, map, settings, progress);
+                report = unocclude(scene, map, copied, progress);
             }
             py::dict d;
             d["samples"] = report.samples;
@@ -239,8 +241,9 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
            const std::vector<uint32_t>& tiles, Progress* progress) {
             const ObjectUse reads = field_use(field, ObjectUse::Kind::Read, "bake_lightmap");
             SceneUse use(scene, SceneUse::Kind::Query, "bake_lightmap");
+            const S copied = settings;  // a progress callback or thread may edit the original
             py::gil_scoped_release release;
-            return bake_lightmap(scene, map, field, settings, tiles, progress);
+            return bake_lightmap(scene, map, field, copied, tiles, progress);
         },
         py::arg("scene"), py::arg("map"), py::arg("settings") = S{},
         py::arg("field") = py::none(), py::arg("tiles") = std::vector<uint32_t>{},
@@ -263,8 +266,9 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
     m.def(
         "filter_lightmap",
         [](const TexelMap& map, LightmapTexels& texels, const F& settings, Progress* progress) {
+            const F copied = settings;  // a progress callback or thread may edit the original
             py::gil_scoped_release release;
-            filter_lightmap(map, texels, settings, progress);
+            filter_lightmap(map, texels, copied, progress);
         },
         py::arg("map"), py::arg("texels"), py::arg("settings") = F{},
         py::arg("progress") = py::none(), "Filters the baked texels in place.");

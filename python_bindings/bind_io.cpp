@@ -55,7 +55,7 @@ FloatArray checked_image_array(const py::handle& obj, const std::string& arg_nam
                                                     std::to_string(kMaxImageDimension) + "]");
         }
     }
-    return FloatArray::ensure(array);
+    return contiguous_copy<FloatArray>(array, arg_name.c_str());
 }
 
 size_t channel_count(const FloatArray& array) {

@@ -4,6 +4,8 @@
 #include <limits>
 #include <sstream>
 
+#include "util/error.h"
+
 namespace shgi::python {
 
 std::string shape_string(const py::array& array) {
@@ -20,6 +22,13 @@ std::string dtype_string(const py::array& array) {
 
 std::string describe_array(const py::array& array) {
     return shape_string(array) + " " + dtype_string(array);
+}
+
+void throw_copy_failed(const py::array& array, const char* arg_name, const char* dtype) {
+    PyErr_Clear();
+    throw OutOfMemory(std::string(arg_name) + ": a contiguous " + dtype + " copy of the " +
+                      shape_string(array) + " array does not fit in memory; pass a smaller "
+                      "array");
 }
 
 namespace {
@@ -54,7 +63,8 @@ py::array_t<T, py::array::c_style | py::array::forcecast> checked_rows(
         throw_value_error(arg_name,
                           "expected shape " + expected + ", got " + shape_string(array));
     }
-    return py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(array);
+    return contiguous_copy<py::array_t<T, py::array::c_style | py::array::forcecast>>(
+        array, arg_name);
 }
 
 }  // namespace

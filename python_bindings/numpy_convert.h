@@ -50,4 +50,22 @@ std::string describe_array(const py::array& array);
 // Raises ValueError "<arg_name>: <message>".
 [[noreturn]] void throw_value_error(const char* arg_name, const std::string& message);
 
+// Raises MemoryError "<arg_name>: a contiguous <dtype> copy of the <shape> array does not fit in
+// memory; ...": what ensure() leaves when it cannot allocate the copy.
+[[noreturn]] void throw_copy_failed(const py::array& array, const char* arg_name,
+                                   const char* dtype);
+
+// `array` as a C-contiguous Array (a py::array_t), copied when needed. ensure() gives a null
+// array when the copy cannot be allocated (a broadcast view of a few bytes may stand for
+// terabytes); that is a MemoryError naming the argument, never a null pointer to read through.
+template <typename Array>
+Array contiguous_copy(const py::array& array, const char* arg_name) {
+    Array contiguous = Array::ensure(array);
+    if (!contiguous)
+        throw_copy_failed(array, arg_name,
+                          py::str(py::dtype::of<typename Array::value_type>()).cast<std::string>()
+                              .c_str());
+    return contiguous;
+}
+
 }  // namespace shgi::python

@@ -810,3 +810,51 @@ def test_cli_merge_without_shards_names_the_missing_file(build_python_dir, room_
     result = run_cli(build_python_dir, room_file, "--out", tmp_path, *CLI_BAKE, "--merge", "3")
     assert result.returncode == 1
     assert str(tmp_path / "shards" / "Floor.shard-0-of-3.npz") in result.stderr
+
+
+def test_settings_edited_by_a_progress_callback_do_not_reach_a_running_bake():
+    # The bake functions read their settings again after checking them, with the GIL released:
+    # a callback (or another thread) shrinking the raster or switching to directional mid-run
+    # corrupted the heap or crashed. They now work on a copy taken before the GIL is released.
+    scene = plane_scene()
+    raster = shgi.TexelRasterSettings(width=16, height=16)
+
+    def shrink(fraction, stage):
+        raster.width = raster.height = 1
+
+    texel_map = shgi.rasterize_texels(scene, 0, raster, progress=shgi.Progress(shrink, 0.0))
+    assert (texel_map.width, texel_map.height) == (16, 16) and raster.width == 1
+    settings = shgi.LightmapSettings(samples=1, tile_size=8)
+
+    def go_directional(fraction, stage):
+        settings.directional = True
+
+    texels = shgi.bake_lightmap(scene, texel_map, settings,
+                                progress=shgi.Progress(go_directional, 0.0))
+    assert not texels.directional and texels.sh is None  # baked as the call was made
+    assert settings.directional
+    filtering = shgi.LightmapFilterSettings(iterations=2)
+
+    def huge_filter(fraction, stage):
+        filtering.iterations = 2**31 - 1  # ran "forever" (and 1 << 31 overflowed)
+
+    shgi.filter_lightmap(texel_map, texels, filtering, progress=shgi.Progress(huge_filter, 0.0))
+    unocclude = shgi.UnoccludeSettings(ray_count=4)
+
+    def many_rays(fraction, stage):
+        unocclude.ray_count = 2**31 - 1
+
+    assert shgi.unocclude(scene, texel_map, unocclude,
+                          progress=shgi.Progress(many_rays, 0.0))["samples"] > 0
+
+
+def test_an_array_too_big_to_copy_is_a_memory_error_naming_it():
+    # A broadcast view of 12 bytes stands for a (2^32, 3) array: numpy cannot allocate its
+    # contiguous copy, and the binding read through the null array it got back (SIGSEGV).
+    positions = np.broadcast_to(np.zeros(3, np.float32), (2**32, 3))
+    with pytest.raises(MemoryError, match="positions: a contiguous float32 copy of the "
+                                          r"\(4294967296, 3\) array does not fit in memory"):
+        shgi.Scene().add_mesh(positions=positions, triangles=np.array([[0, 1, 2]]))
+    pixels = np.broadcast_to(np.zeros(1, np.float16), (2**20, 2**20, 4))
+    with pytest.raises(MemoryError, match="pixels: a contiguous float32 copy"):
+        shgi.write_png("unused.png", pixels)
