@@ -5,6 +5,9 @@
 // Arrays: lightmaps are numpy arrays (height, width, ...) whose row 0 is v = 0, the bottom of
 // the image, as Blender's Image.pixels stores it (files written by shgi.bake flip them to the
 // top-row-first order of EXR and PNG).
+//
+// Settings are taken by value: the functions read them with the GIL released, when a progress
+// callback or another thread may be editing the Python object (past the checks made at the start).
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
@@ -121,11 +124,10 @@ The sample positions of every texel of one object's lightmap (rasterize_texels).
 
     m.def(
         "rasterize_texels",
-        [](const Scene& scene, uint32_t instance, const S& settings, Progress* progress) {
+        [](const Scene& scene, uint32_t instance, const S settings, Progress* progress) {
             SceneUse use(scene, SceneUse::Kind::Query, "rasterize_texels");
-            const S copied = settings;  // a progress callback or thread may edit the original
             py::gil_scoped_release release;
-            return rasterize_texels(scene, instance, copied, progress);
+            return rasterize_texels(scene, instance, settings, progress);
         },
         py::arg("scene"), py::arg("instance"), py::arg("settings") = S{},
         py::arg("progress") = py::none(),
@@ -142,13 +144,12 @@ The sample positions of every texel of one object's lightmap (rasterize_texels).
         .def_readwrite("push_distance", &U::push_distance, "Texels past the wall (0.05).");
     m.def(
         "unocclude",
-        [](const Scene& scene, TexelMap& map, const U& settings, Progress* progress) {
+        [](const Scene& scene, TexelMap& map, const U settings, Progress* progress) {
             SceneUse use(scene, SceneUse::Kind::Query, "unocclude");
             UnoccludeReport report;
-            const U copied = settings;  // a progress callback or thread may edit the original
             {
                 py::gil_scoped_release release;
-                report = unocclude(scene, map, copied, progress);
+                report = unocclude(scene, map, settings, progress);
             }
             py::dict d;
             d["samples"] = report.samples;
@@ -237,13 +238,12 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
           "Tiles shard i of N bakes: every tile t with t % N == i.");
     m.def(
         "bake_lightmap",
-        [](const Scene& scene, const TexelMap& map, const S& settings, const IndirectField* field,
+        [](const Scene& scene, const TexelMap& map, const S settings, const IndirectField* field,
            const std::vector<uint32_t>& tiles, Progress* progress) {
             const ObjectUse reads = field_use(field, ObjectUse::Kind::Read, "bake_lightmap");
             SceneUse use(scene, SceneUse::Kind::Query, "bake_lightmap");
-            const S copied = settings;  // a progress callback or thread may edit the original
             py::gil_scoped_release release;
-            return bake_lightmap(scene, map, field, copied, tiles, progress);
+            return bake_lightmap(scene, map, field, settings, tiles, progress);
         },
         py::arg("scene"), py::arg("map"), py::arg("settings") = S{},
         py::arg("field") = py::none(), py::arg("tiles") = std::vector<uint32_t>{},
@@ -265,10 +265,9 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
                        "Standard deviations of luminance before weight 1/e (4).");
     m.def(
         "filter_lightmap",
-        [](const TexelMap& map, LightmapTexels& texels, const F& settings, Progress* progress) {
-            const F copied = settings;  // a progress callback or thread may edit the original
+        [](const TexelMap& map, LightmapTexels& texels, const F settings, Progress* progress) {
             py::gil_scoped_release release;
-            filter_lightmap(map, texels, copied, progress);
+            filter_lightmap(map, texels, settings, progress);
         },
         py::arg("map"), py::arg("texels"), py::arg("settings") = F{},
         py::arg("progress") = py::none(), "Filters the baked texels in place.");

@@ -104,14 +104,28 @@ ObjectUse lattice_use(const PhotonLattice& lattice, ObjectUse::Kind kind, const 
                      std::string("PhotonLattice.") + method);
 }
 
+// A read-only property `name` = read(lattice), refused while a solve() or reset() of the lattice
+// runs in another thread (they replace what it reads).
+template <typename Read>
+void def_idle_property(py::class_<PhotonLattice, IndirectField>& cls, const char* name,
+                       Read read, const char* doc) {
+    cls.def_property_readonly(
+        name,
+        [name, read](const PhotonLattice& lattice) {
+            const ObjectUse reads = lattice_use(lattice, ObjectUse::Kind::Check, name);
+            return read(lattice);
+        },
+        doc);
+}
+
 void bind_photon_lattice(py::module_& m) {
-    py::class_<PhotonLattice, IndirectField>(m, "PhotonLattice", R"doc(
+    py::class_<PhotonLattice, IndirectField> cls(m, "PhotonLattice", R"doc(
 The ISLLPM solver (seed 000): photons traced from the lights, injected into SH lattices.
 
 Interactive: call solve() repeatedly; each call traces `photons` more and the lattices
 average all passes. Non-interactive: one solve() with many photons, then render any camera.
-After editing and re-committing the scene, call reset().)doc")
-        .def(py::init([](const Scene& scene, const PhotonLatticeSettings& settings,
+After editing and re-committing the scene, call reset().)doc");
+    cls.def(py::init([](const Scene& scene, const PhotonLatticeSettings& settings,
                          Progress* progress) {
                  validate_photon_lattice_settings(settings);
                  SceneUse use(scene, SceneUse::Kind::Query, "PhotonLattice");
@@ -142,43 +156,28 @@ After editing and re-committing the scene, call reset().)doc")
             },
             py::arg("progress") = py::none(),
             "Forgets every pass and re-measures the (re-committed) scene.")
-        .def_property_readonly(
-            "passes",
-            [](const PhotonLattice& l) {
-                const ObjectUse reads = lattice_use(l, ObjectUse::Kind::Check, "passes");
-                return l.passes();
-            },
-            "Solve passes averaged so far.")
-        .def_property_readonly("settings", &PhotonLattice::settings, "A copy of the settings.")
-        .def_property_readonly(
-            "timings",
-            [](const PhotonLattice& l) {
-                const ObjectUse reads = lattice_use(l, ObjectUse::Kind::Check, "timings");
-                return timings_to_dict(l.timings());
-            },
-            "The last solve: seconds of emit_trace, injection, blur; photons_emitted, "
-            "photons_stored, bounces.")
-        .def_property_readonly(
-            "memory_bytes",
-            [](const PhotonLattice& l) {
-                const ObjectUse reads = lattice_use(l, ObjectUse::Kind::Check, "memory_bytes");
-                return l.memory_bytes();
-            },
-            "Bytes held by the lattices and photon map.")
-        .def_property_readonly(
-            "lattices",
-            [](const PhotonLattice& l) {
-                const ObjectUse reads = lattice_use(l, ObjectUse::Kind::Check, "lattices");
-                py::dict out;
-                out["global"] = lattice_dict(l.global_lattice());
-                out["caustic"] = lattice_dict(l.caustic_lattice());
-                return out;
-            },
-            "The solved (averaged, blurred) lattices as {'global': ..., 'caustic': ...}, each a "
-            "dict: origin (x, y, z) of the lower corner (m), cell_size (m), dims (nx, ny, nz), "
-            "order, sh: float32 array (nz, ny, nx, coefficients, 3) of incident radiance "
-            "(W m^-2 sr^-1, index l(l+1)+m, no Condon-Shortley phase), cell (i, j, k) centred at "
-            "origin + (i + 0.5, j + 0.5, k + 0.5) cell_size.");
+        .def_property_readonly("settings", &PhotonLattice::settings, "A copy of the settings.");
+    def_idle_property(cls, "passes", [](const PhotonLattice& l) { return l.passes(); },
+                      "Solve passes averaged so far.");
+    def_idle_property(cls, "timings",
+                      [](const PhotonLattice& l) { return timings_to_dict(l.timings()); },
+                      "The last solve: seconds of emit_trace, injection, blur; photons_emitted, "
+                      "photons_stored, bounces.");
+    def_idle_property(cls, "memory_bytes", [](const PhotonLattice& l) { return l.memory_bytes(); },
+                      "Bytes held by the lattices and photon map.");
+    def_idle_property(
+        cls, "lattices",
+        [](const PhotonLattice& l) {
+            py::dict out;
+            out["global"] = lattice_dict(l.global_lattice());
+            out["caustic"] = lattice_dict(l.caustic_lattice());
+            return out;
+        },
+        "The solved (averaged, blurred) lattices as {'global': ..., 'caustic': ...}, each a "
+        "dict: origin (x, y, z) of the lower corner (m), cell_size (m), dims (nx, ny, nz), "
+        "order, sh: float32 array (nz, ny, nx, coefficients, 3) of incident radiance "
+        "(W m^-2 sr^-1, index l(l+1)+m, no Condon-Shortley phase), cell (i, j, k) centred at "
+        "origin + (i + 0.5, j + 0.5, k + 0.5) cell_size.");
 }
 
 }  // namespace

@@ -41,15 +41,17 @@ std::vector<Pass> requested_passes(const Film& film, const py::object& names) {
     if (py::isinstance<py::str>(names))
         throw_value_error("names", "must be a sequence of pass names, e.g. ['Combined'], not "
                                    "a string");
-    std::string known;
-    for (int p = 0; p < kPassCount; ++p) known += std::string(p ? ", " : "") + pass_name(Pass(p));
     for (const py::handle item : py::iter(names)) {
         const std::string name = py::str(item);
         int found = -1;
         for (int p = 0; p < kPassCount && found < 0; ++p)
             if (name == pass_name(Pass(p))) found = p;
-        if (found < 0)
+        if (found < 0) {
+            std::string known;
+            for (int p = 0; p < kPassCount; ++p)
+                known += std::string(p ? ", " : "") + pass_name(Pass(p));
             throw_value_error("names", "'" + name + "' is not a pass; passes are " + known);
+        }
         if (!film.has_pass(Pass(found)))
             throw_value_error("names", "'" + name + "' is not summed by this renderer, which "
                                        "keeps only Combined (PreviewSettings.combined_only)");
@@ -68,6 +70,16 @@ py::dict passes_to_dict(const Film& film, const py::object& names = py::none()) 
         out[pass_name(pass)] = std::move(array);
     }
     return out;
+}
+
+// Renderer.passes(names=None) of a PathTracer or PreviewRenderer (`type`), refused while a
+// render of that renderer runs in another thread.
+template <typename Renderer>
+auto passes_method(const char* type) {
+    return [type](const Renderer& renderer, const py::object& names) {
+        const ObjectUse film = renderer_use(&renderer, type, "passes", false);
+        return passes_to_dict(renderer.film(), names);
+    };
 }
 
 // A render() call's sample count: any integer in [1, kMaxPathTracerSamples].
@@ -142,10 +154,7 @@ were split between render() calls.)doc")
             "Raises shgi.Cancelled when progress.cancel() is called; the film is then unchanged.")
         .def(
             "passes",
-            [](const PathTracer& tracer, const py::object& names) {
-                const ObjectUse film = renderer_use(&tracer, "PathTracer", "passes", false);
-                return passes_to_dict(tracer.film(), names);
-            },
+            passes_method<PathTracer>("PathTracer"),
             py::arg("names") = py::none(),
             "{pass name: float32 array (H, W, C)}: Combined (RGBA), DiffDir, ..., Normal (XYZ), "
             "Depth (1 channel), with Cycles' meaning; names, e.g. ['Combined'], converts only "
@@ -315,10 +324,7 @@ timings is the last render's stage times in seconds (primary, direct, indirect, 
             "direct light only). The field must have been solved on the renderer's scene.")
         .def(
             "passes",
-            [](const PreviewRenderer& r, const py::object& names) {
-                const ObjectUse film = renderer_use(&r, "PreviewRenderer", "passes", false);
-                return passes_to_dict(r.film(), names);
-            },
+            passes_method<PreviewRenderer>("PreviewRenderer"),
             py::arg("names") = py::none(),
             "{pass name: float32 array (H, W, C)}, as PathTracer.passes(): every pass the "
             "renderer sums (only Combined with settings.combined_only), or those in `names`.")

@@ -24,9 +24,10 @@ std::string describe_array(const py::array& array) {
     return shape_string(array) + " " + dtype_string(array);
 }
 
-void throw_copy_failed(const py::array& array, const char* arg_name, const char* dtype) {
+void throw_copy_failed(const py::array& array, const char* arg_name, const py::dtype& dtype) {
     PyErr_Clear();
-    throw OutOfMemory(std::string(arg_name) + ": a contiguous " + dtype + " copy of the " +
+    throw OutOfMemory(std::string(arg_name) + ": a contiguous " + std::string(py::str(dtype)) +
+                      " copy of the " +
                       shape_string(array) + " array does not fit in memory; pass a smaller "
                       "array");
 }

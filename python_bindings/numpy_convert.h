@@ -53,7 +53,7 @@ std::string describe_array(const py::array& array);
 // Raises MemoryError "<arg_name>: a contiguous <dtype> copy of the <shape> array does not fit in
 // memory; ...": what ensure() leaves when it cannot allocate the copy.
 [[noreturn]] void throw_copy_failed(const py::array& array, const char* arg_name,
-                                   const char* dtype);
+                                   const py::dtype& dtype);
 
 // `array` as a C-contiguous Array (a py::array_t), copied when needed. ensure() gives a null
 // array when the copy cannot be allocated (a broadcast view of a few bytes may stand for
@@ -62,9 +62,7 @@ template <typename Array>
 Array contiguous_copy(const py::array& array, const char* arg_name) {
     Array contiguous = Array::ensure(array);
     if (!contiguous)
-        throw_copy_failed(array, arg_name,
-                          py::str(py::dtype::of<typename Array::value_type>()).cast<std::string>()
-                              .c_str());
+        throw_copy_failed(array, arg_name, py::dtype::of<typename Array::value_type>());
     return contiguous;
 }
 
