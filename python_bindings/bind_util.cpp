@@ -101,10 +101,7 @@ is called at most every ``min_interval`` seconds, possibly from a worker thread.
                                "Fraction of the work done, in [0, 1].")
         .def_property_readonly(
             "stage",
-            [](const Progress& progress) {
-                py::gil_scoped_release release;  // stage() takes the mutex a callback may hold
-                return progress.stage();
-            },
+            [](const Progress& progress) { return progress.stage(); },
             "Name of the current stage.");
 }
 

@@ -241,8 +241,35 @@ std::shared_ptr<const ProbeField> ProbeGrid::field() const {
     return field_;
 }
 
+// Waiting for update_mutex_ from the running call's own thread, or from its progress callback
+// (which that call waits for, on whichever thread TBB runs it), would never return.
+class ProbeGrid::Serial {
+  public:
+    Serial(ProbeGrid& grid, const char* what, const Progress* progress) : grid_(grid) {
+        const Progress* calling_back = Progress::calling_back();
+        if (grid.serial_thread_.load() == std::this_thread::get_id() ||
+            (calling_back != nullptr && calling_back == grid.serial_progress_.load()))
+            throw Error(format_message(
+                "ProbeGrid::", what, ": called from inside this grid's running update() or "
+                "reset() (its progress callback); call it after that call returns"));
+        grid.update_mutex_.lock();
+        grid.serial_thread_.store(std::this_thread::get_id());
+        grid.serial_progress_.store(progress);
+    }
+    ~Serial() {
+        grid_.serial_progress_.store(nullptr);
+        grid_.serial_thread_.store(std::thread::id());
+        grid_.update_mutex_.unlock();
+    }
+    Serial(const Serial&) = delete;
+    Serial& operator=(const Serial&) = delete;
+
+  private:
+    ProbeGrid& grid_;
+};
+
 void ProbeGrid::reset(Progress* progress) {
-    const std::lock_guard<std::mutex> serial(update_mutex_);
+    const Serial serial(*this, "reset", progress);
     if (!scene_->committed())
         throw InvalidArgument("ProbeGrid::reset: the scene is not committed; call commit() first");
     if (scene_->empty())
@@ -335,7 +362,7 @@ ProbeGridData ProbeGrid::place(Progress* progress) const {
 }
 
 void ProbeGrid::update(Progress* progress) {
-    const std::lock_guard<std::mutex> serial(update_mutex_);
+    const Serial serial(*this, "update", progress);
     check_scene("update");
     const auto start = now();
     const std::shared_ptr<const ProbeField> current = field();

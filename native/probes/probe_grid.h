@@ -33,13 +33,16 @@
 // Threads: probes are split over threads; every ray has its own RNG stream (pass, probe, ray),
 // so results are bit-identical for any thread count. update() builds the next ProbeGridData and
 // swaps it in: field() snapshots stay valid and unchanged, so a renderer can draw with the latest
-// snapshot while another thread runs update() (seed 002 Fig. 4.1). Calls on one ProbeGrid must
-// not overlap each other.
+// snapshot while another thread runs update() (seed 002 Fig. 4.1). update() and reset() from
+// two threads run one after the other; one called from the running call's progress callback
+// (which that call waits for) throws instead of waiting for itself.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <thread>
 #include <vector>
 
 #include "probes/probe_field.h"
@@ -124,6 +127,8 @@ class ProbeGrid : public IndirectField {
     void check_scene(const char* what) const;
     ProbeGridData place(Progress* progress) const;
     void publish(std::shared_ptr<const ProbeGridData> data);
+    // Holds update_mutex_ for one update() or reset() (`what`), refusing re-entry from it.
+    class Serial;
 
     const Scene* scene_;
     uint64_t scene_revision_ = 0;
@@ -132,6 +137,8 @@ class ProbeGrid : public IndirectField {
     // update() and reset() run one at a time (they read the current probes and settings_ and
     // replace them); field_mutex_ guards field_ itself, which lookups and field() read.
     std::mutex update_mutex_;
+    std::atomic<std::thread::id> serial_thread_{};        // the thread holding it
+    std::atomic<const Progress*> serial_progress_{nullptr};  // the Progress of its call
     mutable std::mutex field_mutex_;
     std::shared_ptr<const ProbeField> field_;
     ProbeGridTimings timings_;

@@ -2,7 +2,9 @@
 //
 // The default sink writes to stderr. The Python bindings replace it (shgi.set_log_sink) so that
 // warnings reach Python's logging module or Blender's report system. The sink may be called
-// from worker threads; calls are serialised by a mutex, so a sink need not be thread-safe.
+// from worker threads; calls are serialised by a mutex, so a sink need not be thread-safe. No
+// other lock is held while it runs: it may replace the sink (the running call finishes with the
+// one it started with), and what it logs itself goes to stderr instead of re-entering it.
 #pragma once
 
 #include <functional>

@@ -6,6 +6,11 @@
 #include "util/log.h"
 
 namespace shgi {
+namespace {
+
+thread_local const Progress* t_calling_back = nullptr;
+
+}  // namespace
 
 Progress::Progress(Callback callback, double min_interval_seconds)
     : callback_(std::move(callback)),
@@ -55,16 +60,39 @@ void Progress::set_fraction(float fraction) {
     notify(fraction >= 1.0f);
 }
 
+const Progress* Progress::calling_back() { return t_calling_back; }
+
 void Progress::notify(bool force) {
     if (!callback_) return;
-    std::unique_lock<std::mutex> lock(mutex_);
-    const auto now = std::chrono::steady_clock::now();
-    if (!force && now - last_notify_ < min_interval_) return;
-    last_notify_ = now;
-    const std::string stage = stage_;
-    // The callback runs under the mutex so that two workers never call it at once.
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (calling_) {  // the thread in the callback calls again for a notification it missed
+            pending_ = pending_ || force;
+            return;
+        }
+        const auto now = std::chrono::steady_clock::now();
+        if (!force && now - last_notify_ < min_interval_) return;
+        last_notify_ = now;
+        calling_ = true;
+    }
+    const Progress* outer = t_calling_back;
+    t_calling_back = this;
+    for (;;) {
+        call_back();
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!pending_) {
+            calling_ = false;
+            break;
+        }
+        pending_ = false;
+        last_notify_ = std::chrono::steady_clock::now();
+    }
+    t_calling_back = outer;
+}
+
+void Progress::call_back() {
     try {
-        callback_(fraction(), stage);
+        callback_(fraction(), stage());
     } catch (const std::exception& error) {
         // A failing callback (e.g. a Python exception) cancels the work instead of unwinding
         // through a worker thread.

@@ -22,6 +22,10 @@ class Progress {
   public:
     // Called with (overall fraction in [0,1], stage name). It may run on any thread, but never
     // on two at once, and at most every `min_interval` (plus once at each stage start and at 1).
+    // No lock is held while it runs: it may read this Progress, cancel it, or start other work
+    // with it. A notification due while the callback runs (from another thread, or from work
+    // the callback started) is not waited for: the running call is followed by one more call
+    // with the latest state instead.
     using Callback = std::function<void(float fraction, const std::string& stage)>;
 
     Progress() = default;
@@ -44,14 +48,21 @@ class Progress {
     // Sets the overall fraction directly.
     void set_fraction(float fraction);
 
+    // The Progress whose callback this thread is running, or nullptr: work that would wait for
+    // the operation reporting to that Progress must refuse instead (it would wait for itself).
+    static const Progress* calling_back();
+
   private:
     void notify(bool force);
+    void call_back();  // runs callback_ once; a failure in it cancels
 
     std::atomic<bool> cancelled_{false};
     std::atomic<float> fraction_{0.0f};
     float stage_lo_ = 0.0f, stage_hi_ = 1.0f;
-    mutable std::mutex mutex_;  // guards stage_ and the callback bookkeeping
+    mutable std::mutex mutex_;  // guards stage_ and the callback bookkeeping, never held in it
     std::string stage_;
+    bool calling_ = false;  // a thread is running the callback
+    bool pending_ = false;  // a forced notification came while it ran: call once more
     Callback callback_;
     std::chrono::steady_clock::duration min_interval_{};
     std::chrono::steady_clock::time_point last_notify_{};

@@ -200,6 +200,33 @@ def test_concurrent_calls_on_one_grid_are_serialised():
     assert np.isfinite(grid.irradiance(points, normals)).all()
 
 
+def test_update_or_reset_from_the_grids_own_progress_callback_is_refused_not_a_deadlock():
+    """update() waited for its own lock when its progress callback called update() or reset();
+    the callback runs on whichever thread reports, so the call it waits for never ends."""
+    scene = committed(scenes.cornell_box(0.1))
+    grid = solved_grid(scene, 0, rays_per_probe=4, placement_rays=8)
+    refusals = []
+
+    def callback(fraction, stage):
+        for call in (grid.update, grid.reset):
+            try:
+                call()
+            except RuntimeError as error:
+                refusals.append(str(error))
+
+    outcome = []
+    worker = threading.Thread(target=lambda: outcome.append(
+        grid.update(progress=shgi.Progress(callback, min_interval=0.0))), daemon=True)
+    worker.start()
+    worker.join(60.0)
+    assert not worker.is_alive(), "update() deadlocked"
+    assert outcome and grid.passes == 1
+    assert refusals and all("called from inside this grid's running update() or reset()" in
+                            message for message in refusals)
+    grid.update()  # the grid works on afterwards
+    assert grid.passes == 2
+
+
 def test_lookups_reject_normals_without_direction_and_far_points():
     """A zero normal once made NaN probe indices (a crash); far points overflowed distances."""
     scene = committed(scenes.cornell_box(0.1))

@@ -474,6 +474,71 @@ def test_commit_reports_progress_stages():
     assert "building mesh BVHs" in [stage for _, stage in stages]
 
 
+def finishes_in_a_thread(call, timeout=30.0):
+    """Runs call() in a daemon thread: a deadlock fails the test instead of hanging the run."""
+    outcome = {}
+
+    def run():
+        try:
+            outcome["result"] = call()
+        except Exception as error:  # reported by the caller's assertions
+            outcome["error"] = error
+
+    worker = threading.Thread(target=run, daemon=True)
+    worker.start()
+    worker.join(timeout)
+    assert not worker.is_alive(), "the call deadlocked"
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome.get("result")
+
+
+def test_a_progress_callback_may_read_its_progress_and_start_work_with_it():
+    """Progress held its lock while calling back: reading progress.stage in the callback, or
+    starting another call with the same Progress, waited for itself for ever."""
+    positions, triangles = quad_arrays()
+    scene, other = shgi.Scene(), shgi.Scene()
+    for each in (scene, other):
+        each.add_instance(each.add_mesh(positions=positions, triangles=triangles))
+    other.commit()
+    seen = []
+
+    def callback(fraction, stage):
+        seen.append((progress.stage, progress.fraction))
+        if len(seen) == 1:  # a nested call reporting to the same Progress
+            other.intersect(np.zeros((4, 3)), np.tile([0.0, 0.0, 1.0], (4, 1)), progress=progress)
+
+    progress = shgi.Progress(callback)
+    finishes_in_a_thread(lambda: scene.commit(progress=progress))
+    assert scene.committed
+    assert len(seen) >= 2
+    assert "building mesh BVHs" in [stage for stage, _ in seen]
+    assert progress.fraction == 1.0
+
+
+def test_a_log_sink_may_log_and_replace_itself(tmp_path, capfd):
+    """The sink ran under the log mutex: logging or calling set_log_sink inside it deadlocked.
+    What the sink logs itself goes to stderr; a replaced sink finishes its running call."""
+    (tmp_path / "a.obj").write_text("mtllib missing.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    (tmp_path / "b.obj").write_text("mtllib absent.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    received = []
+
+    def sink(level, message):
+        received.append(message)
+        if len(received) == 1:
+            shgi.load_obj(str(tmp_path / "b.obj"))  # logs from inside the sink
+            shgi.set_log_sink(None)
+
+    shgi.set_log_sink(sink)
+    try:
+        finishes_in_a_thread(lambda: shgi.load_obj(str(tmp_path / "a.obj")))
+    finally:
+        shgi.set_log_sink(shgi._forward_to_logging)
+    assert "missing.mtl" in received[0]
+    assert not any("absent.mtl" in message for message in received)
+    assert "absent.mtl" in capfd.readouterr().err
+
+
 def test_memory_budget_raises_memory_error():
     scene = layered_scene(layers=1)
     with pytest.raises(MemoryError, match="the memory budget is 1024 bytes"):

@@ -121,5 +121,25 @@ TEST(Progress, CallbackNeverRunsConcurrently) {
     EXPECT_NEAR(progress.fraction(), 1.0f, kExact);
 }
 
+// No lock is held in the callback: it reads its Progress and reports to it (work it started)
+// without waiting for itself; a forced notification it caused is delivered by one more call.
+TEST(Progress, CallbackMayUseItsProgressAndMissedStagesAreDeliveredAfterIt) {
+    std::vector<std::string> stages;
+    Progress* self = nullptr;
+    Progress progress(
+        [&](float, const std::string& stage) {
+            EXPECT_EQ(Progress::calling_back(), self);
+            EXPECT_EQ(self->stage(), stage);
+            stages.push_back(stage);
+            if (stages.size() == 1) self->begin_stage("nested");  // re-enters notify()
+        },
+        10.0);
+    self = &progress;
+    EXPECT_EQ(Progress::calling_back(), nullptr);
+    progress.begin_stage("outer");
+    EXPECT_EQ(Progress::calling_back(), nullptr);
+    EXPECT_EQ(stages, (std::vector<std::string>{"outer", "nested"}));
+}
+
 }  // namespace
 }  // namespace shgi
