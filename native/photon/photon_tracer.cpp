@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <utility>
@@ -11,6 +13,7 @@
 #include "photon/photon_emitter.h"
 #include "render/shading.h"
 #include "util/error.h"
+#include "util/memory.h"
 #include "util/parallel.h"
 #include "util/rng.h"
 
@@ -24,6 +27,13 @@ constexpr uint64_t kMaxPhotonsPerPass = uint64_t(1) << 40;
 // cancel is noticed quickly. A chunk is also one wavefront: all its photons are in flight at
 // once, so each step hands Embree a ray stream of up to this many rays.
 constexpr uint64_t kPhotonsPerChunk = 4096;
+// Chunks traced per block: the chunks' results are held until their block is merged into the
+// maps, so their records take memory in proportion to a block (~4M photons), not to the whole
+// pass (2^40 photons would need 15 GB of records before the first photon).
+constexpr uint64_t kChunksPerBlock = 1024;
+// Stored photons may take at most this share of the machine's RAM; past it the trace stops
+// with OutOfMemory instead of the system killing the host.
+constexpr double kStoredPhotonsMemoryFraction = 0.5;
 
 // Photons shaded per stage: shade_all runs each stage (set-up, store, BSDF sample, roulette and
 // next ray) over this many photons before the next stage. A photon's shading is one long chain
@@ -275,6 +285,29 @@ class ChunkTracerPool {
     std::vector<std::unique_ptr<ChunkTracer>> free_;
 };
 
+// Capacity for `count` photons: exact for the first block (most passes have one), doubling after
+// (an exact fit per block would copy the whole map at every block).
+void grow_to(std::vector<Photon>& photons, size_t count) {
+    if (count > photons.capacity()) photons.reserve(std::max(count, 2 * photons.capacity()));
+}
+
+// Appends the first `count` chunks' photons to the maps in chunk order, releasing them.
+void merge(std::vector<ChunkResult>& chunks, uint64_t count, PhotonMaps& maps) {
+    size_t global_count = maps.global.size(), caustic_count = maps.caustic.size();
+    for (uint64_t c = 0; c < count; ++c) {
+        global_count += chunks[c].global.size();
+        caustic_count += chunks[c].caustic.size();
+    }
+    grow_to(maps.global, global_count);
+    grow_to(maps.caustic, caustic_count);
+    for (uint64_t c = 0; c < count; ++c) {
+        append(maps.global, chunks[c].global);
+        append(maps.caustic, chunks[c].caustic);
+        maps.bounces += chunks[c].bounces;
+        chunks[c] = ChunkResult{};  // release as we go: the maps may be large
+    }
+}
+
 }  // namespace
 
 void validate_photon_tracer_settings(const PhotonTracerSettings& settings,
@@ -301,33 +334,36 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
     const PhotonEmitter emitter(scene);
     if (scene.empty() || emitter.empty()) return maps;
     const uint64_t chunk_count = (settings.photons + kPhotonsPerChunk - 1) / kPhotonsPerChunk;
-    std::vector<ChunkResult> chunks(chunk_count);
+    const uint64_t physical = physical_memory_bytes();
+    const uint64_t budget = physical > 0
+                                ? uint64_t(double(physical) * kStoredPhotonsMemoryFraction)
+                                : std::numeric_limits<uint64_t>::max();
     ChunkTracerPool pool(scene, settings, emitter);
-    // Grain 1 over chunk indices: each body call traces whole chunks, whatever the split.
-    parallel_for(
-        0, chunk_count, 1,
-        [&](uint64_t chunk_begin, uint64_t chunk_end) {
+    std::vector<ChunkResult> chunks(std::min(chunk_count, kChunksPerBlock));
+    std::atomic<uint64_t> chunks_done{0};
+    for (uint64_t block = 0; block < chunk_count; block += kChunksPerBlock) {
+        const uint64_t stored_bytes = (maps.global.size() + maps.caustic.size()) * sizeof(Photon);
+        if (stored_bytes > budget)
+            throw OutOfMemory(format_message(
+                "trace_photons: after ", block * kPhotonsPerChunk, " of ", settings.photons,
+                " photons the stored photons take ", stored_bytes, " bytes, past half of the "
+                "machine's memory; lower the photon count"));
+        const uint64_t block_chunks = std::min(kChunksPerBlock, chunk_count - block);
+        // Grain 1 over chunk indices: each body call traces whole chunks, whatever the split.
+        // Progress counts chunks over the whole pass (parallel_for's own would restart at each
+        // block), so the body polls the cancel flag itself.
+        parallel_for(0, block_chunks, 1, [&](uint64_t chunk_begin, uint64_t chunk_end) {
             std::unique_ptr<ChunkTracer> tracer = pool.acquire();
             for (uint64_t c = chunk_begin; c < chunk_end; ++c) {
-                const uint64_t begin = c * kPhotonsPerChunk;
+                throw_if_cancelled(progress);
+                const uint64_t begin = (block + c) * kPhotonsPerChunk;
                 const uint64_t end = std::min(begin + kPhotonsPerChunk, settings.photons);
                 chunks[c] = tracer->trace(pass, begin, end);
+                if (progress) progress->report(chunks_done.fetch_add(1) + 1, chunk_count);
             }
             pool.release(std::move(tracer));
-        },
-        progress);
-    size_t global_count = 0, caustic_count = 0;
-    for (const ChunkResult& chunk : chunks) {
-        global_count += chunk.global.size();
-        caustic_count += chunk.caustic.size();
-    }
-    maps.global.reserve(global_count);
-    maps.caustic.reserve(caustic_count);
-    for (ChunkResult& chunk : chunks) {
-        append(maps.global, chunk.global);
-        append(maps.caustic, chunk.caustic);
-        maps.bounces += chunk.bounces;
-        chunk = ChunkResult{};  // release as we go: the maps may be large
+        });
+        merge(chunks, block_chunks, maps);
     }
     maps.emitted = settings.photons;
     maps.emitted_power = emitter.total_power();

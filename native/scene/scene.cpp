@@ -1,7 +1,5 @@
 #include "scene/scene.h"
 
-#include <unistd.h>
-
 #include <cmath>
 #include <limits>
 
@@ -9,6 +7,7 @@
 #include "scene/validation.h"
 #include "util/error.h"
 #include "util/log.h"
+#include "util/memory.h"
 #include "util/parallel.h"
 
 namespace shgi {
@@ -25,11 +24,9 @@ constexpr double kDefaultBudgetFraction = 0.75;
 
 uint64_t resolve_budget(uint64_t requested) {
     if (requested > 0) return requested;
-    const long pages = sysconf(_SC_PHYS_PAGES);
-    const long page_size = sysconf(_SC_PAGE_SIZE);
-    if (pages <= 0 || page_size <= 0) return std::numeric_limits<uint64_t>::max();
-    const double physical = static_cast<double>(pages) * static_cast<double>(page_size);
-    return static_cast<uint64_t>(physical * kDefaultBudgetFraction);
+    const uint64_t physical = physical_memory_bytes();
+    if (physical == 0) return std::numeric_limits<uint64_t>::max();
+    return static_cast<uint64_t>(static_cast<double>(physical) * kDefaultBudgetFraction);
 }
 
 std::string instance_label(const std::vector<Instance>& instances, size_t i) {
