@@ -15,6 +15,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <set>
@@ -29,6 +30,8 @@
 
 namespace shgi {
 namespace {
+
+namespace fs = std::filesystem;
 
 // Blender's importer clamps the specular exponent to this range before mapping it to roughness.
 constexpr float kMaxSpecularExponent = 1000.0f;
@@ -82,6 +85,15 @@ class MtlReader : public tinyobj::MaterialReader {
                     std::map<std::string, int>* material_map, std::string* warn,
                     std::string* err) override {
         const std::string path = directory_ + name;
+        std::error_code error;
+        const fs::file_status status = fs::status(path, error);
+        if (!error && fs::exists(status) && !fs::is_regular_file(status)) {
+            // "mtllib ../../dev/zero" read until memory ran out.
+            *warn += format_message("material library '", path, "' is not a regular file (a "
+                                    "folder, device, FIFO or socket); its materials are replaced "
+                                    "by the default material\n");
+            return false;
+        }
         std::ifstream file(path, std::ios::binary);
         if (!file) {
             *warn += format_message("material library '", path, "' not found (",

@@ -165,6 +165,19 @@ TEST(ObjLoader, MissingMtlIsAWarning) {
     EXPECT_NE(log.warnings.find("obj_loader_absent.mtl"), std::string::npos) << log.warnings;
 }
 
+// "mtllib /dev/zero" (any path naming a device, FIFO or folder) was read until memory ran out.
+TEST(ObjLoader, MtlThatIsNotARegularFileIsAWarningNotARead) {
+    LogCapture log;
+    std::string up;  // from the test folder to the root, whatever its depth ("/.." is "/")
+    for (int i = 0; i < 32; ++i) up += "../";
+    write_file(test_file_path("obj", "obj_loader_device_mtl.obj"),
+               "mtllib " + up + "dev/zero\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl X\nf 1 2 3\n");
+    const Scene scene = load_obj(test_file_path("obj", "obj_loader_device_mtl.obj"));
+    EXPECT_EQ(scene.materials().size(), 1u);
+    EXPECT_NE(log.warnings.find("/dev/zero' is not a regular file"), std::string::npos)
+        << log.warnings;
+}
+
 void expect_io_error(const std::string& name, const std::string& text, const std::string& needle) {
     const std::string path = test_file_path("obj", name);
     write_file(path, text);
