@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <limits>
 #include <map>
 #include <tuple>
 #include <utility>
@@ -235,20 +236,29 @@ std::pair<int64_t, int64_t> data_window_size(const std::string& path,
     return {width, height};
 }
 
+// a * b for non-negative a, b, or INT64_MAX where that overflows: budgets near 2^63 (a caller's
+// "no limit") must not wrap round to refuse, or admit, everything.
+int64_t saturating_product(int64_t a, int64_t b) {
+    if (a != 0 && b > std::numeric_limits<int64_t>::max() / a)
+        return std::numeric_limits<int64_t>::max();
+    return a * b;
+}
+
 void check_read_budget(const std::string& path, int64_t width, int64_t height,
                        size_t channel_count, int64_t max_pixels) {
-    const int64_t pixels = width * height;
+    const int64_t pixels = saturating_product(width, height);
     if (pixels > max_pixels) {
         throw IoError(format_message("cannot read EXR \"", path, "\": it is ", width, " x ", height,
                                      " = ", pixels, " pixels, more than max_pixels = ", max_pixels,
                                      "; raise max_pixels if the file is trusted"));
     }
-    const int64_t values = pixels * int64_t(channel_count);
-    if (values > kMaxExrValuesPerPixel * max_pixels) {
+    const int64_t values = saturating_product(pixels, int64_t(channel_count));
+    const int64_t max_values = saturating_product(kMaxExrValuesPerPixel, max_pixels);
+    if (values > max_values) {
         throw IoError(format_message("cannot read EXR \"", path, "\": its ", channel_count,
                                      " channels of ", pixels, " pixels hold ", values,
                                      " values, more than ", kMaxExrValuesPerPixel,
-                                     " * max_pixels = ", kMaxExrValuesPerPixel * max_pixels,
+                                     " * max_pixels = ", max_values,
                                      "; raise max_pixels if the file is trusted"));
     }
 }

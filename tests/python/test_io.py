@@ -182,6 +182,8 @@ def test_read_exr_enforces_max_pixels(tmp_path):
     with pytest.raises(OSError, match="max_pixels = 63"):
         shgi.read_exr(path, max_pixels=63)
     assert shgi.read_exr(path, max_pixels=64)["Combined"].shape == (8, 8, 4)
+    # "no limit": 16 * max_pixels once overflowed to a negative budget that refused every file
+    assert shgi.read_exr(path, max_pixels=2**63 - 1)["Combined"].shape == (8, 8, 4)
 
 
 def test_missing_and_corrupt_exr_raise_os_error_naming_the_file(tmp_path):
