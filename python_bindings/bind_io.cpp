@@ -118,17 +118,25 @@ PixelType layer_pixel_type(const std::optional<std::string>& pixel_type, const p
 Image image_from_layers(const py::dict& layers, const std::optional<std::string>& pixel_type,
                         const py::dict& channel_names) {
     if (layers.empty()) throw_value_error("layers", "give at least one layer");
-    for (const auto& item : channel_names) {
-        if (!layers.contains(item.first)) {
+    // Iterate over lists of the items, which own references: a dict's own iteration lends them,
+    // and a layer's __array__ (or a key's __eq__) may edit the dict while it runs.
+    const auto owned_items = [](const py::dict& dict) {
+        return py::list(dict.attr("items")());
+    };
+    for (const py::handle item : owned_items(channel_names)) {
+        const py::tuple pair = py::reinterpret_borrow<py::tuple>(item);
+        if (!layers.contains(pair[0])) {
             throw_value_error("channel_names", "names channels of " +
-                                                   py::repr(item.first).cast<std::string>() +
+                                                   py::repr(pair[0]).cast<std::string>() +
                                                    ", which is not a key of layers");
         }
     }
     std::optional<Image> image;
     py::ssize_t height = 0;
     py::ssize_t width = 0;
-    for (const auto& [key, value] : layers) {
+    for (const py::handle item : owned_items(layers)) {
+        const py::tuple pair = py::reinterpret_borrow<py::tuple>(item);
+        const py::object key = pair[0], value = pair[1];
         if (!py::isinstance<py::str>(key)) {
             throw_value_error("layers", "keys must be layer names (str), got " +
                                             py::repr(key).cast<std::string>());

@@ -176,6 +176,39 @@ def test_read_exr_reads_every_part_of_a_multi_part_file(tmp_path):
         + [(f"ViewLayer.DiffInd.{c}", "half") for c in "RGB"])
 
 
+def test_write_exr_survives_layers_that_edit_the_dict_while_converted(tmp_path):
+    """The layers dict was read through borrowed references: a layer whose __array__ removed
+    entries (itself among them) or added some made write_exr read freed memory (a segfault)."""
+
+    class Popping:
+        def __init__(self, layers, key):
+            self.layers, self.key = layers, key
+
+        def __array__(self, dtype=None, copy=None):
+            self.layers.pop(self.key, None)  # may drop the last other reference to self
+            return np.full((4, 4), 0.5, np.float32)
+
+    class Growing:
+        def __init__(self, layers):
+            self.layers = layers
+
+        def __array__(self, dtype=None, copy=None):
+            for i in range(50):
+                self.layers[f"extra{i}"] = np.zeros((4, 4), np.float32)
+            return np.full((4, 4), 0.25, np.float32)
+
+    popping = {}
+    for key in "abcde":
+        popping[key] = Popping(popping, key)
+    shgi.write_exr(tmp_path / "popping.exr", popping)
+    assert sorted(shgi.read_exr(tmp_path / "popping.exr")) == list("abcde")
+    growing = {}
+    growing["a"] = Growing(growing)
+    shgi.write_exr(tmp_path / "growing.exr", growing)  # the items as they were at the call
+    written = shgi.read_exr(tmp_path / "growing.exr")
+    assert list(written) == ["a"] and np.all(written["a"] == 0.25)
+
+
 def test_read_exr_enforces_max_pixels(tmp_path):
     path = tmp_path / "big.exr"
     shgi.write_exr(path, {"Combined": np.zeros((8, 8, 4), np.float32)})
