@@ -49,13 +49,15 @@ py::dict timings_to_dict(const PhotonLatticeTimings& timings) {
 }
 
 void bind_settings(py::module_& m) {
-    py::enum_<CausticMode>(m, "CausticMode", "Where caustic photons (light → specular+ → diffuse) go.")
+    named_values_only(py::enum_<CausticMode>(
+        m, "CausticMode", "Where caustic photons (light → specular+ → diffuse) go.")
         .value("OFF", CausticMode::Off)
         .value("LATTICE", CausticMode::Lattice)
-        .value("PHOTON_MAP", CausticMode::PhotonMap);
-    py::enum_<LatticeInterpolation>(m, "LatticeInterpolation", "How lattices are sampled.")
+        .value("PHOTON_MAP", CausticMode::PhotonMap));
+    named_values_only(
+        py::enum_<LatticeInterpolation>(m, "LatticeInterpolation", "How lattices are sampled.")
         .value("TRILINEAR", LatticeInterpolation::Trilinear)
-        .value("CUBIC", LatticeInterpolation::Cubic);
+        .value("CUBIC", LatticeInterpolation::Cubic));
 
     using S = PhotonLatticeSettings;
     py::class_<S> cls(m, "PhotonLatticeSettings",

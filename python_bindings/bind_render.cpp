@@ -88,9 +88,10 @@ uint32_t checked_samples(const py::handle& samples) {
 }
 
 void bind_settings(py::module_& m) {
-    py::enum_<WorldSampling>(m, "WorldSampling", "How next-event estimation samples the world.")
+    named_values_only(py::enum_<WorldSampling>(m, "WorldSampling",
+                                               "How next-event estimation samples the world.")
         .value("COSINE", WorldSampling::Cosine)
-        .value("UNIFORM", WorldSampling::Uniform);
+        .value("UNIFORM", WorldSampling::Uniform));
     using S = PathTracerSettings;
     py::class_<S> cls(m, "PathTracerSettings",
                       "Settings of the reference path tracer; every field has a default.");

@@ -145,21 +145,21 @@ void bind_mesh(py::module_& m) {
 // --- materials and textures --------------------------------------------------------------------
 
 void bind_material(py::module_& m) {
-    py::enum_<DiffuseModel>(m, "DiffuseModel", "The diffuse lobe of a Material.")
+    named_values_only(py::enum_<DiffuseModel>(m, "DiffuseModel", "The diffuse lobe of a Material.")
         .value("PRINCIPLED", DiffuseModel::Principled,
                "Principled BSDF's diffuse (Burley, with retro-reflection at high roughness)")
-        .value("LAMBERT", DiffuseModel::Lambert, "Lambert, as Blender's Diffuse BSDF");
-    py::enum_<PrincipledModel>(m, "PrincipledModel",
+        .value("LAMBERT", DiffuseModel::Lambert, "Lambert, as Blender's Diffuse BSDF"));
+    named_values_only(py::enum_<PrincipledModel>(m, "PrincipledModel",
                                "How a Material's closures combine, as each Blender's Cycles.")
         .value("V1", PrincipledModel::V1, "Blender 3.x: diffuse and specular added")
         .value("V2", PrincipledModel::V2,
                "Blender 4.0+: the specular layer dims the diffuse by its albedo; Glossy Color "
-               "holds that albedo");
-    py::enum_<MicrofacetDistribution>(m, "MicrofacetDistribution",
+               "holds that albedo"));
+    named_values_only(py::enum_<MicrofacetDistribution>(m, "MicrofacetDistribution",
                                       "The microfacet distribution of a Material's specular.")
         .value("GGX", MicrofacetDistribution::GGX, "GGX, single scattering")
         .value("MULTISCATTER_GGX", MicrofacetDistribution::MultiscatterGGX,
-               "Cycles 4's energy-preserving GGX (with principled_model V2)");
+               "Cycles 4's energy-preserving GGX (with principled_model V2)"));
     py::class_<Material> cls(m, "Material",
                              "Principled BSDF subset (Blender 3.4 semantics, or 4.x's with "
                              "principled_model V2), linear Rec.709.");
@@ -234,16 +234,16 @@ void bind_material(py::module_& m) {
 // --- lights, world, camera ---------------------------------------------------------------------
 
 void bind_light(py::module_& m) {
-    py::enum_<LightType>(m, "LightType", "Blender's light types.")
+    named_values_only(py::enum_<LightType>(m, "LightType", "Blender's light types.")
         .value("POINT", LightType::Point)
         .value("SPOT", LightType::Spot)
         .value("SUN", LightType::Sun)
-        .value("AREA", LightType::Area);
-    py::enum_<AreaShape>(m, "AreaShape", "Blender's area light shapes.")
+        .value("AREA", LightType::Area));
+    named_values_only(py::enum_<AreaShape>(m, "AreaShape", "Blender's area light shapes.")
         .value("SQUARE", AreaShape::Square)
         .value("RECTANGLE", AreaShape::Rectangle)
         .value("DISK", AreaShape::Disk)
-        .value("ELLIPSE", AreaShape::Ellipse);
+        .value("ELLIPSE", AreaShape::Ellipse));
     py::class_<Light> cls(m, "Light", "A Blender light with Cycles' units (see scene/light.h).");
     cls.def(py::init(&from_kwargs<Light>),
             "Light(**fields): a default point light with the given fields set.")
@@ -281,13 +281,13 @@ void bind_light(py::module_& m) {
 constexpr uint64_t kFilmPointsPerChunk = 16384;
 
 void bind_camera(py::module_& m) {
-    py::enum_<CameraType>(m, "CameraType", "Perspective or orthographic.")
+    named_values_only(py::enum_<CameraType>(m, "CameraType", "Perspective or orthographic.")
         .value("PERSPECTIVE", CameraType::Perspective)
-        .value("ORTHOGRAPHIC", CameraType::Orthographic);
-    py::enum_<SensorFit>(m, "SensorFit", "Blender's camera sensor fit.")
+        .value("ORTHOGRAPHIC", CameraType::Orthographic));
+    named_values_only(py::enum_<SensorFit>(m, "SensorFit", "Blender's camera sensor fit.")
         .value("AUTO", SensorFit::Auto)
         .value("HORIZONTAL", SensorFit::Horizontal)
-        .value("VERTICAL", SensorFit::Vertical);
+        .value("VERTICAL", SensorFit::Vertical));
     py::class_<Camera> cls(m, "Camera", "A Blender camera (see scene/camera.h).");
     def_integer(cls, "resolution_x", &Camera::resolution_x, "Render width in pixels.");
     def_integer(cls, "resolution_y", &Camera::resolution_y, "Render height in pixels.");

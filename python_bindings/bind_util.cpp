@@ -15,6 +15,7 @@
 #include <pybind11/stl.h>
 #include <tbb/global_control.h>
 
+#include "struct_fields.h"
 #include "util/error.h"
 #include "util/log.h"
 #include "util/parallel.h"
@@ -106,11 +107,11 @@ is called at most every ``min_interval`` seconds, possibly from a worker thread.
 }
 
 void bind_logging(py::module_& m) {
-    py::enum_<LogLevel>(m, "LogLevel", "Severity of a log message.")
+    named_values_only(py::enum_<LogLevel>(m, "LogLevel", "Severity of a log message.")
         .value("DEBUG", LogLevel::Debug)
         .value("INFO", LogLevel::Info)
         .value("WARNING", LogLevel::Warning)
-        .value("ERROR", LogLevel::Error);
+        .value("ERROR", LogLevel::Error));
     m.def(
         "set_log_sink",
         [](std::optional<py::function> sink) {

@@ -2,11 +2,13 @@
 // Python object mirrors its C++ struct with the same names and defaults (DESIGN.md).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <memory>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include <pybind11/pybind11.h>
 
@@ -14,6 +16,30 @@
 #include "util/math.h"
 
 namespace shgi::python {
+
+// Makes Enum(value) accept only the named values: pybind11's enum_ converts any integer, and
+// an unnamed one (DiffuseModel(7)) reached native switches that have no case for it. Call after
+// the last .value().
+template <typename Enum>
+void named_values_only(pybind11::enum_<Enum> cls) {
+    using Scalar = std::underlying_type_t<Enum>;
+    std::vector<Scalar> named;
+    std::string names;
+    for (const auto& [name, value] : pybind11::dict(cls.attr("__members__"))) {
+        named.push_back(static_cast<Scalar>(value.template cast<Enum>()));
+        names += (names.empty() ? "" : ", ") + name.template cast<std::string>() + " (" +
+                 std::to_string(named.back()) + ")";
+    }
+    const std::string type = cls.attr("__name__").template cast<std::string>();
+    cls.attr("__init__") = pybind11::none();  // replaced, not overloaded: one signature
+    cls.def(pybind11::init([named, names, type](Scalar value) {
+                if (std::find(named.begin(), named.end(), value) == named.end())
+                    throw pybind11::value_error(type + "(" + std::to_string(value) +
+                                                "): not a member; use one of " + names);
+                return static_cast<Enum>(value);
+            }),
+            pybind11::arg("value"));
+}
 
 inline pybind11::tuple to_tuple(const vec3& v) { return pybind11::make_tuple(v.x, v.y, v.z); }
 

@@ -167,6 +167,23 @@ NARROWER_RANGES = {("PathTracerSettings", "samples"): (1, 2**24),
                    ("PhotonLatticeSettings", "photons"): (1, 2**64 - 1)}
 
 
+def test_every_enum_accepts_only_its_named_values():
+    """pybind11's enums converted any integer: DiffuseModel(7) reached native switches with no
+    case for it."""
+    enums = [value for value in vars(shgi).values()
+             if isinstance(value, type) and hasattr(value, "__members__")]
+    assert len(enums) >= 11
+    for enum_type in enums:
+        members = enum_type.__members__
+        for member in members.values():
+            assert enum_type(int(member)) == member
+        unnamed = max(int(member) for member in members.values()) + 1
+        with pytest.raises(ValueError, match=rf"{enum_type.__name__}\({unnamed}\): not a member"):
+            enum_type(unnamed)
+        with pytest.raises((ValueError, TypeError)):  # TypeError where the type is unsigned
+            enum_type(-1)
+
+
 def test_every_integer_field_range_checks_by_name():
     fields = integer_fields()
     # The walk finds the fields it must: signed, unsigned, 32- and 64-bit ones.
