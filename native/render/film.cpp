@@ -4,9 +4,15 @@
 #include <utility>
 
 #include "util/error.h"
+#include "util/memory.h"
 
 namespace shgi {
 namespace {
+
+// A film may take at most this share of the machine's RAM: a progressive renderer holds two
+// (ProgressiveFilm), and its passes' images are as large again. Past it the system would kill
+// the host while the sums are zeroed, before any allocation could fail.
+constexpr double kFilmMemoryFraction = 0.25;
 
 // Cycles writes this depth where no sample hit anything (film_get_pass_pixel_depth).
 constexpr float kMissDepth = 1e10f;
@@ -48,6 +54,13 @@ Film::Film(int width, int height, FilmPasses passes)
     : width_(width), height_(height), passes_(passes),
       pass_count_(passes == FilmPasses::All ? size_t(kPassCount) : 1) {
     check_image_size(width, height, "film");
+    const uint64_t bytes = uint64_t(pass_count_) * pixel_count() * sizeof(vec3);
+    const uint64_t physical = physical_memory_bytes();
+    if (physical > 0 && double(bytes) > kFilmMemoryFraction * double(physical))
+        throw OutOfMemory(format_message(
+            "film: ", width, " x ", height, " pixels with ", pass_count_, " passes need ", bytes,
+            " bytes, more than ", int(kFilmMemoryFraction * 100.0), "% of the machine's ",
+            physical, " bytes of memory; lower the resolution"));
     sums_.assign(pass_count_ * pixel_count(), vec3(0.0f));
 }
 

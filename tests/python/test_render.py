@@ -53,6 +53,18 @@ def test_settings_defaults_mirror_cpp():
     assert shgi.PathTracerSettings(samples=5, seed=9).seed == 9
 
 
+def test_a_film_larger_than_the_machine_can_hold_is_a_memory_error():
+    """Films were allocated for any resolution up to 2^31 pixels (360 GB of sums): zeroing them
+    got the host killed by the system before any allocation failed."""
+    scene = inward_box_scene(0.5, 0.3)
+    scene.set_camera(shgi.Camera(resolution_x=46340, resolution_y=46340))
+    scene.commit()
+    for make in (lambda: shgi.PathTracer(scene), lambda: shgi.PreviewRenderer(scene)):
+        with pytest.raises(MemoryError, match=r"film: 46340 x 46340 pixels with 14 passes need "
+                                              r"\d+ bytes, .*; lower the resolution"):
+            make()
+
+
 def test_white_furnace_through_python():
     albedo, emission = 0.5, 0.3
     scene = inward_box_scene(albedo, emission)
