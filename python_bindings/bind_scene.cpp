@@ -539,8 +539,16 @@ void bind_scene_inspection(py::class_<Scene>& cls) {
 // A scalar (the same for every ray) or an (N,) array.
 std::vector<float> per_ray_values(const py::object& obj, const char* arg_name, size_t count) {
     const py::array array = py::array::ensure(obj);
-    if (PyFloat_Check(obj.ptr()) || PyLong_Check(obj.ptr()) || (array && array.ndim() == 0))
-        return std::vector<float>(count, obj.cast<float>());
+    if (PyFloat_Check(obj.ptr()) || PyLong_Check(obj.ptr()) || (array && array.ndim() == 0)) {
+        float value = 0.0f;
+        try {
+            value = obj.cast<float>();
+        } catch (const py::cast_error&) {  // a string, or another 0-d array that is no number
+            throw_value_error(arg_name, "expected a number or an (N,) array of numbers, got " +
+                                            py::repr(obj).cast<std::string>());
+        }
+        return std::vector<float>(count, value);
+    }
     // Non-finite values are allowed here (tmax = inf); the rays' own check rejects NaN.
     std::vector<float> values = to_float_rows(obj, arg_name, 0, /*allow_non_finite=*/true);
     if (values.size() != count)

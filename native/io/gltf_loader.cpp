@@ -18,6 +18,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <map>
@@ -87,6 +88,22 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
     return true;
 }
 
+// tinygltf's reader, for regular files only: a buffer or image URI naming a folder made it
+// allocate the folder's bogus size (std::bad_alloc), and one naming a device read without end.
+bool read_regular_file(std::vector<unsigned char>* out, std::string* error,
+                       const std::string& path, void* user_data) {
+    std::error_code status_error;
+    const std::filesystem::file_status status = std::filesystem::status(path, status_error);
+    if (!status_error && std::filesystem::exists(status) &&
+        !std::filesystem::is_regular_file(status)) {
+        if (error)
+            *error += format_message("'", path, "' is not a regular file (a folder, device, FIFO "
+                                     "or socket)\n");
+        return false;
+    }
+    return tinygltf::ReadWholeFile(out, error, path, user_data);
+}
+
 bool starts_with_glb_magic(const std::string& path) {
     require_readable_file(path, "glTF");
     std::ifstream file(path, std::ios::binary);
@@ -102,6 +119,8 @@ tinygltf::Model read_model(const std::string& path, const GltfLoadOptions& optio
     const bool binary = starts_with_glb_magic(path);
     std::vector<std::string> image_failures;
     tinygltf::TinyGLTF parser;
+    parser.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_regular_file,
+                           &tinygltf::WriteWholeFile, nullptr});
     if (options.import_textures)
         parser.SetImageLoader(decode_image_or_record, &image_failures);
     else

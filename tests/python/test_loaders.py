@@ -137,6 +137,19 @@ def test_load_gltf_malformed_names_the_path(tmp_path):
     assert str(path) in str(info.value)
 
 
+def test_load_gltf_buffer_uri_naming_a_folder_or_device_is_oserror(tmp_path):
+    """A buffer URI naming a folder made tinygltf allocate its bogus size (MemoryError:
+    std::bad_alloc); one naming a device read without end."""
+    (tmp_path / "folder.bin").mkdir()
+    for uri in ("folder.bin", "../" * 32 + "dev/zero"):
+        document = gltf_document()
+        document["buffers"][0]["uri"] = uri
+        path = tmp_path / "scene.gltf"
+        path.write_text(json.dumps(document))
+        with pytest.raises(OSError, match=r"is not a regular file \(a folder, device"):
+            shgi.load_gltf(path)
+
+
 def test_load_gltf_index_out_of_range_is_oserror(tmp_path):
     path = write_gltf(tmp_path / "bad_index.gltf", gltf_document(indices=(0, 1, 2, 0, 2, 40)))
     with pytest.raises(OSError, match=r"indices\[5\] = 40, but the primitive has only 4"):

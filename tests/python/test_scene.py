@@ -320,6 +320,9 @@ def test_bad_rays_raise_value_error():
         scene.occluded(origins, directions[:3])
     with pytest.raises(ValueError, match="^tmax: has 2 values but there are 4 rays"):
         scene.intersect(origins, directions, tmax=np.ones(2))
+    with pytest.raises(ValueError, match="^tmin: expected a number or an .N,. array of "
+                                         "numbers, got 'abc'"):
+        scene.intersect(origins, directions, tmin="abc")  # was an unnamed cast error
     zero = directions.copy()
     zero[1] = 0.0
     with pytest.raises(ValueError, match=r"rays\[1\]: direction is zero"):
