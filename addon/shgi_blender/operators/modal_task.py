@@ -1,14 +1,20 @@
 """What every SHGI operator that runs a NativeTask (engine/native_task.py) shares: from a script
-or in background mode (execute) it waits for the task; from the UI (invoke) it runs modal, a
-window-manager timer shows the task's progress in the status bar (and, with PROGRESS_BAR, the
-window's progress indicator) and Esc cancels it.
+or in background mode (execute) it waits for the task, and Ctrl-C (SIGINT, which background
+Blender would otherwise keep for renders) cancels it, during the export too; from the UI
+(invoke) it runs modal, a window-manager timer shows the task's progress in the status bar (and,
+with PROGRESS_BAR, the window's progress indicator) and Esc cancels it. The export before the
+task runs on Blender's main thread in one go: a window handles Esc only once it has ended.
 
 A subclass implements _start(context) -> a started task or None (after reporting why),
 _finish(context, task) -> the operator's result, _progress(task) -> (fraction, stage), and may
 override _tick(context, task), called on every timer event before the progress is shown.
 """
 
+from .keyboard_interrupt import keyboard_interrupts
+
 TIMER_SECONDS = 0.1
+# How often a waiting execute() wakes; a Ctrl-C also interrupts the wait at once.
+WAIT_SECONDS = 0.1
 
 
 class ModalTaskOperator:
@@ -17,10 +23,21 @@ class ModalTaskOperator:
     PROGRESS_BAR = False
 
     def execute(self, context):
-        task = self._start(context)
+        task = None
+        try:
+            with keyboard_interrupts():
+                task = self._start(context)
+                while task is not None and not task.wait(WAIT_SECONDS):
+                    pass
+        except KeyboardInterrupt:
+            if task is None:
+                self.report({"WARNING"}, f"{self.STATUS_PREFIX}interrupted (Ctrl-C) while "
+                            "preparing; nothing was started")
+                return {"CANCELLED"}
+            task.cancel()
+            task.wait()
         if task is None:
             return {"CANCELLED"}
-        task.wait()
         return self._finish(context, task)
 
     def invoke(self, context, _event):

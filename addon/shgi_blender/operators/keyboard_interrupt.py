@@ -1,0 +1,68 @@
+"""Ctrl-C (SIGINT) as KeyboardInterrupt while an operator waits for native work. No bpy.
+
+An operator run from a script or in background mode (``blender -b``) waits on Blender's main
+thread for its worker. Background Blender handles SIGINT itself: the first one only sets the
+break flag renders read (creator_signals.c, "Sent an internal break event"), which Python cannot
+read, and the second kills Blender. ``keyboard_interrupts()`` makes SIGINT raise
+KeyboardInterrupt in the main thread for the duration of a ``with`` block, so the waiting
+operator can cancel its worker and return CANCELLED, and then puts back the handler there was:
+Python's own (Blender as a Python module), or Blender's C handler, saved and restored with
+sigaction through ctypes because Python's ``signal.signal`` cannot reinstall a handler it did not
+install. Where that is not possible (another thread, no sigaction), the block runs unchanged.
+"""
+
+import ctypes
+import ctypes.util
+import signal
+import threading
+from contextlib import contextmanager
+
+# Bytes that hold a struct sigaction on every POSIX platform (152 on Linux x86-64, 16 on macOS);
+# the struct is only saved and restored, never read.
+SIGACTION_BYTES = 256
+
+
+@contextmanager
+def keyboard_interrupts():
+    """While the block runs, SIGINT raises KeyboardInterrupt in the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.getsignal(signal.SIGINT)  # None: a handler installed outside Python
+    saved = SavedDisposition.current()
+    if previous is None and saved is None:  # a handler that could not be put back: keep it
+        yield
+        return
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        # Python's table first (SIG_IGN for a handler it did not install: a Ctrl-C in between is
+        # dropped, never fatal), then the exact disposition there was.
+        signal.signal(signal.SIGINT, previous if previous is not None else signal.SIG_IGN)
+        if saved is not None:
+            saved.restore()
+
+
+class SavedDisposition:
+    """SIGINT's disposition as sigaction reports it, to be put back as it was."""
+
+    def __init__(self, libc, action):
+        self._libc = libc
+        self._action = action
+
+    @classmethod
+    def current(cls):
+        """The current disposition, or None where sigaction is not available."""
+        try:
+            libc = ctypes.CDLL(ctypes.util.find_library("c"), use_errno=True)
+            sigaction = libc.sigaction
+        except (OSError, AttributeError, TypeError):
+            return None
+        action = ctypes.create_string_buffer(SIGACTION_BYTES)
+        if sigaction(signal.SIGINT, None, ctypes.byref(action)) != 0:
+            return None
+        return cls(libc, action)
+
+    def restore(self):
+        self._libc.sigaction(signal.SIGINT, ctypes.byref(self._action), None)
