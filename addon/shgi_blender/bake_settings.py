@@ -20,6 +20,8 @@ operator, or a SimpleNamespace in tests).
 
 import math
 
+from . import settings
+
 # Where the indirect light of a bake comes from: identifier, label, description. The field
 # sources solve scene.shgi's photon lattice or probe grid (engine/field_solvers.py), whose
 # render-method identifiers they share.
@@ -85,12 +87,21 @@ DENOISER_ITEMS = (
                                  "the pyoidn module: make deps installs it)"),
 )
 
+# LightmapSettings.samples' native limit (native/bake/lightmap_baker.cpp kMaxSamples): the
+# Samples property's range.
+MAX_SAMPLES = 1 << 20
+
 # LightmapSettings field -> scene.shgi.bake property.
 LIGHTMAP_FIELDS = {name: name for name in ("content", "samples", "directional", "tile_size")}
 # LightmapSettings field -> scene.shgi property (the render settings' light paths and seed).
 LIGHT_PATH_FIELDS = {name: name for name in (
     "seed", "max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
     "clamp_indirect")}
+# LightmapSettings field -> where the Bake and Light Paths panels show it, for refusals.
+LIGHTMAP_LABELS = {
+    "content": "Bake > Content", "samples": "Bake > Samples", "directional": "Bake > Directional",
+    "tile_size": "Bake > Farm > Tile Size",
+    **{field: settings.SETTING_LABELS[prop] for field, prop in LIGHT_PATH_FIELDS.items()}}
 # BakeOptions field -> scene.shgi.bake property.
 OPTION_FIELDS = {"uv_set": "uv_map", "filter": "filter", "padding": "padding"}
 
@@ -116,10 +127,10 @@ def bake_options(bake, props, shgi):
     naming it)."""
     from shgi import bake as shgi_bake
 
-    settings = lightmap_settings(bake, props, shgi)
-    settings.validate()
+    lightmap = settings.validated(lightmap_settings(bake, props, shgi),
+                                  {"LightmapSettings": LIGHTMAP_LABELS})
     options = shgi_bake.BakeOptions(
-        settings=settings, **{field: getattr(bake, prop) for field, prop in OPTION_FIELDS.items()})
+        settings=lightmap, **{field: getattr(bake, prop) for field, prop in OPTION_FIELDS.items()})
     if bake.filter and bake.denoiser == "OIDN":  # Denoise with OpenImageDenoise, not SHGI's filter
         options.filter, options.denoise = False, "OIDN"
     return options

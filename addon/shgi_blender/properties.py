@@ -35,11 +35,13 @@ class ShgiProbeGridSettings(bpy.types.PropertyGroup):
         name="SH Order", default=P["order"], min=1, max=4,
         description="Spherical-harmonics order of the probes (1: 4, 2: 9, 4: 25 coefficients)")
     spacing: FloatProperty(
-        name="Spacing", default=P["spacing"], min=0.0, soft_max=10.0, unit="LENGTH",
+        name="Spacing", default=P["spacing"], min=0.0, max=settings.MAX_PROBE_SPACING,
+        soft_max=10.0, unit="LENGTH",
         description="Probe spacing of the volume fitted to the scene when it has no Irradiance "
                     "Volume; 0 puts 8 probes along its longest side")
     rays_per_probe: IntProperty(
-        name="Rays per Probe", default=P["rays_per_probe"], min=1, soft_max=4096,
+        name="Rays per Probe", default=P["rays_per_probe"], min=1,
+        max=settings.MAX_RAYS_PER_PROBE, soft_max=4096,
         description="Paths traced per probe and update pass")
     hysteresis: FloatProperty(
         name="Hysteresis", default=P["hysteresis"], min=0.0, max=0.999,
@@ -60,7 +62,8 @@ class ShgiProbeGridSettings(bpy.types.PropertyGroup):
         name="Visibility Resolution", default=P["visibility_resolution"], min=2, max=64,
         description="Texels per side of each probe's octahedral distance map")
     visibility_blur: FloatProperty(
-        name="Blur", default=P["visibility_blur"], min=0.0, max=1.5, subtype="ANGLE",
+        name="Blur", default=P["visibility_blur"], min=settings.MIN_VISIBILITY_BLUR, max=1.5,
+        subtype="ANGLE",
         description="Angular radius of the distance filter (EEVEE's Visibility Blur)")
     normal_bias: FloatProperty(
         name="Bias", default=P["normal_bias"], min=0.0, max=1.0,
@@ -71,7 +74,7 @@ class ShgiProbeGridSettings(bpy.types.PropertyGroup):
         description="Probe spacings a shading point moves towards the viewer before it reads "
                     "the probes (DDGI's view bias)")
     bleed_bias: FloatProperty(
-        name="Bleed Bias", default=P["bleed_bias"], min=0.0, max=1.0,
+        name="Bleed Bias", default=P["bleed_bias"], min=0.0, max=settings.MAX_BLEED_BIAS,
         description="Visibility weights below it become 0, against light bleeding (EEVEE's "
                     "Bleed Bias)")
     relocate: BoolProperty(
@@ -81,10 +84,12 @@ class ShgiProbeGridSettings(bpy.types.PropertyGroup):
         name="Max Offset", default=P["max_offset"], min=0.0, max=0.5,
         description="Largest relocation, in probe spacings per axis")
     backface_threshold: FloatProperty(
-        name="Back-face Threshold", default=P["backface_threshold"], min=0.0, max=1.0,
+        name="Back-face Threshold", default=P["backface_threshold"],
+        min=settings.MIN_BACKFACE_THRESHOLD, max=1.0,
         description="Share of back-face hits that marks a probe as inside geometry")
     placement_rays: IntProperty(
-        name="Placement Rays", default=P["placement_rays"], min=1, soft_max=4096,
+        name="Placement Rays", default=P["placement_rays"], min=settings.MIN_PLACEMENT_RAYS,
+        max=settings.MAX_RAYS_PER_PROBE, soft_max=4096,
         description="Rays per probe that find probes inside geometry")
 
 
@@ -110,7 +115,8 @@ def bake_properties():
             name="Texel Density", default=B["texel_density"], min=0.0, soft_max=1024.0,
             description="Texels per metre of surface, used when the resolution is 0"),
         "samples": IntProperty(
-            name="Samples", default=B["samples"], min=1, soft_max=4096,
+            name="Samples", default=B["samples"], min=1, max=bake_settings.MAX_SAMPLES,
+            soft_max=4096,
             description="Samples per texel"),
         "content": EnumProperty(
             name="Content", items=BAKE_CONTENT_ITEMS, default=B["content"],
@@ -172,7 +178,7 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
         name="Method", items=METHOD_ITEMS, default=settings.METHODS[0].identifier,
         description="How indirect light is computed")
     samples: IntProperty(
-        name="Samples", default=D["samples"], min=1, soft_max=4096,
+        name="Samples", default=D["samples"], min=1, max=settings.MAX_SAMPLES, soft_max=4096,
         description="Samples per pixel of a final render")
     seed: IntProperty(
         name="Seed", default=D["seed"], min=0,
@@ -202,7 +208,8 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
         name="Photons", default=D["photons"], min=1, soft_max=50_000_000,
         description="Photons emitted per solve")
     resolution: IntProperty(
-        name="Resolution", default=D["resolution"], min=1, soft_max=256,
+        name="Resolution", default=D["resolution"], min=1, max=settings.MAX_LATTICE_RESOLUTION,
+        soft_max=256,
         description="Cells along the longest side of the global lattice")
     order: IntProperty(
         name="SH Order", default=D["order"], min=1, max=2,
@@ -211,7 +218,8 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
         name="Caustics", items=CAUSTICS_ITEMS, default=D["caustics"],
         description="Where light -> specular -> diffuse photons go")
     caustic_resolution: IntProperty(
-        name="Caustic Resolution", default=D["caustic_resolution"], min=1, soft_max=512,
+        name="Caustic Resolution", default=D["caustic_resolution"], min=1,
+        max=settings.MAX_LATTICE_RESOLUTION, soft_max=512,
         description="Cells along the longest side of the caustic lattice")
     interpolation: EnumProperty(
         name="Interpolation", items=INTERPOLATION_ITEMS, default=D["interpolation"],
@@ -223,7 +231,8 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
         name="World in Lattice", default=D["world_in_field"],
         description="The lattice carries the world's direct light (less noise, blurrier)")
     viewport_samples: IntProperty(
-        name="Viewport Samples", default=V["viewport_samples"], min=1, soft_max=4096,
+        name="Viewport Samples", default=V["viewport_samples"], min=1, max=settings.MAX_SAMPLES,
+        soft_max=4096,
         description="Samples per pixel the Rendered viewport accumulates before it stops")
     viewport_photon_passes: IntProperty(
         name="Viewport Photon Passes", default=V["viewport_photon_passes"], min=1, soft_max=64,

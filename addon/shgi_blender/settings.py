@@ -13,8 +13,14 @@ properties of the same or similar names, exactly as the two native structs diffe
 
 Everything here takes any object with the property names as attributes (the PropertyGroup, or a
 SimpleNamespace in tests), so pytest checks the mapping outside Blender.
+
+The property ranges (properties.py) are the native checks' ranges, so the panels offer only
+values the native code accepts. What the native checks still refuse (a value saved before a
+range was tightened, a spacing that puts too many probes in the scene) is reported with the
+setting's place in the panels instead of the native field (``name_settings``).
 """
 
+import re
 from dataclasses import dataclass
 from types import SimpleNamespace
 
@@ -151,6 +157,61 @@ VIEWPORT_PROPERTY_DEFAULTS = {
 VIEWPORT_RENDER_PROPERTIES = ("method", *PROPERTY_DEFAULTS, "viewport_samples",
                               "viewport_photon_passes", "viewport_probe_passes", "probe_grid")
 
+# Where each property is drawn in Properties > Render ("panel > label"), for messages that name a
+# setting: scene.shgi's, then scene.shgi.probe_grid's (placement_rays is in no panel).
+SETTING_LABELS = {
+    "samples": "SHGI > Render Samples",
+    "seed": "SHGI > Seed",
+    "max_bounces": "Light Paths > Total",
+    "diffuse_bounces": "Light Paths > Diffuse",
+    "glossy_bounces": "Light Paths > Glossy",
+    "transmission_bounces": "Light Paths > Transmission",
+    "clamp_indirect": "Light Paths > Clamp Indirect",
+    "world_sampling": "Light Paths > World Sampling",
+    "max_specular_bounces": "Light Paths > Specular Bounces",
+    "photons": "Photon Lattice > Photons",
+    "resolution": "Photon Lattice > Resolution",
+    "order": "Photon Lattice > SH Order",
+    "caustics": "Photon Lattice > Caustics",
+    "caustic_resolution": "Photon Lattice > Caustic Resolution",
+    "interpolation": "Photon Lattice > Interpolation",
+    "blur_passes": "Photon Lattice > Blur Passes",
+    "world_in_field": "Photon Lattice > World in Lattice",
+}
+PROBE_GRID_LABELS = {
+    "order": "Probe Grid > SH Order",
+    "spacing": "Probe Grid > Spacing",
+    "rays_per_probe": "Probe Grid > Rays per Probe",
+    "hysteresis": "Probe Grid > Hysteresis",
+    "clamp": "Probe Grid > Clamp",
+    "bounces": "Probe Grid > Bounces",
+    "visibility": "Probe Grid > Visibility",
+    "visibility_resolution": "Probe Grid > Visibility > Resolution",
+    "visibility_blur": "Probe Grid > Visibility > Blur",
+    "normal_bias": "Probe Grid > Visibility > Bias",
+    "view_bias": "Probe Grid > Visibility > View Bias",
+    "bleed_bias": "Probe Grid > Visibility > Bleed Bias",
+    "relocate": "Probe Grid > Relocation > Move Out of Geometry",
+    "max_offset": "Probe Grid > Relocation > Max Offset",
+    "backface_threshold": "Probe Grid > Relocation > Back-face Threshold",
+    "placement_rays": "scene.shgi.probe_grid.placement_rays",
+}
+# The native checks' limits the property ranges follow (properties.py), so that the panels offer
+# only values the native code accepts.
+MAX_SAMPLES = 1 << 24                # Path/PreviewSettings.samples (kMaxPathTracerSamples)
+MAX_LATTICE_RESOLUTION = 1024        # PhotonLatticeSettings.resolution, caustic_resolution
+MAX_PROBE_SPACING = 1e15             # ProbeGridSettings.spacing, m (kMaxCoordinate)
+MAX_RAYS_PER_PROBE = 65536           # ProbeGridSettings.rays_per_probe, placement_rays
+MIN_PLACEMENT_RAYS = 4               # ProbeGridSettings.placement_rays
+MIN_VISIBILITY_BLUR = 0.01           # ProbeGridSettings.visibility_blur, radians
+# ProbeGridSettings.bleed_bias must stay below 1 and backface_threshold above 0: the nearest
+# values the panels' two decimals show.
+MAX_BLEED_BIAS = 0.99
+MIN_BACKFACE_THRESHOLD = 0.01
+# A photon is stored after at least one scattering (PhotonLatticeSettings.max_bounces >= 1):
+# Diffuse 0, direct light only, has no photon lattice.
+MIN_PHOTON_BOUNCES = 1
+
 # Native struct -> {native field: scene.shgi property}.
 PATH_TRACER_FIELDS = {name: name for name in (
     "samples", "seed", "max_bounces", "diffuse_bounces", "glossy_bounces",
@@ -166,6 +227,43 @@ PHOTON_LATTICE_FIELDS = dict(
 PROBE_GRID_FIELDS = {name: name for name in PROBE_GRID_DEFAULTS}
 
 
+# Native struct -> {native field: its label}, for name_settings.
+NATIVE_LABELS = {
+    "PathTracerSettings": {name: SETTING_LABELS[prop]
+                           for name, prop in PATH_TRACER_FIELDS.items()},
+    "PreviewSettings": {name: SETTING_LABELS[prop] for name, prop in PREVIEW_FIELDS.items()},
+    "PhotonLatticeSettings": {name: SETTING_LABELS[prop]
+                              for name, prop in PHOTON_LATTICE_FIELDS.items()},
+    "ProbeGridSettings": dict(PROBE_GRID_LABELS),
+}
+# A native field in a message: "ProbeGridSettings.visibility_blur".
+_NATIVE_FIELD = re.compile(r"\b([A-Z]\w*Settings)\.(\w+)\b")
+
+
+def name_settings(message, labels=None):
+    """`message` with each native field it names ("ProbeGridSettings.visibility_blur is 0")
+    replaced by the setting's place in the panels ("Probe Grid > Visibility > Blur is 0").
+
+    labels: {native struct: {field: label}} (default NATIVE_LABELS); other fields stay.
+    """
+    labels = NATIVE_LABELS if labels is None else labels
+
+    def label(match):
+        return labels.get(match.group(1), {}).get(match.group(2), match.group(0))
+
+    return _NATIVE_FIELD.sub(label, str(message))
+
+
+def validated(native_settings, labels=None):
+    """native_settings after its native checks (``validate()``); their ValueError names the
+    panel setting (name_settings with `labels`)."""
+    try:
+        native_settings.validate()
+    except ValueError as error:
+        raise ValueError(name_settings(error, labels)) from None
+    return native_settings
+
+
 def native_fields(props, fields, shgi):
     """{native field: value} read from `props` through a field table, enums converted."""
     values = {}
@@ -178,28 +276,36 @@ def native_fields(props, fields, shgi):
 
 
 def path_tracer_settings(props, shgi):
-    """shgi.PathTracerSettings of scene.shgi."""
-    return shgi.PathTracerSettings(**native_fields(props, PATH_TRACER_FIELDS, shgi))
+    """shgi.PathTracerSettings of scene.shgi (ValueError naming a refused setting)."""
+    return validated(shgi.PathTracerSettings(**native_fields(props, PATH_TRACER_FIELDS, shgi)))
 
 
 def preview_settings(props, shgi):
-    """shgi.PreviewSettings of scene.shgi (the F12 renderer of the lattice methods)."""
-    return shgi.PreviewSettings(**native_fields(props, PREVIEW_FIELDS, shgi))
+    """shgi.PreviewSettings of scene.shgi (the F12 renderer of the lattice methods; ValueError
+    naming a refused setting)."""
+    return validated(shgi.PreviewSettings(**native_fields(props, PREVIEW_FIELDS, shgi)))
 
 
 def photon_lattice_settings(props, shgi):
-    """shgi.PhotonLatticeSettings of scene.shgi."""
-    return shgi.PhotonLatticeSettings(**native_fields(props, PHOTON_LATTICE_FIELDS, shgi))
+    """shgi.PhotonLatticeSettings of scene.shgi (ValueError naming a refused setting)."""
+    if props.diffuse_bounces < MIN_PHOTON_BOUNCES:
+        raise ValueError(f"{SETTING_LABELS['diffuse_bounces']} is {props.diffuse_bounces}: the "
+                         f"Photon Lattice stores light after {MIN_PHOTON_BOUNCES} or more diffuse "
+                         f"bounces; set it to {MIN_PHOTON_BOUNCES} or more, or use Path Tracing "
+                         "(which renders 0 as direct light only)")
+    return validated(shgi.PhotonLatticeSettings(
+        **native_fields(props, PHOTON_LATTICE_FIELDS, shgi)))
 
 
 def probe_grid_settings(props, shgi, volumes=()):
     """shgi.ProbeGridSettings of scene.shgi (its probe_grid group and seed).
 
     volumes: shgi.ProbeVolume list (the scene's Irradiance Volumes); empty: one volume fitted to
-    the scene with the spacing setting.
+    the scene with the spacing setting. ValueError naming a refused setting.
     """
-    return shgi.ProbeGridSettings(**native_fields(props.probe_grid, PROBE_GRID_FIELDS, shgi),
-                                  seed=props.seed, volumes=list(volumes))
+    return validated(shgi.ProbeGridSettings(
+        **native_fields(props.probe_grid, PROBE_GRID_FIELDS, shgi), seed=props.seed,
+        volumes=list(volumes)))
 
 
 def solver_signature(props):

@@ -13,13 +13,15 @@ Background mode (``blender -b --factory-startup --python-exit-code 1 --python ba
    (Cycles' mask and the EXR's Coverage layer): relative mean difference, mean absolute texel
    difference and PSNR (image_metrics.psnr), over every covered texel and over the visible ones
    (without the texels under the box); checks the image against the EXR's Lightmap layer;
-4. the refusals: nothing selected, a missing UV map, no light, an object hidden for render, a
-   relative output folder in an unsaved file (the room was saved as a copy);
+4. the refusals: nothing selected, a missing UV map, no light, an object hidden for render, the
+   floor with a NaN UV and scaled to 0 (the export leaves it out and the refusal says why),
+   Create UV Map on a mesh without faces, a relative output folder in an unsaved file (the room
+   was saved as a copy);
 5. Create UV Map (Lightmap Pack) on the box with Show in Materials, a shared material left
    alone, and Remove Lightmap Nodes;
 6. shards: two shard bakes of the floor and the box and Merge Shards against a whole bake;
-7. Export Volume of a probe grid and of a photon lattice (solving first), and its refusal for
-   the path tracer; the Bake panel draws; scene.shgi.bake and the operators hold the defaults
+7. Export Volume of a probe grid and of a photon lattice (solving first), and its refusals
+   for a scene without geometry (the solve's) and for the path tracer; the Bake panel draws; scene.shgi.bake and the operators hold the defaults
    of bake_settings.BAKE_PROPERTY_DEFAULTS.
 Window mode (``-- <build> <addon> <results json> window``, under Xvfb with
 --enable-event-simulate): a modal bake of two objects cancelled by Esc after the first one
@@ -334,10 +336,40 @@ def refusal_checks(tmpdir, results):
     wall.hide_render = True
     errors["hidden_for_render"] = refusal("wall_north", output_folder=out)
     wall.hide_render = False
+    left_out_refusals(out, errors)
+    results["faceless_uv_maps"] = faceless_refusal(out, errors)
     # The room was saved as a copy: this file has no path yet.
     results["file_path_while_refused"] = bpy.data.filepath
     errors["unsaved_relative_folder"] = refusal("floor", output_folder="//lightmaps")
     results["refused_files"] = os.path.exists(out)
+
+
+def left_out_refusals(out, errors):
+    """The floor with a NaN in its lightmap UV map, then scaled to 0: the export leaves it out,
+    and the refusal says why."""
+    floor = bpy.data.objects["floor"]
+    corner = floor.data.uv_layers[UV_MAP].data[0]
+    uv = tuple(corner.uv)
+    corner.uv = (math.nan, uv[1])
+    errors["nan_uv"] = refusal("floor", output_folder=out)
+    corner.uv = uv
+    floor.scale = (0.0, 1.0, 1.0)
+    errors["zero_scale"] = refusal("floor", output_folder=out)
+    floor.scale = (1.0, 1.0, 1.0)
+
+
+def faceless_refusal(out, errors):
+    """Create UV Map on a mesh of two vertices and no faces is refused; the UV maps the mesh
+    is left with."""
+    mesh = bpy.data.meshes.new("points")
+    mesh.from_pydata([(0.0, 0.0, 0.5), (0.2, 0.2, 0.6)], [], [])
+    obj = bpy.data.objects.new("points", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    errors["faceless_create_uv"] = refusal("points", create_uv=True, output_folder=out)
+    uv_maps = [layer.name for layer in mesh.uv_layers]
+    bpy.data.objects.remove(obj, do_unlink=True)
+    bpy.data.meshes.remove(mesh)
+    return uv_maps
 
 
 # --- UV maps, materials, shards, volumes ---------------------------------------------------------
@@ -485,6 +517,7 @@ def export_volume_checks(scene, tmpdir, results):
         volumes[method] = {"status": sorted(status), "files": sorted(os.listdir(
             os.path.dirname(path))), "json_keys": sorted(document),
             "frozen": solution_cache.get(scene.name_full, method) is not None}
+    volumes["no_geometry_error"] = export_without_geometry(scene, tmpdir)
     scene.shgi.method = "PATH_TRACE"
     try:
         bpy.ops.shgi.export_volume(filepath=os.path.join(tmpdir, "volume_none", "none.json"))
@@ -494,6 +527,24 @@ def export_volume_checks(scene, tmpdir, results):
     results["volumes"] = volumes
     scene.render.engine = "SHGI"
     results["panel"] = draw_panel("SHGI_RENDER_PT_bake")
+
+
+def export_without_geometry(scene, tmpdir):
+    """Export Volume of a photon lattice with every mesh hidden for render: the solve it runs
+    first refuses; the error message (None when it did not fail)."""
+    meshes = [obj for obj in scene.objects if obj.type == "MESH"]
+    for obj in meshes:
+        obj.hide_render = True
+    scene.shgi.method = "PHOTON_LATTICE"
+    solution_cache.clear(scene.name_full)
+    try:
+        bpy.ops.shgi.export_volume(filepath=os.path.join(tmpdir, "volume_empty", "empty.json"))
+        return None
+    except RuntimeError as error:
+        return str(error)
+    finally:
+        for obj in meshes:
+            obj.hide_render = False
 
 
 def property_defaults(scene, results):

@@ -7,8 +7,8 @@ lightmaps finished before it) and the pixels handed to Blender images.
 Inside Blender: tests/blender/bake_checks.py (background: a closed room's floor baked by Cycles
 and by shgi.bake_lightmaps with each source; the refusals; Create UV Map and the material
 nodes; shards and Merge Shards; Export Volume), the saved room baked headless with
-``--python-expr`` (and refused without the native module), and under Xvfb the modal bake with
-Esc.
+``--python-expr`` (refused without the native module, cancelled by Ctrl-C), and under Xvfb the
+modal bake with Esc.
 
 Acceptance against Cycles' DIFFUSE {DIRECT, INDIRECT} bake of the floor, over the covered
 texels: the mean texel difference (the mean over those texels of shgi - Cycles, relative to
@@ -53,6 +53,11 @@ CANCEL_LATENCY = 0.5
 # redraws (software OpenGL under Xvfb), then the native cancel (< 0.2 s).
 ESC_LATENCY = 1.0
 TASK_TIMEOUT = 60.0
+# Ctrl-C in a headless bake: sent this long after the bake starts (its export of the saved room
+# takes a fraction of it, so the signal finds the worker running), and the bake must return
+# within CTRL_C_LATENCY of it (the native cancel, < 0.2 s, after the wait's 0.1 s poll).
+CTRL_C_AFTER_SECONDS = 1.5
+CTRL_C_LATENCY = 0.5
 WINDOW = (640, 480)
 
 
@@ -120,7 +125,7 @@ def test_bake_options_follow_the_properties():
     assert (oidn.filter, oidn.denoise) == (False, "OIDN")
     off = bake_settings.bake_options(bake_props(filter=False, denoiser="OIDN"), scene_props(), shgi)
     assert (off.filter, off.denoise) == (False, "NONE")
-    with pytest.raises(ValueError, match="tile_size"):
+    with pytest.raises(ValueError, match="Bake > Farm > Tile Size = 2: use 4 .. 1024"):
         bake_settings.bake_options(bake_props(tile_size=2), scene_props(), shgi)
 
 
@@ -260,6 +265,11 @@ def test_baked_images_are_float_and_packed(blender, build_python_dir, tmp_path_f
     ("missing_uv_map", ["'box'", "no UV map 'LightmapUV'", "Create UV Map"]),
     ("no_light", ["no light", "add a light"]),
     ("hidden_for_render", ["'wall_north'", "hidden for render"]),
+    ("nan_uv", ["object 'floor' was left out of the exported scene",
+                "UV map 'LightmapUV': corner 0 is (nan,", "values must be finite",
+                "fix it or deselect it"]),
+    ("zero_scale", ["object 'floor' was left out of the exported scene", "a scale of 0"]),
+    ("faceless_create_uv", ["object 'points'", "has no faces", "deselect it"]),
     ("unsaved_relative_folder", ["'//lightmaps'", "not been saved", "absolute folder"]),
 ])
 def test_bake_refusals_name_the_problem_and_fix(blender, case, words, build_python_dir,
@@ -270,6 +280,9 @@ def test_bake_refusals_name_the_problem_and_fix(blender, case, words, build_pyth
     for word in words:
         assert word in message, message
     assert "'floor'" not in results["errors"]["missing_uv_map"]  # the floor has its UV map
+    assert "hidden for render" not in results["errors"]["nan_uv"]  # the real reason only
+    assert results["faceless_uv_maps"] == []  # the refused Create UV Map leaves no UV map
+    assert "Traceback" not in message
     assert results["file_path_while_refused"] == "" and not results["refused_files"]
 
 
@@ -338,6 +351,10 @@ def test_export_volume_writes_the_solved_field(blender, build_python_dir, tmp_pa
         assert row["status"] == ["FINISHED"] and row["frozen"], row
         assert {"format", "version", "sh", "frame"} <= set(row["json_keys"]), row
     assert "solves no volume" in volumes["PATH_TRACE_error"]
+    refused = volumes["no_geometry_error"]
+    assert refused.startswith("Error: SHGI export volume: nothing to export, the solve failed: "
+                              "the scene has no geometry SHGI can render"), refused
+    assert "Traceback" not in refused
     assert "2 selected mesh objects to bake" in results["panel"]
 
 
@@ -370,6 +387,30 @@ def test_headless_bake_of_the_saved_file(blender, build_python_dir, tmp_path_fac
                            "bpy.ops.shgi.bake_lightmaps()")
     assert refused.returncode == 1, refused.stdout[-3000:]
     assert "no mesh object is selected" in refused.stdout + refused.stderr
+
+
+def test_ctrl_c_cancels_a_headless_bake(blender, build_python_dir, tmp_path_factory,
+                                        tmp_path):
+    """A headless bake far too long to finish, interrupted once by SIGINT (Ctrl-C) as it runs:
+    the bake stops within CTRL_C_LATENCY, returns CANCELLED with its report, and Blender lives
+    on to run the rest of the script."""
+    blend = bake_results(blender, build_python_dir, tmp_path_factory)["blend_path"]
+    expression = (
+        "import os, signal, threading, time; sent = {}; "
+        "interrupt = lambda: (sent.update(at=time.perf_counter()), "
+        "os.kill(os.getpid(), signal.SIGINT)); "
+        f"threading.Timer({CTRL_C_AFTER_SECONDS}, interrupt).start(); "
+        f"status = bpy.ops.shgi.bake_lightmaps(output_folder={str(tmp_path)!r}, "
+        "resolution=256, samples=1024); "
+        "print('CTRL_C', sorted(status), round(time.perf_counter() - sent['at'], 3))")
+    result = run_headless(blender, blend, build_python_dir, expression)
+    output = result.stdout + result.stderr
+    assert result.returncode == 0, output[-3000:]
+    line = next(line for line in result.stdout.splitlines() if line.startswith("CTRL_C"))
+    status, seconds = line.split(" ", 1)[1].rsplit(" ", 1)
+    print(f"\nCtrl-C on {blender.name}: the bake returned {float(seconds):.3f} s after SIGINT")
+    assert status == "['CANCELLED']" and float(seconds) < CTRL_C_LATENCY, line
+    assert "SHGI bake: cancelled" in output, output[-3000:]
 
 
 def test_headless_bake_without_the_native_module(blender, build_python_dir, tmp_path_factory):

@@ -8,7 +8,8 @@ project's Cornell box and sun room with each method against Cycles
 (Combined PSNR >= 28 dB after auto-exposure and sRGB; Combined mean within 10%, 2% for the
 path tracer; DiffInd x DiffCol mean within 10%; Cycles' pass names), PROBE_GRID on the Cornell
 box with a fitted volume and with an Irradiance Volume object (whose cells the probes fill),
-the frozen solutions, Esc, broken scenes rendering with warnings, and a missing native module.
+the frozen solutions, Esc, broken scenes rendering with warnings, refusals naming the Blender
+setting or object (and panel ranges the native checks accept), and a missing native module.
 """
 
 import sys
@@ -29,6 +30,7 @@ import scenes  # noqa: E402
 from shgi_blender import native, presets, settings  # noqa: E402
 from shgi_blender.engine import field_solvers, field_spheres, passes, scene_checks  # noqa: E402
 from shgi_blender.engine.render_job import RenderJob, sample_rounds  # noqa: E402
+from shgi_blender.export.light_probe import ProbeVolumeRecord, native_volumes  # noqa: E402
 
 # Issue 5's acceptance figures against Cycles.
 MIN_PSNR_DB = 28.0
@@ -103,6 +105,49 @@ def test_settings_follow_the_properties():
     assert not settings.overlay_wanted(grid_props)
     grid_props.show_probes = True
     assert settings.overlay_wanted(grid_props)
+
+
+def test_refused_settings_are_named_as_the_panels_show_them():
+    """Every mirrored property has its place in the panels; a native refusal names it there,
+    whichever native struct refused it (the lattice's max_bounces is Light Paths > Diffuse)."""
+    assert set(settings.SETTING_LABELS) == set(settings.PROPERTY_DEFAULTS)
+    assert set(settings.PROBE_GRID_LABELS) == set(settings.PROBE_GRID_DEFAULTS)
+    with pytest.raises(ValueError, match=r"^Light Paths > Diffuse is 0: .* Path Tracing"):
+        settings.photon_lattice_settings(default_props(diffuse_bounces=0), shgi)
+    props = default_props(method="PROBE_GRID")
+    props.probe_grid.visibility_blur = 0.0  # a value saved before the range was tightened
+    with pytest.raises(ValueError, match=r"^Probe Grid > Visibility > Blur is 0; use 0\.01\.\.2"):
+        settings.probe_grid_settings(props, shgi)
+    with pytest.raises(ValueError, match=r"^Light Paths > Clamp Indirect is -1"):
+        settings.path_tracer_settings(default_props(clamp_indirect=-1.0), shgi)
+    assert settings.name_settings(
+        "PhotonLatticeSettings.max_bounces is 0; ProbeGridSettings.visibility is x; "
+        "ProbeGridSettings.volumes hold 9 probes") == (
+        "Light Paths > Diffuse is 0; Probe Grid > Visibility is x; "
+        "ProbeGridSettings.volumes hold 9 probes")
+
+
+def test_a_refusal_on_the_worker_names_the_setting():
+    """A probe spacing that puts too many probes in the scene is refused by the grid's
+    placement, on the job's thread: the job's error names the panel setting."""
+    scene = committed(scenes.cornell_box(0.06))
+    recipe = field_solvers.SolverRecipe(field_solvers.ProbeGridSolver,
+                                        shgi.ProbeGridSettings(spacing=1e-3), 1)
+    job = RenderJob(shgi, scene, 1, preview_settings=shgi.PreviewSettings(),
+                    solver_recipe=recipe).start()
+    assert job.wait(60) and isinstance(job.error, ValueError), job.error
+    assert str(job.error).startswith("Probe Grid > Spacing 0.001 m puts "), job.error
+
+
+def test_a_flat_irradiance_volume_is_named():
+    flat = np.diag([0.0, 1.0, 1.0, 1.0]).astype(np.float32)
+    records = [ProbeVolumeRecord(np.eye(4, dtype=np.float32), (2, 2, 2), "fine"),
+               ProbeVolumeRecord(flat, (2, 2, 2), "flat_volume")]
+    with pytest.raises(ValueError) as refused:
+        native_volumes(records, shgi)
+    assert str(refused.value) == ("Irradiance Volume 'flat_volume': world_from_volume is "
+                                  "singular (a scale of 0 flattens it); give every axis a "
+                                  "non-zero scale")
 
 
 def test_enum_properties_offer_the_native_members():
@@ -304,7 +349,7 @@ def test_job_errors_are_kept_for_the_engine():
 # Scripts that break a render on purpose (Esc, an ERROR report): Blender then quits with exit
 # code 1 (G.is_break) however the script ended, so these run with --python-exit-code 2 and pass
 # with exit code 0 or 1 plus their success marker.
-BREAKING_SCRIPTS = {"engine_no_native.py", "engine_cancel.py"}
+BREAKING_SCRIPTS = {"engine_no_native.py", "engine_cancel.py", "engine_refusals.py"}
 SCRIPT_FAILURE_EXIT_CODE = 2
 
 
@@ -325,6 +370,37 @@ def run_engine_script(script, marker, blender, build_python_dir, tmp_path_factor
 ])
 def test_blender_engine_script(script, marker, blender, build_python_dir, tmp_path_factory):
     run_engine_script(script, marker, blender, build_python_dir, tmp_path_factory)
+
+
+def refusal_results(blender, build_python_dir, tmp_path_factory):
+    return run_engine_script("engine_refusals.py", "ENGINE_REFUSALS_OK", blender,
+                             build_python_dir, tmp_path_factory)
+
+
+def test_panel_ranges_are_the_native_ranges(blender, build_python_dir, tmp_path_factory):
+    """Each number property's hard limits build native settings the native checks accept,
+    but for Light Paths > Diffuse 0, which the Photon Lattice refuses by name."""
+    results = refusal_results(blender, build_python_dir, tmp_path_factory)
+    assert results["limits_tried"] >= 2 * (len(settings.PROBE_GRID_DEFAULTS) - 2)  # 2 booleans
+    refusals = results["range_refusals"]
+    assert list(refusals) == ["scene.shgi.diffuse_bounces = 0"], refusals
+    assert refusals["scene.shgi.diffuse_bounces = 0"].startswith("Light Paths > Diffuse is 0")
+
+
+@pytest.mark.parametrize("case, words", [
+    ("zero_scale_volume", ["Irradiance Volume 'flat_volume'", "a scale of 0",
+                           "give every axis a non-zero scale"]),
+    ("no_diffuse_bounces", ["Light Paths > Diffuse is 0", "set it to 1 or more",
+                            "Path Tracing"]),
+    ("saved_visibility_blur", ["Probe Grid > Visibility > Blur is 0", "use 0.01..2"]),
+])
+def test_f12_refusals_name_the_blender_setting_or_object(case, words, blender, build_python_dir,
+                                                         tmp_path_factory):
+    message = refusal_results(blender, build_python_dir, tmp_path_factory)["f12"][case]
+    assert message.startswith("Error: SHGI: "), message
+    for word in words:
+        assert word in message, message
+    assert "Settings." not in message and "volumes[" not in message, message  # native names
 
 
 RENDER_CASES = [(scene, method) for scene in ("cornell_box", "sun_room")

@@ -98,6 +98,27 @@ def test_viewport_camera_projects_where_blender_draws(camera_type, near):
         assert fields["clip_end"] - fields["clip_start"] == pytest.approx(60.0 - near)
 
 
+def test_a_clip_range_deeper_than_float32_keeps_a_finite_far_clip():
+    """Camera view of a 10 m lens clipping 1e-6 .. 1e6 m: in Blender's float32 projection the
+    far clip is lost (W[2][2] rounds to -1, the formula gives -inf); the view clips at
+    MAX_CLIP_END instead and still projects where Blender draws."""
+    width, height = 64, 48
+    world_from_camera = scenes.look_at((1.0, -4.0, 2.0), (0.2, 0.5, 0.8))
+    view = np.linalg.inv(world_from_camera).astype(np.float32)
+    window = blender_window_matrix("PERSP", 1e4, 36.0, 0.0, 0.0, 1e-6, 1e6, width,
+                                   height).astype(np.float32)
+    assert window[2, 2] == -1.0  # the depth range is gone
+    fields = viewport_camera.camera_fields_from_view(view, window, width, height)
+    assert fields["clip_end"] == viewport_camera.MAX_CLIP_END
+    assert 0.0 < fields["clip_start"] < fields["clip_end"]
+    assert fields["lens"] == pytest.approx(1e4, rel=1e-6)
+    camera = viewport_camera.shgi_camera(shgi, fields)  # the native checks accept it
+    target = np.array([0.2, 0.5, 0.8])
+    film = camera.project(tuple(target))
+    np.testing.assert_allclose(film, region_pixel(window.astype(np.float64), view, target,
+                                                  width, height), atol=PROJECTION_TOLERANCE_PX)
+
+
 def test_camera_view_of_a_scene_camera_is_that_camera():
     """A viewport showing exactly the camera frame renders what F12 renders."""
     fields = conversions.camera_fields(

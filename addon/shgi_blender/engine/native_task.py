@@ -7,12 +7,17 @@ makes the running call raise ``shgi.Cancelled`` within one chunk of work (< 0.2 
 DESIGN.md); the task then ends with ``cancelled`` set. Any other exception ends it with
 ``error`` set, for the main thread to report (a worker thread must not call bpy).
 
+A ValueError (a native check's refusal) is kept with the panel setting named in place of the
+native field (settings.name_settings), as the main thread reports it to the artist.
+
 ``wait`` and ``running`` read an Event the worker sets as it ends, not Thread.join: CPython
 3.11's join, interrupted by a KeyboardInterrupt (Ctrl-C under the bpy module), releases the
 lock the running thread holds and marks it stopped (threading.py, the bpo-45274 handler).
 """
 
 import threading
+
+from .. import settings
 
 
 class NativeTask:
@@ -54,6 +59,8 @@ class NativeTask:
             self._work()
         except self._shgi.Cancelled:
             self.cancelled = True
+        except ValueError as error:  # a refusal, reported by the caller on the main thread
+            self.error = ValueError(settings.name_settings(error))
         except Exception as error:  # reported by the caller on the main thread
             self.error = error
         finally:

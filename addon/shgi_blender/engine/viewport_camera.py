@@ -16,15 +16,21 @@ with its border included. With sensor_fit HORIZONTAL and any sensor width S:
                near = (W[2][3] + 1) / W[2][2]  far = (W[2][3] - 1) / W[2][2]
 
 (shgi.Camera follows Blender's BKE_camera_params_compute_viewplane: the fitted axis spans the
-sensor, shifts are in units of it.) An orthographic viewport clips from behind its eye
-(near < 0, Blender centres the clip range on the view); a ray camera cannot start behind its
-origin, so the origin moves back along the view axis by -near and the clip range follows.
+sensor, shifts are in units of it.) Blender's matrices are float32: with a far clip more than
+about 1e7 times the near one, W[2][2] rounds to -1 and the perspective's far clip (infinite by
+the formula) is lost; it then becomes MAX_CLIP_END, as far as a ray goes. An orthographic
+viewport clips from behind its eye (near < 0, Blender centres the clip range on the view); a ray
+camera cannot start behind its origin, so the origin moves back along the view axis by -near
+and the clip range follows.
 """
 
 import numpy as np
 
 # Any sensor width works with a horizontal fit; Blender's default keeps the lens readable.
 SENSOR_WIDTH_MM = 36.0
+# The far clip of a projection too deep for float32 (native/scene/ray.h kMaxCoordinate: no ray
+# travels farther).
+MAX_CLIP_END = 1e15
 
 
 def is_perspective(window_matrix):
@@ -46,7 +52,9 @@ def camera_fields_from_view(view_matrix, window_matrix, width, height):
               "resolution_x": int(width), "resolution_y": int(height)}
     if is_perspective(window):
         near = window[2, 3] / (window[2, 2] - 1.0)
-        far = window[2, 3] / (window[2, 2] + 1.0)
+        depth = window[2, 2] + 1.0  # -2 near / (far - near), which float32 may round to 0
+        far = window[2, 3] / depth if depth < 0.0 else MAX_CLIP_END
+        far = min(far, MAX_CLIP_END) if far > near else MAX_CLIP_END
         fields.update(type="PERSP", lens=window[0, 0] * SENSOR_WIDTH_MM / 2.0,
                       shift_x=window[0, 2] / 2.0, shift_y=window[1, 2] / 2.0 / aspect,
                       clip_start=near, clip_end=far)

@@ -211,7 +211,7 @@ class ViewportWorker:
             pass
         except Exception as error:  # shown by the viewport; the next request starts afresh
             logger.exception("SHGI viewport render failed")
-            self.error = f"{type(error).__name__}: {error}"
+            self.error = f"{type(error).__name__}: {settings.name_settings(error)}"
             self._set_status(f"Error: {self.error}")
             self._scene = self._snapshot = None
             self._drop_solver()

@@ -115,6 +115,56 @@ LINEAR_COLORSPACES = ("Linear", "Linear Rec.709", "Non-Color", "Raw", "Linear CI
                       "Linear FilmLight E-Gamut", "Rec.709 Linear")
 
 
+# The brightest emitter SHGI is given, in the emitter's unit (a light's Power in W, a sun's
+# Strength in W/m², an emission's or the world's radiance in W/m²/sr), times its colour's largest
+# component. The native code keeps light in 32-bit floats (at most 3.4e38) and multiplies an
+# emitter's emission by its area (for a sun or the world, the scene's bounding disk: 4π² r² for
+# the world) before it sums the emitters, so Blender's largest values overflow to infinity. 1e20
+# keeps a scene 1000 km across five orders of magnitude below that limit, and lies far beyond
+# any real source (the Sun's disk is about 2e7 W/m²/sr).
+MAX_EMISSION = 1e20
+# Units of the emitters' values, for messages.
+POWER_UNIT, IRRADIANCE_UNIT, RADIANCE_UNIT = "W", "W/m²", "W/m²/sr"
+
+
+def emission_problem(color, strength, quantity, unit):
+    """Why an emitter of colour × strength cannot be rendered, or None.
+
+    quantity: what the artist sets, for the message ("Power × Color"); unit: its unit.
+    """
+    values = (*rgb(color), float(strength))
+    if not all(math.isfinite(value) for value in values):
+        return (f"{quantity} is {rgb(color)} × {float(strength)}, not finite numbers (NaN or "
+                "infinite)")
+    emission = max(values[:3]) * values[3]
+    if emission > MAX_EMISSION:
+        return (f"{quantity} is {emission:.3g} {unit}, above the {MAX_EMISSION:.0e} {unit} SHGI "
+                "renders (its emitted power would overflow)")
+    return None
+
+
+def non_finite_fields(fields):
+    """Names of the number and colour fields in `fields` that hold NaN or an infinity."""
+    bad = []
+    for name, value in fields.items():
+        values = value if isinstance(value, tuple) else (value,)
+        if any(isinstance(v, float) and not math.isfinite(v) for v in values):
+            bad.append(name)
+    return bad
+
+
+def input_names(node_type, blender_version):
+    """{shgi.Material field: the input of a shader node of `node_type` it comes from}, for
+    messages naming what the artist set."""
+    if node_type == PRINCIPLED_NODE:
+        return principled_socket_names(blender_version)
+    if node_type == EMISSION_NODE:
+        return {"emission_color": "Color", "emission_strength": "Strength"}
+    if node_type == DIFFUSE_NODE:
+        return {"base_color": "Color"}
+    return {}
+
+
 def principled_socket_names(blender_version):
     """{shgi field: Principled BSDF input name} for a Blender version tuple, e.g. (3, 4, 1)."""
     if tuple(blender_version) >= PRINCIPLED_V2_VERSION:
@@ -267,6 +317,13 @@ def light_fields(light_type, energy, color, matrix_world, *, shadow_soft_size=0.
               "world_from_light": row_major(matrix_world),
               "visible_camera": bool(visible_camera)}
     energy = float(energy) * 2.0 ** float(exposure)
+    is_sun = light_type == "SUN"
+    exposure_factor = " × 2^Exposure" if exposure else ""
+    problem = emission_problem(color, energy,
+                               f"{'Strength' if is_sun else 'Power'}{exposure_factor} × Color",
+                               IRRADIANCE_UNIT if is_sun else POWER_UNIT)
+    if problem is not None:
+        raise ValueError(f"{problem}; lower it")
     if light_type == "SUN":
         fields.update(strength=energy, angle=float(angle))
         return fields
@@ -328,7 +385,11 @@ def camera_fields(camera_type, matrix_world, *, lens, sensor_width, sensor_heigh
 
 
 def world_fields(color, strength):
-    """shgi.World fields: the Background's colour and strength (radiance = colour × strength)."""
+    """shgi.World fields: the Background's colour and strength (radiance = colour × strength).
+    ValueError when their product is not finite or brighter than MAX_EMISSION."""
+    problem = emission_problem(color, strength, "Background Color × Strength", RADIANCE_UNIT)
+    if problem is not None:
+        raise ValueError(f"{problem}; lower it")
     return {"color": tuple(max(c, 0.0) for c in rgb(color)), "strength": max(float(strength), 0.0)}
 
 

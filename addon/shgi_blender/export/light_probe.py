@@ -9,6 +9,7 @@ and sets their counts in its Object Data panel. Volumes are recorded as plain va
 (ProbeVolumeRecord) on Blender's main thread and turned into shgi.ProbeVolume on any thread.
 """
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,15 +59,24 @@ def probe_volume_from_object(obj, matrix_world):
     return ProbeVolumeRecord(matrix, tuple(int(n) for n in resolution), obj.name)
 
 
+# How the native checks of ProbeGridSettings name the volume they check: "...volumes[0]: " or
+# "...volumes[0].resolution[0] is 0".
+_NATIVE_VOLUME_PREFIX = re.compile(r"^\w+\.volumes\[\d+\](: |\.)")
+
+
 def native_volumes(records, shgi):
-    """[shgi.ProbeVolume] of ProbeVolumeRecords (ValueError names a bad one)."""
+    """[shgi.ProbeVolume] of ProbeVolumeRecords; ValueError names the Irradiance Volume object
+    the native checks refuse (a zero scale, a resolution out of range)."""
     volumes = []
     for record in records:
         try:
-            volumes.append(shgi.ProbeVolume(world_from_volume=record.world_from_volume,
-                                            resolution=record.resolution))
+            volume = shgi.ProbeVolume(world_from_volume=record.world_from_volume,
+                                      resolution=record.resolution)
+            shgi.ProbeGridSettings(volumes=[volume]).validate()  # the native volume checks
         except ValueError as error:
-            raise ValueError(f"irradiance volume {record.name!r}: {error}") from error
+            problem = _NATIVE_VOLUME_PREFIX.sub("", str(error))
+            raise ValueError(f"Irradiance Volume {record.name!r}: {problem}") from error
+        volumes.append(volume)
     return volumes
 
 

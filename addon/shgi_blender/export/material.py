@@ -5,7 +5,10 @@ lightmap preview, bake_settings.LIGHTMAP_MIX_NODE): a Principled BSDF, an Emissi
 Diffuse BSDF. Socket names and units are mapped in conversions.py. An Image Texture node linked
 to the Principled Base Color becomes an shgi.Texture with base_color = 1 (SHGI multiplies
 texture × base_color). Anything else gets the documented fallback material
-(conversions.fallback_material_fields) and a warning naming the material.
+(conversions.fallback_material_fields) and a warning naming the material, and so does an input
+holding NaN or an infinity; an emission brighter than SHGI renders (conversions.MAX_EMISSION) is
+turned off with a warning. Image pixels that are NaN or infinite are read as 0, with a warning
+naming the image.
 """
 
 import bpy
@@ -98,21 +101,44 @@ class MaterialExporter:
 
     def _convert(self, material):
         """shgi.Material of a Blender material, or None (after a warning) for the fallback."""
-        fields = self._material_fields(material)
+        surface, problem = _surface_node(material)
+        if surface is None:
+            self._log.warn(f"material {material.name!r} {problem}; using the fallback material")
+            return None
+        fields = self._surface_fields(material, surface)
         if fields is None:
             return None
+        names = conversions.input_names(surface.bl_idname, bpy.app.version)
+        bad = conversions.non_finite_fields(fields)
+        if bad:
+            inputs = ", ".join(f"{names.get(name, name)} {fields[name]}" for name in bad)
+            verb = "is not a finite number" if len(bad) == 1 else "are not finite numbers"
+            self._log.warn(f"material {material.name!r}: {inputs} {verb} (NaN or infinite); "
+                           "using the fallback material")
+            return None
+        self._check_emission(material, fields, names)
         clamped, changed = conversions.clamp_material_fields(fields)
         if changed:
             self._log.warn(f"material {material.name!r}: {', '.join(changed)} clamped to the "
                            "range SHGI accepts")
         return shgi.Material(name=material.name, **clamped)
 
-    def _material_fields(self, material):
-        """shgi.Material fields of a material, or None (after a warning) for the fallback."""
-        surface, problem = _surface_node(material)
-        if surface is None:
-            self._log.warn(f"material {material.name!r} {problem}; using the fallback material")
-            return None
+    def _check_emission(self, material, fields, names):
+        """Turns off (after a warning) an emission brighter than SHGI renders."""
+        if "emission_strength" not in fields:
+            return
+        quantity = f"{names['emission_color']} × {names['emission_strength']}"
+        problem = conversions.emission_problem(fields["emission_color"],
+                                               fields["emission_strength"], quantity,
+                                               conversions.RADIANCE_UNIT)
+        if problem is not None:
+            self._log.warn(f"material {material.name!r}: {problem}; its emission is turned off: "
+                           f"lower {names['emission_strength']}")
+            fields["emission_strength"] = 0.0
+
+    def _surface_fields(self, material, surface):
+        """shgi.Material fields of a material's surface shader node, or None (after a warning)
+        for the fallback."""
         values = node_tree.input_values(surface)
         if surface.bl_idname == conversions.PRINCIPLED_NODE:
             return self._principled_fields(material, surface, values)
@@ -194,11 +220,17 @@ class MaterialExporter:
 
 
 def image_pixels(image, log):
-    """(H, W, C) float32 linear pixels of a Blender image, row 0 at the bottom."""
+    """(H, W, C) float32 linear pixels of a Blender image, row 0 at the bottom; NaN and infinite
+    values become 0 (black), with a warning naming the image."""
     width, height = image.size
     pixels = np.empty(width * height * image.channels, dtype=np.float32)
     image.pixels.foreach_get(pixels)
     pixels = pixels.reshape(height, width, image.channels)
+    bad = ~np.isfinite(pixels)
+    if bad.any():
+        log.warn(f"image {image.name!r}: {int(bad.sum())} of its {bad.size} pixel values are NaN "
+                 "or infinite; SHGI reads them as 0 (black): fix or replace the image")
+        pixels[bad] = 0.0
     colorspace = image.colorspace_settings.name
     if not conversions.texture_colorspace_is_known(colorspace):
         log.warn(f"image {image.name!r}: colour space {colorspace!r} is not supported; its "

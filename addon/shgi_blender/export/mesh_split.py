@@ -54,10 +54,11 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
     require_finite_positions(positions, name)
     columns = [corner_vertices[:, None].astype(np.float64)]
     if corner_normals is not None:
-        corner_normals = _corner_array(corner_normals, corners, 3, f"{name} normals")
+        corner_normals = _corner_array(corner_normals, corners, 3, f"mesh {name!r}: normals")
         columns.append(corner_normals)
     for uv_name, uv in corner_uvs.items():
-        corner_uvs[uv_name] = _corner_array(uv, corners, 2, f"{name} UV map {uv_name!r}")
+        corner_uvs[uv_name] = _corner_array(uv, corners, 2,
+                                            f"mesh {name!r}: UV map {uv_name!r}")
         columns.append(corner_uvs[uv_name])
     keys = np.concatenate(columns, axis=1)
     _, first_corner, corner_to_vertex = np.unique(

@@ -24,13 +24,15 @@ class ExportStats:
 
 @dataclass
 class ExportResult:
-    """An uncommitted shgi.Scene with the warnings raised while building it, and the scene's
-    irradiance volumes (light_probe.ProbeVolumeRecord, for the PROBE_GRID method)."""
+    """An uncommitted shgi.Scene with the warnings raised while building it, the scene's
+    irradiance volumes (light_probe.ProbeVolumeRecord, for the PROBE_GRID method) and why each
+    object left out was left out ({object name: problem}; the bake names it)."""
 
     scene: shgi.Scene
     warnings: list = field(default_factory=list)
     stats: ExportStats = field(default_factory=ExportStats)
     probe_volumes: list = field(default_factory=list)
+    skipped: dict = field(default_factory=dict)
 
 
 class WarningLog:

@@ -12,7 +12,7 @@ Visibility is the depsgraph's: a render depsgraph (the engine's F12 depsgraph) a
 out objects and collections disabled for render. For a viewport depsgraph with
 ``for_render=True``, objects whose own or direct collections' hide_render is set are left out too.
 Problems never raise: they become warnings (logged, reported, returned), and the object is
-skipped.
+skipped; the result keeps why each skipped object was left out (``skipped``, by object name).
 """
 
 import time
@@ -64,7 +64,8 @@ def export_scene(depsgraph, scene=None, *, report=None, for_render=None, with_ca
         exporter.export_camera(scene)
     exporter.stats.seconds = time.perf_counter() - start
     return ExportResult(scene=exporter.shgi_scene, warnings=list(exporter.log.messages),
-                        stats=exporter.stats, probe_volumes=exporter.probe_volumes)
+                        stats=exporter.stats, probe_volumes=exporter.probe_volumes,
+                        skipped=exporter.skipped)
 
 
 class _SceneExporter:
@@ -82,7 +83,9 @@ class _SceneExporter:
         self.materials = materials if materials is not None else MaterialExporter(
             self.shgi_scene, log)
         self._mesh_ids = {}  # (geometry key, material ids) -> mesh id, or None when skipped
+        self._mesh_problems = {}  # geometry key -> why its geometry was skipped
         self.probe_volumes = []  # light_probe.ProbeVolumeRecord of the irradiance volumes
+        self.skipped = {}  # object name -> why the object was left out
 
     def export_instances(self):
         """Adds every visible object instance's geometry or light; records irradiance volumes."""
@@ -100,8 +103,7 @@ class _SceneExporter:
             elif obj.type in MESH_CONVERTIBLE_TYPES:
                 self._add_geometry(instance)
             elif obj.type in UNSUPPORTED_GEOMETRY_TYPES:
-                self.log.warn(f"object {obj.name!r}: type {obj.type} is not supported; skipped")
-                self.stats.skipped_objects += 1
+                self._skip(obj, f"type {obj.type} is not supported")
         self.stats.materials = len(self.shgi_scene.materials)
         self.stats.textures = self.materials.texture_count
 
@@ -116,7 +118,8 @@ class _SceneExporter:
         try:
             self.shgi_scene.set_world(world_from_blender(scene.world, self.log))
         except ValueError as error:
-            self.log.warn(f"world: {error}; SHGI's default world is used")
+            name = f"world {scene.world.name!r}" if scene.world is not None else "world"
+            self.log.warn(f"{name}: {error}; SHGI's default world is used")
 
     def export_camera(self, scene):
         camera = camera_from_scene(scene, self.depsgraph, self.log)
@@ -151,14 +154,24 @@ class _SceneExporter:
             self._mesh_ids[key] = self._add_mesh(obj, key[0], material_ids)
         mesh_id = self._mesh_ids[key]
         if mesh_id is None:
+            if key[0] in self._mesh_problems:  # the geometry another object shares was skipped
+                self.skipped.setdefault(obj.name, self._mesh_problems[key[0]])
             return
         try:
             self.shgi_scene.add_instance(mesh_id, conversions.row_major(instance.matrix_world),
                                          name=obj.name)
             self.stats.instances += 1
         except ValueError as error:  # e.g. a zero scale makes matrix_world singular
-            self.log.warn(f"object {obj.name!r}: {error}; skipped")
-            self.stats.skipped_objects += 1
+            self._skip(obj, str(error))
+
+    def _skip(self, obj, problem, geometry_key=None):
+        """Leaves an object out, with a warning; `geometry_key`: its geometry is what failed
+        (every object sharing it is left out for the same reason)."""
+        self.log.warn(f"object {obj.name!r}: {problem}; skipped")
+        self.stats.skipped_objects += 1
+        self.skipped.setdefault(obj.name, problem)
+        if geometry_key is not None:
+            self._mesh_problems[geometry_key] = problem
 
     def _geometry_key(self, obj):
         """("DATA", mesh name) when the geometry is the shared mesh data, else ("OBJECT", name)."""
@@ -179,8 +192,7 @@ class _SceneExporter:
             mesh_id = self.shgi_scene.add_mesh(
                 self._shgi_mesh(geometry, geometry_key, material_ids))
         except ValueError as error:
-            self.log.warn(f"object {obj.name!r}: {error}; skipped")
-            self.stats.skipped_objects += 1
+            self._skip(obj, str(error), geometry_key)
             return None
         self.stats.meshes += 1
         self.stats.triangles += len(geometry.split.triangles)
@@ -195,8 +207,7 @@ class _SceneExporter:
             split, blender_indices = read_mesh(mesh, geometry_key[1])
             return MeshGeometry(split, blender_indices)
         except ValueError as error:
-            self.log.warn(f"object {obj.name!r}: {error}; skipped")
-            self.stats.skipped_objects += 1
+            self._skip(obj, str(error), geometry_key)
             return None
         finally:
             obj.to_mesh_clear()

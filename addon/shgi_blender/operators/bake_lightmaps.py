@@ -111,6 +111,10 @@ def create_lightmap_uv(context, obj, values, report):
     if mesh.library is not None:
         raise BakeError(f"object {obj.name!r}: its mesh {mesh.name!r} is linked from a library "
                         f"and cannot get a UV map {name!r}; add it in the library file")
+    if not mesh.polygons:
+        raise BakeError(f"object {obj.name!r}: its mesh {mesh.name!r} has no faces to lay out a "
+                        f"UV map {name!r} on (nothing to bake a lightmap on); add faces or "
+                        "deselect it")
     # By name: Lightmap Pack's trip through Edit Mode rebuilds the UV layers, and in Blender 5.0
     # a reference taken before it makes another layer active.
     previous = mesh.uv_layers.active.name if mesh.uv_layers.active is not None else None
@@ -122,7 +126,7 @@ def create_lightmap_uv(context, obj, values, report):
     if values.uv_layout == "XATLAS":
         _xatlas_layout(obj, layer, values, report)
     else:
-        _lightmap_pack(context, obj)
+        _lightmap_pack(context, obj, name)
     if previous is not None:
         mesh.uv_layers.active = mesh.uv_layers[previous]
 
@@ -145,27 +149,44 @@ def _xatlas_layout(obj, layer, values, report):
                             "UV; triangulate those polygons for a clean layout")
 
 
-def _lightmap_pack(context, obj):
+def _lightmap_pack(context, obj, name):
+    """Lays out the object's new, active UV map `name` with Lightmap Pack; BakeError, without
+    that UV map, when Blender refuses."""
     options = {"PREF_CONTEXT": "ALL_FACES", "PREF_PACK_IN_ONE": False,
                "PREF_NEW_UVLAYER": False, "PREF_MARGIN_DIV": LIGHTMAP_PACK_MARGIN}
     # Blender 3.4's "New Image" (an unused image per mesh) is off; Blender 5.0 has no such option.
     if "PREF_APPLY_IMAGE" in bpy.ops.uv.lightmap_pack.get_rna_type().properties:
         options["PREF_APPLY_IMAGE"] = False
-    with context.temp_override(active_object=obj, object=obj, selected_objects=[obj],
-                               selected_editable_objects=[obj]):
-        bpy.ops.uv.lightmap_pack(**options)
+    try:
+        with context.temp_override(active_object=obj, object=obj, selected_objects=[obj],
+                                   selected_editable_objects=[obj]):
+            bpy.ops.uv.lightmap_pack(**options)
+    except RuntimeError as error:  # the operator's ERROR report
+        obj.data.uv_layers.remove(obj.data.uv_layers[name])  # by name: edit mode rebuilt them
+        raise BakeError(f"object {obj.name!r}: Lightmap Pack could not lay out {name!r}: "
+                        f"{report_text(error)}") from None
 
 
-def bake_jobs(scene, objects, values):
+def report_text(error):
+    """The message of an operator's ERROR report that bpy.ops raised as RuntimeError."""
+    return str(error).strip().removeprefix("Error: ")
+
+
+def bake_jobs(export, objects, values):
     """A shgi.bake.BakeJob per object: its instance in the exported scene (the first one
-    named after it), its name, its lightmap size."""
+    named after it), its name, its lightmap size. BakeError names an object the export left
+    out, and why."""
     from shgi.bake import BakeJob
 
+    scene = export.scene
     instances = {}
     for index, instance in enumerate(scene.instances):
         instances.setdefault(instance.name, index)
     jobs = []
     for obj in objects:
+        if obj.name not in instances and obj.name in export.skipped:
+            raise BakeError(f"object {obj.name!r} was left out of the exported scene: "
+                            f"{export.skipped[obj.name]}; fix it or deselect it")
         if obj.name not in instances:
             raise BakeError(f"object {obj.name!r} is not in the exported scene (hidden for "
                             "render, or without faces): make it renderable or deselect it")
@@ -200,7 +221,7 @@ def prepare_bake(context, values, report, merge=False):
     if not shgi_bake.emits_light(export.scene):
         raise BakeError(shgi_bake.NO_LIGHT_MESSAGE)
     try:
-        jobs = bake_jobs(export.scene, objects, values)
+        jobs = bake_jobs(export, objects, values)
         options = bake_settings.bake_options(values, scene.shgi, shgi)
         if merge:
             return BakeRequest(export.scene, jobs, options, out_dir,

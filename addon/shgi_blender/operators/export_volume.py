@@ -2,7 +2,7 @@
 
 SHGI_OT_export_volume writes the frozen solution of the scene's method (Solve, in
 engine/solution_cache.py), solving and freezing one first when there is none (the Solve
-operator, waiting for it):
+operator, waiting for it; its refusal becomes this operator's ERROR report):
 * PROBE_GRID: ProbeField.export(path): ``<stem>.json`` and per volume ``<stem>_volume<v>.exr``
   (+ ``_visibility.exr``), the probes' SH of incident radiance, positions and states;
 * PHOTON_LATTICE: shgi.volume_export.export_lattice(lattice, path): ``<stem>.json`` and one EXR
@@ -18,6 +18,7 @@ from bpy.props import StringProperty
 
 from .. import native, settings
 from ..engine import solution_cache
+from .bake_lightmaps import report_text
 
 REPORT_PREFIX = "SHGI export volume: "
 
@@ -73,8 +74,13 @@ describes them (solving it first when there is no frozen solution)"""
         json_path = bpy.path.ensure_ext(os.path.normpath(bpy.path.abspath(path)), ".json")
         solution = solution_cache.get(scene.name_full, scene.shgi.method)
         if solution is None:
-            if bpy.ops.shgi.solve() != {"FINISHED"}:
-                return self._error("the solve failed or was cancelled (see its report)")
+            try:
+                status = bpy.ops.shgi.solve()
+            except RuntimeError as error:  # the solve's ERROR report, raised by bpy.ops
+                problem = report_text(error).removeprefix("SHGI: ")
+                return self._error(f"nothing to export, the solve failed: {problem}")
+            if status != {"FINISHED"}:
+                return self._error("nothing to export: the solve was cancelled")
             solution = solution_cache.get(scene.name_full, scene.shgi.method)
         try:
             os.makedirs(os.path.dirname(json_path), exist_ok=True)
