@@ -18,7 +18,6 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <map>
@@ -92,10 +91,7 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
 // allocate the folder's bogus size (std::bad_alloc), and one naming a device read without end.
 bool read_regular_file(std::vector<unsigned char>* out, std::string* error,
                        const std::string& path, void* user_data) {
-    std::error_code status_error;
-    const std::filesystem::file_status status = std::filesystem::status(path, status_error);
-    if (!status_error && std::filesystem::exists(status) &&
-        !std::filesystem::is_regular_file(status)) {
+    if (is_special_file(path)) {
         if (error)
             *error += format_message("'", path, "' is not a regular file (a folder, device, FIFO "
                                      "or socket)\n");

@@ -167,13 +167,18 @@ void require_no_nul(const std::string& path, const char* action) {
 
 }  // namespace
 
-void require_readable_file(const std::string& path, const char* what) {
-    require_no_nul(path, "read");
+bool is_special_file(const std::string& path) {
     std::error_code error;
     const fs::file_status status = fs::status(path, error);
-    if (error || !fs::exists(status) || fs::is_regular_file(status)) return;
+    return !error && fs::exists(status) && !fs::is_regular_file(status);
+}
+
+void require_readable_file(const std::string& path, const char* what) {
+    require_no_nul(path, "read");
+    if (!is_special_file(path)) return;
+    std::error_code error;
     throw IoError(format_message("cannot read ", what, " \"", path, "\": ",
-                                 fs::is_directory(status)
+                                 fs::is_directory(path, error)
                                      ? "it is a folder; pass a file"
                                      : "it is not a regular file (a device, FIFO or socket)"));
 }

@@ -92,6 +92,10 @@ std::string channel_suffix(const std::string& name);
 // Joins a layer and a suffix ("" layer -> the bare suffix).
 std::string channel_name(const std::string& layer, const std::string& suffix);
 
+// True when `path` exists and is not a regular file (a folder, device, FIFO or socket): what a
+// reader should not open, as a read could block, never end, or make no sense.
+bool is_special_file(const std::string& path);
+
 // Throws before a reader opens `path` (`what` names the kind of file, "EXR", "probe file"): an
 // IoError for a folder, or a device, FIFO or socket (a read could block or never end), and an
 // InvalidArgument for a path holding a NUL byte (the C library would read the name only up to

@@ -15,7 +15,6 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
 #include <map>
 #include <set>
@@ -30,8 +29,6 @@
 
 namespace shgi {
 namespace {
-
-namespace fs = std::filesystem;
 
 // Blender's importer clamps the specular exponent to this range before mapping it to roughness.
 constexpr float kMaxSpecularExponent = 1000.0f;
@@ -85,10 +82,7 @@ class MtlReader : public tinyobj::MaterialReader {
                     std::map<std::string, int>* material_map, std::string* warn,
                     std::string* err) override {
         const std::string path = directory_ + name;
-        std::error_code error;
-        const fs::file_status status = fs::status(path, error);
-        if (!error && fs::exists(status) && !fs::is_regular_file(status)) {
-            // "mtllib ../../dev/zero" read until memory ran out.
+        if (is_special_file(path)) {  // "mtllib ../../dev/zero" read until memory ran out
             *warn += format_message("material library '", path, "' is not a regular file (a "
                                     "folder, device, FIFO or socket); its materials are replaced "
                                     "by the default material\n");

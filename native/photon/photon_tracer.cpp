@@ -4,7 +4,6 @@
 #include <array>
 #include <atomic>
 #include <cmath>
-#include <limits>
 #include <memory>
 #include <mutex>
 #include <utility>
@@ -334,10 +333,7 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
     const PhotonEmitter emitter(scene);
     if (scene.empty() || emitter.empty()) return maps;
     const uint64_t chunk_count = (settings.photons + kPhotonsPerChunk - 1) / kPhotonsPerChunk;
-    const uint64_t physical = physical_memory_bytes();
-    const uint64_t budget = physical > 0
-                                ? uint64_t(double(physical) * kStoredPhotonsMemoryFraction)
-                                : std::numeric_limits<uint64_t>::max();
+    const uint64_t budget = physical_memory_share(kStoredPhotonsMemoryFraction);
     ChunkTracerPool pool(scene, settings, emitter);
     std::vector<ChunkResult> chunks(std::min(chunk_count, kChunksPerBlock));
     std::atomic<uint64_t> chunks_done{0};

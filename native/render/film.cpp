@@ -55,12 +55,12 @@ Film::Film(int width, int height, FilmPasses passes)
       pass_count_(passes == FilmPasses::All ? size_t(kPassCount) : 1) {
     check_image_size(width, height, "film");
     const uint64_t bytes = uint64_t(pass_count_) * pixel_count() * sizeof(vec3);
-    const uint64_t physical = physical_memory_bytes();
-    if (physical > 0 && double(bytes) > kFilmMemoryFraction * double(physical))
+    const uint64_t budget = physical_memory_share(kFilmMemoryFraction);
+    if (bytes > budget)
         throw OutOfMemory(format_message(
             "film: ", width, " x ", height, " pixels with ", pass_count_, " passes need ", bytes,
-            " bytes, more than ", int(kFilmMemoryFraction * 100.0), "% of the machine's ",
-            physical, " bytes of memory; lower the resolution"));
+            " bytes, more than ", int(kFilmMemoryFraction * 100.0), "% of the machine's memory (",
+            budget, " bytes); lower the resolution"));
     sums_.assign(pass_count_ * pixel_count(), vec3(0.0f));
 }
 

@@ -23,10 +23,7 @@ constexpr uint32_t kAnyTextureCount = std::numeric_limits<uint32_t>::max();
 constexpr double kDefaultBudgetFraction = 0.75;
 
 uint64_t resolve_budget(uint64_t requested) {
-    if (requested > 0) return requested;
-    const uint64_t physical = physical_memory_bytes();
-    if (physical == 0) return std::numeric_limits<uint64_t>::max();
-    return static_cast<uint64_t>(static_cast<double>(physical) * kDefaultBudgetFraction);
+    return requested > 0 ? requested : physical_memory_share(kDefaultBudgetFraction);
 }
 
 std::string instance_label(const std::vector<Instance>& instances, size_t i) {

@@ -5,7 +5,8 @@
 
 namespace shgi {
 
-// Physical RAM in bytes, or 0 when the system does not say.
-uint64_t physical_memory_bytes();
+// `fraction` of the physical RAM in bytes, or UINT64_MAX (no budget) when the system does not
+// say how much there is.
+uint64_t physical_memory_share(double fraction);
 
 }  // namespace shgi

@@ -18,7 +18,7 @@ import pytest
 import shgi
 from blender_support import REPO_ROOT
 from image_metrics import psnr
-from scene_support import committed
+from scene_support import committed, finishes_in_a_thread
 
 sys.path.insert(0, str(REPO_ROOT / "examples"))
 import scenes  # noqa: E402  (examples/ is not a package)
@@ -214,13 +214,9 @@ def test_update_or_reset_from_the_grids_own_progress_callback_is_refused_not_a_d
             except RuntimeError as error:
                 refusals.append(str(error))
 
-    outcome = []
-    worker = threading.Thread(target=lambda: outcome.append(
-        grid.update(progress=shgi.Progress(callback, min_interval=0.0))), daemon=True)
-    worker.start()
-    worker.join(60.0)
-    assert not worker.is_alive(), "update() deadlocked"
-    assert outcome and grid.passes == 1
+    finishes_in_a_thread(lambda: grid.update(progress=shgi.Progress(callback, min_interval=0.0)),
+                         timeout=60.0)
+    assert grid.passes == 1
     assert refusals and all("called from inside this grid's running update() or reset()" in
                             message for message in refusals)
     grid.update()  # the grid works on afterwards

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import shgi
+from scene_support import finishes_in_a_thread
 
 # Embree's watertight intersection is exact to a few float32 ulps at unit scale.
 TOLERANCE = 1e-5
@@ -492,25 +493,6 @@ def test_commit_reports_progress_stages():
     scene.commit(progress=progress)
     assert progress.fraction == 1.0
     assert "building mesh BVHs" in [stage for _, stage in stages]
-
-
-def finishes_in_a_thread(call, timeout=30.0):
-    """Runs call() in a daemon thread: a deadlock fails the test instead of hanging the run."""
-    outcome = {}
-
-    def run():
-        try:
-            outcome["result"] = call()
-        except Exception as error:  # reported by the caller's assertions
-            outcome["error"] = error
-
-    worker = threading.Thread(target=run, daemon=True)
-    worker.start()
-    worker.join(timeout)
-    assert not worker.is_alive(), "the call deadlocked"
-    if "error" in outcome:
-        raise outcome["error"]
-    return outcome.get("result")
 
 
 def test_a_progress_callback_may_read_its_progress_and_start_work_with_it():
