@@ -14,7 +14,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "addon"))
 
 import shgi  # noqa: E402
 from shgi_blender.export import conversions  # noqa: E402
-from shgi_blender.export.mesh_split import split_corners  # noqa: E402
+from shgi_blender.export.mesh_split import distinct_rows, split_corners  # noqa: E402
 
 BLENDER_3_4 = (3, 4, 1)
 BLENDER_4_2 = (4, 2, 0)
@@ -295,3 +295,39 @@ def test_split_rejects_nan_and_bad_indices():
 def test_split_of_an_empty_mesh():
     split = split_corners(np.zeros((0, 3)), np.zeros(0, np.int32))
     assert split.positions.shape == (0, 3) and split.triangles.shape == (0, 3)
+
+
+def test_split_matches_distinct_corner_rows_on_a_random_mesh():
+    """Against the definition: one vertex per distinct (Blender vertex, float32 data) row of the
+    corners, ordered by Blender vertex and then by first corner, with every corner's data
+    kept; 0.0 and -0.0 are the same value."""
+    rng = np.random.default_rng(7)
+    positions = rng.random((50, 3), dtype=np.float32)
+    corners = rng.integers(0, 40, 600)  # vertices 40-49 are unused and dropped
+    # Few distinct values, so that corners of one vertex often agree and sometimes do not.
+    normals = rng.integers(-1, 2, (600, 3)).astype(np.float64)
+    normals[normals == 0] = rng.choice([0.0, -0.0], int((normals == 0).sum()))
+    uvs = {"UVMap": rng.integers(0, 2, (600, 2)).astype(np.float32)}
+    split = split_corners(positions, corners, normals, uvs, name="random")
+    rows = np.concatenate([corners[:, None], normals + 0.0, uvs["UVMap"]], axis=1)
+    _, first = np.unique(rows, axis=0, return_index=True)
+    first = first[np.lexsort((first, corners[first]))]
+    assert len(split.positions) == len(first)
+    np.testing.assert_array_equal(split.positions, positions[corners[first]])
+    np.testing.assert_array_equal(split.normals, (normals + 0.0)[first].astype(np.float32))
+    flat = split.triangles.ravel()
+    np.testing.assert_array_equal(split.positions[flat], positions[corners])
+    np.testing.assert_array_equal(split.normals[flat], normals.astype(np.float32))
+    np.testing.assert_array_equal(split.uvs["UVMap"][flat], uvs["UVMap"])
+
+
+def test_distinct_rows_is_exact_even_when_every_row_hashes_alike():
+    rng = np.random.default_rng(3)
+    columns = [rng.integers(0, 3, 500).astype(np.uint32) for _ in range(3)]
+    rows = np.stack(columns, axis=1)
+    _, expected_first = np.unique(rows, axis=0, return_index=True)
+    expected_first.sort()
+    for row_hash in (None, lambda cols: np.zeros(cols[0].size, np.uint64)):
+        first, inverse = distinct_rows(columns, row_hash=row_hash)
+        np.testing.assert_array_equal(first, expected_first)
+        np.testing.assert_array_equal(rows[first][inverse], rows)

@@ -38,13 +38,18 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
 
     positions: (V, 3) Blender vertex positions. corner_vertices: (3T,) vertex index of each
     triangle corner, three per triangle in winding order. corner_normals: (3T, 3) or None.
-    corner_uvs: {uv map name: (3T, 2)} or None. Returns a SplitMesh whose vertices are the
-    distinct corner rows (ordered by vertex index, then attributes).
+    corner_uvs: {uv map name: (3T, 2)} or None. Attributes are compared as the float32 values
+    the SplitMesh stores (so 0.0 and -0.0 share a vertex). Returns a SplitMesh whose vertices
+    are ordered by Blender vertex index, then by the first corner that uses them.
     Raises ValueError naming the mesh for mismatched sizes, bad indices or non-finite data.
+
+    Memory: about 30 bytes per corner beyond the inputs and the result, so that meshes of tens
+    of millions of triangles (a Subdivision Surface at render levels) split without running
+    the machine out of memory. Each corner is compared with the first corner of its Blender
+    vertex; only the corners that differ from it (creases, UV seams) are sorted by their data.
     """
     positions = np.asarray(positions, dtype=np.float32).reshape(-1, 3)
-    corner_vertices = np.asarray(corner_vertices, dtype=np.int64).ravel()
-    corner_uvs = dict(corner_uvs or {})
+    corner_vertices = np.asarray(corner_vertices).ravel()
     corners = corner_vertices.size
     if corners % 3:
         raise ValueError(f"mesh {name!r}: {corners} corners is not a multiple of 3")
@@ -52,29 +57,109 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
         raise ValueError(f"mesh {name!r}: corner vertex indices must lie in "
                          f"[0, {len(positions)})")
     require_finite_positions(positions, name)
-    columns = [corner_vertices[:, None].astype(np.float64)]
+    attributes = []  # (corners, width) float32 arrays: the normals, then each UV map
     if corner_normals is not None:
         corner_normals = _corner_array(corner_normals, corners, 3, f"mesh {name!r}: normals")
-        columns.append(corner_normals)
-    for uv_name, uv in corner_uvs.items():
-        corner_uvs[uv_name] = _corner_array(uv, corners, 2,
-                                            f"mesh {name!r}: UV map {uv_name!r}")
-        columns.append(corner_uvs[uv_name])
-    keys = np.concatenate(columns, axis=1)
-    _, first_corner, corner_to_vertex = np.unique(
-        keys, axis=0, return_index=True, return_inverse=True)
-    corner_to_vertex = np.asarray(corner_to_vertex).ravel()
-    split = SplitMesh(positions=positions[corner_vertices[first_corner]],
-                      triangles=corner_to_vertex.reshape(-1, 3).astype(np.int32))
+        attributes.append(corner_normals)
+    corner_uvs = {uv_name: _corner_array(uv, corners, 2, f"mesh {name!r}: UV map {uv_name!r}")
+                  for uv_name, uv in (corner_uvs or {}).items()}
+    attributes.extend(corner_uvs.values())
+
+    # Group the corners by Blender vertex; each group's first corner is its representative.
+    order = np.argsort(corner_vertices, kind="stable")
+    sorted_vertices = corner_vertices[order]
+    group_start = np.flatnonzero(np.diff(sorted_vertices, prepend=-1))
+    groups = group_start.size
+    representative = order[group_start]  # the first corner of each used vertex
+    group = np.empty(corners, dtype=_index_type(groups))
+    group[order] = np.repeat(np.arange(groups, dtype=group.dtype),
+                             np.diff(group_start, append=corners))
+    del order, sorted_vertices, group_start
+
+    # Corners whose data differ from their representative's become extra vertices: one per
+    # distinct (vertex, data) among them, numbered in the order of their first corner.
+    same = np.ones(corners, dtype=bool)
+    for attribute in attributes:
+        for column in range(attribute.shape[1]):
+            values = attribute[:, column]
+            same &= values == values[representative][group]
+    differing = np.flatnonzero(~same)
+    del same
+    corner_to_vertex = group.astype(np.int64)
+    first_corners = representative
+    if differing.size:
+        columns = [group[differing]]
+        for attribute in attributes:
+            values = attribute[differing] + np.float32(0.0)  # -0.0 becomes 0.0
+            columns += [values[:, column].view(np.uint32) for column in range(values.shape[1])]
+        first, inverse = distinct_rows(columns)
+        corner_to_vertex[differing] = groups + inverse
+        first_corners = np.concatenate([representative, differing[first]])
+    del group
+
+    # Renumber: by Blender vertex, then by first corner (representatives come first).
+    vertex_order = np.lexsort((first_corners, corner_vertices[first_corners]))
+    new_index = np.empty(vertex_order.size, dtype=np.int64)
+    new_index[vertex_order] = np.arange(vertex_order.size)
+    first_corners = first_corners[vertex_order]
+    split = SplitMesh(positions=positions[corner_vertices[first_corners]],
+                      triangles=new_index[corner_to_vertex].astype(np.int32).reshape(-1, 3))
     if corner_normals is not None:
-        split.normals = corner_normals[first_corner].astype(np.float32)
-    split.uvs = {uv_name: uv[first_corner].astype(np.float32) for uv_name, uv in corner_uvs.items()}
+        split.normals = corner_normals[first_corners]
+    split.uvs = {uv_name: uv[first_corners] for uv_name, uv in corner_uvs.items()}
     return split
 
 
+def distinct_rows(columns, row_hash=None):
+    """The distinct rows of a table given as equal-length integer columns: (first, inverse),
+    where first[k] is the index of the first row of the k-th distinct row (ascending) and
+    inverse[i] the distinct row of row i.
+
+    Rows are sorted by a 64-bit hash (one sort, where sorting the rows themselves takes one per
+    column), then every row is compared with the first row of its hash: exact. Should two
+    different rows share a hash, the rows are sorted themselves instead. row_hash: the hash
+    function (columns → (n,) uint64), for tests.
+    """
+    hashes = (row_hash or _row_hash)(columns)
+    order = np.argsort(hashes, kind="stable")  # equal hashes keep row order: first row first
+    sorted_hashes = hashes[order]
+    del hashes
+    run_start = np.flatnonzero(np.diff(sorted_hashes, prepend=~sorted_hashes[:1]))
+    del sorted_hashes
+    run = np.repeat(np.arange(run_start.size), np.diff(run_start, append=order.size))
+    leader = order[run_start][run]  # for each row in hash order, its run's first row
+    if all(np.array_equal(column[order], column[leader]) for column in columns):
+        first = order[run_start]
+        inverse = np.empty(order.size, dtype=np.int64)
+        inverse[order] = run
+    else:  # two different rows share a hash
+        _, first, inverse = np.unique(np.stack(columns, axis=1), axis=0, return_index=True,
+                                      return_inverse=True)
+        inverse = np.asarray(inverse).ravel()
+    by_first = np.argsort(first, kind="stable")
+    rank = np.empty_like(by_first)
+    rank[by_first] = np.arange(by_first.size)
+    return first[by_first], rank[inverse]
+
+
+def _row_hash(columns):
+    """A 64-bit hash of each row (FNV-1a over the columns' words, then a final mix)."""
+    hashes = np.full(columns[0].size, 0xCBF29CE484222325, dtype=np.uint64)
+    for column in columns:
+        hashes ^= column.astype(np.uint64)
+        hashes *= np.uint64(0x100000001B3)
+        hashes ^= hashes >> np.uint64(29)
+    return hashes
+
+
+def _index_type(count):
+    """The smallest of int32 and int64 that holds indices below `count`."""
+    return np.int32 if count < 2**31 else np.int64
+
+
 def _corner_array(values, corners, width, what):
-    """(corners, width) float64 copy of per-corner data; ValueError for a wrong size or NaN."""
-    array = np.asarray(values, dtype=np.float64)
+    """(corners, width) float32 per-corner data; ValueError for a wrong size or NaN."""
+    array = np.asarray(values, dtype=np.float32)
     if array.size != corners * width:
         raise ValueError(f"{what}: {array.size} values for {corners} corners × {width}")
     array = array.reshape(corners, width)
