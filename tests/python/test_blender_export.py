@@ -6,6 +6,7 @@ success marker; a failed check raises, so Blender exits with 1 (--python-exit-co
 """
 
 import math
+import os
 import sys
 
 import numpy as np
@@ -24,6 +25,7 @@ SCRIPTS = {
     "addon_register.py": "ADDON_REGISTER_OK",
     "export_scene_checks.py": "EXPORT_SCENE_OK",
     "export_camera_checks.py": "EXPORT_CAMERA_OK",
+    "export_memory_checks.py": "EXPORT_MEMORY_OK",
 }
 
 
@@ -67,3 +69,21 @@ def test_material_inputs_that_are_not_numbers_are_named():
     assert (names["base_color"], names["emission_color"]) == ("Base Color", "Emission Color")
     assert conversions.input_names(conversions.EMISSION_NODE, (3, 4, 1)) == {
         "emission_color": "Color", "emission_strength": "Strength"}
+
+
+# --- the export's memory check (no Blender) ----------------------------------------------------
+
+def test_a_mesh_needing_more_than_the_available_memory_is_refused_with_the_fix():
+    from shgi_blender.export import memory
+    per_triangle = (memory.EXPORT_BYTES_PER_TRIANGLE
+                    + 2 * memory.EXPORT_BYTES_PER_TRIANGLE_PER_UV_MAP)
+    assert memory.export_bytes(18_000_000, 2) == 18_000_000 * per_triangle
+    fits = int(memory.export_bytes(1000, 2) / memory.EXPORT_SHARE_OF_AVAILABLE) + 1
+    assert memory.export_memory_problem(1000, 2, available=fits) is None
+    problem = memory.export_memory_problem(18_000_000, 2, available=4 * 2**30)
+    assert problem.startswith(f"its 18,000,000 triangles need about "
+                              f"{18_000_000 * per_triangle / 2**30:.1f} GiB of memory to export "
+                              "but 4.0 GiB is available; lower its Subdivision Surface")
+    available = memory.available_memory_bytes()  # Linux's MemAvailable
+    assert available is not None and 0 < available <= os.sysconf("SC_PHYS_PAGES") * os.sysconf(
+        "SC_PAGE_SIZE")

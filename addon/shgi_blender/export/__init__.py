@@ -5,6 +5,7 @@ entry point the render engine and operators call (scene_export.py). The modules 
 from bpy-free code so that pytest checks the conversions outside Blender:
 
 * bpy-free: conversions.py (socket names, units, fields), mesh_split.py (per-corner → per-vertex),
+  memory.py (whether a mesh's export fits in the available memory),
   result.py (ExportResult, ExportStats, warnings), light_probe.py (Irradiance Volume objects
   → probe grid volumes), scene_snapshot.py (an export recorded as values, built into an
   shgi.Scene later on the viewport's worker thread);

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import shgi
 
-from . import conversions
+from . import conversions, memory
 from .camera import camera_from_scene
 from .light import light_from_object, world_from_blender
 from .light_probe import is_irradiance_volume, probe_volume_from_object
@@ -203,6 +203,11 @@ class _SceneExporter:
         mesh = obj.to_mesh()
         try:
             if mesh is None or not mesh.polygons:
+                return None
+            triangles = len(mesh.loops) - 2 * len(mesh.polygons)  # a polygon of n corners: n - 2
+            problem = memory.export_memory_problem(triangles, len(mesh.uv_layers))
+            if problem is not None:
+                self._skip(obj, problem, geometry_key)
                 return None
             split, blender_indices = read_mesh(mesh, geometry_key[1])
             return MeshGeometry(split, blender_indices)
