@@ -28,6 +28,7 @@ SHAPE = ARGS[2] if len(ARGS) > 2 else "grid"
 UV_MAPS = int(ARGS[3]) if len(ARGS) > 3 else 1
 
 from shgi_blender.export import export_scene, memory  # noqa: E402
+from shgi_blender.export.mesh import triangle_count  # noqa: E402
 
 
 def resident_bytes():
@@ -65,7 +66,7 @@ def main():
     obj = build(SHAPE, UV_MAPS)
     depsgraph = bpy.context.evaluated_depsgraph_get()
     mesh = obj.evaluated_get(depsgraph).data
-    triangles = len(mesh.loops) - 2 * len(mesh.polygons)
+    triangles = triangle_count(mesh)
     before = max(resident_bytes(), peak_resident_bytes())
     start = time.perf_counter()
     result = export_scene(depsgraph, with_camera=False)

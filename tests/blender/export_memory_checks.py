@@ -22,6 +22,7 @@ setup.add_import_paths()
 
 import bpy  # noqa: E402
 from shgi_blender.export import export_scene, memory  # noqa: E402
+from shgi_blender.export.mesh import triangle_count  # noqa: E402
 
 
 def resident_bytes():
@@ -46,7 +47,7 @@ def check_peak_within_bound():
     bpy.ops.object.shade_flat()
     depsgraph = bpy.context.evaluated_depsgraph_get()
     mesh = sphere.evaluated_get(depsgraph).data
-    triangles = len(mesh.loops) - 2 * len(mesh.polygons)
+    triangles = triangle_count(mesh)
     uv_maps = len(mesh.uv_layers)
     bound = memory.export_bytes(triangles, uv_maps)
     before = max(resident_bytes(), peak_resident_bytes())

@@ -14,7 +14,8 @@ import os
 # its own normal, the worst case of the split): 371 and 431 B with no UV map, 467 and 431
 # with one, 617 and 576 with three (3.4.1 and 5.0.1), plus a margin for the allocator's
 # variation between runs. Smooth meshes peak near two thirds of this. Measured with
-# tests/blender/export_memory_checks.py, which also checks the bound on every test run.
+# bench/export_memory_bench.py (flat-sphere, 0, 1 and 3 UV maps);
+# tests/blender/export_memory_checks.py checks the bound on every test run.
 EXPORT_BYTES_PER_TRIANGLE = 480
 EXPORT_BYTES_PER_TRIANGLE_PER_UV_MAP = 60
 # The share of the available memory one mesh's export may take: the rest is left to Blender

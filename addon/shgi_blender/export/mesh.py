@@ -33,6 +33,11 @@ def read_mesh(mesh, name):
     return split, material_indices
 
 
+def triangle_count(mesh):
+    """Triangles of a Blender mesh without triangulating it: a polygon of n corners makes n - 2."""
+    return len(mesh.loops) - 2 * len(mesh.polygons)
+
+
 def _loop_normals(mesh):
     """(L, 3) float32 corner normals (flat, smooth, auto-smooth and custom as Blender shades)."""
     loops = len(mesh.loops)

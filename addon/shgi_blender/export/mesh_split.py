@@ -43,10 +43,11 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
     are ordered by Blender vertex index, then by the first corner that uses them.
     Raises ValueError naming the mesh for mismatched sizes, bad indices or non-finite data.
 
-    Memory: about 30 bytes per corner beyond the inputs and the result, so that meshes of tens
-    of millions of triangles (a Subdivision Surface at render levels) split without running
-    the machine out of memory. Each corner is compared with the first corner of its Blender
-    vertex; only the corners that differ from it (creases, UV seams) are sorted by their data.
+    Memory: each corner is compared with the first corner of its Blender vertex, and only the
+    corners that differ from it (creases, UV seams) are sorted by their data, so that meshes of
+    tens of millions of triangles (a Subdivision Surface at render levels) split without running
+    the machine out of memory: about 28 bytes per corner beyond the inputs and the result on a
+    smooth grid, where few corners differ; more where most do (flat shading).
     """
     positions = np.asarray(positions, dtype=np.float32).reshape(-1, 3)
     corner_vertices = np.asarray(corner_vertices).ravel()
@@ -127,9 +128,8 @@ def distinct_rows(columns, row_hash=None):
     run_start = np.flatnonzero(np.diff(sorted_hashes, prepend=~sorted_hashes[:1]))
     del sorted_hashes
     run = np.repeat(np.arange(run_start.size), np.diff(run_start, append=order.size))
-    leader = order[run_start][run]  # for each row in hash order, its run's first row
-    if all(np.array_equal(column[order], column[leader]) for column in columns):
-        first = order[run_start]
+    first = order[run_start]  # each run's first row
+    if all(np.array_equal(column[order], column[first[run]]) for column in columns):
         inverse = np.empty(order.size, dtype=np.int64)
         inverse[order] = run
     else:  # two different rows share a hash

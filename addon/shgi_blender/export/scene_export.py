@@ -26,7 +26,7 @@ from .camera import camera_from_scene
 from .light import light_from_object, world_from_blender
 from .light_probe import is_irradiance_volume, probe_volume_from_object
 from .material import MaterialExporter
-from .mesh import read_mesh
+from .mesh import read_mesh, triangle_count
 from .result import ExportResult, ExportStats, WarningLog
 
 # Object types whose geometry to_mesh() converts to triangles.
@@ -204,8 +204,7 @@ class _SceneExporter:
         try:
             if mesh is None or not mesh.polygons:
                 return None
-            triangles = len(mesh.loops) - 2 * len(mesh.polygons)  # a polygon of n corners: n - 2
-            problem = memory.export_memory_problem(triangles, len(mesh.uv_layers))
+            problem = memory.export_memory_problem(triangle_count(mesh), len(mesh.uv_layers))
             if problem is not None:
                 self._skip(obj, problem, geometry_key)
                 return None
