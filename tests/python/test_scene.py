@@ -4,7 +4,10 @@ Run with Debian's Python: PYTHONPATH=<build>/python /usr/bin/python3 -m pytest t
 """
 
 import enum
+import os
 import re
+import subprocess
+import sys
 import threading
 import time
 
@@ -306,6 +309,40 @@ def test_bad_instances_materials_and_lights():
         scene.commit(memory_budget_bytes=-1)
     with pytest.raises(TypeError, match="expected an shgi.Mesh"):
         scene.add_mesh("not a mesh")
+
+
+# Run in a child process: before the module refused it, a bare __new__ gave an object whose
+# first method call segfaulted, which would take the test run down with it.
+BARE_NEW_CHILD = """
+import inspect, sys
+import shgi._shgi as native
+classes = [c for c in vars(native).values()
+           if inspect.isclass(c) and not issubclass(c, BaseException)]
+assert len(classes) > 30, classes
+for cls in classes:
+    try:
+        cls.__new__(cls)
+    except TypeError as error:
+        assert cls.__name__ in str(error), error
+    else:
+        sys.exit(f"{cls.__name__}.__new__ made an object without __init__")
+class Subclass(native.Scene):
+    pass
+try:
+    Subclass.__new__(Subclass)
+except TypeError:
+    pass
+else:
+    sys.exit("a Python subclass's bare __new__ was allowed")
+assert Subclass().stats()["meshes"] == 0  # calling the class still works
+"""
+
+
+def test_bare_new_raises_instead_of_leaving_an_uninitialised_object(build_python_dir):
+    env = dict(os.environ, PYTHONPATH=str(build_python_dir))
+    result = subprocess.run([sys.executable, "-c", BARE_NEW_CHILD], capture_output=True,
+                            text=True, env=env, timeout=120)
+    assert result.returncode == 0, (result.returncode, result.stdout, result.stderr)
 
 
 def test_bad_rays_raise_value_error():
