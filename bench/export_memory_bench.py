@@ -9,8 +9,9 @@ grid: a 100 x 100 grid under a level-4 Subdivision Surface, smooth (5.12M triang
 corners of a vertex agree). flat-sphere: a 100 x 50 UV sphere under a level-4 Subdivision
 Surface, flat-shaded (2.53M triangles; every corner of a vertex has its own normal, the
 split's worst case). Printed: the export's wall time, the growth of the process's peak resident
-memory per triangle (run in a fresh process: the peak before is Blender's start-up), and
-export/memory.py's bound for the mesh.
+memory per triangle (run in a fresh process: the peak before is Blender's start-up),
+export/memory.py's bound for the mesh, and the longest stretch between two polls of the
+export's should_stop (how late Esc during F12 can stop it).
 """
 
 import os
@@ -68,14 +69,23 @@ def main():
     mesh = obj.evaluated_get(depsgraph).data
     triangles = triangle_count(mesh)
     before = max(resident_bytes(), peak_resident_bytes())
+    polls = []
+
+    def should_stop():
+        polls.append(time.perf_counter())
+        return False
+
     start = time.perf_counter()
-    result = export_scene(depsgraph, with_camera=False)
+    result = export_scene(depsgraph, with_camera=False, should_stop=should_stop)
     seconds = time.perf_counter() - start
+    stamps = [start, *polls, start + seconds]
+    longest = max(b - a for a, b in zip(stamps, stamps[1:]))
     growth = peak_resident_bytes() - before
     assert result.stats.triangles == triangles, result.warnings
     print(f"{SHAPE}, {UV_MAPS} UV map(s), {triangles} triangles, Blender {bpy.app.version_string}:"
           f" export {seconds:.2f} s, peak +{growth / triangles:.0f} B per triangle (bound "
-          f"{memory.export_bytes(triangles, UV_MAPS) / triangles:.0f})")
+          f"{memory.export_bytes(triangles, UV_MAPS) / triangles:.0f}), should_stop polled "
+          f"{len(polls)} times, at most {longest:.2f} s apart")
 
 
 main()

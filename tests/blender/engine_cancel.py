@@ -8,8 +8,11 @@
 2. The engine's F12 code (engine/final_render.py) driven directly with a stub RenderEngine whose
    test_break turns True after a delay, once while the photon lattice is being solved and once
    while the path tracer samples.
+3. The same stub breaking during the scene export: HEAVY_OBJECTS objects of HEAVY_GRID^2 quads
+   each (a modifier makes each one its own geometry to read), seconds of export.
 Each render must end within CANCEL_LATENCY seconds of the break, report no error, record
-`cancelled`, and (for the sampling cases) keep a partial image. Prints ENGINE_CANCEL_OK.
+`cancelled`, and (for the sampling cases) keep a partial image; the export case must not have
+started the solver. Prints ENGINE_CANCEL_OK.
 """
 
 import json
@@ -32,6 +35,9 @@ SCALE = 0.25
 HUGE_SAMPLES = 1_000_000
 HUGE_PHOTONS = 200_000_000
 BREAK_AFTER_SECONDS = 1.5
+HEAVY_OBJECTS = 200
+HEAVY_GRID = 100  # quads per side: 19,602 triangles per object
+EXPORT_BREAK_AFTER_SECONDS = 0.5
 # DESIGN.md: a cancelled native call returns within 0.2 s; the engine polls every 0.05 s.
 CANCEL_LATENCY = 0.5
 
@@ -78,11 +84,12 @@ class StubEngine:
         self.reports.append(("ERROR_SET", message))
 
 
-def check_record(what, record, latency, expect_image):
+def check_record(what, record, latency, expect_image, stage=None):
     if record["errors"] or not record["cancelled"]:
         raise AssertionError(f"{what}: not a clean cancel: {record}")
-    stage = "render" if expect_image else "solve"
-    if stage not in record["timings"] or (not expect_image and "render" in record["timings"]):
+    stage = stage or ("render" if expect_image else "solve")
+    later = {"export": ("commit", "solve", "render"), "solve": ("render",), "render": ()}[stage]
+    if stage not in record["timings"] or any(name in record["timings"] for name in later):
         raise AssertionError(f"{what}: the break did not land in the {stage} stage: "
                              f"{record['timings']}")
     if latency > CANCEL_LATENCY:
@@ -93,18 +100,38 @@ def check_record(what, record, latency, expect_image):
                              "image")
 
 
-def cancel_with_stub(method):
+def add_heavy_objects(scene):
+    """HEAVY_OBJECTS small grids inside the box, each with a modifier (exported one by one)."""
+    n = HEAVY_GRID + 1
+    vertices = [(0.2 * x / HEAVY_GRID, 0.2 * y / HEAVY_GRID, 0.0) for y in range(n)
+                for x in range(n)]
+    faces = [(y * n + x, y * n + x + 1, (y + 1) * n + x + 1, (y + 1) * n + x)
+             for y in range(HEAVY_GRID) for x in range(HEAVY_GRID)]
+    mesh = bpy.data.meshes.new("heavy_grid")
+    mesh.from_pydata(vertices, [], faces)
+    for i in range(HEAVY_OBJECTS):
+        obj = bpy.data.objects.new(f"heavy_{i}", mesh)
+        obj.location = (-0.4 + 0.04 * (i % 20), -0.4 + 0.08 * (i // 20), 0.05)
+        obj.modifiers.new("Triangulate", "TRIANGULATE")
+        scene.collection.objects.link(obj)
+
+
+def cancel_with_stub(method, during_export=False):
     """final_render with a stub engine; returns (record, latency in s)."""
     scene = common.new_scene("cornell_box", SCALE)
     scene.shgi.method = method
     scene.shgi.samples = HUGE_SAMPLES
     scene.shgi.photons = HUGE_PHOTONS
+    if during_export:
+        add_heavy_objects(scene)
+    depsgraph = bpy.context.evaluated_depsgraph_get()  # evaluated before the clock starts
+    after = EXPORT_BREAK_AFTER_SECONDS if during_export else BREAK_AFTER_SECONDS
     stub = StubEngine(scene.render.resolution_x, scene.render.resolution_y,
-                      time.perf_counter() + BREAK_AFTER_SECONDS)
-    final_render.render(stub, bpy.context.evaluated_depsgraph_get())
-    latency = time.perf_counter() - stub.broke_at
-    if not stub.ended:
-        raise AssertionError(f"stub {method}: end_result was not called")
+                      time.perf_counter() + after)
+    final_render.render(stub, depsgraph)
+    latency = time.perf_counter() - stub.break_at  # from when Esc was "pressed"
+    if stub.ended == during_export:  # an export cancelled before any result was begun
+        raise AssertionError(f"stub {method}: end_result called: {stub.ended}")
     return final_render.last_render(), latency, stub
 
 
@@ -137,6 +164,12 @@ def main():
             raise AssertionError("stub PATH_TRACE: the partial image was not written")
         results[f"stub {method}"] = {"latency": latency, "samples": record["samples"],
                                      "stage_seconds": record["timings"]}
+    record, latency, stub = cancel_with_stub("PHOTON_LATTICE", during_export=True)
+    check_record("stub export", record, latency, False, stage="export")
+    if not record["timings"]["export"] > EXPORT_BREAK_AFTER_SECONDS:
+        raise AssertionError(f"stub export: the export ended before the break: {record}")
+    results["stub export"] = {"latency": latency, "samples": record["samples"],
+                              "stage_seconds": record["timings"]}
     with tempfile.TemporaryDirectory(prefix="shgi_cancel_") as tmpdir:
         record, latency, mean = cancel_f12_with_sigint(tmpdir)
     check_record("F12 + SIGINT", record, latency, True)

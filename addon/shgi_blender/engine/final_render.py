@@ -2,8 +2,9 @@
 
 Steps: export the render depsgraph (export/), start a RenderJob on a worker thread (commit,
 solve, progressive sampling, all in native calls that release the GIL), then poll it every
-POLL_SECONDS: Esc (``test_break``; Ctrl-C under the bpy module) cancels the job, progress and
-the stage go to Blender's status, each new snapshot's Combined goes to the image editor, and at
+POLL_SECONDS: Esc (``test_break``; Ctrl-C under the bpy module) cancels the export (polled
+before each object and between a mesh's reading stages) or the job; progress and the
+stage go to Blender's status, each new snapshot's Combined goes to the image editor, and at
 the end every pass the view layer enables is written with Cycles' names (those of the running
 Blender, passes.py). Export warnings, native warnings and unsupported passes are reported as
 WARNING; a failure is set with ``error_set`` and reported as ERROR (bpy.ops.render.render then
@@ -131,11 +132,18 @@ class FinalRender:
                     if method.uses_field else None)
         if solution is not None:
             return self._start_frozen_job(shgi, props, solution)
-        from ..export import export_scene  # imports shgi: only once it is known to import
+        from ..export import ExportCancelled, export_scene  # imports shgi: once it imports
 
         export_start = time.perf_counter()
-        export = export_scene(self.depsgraph, self.scene, report=self._export_warning)
-        self.record["timings"]["export"] = time.perf_counter() - export_start
+        try:
+            export = export_scene(self.depsgraph, self.scene, report=self._export_warning,
+                                  should_stop=self.engine.test_break)
+        except (ExportCancelled, KeyboardInterrupt):  # Esc; Ctrl-C under the bpy module
+            self.record["cancelled"] = True
+            self.engine.report({"INFO"}, "SHGI: render cancelled during the scene export")
+            return None
+        finally:
+            self.record["timings"]["export"] = time.perf_counter() - export_start
         if not export.scene.has_camera:
             self.fail("SHGI: the scene has no usable camera (see the warnings)")
             return None

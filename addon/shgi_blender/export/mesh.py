@@ -12,24 +12,31 @@ import numpy as np
 from .mesh_split import require_finite_positions, split_corners
 
 
-def read_mesh(mesh, name):
+def read_mesh(mesh, name, check_stop=None):
     """(SplitMesh, (T,) int32 Blender material index per triangle) of a Blender mesh.
 
-    Raises ValueError naming the mesh for a non-finite vertex.
+    Raises ValueError naming the mesh for a non-finite vertex. check_stop, if given, is called
+    between the reading stages and may raise to stop.
     """
+    check_stop = check_stop or (lambda: None)
     positions = _foreach(mesh.vertices, "co", np.float32, len(mesh.vertices) * 3).reshape(-1, 3)
     # Check before the normals are computed, which would spread the NaN around.
     require_finite_positions(positions, name)
+    check_stop()
     mesh.calc_loop_triangles()
+    check_stop()
     triangles = mesh.loop_triangles
     corner_loops = _foreach(triangles, "loops", np.int32, len(triangles) * 3)
     corner_vertices = _foreach(triangles, "vertices", np.int32, len(triangles) * 3)
     material_indices = _foreach(triangles, "material_index", np.int32, len(triangles))
+    check_stop()
     corner_normals = _loop_normals(mesh)[corner_loops]
+    check_stop()
     corner_uvs = {layer.name: _foreach(layer.data, "uv", np.float32,
                                        len(mesh.loops) * 2).reshape(-1, 2)[corner_loops]
                   for layer in _uv_layers_render_first(mesh)}
-    split = split_corners(positions, corner_vertices, corner_normals, corner_uvs, name=name)
+    split = split_corners(positions, corner_vertices, corner_normals, corner_uvs, name=name,
+                          check_stop=check_stop)
     return split, material_indices
 
 

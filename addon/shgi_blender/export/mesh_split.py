@@ -33,7 +33,7 @@ def require_finite_positions(positions, name):
 
 
 def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=None,
-                  name="mesh"):
+                  name="mesh", check_stop=None):
     """Builds per-vertex arrays from per-corner data of a triangle list.
 
     positions: (V, 3) Blender vertex positions. corner_vertices: (3T,) vertex index of each
@@ -42,6 +42,7 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
     the SplitMesh stores (so 0.0 and -0.0 share a vertex). Returns a SplitMesh whose vertices
     are ordered by Blender vertex index, then by the first corner that uses them.
     Raises ValueError naming the mesh for mismatched sizes, bad indices or non-finite data.
+    check_stop, if given, is called between the steps (a cancel point: it may raise).
 
     Memory: each corner is compared with the first corner of its Blender vertex, and only the
     corners that differ from it (creases, UV seams) are sorted by their data, so that meshes of
@@ -65,6 +66,8 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
     corner_uvs = {uv_name: _corner_array(uv, corners, 2, f"mesh {name!r}: UV map {uv_name!r}")
                   for uv_name, uv in (corner_uvs or {}).items()}
     attributes.extend(corner_uvs.values())
+    check_stop = check_stop or (lambda: None)
+    check_stop()
 
     # Group the corners by Blender vertex; each group's first corner is its representative.
     order = np.argsort(corner_vertices, kind="stable")
@@ -76,6 +79,7 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
     group[order] = np.repeat(np.arange(groups, dtype=group.dtype),
                              np.diff(group_start, append=corners))
     del order, sorted_vertices, group_start
+    check_stop()
 
     # Corners whose data differ from their representative's become extra vertices: one per
     # distinct (vertex, data) among them, numbered in the order of their first corner.
@@ -86,6 +90,7 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
             same &= values == values[representative][group]
     differing = np.flatnonzero(~same)
     del same
+    check_stop()
     corner_to_vertex = group.astype(np.int64)
     first_corners = representative
     if differing.size:
@@ -93,13 +98,17 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
         for attribute in attributes:
             values = attribute[differing] + np.float32(0.0)  # -0.0 becomes 0.0
             columns += [values[:, column].view(np.uint32) for column in range(values.shape[1])]
-        first, inverse = distinct_rows(columns)
+        check_stop()
+        first, inverse = distinct_rows(columns, check_stop=check_stop)
         corner_to_vertex[differing] = groups + inverse
         first_corners = np.concatenate([representative, differing[first]])
+        check_stop()
     del group
 
     # Renumber: by Blender vertex, then by first corner (representatives come first).
-    vertex_order = np.lexsort((first_corners, corner_vertices[first_corners]))
+    # One key per vertex, (Blender vertex, first corner), all distinct: one unstable sort.
+    vertex_order = np.argsort(corner_vertices[first_corners].astype(np.int64) * corners
+                              + first_corners)
     new_index = np.empty(vertex_order.size, dtype=np.int64)
     new_index[vertex_order] = np.arange(vertex_order.size)
     first_corners = first_corners[vertex_order]
@@ -111,7 +120,7 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
     return split
 
 
-def distinct_rows(columns, row_hash=None):
+def distinct_rows(columns, row_hash=None, check_stop=None):
     """The distinct rows of a table given as equal-length integer columns: (first, inverse),
     where first[k] is the index of the first row of the k-th distinct row (ascending) and
     inverse[i] the distinct row of row i.
@@ -119,24 +128,30 @@ def distinct_rows(columns, row_hash=None):
     Rows are sorted by a 64-bit hash (one sort, where sorting the rows themselves takes one per
     column), then every row is compared with the first row of its hash: exact. Should two
     different rows share a hash, the rows are sorted themselves instead. row_hash: the hash
-    function (columns → (n,) uint64), for tests.
+    function (columns → (n,) uint64), for tests. check_stop: called between the steps.
     """
+    check_stop = check_stop or (lambda: None)
     hashes = (row_hash or _row_hash)(columns)
-    order = np.argsort(hashes, kind="stable")  # equal hashes keep row order: first row first
+    check_stop()
+    order = np.argsort(hashes)
     sorted_hashes = hashes[order]
     del hashes
     run_start = np.flatnonzero(np.diff(sorted_hashes, prepend=~sorted_hashes[:1]))
     del sorted_hashes
-    run = np.repeat(np.arange(run_start.size), np.diff(run_start, append=order.size))
-    first = order[run_start]  # each run's first row
-    if all(np.array_equal(column[order], column[first[run]]) for column in columns):
-        inverse = np.empty(order.size, dtype=np.int64)
-        inverse[order] = run
-    else:  # two different rows share a hash
+    first = np.minimum.reduceat(order, run_start)  # each run's first row (the sort is unstable)
+    inverse = np.empty(order.size, dtype=np.int64)
+    inverse[order] = np.repeat(np.arange(run_start.size), np.diff(run_start, append=order.size))
+    del order, run_start
+    check_stop()
+    representative = first[inverse]
+    if not all(np.array_equal(column, column[representative]) for column in columns):
+        # Two different rows share a hash.
         _, first, inverse = np.unique(np.stack(columns, axis=1), axis=0, return_index=True,
                                       return_inverse=True)
         inverse = np.asarray(inverse).ravel()
-    by_first = np.argsort(first, kind="stable")
+    del representative
+    check_stop()
+    by_first = np.argsort(first)  # the values are distinct: no need for a stable sort
     rank = np.empty_like(by_first)
     rank[by_first] = np.arange(by_first.size)
     return first[by_first], rank[inverse]

@@ -8,6 +8,10 @@ import shgi
 logger = logging.getLogger("shgi_blender.export")
 
 
+class ExportCancelled(Exception):
+    """export_scene's ``should_stop`` said stop (Esc during F12); the partial scene is dropped."""
+
+
 @dataclass
 class ExportStats:
     """Counts of what went into the shgi.Scene and what was left out."""

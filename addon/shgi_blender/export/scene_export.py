@@ -27,7 +27,7 @@ from .light import light_from_object, world_from_blender
 from .light_probe import is_irradiance_volume, probe_volume_from_object
 from .material import MaterialExporter
 from .mesh import read_mesh, triangle_count
-from .result import ExportResult, ExportStats, WarningLog
+from .result import ExportCancelled, ExportResult, ExportStats, WarningLog
 
 # Object types whose geometry to_mesh() converts to triangles.
 MESH_CONVERTIBLE_TYPES = ("MESH", "CURVE", "SURFACE", "FONT", "META")
@@ -39,7 +39,8 @@ NON_MESH_GEOMETRY_TYPES = ("CURVE", "SURFACE", "FONT", "META")
 UNSUPPORTED_GEOMETRY_TYPES = ("CURVES", "POINTCLOUD", "VOLUME", "GPENCIL")
 
 
-def export_scene(depsgraph, scene=None, *, report=None, for_render=None, with_camera=True):
+def export_scene(depsgraph, scene=None, *, report=None, for_render=None, with_camera=True,
+                 should_stop=None):
     """Converts an evaluated depsgraph into a new, uncommitted shgi.Scene.
 
     depsgraph: an evaluated Depsgraph (the render engine's, or
@@ -51,6 +52,9 @@ def export_scene(depsgraph, scene=None, *, report=None, for_render=None, with_ca
         False for a viewport one, which already holds only the viewport-visible objects).
     with_camera: export the scene camera (False for bakes, which need none: no warning about
         a scene without one).
+    should_stop: a callable polled before each object and between the stages of reading a
+        mesh (the render engine's ``test_break``: Esc during F12); when it returns True the
+        export raises ExportCancelled.
     Returns ExportResult(scene, warnings, stats, probe_volumes).
     """
     start = time.perf_counter()
@@ -58,6 +62,8 @@ def export_scene(depsgraph, scene=None, *, report=None, for_render=None, with_ca
     if for_render is None:
         for_render = depsgraph.mode == "RENDER"
     exporter = _SceneExporter(depsgraph, WarningLog(report), for_render)
+    if should_stop is not None:
+        exporter.check_stop = _stop_check(should_stop)
     exporter.export_instances()
     exporter.export_world(scene)
     if with_camera:
@@ -66,6 +72,18 @@ def export_scene(depsgraph, scene=None, *, report=None, for_render=None, with_ca
     return ExportResult(scene=exporter.shgi_scene, warnings=list(exporter.log.messages),
                         stats=exporter.stats, probe_volumes=exporter.probe_volumes,
                         skipped=exporter.skipped)
+
+
+def _stop_check(should_stop):
+    """A callable raising ExportCancelled once `should_stop()` is true."""
+    def check_stop():
+        if should_stop():
+            raise ExportCancelled("the scene export was cancelled")
+    return check_stop
+
+
+def _never_stop():
+    pass
 
 
 class _SceneExporter:
@@ -86,11 +104,13 @@ class _SceneExporter:
         self._mesh_problems = {}  # geometry key -> why its geometry was skipped
         self.probe_volumes = []  # light_probe.ProbeVolumeRecord of the irradiance volumes
         self.skipped = {}  # object name -> why the object was left out
+        self.check_stop = _never_stop  # raises ExportCancelled when the caller says stop
 
     def export_instances(self):
         """Adds every visible object instance's geometry or light; records irradiance volumes."""
         evaluated_as_mesh = self._objects_evaluated_as_mesh_instances()
         for instance in self.depsgraph.object_instances:
+            self.check_stop()
             obj = instance.object
             if not instance.show_self or not self._is_visible(instance):
                 continue
@@ -208,7 +228,7 @@ class _SceneExporter:
             if problem is not None:
                 self._skip(obj, problem, geometry_key)
                 return None
-            split, blender_indices = read_mesh(mesh, geometry_key[1])
+            split, blender_indices = read_mesh(mesh, geometry_key[1], self.check_stop)
             return MeshGeometry(split, blender_indices)
         except ValueError as error:
             self._skip(obj, str(error), geometry_key)
