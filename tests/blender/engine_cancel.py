@@ -48,16 +48,12 @@ class StubEngine:
     def __init__(self, width, height, break_at):
         self.resolution_x, self.resolution_y = width, height
         self.break_at = break_at
-        self.broke_at = None
         self.reports = []
         self.combined = SimpleNamespace(name="Combined", channels=4, rect=None)
         self.ended = False
 
     def test_break(self):
-        if time.perf_counter() >= self.break_at:
-            self.broke_at = self.broke_at or time.perf_counter()
-            return True
-        return False
+        return time.perf_counter() >= self.break_at
 
     def begin_result(self, x, y, width, height, layer=""):
         return SimpleNamespace(layers=[SimpleNamespace(passes=[self.combined])])

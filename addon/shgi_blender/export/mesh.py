@@ -9,16 +9,15 @@ as Blender reads the render UV map when an Image Texture's Vector input is unlin
 
 import numpy as np
 
-from .mesh_split import require_finite_positions, split_corners
+from .mesh_split import never_stop, require_finite_positions, split_corners
 
 
-def read_mesh(mesh, name, check_stop=None):
+def read_mesh(mesh, name, check_stop=never_stop):
     """(SplitMesh, (T,) int32 Blender material index per triangle) of a Blender mesh.
 
-    Raises ValueError naming the mesh for a non-finite vertex. check_stop, if given, is called
-    between the reading stages and may raise to stop.
+    Raises ValueError naming the mesh for a non-finite vertex. check_stop is called between
+    the reading stages and may raise to stop.
     """
-    check_stop = check_stop or (lambda: None)
     positions = _foreach(mesh.vertices, "co", np.float32, len(mesh.vertices) * 3).reshape(-1, 3)
     # Check before the normals are computed, which would spread the NaN around.
     require_finite_positions(positions, name)

@@ -22,6 +22,10 @@ class SplitMesh:
     uvs: dict = field(default_factory=dict)      # {uv map name: (N, 2) float32}, in order
 
 
+def never_stop():
+    """The default cancel point of the export steps: never stops."""
+
+
 def require_finite_positions(positions, name):
     """ValueError naming the mesh and the first vertex with a NaN or infinite coordinate."""
     positions = np.asarray(positions)
@@ -33,7 +37,7 @@ def require_finite_positions(positions, name):
 
 
 def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=None,
-                  name="mesh", check_stop=None):
+                  name="mesh", check_stop=never_stop):
     """Builds per-vertex arrays from per-corner data of a triangle list.
 
     positions: (V, 3) Blender vertex positions. corner_vertices: (3T,) vertex index of each
@@ -42,7 +46,7 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
     the SplitMesh stores (so 0.0 and -0.0 share a vertex). Returns a SplitMesh whose vertices
     are ordered by Blender vertex index, then by the first corner that uses them.
     Raises ValueError naming the mesh for mismatched sizes, bad indices or non-finite data.
-    check_stop, if given, is called between the steps (a cancel point: it may raise).
+    check_stop is called between the steps (a cancel point: it may raise).
 
     Memory: each corner is compared with the first corner of its Blender vertex, and only the
     corners that differ from it (creases, UV seams) are sorted by their data, so that meshes of
@@ -66,7 +70,6 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
     corner_uvs = {uv_name: _corner_array(uv, corners, 2, f"mesh {name!r}: UV map {uv_name!r}")
                   for uv_name, uv in (corner_uvs or {}).items()}
     attributes.extend(corner_uvs.values())
-    check_stop = check_stop or (lambda: None)
     check_stop()
 
     # Group the corners by Blender vertex; each group's first corner is its representative.
@@ -120,7 +123,7 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
     return split
 
 
-def distinct_rows(columns, row_hash=None, check_stop=None):
+def distinct_rows(columns, row_hash=None, check_stop=never_stop):
     """The distinct rows of a table given as equal-length integer columns: (first, inverse),
     where first[k] is the index of the first row of the k-th distinct row (ascending) and
     inverse[i] the distinct row of row i.
@@ -130,7 +133,6 @@ def distinct_rows(columns, row_hash=None, check_stop=None):
     different rows share a hash, the rows are sorted themselves instead. row_hash: the hash
     function (columns → (n,) uint64), for tests. check_stop: called between the steps.
     """
-    check_stop = check_stop or (lambda: None)
     hashes = (row_hash or _row_hash)(columns)
     check_stop()
     order = np.argsort(hashes)

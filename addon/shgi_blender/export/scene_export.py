@@ -27,6 +27,7 @@ from .light import light_from_object, world_from_blender
 from .light_probe import is_irradiance_volume, probe_volume_from_object
 from .material import MaterialExporter
 from .mesh import read_mesh, triangle_count
+from .mesh_split import never_stop
 from .result import ExportCancelled, ExportResult, ExportStats, WarningLog
 
 # Object types whose geometry to_mesh() converts to triangles.
@@ -82,10 +83,6 @@ def _stop_check(should_stop):
     return check_stop
 
 
-def _never_stop():
-    pass
-
-
 class _SceneExporter:
     """The state of one export: the shgi.Scene being built and what was converted already."""
 
@@ -104,7 +101,7 @@ class _SceneExporter:
         self._mesh_problems = {}  # geometry key -> why its geometry was skipped
         self.probe_volumes = []  # light_probe.ProbeVolumeRecord of the irradiance volumes
         self.skipped = {}  # object name -> why the object was left out
-        self.check_stop = _never_stop  # raises ExportCancelled when the caller says stop
+        self.check_stop = never_stop  # raises ExportCancelled when the caller says stop
 
     def export_instances(self):
         """Adds every visible object instance's geometry or light; records irradiance volumes."""
