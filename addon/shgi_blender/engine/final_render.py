@@ -24,6 +24,7 @@ import bpy
 
 from .. import native, settings
 from . import passes, scene_checks, solution_cache
+from ..operators.keyboard_interrupt import sigint_watch
 from .render_job import RenderJob
 
 POLL_SECONDS = 0.05
@@ -117,9 +118,16 @@ class FinalRender:
                       "by SHGI; it is left out")
         if self.scene.render.use_border:
             self.warn("Render Region is ignored by SHGI: the full frame is rendered")
-        job = self._start_job(shgi)
-        if job is not None:
-            self._follow(job, log)
+        with sigint_watch() as interrupted:
+            self._interrupted = interrupted
+            job = self._start_job(shgi)
+            if job is not None:
+                self._follow(job, log)
+
+    def _should_stop(self):
+        """Esc (Blender's break flag), or a Ctrl-C under the bpy module even if the
+        KeyboardInterrupt it raised was swallowed on the way (keyboard_interrupt.py)."""
+        return self.engine.test_break() or self._interrupted()
 
     def _start_job(self, shgi):
         """Exports and starts the RenderJob of the scene's method (None after a failure)."""
@@ -137,13 +145,19 @@ class FinalRender:
         export_start = time.perf_counter()
         try:
             export = export_scene(self.depsgraph, self.scene, report=self._export_warning,
-                                  should_stop=self.engine.test_break)
-        except (ExportCancelled, KeyboardInterrupt):  # Esc; Ctrl-C under the bpy module
-            self.record["cancelled"] = True
-            self.engine.report({"INFO"}, "SHGI: render cancelled during the scene export")
-            return None
-        finally:
+                                  should_stop=self._should_stop)
             self.record["timings"]["export"] = time.perf_counter() - export_start
+            # Ctrl-C under the bpy module raises in whatever Python runs next: until the job
+            # has started, that is here.
+            return self._job_for(shgi, props, method, export)
+        except (ExportCancelled, KeyboardInterrupt):  # Esc; Ctrl-C under the bpy module
+            self.record["timings"].setdefault("export", time.perf_counter() - export_start)
+            self.record["cancelled"] = True
+            self.engine.report({"INFO"}, "SHGI: render cancelled before its native work began")
+            return None
+
+    def _job_for(self, shgi, props, method, export):
+        """The started RenderJob of the exported scene (None after a failure)."""
         if not export.scene.has_camera:
             self.fail("SHGI: the scene has no usable camera (see the warnings)")
             return None
@@ -211,7 +225,7 @@ class FinalRender:
         """Every POLL_SECONDS until the job ends: Esc cancels it; progress, stage, native
         warnings and each new snapshot's Combined go to Blender."""
         while not job.wait(POLL_SECONDS):
-            if self.engine.test_break():
+            if self._should_stop():
                 job.cancel()
             self.engine.update_progress(job.fraction)
             self.engine.update_stats("", f"SHGI | {job.stage}")

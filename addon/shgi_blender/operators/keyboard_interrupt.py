@@ -9,10 +9,19 @@ operator can cancel its worker and return CANCELLED, and then puts back the hand
 Python's own (Blender as a Python module), or Blender's C handler, saved and restored with
 sigaction through ctypes because Python's ``signal.signal`` cannot reinstall a handler it did not
 install. Where that is not possible (another thread, no sigaction), the block runs unchanged.
+
+``sigint_watch()`` makes a Ctrl-C impossible to lose while the main thread polls a worker. A
+SIGINT that Python handles raises KeyboardInterrupt in whatever Python code the main thread runs
+next, and some code swallows it: a finaliser run by the garbage collector, or a callback Blender
+calls and whose errors it only prints. Once swallowed, no exception reaches the polling loop,
+which would wait for the worker to the end (a render of a million samples: for ever). The watch
+lends Python's signal wake-up fd a pipe, which Python's C handler writes to as the signal
+arrives, before any Python code runs; the loop reads it as it reads Blender's break flag.
 """
 
 import ctypes
 import ctypes.util
+import os
 import signal
 import threading
 from contextlib import contextmanager
@@ -66,3 +75,42 @@ class SavedDisposition:
 
     def restore(self):
         self._libc.sigaction(signal.SIGINT, ctypes.byref(self._action), None)
+
+
+@contextmanager
+def sigint_watch():
+    """Yields a callable that is True once a SIGINT has arrived during the block (and stays
+    True). It sees the signals Python handles (Blender as a Python module, or inside
+    ``keyboard_interrupts()``); elsewhere (another thread, Blender's own handler) it stays False.
+    The KeyboardInterrupt the signal raises is unchanged: the caller handles both."""
+    if threading.current_thread() is not threading.main_thread():
+        yield lambda: False
+        return
+    read_fd, write_fd = os.pipe()
+    os.set_blocking(read_fd, False)
+    os.set_blocking(write_fd, False)
+    try:
+        previous = signal.set_wakeup_fd(write_fd, warn_on_full_buffer=False)
+    except ValueError:  # not the main interpreter
+        os.close(read_fd)
+        os.close(write_fd)
+        yield lambda: False
+        return
+    seen = []
+
+    def interrupted():
+        if not seen:
+            try:
+                arrived = os.read(read_fd, 512)
+            except BlockingIOError:
+                arrived = b""
+            if signal.SIGINT in arrived:  # one byte per signal: its number
+                seen.append(True)
+        return bool(seen)
+
+    try:
+        yield interrupted
+    finally:
+        signal.set_wakeup_fd(previous)  # an event loop's fd, or -1
+        os.close(read_fd)
+        os.close(write_fd)

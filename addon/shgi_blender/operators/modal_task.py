@@ -10,7 +10,7 @@ _finish(context, task) -> the operator's result, _progress(task) -> (fraction, s
 override _tick(context, task), called on every timer event before the progress is shown.
 """
 
-from .keyboard_interrupt import keyboard_interrupts
+from .keyboard_interrupt import keyboard_interrupts, sigint_watch
 
 TIMER_SECONDS = 0.1
 # How often a waiting execute() wakes; a Ctrl-C also interrupts the wait at once.
@@ -25,10 +25,11 @@ class ModalTaskOperator:
     def execute(self, context):
         task = None
         try:
-            with keyboard_interrupts():
+            with keyboard_interrupts(), sigint_watch() as interrupted:
                 task = self._start(context)
                 while task is not None and not task.wait(WAIT_SECONDS):
-                    pass
+                    if interrupted():  # a Ctrl-C whose KeyboardInterrupt was swallowed
+                        raise KeyboardInterrupt
         except KeyboardInterrupt:
             if task is None:
                 self.report({"WARNING"}, f"{self.STATUS_PREFIX}interrupted (Ctrl-C) while "
