@@ -194,7 +194,7 @@ def main():
     results["F12 SIGINT PATH_TRACE"] = {"latency": latency, "samples": record["samples"],
                                         "stage_seconds": record["timings"]}
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # the bpy module
-        # 5. A Ctrl-C whose KeyboardInterrupt never reaches the engine (a finaliser or a
+        # 4. A Ctrl-C whose KeyboardInterrupt never reaches the engine (a finaliser or a
         # callback Blender calls swallowed it; here, a handler that raises nothing): the
         # engine still sees the signal (keyboard_interrupt.sigint_watch).
         signal.signal(signal.SIGINT, lambda *_: None)

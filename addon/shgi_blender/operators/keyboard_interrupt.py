@@ -83,34 +83,30 @@ def sigint_watch():
     True). It sees the signals Python handles (Blender as a Python module, or inside
     ``keyboard_interrupts()``); elsewhere (another thread, Blender's own handler) it stays False.
     The KeyboardInterrupt the signal raises is unchanged: the caller handles both."""
-    if threading.current_thread() is not threading.main_thread():
-        yield lambda: False
-        return
     read_fd, write_fd = os.pipe()
-    os.set_blocking(read_fd, False)
-    os.set_blocking(write_fd, False)
     try:
-        previous = signal.set_wakeup_fd(write_fd, warn_on_full_buffer=False)
-    except ValueError:  # not the main interpreter
-        os.close(read_fd)
-        os.close(write_fd)
-        yield lambda: False
-        return
-    seen = []
+        os.set_blocking(read_fd, False)
+        os.set_blocking(write_fd, False)
+        try:
+            previous = signal.set_wakeup_fd(write_fd, warn_on_full_buffer=False)
+        except ValueError:  # not the main thread of the main interpreter
+            yield lambda: False
+            return
+        seen = False
 
-    def interrupted():
-        if not seen:
-            try:
-                arrived = os.read(read_fd, 512)
-            except BlockingIOError:
-                arrived = b""
-            if signal.SIGINT in arrived:  # one byte per signal: its number
-                seen.append(True)
-        return bool(seen)
+        def interrupted():
+            nonlocal seen
+            if not seen:
+                try:
+                    seen = signal.SIGINT in os.read(read_fd, 512)  # a byte per signal: its number
+                except BlockingIOError:  # nothing arrived
+                    pass
+            return seen
 
-    try:
-        yield interrupted
+        try:
+            yield interrupted
+        finally:
+            signal.set_wakeup_fd(previous)  # an event loop's fd, or -1
     finally:
-        signal.set_wakeup_fd(previous)  # an event loop's fd, or -1
         os.close(read_fd)
         os.close(write_fd)
