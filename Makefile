@@ -168,6 +168,7 @@ bench: build
 	$(BUILD_DIR)/bench/path_tracer_bench
 	$(BUILD_DIR)/bench/photon_lattice_bench
 	$(BUILD_DIR)/bench/preview_convergence_bench
+	$(BUILD_DIR)/bench/cancel_latency_bench
 	env PATH=$(SYSTEM_PATH) blender -b --factory-startup --python bench/viewport_sync_bench.py -- \
 		$(CURDIR)/$(BUILD_DIR)/python $(CURDIR)/addon
 

@@ -33,6 +33,8 @@ constexpr uint64_t kChunksPerBlock = 1024;
 // Stored photons may take at most this share of the machine's RAM; past it the trace stops
 // with OutOfMemory instead of the system killing the host.
 constexpr double kStoredPhotonsMemoryFraction = 0.5;
+// Photons copied between cancel polls when a map moves to a larger buffer: 48 MB, ~10 ms.
+constexpr size_t kPhotonsPerCopySlice = size_t(1) << 20;
 
 // Photons shaded per stage: shade_all runs each stage (set-up, store, BSDF sample, roulette and
 // next ray) over this many photons before the next stage. A photon's shading is one long chain
@@ -285,21 +287,37 @@ class ChunkTracerPool {
 };
 
 // Capacity for `count` photons: exact for the first block (most passes have one), doubling after
-// (an exact fit per block would copy the whole map at every block).
-void grow_to(std::vector<Photon>& photons, size_t count) {
-    if (count > photons.capacity()) photons.reserve(std::max(count, 2 * photons.capacity()));
+// (an exact fit per block would copy the whole map at every block). The photons move to the
+// larger buffer in slices with a cancel poll between them: the map can hold 10^8 photons, and
+// copying them all in one go would keep a cancel waiting for a second.
+void grow_to(std::vector<Photon>& photons, size_t count, const Progress* progress) {
+    if (count <= photons.capacity()) return;
+    std::vector<Photon> grown;
+    grown.reserve(std::max(count, 2 * photons.capacity()));
+    advise_huge_pages(grown.data(), grown.capacity() * sizeof(Photon));
+    for (size_t begin = 0; begin < photons.size(); begin += kPhotonsPerCopySlice) {
+        throw_if_cancelled(progress);
+        const size_t end = std::min(begin + kPhotonsPerCopySlice, photons.size());
+        grown.insert(grown.end(), photons.begin() + ptrdiff_t(begin),
+                     photons.begin() + ptrdiff_t(end));
+    }
+    photons.swap(grown);
 }
 
-// Appends the first `count` chunks' photons to the maps in chunk order, releasing them.
-void merge(std::vector<ChunkResult>& chunks, uint64_t count, PhotonMaps& maps) {
+// Appends the first `count` chunks' photons to the maps in chunk order, releasing them; polls
+// cancel before each chunk (the first writes to fresh pages of a block's ~10^7 photons take a
+// few hundred ms in all).
+void merge(std::vector<ChunkResult>& chunks, uint64_t count, PhotonMaps& maps,
+           const Progress* progress) {
     size_t global_count = maps.global.size(), caustic_count = maps.caustic.size();
     for (uint64_t c = 0; c < count; ++c) {
         global_count += chunks[c].global.size();
         caustic_count += chunks[c].caustic.size();
     }
-    grow_to(maps.global, global_count);
-    grow_to(maps.caustic, caustic_count);
+    grow_to(maps.global, global_count, progress);
+    grow_to(maps.caustic, caustic_count, progress);
     for (uint64_t c = 0; c < count; ++c) {
+        throw_if_cancelled(progress);
         append(maps.global, chunks[c].global);
         append(maps.caustic, chunks[c].caustic);
         maps.bounces += chunks[c].bounces;
@@ -359,7 +377,7 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
             }
             pool.release(std::move(tracer));
         });
-        merge(chunks, block_chunks, maps);
+        merge(chunks, block_chunks, maps, progress);
     }
     maps.emitted = settings.photons;
     maps.emitted_power = emitter.total_power();

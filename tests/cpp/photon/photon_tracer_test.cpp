@@ -84,6 +84,13 @@ TEST(PhotonTracer, FurnaceTruncatedByMaxBounces) {
     expect_furnace_total(0.7f, 1, 20000);
 }
 
+// Past one block of 1024 chunks of 4096 photons: the second block's merge moves the ~2.9M photons
+// of the first to a larger buffer in slices of 2^20; a lost or repeated slice would move the total
+// by a third.
+TEST(PhotonTracer, FurnaceTotalHoldsAcrossBlocks) {
+    expect_furnace_total(0.7f, 1, 1024 * 4096 + 4096);
+}
+
 TEST(PhotonTracer, BlackSurfacesStoreNothing) {
     const Scene scene = furnace(0.0f, 10.0f);
     PhotonTracerSettings settings;
