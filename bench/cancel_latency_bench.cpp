@@ -1,17 +1,21 @@
-// Cancel latency of a long photon pass: how long trace_photons takes to throw Cancelled (and free
-// what it stored) after Progress::cancel(), for cancels at several times into a pass of 2 x 10^8
-// photons on the Cornell box. Later cancels find larger maps, so they also measure the slice-wise
-// growth of the maps and the cost of freeing them. A plain main printing figures: benchmarks are
-// not tests.
+// Cancel latency of long photon work on the Cornell box: how long a call takes to throw Cancelled
+// (and free what it made) after Progress::cancel().
+// - trace_photons, a pass of 2 x 10^8 photons cancelled after each of `seconds`: later cancels
+//   find larger maps, so they also measure the slice-wise growth of the maps and freeing them.
+// - PhotonLattice::solve of 10^7 photons, cancelled at 70-99% of the time a full solve takes,
+//   the later ones in the injection of ~2 x 10^7 stored photons.
+// A plain main printing figures: benchmarks are not tests.
 //
 //   build/bench/cancel_latency_bench [seconds ...]   (default: 0.25 0.5 1 2 4 8)
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 #include <thread>
 #include <vector>
 
 #include "bench_scenes.h"
+#include "lattice/photon_lattice.h"
 #include "photon/photon_tracer.h"
 #include "util/error.h"
 #include "util/progress.h"
@@ -23,6 +27,36 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+// Runs work(progress) with a cancel after `after` seconds; prints the latency and the stage the
+// cancel found.
+template <typename Work>
+void cancel_after_seconds(double after, Work&& work) {
+    Progress progress;
+    Clock::time_point cancelled_at;
+    std::string stage;
+    std::thread canceller([&] {
+        std::this_thread::sleep_for(std::chrono::duration<double>(after));
+        cancelled_at = Clock::now();
+        stage = progress.stage();
+        progress.cancel();
+    });
+    bool cancelled = false;
+    try {
+        work(&progress);
+    } catch (const Cancelled&) {
+        cancelled = true;
+    }
+    const Clock::time_point returned = Clock::now();
+    canceller.join();
+    if (!cancelled) {
+        std::printf("  %5.2f s: finished before the cancel\n", after);
+        return;
+    }
+    std::printf("  %5.2f s: Cancelled %.1f ms after cancel()%s%s\n", after,
+                1e3 * seconds(returned - cancelled_at), stage.empty() ? "" : ", in stage ",
+                stage.c_str());
+}
 
 }  // namespace
 
@@ -36,28 +70,22 @@ int main(int argc, char** argv) {
     settings.photons = 200000000;
     std::printf("cornell box, %llu photons per pass, cancelled after:\n",
                 static_cast<unsigned long long>(settings.photons));
-    for (const double after : cancel_after) {
-        Progress progress;
-        Clock::time_point cancelled_at;
-        std::thread canceller([&] {
-            std::this_thread::sleep_for(std::chrono::duration<double>(after));
-            cancelled_at = Clock::now();
-            progress.cancel();
+    for (const double after : cancel_after)
+        cancel_after_seconds(after, [&](Progress* progress) {
+            trace_photons(scene, settings, 0, progress);
         });
-        bool cancelled = false;
-        try {
-            trace_photons(scene, settings, 0, &progress);
-        } catch (const Cancelled&) {
-            cancelled = true;
-        }
-        const Clock::time_point returned = Clock::now();
-        canceller.join();
-        if (!cancelled) {
-            std::printf("  %5.2f s: the pass finished before the cancel\n", after);
-            continue;
-        }
-        std::printf("  %5.2f s: Cancelled %.1f ms after cancel()\n", after,
-                    1e3 * seconds(returned - cancelled_at));
-    }
+
+    PhotonLatticeSettings solve_settings;
+    solve_settings.photons = 10000000;
+    PhotonLattice lattice(scene, solve_settings);
+    const Clock::time_point start = Clock::now();
+    lattice.solve();
+    const double full = seconds(Clock::now() - start);
+    std::printf("PhotonLattice::solve of %llu photons: %.2f s in full (trace %.2f, injection "
+                "%.2f); cancelled after:\n",
+                static_cast<unsigned long long>(solve_settings.photons), full,
+                lattice.timings().emit_trace, lattice.timings().injection);
+    for (const double fraction : {0.7, 0.88, 0.92, 0.96, 0.99})
+        cancel_after_seconds(fraction * full, [&](Progress* progress) { lattice.solve(progress); });
     return 0;
 }

@@ -40,6 +40,8 @@ constexpr float kColumnSlackCells = 1e-3f;
 
 constexpr uint64_t kPhotonsPerChunk = 1 << 16;
 constexpr uint64_t kCellsPerChunk = 512;
+// Photons a sequential pass over the photons handles between cancel polls (a few ms).
+constexpr size_t kPhotonsPerCancelPoll = size_t(1) << 20;
 constexpr uint32_t kNoCell = std::numeric_limits<uint32_t>::max();
 
 const char* const kClassName = "ShLattice";
@@ -252,16 +254,21 @@ struct PhotonsByCell {
 };
 
 // `photon_cell` holds each photon's cell index, or kNoCell for photons to skip.
-PhotonsByCell sort_by_cell(const std::vector<uint32_t>& photon_cell, size_t cells) {
+PhotonsByCell sort_by_cell(const std::vector<uint32_t>& photon_cell, size_t cells,
+                           const Progress* progress) {
     PhotonsByCell sorted;
     sorted.start.assign(cells + 1, 0);
-    for (uint32_t cell : photon_cell)
-        if (cell != kNoCell) ++sorted.start[cell + 1];
+    for (size_t i = 0; i < photon_cell.size(); ++i) {
+        if (i % kPhotonsPerCancelPoll == 0) throw_if_cancelled(progress);
+        if (photon_cell[i] != kNoCell) ++sorted.start[photon_cell[i] + 1];
+    }
     for (size_t c = 0; c < cells; ++c) sorted.start[c + 1] += sorted.start[c];
     sorted.order.resize(sorted.start[cells]);
     std::vector<uint32_t> next(sorted.start.begin(), sorted.start.end() - 1);
-    for (size_t i = 0; i < photon_cell.size(); ++i)
+    for (size_t i = 0; i < photon_cell.size(); ++i) {
+        if (i % kPhotonsPerCancelPoll == 0) throw_if_cancelled(progress);
         if (photon_cell[i] != kNoCell) sorted.order[next[photon_cell[i]]++] = uint32_t(i);
+    }
     return sorted;
 }
 
@@ -588,7 +595,10 @@ uint64_t ShLattice::inject(const std::vector<Photon>& photons, float scale, Prog
     throw_if_cancelled(progress);
     const size_t cells = cell_count();
     std::vector<uint32_t> photon_cell(photons.size());
+    // Cancel is polled by hand in these two passes (their parallel_for would report progress,
+    // which belongs to the injection below).
     parallel_for(0, photons.size(), kPhotonsPerChunk, [&](uint64_t begin, uint64_t end) {
+        throw_if_cancelled(progress);
         for (uint64_t i = begin; i < end; ++i) {
             const Photon& photon = photons[i];
             const ivec3 cell = cell_of(photon.position);
@@ -599,7 +609,7 @@ uint64_t ShLattice::inject(const std::vector<Photon>& photons, float scale, Prog
         }
     });
 
-    const PhotonsByCell sorted = sort_by_cell(photon_cell, cells);
+    const PhotonsByCell sorted = sort_by_cell(photon_cell, cells, progress);
     photon_cell = {};
 
     try {
@@ -607,6 +617,8 @@ uint64_t ShLattice::inject(const std::vector<Photon>& photons, float scale, Prog
             0, cells, kCellsPerChunk,
             [&](uint64_t begin, uint64_t end) {
                 for (uint64_t cell = begin; cell < end; ++cell) {
+                    // A chunk of cells can hold millions of photons: poll per cell.
+                    throw_if_cancelled(progress);
                     const uint32_t first = sorted.start[cell];
                     const uint32_t count = sorted.start[cell + 1] - first;
                     if (count > 0)
