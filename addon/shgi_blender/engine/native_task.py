@@ -37,7 +37,14 @@ class NativeTask:
     # --- main thread ---------------------------------------------------------------------------
 
     def start(self):
-        self._thread.start()
+        try:
+            self._thread.start()
+        except BaseException:
+            # A KeyboardInterrupt (Ctrl-C under the bpy module) can land in Thread.start() after
+            # the worker began, while start() waits for it to run: the caller never gets the
+            # task to cancel, so the work is cancelled here.
+            self.progress.cancel()
+            raise
         return self
 
     def cancel(self):
