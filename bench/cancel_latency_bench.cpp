@@ -46,6 +46,9 @@ void cancel_after_seconds(double after, Work&& work) {
         work(&progress);
     } catch (const Cancelled&) {
         cancelled = true;
+    } catch (...) {
+        canceller.join();  // a joinable thread's destructor would terminate instead
+        throw;
     }
     const Clock::time_point returned = Clock::now();
     canceller.join();
@@ -61,16 +64,16 @@ void cancel_after_seconds(double after, Work&& work) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    std::vector<double> cancel_after;
-    for (int i = 1; i < argc; ++i) cancel_after.push_back(std::atof(argv[i]));
-    if (cancel_after.empty()) cancel_after = {0.25, 0.5, 1.0, 2.0, 4.0, 8.0};
+    std::vector<double> times;
+    for (int i = 1; i < argc; ++i) times.push_back(std::atof(argv[i]));
+    if (times.empty()) times = {0.25, 0.5, 1.0, 2.0, 4.0, 8.0};
     Scene scene = bench::cornell_box(64, 36);
     scene.commit();
     PhotonTracerSettings settings;
     settings.photons = 200000000;
     std::printf("cornell box, %llu photons per pass, cancelled after:\n",
                 static_cast<unsigned long long>(settings.photons));
-    for (const double after : cancel_after)
+    for (const double after : times)
         cancel_after_seconds(after, [&](Progress* progress) {
             trace_photons(scene, settings, 0, progress);
         });
