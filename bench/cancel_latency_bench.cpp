@@ -19,25 +19,22 @@
 #include "photon/photon_tracer.h"
 #include "util/error.h"
 #include "util/progress.h"
+#include "util/timer.h"
 
 using namespace shgi;
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
 // Runs work(progress) with a cancel after `after` seconds; prints the latency and the stage the
 // cancel found.
 template <typename Work>
 void cancel_after_seconds(double after, Work&& work) {
     Progress progress;
-    Clock::time_point cancelled_at;
+    TimePoint cancelled_at;
     std::string stage;
     std::thread canceller([&] {
         std::this_thread::sleep_for(std::chrono::duration<double>(after));
-        cancelled_at = Clock::now();
+        cancelled_at = now();
         stage = progress.stage();
         progress.cancel();
     });
@@ -50,14 +47,14 @@ void cancel_after_seconds(double after, Work&& work) {
         canceller.join();  // a joinable thread's destructor would terminate instead
         throw;
     }
-    const Clock::time_point returned = Clock::now();
+    const TimePoint returned = now();
     canceller.join();
     if (!cancelled) {
         std::printf("  %5.2f s: finished before the cancel\n", after);
         return;
     }
     std::printf("  %5.2f s: Cancelled %.1f ms after cancel()%s%s\n", after,
-                1e3 * seconds(returned - cancelled_at), stage.empty() ? "" : ", in stage ",
+                1e3 * seconds_between(cancelled_at, returned), stage.empty() ? "" : ", in stage ",
                 stage.c_str());
 }
 
@@ -81,9 +78,9 @@ int main(int argc, char** argv) {
     PhotonLatticeSettings solve_settings;
     solve_settings.photons = 10000000;
     PhotonLattice lattice(scene, solve_settings);
-    const Clock::time_point start = Clock::now();
+    const TimePoint start = now();
     lattice.solve();
-    const double full = seconds(Clock::now() - start);
+    const double full = seconds_since(start);
     std::printf("PhotonLattice::solve of %llu photons: %.2f s in full (trace %.2f, injection "
                 "%.2f); cancelled after:\n",
                 static_cast<unsigned long long>(solve_settings.photons), full,

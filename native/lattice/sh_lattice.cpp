@@ -41,7 +41,7 @@ constexpr float kColumnSlackCells = 1e-3f;
 constexpr uint64_t kPhotonsPerChunk = 1 << 16;
 constexpr uint64_t kCellsPerChunk = 512;
 // Photons a sequential pass over the photons handles between cancel polls (a few ms).
-constexpr size_t kPhotonsPerCancelPoll = size_t(1) << 20;
+constexpr uint64_t kPhotonsPerCancelPoll = uint64_t(1) << 20;
 constexpr uint32_t kNoCell = std::numeric_limits<uint32_t>::max();
 
 const char* const kClassName = "ShLattice";
@@ -258,17 +258,20 @@ PhotonsByCell sort_by_cell(const std::vector<uint32_t>& photon_cell, size_t cell
                            const Progress* progress) {
     PhotonsByCell sorted;
     sorted.start.assign(cells + 1, 0);
-    for (size_t i = 0; i < photon_cell.size(); ++i) {
-        if (i % kPhotonsPerCancelPoll == 0) throw_if_cancelled(progress);
-        if (photon_cell[i] != kNoCell) ++sorted.start[photon_cell[i] + 1];
-    }
+    for_each_slice(photon_cell.size(), kPhotonsPerCancelPoll, progress,
+                   [&](uint64_t begin, uint64_t end) {
+                       for (uint64_t i = begin; i < end; ++i)
+                           if (photon_cell[i] != kNoCell) ++sorted.start[photon_cell[i] + 1];
+                   });
     for (size_t c = 0; c < cells; ++c) sorted.start[c + 1] += sorted.start[c];
     sorted.order.resize(sorted.start[cells]);
     std::vector<uint32_t> next(sorted.start.begin(), sorted.start.end() - 1);
-    for (size_t i = 0; i < photon_cell.size(); ++i) {
-        if (i % kPhotonsPerCancelPoll == 0) throw_if_cancelled(progress);
-        if (photon_cell[i] != kNoCell) sorted.order[next[photon_cell[i]]++] = uint32_t(i);
-    }
+    for_each_slice(photon_cell.size(), kPhotonsPerCancelPoll, progress,
+                   [&](uint64_t begin, uint64_t end) {
+                       for (uint64_t i = begin; i < end; ++i)
+                           if (photon_cell[i] != kNoCell)
+                               sorted.order[next[photon_cell[i]]++] = uint32_t(i);
+                   });
     return sorted;
 }
 

@@ -34,7 +34,7 @@ constexpr uint64_t kChunksPerBlock = 1024;
 // with OutOfMemory instead of the system killing the host.
 constexpr double kStoredPhotonsMemoryFraction = 0.5;
 // Photons copied between cancel polls when a map moves to a larger buffer: 48 MB, ~10 ms.
-constexpr size_t kPhotonsPerCopySlice = size_t(1) << 20;
+constexpr uint64_t kPhotonsPerCopySlice = uint64_t(1) << 20;
 
 // Photons shaded per stage: shade_all runs each stage (set-up, store, BSDF sample, roulette and
 // next ray) over this many photons before the next stage. A photon's shading is one long chain
@@ -295,12 +295,11 @@ void grow_to(std::vector<Photon>& photons, size_t count, const Progress* progres
     std::vector<Photon> grown;
     grown.reserve(std::max(count, 2 * photons.capacity()));
     advise_huge_pages(grown.data(), grown.capacity() * sizeof(Photon));
-    for (size_t begin = 0; begin < photons.size(); begin += kPhotonsPerCopySlice) {
-        throw_if_cancelled(progress);
-        const size_t end = std::min(begin + kPhotonsPerCopySlice, photons.size());
-        grown.insert(grown.end(), photons.begin() + ptrdiff_t(begin),
-                     photons.begin() + ptrdiff_t(end));
-    }
+    for_each_slice(photons.size(), kPhotonsPerCopySlice, progress,
+                   [&](uint64_t begin, uint64_t end) {
+                       grown.insert(grown.end(), photons.begin() + ptrdiff_t(begin),
+                                    photons.begin() + ptrdiff_t(end));
+                   });
     photons.swap(grown);
 }
 

@@ -73,4 +73,14 @@ inline void throw_if_cancelled(const Progress* progress) {
     if (progress) progress->throw_if_cancelled();
 }
 
+// A long sequential pass over [0, count) as body(begin, end) calls on slices of at most `slice`
+// items, with a cancel poll before each: the poll stays out of the per-item loop.
+template <typename Body>
+void for_each_slice(uint64_t count, uint64_t slice, const Progress* progress, Body&& body) {
+    for (uint64_t begin = 0; begin < count; begin += slice) {
+        throw_if_cancelled(progress);
+        body(begin, count - begin < slice ? count : begin + slice);
+    }
+}
+
 }  // namespace shgi

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <tbb/global_control.h>
@@ -37,6 +38,26 @@ TEST(Progress, StagesMapOntoSubranges) {
     EXPECT_NEAR(progress.fraction(), 0.8f, kExact);
     progress.report(0, 0);  // an empty stage is complete
     EXPECT_NEAR(progress.fraction(), 1.0f, kExact);
+}
+
+TEST(Progress, ForEachSliceCoversTheRangeAndPollsBeforeEachSlice) {
+    std::vector<std::pair<uint64_t, uint64_t>> slices;
+    const auto record = [&](uint64_t begin, uint64_t end) { slices.emplace_back(begin, end); };
+    for_each_slice(10, 4, nullptr, record);
+    EXPECT_EQ(slices, (std::vector<std::pair<uint64_t, uint64_t>>{{0, 4}, {4, 8}, {8, 10}}));
+    slices.clear();
+    for_each_slice(0, 4, nullptr, record);
+    EXPECT_TRUE(slices.empty());
+    // Cancelled by the second slice: the third is never started.
+    Progress progress;
+    slices.clear();
+    EXPECT_THROW(for_each_slice(10, 4, &progress,
+                                [&](uint64_t begin, uint64_t end) {
+                                    record(begin, end);
+                                    if (slices.size() == 2) progress.cancel();
+                                }),
+                 Cancelled);
+    EXPECT_EQ(slices.size(), 2u);
 }
 
 TEST(Progress, StageBoundsAreClamped) {
