@@ -4,6 +4,8 @@
 //   find larger maps, so they also measure the slice-wise growth of the maps and freeing them.
 // - PhotonLattice::solve of 10^7 photons, cancelled at 70-99% of the time a full solve takes,
 //   the later ones in the injection of ~2 x 10^7 stored photons.
+// - the PhotonMap (k-d tree shards) over 10^7 photons that caustics = PhotonMap rebuilds after
+//   every pass once a map has grown that large, cancelled at 10-90% of its full build time.
 // A plain main printing figures: benchmarks are not tests.
 //
 //   build/bench/cancel_latency_bench [seconds ...]   (default: 0.25 0.5 1 2 4 8)
@@ -16,9 +18,11 @@
 
 #include "bench_scenes.h"
 #include "lattice/photon_lattice.h"
+#include "photon/photon_map.h"
 #include "photon/photon_tracer.h"
 #include "util/error.h"
 #include "util/progress.h"
+#include "util/rng.h"
 #include "util/timer.h"
 
 using namespace shgi;
@@ -88,5 +92,28 @@ int main(int argc, char** argv) {
                 lattice.timings().emit_trace, lattice.timings().injection);
     for (const double fraction : {0.7, 0.88, 0.92, 0.96, 0.99})
         cancel_after_seconds(fraction * full, [&](Progress* progress) { lattice.solve(progress); });
+
+    // Photons spread through the room's volume (a caustic map's photons lie on surfaces, which
+    // only changes the tree's shape, not the work of building it).
+    std::vector<Photon> photons(10000000);
+    Pcg32 rng(3, 0);
+    for (Photon& photon : photons) {
+        photon.position = vec3(rng.next_float(), rng.next_float(), rng.next_float());
+        photon.power = vec3(1.0f);
+        photon.normal = photon.direction = vec3(0.0f, 0.0f, 1.0f);
+    }
+    // Each build gets its own copy, made before the clock starts.
+    std::vector<Photon> copy = photons;
+    const TimePoint build_start = now();
+    const PhotonMap built(std::move(copy));
+    const double build = seconds_since(build_start);
+    std::printf("PhotonMap of %zu photons: built in %.2f s (%zu shards); cancelled after:\n",
+                photons.size(), build, built.shard_count());
+    for (const double fraction : {0.1, 0.3, 0.5, 0.7, 0.9}) {
+        copy = photons;
+        cancel_after_seconds(fraction * build, [&](Progress* progress) {
+            const PhotonMap map(std::move(copy), 1.0f, progress);
+        });
+    }
     return 0;
 }

@@ -1,12 +1,14 @@
 #include "photon/photon_map.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
 #include <nanoflann.hpp>
 
 #include "util/error.h"
+#include "util/parallel.h"
 
 namespace shgi {
 namespace {
@@ -32,6 +34,8 @@ using KdTree = nanoflann::KDTreeSingleIndexAdaptor<
 
 // Photons per k-d tree leaf: nanoflann's default, a good balance of tree depth and leaf scans.
 constexpr size_t kLeafSize = 10;
+// Photons per shard (one nanoflann tree): its build takes ~0.1 s, the longest a cancel waits.
+constexpr size_t kShardPhotons = size_t(1) << 18;
 
 // The k nearest photons strictly within a radius, sorted by distance: a nanoflann result set
 // whose search radius shrinks to the k-th distance once k are found.
@@ -47,11 +51,14 @@ class NearestWithin {
         distances_squared_.reserve(expected);
     }
 
+    // Photon index of the tree's point 0: results are map indices.
+    void set_first(uint32_t first) { first_ = first; }
     bool full() const { return indices_.size() == capacity_; }
     float worstDist() const { return full() ? distances_squared_.back() : radius_squared_; }
 
-    bool addPoint(float distance_squared, uint32_t index) {
+    bool addPoint(float distance_squared, uint32_t local_index) {
         if (distance_squared >= worstDist()) return true;  // keep searching
+        const uint32_t index = first_ + local_index;
         if (full()) {
             indices_.pop_back();
             distances_squared_.pop_back();
@@ -75,19 +82,95 @@ class NearestWithin {
   private:
     size_t capacity_;
     float radius_squared_;
+    uint32_t first_ = 0;
     std::vector<uint32_t> indices_;
     std::vector<float> distances_squared_;
+};
+
+// One nanoflann tree over the photons [first, first + cloud.count) of the map.
+struct Shard {
+    PhotonCloud cloud;
+    uint32_t first = 0;
+    std::unique_ptr<KdTree> tree;
+};
+
+// The median splits above the shards. A leaf names its shard; an inner node's first child holds
+// the photons whose coordinate along `axis` is <= split, its second those >= split.
+struct SplitNode {
+    int axis = 0;
+    float split = 0.0f;
+    std::array<uint32_t, 2> children{};
+    int32_t shard = -1;
 };
 
 }  // namespace
 
 struct PhotonMap::Index {
-    PhotonCloud cloud;  // must outlive the tree, which keeps a reference to it
-    KdTree tree;
+    std::vector<SplitNode> nodes;  // nodes[0] is the root
+    std::vector<Shard> shards;     // not resized once the trees, which refer to clouds, exist
 
-    explicit Index(const std::vector<Photon>& photons)
-        : cloud{photons.data(), photons.size()},
-          tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(kLeafSize)) {}
+    // Splits photons [begin, end) at the median of their widest axis until the parts fit a
+    // shard; returns the node. Polls cancel before each split (one nth_element over 10^7
+    // photons takes ~0.1 s).
+    uint32_t split(Photon* photons, size_t begin, size_t end, const Progress* progress) {
+        throw_if_cancelled(progress);
+        const uint32_t node = uint32_t(nodes.size());
+        nodes.emplace_back();
+        if (end - begin <= kShardPhotons) {
+            nodes[node].shard = int32_t(shards.size());
+            shards.push_back(Shard{PhotonCloud{photons + begin, end - begin}, uint32_t(begin), {}});
+            return node;
+        }
+        vec3 lo(std::numeric_limits<float>::infinity()), hi(-lo);
+        for (size_t i = begin; i < end; ++i) {
+            lo = glm::min(lo, photons[i].position);
+            hi = glm::max(hi, photons[i].position);
+        }
+        const vec3 extent = hi - lo;
+        const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0
+                         : extent.y >= extent.z                      ? 1
+                                                                     : 2;
+        const size_t middle = begin + (end - begin) / 2;
+        std::nth_element(photons + begin, photons + middle, photons + end,
+                         [axis](const Photon& a, const Photon& b) {
+                             return a.position[axis] < b.position[axis];
+                         });
+        const float at = photons[middle].position[axis];
+        const uint32_t first = split(photons, begin, middle, progress);
+        const uint32_t second = split(photons, middle, end, progress);
+        SplitNode& inner = nodes[node];  // after the recursion: nodes has grown
+        inner.axis = axis;
+        inner.split = at;
+        inner.children = {first, second};
+        return node;
+    }
+
+    // One tree per shard, in parallel (each is built from its own photons only, so the trees do
+    // not depend on the thread count).
+    void build_trees(Progress* progress) {
+        parallel_for(0, shards.size(), 1, [&](uint64_t begin, uint64_t end) {
+            for (uint64_t s = begin; s < end; ++s)
+                shards[s].tree = std::make_unique<KdTree>(
+                    3, shards[s].cloud, nanoflann::KDTreeSingleIndexAdaptorParams(kLeafSize));
+        }, progress);
+    }
+
+    // Adds to `nearest` the photons of node's subtree that are closer than its current worst
+    // distance: the near side first, the far side only when its half-space is closer than that.
+    template <typename ResultSet>
+    void search(uint32_t node, const float query[3], ResultSet& nearest) const {
+        const SplitNode& at = nodes[node];
+        if (at.shard >= 0) {
+            const Shard& shard = shards[size_t(at.shard)];
+            nearest.set_first(shard.first);
+            shard.tree->findNeighbors(nearest, query, nanoflann::SearchParams());
+            return;
+        }
+        const float offset = query[at.axis] - at.split;
+        const int near = offset < 0.0f ? 0 : 1;
+        search(at.children[near], query, nearest);
+        if (offset * offset < nearest.worstDist()) search(at.children[1 - near], query, nearest);
+    }
 };
 
 PhotonMap::PhotonMap() = default;
@@ -95,7 +178,7 @@ PhotonMap::~PhotonMap() = default;
 PhotonMap::PhotonMap(PhotonMap&&) noexcept = default;
 PhotonMap& PhotonMap::operator=(PhotonMap&&) noexcept = default;
 
-PhotonMap::PhotonMap(std::vector<Photon> photons, float power_scale)
+PhotonMap::PhotonMap(std::vector<Photon> photons, float power_scale, Progress* progress)
     : photons_(std::move(photons)), power_scale_(power_scale) {
     if (!std::isfinite(power_scale) || power_scale < 0.0f)
         throw InvalidArgument(format_message("PhotonMap: power_scale is ", power_scale,
@@ -109,8 +192,14 @@ PhotonMap::PhotonMap(std::vector<Photon> photons, float power_scale)
             throw InvalidArgument(format_message("PhotonMap: photons[", i, "].position is (", p.x,
                                                  ", ", p.y, ", ", p.z, "); it must be finite"));
     }
-    if (!photons_.empty()) index_ = std::make_unique<Index>(photons_);
+    if (photons_.empty()) return;
+    auto index = std::make_unique<Index>();
+    index->split(photons_.data(), 0, photons_.size(), progress);
+    index->build_trees(progress);
+    index_ = std::move(index);
 }
+
+size_t PhotonMap::shard_count() const { return index_ ? index_->shards.size() : 0; }
 
 vec3 PhotonMap::irradiance(const vec3& p, const vec3& n, int k, float max_radius) const {
     if (k < 1)
@@ -123,7 +212,7 @@ vec3 PhotonMap::irradiance(const vec3& p, const vec3& n, int k, float max_radius
     NearestWithin nearest(size_t(k), max_radius * max_radius,
                           std::min(size_t(k), photons_.size()));
     const float query[3] = {p.x, p.y, p.z};
-    index_->tree.findNeighbors(nearest, query, nanoflann::SearchParams());
+    index_->search(0, query, nearest);
     vec3 power(0.0f);
     for (uint32_t index : nearest.indices()) {
         const Photon& photon = photons_[index];

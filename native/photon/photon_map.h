@@ -6,6 +6,13 @@
 // photons were gathered from. Used for caustics (the caustic map) and in tests.
 //
 // `power_scale` multiplies every photon's power (1 / passes when several passes are merged).
+//
+// Large maps (the caustic map gathers every pass's photons, 10^7 and more) are built in shards:
+// a median split along the widest axis, repeated until each part holds at most 2^18 photons,
+// then one nanoflann tree per part, built in parallel. A build polls cancel between the splits
+// and the shards (nanoflann's own build cannot be interrupted: one tree of 10^7 photons takes ~5 s
+// on one core), and a query visits the parts nearest first, skipping those farther than the k-th
+// photon found so far.
 #pragma once
 
 #include <memory>
@@ -13,20 +20,24 @@
 
 #include "photon/photon.h"
 #include "util/math.h"
+#include "util/progress.h"
 
 namespace shgi {
 
 class PhotonMap {
   public:
     PhotonMap();
-    // Builds the k-d tree. Throws InvalidArgument for a negative or non-finite power_scale or a
-    // non-finite photon position.
-    explicit PhotonMap(std::vector<Photon> photons, float power_scale = 1.0f);
+    // Builds the k-d tree (the photons are reordered by it). Throws InvalidArgument for a
+    // negative or non-finite power_scale or a non-finite photon position; Cancelled when
+    // `progress` is cancelled while it builds.
+    explicit PhotonMap(std::vector<Photon> photons, float power_scale = 1.0f,
+                       Progress* progress = nullptr);
     ~PhotonMap();
     PhotonMap(PhotonMap&&) noexcept;
     PhotonMap& operator=(PhotonMap&&) noexcept;
 
     size_t size() const { return photons_.size(); }
+    size_t shard_count() const;  // nanoflann trees the map is split into (0 when empty)
     const std::vector<Photon>& photons() const { return photons_; }
 
     // Irradiance (W/m^2) at p on a surface with unit normal n from the k nearest photons.

@@ -4,9 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "util/error.h"
+#include "util/progress.h"
 #include "util/rng.h"
 
 namespace shgi {
@@ -90,6 +94,67 @@ TEST(PhotonMap, DiskRadiusRule) {
     photons[0].normal = -kUp;
     const PhotonMap flipped(photons, scale);
     EXPECT_NEAR(flipped.irradiance(p, kUp, 3, 1.0f).x, scale * 6.0f / (kPi * 0.09f), 1e-4f);
+}
+
+// The k nearest photons within max_radius by brute force, the way PhotonMap::irradiance counts
+// them (facing n, disk of the k-th nearest or max_radius).
+vec3 brute_force_irradiance(const std::vector<Photon>& photons, const vec3& p, const vec3& n, int k,
+                            float max_radius) {
+    std::vector<std::pair<float, size_t>> within;
+    for (size_t i = 0; i < photons.size(); ++i) {
+        const vec3 d = photons[i].position - p;
+        const float distance_squared = glm::dot(d, d);
+        if (distance_squared < max_radius * max_radius) within.emplace_back(distance_squared, i);
+    }
+    const size_t count = std::min(within.size(), size_t(k));
+    std::partial_sort(within.begin(), within.begin() + ptrdiff_t(count), within.end());
+    vec3 power(0.0f);
+    for (size_t j = 0; j < count; ++j)
+        if (glm::dot(photons[within[j].second].normal, n) > 0.0f)
+            power += photons[within[j].second].power;
+    const float radius_squared =
+        count == size_t(k) ? within[count - 1].first : max_radius * max_radius;
+    return power / (kPi * radius_squared);
+}
+
+// A map past one shard (2^18 photons) is split at medians into several k-d trees; a query that
+// straddles a split must still find the exact k nearest, as one tree over all photons would.
+// Photons on both sides of a plane with random normals and powers, queried on a grid that crosses
+// the splits, against a brute-force search.
+TEST(PhotonMap, ShardedMapFindsTheExactNearest) {
+    Pcg32 rng(9, 0);
+    std::vector<Photon> photons(600000);
+    for (Photon& photon : photons) {
+        const vec2 u = rng.next_vec2();
+        photon = photon_at(vec3(2.0f * u - 1.0f, 0.02f * rng.next_float()), 1.0f + rng.next_float(),
+                           rng.next_float() < 0.5f ? kUp : -kUp);
+    }
+    const PhotonMap map(photons);
+    ASSERT_GE(map.shard_count(), 4u);
+    for (int y = 0; y < 5; ++y)
+        for (int x = 0; x < 5; ++x) {
+            // Through 0 on both axes, where the first median splits fall.
+            const vec3 p(-0.5f + 0.25f * x, -0.5f + 0.25f * y, 0.01f);
+            for (int k : {1, 50, 400}) {
+                const vec3 expected = brute_force_irradiance(photons, p, kUp, k, 0.5f);
+                const vec3 got = map.irradiance(p, kUp, k, 0.5f);
+                EXPECT_NEAR(got.x, expected.x, 1e-5f * expected.x) << x << "," << y << " k " << k;
+            }
+        }
+    // The radius cap still holds across shards: nothing beyond 1e-4 m of an empty spot.
+    EXPECT_EQ(map.irradiance(vec3(5.0f, 5.0f, 0.0f), kUp, 50, 1e-4f), vec3(0.0f));
+}
+
+// The build of a large map stops at a cancel: the map is never half built.
+TEST(PhotonMap, BuildStopsOnCancel) {
+    std::vector<Photon> photons = uniform_plane(600000, 1.0f, kUp, 3);
+    Progress progress;
+    progress.cancel();
+    EXPECT_THROW(PhotonMap(photons, 1.0f, &progress), Cancelled);
+    // A small map builds before any poll could matter; an uncancelled one builds fully.
+    Progress fresh;
+    const PhotonMap map(std::move(photons), 1.0f, &fresh);
+    EXPECT_EQ(map.size(), 600000u);
 }
 
 TEST(PhotonMap, EmptyAndMovedMaps) {
