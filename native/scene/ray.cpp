@@ -2,13 +2,13 @@
 
 namespace shgi {
 
-const char* ray_problem(const Ray& ray) {
+const char* ray_problem(const Ray& ray, const RayLimits& limits) {
     if (!is_finite(ray.origin)) return "origin is not finite";
     if (!is_finite(ray.direction)) return "direction is not finite";
-    if (max_abs_component(ray.origin) > kMaxRayComponent)
-        return "origin exceeds 1e18 in magnitude (beyond Embree's range)";
-    if (max_abs_component(ray.direction) > kMaxRayComponent)
-        return "direction exceeds 1e18 in magnitude (beyond Embree's range)";
+    if (max_abs_component(ray.origin) > limits.origin)
+        return "origin exceeds the scene's ray range (beyond Embree's)";
+    if (max_abs_component(ray.direction) > limits.direction)
+        return "direction exceeds the scene's ray range (beyond Embree's)";
     if (ray.direction.x == 0.0f && ray.direction.y == 0.0f && ray.direction.z == 0.0f)
         return "direction is zero";
     // tmax may be +inf (an unbounded ray) but never NaN; tmin must be finite.

@@ -31,25 +31,33 @@ inline constexpr float kMaxCoordinate = 1e15f;
 // Embree is built with assertions and aborts the process on a ray beyond it, finite or not.
 inline constexpr float kMaxRayComponent = 1e18f;
 
-// True if the ray may be traced: finite origin and direction within kMaxRayComponent, non-zero
+// The largest |component| of origin and direction a scene traces. Embree checks the bound again
+// after mapping a ray into each instance's object space, where an instance that scales its mesh
+// down magnifies the ray: a committed Scene lowers the limits so that every instance's
+// object-space ray stays within kMaxRayComponent (Scene::ray_limits).
+struct RayLimits {
+    float origin = kMaxRayComponent;
+    float direction = kMaxRayComponent;
+};
+
+// True if the ray may be traced: finite origin and direction within the limits, non-zero
 // direction, 0 <= tmin <= tmax (tmax may be +inf), tmin finite. Every traced ray passes here, so
-// it is inline and branch-free: each comparison is false for NaN, |x| <= kMaxRayComponent also
-// for ±inf, and the results are combined with & rather than &&.
-inline bool is_valid_ray(const Ray& ray) {
+// it is inline and branch-free: each comparison is false for NaN, |x| <= limit also for ±inf,
+// and the results are combined with & rather than &&.
+inline bool is_valid_ray(const Ray& ray, const RayLimits& limits = RayLimits{}) {
     const vec3 o = ray.origin, d = ray.direction;
-    const bool origin_ok = (std::fabs(o.x) <= kMaxRayComponent) &
-                           (std::fabs(o.y) <= kMaxRayComponent) &
-                           (std::fabs(o.z) <= kMaxRayComponent);
-    const bool direction_ok = (std::fabs(d.x) <= kMaxRayComponent) &
-                              (std::fabs(d.y) <= kMaxRayComponent) &
-                              (std::fabs(d.z) <= kMaxRayComponent) &
+    const float lo = limits.origin, ld = limits.direction;
+    const bool origin_ok = (std::fabs(o.x) <= lo) & (std::fabs(o.y) <= lo) &
+                           (std::fabs(o.z) <= lo);
+    const bool direction_ok = (std::fabs(d.x) <= ld) & (std::fabs(d.y) <= ld) &
+                              (std::fabs(d.z) <= ld) &
                               ((d.x != 0.0f) | (d.y != 0.0f) | (d.z != 0.0f));
     const bool interval_ok = (ray.tmin >= 0.0f) & (ray.tmin <= std::numeric_limits<float>::max()) &
                              (ray.tmax >= ray.tmin);
     return origin_ok & direction_ok & interval_ok;
 }
 // Why is_valid_ray rejects `ray` ("direction is zero", ...), or nullptr for a valid ray.
-const char* ray_problem(const Ray& ray);
+const char* ray_problem(const Ray& ray, const RayLimits& limits = RayLimits{});
 
 // A hint for batches of rays: Coherent rays (a tile's camera rays, shadow rays from neighbouring
 // pixels to one light) start close together and point alike, so Embree traverses them as packets.

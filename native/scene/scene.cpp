@@ -33,20 +33,74 @@ std::string instance_label(const std::vector<Instance>& instances, size_t i) {
 }
 
 // `name` is a const char* so that the per-ray call of a valid ray builds no string.
-void check_ray(const Ray& ray, const char* name) {
-    if (is_valid_ray(ray)) return;  // the branch-free test; ray_problem only to name the fault
-    const char* problem = ray_problem(ray);
-    throw InvalidArgument(format_message(name, ": ", problem, " (origin ",
-                                         to_string(ray.origin), ", direction ",
-                                         to_string(ray.direction), ", tmin ", ray.tmin,
-                                         ", tmax ", ray.tmax, ")"));
+void check_ray(const Ray& ray, const char* name, const RayLimits& limits,
+               const std::string& limit_reason) {
+    if (is_valid_ray(ray, limits)) return;  // branch-free; ray_problem only to name the fault
+    const char* problem = ray_problem(ray, limits);
+    const bool out_of_range =
+        is_finite(ray.origin) && is_finite(ray.direction) &&
+        (max_abs_component(ray.origin) > limits.origin ||
+         max_abs_component(ray.direction) > limits.direction);
+    const std::string range =
+        out_of_range ? format_message("; this scene traces origins up to ", limits.origin,
+                                      " and directions up to ", limits.direction,
+                                      " per component", limit_reason)
+                     : std::string();
+    throw InvalidArgument(format_message(name, ": ", problem, " (origin ", to_string(ray.origin),
+                                         ", direction ", to_string(ray.direction), ", tmin ",
+                                         ray.tmin, ", tmax ", ray.tmax, ")", range));
 }
 
 // Validates every ray before any is traced, so the message names the first bad one whatever
 // the chunking.
-void check_rays(const std::vector<Ray>& rays) {
+void check_rays(const std::vector<Ray>& rays, const RayLimits& limits,
+                const std::string& limit_reason) {
     for (size_t i = 0; i < rays.size(); ++i)
-        if (!is_valid_ray(rays[i])) check_ray(rays[i], format_message("rays[", i, "]").c_str());
+        if (!is_valid_ray(rays[i], limits))
+            check_ray(rays[i], format_message("rays[", i, "]").c_str(), limits, limit_reason);
+}
+
+// The ray limits of a scene and the instance that sets the origin's.
+struct SceneRayLimits {
+    RayLimits limits;
+    size_t instance = 0;
+    double magnification = 1.0;  // that instance's
+    bool set_by_instance = false;
+};
+
+// Embree maps a ray into an instance's object space as M^-1 (o - t) and M^-1 d (M the linear
+// part of world_from_object, t its translation), then checks it against its range again. Per
+// component |(M^-1 x)_j| <= K max_k |x_k|, K the largest row sum of |M^-1| (the magnification):
+// origins within kMaxRayComponent / K - max|t| and directions within kMaxRayComponent / K stay
+// in range. Instances of meshes without triangles are not in Embree's scene and do not count.
+SceneRayLimits ray_limits_of(const std::vector<Instance>& instances,
+                             const std::vector<Mesh>& meshes) {
+    SceneRayLimits result;
+    double origin = kMaxRayComponent, direction = kMaxRayComponent;
+    for (size_t i = 0; i < instances.size(); ++i) {
+        if (meshes[instances[i].mesh_id].triangles.empty()) continue;
+        const glm::dmat4 transform(instances[i].world_from_object);
+        const glm::dmat3 inverse = glm::inverse(glm::dmat3(transform));
+        double magnification = 0.0;
+        for (int row = 0; row < 3; ++row)
+            magnification = std::max(magnification, std::fabs(inverse[0][row]) +
+                                                         std::fabs(inverse[1][row]) +
+                                                         std::fabs(inverse[2][row]));
+        if (!std::isfinite(magnification)) magnification = std::numeric_limits<double>::max();
+        const double reach = std::max({std::fabs(transform[3].x), std::fabs(transform[3].y),
+                                       std::fabs(transform[3].z)});
+        const double instance_origin = kMaxRayComponent / magnification - reach;
+        direction = std::min(direction, kMaxRayComponent / magnification);
+        if (instance_origin < origin) {
+            origin = instance_origin;
+            result.instance = i;
+            result.magnification = magnification;
+            result.set_by_instance = true;
+        }
+    }
+    result.limits.origin = float(std::max(origin, 0.0));
+    result.limits.direction = float(direction);
+    return result;
 }
 
 // det(M) * M^-T, whose columns are cross products of M's columns; times sign(det) so that a
@@ -196,6 +250,29 @@ Bounds3 Scene::compute_bounds() const {
     return bounds;
 }
 
+void Scene::set_ray_limits() {
+    const SceneRayLimits found = ray_limits_of(instances_, meshes_);
+    ray_limits_ = found.limits;
+    ray_limit_reason_.clear();
+    if (!found.set_by_instance || !(found.magnification > 1.0)) return;
+    const std::string label = instance_label(instances_, found.instance);
+    ray_limit_reason_ = format_message(" (", label, " shrinks its mesh by up to ",
+                                       found.magnification, "x, and Embree's range of ",
+                                       kMaxRayComponent, " applies in the mesh's coordinates)");
+    // Rays leave the scene's own surfaces, which must lie within the range (and directions of
+    // length 1 with them: their limit is at least the origins').
+    const float extent = bounds_.empty() ? 0.0f
+                                         : std::max(max_abs_component(bounds_.lower),
+                                                    max_abs_component(bounds_.upper));
+    if (ray_limits_.origin < std::max(extent, 1.0f))
+        throw InvalidArgument(format_message(
+            label, ": its transform shrinks the mesh by up to ", found.magnification,
+            "x, so rays from the scene's extent (", extent, " m) would pass Embree's range of ",
+            kMaxRayComponent, " in the mesh's own coordinates, where Debian's Embree aborts; "
+            "apply the scale to the mesh's vertices (Blender: Apply Scale) or move the object "
+            "nearer the origin"));
+}
+
 void Scene::gather_emissive() {
     emissive_.clear();
     for (size_t i = 0; i < instances_.size(); ++i) {
@@ -227,6 +304,7 @@ void Scene::commit(const CommitSettings& settings, Progress* progress) {
     if (progress) progress->begin_stage("checking scene", 0.0f, 0.05f);
     check_references();
     bounds_ = compute_bounds();
+    set_ray_limits();
     const uint64_t budget = resolve_budget(settings.memory_budget_bytes);
     const uint64_t estimate = estimate_bvh_bytes(meshes_, instances_);
     if (estimate > budget)
@@ -304,7 +382,7 @@ void Scene::finish_hit(Hit& hit) const {
 
 Hit Scene::intersect(const Ray& ray) const {
     require_committed("intersect");
-    check_ray(ray, "ray");
+    check_ray(ray, "ray", ray_limits_, ray_limit_reason_);
     Hit hit;
     if (empty()) return hit;
     embree_->intersect(&ray, &hit, 1);
@@ -314,7 +392,7 @@ Hit Scene::intersect(const Ray& ray) const {
 
 bool Scene::occluded(const Ray& ray) const {
     require_committed("occluded");
-    check_ray(ray, "ray");
+    check_ray(ray, "ray", ray_limits_, ray_limit_reason_);
     if (empty()) return false;
     uint8_t result = 0;
     embree_->occluded(&ray, &result, 1);
@@ -324,7 +402,7 @@ bool Scene::occluded(const Ray& ray) const {
 void Scene::intersect(const std::vector<Ray>& rays, std::vector<Hit>& hits,
                       Progress* progress, RayCoherence coherence) const {
     require_committed("intersect");
-    check_rays(rays);
+    check_rays(rays, ray_limits_, ray_limit_reason_);
     hits.assign(rays.size(), Hit{});
     if (empty()) {
         throw_if_cancelled(progress);
@@ -342,7 +420,7 @@ void Scene::intersect(const std::vector<Ray>& rays, std::vector<Hit>& hits,
 void Scene::occluded(const std::vector<Ray>& rays, std::vector<uint8_t>& occluded,
                      Progress* progress, RayCoherence coherence) const {
     require_committed("occluded");
-    check_rays(rays);
+    check_rays(rays, ray_limits_, ray_limit_reason_);
     occluded.assign(rays.size(), 0);
     if (empty()) {
         throw_if_cancelled(progress);

@@ -139,7 +139,8 @@ class Scene {
     const std::vector<EmissiveTriangle>& emissive_triangles() const { return emissive_; }
 
     // --- queries (scene must be committed: otherwise InvalidArgument "call commit() first") ---
-    // A ray failing is_valid_ray throws InvalidArgument naming the ray (index) and its values.
+    // A ray failing is_valid_ray(ray, ray_limits()) throws InvalidArgument naming the ray
+    // (index), its values and the limits.
     Hit intersect(const Ray& ray) const;
     bool occluded(const Ray& ray) const;
     // Batches: hits/occluded are resized to rays.size(). All rays are validated before any is
@@ -154,12 +155,17 @@ class Scene {
     SurfacePoint surface_point(const Ray& ray, const Hit& hit) const;
 
     static constexpr uint64_t kRaysPerChunk = 4096;
+    // The origin and direction components the committed scene traces: kMaxRayComponent, less
+    // where an instance shrinks its mesh (scene/ray.h, RayLimits). commit() refuses an instance
+    // that would leave the scene's own surfaces out of range.
+    const RayLimits& ray_limits() const { return ray_limits_; }
 
   private:
     void invalidate();
     void require_committed(const char* query) const;
     void check_references();
     Bounds3 compute_bounds() const;
+    void set_ray_limits();  // from the instances and bounds_
     void gather_emissive();
     void finish_hit(Hit& hit) const;
 
@@ -179,6 +185,8 @@ class Scene {
     // Per instance, world_from_object's cofactor times sign(det): maps object normals to world.
     std::vector<mat3> normal_from_object_;
     Bounds3 bounds_;  // world bounds of the instanced triangles, cached at commit
+    RayLimits ray_limits_;
+    std::string ray_limit_reason_;  // why ray_limits_ is below kMaxRayComponent, for messages
     uint64_t bvh_bytes_ = 0;
     std::unique_ptr<EmbreeScene> embree_;
 };

@@ -369,6 +369,70 @@ def test_bad_rays_raise_value_error():
         scene.occluded(origins, directions, tmin=2.0, tmax=1.0)
 
 
+# An instance that shrinks its mesh magnifies rays in its own coordinates, where Debian's Embree
+# checks them again and aborts the process past 1.8e18. Each case used to abort (SIGABRT): a
+# child process runs them, so a regression fails this test instead of killing the run.
+SHRUNK_INSTANCE_CHILD = r"""
+import numpy as np, shgi
+
+def triangle_scene(transform):
+    scene = shgi.Scene()
+    mesh = scene.add_mesh(positions=np.array([[-1, -1, 0], [1, -1, 0], [0, 1, 0]], np.float32),
+                          triangles=np.array([[0, 1, 2]]))
+    scene.add_instance(mesh, transform, name="Shrunk")
+    return scene
+
+def refused(call, *fragments):
+    try:
+        call()
+    except ValueError as error:
+        for fragment in fragments:
+            assert fragment in str(error), (fragment, str(error))
+        return
+    raise AssertionError("no ValueError")
+
+# A z scale of 1e-20: refused at commit, naming the instance and the fix.
+flat = triangle_scene(np.diag([1.0, 1.0, 1e-20, 1.0]))
+refused(flat.commit, "instance 0 'Shrunk': its transform shrinks the mesh by up to 1e+20x",
+        "Apply Scale")
+# Scale 1e-4 placed 9e14 m out: rays from the scene's own extent would be out of range.
+far = np.diag([1e-4, 1e-4, 1e-4, 1.0])
+far[0, 3] = 9e14
+refused(triangle_scene(far).commit, "shrinks the mesh by up to 10000x")
+# Scale 0.1: commits, and a ray from 5e17 m (within 1e18, but 5e18 in the mesh's coordinates)
+# is refused, naming the scene's lower limit and the instance that sets it.
+small = triangle_scene(np.diag([0.1, 0.1, 0.1, 1.0]))
+small.commit()
+assert small.intersect(np.array([[0, 0, 1]], np.float32),
+                       np.array([[0, 0, -1]], np.float32))["hit"][0]
+refused(lambda: small.intersect(np.array([[5e17, 0, 0]], np.float32),
+                                np.array([[-1, 0, 0]], np.float32)),
+        "rays[0]: origin exceeds the scene's ray range", "origins up to 1e+17",
+        "instance 0 'Shrunk' shrinks its mesh by up to 10x")
+# The renderers' own rays: an orthographic camera 9e14 m above an object scaled 1e-4.
+tiny = triangle_scene(np.diag([1e-4, 1e-4, 1e-4, 1.0]))
+tiny.add_light(shgi.Light(type=shgi.LightType.SUN))
+camera = shgi.Camera(resolution_x=4, resolution_y=4, type=shgi.CameraType.ORTHOGRAPHIC,
+                     ortho_scale=1e-4, clip_end=1e15)
+above = np.eye(4)
+above[2, 3] = 9e14
+camera.world_from_camera = above
+tiny.set_camera(camera)
+tiny.commit()
+refused(lambda: shgi.render_path_traced(tiny, shgi.PathTracerSettings(samples=1)),
+        "origin exceeds the scene's ray range", "origins up to 1e+14")
+print("ok")
+"""
+
+
+def test_rays_out_of_range_in_a_shrunk_instance_raise_instead_of_aborting(build_python_dir):
+    env = dict(os.environ, PYTHONPATH=str(build_python_dir))
+    result = subprocess.run([sys.executable, "-c", SHRUNK_INSTANCE_CHILD], capture_output=True,
+                            text=True, env=env, timeout=120)
+    assert result.returncode == 0, (result.returncode, result.stdout, result.stderr)
+    assert result.stdout.strip() == "ok"
+
+
 def test_queries_before_commit_raise():
     positions, triangles = quad_arrays()
     scene = shgi.Scene()

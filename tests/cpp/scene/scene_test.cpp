@@ -339,6 +339,53 @@ TEST(SceneValidation, InstanceBeyondEmbreeRangeIsRejectedAtCommit) {
                     "instance 0 'Huge': world-space bounds");
 }
 
+// Embree checks a ray again in each instance's own coordinates (and Debian's Embree aborts past
+// 1.8e18 there): an instance that shrinks its mesh lowers the range the scene traces, and one
+// that would put rays from the scene's own surfaces out of range is refused at commit.
+TEST(SceneValidation, ShrunkInstanceLowersTheRayRange) {
+    Scene small;
+    small.add_instance(small.add_mesh(unit_quad()), glm::scale(mat4(1.0f), vec3(0.1f)), "Small");
+    small.commit();
+    EXPECT_NEAR(small.ray_limits().origin, 1e17f, 1e12f);
+    EXPECT_NEAR(small.ray_limits().direction, 1e17f, 1e12f);
+    // Within the lowered range: traced (9e17 in the mesh's coordinates).
+    EXPECT_FALSE(small.intersect(make_ray(vec3(9e16f, 0.05f, 0.05f), vec3(0, 0, 1))).valid());
+    expect_contains(rejection<InvalidArgument>([&] {
+                        small.intersect(make_ray(vec3(5e17f, 0, 0), vec3(-1, 0, 0)));
+                    }),
+                    "ray: origin exceeds the scene's ray range");
+    const std::vector<Ray> rays(3, make_ray(vec3(0.05f, 0.05f, 1), vec3(0, 2e17f, -1)));
+    std::vector<Hit> hits;
+    expect_contains(rejection<InvalidArgument>([&] { small.intersect(rays, hits); }),
+                    "rays[0]: direction exceeds the scene's ray range");
+    expect_contains(rejection<InvalidArgument>([&] { small.intersect(rays, hits); }),
+                    "instance 0 'Small' shrinks its mesh by up to 10x");
+    // The translation counts too: origins are moved by it before the inverse scale.
+    Scene moved;
+    const mat4 transform =
+        glm::scale(glm::translate(mat4(1.0f), vec3(0, 0, 1e15f)), vec3(0.01f));
+    moved.add_instance(moved.add_mesh(unit_quad()), transform);
+    moved.commit();
+    EXPECT_NEAR(moved.ray_limits().origin, 1e16f - 1e15f, 1e11f);
+    EXPECT_NEAR(moved.ray_limits().direction, 1e16f, 1e11f);
+    // Scaling up, or a mesh without triangles, leaves Embree's own range.
+    Scene large;
+    large.add_instance(large.add_mesh(unit_quad()), glm::scale(mat4(1.0f), vec3(10.0f)));
+    large.add_instance(large.add_mesh(Mesh{}), glm::scale(mat4(1.0f), vec3(1e-30f)));
+    large.commit();
+    EXPECT_EQ(large.ray_limits().origin, kMaxRayComponent);
+    EXPECT_EQ(large.ray_limits().direction, kMaxRayComponent);
+    // One axis scaled by 1e-20 (its determinant is not "singular" relative to its columns):
+    // a ray from anywhere in the scene would leave Embree's range in the mesh's coordinates.
+    Scene flat;
+    flat.add_instance(flat.add_mesh(unit_quad()), glm::scale(mat4(1.0f), vec3(1, 1, 1e-20f)),
+                      "Flat");
+    const std::string message = rejection<InvalidArgument>([&] { flat.commit(); });
+    expect_contains(message, "instance 0 'Flat': its transform shrinks the mesh by up to 1e+20x");
+    expect_contains(message, "Apply Scale");
+    EXPECT_FALSE(flat.committed());
+}
+
 TEST(SceneValidation, EachBadRayHasItsOwnMessage) {
     const Scene scene = quad_scene();
     const auto bad = [&](const Ray& ray) {
@@ -350,9 +397,12 @@ TEST(SceneValidation, EachBadRayHasItsOwnMessage) {
     expect_contains(bad(make_ray(vec3(0), vec3(0))), "ray: direction is zero");
     // Finite but beyond Embree's FLT_LARGE: Debian's Embree asserts on these and aborts.
     expect_contains(bad(make_ray(vec3(2e18f, 0, 1), vec3(0, 0, -1))),
-                    "ray: origin exceeds 1e18 in magnitude");
+                    "ray: origin exceeds the scene's ray range");
+    expect_contains(bad(make_ray(vec3(2e18f, 0, 1), vec3(0, 0, -1))),
+                    "; this scene traces origins up to 1e+18 and directions up to 1e+18 per "
+                    "component");
     expect_contains(bad(make_ray(vec3(0, 0, 1), vec3(0, -3e18f, 0))),
-                    "ray: direction exceeds 1e18 in magnitude");
+                    "ray: direction exceeds the scene's ray range");
     expect_contains(bad(make_ray(vec3(0), vec3(0, 0, 1), -1.0f)),
                     "ray: tmin must be finite and >= 0");
     expect_contains(bad(make_ray(vec3(0), vec3(0, 0, 1), 2.0f, 1.0f)),
@@ -393,6 +443,16 @@ TEST(SceneValidation, FastRayTestAgreesWithTheNamedProblem) {
         ++checked;
         valid += fast ? 1 : 0;
     };
+    const RayLimits lowered{1e3f, 10.0f};
+    const auto agree_lowered = [&](const Ray& ray) {
+        EXPECT_EQ(is_valid_ray(ray, lowered), ray_problem(ray, lowered) == nullptr)
+            << "origin " << ray.origin.x << " direction " << ray.direction.y;
+    };
+    for (float a : {999.0f, 1e3f, 1001.0f, 9.0f, 10.0f, 11.0f, kNaN})
+        for (float b : {0.0f, 1.0f, -1e3f, -1e4f}) {
+            agree_lowered(make_ray(vec3(a, b, 0.0f), vec3(0, 0, 1)));
+            agree_lowered(make_ray(vec3(0.0f), vec3(b, a, 1.0f)));
+        }
     for (float a : values)
         for (float b : values) {
             agree(make_ray(vec3(a, 1.0f, b), vec3(0, 0, 1)));      // origin
