@@ -18,9 +18,6 @@ namespace {
 using glm::dvec2;
 using glm::dvec3;
 
-// Largest lightmap side accepted: 16384^2 texels already need tens of GB of samples; larger maps
-// must be baked in tiles.
-constexpr uint32_t kMaxResolution = 16384;
 constexpr uint32_t kMaxSamplesPerAxis = 16;
 
 // A UV triangle is degenerate when twice its area is below this fraction of its longest edge
@@ -30,7 +27,7 @@ constexpr double kMinRelativeUvArea = 1e-7;
 
 // Intersections of a triangle and a texel below this area (in texels) are clipping round-off
 // of triangles that merely touch the texel along an edge or at a corner: coordinates up to
-// kMaxResolution texels carry ~1e-12 absolute error in double.
+// kMaxLightmapResolution texels carry ~1e-12 absolute error in double.
 constexpr double kMinClippedArea = 1e-9;
 
 // A texel counts as overlapping when its triangles' areas sum past 1 by more than this: the
@@ -49,9 +46,9 @@ std::string mesh_label(const Mesh& mesh) {
 
 void check_settings(const TexelRasterSettings& settings) {
     const auto check_side = [](const char* field, uint32_t value) {
-        if (value < 1 || value > kMaxResolution)
+        if (value < 1 || value > kMaxLightmapResolution)
             throw InvalidArgument(format_message("TexelRasterSettings.", field, " = ", value,
-                                                 " is outside [1, ", kMaxResolution,
+                                                 " is outside [1, ", kMaxLightmapResolution,
                                                  "]; bake larger lightmaps in tiles"));
     };
     check_side("width", settings.width);

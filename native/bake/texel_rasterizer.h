@@ -45,6 +45,10 @@
 
 namespace shgi {
 
+// Largest lightmap side accepted: 16384^2 texels already need tens of GB of samples; larger maps
+// must be baked in tiles.
+inline constexpr uint32_t kMaxLightmapResolution = 16384;
+
 struct TexelRasterSettings {
     uint32_t width = 256;   // texels along u
     uint32_t height = 256;  // texels along v

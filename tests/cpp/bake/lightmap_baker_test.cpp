@@ -361,6 +361,14 @@ TEST(LightmapBaker, RejectsBadInput) {
     expect_error<InvalidArgument>([&] { bake_lightmap(scene, other, nullptr, settings); },
                                   {"instance 5"});
     expect_error<InvalidArgument>([] { lightmap_shard_tiles(8, 8, 4, 2, 2); }, {"shard 2/2"});
+    // Sides past the rasterizer's: the tile count used to wrap in 32 bits (65536^2 one-texel
+    // tiles gave 0) and a 2^31-texel side listed 2^31 tiles (8 GB) before failing.
+    expect_error<InvalidArgument>([] { lightmap_tile_count(65536, 65536, 1); },
+                                  {"lightmap width = 65536 is outside [1, 16384]"});
+    expect_error<InvalidArgument>([] { lightmap_shard_tiles(1, 0x80000000u, 1, 0, 1); },
+                                  {"lightmap height = 2147483648"});
+    expect_error<InvalidArgument>([] { lightmap_tile_count(0, 8, 4); }, {"lightmap width = 0"});
+    EXPECT_EQ(lightmap_tile_count(16384, 16384, 1), 16384u * 16384u);
     expect_error<InvalidArgument>([] { lightmap_content_from_name("COLOR"); }, {"DIRECT_INDIRECT"});
 }
 
