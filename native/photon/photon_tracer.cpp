@@ -33,6 +33,9 @@ constexpr uint64_t kChunksPerBlock = 1024;
 // Stored photons may take at most this share of the machine's RAM; past it the trace stops
 // with OutOfMemory instead of the system killing the host.
 constexpr double kStoredPhotonsMemoryFraction = 0.5;
+// Growing the maps holds a map's old and new buffers at once: old, new and the other map's
+// buffer may take at most this share.
+constexpr double kGrowingPhotonsMemoryFraction = 0.75;
 // Photons copied between cancel polls when a map moves to a larger buffer: 48 MB, ~10 ms.
 constexpr uint64_t kPhotonsPerCopySlice = uint64_t(1) << 20;
 
@@ -287,13 +290,21 @@ class ChunkTracerPool {
 };
 
 // Capacity for `count` photons: exact for the first block (most passes have one), doubling after
-// (an exact fit per block would copy the whole map at every block). The photons move to the
-// larger buffer in slices with a cancel poll between them: the map can hold 10^8 photons, and
-// copying them all in one go would keep a cancel waiting for a second.
-void grow_to(std::vector<Photon>& photons, size_t count, const Progress* progress) {
-    if (count <= photons.capacity()) return;
+// (an exact fit per block would copy the whole map at every block), but not past `limit` photons
+// unless `count` is.
+size_t grown_capacity(size_t capacity, size_t count, size_t limit) {
+    if (count <= capacity) return capacity;
+    if (capacity == 0) return count;
+    return std::max(count, std::min(2 * capacity, limit));
+}
+
+// Moves the map to a buffer of `capacity` photons (when larger than its own) in slices with a
+// cancel poll between them: the map can hold 10^8 photons, and copying them all in one go would
+// keep a cancel waiting for a second.
+void grow_to(std::vector<Photon>& photons, size_t capacity, const Progress* progress) {
+    if (capacity <= photons.capacity()) return;
     std::vector<Photon> grown;
-    grown.reserve(std::max(count, 2 * photons.capacity()));
+    grown.reserve(capacity);
     advise_huge_pages(grown.data(), grown.capacity() * sizeof(Photon));
     for_each_slice(photons.size(), kPhotonsPerCopySlice, progress,
                    [&](uint64_t begin, uint64_t end) {
@@ -306,15 +317,34 @@ void grow_to(std::vector<Photon>& photons, size_t count, const Progress* progres
 // Appends the first `count` chunks' photons to the maps in chunk order, releasing them; polls
 // cancel before each chunk (the first writes to fresh pages of a block's ~10^7 photons take a
 // few hundred ms in all).
+// Growing a map holds its old and new buffers at once: when that would pass `transient_budget`
+// bytes for both maps, throws OutOfMemory (naming how far the pass got) before allocating.
 void merge(std::vector<ChunkResult>& chunks, uint64_t count, PhotonMaps& maps,
+           uint64_t transient_budget, const PhotonTracerSettings& settings, uint64_t traced,
            const Progress* progress) {
     size_t global_count = maps.global.size(), caustic_count = maps.caustic.size();
     for (uint64_t c = 0; c < count; ++c) {
         global_count += chunks[c].global.size();
         caustic_count += chunks[c].caustic.size();
     }
-    grow_to(maps.global, global_count, progress);
-    grow_to(maps.caustic, caustic_count, progress);
+    const size_t limit = size_t(transient_budget / sizeof(Photon) / 2);
+    const size_t global_capacity = grown_capacity(maps.global.capacity(), global_count, limit);
+    const size_t caustic_capacity = grown_capacity(maps.caustic.capacity(), caustic_count, limit);
+    // The global map grows first (beside the caustic map's old buffer), then the caustic map
+    // (beside the global map's new one).
+    const uint64_t old_global = maps.global.capacity(), old_caustic = maps.caustic.capacity();
+    const uint64_t global_peak =
+        global_capacity > old_global ? old_global + global_capacity + old_caustic : 0;
+    const uint64_t caustic_peak =
+        caustic_capacity > old_caustic ? global_capacity + old_caustic + caustic_capacity : 0;
+    const uint64_t transient = std::max(global_peak, caustic_peak) * sizeof(Photon);
+    if (transient > transient_budget)
+        throw OutOfMemory(format_message(
+            "trace_photons: after ", traced, " of ", settings.photons, " photons, growing the "
+            "photon maps would hold ", transient, " bytes at once (old and new buffers), past "
+            "three quarters of the machine's memory; lower the photon count"));
+    grow_to(maps.global, global_capacity, progress);
+    grow_to(maps.caustic, caustic_capacity, progress);
     for (uint64_t c = 0; c < count; ++c) {
         throw_if_cancelled(progress);
         append(maps.global, chunks[c].global);
@@ -351,6 +381,7 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
     if (scene.empty() || emitter.empty()) return maps;
     const uint64_t chunk_count = (settings.photons + kPhotonsPerChunk - 1) / kPhotonsPerChunk;
     const uint64_t budget = physical_memory_share(kStoredPhotonsMemoryFraction);
+    const uint64_t transient_budget = physical_memory_share(kGrowingPhotonsMemoryFraction);
     ChunkTracerPool pool(scene, settings, emitter);
     std::vector<ChunkResult> chunks(std::min(chunk_count, kChunksPerBlock));
     std::atomic<uint64_t> chunks_done{0};
@@ -376,7 +407,8 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
             }
             pool.release(std::move(tracer));
         });
-        merge(chunks, block_chunks, maps, progress);
+        merge(chunks, block_chunks, maps, transient_budget, settings,
+              std::min(settings.photons, (block + block_chunks) * kPhotonsPerChunk), progress);
     }
     maps.emitted = settings.photons;
     maps.emitted_power = emitter.total_power();
