@@ -263,9 +263,25 @@ void check_read_budget(const std::string& path, int64_t width, int64_t height,
     }
 }
 
+// OpenEXR stores channel names of at most 255 bytes, NUL-terminated: a longer name, or one with
+// a NUL inside, would be cut short in the file, and the layer's channels merged into one.
+constexpr size_t kMaxExrNameBytes = 255;
+
 void check_writable(const Image& image) {
     if (image.channels().empty()) {
         throw InvalidArgument("cannot write an EXR image without channels; add a layer first");
+    }
+    for (const ImageChannel& channel : image.channels()) {
+        const std::string& name = channel.name;
+        const std::string shown = name.size() > 40 ? name.substr(0, 40) + "..." : name;
+        if (name.find('\0') != std::string::npos)
+            throw InvalidArgument(format_message("EXR channel name \"", shown.c_str(),
+                                                 "\" contains a NUL byte, which OpenEXR would "
+                                                 "cut the name at; remove it from the layer name"));
+        if (name.size() > kMaxExrNameBytes)
+            throw InvalidArgument(format_message("EXR channel name \"", shown, "\" is ",
+                                                 name.size(), " bytes; OpenEXR stores at most ",
+                                                 kMaxExrNameBytes, ", so shorten the layer name"));
     }
 }
 

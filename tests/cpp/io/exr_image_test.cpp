@@ -398,6 +398,21 @@ TEST(ExrImage, InvalidImagesAreRejectedWithTheReason) {
     EXPECT_EQ(image.channels().size(), 1u) << "a failed add_layer must leave the image unchanged";
     expect_error<InvalidArgument>([] { write_exr("unused.exr", Image(1, 1)); },
                                   {"without channels"});
+    // Names OpenEXR would cut short (past 255 bytes, or at a NUL), which used to merge a layer's
+    // channels into one truncated channel without a word.
+    Image long_name(1, 1);
+    long_name.add_layer(std::string(300, 'x'), {"R", "G"}, std::vector<float>(2));
+    expect_error<InvalidArgument>([&] { write_exr("unused.exr", long_name); },
+                                  {"is 302 bytes; OpenEXR stores at most 255"});
+    Image nul_name(1, 1);
+    nul_name.add_layer(std::string("a\0b", 3), {"R"}, std::vector<float>(1));
+    expect_error<InvalidArgument>([&] { write_exr("unused.exr", nul_name); },
+                                  {"EXR channel name \"a\" contains a NUL byte"});
+    Image longest(1, 1);
+    longest.add_layer(std::string(253, 'x'), {"R"}, std::vector<float>(1));  // 255 bytes
+    const std::string path = ::testing::TempDir() + "longest_name.exr";
+    write_exr(path, longest);
+    EXPECT_EQ(read_exr(path).channels().front().name, std::string(253, 'x') + ".R");
 }
 
 Image small_image() {
