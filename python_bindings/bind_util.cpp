@@ -119,7 +119,14 @@ void bind_logging(py::module_& m) {
             if (sink) {
                 PyCallable callable(std::move(*sink));
                 native_sink = [callable](LogLevel level, const std::string& message) {
-                    callable(level, message);
+                    // Messages quote names from files (an OBJ's material, an EXR's channel),
+                    // which need not be UTF-8: undecodable bytes become U+FFFD instead of a
+                    // UnicodeDecodeError that would lose the message.
+                    py::gil_scoped_acquire gil;
+                    PyObject* decoded = PyUnicode_DecodeUTF8(
+                        message.data(), Py_ssize_t(message.size()), "replace");
+                    if (decoded == nullptr) throw py::error_already_set();
+                    callable(level, py::reinterpret_steal<py::str>(decoded));
                 };
             }
             LogSink previous;

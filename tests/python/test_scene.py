@@ -242,6 +242,9 @@ def test_camera_rays_follow_blender_model():
     film = camera.project(np.array(origin) + 3.0 * np.array(direction))
     np.testing.assert_allclose(film, (0.0, 0.0), atol=1e-3)
     assert camera.project((0.0, 0.0, 1.0)) is None
+    with pytest.raises(ValueError, match=r"generate_ray: the film point \(nan, 0\) must be "
+                                         "finite"):
+        camera.generate_ray(float("nan"), 0.0)
     scene = shgi.Scene()
     with pytest.raises(ValueError, match="no camera"):
         scene.camera
@@ -640,6 +643,19 @@ def test_a_log_sink_may_log_and_replace_itself(tmp_path, capfd):
     assert "missing.mtl" in received[0]
     assert not any("absent.mtl" in message for message in received)
     assert "absent.mtl" in capfd.readouterr().err
+
+
+def test_a_log_message_quoting_bytes_that_are_not_utf8_still_reaches_the_sink(tmp_path):
+    """A warning quoting an OBJ's material name \\xff used to fail to decode in the sink's call
+    (UnicodeDecodeError, "Exception ignored"): the message was lost to the sink."""
+    (tmp_path / "a.obj").write_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl \xff\nf 1 2 3\n")
+    received = []
+    shgi.set_log_sink(lambda level, message: received.append(message))
+    try:
+        shgi.load_obj(str(tmp_path / "a.obj"))
+    finally:
+        shgi.set_log_sink(shgi._forward_to_logging)
+    assert any("\ufffd" in message and "not found" in message for message in received), received
 
 
 def test_memory_budget_raises_memory_error():
