@@ -306,10 +306,8 @@ void bind_camera(py::module_& m) {
             "generate_ray",
             [](const Camera& camera, float x, float y) {
                 validate_camera(camera);
-                if (!std::isfinite(x) || !std::isfinite(y))
-                    throw InvalidArgument(format_message("generate_ray: the film point (", x,
-                                                         ", ", y, ") must be finite"));
-                const Ray ray = camera.generate_ray(vec2(x, y));
+                const Ray ray =
+                    camera.generate_ray(vec2(checked_finite(x, "x"), checked_finite(y, "y")));
                 return py::make_tuple(to_tuple(ray.origin), to_tuple(ray.direction), ray.tmin,
                                       ray.tmax);
             },

@@ -97,12 +97,6 @@ float checked_roughness(float roughness) {
     return roughness;
 }
 
-float checked_finite(float value, const char* arg_name) {
-    if (!std::isfinite(value))
-        throw_value_error(arg_name, "is " + std::to_string(value) + "; it must be finite");
-    return value;
-}
-
 py::array_t<float> rgb_to_numpy(const ShRgb& sh) {
     py::array_t<float> out({sh.num_coefficients(), 3});
     std::copy(sh.data(), sh.data() + 3 * sh.num_coefficients(), out.mutable_data());

@@ -74,6 +74,12 @@ void throw_value_error(const char* arg_name, const std::string& message) {
     throw py::value_error(std::string(arg_name) + ": " + message);
 }
 
+float checked_finite(float value, const char* arg_name) {
+    if (!std::isfinite(value))
+        throw_value_error(arg_name, "is " + std::to_string(value) + "; it must be finite");
+    return value;
+}
+
 std::vector<float> to_float_rows(const py::handle& obj, const char* arg_name, int columns,
                                  bool allow_non_finite, bool accept_integers) {
     auto array = checked_rows<float>(obj, arg_name, columns, accept_integers);

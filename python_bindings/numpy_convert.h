@@ -49,6 +49,8 @@ std::string describe_array(const py::array& array);
 
 // Raises ValueError "<arg_name>: <message>".
 [[noreturn]] void throw_value_error(const char* arg_name, const std::string& message);
+// `value`, or ValueError "<arg_name>: is nan; it must be finite" for NaN or ±inf.
+float checked_finite(float value, const char* arg_name);
 
 // Raises MemoryError "<arg_name>: a contiguous <dtype> copy of the <shape> array does not fit in
 // memory; ...": what ensure() leaves when it cannot allocate the copy.

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <utility>
 
 #include "render/light_sampler.h"
 #include "render/path_integrator.h"
@@ -309,12 +308,8 @@ void validate_lightmap_settings(const LightmapSettings& s) {
 uint32_t lightmap_tile_count(uint32_t width, uint32_t height, uint32_t tile_size) {
     if (tile_size == 0) throw InvalidArgument("lightmap tile_size must be positive");
     // Within the rasterizer's sides, the count fits 32 bits (at most 16384^2 one-texel tiles).
-    for (const auto& [name, side] : {std::pair<const char*, uint32_t>{"width", width},
-                                     std::pair<const char*, uint32_t>{"height", height}})
-        if (side < 1 || side > kMaxLightmapResolution)
-            throw InvalidArgument(format_message("lightmap ", name, " = ", side,
-                                                 " is outside [1, ", kMaxLightmapResolution,
-                                                 "], the sides rasterize_texels accepts"));
+    check_lightmap_side("lightmap width", width);
+    check_lightmap_side("lightmap height", height);
     return tiles_along(width, tile_size) * tiles_along(height, tile_size);
 }
 

@@ -45,14 +45,8 @@ std::string mesh_label(const Mesh& mesh) {
 // --- input checks ---------------------------------------------------------------------------
 
 void check_settings(const TexelRasterSettings& settings) {
-    const auto check_side = [](const char* field, uint32_t value) {
-        if (value < 1 || value > kMaxLightmapResolution)
-            throw InvalidArgument(format_message("TexelRasterSettings.", field, " = ", value,
-                                                 " is outside [1, ", kMaxLightmapResolution,
-                                                 "]; bake larger lightmaps in tiles"));
-    };
-    check_side("width", settings.width);
-    check_side("height", settings.height);
+    check_lightmap_side("TexelRasterSettings.width", settings.width);
+    check_lightmap_side("TexelRasterSettings.height", settings.height);
     if (settings.samples_per_axis < 1 || settings.samples_per_axis > kMaxSamplesPerAxis)
         throw InvalidArgument(format_message("TexelRasterSettings.samples_per_axis = ",
                                              settings.samples_per_axis, " is outside [1, ",
@@ -493,6 +487,13 @@ TexelMap gather(std::vector<TriangleResult>& results, const TexelRasterSettings&
 }
 
 }  // namespace
+
+void check_lightmap_side(const char* what, uint32_t side) {
+    if (side < 1 || side > kMaxLightmapResolution)
+        throw InvalidArgument(format_message(what, " = ", side, " is outside [1, ",
+                                             kMaxLightmapResolution,
+                                             "]; bake larger lightmaps in tiles"));
+}
 
 TexelMap rasterize_texels(const Mesh& mesh, const mat4& world_from_object,
                           const TexelRasterSettings& settings, Progress* progress) {

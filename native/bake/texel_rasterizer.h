@@ -48,6 +48,8 @@ namespace shgi {
 // Largest lightmap side accepted: 16384^2 texels already need tens of GB of samples; larger maps
 // must be baked in tiles.
 inline constexpr uint32_t kMaxLightmapResolution = 16384;
+// Throws InvalidArgument "<what> = <side> is outside [1, 16384]; ..." for a side out of range.
+void check_lightmap_side(const char* what, uint32_t side);
 
 struct TexelRasterSettings {
     uint32_t width = 256;   // texels along u

@@ -273,14 +273,14 @@ void check_writable(const Image& image) {
     }
     for (const ImageChannel& channel : image.channels()) {
         const std::string& name = channel.name;
-        const std::string shown = name.size() > 40 ? name.substr(0, 40) + "..." : name;
-        if (name.find('\0') != std::string::npos)
-            throw InvalidArgument(format_message("EXR channel name \"", shown.c_str(),
+        if (name.find('\0') != std::string::npos)  // shown up to the NUL
+            throw InvalidArgument(format_message("EXR channel name \"", name.c_str(),
                                                  "\" contains a NUL byte, which OpenEXR would "
                                                  "cut the name at; remove it from the layer name"));
         if (name.size() > kMaxExrNameBytes)
-            throw InvalidArgument(format_message("EXR channel name \"", shown, "\" is ",
-                                                 name.size(), " bytes; OpenEXR stores at most ",
+            throw InvalidArgument(format_message("EXR channel name \"", name.substr(0, 40),
+                                                 "...\" is ", name.size(),
+                                                 " bytes; OpenEXR stores at most ",
                                                  kMaxExrNameBytes, ", so shorten the layer name"));
     }
 }

@@ -2,12 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstddef>
 #include <string>
 #include <vector>
 
 #include "util/error.h"
-#include "util/progress.h"
 #include "util/timer.h"
 
 namespace shgi {
@@ -15,8 +13,6 @@ namespace {
 
 // Share of the bounds' diagonal used as the caustic density estimate's radius by default.
 constexpr float kDefaultCausticRadiusFraction = 0.02f;
-// Caustic photons copied between cancel polls when the photon map is rebuilt: 48 MB, ~10 ms.
-constexpr uint64_t kPhotonsPerCopySlice = uint64_t(1) << 20;
 
 PhotonTracerSettings tracer_settings(const PhotonLatticeSettings& settings) {
     PhotonTracerSettings tracer;
@@ -153,17 +149,10 @@ void PhotonLattice::solve(Progress* progress) {
     if (settings_.caustics == CausticMode::Lattice) {
         caustic_injected += caustic_raw.inject(maps.caustic, 1.0f, progress);
     } else if (settings_.caustics == CausticMode::PhotonMap) {
-        // All passes so far (unscaled), copied in slices with a cancel poll between them: the
-        // map may hold 10^7 photons, half a GB.
-        const std::vector<Photon>& previous = caustic_map_.photons();
-        caustic_photons.reserve(previous.size() + maps.caustic.size());
-        for_each_slice(previous.size(), kPhotonsPerCopySlice, progress,
-                       [&](uint64_t begin, uint64_t end) {
-                           caustic_photons.insert(caustic_photons.end(),
-                                                  previous.begin() + ptrdiff_t(begin),
-                                                  previous.begin() + ptrdiff_t(end));
-                       });
-        caustic_photons.insert(caustic_photons.end(), maps.caustic.begin(), maps.caustic.end());
+        // All passes so far (unscaled; the map may hold 10^7 photons, half a GB), then this one.
+        caustic_photons.reserve(caustic_map_.size() + maps.caustic.size());
+        append_photons(caustic_photons, caustic_map_.photons(), progress);
+        append_photons(caustic_photons, maps.caustic, progress);
     }
     timings.injection = seconds_since(start);
 

@@ -36,8 +36,6 @@ constexpr double kStoredPhotonsMemoryFraction = 0.5;
 // Growing the maps holds a map's old and new buffers at once: old, new and the other map's
 // buffer may take at most this share.
 constexpr double kGrowingPhotonsMemoryFraction = 0.75;
-// Photons copied between cancel polls when a map moves to a larger buffer: 48 MB, ~10 ms.
-constexpr uint64_t kPhotonsPerCopySlice = uint64_t(1) << 20;
 
 // Photons shaded per stage: shade_all runs each stage (set-up, store, BSDF sample, roulette and
 // next ray) over this many photons before the next stage. A photon's shading is one long chain
@@ -253,10 +251,6 @@ bool ChunkTracer::scatter(PhotonState& photon, const Shading& shading, const Mat
     return true;
 }
 
-void append(std::vector<Photon>& to, const std::vector<Photon>& from) {
-    to.insert(to.end(), from.begin(), from.end());
-}
-
 // Tracers for the workers of one trace_photons call: each chunk borrows one (and its buffers)
 // for as long as it runs.
 class ChunkTracerPool {
@@ -298,19 +292,14 @@ size_t grown_capacity(size_t capacity, size_t count, size_t limit) {
     return std::max(count, std::min(2 * capacity, limit));
 }
 
-// Moves the map to a buffer of `capacity` photons (when larger than its own) in slices with a
-// cancel poll between them: the map can hold 10^8 photons, and copying them all in one go would
-// keep a cancel waiting for a second.
+// Moves the map to a buffer of `capacity` photons when larger than its own (cancellable: the
+// map can hold 10^8 photons).
 void grow_to(std::vector<Photon>& photons, size_t capacity, const Progress* progress) {
     if (capacity <= photons.capacity()) return;
     std::vector<Photon> grown;
     grown.reserve(capacity);
     advise_huge_pages(grown.data(), grown.capacity() * sizeof(Photon));
-    for_each_slice(photons.size(), kPhotonsPerCopySlice, progress,
-                   [&](uint64_t begin, uint64_t end) {
-                       grown.insert(grown.end(), photons.begin() + ptrdiff_t(begin),
-                                    photons.begin() + ptrdiff_t(end));
-                   });
+    append_photons(grown, photons, progress);
     photons.swap(grown);
 }
 
@@ -347,14 +336,22 @@ void merge(std::vector<ChunkResult>& chunks, uint64_t count, PhotonMaps& maps,
     grow_to(maps.caustic, caustic_capacity, progress);
     for (uint64_t c = 0; c < count; ++c) {
         throw_if_cancelled(progress);
-        append(maps.global, chunks[c].global);
-        append(maps.caustic, chunks[c].caustic);
+        append_photons(maps.global, chunks[c].global, progress);
+        append_photons(maps.caustic, chunks[c].caustic, progress);
         maps.bounces += chunks[c].bounces;
         chunks[c] = ChunkResult{};  // release as we go: the maps may be large
     }
 }
 
 }  // namespace
+
+void append_photons(std::vector<Photon>& to, const std::vector<Photon>& from,
+                    const Progress* progress) {
+    constexpr uint64_t kPhotonsPerSlice = uint64_t(1) << 20;
+    for_each_slice(from.size(), kPhotonsPerSlice, progress, [&](uint64_t begin, uint64_t end) {
+        to.insert(to.end(), from.begin() + ptrdiff_t(begin), from.begin() + ptrdiff_t(end));
+    });
+}
 
 void validate_photon_tracer_settings(const PhotonTracerSettings& settings,
                                      const char* struct_name) {

@@ -56,8 +56,10 @@ inline bool is_valid_ray(const Ray& ray, const RayLimits& limits = RayLimits{}) 
                              (ray.tmax >= ray.tmin);
     return origin_ok & direction_ok & interval_ok;
 }
-// Why is_valid_ray rejects `ray` ("direction is zero", ...), or nullptr for a valid ray.
-const char* ray_problem(const Ray& ray, const RayLimits& limits = RayLimits{});
+// Why is_valid_ray rejects `ray` ("direction is zero", ...), or nullptr for a valid ray;
+// *out_of_range (if given) says whether the problem is a finite value beyond the limits.
+const char* ray_problem(const Ray& ray, const RayLimits& limits = RayLimits{},
+                        bool* out_of_range = nullptr);
 
 // A hint for batches of rays: Coherent rays (a tile's camera rays, shadow rays from neighbouring
 // pixels to one light) start close together and point alike, so Embree traverses them as packets.

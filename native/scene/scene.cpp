@@ -36,11 +36,8 @@ std::string instance_label(const std::vector<Instance>& instances, size_t i) {
 void check_ray(const Ray& ray, const char* name, const RayLimits& limits,
                const std::string& limit_reason) {
     if (is_valid_ray(ray, limits)) return;  // branch-free; ray_problem only to name the fault
-    const char* problem = ray_problem(ray, limits);
-    const bool out_of_range =
-        is_finite(ray.origin) && is_finite(ray.direction) &&
-        (max_abs_component(ray.origin) > limits.origin ||
-         max_abs_component(ray.direction) > limits.direction);
+    bool out_of_range = false;
+    const char* problem = ray_problem(ray, limits, &out_of_range);
     const std::string range =
         out_of_range ? format_message("; this scene traces origins up to ", limits.origin,
                                       " and directions up to ", limits.direction,
@@ -60,12 +57,11 @@ void check_rays(const std::vector<Ray>& rays, const RayLimits& limits,
             check_ray(rays[i], format_message("rays[", i, "]").c_str(), limits, limit_reason);
 }
 
-// The ray limits of a scene and the instance that sets the origin's.
+// The ray limits of a scene and the instance that sets the origin's (magnification 1: none).
 struct SceneRayLimits {
     RayLimits limits;
     size_t instance = 0;
     double magnification = 1.0;  // that instance's
-    bool set_by_instance = false;
 };
 
 // Embree maps a ray into an instance's object space as M^-1 (o - t) and M^-1 d (M the linear
@@ -95,7 +91,6 @@ SceneRayLimits ray_limits_of(const std::vector<Instance>& instances,
             origin = instance_origin;
             result.instance = i;
             result.magnification = magnification;
-            result.set_by_instance = true;
         }
     }
     result.limits.origin = float(std::max(origin, 0.0));
@@ -254,7 +249,7 @@ void Scene::set_ray_limits() {
     const SceneRayLimits found = ray_limits_of(instances_, meshes_);
     ray_limits_ = found.limits;
     ray_limit_reason_.clear();
-    if (!found.set_by_instance || !(found.magnification > 1.0)) return;
+    if (!(found.magnification > 1.0)) return;  // Embree's own range holds
     const std::string label = instance_label(instances_, found.instance);
     ray_limit_reason_ = format_message(" (", label, " shrinks its mesh by up to ",
                                        found.magnification, "x, and Embree's range of ",

@@ -242,9 +242,10 @@ def test_camera_rays_follow_blender_model():
     film = camera.project(np.array(origin) + 3.0 * np.array(direction))
     np.testing.assert_allclose(film, (0.0, 0.0), atol=1e-3)
     assert camera.project((0.0, 0.0, 1.0)) is None
-    with pytest.raises(ValueError, match=r"generate_ray: the film point \(nan, 0\) must be "
-                                         "finite"):
+    with pytest.raises(ValueError, match=r"^x: is nan; it must be finite"):
         camera.generate_ray(float("nan"), 0.0)
+    with pytest.raises(ValueError, match=r"^y: is inf; it must be finite"):
+        camera.generate_ray(0.0, float("inf"))
     scene = shgi.Scene()
     with pytest.raises(ValueError, match="no camera"):
         scene.camera
