@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
+#include <fstream>
 #include <limits>
 #include <map>
 #include <tuple>
@@ -24,6 +26,60 @@
 namespace shgi {
 
 namespace {
+
+// OpenEXR 3.1 sizes an attribute's value from its 32-bit size field and fills it before it meets
+// the end of the file: a damaged size field (2^31 in an 830-byte file, found by fuzzing) made it
+// allocate and zero-fill ~2 GB for a few seconds before "Early end of file". So the headers are
+// walked first (name, type, size, value per attribute; an empty name ends a header; in a
+// multi-part file an empty header ends the list) and a size the rest of the file cannot hold is
+// refused. Anything else malformed is left to OpenEXR, which reports it.
+void check_header_attribute_sizes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return;  // OpenEXR names the failure
+    in.seekg(0, std::ios::end);
+    const int64_t file_size = int64_t(in.tellg());
+    in.seekg(0);
+    uint8_t preamble[8];
+    if (!in.read(reinterpret_cast<char*>(preamble), sizeof(preamble))) return;
+    constexpr uint8_t kMagic[4] = {0x76, 0x2f, 0x31, 0x01};
+    if (!std::equal(kMagic, kMagic + 4, preamble)) return;
+    const bool multi_part = (preamble[5] & 0x10) != 0;  // version flag bit 12
+    // A name or type (at most 255 bytes with the long-names flag); false at the end of the file
+    // or past 255 bytes.
+    const auto read_string = [&](std::string& out) {
+        out.clear();
+        for (char c; in.get(c);) {
+            if (c == '\0') return true;
+            if (out.size() == 255) return false;
+            out.push_back(c);
+        }
+        return false;
+    };
+    std::string name, type;
+    for (int part = 0;; ++part) {
+        for (bool first = true;; first = false) {
+            if (!read_string(name)) return;
+            if (name.empty()) {
+                if (first && (multi_part || part > 0)) return;  // the empty header: the end
+                break;                                           // the end of this header
+            }
+            uint8_t size_bytes[4];
+            if (!read_string(type) || !in.read(reinterpret_cast<char*>(size_bytes), 4)) return;
+            const int32_t size = int32_t(uint32_t(size_bytes[0]) | uint32_t(size_bytes[1]) << 8 |
+                                         uint32_t(size_bytes[2]) << 16 |
+                                         uint32_t(size_bytes[3]) << 24);
+            const int64_t remaining = file_size - int64_t(in.tellg());
+            if (size < 0 || int64_t(size) > remaining) {
+                throw IoError(format_message(
+                    "cannot read EXR \"", path, "\": the file is damaged: its header attribute \"",
+                    name, "\" (", type, ") claims ", size, " bytes, but ", remaining,
+                    " bytes are left in the file"));
+            }
+            in.seekg(size, std::ios::cur);
+        }
+        if (!multi_part) return;
+    }
+}
 
 // Header attribute holding the channel names in the order they were added to the Image.
 constexpr const char* kChannelOrderAttribute = "shgiChannelOrder";
@@ -348,6 +404,7 @@ void write_exr(const std::string& path, const Image& image, const ExrWriteSettin
 
 Image read_exr(const std::string& path, int64_t max_pixels) {
     require_readable_file(path, "EXR");
+    check_header_attribute_sizes(path);
     try {
         Imf::MultiPartInputFile file(path.c_str());
         const ExrLayout layout = read_layout(path, file);
@@ -387,6 +444,7 @@ Image read_exr(const std::string& path, int64_t max_pixels) {
 
 ExrInfo read_exr_info(const std::string& path) {
     require_readable_file(path, "EXR");
+    check_header_attribute_sizes(path);
     try {
         Imf::MultiPartInputFile file(path.c_str());
         const ExrLayout layout = read_layout(path, file);

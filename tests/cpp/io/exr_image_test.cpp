@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <random>
 #include <string>
@@ -436,6 +437,46 @@ TEST(ExrImage, MissingAndCorruptFilesRaiseIoErrorNamingThePath) {
     write_exr(truncated, small_image(), ExrWriteSettings{ExrCompression::None});
     fs::resize_file(truncated, fs::file_size(truncated) / 2);
     expect_error<IoError>([&] { read_exr(truncated); }, {truncated});
+}
+
+// The file at `path` with the 32-bit size field of the last attribute named `name` (a name and
+// type of that attribute: "name\0type\0") set to `size`.
+void set_attribute_size(const std::string& path, const std::string& name_and_type, int32_t size) {
+    std::string bytes;
+    {
+        std::ifstream in(path, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    const size_t at = bytes.rfind(name_and_type);
+    ASSERT_NE(at, std::string::npos) << name_and_type;
+    std::memcpy(&bytes[at + name_and_type.size()], &size, sizeof(size));  // little-endian x86
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+// A damaged attribute size is refused before OpenEXR reads the header: it would allocate and fill
+// that many bytes (up to 2 GB) before meeting the end of the file.
+TEST(ExrImage, DamagedHeaderAttributeSizesAreRefusedNamingTheAttribute) {
+    const fs::path folder = testing::test_folder("exr");
+    const std::string single = (folder / "damaged_size.exr").string();
+    const std::string order("shgiChannelOrder\0stringvector\0", 30);
+    for (int32_t size : {int32_t(1) << 30, -5}) {
+        write_exr(single, small_image(), ExrWriteSettings{ExrCompression::None});
+        set_attribute_size(single, order, size);
+        for (const auto& read : {std::function<void()>([&] { read_exr(single); }),
+                                 std::function<void()>([&] { read_exr_info(single); })})
+            expect_error<IoError>(read, {single, "damaged", "shgiChannelOrder",
+                                         std::to_string(size) + " bytes"});
+    }
+    // In a multi-part file, the last part's header is walked too.
+    const std::string parts = (folder / "damaged_part.exr").string();
+    write_fixture(parts, kThreePartExr);
+    set_attribute_size(parts, std::string("type\0string\0", 12), int32_t(1) << 30);
+    expect_error<IoError>([&] { read_exr(parts); }, {parts, "damaged", "\"type\" (string)"});
+    // Intact files of both kinds still read (the walk stops where the headers end).
+    write_exr(single, small_image(), ExrWriteSettings{ExrCompression::None});
+    EXPECT_EQ(read_exr(single).pixel_count(), 64u);
+    write_fixture(parts, kThreePartExr);
+    EXPECT_EQ(read_exr(parts).channels().size(), 8u);
 }
 
 TEST(ExrImage, ReadEnforcesThePixelBudget) {
