@@ -9,7 +9,6 @@
 // Arrays are checked and copied with the GIL held; the GIL is released around file I/O.
 #include <cmath>
 #include <cstdint>
-#include <filesystem>
 #include <optional>
 #include <string>
 #include <utility>
@@ -18,12 +17,12 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
-#include <pybind11/stl/filesystem.h>
 
 #include "io/exr_image.h"
 #include "io/image.h"
 #include "io/png_image.h"
 #include "numpy_convert.h"
+#include "path_arg.h"
 #include "util/error.h"
 
 namespace py = pybind11;
@@ -176,7 +175,7 @@ py::array_t<float> layer_array(const Image& image, const std::string& layer) {
 void bind_exr(py::module_& m) {
     m.def(
         "write_exr",
-        [](const std::filesystem::path& path, const py::dict& layers,
+        [](const PathArg& path, const py::dict& layers,
            const std::optional<std::string>& pixel_type, const py::dict& channel_names,
            const std::string& compression) {
             const Image image = image_from_layers(layers, pixel_type, channel_names);
@@ -187,7 +186,7 @@ void bind_exr(py::module_& m) {
                 throw_value_error("compression", error.what());
             }
             py::gil_scoped_release release;
-            write_exr(path.string(), image, settings);
+            write_exr(path.value, image, settings);
         },
         py::arg("path"), py::arg("layers"), py::arg("pixel_type") = py::none(),
         py::arg("channel_names") = py::dict(), py::arg("compression") = "zip",
@@ -207,7 +206,7 @@ be written.)doc");
 
     m.def(
         "read_exr",
-        [](const std::filesystem::path& path, int64_t max_pixels) {
+        [](const PathArg& path, int64_t max_pixels) {
             if (max_pixels < 1) {
                 throw_value_error("max_pixels", "must be positive, got " +
                                                     std::to_string(max_pixels));
@@ -215,7 +214,7 @@ be written.)doc");
             std::optional<Image> image;
             {
                 py::gil_scoped_release release;
-                image.emplace(read_exr(path.string(), max_pixels));
+                image.emplace(read_exr(path.value, max_pixels));
             }
             py::dict layers;
             for (const std::string& layer : image->layer_names()) {
@@ -237,11 +236,11 @@ Raises OSError naming the file when it is missing, corrupt, too large or unsuppo
 
     m.def(
         "read_exr_info",
-        [](const std::filesystem::path& path) {
+        [](const PathArg& path) {
             ExrInfo info;
             {
                 py::gil_scoped_release release;
-                info = read_exr_info(path.string());
+                info = read_exr_info(path.value);
             }
             py::list channels;
             for (const ExrChannelInfo& channel : info.channels) {
@@ -264,7 +263,7 @@ Raises OSError naming the file when it is missing, corrupt or unsupported.)doc")
 void bind_png(py::module_& m) {
     m.def(
         "write_png",
-        [](const std::filesystem::path& path, const py::handle& pixels, float exposure,
+        [](const PathArg& path, const py::handle& pixels, float exposure,
            bool premultiplied) {
             const FloatArray array = checked_image_array(pixels, "pixels");
             const size_t channels = channel_count(array);
@@ -279,7 +278,7 @@ void bind_png(py::module_& m) {
             const int height = int(array.shape(0));
             const int width = int(array.shape(1));
             py::gil_scoped_release release;
-            write_png(path.string(), values, width, height, int(channels),
+            write_png(path.value, values, width, height, int(channels),
                       PngWriteSettings{exposure, premultiplied});
         },
         py::arg("path"), py::arg("pixels"), py::arg("exposure") = 0.0f,

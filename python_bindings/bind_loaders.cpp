@@ -5,16 +5,15 @@
 // values spelled as Blender's importers spell them ("SPEC", "Y"). Arguments are checked with the
 // GIL held; the GIL is released while the file is read and converted.
 #include <cmath>
-#include <filesystem>
 #include <optional>
 #include <string>
 #include <utility>
 
 #include <pybind11/pybind11.h>
-#include <pybind11/stl/filesystem.h>
 
 #include "io/gltf_loader.h"
 #include "io/obj_loader.h"
+#include "path_arg.h"
 #include "scene/scene.h"
 
 namespace py = pybind11;
@@ -41,7 +40,7 @@ ObjUpAxis up_axis_from_name(const std::string& name) {
 void bind_loaders(py::module_& m) {
     m.def(
         "load_gltf",
-        [](const std::filesystem::path& path, const std::string& lighting_mode,
+        [](const PathArg& path, const std::string& lighting_mode,
            bool import_lights, bool import_camera, bool import_textures, float light_radius,
            float sun_angle) {
             if (!(light_radius >= 0.0f) || !std::isfinite(light_radius))
@@ -60,7 +59,7 @@ void bind_loaders(py::module_& m) {
             std::optional<Scene> scene;
             {
                 py::gil_scoped_release release;
-                scene.emplace(load_gltf(path.string(), options));
+                scene.emplace(load_gltf(path.value, options));
             }
             return std::move(*scene);
         },
@@ -87,13 +86,13 @@ logged as warnings.)doc");
 
     m.def(
         "load_obj",
-        [](const std::filesystem::path& path, const std::string& up_axis) {
+        [](const PathArg& path, const std::string& up_axis) {
             ObjLoadOptions options;
             options.up_axis = up_axis_from_name(up_axis);
             std::optional<Scene> scene;
             {
                 py::gil_scoped_release release;
-                scene.emplace(load_obj(path.string(), options));
+                scene.emplace(load_obj(path.value, options));
             }
             return std::move(*scene);
         },

@@ -10,6 +10,7 @@
 #include <cstring>
 
 #include "numpy_convert.h"
+#include "path_arg.h"
 #include "probes/probe_grid.h"
 #include "probes/probe_storage.h"
 #include "scene_use.h"
@@ -78,7 +79,7 @@ void def_probe_arrays(Cls& cls, GetData get) {
             "The ProbeVolumes, in probe order.")
         .def(
             "save",
-            [get](const typename Cls::type& self, const std::string& path) {
+            [get](const typename Cls::type& self, const PathArg& path) {
                 ProbeGridData data = *get(self);
                 py::gil_scoped_release release;
                 save_probe_grid(path, data);
@@ -87,7 +88,7 @@ void def_probe_arrays(Cls& cls, GetData get) {
             "Writes the compact binary cache (SH at half precision: 56 bytes per L2 probe).")
         .def(
             "export",
-            [get](const typename Cls::type& self, const std::string& json_path) {
+            [get](const typename Cls::type& self, const PathArg& json_path) {
                 ProbeGridData data = *get(self);
                 py::gil_scoped_release release;
                 export_probe_grid(json_path, data);
@@ -192,7 +193,7 @@ From ProbeGrid.field(), ProbeField.load(path) or ProbeField.import_exr(json_path
                               "Update passes blended into these probes.")
         .def_static(
             "load",
-            [](const std::string& path, const ProbeLookupSettings& lookup) {
+            [](const PathArg& path, const ProbeLookupSettings& lookup) {
                 auto data = std::make_shared<const ProbeGridData>([&] {
                     py::gil_scoped_release release;
                     return load_probe_grid(path);
@@ -203,7 +204,7 @@ From ProbeGrid.field(), ProbeField.load(path) or ProbeField.import_exr(json_path
             "Reads a binary cache written by save() (OSError naming a bad file).")
         .def_static(
             "import_exr",
-            [](const std::string& json_path, const ProbeLookupSettings& lookup) {
+            [](const PathArg& json_path, const ProbeLookupSettings& lookup) {
                 auto data = std::make_shared<const ProbeGridData>([&] {
                     py::gil_scoped_release release;
                     return import_probe_grid(json_path);

@@ -382,3 +382,32 @@ def test_srgb_curve():
     encoded = shgi.srgb_from_linear(linear)
     assert encoded.dtype == np.float32 and encoded.shape == linear.shape
     np.testing.assert_allclose(shgi.linear_from_srgb(encoded), linear, atol=1e-6)
+
+
+def test_file_functions_take_str_bytes_and_path_like_and_name_a_nul_byte(tmp_path):
+    """Found by fuzzing: read_exr, write_exr, write_png and the scene loaders made a path holding
+    a NUL byte an "incompatible function arguments" TypeError, and the probe files refused
+    pathlib.Path. Every file argument now takes what open() takes."""
+    layers = {"a": np.ones((2, 3), np.float32)}
+    for path in (str(tmp_path / "s.exr"), os.fsencode(tmp_path / "b.exr"), tmp_path / "p.exr"):
+        shgi.write_exr(path, layers)
+        assert shgi.read_exr(path)["a"].shape == (2, 3, 1)
+        assert shgi.read_exr_info(path)["width"] == 3
+    nul = str(tmp_path / "x.exr") + "\0.other"
+    calls = {
+        "read_exr": lambda p: shgi.read_exr(p),
+        "read_exr_info": lambda p: shgi.read_exr_info(p),
+        "write_exr": lambda p: shgi.write_exr(p, layers),
+        "write_png": lambda p: shgi.write_png(p, np.zeros((1, 1, 3), np.float32)),
+        "load_obj": lambda p: shgi.load_obj(p),
+        "load_gltf": lambda p: shgi.load_gltf(p),
+        "ProbeField.load": lambda p: shgi.ProbeField.load(p),
+        "ProbeField.import_exr": lambda p: shgi.ProbeField.import_exr(p),
+    }
+    position = f"position {len(str(tmp_path / 'x.exr'))}"
+    for name, call in calls.items():
+        for path in (nul, os.fsencode(nul)):
+            with pytest.raises(ValueError, match=f"NUL byte at {position}"):
+                call(path)
+        with pytest.raises(TypeError):  # not a path at all
+            call(5)

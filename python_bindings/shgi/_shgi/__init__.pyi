@@ -1606,20 +1606,20 @@ class ProbeField(IndirectField):
     def _pybind11_conduit_v1_(*args, **kwargs):
         ...
     @staticmethod
-    def import_exr(json_path: str, lookup: ProbeLookupSettings = ...) -> ProbeField:
+    def import_exr(json_path: str | bytes | os.PathLike, lookup: ProbeLookupSettings = ...) -> ProbeField:
         """
         Reads an EXR + JSON export written by export().
         """
     @staticmethod
-    def load(path: str, lookup: ProbeLookupSettings = ...) -> ProbeField:
+    def load(path: str | bytes | os.PathLike, lookup: ProbeLookupSettings = ...) -> ProbeField:
         """
         Reads a binary cache written by save() (OSError naming a bad file).
         """
-    def export(self, json_path: str) -> None:
+    def export(self, json_path: str | bytes | os.PathLike) -> None:
         """
         Writes <stem>.json and per volume <stem>_volume<v>.exr (float SH, positions, active, variance) and <stem>_volume<v>_visibility.exr; the JSON states basis, units and layout.
         """
-    def save(self, path: str) -> None:
+    def save(self, path: str | bytes | os.PathLike) -> None:
         """
         Writes the compact binary cache (SH at half precision: 56 bytes per L2 probe).
         """
@@ -1689,7 +1689,7 @@ class ProbeGrid(IndirectField):
         """
         Places the probes (the scene must be committed).
         """
-    def export(self, json_path: str) -> None:
+    def export(self, json_path: str | bytes | os.PathLike) -> None:
         """
         Writes <stem>.json and per volume <stem>_volume<v>.exr (float SH, positions, active, variance) and <stem>_volume<v>_visibility.exr; the JSON states basis, units and layout.
         """
@@ -1705,7 +1705,7 @@ class ProbeGrid(IndirectField):
         """
         Forgets every pass and re-places the probes.
         """
-    def save(self, path: str) -> None:
+    def save(self, path: str | bytes | os.PathLike) -> None:
         """
         Writes the compact binary cache (SH at half precision: 56 bytes per L2 probe).
         """
@@ -2489,7 +2489,7 @@ def linear_from_srgb(encoded: typing.Annotated[numpy.typing.ArrayLike, numpy.flo
     Inverse sRGB transfer function: x / 12.92 up to 0.04045, ((x + 0.055) / 1.055)**2.4 above.
     Input is clamped to [0, 1] (NaN -> 0). Accepts a float or an array (float32 result).
     """
-def load_gltf(path: os.PathLike | str | bytes, *, lighting_mode: str = 'SPEC', import_lights: bool = True, import_camera: bool = True, import_textures: bool = True, light_radius: typing.SupportsFloat | typing.SupportsIndex = 0.25, sun_angle: typing.SupportsFloat | typing.SupportsIndex = 0.009180432185530663) -> Scene:
+def load_gltf(path: str | bytes | os.PathLike, *, lighting_mode: str = 'SPEC', import_lights: bool = True, import_camera: bool = True, import_textures: bool = True, light_radius: typing.SupportsFloat | typing.SupportsIndex = 0.25, sun_angle: typing.SupportsFloat | typing.SupportsIndex = 0.009180432185530663) -> Scene:
     """
     Loads the default scene of a glTF 2.0 file (.gltf or .glb) into a new, uncommitted Scene, as
     Blender 3.4's glTF importer would import it.
@@ -2507,7 +2507,7 @@ def load_gltf(path: os.PathLike | str | bytes, *, lighting_mode: str = 'SPEC', i
     extensions; problems that only cost a part (an undecodable image, a non-triangle primitive) are
     logged as warnings.
     """
-def load_obj(path: os.PathLike | str | bytes, *, up_axis: str = 'Y') -> Scene:
+def load_obj(path: str | bytes | os.PathLike, *, up_axis: str = 'Y') -> Scene:
     """
     Loads a Wavefront OBJ file and the .mtl files it names (looked up beside it) into a new,
     uncommitted Scene, as Blender 3.4's OBJ importer would import it.
@@ -2536,7 +2536,7 @@ def rasterize_texels(scene: Scene, instance: typing.SupportsInt | typing.Support
     """
     Rasterizes instance `instance`'s lightmap UV map; ValueError naming the object when the UV map is missing (listing the ones it has) or the mesh is bad.
     """
-def read_exr(path: os.PathLike | str | bytes, max_pixels: typing.SupportsInt | typing.SupportsIndex = 268435456) -> dict:
+def read_exr(path: str | bytes | os.PathLike, max_pixels: typing.SupportsInt | typing.SupportsIndex = 268435456) -> dict:
     """
     Reads an OpenEXR file into a dict of layer name -> float32 array (H, W, C), row 0 at the top.
     
@@ -2548,7 +2548,7 @@ def read_exr(path: os.PathLike | str | bytes, max_pixels: typing.SupportsInt | t
         file cannot exhaust memory; raise it only for trusted files.
     Raises OSError naming the file when it is missing, corrupt, too large or unsupported.
     """
-def read_exr_info(path: os.PathLike | str | bytes) -> dict:
+def read_exr_info(path: str | bytes | os.PathLike) -> dict:
     """
     Reads only the header of an OpenEXR file: {"width", "height", "compression",
     "channels": [(full name, "half" | "float"), ...]} with channels in read_exr's order.
@@ -2587,7 +2587,7 @@ def version() -> str:
     """
     SHGI's version string.
     """
-def write_exr(path: os.PathLike | str | bytes, layers: dict, pixel_type: str | None = None, channel_names: dict = {}, compression: str = 'zip') -> None:
+def write_exr(path: str | bytes | os.PathLike, layers: dict, pixel_type: str | None = None, channel_names: dict = {}, compression: str = 'zip') -> None:
     """
     Writes a multilayer OpenEXR file, atomically (temporary file in the same folder, then rename).
     
@@ -2602,7 +2602,7 @@ def write_exr(path: os.PathLike | str | bytes, layers: dict, pixel_type: str | N
     Raises ValueError for bad arrays or names (naming the argument), OSError when the file cannot
     be written.
     """
-def write_png(path: os.PathLike | str | bytes, pixels: typing.Any, exposure: typing.SupportsFloat | typing.SupportsIndex = 0.0, premultiplied: bool = True) -> None:
+def write_png(path: str | bytes | os.PathLike, pixels: typing.Any, exposure: typing.SupportsFloat | typing.SupportsIndex = 0.0, premultiplied: bool = True) -> None:
     """
     Writes linear float pixels as an 8-bit sRGB PNG, atomically.
     
