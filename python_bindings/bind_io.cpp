@@ -204,9 +204,23 @@ compression: lossless codec "zip" (default), "piz", "zips", "rle" or "none".
 Raises ValueError for bad arrays or names (naming the argument), OSError when the file cannot
 be written.)doc");
 
+    // A channel or layer name read from `path` as a str; IoError when it is not UTF-8 (another
+    // writer's Latin-1 name), which pybind11 would make a bare UnicodeDecodeError.
+    const auto name_from_file = [](const std::string& name, const std::string& path,
+                                   const char* what) {
+        PyObject* text = PyUnicode_DecodeUTF8(name.data(), Py_ssize_t(name.size()), nullptr);
+        if (text == nullptr) {
+            PyErr_Clear();
+            throw IoError(format_message("cannot read EXR \"", path, "\": the ", what, " \"",
+                                         name, "\" is not UTF-8; rename it when writing the "
+                                         "file"));
+        }
+        return py::reinterpret_steal<py::str>(text);
+    };
+
     m.def(
         "read_exr",
-        [](const PathArg& path, int64_t max_pixels) {
+        [name_from_file](const PathArg& path, int64_t max_pixels) {
             if (max_pixels < 1) {
                 throw_value_error("max_pixels", "must be positive, got " +
                                                     std::to_string(max_pixels));
@@ -218,7 +232,7 @@ be written.)doc");
             }
             py::dict layers;
             for (const std::string& layer : image->layer_names()) {
-                layers[py::str(layer)] = layer_array(*image, layer);
+                layers[name_from_file(layer, path.value, "layer name")] = layer_array(*image, layer);
             }
             return layers;
         },
@@ -236,7 +250,7 @@ Raises OSError naming the file when it is missing, corrupt, too large or unsuppo
 
     m.def(
         "read_exr_info",
-        [](const PathArg& path) {
+        [name_from_file](const PathArg& path) {
             ExrInfo info;
             {
                 py::gil_scoped_release release;
@@ -244,7 +258,8 @@ Raises OSError naming the file when it is missing, corrupt, too large or unsuppo
             }
             py::list channels;
             for (const ExrChannelInfo& channel : info.channels) {
-                channels.append(py::make_tuple(channel.name, pixel_type_name(channel.pixel_type)));
+                channels.append(py::make_tuple(name_from_file(channel.name, path.value, "channel name"),
+                                               pixel_type_name(channel.pixel_type)));
             }
             py::dict result;
             result["width"] = info.width;

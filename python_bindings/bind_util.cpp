@@ -7,6 +7,7 @@
 // Callbacks into Python (progress, log sink) may run on TBB worker threads: they take the GIL
 // themselves. To keep that deadlock-free, every binding that runs parallel work releases the GIL,
 // and the Python-side accessors here release it before taking a native mutex.
+#include <cstring>
 #include <memory>
 #include <mutex>
 
@@ -60,6 +61,17 @@ std::unique_ptr<tbb::global_control>& thread_limit() {
     return limit;
 }
 
+// Sets the Python error `type` with a native message. Messages quote paths and names from files,
+// which need not be UTF-8: PyErr_SetString would replace such an error by a bare
+// UnicodeDecodeError, so undecodable bytes are shown as \xNN escapes instead.
+void set_error(PyObject* type, const char* message) {
+    PyObject* text = PyUnicode_DecodeUTF8(message, Py_ssize_t(std::strlen(message)),
+                                          "backslashreplace");
+    if (text == nullptr) return;  // out of memory: that error is set
+    PyErr_SetObject(type, text);
+    Py_DECREF(text);
+}
+
 void register_exceptions(py::module_& m) {
     static py::exception<Cancelled> cancelled(m, "Cancelled", PyExc_Exception);
     cancelled.doc() = "Raised when a long operation stops because Progress.cancel() was called.";
@@ -68,15 +80,15 @@ void register_exceptions(py::module_& m) {
         try {
             std::rethrow_exception(pointer);
         } catch (const Cancelled& error) {
-            PyErr_SetString(cancelled.ptr(), error.what());
+            set_error(cancelled.ptr(), error.what());
         } catch (const InvalidArgument& error) {
-            PyErr_SetString(PyExc_ValueError, error.what());
+            set_error(PyExc_ValueError, error.what());
         } catch (const IoError& error) {
-            PyErr_SetString(PyExc_OSError, error.what());
+            set_error(PyExc_OSError, error.what());
         } catch (const OutOfMemory& error) {
-            PyErr_SetString(PyExc_MemoryError, error.what());
+            set_error(PyExc_MemoryError, error.what());
         } catch (const Error& error) {
-            PyErr_SetString(PyExc_RuntimeError, error.what());
+            set_error(PyExc_RuntimeError, error.what());
         }
     });
 }

@@ -411,3 +411,20 @@ def test_file_functions_take_str_bytes_and_path_like_and_name_a_nul_byte(tmp_pat
                 call(path)
         with pytest.raises(TypeError):  # not a path at all
             call(5)
+
+
+def test_non_utf8_names_and_paths_give_os_errors_not_unicode_errors(tmp_path):
+    """Found by fuzzing: an EXR channel name that is not UTF-8 (another writer's Latin-1) raised a
+    bare UnicodeDecodeError from read_exr, as did any native error quoting such a path."""
+    path = tmp_path / "latin1.exr"
+    shgi.write_exr(path, {"Qz": np.ones((2, 2, 3), np.float32)})
+    data = path.read_bytes()
+    assert data.count(b"Qz.") == 6  # three channels, listed in the channel list and SHGI's order
+    path.write_bytes(data.replace(b"Qz.", b"Q\xe9."))
+    for read in (shgi.read_exr, shgi.read_exr_info):
+        name = r'(layer|channel) name "Q\\xe9(\.[RGB])?" is not UTF-8'
+        with pytest.raises(OSError, match=name):
+            read(path)
+    missing = os.fsencode(tmp_path) + b"/caf\xe9.exr"
+    with pytest.raises(OSError, match=r"caf\\xe9\.exr"):
+        shgi.read_exr(missing)
