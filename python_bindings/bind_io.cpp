@@ -232,7 +232,8 @@ be written.)doc");
             }
             py::dict layers;
             for (const std::string& layer : image->layer_names()) {
-                layers[name_from_file(layer, path.value, "layer name")] = layer_array(*image, layer);
+                const py::str name = name_from_file(layer, path.value, "layer name");
+                layers[name] = layer_array(*image, layer);
             }
             return layers;
         },
@@ -258,8 +259,8 @@ Raises OSError naming the file when it is missing, corrupt, too large or unsuppo
             }
             py::list channels;
             for (const ExrChannelInfo& channel : info.channels) {
-                channels.append(py::make_tuple(name_from_file(channel.name, path.value, "channel name"),
-                                               pixel_type_name(channel.pixel_type)));
+                const py::str name = name_from_file(channel.name, path.value, "channel name");
+                channels.append(py::make_tuple(name, pixel_type_name(channel.pixel_type)));
             }
             py::dict result;
             result["width"] = info.width;

@@ -42,7 +42,8 @@ struct type_caster<shgi::python::PathArg> {
         return true;
     }
     static handle cast(const shgi::python::PathArg& source, return_value_policy, handle) {
-        return PyUnicode_DecodeFSDefaultAndSize(source.value.data(), Py_ssize_t(source.value.size()));
+        const std::string& path = source.value;
+        return PyUnicode_DecodeFSDefaultAndSize(path.data(), Py_ssize_t(path.size()));
     }
 };
 
