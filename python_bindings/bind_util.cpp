@@ -61,12 +61,17 @@ std::unique_ptr<tbb::global_control>& thread_limit() {
     return limit;
 }
 
-// Sets the Python error `type` with a native message. Messages quote paths and names from files,
-// which need not be UTF-8: PyErr_SetString would replace such an error by a bare
-// UnicodeDecodeError, so undecodable bytes are shown as \xNN escapes instead.
+// A native message (an error or a log line) as a new str reference, or null with the Python
+// error set (out of memory). Messages quote paths and names from files, which need not be UTF-8:
+// a strict decode would turn the message into a bare UnicodeDecodeError, so undecodable bytes are
+// shown as \xNN escapes.
+PyObject* native_text(const char* message, size_t size) {
+    return PyUnicode_DecodeUTF8(message, Py_ssize_t(size), "backslashreplace");
+}
+
+// Sets the Python error `type` with a native message (PyErr_SetString decodes strictly).
 void set_error(PyObject* type, const char* message) {
-    PyObject* text = PyUnicode_DecodeUTF8(message, Py_ssize_t(std::strlen(message)),
-                                          "backslashreplace");
+    PyObject* text = native_text(message, std::strlen(message));
     if (text == nullptr) return;  // out of memory: that error is set
     PyErr_SetObject(type, text);
     Py_DECREF(text);
@@ -131,12 +136,10 @@ void bind_logging(py::module_& m) {
             if (sink) {
                 PyCallable callable(std::move(*sink));
                 native_sink = [callable](LogLevel level, const std::string& message) {
-                    // Messages quote names from files (an OBJ's material, an EXR's channel),
-                    // which need not be UTF-8: undecodable bytes become U+FFFD instead of a
-                    // UnicodeDecodeError that would lose the message.
+                    // A strict decode of a message quoting an OBJ's non-UTF-8 material name
+                    // lost the message to a UnicodeDecodeError.
                     py::gil_scoped_acquire gil;
-                    PyObject* decoded = PyUnicode_DecodeUTF8(
-                        message.data(), Py_ssize_t(message.size()), "replace");
+                    PyObject* decoded = native_text(message.data(), message.size());
                     if (decoded == nullptr) throw py::error_already_set();
                     callable(level, py::reinterpret_steal<py::str>(decoded));
                 };

@@ -56,28 +56,23 @@ void check_header_attribute_sizes(const std::string& path) {
         return false;
     };
     std::string name, type;
-    for (int part = 0;; ++part) {
-        for (bool first = true;; first = false) {
-            if (!read_string(name)) return;
-            if (name.empty()) {
-                if (first && (multi_part || part > 0)) return;  // the empty header: the end
-                break;                                           // the end of this header
-            }
-            uint8_t size_bytes[4];
-            if (!read_string(type) || !in.read(reinterpret_cast<char*>(size_bytes), 4)) return;
-            const int32_t size = int32_t(uint32_t(size_bytes[0]) | uint32_t(size_bytes[1]) << 8 |
-                                         uint32_t(size_bytes[2]) << 16 |
-                                         uint32_t(size_bytes[3]) << 24);
-            const int64_t remaining = file_size - int64_t(in.tellg());
-            if (size < 0 || int64_t(size) > remaining) {
-                throw IoError(format_message(
-                    "cannot read EXR \"", path, "\": the file is damaged: its header attribute \"",
-                    name, "\" (", type, ") claims ", size, " bytes, but ", remaining,
-                    " bytes are left in the file"));
-            }
-            in.seekg(size, std::ios::cur);
+    while (read_string(name)) {
+        if (name.empty()) {  // the end of a header: the last one, or an empty one follows
+            if (!multi_part || in.peek() == '\0' || in.peek() == EOF) return;
+            continue;
         }
-        if (!multi_part) return;
+        uint8_t size_bytes[4];
+        if (!read_string(type) || !in.read(reinterpret_cast<char*>(size_bytes), 4)) return;
+        const int32_t size = int32_t(uint32_t(size_bytes[0]) | uint32_t(size_bytes[1]) << 8 |
+                                     uint32_t(size_bytes[2]) << 16 | uint32_t(size_bytes[3]) << 24);
+        const int64_t remaining = file_size - int64_t(in.tellg());
+        if (size < 0 || int64_t(size) > remaining) {
+            throw IoError(format_message(
+                "cannot read EXR \"", path, "\": the file is damaged: its header attribute \"",
+                name, "\" (", type, ") claims ", size, " bytes, but ", remaining,
+                " bytes are left in the file"));
+        }
+        in.seekg(size, std::ios::cur);
     }
 }
 

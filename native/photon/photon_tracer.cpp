@@ -303,9 +303,9 @@ void grow_to(std::vector<Photon>& photons, size_t capacity, const Progress* prog
     photons.swap(grown);
 }
 
-// Appends the first `count` chunks' photons to the maps in chunk order, releasing them; polls
-// cancel before each chunk (the first writes to fresh pages of a block's ~10^7 photons take a
-// few hundred ms in all).
+// Appends the first `count` chunks' photons to the maps in chunk order, releasing them; the
+// appends poll cancel (the first writes to fresh pages of a block's ~10^7 photons take a few
+// hundred ms in all).
 // Growing a map holds its old and new buffers at once: when that would pass `transient_budget`
 // bytes for both maps, throws OutOfMemory (naming how far the pass got) before allocating.
 void merge(std::vector<ChunkResult>& chunks, uint64_t count, PhotonMaps& maps,
@@ -335,7 +335,6 @@ void merge(std::vector<ChunkResult>& chunks, uint64_t count, PhotonMaps& maps,
     grow_to(maps.global, global_capacity, progress);
     grow_to(maps.caustic, caustic_capacity, progress);
     for (uint64_t c = 0; c < count; ++c) {
-        throw_if_cancelled(progress);
         append_photons(maps.global, chunks[c].global, progress);
         append_photons(maps.caustic, chunks[c].caustic, progress);
         maps.bounces += chunks[c].bounces;
