@@ -1,5 +1,9 @@
 #include "scene/camera.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 #include "scene/validation.h"
 #include "util/error.h"
 
@@ -106,6 +110,50 @@ bool Camera::project(const vec3& p, vec2* film) const {
     return true;
 }
 
+namespace {
+
+// Each field may be finite while the rays they make together are not (shift_x = 1e38 puts the
+// image plane past float range; ortho_scale = 1e20 starts rays beyond any scene): the image
+// plane's reach, in double, must stay within kMaxCoordinate, and a perspective ray's clip_start
+// (longer along rays off the view axis) finite. The message names the fields that set it.
+void validate_image_plane(const Camera& camera, const std::string& item) {
+    const double width = camera.resolution_x, height = camera.resolution_y;
+    const bool vertical = camera.sensor_fit == SensorFit::Vertical ||
+                          (camera.sensor_fit == SensorFit::Auto && width < height);
+    const double view_factor = vertical ? height : width;
+    const bool ortho = camera.type == CameraType::Orthographic;
+    const double extent =
+        ortho ? double(camera.ortho_scale)
+              : double(vertical ? camera.sensor_height : camera.sensor_width) / camera.lens;
+    const double pixel_size = extent / view_factor;
+    const double reach_x = (0.5 * width + std::fabs(double(camera.shift_x)) * view_factor) *
+                           pixel_size;
+    const double reach_y = (0.5 * height + std::fabs(double(camera.shift_y)) * view_factor) *
+                           pixel_size;
+    const double reach = std::max(reach_x, reach_y);
+    const std::string fields =
+        ortho ? format_message("ortho_scale = ", camera.ortho_scale)
+              : format_message("lens = ", camera.lens, " mm, ",
+                               vertical ? "sensor_height = " : "sensor_width = ",
+                               vertical ? camera.sensor_height : camera.sensor_width, " mm");
+    if (!(reach <= double(kMaxCoordinate)))
+        throw InvalidArgument(format_message(
+            item, ": shift_x = ", camera.shift_x, " and shift_y = ", camera.shift_y, " with ",
+            fields, " put the image plane's edge ", reach, ortho ? " m" : " (a tangent)",
+            " from the view axis, past ", kMaxCoordinate, "; lower ",
+            std::max(std::fabs(camera.shift_x), std::fabs(camera.shift_y)) > 1.0f
+                ? "shift_x / shift_y"
+                : (ortho ? "ortho_scale" : "the sensor size or raise lens")));
+    if (ortho) return;
+    const double clip_start = double(camera.clip_start) * std::sqrt(1.0 + 2.0 * reach * reach);
+    if (!(clip_start <= double(std::numeric_limits<float>::max())))
+        throw InvalidArgument(format_message(
+            item, ": clip_start = ", camera.clip_start, " m is ", clip_start, " m along the "
+            "image corner's ray (", fields, "), past float range; lower clip_start"));
+}
+
+}  // namespace
+
 void validate_camera(const Camera& camera) {
     const std::string item = "camera";
     require_transform(item, "world_from_camera", camera.world_from_camera);
@@ -126,6 +174,7 @@ void validate_camera(const Camera& camera) {
     if (camera.resolution_x == 0 || camera.resolution_y == 0)
         throw InvalidArgument(format_message(item, ": resolution ", camera.resolution_x, " x ",
                                              camera.resolution_y, " must be at least 1 x 1"));
+    validate_image_plane(camera, item);
 }
 
 }  // namespace shgi

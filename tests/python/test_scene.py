@@ -251,6 +251,11 @@ def test_camera_rays_follow_blender_model():
         scene.camera
     scene.set_camera(camera)
     assert scene.has_camera and scene.camera.lens == 50.0
+    # Finite fields whose rays are not: refused by name, before any ray.
+    with pytest.raises(ValueError, match=r"^camera: shift_x = 1e\+38 and shift_y = 0 with lens"):
+        scene.set_camera(shgi.Camera(shift_x=1e38))
+    with pytest.raises(ValueError, match=r"with ortho_scale = 1e\+20 put .* lower ortho_scale"):
+        scene.set_camera(shgi.Camera(type=shgi.CameraType.ORTHOGRAPHIC, ortho_scale=1e20))
 
 
 # --- bad input --------------------------------------------------------------------------------

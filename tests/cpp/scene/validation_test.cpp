@@ -140,5 +140,38 @@ TEST(CameraValidation, RejectsEachBadField) {
     expect_contains(bad([](Camera& c) { c.shift_x = kNaN; }), "camera: shift_x = nan");
 }
 
+// Finite fields whose rays together are not: each message names the fields and what to change.
+TEST(CameraValidation, RejectsAnImagePlaneBeyondFloatRange) {
+    const auto bad = [](const std::function<void(Camera&)>& edit) {
+        Camera camera;
+        edit(camera);
+        return rejection([&] { validate_camera(camera); });
+    };
+    const std::string shifted = bad([](Camera& c) { c.shift_x = 1e38f; });
+    expect_contains(shifted, "camera: shift_x = 1e+38 and shift_y = 0 with lens = 50 mm");
+    expect_contains(shifted, "lower shift_x / shift_y");
+    const std::string wide = bad([](Camera& c) {
+        c.type = CameraType::Orthographic;
+        c.ortho_scale = 1e20f;
+    });
+    expect_contains(wide, "with ortho_scale = 1e+20 put the image plane's edge");
+    expect_contains(wide, "lower ortho_scale");
+    expect_contains(bad([](Camera& c) { c.lens = 1e-30f; }), "lower the sensor size or raise lens");
+    expect_contains(bad([](Camera& c) {
+                        c.lens = 1e-6f;
+                        c.clip_start = 1e33f;
+                        c.clip_end = 2e33f;
+                    }),
+                    "camera: clip_start = 1e+33 m is");
+    // Unused by a perspective camera, and within range for an orthographic one: accepted.
+    EXPECT_EQ(bad([](Camera& c) { c.ortho_scale = 1e20f; }), "");
+    EXPECT_EQ(bad([](Camera& c) {
+                  c.type = CameraType::Orthographic;
+                  c.ortho_scale = 1e6f;
+                  c.shift_y = 2.0f;
+              }),
+              "");
+}
+
 }  // namespace
 }  // namespace shgi
