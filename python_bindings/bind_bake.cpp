@@ -124,10 +124,11 @@ The sample positions of every texel of one object's lightmap (rasterize_texels).
 
     m.def(
         "rasterize_texels",
-        [](const Scene& scene, uint32_t instance, const S settings, Progress* progress) {
+        [](const Scene& scene, const IndexInt& instance, const S settings, Progress* progress) {
+            const uint32_t id = int_arg<uint32_t>(instance, "instance");
             SceneUse use(scene, SceneUse::Kind::Query, "rasterize_texels");
             py::gil_scoped_release release;
-            return rasterize_texels(scene, instance, settings, progress);
+            return rasterize_texels(scene, id, settings, progress);
         },
         py::arg("scene"), py::arg("instance"), py::arg("settings") = S{},
         py::arg("progress") = py::none(),
@@ -231,22 +232,40 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
             [](const LightmapTexels& t) { return grid_array<bool>(t.baked, t.width, t.height); },
             "(H, W) bool: texels this bake computed.");
 
-    m.def("lightmap_tile_count", &lightmap_tile_count, py::arg("width"), py::arg("height"),
-          py::arg("tile_size"));
-    m.def("lightmap_shard_tiles", &lightmap_shard_tiles, py::arg("width"), py::arg("height"),
-          py::arg("tile_size"), py::arg("shard"), py::arg("shards"),
-          "Tiles shard i of N bakes: every tile t with t % N == i.");
+    m.def(
+        "lightmap_tile_count",
+        [](const IndexInt& width, const IndexInt& height, const IndexInt& tile_size) {
+            return lightmap_tile_count(int_arg<uint32_t>(width, "width"),
+                                       int_arg<uint32_t>(height, "height"),
+                                       int_arg<uint32_t>(tile_size, "tile_size"));
+        },
+        py::arg("width"), py::arg("height"), py::arg("tile_size"));
+    m.def(
+        "lightmap_shard_tiles",
+        [](const IndexInt& width, const IndexInt& height, const IndexInt& tile_size,
+           const IndexInt& shard, const IndexInt& shards) {
+            return lightmap_shard_tiles(
+                int_arg<uint32_t>(width, "width"), int_arg<uint32_t>(height, "height"),
+                int_arg<uint32_t>(tile_size, "tile_size"), int_arg<uint32_t>(shard, "shard"),
+                int_arg<uint32_t>(shards, "shards"));
+        },
+        py::arg("width"), py::arg("height"), py::arg("tile_size"), py::arg("shard"),
+        py::arg("shards"), "Tiles shard i of N bakes: every tile t with t % N == i.");
     m.def(
         "bake_lightmap",
         [](const Scene& scene, const TexelMap& map, const S settings, const IndirectField* field,
-           const std::vector<uint32_t>& tiles, Progress* progress) {
+           const std::vector<IndexInt>& tile_args, Progress* progress) {
+            std::vector<uint32_t> tiles(tile_args.size());
+            for (size_t i = 0; i < tiles.size(); ++i)
+                tiles[i] = int_arg<uint32_t>(tile_args[i],
+                                             ("tiles[" + std::to_string(i) + "]").c_str());
             const ObjectUse reads = field_use(field, ObjectUse::Kind::Read, "bake_lightmap");
             SceneUse use(scene, SceneUse::Kind::Query, "bake_lightmap");
             py::gil_scoped_release release;
             return bake_lightmap(scene, map, field, settings, tiles, progress);
         },
         py::arg("scene"), py::arg("map"), py::arg("settings") = S{},
-        py::arg("field") = py::none(), py::arg("tiles") = std::vector<uint32_t>{},
+        py::arg("field") = py::none(), py::arg("tiles") = std::vector<IndexInt>{},
         py::arg("progress") = py::none(),
         "Bakes `tiles` (all when empty) of the texel map: with the path tracer when `field` is "
         "None, else with the field's indirect light.");
@@ -273,12 +292,12 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
         py::arg("progress") = py::none(), "Filters the baked texels in place.");
     m.def(
         "dilate_lightmap",
-        [](LightmapTexels& texels, uint32_t padding, Progress* progress) {
+        [](LightmapTexels& texels, const IndexInt& padding, Progress* progress) {
             std::vector<uint8_t> filled;
+            DilationSettings dilation;
+            dilation.padding = int_arg<uint32_t>(padding, "padding");
             {
                 py::gil_scoped_release release;
-                DilationSettings dilation;
-                dilation.padding = padding;
                 filled = dilate_lightmap(texels, dilation, progress);
             }
             return grid_array<bool>(filled, texels.width, texels.height);

@@ -9,6 +9,7 @@
 // Arrays are checked and copied with the GIL held; the GIL is released around file I/O.
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <utility>
@@ -23,6 +24,7 @@
 #include "io/png_image.h"
 #include "numpy_convert.h"
 #include "path_arg.h"
+#include "struct_fields.h"
 #include "util/error.h"
 
 namespace py = pybind11;
@@ -220,11 +222,9 @@ be written.)doc");
 
     m.def(
         "read_exr",
-        [name_from_file](const PathArg& path, int64_t max_pixels) {
-            if (max_pixels < 1) {
-                throw_value_error("max_pixels", "must be positive, got " +
-                                                    std::to_string(max_pixels));
-            }
+        [name_from_file](const PathArg& path, const IndexInt& max_pixels_arg) {
+            const int64_t max_pixels = int_arg<int64_t>(max_pixels_arg, "max_pixels", 1,
+                                                        std::numeric_limits<int64_t>::max());
             std::optional<Image> image;
             {
                 py::gil_scoped_release release;

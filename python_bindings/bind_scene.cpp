@@ -401,13 +401,14 @@ void bind_scene_building(py::class_<Scene>& cls) {
                  .c_str())
         .def(
             "add_instance",
-            [](Scene& scene, uint32_t mesh_id, const py::object& world_from_object,
+            [](Scene& scene, const IndexInt& mesh_id, const py::object& world_from_object,
                std::string name) {
                 SceneUse use(scene, SceneUse::Kind::Edit, "add_instance");
                 const mat4 matrix = world_from_object.is_none()
                                         ? mat4(1.0f)
                                         : to_mat4(world_from_object, "world_from_object");
-                return scene.add_instance(mesh_id, matrix, std::move(name));
+                return scene.add_instance(int_arg<uint32_t>(mesh_id, "mesh_id"), matrix,
+                                          std::move(name));
             },
             py::arg("mesh_id"), py::arg("world_from_object") = py::none(), py::arg("name") = "",
             "Places mesh `mesh_id` with a (4, 4) row-major matrix (Blender's matrix_world; None "
@@ -424,14 +425,20 @@ void bind_scene_building(py::class_<Scene>& cls) {
              "Sets the Camera.")
         .def(
             "set_instance_transform",
-            [](Scene& scene, uint32_t instance_id, const py::object& world_from_object) {
+            [](Scene& scene, const IndexInt& instance_id, const py::object& world_from_object) {
                 SceneUse use(scene, SceneUse::Kind::Edit, "set_instance_transform");
-                scene.set_instance_transform(instance_id,
+                scene.set_instance_transform(int_arg<uint32_t>(instance_id, "instance_id"),
                                              to_mat4(world_from_object, "world_from_object"));
             },
             py::arg("instance_id"), py::arg("world_from_object"),
             "Moves an instance; the next commit() rebuilds only the top-level BVH.")
-        .def("set_mesh", edit("set_mesh", &Scene::set_mesh), py::arg("mesh_id"), py::arg("mesh"),
+        .def(
+            "set_mesh",
+            [](Scene& scene, const IndexInt& mesh_id, const Mesh& mesh) {
+                SceneUse use(scene, SceneUse::Kind::Edit, "set_mesh");
+                scene.set_mesh(int_arg<uint32_t>(mesh_id, "mesh_id"), mesh);
+            },
+            py::arg("mesh_id"), py::arg("mesh"),
              "Replaces mesh `mesh_id` (an shgi.Mesh, checked and cleaned as add_mesh does) for "
              "every instance of it, e.g. with one that has a new lightmap UV map; the next "
              "commit() rebuilds its BVH. ValueError naming the id and the mesh count for a bad "
@@ -480,13 +487,11 @@ py::dict emissive_to_dict(const std::vector<EmissiveTriangle>& triangles) {
 void bind_scene_inspection(py::class_<Scene>& cls) {
     cls.def(
            "commit",
-           [](Scene& scene, int64_t memory_budget_bytes, Progress* progress) {
-               if (memory_budget_bytes < 0)
-                   throw_value_error("memory_budget_bytes",
-                                     "must be >= 0 (0 = 75% of physical RAM), got " +
-                                         std::to_string(memory_budget_bytes));
+           [](Scene& scene, const IndexInt& memory_budget_bytes, Progress* progress) {
+               // 0 = 75% of physical RAM
                CommitSettings settings;
-               settings.memory_budget_bytes = static_cast<uint64_t>(memory_budget_bytes);
+               settings.memory_budget_bytes =
+                   int_arg<uint64_t>(memory_budget_bytes, "memory_budget_bytes");
                SceneUse use(scene, SceneUse::Kind::Commit, "commit");
                py::gil_scoped_release release;
                scene.commit(settings, progress);

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "numpy_convert.h"
+#include "struct_fields.h"
 #include "sh/ggx_zh.h"
 #include "sh/lobe_zh.h"
 #include "sh/sh_basis.h"
@@ -31,12 +32,14 @@ namespace {
 // amortise TBB's per-chunk overhead.
 constexpr uint64_t kDirectionsPerChunk = 4096;
 
-int checked_order(int order, const char* arg_name) {
-    if (order < 0 || order > kMaxShOrder)
-        throw_value_error(arg_name, "SH order " + std::to_string(order) +
+// An SH order argument (any int, or __index__ object such as numpy's integers) in 0..4.
+int checked_order(const IndexInt& order_arg, const char* arg_name) {
+    const py::int_& order = order_arg.value;
+    if (order < py::int_(0) || order > py::int_(kMaxShOrder))
+        throw_value_error(arg_name, "SH order " + std::string(py::str(order)) +
                                         " is not supported; use 0.." +
                                         std::to_string(kMaxShOrder));
-    return order;
+    return order.cast<int>();
 }
 
 // (N, 3) unit vectors; rejects non-unit rows naming the row.
@@ -128,13 +131,13 @@ py::array_t<float> map_directions(const std::vector<vec3>& directions, F&& f) {
 
 void bind_basis(py::module_& sh) {
     sh.attr("MAX_ORDER") = kMaxShOrder;
-    sh.def("num_coefficients", [](int order) {
+    sh.def("num_coefficients", [](const IndexInt& order) {
         return sh_num_coefficients(checked_order(order, "order"));
     }, py::arg("order"), "Number of SH coefficients of an order-`order` expansion: (order+1)^2.");
     sh.def(
         "eval",
-        [](const py::handle& directions_obj, int order) {
-            checked_order(order, "order");
+        [](const py::handle& directions_obj, const IndexInt& order_arg) {
+            const int order = checked_order(order_arg, "order");
             const std::vector<vec3> directions = to_unit_directions(directions_obj, "directions");
             const int n = sh_num_coefficients(order);
             py::array_t<float> out({static_cast<py::ssize_t>(directions.size()),
@@ -167,8 +170,8 @@ void bind_projection(py::module_& sh) {
     sh.def(
         "project",
         [](const py::handle& directions_obj, const py::handle& values_obj,
-           const py::handle& weights_obj, int order) {
-            checked_order(order, "order");
+           const py::handle& weights_obj, const IndexInt& order_arg) {
+            const int order = checked_order(order_arg, "order");
             const std::vector<vec3> directions = to_unit_directions(directions_obj, "directions");
             const std::vector<vec3> values = to_vec3_array(values_obj, "values");
             if (values.size() != directions.size())
@@ -268,16 +271,18 @@ void bind_zonal(py::module_& sh) {
 }
 
 void bind_lobes(py::module_& sh) {
-    const auto first_bands = [](const ZhCoeffs& zh, int order) {
+    const auto first_bands = [](const ZhCoeffs& zh, const IndexInt& order) {
         return scalar_to_numpy(zh.data(), checked_order(order, "order") + 1);
     };
-    sh.def("cosine_lobe_zh", [=](int order) { return first_bands(cosine_lobe_zh(), order); },
-           py::arg("order") = kMaxShOrder,
-           "ZH coefficients z_0..z_order of the clamped cosine max(cos theta, 0): sqrt(pi)/2, "
-           "sqrt(pi/3), sqrt(5pi)/8, 0, -sqrt(pi)/16.");
+    sh.def(
+        "cosine_lobe_zh",
+        [=](const IndexInt& order) { return first_bands(cosine_lobe_zh(), order); },
+        py::arg("order") = kMaxShOrder,
+        "ZH coefficients z_0..z_order of the clamped cosine max(cos theta, 0): sqrt(pi)/2, "
+        "sqrt(pi/3), sqrt(5pi)/8, 0, -sqrt(pi)/16.");
     sh.def(
         "lambert_zh",
-        [=](int order, float albedo) {
+        [=](const IndexInt& order, float albedo) {
             return first_bands(lambert_zh(checked_finite(albedo, "albedo")), order);
         },
         py::arg("order") = kMaxShOrder, py::arg("albedo") = 1.0f,
@@ -285,7 +290,7 @@ void bind_lobes(py::module_& sh) {
         "(seed 004 3.3.1, corrected even-l formula).");
     sh.def(
         "phong_zh",
-        [=](float exponent, int order, float specular) {
+        [=](float exponent, const IndexInt& order, float specular) {
             if (!(exponent >= 0.0f) || !std::isfinite(exponent))
                 throw_value_error("exponent", "is " + std::to_string(exponent) +
                                                   "; it must be finite and >= 0");
@@ -321,11 +326,11 @@ void bind_lobes(py::module_& sh) {
 void bind_window(py::module_& sh) {
     sh.def(
         "window_factors",
-        [](const std::string& kind, int order, float width) {
+        [](const std::string& kind, const IndexInt& order_arg, float width) {
             const ShWindow window = parse_sh_window(kind);
+            const int order = checked_order(order_arg, "order");
             const BandFactors factors =
-                sh_window_factors(window, checked_order(order, "order"),
-                                  checked_finite(width, "width"));
+                sh_window_factors(window, order, checked_finite(width, "width"));
             return scalar_to_numpy(factors.data(), order + 1);
         },
         py::arg("kind"), py::arg("order"), py::arg("width") = 0.0f,

@@ -167,10 +167,10 @@ void bind_util(py::module_& m) {
     m.def("version", &version, "SHGI's version string.");
     m.def(
         "set_max_threads",
-        [](int threads) {
-            if (threads < 0)
-                throw py::value_error("threads: must be >= 0 (0 = all cores), got " +
-                                      std::to_string(threads));
+        [](const IndexInt& threads_arg) {
+            // 0 = all cores; TBB takes a size_t, and no machine has 2^31 cores.
+            const int threads = int_arg<int>(threads_arg, "threads", 0,
+                                             std::numeric_limits<int>::max());
             thread_limit().reset();
             if (threads > 0)
                 thread_limit() = std::make_unique<tbb::global_control>(

@@ -101,6 +101,16 @@ U checked_integer(const pybind11::handle& value, const char* name,
                             maximum);
 }
 
+// An integer argument bound as IndexInt, as a U in [minimum, maximum] (by default the type's
+// range): outside it, a ValueError naming the argument. pybind's own int caster turned 2**64 into
+// a TypeError about incompatible arguments that named none.
+template <typename U>
+U int_arg(const IndexInt& value, const char* name,
+          typename Exactly<U>::type minimum = std::numeric_limits<U>::min(),
+          typename Exactly<U>::type maximum = std::numeric_limits<U>::max()) {
+    return range_checked<U>(value.value, name, minimum, maximum);
+}
+
 // An integer field (int, uint32_t, uint64_t) exposed as an int in [minimum, maximum], by default
 // the type's range. It takes any int or __index__ object (numpy's integers); outside the range
 // (2**40 for an int, -1 for an unsigned) it is a ValueError naming the field and the range,

@@ -2063,7 +2063,7 @@ class Scene:
         """
         An empty scene.
         """
-    def add_instance(self, mesh_id: typing.SupportsInt | typing.SupportsIndex, world_from_object: typing.Any = None, name: str = '') -> int:
+    def add_instance(self, mesh_id: typing.SupportsIndex, world_from_object: typing.Any = None, name: str = '') -> int:
         """
         Places mesh `mesh_id` with a (4, 4) row-major matrix (Blender's matrix_world; None = identity); returns the instance id.
         """
@@ -2087,7 +2087,7 @@ class Scene:
         """
         World-space bounds ((x0, y0, z0), (x1, y1, z1)); ValueError for an empty scene.
         """
-    def commit(self, memory_budget_bytes: typing.SupportsInt | typing.SupportsIndex = 0, progress: Progress = None) -> None:
+    def commit(self, memory_budget_bytes: typing.SupportsIndex = 0, progress: Progress = None) -> None:
         """
         Checks cross references and builds the BVH, with the GIL released. Raises MemoryError when the BVH would exceed memory_budget_bytes (0 = 75% of RAM), shgi.Cancelled when progress.cancel() is called.
         """
@@ -2107,11 +2107,11 @@ class Scene:
         """
         Sets the Camera.
         """
-    def set_instance_transform(self, instance_id: typing.SupportsInt | typing.SupportsIndex, world_from_object: typing.Any) -> None:
+    def set_instance_transform(self, instance_id: typing.SupportsIndex, world_from_object: typing.Any) -> None:
         """
         Moves an instance; the next commit() rebuilds only the top-level BVH.
         """
-    def set_mesh(self, mesh_id: typing.SupportsInt | typing.SupportsIndex, mesh: Mesh) -> None:
+    def set_mesh(self, mesh_id: typing.SupportsIndex, mesh: Mesh) -> None:
         """
         Replaces mesh `mesh_id` (an shgi.Mesh, checked and cleaned as add_mesh does) for every instance of it, e.g. with one that has a new lightmap UV map; the next commit() rebuilds its BVH. ValueError naming the id and the mesh count for a bad mesh_id.
         """
@@ -2466,11 +2466,11 @@ class WorldSampling:
     @property
     def value(self) -> int:
         ...
-def bake_lightmap(scene: Scene, map: TexelMap, settings: LightmapSettings = ..., field: IndirectField = None, tiles: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex] = [], progress: Progress = None) -> LightmapTexels:
+def bake_lightmap(scene: Scene, map: TexelMap, settings: LightmapSettings = ..., field: IndirectField = None, tiles: collections.abc.Sequence[typing.SupportsIndex] = [], progress: Progress = None) -> LightmapTexels:
     """
     Bakes `tiles` (all when empty) of the texel map: with the path tracer when `field` is None, else with the field's indirect light.
     """
-def dilate_lightmap(texels: LightmapTexels, padding: typing.SupportsInt | typing.SupportsIndex = 4, progress: Progress = None) -> numpy.typing.NDArray[numpy.bool]:
+def dilate_lightmap(texels: LightmapTexels, padding: typing.SupportsIndex = 4, progress: Progress = None) -> numpy.typing.NDArray[numpy.bool]:
     """
     Spreads every layer `padding` texels beyond the charts in place; returns the (H, W) bool mask of texels holding a value.
     """
@@ -2478,11 +2478,11 @@ def filter_lightmap(map: TexelMap, texels: LightmapTexels, settings: LightmapFil
     """
     Filters the baked texels in place.
     """
-def lightmap_shard_tiles(width: typing.SupportsInt | typing.SupportsIndex, height: typing.SupportsInt | typing.SupportsIndex, tile_size: typing.SupportsInt | typing.SupportsIndex, shard: typing.SupportsInt | typing.SupportsIndex, shards: typing.SupportsInt | typing.SupportsIndex) -> list[int]:
+def lightmap_shard_tiles(width: typing.SupportsIndex, height: typing.SupportsIndex, tile_size: typing.SupportsIndex, shard: typing.SupportsIndex, shards: typing.SupportsIndex) -> list[int]:
     """
     Tiles shard i of N bakes: every tile t with t % N == i.
     """
-def lightmap_tile_count(width: typing.SupportsInt | typing.SupportsIndex, height: typing.SupportsInt | typing.SupportsIndex, tile_size: typing.SupportsInt | typing.SupportsIndex) -> int:
+def lightmap_tile_count(width: typing.SupportsIndex, height: typing.SupportsIndex, tile_size: typing.SupportsIndex) -> int:
     ...
 def linear_from_srgb(encoded: typing.Annotated[numpy.typing.ArrayLike, numpy.float32]) -> typing.Any:
     """
@@ -2532,11 +2532,11 @@ def merge_lightmap(into: LightmapTexels, part: LightmapTexels) -> None:
     """
     Copies the texels `part` baked into `into` (ValueError when shards overlap).
     """
-def rasterize_texels(scene: Scene, instance: typing.SupportsInt | typing.SupportsIndex, settings: TexelRasterSettings = ..., progress: Progress = None) -> TexelMap:
+def rasterize_texels(scene: Scene, instance: typing.SupportsIndex, settings: TexelRasterSettings = ..., progress: Progress = None) -> TexelMap:
     """
     Rasterizes instance `instance`'s lightmap UV map; ValueError naming the object when the UV map is missing (listing the ones it has) or the mesh is bad.
     """
-def read_exr(path: str | bytes | os.PathLike, max_pixels: typing.SupportsInt | typing.SupportsIndex = 268435456) -> dict:
+def read_exr(path: str | bytes | os.PathLike, max_pixels: typing.SupportsIndex = 268435456) -> dict:
     """
     Reads an OpenEXR file into a dict of layer name -> float32 array (H, W, C), row 0 at the top.
     
@@ -2570,7 +2570,7 @@ def set_log_sink(sink: collections.abc.Callable | None) -> None:
     """
     Routes SHGI's log messages to sink(level: LogLevel, message: str); None restores stderr. The shgi package installs a sink that forwards to logging.getLogger('shgi').
     """
-def set_max_threads(threads: typing.SupportsInt | typing.SupportsIndex) -> None:
+def set_max_threads(threads: typing.SupportsIndex) -> None:
     """
     Limits SHGI's worker threads (0 = all cores). Results do not depend on it.
     """

@@ -14,11 +14,11 @@ def convolve_zonal(coeffs: typing.Any, zh: typing.Any) -> numpy.typing.NDArray[n
     """
     Convolution with the zonal kernel `zh` (ZH coefficients z_l, Funk-Hecke): band l times sqrt(4pi/(2l+1)) z_l. Returns float32 (n, 3).
     """
-def cosine_lobe_zh(order: typing.SupportsInt | typing.SupportsIndex = 4) -> numpy.typing.NDArray[numpy.float32]:
+def cosine_lobe_zh(order: typing.SupportsIndex = 4) -> numpy.typing.NDArray[numpy.float32]:
     """
     ZH coefficients z_0..z_order of the clamped cosine max(cos theta, 0): sqrt(pi)/2, sqrt(pi/3), sqrt(5pi)/8, 0, -sqrt(pi)/16.
     """
-def eval(directions: typing.Any, order: typing.SupportsInt | typing.SupportsIndex = 2) -> numpy.typing.NDArray[numpy.float32]:
+def eval(directions: typing.Any, order: typing.SupportsIndex = 2) -> numpy.typing.NDArray[numpy.float32]:
     """
     Basis functions Y_i at unit `directions` (N, 3): float32 (N, (order+1)^2), index i = l(l+1)+m, no Condon-Shortley phase (Y1-1 = +0.488603 y).
     """
@@ -34,19 +34,19 @@ def irradiance(coeffs: typing.Any, normals: typing.Any) -> numpy.typing.NDArray[
     """
     Irradiance E(n) = sum A_l L_lm Y_lm(n) (W/m^2, unclamped) of radiance coefficients (n, 3) at unit normals (N, 3): float32 (N, 3). A_l = pi, 2pi/3, pi/4, 0, -pi/24.
     """
-def lambert_zh(order: typing.SupportsInt | typing.SupportsIndex = 4, albedo: typing.SupportsFloat | typing.SupportsIndex = 1.0) -> numpy.typing.NDArray[numpy.float32]:
+def lambert_zh(order: typing.SupportsIndex = 4, albedo: typing.SupportsFloat | typing.SupportsIndex = 1.0) -> numpy.typing.NDArray[numpy.float32]:
     """
     ZH coefficients of the Lambertian BRDF times cosine, (albedo/pi) max(cos theta, 0) (seed 004 3.3.1, corrected even-l formula).
     """
-def num_coefficients(order: typing.SupportsInt | typing.SupportsIndex) -> int:
+def num_coefficients(order: typing.SupportsIndex) -> int:
     """
     Number of SH coefficients of an order-`order` expansion: (order+1)^2.
     """
-def phong_zh(exponent: typing.SupportsFloat | typing.SupportsIndex, order: typing.SupportsInt | typing.SupportsIndex = 4, specular: typing.SupportsFloat | typing.SupportsIndex = 1.0) -> numpy.typing.NDArray[numpy.float32]:
+def phong_zh(exponent: typing.SupportsFloat | typing.SupportsIndex, order: typing.SupportsIndex = 4, specular: typing.SupportsFloat | typing.SupportsIndex = 1.0) -> numpy.typing.NDArray[numpy.float32]:
     """
     ZH coefficients of the normalised Phong lobe specular*(n+1)/(2pi) cos^n theta (seed 004 3.3.2).
     """
-def project(directions: typing.Any, values: typing.Any, weights: typing.Any = None, order: typing.SupportsInt | typing.SupportsIndex = 2) -> numpy.typing.NDArray[numpy.float32]:
+def project(directions: typing.Any, values: typing.Any, weights: typing.Any = None, order: typing.SupportsIndex = 2) -> numpy.typing.NDArray[numpy.float32]:
     """
     Projects samples: returns sum_k weights[k] * values[k] * Y(directions[k]) as float32 (n, 3). directions (N, 3) unit, values (N, 3) RGB, weights (N,) or None (all 1). For a Monte Carlo estimate of the integral use weights = 1 / (N * pdf).
     """
@@ -66,7 +66,7 @@ def window(coeffs: typing.Any, kind: str = 'hanning', width: typing.SupportsFloa
     """
     Returns the coefficients (n, 3) with a window applied per band (see window_factors).
     """
-def window_factors(kind: str, order: typing.SupportsInt | typing.SupportsIndex, width: typing.SupportsFloat | typing.SupportsIndex = 0.0) -> numpy.typing.NDArray[numpy.float32]:
+def window_factors(kind: str, order: typing.SupportsIndex, width: typing.SupportsFloat | typing.SupportsIndex = 0.0) -> numpy.typing.NDArray[numpy.float32]:
     """
     Windowing factors (order+1,) against ringing: kind 'none', 'hanning' or 'lanczos'; width in bands, <= 0 means order+1 (Sloan 2008).
     """
