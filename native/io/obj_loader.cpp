@@ -26,6 +26,7 @@
 #include "io/image.h"
 #include "util/error.h"
 #include "util/log.h"
+#include "util/text.h"
 
 namespace shgi {
 namespace {
@@ -157,6 +158,16 @@ IllumModes illum_modes(int illum) {
     return modes;
 }
 
+// A shape or material name as the rest of SHGI takes it, UTF-8: bytes of another encoding
+// (Latin-1 from older exporters) become \xNN escapes, with a warning naming them.
+std::string utf8_name(const std::string& name, const char* kind, const std::string& path) {
+    if (is_utf8(name)) return name;
+    const std::string escaped = utf8_escaped(name);
+    log_warning(path, ": ", kind, " name '", escaped, "' is not UTF-8; the bytes that are "
+                "not are kept as \\xNN escapes");
+    return escaped;
+}
+
 float mean(const tinyobj::real_t rgb[3]) { return (rgb[0] + rgb[1] + rgb[2]) / 3.0f; }
 vec3 to_vec3(const tinyobj::real_t rgb[3]) { return vec3(rgb[0], rgb[1], rgb[2]); }
 
@@ -165,7 +176,7 @@ Material material_from_mtl(const tinyobj::material_t& source, const std::set<std
     const auto has = [&keys](const char* key) { return keys.count(key) > 0; };
     const IllumModes modes = illum_modes(has("illum") ? source.illum : -1);
     Material material;
-    material.name = source.name;
+    material.name = utf8_name(source.name, "material", path);
     if (has("Kd")) material.base_color = to_vec3(source.diffuse);
     if (has("Ke")) material.emission_color = glm::max(to_vec3(source.emission), vec3(0.0f));
     material.specular = has("Ks") ? std::clamp(mean(source.specular), 0.0f, 1.0f)
@@ -182,7 +193,7 @@ Material material_from_mtl(const tinyobj::material_t& source, const std::set<std
     if (has("Ni")) {
         material.ior = float(source.ior);
         if (!(material.ior >= 1.0f)) {
-            log_warning(path, ": material '", source.name, "' has Ni ", source.ior,
+            log_warning(path, ": material '", material.name, "' has Ni ", source.ior,
                         "; SHGI needs an IOR >= 1, using 1");
             material.ior = 1.0f;
         }
@@ -192,7 +203,7 @@ Material material_from_mtl(const tinyobj::material_t& source, const std::set<std
         material.ior = kTransparentIor;
     }
     if (!source.diffuse_texname.empty())
-        log_warning(path, ": material '", source.name, "': map_Kd '", source.diffuse_texname,
+        log_warning(path, ": material '", material.name, "': map_Kd '", source.diffuse_texname,
                     "' is not loaded (OBJ textures are not supported); using Kd");
     return material;
 }
@@ -229,7 +240,8 @@ class ObjImporter {
 Scene ObjImporter::run() {
     for (size_t s = 0; s < data_.shapes.size(); ++s) {
         const tinyobj::shape_t& shape = data_.shapes[s];
-        const std::string name = shape.name.empty() ? format_message("shape_", s) : shape.name;
+        const std::string name = shape.name.empty() ? format_message("shape_", s)
+                                                    : utf8_name(shape.name, "shape", path_);
         if (shape.mesh.num_face_vertices.empty()) {
             log_info(path_, ": shape '", name, "' has no faces (lines or points only); skipped");
             continue;

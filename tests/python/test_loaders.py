@@ -223,6 +223,22 @@ def test_load_obj_counts_materials_and_a_ray_hit(tmp_path):
     assert trace_down(scene, 0.0, 0.0) == pytest.approx(9.0)  # OBJ y = 1 is Blender z = 1
 
 
+def test_load_obj_names_that_are_not_utf8_come_back_escaped(tmp_path, caplog):
+    """A Latin-1 material or shape name reached Python as bytes no str could hold: reading
+    scene.materials raised UnicodeDecodeError. The loader now keeps such bytes as \\xNN
+    escapes, as Python's backslashreplace writes them, and warns naming the name."""
+    (tmp_path / "latin.mtl").write_bytes(b"newmtl caf\xe9\nKd 0.5 0.5 0.5\n")
+    path = tmp_path / "latin.obj"
+    path.write_bytes(b"mtllib latin.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl caf\xe9\n"
+                     b"o Stra\xdfe\nf 1 2 3\n")
+    with caplog.at_level("WARNING", logger="shgi"):
+        scene = shgi.load_obj(path)
+    assert [m.name for m in scene.materials] == [b"caf\xe9".decode("utf-8", "backslashreplace")]
+    assert scene.instances[0].name == scene.meshes[0].name == "Stra\\xdfe"
+    assert "material name 'caf\\xe9' is not UTF-8" in caplog.text
+    assert "shape name 'Stra\\xdfe' is not UTF-8" in caplog.text
+
+
 def test_load_obj_missing_file_is_oserror(tmp_path):
     with pytest.raises(OSError, match="nothing.obj"):
         shgi.load_obj(tmp_path / "nothing.obj")
