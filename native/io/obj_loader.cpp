@@ -163,8 +163,8 @@ IllumModes illum_modes(int illum) {
 std::string utf8_name(const std::string& name, const char* kind, const std::string& path) {
     if (is_utf8(name)) return name;
     const std::string escaped = utf8_escaped(name);
-    log_warning(path, ": ", kind, " name '", escaped, "' is not UTF-8; the bytes that are "
-                "not are kept as \\xNN escapes");
+    log_warning(path, ": ", kind, " name '", escaped, "' is not UTF-8; its bytes outside "
+                "UTF-8 are kept as \\xNN escapes");
     return escaped;
 }
 
