@@ -439,10 +439,10 @@ void bind_scene_building(py::class_<Scene>& cls) {
                 scene.set_mesh(int_arg<uint32_t>(mesh_id, "mesh_id"), mesh);
             },
             py::arg("mesh_id"), py::arg("mesh"),
-             "Replaces mesh `mesh_id` (an shgi.Mesh, checked and cleaned as add_mesh does) for "
-             "every instance of it, e.g. with one that has a new lightmap UV map; the next "
-             "commit() rebuilds its BVH. ValueError naming the id and the mesh count for a bad "
-             "mesh_id.");
+            "Replaces mesh `mesh_id` (an shgi.Mesh, checked and cleaned as add_mesh does) for "
+            "every instance of it, e.g. with one that has a new lightmap UV map; the next "
+            "commit() rebuilds its BVH. ValueError naming the id and the mesh count for a bad "
+            "mesh_id.");
 }
 
 // --- commit, inspection ------------------------------------------------------------------------
