@@ -33,13 +33,8 @@ namespace {
 constexpr uint64_t kDirectionsPerChunk = 4096;
 
 // An SH order argument (any int, or __index__ object such as numpy's integers) in 0..4.
-int checked_order(const IndexInt& order_arg, const char* arg_name) {
-    const py::int_& order = order_arg.value;
-    if (order < py::int_(0) || order > py::int_(kMaxShOrder))
-        throw_value_error(arg_name, "SH order " + std::string(py::str(order)) +
-                                        " is not supported; use 0.." +
-                                        std::to_string(kMaxShOrder));
-    return order.cast<int>();
+int checked_order(const IndexInt& order, const char* arg_name) {
+    return int_arg<int>(order, arg_name, 0, kMaxShOrder);
 }
 
 // (N, 3) unit vectors; rejects non-unit rows naming the row.

@@ -123,7 +123,7 @@ void def_integer(pybind11::class_<T>& cls, const char* name, U T::*field, const 
     cls.def_property(
         name, [field](const T& self) { return self.*field; },
         [field, name, minimum, maximum](T& self, const IndexInt& value) {
-            self.*field = range_checked<U>(value.value, name, minimum, maximum);
+            self.*field = int_arg<U>(value, name, minimum, maximum);
         },
         doc);
 }

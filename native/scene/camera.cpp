@@ -13,30 +13,38 @@ namespace {
 using namespace scene_detail;
 
 // The image rectangle in camera space: on the plane z = -1 for a perspective camera (so x, y
-// are tangents of the view angles), in metres on z = 0 for an orthographic one.
+// are tangents of the view angles), in metres on z = 0 for an orthographic one. In float for
+// rays; validate_camera computes it in double, where extreme fields cannot overflow.
+template <typename Real>
 struct Viewplane {
-    float xmin, xmax, ymin, ymax;
+    Real xmin, xmax, ymin, ymax;
 };
+
+// Blender spans the sensor height only with Vertical fit; Auto spans the larger image dimension
+// with sensor_width.
+bool spans_sensor_height(const Camera& camera) { return camera.sensor_fit == SensorFit::Vertical; }
 
 // Blender's BKE_camera_params_compute_viewplane with pixel aspect 1 and no border: the sensor
 // (or ortho_scale) spans the fitted axis; Auto fits the larger image dimension with
 // sensor_width; the shift is in units of the fitted dimension.
-Viewplane compute_viewplane(const Camera& camera) {
-    const float width = static_cast<float>(camera.resolution_x);
-    const float height = static_cast<float>(camera.resolution_y);
-    const float sensor_size =
-        camera.sensor_fit == SensorFit::Vertical ? camera.sensor_height : camera.sensor_width;
+template <typename Real>
+Viewplane<Real> compute_viewplane(const Camera& camera) {
+    const Real width = static_cast<Real>(camera.resolution_x);
+    const Real height = static_cast<Real>(camera.resolution_y);
+    const Real sensor_size =
+        spans_sensor_height(camera) ? camera.sensor_height : camera.sensor_width;
     SensorFit fit = camera.sensor_fit;
     if (fit == SensorFit::Auto) fit = width >= height ? SensorFit::Horizontal : SensorFit::Vertical;
-    const float view_factor = fit == SensorFit::Horizontal ? width : height;
-    const float fitted_extent = camera.type == CameraType::Orthographic
-                                    ? camera.ortho_scale
-                                    : sensor_size / camera.lens;
-    const float pixel_size = fitted_extent / view_factor;
-    const float dx = camera.shift_x * view_factor;
-    const float dy = camera.shift_y * view_factor;
-    return {(-0.5f * width + dx) * pixel_size, (0.5f * width + dx) * pixel_size,
-            (-0.5f * height + dy) * pixel_size, (0.5f * height + dy) * pixel_size};
+    const Real view_factor = fit == SensorFit::Horizontal ? width : height;
+    const Real fitted_extent = camera.type == CameraType::Orthographic
+                                   ? Real(camera.ortho_scale)
+                                   : sensor_size / Real(camera.lens);
+    const Real pixel_size = fitted_extent / view_factor;
+    const Real dx = Real(camera.shift_x) * view_factor;
+    const Real dy = Real(camera.shift_y) * view_factor;
+    const Real half = Real(0.5);
+    return {(-half * width + dx) * pixel_size, (half * width + dx) * pixel_size,
+            (-half * height + dy) * pixel_size, (half * height + dy) * pixel_size};
 }
 
 // Blender's camera matrix with its scale removed (Cycles' transform_clear_scale): a scaled camera
@@ -60,7 +68,7 @@ CameraRayGenerator::CameraRayGenerator(const Camera& camera)
       height_(static_cast<float>(camera.resolution_y)),
       clip_start_(camera.clip_start),
       clip_end_(camera.clip_end) {
-    const Viewplane plane = compute_viewplane(camera);
+    const Viewplane<float> plane = compute_viewplane<float>(camera);
     xmin_ = plane.xmin;
     xmax_ = plane.xmax;
     ymin_ = plane.ymin;
@@ -102,7 +110,7 @@ bool Camera::project(const vec3& p, vec2* film) const {
     } else if (local.z > 0.0f) {
         return false;
     }
-    const Viewplane plane = compute_viewplane(*this);
+    const Viewplane<float> plane = compute_viewplane<float>(*this);
     if (film) {
         film->x = (x - plane.xmin) / (plane.xmax - plane.xmin) * static_cast<float>(resolution_x);
         film->y = (plane.ymax - y) / (plane.ymax - plane.ymin) * static_cast<float>(resolution_y);
@@ -117,25 +125,16 @@ namespace {
 // plane's reach, in double, must stay within kMaxCoordinate, and a perspective ray's clip_start
 // (longer along rays off the view axis) finite. The message names the fields that set it.
 void validate_image_plane(const Camera& camera, const std::string& item) {
-    const double width = camera.resolution_x, height = camera.resolution_y;
-    const bool vertical = camera.sensor_fit == SensorFit::Vertical ||
-                          (camera.sensor_fit == SensorFit::Auto && width < height);
-    const double view_factor = vertical ? height : width;
+    const Viewplane<double> plane = compute_viewplane<double>(camera);
+    const double reach = std::max({std::fabs(plane.xmin), std::fabs(plane.xmax),
+                                   std::fabs(plane.ymin), std::fabs(plane.ymax)});
     const bool ortho = camera.type == CameraType::Orthographic;
-    const double extent =
-        ortho ? double(camera.ortho_scale)
-              : double(vertical ? camera.sensor_height : camera.sensor_width) / camera.lens;
-    const double pixel_size = extent / view_factor;
-    const double reach_x = (0.5 * width + std::fabs(double(camera.shift_x)) * view_factor) *
-                           pixel_size;
-    const double reach_y = (0.5 * height + std::fabs(double(camera.shift_y)) * view_factor) *
-                           pixel_size;
-    const double reach = std::max(reach_x, reach_y);
+    const bool sensor_height = spans_sensor_height(camera);
     const std::string fields =
         ortho ? format_message("ortho_scale = ", camera.ortho_scale)
               : format_message("lens = ", camera.lens, " mm, ",
-                               vertical ? "sensor_height = " : "sensor_width = ",
-                               vertical ? camera.sensor_height : camera.sensor_width, " mm");
+                               sensor_height ? "sensor_height = " : "sensor_width = ",
+                               sensor_height ? camera.sensor_height : camera.sensor_width, " mm");
     if (!(reach <= double(kMaxCoordinate)))
         throw InvalidArgument(format_message(
             item, ": shift_x = ", camera.shift_x, " and shift_y = ", camera.shift_y, " with ",

@@ -151,7 +151,7 @@ TEST(PhotonMap, BuildStopsOnCancel) {
     Progress progress;
     progress.cancel();
     EXPECT_THROW(PhotonMap(photons, 1.0f, &progress), Cancelled);
-    // A small map builds before any poll could matter; an uncancelled one builds fully.
+    // Uncancelled, the same photons build fully.
     Progress fresh;
     const PhotonMap map(std::move(photons), 1.0f, &fresh);
     EXPECT_EQ(map.size(), 600000u);

@@ -157,6 +157,12 @@ TEST(CameraValidation, RejectsAnImagePlaneBeyondFloatRange) {
     expect_contains(wide, "with ortho_scale = 1e+20 put the image plane's edge");
     expect_contains(wide, "lower ortho_scale");
     expect_contains(bad([](Camera& c) { c.lens = 1e-30f; }), "lower the sensor size or raise lens");
+    // Auto fit spans a portrait image's height with sensor_width, as Blender does.
+    expect_contains(bad([](Camera& c) {
+                        c.resolution_x = 480, c.resolution_y = 640;
+                        c.lens = 1e-30f;
+                    }),
+                    "with lens = 1e-30 mm, sensor_width = 36 mm put");
     expect_contains(bad([](Camera& c) {
                         c.lens = 1e-6f;
                         c.clip_start = 1e33f;
