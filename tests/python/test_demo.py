@@ -1,5 +1,7 @@
 """The main job (examples/demo.py) runs end to end at a tiny size and writes what it promises."""
 
+import math
+import re
 import sys
 
 import numpy as np
@@ -27,6 +29,21 @@ def test_demo_writes_every_pass_and_a_png_for_both_scenes(tmp_path, capsys):
         assert np.isfinite(combined).all() and combined[..., :3].mean() > 0.0
         assert (tmp_path / f"{name}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
         assert f"{name:12s} {size[1]}x{size[0]} px, 2 spp" in summary
+        # Each solver's preview: the same passes, lit, and a line comparing it with the path
+        # tracer (its PSNR and the path tracer's at equal time, both finite numbers).
+        for solver in demo.SOLVERS:
+            preview = shgi.read_exr(str(tmp_path / f"{name}_{solver}.exr"))
+            assert set(preview) == PASSES
+            assert preview["Combined"].shape == (*size, 4)
+            assert np.isfinite(preview["Combined"]).all()
+            assert (preview["DiffInd"][..., :3] * preview["DiffCol"][..., :3]).mean() > 0.0
+            assert (tmp_path / f"{name}_{solver}.png").exists()
+            line = next(line for line in summary.splitlines()
+                        if line.startswith(f"{name:12s} {solver:14s} solve "))
+            figures = re.search(r"indirect diffuse ([+-][0-9.]+)%, PSNR ([0-9.]+) dB \(path "
+                                r"tracer, same time, ([0-9]+) spp: ([0-9.]+) dB\)", line)
+            assert figures, line
+            assert all(math.isfinite(float(x)) for x in figures.groups()), line
 
     # The bake: a lightmap per baked object, lit (the sun room's floor sees the sun patch).
     assert "bake         sun room, 5 lightmaps of 16x16, 4 samples/texel" in summary
