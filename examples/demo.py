@@ -14,8 +14,9 @@ field, 16 samples per pixel). It writes <out>/<scene>_<solver>.exr and .png and 
 solve and render times, how far the mean indirect diffuse light (DiffInd x DiffCol) is from the
 path tracer's, and the PSNR of Combined against the path-traced image (the tests' measure: sRGB
 after the path-traced image's auto-exposure) beside the PSNR the path tracer itself reaches in
-the same time (as many samples per pixel as fit, another seed). Both PSNRs include the
-path-traced image's own noise, so they are lower bounds; their difference is the point.
+the same time (as many samples per pixel as fit). Both use another seed than the path-traced
+image's, and both PSNRs include that image's own noise, so they are lower bounds; their
+difference is the point.
 
 Last it bakes lightmaps of the sun room's floor and walls (examples/scenes.py
 sun_room(lightmap=True)) with the path tracer into <out>/lightmaps/<object>.exr and .png
@@ -57,7 +58,6 @@ def path_trace(scene, samples, seed):
 def render_scene(name, scene, samples, seed, out_dir):
     """The path-traced passes (written out) and the seconds one sample per pixel took."""
     passes, seconds = path_trace(scene, samples, seed)
-
     write_passes(out_dir, name, passes)
     height, width = passes["Combined"].shape[:2]
     path_samples = width * height * samples
@@ -107,7 +107,10 @@ SOLVERS = {"photon_lattice": solve_photon_lattice, "probe_grid": solve_probe_gri
 
 def preview_scene(name, scene, reference, sample_seconds, seed, out_dir):
     """Each solver's preview of the scene, compared with the path-traced passes `reference`, and
-    the path tracer given the same time (`sample_seconds` per sample per pixel)."""
+    the path tracer given the same time (`sample_seconds` per sample per pixel). Both use another
+    seed than the reference's: with its own, a preview's camera rays and light samples would
+    repeat the reference's first samples, and their shared noise would raise the PSNR."""
+    seed += 1
     for solver, solve in SOLVERS.items():
         start = time.perf_counter()
         field = solve(scene, seed)
@@ -119,7 +122,7 @@ def preview_scene(name, scene, reference, sample_seconds, seed, out_dir):
         difference = indirect_diffuse(passes) / indirect_diffuse(reference) - 1.0
         quality = psnr(reference["Combined"], passes["Combined"])
         equal_samples = max(1, int((done - start) / sample_seconds))
-        equal_time, _ = path_trace(scene, equal_samples, seed + 1)
+        equal_time, _ = path_trace(scene, equal_samples, seed)
         print(f"{name:12s} {solver:14s} solve {solved - start:4.2f} s + preview "
               f"{settings.samples} spp {done - solved:4.2f} s: indirect diffuse "
               f"{100 * difference:+4.1f}%, PSNR {quality:.1f} dB (path tracer, same time, "
