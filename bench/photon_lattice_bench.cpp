@@ -88,7 +88,8 @@ void run(const char* name, Scene& scene) {
                 fastest.direct * 1e3, fastest.indirect * 1e3);
     // The frame in raw ray queries per pixel (both wall times on all threads): a measure that
     // does not move with the machine's speed, beside what issue 4's 33 ms allows at this raw rate.
-    const double pixels = 640.0 * 360.0;
+    const double pixels =
+        double(scene.camera().resolution_x) * double(scene.camera().resolution_y);
     std::printf("  that frame: %.2f raw ray queries per pixel (33 ms at this raw rate: %.2f)\n",
                 fastest.total * raw / pixels, kTargetFrameSeconds * raw / pixels);
 }

@@ -110,19 +110,19 @@ def preview_scene(name, scene, reference, sample_seconds, seed, out_dir):
     the path tracer given the same time (`sample_seconds` per sample per pixel). Both use another
     seed than the reference's: with its own, a preview's camera rays and light samples would
     repeat the reference's first samples, and their shared noise would raise the PSNR."""
-    seed += 1
+    other_seed = seed + 1
     for solver, solve in SOLVERS.items():
         start = time.perf_counter()
-        field = solve(scene, seed)
+        field = solve(scene, other_seed)
         solved = time.perf_counter()
-        settings = shgi.PreviewSettings(seed=seed)
+        settings = shgi.PreviewSettings(seed=other_seed)
         passes, _ = shgi.render_preview(scene, field, settings)
         done = time.perf_counter()
         write_passes(out_dir, f"{name}_{solver}", passes)
         difference = indirect_diffuse(passes) / indirect_diffuse(reference) - 1.0
         quality = psnr(reference["Combined"], passes["Combined"])
         equal_samples = max(1, int((done - start) / sample_seconds))
-        equal_time, _ = path_trace(scene, equal_samples, seed)
+        equal_time, _ = path_trace(scene, equal_samples, other_seed)
         print(f"{name:12s} {solver:14s} solve {solved - start:4.2f} s + preview "
               f"{settings.samples} spp {done - solved:4.2f} s: indirect diffuse "
               f"{100 * difference:+4.1f}%, PSNR {quality:.1f} dB (path tracer, same time, "

@@ -31,7 +31,6 @@ def test_demo_writes_every_pass_and_a_png_for_both_scenes(tmp_path, capsys):
         assert f"{name:12s} {size[1]}x{size[0]} px, 2 spp" in summary
         # Each solver's preview: the same passes, lit, and a line comparing it with the path
         # tracer whose figures are those of the written images.
-        reference = layers
         for solver in demo.SOLVERS:
             preview = shgi.read_exr(str(tmp_path / f"{name}_{solver}.exr"))
             assert set(preview) == PASSES
@@ -44,9 +43,9 @@ def test_demo_writes_every_pass_and_a_png_for_both_scenes(tmp_path, capsys):
             figures = re.search(r"indirect diffuse ([+-][0-9.]+)%, PSNR ([0-9.]+) dB \(path "
                                 r"tracer, same time, ([0-9]+) spp: ([0-9.]+) dB\)", line)
             assert figures, line
-            difference = demo.indirect_diffuse(preview) / demo.indirect_diffuse(reference) - 1
+            difference = demo.indirect_diffuse(preview) / demo.indirect_diffuse(layers) - 1
             assert float(figures[1]) == pytest.approx(100 * difference, abs=0.051), line
-            quality = demo.psnr(reference["Combined"], preview["Combined"])
+            quality = demo.psnr(combined, preview["Combined"])
             assert float(figures[2]) == pytest.approx(quality, abs=0.051), line
 
     # The bake: a lightmap per baked object, lit (the sun room's floor sees the sun patch).
