@@ -98,10 +98,10 @@ class ChunkTracer {
     // keeps each photon's stores in bounce order.
     std::vector<Photon> in_photon_order(const std::vector<StagedPhoton>& staged,
                                         size_t photon_count);
-    // Moves a photon whose BSDF sample `bs` succeeded: Russian roulette, then its next ray.
-    // False ends the path.
+    // Moves a photon that survived the roulette (probability `survive`) and whose BSDF sample
+    // `bs` succeeded: its power and its next ray. False ends the path.
     bool scatter(PhotonState& photon, const Shading& shading, const Material& material,
-                 const BsdfSample& bs, Ray* ray);
+                 const BsdfSample& bs, float survive, Ray* ray);
 
     const Scene& scene_;
     const PhotonTracerSettings& settings_;
@@ -115,6 +115,7 @@ class ChunkTracer {
     std::array<Shading, kShadeBatch> shadings_;
     std::array<BsdfSample, kShadeBatch> samples_;
     std::array<bool, kShadeBatch> sampled_{};
+    std::array<float, kShadeBatch> survival_{};  // Russian roulette survival probabilities
     // Stores in the order made (bounce-major) and the counting sort's offsets: kept from chunk
     // to chunk, so only the results' exactly sized vectors are new memory.
     std::vector<StagedPhoton> global_, caustic_;
@@ -195,22 +196,33 @@ void ChunkTracer::shade_batch(size_t begin, size_t end, size_t* alive) {
         if (!direct && shading.bsdf.has_smooth_lobes()) store(photon, shading, rays_[i]);
         sampled_[i - begin] = photon.scatterings < settings_.max_bounces;
     }
-    // The BSDF sample towards each photon's next direction (wo = towards where it came from; the
-    // BSDF evaluates its non-reciprocal Principled v2 terms toward the sampled direction).
+    // Russian roulette by albedo, then the survivors' BSDF sample towards their next direction
+    // (wo = towards where the photon came from; the BSDF evaluates its non-reciprocal Principled
+    // v2 terms toward the sampled direction). Absorbed photons skip the sample. One lobe per
+    // bounce, as seed 000 §5.1 picks one bounce type: its weight needs only that lobe, where the
+    // mixture weight of sample() evaluates every lobe.
     for (size_t i = begin; i < end; ++i) {
         if (!sampled_[i - begin]) continue;
         PhotonState& photon = photons_[i];
         const Shading& shading = shadings_[i - begin];
+        const float survive = std::min(1.0f, max_component(shading.bsdf.albedo_estimate()));
+        survival_[i - begin] = survive;
+        if (!(survive > 0.0f) || photon.rng.next_float() >= survive) {
+            sampled_[i - begin] = false;
+            continue;
+        }
         const float u_lobe = photon.rng.next_float();
         const vec2 u = photon.rng.next_vec2();
-        sampled_[i - begin] = shading.bsdf.sample(shading.wo, u_lobe, u, &samples_[i - begin]);
+        sampled_[i - begin] =
+            shading.bsdf.sample_one_lobe(shading.wo, u_lobe, u, &samples_[i - begin]);
     }
-    // Roulette and next rays; survivors move to the front, in order.
+    // Next rays; survivors move to the front, in order.
     for (size_t i = begin; i < end; ++i) {
         if (!sampled_[i - begin]) continue;
         Ray ray = rays_[i];
         const Material& material = scene_.materials()[points_[i].material_id];
-        if (!scatter(photons_[i], shadings_[i - begin], material, samples_[i - begin], &ray))
+        if (!scatter(photons_[i], shadings_[i - begin], material, samples_[i - begin],
+                     survival_[i - begin], &ray))
             continue;
         photons_[*alive] = photons_[i];
         rays_[*alive] = ray;
@@ -230,7 +242,7 @@ void ChunkTracer::store(const PhotonState& photon, const Shading& shading, const
 }
 
 bool ChunkTracer::scatter(PhotonState& photon, const Shading& shading, const Material& material,
-                          const BsdfSample& bs, Ray* ray) {
+                          const BsdfSample& bs, float survive, Ray* ray) {
     const vec3 wi = glm::normalize(shading.frame.to_world(bs.wi));
     if (!is_finite(wi)) return false;
     const bool geometric_above = glm::dot(wi, shading.geometric_normal) > 0.0f;
@@ -239,8 +251,6 @@ bool ChunkTracer::scatter(PhotonState& photon, const Shading& shading, const Mat
     const bool specular = bs.delta || (bs.lobe_class != LobeClass::Diffuse &&
                                        material.roughness <= settings_.specular_roughness);
     photon.specular_path = photon.specular_path && specular;
-    const float survive = std::min(1.0f, max_component(bs.weight));
-    if (!(survive > 0.0f) || photon.rng.next_float() >= survive) return false;
     photon.power *= bs.weight / survive;
     if (!is_finite(photon.power) || !(max_component(photon.power) > 0.0f)) return false;
     ++photon.scatterings;

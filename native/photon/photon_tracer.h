@@ -13,8 +13,10 @@
 // since emission bounced only on specular surfaces (Dirac lobes, or lobes with roughness <=
 // specular_roughness), at least once, goes to the caustic map (L S+ D); every other stored
 // photon to the global map. Paths end after max_bounces scatterings, by Russian roulette
-// (survival = min(1, max component of the sampled BSDF weight), the survivor's power divided by
-// it) or when they leave the scene.
+// (survival = min(1, max component of PrincipledBsdf::albedo_estimate()), drawn before the BSDF
+// sample so that absorbed photons skip it; the survivor's power is divided by it) or when they
+// leave the scene. A survivor scatters by one lobe, chosen in proportion to the lobes' selection
+// weights (seed 000 §5.1's choice of one bounce type; PrincipledBsdf::sample_one_lobe).
 //
 // Tracing is a wavefront (stream) per chunk of photons: all photons of a chunk are in flight
 // together, each step intersects all their rays with one batch query (Embree ray streams), then

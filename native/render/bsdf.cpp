@@ -412,7 +412,13 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const vec3& base_color,
     for (int i = 0; i < lobe_count_; ++i) {
         Lobe& lobe = lobes_[i];
         lobe.select_prob = average(lobe.weight);
-        if (lobe.kind == LobeKind::Specular) lobe.select_prob *= average(specular_color(cos_nv));
+        if (lobe.kind == LobeKind::Specular) {
+            const vec3 color = specular_color(cos_nv);
+            lobe.select_prob *= average(color);
+            albedo_estimate_ += lobe.weight * color;
+        } else {
+            albedo_estimate_ += lobe.weight;
+        }
         total += lobe.select_prob;
     }
     const float inv_total = total > 0.0f ? 1.0f / total : 0.0f;
@@ -614,8 +620,8 @@ float PrincipledBsdf::pdf(const vec3& wo, const vec3& wi) const {
     return pdf;
 }
 
-bool PrincipledBsdf::sample(const vec3& wo, float u_lobe, const vec2& u, BsdfSample* out) const {
-    if (wo.z <= 0.0f || lobe_count_ == 0) return false;
+const PrincipledBsdf::Lobe* PrincipledBsdf::choose_lobe(float u_lobe) const {
+    if (lobe_count_ == 0) return nullptr;
     int chosen = lobe_count_ - 1;
     for (int i = 0; i < lobe_count_; ++i) {
         if (u_lobe < lobes_[i].select_prob) {
@@ -625,7 +631,14 @@ bool PrincipledBsdf::sample(const vec3& wo, float u_lobe, const vec2& u, BsdfSam
         u_lobe -= lobes_[i].select_prob;
     }
     const Lobe& lobe = lobes_[chosen];
-    if (lobe.select_prob <= 0.0f) return false;
+    return lobe.select_prob > 0.0f ? &lobe : nullptr;
+}
+
+bool PrincipledBsdf::sample(const vec3& wo, float u_lobe, const vec2& u, BsdfSample* out) const {
+    if (wo.z <= 0.0f) return false;
+    const Lobe* chosen = choose_lobe(u_lobe);
+    if (chosen == nullptr) return false;
+    const Lobe& lobe = *chosen;
     if (!lobe_sample(lobe, wo, u, &out->wi)) return false;
     out->lobe_class = lobe.lobe_class();
     out->delta = lobe.delta();
@@ -641,6 +654,13 @@ bool PrincipledBsdf::sample(const vec3& wo, float u_lobe, const vec2& u, BsdfSam
         out->weight = out->eval.total() * (1.0f / out->pdf);
     }
     return is_finite(out->weight) && glm::any(glm::greaterThan(out->weight, vec3(0.0f)));
+}
+
+bool PrincipledBsdf::sample_one_lobe(const vec3& wo, float u_lobe, const vec2& u,
+                                     BsdfSample* out) const {
+    if (wo.z <= 0.0f) return false;
+    const Lobe* chosen = choose_lobe(u_lobe);
+    return chosen != nullptr && sample_lobe(*chosen, chosen->select_prob, wo, u, out);
 }
 
 vec3 PrincipledBsdf::class_color(LobeClass lobe_class) const {

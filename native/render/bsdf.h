@@ -105,6 +105,12 @@ class PrincipledBsdf {
     // u_lobe picks the lobe, u the direction. False when the sample is invalid (below the
     // surface for a reflection lobe, total internal reflection, zero weight).
     bool sample(const vec3& wo, float u_lobe, const vec2& u, BsdfSample* out) const;
+    // The same lobe choice and direction as sample(), but the one-lobe estimator: weight = the
+    // chosen lobe's f |cos| / (its selection probability x its pdf), without evaluating the other
+    // lobes (pdf: that product; eval: the weight in the lobe's class). Unbiased like sample(),
+    // with somewhat more variance where lobes overlap; it is seed 000 §5.1's choice of one
+    // bounce type per photon, and what the photon tracer uses (it needs only the weight).
+    bool sample_one_lobe(const vec3& wo, float u_lobe, const vec2& u, BsdfSample* out) const;
 
     // Sum of closure weights per class: Cycles' DiffCol / GlossCol / TransCol for this hit
     // (PrincipledModel::V2: GlossCol is the specular lobes' estimated albedo toward wo, as
@@ -112,6 +118,11 @@ class PrincipledBsdf {
     vec3 class_color(LobeClass lobe_class) const;
     // True when at least one lobe is not a Dirac lobe (light sampling can help).
     bool has_smooth_lobes() const;
+    // The sum of the lobes' closure weights, the specular lobe's times its colour toward wo: how
+    // much of the light arriving from wo the surface scatters, roughly (it leaves out the
+    // lobes' directional albedos and, on light paths of PrincipledModel::V2, the layer's
+    // dimming of the diffuse). The photon tracer's Russian roulette survival.
+    const vec3& albedo_estimate() const { return albedo_estimate_; }
 
     // --- The split the preview renderer uses (render/preview_renderer.h). "Field lobes" are the
     // non-Dirac diffuse and glossy reflection lobes, whose indirect light comes from an
@@ -149,6 +160,9 @@ class PrincipledBsdf {
         LobeClass lobe_class() const;
     };
 
+    // The lobe u_lobe picks in proportion to the selection probabilities, or nullptr (no lobe,
+    // or one that cannot be chosen).
+    const Lobe* choose_lobe(float u_lobe) const;
     bool sample_lobe(const Lobe& lobe, float choice_prob, const vec3& wo, const vec2& u,
                      BsdfSample* out) const;
 
@@ -205,6 +219,7 @@ class PrincipledBsdf {
         vec3 metal_fss{0.0f};
     } v2_;
     vec3 glossy_albedo_{0.0f};  // V2: GlossCol of the specular lobe (toward wo)
+    vec3 albedo_estimate_{0.0f};
 };
 
 }  // namespace shgi

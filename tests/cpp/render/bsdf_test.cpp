@@ -38,14 +38,18 @@ struct Estimates {
     float valid_fraction = 0.0f;
 };
 
-Estimates sample_estimates(const PrincipledBsdf& bsdf, const vec3& wo) {
+// With one_lobe, PrincipledBsdf::sample_one_lobe (the photon tracer's estimator) instead of
+// sample(): both must be unbiased, and both draw the same directions.
+Estimates sample_estimates(const PrincipledBsdf& bsdf, const vec3& wo, bool one_lobe = false) {
     Pcg32 rng(1, 2);
     Estimates e;
     int valid = 0;
     for (int i = 0; i < kSamples; ++i) {
         BsdfSample s;
         const float u_lobe = rng.next_float();
-        if (!bsdf.sample(wo, u_lobe, rng.next_vec2(), &s)) continue;
+        const vec2 u = rng.next_vec2();
+        if (!(one_lobe ? bsdf.sample_one_lobe(wo, u_lobe, u, &s) : bsdf.sample(wo, u_lobe, u, &s)))
+            continue;
         e.sampled_albedo += s.weight;
         ++valid;
     }
@@ -92,11 +96,15 @@ TEST_P(BsdfConsistency, SampledWeightsMatchQuadratureAndPdfIntegratesToValidFrac
         material.distribution = c.distribution;
         const PrincipledBsdf bsdf(material, vec3(1.0f), false, wo.z, c.origin);
         const Estimates e = sample_estimates(bsdf, wo);
+        const Estimates one_lobe = sample_estimates(bsdf, wo, true);
         vec3 albedo;
         float pdf_integral;
         quadrature(bsdf, wo, &albedo, &pdf_integral);
         EXPECT_NEAR(e.sampled_albedo.x, albedo.x, kMonteCarloTolerance) << c.name << " " << theta;
         EXPECT_NEAR(pdf_integral, e.valid_fraction, kMonteCarloTolerance) << c.name << " " << theta;
+        EXPECT_NEAR(one_lobe.sampled_albedo.x, albedo.x, kMonteCarloTolerance)
+            << c.name << " " << theta << " (one lobe)";
+        EXPECT_EQ(one_lobe.valid_fraction, e.valid_fraction) << c.name << " " << theta;
         if (c.metallic == 1.0f || c.transmission == 1.0f) {
             EXPECT_LE(albedo.x, 1.0f + kMonteCarloTolerance) << c.name << " " << theta;
         }
@@ -266,6 +274,29 @@ TEST(Bsdf, NoSpecularClosureWithoutSpecularOrMetallic) {
     material.metallic = 1.0f;
     const PrincipledBsdf metal(material, vec3(0.5f), false, grazing.z);
     EXPECT_EQ(metal.class_color(LobeClass::Glossy), vec3(1.0f));
+}
+
+// The photon tracer's roulette survival: a matte surface scatters its base colour; a smooth
+// metal its specular colour toward wo, which is what its mirror sample carries; smooth glass
+// all of it (Fresnel reflection plus the white refraction).
+TEST(Bsdf, AlbedoEstimateIsWhatTheSurfaceScatters) {
+    Material material = make_material(0.0f, 0.0f, 0.5f);
+    material.specular = 0.0f;
+    const vec3 base(0.2f, 0.5f, 0.8f);
+    const PrincipledBsdf matte(material, base, false, 0.7f);
+    EXPECT_EQ(matte.albedo_estimate(), base);
+
+    material = make_material(1.0f, 0.0f, 0.0f);
+    const vec3 wo = direction_from_angle(0.6f);
+    const PrincipledBsdf metal(material, base, false, wo.z);
+    BsdfSample s;
+    ASSERT_TRUE(metal.sample(wo, 0.5f, vec2(0.5f), &s));
+    ASSERT_TRUE(s.delta);
+    EXPECT_NEAR(metal.albedo_estimate().x, s.weight.x, 1e-6f);
+    EXPECT_NEAR(metal.albedo_estimate().z, s.weight.z, 1e-6f);
+
+    const PrincipledBsdf glass(make_material(0.0f, 1.0f, 0.0f), vec3(1.0f), false, wo.z);
+    EXPECT_NEAR(glass.albedo_estimate().y, 1.0f, 1e-6f);
 }
 
 // --- PrincipledModel::V2 (Cycles 4's layering) ---
