@@ -7,8 +7,8 @@
 // raw rate) and the rest; injection rate (stored photons per second); the
 // solve's stage times; and the frame time of a 640 x 360 preview with the solved field, at 1
 // sample per pixel (one progressive viewport frame) and 16 (PreviewSettings' default), with its
-// stage times, best of three runs each; and the best of 40 1-spp frames added to one renderer,
-// also in raw ray queries per pixel.
+// stage times, best of three runs each; and the best of 40 1-spp frames added to one renderer
+// that sums only Combined (the viewport's pattern), also in raw ray queries per pixel.
 // Last, the caustic photon map's density estimate (caustics = PhotonMap): the time of one k = 50
 // query over 10^6 photons lying mostly in a dense caustic, on one thread.
 // A plain main printing figures: benchmarks are not tests.
@@ -73,8 +73,10 @@ void run(const char* name, Scene& scene) {
                     fastest.indirect * 1e3);
     }
     // The viewport's pattern: one renderer, a 1-spp frame added per redraw (each pixel's sample
-    // is accumulated onto the film it already has). Best of kProgressiveFrames.
+    // is accumulated onto the film it already has), summing only Combined as the add-on's
+    // viewport does (engine/viewport_worker.py). Best of kProgressiveFrames.
     PreviewSettings preview;
+    preview.combined_only = true;
     PreviewRenderer renderer(scene, preview);
     PreviewTimings fastest;
     fastest.total = 1e30;
@@ -82,8 +84,8 @@ void run(const char* name, Scene& scene) {
         renderer.render(&lattice, 1);
         if (renderer.timings().total < fastest.total) fastest = renderer.timings();
     }
-    std::printf("  preview 640x360, progressive 1-spp frames (best of %d): %.1f ms (primary %.1f, "
-                "direct %.1f, indirect %.1f)\n",
+    std::printf("  preview 640x360, progressive 1-spp Combined-only frames (best of %d): %.1f ms "
+                "(primary %.1f, direct %.1f, indirect %.1f)\n",
                 kProgressiveFrames, fastest.total * 1e3, fastest.primary * 1e3,
                 fastest.direct * 1e3, fastest.indirect * 1e3);
     // The frame in raw ray queries per pixel (both wall times on all threads): a measure that
