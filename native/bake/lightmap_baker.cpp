@@ -369,10 +369,13 @@ LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const Indi
                 const uint32_t y0 = (tile / tiles_x) * settings.tile_size;
                 const uint32_t x1 = std::min(map.width, x0 + settings.tile_size);
                 const uint32_t y1 = std::min(map.height, y0 + settings.tile_size);
-                for (uint32_t y = y0; y < y1; ++y) {
-                    throw_if_cancelled(progress);
-                    for (uint32_t x = x0; x < x1; ++x) baker.bake_texel(map.texel_index(x, y), out);
-                }
+                // Polled per texel: a row of a tile at thousands of samples per texel takes
+                // longer than the 0.2 s a cancel may take on a slow machine.
+                for (uint32_t y = y0; y < y1; ++y)
+                    for (uint32_t x = x0; x < x1; ++x) {
+                        throw_if_cancelled(progress);
+                        baker.bake_texel(map.texel_index(x, y), out);
+                    }
                 const uint64_t finished = done.fetch_add(1) + 1;
                 if (progress) progress->report(finished, work.size());
             }

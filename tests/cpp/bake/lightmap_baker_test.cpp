@@ -315,16 +315,19 @@ TEST(LightmapBaker, CancelStopsPromptly) {
     LightmapSettings settings;
     settings.samples = 4096;
     Progress progress;
+    // Timed from the cancel itself: on a loaded machine the canceller may wake well after its
+    // 0.2 s, which is not the bake's latency.
+    std::chrono::steady_clock::time_point cancelled_at;
     std::thread canceller([&] {
         std::this_thread::sleep_for(std::chrono::milliseconds(200));
+        cancelled_at = std::chrono::steady_clock::now();
         progress.cancel();
     });
-    const auto start = std::chrono::steady_clock::now();
     EXPECT_THROW(bake_lightmap(r.scene, map, nullptr, settings, {}, &progress), Cancelled);
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const auto stopped_at = std::chrono::steady_clock::now();
     canceller.join();
-    EXPECT_LT(seconds, 0.2 + 0.2);  // cancelled at 0.2 s, stopped within another 0.2 s
+    const double latency = std::chrono::duration<double>(stopped_at - cancelled_at).count();
+    EXPECT_LT(latency, 0.2);  // DESIGN.md: a cancelled call returns within 0.2 s
 }
 
 TEST(LightmapBaker, TexelUnderAWallEdgeIsNotBlackAfterUnocclude) {
