@@ -7,6 +7,7 @@ import collections
 import os
 import re
 import pathlib
+import signal
 import sys
 
 import pytest
@@ -28,6 +29,14 @@ BUILD_PYTHON = _build_python_dir()
 if (BUILD_PYTHON / "shgi").is_dir():
     sys.path.insert(0, str(BUILD_PYTHON))
 sys.path.append(str(BLENDER_SCRIPTS))
+
+# A run started with SIGINT ignored (a background job of a non-interactive shell, `make test &`)
+# would pass that on to every child, and the tests that send a child SIGINT as Ctrl-C would wait
+# for a cancel that never comes (engine_cancel.py under the bpy module hung for its whole
+# timeout). Python's own handler, as in an interactive run, makes children start with SIGINT's
+# default action (exec resets handled signals, not ignored ones).
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture(scope="session")
