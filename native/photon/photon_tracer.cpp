@@ -45,6 +45,12 @@ constexpr double kGrowingPhotonsMemoryFraction = 0.75;
 // cache between stages.
 constexpr size_t kShadeBatch = 32;
 
+// Russian roulette by albedo: the probability that a photon arriving at a surface with this
+// BSDF scatters on (its power is then divided by it).
+float survival_probability(const PrincipledBsdf& bsdf) {
+    return std::min(1.0f, max_component(bsdf.albedo_estimate()));
+}
+
 // A stored photon and the photon of its chunk (index from the chunk's start) that stored it.
 struct StagedPhoton {
     Photon photon;
@@ -98,10 +104,10 @@ class ChunkTracer {
     // keeps each photon's stores in bounce order.
     std::vector<Photon> in_photon_order(const std::vector<StagedPhoton>& staged,
                                         size_t photon_count);
-    // Moves a photon that survived the roulette (probability `survive`) and whose BSDF sample
-    // `bs` succeeded: its power and its next ray. False ends the path.
+    // Moves a photon that survived the roulette and whose BSDF sample `bs` succeeded: its power
+    // and its next ray. False ends the path.
     bool scatter(PhotonState& photon, const Shading& shading, const Material& material,
-                 const BsdfSample& bs, float survive, Ray* ray);
+                 const BsdfSample& bs, Ray* ray);
 
     const Scene& scene_;
     const PhotonTracerSettings& settings_;
@@ -115,7 +121,6 @@ class ChunkTracer {
     std::array<Shading, kShadeBatch> shadings_;
     std::array<BsdfSample, kShadeBatch> samples_;
     std::array<bool, kShadeBatch> sampled_{};
-    std::array<float, kShadeBatch> survival_{};  // Russian roulette survival probabilities
     // Stores in the order made (bounce-major) and the counting sort's offsets: kept from chunk
     // to chunk, so only the results' exactly sized vectors are new memory.
     std::vector<StagedPhoton> global_, caustic_;
@@ -205,8 +210,7 @@ void ChunkTracer::shade_batch(size_t begin, size_t end, size_t* alive) {
         if (!sampled_[i - begin]) continue;
         PhotonState& photon = photons_[i];
         const Shading& shading = shadings_[i - begin];
-        const float survive = std::min(1.0f, max_component(shading.bsdf.albedo_estimate()));
-        survival_[i - begin] = survive;
+        const float survive = survival_probability(shading.bsdf);
         if (!(survive > 0.0f) || photon.rng.next_float() >= survive) {
             sampled_[i - begin] = false;
             continue;
@@ -221,8 +225,7 @@ void ChunkTracer::shade_batch(size_t begin, size_t end, size_t* alive) {
         if (!sampled_[i - begin]) continue;
         Ray ray = rays_[i];
         const Material& material = scene_.materials()[points_[i].material_id];
-        if (!scatter(photons_[i], shadings_[i - begin], material, samples_[i - begin],
-                     survival_[i - begin], &ray))
+        if (!scatter(photons_[i], shadings_[i - begin], material, samples_[i - begin], &ray))
             continue;
         photons_[*alive] = photons_[i];
         rays_[*alive] = ray;
@@ -242,7 +245,7 @@ void ChunkTracer::store(const PhotonState& photon, const Shading& shading, const
 }
 
 bool ChunkTracer::scatter(PhotonState& photon, const Shading& shading, const Material& material,
-                          const BsdfSample& bs, float survive, Ray* ray) {
+                          const BsdfSample& bs, Ray* ray) {
     const vec3 wi = glm::normalize(shading.frame.to_world(bs.wi));
     if (!is_finite(wi)) return false;
     const bool geometric_above = glm::dot(wi, shading.geometric_normal) > 0.0f;
@@ -251,7 +254,7 @@ bool ChunkTracer::scatter(PhotonState& photon, const Shading& shading, const Mat
     const bool specular = bs.delta || (bs.lobe_class != LobeClass::Diffuse &&
                                        material.roughness <= settings_.specular_roughness);
     photon.specular_path = photon.specular_path && specular;
-    photon.power *= bs.weight / survive;
+    photon.power *= bs.weight / survival_probability(shading.bsdf);
     if (!is_finite(photon.power) || !(max_component(photon.power) > 0.0f)) return false;
     ++photon.scatterings;
     ray->origin = shading.spawn_origin(wi);
