@@ -50,6 +50,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 import shgi  # noqa: E402
 from image_metrics import psnr  # noqa: E402
+from latency_clock import LatencyClock  # noqa: E402
 from recording_layout import draw_panel  # noqa: E402
 from shgi_blender import bake_settings  # noqa: E402
 from shgi_blender.engine import solution_cache  # noqa: E402
@@ -591,15 +592,15 @@ def worker_running():
     return any(thread.name == WORKER_THREAD for thread in threading.enumerate())
 
 
-def watch_worker_end():
-    """{"at": time} once the bake's worker thread has ended, timed by a thread of its own (the
-    steps' timer runs only between Blender's redraws)."""
+def watch_worker_end(clock):
+    """{"latency": clock.read()} once the bake's worker thread has ended, timed by a thread of
+    its own (the steps' timer runs only between Blender's redraws)."""
     ended = {}
 
     def watch():
         while worker_running():
             time.sleep(WATCH_SECONDS)
-        ended["at"] = time.perf_counter()
+        ended["latency"] = clock.read()
 
     threading.Thread(target=watch, name="bake-watch", daemon=True).start()
     return ended
@@ -633,12 +634,12 @@ def modal_steps(results, out_dir):
         yield POLL_SECONDS
     results["first_image_seconds"] = time.perf_counter() - start
     results["worker_running_at_esc"] = worker_running()
-    ended = watch_worker_end()
-    esc_at = time.perf_counter()
+    esc = LatencyClock()
+    ended = watch_worker_end(esc)
     bpy.context.window_manager.windows[0].event_simulate(type="ESC", value="PRESS")
-    while "at" not in ended and time.perf_counter() - esc_at < MODAL_TIMEOUT_SECONDS:
+    while "latency" not in ended and esc.read().wall < MODAL_TIMEOUT_SECONDS:
         yield POLL_SECONDS
-    results["cancel_seconds"] = ended["at"] - esc_at
+    results["cancel_latency"] = ended["latency"]._asdict()
     yield 0.5  # the operator's timer notices the end and finishes
     results["cancelled"] = {"images": sorted(image.name for image in bpy.data.images
                                              if image.name.endswith("_shgi_lightmap")),
