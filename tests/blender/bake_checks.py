@@ -58,7 +58,6 @@ from shgi_blender.export import export_scene  # noqa: E402
 
 RESOLUTION = 64              # texels per side of the floor's lightmap
 CYCLES_SAMPLES = 1024        # the reference
-CYCLES_MARGIN = 4            # texels Cycles extends its bake by
 THREADS = 2
 SEED = 1
 # shgi samples per texel of each source. The field sources bake only direct light per sample
@@ -201,9 +200,10 @@ def set_up_cycles(scene):
     cycles.seed = SEED
 
 
-def cycles_bake(name, margin):
-    """Cycles' DIFFUSE {DIRECT, INDIRECT} bake of object `name` through LightmapUV:
-    ((H, W, 4) float64 RGBA, seconds); alpha is 1 where Cycles baked (the image starts at 0)."""
+def cycles_bake(name):
+    """Cycles' DIFFUSE {DIRECT, INDIRECT} bake of object `name` through LightmapUV, without a
+    margin: ((H, W, 4) float64 RGBA, seconds); alpha is 1 where Cycles baked (the image starts at
+    0). The comparisons read only those texels, so the one bake is the reference and the mask."""
     obj = bpy.data.objects[name]
     image = bpy.data.images.new(f"{name}_cycles", RESOLUTION, RESOLUTION, alpha=True,
                                 float_buffer=True)
@@ -215,7 +215,7 @@ def cycles_bake(name, margin):
     obj.data.uv_layers.active = obj.data.uv_layers[UV_MAP]
     select_only(name)
     start = time.perf_counter()
-    bpy.ops.object.bake(type="DIFFUSE", pass_filter={"DIRECT", "INDIRECT"}, margin=margin,
+    bpy.ops.object.bake(type="DIFFUSE", pass_filter={"DIRECT", "INDIRECT"}, margin=0,
                         use_clear=True, target="IMAGE_TEXTURES")
     seconds = time.perf_counter() - start
     tree.nodes.remove(node)
@@ -261,8 +261,8 @@ def figures(reference, texels, mask):
 
 def bake_comparison(scene, tmpdir, results):
     set_up_cycles(scene)
-    reference, seconds = cycles_bake("floor", CYCLES_MARGIN)
-    mask = cycles_bake("floor", 0)[0][..., 3] > 0.5  # without margin: alpha marks baked texels
+    reference, seconds = cycles_bake("floor")
+    mask = reference[..., 3] > 0.5
     results["cycles"] = {"seconds": seconds, "samples": CYCLES_SAMPLES,
                          "mask_texels": int(mask.sum())}
     print(f"Cycles bake of the floor: {RESOLUTION}x{RESOLUTION} texels, {CYCLES_SAMPLES} "
@@ -295,11 +295,6 @@ def bake_comparison(scene, tmpdir, results):
               f"{100 * row['visible']['mean_difference']:+.2f}%, mean |difference| "
               f"{100 * row['visible']['mean_absolute_difference']:.2f}%, PSNR "
               f"{row['visible']['psnr']:.2f} dB")
-    out_dir = os.path.join(tmpdir, "bake_equal_samples")
-    seconds = bake("floor", source="PATH_TRACER", samples=CYCLES_SAMPLES, resolution=RESOLUTION,
-                   output_folder=out_dir)
-    results["path_tracer_equal_samples_seconds"] = seconds
-    print(f"shgi PATH_TRACER at Cycles' {CYCLES_SAMPLES} samples: {seconds:.2f} s")
     image = bpy.data.images["floor_shgi_lightmap"]
     results["image"] = {"size": list(image.size), "is_float": image.is_float,
                         "packed": image.packed_file is not None}
