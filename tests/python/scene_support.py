@@ -1,13 +1,29 @@
 """What tests outside Blender share: the project's example scenes (examples/scenes.py) as they
-use them, and a guard against calls that deadlock."""
+use them, their path-traced references, and a guard against calls that deadlock."""
 
 import threading
+
+import shgi
+
+_REFERENCES = {}
 
 
 def committed(builder):
     """The shgi.Scene of an examples/scenes.py builder, committed and ready to render."""
     builder.scene.commit()
     return builder.scene
+
+
+def path_traced_reference(make_scene, scale, samples, seed=11):
+    """(committed scene, path-traced passes) of `make_scene(scale)` (an examples/scenes.py
+    function) at `samples` per pixel, rendered once per session: the photon lattice's and the
+    probe grid's agreement tests compare against the same references."""
+    key = (make_scene, scale, samples, seed)
+    if key not in _REFERENCES:
+        scene = committed(make_scene(scale))
+        _REFERENCES[key] = scene, shgi.render_path_traced(
+            scene, shgi.PathTracerSettings(samples=samples, seed=seed))
+    return _REFERENCES[key]
 
 
 def finishes_in_a_thread(call, timeout=30.0):

@@ -17,7 +17,7 @@ import pytest
 import shgi
 from blender_support import REPO_ROOT
 from image_metrics import psnr  # tests/blender/image_metrics.py: the figure Blender tests use
-from scene_support import committed
+from scene_support import committed, path_traced_reference
 
 sys.path.insert(0, str(REPO_ROOT / "examples"))
 import scenes  # noqa: E402  (examples/ is not a package)
@@ -32,9 +32,7 @@ _AGREEMENT = {}
 def agreement(name):
     """(reference passes, preview passes) for a project scene, computed once per session."""
     if name not in _AGREEMENT:
-        scene = committed(getattr(scenes, name)(SCALE))
-        reference = shgi.render_path_traced(
-            scene, shgi.PathTracerSettings(samples=REFERENCE_SAMPLES, seed=11))
+        scene, reference = path_traced_reference(getattr(scenes, name), SCALE, REFERENCE_SAMPLES)
         lattice = shgi.PhotonLattice(scene, shgi.PhotonLatticeSettings(seed=5))
         lattice.solve()
         preview, timings = shgi.render_preview(scene, lattice, shgi.PreviewSettings(seed=5))

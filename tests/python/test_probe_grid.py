@@ -18,7 +18,7 @@ import pytest
 import shgi
 from blender_support import REPO_ROOT
 from image_metrics import psnr
-from scene_support import committed, finishes_in_a_thread
+from scene_support import committed, finishes_in_a_thread, path_traced_reference
 
 sys.path.insert(0, str(REPO_ROOT / "examples"))
 import scenes  # noqa: E402  (examples/ is not a package)
@@ -27,16 +27,9 @@ SCALE = 0.25
 REFERENCE_SAMPLES = 2048
 AGREEMENT_PASSES = 6
 
-_REFERENCES = {}
-
 
 def reference(name, scale=SCALE, samples=REFERENCE_SAMPLES):
-    key = (name, scale, samples)
-    if key not in _REFERENCES:
-        scene = committed(getattr(scenes, name)(scale))
-        _REFERENCES[key] = scene, shgi.render_path_traced(
-            scene, shgi.PathTracerSettings(samples=samples, seed=11))
-    return _REFERENCES[key]
+    return path_traced_reference(getattr(scenes, name), scale, samples)
 
 
 def indirect_diffuse(passes):
