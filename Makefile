@@ -116,11 +116,12 @@ test-cpp: build
 # 3.4.1 and the bpy module of BPY_VENV) and the packages of `make dist`. The python3 on PATH, when
 # it is another interpreter (pyenv, with numpy 2) that has pytest, runs them again but for the
 # Blender and package tests (marked `blender`, `dist`), whose Blenders and venvs are its same.
+# The first run ends with its 12 slowest tests: where the suite's time goes.
 PYTEST := pytest -q -p no:cacheprovider
 TEST_ENV := PYTHONPATH=$(CURDIR)/$(BUILD_DIR)/python SHGI_BPY_PYTHON=$(BPY_VENV)/bin/python \
 	SHGI_DIST_DIR=$(CURDIR)/$(DIST_DIR)
 test-python: build dist bpy-venv
-	cd tests/python && $(TEST_ENV) $(PYTHON) -m $(PYTEST) .
+	cd tests/python && $(TEST_ENV) $(PYTHON) -m $(PYTEST) --durations=12 .
 	@other=$$(command -v python3); \
 	if [ -n "$$other" ] && [ "$$(readlink -f $$other)" != "$$(readlink -f $(PYTHON))" ]; then \
 		if $$other -c 'import numpy, pytest' 2>/dev/null; then \
