@@ -18,7 +18,7 @@ import os
 import time
 from typing import NamedTuple
 
-_TICKS_PER_SECOND = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+_TICKS_PER_SECOND = os.sysconf("SC_CLK_TCK")
 _STEAL_FIELD = 8  # "cpu user nice system idle iowait irq softirq steal ..."
 
 

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 import shgi
-from scene_support import finishes_in_a_thread
 from latency_clock import LatencyClock
+from scene_support import finishes_in_a_thread
 
 # Embree's watertight intersection is exact to a few float32 ulps at unit scale.
 TOLERANCE = 1e-5
