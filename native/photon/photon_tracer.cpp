@@ -6,8 +6,6 @@
 #include <cmath>
 #include <memory>
 #include <mutex>
-#include <new>
-#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -46,8 +44,6 @@ constexpr double kGrowingPhotonsMemoryFraction = 0.75;
 // photon on the bench scenes), and the batch's Shading and BsdfSample records stay in the L1
 // cache between stages.
 constexpr size_t kShadeBatch = 32;
-// shade_batch builds each Shading over the last one in its slot without destroying it.
-static_assert(std::is_trivially_destructible_v<Shading>);
 
 // Russian roulette by albedo: the probability that a photon arriving at a surface with this
 // BSDF scatters on (its power is then divided by it).
@@ -198,10 +194,8 @@ void ChunkTracer::shade_batch(size_t begin, size_t end, size_t* alive) {
         sampled_[i - begin] = false;
         if (!hits_[i].valid()) continue;  // left the scene
         PhotonState& photon = photons_[i];
-        // Built in its slot: assigning make_shading's result would copy the 260-byte record
-        // (a `rep movsq`, ~4% of the trace's time on the bench's Cornell box).
-        Shading& shading = *::new (&shadings_[i - begin])
-            Shading(make_shading(scene_, points_[i], rays_[i].direction, PathOrigin::Light));
+        const Shading& shading = make_shading_in(&shadings_[i - begin], scene_, points_[i],
+                                                 rays_[i].direction, PathOrigin::Light);
         const bool direct =
             photon.scatterings == 0 && !(photon.from_world && settings_.store_world_direct);
         if (!direct && shading.bsdf.has_smooth_lobes()) store(photon, shading, rays_[i]);

@@ -47,8 +47,8 @@ bool PathIntegrator::begin(const Ray& camera_ray, const Hit& first_hit) {
 bool PathIntegrator::enter_surface(const Hit& hit) {
     find_emission(ray_, hit);
     if (!hit.valid() || terminate_on_next_surface_) return false;
-    shading_.emplace(make_shading(scene_, scene_.surface_point(ray_, hit), ray_.direction));
-    if (vertex_ == 0) record_first_hit(*shading_, ray_, hit);
+    make_shading_in(&shading_, scene_, scene_.surface_point(ray_, hit), ray_.direction);
+    if (vertex_ == 0) record_first_hit(shading_, ray_, hit);
     return true;
 }
 
@@ -56,8 +56,8 @@ bool PathIntegrator::enter_surface(const Hit& hit) {
 // light, then the BSDF chooses whether and where the path continues.
 void PathIntegrator::finish() {
     for (;;) {
-        if (field_ != nullptr) add_field(*shading_);
-        if (!scatter(*shading_, &ray_)) return;
+        if (field_ != nullptr) add_field(shading_);
+        if (!scatter(shading_, &ray_)) return;
         const int total = bounces_[0] + bounces_[1] + bounces_[2];
         terminate_on_next_surface_ = total > settings_.max_bounces ||
                                      bounces_[0] > settings_.diffuse_bounces ||
@@ -127,7 +127,7 @@ void PathIntegrator::sample_direct() {
 }
 
 bool PathIntegrator::prepare_direct(Ray* shadow) {
-    const Shading& shading = *shading_;
+    const Shading& shading = shading_;
     if (!shading.bsdf.has_smooth_lobes()) return false;  // a Dirac lobe never meets a light sample
     LightSample ls;
     float u_select = rng_.next_float();
@@ -153,7 +153,7 @@ bool PathIntegrator::prepare_direct(Ray* shadow) {
 }
 
 void PathIntegrator::add_direct() {
-    const Shading& shading = *shading_;
+    const Shading& shading = shading_;
     const LightSample& ls = pending_.light;
     const bool mis = !ls.delta && field_ == nullptr;
     const float weight =

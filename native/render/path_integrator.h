@@ -132,7 +132,7 @@ class PathIntegrator {
     IntegratorClock* clock_;
 
     Ray ray_;                          // the ray that reached the current surface
-    std::optional<Shading> shading_;   // the current surface (Shading has no empty state)
+    Shading shading_;                  // the current surface (set by enter_surface)
     PendingDirect pending_;
     bool terminate_on_next_surface_ = false;
     vec3 throughput_{1.0f};
