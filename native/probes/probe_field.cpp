@@ -184,9 +184,12 @@ ShRgb ProbeField::radiance_sh(const vec3& p, const vec3& n, const vec3& wo) cons
         p + (n * settings_.normal_bias + wo * settings_.view_bias) * frame.min_spacing;
     const vec3 local = vec3(frame.volume_from_world * vec4(biased, 1.0f));
     const vec3 grid = (local + 1.0f) * frame.grid_scale - 0.5f;
+    // One named result for every return, so it is built in the caller's (a second returned
+    // object would make the compiler copy the 304-byte record out at the end).
+    ShRgb out(data.order);
     // A point or normal that is not finite has no place in the grid (and NaN would survive the
     // clamps below into the probe indices): no light.
-    if (!is_finite(grid)) return ShRgb(data.order);
+    if (!is_finite(grid)) return out;
     ivec3 base;
     vec3 frac;
     for (int a = 0; a < 3; ++a) {
@@ -196,7 +199,6 @@ ShRgb ProbeField::radiance_sh(const vec3& p, const vec3& n, const vec3& wo) cons
         frac[a] = last == 0 ? 0.0f : g - float(base[a]);
     }
     const int res = data.visibility_resolution;
-    ShRgb out(data.order);
     float weight_sum = 0.0f;
     for (int corner = 0; corner < 8; ++corner) {
         const ivec3 offset(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
