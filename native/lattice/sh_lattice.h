@@ -196,6 +196,7 @@ class ShLattice {
     // False when no cell a sample at lattice coordinates `cells` reads holds radiance.
     bool radiance_near(const vec3& cells) const;
     void update_radiance_near();  // recomputes radiance_near_ from the coefficients
+    void update_surface_near();   // recomputes surface_near_ from surface_index_
     const float* cell_coefficients(size_t cell) const {
         return coeffs_.data() + cell * size_t(num_coefficients()) * 3;
     }
@@ -207,6 +208,10 @@ class ShLattice {
     std::vector<float> coeffs_;
     std::vector<uint32_t> surface_index_;  // per cell: index into surfaces_, or kNoSurface
     std::vector<CellSurface> surfaces_;    // cells with surface, in cell order
+    // Per cell: a 27-bit mask of the cells of its 3x3x3 block (in the lattice) that hold
+    // surface, bit (dz + 1) * 9 + (dy + 1) * 3 + (dx + 1) for the neighbour at offset (dx, dy,
+    // dz). Cubic samples visit only those cells.
+    std::vector<uint32_t> surface_near_;
     // Per cell: 1 when a cell of its 3x3x3 block may hold nonzero radiance; 0 guarantees that all
     // of them are zero, so that samples there return zero at once (a caustic lattice away from
     // its caustics). Kept by every operation that changes coefficients.
