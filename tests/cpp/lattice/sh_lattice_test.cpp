@@ -10,6 +10,7 @@
 #include <cmath>
 
 #include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtx/string_cast.hpp>
 #include <tbb/global_control.h>
 
 #include "lattice/lattice_test_scenes.h"
@@ -463,6 +464,52 @@ TEST(ShLattice, CubicWeightsFollowTheSmoothstepAndKeepConstants) {
                 for (int ch = 0; ch < 3; ++ch)
                     ASSERT_NEAR(sampled[i][ch], constant[i][ch], kFloatTolerance);
     }
+}
+
+// Cubic samples over a lattice where only some cells hold surface (a floor through the z = 2
+// layer, a wall through the x = 3 layer): an impulse in a floor cell comes back with weight
+// w(d_impulse) / Σ w(d) over the floor cells of the block, for upward normals (wall cells face
+// sideways, D_c(up) = 0, and cells without surface weigh nothing). Sample points cover every
+// position of the block against the lattice's faces, so each of the 27 neighbours is tried in
+// and out of the lattice.
+TEST(ShLattice, CubicSamplesWeighOnlyTheCellsWithSurface) {
+    ShLattice lattice(Bounds3{vec3(0.0f), vec3(5.0f)}, 5, 1);
+    const float s = lattice.cell_size();
+    const vec3 o = lattice.origin();
+    lattice.measure_surfaces(test::committed_scene(
+        {test::quad(o + vec3(-1.0f, -1.0f, 2.5f * s), vec3(5.0f * s + 2.0f, 0, 0),
+                    vec3(0, 5.0f * s + 2.0f, 0)),
+         test::quad(o + vec3(3.5f * s, -1.0f, -1.0f), vec3(0, 5.0f * s + 2.0f, 0),
+                    vec3(0, 0, 5.0f * s + 2.0f))}));
+    const ivec3 impulse_cell(2, 2, 2);
+    ShRgb impulse(1);
+    impulse[0] = vec3(1.0f, 0.0f, 0.0f);
+    lattice.set_cell_radiance(lattice.cell_index(impulse_cell), impulse);
+    Pcg32 rng(7, 0);
+    int nonzero = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+        const vec3 cells = vec3(5.0f * rng.next_float(), 5.0f * rng.next_float(),
+                                1.0f + 3.0f * rng.next_float());
+        const ivec3 centre_cell(glm::floor(cells));
+        double total = 0.0, impulse_weight = 0.0;
+        for (int y = -1; y <= 1; ++y)
+            for (int x = -1; x <= 1; ++x) {
+                const ivec3 cell = ivec3(centre_cell.x + x, centre_cell.y + y, 2);
+                if (std::abs(centre_cell.z - 2) > 1 || glm::any(glm::lessThan(cell, ivec3(0))) ||
+                    glm::any(glm::greaterThanEqual(cell, lattice.dims())))
+                    continue;
+                const glm::dvec3 to_centre = glm::dvec3(cells) - (glm::dvec3(cell) + 0.5);
+                const double w = smoothstep_weight(glm::length(to_centre));
+                total += w;
+                if (cell == impulse_cell) impulse_weight = w;
+            }
+        const float expected = total > 0.0 ? float(impulse_weight / total) : 0.0f;
+        nonzero += expected > 0.0f;
+        EXPECT_NEAR(lattice.sample_cubic(o + cells * s, kUp, 0.0f)[0].x, expected,
+                    kFloatTolerance)
+            << "trial " << trial << " at cells " << glm::to_string(cells);
+    }
+    EXPECT_GT(nonzero, 50);
 }
 
 // A room corner: floor in the z = 0 layer, wall in the x = 0 layer. Wall cells hold radiance
