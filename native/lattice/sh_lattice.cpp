@@ -376,55 +376,23 @@ void for_each_trilinear_cell(const vec3& cells, const ivec3& dims, Facing&& faci
     }
 }
 
-// visit(cell index, w(d) × facing(cell)) for the lattice cells of the 3x3x3 block around the
-// cell holding `cells` whose centres are closer than kCubicRadiusCells and that face the normal.
-template <typename Facing, typename Visit>
-void for_each_cubic_cell(const vec3& cells, const ivec3& dims, Facing&& facing, Visit&& visit) {
-    constexpr float r2 = kCubicRadiusCells * kCubicRadiusCells;
-    const ivec3 centre(glm::floor(cells));
-    const ivec3 lo = glm::max(centre - 1, ivec3(0)), hi = glm::min(centre + 1, dims - 1);
-    // Squared distances along x to the centres of the (up to) three columns, computed once
-    // instead of once per row.
-    float dx2[3];
-    for (int x = lo.x; x <= hi.x; ++x) {
-        const float dx = cells.x - (float(x) + 0.5f);
-        dx2[x - lo.x] = dx * dx;
-    }
-    const int columns = hi.x - lo.x + 1;
-    for (int z = lo.z; z <= hi.z; ++z) {
-        const float dz = cells.z - (float(z) + 0.5f);
-        for (int y = lo.y; y <= hi.y; ++y) {
-            const float dy = cells.y - (float(y) + 0.5f);
-            const float dyz2 = dy * dy + dz * dz;
-            const size_t row =
-                size_t(dims.x) * (size_t(y) + size_t(dims.y) * size_t(z)) + size_t(lo.x);
-            for (int i = 0; i < columns; ++i) {
-                const float d2 = dx2[i] + dyz2;
-                if (d2 >= r2) continue;
-                const size_t cell = row + size_t(i);
-                const float density = facing(cell);
-                if (density > 0.0f) visit(cell, cubic_weight(std::sqrt(d2)) * density);
-            }
-        }
-    }
-}
-
-// Bit k of a cell's block mask (ShLattice::surface_near_) stands for its neighbour at offset
-// (kBlockOffset[k % 3], kBlockOffset[k / 3 % 3], kBlockOffset[k / 9]): bits in increasing order
-// visit the 3x3x3 block z-major, then y, then x, the order of for_each_cubic_cell's loops.
+// Bit k of a block mask (ShLattice::surface_near_) stands for the block's cell at offset
+// (kBlockOffset[k % 3], kBlockOffset[k / 3 % 3], kBlockOffset[k / 9]) from its centre: bits in
+// increasing order visit the 3x3x3 block z-major, then y, then x.
 constexpr int kBlockOffset[3] = {-1, 0, 1};
 constexpr uint32_t block_bit(int dx, int dy, int dz) {
     return uint32_t(1) << ((dz + 1) * 9 + (dy + 1) * 3 + (dx + 1));
 }
 
-// for_each_cubic_cell for a sample whose cell `centre` lies inside the lattice, visiting only the
-// neighbours that `mask` (the centre's block mask) marks as holding surface: the others would
-// get D_c(n) = 0 and be left out anyway. Same cells, same order, same arithmetic (the squared
-// distance is dx² + (dy² + dz²) as there), so the same sums; it skips most of the block's
-// loads and branches, as a point on a wall has surface in about a third of its block.
+// visit(cell index, w(d) × facing(cell)) for the cells of the 3x3x3 block around `centre` (the
+// cell holding `cells`, at most one cell outside the lattice) that `mask`, the centre's block
+// mask, marks as lattice cells with surface, whose centres are closer than kCubicRadiusCells and
+// that face the normal. Cells without surface would get D_c(n) = 0 and be left out anyway; not
+// visiting them saves a load and a branch each, which goes both ways at random: a point on a
+// wall has surface in about a third of its block.
 template <typename Facing, typename Visit>
-void for_each_cubic_surface_cell(const vec3& cells, const ivec3& centre, uint32_t mask,
-                                 const ivec3& dims, Facing&& facing, Visit&& visit) {
+void for_each_cubic_cell(const vec3& cells, const ivec3& centre, uint32_t mask, const ivec3& dims,
+                         Facing&& facing, Visit&& visit) {
     constexpr float r2 = kCubicRadiusCells * kCubicRadiusCells;
     float d2_along[3][3];  // [axis][offset + 1]: squared distance to that row's centres
     for (int a = 0; a < 3; ++a)
@@ -432,18 +400,17 @@ void for_each_cubic_surface_cell(const vec3& cells, const ivec3& centre, uint32_
             const float d = cells[a] - (float(centre[a] + kBlockOffset[i]) + 0.5f);
             d2_along[a][i] = d * d;
         }
-    const size_t row = size_t(dims.x), slice = size_t(dims.x) * size_t(dims.y);
-    const size_t centre_cell = size_t(centre.x) + row * (size_t(centre.y) + size_t(dims.y) *
-                                                         size_t(centre.z));
+    // Signed: the centre may lie just outside the lattice; the cells the mask marks lie inside.
+    const ptrdiff_t row = dims.x, slice = ptrdiff_t(dims.x) * ptrdiff_t(dims.y);
+    const ptrdiff_t centre_cell = centre.x + row * centre.y + slice * centre.z;
     while (mask != 0) {
         const int k = __builtin_ctz(mask);
         mask &= mask - 1;
         const int ix = k % 3, iy = k / 3 % 3, iz = k / 9;
         const float d2 = d2_along[0][ix] + (d2_along[1][iy] + d2_along[2][iz]);
         if (d2 >= r2) continue;
-        const size_t cell = centre_cell + size_t(ptrdiff_t(kBlockOffset[ix]) +
-                                                 ptrdiff_t(kBlockOffset[iy]) * ptrdiff_t(row) +
-                                                 ptrdiff_t(kBlockOffset[iz]) * ptrdiff_t(slice));
+        const size_t cell = size_t(centre_cell + kBlockOffset[ix] + kBlockOffset[iy] * row +
+                                   kBlockOffset[iz] * slice);
         const float density = facing(cell);
         if (density > 0.0f) visit(cell, cubic_weight(std::sqrt(d2)) * density);
     }
@@ -509,7 +476,7 @@ ShLattice::ShLattice(const Bounds3& bounds, int resolution, int order) : order_(
             cells, " cells, more than ", kMaxCells, "; lower the resolution"));
     coeffs_.assign(cells * size_t(num_coefficients()) * 3, 0.0f);
     surface_index_.assign(cells, kNoSurface);
-    surface_near_.assign(cells, 0u);
+    surface_near_.assign(size_t(dims_.x + 2) * size_t(dims_.y + 2) * size_t(dims_.z + 2), 0u);
     radiance_near_.assign(cells, 0);
 }
 
@@ -844,14 +811,17 @@ ShRgb ShLattice::sample_cubic(const vec3& p, const vec3& n, float normal_offset)
         !radiance_near(cells))
         return zero_radiance(order_);
     const ivec3 centre(glm::floor(cells));
-    if (glm::all(glm::greaterThanEqual(centre, ivec3(0))) && glm::all(glm::lessThan(centre, dims_)))
-        return blend(n, [&](auto&& facing, auto&& visit) {
-            for_each_cubic_surface_cell(cells, centre, surface_near_[cell_index(centre)], dims_,
-                                        facing, visit);
-        });
-    return blend(n, [&](auto&& facing, auto&& visit) {  // outside: the block is cut
-        for_each_cubic_cell(cells, dims_, facing, visit);
+    if (glm::any(glm::lessThan(centre, ivec3(-1))) || glm::any(glm::greaterThan(centre, dims_)))
+        return zero_radiance(order_);  // the block holds no lattice cell
+    return blend(n, [&](auto&& facing, auto&& visit) {
+        for_each_cubic_cell(cells, centre, surface_near_[padded_index(centre)], dims_, facing,
+                            visit);
     });
+}
+
+size_t ShLattice::padded_index(const ivec3& cell) const {
+    const ivec3 at = cell + 1;
+    return size_t(at.x) + size_t(dims_.x + 2) * (size_t(at.y) + size_t(dims_.y + 2) * size_t(at.z));
 }
 
 void ShLattice::update_surface_near() {
@@ -861,16 +831,12 @@ void ShLattice::update_surface_near() {
             for (int x = 0; x < dims_.x; ++x) {
                 const ivec3 at(x, y, z);
                 if (surface_index_[cell_index(at)] == kNoSurface) continue;
-                // Every neighbour q = at + d in the lattice has this cell at offset -d.
+                // Each block centre q = at + d (inside the padded lattice) has it at offset -d.
                 for (int dz = -1; dz <= 1; ++dz)
                     for (int dy = -1; dy <= 1; ++dy)
-                        for (int dx = -1; dx <= 1; ++dx) {
-                            const ivec3 q = at + ivec3(dx, dy, dz);
-                            if (glm::any(glm::lessThan(q, ivec3(0))) ||
-                                glm::any(glm::greaterThanEqual(q, dims_)))
-                                continue;
-                            surface_near_[cell_index(q)] |= block_bit(-dx, -dy, -dz);
-                        }
+                        for (int dx = -1; dx <= 1; ++dx)
+                            surface_near_[padded_index(at + ivec3(dx, dy, dz))] |=
+                                block_bit(-dx, -dy, -dz);
             }
 }
 

@@ -197,6 +197,8 @@ class ShLattice {
     bool radiance_near(const vec3& cells) const;
     void update_radiance_near();  // recomputes radiance_near_ from the coefficients
     void update_surface_near();   // recomputes surface_near_ from surface_index_
+    // Index in surface_near_ of a cell of the lattice padded by one cell on every side.
+    size_t padded_index(const ivec3& cell) const;
     const float* cell_coefficients(size_t cell) const {
         return coeffs_.data() + cell * size_t(num_coefficients()) * 3;
     }
@@ -208,9 +210,10 @@ class ShLattice {
     std::vector<float> coeffs_;
     std::vector<uint32_t> surface_index_;  // per cell: index into surfaces_, or kNoSurface
     std::vector<CellSurface> surfaces_;    // cells with surface, in cell order
-    // Per cell: a 27-bit mask of the cells of its 3x3x3 block (in the lattice) that hold
-    // surface, bit (dz + 1) * 9 + (dy + 1) * 3 + (dx + 1) for the neighbour at offset (dx, dy,
-    // dz). Cubic samples visit only those cells.
+    // Per cell of the lattice padded by one cell on every side (the centres of every 3x3x3 block
+    // that holds a lattice cell; padded_index): a 27-bit mask of the lattice cells of its block
+    // that hold surface, bit (dz + 1) * 9 + (dy + 1) * 3 + (dx + 1) for the cell at offset (dx,
+    // dy, dz). Cubic samples visit only those cells.
     std::vector<uint32_t> surface_near_;
     // Per cell: 1 when a cell of its 3x3x3 block may hold nonzero radiance; 0 guarantees that all
     // of them are zero, so that samples there return zero at once (a caustic lattice away from

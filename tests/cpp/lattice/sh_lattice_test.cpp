@@ -469,9 +469,10 @@ TEST(ShLattice, CubicWeightsFollowTheSmoothstepAndKeepConstants) {
 // Cubic samples over a lattice where only some cells hold surface (a floor through the z = 2
 // layer, a wall through the x = 3 layer): an impulse in a floor cell comes back with weight
 // w(d_impulse) / Σ w(d) over the floor cells of the block, for upward normals (wall cells face
-// sideways, D_c(up) = 0, and cells without surface weigh nothing). Sample points cover every
-// position of the block against the lattice's faces, so each of the 27 neighbours is tried in
-// and out of the lattice.
+// sideways, D_c(up) = 0, and cells without surface weigh nothing). One impulse lies inside (red),
+// one on the lattice's x = 0 face (green). Sample points reach two cells beyond the lattice in x
+// and y, so each of the 27 neighbours is tried in and out of the lattice, also from block
+// centres just outside it.
 TEST(ShLattice, CubicSamplesWeighOnlyTheCellsWithSurface) {
     ShLattice lattice(Bounds3{vec3(0.0f), vec3(5.0f)}, 5, 1);
     const float s = lattice.cell_size();
@@ -481,17 +482,19 @@ TEST(ShLattice, CubicSamplesWeighOnlyTheCellsWithSurface) {
                     vec3(0, 5.0f * s + 2.0f, 0)),
          test::quad(o + vec3(3.5f * s, -1.0f, -1.0f), vec3(0, 5.0f * s + 2.0f, 0),
                     vec3(0, 0, 5.0f * s + 2.0f))}));
-    const ivec3 impulse_cell(2, 2, 2);
-    ShRgb impulse(1);
-    impulse[0] = vec3(1.0f, 0.0f, 0.0f);
-    lattice.set_cell_radiance(lattice.cell_index(impulse_cell), impulse);
+    const ivec3 impulse_cells[2] = {ivec3(2, 2, 2), ivec3(0, 2, 2)};
+    for (int i = 0; i < 2; ++i) {
+        ShRgb impulse(1);
+        impulse[0][i] = 1.0f;
+        lattice.set_cell_radiance(lattice.cell_index(impulse_cells[i]), impulse);
+    }
     Pcg32 rng(7, 0);
-    int nonzero = 0;
-    for (int trial = 0; trial < 400; ++trial) {
-        const vec3 cells = vec3(5.0f * rng.next_float(), 5.0f * rng.next_float(),
-                                1.0f + 3.0f * rng.next_float());
+    int nonzero[2] = {0, 0};
+    for (int trial = 0; trial < 1200; ++trial) {
+        const vec3 cells = vec3(-1.5f + 8.0f * rng.next_float(), -1.5f + 8.0f * rng.next_float(),
+                                5.0f * rng.next_float());
         const ivec3 centre_cell(glm::floor(cells));
-        double total = 0.0, impulse_weight = 0.0;
+        double total = 0.0, impulse_weight[2] = {0.0, 0.0};
         for (int y = -1; y <= 1; ++y)
             for (int x = -1; x <= 1; ++x) {
                 const ivec3 cell = ivec3(centre_cell.x + x, centre_cell.y + y, 2);
@@ -501,15 +504,20 @@ TEST(ShLattice, CubicSamplesWeighOnlyTheCellsWithSurface) {
                 const glm::dvec3 to_centre = glm::dvec3(cells) - (glm::dvec3(cell) + 0.5);
                 const double w = smoothstep_weight(glm::length(to_centre));
                 total += w;
-                if (cell == impulse_cell) impulse_weight = w;
+                for (int i = 0; i < 2; ++i)
+                    if (cell == impulse_cells[i]) impulse_weight[i] = w;
             }
-        const float expected = total > 0.0 ? float(impulse_weight / total) : 0.0f;
-        nonzero += expected > 0.0f;
-        EXPECT_NEAR(lattice.sample_cubic(o + cells * s, kUp, 0.0f)[0].x, expected,
-                    kFloatTolerance)
-            << "trial " << trial << " at cells " << glm::to_string(cells);
+        const vec3 sampled = lattice.sample_cubic(o + cells * s, kUp, 0.0f)[0];
+        for (int i = 0; i < 2; ++i) {
+            const float expected = total > 0.0 ? float(impulse_weight[i] / total) : 0.0f;
+            nonzero[i] += expected > 0.0f;
+            EXPECT_NEAR(sampled[i], expected, kFloatTolerance)
+                << "impulse " << i << ", trial " << trial << " at cells "
+                << glm::to_string(cells);
+        }
     }
-    EXPECT_GT(nonzero, 50);
+    EXPECT_GT(nonzero[0], 50);
+    EXPECT_GT(nonzero[1], 50);
 }
 
 // A room corner: floor in the z = 0 layer, wall in the x = 0 layer. Wall cells hold radiance
