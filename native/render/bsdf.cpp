@@ -9,14 +9,10 @@
 namespace shgi {
 namespace {
 
-// Principled's "Specular" 0..1 maps to F0 = kSpecularF0Scale * specular (Blender manual).
-constexpr float kSpecularF0Scale = 0.08f;
 // Cycles 4's mean of Schlick's blend (1 - cos)^5 over the cosine-weighted hemisphere,
 // 2 ∫ mu (1 - mu)^5 dmu = 1/21: the metallic lobe's single-scattering mean Fresnel is
 // mix(base colour, 1, 1/21).
 constexpr float kSchlickAverageBlend = 1.0f / 21.0f;
-// Lobes whose closure weight averages below this are dropped (Cycles' CLOSURE_WEIGHT_CUTOFF).
-constexpr float kClosureWeightCutoff = 1e-5f;
 
 constexpr float kOneThird = 1.0f / 3.0f;
 float average(const vec3& v) { return (v.x + v.y + v.z) * kOneThird; }
@@ -347,29 +343,32 @@ LobeClass PrincipledBsdf::Lobe::lobe_class() const {
 
 PrincipledBsdf::PrincipledBsdf(const Material& material, const vec3& base_color, bool back_face,
                                float cos_nv, PathOrigin origin)
+    : PrincipledBsdf(material, material_terms(material), base_color, back_face, cos_nv, origin) {}
+
+PrincipledBsdf::PrincipledBsdf(const Material& material, const MaterialTerms& terms,
+                               const vec3& base_color, bool back_face, float cos_nv,
+                               PathOrigin origin)
     : roughness_(material.roughness),
       diffuse_model_(material.diffuse_model),
       height_correlated_(material.principled_model == PrincipledModel::V2) {
-    const float metallic = std::clamp(material.metallic, 0.0f, 1.0f);
-    const float transmission = (1.0f - metallic) * std::clamp(material.transmission, 0.0f, 1.0f);
-    const float alpha = material.roughness * material.roughness;
-    eta_ = back_face ? 1.0f / material.ior : material.ior;
-
-    const float f0_dielectric = kSpecularF0Scale * std::clamp(material.specular, 0.0f, 1.0f);
-    specular_f0_ = f0_dielectric;
-    inv_one_minus_f0_ = f0_dielectric < 1.0f ? 1.0f / (1.0f - f0_dielectric) : 0.0f;
-    specular_ior_ = 2.0f / (1.0f - std::sqrt(f0_dielectric)) - 1.0f;
-    cspec0_ = glm::mix(vec3(f0_dielectric), base_color, metallic);
+    const float metallic = terms.metallic;
+    const float transmission = terms.transmission;
+    const float alpha = terms.alpha;
+    eta_ = back_face ? terms.inv_ior : material.ior;
+    specular_f0_ = terms.specular_f0;
+    inv_one_minus_f0_ = terms.inv_one_minus_f0;
+    specular_ior_ = terms.specular_ior;
+    cspec0_ = glm::mix(vec3(terms.specular_f0), base_color, metallic);
 
     // Cycles adds no specular closure to a surface with Specular 0 and Metallic 0 (its GlossCol
     // is 0 and it has no grazing-angle reflection).
-    const bool specular = material.specular > kClosureWeightCutoff || metallic > kClosureWeightCutoff;
-    vec3 diffuse_weight = (1.0f - metallic) * (1.0f - material.transmission) * base_color;
+    const bool specular = terms.specular;
+    vec3 diffuse_weight = terms.diffuse_scale * base_color;
     vec3 specular_weight(1.0f - transmission);
     if (material.principled_model == PrincipledModel::V2 && specular) {
         // Cycles 4 splits 3.4's specular closure into a metallic one (weight metallic, F0 = base
         // colour) and a dielectric layer (weight (1 - metallic)(1 - transmission), F0 =
-        // f0_dielectric, the Fresnel of specular_ior_); their sum is the lobe used here. The
+        // specular_f0_, the Fresnel of specular_ior_); their sum is the lobe used here. The
         // dielectric layer dims everything below it by its albedo toward the camera-side
         // direction (closure_layering_weight), Multiscatter GGX scales both lobes by the energy
         // single scattering misses, and GlossCol holds both lobes' albedo estimates.
@@ -377,10 +376,7 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const vec3& base_color,
         v2_.from_light = origin == PathOrigin::Light;
         v2_.multiscatter = material.distribution == MicrofacetDistribution::MultiscatterGGX;
         v2_.metallic = metallic;
-        v2_.dielectric_weight =
-            f0_dielectric > 0.0f
-                ? (1.0f - metallic) * (1.0f - std::clamp(material.transmission, 0.0f, 1.0f))
-                : 0.0f;
+        v2_.dielectric_weight = terms.dielectric_weight;
         v2_.metal_fss = glm::mix(base_color, vec3(1.0f), kSchlickAverageBlend);
         if (v2_.multiscatter) v2_.dielectric_fss = dielectric_average_fresnel(specular_ior_);
         // On light paths wo is not the camera side: the factors are applied per scattered wi

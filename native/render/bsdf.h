@@ -97,6 +97,10 @@ class PrincipledBsdf {
     // The diffuse lobe follows material.diffuse_model, the layering material.principled_model.
     PrincipledBsdf(const Material& material, const vec3& base_color, bool back_face,
                    float cos_nv, PathOrigin origin = PathOrigin::Camera);
+    // The same BSDF from the material's terms computed beforehand (terms ==
+    // material_terms(material), as Scene::material_terms() keeps them): what tracers use.
+    PrincipledBsdf(const Material& material, const MaterialTerms& terms, const vec3& base_color,
+                   bool back_face, float cos_nv, PathOrigin origin = PathOrigin::Camera);
     // No lobes (black: eval 0, sample fails); a placeholder in arrays of Shading to assign later.
     PrincipledBsdf() = default;
 

@@ -41,7 +41,8 @@ Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray
     if (material.base_color_texture != kNoTexture)
         base_color *= texture_bilinear(scene.textures()[size_t(material.base_color_texture)], sp.uv);
     return Shading{sp.position, ng, frame, wo,
-                   PrincipledBsdf(material, base_color, back_face, wo.z, origin)};
+                   PrincipledBsdf(material, scene.material_terms()[sp.material_id], base_color,
+                                  back_face, wo.z, origin)};
 }
 
 vec3 Shading::spawn_origin(const vec3& wi) const {

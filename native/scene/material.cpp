@@ -1,5 +1,6 @@
 #include "scene/material.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "scene/validation.h"
@@ -26,6 +27,24 @@ void validate_material(const Material& material, uint32_t texture_count) {
         throw InvalidArgument(format_message(item, ": base_color_texture = ", texture,
                                              " but the scene has ", texture_count,
                                              " textures (use -1 for none)"));
+}
+
+MaterialTerms material_terms(const Material& material) {
+    MaterialTerms terms;
+    const float metallic = std::clamp(material.metallic, 0.0f, 1.0f);
+    const float transmission = std::clamp(material.transmission, 0.0f, 1.0f);
+    terms.metallic = metallic;
+    terms.transmission = (1.0f - metallic) * transmission;
+    terms.diffuse_scale = (1.0f - metallic) * (1.0f - material.transmission);
+    terms.alpha = material.roughness * material.roughness;
+    const float f0 = kSpecularF0Scale * std::clamp(material.specular, 0.0f, 1.0f);
+    terms.specular_f0 = f0;
+    terms.inv_one_minus_f0 = f0 < 1.0f ? 1.0f / (1.0f - f0) : 0.0f;
+    terms.specular_ior = 2.0f / (1.0f - std::sqrt(f0)) - 1.0f;
+    terms.dielectric_weight = f0 > 0.0f ? (1.0f - metallic) * (1.0f - transmission) : 0.0f;
+    terms.inv_ior = 1.0f / material.ior;
+    terms.specular = material.specular > kClosureWeightCutoff || metallic > kClosureWeightCutoff;
+    return terms;
 }
 
 void validate_texture(const Texture& texture) {

@@ -70,6 +70,29 @@ struct Material {
 // Throws InvalidArgument naming the material and field for NaN/Inf or out-of-range values.
 void validate_material(const Material& material, uint32_t texture_count);
 
+// Principled's "Specular" 0..1 maps to F0 = kSpecularF0Scale * specular (Blender manual).
+inline constexpr float kSpecularF0Scale = 0.08f;
+// Closures whose weight averages below this are left out (Cycles' CLOSURE_WEIGHT_CUTOFF).
+inline constexpr float kClosureWeightCutoff = 1e-5f;
+
+// What shading derives from a Material alone, whatever the hit: Scene::commit() computes them
+// once per material (Scene::material_terms()), so the BSDF built at every hit
+// (render/bsdf.h) does not redo a square root, two divisions and a handful of clamps.
+struct MaterialTerms {
+    float metallic = 0.0f;           // clamped to [0, 1]
+    float transmission = 0.0f;       // (1 - metallic) x clamped transmission: the glass lobes'
+    float diffuse_scale = 0.0f;      // (1 - metallic)(1 - transmission): the diffuse lobe's
+    float dielectric_weight = 0.0f;  // the dielectric specular layer's; 0 with Specular 0
+    float alpha = 0.0f;              // GGX alpha = roughness^2
+    float specular_f0 = 0.0f;        // kSpecularF0Scale x clamped specular
+    float inv_one_minus_f0 = 0.0f;   // 1 / (1 - specular_f0), 0 when specular_f0 >= 1
+    float specular_ior = 1.0f;       // the ior whose Fresnel at normal incidence is specular_f0
+    float inv_ior = 1.0f;            // the relative ior seen from a back face, 1 / ior
+    bool specular = false;           // Cycles adds a specular closure (Specular or Metallic > 0)
+};
+
+MaterialTerms material_terms(const Material& material);
+
 struct Texture {
     std::string name;
     uint32_t width = 0, height = 0;

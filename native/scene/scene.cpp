@@ -222,8 +222,11 @@ const Camera& Scene::camera() const {
 void Scene::check_references() {
     if (materials_.empty()) materials_.push_back(Material{});
     const auto material_count = static_cast<uint32_t>(materials_.size());
-    for (const Material& material : materials_)
+    material_terms_.clear();
+    for (const Material& material : materials_) {
         validate_material(material, static_cast<uint32_t>(textures_.size()));
+        material_terms_.push_back(shgi::material_terms(material));
+    }
     for (const Mesh& mesh : meshes_) check_material_indices(mesh, material_count);
 }
 

@@ -119,6 +119,8 @@ class Scene {
     const std::vector<MeshReport>& mesh_reports() const { return mesh_reports_; }
     const std::vector<Instance>& instances() const { return instances_; }
     const std::vector<Material>& materials() const { return materials_; }
+    // material_terms(materials()[i]) for every material, computed by commit() (empty before).
+    const std::vector<MaterialTerms>& material_terms() const { return material_terms_; }
     const std::vector<Texture>& textures() const { return textures_; }
     const std::vector<Light>& lights() const { return lights_; }
     const World& world() const { return world_; }
@@ -173,6 +175,7 @@ class Scene {
     std::vector<MeshReport> mesh_reports_;
     std::vector<Instance> instances_;
     std::vector<Material> materials_;
+    std::vector<MaterialTerms> material_terms_;
     std::vector<Texture> textures_;
     std::vector<Light> lights_;
     World world_;

@@ -332,6 +332,68 @@ TEST(SceneValidation, CommitChecksCrossReferences) {
     EXPECT_TRUE(textured.committed());
 }
 
+// What the BSDF takes from a material alone (MaterialTerms), against the closure weights of
+// render/bsdf.h's header comment and the meaning of Principled's Specular (F0 = 0.08 specular).
+TEST(SceneMaterials, MaterialTermsFollowThePrincipledParameters) {
+    for (float metallic : {0.0f, 0.3f, 1.0f})
+        for (float transmission : {0.0f, 0.6f, 1.0f})
+            for (float specular : {0.0f, 0.5f, 1.0f}) {
+                Material material;
+                material.metallic = metallic;
+                material.transmission = transmission;
+                material.specular = specular;
+                material.roughness = 0.4f;
+                material.ior = 1.33f;
+                const MaterialTerms terms = material_terms(material);
+                const std::string name = "metallic " + std::to_string(metallic) +
+                                         " transmission " + std::to_string(transmission) +
+                                         " specular " + std::to_string(specular);
+                const float dielectric = (1.0f - metallic) * (1.0f - transmission);
+                EXPECT_EQ(terms.metallic, metallic) << name;
+                EXPECT_FLOAT_EQ(terms.transmission, (1.0f - metallic) * transmission) << name;
+                EXPECT_FLOAT_EQ(terms.diffuse_scale, dielectric) << name;
+                // The dielectric layer exists only with a non-zero Specular.
+                EXPECT_FLOAT_EQ(terms.dielectric_weight, specular > 0.0f ? dielectric : 0.0f)
+                    << name;
+                EXPECT_FLOAT_EQ(terms.alpha, 0.16f) << name;
+                EXPECT_FLOAT_EQ(terms.specular_f0, 0.08f * specular) << name;
+                // specular_ior is the ior whose Fresnel reflectance at normal incidence,
+                // ((n - 1) / (n + 1))^2, is F0.
+                const float n = terms.specular_ior;
+                EXPECT_NEAR((n - 1.0f) * (n - 1.0f) / ((n + 1.0f) * (n + 1.0f)),
+                            terms.specular_f0, 1e-6f) << name;
+                EXPECT_NEAR(terms.inv_one_minus_f0 * (1.0f - terms.specular_f0), 1.0f, 1e-6f)
+                    << name;
+                EXPECT_NEAR(terms.inv_ior * material.ior, 1.0f, 1e-6f) << name;
+                EXPECT_EQ(terms.specular, specular > 0.0f || metallic > 0.0f) << name;
+            }
+}
+
+TEST(SceneMaterials, CommitKeepsEachMaterialsTerms) {
+    Scene scene;
+    scene.add_instance(scene.add_mesh(unit_quad()), mat4(1.0f));
+    scene.commit();  // no material: commit adds the default one
+    ASSERT_EQ(scene.materials().size(), 1u);
+    ASSERT_EQ(scene.material_terms().size(), 1u);
+    Material metal;
+    metal.metallic = 1.0f;
+    metal.roughness = 0.3f;
+    scene.add_material(metal);
+    scene.commit();
+    ASSERT_EQ(scene.material_terms().size(), 2u);
+    for (size_t i = 0; i < 2; ++i) {
+        const MaterialTerms expected = material_terms(scene.materials()[i]);
+        const MaterialTerms& kept = scene.material_terms()[i];
+        EXPECT_EQ(kept.metallic, expected.metallic) << i;
+        EXPECT_EQ(kept.alpha, expected.alpha) << i;
+        EXPECT_EQ(kept.specular_ior, expected.specular_ior) << i;
+        EXPECT_EQ(kept.inv_ior, expected.inv_ior) << i;
+    }
+    EXPECT_EQ(scene.material_terms()[1].metallic, 1.0f);
+    EXPECT_FLOAT_EQ(scene.material_terms()[1].alpha, 0.09f);
+    EXPECT_EQ(scene.material_terms()[1].diffuse_scale, 0.0f);
+}
+
 TEST(SceneValidation, InstanceBeyondEmbreeRangeIsRejectedAtCommit) {
     Scene scene;
     scene.add_instance(scene.add_mesh(unit_quad()), glm::scale(mat4(1.0f), vec3(1e16f)), "Huge");
