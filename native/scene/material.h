@@ -77,7 +77,7 @@ inline constexpr float kClosureWeightCutoff = 1e-5f;
 
 // What shading derives from a Material alone, whatever the hit: Scene::commit() computes them
 // once per material (Scene::material_terms()), so the BSDF built at every hit
-// (render/bsdf.h) does not redo a square root, two divisions and a handful of clamps.
+// (render/bsdf.h) does not redo a square root, up to three divisions and a handful of clamps.
 struct MaterialTerms {
     float metallic = 0.0f;           // clamped to [0, 1]
     float transmission = 0.0f;       // (1 - metallic) x clamped transmission: the glass lobes'
