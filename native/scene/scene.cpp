@@ -222,11 +222,8 @@ const Camera& Scene::camera() const {
 void Scene::check_references() {
     if (materials_.empty()) materials_.push_back(Material{});
     const auto material_count = static_cast<uint32_t>(materials_.size());
-    material_terms_.clear();
-    for (const Material& material : materials_) {
+    for (const Material& material : materials_)
         validate_material(material, static_cast<uint32_t>(textures_.size()));
-        material_terms_.push_back(shgi::material_terms(material));
-    }
     for (const Mesh& mesh : meshes_) check_material_indices(mesh, material_count);
 }
 
@@ -301,6 +298,9 @@ void Scene::commit(const CommitSettings& settings, Progress* progress) {
     committed_ = false;
     if (progress) progress->begin_stage("checking scene", 0.0f, 0.05f);
     check_references();
+    material_terms_.clear();
+    for (const Material& material : materials_)
+        material_terms_.push_back(shgi::material_terms(material));
     bounds_ = compute_bounds();
     set_ray_limits();
     const uint64_t budget = resolve_budget(settings.memory_budget_bytes);
