@@ -115,7 +115,9 @@ test-cpp: build
 # Debian's Python runs every test: shgi, the add-on's bpy-free parts, both Blenders (Debian's
 # 3.4.1 and the bpy module of BPY_VENV) and the packages of `make dist`. The python3 on PATH, when
 # it is another interpreter (pyenv, with numpy 2) that has pytest, runs them again but for the
-# Blender and package tests (marked `blender`, `dist`), whose Blenders and venvs are its same.
+# Blender and package tests (marked `blender`, `dist`), whose Blenders and venvs are its same,
+# and the tests whose time goes to a long path-traced reference (marked `reference`, ~45 s):
+# the same native code, whose numpy interface the other tests cover under both interpreters.
 # The first run ends with its 12 slowest tests: where the suite's time goes.
 PYTEST := pytest -q -p no:cacheprovider
 TEST_ENV := PYTHONPATH=$(CURDIR)/$(BUILD_DIR)/python SHGI_BPY_PYTHON=$(BPY_VENV)/bin/python \
@@ -125,8 +127,9 @@ test-python: build dist bpy-venv
 	@other=$$(command -v python3); \
 	if [ -n "$$other" ] && [ "$$(readlink -f $$other)" != "$$(readlink -f $(PYTHON))" ]; then \
 		if $$other -c 'import numpy, pytest' 2>/dev/null; then \
-			echo "Python tests again under $$other, but for the Blender and package tests"; \
-			cd tests/python && $(TEST_ENV) $$other -m $(PYTEST) -m 'not blender and not dist' .; \
+			echo "Python tests again under $$other: no Blender, package or reference tests"; \
+			cd tests/python && $(TEST_ENV) $$other -m $(PYTEST) \
+				-m 'not blender and not dist and not reference' .; \
 		else echo "note: $$other lacks numpy/pytest; its Python tests were skipped"; fi; \
 	fi
 

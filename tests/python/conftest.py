@@ -48,6 +48,10 @@ def build_python_dir():
 def pytest_configure(config):
     config.addinivalue_line("markers", "blender: runs Blender (the program or the bpy module)")
     config.addinivalue_line("markers", "dist: installs the packages of `make dist`")
+    config.addinivalue_line(
+        "markers", "reference: spends its time computing a long path-traced reference (the "
+        "second interpreter of `make test-python` skips it: same native code, whose numpy "
+        "interface the other tests cover)")
 
 
 @pytest.fixture(params=blender_params())

@@ -71,11 +71,17 @@ def floor_map(size):
 
 
 @pytest.fixture(scope="module")
-def floor():
-    """(texel map, low-sample bake, reference bake) of the sun room's floor."""
+def floor_low():
+    """(scene, texel map, low-sample bake) of the sun room's floor."""
     scene, texel_map = floor_map(FLOOR_SIZE)
-    return (texel_map, bake(scene, texel_map, LOW_SAMPLES, seed=1),
-            bake(scene, texel_map, REFERENCE_SAMPLES, seed=7))
+    return scene, texel_map, bake(scene, texel_map, LOW_SAMPLES, seed=1)
+
+
+@pytest.fixture(scope="module")
+def floor(floor_low):
+    """(texel map, low-sample bake, reference bake) of the sun room's floor."""
+    scene, texel_map, low = floor_low
+    return texel_map, low, bake(scene, texel_map, REFERENCE_SAMPLES, seed=7)
 
 
 # --- noise: the sun room's floor ----------------------------------------------------------------
@@ -86,6 +92,7 @@ def floor_psnr(floor, method, **options):
     return psnr(image.color, reference.color, low.baked)
 
 
+@pytest.mark.reference
 def test_shgi_filter_beats_the_raw_floor(floor):
     raw, filtered = floor_psnr(floor, "raw"), floor_psnr(floor, "SHGI")
     print(f"\nsun room floor {FLOOR_SIZE}^2, {LOW_SAMPLES} vs {REFERENCE_SAMPLES} spp: "
@@ -93,6 +100,7 @@ def test_shgi_filter_beats_the_raw_floor(floor):
     assert filtered >= raw + MIN_GAIN_DB
 
 
+@pytest.mark.reference
 @needs_pyoidn
 def test_oidn_beats_the_raw_floor_and_the_shgi_filter(floor):
     raw, filtered = floor_psnr(floor, "raw"), floor_psnr(floor, "SHGI")
@@ -127,8 +135,8 @@ def test_oidn_denoises_the_directional_sh_too():
 
 
 @needs_pyoidn
-def test_oidn_is_deterministic_and_leaves_its_input_alone(floor):
-    texel_map, low, _ = floor
+def test_oidn_is_deterministic_and_leaves_its_input_alone(floor_low):
+    _, texel_map, low = floor_low
     before = low.color
     first = denoise_lightmap(texel_map, low, "OIDN")
     second = denoise_lightmap(texel_map, low, "OIDN")
@@ -139,8 +147,8 @@ def test_oidn_is_deterministic_and_leaves_its_input_alone(floor):
 
 
 @needs_pyoidn
-def test_oidn_stops_when_cancelled(floor):
-    texel_map, low, _ = floor
+def test_oidn_stops_when_cancelled(floor_low):
+    _, texel_map, low = floor_low
     progress = shgi.Progress()
     progress.cancel()
     with pytest.raises(shgi.Cancelled):

@@ -41,6 +41,7 @@ def agreement(name):
     return _AGREEMENT[name]
 
 
+@pytest.mark.reference
 @pytest.mark.parametrize("name", ["cornell_box", "sun_room"])
 def test_indirect_diffuse_agrees_with_path_tracer(name):
     reference, preview = agreement(name)
@@ -49,6 +50,7 @@ def test_indirect_diffuse_agrees_with_path_tracer(name):
     assert abs(measured / expected - 1.0) < 0.10, (measured, expected)
 
 
+@pytest.mark.reference
 @pytest.mark.parametrize("name", ["cornell_box", "sun_room"])
 def test_combined_psnr_against_path_tracer(name):
     reference, preview = agreement(name)
