@@ -116,7 +116,7 @@ test-cpp: build
 # 3.4.1 and the bpy module of BPY_VENV) and the packages of `make dist`. The python3 on PATH, when
 # it is another interpreter (pyenv, with numpy 2) that has pytest, runs them again but for the
 # Blender and package tests (marked `blender`, `dist`), whose Blenders and venvs are its same,
-# and the tests whose time goes to a long path-traced reference (marked `reference`, ~45 s):
+# and the tests whose time goes to a long path-traced reference (marked `reference`, ~60 s):
 # the same native code, whose numpy interface the other tests cover under both interpreters.
 # The first run ends with its 12 slowest tests: where the suite's time goes.
 PYTEST := pytest -q -p no:cacheprovider

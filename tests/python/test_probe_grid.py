@@ -43,6 +43,7 @@ def solved_grid(scene, updates, **settings):
     return grid
 
 
+@pytest.mark.reference
 @pytest.mark.parametrize("order", [1, 2, 4])
 @pytest.mark.parametrize("name", ["cornell_box", "sun_room"])
 def test_agrees_with_path_tracer(name, order):
@@ -57,6 +58,7 @@ def test_agrees_with_path_tracer(name, order):
     assert quality >= 30.0
 
 
+@pytest.mark.reference
 def test_dim_room_does_not_leak():
     """The dim room's indirect light against the path tracer: within 15% with visibility; plain
     trilinear interpolation, reported beside it, lets the bright room's probes through the wall."""
