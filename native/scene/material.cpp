@@ -35,13 +35,13 @@ MaterialTerms material_terms(const Material& material) {
     const float transmission = std::clamp(material.transmission, 0.0f, 1.0f);
     terms.metallic = metallic;
     terms.transmission = (1.0f - metallic) * transmission;
-    terms.diffuse_scale = (1.0f - metallic) * (1.0f - material.transmission);
+    terms.diffuse_scale = (1.0f - metallic) * (1.0f - transmission);
     terms.alpha = material.roughness * material.roughness;
     const float f0 = kSpecularF0Scale * std::clamp(material.specular, 0.0f, 1.0f);
     terms.specular_f0 = f0;
     terms.inv_one_minus_f0 = f0 < 1.0f ? 1.0f / (1.0f - f0) : 0.0f;
     terms.specular_ior = 2.0f / (1.0f - std::sqrt(f0)) - 1.0f;
-    terms.dielectric_weight = f0 > 0.0f ? (1.0f - metallic) * (1.0f - transmission) : 0.0f;
+    terms.dielectric_weight = f0 > 0.0f ? terms.diffuse_scale : 0.0f;
     terms.inv_ior = 1.0f / material.ior;
     terms.specular = material.specular > kClosureWeightCutoff || metallic > kClosureWeightCutoff;
     return terms;
