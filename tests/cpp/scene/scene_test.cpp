@@ -369,6 +369,25 @@ TEST(SceneMaterials, MaterialTermsFollowThePrincipledParameters) {
             }
 }
 
+// The old PrincipledBsdf(material, ...) constructor takes materials no scene validated: their
+// terms use the clamped parameters, so no lobe gets a negative weight.
+TEST(SceneMaterials, MaterialTermsClampOutOfRangeParameters) {
+    Material material;
+    material.metallic = -0.5f;
+    material.transmission = 1.5f;
+    material.specular = 0.5f;
+    const MaterialTerms terms = material_terms(material);
+    EXPECT_EQ(terms.metallic, 0.0f);
+    EXPECT_FLOAT_EQ(terms.transmission, 1.0f);
+    EXPECT_EQ(terms.diffuse_scale, 0.0f);
+    EXPECT_EQ(terms.dielectric_weight, 0.0f);
+    material.transmission = -1.0f;
+    const MaterialTerms opaque = material_terms(material);
+    EXPECT_EQ(opaque.transmission, 0.0f);
+    EXPECT_EQ(opaque.diffuse_scale, 1.0f);
+    EXPECT_EQ(opaque.dielectric_weight, 1.0f);
+}
+
 TEST(SceneMaterials, CommitKeepsEachMaterialsTerms) {
     Scene scene;
     scene.add_instance(scene.add_mesh(unit_quad()), mat4(1.0f));
