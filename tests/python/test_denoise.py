@@ -72,15 +72,15 @@ def floor_map(size):
 
 @pytest.fixture(scope="module")
 def floor_low():
-    """(scene, texel map, low-sample bake) of the sun room's floor."""
+    """(texel map, low-sample bake, scene) of the sun room's floor: floor's first two."""
     scene, texel_map = floor_map(FLOOR_SIZE)
-    return scene, texel_map, bake(scene, texel_map, LOW_SAMPLES, seed=1)
+    return texel_map, bake(scene, texel_map, LOW_SAMPLES, seed=1), scene
 
 
 @pytest.fixture(scope="module")
 def floor(floor_low):
     """(texel map, low-sample bake, reference bake) of the sun room's floor."""
-    scene, texel_map, low = floor_low
+    texel_map, low, scene = floor_low
     return texel_map, low, bake(scene, texel_map, REFERENCE_SAMPLES, seed=7)
 
 
@@ -136,7 +136,7 @@ def test_oidn_denoises_the_directional_sh_too():
 
 @needs_pyoidn
 def test_oidn_is_deterministic_and_leaves_its_input_alone(floor_low):
-    _, texel_map, low = floor_low
+    texel_map, low, _ = floor_low
     before = low.color
     first = denoise_lightmap(texel_map, low, "OIDN")
     second = denoise_lightmap(texel_map, low, "OIDN")
@@ -148,7 +148,7 @@ def test_oidn_is_deterministic_and_leaves_its_input_alone(floor_low):
 
 @needs_pyoidn
 def test_oidn_stops_when_cancelled(floor_low):
-    _, texel_map, low = floor_low
+    texel_map, low, _ = floor_low
     progress = shgi.Progress()
     progress.cancel()
     with pytest.raises(shgi.Cancelled):
