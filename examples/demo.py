@@ -27,24 +27,19 @@ Usage: python3 examples/demo.py [--out DIR] [--samples N] [--scale S] [--seed S]
 """
 
 import argparse
-import math
 import pathlib
 import sys
 import time
 
-import numpy as np
-
 import shgi
 import shgi.bake
+from shgi.metrics import psnr
 
 import scenes
 
 SCENES = {"cornell_box": scenes.cornell_box, "sun_room": scenes.sun_room}
 # Probe grid passes before its preview: what the tests give it to agree with the path tracer.
 PROBE_UPDATES = 6
-# Rec. 709 luminance of linear RGB, and the grey the auto-exposure maps the mean luminance to.
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
-MIDDLE_GREY = 0.18
 
 
 def path_trace(scene, samples, seed):
@@ -70,19 +65,6 @@ def render_scene(name, scene, samples, seed, out_dir):
 def write_passes(out_dir, stem, passes):
     shgi.write_exr(str(out_dir / f"{stem}.exr"), passes)
     shgi.write_png(str(out_dir / f"{stem}.png"), passes["Combined"])
-
-
-def psnr(reference, image):
-    """PSNR (dB) of the sRGB images after the reference's auto-exposure, as the tests measure it
-    (tests/blender/image_metrics.py)."""
-    exposure = MIDDLE_GREY / float((reference[..., :3].astype(np.float64) @ LUMINANCE).mean())
-
-    def display(linear):
-        scaled = np.clip(linear[..., :3].astype(np.float64) * exposure, 0.0, None)
-        return np.clip(shgi.srgb_from_linear(scaled.astype(np.float32)), 0.0, 1.0)
-
-    mse = float(np.mean((display(reference) - display(image)) ** 2))
-    return math.inf if mse == 0.0 else 10.0 * math.log10(1.0 / mse)
 
 
 def indirect_diffuse(passes):

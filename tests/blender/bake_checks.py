@@ -11,7 +11,7 @@ Background mode (``blender -b --factory-startup --python-exit-code 1 --python ba
 3. bakes the floor with shgi.bake_lightmaps for each source (PATH_TRACER, PHOTON_LATTICE,
    PROBE_GRID), timed, and compares the Blender image with Cycles' over the covered texels
    (Cycles' mask and the EXR's Coverage layer): relative mean difference, mean absolute texel
-   difference and PSNR (image_metrics.psnr), over every covered texel and over the visible ones
+   difference and PSNR (shgi.metrics.psnr), over every covered texel and over the visible ones
    (without the texels under the box); checks the image against the EXR's Lightmap layer;
 4. the refusals: nothing selected, a missing UV map, no light, an object hidden for render, the
    floor with a NaN UV and scaled to 0 (the export leaves it out and the refusal says why),
@@ -49,7 +49,7 @@ setup.enable_addon()
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 import shgi  # noqa: E402
-from image_metrics import psnr  # noqa: E402
+from shgi.metrics import psnr  # noqa: E402
 from latency_clock import LatencyClock  # noqa: E402
 from recording_layout import draw_panel  # noqa: E402
 from shgi_blender import bake_settings  # noqa: E402

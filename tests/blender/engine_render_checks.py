@@ -30,7 +30,7 @@ from blender_test_setup import check_close, results_path  # noqa: E402
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 import shgi  # noqa: E402
-from image_metrics import psnr  # noqa: E402
+from shgi.metrics import psnr  # noqa: E402
 import scenes  # noqa: E402  (examples/scenes.py, on the path through engine_common)
 from mathutils import Matrix  # noqa: E402
 from recording_layout import draw_panel  # noqa: E402

@@ -265,8 +265,8 @@ def converge(scene):
 
 def compare_with_f12(scene, before, box):
     """F12 of the same camera, displayed as the viewport displays it (Standard view, sRGB)."""
-    import image_metrics
     import shgi
+    import shgi.metrics
 
     start = time.perf_counter()
     bpy.ops.render.render(write_still=False)
@@ -276,7 +276,7 @@ def compare_with_f12(scene, before, box):
     layers = shgi.read_exr(path)
     combined = next(pixels for name, pixels in layers.items() if name.endswith("Combined"))
     # Bottom row first, as the screenshot; Standard view: sRGB, no exposure.
-    f12 = image_metrics.display(combined[::-1], 1.0)
+    f12 = shgi.metrics.display(combined[::-1], 1.0)
     viewport_blocks = crop_blocks(before, box, BLOCKS)
     f12_blocks = block_means(f12, BLOCKS)
     RESULTS["f12_mean"] = float(f12_blocks.mean())
@@ -287,7 +287,7 @@ def compare_with_f12(scene, before, box):
 
 def move_light(before, box):
     """Moves the ceiling light to the right; luminance of the frame's thirds before/after."""
-    from image_metrics import LUMINANCE
+    from shgi.metrics import LUMINANCE
 
     last_frame = session().worker.latest_frame().frame_id
     bpy.data.objects["ceiling_light"].location.x = LIGHT_X[1]

@@ -13,7 +13,7 @@ modal bake with Esc.
 Acceptance against Cycles' DIFFUSE {DIRECT, INDIRECT} bake of the floor, over the covered
 texels: the mean texel difference (the mean over those texels of shgi - Cycles, relative to
 Cycles' mean) within 5% for the path tracer and 10% for each field source. PSNR (after
-auto-exposure and sRGB, image_metrics.psnr) and the mean absolute texel difference are reported,
+auto-exposure and sRGB, shgi.metrics.psnr) and the mean absolute texel difference are reported,
 over all covered texels and over the visible ones (not under the box).
 """
 

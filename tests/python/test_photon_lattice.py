@@ -16,7 +16,7 @@ import pytest
 
 import shgi
 from blender_support import REPO_ROOT
-from image_metrics import psnr  # tests/blender/image_metrics.py: the figure Blender tests use
+from shgi.metrics import psnr  # the figure the Blender tests use too
 from scene_support import committed, path_traced_reference
 
 sys.path.insert(0, str(REPO_ROOT / "examples"))

@@ -17,7 +17,7 @@ import pytest
 
 import shgi
 from blender_support import REPO_ROOT
-from image_metrics import psnr
+from shgi.metrics import psnr
 from scene_support import committed, finishes_in_a_thread, path_traced_reference
 
 sys.path.insert(0, str(REPO_ROOT / "examples"))
