@@ -49,8 +49,8 @@ def psnr(reference, image):
     the display values are equal. ValueError for images of different shapes."""
     reference = np.asarray(reference)
     image = np.asarray(image)
-    if reference.shape[:-1] != image.shape[:-1] or min(reference.shape[-1],
-                                                       image.shape[-1]) < 3:
+    if (reference.ndim != 3 or image.ndim != 3 or reference.shape[:2] != image.shape[:2]
+            or min(reference.shape[2], image.shape[2]) < 3):
         raise ValueError(f"psnr: reference {reference.shape} and image {image.shape} must be "
                          "(H, W, >= 3) of the same height and width")
     exposure = auto_exposure(reference)

@@ -70,6 +70,7 @@ def test_psnr_is_the_same_for_float32_and_float64_pixels():
 @pytest.mark.parametrize("reference, image, match", [
     (grey(0.5), grey(0.5, (4, 5)), "same height and width"),
     (np.zeros((4, 6, 2)), np.zeros((4, 6, 2)), "same height and width"),
+    (np.ones((4, 6)), np.ones((4, 6)), "same height and width"),  # no channel axis
     (grey(0.0), grey(0.5), "mean luminance is 0.0"),
     (grey(math.nan), grey(0.5), "mean luminance is nan"),
 ])
