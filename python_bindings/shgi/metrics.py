@@ -26,7 +26,7 @@ MIDDLE_GREY = 0.18
 
 
 def auto_exposure(reference):
-    """The scale that maps the mean Rec. 709 luminance of linear `reference` (H, W, >= 3) to
+    """The scale that maps the mean Rec. 709 luminance of linear `reference` (..., >= 3) to
     MIDDLE_GREY; ValueError when that mean is not a positive finite number (a black or
     non-finite reference has no exposure)."""
     mean = float((np.asarray(reference[..., :3], np.float64) @ LUMINANCE).mean())
@@ -37,22 +37,23 @@ def auto_exposure(reference):
 
 
 def display(image, exposure):
-    """sRGB-encoded [0, 1] float64 RGB of linear `image` (H, W, >= 3) scaled by `exposure`."""
+    """sRGB-encoded [0, 1] float64 RGB of linear `image` (..., >= 3) scaled by `exposure`."""
     linear = np.clip(np.asarray(image[..., :3], np.float64) * exposure, 0.0, None)
     linear = linear.astype(np.float32)
     return np.clip(np.asarray(_shgi.srgb_from_linear(linear), np.float64), 0.0, 1.0)
 
 
 def psnr(reference, image):
-    """PSNR (dB) of linear `image` against linear `reference` (both H, W, >= 3; alpha and other
-    channels past RGB are ignored) as displayed after the reference's auto-exposure; inf when
-    the display values are equal. ValueError for images of different shapes."""
+    """PSNR (dB) of linear `image` against linear `reference` as displayed after the reference's
+    auto-exposure; inf when the display values are equal. Both are (H, W, >= 3) images or
+    (N, >= 3) lists of pixels (e.g. a lightmap's covered texels), the same size; alpha and other
+    channels past RGB are ignored. ValueError for anything else."""
     reference = np.asarray(reference)
     image = np.asarray(image)
-    if (reference.ndim != 3 or image.ndim != 3 or reference.shape[:2] != image.shape[:2]
-            or min(reference.shape[2], image.shape[2]) < 3):
+    if (reference.ndim < 2 or image.ndim < 2 or reference.shape[:-1] != image.shape[:-1]
+            or min(reference.shape[-1], image.shape[-1]) < 3):
         raise ValueError(f"psnr: reference {reference.shape} and image {image.shape} must be "
-                         "(H, W, >= 3) of the same height and width")
+                         "(H, W, >= 3) images, or (N, >= 3) pixel lists, of the same size")
     exposure = auto_exposure(reference)
     mse = float(np.mean((display(reference, exposure) - display(image, exposure)) ** 2))
     return math.inf if mse == 0.0 else 10.0 * math.log10(1.0 / mse)

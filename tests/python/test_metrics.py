@@ -60,6 +60,14 @@ def test_psnr_is_infinite_for_equal_display_values_and_clips_above_white():
     assert psnr(bright, brighter) == math.inf
 
 
+def test_psnr_of_a_pixel_list_is_the_psnr_of_its_image():
+    """Bakes compare the covered texels only, as (N, 3) lists."""
+    rng = np.random.default_rng(5)
+    reference = rng.random((6, 4, 3))
+    image = reference * rng.uniform(0.8, 1.2, (6, 4, 3))
+    assert psnr(reference.reshape(-1, 3), image.reshape(-1, 3)) == psnr(reference, image)
+
+
 def test_psnr_is_the_same_for_float32_and_float64_pixels():
     rng = np.random.default_rng(3)
     reference = rng.random((8, 8, 3)).astype(np.float32)
@@ -68,9 +76,10 @@ def test_psnr_is_the_same_for_float32_and_float64_pixels():
 
 
 @pytest.mark.parametrize("reference, image, match", [
-    (grey(0.5), grey(0.5, (4, 5)), "same height and width"),
-    (np.zeros((4, 6, 2)), np.zeros((4, 6, 2)), "same height and width"),
-    (np.ones((4, 6)), np.ones((4, 6)), "same height and width"),  # no channel axis
+    (grey(0.5), grey(0.5, (4, 5)), "of the same size"),
+    (np.zeros((4, 6, 2)), np.zeros((4, 6, 2)), "of the same size"),
+    (np.ones(6), np.ones(6), "of the same size"),  # no channel axis
+    (np.ones((24, 3)), grey(0.5), "of the same size"),  # a pixel list against an image
     (grey(0.0), grey(0.5), "mean luminance is 0.0"),
     (grey(math.nan), grey(0.5), "mean luminance is nan"),
 ])
