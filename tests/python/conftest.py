@@ -1,6 +1,6 @@
 """pytest setup: import shgi from the build tree (make test sets PYTHONPATH=build/python), the
-bpy-free modules of tests/blender (latency_clock, recording_layout) that tests share with the Blender scripts, the
-`blender` fixture (each Blender of blender_support.BLENDERS in turn) and, after the run, a
+bpy-free modules of tests/blender (latency_clock, recording_layout) that tests share with the
+Blender scripts, the `blender` fixture (each Blender of blender_support.BLENDERS in turn) and, after the run, a
 summary of the Blender tests per Blender version."""
 
 import collections

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import shgi
+from shgi.metrics import psnr
 
 from blender_support import REPO_ROOT
 
@@ -45,7 +46,7 @@ def test_demo_writes_every_pass_and_a_png_for_both_scenes(tmp_path, capsys):
             assert figures, line
             difference = demo.indirect_diffuse(preview) / demo.indirect_diffuse(layers) - 1
             assert float(figures[1]) == pytest.approx(100 * difference, abs=0.051), line
-            quality = demo.psnr(combined, preview["Combined"])
+            quality = psnr(combined, preview["Combined"])
             assert float(figures[2]) == pytest.approx(quality, abs=0.051), line
 
     # The bake: a lightmap per baked object, lit (the sun room's floor sees the sun patch).

@@ -6,7 +6,6 @@ import math
 import numpy as np
 import pytest
 
-import shgi.metrics
 from shgi.metrics import LUMINANCE, MIDDLE_GREY, auto_exposure, display, psnr
 
 
@@ -85,4 +84,4 @@ def test_psnr_is_the_same_for_float32_and_float64_pixels():
 ])
 def test_bad_images_raise_value_error_naming_the_problem(reference, image, match):
     with pytest.raises(ValueError, match=match):
-        shgi.metrics.psnr(reference, image)
+        psnr(reference, image)

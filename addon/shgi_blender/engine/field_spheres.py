@@ -19,11 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import shgi
+from shgi.metrics import LUMINANCE, MIDDLE_GREY
 
 SPHERE_RADIUS_SPACINGS = 0.18  # sphere radius in cells or probe spacings: room to see between
 SPHERE_SUBDIVISIONS = 1        # icosphere levels: 42 vertices, 80 triangles per sphere
-MIDDLE_GREY = 0.18
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722], np.float32)
 # The six normals of the ambient cube, in the order of ambient_cube_weights' columns.
 AXES = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]],
                 np.float32)
