@@ -94,11 +94,17 @@ void validate_probe_grid_data(const ProbeGridData& data) {
     if (data.order < 1)
         throw InvalidArgument("ProbeGridData.order is 0; probes need order 1..4");
     if (data.volumes.empty()) throw InvalidArgument("ProbeGridData has no volumes");
+    if (data.volumes.size() > kMaxProbeVolumes)
+        throw InvalidArgument(format_message("ProbeGridData has ", data.volumes.size(),
+                                             " volumes; the limit is ", kMaxProbeVolumes));
     for (size_t v = 0; v < data.volumes.size(); ++v) {
         const std::string what = format_message("ProbeGridData.volumes[", v, "]");
         validate_probe_volume(data.volumes[v], what.c_str());
     }
     const size_t count = data.volume_offset(data.volumes.size());
+    if (count > kMaxProbes)
+        throw InvalidArgument(format_message("ProbeGridData's volumes hold ", count,
+                                             " probes; the limit is ", kMaxProbes));
     const auto check_size = [&](size_t size, size_t expected, const char* name) {
         if (size != expected)
             throw InvalidArgument(format_message("ProbeGridData.", name, " has ", size,

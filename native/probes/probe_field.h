@@ -43,6 +43,12 @@ struct ProbeVolume {
 // outside 1..kMaxProbesPerAxis.
 void validate_probe_volume(const ProbeVolume& volume, const char* what);
 inline constexpr int kMaxProbesPerAxis = 256;
+// The most volumes and probes (all volumes) a grid may hold, whether from ProbeGridSettings or
+// read from a file: the binary format's header admits kMaxProbeVolumes volumes, and 2^21 probes
+// with 8 x 8 visibility maps hold ~1.7 GB (a larger request is almost certainly a spacing typed
+// in the wrong unit, or a damaged or hostile file).
+inline constexpr size_t kMaxProbeVolumes = 4096;
+inline constexpr size_t kMaxProbes = size_t(1) << 21;
 
 // World position of probe (i, j, k) of a volume before relocation.
 vec3 probe_base_position(const ProbeVolume& volume, const ivec3& index);
@@ -83,9 +89,9 @@ struct ProbeGridData {
 // Probes of the volumes, their base positions in order (the layout's numbering).
 std::vector<vec3> probe_base_positions(const std::vector<ProbeVolume>& volumes);
 
-// Throws InvalidArgument naming the first inconsistent or non-finite item (array sizes that
-// disagree with the volumes, SH of another order, NaN values...): data read from files passes
-// through here before any lookup.
+// Throws InvalidArgument naming the first inconsistent or non-finite item (more than
+// kMaxProbeVolumes volumes or kMaxProbes probes, array sizes that disagree with the volumes, SH
+// of another order, NaN values...): data read from files passes through here before any lookup.
 void validate_probe_grid_data(const ProbeGridData& data);
 
 class ProbeField : public IndirectField {

@@ -23,9 +23,6 @@
 namespace shgi {
 namespace {
 
-// Largest grid a ProbeGrid accepts (all volumes): 2^21 probes with 8x8 visibility maps hold
-// ~1.7 GB; a larger request is almost certainly a spacing typed in the wrong unit.
-constexpr size_t kMaxProbes = size_t(1) << 21;
 // Bytes one probe's state takes in a ProbeGridData (the memory cap and memory_bytes()).
 size_t probe_bytes(int visibility_resolution) {
     return sizeof(vec3) + sizeof(uint8_t) + sizeof(ShRgb) + sizeof(float) +
@@ -161,6 +158,9 @@ void validate_probe_grid_settings(const ProbeGridSettings& s) {
     if (s.order < 1 || s.order > kMaxShOrder)
         throw InvalidArgument(format_message(name, ".order is ", s.order, "; use 1..",
                                              kMaxShOrder));
+    if (s.volumes.size() > kMaxProbeVolumes)
+        throw InvalidArgument(format_message(name, ".volumes holds ", s.volumes.size(),
+                                             " volumes; the limit is ", kMaxProbeVolumes));
     for (size_t v = 0; v < s.volumes.size(); ++v) {
         const std::string what = format_message(name, ".volumes[", v, "]");
         validate_probe_volume(s.volumes[v], what.c_str());

@@ -173,7 +173,7 @@ ProbeGridData load_probe_grid(const std::string& path) {
     data.includes_direct = r.get<uint32_t>("the header") != 0;
     data.passes = r.get<uint64_t>("the header");
     const uint64_t probes = r.get<uint64_t>("the header");
-    if (data.order < 1 || data.order > kMaxShOrder || volumes == 0 || volumes > 4096 ||
+    if (data.order < 1 || data.order > kMaxShOrder || volumes == 0 || volumes > kMaxProbeVolumes ||
         data.visibility_resolution < 1 || data.visibility_resolution > 64)
         throw IoError(format_message("probe file \"", path, "\" has an invalid header (order ",
                                      data.order, ", ", volumes, " volumes, visibility ",
@@ -192,6 +192,9 @@ ProbeGridData load_probe_grid(const std::string& path) {
     if (probes != expected)
         throw IoError(format_message("probe file \"", path, "\" says ", probes,
                                      " probes; its volumes hold ", expected));
+    if (probes > kMaxProbes)
+        throw IoError(format_message("probe file \"", path, "\" holds ", probes,
+                                     " probes; the limit is ", kMaxProbes));
     // The rest of the file must hold exactly those probes. Checked before anything is allocated,
     // so that a damaged header cannot make a small file ask for gigabytes.
     const uint64_t probe_bytes = sizeof(vec3) + 1 + sizeof(float) +
@@ -364,8 +367,18 @@ ProbeGridData import_probe_grid(const std::string& json_path) {
         if (res < 1 || res > 64)
             throw IoError(format_message("\"", json_path, "\": visibility resolution ", res));
         const int coefficients = sh_num_coefficients(data.order);
-        for (const nlohmann::json& entry : doc.at("volumes")) {
-            ProbeVolume volume;
+        // Every volume and the probe count first, before any EXR is read: a small JSON listing
+        // many (or many large) volumes must not make the import ask for gigabytes.
+        const nlohmann::json& entries = doc.at("volumes");
+        const size_t listed = entries.is_array() ? entries.size() : 0;
+        if (listed == 0 || listed > kMaxProbeVolumes)
+            throw IoError(format_message("\"", json_path, "\": \"volumes\" lists ", listed,
+                                         " volumes; a probe grid has 1..", kMaxProbeVolumes));
+        std::vector<ProbeVolume> volumes(listed);
+        size_t total = 0;
+        for (size_t v = 0; v < listed; ++v) {
+            const nlohmann::json& entry = entries[v];
+            ProbeVolume& volume = volumes[v];
             const auto matrix = entry.at("world_from_volume").get<std::vector<float>>();
             std::vector<int> resolution;
             for (const nlohmann::json& count : entry.at("resolution"))
@@ -376,6 +389,14 @@ ProbeGridData import_probe_grid(const std::string& json_path) {
             for (int i = 0; i < 16; ++i) volume.world_from_volume[i / 4][i % 4] = matrix[size_t(i)];
             volume.resolution = ivec3(resolution[0], resolution[1], resolution[2]);
             validate_probe_volume(volume, "volume");
+            total += size_t(volume.resolution.x) * volume.resolution.y * volume.resolution.z;
+        }
+        if (total > kMaxProbes)
+            throw IoError(format_message("\"", json_path, "\": its volumes hold ", total,
+                                         " probes; the limit is ", kMaxProbes));
+        for (size_t v = 0; v < listed; ++v) {
+            const nlohmann::json& entry = entries[v];
+            const ProbeVolume& volume = volumes[v];
             const ivec3 n = volume.resolution;
             const size_t count = size_t(n.x) * n.y * n.z;
             const auto path_of = [&](const char* key) {

@@ -289,6 +289,21 @@ def test_bad_paths_and_loose_json_are_refused_by_name(tmp_path):
             shgi.ProbeField.import_exr(str(tmp_path / "grid.json"))
 
 
+def test_an_export_listing_too_many_volumes_is_refused_before_reading_them(tmp_path):
+    """Found by fuzzing: a 4 MB JSON listing one small volume 20,000 times made import_exr read
+    its EXRs 20,000 times and ask for ~9 GB, where the binary format caps volumes at 4096."""
+    scene = committed(scenes.cornell_box(0.05))
+    solved_grid(scene, 1, rays_per_probe=8).field().export(str(tmp_path / "grid.json"))
+    doc = json.loads((tmp_path / "grid.json").read_text())
+    doc["volumes"] = doc["volumes"] * 20000
+    (tmp_path / "grid.json").write_text(json.dumps(doc))
+    with pytest.raises(OSError, match="lists 20000 volumes; a probe grid has 1..4096"):
+        shgi.ProbeField.import_exr(str(tmp_path / "grid.json"))
+    with pytest.raises(ValueError, match="volumes holds 4097 volumes; the limit is 4096"):
+        shgi.ProbeGrid(scene, shgi.ProbeGridSettings(
+            volumes=[shgi.ProbeVolume(resolution=(1, 1, 1))] * 4097))
+
+
 def test_grid_memory_is_capped_before_allocation():
     """Fine visibility maps on many probes asked for ~9 GB and raised a bare MemoryError."""
     scene = committed(scenes.cornell_box(0.05))

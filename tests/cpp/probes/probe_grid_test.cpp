@@ -276,6 +276,14 @@ TEST(ProbeGrid, RejectsBadSettingsAndEditedScenes) {
     expect_error<InvalidArgument>(
         [&] { ProbeGrid(scene, settings); },
         {"1048576 probes with visibility_resolution 64 need", "lower visibility_resolution"});
+    // More volumes than the probe file's header admits: a grid that could not be saved (and
+    // whose lookups scan every volume).
+    settings = {};
+    settings.volumes.assign(kMaxProbeVolumes + 1, ProbeVolume{});
+    for (ProbeVolume& volume : settings.volumes) volume.resolution = ivec3(1);
+    expect_error<InvalidArgument>([&] { ProbeGrid(scene, settings); },
+                                  {"ProbeGridSettings.volumes holds 4097 volumes",
+                                   "the limit is 4096"});
     settings = {};
     ProbeGrid grid(scene, settings);
     scene.set_world(World{});

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include <glm/gtc/matrix_transform.hpp>
+#include <nlohmann/json.hpp>
 
 #include "probes/probe_storage.h"
 #include "support/expect_error.h"
@@ -128,21 +129,26 @@ TEST(ProbeStorage, BinaryCacheRoundTripsAtHalfPrecision) {
     expect_error<IoError>([&] { load_probe_grid(path + ".missing"); }, {"cannot open"});
 
     // A header that promises more probes than the file holds is refused before anything that
-    // size is allocated: both volumes claim 256^3 probes (1.5 GB of data in a 1 KB file).
-    save_probe_grid(path, data);
-    {
+    // size is allocated: both volumes claim `side`^3 probes. 64^3 each is ~0.1 GB of data in a
+    // 1 KB file; 256^3 each is past the probe cap, refused by that.
+    const auto claim = [&](int32_t side) {
+        save_probe_grid(path, data);
         std::fstream file(path, std::ios::binary | std::ios::in | std::ios::out);
-        const uint64_t probes = 2ull * 256 * 256 * 256;
+        const uint64_t probes = 2ull * uint64_t(side) * uint64_t(side) * uint64_t(side);
         file.seekp(36);  // after the magic (8), five uint32 fields and passes (8)
         file.write(reinterpret_cast<const char*>(&probes), sizeof(probes));
-        const int32_t resolution[3] = {256, 256, 256};
+        const int32_t resolution[3] = {side, side, side};
         for (int v = 0; v < 2; ++v) {
             file.seekp(44 + v * (16 * 4 + 3 * 4) + 16 * 4);  // after the volume's matrix
             file.write(reinterpret_cast<const char*>(resolution), sizeof(resolution));
         }
-    }
+    };
+    claim(64);
     expect_error<IoError>([&] { load_probe_grid(path); },
-                          {"grid.shprobes", "says 33554432 probes", "truncated or damaged"});
+                          {"grid.shprobes", "says 524288 probes", "truncated or damaged"});
+    claim(256);
+    expect_error<IoError>([&] { load_probe_grid(path); },
+                          {"grid.shprobes", "holds 33554432 probes", "the limit is 2097152"});
 }
 
 TEST(ProbeStorage, ExrJsonExportRoundTrips) {
@@ -167,6 +173,38 @@ TEST(ProbeStorage, ExrJsonExportRoundTrips) {
     expect_error<IoError>([&] { import_probe_grid(path); }, {"not an SHGI probe grid"});
 }
 
+// The JSON is read whole before any EXR: an export that lists more volumes, or larger ones,
+// than a grid may hold is refused by name (the EXRs are gone, so reading one would fail with
+// its file name instead), not by a bad_alloc after gigabytes of reading.
+TEST(ProbeStorage, ImportRefusesTooManyVolumesOrProbesBeforeReadingExrs) {
+    const std::string path = test_file_path("probes", "listing.json");
+    export_probe_grid(path, sample_data());
+    std::ifstream in(path);
+    const nlohmann::json original = nlohmann::json::parse(in);
+    in.close();
+    for (const char* exr : {"listing_volume0.exr", "listing_volume0_visibility.exr",
+                            "listing_volume1.exr", "listing_volume1_visibility.exr"})
+        std::filesystem::remove(test_file_path("probes", exr));
+
+    nlohmann::json doc = original;
+    doc["volumes"] = nlohmann::json::array();
+    for (size_t v = 0; v <= kMaxProbeVolumes; ++v) doc["volumes"].push_back(original["volumes"][0]);
+    testing::write_file(path, doc.dump());
+    expect_error<IoError>([&] { import_probe_grid(path); },
+                          {"listing.json", "lists 4097 volumes", "1..4096"});
+
+    doc = original;
+    doc["volumes"][1]["resolution"] = {256, 256, 64};
+    testing::write_file(path, doc.dump());
+    expect_error<IoError>([&] { import_probe_grid(path); },
+                          {"listing.json", "hold 4194316 probes", "the limit is 2097152"});
+
+    doc = original;
+    doc["volumes"] = nlohmann::json::object();
+    testing::write_file(path, doc.dump());
+    expect_error<IoError>([&] { import_probe_grid(path); }, {"lists 0 volumes"});
+}
+
 TEST(ProbeStorage, InconsistentDataIsRefused) {
     ProbeGridData data = sample_data();
     data.sh[3].data()[4] = std::nanf("");
@@ -174,6 +212,14 @@ TEST(ProbeStorage, InconsistentDataIsRefused) {
     data = sample_data();
     data.active.pop_back();
     expect_error<InvalidArgument>([&] { validate_probe_grid_data(data); }, {"active", "entries"});
+    data = sample_data();
+    data.volumes.assign(kMaxProbeVolumes + 1, ProbeVolume{});
+    expect_error<InvalidArgument>([&] { validate_probe_grid_data(data); },
+                                  {"4097 volumes; the limit is 4096"});
+    data = sample_data();
+    data.volumes[0].resolution = ivec3(256, 256, 32);
+    expect_error<InvalidArgument>([&] { validate_probe_grid_data(data); },
+                                  {"2097154 probes; the limit is 2097152"});
 }
 
 }  // namespace
