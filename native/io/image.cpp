@@ -9,6 +9,7 @@
 #include <system_error>
 #include <utility>
 
+#include "scene/camera.h"
 #include "util/error.h"
 
 namespace shgi {
@@ -23,6 +24,9 @@ InvalidArgument duplicate_channel(const std::string& name) {
 }
 
 }  // namespace
+
+static_assert(kMaxImageDimension == int(kMaxCameraResolution),
+              "a camera's largest resolution is an image's largest side");
 
 const char* pixel_type_name(PixelType type) {
     return type == PixelType::Half ? "half" : "float";

@@ -173,6 +173,11 @@ void validate_camera(const Camera& camera) {
     if (camera.resolution_x == 0 || camera.resolution_y == 0)
         throw InvalidArgument(format_message(item, ": resolution ", camera.resolution_x, " x ",
                                              camera.resolution_y, " must be at least 1 x 1"));
+    // Films and images take int sides: a larger side would wrap to a negative size.
+    if (camera.resolution_x > kMaxCameraResolution || camera.resolution_y > kMaxCameraResolution)
+        throw InvalidArgument(format_message(item, ": resolution ", camera.resolution_x, " x ",
+                                             camera.resolution_y, " has a side above ",
+                                             kMaxCameraResolution, "; render it in tiles"));
     validate_image_plane(camera, item);
 }
 

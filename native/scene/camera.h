@@ -55,7 +55,10 @@ class CameraRayGenerator {
 };
 
 // Throws InvalidArgument naming the field (NaN/Inf transform, non-positive lens or sensor,
-// zero resolution, clip_start >= clip_end, ...).
+// a resolution of 0 or above kMaxCameraResolution, clip_start >= clip_end, ...).
 void validate_camera(const Camera& camera);
+// The largest resolution_x or resolution_y: an image's largest side (io/image.h's
+// kMaxImageDimension, which static_asserts that they agree).
+inline constexpr uint32_t kMaxCameraResolution = 1u << 20;
 
 }  // namespace shgi

@@ -135,6 +135,10 @@ TEST(CameraValidation, RejectsEachBadField) {
                     "camera: clip_start = 10 must be < clip_end = 1");
     expect_contains(bad([](Camera& c) { c.resolution_x = 0; }),
                     "camera: resolution 0 x 480 must be at least 1 x 1");
+    // Found by fuzzing: 2^31 passed and a film of "-2147483648 x 480" was refused later.
+    expect_contains(bad([](Camera& c) { c.resolution_x = 1u << 31; }),
+                    "camera: resolution 2147483648 x 480 has a side above 1048576");
+    EXPECT_EQ(bad([](Camera& c) { c.resolution_y = kMaxCameraResolution; }), "");
     expect_contains(bad([](Camera& c) { c.world_from_camera[0] = vec4(0); }),
                     "camera: world_from_camera is singular");
     expect_contains(bad([](Camera& c) { c.shift_x = kNaN; }), "camera: shift_x = nan");
