@@ -45,6 +45,23 @@ void validate_probe_volume(const ProbeVolume& volume, const char* what) {
     }
 }
 
+size_t validate_probe_volumes(const std::vector<ProbeVolume>& volumes, const char* what) {
+    if (volumes.empty() || volumes.size() > kMaxProbeVolumes)
+        throw InvalidArgument(format_message(what, " holds ", volumes.size(),
+                                             " volumes; a probe grid has 1..", kMaxProbeVolumes));
+    size_t probes = 0;
+    for (size_t v = 0; v < volumes.size(); ++v) {
+        const std::string item = format_message(what, "[", v, "]");
+        validate_probe_volume(volumes[v], item.c_str());
+        const ivec3 r = volumes[v].resolution;
+        probes += size_t(r.x) * size_t(r.y) * size_t(r.z);
+    }
+    if (probes > kMaxProbes)
+        throw InvalidArgument(format_message(what, " hold ", probes, " probes; the limit is ",
+                                             kMaxProbes, ": lower the resolutions"));
+    return probes;
+}
+
 vec3 probe_base_position(const ProbeVolume& volume, const ivec3& index) {
     const vec3 local = -1.0f + (2.0f * vec3(index) + 1.0f) / vec3(volume.resolution);
     return vec3(volume.world_from_volume * vec4(local, 1.0f));
@@ -93,18 +110,7 @@ void validate_probe_grid_data(const ProbeGridData& data) {
     check_sh_order(data.order, "ProbeGridData.order");
     if (data.order < 1)
         throw InvalidArgument("ProbeGridData.order is 0; probes need order 1..4");
-    if (data.volumes.empty()) throw InvalidArgument("ProbeGridData has no volumes");
-    if (data.volumes.size() > kMaxProbeVolumes)
-        throw InvalidArgument(format_message("ProbeGridData has ", data.volumes.size(),
-                                             " volumes; the limit is ", kMaxProbeVolumes));
-    for (size_t v = 0; v < data.volumes.size(); ++v) {
-        const std::string what = format_message("ProbeGridData.volumes[", v, "]");
-        validate_probe_volume(data.volumes[v], what.c_str());
-    }
-    const size_t count = data.volume_offset(data.volumes.size());
-    if (count > kMaxProbes)
-        throw InvalidArgument(format_message("ProbeGridData's volumes hold ", count,
-                                             " probes; the limit is ", kMaxProbes));
+    const size_t count = validate_probe_volumes(data.volumes, "ProbeGridData.volumes");
     const auto check_size = [&](size_t size, size_t expected, const char* name) {
         if (size != expected)
             throw InvalidArgument(format_message("ProbeGridData.", name, " has ", size,

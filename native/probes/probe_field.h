@@ -49,6 +49,10 @@ inline constexpr int kMaxProbesPerAxis = 256;
 // in the wrong unit, or a damaged or hostile file).
 inline constexpr size_t kMaxProbeVolumes = 4096;
 inline constexpr size_t kMaxProbes = size_t(1) << 21;
+// Throws InvalidArgument naming `what` unless there are 1..kMaxProbeVolumes volumes, each valid
+// (validate_probe_volume, named what[v]), with at most kMaxProbes probes in all; returns that
+// count. Every source of volumes (settings, grid data, both file formats) checks them here.
+size_t validate_probe_volumes(const std::vector<ProbeVolume>& volumes, const char* what);
 
 // World position of probe (i, j, k) of a volume before relocation.
 vec3 probe_base_position(const ProbeVolume& volume, const ivec3& index);

@@ -158,13 +158,7 @@ void validate_probe_grid_settings(const ProbeGridSettings& s) {
     if (s.order < 1 || s.order > kMaxShOrder)
         throw InvalidArgument(format_message(name, ".order is ", s.order, "; use 1..",
                                              kMaxShOrder));
-    if (s.volumes.size() > kMaxProbeVolumes)
-        throw InvalidArgument(format_message(name, ".volumes holds ", s.volumes.size(),
-                                             " volumes; the limit is ", kMaxProbeVolumes));
-    for (size_t v = 0; v < s.volumes.size(); ++v) {
-        const std::string what = format_message(name, ".volumes[", v, "]");
-        validate_probe_volume(s.volumes[v], what.c_str());
-    }
+    if (!s.volumes.empty()) validate_probe_volumes(s.volumes, "ProbeGridSettings.volumes");
     if (!(s.spacing >= 0.0f && s.spacing <= kMaxCoordinate))
         throw InvalidArgument(format_message(name, ".spacing is ", s.spacing,
                                              "; use metres in (0, 1e15], or 0 for longest side "
@@ -293,11 +287,8 @@ ProbeGridData ProbeGrid::place(Progress* progress) const {
     data.volumes = settings_.volumes;
     data.visibility_resolution = settings_.visibility_resolution;
     data.includes_direct = settings_.include_direct;
-    const size_t probes = data.volume_offset(data.volumes.size());
-    if (probes > kMaxProbes)
-        throw InvalidArgument(format_message("ProbeGridSettings.volumes hold ", probes,
-                                             " probes; the limit is ", kMaxProbes,
-                                             ": lower the resolutions"));
+    // The artist's volumes were checked with the settings; a fitted one is checked here.
+    const size_t probes = validate_probe_volumes(data.volumes, "ProbeGridSettings.volumes");
     const double bytes = double(probes) * double(probe_bytes(data.visibility_resolution));
     if (bytes > double(kMaxProbeBytes))
         throw InvalidArgument(format_message(

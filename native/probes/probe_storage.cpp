@@ -90,6 +90,15 @@ uint64_t remaining_bytes(std::ifstream& in, const std::string& path) {
     return uint64_t(end - here);
 }
 
+// validate_probe_volumes for volumes read from `path`: a refusal is a file error naming it.
+size_t checked_volumes(const std::vector<ProbeVolume>& volumes, const std::string& path) {
+    try {
+        return validate_probe_volumes(volumes, "volumes");
+    } catch (const InvalidArgument& e) {
+        throw IoError(format_message("\"", path, "\": ", e.what()));
+    }
+}
+
 }  // namespace
 
 size_t packed_probe_bytes(int order) {
@@ -179,22 +188,14 @@ ProbeGridData load_probe_grid(const std::string& path) {
                                      data.order, ", ", volumes, " volumes, visibility ",
                                      data.visibility_resolution, ")"));
     data.volumes.resize(volumes);
-    uint64_t expected = 0;
     for (ProbeVolume& v : data.volumes) {
         r.bytes(&v.world_from_volume[0][0], 16 * sizeof(float), "a volume");
         r.bytes(&v.resolution[0], 3 * sizeof(int32_t), "a volume");
-        for (int a = 0; a < 3; ++a)
-            if (v.resolution[a] < 1 || v.resolution[a] > kMaxProbesPerAxis)
-                throw IoError(format_message("probe file \"", path, "\" has a volume with ",
-                                             v.resolution[a], " probes along an axis"));
-        expected += uint64_t(v.resolution.x) * v.resolution.y * v.resolution.z;
     }
+    const uint64_t expected = checked_volumes(data.volumes, path);
     if (probes != expected)
         throw IoError(format_message("probe file \"", path, "\" says ", probes,
                                      " probes; its volumes hold ", expected));
-    if (probes > kMaxProbes)
-        throw IoError(format_message("probe file \"", path, "\" holds ", probes,
-                                     " probes; the limit is ", kMaxProbes));
     // The rest of the file must hold exactly those probes. Checked before anything is allocated,
     // so that a damaged header cannot make a small file ask for gigabytes.
     const uint64_t probe_bytes = sizeof(vec3) + 1 + sizeof(float) +
@@ -371,11 +372,7 @@ ProbeGridData import_probe_grid(const std::string& json_path) {
         // many (or many large) volumes must not make the import ask for gigabytes.
         const nlohmann::json& entries = doc.at("volumes");
         const size_t listed = entries.is_array() ? entries.size() : 0;
-        if (listed == 0 || listed > kMaxProbeVolumes)
-            throw IoError(format_message("\"", json_path, "\": \"volumes\" lists ", listed,
-                                         " volumes; a probe grid has 1..", kMaxProbeVolumes));
         std::vector<ProbeVolume> volumes(listed);
-        size_t total = 0;
         for (size_t v = 0; v < listed; ++v) {
             const nlohmann::json& entry = entries[v];
             ProbeVolume& volume = volumes[v];
@@ -388,12 +385,8 @@ ProbeGridData import_probe_grid(const std::string& json_path) {
                                              "entries and 3 resolutions"));
             for (int i = 0; i < 16; ++i) volume.world_from_volume[i / 4][i % 4] = matrix[size_t(i)];
             volume.resolution = ivec3(resolution[0], resolution[1], resolution[2]);
-            validate_probe_volume(volume, "volume");
-            total += size_t(volume.resolution.x) * volume.resolution.y * volume.resolution.z;
         }
-        if (total > kMaxProbes)
-            throw IoError(format_message("\"", json_path, "\": its volumes hold ", total,
-                                         " probes; the limit is ", kMaxProbes));
+        checked_volumes(volumes, json_path);
         for (size_t v = 0; v < listed; ++v) {
             const nlohmann::json& entry = entries[v];
             const ProbeVolume& volume = volumes[v];

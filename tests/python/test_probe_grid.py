@@ -297,9 +297,10 @@ def test_an_export_listing_too_many_volumes_is_refused_before_reading_them(tmp_p
     doc = json.loads((tmp_path / "grid.json").read_text())
     doc["volumes"] = doc["volumes"] * 20000
     (tmp_path / "grid.json").write_text(json.dumps(doc))
-    with pytest.raises(OSError, match="lists 20000 volumes; a probe grid has 1..4096"):
+    with pytest.raises(OSError, match="volumes holds 20000 volumes; a probe grid has 1..4096"):
         shgi.ProbeField.import_exr(str(tmp_path / "grid.json"))
-    with pytest.raises(ValueError, match="volumes holds 4097 volumes; the limit is 4096"):
+    with pytest.raises(ValueError, match="ProbeGridSettings.volumes holds 4097 volumes; "
+                                         "a probe grid has 1..4096"):
         shgi.ProbeGrid(scene, shgi.ProbeGridSettings(
             volumes=[shgi.ProbeVolume(resolution=(1, 1, 1))] * 4097))
 

@@ -283,7 +283,7 @@ TEST(ProbeGrid, RejectsBadSettingsAndEditedScenes) {
     for (ProbeVolume& volume : settings.volumes) volume.resolution = ivec3(1);
     expect_error<InvalidArgument>([&] { ProbeGrid(scene, settings); },
                                   {"ProbeGridSettings.volumes holds 4097 volumes",
-                                   "the limit is 4096"});
+                                   "a probe grid has 1..4096"});
     settings = {};
     ProbeGrid grid(scene, settings);
     scene.set_world(World{});

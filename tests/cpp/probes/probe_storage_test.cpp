@@ -148,7 +148,8 @@ TEST(ProbeStorage, BinaryCacheRoundTripsAtHalfPrecision) {
                           {"grid.shprobes", "says 524288 probes", "truncated or damaged"});
     claim(256);
     expect_error<IoError>([&] { load_probe_grid(path); },
-                          {"grid.shprobes", "holds 33554432 probes", "the limit is 2097152"});
+                          {"grid.shprobes", "volumes hold 33554432 probes",
+                           "the limit is 2097152"});
 }
 
 TEST(ProbeStorage, ExrJsonExportRoundTrips) {
@@ -191,7 +192,7 @@ TEST(ProbeStorage, ImportRefusesTooManyVolumesOrProbesBeforeReadingExrs) {
     for (size_t v = 0; v <= kMaxProbeVolumes; ++v) doc["volumes"].push_back(original["volumes"][0]);
     testing::write_file(path, doc.dump());
     expect_error<IoError>([&] { import_probe_grid(path); },
-                          {"listing.json", "lists 4097 volumes", "1..4096"});
+                          {"listing.json", "volumes holds 4097 volumes", "1..4096"});
 
     doc = original;
     doc["volumes"][1]["resolution"] = {256, 256, 64};
@@ -202,7 +203,7 @@ TEST(ProbeStorage, ImportRefusesTooManyVolumesOrProbesBeforeReadingExrs) {
     doc = original;
     doc["volumes"] = nlohmann::json::object();
     testing::write_file(path, doc.dump());
-    expect_error<IoError>([&] { import_probe_grid(path); }, {"lists 0 volumes"});
+    expect_error<IoError>([&] { import_probe_grid(path); }, {"listing.json", "holds 0 volumes"});
 }
 
 TEST(ProbeStorage, InconsistentDataIsRefused) {
@@ -215,7 +216,8 @@ TEST(ProbeStorage, InconsistentDataIsRefused) {
     data = sample_data();
     data.volumes.assign(kMaxProbeVolumes + 1, ProbeVolume{});
     expect_error<InvalidArgument>([&] { validate_probe_grid_data(data); },
-                                  {"4097 volumes; the limit is 4096"});
+                                  {"ProbeGridData.volumes holds 4097 volumes; a probe grid has "
+                                   "1..4096"});
     data = sample_data();
     data.volumes[0].resolution = ivec3(256, 256, 32);
     expect_error<InvalidArgument>([&] { validate_probe_grid_data(data); },
