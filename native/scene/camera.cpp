@@ -48,10 +48,12 @@ Viewplane<Real> compute_viewplane(const Camera& camera) {
 }
 
 // Blender's camera matrix with its scale removed (Cycles' transform_clear_scale): a scaled camera
-// object renders as if unscaled.
+// object renders as if unscaled. In double: the squared length of an axis scaled by 1e30 (or
+// 1e-30), which validate_camera accepts, would overflow (underflow) a float.
 mat4 unscaled(const mat4& world_from_camera) {
     mat4 m = world_from_camera;
-    for (int axis = 0; axis < 3; ++axis) m[axis] = vec4(glm::normalize(vec3(m[axis])), 0.0f);
+    for (int axis = 0; axis < 3; ++axis)
+        m[axis] = vec4(vec3(glm::normalize(glm::dvec3(vec3(m[axis])))), 0.0f);
     return m;
 }
 

@@ -85,6 +85,26 @@ TEST(Camera, ScaleOfTheCameraObjectIsIgnored) {
                 glm::normalize(vec3(-0.36f, 0.27f, -1.0f)));
 }
 
+// Any finite non-zero scale: an axis scaled by 1e30 (or 1e-30) squares to beyond (below) float.
+TEST(Camera, ExtremeScalesOfTheCameraObjectAreIgnored) {
+    Camera unit;
+    unit.world_from_camera = glm::rotate(mat4(1.0f), 0.4f, glm::normalize(vec3(1, 2, 3)));
+    for (const float scale : {1e30f, 1e-30f}) {
+        Camera scaled = unit;
+        scaled.world_from_camera = unit.world_from_camera * glm::scale(mat4(1.0f), vec3(scale));
+        ASSERT_NO_THROW(validate_camera(scaled)) << scale;
+        for (const vec2 film : {vec2(0, 0), vec2(320, 240), vec2(639.5f, 10)}) {
+            const Ray ray = scaled.generate_ray(film);
+            ASSERT_TRUE(is_finite(ray.direction)) << scale;
+            expect_near(ray.direction, unit.generate_ray(film).direction);
+            vec2 projected;
+            ASSERT_TRUE(scaled.project(ray.origin + 5.0f * ray.direction, &projected));
+            EXPECT_NEAR(projected.x, film.x, kFilmTolerance);
+            EXPECT_NEAR(projected.y, film.y, kFilmTolerance);
+        }
+    }
+}
+
 TEST(Camera, ProjectInvertsGenerateRay) {
     for (const CameraType type : {CameraType::Perspective, CameraType::Orthographic}) {
         Camera camera;
