@@ -287,11 +287,76 @@ void Scene::gather_emissive() {
             emissive.p2 = vec3(world_from_object * vec4(mesh.positions[tri.z], 1.0f));
             const vec3 twice_area_normal =
                 glm::cross(emissive.p1 - emissive.p0, emissive.p2 - emissive.p0);
-            emissive.area = 0.5f * glm::length(twice_area_normal);
+            // In double: the squared length of a cross product of 1e15 m edges overflows float.
+            emissive.area = float(0.5 * glm::length(glm::dvec3(twice_area_normal)));
             emissive.radiance = material.emission();
             emissive_.push_back(emissive);
         }
     }
+}
+
+void Scene::check_emitted_power() const {
+    // Upper bounds of what LightSampler and PhotonEmitter weigh each emitter by: the sun and the
+    // world cover the disk of the scene's bounding sphere (at least 1 mm; 1 m when empty).
+    const double radius =
+        empty() ? 1.0 : std::max(0.5 * glm::length(glm::dvec3(bounds_.extent())), 1e-3);
+    const double cross_section = double(kPi) * radius * radius;
+    auto light_power = [&](const Light& light) {
+        if (light.portal) return 0.0;  // emits nothing
+        const double colour = max_component(light.color);
+        return light.type == LightType::Sun ? colour * light.strength * cross_section
+                                            : colour * light.power;
+    };
+    auto triangle_power = [](const EmissiveTriangle& triangle) {
+        return max_component(triangle.radiance) * double(kTwoPi) * triangle.area;
+    };
+    const double world_power =
+        max_component(world_.radiance()) * double(kFourPi) * cross_section;
+    double total = world_power, largest = world_power;
+    size_t brightest_light = lights_.size(), brightest_triangle = emissive_.size();
+    for (size_t i = 0; i < lights_.size(); ++i) {
+        const double power = light_power(lights_[i]);
+        total += power;
+        if (power > largest) {
+            largest = power;
+            brightest_light = i;
+        }
+    }
+    for (size_t i = 0; i < emissive_.size(); ++i) {
+        const double power = triangle_power(emissive_[i]);
+        total += power;
+        if (power > largest) {
+            largest = power;
+            brightest_light = lights_.size();
+            brightest_triangle = i;
+        }
+    }
+    if (total <= kMaxEmittedPower) return;
+    std::string brightest;  // what the largest emitter's power comes from, and the fix
+    if (brightest_light < lights_.size()) {
+        const Light& light = lights_[brightest_light];
+        brightest = light.type == LightType::Sun
+                        ? format_message(label("light", light.name), " (strength ",
+                                         light.strength, " W/m^2 over the scene's cross-section "
+                                         "of ", cross_section, " m^2): lower its strength")
+                        : format_message(label("light", light.name), " (power ", light.power,
+                                         " W): lower its power");
+    } else if (brightest_triangle < emissive_.size()) {
+        const EmissiveTriangle& triangle = emissive_[brightest_triangle];
+        brightest = format_message(
+            "triangle ", triangle.triangle_id, " of ",
+            instance_label(instances_, triangle.instance_id), " (emission ",
+            max_component(triangle.radiance), " W m^-2 sr^-1 over ", triangle.area,
+            " m^2): lower its material's emission strength");
+    } else {
+        brightest = format_message("the world (", max_component(world_.radiance()),
+                                   " W m^-2 sr^-1 around the scene's cross-section of ",
+                                   cross_section, " m^2): lower its strength");
+    }
+    throw InvalidArgument(format_message(
+        "the scene emits ", total, " W, beyond the ", kMaxEmittedPower,
+        " W that light sampling carries in single precision; the brightest emitter, with ",
+        largest, " W, is ", brightest));
 }
 
 void Scene::commit(const CommitSettings& settings, Progress* progress) {
@@ -333,6 +398,7 @@ void Scene::commit(const CommitSettings& settings, Progress* progress) {
     for (const Instance& instance : instances_)
         normal_from_object_.push_back(normal_matrix(instance.world_from_object));
     gather_emissive();
+    check_emitted_power();
     if (empty()) log_warning("scene has no triangles: every ray misses");
     committed_ = true;
     if (progress) progress->set_fraction(1.0f);

@@ -5,7 +5,8 @@
 // triangles are dropped and counted) and throws InvalidArgument naming the item and field.
 // commit() checks cross references (instance -> mesh, triangle -> material, material -> texture;
 // a scene without materials gets one default Material so every triangle has one), gathers
-// emissive triangles, and builds the BVH: one Embree geometry per mesh, instanced once
+// emissive triangles, refuses emitted power beyond kMaxEmittedPower (naming the brightest
+// emitter), and builds the BVH: one Embree geometry per mesh, instanced once
 // per Instance, so a mesh used a thousand times is stored once. Any edit un-commits the scene;
 // set_instance_transform() keeps the per-mesh BVHs and re-commits only the top level, set_mesh()
 // (a mesh replaced for all its instances) rebuilds them.
@@ -55,6 +56,12 @@ struct Bounds3 {
     }
     vec3 extent() const { return upper - lower; }
 };
+
+// The most power (W, in an emitter's brightest channel, summed over the scene's lights, emissive
+// triangles and world) that commit() accepts. The samplers weigh emitters and photons by their
+// power in float (3.4e38 at most): below this a sum or product of them stays finite. A sun of
+// 1000 W/m^2 over a scene kMaxCoordinate across emits ~1e34 W.
+inline constexpr double kMaxEmittedPower = 1e36;
 
 // A triangle whose material emits: the "emissive triangles" light type.
 struct EmissiveTriangle {
@@ -169,6 +176,7 @@ class Scene {
     Bounds3 compute_bounds() const;
     void set_ray_limits();  // from the instances and bounds_
     void gather_emissive();
+    void check_emitted_power() const;  // after gather_emissive, with bounds_
     void finish_hit(Hit& hit) const;
 
     std::vector<Mesh> meshes_;

@@ -364,6 +364,11 @@ def test_bad_instances_materials_and_lights():
         scene.commit(memory_budget_bytes=-1)
     with pytest.raises(TypeError, match="expected an shgi.Mesh"):
         scene.add_mesh("not a mesh")
+    scene.add_instance(mesh)
+    scene.add_light(shgi.Light(name="Sun", type=shgi.LightType.SUN, strength=1e38))
+    with pytest.raises(ValueError, match=r"the brightest emitter, with 1\.5708e\+38 W, is light "
+                       r"'Sun' \(strength 1e\+38 W/m\^2 .*\): lower its strength"):
+        scene.commit()  # before, light sampling failed on an infinite weight
 
 
 # Run in a child process: before the module refused it, a bare __new__ gave an object whose

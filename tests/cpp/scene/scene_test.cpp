@@ -714,6 +714,76 @@ TEST(SceneEmissive, GathersWorldSpaceEmissiveTriangles) {
     EXPECT_EQ(scene.stats().emissive_triangles, 1u);
 }
 
+// Float light sampling overflows past ~3e38 W: commit() refuses a scene emitting more than
+// kMaxEmittedPower and names its brightest emitter and the field to lower.
+TEST(SceneEmissive, PowerBeyondTheLimitIsRefusedNamingTheBrightestEmitter) {
+    auto commit_with = [](auto&& edit) {
+        Scene scene;
+        scene.add_instance(scene.add_mesh(unit_quad()), mat4(1.0f));  // cross-section pi / 2 m^2
+        edit(scene);
+        return rejection<InvalidArgument>([&] { scene.commit(); });
+    };
+    auto light = [](const char* name, LightType type, float power, float strength) -> Light {
+        Light made;
+        made.name = name;
+        made.type = type;
+        made.power = power;
+        made.strength = strength;
+        return made;
+    };
+    expect_contains(commit_with([&](Scene& scene) {
+                        scene.add_light(light("Bulb", LightType::Point, 2e36f, 1.0f));
+                    }),
+                    "the scene emits 2e+36 W, beyond the 1e+36 W");
+    expect_contains(commit_with([&](Scene& scene) {
+                        scene.add_light(light("Dim", LightType::Point, 4e35f, 1.0f));
+                        scene.add_light(light("Bulb", LightType::Spot, 7e35f, 1.0f));
+                    }),
+                    "the brightest emitter, with 7e+35 W, is light 'Bulb' (power 7e+35 W): "
+                    "lower its power");
+    // A sun covers the scene's cross-section: 1e36 W/m^2 over pi / 2 m^2.
+    expect_contains(commit_with([&](Scene& scene) {
+                        scene.add_light(light("Sun", LightType::Sun, 1.0f, 1e36f));
+                    }),
+                    "light 'Sun' (strength 1e+36 W/m^2 over the scene's cross-section of "
+                    "1.5708 m^2): lower its strength");
+    expect_contains(commit_with([&](Scene& scene) {
+                        World world;
+                        world.color = vec3(1.0f);
+                        world.strength = 1e35f;  // x 4 pi x pi / 2 m^2
+                        scene.set_world(world);
+                    }),
+                    "is the world (1e+35 W m^-2 sr^-1 around the scene's cross-section");
+    expect_contains(commit_with([&](Scene& scene) {
+                        Material lamp;
+                        lamp.emission_color = vec3(1.0f);
+                        lamp.emission_strength = 1e36f;  // x 2 pi x 0.5 m^2
+                        scene.add_material(Material{});  // the first quad's
+                        Mesh panel = unit_quad();
+                        panel.material_indices = {scene.add_material(lamp), 0};
+                        scene.add_instance(scene.add_mesh(panel), mat4(1.0f), "Panel");
+                    }),
+                    "is triangle 0 of instance 1 'Panel' (emission 1e+36 W m^-2 sr^-1 over 0.5 "
+                    "m^2): lower its material's emission strength");
+
+    // Within the limit: a real sun, and a sun and lamp as large as scene coordinates go, whose
+    // float area (squared 1e30 m^2 edges) would overflow.
+    Scene sunny;
+    sunny.add_instance(sunny.add_mesh(unit_quad()), mat4(1.0f));
+    sunny.add_light(light("Sun", LightType::Sun, 1.0f, 1000.0f));
+    EXPECT_NO_THROW(sunny.commit());
+    Scene huge;
+    Material lamp;
+    lamp.emission_color = vec3(1.0f);
+    lamp.emission_strength = 1.0f;
+    huge.add_material(lamp);
+    huge.add_instance(huge.add_mesh(unit_quad()), glm::scale(mat4(1.0f), vec3(9e14f)));
+    huge.add_light(light("Sun", LightType::Sun, 1.0f, 1000.0f));
+    ASSERT_NO_THROW(huge.commit());
+    ASSERT_EQ(huge.emissive_triangles().size(), 2u);
+    EXPECT_NEAR(huge.emissive_triangles()[0].area / 4.05e29f, 1.0f, 1e-5f);
+}
+
 TEST(SceneProgress, CancelledBatchThrowsCancelled) {
     const Scene scene = quad_scene();
     std::vector<Ray> rays(50000, make_ray(vec3(0.5f, 0.5f, 1), vec3(0, 0, -1)));
