@@ -141,8 +141,10 @@ The sample positions of every texel of one object's lightmap (rasterize_texels).
     def_integer(unocclude_settings, "ray_count", &U::ray_count,
                 "Tangent-plane rays per sample (8).");
     unocclude_settings.def(py::init(&from_kwargs<U>), "UnoccludeSettings(**fields)")
-        .def_readwrite("search_radius", &U::search_radius, "Texels searched for walls (1).")
-        .def_readwrite("push_distance", &U::push_distance, "Texels past the wall (0.05).");
+        .def_readwrite("search_radius", &U::search_radius,
+                       "Texels searched for walls, (0, 16] (1).")
+        .def_readwrite("push_distance", &U::push_distance,
+                       "Texels past the wall, [0, 16] (0.05).");
     m.def(
         "unocclude",
         [](const Scene& scene, TexelMap& map, const U settings, Progress* progress) {

@@ -11,6 +11,10 @@ namespace shgi {
 namespace {
 
 constexpr uint32_t kMaxRayCount = 64;
+// The farthest (texels) a search or a push may reach: a sample moved further than a few texels
+// lies under other texels, whose light it would give its own (and 1e38 texels put ray origins
+// out of Embree's range, where the bake refused them without naming the setting).
+constexpr float kMaxMoveTexels = 16.0f;
 // Samples per parallel chunk: ray_count rays each, a few ms per chunk (polls cancel often).
 constexpr uint64_t kSamplesPerChunk = 1024;
 
@@ -20,14 +24,14 @@ void check_settings(const Scene& scene, const UnoccludeSettings& settings) {
     if (settings.ray_count < 1 || settings.ray_count > kMaxRayCount)
         throw InvalidArgument(format_message("UnoccludeSettings.ray_count = ", settings.ray_count,
                                              " is outside [1, ", kMaxRayCount, "]"));
-    if (!(std::isfinite(settings.search_radius) && settings.search_radius > 0.0f))
+    if (!(settings.search_radius > 0.0f && settings.search_radius <= kMaxMoveTexels))
         throw InvalidArgument(format_message("UnoccludeSettings.search_radius = ",
-                                             settings.search_radius,
-                                             " must be a finite number of texels > 0"));
-    if (!(std::isfinite(settings.push_distance) && settings.push_distance >= 0.0f))
+                                             settings.search_radius, " must be in (0, ",
+                                             kMaxMoveTexels, "] texels"));
+    if (!(settings.push_distance >= 0.0f && settings.push_distance <= kMaxMoveTexels))
         throw InvalidArgument(format_message("UnoccludeSettings.push_distance = ",
-                                             settings.push_distance,
-                                             " must be a finite number of texels >= 0"));
+                                             settings.push_distance, " must be in [0, ",
+                                             kMaxMoveTexels, "] texels"));
 }
 
 // Moves one sample's ray origin out of the geometry it lies in; returns whether it moved.

@@ -31,10 +31,10 @@ struct UnoccludeSettings {
     // How far (texels) from a sample the inside of a wall is looked for. A wall edge through a
     // texel passes within half a texel of its centre and within ~1 texel of most of its
     // samples; a larger radius would move samples deep under a wall, whose texels no one sees.
-    float search_radius = 1.0f;
+    float search_radius = 1.0f;  // (0, 16]
     // How far (texels) past the back face the ray origin is put: clear of the wall's surface
     // by more than float round-off, small enough to stay within the texel's neighbourhood.
-    float push_distance = 0.05f;
+    float push_distance = 0.05f;  // [0, 16]
 };
 
 struct UnoccludeReport {

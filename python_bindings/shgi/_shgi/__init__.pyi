@@ -2368,7 +2368,7 @@ class UnoccludeSettings:
     @property
     def push_distance(self) -> float:
         """
-        Texels past the wall (0.05).
+        Texels past the wall, [0, 16] (0.05).
         """
     @push_distance.setter
     def push_distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
@@ -2384,7 +2384,7 @@ class UnoccludeSettings:
     @property
     def search_radius(self) -> float:
         """
-        Texels searched for walls (1).
+        Texels searched for walls, (0, 16] (1).
         """
     @search_radius.setter
     def search_radius(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:

@@ -162,6 +162,15 @@ TEST(Unocclude, RejectsAnUncommittedSceneAndBadSettings) {
     bad = UnoccludeSettings{};
     bad.push_distance = std::numeric_limits<float>::quiet_NaN();
     expect_contains(message(bad), "UnoccludeSettings.push_distance = nan");
+    // Finite but far: 1e38 texels put ray origins out of Embree's range.
+    bad.push_distance = 1e38f;
+    expect_contains(message(bad), "UnoccludeSettings.push_distance = 1e+38 must be in [0, 16]");
+    bad = UnoccludeSettings{};
+    bad.search_radius = 17.0f;
+    expect_contains(message(bad), "UnoccludeSettings.search_radius = 17 must be in (0, 16]");
+    bad.search_radius = 16.0f;
+    bad.push_distance = 16.0f;
+    EXPECT_NO_THROW(unocclude(fixture.scene, map, bad));
 
     fixture.scene.set_instance_transform(fixture.floor, mat4(1.0f));  // un-commits
     expect_contains(message(UnoccludeSettings{}), "call Scene::commit() first");
