@@ -586,7 +586,14 @@ void GltfImporter::add_node_camera(const tinygltf::Node& node, const mat4& world
         log_info(path_, ": camera ", node.camera, " ignored; the first camera node is used");
         return;
     }
-    scene_.set_camera(camera_from_gltf(model_.cameras[size_t(node.camera)], world_from_node));
+    const tinygltf::Camera& camera = model_.cameras[size_t(node.camera)];
+    // Else the lens comes out negative (yfov >= pi) or infinite (yfov = 0), which set_camera
+    // refuses without naming the glTF's field.
+    const float yfov = float(camera.perspective.yfov);  // as camera_from_gltf converts it
+    if (camera.type != "orthographic" && !(yfov > 0.0f && yfov < kPi))
+        throw IoError(format_message(path_, ": camera ", node.camera, " has yfov = ", yfov,
+                                     " rad; a perspective camera's must be in (0, pi)"));
+    scene_.set_camera(camera_from_gltf(camera, world_from_node));
 }
 
 const std::vector<uint32_t>& GltfImporter::mesh_ids(int mesh_index) {

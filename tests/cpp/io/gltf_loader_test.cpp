@@ -384,6 +384,13 @@ TEST(GltfLoaderErrors, BufferViewPastItsBuffer) {
     expect_io_error("gltf_loader_long_view.gltf", json, "buffer");
 }
 
+TEST(GltfLoaderErrors, FieldOfViewOutsideZeroToPi) {
+    for (const char* yfov : {"3.14159274", "4", "0", "-0.5"})
+        expect_io_error("gltf_loader_yfov.gltf",
+                        replaced(scene_json(), R"("yfov": 0.5)", std::string("\"yfov\": ") + yfov),
+                        "camera 0 has yfov = ");
+}
+
 TEST(GltfLoaderErrors, CyclicNodeHierarchy) {
     const std::string json = replaced(scene_json(), R"("scale": [2, 2, 2]})",
                                       R"("scale": [2, 2, 2], "children": [0]})");
