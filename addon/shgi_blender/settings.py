@@ -200,7 +200,7 @@ PROBE_GRID_LABELS = {
 # only values the native code accepts.
 MAX_SAMPLES = 1 << 24                # Path/PreviewSettings.samples (kMaxPathTracerSamples)
 MAX_LATTICE_RESOLUTION = 1024        # PhotonLatticeSettings.resolution, caustic_resolution
-MAX_PROBE_SPACING = 1e15             # ProbeGridSettings.spacing, m (kMaxCoordinate)
+MAX_PROBE_SPACING = 1e12             # ProbeGridSettings.spacing, m (kMaxCoordinate)
 MAX_RAYS_PER_PROBE = 65536           # ProbeGridSettings.rays_per_probe, placement_rays
 MIN_PLACEMENT_RAYS = 4               # ProbeGridSettings.placement_rays
 MIN_VISIBILITY_BLUR = 0.01           # ProbeGridSettings.visibility_blur, radians

@@ -161,7 +161,8 @@ void validate_probe_grid_settings(const ProbeGridSettings& s) {
     if (!s.volumes.empty()) validate_probe_volumes(s.volumes, "ProbeGridSettings.volumes");
     if (!(s.spacing >= 0.0f && s.spacing <= kMaxCoordinate))
         throw InvalidArgument(format_message(name, ".spacing is ", s.spacing,
-                                             "; use metres in (0, 1e15], or 0 for longest side "
+                                             "; use metres in (0, ", kMaxCoordinate,
+                                             "], or 0 for longest side "
                                              "/ 8"));
     if (s.rays_per_probe < 1 || s.rays_per_probe > 65536)
         throw InvalidArgument(format_message(name, ".rays_per_probe is ", s.rays_per_probe,

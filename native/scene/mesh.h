@@ -37,7 +37,7 @@ struct MeshReport {
 // Checks and cleans a mesh in place; `material_count` bounds the material indices (Scene passes
 // kAnyMaterialCount while materials may still be added, and checks again at commit).
 // Throws InvalidArgument naming the mesh, the array and the first bad element: NaN/Inf or
-// |coordinate| > 1e15 (beyond Embree's float range), array sizes that differ from the vertex or
+// |coordinate| > 1e12 (beyond Embree's float range), array sizes that differ from the vertex or
 // triangle count, vertex or material indices out of range. Degenerate triangles are dropped (with
 // their material index); zero-length normals are replaced by the adjacent face normals.
 MeshReport validate_mesh(Mesh& mesh, uint32_t material_count);

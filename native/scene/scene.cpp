@@ -287,7 +287,7 @@ void Scene::gather_emissive() {
             emissive.p2 = vec3(world_from_object * vec4(mesh.positions[tri.z], 1.0f));
             const vec3 twice_area_normal =
                 glm::cross(emissive.p1 - emissive.p0, emissive.p2 - emissive.p0);
-            // In double: the squared length of a cross product of 1e15 m edges overflows float.
+            // In double: the squared length of a cross product of 1e12 m edges overflows float.
             emissive.area = float(0.5 * glm::length(glm::dvec3(twice_area_normal)));
             emissive.radiance = material.emission();
             emissive_.push_back(emissive);

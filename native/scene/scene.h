@@ -60,7 +60,7 @@ struct Bounds3 {
 // The most power (W, in an emitter's brightest channel, summed over the scene's lights, emissive
 // triangles and world) that commit() accepts. The samplers weigh emitters and photons by their
 // power in float (3.4e38 at most): below this a sum or product of them stays finite. A sun of
-// 1000 W/m^2 over a scene kMaxCoordinate across emits ~1e34 W.
+// 1000 W/m^2 over a scene kMaxCoordinate across emits ~1e27 W.
 inline constexpr double kMaxEmittedPower = 1e36;
 
 // A triangle whose material emits: the "emissive triangles" light type.

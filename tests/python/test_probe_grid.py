@@ -227,7 +227,7 @@ def test_lookups_reject_normals_without_direction_and_far_points():
             field.irradiance(np.array([[0, 0, 0.5], [0, 0, 0.5]]), np.array([[0, 0, 1.0], [0, 0, 0]]))
         with pytest.raises(ValueError, match="normal: .* has no direction"):
             field.radiance_sh(np.array([0, 0, 0.5]), np.array([1e-30, 0, 0]))
-        with pytest.raises(ValueError, match=r"points\[0\]: .* is beyond 1e\+15 m"):
+        with pytest.raises(ValueError, match=r"points\[0\]: .* is beyond 1e\+12 m"):
             field.irradiance(np.array([[1e20, 0, 0.5]]), np.array([[0, 0, 1.0]]))
 
 

@@ -332,7 +332,7 @@ def test_bad_arrays_raise_value_error_naming_the_argument(kwargs, argument):
     (dict(normals=np.zeros((3, 3), np.float32)), "normals has 3 elements but positions has 4"),
     (dict(material_indices=[0]), "material_indices has 1 elements but triangles has 2"),
     (dict(positions=np.full((4, 3), 1e16, np.float32)),
-     r"positions\[0\] = .* exceeds 1e\+15 m"),
+     r"positions\[0\] = .* exceeds 1e\+12 m"),
 ])
 def test_bad_meshes_raise_value_error_naming_the_mesh(kwargs, message):
     positions, triangles = quad_arrays()
@@ -455,10 +455,10 @@ def refused(call, *fragments):
 flat = triangle_scene(np.diag([1.0, 1.0, 1e-20, 1.0]))
 refused(flat.commit, "instance 0 'Shrunk': its transform shrinks the mesh by up to 1e+20x",
         "Apply Scale")
-# Scale 1e-4 placed 9e14 m out: rays from the scene's own extent would be out of range.
-far = np.diag([1e-4, 1e-4, 1e-4, 1.0])
-far[0, 3] = 9e14
-refused(triangle_scene(far).commit, "shrinks the mesh by up to 10000x")
+# Scale 1e-7 placed 9e11 m out: rays from the scene's own extent would be out of range.
+far = np.diag([1e-7, 1e-7, 1e-7, 1.0])
+far[0, 3] = 9e11
+refused(triangle_scene(far).commit, "shrinks the mesh by up to 1e+07x")
 # Scale 0.1: commits, and a ray from 5e17 m (within 1e18, but 5e18 in the mesh's coordinates)
 # is refused, naming the scene's lower limit and the instance that sets it.
 small = triangle_scene(np.diag([0.1, 0.1, 0.1, 1.0]))
@@ -469,18 +469,18 @@ refused(lambda: small.intersect(np.array([[5e17, 0, 0]], np.float32),
                                 np.array([[-1, 0, 0]], np.float32)),
         "rays[0]: origin exceeds the scene's ray range", "origins up to 1e+17",
         "instance 0 'Shrunk' shrinks its mesh by up to 10x")
-# The renderers' own rays: an orthographic camera 9e14 m above an object scaled 1e-4.
-tiny = triangle_scene(np.diag([1e-4, 1e-4, 1e-4, 1.0]))
+# The renderers' own rays: an orthographic camera 9e11 m above an object scaled 1e-7.
+tiny = triangle_scene(np.diag([1e-7, 1e-7, 1e-7, 1.0]))
 tiny.add_light(shgi.Light(type=shgi.LightType.SUN))
 camera = shgi.Camera(resolution_x=4, resolution_y=4, type=shgi.CameraType.ORTHOGRAPHIC,
-                     ortho_scale=1e-4, clip_end=1e15)
+                     ortho_scale=1e-7, clip_end=1e12)
 above = np.eye(4)
-above[2, 3] = 9e14
+above[2, 3] = 9e11
 camera.world_from_camera = above
 tiny.set_camera(camera)
 tiny.commit()
 refused(lambda: shgi.render_path_traced(tiny, shgi.PathTracerSettings(samples=1)),
-        "origin exceeds the scene's ray range", "origins up to 1e+14")
+        "origin exceeds the scene's ray range", "origins up to 1e+11")
 print("ok")
 """
 

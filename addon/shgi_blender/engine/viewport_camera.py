@@ -30,7 +30,7 @@ import numpy as np
 SENSOR_WIDTH_MM = 36.0
 # The far clip of a projection too deep for float32 (native/scene/ray.h kMaxCoordinate: no ray
 # travels farther).
-MAX_CLIP_END = 1e15
+MAX_CLIP_END = 1e12
 
 
 def is_perspective(window_matrix):

@@ -420,6 +420,33 @@ TEST(SceneValidation, InstanceBeyondEmbreeRangeIsRejectedAtCommit) {
                     "instance 0 'Huge': world-space bounds");
 }
 
+// The largest scene kMaxCoordinate allows still intersects right: Embree's triangle test
+// multiplies three lengths in float, and in a box of half-side 5e12 m most hits came back at
+// t = inf (scene/ray.h). Rays from inside a closed cube of half-side kMaxCoordinate all hit it,
+// within the cube's diagonal.
+TEST(SceneIntersect, TheLargestSceneAllowedHitsAtFiniteDistances) {
+    Scene scene;
+    scene.add_instance(scene.add_mesh(unit_cube()),
+                       glm::translate(mat4(1.0f), vec3(-kMaxCoordinate)) *
+                           glm::scale(mat4(1.0f), vec3(2.0f * kMaxCoordinate)));
+    scene.commit();
+    std::mt19937 random(7);
+    std::uniform_real_distribution<float> inside(-0.99f, 0.99f);
+    std::normal_distribution<float> normal;
+    std::vector<Ray> rays(4096);
+    for (Ray& ray : rays) {
+        ray.origin = kMaxCoordinate * vec3(inside(random), inside(random), inside(random));
+        ray.direction = vec3(normal(random), normal(random), normal(random));
+    }
+    std::vector<Hit> hits;
+    scene.intersect(rays, hits);
+    for (size_t i = 0; i < rays.size(); ++i) {
+        ASSERT_TRUE(hits[i].valid()) << i;
+        ASSERT_TRUE(std::isfinite(hits[i].t)) << i;
+        ASSERT_LE(hits[i].t * glm::length(rays[i].direction), 3.5f * kMaxCoordinate) << i;
+    }
+}
+
 // Embree checks a ray again in each instance's own coordinates (and Debian's Embree aborts past
 // 1.8e18 there): an instance that shrinks its mesh lowers the range the scene traces, and one
 // that would put rays from the scene's own surfaces out of range is refused at commit.
@@ -444,11 +471,11 @@ TEST(SceneValidation, ShrunkInstanceLowersTheRayRange) {
     // The translation counts too: origins are moved by it before the inverse scale.
     Scene moved;
     const mat4 transform =
-        glm::scale(glm::translate(mat4(1.0f), vec3(0, 0, 1e15f)), vec3(0.01f));
+        glm::scale(glm::translate(mat4(1.0f), vec3(0, 0, 1e12f)), vec3(1e-5f));
     moved.add_instance(moved.add_mesh(unit_quad()), transform);
     moved.commit();
-    EXPECT_NEAR(moved.ray_limits().origin, 1e16f - 1e15f, 1e11f);
-    EXPECT_NEAR(moved.ray_limits().direction, 1e16f, 1e11f);
+    EXPECT_NEAR(moved.ray_limits().origin, 1e13f - 1e12f, 1e8f);
+    EXPECT_NEAR(moved.ray_limits().direction, 1e13f, 1e8f);
     // Scaling up, or a mesh without triangles, leaves Embree's own range.
     Scene large;
     large.add_instance(large.add_mesh(unit_quad()), glm::scale(mat4(1.0f), vec3(10.0f)));
@@ -767,7 +794,7 @@ TEST(SceneEmissive, PowerBeyondTheLimitIsRefusedNamingTheBrightestEmitter) {
                     "m^2): lower its material's emission strength");
 
     // Within the limit: a real sun, and a sun and lamp as large as scene coordinates go, whose
-    // float area (squared 1e30 m^2 edges) would overflow.
+    // float area (a cross product of 8e23 m^2, squared) would overflow.
     Scene sunny;
     sunny.add_instance(sunny.add_mesh(unit_quad()), mat4(1.0f));
     sunny.add_light(light("Sun", LightType::Sun, 1.0f, 1000.0f));
@@ -777,11 +804,11 @@ TEST(SceneEmissive, PowerBeyondTheLimitIsRefusedNamingTheBrightestEmitter) {
     lamp.emission_color = vec3(1.0f);
     lamp.emission_strength = 1.0f;
     huge.add_material(lamp);
-    huge.add_instance(huge.add_mesh(unit_quad()), glm::scale(mat4(1.0f), vec3(9e14f)));
+    huge.add_instance(huge.add_mesh(unit_quad()), glm::scale(mat4(1.0f), vec3(9e11f)));
     huge.add_light(light("Sun", LightType::Sun, 1.0f, 1000.0f));
     ASSERT_NO_THROW(huge.commit());
     ASSERT_EQ(huge.emissive_triangles().size(), 2u);
-    EXPECT_NEAR(huge.emissive_triangles()[0].area / 4.05e29f, 1.0f, 1e-5f);
+    EXPECT_NEAR(huge.emissive_triangles()[0].area / 4.05e23f, 1.0f, 1e-5f);
 }
 
 TEST(SceneProgress, CancelledBatchThrowsCancelled) {

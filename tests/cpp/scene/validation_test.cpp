@@ -96,7 +96,7 @@ TEST(LightValidation, RejectsEachBadField) {
     EXPECT_EQ(bad(LightType::Point, [](Light& l) { l.size_x = 0.0f; }), "");
     // Rays start anywhere on a light: beyond Embree's range its emission would abort the process.
     expect_contains(bad(LightType::Area, [](Light& l) { l.size_x = 1e20f; }),
-                    "beyond 1e+15 m; make the light smaller");
+                    "beyond 1e+12 m; make the light smaller");
     expect_contains(bad(LightType::Area,
                         [](Light& l) { l.world_from_light = glm::scale(mat4(1.0f), vec3(1e19f)); }),
                     "reaches 1e+19 m");
