@@ -251,6 +251,9 @@ ExrLayout read_layout(const std::string& path, const Imf::MultiPartInputFile& fi
         const std::string part_name =
             prefix_part_names && header.hasName() ? header.name() : std::string();
         for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
+            if (layout.channels.size() == kMaxExrChannels)
+                throw IoError(format_message("cannot read EXR \"", path, "\": it has more than ",
+                                             kMaxExrChannels, " channels, the most SHGI reads"));
             const std::string name = layer_channel_name(part_name, it.name());
             check_readable_channel(path, name, it.channel());
             const auto [found, inserted] =

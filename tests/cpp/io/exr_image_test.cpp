@@ -495,6 +495,15 @@ TEST(ExrImage, ReadEnforcesThePixelBudget) {
     write_exr(wide_path, wide);
     expect_error<IoError>([&] { read_exr(wide_path, 64); }, {wide_path, "17 channels"});
     EXPECT_EQ(read_exr(wide_path, 128).channels().size(), size_t(kMaxExrValuesPerPixel + 1));
+
+    // The channel cap, whatever the pixel budget: refused from the header, before any pixel.
+    Image many(1, 1);
+    for (size_t c = 0; c <= kMaxExrChannels; ++c)
+        many.add_channel("c" + std::to_string(c), PixelType::Half, {0.0f});
+    const std::string many_path = (folder / "many.exr").string();
+    write_exr(many_path, many);
+    expect_error<IoError>([&] { read_exr(many_path); }, {many_path, "more than 4096 channels"});
+    expect_error<IoError>([&] { read_exr_info(many_path); }, {"more than 4096 channels"});
 }
 
 TEST(ExrImage, WritesAreAtomicAndLeaveNoTemporaryFile) {
