@@ -301,62 +301,56 @@ void Scene::check_emitted_power() const {
     const double radius =
         empty() ? 1.0 : std::max(0.5 * glm::length(glm::dvec3(bounds_.extent())), 1e-3);
     const double cross_section = double(kPi) * radius * radius;
-    auto light_power = [&](const Light& light) {
-        if (light.portal) return 0.0;  // emits nothing
-        const double colour = max_component(light.color);
-        return light.type == LightType::Sun ? colour * light.strength * cross_section
-                                            : colour * light.power;
+    enum class Kind { World, Light, Triangle };
+    struct Emitter {
+        Kind kind;
+        size_t index;
+        double power;
     };
-    auto triangle_power = [](const EmissiveTriangle& triangle) {
-        return max_component(triangle.radiance) * double(kTwoPi) * triangle.area;
+    Emitter brightest{Kind::World, 0,
+                      max_component(world_.radiance()) * double(kFourPi) * cross_section};
+    double total = brightest.power;
+    auto add = [&](Kind kind, size_t index, double power) {
+        total += power;
+        if (power > brightest.power) brightest = {kind, index, power};
     };
-    const double world_power =
-        max_component(world_.radiance()) * double(kFourPi) * cross_section;
-    double total = world_power, largest = world_power;
-    size_t brightest_light = lights_.size(), brightest_triangle = emissive_.size();
     for (size_t i = 0; i < lights_.size(); ++i) {
-        const double power = light_power(lights_[i]);
-        total += power;
-        if (power > largest) {
-            largest = power;
-            brightest_light = i;
-        }
+        const Light& light = lights_[i];
+        if (light.portal) continue;  // emits nothing
+        const double colour = max_component(light.color);
+        add(Kind::Light, i,
+            light.type == LightType::Sun ? colour * light.strength * cross_section
+                                         : colour * light.power);
     }
-    for (size_t i = 0; i < emissive_.size(); ++i) {
-        const double power = triangle_power(emissive_[i]);
-        total += power;
-        if (power > largest) {
-            largest = power;
-            brightest_light = lights_.size();
-            brightest_triangle = i;
-        }
-    }
+    for (size_t i = 0; i < emissive_.size(); ++i)
+        add(Kind::Triangle, i,
+            max_component(emissive_[i].radiance) * double(kTwoPi) * emissive_[i].area);
     if (total <= kMaxEmittedPower) return;
-    std::string brightest;  // what the largest emitter's power comes from, and the fix
-    if (brightest_light < lights_.size()) {
-        const Light& light = lights_[brightest_light];
-        brightest = light.type == LightType::Sun
-                        ? format_message(label("light", light.name), " (strength ",
-                                         light.strength, " W/m^2 over the scene's cross-section "
-                                         "of ", cross_section, " m^2): lower its strength")
-                        : format_message(label("light", light.name), " (power ", light.power,
-                                         " W): lower its power");
-    } else if (brightest_triangle < emissive_.size()) {
-        const EmissiveTriangle& triangle = emissive_[brightest_triangle];
-        brightest = format_message(
-            "triangle ", triangle.triangle_id, " of ",
-            instance_label(instances_, triangle.instance_id), " (emission ",
-            max_component(triangle.radiance), " W m^-2 sr^-1 over ", triangle.area,
-            " m^2): lower its material's emission strength");
+
+    std::string source;  // what the brightest emitter's power comes from, and the fix
+    if (brightest.kind == Kind::Light) {
+        const Light& light = lights_[brightest.index];
+        source = light.type == LightType::Sun
+                     ? format_message(label("light", light.name), " (strength ", light.strength,
+                                      " W/m^2 over the scene's cross-section of ", cross_section,
+                                      " m^2): lower its strength")
+                     : format_message(label("light", light.name), " (power ", light.power,
+                                      " W): lower its power");
+    } else if (brightest.kind == Kind::Triangle) {
+        const EmissiveTriangle& triangle = emissive_[brightest.index];
+        source = format_message("triangle ", triangle.triangle_id, " of ",
+                                instance_label(instances_, triangle.instance_id), " (emission ",
+                                max_component(triangle.radiance), " W m^-2 sr^-1 over ",
+                                triangle.area, " m^2): lower its material's emission strength");
     } else {
-        brightest = format_message("the world (", max_component(world_.radiance()),
-                                   " W m^-2 sr^-1 around the scene's cross-section of ",
-                                   cross_section, " m^2): lower its strength");
+        source = format_message("the world (", max_component(world_.radiance()),
+                                " W m^-2 sr^-1 around the scene's cross-section of ",
+                                cross_section, " m^2): lower its strength");
     }
     throw InvalidArgument(format_message(
         "the scene emits ", total, " W, beyond the ", kMaxEmittedPower,
         " W that light sampling carries in single precision; the brightest emitter, with ",
-        largest, " W, is ", brightest));
+        brightest.power, " W, is ", source));
 }
 
 void Scene::commit(const CommitSettings& settings, Progress* progress) {
@@ -368,6 +362,8 @@ void Scene::commit(const CommitSettings& settings, Progress* progress) {
         material_terms_.push_back(shgi::material_terms(material));
     bounds_ = compute_bounds();
     set_ray_limits();
+    gather_emissive();
+    check_emitted_power();  // before the BVH is built for nothing
     const uint64_t budget = resolve_budget(settings.memory_budget_bytes);
     const uint64_t estimate = estimate_bvh_bytes(meshes_, instances_);
     if (estimate > budget)
@@ -393,12 +389,10 @@ void Scene::commit(const CommitSettings& settings, Progress* progress) {
         throw;
     }
     bvh_bytes_ = embree_->peak_bytes();
-    if (progress) progress->begin_stage("gathering emissive triangles", 0.95f, 1.0f);
+    if (progress) progress->begin_stage("instance normals", 0.95f, 1.0f);
     normal_from_object_.clear();
     for (const Instance& instance : instances_)
         normal_from_object_.push_back(normal_matrix(instance.world_from_object));
-    gather_emissive();
-    check_emitted_power();
     if (empty()) log_warning("scene has no triangles: every ray misses");
     committed_ = true;
     if (progress) progress->set_fraction(1.0f);

@@ -176,7 +176,7 @@ class Scene {
     Bounds3 compute_bounds() const;
     void set_ray_limits();  // from the instances and bounds_
     void gather_emissive();
-    void check_emitted_power() const;  // after gather_emissive, with bounds_
+    void check_emitted_power() const;  // after gather_emissive and compute_bounds
     void finish_hit(Hit& hit) const;
 
     std::vector<Mesh> meshes_;
