@@ -27,11 +27,6 @@ bool in_front_of_plane(const vec3& p, const vec3& center, const vec3& axis) {
     return glm::dot(p - center, axis) > 0.0f;
 }
 
-float scene_radius(const Scene& scene) {
-    if (scene.empty()) return 1.0f;
-    return std::max(0.5f * glm::length(scene.bounds().extent()), 1e-3f);
-}
-
 }  // namespace
 
 float spot_attenuation(const Light& light, float cos_angle) {
@@ -107,7 +102,7 @@ LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, boo
     if (!scene.committed())
         throw InvalidArgument("LightSampler: the scene is not committed; call commit() first");
     // Power estimates only steer selection; any positive weights keep the estimator unbiased.
-    const float radius = scene_radius(scene);
+    const float radius = scene.bounding_radius();
     const float disk_area = kPi * radius * radius;
     std::vector<float> weights;
     light_emitter_.assign(scene.lights().size(), kInvalidId);

@@ -123,6 +123,11 @@ const UvSet& texture_uv_set(const Mesh& mesh, const Material& material) {
     return mesh.uv_sets.front();
 }
 
+// Scene::bounding_radius of non-empty bounds.
+float radius_of(const Bounds3& bounds) {
+    return std::max(0.5f * glm::length(bounds.extent()), 1e-3f);
+}
+
 }  // namespace
 
 Scene::Scene() = default;
@@ -297,9 +302,8 @@ void Scene::gather_emissive() {
 
 void Scene::check_emitted_power() const {
     // Upper bounds of what LightSampler and PhotonEmitter weigh each emitter by: the sun and the
-    // world cover the disk of the scene's bounding sphere (at least 1 mm; 1 m when empty).
-    const double radius =
-        empty() ? 1.0 : std::max(0.5 * glm::length(glm::dvec3(bounds_.extent())), 1e-3);
+    // world cover the disk of bounding_radius() (of bounds_: the scene is not committed yet).
+    const double radius = empty() ? 1.0 : double(radius_of(bounds_));
     const double cross_section = double(kPi) * radius * radius;
     enum class Kind { World, Light, Triangle };
     struct Emitter {
@@ -410,6 +414,8 @@ Bounds3 Scene::bounds() const {
                               "an instance of it");
     return committed_ ? bounds_ : compute_bounds();
 }
+
+float Scene::bounding_radius() const { return empty() ? 1.0f : radius_of(bounds()); }
 
 SceneStats Scene::stats() const {
     SceneStats stats;
