@@ -56,7 +56,7 @@ PhotonEmitter::PhotonEmitter(const Scene& scene) : scene_(&scene) {
     if (!scene.empty()) {
         const Bounds3 bounds = scene.bounds();
         bounding_center_ = 0.5f * (bounds.lower + bounds.upper);
-        bounding_radius_ = 0.5f * glm::length(bounds.extent());
+        bounding_radius_ = scene.bounding_radius();
     }
     std::vector<float> weights;
     auto add = [&](Kind kind, uint32_t index, const vec3& power) {

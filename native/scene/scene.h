@@ -145,7 +145,8 @@ class Scene {
     // World-space bounds of all instances; throws InvalidArgument for an empty scene.
     Bounds3 bounds() const;
     // Radius of the bounding sphere, at least 1 mm (1 m for an empty scene): the sun and the
-    // world are weighed over the disk of this radius (LightSampler, commit's power check).
+    // world are weighed over the disk of this radius (LightSampler, PhotonEmitter, commit's power
+    // check).
     float bounding_radius() const;
     SceneStats stats() const;
     const std::vector<EmissiveTriangle>& emissive_triangles() const { return emissive_; }
