@@ -149,6 +149,13 @@ MeshReport validate_mesh(Mesh& mesh, uint32_t material_count) {
     MeshReport report;
     report.dropped_degenerate = drop_degenerate(mesh);
     report.fixed_normals = fix_normals(mesh);
+    for (const uvec3& tri : mesh.triangles)
+        for (int k = 0; k < 3; ++k) {
+            const glm::dvec3 p(mesh.positions[tri[k]]);
+            report.longest_edge = std::max(
+                report.longest_edge, glm::length(glm::dvec3(mesh.positions[tri[(k + 1) % 3]]) - p));
+            report.vertex_reach = std::max(report.vertex_reach, glm::length(p));
+        }
     return report;
 }
 

@@ -34,17 +34,22 @@ inline constexpr float kMaxCoordinate = 1e12f;
 // Embree is built with assertions and aborts the process on a ray beyond it, finite or not.
 inline constexpr float kMaxRayComponent = 1e18f;
 
-// The largest |component| of origin and direction a scene traces. Embree checks the bound again
+// The largest |component| of origin and direction a scene traces, and the smallest largest
+// |component| of a direction (0: any non-zero direction). Embree checks the upper bounds again
 // after mapping a ray into each instance's object space, where an instance that scales its mesh
-// down magnifies the ray: a committed Scene lowers the limits so that every instance's
-// object-space ray stays within kMaxRayComponent (Scene::ray_limits).
+// down magnifies the ray, and its float triangle test overflows for origins far from large
+// triangles, for long directions, and for hit distances (in units of |direction|) past 3.4e38
+// from short ones: a committed Scene sets limits that keep all of these in range
+// (Scene::ray_limits).
 struct RayLimits {
     float origin = kMaxRayComponent;
     float direction = kMaxRayComponent;
+    float min_direction = 0.0f;
 };
 
-// True if the ray may be traced: finite origin and direction within the limits, non-zero
-// direction, 0 <= tmin <= tmax (tmax may be +inf), tmin finite. Every traced ray passes here, so
+// True if the ray may be traced: finite origin and direction within the limits (the direction's
+// largest |component| above min_direction: non-zero), 0 <= tmin <= tmax (tmax may be +inf),
+// tmin finite. Every traced ray passes here, so
 // it is inline and branch-free: each comparison is false for NaN, |x| <= limit also for ±inf,
 // and the results are combined with & rather than &&.
 inline bool is_valid_ray(const Ray& ray, const RayLimits& limits = RayLimits{}) {
@@ -52,9 +57,11 @@ inline bool is_valid_ray(const Ray& ray, const RayLimits& limits = RayLimits{}) 
     const float lo = limits.origin, ld = limits.direction;
     const bool origin_ok = (std::fabs(o.x) <= lo) & (std::fabs(o.y) <= lo) &
                            (std::fabs(o.z) <= lo);
+    const float dmin = limits.min_direction;
     const bool direction_ok = (std::fabs(d.x) <= ld) & (std::fabs(d.y) <= ld) &
                               (std::fabs(d.z) <= ld) &
-                              ((d.x != 0.0f) | (d.y != 0.0f) | (d.z != 0.0f));
+                              ((std::fabs(d.x) > dmin) | (std::fabs(d.y) > dmin) |
+                               (std::fabs(d.z) > dmin));
     const bool interval_ok = (ray.tmin >= 0.0f) & (ray.tmin <= std::numeric_limits<float>::max()) &
                              (ray.tmax >= ray.tmin);
     return origin_ok & direction_ok & interval_ok;

@@ -38,10 +38,14 @@ void check_ray(const Ray& ray, const char* name, const RayLimits& limits,
     if (is_valid_ray(ray, limits)) return;  // branch-free; ray_problem only to name the fault
     bool out_of_range = false;
     const char* problem = ray_problem(ray, limits, &out_of_range);
+    const std::string shortest =
+        limits.min_direction > 0.0f
+            ? format_message(", the largest above ", limits.min_direction)
+            : std::string();
     const std::string range =
         out_of_range ? format_message("; this scene traces origins up to ", limits.origin,
                                       " and directions up to ", limits.direction,
-                                      " per component", limit_reason)
+                                      " per component", shortest, limit_reason)
                      : std::string();
     throw InvalidArgument(format_message(name, ": ", problem, " (origin ", to_string(ray.origin),
                                          ", direction ", to_string(ray.direction), ", tmin ",
@@ -57,45 +61,167 @@ void check_rays(const std::vector<Ray>& rays, const RayLimits& limits,
             check_ray(rays[i], format_message("rays[", i, "]").c_str(), limits, limit_reason);
 }
 
-// The ray limits of a scene and the instance that sets the origin's (magnification 1: none).
-struct SceneRayLimits {
-    RayLimits limits;
+// Embree's float triangle test (the Pluecker test of RTC_SCENE_FLAG_ROBUST) in a mesh's own
+// coordinates, for a ray (o, d) there and a triangle with vertices v_k and edges e_k: the edge
+// tests dot(cross(v_i + v_j - 2o, e_k), d) sum to at most 6 P L |d|, the normal
+// Ng = 2 cross(e_i, e_j) is at most 2 L^2, den = dot(Ng, d) at most 2 L^2 |d| and
+// T = dot(v_0 - o, Ng) at most 2 P L^2 (Cauchy-Schwarz; L the mesh's longest edge, P the largest
+// |v - o|); the hit distance T / den is the world distance to the hit over |d|. Past float's
+// 3.4e38 these overflow to inf: hits at t = inf, or misses. Each is kept below this bound.
+constexpr double kTriangleTestBound = std::numeric_limits<float>::max() / 4.0;
+const double kSqrt3 = std::sqrt(3.0);
+// Direction components the triangle-test limits always leave (those of a unit direction, with
+// room to spare), where they lower the origins' limit instead.
+constexpr double kShortDirections = 2.0;
+
+// What lowered one of the scene's ray limits.
+enum class RayLimitCause { None, Magnification, TriangleTest };
+
+struct RayLimit {
+    double value = kMaxRayComponent;
+    RayLimitCause cause = RayLimitCause::None;
     size_t instance = 0;
-    double magnification = 1.0;  // that instance's
+
+    void lower(double to, RayLimitCause why, size_t i) {
+        if (to >= value) return;
+        value = to;
+        cause = why;
+        instance = i;
+    }
 };
 
-// Embree maps a ray into an instance's object space as M^-1 (o - t) and M^-1 d (M the linear
-// part of world_from_object, t its translation), then checks it against its range again. Per
-// component |(M^-1 x)_j| <= K max_k |x_k|, K the largest row sum of |M^-1| (the magnification):
-// origins within kMaxRayComponent / K - max|t| and directions within kMaxRayComponent / K stay
-// in range. Instances of meshes without triangles are not in Embree's scene and do not count.
-SceneRayLimits ray_limits_of(const std::vector<Instance>& instances,
-                             const std::vector<Mesh>& meshes) {
-    SceneRayLimits result;
-    double origin = kMaxRayComponent, direction = kMaxRayComponent;
-    for (size_t i = 0; i < instances.size(); ++i) {
-        if (meshes[instances[i].mesh_id].triangles.empty()) continue;
-        const glm::dmat4 transform(instances[i].world_from_object);
-        const glm::dmat3 inverse = glm::inverse(glm::dmat3(transform));
-        double magnification = 0.0;
+// One instance as its object-space ray sees it: A = M^-1 (M the linear part of
+// world_from_object, t its translation) maps a world ray to (A (o - t), A d).
+struct InstanceRange {
+    double magnification;  // max_j sum_k |A_jk|: |(A x)_j| <= magnification * max_k |x_k|
+    double stretch;        // >= the spectral norm of A: |A x| <= stretch |x|
+    double reach;          // max_k |t_k|
+    double longest_edge;   // of its mesh, object space (MeshReport)
+};
+
+InstanceRange instance_range(const Instance& instance, const MeshReport& report) {
+    const glm::dmat4 transform(instance.world_from_object);
+    const glm::dmat3 inverse = glm::inverse(glm::dmat3(transform));
+    InstanceRange range{0.0, 0.0, 0.0, report.longest_edge};
+    for (int row = 0; row < 3; ++row)
+        range.magnification = std::max(range.magnification, std::fabs(inverse[0][row]) +
+                                                                std::fabs(inverse[1][row]) +
+                                                                std::fabs(inverse[2][row]));
+    if (!std::isfinite(range.magnification))
+        range.magnification = std::numeric_limits<double>::max();
+    // |A|_2^2 is the largest eigenvalue of X = A^T A, at most |X^16|_inf^(1/16): within 3^(1/32)
+    // (3.5%) of it, and exact for rotations and axis scales.
+    const auto inf_norm = [](const glm::dmat3& m) {
+        double norm = 0.0;
         for (int row = 0; row < 3; ++row)
-            magnification = std::max(magnification, std::fabs(inverse[0][row]) +
-                                                         std::fabs(inverse[1][row]) +
-                                                         std::fabs(inverse[2][row]));
-        if (!std::isfinite(magnification)) magnification = std::numeric_limits<double>::max();
-        const double reach = std::max({std::fabs(transform[3].x), std::fabs(transform[3].y),
-                                       std::fabs(transform[3].z)});
-        const double instance_origin = kMaxRayComponent / magnification - reach;
-        direction = std::min(direction, kMaxRayComponent / magnification);
-        if (instance_origin < origin) {
-            origin = instance_origin;
-            result.instance = i;
-            result.magnification = magnification;
+            norm = std::max(norm, std::fabs(m[0][row]) + std::fabs(m[1][row]) +
+                                      std::fabs(m[2][row]));
+        return norm;
+    };
+    glm::dmat3 power = glm::transpose(inverse) * inverse;
+    // X^(2^k) = (scale * norm)^(2^k) * (power / norm), renormalised at each squaring.
+    double scale = 1.0;
+    range.stretch = std::numeric_limits<double>::max();
+    for (int squaring = 0; squaring <= 4; ++squaring) {
+        const double norm = inf_norm(power);
+        if (!(norm > 0.0) || !std::isfinite(norm)) break;
+        scale *= std::pow(norm, 1.0 / double(1 << squaring));
+        if (squaring == 4) {
+            range.stretch = std::sqrt(scale);
+            break;
         }
+        power /= norm;
+        power = power * power;
     }
-    result.limits.origin = float(std::max(origin, 0.0));
-    result.limits.direction = float(direction);
+    range.reach = std::max({std::fabs(transform[3].x), std::fabs(transform[3].y),
+                            std::fabs(transform[3].z)});
+    return range;
+}
+
+// The scene's ray limits, and what set them.
+struct SceneRayLimits {
+    RayLimit origin, direction;
+    double min_direction = 0.0;
+    RayLimit embree_origin, embree_direction;  // Embree's range alone (cause Magnification)
+};
+
+// Embree maps a ray into an instance's object space and checks it against its range again
+// (kMaxRayComponent): origins within kMaxRayComponent / magnification - reach and directions
+// within kMaxRayComponent / magnification stay in range. Its triangle test (above) then bounds
+// origins and directions jointly: with |o - w| <= |o| + world_reach for any world vertex w, an
+// origin of component limit O and a direction of component limit D give, in the mesh's
+// coordinates, P <= stretch (sqrt(3) O + world_reach) and |d| <= stretch sqrt(3) D. The
+// shortest direction keeps hit distances from origins within the limit finite. Instances of
+// meshes without triangles are not in Embree's scene and do not count.
+SceneRayLimits ray_limits_of(const std::vector<Instance>& instances,
+                             const std::vector<MeshReport>& reports,
+                             const std::vector<Mesh>& meshes, double world_reach) {
+    std::vector<std::pair<size_t, InstanceRange>> ranges;
+    for (size_t i = 0; i < instances.size(); ++i)
+        if (!meshes[instances[i].mesh_id].triangles.empty())
+            ranges.emplace_back(i, instance_range(instances[i], reports[instances[i].mesh_id]));
+    SceneRayLimits result;
+    for (const auto& [i, r] : ranges) {
+        result.embree_origin.lower(kMaxRayComponent / r.magnification - r.reach,
+                                   RayLimitCause::Magnification, i);
+        result.embree_direction.lower(kMaxRayComponent / r.magnification,
+                                      RayLimitCause::Magnification, i);
+    }
+    // Origins: Embree's range and the depth test, which do not depend on the direction.
+    RayLimit origin = result.embree_origin;
+    for (const auto& [i, r] : ranges) {
+        const double depth_test = kTriangleTestBound / (2.0 * r.longest_edge * r.longest_edge);
+        origin.lower((depth_test / r.stretch - world_reach) / kSqrt3, RayLimitCause::TriangleTest,
+                     i);
+    }
+    // Directions: Embree's range, den, and the edge tests from those origins; but never below
+    // kShortDirections, in which case the edge tests lower the origins instead (a camera or a
+    // light outside the scene's geometry needs origins beyond its extent more than any ray
+    // needs a long direction).
+    result.direction = result.embree_direction;
+    for (const auto& [i, r] : ranges)
+        result.direction.lower(kTriangleTestBound /
+                                   (2.0 * r.longest_edge * r.longest_edge * r.stretch * kSqrt3),
+                               RayLimitCause::TriangleTest, i);
+    RayLimit from_origins = result.direction;
+    for (const auto& [i, r] : ranges) {
+        const double p = r.stretch * (kSqrt3 * std::max(origin.value, 0.0) + world_reach);
+        from_origins.lower(kTriangleTestBound / (6.0 * p * r.longest_edge * r.stretch * kSqrt3),
+                           RayLimitCause::TriangleTest, i);
+    }
+    if (from_origins.value >= kShortDirections)
+        result.direction = from_origins;
+    else
+        result.direction.lower(kShortDirections, RayLimitCause::TriangleTest,
+                               from_origins.instance);
+    // Origins whose edge tests pass with directions up to that.
+    for (const auto& [i, r] : ranges) {
+        const double edge_tests = kTriangleTestBound / (6.0 * r.longest_edge * r.stretch *
+                                                        kSqrt3 * result.direction.value);
+        origin.lower((edge_tests / r.stretch - world_reach) / kSqrt3, RayLimitCause::TriangleTest,
+                     i);
+    }
+    result.origin = origin;
+    result.origin.value = std::max(result.origin.value, 0.0);
+    result.min_direction = (kSqrt3 * result.origin.value + world_reach) / kTriangleTestBound;
     return result;
+}
+
+// Why `limit` is below Embree's own range, for messages.
+std::string ray_limit_cause(const RayLimit& limit, const std::vector<Instance>& instances,
+                            const std::vector<MeshReport>& reports) {
+    if (limit.cause == RayLimitCause::None) return std::string();
+    const Instance& instance = instances[limit.instance];
+    const std::string label = instance_label(instances, limit.instance);
+    if (limit.cause == RayLimitCause::Magnification)
+        return format_message(label, " shrinks its mesh by up to ",
+                              instance_range(instance, reports[instance.mesh_id]).magnification,
+                              "x, and Embree's range of ", kMaxRayComponent,
+                              " applies in the mesh's coordinates");
+    return format_message(label, "'s mesh has triangle edges up to ",
+                          reports[instance.mesh_id].longest_edge,
+                          " m in its own coordinates, where Embree's triangle test in float "
+                          "overflows for rays from farther away or longer");
 }
 
 // det(M) * M^-T, whose columns are cross products of M's columns; times sign(det) so that a
@@ -251,26 +377,54 @@ Bounds3 Scene::compute_bounds() const {
 }
 
 void Scene::set_ray_limits() {
-    const SceneRayLimits found = ray_limits_of(instances_, meshes_);
-    ray_limits_ = found.limits;
-    ray_limit_reason_.clear();
-    if (!(found.magnification > 1.0)) return;  // Embree's own range holds
-    const std::string label = instance_label(instances_, found.instance);
-    ray_limit_reason_ = format_message(" (", label, " shrinks its mesh by up to ",
-                                       found.magnification, "x, and Embree's range of ",
-                                       kMaxRayComponent, " applies in the mesh's coordinates)");
     // Rays leave the scene's own surfaces, which must lie within the range (and directions of
-    // length 1 with them: their limit is at least the origins').
-    const float extent = bounds_.empty() ? 0.0f
-                                         : std::max(max_abs_component(bounds_.lower),
-                                                    max_abs_component(bounds_.upper));
-    if (ray_limits_.origin < std::max(extent, 1.0f))
+    // length 1 with them).
+    const double extent = bounds_.empty() ? 0.0
+                                          : std::max(max_abs_component(bounds_.lower),
+                                                     max_abs_component(bounds_.upper));
+    const double world_reach = bounds_.empty()
+                                   ? 0.0
+                                   : glm::length(glm::max(glm::abs(glm::dvec3(bounds_.lower)),
+                                                          glm::abs(glm::dvec3(bounds_.upper))));
+    const double needed = std::max(extent, 1.0);
+    const SceneRayLimits found =
+        ray_limits_of(instances_, mesh_reports_, meshes_, world_reach);
+    ray_limits_.origin = float(found.origin.value);
+    ray_limits_.direction = float(found.direction.value);
+    ray_limits_.min_direction = float(found.min_direction);
+    ray_limit_reason_.clear();
+    std::string causes = ray_limit_cause(found.origin, instances_, mesh_reports_);
+    const std::string direction_cause =
+        ray_limit_cause(found.direction, instances_, mesh_reports_);
+    if (!direction_cause.empty() && direction_cause != causes)
+        causes += (causes.empty() ? "" : "; ") + direction_cause;
+    if (!causes.empty()) ray_limit_reason_ = " (" + causes + ")";
+    if (found.origin.value >= needed && found.direction.value >= 1.0) return;
+    // Embree's range alone may already fail: its message names the scale.
+    const bool range_fails = found.embree_origin.value < needed ||
+                             found.embree_direction.value < 1.0;
+    const RayLimit& limit =
+        range_fails ? (found.embree_origin.value < needed ? found.embree_origin
+                                                          : found.embree_direction)
+                    : (found.origin.value < needed ? found.origin : found.direction);
+    const std::string label = instance_label(instances_, limit.instance);
+    if (range_fails)
         throw InvalidArgument(format_message(
-            label, ": its transform shrinks the mesh by up to ", found.magnification,
+            label, ": its transform shrinks the mesh by up to ",
+            instance_range(instances_[limit.instance],
+                           mesh_reports_[instances_[limit.instance].mesh_id])
+                .magnification,
             "x, so rays from the scene's extent (", extent, " m) would pass Embree's range of ",
             kMaxRayComponent, " in the mesh's own coordinates, where Debian's Embree aborts; "
             "apply the scale to the mesh's vertices (Blender: Apply Scale) or move the object "
             "nearer the origin"));
+    throw InvalidArgument(format_message(
+        label, ": its mesh has triangle edges up to ",
+        mesh_reports_[instances_[limit.instance].mesh_id].longest_edge,
+        " m in its own coordinates, so rays from the scene's extent (", extent,
+        " m) would overflow Embree's triangle test in float (hits at infinite distance); apply "
+        "the object's scale to the mesh's vertices (Blender: Apply Scale), split its largest "
+        "faces, or keep the scene smaller"));
 }
 
 void Scene::gather_emissive() {

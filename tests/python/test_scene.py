@@ -431,7 +431,8 @@ def test_bad_rays_raise_value_error():
 
 # An instance that shrinks its mesh magnifies rays in its own coordinates, where Debian's Embree
 # checks them again and aborts the process past 1.8e18. Each case used to abort (SIGABRT): a
-# child process runs them, so a regression fails this test instead of killing the run.
+# child process runs them, so a regression fails this test instead of killing the run. The last
+# cases, rays that overflow Embree's triangle test, came back as wrong hits.
 SHRUNK_INSTANCE_CHILD = r"""
 import numpy as np, shgi
 
@@ -481,6 +482,21 @@ tiny.set_camera(camera)
 tiny.commit()
 refused(lambda: shgi.render_path_traced(tiny, shgi.PathTracerSettings(samples=1)),
         "origin exceeds the scene's ray range", "origins up to 1e+11")
+# Embree's triangle test in float: a triangle with 2e11 m edges hit from 1e17 m came back at
+# t = inf, and a direction of 1e-38 missed a triangle 5 m away. Both are refused, naming why;
+# a ray from 1e12 m still hits at the right distance.
+huge = shgi.Scene()
+mesh = huge.add_mesh(positions=np.array([[-1e11, -1e11, 5], [1e11, -1e11, 5], [0, 1e11, 5]],
+                                        np.float32), triangles=np.array([[0, 1, 2]]))
+huge.add_instance(mesh, np.eye(4), name="Huge")
+huge.commit()
+hit = huge.intersect(np.array([[0, 0, -1e12]]), np.array([[0.0, 0.0, 1.0]]))
+assert hit["hit"][0] and abs(hit["t"][0] - (1e12 + 5)) < 1e6, hit
+refused(lambda: huge.intersect(np.array([[0, 0, -1e17]]), np.array([[0.0, 0.0, 1.0]])),
+        "rays[0]: origin exceeds the scene's ray range",
+        "instance 0 'Huge''s mesh has triangle edges up to 2.23607e+11 m")
+refused(lambda: huge.occluded(np.array([[0.0, 0.0, 0.0]]), np.array([[0, 0, 1e-38]])),
+        "rays[0]: direction is shorter than the scene's ray range", "normalise it")
 print("ok")
 """
 

@@ -447,6 +447,81 @@ TEST(SceneIntersect, TheLargestSceneAllowedHitsAtFiniteDistances) {
     }
 }
 
+// A closed cube of half-side `half` around the origin, in its own coordinates.
+Mesh cube_of_half_side(float half) {
+    Mesh mesh = unit_cube();
+    for (vec3& p : mesh.positions) p = (2.0f * p - 1.0f) * half;
+    return mesh;
+}
+
+// Rays at the limits a scene sets from its triangles still intersect right, where Embree's
+// triangle test in float overflowed before (scene/ray.h, RayLimits): from origins just inside
+// the origin limit, with directions just inside the direction limits (longest and shortest) and
+// of length 1, aimed at points inside a closed cube, every ray hits it at a finite distance no
+// farther than its target; origins and directions just past the limits are refused, naming the
+// cause. Before, the cube of half-side 1e12 m hit at t = inf from 1e17 m, and the shrunk one
+// from 1e9 m; and a direction of 1e-38 missed a triangle 5 m away.
+TEST(SceneIntersect, RaysAtTheTriangleTestLimitsHitAtFiniteDistances) {
+    struct Case {
+        float half;          // the mesh's, in its own coordinates
+        float scale;         // the instance's
+        float far_origin;    // traced as hits at t = inf before
+    };
+    for (const Case& c : {Case{1e12f, 1.0f, 1e17f}, Case{9e11f, 1e-7f, 1e9f}}) {
+        SCOPED_TRACE(c.half);
+        Scene scene;
+        scene.add_instance(scene.add_mesh(cube_of_half_side(c.half)),
+                           glm::scale(mat4(1.0f), vec3(c.scale)), "Cube");
+        scene.commit();
+        const RayLimits limits = scene.ray_limits();
+        const float world_half = c.half * c.scale;
+        EXPECT_GE(limits.origin, world_half);
+        EXPECT_GE(limits.direction, 1.0f);
+        EXPECT_LT(limits.origin, c.far_origin);
+        const std::string far = rejection<InvalidArgument>([&] {
+            scene.intersect(make_ray(vec3(-c.far_origin, 0, 0), vec3(1, 0, 0)));
+        });
+        expect_contains(far, "ray: origin exceeds the scene's ray range");
+        expect_contains(far, "instance 0 'Cube''s mesh has triangle edges up to");
+        expect_contains(rejection<InvalidArgument>([&] {
+                            scene.intersect(make_ray(vec3(0.0f),
+                                                     vec3(0, 0, 1.01f * limits.direction)));
+                        }),
+                        "ray: direction exceeds the scene's ray range");
+        expect_contains(rejection<InvalidArgument>([&] {
+                            scene.intersect(make_ray(vec3(0.0f),
+                                                     vec3(0, 0, 0.5f * limits.min_direction)));
+                        }),
+                        "ray: direction is shorter than the scene's ray range");
+        std::mt19937 random(11);
+        std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+        std::vector<Ray> rays;
+        std::vector<vec3> targets;
+        for (int i = 0; i < 3000; ++i) {
+            // An origin on the faces of the box the origin limit allows, outside the cube.
+            vec3 origin(unit(random), unit(random), unit(random));
+            origin[i % 3] = (i & 8) ? 1.0f : -1.0f;
+            origin *= 0.999f * limits.origin;
+            const vec3 target = 0.9f * world_half * vec3(unit(random), unit(random), unit(random));
+            const vec3 towards = target - origin;
+            const float length = i % 3 == 0   ? 0.999f * limits.direction
+                                 : i % 3 == 1 ? 1.001f * limits.min_direction
+                                              : 1.0f;  // largest component
+            rays.push_back(make_ray(origin, towards * (length / max_abs_component(towards))));
+            targets.push_back(target);
+        }
+        std::vector<Hit> hits;
+        scene.intersect(rays, hits);
+        for (size_t i = 0; i < rays.size(); ++i) {
+            ASSERT_TRUE(hits[i].valid()) << i;
+            ASSERT_TRUE(std::isfinite(hits[i].t)) << i;
+            const double reached = double(hits[i].t) * glm::length(glm::dvec3(rays[i].direction));
+            ASSERT_LE(reached, 1.0001 * glm::length(glm::dvec3(targets[i] - rays[i].origin)))
+                << i;
+        }
+    }
+}
+
 // Embree checks a ray again in each instance's own coordinates (and Debian's Embree aborts past
 // 1.8e18 there): an instance that shrinks its mesh lowers the range the scene traces, and one
 // that would put rays from the scene's own surfaces out of range is refused at commit.
@@ -551,7 +626,7 @@ TEST(SceneValidation, FastRayTestAgreesWithTheNamedProblem) {
         ++checked;
         valid += fast ? 1 : 0;
     };
-    const RayLimits lowered{1e3f, 10.0f};
+    const RayLimits lowered{1e3f, 10.0f, 1e-3f};
     const auto agree_lowered = [&](const Ray& ray) {
         EXPECT_EQ(is_valid_ray(ray, lowered), ray_problem(ray, lowered) == nullptr)
             << "origin " << ray.origin.x << " direction " << ray.direction.y;
@@ -561,6 +636,9 @@ TEST(SceneValidation, FastRayTestAgreesWithTheNamedProblem) {
             agree_lowered(make_ray(vec3(a, b, 0.0f), vec3(0, 0, 1)));
             agree_lowered(make_ray(vec3(0.0f), vec3(b, a, 1.0f)));
         }
+    // The shortest direction: its largest |component| must exceed min_direction.
+    for (float a : {0.0f, 1e-4f, -1e-3f, 1e-3f, std::nextafter(1e-3f, 1.0f), -2e-3f, kNaN})
+        for (float b : {0.0f, 5e-4f, -1e-2f}) agree_lowered(make_ray(vec3(0.0f), vec3(a, b, b)));
     for (float a : values)
         for (float b : values) {
             agree(make_ray(vec3(a, 1.0f, b), vec3(0, 0, 1)));      // origin
