@@ -149,13 +149,16 @@ MeshReport validate_mesh(Mesh& mesh, uint32_t material_count) {
     MeshReport report;
     report.dropped_degenerate = drop_degenerate(mesh);
     report.fixed_normals = fix_normals(mesh);
+    // Squared lengths (in double: a float square of 1e12 m edges is close to float's range),
+    // one square root at the end.
+    double edge2 = 0.0;
     for (const uvec3& tri : mesh.triangles)
         for (int k = 0; k < 3; ++k) {
-            const glm::dvec3 p(mesh.positions[tri[k]]);
-            report.longest_edge = std::max(
-                report.longest_edge, glm::length(glm::dvec3(mesh.positions[tri[(k + 1) % 3]]) - p));
-            report.vertex_reach = std::max(report.vertex_reach, glm::length(p));
+            const glm::dvec3 edge =
+                glm::dvec3(mesh.positions[tri[(k + 1) % 3]]) - glm::dvec3(mesh.positions[tri[k]]);
+            edge2 = std::max(edge2, glm::dot(edge, edge));
         }
+    report.longest_edge = std::sqrt(edge2);
     return report;
 }
 

@@ -32,10 +32,9 @@ struct Mesh {
 struct MeshReport {
     uint64_t dropped_degenerate = 0;  // triangles removed for repeated indices or zero area
     uint64_t fixed_normals = 0;       // zero-length normals replaced by the face normal
-    // Of the kept triangles, in object space (m): the longest edge, and the largest distance of
-    // a vertex from the origin. They bound Embree's triangle-test arithmetic (Scene::ray_limits).
+    // The longest edge of the kept triangles, in object space (m): it bounds Embree's
+    // triangle-test arithmetic (Scene::ray_limits).
     double longest_edge = 0.0;
-    double vertex_reach = 0.0;
 };
 
 // Checks and cleans a mesh in place; `material_count` bounds the material indices (Scene passes
