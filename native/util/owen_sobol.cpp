@@ -3,12 +3,13 @@
 namespace shgi {
 namespace {
 
+// The byte order reversed by one bswap, then the bits within each byte by three swaps: two steps
+// fewer than five swaps, on a path that reverses five times per 2-D sample.
 uint32_t reverse_bits(uint32_t x) {
-    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
-    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = __builtin_bswap32(x);
     x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
-    x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
-    return (x >> 16) | (x << 16);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    return ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
 }
 
 // Laine and Karras' hash: each output bit depends only on itself and the bits below it, which is
