@@ -49,19 +49,33 @@ float sample_power_cosine_pdf(float exponent, float cos_theta) {
     return (exponent + 1.0f) * kInvTwoPi * std::pow(cos_theta, exponent);
 }
 
+namespace {
+
+// (cos x, sin x) for |x| <= pi/4 from their Taylor series to x^10 and x^11 (truncation below
+// 1e-9, so within about an ulp of float): the concentric disk map only needs this quarter turn,
+// and libm's general sincosf (range reduction, a call) was ~2.3% of the photon trace's time
+// (perf), which samples a cosine-weighted direction at every diffuse bounce.
+vec2 cos_sin_quarter_turn(float x) {
+    const float x2 = x * x;
+    const float c = 1.0f + x2 * (-1.0f / 2.0f + x2 * (1.0f / 24.0f + x2 * (-1.0f / 720.0f +
+                    x2 * (1.0f / 40320.0f + x2 * (-1.0f / 3628800.0f)))));
+    const float s = x * (1.0f + x2 * (-1.0f / 6.0f + x2 * (1.0f / 120.0f + x2 * (-1.0f / 5040.0f +
+                    x2 * (1.0f / 362880.0f + x2 * (-1.0f / 39916800.0f))))));
+    return vec2(c, s);
+}
+
+}  // namespace
+
 vec2 sample_uniform_disk(const vec2& u) {
-    // Shirley & Chiu 1997: maps concentric squares to concentric circles.
+    // Shirley & Chiu 1997: maps concentric squares to concentric circles. The angle is
+    // (pi/4) (y/x) in the wedges around the x axis and pi/2 - (pi/4) (x/y) around the y axis,
+    // whose cosine and sine are the sine and cosine of (pi/4) (x/y): one quarter-turn sincos.
     const vec2 offset = 2.0f * u - vec2(1.0f);
     if (offset.x == 0.0f && offset.y == 0.0f) return vec2(0.0f);
-    float r, theta;
-    if (std::abs(offset.x) > std::abs(offset.y)) {
-        r = offset.x;
-        theta = 0.25f * kPi * (offset.y / offset.x);
-    } else {
-        r = offset.y;
-        theta = 0.5f * kPi - 0.25f * kPi * (offset.x / offset.y);
-    }
-    return r * vec2(std::cos(theta), std::sin(theta));
+    if (std::abs(offset.x) > std::abs(offset.y))
+        return offset.x * cos_sin_quarter_turn(0.25f * kPi * (offset.y / offset.x));
+    const vec2 cs = cos_sin_quarter_turn(0.25f * kPi * (offset.x / offset.y));
+    return offset.y * vec2(cs.y, cs.x);
 }
 float sample_uniform_disk_pdf() { return kInvPi; }
 
