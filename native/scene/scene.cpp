@@ -99,25 +99,22 @@ struct InstanceRange {
     double longest_edge;   // of its mesh, object space (MeshReport)
 };
 
+// The largest row sum of |m|: |(m x)_j| <= inf_norm(m) max_k |x_k|.
+double inf_norm(const glm::dmat3& m) {
+    double norm = 0.0;
+    for (int row = 0; row < 3; ++row)
+        norm = std::max(norm, std::fabs(m[0][row]) + std::fabs(m[1][row]) + std::fabs(m[2][row]));
+    return norm;
+}
+
 InstanceRange instance_range(const Instance& instance, const MeshReport& report) {
     const glm::dmat4 transform(instance.world_from_object);
     const glm::dmat3 inverse = glm::inverse(glm::dmat3(transform));
-    InstanceRange range{0.0, 0.0, 0.0, report.longest_edge};
-    for (int row = 0; row < 3; ++row)
-        range.magnification = std::max(range.magnification, std::fabs(inverse[0][row]) +
-                                                                std::fabs(inverse[1][row]) +
-                                                                std::fabs(inverse[2][row]));
+    InstanceRange range{inf_norm(inverse), 0.0, 0.0, report.longest_edge};
     if (!std::isfinite(range.magnification))
         range.magnification = std::numeric_limits<double>::max();
     // |A|_2^2 is the largest eigenvalue of X = A^T A, at most |X^16|_inf^(1/16): within 3^(1/32)
     // (3.5%) of it, and exact for rotations and axis scales.
-    const auto inf_norm = [](const glm::dmat3& m) {
-        double norm = 0.0;
-        for (int row = 0; row < 3; ++row)
-            norm = std::max(norm, std::fabs(m[0][row]) + std::fabs(m[1][row]) +
-                                      std::fabs(m[2][row]));
-        return norm;
-    };
     glm::dmat3 power = glm::transpose(inverse) * inverse;
     // X^(2^k) = (scale * norm)^(2^k) * (power / norm), renormalised at each squaring.
     double scale = 1.0;
@@ -152,13 +149,13 @@ struct SceneRayLimits {
 // origin of component limit O and a direction of component limit D give, in the mesh's
 // coordinates, P <= stretch (sqrt(3) O + world_reach) and |d| <= stretch sqrt(3) D. The
 // shortest direction keeps hit distances from origins within the limit finite. Instances of
-// meshes without triangles are not in Embree's scene and do not count.
+// meshes without triangles (longest_edge 0: the triangles validate_mesh keeps have non-zero
+// area) are not in Embree's scene and do not count.
 SceneRayLimits ray_limits_of(const std::vector<Instance>& instances,
-                             const std::vector<MeshReport>& reports,
-                             const std::vector<Mesh>& meshes, double world_reach) {
+                             const std::vector<MeshReport>& reports, double world_reach) {
     std::vector<std::pair<size_t, InstanceRange>> ranges;
     for (size_t i = 0; i < instances.size(); ++i)
-        if (!meshes[instances[i].mesh_id].triangles.empty())
+        if (reports[instances[i].mesh_id].longest_edge > 0.0)
             ranges.emplace_back(i, instance_range(instances[i], reports[instances[i].mesh_id]));
     SceneRayLimits result;
     for (const auto& [i, r] : ranges) {
@@ -387,8 +384,7 @@ void Scene::set_ray_limits() {
                                    : glm::length(glm::max(glm::abs(glm::dvec3(bounds_.lower)),
                                                           glm::abs(glm::dvec3(bounds_.upper))));
     const double needed = std::max(extent, 1.0);
-    const SceneRayLimits found =
-        ray_limits_of(instances_, mesh_reports_, meshes_, world_reach);
+    const SceneRayLimits found = ray_limits_of(instances_, mesh_reports_, world_reach);
     ray_limits_.origin = float(found.origin.value);
     ray_limits_.direction = float(found.direction.value);
     ray_limits_.min_direction = float(found.min_direction);
