@@ -80,10 +80,9 @@ int sh_band(int index) {
     return l;
 }
 
-void check_sh_order(int order, const char* what) {
-    if (order < 0 || order > kMaxShOrder)
-        throw InvalidArgument(format_message(what, ": SH order ", order,
-                                             " is not supported; use 0..", kMaxShOrder));
+void throw_bad_sh_order(int order, const char* what) {
+    throw InvalidArgument(format_message(what, ": SH order ", order, " is not supported; use 0..",
+                                         kMaxShOrder));
 }
 
 int sh_order_from_count(int num_coefficients, const char* what) {

@@ -29,8 +29,15 @@ constexpr int sh_index(int l, int m) { return l * (l + 1) + m; }
 // Band l of flat index i (the inverse of sh_index for the l part).
 int sh_band(int index);
 
-// Throws InvalidArgument naming `what` unless 0 <= order <= kMaxShOrder.
-void check_sh_order(int order, const char* what);
+// Throws InvalidArgument naming `what` for an order outside 0..kMaxShOrder.
+[[noreturn]] void throw_bad_sh_order(int order, const char* what);
+
+// Throws InvalidArgument naming `what` unless 0 <= order <= kMaxShOrder. Inline, so that the
+// compiler sees that a bad constant order never reaches the loops after the check (with
+// link-time optimisation it otherwise warns that those loops would overrun their arrays).
+inline void check_sh_order(int order, const char* what) {
+    if (order < 0 || order > kMaxShOrder) throw_bad_sh_order(order, what);
+}
 
 // Order of an expansion with `num_coefficients` coefficients; throws InvalidArgument naming
 // `what` unless the count is a perfect square (order + 1)^2 with order <= kMaxShOrder.
