@@ -69,7 +69,7 @@ void check_rays(const std::vector<Ray>& rays, const RayLimits& limits,
 // |v - o|); the hit distance T / den is the world distance to the hit over |d|. Past float's
 // 3.4e38 these overflow to inf: hits at t = inf, or misses. Each is kept below this bound.
 constexpr double kTriangleTestBound = std::numeric_limits<float>::max() / 4.0;
-const double kSqrt3 = std::sqrt(3.0);
+constexpr double kSqrt3 = 1.7320508075688772;
 // Direction components the triangle-test limits always leave (those of a unit direction, with
 // room to spare), where they lower the origins' limit instead.
 constexpr double kShortDirections = 2.0;
@@ -87,6 +87,9 @@ struct RayLimit {
         value = to;
         cause = why;
         instance = i;
+    }
+    bool same_cause(const RayLimit& other) const {
+        return cause == other.cause && instance == other.instance;
     }
 };
 
@@ -390,10 +393,11 @@ void Scene::set_ray_limits() {
     ray_limits_.min_direction = float(found.min_direction);
     ray_limit_reason_.clear();
     std::string causes = ray_limit_cause(found.origin, instances_, mesh_reports_);
-    const std::string direction_cause =
-        ray_limit_cause(found.direction, instances_, mesh_reports_);
-    if (!direction_cause.empty() && direction_cause != causes)
-        causes += (causes.empty() ? "" : "; ") + direction_cause;
+    if (!found.direction.same_cause(found.origin)) {
+        const std::string direction_cause =
+            ray_limit_cause(found.direction, instances_, mesh_reports_);
+        if (!direction_cause.empty()) causes += (causes.empty() ? "" : "; ") + direction_cause;
+    }
     if (!causes.empty()) ray_limit_reason_ = " (" + causes + ")";
     if (found.origin.value >= needed && found.direction.value >= 1.0) return;
     // Embree's range alone may already fail: its message names the scale.
@@ -404,20 +408,17 @@ void Scene::set_ray_limits() {
                                                           : found.embree_direction)
                     : (found.origin.value < needed ? found.origin : found.direction);
     const std::string label = instance_label(instances_, limit.instance);
+    const Instance& instance = instances_[limit.instance];
+    const MeshReport& report = mesh_reports_[instance.mesh_id];
     if (range_fails)
         throw InvalidArgument(format_message(
             label, ": its transform shrinks the mesh by up to ",
-            instance_range(instances_[limit.instance],
-                           mesh_reports_[instances_[limit.instance].mesh_id])
-                .magnification,
-            "x, so rays from the scene's extent (", extent, " m) would pass Embree's range of ",
+            instance_range(instance, report).magnification, "x, so rays from the scene's extent (", extent, " m) would pass Embree's range of ",
             kMaxRayComponent, " in the mesh's own coordinates, where Debian's Embree aborts; "
             "apply the scale to the mesh's vertices (Blender: Apply Scale) or move the object "
             "nearer the origin"));
     throw InvalidArgument(format_message(
-        label, ": its mesh has triangle edges up to ",
-        mesh_reports_[instances_[limit.instance].mesh_id].longest_edge,
-        " m in its own coordinates, so rays from the scene's extent (", extent,
+        label, ": its mesh has triangle edges up to ", report.longest_edge, " m in its own coordinates, so rays from the scene's extent (", extent,
         " m) would overflow Embree's triangle test in float (hits at infinite distance); apply "
         "the object's scale to the mesh's vertices (Blender: Apply Scale), split its largest "
         "faces, or keep the scene smaller"));
