@@ -9,10 +9,14 @@
 // sample per pixel (one progressive viewport frame) and 16 (PreviewSettings' default), with its
 // stage times, best of three runs each; and the best of 40 1-spp frames added to one renderer
 // that sums only Combined (the viewport's pattern), also in raw ray queries per pixel.
+// Beside them, two floors that no photon tracer or preview frame can go under on this machine:
+// the leanest Lambert photon trace's ratio to the raw rate, and Embree's time alone for one
+// frame's camera and shadow rays.
 // Last, the caustic photon map's density estimate (caustics = PhotonMap): the time of one k = 50
 // query over 10^6 photons lying mostly in a dense caustic, on one thread.
 // A plain main printing figures: benchmarks are not tests.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 
@@ -20,6 +24,8 @@
 #include "lattice/photon_lattice.h"
 #include "photon/photon_map.h"
 #include "render/preview_renderer.h"
+#include "util/parallel.h"
+#include "util/sampling.h"
 
 using namespace shgi;
 
@@ -28,6 +34,129 @@ namespace {
 constexpr int kRuns = 3;
 constexpr int kProgressiveFrames = 40;
 constexpr double kTargetFrameSeconds = 0.033;  // issue 4: a 640 x 360 preview frame
+
+// The floor under the photon ratio: the leanest photon trace there is in the bench rooms, for
+// scale beside the real one. Photons leave the area light cosine-distributed, and at every hit
+// do only what any photon tracer must: the surface point (Scene::surface_point), a stored
+// photon after the first bounce, Russian roulette by the material's base colour and a
+// cosine-weighted Lambert bounce; no BSDF, no Fresnel, no caustic split, no photon order.
+// Wavefronts of 4096 photons through the same batch intersect as the tracer, on all threads.
+// 10^6 photons (a run of the tracer's 200,000 lasts ~0.1 s, too short to time steadily here);
+// bounces per second, best of kRuns.
+double lambert_photon_floor(const Scene& scene) {
+    constexpr uint64_t photons = 1000000;
+    constexpr uint64_t kChunk = 4096;
+    const uint64_t chunks = (photons + kChunk - 1) / kChunk;
+    double best = 0.0;
+    for (int run = 0; run < kRuns; ++run) {
+        std::atomic<uint64_t> bounces{0};
+        const auto start = now();
+        parallel_for(0, chunks, 1, [&](uint64_t begin, uint64_t end) {
+            std::vector<Ray> rays;
+            std::vector<Hit> hits;
+            std::vector<Pcg32> rngs;
+            std::vector<vec3> power;
+            std::vector<Photon> stored;
+            for (uint64_t c = begin; c < end; ++c) {
+                rays.clear();
+                rngs.clear();
+                power.clear();
+                stored.clear();
+                for (uint64_t i = 0; i < kChunk; ++i) {
+                    Pcg32 rng(uint64_t(run), c * kChunk + i);
+                    Ray ray;
+                    ray.origin = vec3(0.5f * rng.next_float() - 0.25f,
+                                      0.5f * rng.next_float() - 0.25f, bench::kHalf - 0.011f);
+                    const vec3 local = sample_cosine_hemisphere(rng.next_vec2());
+                    ray.direction = vec3(local.x, local.y, -local.z);
+                    rays.push_back(ray);
+                    rngs.push_back(rng);
+                    power.push_back(vec3(1e-3f));
+                }
+                bool first = true;
+                while (!rays.empty()) {
+                    scene.intersect(rays, hits);
+                    bounces += rays.size();
+                    size_t alive = 0;
+                    for (size_t i = 0; i < rays.size(); ++i) {
+                        if (!hits[i].valid()) continue;
+                        const SurfacePoint sp = scene.surface_point(rays[i], hits[i]);
+                        vec3 n = sp.geometric_normal;
+                        if (glm::dot(n, rays[i].direction) > 0.0f) n = -n;
+                        if (!first)
+                            stored.push_back(Photon{sp.position, power[i], n, -rays[i].direction});
+                        const vec3 albedo = scene.materials()[sp.material_id].base_color;
+                        const float survive = max_component(albedo);
+                        if (rngs[i].next_float() >= survive) continue;
+                        const vec3 wi = Frame::from_z(n).to_world(
+                            sample_cosine_hemisphere(rngs[i].next_vec2()));
+                        rays[alive].origin = sp.position + 1e-4f * n;
+                        rays[alive].direction = wi;
+                        rngs[alive] = rngs[i];
+                        power[alive] = power[i] * albedo / survive;
+                        ++alive;
+                    }
+                    rays.resize(alive);
+                    first = false;
+                }
+            }
+        });
+        best = std::max(best, double(bounces.load()) / seconds_since(start));
+    }
+    return best;
+}
+
+// The floor under any 640 x 360 frame that shows ray-traced direct light: Embree alone, for one
+// camera ray per pixel (16 x 16 tiles as 16-wide packets, as the renderer casts them) and one
+// shadow ray from each first hit to a random point of the bench rooms' area light, traced as
+// the renderer traces them (occlusion packets), on all threads, with nothing shaded. Best of
+// kProgressiveFrames frames.
+double embree_frame_floor(const Scene& scene) {
+    const Camera& camera = scene.camera();
+    const CameraRayGenerator generator(camera);
+    const int width = int(camera.resolution_x), height = int(camera.resolution_y);
+    constexpr int kTile = 16;
+    const int columns = (width + kTile - 1) / kTile, rows = (height + kTile - 1) / kTile;
+    double best = 1e30;
+    for (int frame = 0; frame < kProgressiveFrames; ++frame) {
+        const auto start = now();
+        parallel_for(0, uint64_t(columns) * uint64_t(rows), 4, [&](uint64_t begin, uint64_t end) {
+            std::vector<Ray> rays, shadows;
+            std::vector<Hit> hits;
+            std::vector<uint8_t> occluded;
+            for (uint64_t t = begin; t < end; ++t) {
+                const int x0 = int(t % uint64_t(columns)) * kTile;
+                const int y0 = int(t / uint64_t(columns)) * kTile;
+                Pcg32 rng(uint64_t(frame), t);
+                rays.clear();
+                for (int y = y0; y < std::min(y0 + kTile, height); ++y)
+                    for (int x = x0; x < std::min(x0 + kTile, width); ++x)
+                        rays.push_back(generator.generate_ray(vec2(float(x), float(y)) +
+                                                              rng.next_vec2()));
+                scene.intersect(rays, hits, nullptr, RayCoherence::Coherent);
+                shadows.clear();
+                for (size_t i = 0; i < rays.size(); ++i) {
+                    if (!hits[i].valid()) continue;
+                    const vec3 p = rays[i].origin + hits[i].t * rays[i].direction;
+                    const vec3 light = vec3(0.5f * rng.next_float() - 0.25f,
+                                            0.5f * rng.next_float() - 0.25f,
+                                            bench::kHalf - 0.01f);
+                    const vec3 to_light = light - p;
+                    const float distance = glm::length(to_light);
+                    if (!(distance > 1e-3f)) continue;
+                    Ray shadow;
+                    shadow.direction = to_light / distance;
+                    shadow.origin = p + 1e-4f * shadow.direction;
+                    shadow.tmax = 0.999f * distance;
+                    shadows.push_back(shadow);
+                }
+                scene.occluded(shadows, occluded, nullptr, RayCoherence::Coherent);
+            }
+        });
+        best = std::min(best, seconds_since(start));
+    }
+    return best;
+}
 
 void run(const char* name, Scene& scene) {
     scene.commit();
@@ -55,6 +184,9 @@ void run(const char* name, Scene& scene) {
     const double bounce_ns = 1e9 / bounce_rate, ray_ns = 1e9 / raw;
     std::printf("  per bounce: %.1f ns = %.1f ns ray query + %.1f ns the rest (%.2f ray queries)\n",
                 bounce_ns, ray_ns, bounce_ns - ray_ns, (bounce_ns - ray_ns) / ray_ns);
+    const double floor_rate = lambert_photon_floor(scene);
+    std::printf("  leanest Lambert photon trace (no BSDF): %.3g bounces/s, ratio to raw %.2f\n",
+                floor_rate, floor_rate / raw);
     std::printf("  injection: %.4f s (%.3g photons/s), blur %.4f s\n", best.injection,
                 double(best.photons_stored) / best.injection, best.blur);
     for (uint32_t samples : {1u, 16u}) {
@@ -95,6 +227,8 @@ void run(const char* name, Scene& scene) {
     std::printf("  that frame: %.2f raw ray queries per pixel (%.0f ms at this raw rate: %.2f)\n",
                 fastest.total * raw / pixels, kTargetFrameSeconds * 1e3,
                 kTargetFrameSeconds * raw / pixels);
+    std::printf("  Embree alone for such a frame's camera and shadow rays (best of %d): %.1f ms\n",
+                kProgressiveFrames, embree_frame_floor(scene) * 1e3);
 }
 
 // 10^6 photons on a 4 m x 4 m floor, 30% spread evenly and 70% in a caustic (a Gaussian spot of
