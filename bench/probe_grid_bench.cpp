@@ -9,12 +9,17 @@
 // DC luminance below 2% (ProbeGrid::relative_error; hysteresis 0.99 so that the exponential
 // blend's noise floor lies below the threshold). A plain main printing figures: benchmarks are
 // not tests.
+// Beside the L1-L4 rates, the floor under them: the leanest Lambert probe update's ray ratio.
 #include <algorithm>
+#include <atomic>
 #include <cstdio>
 #include <vector>
 
 #include "bench_scenes.h"
 #include "probes/probe_grid.h"
+#include "sh/sh_projection.h"
+#include "util/parallel.h"
+#include "util/sampling.h"
 
 using namespace shgi;
 
@@ -81,12 +86,101 @@ void convergence(const Scene& scene) {
                 grid.active_count(), p95, passes, seconds_since(start), grid.timings().placement);
 }
 
+// The floor under the probe ray ratio: the leanest probe update there is in the bench rooms, for
+// scale beside the real one. From each of the fitted grid's probe positions (the 8 x 8 x 8 lattice
+// of cell centres in the scene's box), paths along Fibonacci directions do, at every hit, only
+// what any path-traced probe must: the surface point, next-event estimation with one shadow ray
+// to a random point of the area light (Lambert), Russian roulette by the material's base colour
+// and a cosine-weighted Lambert bounce; the path's radiance goes into the probe's L2 SH. No BSDF,
+// no MIS, no visibility moments, no passes. The same single-ray queries as ProbeGrid::update, on
+// all threads; rays per second (closest-hit and shadow rays) and rays per path, best of kRuns.
+struct ProbeFloor {
+    double rays_per_second = 0.0, rays_per_path = 0.0;
+};
+
+ProbeFloor lean_probe_floor(const Scene& scene) {
+    constexpr int kSide = 8;
+    constexpr uint32_t kPaths = 256;
+    // The bench rooms' area light: 0.5 m square, 100 W, facing down under the ceiling.
+    constexpr float kLightSide = 0.5f, kLightZ = bench::kHalf - 0.01f;
+    const float light_radiance = 100.0f / (kPi * kLightSide * kLightSide);
+    const Bounds3 bounds = scene.bounds();
+    ProbeFloor best;
+    for (int run = 0; run < kRuns; ++run) {
+        std::atomic<uint64_t> rays{0};
+        const auto start = now();
+        parallel_for(0, uint64_t(kSide * kSide * kSide), 8, [&](uint64_t begin, uint64_t end) {
+            uint64_t local_rays = 0;
+            for (uint64_t probe = begin; probe < end; ++probe) {
+                const vec3 cell(float(probe % kSide), float(probe / kSide % kSide),
+                                float(probe / (kSide * kSide)));
+                const vec3 position =
+                    bounds.lower + (cell + 0.5f) / float(kSide) * bounds.extent();
+                ShRgb estimate(2);
+                for (uint32_t r = 0; r < kPaths; ++r) {
+                    Pcg32 rng(uint64_t(run), probe * kPaths + r);
+                    Ray ray;
+                    ray.origin = position;
+                    ray.direction = fibonacci_sphere(r, kPaths);
+                    const vec3 first_direction = ray.direction;
+                    vec3 throughput(1.0f), radiance(0.0f);
+                    for (int bounce = 0; bounce < 8; ++bounce) {
+                        const Hit hit = scene.intersect(ray);
+                        ++local_rays;
+                        if (!hit.valid()) break;
+                        const SurfacePoint sp = scene.surface_point(ray, hit);
+                        vec3 n = sp.geometric_normal;
+                        if (glm::dot(n, ray.direction) > 0.0f) n = -n;
+                        const vec3 albedo = scene.materials()[sp.material_id].base_color;
+                        const vec3 light(kLightSide * (rng.next_float() - 0.5f),
+                                         kLightSide * (rng.next_float() - 0.5f), kLightZ);
+                        const vec3 to_light = light - sp.position;
+                        const float d2 = glm::dot(to_light, to_light);
+                        const vec3 wi = to_light / std::sqrt(d2);
+                        const float cos_surface = glm::dot(wi, n), cos_light = -wi.z;
+                        if (cos_surface > 0.0f && cos_light > 0.0f) {
+                            Ray shadow;
+                            shadow.origin = sp.position + 1e-4f * n;
+                            shadow.direction = to_light;
+                            shadow.tmax = 0.999f;
+                            ++local_rays;
+                            if (!scene.occluded(shadow))
+                                radiance += throughput * albedo * (kInvPi * light_radiance *
+                                            cos_surface * cos_light * kLightSide * kLightSide /
+                                            d2);
+                        }
+                        const float survive = max_component(albedo);
+                        if (rng.next_float() >= survive) break;
+                        throughput *= albedo / survive;
+                        ray.origin = sp.position + 1e-4f * n;
+                        ray.direction = Frame::from_z(n).to_world(
+                            sample_cosine_hemisphere(rng.next_vec2()));
+                        ray.tmin = 0.0f;
+                        ray.tmax = kInfinity;
+                    }
+                    sh_add_sample(estimate, first_direction, radiance * (kFourPi / kPaths));
+                }
+                if (!(estimate[0].x >= 0.0f)) std::printf("  (negative probe)\n");  // keeps it live
+            }
+            rays += local_rays;
+        });
+        const double rate = double(rays.load()) / seconds_since(start);
+        if (rate > best.rays_per_second)
+            best = {rate, double(rays.load()) / double(kSide * kSide * kSide * kPaths)};
+    }
+    return best;
+}
+
 void run(const char* name, Scene& scene) {
     scene.commit();
     const double raw = bench::incoherent_ray_rate(scene);
     std::printf("%s: %zu triangles\n", name, size_t(scene.stats().instanced_triangles));
     std::printf("  embree incoherent closest-hit: %.3g rays/s\n", raw);
     update_rates(scene, raw);
+    const ProbeFloor floor = lean_probe_floor(scene);
+    std::printf("  leanest Lambert probe update (no BSDF, no MIS, no visibility): %.3g rays/s "
+                "(ratio %.2f, %.2f rays per path)\n",
+                floor.rays_per_second, floor.rays_per_second / raw, floor.rays_per_path);
     convergence(scene);
 }
 
