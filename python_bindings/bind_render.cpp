@@ -282,7 +282,8 @@ void bind_preview(py::module_& m) {
                 uint32_t(kMaxPathTracerSamples));
     def_integer(cls, "max_specular_bounces", &S::max_specular_bounces,
                 "Mirror/glass bounces followed per path (8).");
-    def_integer(cls, "tile_size", &S::tile_size, "Tile side in pixels (16).");
+    def_integer(cls, "tile_size", &S::tile_size,
+                "Tile side in pixels (16), rounded up to an even number.");
     cls.def(py::init(&from_kwargs<S>),
             "PreviewSettings(**fields), e.g. PreviewSettings(samples=4, seed=1).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
@@ -291,6 +292,10 @@ void bind_preview(py::module_& m) {
         .def_readwrite("combined_only", &S::combined_only,
                        "Sum only the Combined pass (False): what a viewport shows, without the "
                        "other 13 passes' film traffic.")
+        .def_readwrite("reuse_field_lookups", &S::reuse_field_lookups,
+                       "Share one field lookup among the pixels of a 2 x 2 quad whose first "
+                       "surfaces lie within the field's reuse distance and whose normals agree "
+                       "(True); False: one lookup per pixel.")
         .def("validate", &validate_preview_settings,
              "Raises ValueError naming the first invalid field.");
 

@@ -213,6 +213,16 @@ FieldLookup PhotonLattice::lookup(const vec3& p, const vec3& n) const {
     return result;
 }
 
+float PhotonLattice::reuse_distance() const {
+    constexpr float kReuseShare = 0.25f;
+    float distance = global_.cell_size();
+    if (settings_.caustics == CausticMode::Lattice && caustic_photons_injected_ > 0)
+        distance = std::min(distance, caustic_.cell_size());
+    if (settings_.caustics == CausticMode::PhotonMap && caustic_map_.size() > 0)
+        distance = std::min(distance, caustic_radius_);
+    return kReuseShare * distance;
+}
+
 size_t PhotonLattice::memory_bytes() const {
     return global_raw_.memory_bytes() + global_.memory_bytes() + caustic_raw_.memory_bytes() +
            caustic_.memory_bytes() + caustic_map_.size() * sizeof(Photon);

@@ -110,6 +110,10 @@ class PhotonLattice : public IndirectField {
 
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
     FieldLookup lookup(const vec3& p, const vec3& n) const override;
+    // A quarter of the finest cell queried (the caustic lattice's when it holds photons), or of
+    // the photon map's radius with caustics = PhotonMap: small beside the interpolation's own
+    // reach (1.75 cells for the cubic weights, the k nearest photons' disk).
+    float reuse_distance() const override;
     bool includes_world_direct() const override { return settings_.world_in_field; }
     bool is_zero() const override { return passes_ == 0; }  // nothing solved yet
 

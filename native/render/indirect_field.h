@@ -48,6 +48,10 @@ class IndirectField {
         return lookup(p, n);
     }
 
+    // Screen-space reuse (render/preview_renderer.h): how far apart (m) two shading points of
+    // neighbouring pixels may lie, their normals agreeing, for one view_lookup() to serve both,
+    // the field changing too little over that distance to show. 0 (the default): never.
+    virtual float reuse_distance() const { return 0.0f; }
     // True when the field also carries the world's direct light (photons from the world stored
     // at their first hit): consumers then leave the world out of next-event estimation.
     virtual bool includes_world_direct() const { return false; }

@@ -170,23 +170,38 @@ void PathIntegrator::add_direct() {
 // Indirect light from the field through the field lobes (see the header).
 void PathIntegrator::add_field(const Shading& shading) {
     if (field_->is_zero()) return;  // every term below would be zero
-    const vec3 n = shading.frame.z;
-    const vec3 diffuse = shading.bsdf.field_diffuse(shading.wo);
-    PrincipledBsdf::GlossyLobe lobes[2];
-    const int count = shading.bsdf.field_glossy_lobes(shading.wo, lobes);
-    if (max_component(diffuse) <= 0.0f && count == 0) return;
+    FieldLobes lobes;
+    lobes.diffuse = shading.bsdf.field_diffuse(shading.wo);
+    lobes.glossy_count = shading.bsdf.field_glossy_lobes(shading.wo, lobes.glossy);
+    if (max_component(lobes.diffuse) <= 0.0f && lobes.glossy_count == 0) return;
     const vec3 wo = shading.frame.to_world(shading.wo);
-    const FieldLookup field = field_->view_lookup(shading.position, n, wo);
-    vec3 by_class[2] = {diffuse * field.irradiance(n) * kInvPi, vec3(0.0f)};
-    if (count > 0) {
-        for (int i = 0; i < count; ++i)
-            by_class[1] += lobes[i].albedo * field.glossy(n, wo, lobes[i].roughness);
+    if (vertex_ == 0 && shared_lookup_ != nullptr) {
+        add_field_light(*shared_lookup_, lobes, shading.frame.z, wo);
+        return;
     }
+    // The lookup's result binds to the parameter directly: no copy of its SH.
+    add_field_light(field_->view_lookup(shading.position, shading.frame.z, wo), lobes,
+                    shading.frame.z, wo);
+}
+
+void PathIntegrator::add_field_light(const FieldLookup& field, const FieldLobes& lobes,
+                                     const vec3& n, const vec3& wo) {
+    vec3 by_class[2] = {lobes.diffuse * field.irradiance(n) * kInvPi, vec3(0.0f)};
+    for (int i = 0; i < lobes.glossy_count; ++i)
+        by_class[1] += lobes.glossy[i].albedo * field.glossy(n, wo, lobes.glossy[i].roughness);
     if (vertex_ == 0) {
         for (int c = 0; c < 2; ++c) add_light(throughput_ * by_class[c], c, false);
         return;
     }
     add_split(throughput_ * (by_class[0] + by_class[1]), false);
+}
+
+bool PathIntegrator::first_field_query(vec3* position, vec3* normal, vec3* wo) const {
+    if (field_ == nullptr || field_->is_zero() || vertex_ != 0) return false;
+    *position = shading_.position;
+    *normal = shading_.frame.z;
+    *wo = shading_.frame.to_world(shading_.wo);
+    return true;
 }
 
 // Samples the BSDF, updates throughput, bounce counts and MIS state; false ends the path.

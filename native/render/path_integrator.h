@@ -97,7 +97,17 @@ class PathIntegrator {
         first_light_sample_ = FirstLightSample{u_select, u};
     }
 
+    // The field query finish() will make at the first surface (after begin()): its position,
+    // shading normal and the direction towards the viewer, world space. False without a field
+    // to query (none, or one that holds no light).
+    bool first_field_query(vec3* position, vec3* normal, vec3* wo) const;
+    // A lookup made for another path's first surface (screen-space reuse, see
+    // render/preview_renderer.h) for finish() to use at this path's first surface instead of
+    // its own; it must outlive finish().
+    void share_first_field_lookup(const FieldLookup* lookup) { shared_lookup_ = lookup; }
+
   private:
+    const FieldLookup* shared_lookup_ = nullptr;
     struct FirstLightSample {
         float u_select;
         vec2 u;
@@ -118,6 +128,14 @@ class PathIntegrator {
     void record_first_hit(const Shading& shading, const Ray& ray, const Hit& hit);
     void sample_direct();
     void add_field(const Shading& shading);
+    // The field lobes of the current surface (render/bsdf.h): what field light is weighted by.
+    struct FieldLobes {
+        vec3 diffuse{0.0f};
+        PrincipledBsdf::GlossyLobe glossy[2];
+        int glossy_count = 0;
+    };
+    void add_field_light(const FieldLookup& field, const FieldLobes& lobes, const vec3& n,
+                         const vec3& wo);
     bool scatter(const Shading& shading, Ray* ray);
     void add_light(const vec3& contribution, int lobe_class, bool direct);
     void add_split(const vec3& contribution, bool direct);

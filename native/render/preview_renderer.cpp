@@ -22,17 +22,24 @@ constexpr size_t kWavePixels = 256;
 // units, plenty to balance the threads, and the per-unit setup stays negligible.
 constexpr uint64_t kChunkPixels = 1024;
 
+// Screen-space reuse of field lookups: the pixels of each aligned 2 x 2 quad share one lookup
+// when their first surfaces lie within the field's reuse_distance() of the quad's lead pixel and
+// their normals agree to within this cosine (~11 degrees).
+constexpr float kReuseMinCosine = 0.98f;
+
 // Seconds one work unit spent in each stage.
 struct StageSeconds {
     double primary = 0.0, direct = 0.0, indirect = 0.0;
 };
 
-// The frame's tiles, row-major; the last column and row may be cut by the image border.
+// The frame's tiles, row-major; the last column and row may be cut by the image border. The
+// tile side is tile_size rounded up to an even number, so that every tile is made of whole
+// aligned 2 x 2 quads (the reuse of field lookups) whatever the setting.
 struct TileGrid {
     TileGrid(int image_width, int image_height, int tile_size)
-        : width(image_width), height(image_height), tile(tile_size),
-          columns((int64_t(image_width) + tile_size - 1) / tile_size),
-          rows((int64_t(image_height) + tile_size - 1) / tile_size) {}
+        : width(image_width), height(image_height), tile(tile_size + (tile_size & 1)),
+          columns((int64_t(image_width) + tile - 1) / tile),
+          rows((int64_t(image_height) + tile - 1) / tile) {}
     uint64_t count() const { return uint64_t(columns) * uint64_t(rows); }
     // Pixel bounds [x0, x1) x [y0, y1) of tile t.
     void bounds(uint64_t t, int* x0, int* x1, int* y0, int* y1) const {
@@ -72,6 +79,7 @@ struct Wave {
     explicit Wave(size_t capacity)
         : x(capacity), y(capacity), rngs(capacity), samples(capacity), values(capacity),
           paths(capacity), live(capacity) {
+        quads.reserve(capacity);
         rays.reserve(capacity);
         hits.reserve(capacity);
         shadow_rays.reserve(capacity);
@@ -87,6 +95,10 @@ struct Wave {
     std::vector<PassValues> values;
     std::vector<std::optional<PathIntegrator>> paths;
     std::vector<uint8_t> live;  // the path has a first surface to shade
+    // The wave holds whole 2 x 2 quads (fewer pixels at the image border): quad q is pixels
+    // [quads[q], quads[q + 1]) (the last one ends at count), and lookups[q] its shared lookup.
+    std::vector<uint32_t> quads;
+    std::vector<FieldLookup> lookups;
     std::vector<Ray> rays;
     std::vector<Hit> hits;
     std::vector<Ray> shadow_rays;
@@ -102,12 +114,14 @@ class FrameWork {
     FrameWork(const Scene& scene, const Camera& camera, const CameraRayGenerator& camera_rays,
               const LightSampler& lights, const PathTracerSettings& settings,
               const IndirectField& field, const TileGrid& grid, uint64_t first, uint64_t count,
-              const Film& base, Film& target, Progress* progress)
+              const Film& base, Film& target, Progress* progress, bool reuse_lookups)
         : scene_(scene), camera_(camera), camera_rays_(camera_rays), lights_(lights),
           settings_(settings), field_(field), grid_(grid), first_(first), count_(count),
-          base_(base), target_(&target), progress_(progress) {}
+          base_(base), target_(&target), progress_(progress),
+          reuse_(reuse_lookups ? field.reuse_distance() : 0.0f) {}
 
-    // Renders tiles [begin, end) of the grid, pixels in tile order, in waves.
+    // Renders tiles [begin, end) of the grid in waves of whole 2 x 2 quads: quads in row-major
+    // order within each tile, each quad's pixels row-major.
     void render_tiles(uint64_t begin, uint64_t end, StageSeconds* seconds) const {
         const uint64_t tile_pixels = uint64_t(grid_.tile) * uint64_t(grid_.tile);
         Wave wave(size_t(std::min<uint64_t>(kWavePixels, (end - begin) * tile_pixels)));
@@ -115,11 +129,16 @@ class FrameWork {
         for (uint64_t t = begin; t < end; ++t) {
             int x0, x1, y0, y1;
             grid_.bounds(t, &x0, &x1, &y0, &y1);
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x) {
-                    wave.x[wave.count] = x;
-                    wave.y[wave.count] = y;
-                    if (++wave.count == wave.capacity()) render_wave(wave, clock, seconds);
+            for (int qy = y0; qy < y1; qy += 2)
+                for (int qx = x0; qx < x1; qx += 2) {
+                    if (wave.count + 4 > wave.capacity()) render_wave(wave, clock, seconds);
+                    wave.quads.push_back(uint32_t(wave.count));
+                    for (int y = qy; y < std::min(qy + 2, y1); ++y)
+                        for (int x = qx; x < std::min(qx + 2, x1); ++x) {
+                            wave.x[wave.count] = x;
+                            wave.y[wave.count] = y;
+                            ++wave.count;
+                        }
                 }
         }
         if (wave.count > 0) render_wave(wave, clock, seconds);
@@ -141,6 +160,7 @@ class FrameWork {
             // Next-event estimation where a specular chain lands is direct light too: the
             // integrators add its time to `clock`.
             const double chain_direct = clock.direct;
+            share_field_lookups(wave, s);
             const Film& sums = s == first_ ? base_ : *target_;
             for (size_t i = 0; i < wave.count; ++i) {
                 if (wave.live[i]) wave.paths[i]->finish();
@@ -152,6 +172,40 @@ class FrameWork {
             seconds->indirect += shading - chained;
         }
         wave.count = 0;
+        wave.quads.clear();
+    }
+
+    // Screen-space reuse (PreviewRenderer's header): per quad, the lead pixel (the first of the
+    // quad's pixels, from the one at sample index s mod the quad's size on, whose path has a
+    // first surface) makes its field lookup, and every other pixel of the quad whose first
+    // surface lies within reuse_ of the lead's and whose normal agrees takes it instead of its
+    // own. The lead rotates with the sample index, so a progressive render spreads the lookups.
+    void share_field_lookups(Wave& wave, uint64_t s) const {
+        if (!(reuse_ > 0.0f)) return;
+        if (wave.lookups.size() < wave.quads.size()) wave.lookups.resize(wave.capacity());
+        const float reuse2 = reuse_ * reuse_;
+        for (size_t q = 0; q < wave.quads.size(); ++q) {
+            const uint32_t first = wave.quads[q];
+            const uint32_t size =
+                (q + 1 < wave.quads.size() ? wave.quads[q + 1] : uint32_t(wave.count)) - first;
+            vec3 p, n, wo;
+            uint32_t lead = size;
+            for (uint32_t k = 0; k < size && lead == size; ++k) {
+                const uint32_t i = first + uint32_t((s + k) % size);
+                if (wave.live[i] && wave.paths[i]->first_field_query(&p, &n, &wo)) lead = i;
+            }
+            if (lead == size) continue;
+            wave.lookups[q] = field_.view_lookup(p, n, wo);
+            wave.paths[lead]->share_first_field_lookup(&wave.lookups[q]);
+            for (uint32_t i = first; i < first + size; ++i) {
+                vec3 pi, ni, woi;
+                if (i == lead || !wave.live[i] ||
+                    !wave.paths[i]->first_field_query(&pi, &ni, &woi))
+                    continue;
+                if (glm::dot(pi - p, pi - p) <= reuse2 && glm::dot(ni, n) >= kReuseMinCosine)
+                    wave.paths[i]->share_first_field_lookup(&wave.lookups[q]);
+            }
+        }
     }
 
     // Camera rays of sample s as one stream, then each first surface's shading (the G-buffer).
@@ -203,6 +257,7 @@ class FrameWork {
     const Film& base_;
     Film* target_;  // written by the work units, each in its own pixels
     Progress* progress_;
+    float reuse_;  // the field's reuse distance; 0: every pixel makes its own lookup
 };
 
 // The path tracer settings that make PathIntegrator follow only specular chains: every
@@ -291,7 +346,8 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
     Film& target = film_.begin();
     const TileGrid grid(target.width(), target.height(), settings_.tile_size);
     const FrameWork work(*scene_, camera_, camera_rays_, lights, path_settings_, *field, grid,
-                         first, samples, film_.base(), target, progress);
+                         first, samples, film_.base(), target, progress,
+                         settings_.reuse_field_lookups);
     const uint64_t tile_pixels = uint64_t(grid.tile) * uint64_t(grid.tile);
     const uint64_t tiles_per_unit = std::max<uint64_t>(1, kChunkPixels / tile_pixels);
     std::vector<StageSeconds> busy(grid.count());  // per work unit, at its first tile

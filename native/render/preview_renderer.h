@@ -23,6 +23,21 @@
 // the film as it was, without the film being copied (render/film.h, ProgressiveFilm).
 // The viewport shows only Combined: with combined_only the film sums nothing else, which saves
 // most of the film's memory traffic per frame.
+//
+// Screen-space reuse of field lookups (in the spirit of seed 004's discontinuity-aware sharing of
+// SH between neighbouring pixels): a field's lookup (a 27-cell lattice sample, a photon map's
+// k-nearest density estimate) is the costliest part of a pixel, and it changes little between
+// neighbouring pixels on one surface. The pixels of each aligned 2 x 2 quad (waves hold whole
+// quads; tiles have an even side) share one lookup, made at the first surface of a lead pixel
+// that rotates with the sample index, when their own first surfaces lie within the field's
+// reuse_distance() of it (PhotonLattice: a quarter of its finest cell) and their normals agree
+// within ~11 degrees; the others, across edges and depth jumps, make their own. Each pixel still
+// evaluates irradiance and glossy light with its own normal and view direction, and later
+// vertices of specular chains always look up for themselves. Fields that do not allow it
+// (reuse_distance() 0, e.g. probe grids, whose lookups weigh visibility) and
+// reuse_field_lookups = false give one lookup per pixel. The quads and leads depend only on
+// pixel coordinates and the sample index, so frames stay identical for any thread count and
+// tile size.
 #pragma once
 
 #include <cstdint>
@@ -45,8 +60,11 @@ struct PreviewSettings {
     int max_specular_bounces = 8;       // Dirac and refraction bounces followed per path
     float clamp_indirect = 0.0f;        // as PathTracerSettings.clamp_indirect; 0 = off
     WorldSampling world_sampling = WorldSampling::Cosine;
-    int tile_size = 16;
+    int tile_size = 16;                 // rounded up to an even number (whole 2 x 2 quads)
     bool combined_only = false;         // sum only the Combined pass (the viewport's)
+    // Screen-space reuse of the field's lookups within 2 x 2 pixel quads (see above); false: one
+    // lookup per pixel, as the reference would make.
+    bool reuse_field_lookups = true;
 };
 
 void validate_preview_settings(const PreviewSettings& settings);

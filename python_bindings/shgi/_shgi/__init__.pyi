@@ -1515,6 +1515,14 @@ class PreviewSettings:
     def max_specular_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
+    def reuse_field_lookups(self) -> bool:
+        """
+        Share one field lookup among the pixels of a 2 x 2 quad whose first surfaces lie within the field's reuse distance and whose normals agree (True); False: one lookup per pixel.
+        """
+    @reuse_field_lookups.setter
+    def reuse_field_lookups(self, arg0: bool) -> None:
+        ...
+    @property
     def samples(self) -> int:
         """
         Samples per pixel rendered by render_preview (default 16).
@@ -1533,7 +1541,7 @@ class PreviewSettings:
     @property
     def tile_size(self) -> int:
         """
-        Tile side in pixels (16).
+        Tile side in pixels (16), rounded up to an even number.
         """
     @tile_size.setter
     def tile_size(self, arg1: typing.SupportsIndex) -> None:
