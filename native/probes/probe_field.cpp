@@ -158,6 +158,10 @@ ProbeField::ProbeField(std::shared_ptr<const ProbeGridData> data,
                            std::min(spacing.x, std::min(spacing.y, spacing.z)),
                            data_->volume_offset(v), volume.resolution});
     }
+    constexpr float kReuseShare = 0.25f;
+    float spacing = kInfinity;
+    for (const VolumeFrame& frame : frames_) spacing = std::min(spacing, frame.min_spacing);
+    reuse_distance_ = std::isfinite(spacing) ? kReuseShare * spacing : 0.0f;
 }
 
 size_t ProbeField::volume_at(const vec3& p) const {

@@ -114,6 +114,9 @@ class ProbeField : public IndirectField {
 
     // The volume whose probes light p (see the header comment).
     size_t volume_at(const vec3& p) const;
+    // A quarter of the smallest probe spacing of any volume: the trilinear, back-face and
+    // Chebyshev weights change little over it on one surface.
+    float reuse_distance() const override { return reuse_distance_; }
 
   private:
     struct VolumeFrame {
@@ -127,6 +130,7 @@ class ProbeField : public IndirectField {
     std::shared_ptr<const ProbeGridData> data_;
     ProbeLookupSettings settings_;
     std::vector<VolumeFrame> frames_;
+    float reuse_distance_ = 0.0f;
 };
 
 }  // namespace shgi

@@ -122,6 +122,7 @@ class ProbeGrid : public IndirectField {
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
     FieldLookup view_lookup(const vec3& p, const vec3& n, const vec3& wo) const override;
     std::shared_ptr<const IndirectField> snapshot() const override { return field(); }
+    float reuse_distance() const override { return field()->reuse_distance(); }
 
   private:
     void check_scene(const char* what) const;

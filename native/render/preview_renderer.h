@@ -30,12 +30,12 @@
 // neighbouring pixels on one surface. The pixels of each aligned 2 x 2 quad (waves hold whole
 // quads; tiles have an even side) share one lookup, made at the first surface of a lead pixel
 // that rotates with the sample index, when their own first surfaces lie within the field's
-// reuse_distance() of it (PhotonLattice: a quarter of its finest cell) and their normals agree
-// within ~11 degrees; the others, across edges and depth jumps, make their own. Each pixel still
-// evaluates irradiance and glossy light with its own normal and view direction, and later
-// vertices of specular chains always look up for themselves. Fields that do not allow it
-// (reuse_distance() 0, e.g. probe grids, whose lookups weigh visibility) and
-// reuse_field_lookups = false give one lookup per pixel. The quads and leads depend only on
+// reuse_distance() of it (a quarter of a photon lattice's finest cell or of a probe grid's
+// spacing) and their normals agree within ~11 degrees; the others, across edges and depth jumps,
+// make their own. Each pixel still evaluates irradiance and glossy light with its own normal and
+// view direction, and later vertices of specular chains always look up for themselves. Fields
+// that do not allow it (reuse_distance() 0, the default) and reuse_field_lookups = false give
+// one lookup per pixel. The quads and leads depend only on
 // pixel coordinates and the sample index, so frames stay identical for any thread count and
 // tile size.
 #pragma once

@@ -24,6 +24,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "lattice/photon_lattice.h"
+#include "probes/probe_grid.h"
 #include "render_test_scenes.h"
 #include "support/expect_error.h"
 #include "support/noise_stats.h"
@@ -443,40 +444,78 @@ TEST(PreviewRenderer, ReuseSharesOneLookupPerQuadOnOneSurface) {
         EXPECT_NEAR(shared[i], 0.5f, 0.5f * kRoundingTolerance) << "pixel " << i / 3;
 }
 
-// With the photon lattice (the bench's preview), reuse changes the picture by far less than the
-// preview's own difference from the path tracer: on the room at 96 x 96 (pixels of 1.9 cm, the
-// lattices' reuse distance 3 cm, 8 spp), DiffInd's mean moves by under 0.1% and its pixels by
-// under 1% RMS of the mean, while the lattice makes at most half the lookups (edges, the sphere
-// and the mirror's reflections make their own).
-TEST(PreviewRenderer, ReuseOnTheLatticeChangesTheImageLittle) {
-    Scene scene = room_scene();
-    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.9f), 1.8f, 96));
-    scene.commit();
-    const auto lattice = solved_lattice(scene);
-    ASSERT_GT(lattice->reuse_distance(), 0.0f);
+// Renders `scene` at 8 spp with `field` with and without screen-space reuse: the share of
+// lookups reuse makes, DiffInd's mean with reuse over its mean without, and the RMS of their
+// per-pixel difference over that mean.
+struct ReuseEffect {
+    double lookup_share = 0.0, mean_ratio = 0.0, relative_rms = 0.0;
+};
+ReuseEffect reuse_effect(const Scene& scene, const IndirectField& field) {
     const auto render = [&](bool reuse, uint64_t* lookups) {
-        const CountingField field(*lattice, lattice->reuse_distance());
+        const CountingField counting(field, field.reuse_distance());
         PreviewSettings settings = preview_settings(8);
         settings.reuse_field_lookups = reuse;
-        const Image image = render_preview(scene, &field, settings);
-        *lookups = field.lookups();
+        const Image image = render_preview(scene, &counting, settings);
+        *lookups = counting.lookups();
         return image.layer_pixels("DiffInd");
     };
     uint64_t shared_lookups = 0, own_lookups = 0;
     const std::vector<float> shared = render(true, &shared_lookups);
     const std::vector<float> own = render(false, &own_lookups);
-    EXPECT_LE(double(shared_lookups), 0.5 * double(own_lookups));  // measured: 0.45
     double sum_shared = 0.0, sum_own = 0.0, sum_d2 = 0.0;
     for (size_t i = 0; i < own.size(); ++i) {
         sum_shared += shared[i];
         sum_own += own[i];
         sum_d2 += double(shared[i] - own[i]) * double(shared[i] - own[i]);
     }
-    const double mean = sum_own / double(own.size());
-    ASSERT_GT(mean, 0.0);
-    const double rms = std::sqrt(sum_d2 / double(own.size()));
-    EXPECT_NEAR(sum_shared / sum_own, 1.0, 0.001);  // measured: 1e-5
-    EXPECT_LT(rms / mean, 0.01);                     // measured: 0.0036
+    ReuseEffect effect;
+    effect.lookup_share = double(shared_lookups) / double(own_lookups);
+    effect.mean_ratio = sum_shared / sum_own;
+    effect.relative_rms = std::sqrt(sum_d2 / double(own.size())) / (sum_own / double(own.size()));
+    return effect;
+}
+
+// The room at 96 x 96: pixels of 1.9 cm.
+Scene fine_room_scene() {
+    Scene scene = room_scene();
+    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.9f), 1.8f, 96));
+    scene.commit();
+    return scene;
+}
+
+// With the photon lattice (the bench's preview), reuse changes the picture by far less than the
+// preview's own difference from the path tracer: on the fine room (the lattices' reuse distance
+// 3 cm, 8 spp), DiffInd's mean moves by under 0.1% and its pixels by under 1% RMS of the mean,
+// while the lattice makes at most half the lookups (edges, the sphere and the mirror's
+// reflections make their own).
+TEST(PreviewRenderer, ReuseOnTheLatticeChangesTheImageLittle) {
+    const Scene scene = fine_room_scene();
+    const auto lattice = solved_lattice(scene);
+    ASSERT_GT(lattice->reuse_distance(), 0.0f);
+    const ReuseEffect effect = reuse_effect(scene, *lattice);
+    EXPECT_LE(effect.lookup_share, 0.5);            // measured: 0.45
+    EXPECT_NEAR(effect.mean_ratio, 1.0, 0.001);     // measured: 1 + 1e-5
+    EXPECT_LT(effect.relative_rms, 0.01);           // measured: 0.0036
+}
+
+// The same for a probe grid (4 x 4 x 4 probes 0.5 m apart, visibility-weighted lookups: reuse
+// within 12.5 cm on one surface).
+TEST(PreviewRenderer, ReuseOnAProbeGridChangesTheImageLittle) {
+    const Scene scene = fine_room_scene();
+    ProbeGridSettings settings;
+    ProbeVolume volume;
+    volume.world_from_volume = glm::scale(mat4(1.0f), vec3(0.99f));
+    volume.resolution = ivec3(4);
+    settings.volumes = {volume};
+    settings.rays_per_probe = 64;
+    ProbeGrid grid(scene, settings);
+    grid.update();
+    const std::shared_ptr<const ProbeField> field = grid.field();
+    EXPECT_NEAR(field->reuse_distance(), 0.25f * 0.495f, 1e-4f);
+    const ReuseEffect effect = reuse_effect(scene, *field);
+    EXPECT_LE(effect.lookup_share, 0.5);         // measured: 0.34
+    EXPECT_NEAR(effect.mean_ratio, 1.0, 0.001);  // measured: 1 - 6e-6
+    EXPECT_LT(effect.relative_rms, 0.01);        // measured: 0.0066
 }
 
 // The viewport's film sums only Combined: the same Combined bits as a film with every pass, and
