@@ -32,12 +32,19 @@ struct StageSeconds {
     double primary = 0.0, direct = 0.0, indirect = 0.0;
 };
 
-// The frame's tiles, row-major; the last column and row may be cut by the image border. The
-// tile side is tile_size rounded up to an even number, so that every tile is made of whole
-// aligned 2 x 2 quads (the reuse of field lookups) whatever the setting.
+// A tile side of tile_size rounded up to an even number, so that every tile is made of whole
+// aligned 2 x 2 quads (the reuse of field lookups) whatever the setting; sides past 2^21 (above
+// any image side, kMaxCameraResolution) cover the image alike and are cut to it first.
+int even_tile_side(int tile_size) {
+    const int side = std::min(tile_size, 1 << 21);
+    return side + (side & 1);
+}
+
+// The frame's tiles (of even_tile_side(tile_size) pixels), row-major; the last column and row
+// may be cut by the image border.
 struct TileGrid {
     TileGrid(int image_width, int image_height, int tile_size)
-        : width(image_width), height(image_height), tile(tile_size + (tile_size & 1)),
+        : width(image_width), height(image_height), tile(even_tile_side(tile_size)),
           columns((int64_t(image_width) + tile - 1) / tile),
           rows((int64_t(image_height) + tile - 1) / tile) {}
     uint64_t count() const { return uint64_t(columns) * uint64_t(rows); }

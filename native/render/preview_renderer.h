@@ -35,9 +35,8 @@
 // make their own. Each pixel still evaluates irradiance and glossy light with its own normal and
 // view direction, and later vertices of specular chains always look up for themselves. Fields
 // that do not allow it (reuse_distance() 0, the default) and reuse_field_lookups = false give
-// one lookup per pixel. The quads and leads depend only on
-// pixel coordinates and the sample index, so frames stay identical for any thread count and
-// tile size.
+// one lookup per pixel. The quads and leads depend only on pixel coordinates and the sample
+// index, so frames stay identical for any thread count and tile size.
 #pragma once
 
 #include <cstdint>

@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -418,6 +419,8 @@ TEST(PreviewRenderer, BitIdenticalForAnyThreadCountAndTileSize) {
     const auto one = render(1, 16);
     const auto two = render(2, 5);
     expect_same_film(one->film(), two->film());
+    // One tile holding the whole image (a side past any image's is cut before it is made even).
+    expect_same_film(one->film(), render(2, std::numeric_limits<int>::max())->film());
 }
 
 // Screen-space reuse on one flat surface: the pixels of each 2 x 2 quad share one lookup (an
