@@ -14,6 +14,18 @@
 namespace shgi::bench {
 
 inline constexpr float kHalf = 1.0f;  // box half size (m)
+// The rooms' area light: a square of this side (m) and power (W), facing down just under the
+// ceiling.
+inline constexpr float kLightSide = 0.5f;
+inline constexpr float kLightPower = 100.0f;
+inline constexpr float kLightHeight = kHalf - 0.01f;
+
+// A uniformly random point of the area light.
+inline vec3 point_on_light(Pcg32& rng) {
+    const float x = kLightSide * (rng.next_float() - 0.5f);
+    const float y = kLightSide * (rng.next_float() - 0.5f);
+    return vec3(x, y, kLightHeight);
+}
 
 inline Mesh box(float half, bool inward) {
     Mesh mesh;
@@ -48,9 +60,9 @@ inline Scene cornell_box(uint32_t width = 128, uint32_t height = 128) {
                                          vec3(1.0f, 1.0f, 2.0f)));
     Light light;
     light.type = LightType::Area;
-    light.size_x = 0.5f;
-    light.power = 100.0f;
-    light.world_from_light = glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, kHalf - 0.01f));
+    light.size_x = kLightSide;
+    light.power = kLightPower;
+    light.world_from_light = glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, kLightHeight));
     scene.add_light(light);
     World world;
     world.strength = 0.0f;

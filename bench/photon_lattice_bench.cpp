@@ -25,6 +25,7 @@
 #include "lattice/photon_lattice.h"
 #include "photon/photon_map.h"
 #include "render/preview_renderer.h"
+#include "render/shading.h"
 #include "util/parallel.h"
 #include "util/sampling.h"
 
@@ -66,8 +67,7 @@ double lambert_photon_floor(const Scene& scene) {
                 for (uint64_t i = 0; i < kChunk; ++i) {
                     Pcg32 rng(uint64_t(run), c * kChunk + i);
                     Ray ray;
-                    ray.origin = vec3(0.5f * rng.next_float() - 0.25f,
-                                      0.5f * rng.next_float() - 0.25f, bench::kHalf - 0.011f);
+                    ray.origin = offset_origin(bench::point_on_light(rng), vec3(0.0f, 0.0f, -1.0f));
                     const vec3 local = sample_cosine_hemisphere(rng.next_vec2());
                     ray.direction = vec3(local.x, local.y, -local.z);
                     rays.push_back(ray);
@@ -91,7 +91,7 @@ double lambert_photon_floor(const Scene& scene) {
                         if (rngs[i].next_float() >= survive) continue;
                         const vec3 wi = Frame::from_z(n).to_world(
                             sample_cosine_hemisphere(rngs[i].next_vec2()));
-                        rays[alive].origin = sp.position + 1e-4f * n;
+                        rays[alive].origin = offset_origin(sp.position, n);
                         rays[alive].direction = wi;
                         rngs[alive] = rngs[i];
                         power[alive] = power[i] * albedo / survive;
@@ -139,10 +139,7 @@ double embree_frame_floor(const Scene& scene) {
                 for (size_t i = 0; i < rays.size(); ++i) {
                     if (!hits[i].valid()) continue;
                     const vec3 p = rays[i].origin + hits[i].t * rays[i].direction;
-                    const vec3 light = vec3(0.5f * rng.next_float() - 0.25f,
-                                            0.5f * rng.next_float() - 0.25f,
-                                            bench::kHalf - 0.01f);
-                    const vec3 to_light = light - p;
+                    const vec3 to_light = bench::point_on_light(rng) - p;
                     const float distance = glm::length(to_light);
                     if (!(distance > 1e-3f)) continue;
                     Ray shadow;

@@ -19,6 +19,7 @@
 #include "bench_scenes.h"
 #include "probes/probe_grid.h"
 #include "render/preview_renderer.h"
+#include "render/shading.h"
 #include "sh/sh_projection.h"
 #include "util/parallel.h"
 #include "util/sampling.h"
@@ -130,9 +131,8 @@ struct ProbeFloor {
 ProbeFloor lean_probe_floor(const Scene& scene) {
     constexpr int kSide = 8;
     constexpr uint32_t kPaths = 256;
-    // The bench rooms' area light: 0.5 m square, 100 W, facing down under the ceiling.
-    constexpr float kLightSide = 0.5f, kLightZ = bench::kHalf - 0.01f;
-    const float light_radiance = 100.0f / (kPi * kLightSide * kLightSide);
+    constexpr float kLightArea = bench::kLightSide * bench::kLightSide;
+    const float light_radiance = bench::kLightPower / (kPi * kLightArea);
     const Bounds3 bounds = scene.bounds();
     ProbeFloor best;
     for (int run = 0; run < kRuns; ++run) {
@@ -161,27 +161,25 @@ ProbeFloor lean_probe_floor(const Scene& scene) {
                         vec3 n = sp.geometric_normal;
                         if (glm::dot(n, ray.direction) > 0.0f) n = -n;
                         const vec3 albedo = scene.materials()[sp.material_id].base_color;
-                        const vec3 light(kLightSide * (rng.next_float() - 0.5f),
-                                         kLightSide * (rng.next_float() - 0.5f), kLightZ);
-                        const vec3 to_light = light - sp.position;
+                        const vec3 to_light = bench::point_on_light(rng) - sp.position;
                         const float d2 = glm::dot(to_light, to_light);
                         const vec3 wi = to_light / std::sqrt(d2);
                         const float cos_surface = glm::dot(wi, n), cos_light = -wi.z;
                         if (cos_surface > 0.0f && cos_light > 0.0f) {
                             Ray shadow;
-                            shadow.origin = sp.position + 1e-4f * n;
+                            shadow.origin = offset_origin(sp.position, n);
                             shadow.direction = to_light;
                             shadow.tmax = 0.999f;
                             ++local_rays;
                             if (!scene.occluded(shadow))
-                                radiance += throughput * albedo * (kInvPi * light_radiance *
-                                            cos_surface * cos_light * kLightSide * kLightSide /
-                                            d2);
+                                radiance += throughput * albedo *
+                                            (kInvPi * light_radiance * cos_surface * cos_light *
+                                             kLightArea / d2);
                         }
                         const float survive = max_component(albedo);
                         if (rng.next_float() >= survive) break;
                         throughput *= albedo / survive;
-                        ray.origin = sp.position + 1e-4f * n;
+                        ray.origin = offset_origin(sp.position, n);
                         ray.direction = Frame::from_z(n).to_world(
                             sample_cosine_hemisphere(rng.next_vec2()));
                         ray.tmin = 0.0f;

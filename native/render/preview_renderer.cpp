@@ -189,7 +189,9 @@ class FrameWork {
     // own. The lead rotates with the sample index, so a progressive render spreads the lookups.
     void share_field_lookups(Wave& wave, uint64_t s) const {
         if (!(reuse_ > 0.0f)) return;
-        if (wave.lookups.size() < wave.quads.size()) wave.lookups.resize(wave.capacity());
+        // Grown to the most quads a wave has held (64 for full 16 x 16 tiles), not to the
+        // wave's capacity: the work unit's wave is new, and each lookup is ~0.3 KB to clear.
+        if (wave.lookups.size() < wave.quads.size()) wave.lookups.resize(wave.quads.size());
         const float reuse2 = reuse_ * reuse_;
         for (size_t q = 0; q < wave.quads.size(); ++q) {
             const uint32_t first = wave.quads[q];
