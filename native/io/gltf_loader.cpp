@@ -18,8 +18,10 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -39,6 +41,11 @@
 namespace shgi {
 namespace {
 
+// JSON nesting a file may have. nlohmann-json (inside tinygltf) parses recursively, so a file of
+// a few hundred kilobytes nested tens of thousands deep (in `extras`, say) overflows the stack
+// and takes the host down; the glTF schema itself nests under ten deep, and exporters' extras a
+// few levels more.
+constexpr int kMaxJsonNesting = 256;
 // Blender's importer reads at most this many TEXCOORD_n sets (UV_MAX in gltf2_blender_mesh.py).
 constexpr int kMaxUvSets = 8;
 // The first four bytes of a .glb file (glTF 2.0 spec, "Binary glTF Layout").
@@ -100,6 +107,52 @@ bool read_regular_file(std::vector<unsigned char>* out, std::string* error,
     return tinygltf::ReadWholeFile(out, error, path, user_data);
 }
 
+// tinygltf's own test opens the file to see that it exists, and opening a FIFO for reading
+// blocks until a writer comes, out of reach of cancel and Ctrl-C; stat opens nothing. A special
+// file "exists" here so that read_regular_file names it rather than "File not found".
+bool file_exists(const std::string& path, void*) {
+    std::error_code error;
+    return std::filesystem::exists(path, error);
+}
+
+// Refuses JSON nested deeper than kMaxJsonNesting before any recursive parser sees it. Brackets
+// inside strings (with their escapes) do not count.
+void require_shallow_json(const std::string& path, const unsigned char* text, size_t size) {
+    int depth = 0;
+    bool in_string = false, escaped = false;
+    for (size_t i = 0; i < size; ++i) {
+        const unsigned char c = text[i];
+        if (in_string) {
+            if (escaped) escaped = false;
+            else if (c == '\\') escaped = true;
+            else if (c == '"') in_string = false;
+        } else if (c == '"') {
+            in_string = true;
+        } else if (c == '{' || c == '[') {
+            if (++depth > kMaxJsonNesting) {
+                throw IoError(format_message(
+                    path, ": its JSON nests deeper than ", kMaxJsonNesting, " levels (at byte ", i,
+                    "), which no glTF needs; the file is damaged or hostile: re-export it"));
+            }
+        } else if (c == '}' || c == ']') {
+            --depth;
+        }
+    }
+}
+
+// The JSON of a .glb: the first chunk, after the 12-byte header (glTF 2.0 spec, "Binary glTF
+// Layout": magic, version, length, then chunkLength, chunkType, chunkData). A short or
+// inconsistent header is left to tinygltf's own message; nothing past the file is read.
+void require_shallow_glb_json(const std::string& path, const std::vector<unsigned char>& bytes) {
+    constexpr size_t kHeader = 12, kChunkHeader = 8;
+    if (bytes.size() < kHeader + kChunkHeader) return;
+    uint32_t chunk_length = 0;
+    std::memcpy(&chunk_length, bytes.data() + kHeader, sizeof(chunk_length));
+    const size_t available = bytes.size() - kHeader - kChunkHeader;
+    require_shallow_json(path, bytes.data() + kHeader + kChunkHeader,
+                         std::min<size_t>(chunk_length, available));
+}
+
 bool starts_with_glb_magic(const std::string& path) {
     require_readable_file(path, "glTF");
     std::ifstream file(path, std::ios::binary);
@@ -115,7 +168,7 @@ tinygltf::Model read_model(const std::string& path, const GltfLoadOptions& optio
     const bool binary = starts_with_glb_magic(path);
     std::vector<std::string> image_failures;
     tinygltf::TinyGLTF parser;
-    parser.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_regular_file,
+    parser.SetFsCallbacks({&file_exists, &tinygltf::ExpandFilePath, &read_regular_file,
                            &tinygltf::WriteWholeFile, nullptr});
     if (options.import_textures)
         parser.SetImageLoader(decode_image_or_record, &image_failures);
@@ -124,8 +177,23 @@ tinygltf::Model read_model(const std::string& path, const GltfLoadOptions& optio
 
     tinygltf::Model model;
     std::string error, warning;
-    const bool ok = binary ? parser.LoadBinaryFromFile(&model, &error, &warning, path)
-                           : parser.LoadASCIIFromFile(&model, &error, &warning, path);
+    // Read here rather than by tinygltf, so that the JSON's nesting is checked before parsing.
+    std::vector<unsigned char> bytes;
+    if (!read_regular_file(&bytes, &error, path, nullptr))
+        throw IoError(format_message(path, ": cannot read the file: ", trimmed(error)));
+    if (bytes.size() > std::numeric_limits<unsigned int>::max()) {
+        throw IoError(format_message(path, ": ", bytes.size(), " bytes, over the 4 GiB a glTF "
+                                     "reader takes; split the scene into several files"));
+    }
+    if (binary) require_shallow_glb_json(path, bytes);
+    else require_shallow_json(path, bytes.data(), bytes.size());
+    const std::string base_dir = std::filesystem::path(path).parent_path().string();
+    const bool ok =
+        binary ? parser.LoadBinaryFromMemory(&model, &error, &warning, bytes.data(),
+                                             static_cast<unsigned int>(bytes.size()), base_dir)
+               : parser.LoadASCIIFromString(&model, &error, &warning,
+                                            reinterpret_cast<const char*>(bytes.data()),
+                                            static_cast<unsigned int>(bytes.size()), base_dir);
     if (!warning.empty()) log_warning(path, ": ", trimmed(warning));
     for (const std::string& failure : image_failures) log_warning(path, ": ", failure);
     if (!ok) {

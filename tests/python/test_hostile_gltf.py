@@ -1,0 +1,109 @@
+"""Hostile glTF files: each is loaded in a child Python with an address-space cap and a timeout,
+so a crash (a signal), a hang or a runaway allocation fails the test instead of taking pytest
+down. Every case must end in a Python exception that names the file and what is wrong with it.
+"""
+
+import json
+import os
+import struct
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from conftest import BUILD_PYTHON
+
+# Enough for the interpreter, numpy and the module, far below the machine: a load that tries to
+# allocate without bound meets MemoryError here, not the OOM killer.
+ADDRESS_SPACE_CAP = 4 << 30
+# A load of these small files takes milliseconds; a child still running after this is a hang.
+TIMEOUT_SECONDS = 30
+
+BASE_DOCUMENT = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": []}]}
+
+
+def load_in_child(path):
+    """Loads `path` with shgi.load_gltf in a capped child; returns its verdict, ("loaded", "")
+    or (exception type, message), and what it logged (stderr)."""
+    code = textwrap.dedent(f"""
+        import resource, sys
+        resource.setrlimit(resource.RLIMIT_AS, ({ADDRESS_SPACE_CAP}, {ADDRESS_SPACE_CAP}))
+        sys.path.insert(0, {str(BUILD_PYTHON)!r})
+        import shgi
+        try:
+            shgi.load_gltf({str(path)!r})
+        except Exception as error:
+            print(type(error).__name__ + ": " + str(error))
+        else:
+            print("loaded")
+    """)
+    try:
+        child = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                               timeout=TIMEOUT_SECONDS)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"load_gltf({path}) still ran after {TIMEOUT_SECONDS} s (a hang)")
+    assert child.returncode == 0, (
+        f"load_gltf({path}) ended the process with {child.returncode} "
+        f"(a negative code is a signal):\n{child.stderr[-2000:]}")
+    kind, _, message = child.stdout.strip().rpartition("\n")[2].partition(": ")
+    return (kind, message), child.stderr
+
+
+def deeply_nested(depth):
+    """BASE_DOCUMENT with `extras` holding `depth` nested arrays (JSON text: ~2 bytes a level)."""
+    text = json.dumps(BASE_DOCUMENT)
+    return text[:-1] + ', "extras": ' + "[" * depth + "]" * depth + "}"
+
+
+def glb_of(json_text):
+    """A .glb holding `json_text` as its JSON chunk (padded to 4 bytes with spaces), no BIN."""
+    chunk = json_text.encode() + b" " * (-len(json_text.encode()) % 4)
+    header = struct.pack("<4sII", b"glTF", 2, 12 + 8 + len(chunk))
+    return header + struct.pack("<I4s", len(chunk), b"JSON") + chunk
+
+
+@pytest.mark.parametrize("container", ["gltf", "glb"])
+def test_json_nested_30000_deep_is_refused_not_a_stack_overflow(tmp_path, container):
+    path = tmp_path / f"deep.{container}"
+    text = deeply_nested(30000)
+    if container == "gltf":
+        path.write_text(text)
+    else:
+        path.write_bytes(glb_of(text))
+    (kind, message), _ = load_in_child(path)
+    assert kind == "OSError"
+    assert str(path) in message and "nests deeper than 256 levels" in message
+
+
+def test_brackets_inside_strings_do_not_count_as_nesting(tmp_path):
+    document = dict(BASE_DOCUMENT, extras={"note": "[" * 1000 + "{\\\"" * 500})
+    path = tmp_path / "strings.gltf"
+    path.write_text(json.dumps(document))
+    assert load_in_child(path)[0] == ("loaded", "")
+
+
+def test_moderate_nesting_in_extras_still_loads(tmp_path):
+    path = tmp_path / "nested.gltf"
+    path.write_text(deeply_nested(200))
+    assert load_in_child(path)[0] == ("loaded", "")
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs")
+def test_buffer_uri_naming_a_fifo_is_refused_without_blocking(tmp_path):
+    os.mkfifo(tmp_path / "pipe.bin")
+    path = tmp_path / "fifo.gltf"
+    path.write_text(json.dumps(dict(BASE_DOCUMENT, buffers=[{"uri": "pipe.bin", "byteLength": 4}])))
+    (kind, message), _ = load_in_child(path)
+    assert kind == "OSError"
+    assert "pipe.bin" in message and "not a regular file" in message
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs")
+def test_image_uri_naming_a_fifo_costs_only_the_image(tmp_path):
+    os.mkfifo(tmp_path / "pipe.png")
+    path = tmp_path / "fifo.gltf"
+    path.write_text(json.dumps(dict(BASE_DOCUMENT, images=[{"uri": "pipe.png"}])))
+    verdict, log = load_in_child(path)
+    assert verdict == ("loaded", "")
+    assert "pipe.png" in log and "not a regular file" in log
