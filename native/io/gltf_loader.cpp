@@ -577,7 +577,10 @@ std::vector<int> GltfImporter::root_nodes() const {
 
 // Depth-first, parents before children and children in file order (so "the first camera node"
 // is the importer's), with an explicit stack: a hostile file's deep hierarchy must not be able to
-// overflow the call stack (Python's and Blender's threads have small ones).
+// overflow the call stack (Python's and Blender's threads have small ones). Each node is visited
+// once: glTF 2.0 (§3.5.3, "Nodes and Hierarchy") requires the nodes to form disjoint strict
+// trees, and a file of 41 nodes that each list the next one twice would otherwise expand to 2^40
+// instances; so the instances are bounded by the file's own node and primitive counts.
 Scene GltfImporter::run() {
     struct Pending {
         int node;
@@ -585,6 +588,7 @@ Scene GltfImporter::run() {
         bool leaving;  // pops the node off the current path after its subtree
     };
     std::vector<uint8_t> on_path(model_.nodes.size(), 0);  // ancestors of the node being visited
+    std::vector<uint8_t> visited(model_.nodes.size(), 0);
     std::vector<Pending> stack;
     const std::vector<int> roots = root_nodes();
     for (auto root = roots.rbegin(); root != roots.rend(); ++root)
@@ -600,7 +604,12 @@ Scene GltfImporter::run() {
         if (on_path[size_t(item.node)])
             throw IoError(format_message(path_, ": node ", item.node,
                                          " is its own ancestor (the node hierarchy has a cycle)"));
-        on_path[size_t(item.node)] = 1;
+        if (visited[size_t(item.node)])
+            throw IoError(format_message(
+                path_, ": node ", item.node, " is reached twice (it has two parents, is listed "
+                "twice as a child or as a root); glTF 2.0 allows each node one parent: re-export "
+                "the file, or use a mesh in several nodes to instance it"));
+        on_path[size_t(item.node)] = visited[size_t(item.node)] = 1;
         stack.push_back({item.node, mat4(1.0f), true});
         const mat4 gltf_world = visit_node(item.node, item.gltf_world_from_parent);
         const std::vector<int>& children = model_.nodes[size_t(item.node)].children;

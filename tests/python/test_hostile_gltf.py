@@ -107,3 +107,23 @@ def test_image_uri_naming_a_fifo_costs_only_the_image(tmp_path):
     verdict, log = load_in_child(path)
     assert verdict == ("loaded", "")
     assert "pipe.png" in log and "not a regular file" in log
+
+
+def test_nodes_listing_a_child_twice_are_refused_not_expanded(tmp_path):
+    """41 nodes, each listing the next twice: 2^40 paths to the last one (depth first, the last
+    node is the first reached again)."""
+    nodes = [{"children": [i + 1, i + 1]} for i in range(40)] + [{}]
+    document = dict(BASE_DOCUMENT, scenes=[{"nodes": [0]}], nodes=nodes)
+    path = tmp_path / "doubling.gltf"
+    path.write_text(json.dumps(document))
+    (kind, message), _ = load_in_child(path)
+    assert kind == "OSError"
+    assert "node 40 is reached twice" in message and str(path) in message
+
+
+def test_a_node_with_two_parents_is_refused(tmp_path):
+    nodes = [{"children": [2]}, {"children": [2]}, {}]
+    path = tmp_path / "two_parents.gltf"
+    path.write_text(json.dumps(dict(BASE_DOCUMENT, scenes=[{"nodes": [0, 1]}], nodes=nodes)))
+    (kind, message), _ = load_in_child(path)
+    assert kind == "OSError" and "node 2 is reached twice" in message
