@@ -15,7 +15,9 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <charconv>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -49,6 +51,111 @@ std::string directory_of(const std::string& path) {
 
 // ---------------------------------------------------------------------------------------------
 // Step 1: reading the .obj and its .mtl files.
+
+// tinyobjloader reads a number it cannot parse ("nan", "inf", "1e39", an index past 2^31) as 0
+// or as a wrapped integer, without a word, so "v nan 5 5" loaded as x = 0 and "f 1 2
+// 18446744073709551616" as vertex 4. Every numeric statement is checked here first, and a file
+// holding a bad number is refused with the line that holds it.
+class NumberCheck {
+  public:
+    explicit NumberCheck(const std::string& path) : path_(path) {}
+
+    // The OBJ statements with numbers: positions, normals, texture coordinates, elements.
+    void check_obj(const std::string& text) {
+        for_each_statement(text, [this](const std::vector<std::string>& words) {
+            const std::string& key = words[0];
+            if (key == "v" || key == "vn") require_floats(words, 1, 3, "a coordinate");
+            else if (key == "vt") require_floats(words, 1, 1, "a texture coordinate");
+            else if (key == "f" || key == "l" || key == "p") require_indices(words);
+        });
+    }
+
+    // The MTL statements with numbers (a colour may also be "spectral file" or "xyz x y z").
+    void check_mtl(const std::string& text) {
+        static const std::set<std::string> colours = {"Ka", "Kd", "Ks", "Ke", "Kt", "Tf"};
+        static const std::set<std::string> scalars = {"Ns", "Ni", "d",  "Tr", "Pr",    "Pm",
+                                                      "Ps", "Pc", "Pcr", "aniso", "anisor"};
+        for_each_statement(text, [this](const std::vector<std::string>& words) {
+            const std::string& key = words[0];
+            if (colours.count(key) && words.size() > 1 && words[1] != "spectral")
+                require_floats(words, words[1] == "xyz" ? 2 : 1, 1, ("the " + key).c_str());
+            else if (scalars.count(key) && words.size() > 1 && words[1] != "-halo")
+                require_floats(words, 1, 1, ("the " + key).c_str());
+        });
+    }
+
+  private:
+    template <class Visit>
+    void for_each_statement(const std::string& text, const Visit& visit) {
+        std::istringstream lines(text);
+        std::string line;
+        for (line_ = 1; std::getline(lines, line); ++line_) {
+            std::istringstream words_of_line(line);
+            std::vector<std::string> words;
+            for (std::string word; words_of_line >> word;) words.push_back(word);
+            if (!words.empty() && words[0][0] != '#') visit(words);
+        }
+    }
+
+    void require_floats(const std::vector<std::string>& words, size_t first, size_t at_least,
+                        const char* what) const {
+        if (words.size() < first + at_least)
+            fail(format_message("'", words[0], "' needs at least ", at_least, " number",
+                                at_least > 1 ? "s" : "", " after it"));
+        for (size_t i = first; i < words.size(); ++i) {
+            if (!is_finite_float(words[i]))
+                fail(format_message(what, " '", words[i], "' is not a finite number"));
+        }
+    }
+
+    // std::from_chars, as it ignores the C locale (a "de_DE" one would make strtof stop at the
+    // '.'), with the leading '+' it refuses skipped. A number too small for a float reads as 0,
+    // as tinyobjloader takes it; one too large, "nan" or "inf" is no finite number.
+    static bool is_finite_float(const std::string& word) {
+        const char* begin = word.data() + (word[0] == '+' ? 1 : 0);
+        const char* end = word.data() + word.size();
+        float number = 0.0f;
+        const auto [stop, error] = std::from_chars(begin, end, number);
+        if (stop != end) return false;
+        if (error == std::errc::result_out_of_range)
+            return word.find("e-") != std::string::npos || word.find("E-") != std::string::npos;
+        return error == std::errc() && std::isfinite(number);
+    }
+
+    // "f 1/2/3 4//6 -1": each part an integer other than 0 that fits an int (OBJ counts from 1,
+    // negative counts back from the last).
+    void require_indices(const std::vector<std::string>& words) const {
+        for (size_t i = 1; i < words.size(); ++i) {
+            std::istringstream parts(words[i]);
+            for (std::string part; std::getline(parts, part, '/');) {
+                if (part.empty()) continue;
+                int index = 0;
+                const auto [stop, error] =
+                    std::from_chars(part.data(), part.data() + part.size(), index);
+                if (stop != part.data() + part.size() || error != std::errc() || index == 0 ||
+                    index == std::numeric_limits<int>::min())
+                    fail(format_message("index '", part, "' in '", words[i], "' is not a vertex "
+                                        "number (a whole number from 1, or negative from -1, "
+                                        "within ", std::numeric_limits<int>::max(), ")"));
+            }
+        }
+    }
+
+    [[noreturn]] void fail(const std::string& problem) const {
+        throw IoError(format_message(path_, ":", line_, ": ", problem, "; fix the line or the "
+                                     "exporter that wrote it"));
+    }
+
+    const std::string& path_;
+    int line_ = 0;
+};
+
+std::string read_text(const std::string& path, std::ifstream& file) {
+    std::ostringstream text;
+    text << file.rdbuf();
+    if (file.bad()) throw IoError(format_message(path, ": read error (", std::strerror(errno), ")"));
+    return text.str();
+}
 
 // Statement keys ("Kd", "Ns", "Pr", ...) present in each material, by material name.
 using MaterialKeys = std::map<std::string, std::set<std::string>>;
@@ -96,17 +203,27 @@ class MtlReader : public tinyobj::MaterialReader {
                                     "default material\n");
             return false;
         }
-        std::ostringstream text;
-        text << file.rdbuf();
-        record_material_keys(text.str(), keys_);
-        std::istringstream stream(text.str());
+        const std::string text = read_text(path, file);
+        try {
+            NumberCheck(path).check_mtl(text);
+        } catch (const IoError& error) {
+            // Thrown after tinyobjloader returns, not through it.
+            if (first_error_.empty()) first_error_ = error.what();
+            return false;
+        }
+        record_material_keys(text, keys_);
+        std::istringstream stream(text);
         tinyobj::LoadMtl(material_map, materials, &stream, warn, err);
         return true;
     }
 
+    // The first bad number found in a material library, or "".
+    const std::string& first_error() const { return first_error_; }
+
   private:
     std::string directory_;
     MaterialKeys& keys_;
+    std::string first_error_;
 };
 
 struct ObjData {
@@ -121,13 +238,17 @@ ObjData read_obj(const std::string& path) {
     std::ifstream file(path, std::ios::binary);
     if (!file)
         throw IoError(format_message(path, ": cannot open the file (", std::strerror(errno), ")"));
+    const std::string text = read_text(path, file);
+    NumberCheck(path).check_obj(text);
+    std::istringstream stream(text);
     ObjData data;
     MtlReader mtl_reader(directory_of(path), data.material_keys);
     std::string warning, error;
     // No triangulation here: it would run before the indices are checked (see the file header).
     const bool ok = tinyobj::LoadObj(&data.attrib, &data.shapes, &data.materials, &warning,
-                                     &error, &file, &mtl_reader, /*triangulate=*/false,
+                                     &error, &stream, &mtl_reader, /*triangulate=*/false,
                                      /*default_vcols_fallback=*/false);
+    if (!mtl_reader.first_error().empty()) throw IoError(mtl_reader.first_error());
     // Index problems are reported precisely by the checks below; other warnings go to the log.
     std::istringstream warning_lines(warning);
     for (std::string line; std::getline(warning_lines, line);) {

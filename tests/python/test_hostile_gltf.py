@@ -23,8 +23,8 @@ TIMEOUT_SECONDS = 30
 BASE_DOCUMENT = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": []}]}
 
 
-def load_in_child(path):
-    """Loads `path` with shgi.load_gltf in a capped child; returns its verdict, ("loaded", "")
+def load_in_child(path, loader="load_gltf"):
+    """Loads `path` with shgi.<loader> in a capped child; returns its verdict, ("loaded", "")
     or (exception type, message), and what it logged (stderr)."""
     code = textwrap.dedent(f"""
         import resource, sys
@@ -32,7 +32,7 @@ def load_in_child(path):
         sys.path.insert(0, {str(BUILD_PYTHON)!r})
         import shgi
         try:
-            shgi.load_gltf({str(path)!r})
+            shgi.{loader}({str(path)!r})
         except Exception as error:
             print(type(error).__name__ + ": " + str(error))
         else:
@@ -42,9 +42,9 @@ def load_in_child(path):
         child = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                                timeout=TIMEOUT_SECONDS)
     except subprocess.TimeoutExpired:
-        pytest.fail(f"load_gltf({path}) still ran after {TIMEOUT_SECONDS} s (a hang)")
+        pytest.fail(f"{loader}({path}) still ran after {TIMEOUT_SECONDS} s (a hang)")
     assert child.returncode == 0, (
-        f"load_gltf({path}) ended the process with {child.returncode} "
+        f"{loader}({path}) ended the process with {child.returncode} "
         f"(a negative code is a signal):\n{child.stderr[-2000:]}")
     kind, _, message = child.stdout.strip().rpartition("\n")[2].partition(": ")
     return (kind, message), child.stderr
