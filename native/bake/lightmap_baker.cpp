@@ -22,6 +22,8 @@ constexpr uint32_t kMaxSamples = 1u << 20;
 // Mixed into the seed with the instance id, so that objects baked with one seed do not share
 // their noise pattern (texel indices restart at 0 on every object).
 constexpr uint64_t kInstanceSeedMix = 0x9e3779b97f4a7c15ull;
+// A texel's samples between cancel polls: a few milliseconds of paths with a bounce or two.
+constexpr uint32_t kSamplesPerCancelPoll = 256;
 
 const char* const kContentNames[] = {"INDIRECT", "DIRECT", "DIRECT_INDIRECT", "FULL"};
 
@@ -100,7 +102,8 @@ class TexelBaker {
           indirect_(wants_indirect(settings.content) && settings.max_bounces > 0 &&
                     settings.diffuse_bounces > 0) {}
 
-    void bake_texel(uint64_t texel, LightmapTexels& out) const {
+    // Polls `progress` every kSamplesPerCancelPoll samples.
+    void bake_texel(uint64_t texel, LightmapTexels& out, const Progress* progress) const {
         const uint64_t positions = map_.sample_count(texel);
         if (positions == 0) return;
         const uint32_t per_position = uint32_t(std::max<uint64_t>(1, settings_.samples / positions));
@@ -113,7 +116,7 @@ class TexelBaker {
         for (uint64_t k = 0; k < positions; ++k) {
             // The sample's global index in the map names its random streams.
             const PositionSums sums =
-                bake_position(samples[k], map_.sample_offsets[texel] + k, per_position);
+                bake_position(samples[k], map_.sample_offsets[texel] + k, per_position, progress);
             const float w = float(samples[k].weight / weight_sum);
             const float scale = w / float(per_position);
             color += sums.value * scale;
@@ -137,7 +140,8 @@ class TexelBaker {
     }
 
   private:
-    PositionSums bake_position(const TexelSample& sample, uint64_t stream, uint32_t count) const {
+    PositionSums bake_position(const TexelSample& sample, uint64_t stream, uint32_t count,
+                               const Progress* progress) const {
         const TexelSurface surface = texel_surface(scene_, map_.instance_id, sample);
         const vec3 n = surface.frame.z;
         const vec3 color_scale =
@@ -171,6 +175,7 @@ class TexelBaker {
         const bool trace_hemisphere = field_ == nullptr && (indirect_ || direct_);
         const Camera camera;  // the continuation's Depth pass is not read
         for (uint32_t i = 0; i < count; ++i) {
+            if (i % kSamplesPerCancelPoll == kSamplesPerCancelPoll - 1) throw_if_cancelled(progress);
             const PixelSample ps = pixel_sample(seed_, stream, i);
             Pcg32 rng(seed_, stream_id(i, stream));
             vec3 value = field_value;
@@ -369,12 +374,13 @@ LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const Indi
                 const uint32_t y0 = (tile / tiles_x) * settings.tile_size;
                 const uint32_t x1 = std::min(map.width, x0 + settings.tile_size);
                 const uint32_t y1 = std::min(map.height, y0 + settings.tile_size);
-                // Polled per texel: a row of a tile at thousands of samples per texel takes
-                // longer than the 0.2 s a cancel may take on a slow machine.
+                // Polled per texel, and within a texel every kSamplesPerCancelPoll samples: a
+                // row of a tile at thousands of samples per texel, or one texel at a million,
+                // takes longer than the 0.2 s a cancel may take.
                 for (uint32_t y = y0; y < y1; ++y)
                     for (uint32_t x = x0; x < x1; ++x) {
                         throw_if_cancelled(progress);
-                        baker.bake_texel(map.texel_index(x, y), out);
+                        baker.bake_texel(map.texel_index(x, y), out, progress);
                     }
                 const uint64_t finished = done.fetch_add(1) + 1;
                 if (progress) progress->report(finished, work.size());
