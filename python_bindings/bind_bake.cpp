@@ -18,6 +18,7 @@
 #include "bake/texel_rasterizer.h"
 #include "bake/unocclude.h"
 #include "numpy_convert.h"
+#include "interruptible.h"
 #include "scene_use.h"
 #include "struct_fields.h"
 #include "util/error.h"
@@ -127,8 +128,9 @@ The sample positions of every texel of one object's lightmap (rasterize_texels).
         [](const Scene& scene, const IndexInt& instance, const S settings, Progress* progress) {
             const uint32_t id = int_arg<uint32_t>(instance, "instance");
             SceneUse use(scene, SceneUse::Kind::Query, "rasterize_texels");
-            py::gil_scoped_release release;
-            return rasterize_texels(scene, id, settings, progress);
+            return run_interruptible(progress, [&](Progress* used) {
+                return rasterize_texels(scene, id, settings, used);
+            });
         },
         py::arg("scene"), py::arg("instance"), py::arg("settings") = S{},
         py::arg("progress") = py::none(),
@@ -150,10 +152,9 @@ The sample positions of every texel of one object's lightmap (rasterize_texels).
         [](const Scene& scene, TexelMap& map, const U settings, Progress* progress) {
             SceneUse use(scene, SceneUse::Kind::Query, "unocclude");
             UnoccludeReport report;
-            {
-                py::gil_scoped_release release;
-                report = unocclude(scene, map, settings, progress);
-            }
+            report = run_interruptible(progress, [&](Progress* used) {
+                    return unocclude(scene, map, settings, used);
+                });
             py::dict d;
             d["samples"] = report.samples;
             d["moved_samples"] = report.moved_samples;
@@ -263,8 +264,9 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
                                              ("tiles[" + std::to_string(i) + "]").c_str());
             const ObjectUse reads = field_use(field, ObjectUse::Kind::Read, "bake_lightmap");
             SceneUse use(scene, SceneUse::Kind::Query, "bake_lightmap");
-            py::gil_scoped_release release;
-            return bake_lightmap(scene, map, field, settings, tiles, progress);
+            return run_interruptible(progress, [&](Progress* used) {
+                return bake_lightmap(scene, map, field, settings, tiles, used);
+            });
         },
         py::arg("scene"), py::arg("map"), py::arg("settings") = S{},
         py::arg("field") = py::none(), py::arg("tiles") = std::vector<IndexInt>{},
@@ -287,8 +289,9 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
     m.def(
         "filter_lightmap",
         [](const TexelMap& map, LightmapTexels& texels, const F settings, Progress* progress) {
-            py::gil_scoped_release release;
-            filter_lightmap(map, texels, settings, progress);
+            run_interruptible(progress, [&](Progress* used) {
+                filter_lightmap(map, texels, settings, used);
+            });
         },
         py::arg("map"), py::arg("texels"), py::arg("settings") = F{},
         py::arg("progress") = py::none(), "Filters the baked texels in place.");
@@ -298,10 +301,9 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
             std::vector<uint8_t> filled;
             DilationSettings dilation;
             dilation.padding = int_arg<uint32_t>(padding, "padding");
-            {
-                py::gil_scoped_release release;
-                filled = dilate_lightmap(texels, dilation, progress);
-            }
+            filled = run_interruptible(progress, [&](Progress* used) {
+                    return dilate_lightmap(texels, dilation, used);
+                });
             return grid_array<bool>(filled, texels.width, texels.height);
         },
         py::arg("texels"), py::arg("padding") = 4, py::arg("progress") = py::none(),

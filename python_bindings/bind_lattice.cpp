@@ -10,6 +10,7 @@
 
 #include "lattice/photon_lattice.h"
 #include "numpy_convert.h"
+#include "interruptible.h"
 #include "scene_use.h"
 #include "struct_fields.h"
 #include "util/progress.h"
@@ -131,8 +132,9 @@ After editing and re-committing the scene, call reset().)doc");
                          Progress* progress) {
                  validate_photon_lattice_settings(settings);
                  SceneUse use(scene, SceneUse::Kind::Query, "PhotonLattice");
-                 py::gil_scoped_release release;
-                 return std::make_unique<PhotonLattice>(scene, settings, progress);
+                 return run_interruptible(progress, [&](Progress* used) {
+                     return std::make_unique<PhotonLattice>(scene, settings, used);
+                 });
              }),
              py::arg("scene"), py::arg("settings") = PhotonLatticeSettings{},
              py::arg("progress") = py::none(), py::keep_alive<1, 2>(),
@@ -142,8 +144,7 @@ After editing and re-committing the scene, call reset().)doc");
             [](PhotonLattice& lattice, Progress* progress) {
                 const ObjectUse writes = lattice_use(lattice, ObjectUse::Kind::Write, "solve");
                 SceneUse use(lattice.scene(), SceneUse::Kind::Query, "solve (PhotonLattice)");
-                py::gil_scoped_release release;
-                lattice.solve(progress);
+                run_interruptible(progress, [&](Progress* used) { lattice.solve(used); });
             },
             py::arg("progress") = py::none(),
             "Traces one more pass of photons and rebuilds the lattices (GIL released). Raises "
@@ -153,8 +154,7 @@ After editing and re-committing the scene, call reset().)doc");
             [](PhotonLattice& lattice, Progress* progress) {
                 const ObjectUse writes = lattice_use(lattice, ObjectUse::Kind::Write, "reset");
                 SceneUse use(lattice.scene(), SceneUse::Kind::Query, "reset (PhotonLattice)");
-                py::gil_scoped_release release;
-                lattice.reset(progress);
+                run_interruptible(progress, [&](Progress* used) { lattice.reset(used); });
             },
             py::arg("progress") = py::none(),
             "Forgets every pass and re-measures the (re-committed) scene.")

@@ -13,6 +13,7 @@
 #include "path_arg.h"
 #include "probes/probe_grid.h"
 #include "probes/probe_storage.h"
+#include "interruptible.h"
 #include "scene_use.h"
 #include "struct_fields.h"
 #include "util/error.h"
@@ -244,8 +245,9 @@ reset().)doc");
                          Progress* progress) {
                  validate_probe_grid_settings(settings);
                  SceneUse use(scene, SceneUse::Kind::Query, "ProbeGrid");
-                 py::gil_scoped_release release;
-                 return std::make_unique<ProbeGrid>(scene, settings, progress);
+                 return run_interruptible(progress, [&](Progress* used) {
+                     return std::make_unique<ProbeGrid>(scene, settings, used);
+                 });
              }),
              py::arg("scene"), py::arg("settings") = ProbeGridSettings{},
              py::arg("progress") = py::none(), py::keep_alive<1, 2>(),
@@ -262,8 +264,7 @@ reset().)doc");
             "update",
             [](ProbeGrid& grid, Progress* progress) {
                 SceneUse use(grid.scene(), SceneUse::Kind::Query, "update (ProbeGrid)");
-                py::gil_scoped_release release;
-                grid.update(progress);
+                run_interruptible(progress, [&](Progress* used) { grid.update(used); });
             },
             py::arg("progress") = py::none(),
             "One update pass (GIL released). Raises shgi.Cancelled on cancel, keeping the "
@@ -272,8 +273,7 @@ reset().)doc");
             "reset",
             [](ProbeGrid& grid, Progress* progress) {
                 SceneUse use(grid.scene(), SceneUse::Kind::Query, "reset (ProbeGrid)");
-                py::gil_scoped_release release;
-                grid.reset(progress);
+                run_interruptible(progress, [&](Progress* used) { grid.reset(used); });
             },
             py::arg("progress") = py::none(), "Forgets every pass and re-places the probes.")
         .def(

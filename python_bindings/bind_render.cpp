@@ -18,6 +18,7 @@
 
 #include "numpy_convert.h"
 #include "struct_fields.h"
+#include "interruptible.h"
 #include "scene_use.h"
 #include "render/indirect_field.h"
 #include "render/path_tracer.h"
@@ -147,8 +148,9 @@ were split between render() calls.)doc")
                                       : checked_samples(samples);
                 const ObjectUse film = renderer_use(&tracer, "PathTracer", "render", true);
                 SceneUse use(tracer.scene(), SceneUse::Kind::Query, "render (PathTracer)");
-                py::gil_scoped_release release;
-                tracer.render(count, progress);
+                run_interruptible(progress, [&](Progress* used) {
+                    tracer.render(count, used);
+                });
             },
             py::arg("samples") = py::none(), py::arg("progress") = py::none(),
             "Adds `samples` samples per pixel (default settings.samples) with the GIL released. "
@@ -175,8 +177,9 @@ were split between render() calls.)doc")
             {
                 SceneUse use(scene, SceneUse::Kind::Query, "render (render_path_traced)");
                 tracer.emplace(scene, settings);  // validates the settings
-                py::gil_scoped_release release;
-                tracer->render(settings.samples, progress);
+                run_interruptible(progress, [&](Progress* used) {
+                    tracer->render(settings.samples, used);
+                });
             }
             return passes_to_dict(tracer->film());
         },
@@ -322,8 +325,9 @@ timings is the last render's stage times in seconds (primary, direct, indirect, 
                 const ObjectUse reads =
                     field_use(field, ObjectUse::Kind::Read, "PreviewRenderer.render");
                 SceneUse use(renderer.scene(), SceneUse::Kind::Query, "render (PreviewRenderer)");
-                py::gil_scoped_release release;
-                renderer.render(field, count, progress);
+                run_interruptible(progress, [&](Progress* used) {
+                    renderer.render(field, count, used);
+                });
             },
             py::arg("field"), py::arg("samples") = py::none(), py::arg("progress") = py::none(),
             "Adds `samples` samples per pixel (default 1) lit indirectly by `field` (None: "
@@ -351,8 +355,9 @@ timings is the last render's stage times in seconds (primary, direct, indirect, 
                 const ObjectUse reads = field_use(field, ObjectUse::Kind::Read, "render_preview");
                 SceneUse use(scene, SceneUse::Kind::Query, "render (render_preview)");
                 renderer = make_preview_renderer(scene, settings, camera);  // validates
-                py::gil_scoped_release release;
-                renderer->render(field, settings.samples, progress);
+                run_interruptible(progress, [&](Progress* used) {
+                    renderer->render(field, settings.samples, used);
+                });
             }
             py::dict passes = passes_to_dict(renderer->film());
             return py::make_tuple(passes, timings_to_dict(renderer->timings()));

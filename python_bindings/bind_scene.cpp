@@ -22,6 +22,7 @@
 
 #include "numpy_convert.h"
 #include "struct_fields.h"
+#include "interruptible.h"
 #include "scene_use.h"
 #include "scene/scene.h"
 #include "util/parallel.h"
@@ -493,8 +494,9 @@ void bind_scene_inspection(py::class_<Scene>& cls) {
                settings.memory_budget_bytes =
                    int_arg<uint64_t>(memory_budget_bytes, "memory_budget_bytes");
                SceneUse use(scene, SceneUse::Kind::Commit, "commit");
-               py::gil_scoped_release release;
-               scene.commit(settings, progress);
+               run_interruptible(progress, [&](Progress* used) {
+                   scene.commit(settings, used);
+               });
            },
            py::arg("memory_budget_bytes") = 0, py::arg("progress") = py::none(),
            "Checks cross references and builds the BVH, with the GIL released. Raises "
@@ -622,8 +624,9 @@ void bind_scene_queries(py::class_<Scene>& cls) {
                std::vector<Hit> hits;
                {
                    SceneUse use(scene, SceneUse::Kind::Query, "intersect");
-                   py::gil_scoped_release release;
-                   scene.intersect(rays, hits, progress);
+                   run_interruptible(progress, [&](Progress* used) {
+                       scene.intersect(rays, hits, used);
+                   });
                }
                return hits_to_dict(hits);
            },
@@ -644,8 +647,9 @@ void bind_scene_queries(py::class_<Scene>& cls) {
                 std::vector<uint8_t> occluded;
                 {
                     SceneUse use(scene, SceneUse::Kind::Query, "occluded");
-                    py::gil_scoped_release release;
-                    scene.occluded(rays, occluded, progress);
+                    run_interruptible(progress, [&](Progress* used) {
+                        scene.occluded(rays, occluded, used);
+                    });
                 }
                 py::array_t<bool> out(static_cast<py::ssize_t>(occluded.size()));
                 for (size_t i = 0; i < occluded.size(); ++i) out.mutable_data()[i] = occluded[i];

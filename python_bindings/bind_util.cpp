@@ -16,6 +16,7 @@
 #include <pybind11/stl.h>
 #include <tbb/global_control.h>
 
+#include "interruptible.h"
 #include "struct_fields.h"
 #include "util/error.h"
 #include "util/log.h"
@@ -44,11 +45,9 @@ class PyCallable {
         try {
             (*function_)(std::forward<Args>(args)...);
         } catch (py::error_already_set& error) {
-            // Report it the way Python reports errors in callbacks, then let native code react
-            // (Progress cancels; the log sink falls back to stderr).
-            const std::string message = error.what();
-            error.discard_as_unraisable("shgi callback");
-            throw std::runtime_error(message);
+            // Native code reacts (Progress cancels and keeps it for the caller, see
+            // interruptible.h; the log sink reports it and falls back to stderr).
+            throw PythonError(error);
         }
     }
 
@@ -141,7 +140,16 @@ void bind_logging(py::module_& m) {
                     py::gil_scoped_acquire gil;
                     PyObject* decoded = native_text(message.data(), message.size());
                     if (decoded == nullptr) throw py::error_already_set();
-                    callable(level, py::reinterpret_steal<py::str>(decoded));
+                    try {
+                        callable(level, py::reinterpret_steal<py::str>(decoded));
+                    } catch (const PythonError& error) {
+                        // Reported the way Python reports errors in callbacks.
+                        PyErr_SetObject(reinterpret_cast<PyObject*>(
+                                            Py_TYPE(error.exception().ptr())),
+                                        error.exception().ptr());
+                        py::error_already_set().discard_as_unraisable("shgi log sink");
+                        throw;
+                    }
                 };
             }
             LogSink previous;

@@ -3,7 +3,6 @@
 #include <algorithm>
 
 #include "util/error.h"
-#include "util/log.h"
 
 namespace shgi {
 namespace {
@@ -90,17 +89,26 @@ void Progress::notify(bool force) {
     t_calling_back = outer;
 }
 
+std::exception_ptr Progress::callback_failure() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return callback_failure_;
+}
+
 void Progress::call_back() {
+    // A failing callback (e.g. a Python exception) cancels the work instead of unwinding
+    // through a worker thread; the first failure is kept for the caller to report.
+    std::exception_ptr failure;
     try {
         callback_(fraction(), stage());
-    } catch (const std::exception& error) {
-        // A failing callback (e.g. a Python exception) cancels the work instead of unwinding
-        // through a worker thread.
-        log_warning("progress callback failed (", error.what(), "); cancelling");
-        cancel();
+        return;
     } catch (...) {
-        cancel();
+        failure = std::current_exception();
     }
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!callback_failure_) callback_failure_ = failure;
+    }
+    cancel();
 }
 
 }  // namespace shgi

@@ -12,6 +12,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <mutex>
 #include <string>
@@ -48,6 +49,10 @@ class Progress {
     // Sets the overall fraction directly.
     void set_fraction(float fraction);
 
+    // What the callback threw first, or null. A throwing callback cancels the work, which then
+    // ends in Cancelled; the caller may raise this in its place (the bindings do).
+    std::exception_ptr callback_failure() const;
+
     // The Progress whose callback this thread is running, or nullptr: work that would wait for
     // the operation reporting to that Progress must refuse instead (it would wait for itself).
     static const Progress* calling_back();
@@ -64,6 +69,7 @@ class Progress {
     bool calling_ = false;  // a thread is running the callback
     bool pending_ = false;  // a forced notification came while it ran: call once more
     Callback callback_;
+    std::exception_ptr callback_failure_;  // guarded by mutex_
     std::chrono::steady_clock::duration min_interval_{};
     std::chrono::steady_clock::time_point last_notify_{};
 };

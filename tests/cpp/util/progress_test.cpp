@@ -108,18 +108,22 @@ TEST(Progress, CancelIsSeenByWorkers) {
     EXPECT_NO_THROW(throw_if_cancelled(nullptr));
 }
 
-TEST(Progress, FailingCallbackCancelsInsteadOfUnwinding) {
-    std::vector<std::string> warnings;
-    const LogSink previous = set_log_sink(
-        [&](LogLevel level, const std::string& message) {
-            if (level == LogLevel::Warning) warnings.push_back(message);
-        });
-    Progress progress([](float, const std::string&) { throw std::runtime_error("ui gone"); });
+TEST(Progress, FailingCallbackCancelsInsteadOfUnwindingAndKeepsItsFirstFailure) {
+    int calls = 0;
+    Progress progress([&calls](float, const std::string&) {
+        throw std::runtime_error(++calls == 1 ? "ui gone" : "second failure");
+    });
+    EXPECT_EQ(progress.callback_failure(), nullptr);
     EXPECT_NO_THROW(progress.begin_stage("work"));
     EXPECT_TRUE(progress.cancelled());
-    set_log_sink(previous);
-    ASSERT_EQ(warnings.size(), 1u);
-    EXPECT_NE(warnings[0].find("ui gone"), std::string::npos);
+    EXPECT_NO_THROW(progress.begin_stage("more work"));
+    EXPECT_EQ(calls, 2);
+    ASSERT_NE(progress.callback_failure(), nullptr);
+    try {
+        std::rethrow_exception(progress.callback_failure());
+    } catch (const std::runtime_error& error) {
+        EXPECT_STREQ(error.what(), "ui gone");
+    }
 }
 
 // "never on two threads at once": reports from parallel workers are serialised.
