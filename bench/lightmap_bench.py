@@ -1,4 +1,4 @@
-"""Lightmap baker figures on the sun room (issue 7). Prints figures; it is not a test.
+"""Lightmap baker figures on the sun room. Prints figures; it is not a test.
 
     python3 bench/lightmap_bench.py [--resolution 1024] [--samples 64] [--threads 0]
         [--cycles [--cycles-samples 1,2,4,...] [--reference own|shgi|cycles]

@@ -9,7 +9,7 @@
 //    traced through Scene::intersect's batch interface (Embree ray streams, all threads);
 //  - their ratio: the cost of one path sample in raw closest-hit rays (it folds in shadow
 //    rays, shading and BSDF/light sampling, so it is not a count of rays traced).
-// A plain main printing figures (DESIGN.md: benchmarks are not tests).
+// A plain main printing figures (docs/architecture.md: benchmarks are not tests).
 #include <cstdio>
 
 #include "bench_scenes.h"

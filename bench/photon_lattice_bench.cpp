@@ -1,4 +1,4 @@
-// PhotonLattice and preview renderer figures (issue 4, seed 000 Tables 5 and 6), with the raw
+// PhotonLattice and preview renderer figures (seed 000 Tables 5 and 6), with the raw
 // Embree incoherent ray rate measured in the same run.
 //
 // Scenes: the Cornell-like room of bench_scenes.h, and the same room holding a UV sphere of
@@ -35,7 +35,7 @@ namespace {
 
 constexpr int kRuns = 3;
 constexpr int kProgressiveFrames = 40;
-constexpr double kTargetFrameSeconds = 0.033;  // issue 4: a 640 x 360 preview frame
+constexpr double kTargetFrameSeconds = 0.033;  // the project's target: a 640 x 360 preview frame
 
 // The floor under the photon ratio: the leanest photon trace there is in the bench rooms, for
 // scale beside the real one. Photons leave the area light cosine-distributed, and at every hit
@@ -177,8 +177,8 @@ void run(const char* name, Scene& scene) {
                 (unsigned long long)best.photons_emitted, (unsigned long long)best.photons_stored,
                 (unsigned long long)best.bounces, best.emit_trace, bounce_rate, bounce_rate / raw);
     // Where a bounce's time goes: the same ray query as the raw rate, plus everything else
-    // (emission, surface set-up, BSDF sampling, storing); issue 4's 0.7 needs the rest to fit in
-    // 0.43 ray queries.
+    // (emission, surface set-up, BSDF sampling, storing); the target ratio of 0.7 needs the rest
+    // to fit in 0.43 ray queries.
     const double bounce_ns = 1e9 / bounce_rate, ray_ns = 1e9 / raw;
     std::printf("  per bounce: %.1f ns = %.1f ns ray query + %.1f ns the rest (%.2f ray queries)\n",
                 bounce_ns, ray_ns, bounce_ns - ray_ns, (bounce_ns - ray_ns) / ray_ns);
@@ -231,7 +231,7 @@ void run(const char* name, Scene& scene) {
     print_frames("", fastest);
     print_frames(", one lookup per pixel", fastest_unshared);
     // The frame in raw ray queries per pixel (both wall times on all threads): a measure that
-    // does not move with the machine's speed, beside what issue 4's 33 ms allows at this raw rate.
+    // does not move with the machine's speed, beside what the 33 ms target allows at this raw rate.
     const double pixels =
         double(scene.camera().resolution_x) * double(scene.camera().resolution_y);
     std::printf("  that frame: %.2f raw ray queries per pixel (%.0f ms at this raw rate: %.2f)\n",

@@ -1,7 +1,7 @@
-// Equal-time convergence (issue 4): PSNR against a long path-traced reference after 0.25, 0.5, 1
-// and 2 s of wall time, for the photon lattice with the preview renderer and for the plain path
-// tracer given the same time, on the Cornell-like room of bench_scenes.h and on that room with a
-// sphere of 502,636 triangles, at 320 x 180.
+// Equal-time convergence (docs/benchmarks.md): PSNR against a long path-traced reference after
+// 0.25, 0.5, 1 and 2 s of wall time, for the photon lattice with the preview renderer and for
+// the plain path tracer given the same time, on the Cornell-like room of bench_scenes.h and on
+// that room with a sphere of 502,636 triangles, at 320 x 180.
 //
 // PSNR is the tests' (tests/python/test_photon_lattice.py): the reference's mean luminance mapped
 // to 0.18 (auto-exposure), both images through the sRGB curve and clamped to [0, 1], then

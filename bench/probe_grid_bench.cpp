@@ -1,5 +1,5 @@
-// ProbeGrid figures (issue 6, seed 002 Tables 5.1-5.3), with the raw Embree incoherent ray rate
-// measured in the same run.
+// ProbeGrid figures (seed 002 Tables 5.1-5.3; docs/benchmarks.md, "Probe grid"), with the raw
+// Embree incoherent ray rate measured in the same run.
 //
 // Scenes: the Cornell-like room of bench_scenes.h, and the same room holding a UV sphere of
 // ~500k triangles. For each, printed: for L1, L2 and L4 probes (the fitted 8 x 8 x 8 grid, 256

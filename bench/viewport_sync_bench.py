@@ -1,4 +1,4 @@
-"""Sync cost of the SHGI viewport on a scene of >= 500k triangles (issue 5). Prints figures.
+"""Sync cost of the SHGI viewport on a scene of >= 500k triangles. Prints figures.
 
     blender -b --factory-startup --python bench/viewport_sync_bench.py -- \
         [build python dir (build/python)] [addon dir (addon)] [runs (7)]

@@ -152,7 +152,8 @@ def sun_room(scale=1.0, lightmap=False):
 def two_rooms(scale=1.0):
     """Two closed rooms side by side, split by a solid wall 0.1 m thick: the left room lit by a
     bright lamp, the right one by a dim lamp. The camera stands in the dim room facing the wall.
-    The leak test of probe grids (issue 6): light must not cross the wall. 128 x 96 px x scale."""
+    The leak test of probe grids (docs/methods.md): light must not cross the wall.
+    128 x 96 px x scale."""
     b = SceneBuilder()
     sx, sy, sz = 6.0, 3.0, 2.5  # the shell spans x in [-3, 3]
     shell = [  # six faces of the shell, facing in

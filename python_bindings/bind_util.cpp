@@ -1,6 +1,6 @@
 // Bindings for native/util: exception mapping, Progress, the log sink, thread count, version.
 //
-// Exceptions (DESIGN.md, "Errors"): InvalidArgument -> ValueError, IoError -> OSError,
+// Exceptions (docs/architecture.md, "Errors"): InvalidArgument -> ValueError, IoError -> OSError,
 // OutOfMemory -> MemoryError, Cancelled -> shgi.Cancelled, Internal and other shgi::Error ->
 // RuntimeError.
 //

@@ -1,9 +1,9 @@
 // Checked conversions between numpy arrays and SHGI types, shared by every bind_<area>.cpp.
 //
-// The boundary rules (DESIGN.md, "Bindings"): explicit shapes and dtypes, checks done with the
-// GIL held, and a ValueError that names the argument, the expected shape/dtype and what came in.
-// Floating input accepts float32 or float64 (converted to float32); integer input accepts any
-// integer dtype whose values fit (negative or too-large indices are errors, not wrap-arounds).
+// The boundary rules (docs/architecture.md, "Bindings"): explicit shapes and dtypes, checks done
+// with the GIL held, and a ValueError that names the argument, the expected shape/dtype and what
+// came in. Floating input accepts float32 or float64 (converted to float32); integer input accepts
+// any integer dtype whose values fit (negative or too-large indices are errors, not wrap-arounds).
 // Non-finite floats are rejected unless allow_non_finite is set.
 #pragma once
 

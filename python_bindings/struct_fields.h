@@ -1,5 +1,5 @@
 // Helpers that expose plain native structs (settings, materials, lights) field by field, so a
-// Python object mirrors its C++ struct with the same names and defaults (DESIGN.md).
+// Python object mirrors its C++ struct with the same names and defaults (docs/architecture.md).
 #pragma once
 
 #include <algorithm>

@@ -1,6 +1,6 @@
 // Dilation: spreads lightmap values from covered texels into the empty texels around them, so
 // that bilinear filtering (and mip-mapping) near a UV chart's border never reads an empty,
-// black texel (issue 7, item 2: "padding").
+// black texel (the bake's `padding`, docs/baking.md step 4).
 //
 // Each pass fills every empty texel that has at least one filled 8-neighbour with the plain
 // average of those neighbours, reading only what the previous passes left (Jacobi order), so

@@ -1,5 +1,5 @@
-// Lightmap baker (issue 7, item 2): the light arriving at every texel of a TexelMap, from the
-// reference path tracer (ground truth) or from any IndirectField (a solved photon lattice or
+// Lightmap baker (docs/baking.md, step 3): the light arriving at every texel of a TexelMap, from
+// the reference path tracer (ground truth) or from any IndirectField (a solved photon lattice or
 // probe grid), with an optional L1 SH of the incident radiance per texel (directional lightmaps).
 //
 // What a texel holds (LightmapContent), in Cycles' DIFFUSE bake units so that a user can swap

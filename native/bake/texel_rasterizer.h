@@ -1,4 +1,4 @@
-// Texel rasterizer: where on an object each lightmap texel lies (issue 7, item 1).
+// Texel rasterizer: where on an object each lightmap texel lies (docs/baking.md, step 1).
 //
 // An instance's lightmap-UV triangles (one named UV set of its Mesh) are rasterized into a
 // width x height texel grid. Every texel gets a list of samples: points on the surface, each

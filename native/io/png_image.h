@@ -1,5 +1,5 @@
 // PNG output: linear scene-referred floats -> 8-bit sRGB PNG, the one place where SHGI applies a
-// display transform (DESIGN.md, "Colour").
+// display transform (docs/architecture.md, "Colour").
 //
 // Encoding, per pixel: colour * 2^exposure (stops, as Blender's Film exposure), divided by alpha
 // when the input is premultiplied (PNG stores straight alpha), clamped to [0, 1], encoded with

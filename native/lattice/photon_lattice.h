@@ -19,8 +19,8 @@
 //
 // World light: with world_in_field photons from the world are stored at their first hit too, so the
 // lattices carry the sky's direct light and renderers leave the world out of next-event
-// estimation (DESIGN.md has every consumer compute direct light exactly; an environment seen
-// through openings is the exception, because sampling it per pixel is what makes previews
+// estimation (docs/architecture.md has every consumer compute direct light exactly; an environment
+// seen through openings is the exception, because sampling it per pixel is what makes previews
 // noisy — the role Cycles' light portals play). world_in_field = false restores exact NEE.
 //
 // Lattice bounds: the scene's bounds, or [bounds_min, bounds_max] with use_bounds. The density

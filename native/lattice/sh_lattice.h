@@ -11,7 +11,7 @@
 // empty layer), so dims() = (8, 2, 2) for bounds of 4 x 1 x 1 m at resolution 8. Cell (i, j, k)
 // is [origin + (i, j, k) cell_size, origin + (i+1, j+1, k+1) cell_size); its index is
 // i + dims.x (j + dims.y k). Coefficients are stored per cell coefficient-major [coeff][rgb]
-// (DESIGN.md), the basis of sh/sh_basis.h.
+// (docs/architecture.md), the basis of sh/sh_basis.h.
 //
 // Density estimate (why the lattice's irradiance agrees with the path tracer): a photon of power
 // Φ arriving from direction ω on a surface inside cell c estimates the radiance arriving from ω

@@ -8,8 +8,8 @@
 // grid of cells: local = -1 + (2 i + 1) / resolution. Probes are numbered volume by volume, x
 // fastest, then y, then z. Each probe has a base position (that rule), a position (base plus
 // the relocation offset, probes/probe_grid.h), an active flag (inactive: inside geometry), its
-// incident radiance as RGB SH (W m^-2 sr^-1, DESIGN.md's basis, one order for the grid), and an
-// octahedral visibility map (probes/probe_visibility.h).
+// incident radiance as RGB SH (W m^-2 sr^-1, docs/architecture.md's basis, one order for the grid),
+// and an octahedral visibility map (probes/probe_visibility.h).
 //
 // Lookup at (p, n): the volume containing p with the smallest probe spacing (p outside every
 // volume: the nearest, clamped to its outer probes); the 8 probes around p + (n * normal_bias +

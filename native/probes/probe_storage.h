@@ -2,11 +2,11 @@
 // and an EXR + JSON export that other tools can read.
 //
 // Packing: a probe's (order + 1)^2 RGB coefficients as IEEE half floats (Imath::half),
-// coefficient-major [coeff][rgb] like DESIGN.md's float layout, zero-padded to a multiple of
-// 4 bytes: L2 = 27 halves = 54 bytes -> 56 (seed 002 §5.2: "a 10^3 grid of L2 probes ... roughly
-// 56 kilobytes"), L1 = 24, L3 = 96, L4 = 152. Values beyond half's range (|x| > 65504) are clamped
-// to it; each coefficient keeps a relative error <= 2^-11 (half's 11-bit significand) above
-// half's smallest normal number 6.1e-5, and an absolute error <= 2^-25 below it.
+// coefficient-major [coeff][rgb] like docs/architecture.md's float layout, zero-padded to a
+// multiple of 4 bytes: L2 = 27 halves = 54 bytes -> 56 (seed 002 §5.2: "a 10^3 grid of L2 probes
+// ... roughly 56 kilobytes"), L1 = 24, L3 = 96, L4 = 152. Values beyond half's range (|x| > 65504)
+// are clamped to it; each coefficient keeps a relative error <= 2^-11 (half's 11-bit significand)
+// above half's smallest normal number 6.1e-5, and an absolute error <= 2^-25 below it.
 //
 // Binary cache (.shprobes), little-endian, version 1:
 //   "SHGIPRB\0" | u32 version | u32 order | u32 volumes | u32 visibility_resolution |

@@ -1,6 +1,6 @@
 // IndirectField: what every solver produces and every consumer (preview renderer, baker) reads —
-// indirect incident light at a surface point, independent of how it was solved (DESIGN.md,
-// "Data flow").
+// indirect incident light at a surface point, independent of how it was solved
+// (docs/architecture.md, "Data flow").
 //
 // Units: radiance in W m^-2 sr^-1, irradiance in W m^-2. A field carries only indirect light
 // (light that scattered at least once after leaving an emitter); consumers add direct light

@@ -1,7 +1,7 @@
 // LightSampler: next-event estimation and emission lookup for every emitter of a Scene, with
 // Cycles' (Blender 3.4) unit conventions, and the pdfs multiple importance sampling needs.
 //
-// Units, as MEASURED against Cycles 3.4.1 (/tmp scripts described in issue 3's report: an
+// Units, as MEASURED against Cycles 3.4.1 (one-off scripts of the calibration work: an
 // orthographic camera looking straight down at a Lambert plane of albedo 0.8, one light, 256
 // samples, mean pixel L = 0.8/pi * E; each ratio below is measured / predicted):
 // - point, power P (W): radiant intensity I = P / (4 pi) W/sr (P = 100 W at h = 2 m:

@@ -1,7 +1,8 @@
 // One Embree device behind RAII, with the two callbacks that keep Embree from taking the host
-// process down (DESIGN.md, "Errors"): an error callback that records the first error instead of
-// printing or aborting, and a memory monitor that refuses allocations beyond a budget, so that a
-// scene too large for the machine fails its commit with OutOfMemory instead of being killed.
+// process down (docs/architecture.md, "Errors"): an error callback that records the first error
+// instead of printing or aborting, and a memory monitor that refuses allocations beyond a budget,
+// so that a scene too large for the machine fails its commit with OutOfMemory instead of being
+// killed.
 //
 // Included only by scene/embree_*.cpp (STYLE.md habit 7: Embree lives in one place).
 // Follows the lifetime in Embree's tutorials/minimal/minimal.cpp: device, error callback first.

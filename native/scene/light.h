@@ -1,9 +1,10 @@
-// Lights with Blender's parameters and units (DESIGN.md, "Light units match Cycles").
+// Lights with Blender's parameters and units (docs/architecture.md, "Light units match Cycles").
 //
 // A light's frame is Blender's: it emits along its local -Z (spot, sun, area), the area light's
 // surface spans local X/Y. `power` is Blender's "Power" in W (point, spot, area); `strength` is the
 // sun's "Strength" in W/m^2. What these units mean in radiometric terms (Cycles' conventions) is
-// fixed by the calibration tests against Cycles (issue 3), which the renderers must follow.
+// fixed by the calibration tests against Cycles (docs/methods.md, "Calibration against
+// Cycles"), which the renderers must follow.
 // Emissive triangles are not Lights: they come from materials with emission (Scene collects them
 // at commit).
 #pragma once

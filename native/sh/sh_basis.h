@@ -1,7 +1,7 @@
 // The real spherical-harmonics basis Y_i(ω) up to order L4, evaluated fast and by a slow reference.
 //
-// Convention (DESIGN.md, "SH"): real, orthonormal over the unit sphere (∫ Y_i Y_j dω = δ_ij),
-// index i = l(l+1) + m, WITHOUT the Condon–Shortley phase, as in Ramamoorthi & Hanrahan 2001
+// Convention (docs/architecture.md, "SH"): real, orthonormal over the unit sphere (∫ Y_i Y_j dω =
+// δ_ij), index i = l(l+1) + m, WITHOUT the Condon–Shortley phase, as in Ramamoorthi & Hanrahan 2001
 // ("An efficient representation for irradiance environment maps", eq. 3) and three.js:
 //     Y00 = 0.282095, Y1-1 = +0.488603 y, Y10 = +0.488603 z, Y11 = +0.488603 x.
 // For m > 0, Y_lm = √2 K_lm P_l^m(cos θ) cos(mφ); for m < 0, √2 K_l|m| P_l^|m|(cos θ) sin(|m|φ);

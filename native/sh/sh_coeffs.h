@@ -2,8 +2,8 @@
 //
 // Both have a run-time order 0..kMaxShOrder and a fixed capacity of 25 coefficients, so they
 // are plain values (no heap) that lattices and probe grids can store in arrays. ShRgb keeps the
-// DESIGN.md storage layout: coefficient-major [coeff][rgb] float32, i.e. `coeffs` is 25 vec3 with
-// three contiguous floats each. Coefficients beyond `num_coefficients()` are zero.
+// docs/architecture.md storage layout: coefficient-major [coeff][rgb] float32, i.e. `coeffs` is 25
+// vec3 with three contiguous floats each. Coefficients beyond `num_coefficients()` are zero.
 //
 // Units are those of the projected function: a probe of incident radiance stores W·m⁻²·sr⁻¹
 // coefficients; sh_evaluate then returns radiance in that unit. Basis: sh/sh_basis.h.

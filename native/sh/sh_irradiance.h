@@ -6,7 +6,7 @@
 // (Â_l = √(4π/(2l+1)) z_l of the cosine lobe, sh/lobe_zh.h). The identity is exact for a
 // band-limited L: bands of L above its order contribute nothing, and because Â_3 = 0 the l = 3
 // part of an L3/L4 radiance field never reaches irradiance. Seed 002 §4.2.2 uses this for diffuse
-// probe lighting; DESIGN.md fixes it as SHGI's irradiance.
+// probe lighting; docs/architecture.md fixes it as SHGI's irradiance.
 //
 // Units: radiance coefficients in W·m⁻²·sr⁻¹ give irradiance in W·m⁻². The result is not
 // clamped: ringing can make E slightly negative, and callers that shade clamp at use.

@@ -1,4 +1,4 @@
-// Error hierarchy of SHGI (DESIGN.md, "Errors").
+// Error hierarchy of SHGI (docs/architecture.md, "Errors").
 //
 // Native code never calls exit/abort: a crash would take Blender and the artist's unsaved work
 // down with it. Every failure is one of these exceptions, whose message names the offending

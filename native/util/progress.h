@@ -1,7 +1,7 @@
 // Progress of a long operation: fraction done, stage name, cancel flag, optional callback.
 //
-// DESIGN.md, "Progress and cancel": every long call takes a Progress and polls it between
-// chunks of work; once cancel() is called the work stops within a chunk and the call throws
+// docs/architecture.md, "Progress and cancel": every long call takes a Progress and polls it
+// between chunks of work; once cancel() is called the work stops within a chunk and the call throws
 // Cancelled (< 0.2 s for the chunk sizes SHGI uses). All members are thread-safe: workers report,
 // the caller (or a UI thread) reads and cancels.
 //

@@ -1,8 +1,9 @@
 // Random numbers: PCG32 (O'Neill 2014) from Debian's pcg-cpp, with an explicit (seed, stream).
 //
-// Determinism (DESIGN.md): every unit of work (a photon, a probe, a pixel sample, a texel) gets
-// its own stream, derived from the user's seed and the unit's index, never from a thread id. The
-// result therefore does not depend on the thread count or on how work is split into shards.
+// Determinism (docs/architecture.md): every unit of work (a photon, a probe, a pixel sample, a
+// texel) gets its own stream, derived from the user's seed and the unit's index, never from a
+// thread id. The result therefore does not depend on the thread count or on how work is split into
+// shards.
 #pragma once
 
 #include <cstdint>

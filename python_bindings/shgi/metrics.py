@@ -5,7 +5,7 @@ This is the figure behind SHGI's acceptance tests (a preview against Cycles or t
 Rec. 709 luminance mapped to middle grey, 0.18), encoded with shgi's sRGB curve
 (``shgi.srgb_from_linear``) and clipped to [0, 1]; the PSNR of those display values, with a
 peak of 1, is the figure. Scripts that compare their own renders use the same function, so
-their numbers read like the README's.
+their numbers read like those of docs/methods.md and docs/benchmarks.md.
 
 Every step has a fixed dtype (exposure applied in float64, float32 into the native sRGB curve,
 float64 after it, Python floats for the scalars): the same pixel values give the same figure

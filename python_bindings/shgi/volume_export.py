@@ -1,4 +1,5 @@
-"""Exporting a solved photon lattice as EXR + JSON that other tools can read (issue 7, item 4).
+"""Exporting a solved photon lattice as EXR + JSON that other tools can read (docs/baking.md,
+"Export Volume").
 
 Probe grids export natively (``ProbeField.export(json_path)``, probes/probe_storage.h); this is
 the same format family for ``PhotonLattice``: ``<stem>.json`` beside one EXR per lattice,

@@ -327,7 +327,7 @@ TEST(LightmapBaker, CancelStopsPromptly) {
     EXPECT_THROW(bake_lightmap(r.scene, map, nullptr, settings, {}, &progress), Cancelled);
     canceller.join();  // it ended at the cancel
     const testing::Latency latency = clock.read();
-    // DESIGN.md: a cancelled call returns within 0.2 s
+    // docs/architecture.md: a cancelled call returns within 0.2 s
     EXPECT_LT(latency.seconds(), 0.2) << latency.describe();
 }
 

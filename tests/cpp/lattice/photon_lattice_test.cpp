@@ -265,7 +265,7 @@ std::vector<float> global_coefficients(const PhotonLattice& lattice) {
 }
 
 // Two passes with 1 and with 2 threads: every lattice coefficient and the caustic photon map's
-// density estimate are bit-identical (DESIGN.md, "Determinism").
+// density estimate are bit-identical (docs/architecture.md, "Determinism").
 TEST(PhotonLattice, BitIdenticalForAnyThreadCount) {
     const Scene scene = room_with_mirror_sphere();
     const std::vector<Probe> probes = face_centre_probes();

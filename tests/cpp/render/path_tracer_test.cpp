@@ -310,7 +310,7 @@ TEST(PathTracer, CancelThrowsPromptly) {
     EXPECT_THROW(tracer.render(settings.samples, &progress), Cancelled);
     canceller.join();  // it ended at the cancel
     const testing::Latency latency = clock.read();
-    EXPECT_LT(latency.seconds(), 0.2) << latency.describe();  // DESIGN.md: within 0.2 s
+    EXPECT_LT(latency.seconds(), 0.2) << latency.describe();  // docs/architecture.md: within 0.2 s
     EXPECT_EQ(tracer.samples_done(), 0u);  // the film is left as it was
 }
 

@@ -1,5 +1,6 @@
 // The SH basis against ground truth: orthonormality by exact quadrature, the closed-form
-// polynomials against the associated-Legendre reference, and the DESIGN.md sign convention.
+// polynomials against the associated-Legendre reference, and the docs/architecture.md sign
+// convention.
 #include "sh/sh_basis.h"
 
 #include <gtest/gtest.h>
@@ -108,11 +109,11 @@ TEST(ShBasis, LowerOrdersArePrefixesOfHigherOnes) {
     }
 }
 
-// DESIGN.md: Y00 = 0.282095, Y1-1 = +0.488603 y, Y10 = +0.488603 z, Y11 = +0.488603 x, no
-// Condon–Shortley phase (every Y_lm with m != 0 is positive where cos/sin(mφ) and the
+// docs/architecture.md: Y00 = 0.282095, Y1-1 = +0.488603 y, Y10 = +0.488603 z, Y11 = +0.488603 x,
+// no Condon–Shortley phase (every Y_lm with m != 0 is positive where cos/sin(mφ) and the
 // polynomial are positive).
 TEST(ShBasis, SignConventionHasNoCondonShortleyPhase) {
-    constexpr float kDesignPrecision = 1e-6f;  // DESIGN.md quotes six digits
+    constexpr float kDesignPrecision = 1e-6f;  // docs/architecture.md quotes six digits
     float b[kMaxShCoefficients];
     sh_eval(kMaxShOrder, vec3(0, 1, 0), b);
     EXPECT_NEAR(b[0], 0.282095f, kDesignPrecision);

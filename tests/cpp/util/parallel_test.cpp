@@ -17,7 +17,7 @@ namespace {
 constexpr uint64_t kItems = 10000;
 constexpr uint64_t kGrain = 64;
 
-// Each item draws from its own stream (DESIGN.md, "Determinism") and does a little work.
+// Each item draws from its own stream (docs/architecture.md, "Determinism") and does a little work.
 std::vector<float> per_item_work(int threads) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
     EXPECT_EQ(max_threads(), threads);
