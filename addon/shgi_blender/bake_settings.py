@@ -69,6 +69,7 @@ BAKE_PROPERTY_DEFAULTS = {
     "shard_index": 0,
     "shard_count": 1,
     "hook_up_material": False,
+    "single_user_materials": True,
 }
 # Where Export Volume writes when its operator's filepath is not set (scene.shgi.bake only).
 VOLUME_PATH_DEFAULT = "//shgi_volume.json"

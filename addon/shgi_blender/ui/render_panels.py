@@ -243,6 +243,9 @@ class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
         sub.active = bake.filter
         sub.prop(bake, "denoiser")
         column.prop(bake, "hook_up_material")
+        sub = column.column(align=True)
+        sub.active = bake.hook_up_material
+        sub.prop(bake, "single_user_materials")
         layout.prop(bake, "output_folder")
         column = layout.column(align=True, heading="Farm")
         column.prop(bake, "shard_count")
