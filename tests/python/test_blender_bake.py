@@ -29,7 +29,7 @@ import pytest
 import shgi
 from shgi import bake as shgi_bake
 from blender_support import (ADDON_DIR, BLENDER_SCRIPTS, REPO_ROOT, needs_window,
-                             run_in_window, run_script_once)
+                             run_blender, run_in_window, run_script_once)
 from latency_clock import Latency, LatencyClock
 
 sys.path.insert(0, str(REPO_ROOT / "addon"))
@@ -37,6 +37,7 @@ sys.path.insert(0, str(REPO_ROOT / "examples"))
 
 import scenes  # noqa: E402
 from shgi_blender import bake_settings, settings  # noqa: E402
+from shgi_blender.operators.facing_check import warning as facing_warning  # noqa: E402
 from shgi_blender.engine import field_solvers  # noqa: E402
 from shgi_blender.engine.lightmap_bake import BakeRequest, BakeTask, rgba_pixels  # noqa: E402
 
@@ -444,3 +445,106 @@ def test_modal_bake_shows_results_as_they_come_and_esc_cancels(build_python_dir,
     assert cancel.seconds < ESC_LATENCY, str(cancel)
     assert r["cancelled"] == {"images": ["box_shgi_lightmap"], "files": ["box.exr", "box.png"]}
     assert r["finished"] == {"size": [16, 16], "files": ["floor.exr", "floor.png"]}
+
+
+# --- the traps of tests/blender/bake_trap_checks.py --------------------------------------------
+
+# The sun room's objects (examples/blender_scenes.py), in bake order.
+SUN_ROOM_OBJECTS = ["back", "ceiling", "floor", "front", "left_wall_0", "left_wall_1",
+                    "left_wall_2", "left_wall_3", "right", "table"]
+# The floor of the outward room sees only the world under it: its lightmap (irradiance / pi)
+# is the world's colour, to the noise of 16 samples.
+WORLD_COLOR_TOLERANCE = 0.05
+_TRAP_RUNS = {}
+
+
+def trap_results(blender, build_python_dir, tmp_path_factory):
+    """(results JSON, Blender's output) of bake_trap_checks.py on `blender`, once a session."""
+    if blender.name not in _TRAP_RUNS:
+        out = tmp_path_factory.mktemp(f"bake_traps-{blender.name}") / "bake_traps.json"
+        result = run_blender(BLENDER_SCRIPTS / "bake_trap_checks.py", build_python_dir,
+                             ADDON_DIR, out, blender=blender, timeout=300)
+        output = result.stdout + result.stderr
+        _TRAP_RUNS[blender.name] = (
+            json.loads(out.read_text()) if result.returncode == 0 and out.exists() else None,
+            output)
+    results, output = _TRAP_RUNS[blender.name]
+    assert results is not None and "BAKE_TRAPS_OK" in output, output[-6000:]
+    return results, output
+
+
+def bake_output(output, folder_name):
+    """The part of Blender's output from the bake into folder `folder_name` to the next bake."""
+    part = output.split(f"/{folder_name}: ", 1)[1]
+    return part.split("\nBAKE ", 1)[0]
+
+
+def test_outward_facing_room_is_warned_and_inward_room_bakes_its_light(
+        blender, build_python_dir, tmp_path_factory):
+    """The sun room as the renderers build it faces out: baking its floor warns, naming the
+    floor and the fix, and the floor's lightmap holds the world's light under it. Built for
+    bakes (facing in), it bakes without the warning and holds the room's light."""
+    results, output = trap_results(blender, build_python_dir, tmp_path_factory)
+    world = np.array(results["world_color"])
+    outward, inward = bake_output(output, "outward"), bake_output(output, "inward")
+    assert results["outward"]["status"] == ["FINISHED"]
+    assert facing_warning("floor") in outward, outward
+    assert "'floor'" in facing_warning("floor") and "Recalculate Inside" in facing_warning("x")
+    np.testing.assert_allclose(results["outward"]["floor_mean"], world,
+                               rtol=WORLD_COLOR_TOLERANCE)
+    assert results["inward"]["status"] == ["FINISHED"]
+    assert "faces away from the scene" not in inward, inward
+    floor = np.array(results["inward"]["floor_mean"])
+    assert np.abs(floor / world - 1.0).max() > 5 * WORLD_COLOR_TOLERANCE, floor
+    assert floor.min() > 0.0
+
+
+def test_show_in_materials_makes_shared_materials_single_user(blender, build_python_dir,
+                                                              tmp_path_factory):
+    """Nine of the sun room's ten objects share "plaster": with Make Materials Single-User
+    (the default) each object shows its own lightmap in a material of its own and the result
+    says so; turned off, the shared material is left alone with a warning per object and the
+    result counts only the material shown."""
+    results, output = trap_results(blender, build_python_dir, tmp_path_factory)
+    single = results["single_user"]
+    assert single["status"] == ["FINISHED"]
+    assert sorted(single["objects"]) == SUN_ROOM_OBJECTS
+    for name, view in single["objects"].items():
+        assert view["image"] == f"{name}_shgi_lightmap", (name, view)
+    materials = [view["material"] for view in single["objects"].values()]
+    assert len(set(materials)) == len(SUN_ROOM_OBJECTS), materials
+    assert ("10 lightmaps baked into" in bake_output(output, "single_user")
+            and "shown in 10 materials (8 of them single-user copies of shared materials)"
+            in bake_output(output, "single_user")), bake_output(output, "single_user")
+    shared = results["left_shared"]
+    assert shared["status"] == ["FINISHED"]
+    shown = {name for name, view in shared["objects"].items() if view["image"]}
+    assert shown == {"table"}  # the one object with a material of its own
+    assert {view["material"] for name, view in shared["objects"].items()
+            if name != "table"} == {"plaster"}
+    text = bake_output(output, "left_shared")
+    assert "shown in 1 material; 9 warnings" in text, text
+    assert text.count("turn on Make Materials Single-User") == 9
+
+
+def test_headless_bake_logs_each_lightmap_and_tenth(blender, build_python_dir,
+                                                    tmp_path_factory):
+    """A background bake (execute) of the ten objects prints a line per finished lightmap, in
+    bake order, and one per 10% of progress, for a farm's log."""
+    _results, output = trap_results(blender, build_python_dir, tmp_path_factory)
+    lines = bake_output(output, "single_user").splitlines()
+    done = [line for line in lines if " done (" in line and line.startswith("SHGI bake: ")]
+    assert done == [f"SHGI bake: {name} done ({k} of 10 lightmaps)"
+                    for k, name in enumerate(SUN_ROOM_OBJECTS, 1)], lines
+    tenths = [int(line.split()[2][:-1]) for line in lines
+              if line.startswith("SHGI bake: ") and line.split()[2].endswith("%")]
+    assert tenths == list(range(10, 101, 10)), lines
+
+
+def test_lightmap_nodes_without_an_image_are_dropped_on_load(blender, build_python_dir,
+                                                             tmp_path_factory):
+    """A material whose lightmap image is gone, saved and opened again, shows its own surface
+    again, without the lightmap nodes (no image-less lightmap node reaches a renderer)."""
+    results, _output = trap_results(blender, build_python_dir, tmp_path_factory)
+    assert results["imageless"] == {"material": "plaster floor", "nodes": [],
+                                    "surface_from": "Principled BSDF"}

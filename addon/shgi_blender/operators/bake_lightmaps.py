@@ -302,7 +302,7 @@ class _BakeOperator(ModalTaskOperator):
             self._lightmaps.append(lightmap)
             if self._log:
                 print(f"{REPORT_PREFIX}{lightmap.name} done ({len(self._lightmaps)} of "
-                      f"{self._job_count} lightmaps)", flush=True)
+                      f"{counted(self._job_count, 'lightmap')})", flush=True)
 
     def _log_progress(self, fraction, stage):
         """In background mode, a line for each tenth of the progress reached since the last."""
@@ -356,20 +356,25 @@ class _BakeOperator(ModalTaskOperator):
         else:
             shown = (f"; {describe_hook_ups(hook_ups)}" if self._values.hook_up_material
                      else "")
-            self.report({"INFO"}, f"{REPORT_PREFIX}{len(self._lightmaps)} lightmaps baked "
-                        f"into {request.out_dir} ({seconds:.2f} s){shown}")
+            self.report({"INFO"}, f"{REPORT_PREFIX}{counted(len(self._lightmaps), 'lightmap')} "
+                        f"baked into {request.out_dir} ({seconds:.2f} s){shown}")
         return {"FINISHED"}
 
 
 def describe_hook_ups(hook_ups):
     """What Show in Materials did, for the bake's result: "shown in 10 materials (8 of them
     single-user copies of shared materials)", and how many warnings it gave."""
-    text = f"shown in {len(hook_ups.materials)} materials"
+    text = f"shown in {counted(len(hook_ups.materials), 'material')}"
     if hook_ups.copies:
         text += f" ({hook_ups.copies} of them single-user copies of shared materials)"
     if hook_ups.warnings:
-        text += f"; {len(hook_ups.warnings)} warnings (see the Info editor)"
+        text += f"; {counted(len(hook_ups.warnings), 'warning')} (see the Info editor)"
     return text
+
+
+def counted(count, noun):
+    """"1 lightmap", "10 lightmaps"."""
+    return f"{count} {noun}{'' if count == 1 else 's'}"
 
 
 class SHGI_OT_bake_lightmaps(_BakeOperator, bpy.types.Operator):

@@ -10,9 +10,8 @@ faces away from the scene. Hits on the object itself do not count: a closed obje
 normals rightly out) sees its own inside from the back wherever it stands.
 
 A room that is one closed mesh with its normals out looks like such a box and is not found.
+The module imports without bpy (its warning text is tested outside Blender).
 """
-
-from mathutils import Vector
 
 # Face centres sampled per object (evenly over its faces) and the share of them that must
 # agree: front rays escaping and back rays hitting another object.
@@ -68,8 +67,8 @@ def _face_samples(evaluated):
 
 
 def _hit_object(scene, depsgraph, point, direction):
-    """Name of the (original) object a ray from `point` along `direction` hits first; None
-    when it escapes to the world."""
+    """Name of the (original) object a ray from `point` along `direction` (mathutils
+    Vectors) hits first; None when it escapes to the world."""
     hit, _location, _normal, _index, obj, _matrix = scene.ray_cast(
-        depsgraph, Vector(point) + RAY_OFFSET * direction, direction, distance=RAY_LENGTH)
+        depsgraph, point + RAY_OFFSET * direction, direction, distance=RAY_LENGTH)
     return obj.original.name if hit and obj is not None else None
