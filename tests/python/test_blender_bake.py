@@ -548,3 +548,28 @@ def test_lightmap_nodes_without_an_image_are_dropped_on_load(blender, build_pyth
     results, _output = trap_results(blender, build_python_dir, tmp_path_factory)
     assert results["imageless"] == {"material": "plaster floor", "nodes": [],
                                     "surface_from": "Principled BSDF"}
+
+
+@needs_window
+def test_undo_after_a_bake_shown_in_materials_then_material_preview(build_python_dir, tmp_path):
+    """The sun room's ten objects baked modally with Show in Materials (Create UV Map for the
+    table), one undo, Material Preview: Blender lives, and the undo took back the UV map, the
+    images, the material copies and the nodes together (the state before the bake); a redo
+    gives the bake's state back whole. No state has a lightmap node without its image."""
+    out = tmp_path / "bake_undo_window.json"
+    result = run_in_window("bake_undo_window.py", WINDOW, build_python_dir, ADDON_DIR, out)
+    log = result.stdout[-4000:] + result.stderr[-2000:]
+    assert result.returncode == 0 and "BAKE_UNDO_WINDOW_OK" in result.stdout, log
+    r = json.loads(out.read_text())
+    before, baked = r["before_bake"], r["after_bake"]
+    assert r["invoke_status"] == ["RUNNING_MODAL"]
+    assert baked["images"] == sorted(f"{name}_shgi_lightmap" for name in SUN_ROOM_OBJECTS)
+    assert sorted(baked["nodes"].values()) == baked["images"]  # each shown in a material
+    assert "LightmapUV" in baked["objects"]["table"]["uv_maps"]
+    assert "LightmapUV" not in before["objects"]["table"]["uv_maps"]
+    assert r["undo_status"] == ["FINISHED"] and r["after_undo"] == before
+    assert r["shading"] == "MATERIAL" and r["after_material_preview"] == before
+    assert r["redo_status"] == ["FINISHED"] and r["after_redo"] == baked
+    for step in ("before_bake", "after_bake", "after_undo", "after_material_preview",
+                 "after_redo"):
+        assert r[step]["problems"] == [], (step, r[step]["problems"])
