@@ -25,7 +25,8 @@ Background mode (``blender -b --factory-startup --python-exit-code 1 --python ba
    of bake_settings.BAKE_PROPERTY_DEFAULTS.
 Window mode (``-- <build> <addon> <results json> window``, under Xvfb with
 --enable-event-simulate): a modal bake of two objects cancelled by Esc after the first one
-finished, then a modal bake to its end.
+finished (its files written; no image yet: the images come at the bake's end, in its one undo
+step), then a modal bake to its end.
 The pytest side (tests/python/test_blender_bake.py) asserts the figures; it also runs the saved
 file headless with ``--python-expr``. Prints BAKE_CHECKS_OK (BAKE_WINDOW_OK in window mode).
 """
@@ -623,10 +624,13 @@ def modal_steps(results, out_dir):
                          resolution=MODAL_RESOLUTION, samples=MODAL_SAMPLES)
     results["invoke_status"] = sorted(status)
     start = time.perf_counter()
-    while "box_shgi_lightmap" not in bpy.data.images:  # the first object's image, by the timer
+    # The first object's files (its image waits for the bake's end: one undo step).
+    while not os.path.exists(os.path.join(cancelled_dir, "box.png")):
         if time.perf_counter() - start > MODAL_TIMEOUT_SECONDS or not worker_running():
             raise AssertionError("the first lightmap of the modal bake never arrived")
         yield POLL_SECONDS
+    results["images_while_running"] = sorted(image.name for image in bpy.data.images
+                                             if image.name.endswith("_shgi_lightmap"))
     results["first_image_seconds"] = time.perf_counter() - start
     results["worker_running_at_esc"] = worker_running()
     esc = LatencyClock()

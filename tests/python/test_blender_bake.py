@@ -431,7 +431,10 @@ def test_headless_bake_without_the_native_module(blender, build_python_dir, tmp_
 
 
 @needs_window
-def test_modal_bake_shows_results_as_they_come_and_esc_cancels(build_python_dir, tmp_path):
+def test_modal_bake_keeps_the_finished_lightmaps_when_esc_cancels(build_python_dir, tmp_path):
+    """A modal bake of two objects: the first one's files come while it runs, its image only
+    at the end (one undo step for all the bake's data); Esc cancels the second and keeps the
+    first; a second modal bake runs to its end."""
     out = tmp_path / "bake_window.json"
     result = run_in_window("bake_checks.py", WINDOW, build_python_dir, ADDON_DIR, out, "window",
                            options=("--enable-event-simulate",))
@@ -442,6 +445,7 @@ def test_modal_bake_shows_results_as_they_come_and_esc_cancels(build_python_dir,
     print(f"\nmodal bake: first lightmap after {r['first_image_seconds']:.2f} s, cancelled in "
           f"{cancel}")
     assert r["invoke_status"] == ["RUNNING_MODAL"] and r["worker_running_at_esc"]
+    assert r["images_while_running"] == []
     assert cancel.seconds < ESC_LATENCY, str(cancel)
     assert r["cancelled"] == {"images": ["box_shgi_lightmap"], "files": ["box.exr", "box.png"]}
     assert r["finished"] == {"size": [16, 16], "files": ["floor.exr", "floor.png"]}
