@@ -301,6 +301,10 @@ def test_create_uv_map_and_material_nodes(blender, build_python_dir, tmp_path_fa
     assert nodes["surface_from"] == "SHGI Lightmap Mix" and nodes["active_node"] == "SHGI Lightmap"
     assert "SHGI fallback" not in nodes["exported_materials"]
     assert nodes["shared_material_nodes"] == []  # 'white' is shared by four objects
+    # Make Materials Single-User (the default): the ceiling shows its lightmap in a copy.
+    assert nodes["single_user"] == {
+        "ceiling_material": "white ceiling", "ceiling_image": "ceiling_shgi_lightmap",
+        "white_users": ["wall_east", "wall_north", "wall_south"], "white_nodes": []}
     assert nodes["after_removal"] == {"nodes": [], "surface_from": "Principled BSDF"}
 
 
