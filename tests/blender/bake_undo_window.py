@@ -2,8 +2,8 @@
 
 Runs Blender with a window under Xvfb (Debian's Blender program; the bpy module has none):
 
-    xvfb-run -a blender --factory-startup --window-geometry 0 0 <W> <H> \
-        --python tests/blender/bake_undo_window.py -- <build python dir> <addon dir> <results json>
+    xvfb-run -a blender --factory-startup --enable-event-simulate \
+        --window-geometry 0 0 <W> <H> --python tests/blender/bake_undo_window.py -- <build python dir> <addon dir> <results json>
 
 The steps run from a timer on Blender's main thread while the window draws. In the startup
 file's scene it builds the sun room facing in (examples/blender_scenes.py, lightmap=True),
@@ -13,7 +13,10 @@ pushes an undo step, selects the ten objects and pushes another, then:
 2. undoes once (ed.undo in the window): UV maps, images, material copies and nodes must all go
    back to the state before the bake;
 3. switches the 3D view to Material Preview and draws it (EEVEE compiles the materials);
-4. redoes (ed.redo) and draws again: the bake's state comes back whole.
+4. redoes (ed.redo) and draws again: the bake's state comes back whole;
+5. adds two rugs (no lightmap UV map yet), bakes them with Create UV Map and cancels with Esc
+   (simulated) once the first one's files are written: the first rug's image is kept and both
+   got the UV map, in one undo step, which one undo takes back whole.
 After each step it records the data's state (lightmap images, the lightmap nodes per material
 and their images, each object's materials and UV maps) and what is inconsistent in it (a
 lightmap node without its image, an object showing a lightmap through a UV map its mesh lacks).
@@ -38,6 +41,9 @@ sys.path.insert(0, str(setup.REPO_ROOT / "examples"))
 import bpy  # noqa: E402
 
 RESOLUTION, SAMPLES = 16, 16
+# The cancelled bake: each rug takes seconds, so Esc lands while the second one bakes.
+CANCEL_RESOLUTION, CANCEL_SAMPLES = 96, 256
+RUGS = ("rug_a", "rug_b")
 BAKE_TIMEOUT_SECONDS = 120.0
 POLL_SECONDS = 0.1
 # Material Preview: redraws, a pause between them for EEVEE's shader compiles.
@@ -102,6 +108,77 @@ def worker_running():
     return any(thread.name == WORKER_THREAD for thread in threading.enumerate())
 
 
+def select(names):
+    bpy.ops.object.select_all(action="DESELECT")
+    for name in names:
+        bpy.data.objects[name].select_set(True)
+    bpy.context.view_layer.objects.active = bpy.data.objects[names[0]]
+
+
+def invoke_bake(folder, **arguments):
+    """shgi.bake_lightmaps('INVOKE_DEFAULT') of the selected objects into `folder` (absolute),
+    as the Bake button runs it."""
+    return in_view(bpy.ops.shgi.bake_lightmaps, "INVOKE_DEFAULT", output_folder=folder,
+                   **arguments)
+
+
+def add_rugs():
+    """Two 2 x 2 m quads just above the floor, without a UV map."""
+    for index, name in enumerate(RUGS):
+        z = 0.01 * (index + 1)
+        mesh = bpy.data.meshes.new(name)
+        mesh.from_pydata([(-1, 1, z), (1, 1, z), (1, 3, z), (-1, 3, z)], [], [(0, 1, 2, 3)])
+        bpy.context.scene.collection.objects.link(bpy.data.objects.new(name, mesh))
+
+
+def cancelled_bake():
+    """Generator: the rugs' bake, cancelled by Esc once the first rug's files are written."""
+    select(RUGS)
+    folder = os.path.join(tempfile.mkdtemp(prefix="shgi_undo_"), "rugs")
+    RESULTS["cancel_invoke_status"] = invoke_bake(
+        folder, create_uv=True, resolution=CANCEL_RESOLUTION, samples=CANCEL_SAMPLES)
+    start = time.perf_counter()
+    while not os.path.exists(os.path.join(folder, f"{RUGS[0]}.png")):
+        if time.perf_counter() - start > BAKE_TIMEOUT_SECONDS or not worker_running():
+            raise AssertionError("the first rug's lightmap never arrived")
+        yield POLL_SECONDS
+    RESULTS["worker_running_at_esc"] = worker_running()
+    view3d()[0].event_simulate(type="ESC", value="PRESS")
+    start = time.perf_counter()
+    while worker_running():
+        if time.perf_counter() - start > BAKE_TIMEOUT_SECONDS:
+            raise AssertionError("Esc did not stop the rugs' bake")
+        yield POLL_SECONDS
+    yield 0.5  # the operator's timer notices the end and keeps what finished
+
+
+def baked_room():
+    """Generator: the room's ten objects baked to the end with Show in Materials."""
+    names = sorted(obj.name for obj in bpy.data.objects if obj.type == "MESH")
+    select(names)
+    in_view(bpy.ops.ed.undo_push, message="select")  # as selecting in the view pushes one
+    RESULTS["invoke_status"] = invoke_bake(
+        os.path.join(tempfile.mkdtemp(prefix="shgi_undo_"), "lightmaps"),
+        hook_up_material=True, create_uv=True, resolution=RESOLUTION, samples=SAMPLES)
+    start = time.perf_counter()
+    while worker_running() or not all(f"{name}{LIGHTMAP_SUFFIX}" in bpy.data.images
+                                      for name in names):
+        if time.perf_counter() - start > BAKE_TIMEOUT_SECONDS:
+            raise AssertionError(f"the modal bake did not finish: {data_state()}")
+        yield POLL_SECONDS
+    yield 0.5  # the operator's timer notices the end and makes the images
+
+
+def material_preview(draws=PREVIEW_DRAWS):
+    """Generator: the 3D view in Material Preview, drawn `draws` times (EEVEE compiles)."""
+    space = view3d()[3]
+    space.shading.type = "MATERIAL"
+    for _ in range(draws):
+        draw()
+        yield PREVIEW_PAUSE_SECONDS
+    RESULTS["shading"] = space.shading.type
+
+
 def steps():
     """Generator of the steps; yields the seconds to wait before going on."""
     bpy.context.preferences.view.show_splash = False
@@ -113,39 +190,23 @@ def steps():
     in_view(bpy.ops.ed.undo_push, message="sun room")
     yield 0.5
     RESULTS["before_bake"] = data_state()
-    names = sorted(obj.name for obj in bpy.data.objects if obj.type == "MESH")
-    bpy.ops.object.select_all(action="DESELECT")
-    for name in names:
-        bpy.data.objects[name].select_set(True)
-    bpy.context.view_layer.objects.active = bpy.data.objects[names[0]]
-    in_view(bpy.ops.ed.undo_push, message="select")  # as selecting in the view pushes one
-    RESULTS["invoke_status"] = in_view(
-        bpy.ops.shgi.bake_lightmaps, "INVOKE_DEFAULT",
-        output_folder=os.path.join(tempfile.mkdtemp(prefix="shgi_undo_"), "lightmaps"),
-        hook_up_material=True, create_uv=True, resolution=RESOLUTION, samples=SAMPLES)
-    start = time.perf_counter()
-    while worker_running() or not all(f"{name}{LIGHTMAP_SUFFIX}" in bpy.data.images
-                                      for name in names):
-        if time.perf_counter() - start > BAKE_TIMEOUT_SECONDS:
-            raise AssertionError(f"the modal bake did not finish: {data_state()}")
-        yield POLL_SECONDS
-    yield 0.5  # the operator's timer notices the end and makes the images
+    yield from baked_room()
     RESULTS["after_bake"] = data_state()
     RESULTS["undo_status"] = in_view(bpy.ops.ed.undo)
     RESULTS["after_undo"] = data_state()
-    yield 0.2
-    _window, _area, _region, space = view3d()
-    space.shading.type = "MATERIAL"
-    for _ in range(PREVIEW_DRAWS):
-        draw()
-        yield PREVIEW_PAUSE_SECONDS
+    yield from material_preview()
     RESULTS["after_material_preview"] = data_state()
-    RESULTS["shading"] = space.shading.type
     RESULTS["redo_status"] = in_view(bpy.ops.ed.redo)
-    for _ in range(PREVIEW_DRAWS):
-        draw()
-        yield PREVIEW_PAUSE_SECONDS
+    yield from material_preview()
     RESULTS["after_redo"] = data_state()
+    add_rugs()
+    in_view(bpy.ops.ed.undo_push, message="rugs")
+    RESULTS["before_cancelled_bake"] = data_state()
+    yield from cancelled_bake()
+    RESULTS["after_cancelled_bake"] = data_state()
+    RESULTS["cancelled_undo_status"] = in_view(bpy.ops.ed.undo)
+    draw()
+    RESULTS["after_cancelled_undo"] = data_state()
 
 
 _steps = steps()

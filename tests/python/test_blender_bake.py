@@ -563,9 +563,11 @@ def test_undo_after_a_bake_shown_in_materials_then_material_preview(build_python
     """The sun room's ten objects baked modally with Show in Materials (Create UV Map for the
     table), one undo, Material Preview: Blender lives, and the undo took back the UV map, the
     images, the material copies and the nodes together (the state before the bake); a redo
-    gives the bake's state back whole. No state has a lightmap node without its image."""
+    gives the bake's state back whole. Then a bake of two new rugs cancelled by Esc keeps what
+    it finished as one undo step. No state has a lightmap node without its image."""
     out = tmp_path / "bake_undo_window.json"
-    result = run_in_window("bake_undo_window.py", WINDOW, build_python_dir, ADDON_DIR, out)
+    result = run_in_window("bake_undo_window.py", WINDOW, build_python_dir, ADDON_DIR, out,
+                           options=("--enable-event-simulate",))
     log = result.stdout[-4000:] + result.stderr[-2000:]
     assert result.returncode == 0 and "BAKE_UNDO_WINDOW_OK" in result.stdout, log
     r = json.loads(out.read_text())
@@ -578,6 +580,17 @@ def test_undo_after_a_bake_shown_in_materials_then_material_preview(build_python
     assert r["undo_status"] == ["FINISHED"] and r["after_undo"] == before
     assert r["shading"] == "MATERIAL" and r["after_material_preview"] == before
     assert r["redo_status"] == ["FINISHED"] and r["after_redo"] == baked
+    # A bake cancelled by Esc keeps the first rug's image, and both rugs got the UV map: one
+    # undo step, which one undo takes back whole.
+    rugs_before, cancelled = r["before_cancelled_bake"], r["after_cancelled_bake"]
+    assert r["cancel_invoke_status"] == ["RUNNING_MODAL"] and r["worker_running_at_esc"]
+    assert cancelled["images"] == sorted(baked["images"] + ["rug_a_shgi_lightmap"])
+    for rug in ("rug_a", "rug_b"):
+        assert rugs_before["objects"][rug]["uv_maps"] == [], rug
+        assert cancelled["objects"][rug]["uv_maps"] == ["LightmapUV"], rug
+    assert r["cancelled_undo_status"] == ["FINISHED"]
+    assert r["after_cancelled_undo"] == rugs_before
     for step in ("before_bake", "after_bake", "after_undo", "after_material_preview",
-                 "after_redo"):
+                 "after_redo", "before_cancelled_bake", "after_cancelled_bake",
+                 "after_cancelled_undo"):
         assert r[step]["problems"] == [], (step, r[step]["problems"])
