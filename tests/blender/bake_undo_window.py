@@ -3,7 +3,8 @@
 Runs Blender with a window under Xvfb (Debian's Blender program; the bpy module has none):
 
     xvfb-run -a blender --factory-startup --enable-event-simulate \
-        --window-geometry 0 0 <W> <H> --python tests/blender/bake_undo_window.py -- <build python dir> <addon dir> <results json>
+        --window-geometry 0 0 <W> <H> --python tests/blender/bake_undo_window.py -- \
+        <build python dir> <addon dir> <results json>
 
 The steps run from a timer on Blender's main thread while the window draws. In the startup
 file's scene it builds the sun room facing in (examples/blender_scenes.py, lightmap=True),

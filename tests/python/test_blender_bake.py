@@ -8,7 +8,11 @@ Inside Blender: tests/blender/bake_checks.py (background: a closed room's floor 
 and by shgi.bake_lightmaps with each source; the refusals; Create UV Map and the material
 nodes; shards and Merge Shards; Export Volume), the saved room baked headless with
 ``--python-expr`` (refused without the native module, cancelled by Ctrl-C), and under Xvfb the
-modal bake with Esc.
+modal bake with Esc. The traps an artist hits: tests/blender/bake_trap_checks.py (the sun room
+facing out warned about, shared materials made single-user, a headless bake's log lines,
+lightmap nodes without an image dropped on load) and, under Xvfb,
+tests/blender/bake_undo_window.py (one undo after a bake shown in materials, Material
+Preview, redo, a cancelled bake's undo step).
 
 Acceptance against Cycles' DIFFUSE {DIRECT, INDIRECT} bake of the floor, over the covered
 texels: the mean texel difference (the mean over those texels of shgi - Cycles, relative to
