@@ -8,6 +8,8 @@ without an image.
    baked (Create UV Map) with the facing check's warning (in Blender's output, which
    tests/python/test_blender_bake.py reads) and the world's colour in its lightmap; the room
    built for bakes (lightmap=True, facing in): no warning, a lightmap holding the room's light;
+   the room facing out baked with Bake Side "Facing the Scene": the floor's back is baked, as
+   the floor of the room facing in (all three through a UV map Lightmap Pack lays out);
 2. shared materials: all ten objects of the room facing in (nine share "plaster") baked with
    Show in Materials, Make Materials Single-User on: every object shows its own lightmap;
    the same with it off: only the objects with a material of their own;
@@ -33,7 +35,8 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 import blender_scenes  # noqa: E402
 
-RESOLUTION, SAMPLES = 16, 16
+RESOLUTION, FACING_SAMPLES = 16, 64
+FACING_UV_MAP = "BakeUV"
 SHARED_RESOLUTION, SHARED_SAMPLES = 8, 2
 LIGHTMAP_SUFFIX = "_shgi_lightmap"
 TEXTURE_NODE = "SHGI Lightmap"
@@ -68,10 +71,12 @@ def lightmap_mean(name):
 def facing_checks(tmpdir, results):
     world = list(blender_scenes.SKY)
     results["world_color"] = world
-    for case, lightmap in (("outward", False), ("inward", True)):
+    for case, lightmap, side in (("outward", False, "FRONT"), ("inward", True, "FRONT"),
+                                 ("outward_facing_scene", False, "FACING_SCENE")):
         build_room(lightmap)
-        status = bake(os.path.join(tmpdir, case), "floor", create_uv=True,
-                      resolution=RESOLUTION, samples=SAMPLES)
+        # A UV map that Lightmap Pack lays out alike for the floor facing either way.
+        status = bake(os.path.join(tmpdir, case), "floor", uv_map=FACING_UV_MAP, create_uv=True,
+                      bake_side=side, resolution=RESOLUTION, samples=FACING_SAMPLES)
         results[case] = {"status": status, "floor_mean": lightmap_mean("floor")}
 
 

@@ -41,6 +41,7 @@ sys.path.insert(0, str(REPO_ROOT / "examples"))
 
 import scenes  # noqa: E402
 from shgi_blender import bake_settings, settings  # noqa: E402
+from shgi_blender.operators.facing_check import turned_around  # noqa: E402
 from shgi_blender.operators.facing_check import warning as facing_warning  # noqa: E402
 from shgi_blender.engine import field_solvers  # noqa: E402
 from shgi_blender.engine.lightmap_bake import BakeRequest, BakeTask, rgba_pixels  # noqa: E402
@@ -467,6 +468,10 @@ SUN_ROOM_OBJECTS = ["back", "ceiling", "floor", "front", "left_wall_0", "left_wa
 # The floor of the outward room sees only the world under it: its lightmap (irradiance / pi)
 # is the world's colour, to the noise of 16 samples.
 WORLD_COLOR_TOLERANCE = 0.05
+# The floor of the room facing out, baked with every quad turned around, against the floor of
+# the room built facing in (64 samples, a Lightmap Pack layout mirrored between the two): the
+# same light to the noise of the mean.
+SAME_ROOM_TOLERANCE = 0.05
 _TRAP_RUNS = {}
 
 
@@ -494,14 +499,17 @@ def bake_output(output, folder_name):
 def test_outward_facing_room_is_warned_and_inward_room_bakes_its_light(
         blender, build_python_dir, tmp_path_factory):
     """The sun room as the renderers build it faces out: baking its floor warns, naming the
-    floor and the fix, and the floor's lightmap holds the world's light under it. Built for
-    bakes (facing in), it bakes without the warning and holds the room's light."""
+    floor and the fixes, and the floor's lightmap holds the world's light under it. Built for
+    bakes (facing in), it bakes without the warning and holds the room's light. Facing out
+    but baked with Bake Side "Facing the Scene", every quad is turned around for the bake and
+    the floor holds the light of the room facing in."""
     results, output = trap_results(blender, build_python_dir, tmp_path_factory)
     world = np.array(results["world_color"])
     outward, inward = bake_output(output, "outward"), bake_output(output, "inward")
     assert results["outward"]["status"] == ["FINISHED"]
     assert facing_warning("floor") in outward, outward
     assert "'floor'" in facing_warning("floor") and "Recalculate Inside" in facing_warning("x")
+    assert "Bake Side to Facing the Scene" in facing_warning("x")
     np.testing.assert_allclose(results["outward"]["floor_mean"], world,
                                rtol=WORLD_COLOR_TOLERANCE)
     assert results["inward"]["status"] == ["FINISHED"]
@@ -509,6 +517,16 @@ def test_outward_facing_room_is_warned_and_inward_room_bakes_its_light(
     floor = np.array(results["inward"]["floor_mean"])
     assert np.abs(floor / world - 1.0).max() > 5 * WORLD_COLOR_TOLERANCE, floor
     assert floor.min() > 0.0
+    turned = bake_output(output, "outward_facing_scene")
+    assert results["outward_facing_scene"]["status"] == ["FINISHED"]
+    assert facing_warning("floor") not in turned
+    assert turned_around("floor", baked=True) in turned, turned
+    for name in SUN_ROOM_OBJECTS:
+        if name not in ("floor", "table"):  # the table's box faces out rightly
+            assert turned_around(name, baked=False) in turned, (name, turned)
+    assert "'table'" not in turned
+    np.testing.assert_allclose(results["outward_facing_scene"]["floor_mean"], floor,
+                               rtol=SAME_ROOM_TOLERANCE)
 
 
 def test_show_in_materials_makes_shared_materials_single_user(blender, build_python_dir,

@@ -21,7 +21,8 @@ together.
 
 Facing: before baking, operators/facing_check.py looks for objects facing away from the scene
 (front to the world, back to the other objects: a room built with its normals out) and warns,
-naming them and the fix; their lightmaps would hold the light outside.
+naming them and the fixes, as their lightmaps would hold the light outside; with Bake Side
+"Facing the Scene" the export turns them around instead, so their backs are baked.
 
 Results: the files shgi.bake writes into the output folder (``<object>.exr`` and ``.png``;
 with Shards > 1 the raw shard files of shard Shard, which SHGI_OT_merge_lightmap_shards merges
@@ -208,6 +209,26 @@ def bake_jobs(export, objects, values):
     return jobs
 
 
+def check_facing(scene, depsgraph, objects, values, report):
+    """Names of the objects the bake exports facing the other way.
+
+    Bake Side "Front": none; each of `objects` (the baked ones) facing away from the scene
+    (facing_check.py) is warned about. "Facing the Scene": every renderable mesh object of the
+    scene facing away, each reported: the baked objects' backs are baked, and the light they
+    get off the others comes off their sides facing the scene too.
+    """
+    if values.bake_side != "FACING_SCENE":
+        for name in facing_check.facing_away(scene, depsgraph, objects):
+            report({"WARNING"}, f"{REPORT_PREFIX}{facing_check.warning(name)}")
+        return []
+    meshes = [obj for obj in scene.objects if obj.type == "MESH" and not obj.hide_render]
+    away = facing_check.facing_away(scene, depsgraph, meshes)
+    baked = {obj.name for obj in objects}
+    for name in away:
+        report({"INFO"}, f"{REPORT_PREFIX}{facing_check.turned_around(name, name in baked)}")
+    return away
+
+
 def prepare_bake(context, values, report, merge=False, created=None):
     """The BakeRequest of a bake (or, with `merge`, of a merge of shard files) of the
     selected objects; BakeError when it cannot run. The meshes that got a new UV map are
@@ -227,14 +248,14 @@ def prepare_bake(context, values, report, merge=False, created=None):
         bpy.ops.object.mode_set(mode="OBJECT")
     prepare_uv_maps(context, objects, values, report, [] if created is None else created)
     scene = context.scene
-    export = export_scene(context.evaluated_depsgraph_get(), scene, report=report,
-                          for_render=True, with_camera=False)
+    depsgraph = context.evaluated_depsgraph_get()
+    flipped = check_facing(scene, depsgraph, objects, values, report)
+    export = export_scene(depsgraph, scene, report=report, for_render=True, with_camera=False,
+                          flipped=flipped)
     from shgi import bake as shgi_bake  # shgi is loaded (native.module() above)
 
     if not shgi_bake.emits_light(export.scene):
         raise BakeError(shgi_bake.NO_LIGHT_MESSAGE)
-    for name in facing_check.facing_away(scene, context.evaluated_depsgraph_get(), objects):
-        report({"WARNING"}, f"{REPORT_PREFIX}{facing_check.warning(name)}")
     try:
         jobs = bake_jobs(export, objects, values)
         options = bake_settings.bake_options(values, scene.shgi, shgi)

@@ -222,7 +222,7 @@ class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         column = layout.column(align=True)
-        for name in ("source", "content", "samples"):
+        for name in ("source", "content", "samples", "bake_side"):
             column.prop(bake, name)
         column = layout.column(align=True)
         column.prop(bake, "uv_map")
