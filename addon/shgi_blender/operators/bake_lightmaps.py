@@ -221,7 +221,8 @@ def check_facing(scene, depsgraph, objects, values, report):
         for name in facing_check.facing_away(scene, depsgraph, objects):
             report({"WARNING"}, f"{REPORT_PREFIX}{facing_check.warning(name)}")
         return []
-    meshes = [obj for obj in scene.objects if obj.type == "MESH" and not obj.hide_render]
+    meshes = [obj.original for obj in depsgraph.objects
+              if obj.type == "MESH" and not obj.original.hide_render]
     away = facing_check.facing_away(scene, depsgraph, meshes)
     baked = {obj.name for obj in objects}
     for name in away:
