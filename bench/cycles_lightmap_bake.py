@@ -16,7 +16,7 @@ relative RMS error, stopping after the first count at or below target_error. One
 <out>/cycles.json: {"bakes": [{"samples", "seconds", "path", "error"}]}.
 
 The scene: examples/blender_scenes.py's sun room (the same vertices, materials, sun, window
-portal and sky as examples/scenes.py) turned into its lightmap variant as
+portal and sky as examples/scenes.py) in its lightmap variant (lightmap=True), as
 examples/scenes.py's sun_room(lightmap=True) builds it: every quad (the walls, floor, ceiling)
 faces into the room and gets the UV map LightmapUV = the unit square over its corners in
 vertex order. The table (a closed box) is left as it is, as there.
@@ -27,7 +27,6 @@ import os
 import sys
 import time
 
-import bmesh
 import bpy
 import numpy as np
 
@@ -37,28 +36,6 @@ sys.path[:0] = [os.path.join(REQUEST["repo"], "examples"), os.path.join(REQUEST[
                 REQUEST["build_python"]]
 import blender_scenes  # noqa: E402  (examples/blender_scenes.py)
 from lightmap_bench import relative_rms  # noqa: E402  (one error metric for both bakers)
-
-UV_MAP = "LightmapUV"
-# LightmapUV of a quad's corners c, c + u, c + u + v, c + v (examples/scenes.py UNIT_SQUARE).
-UNIT_SQUARE = ((0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0))
-
-
-def lightmap_variant(scene):
-    """Turns every quad to face the other way (into the room) and gives it LightmapUV."""
-    for obj in scene.objects:
-        if obj.type != "MESH" or len(obj.data.vertices) != 4:
-            continue
-        mesh = obj.data
-        editable = bmesh.new()
-        editable.from_mesh(mesh)
-        bmesh.ops.reverse_faces(editable, faces=editable.faces[:])
-        editable.to_mesh(mesh)
-        editable.free()
-        layer = mesh.uv_layers.new(name=UV_MAP)
-        for loop in mesh.loops:  # the UV belongs to the vertex, whatever the loop order
-            layer.data[loop.index].uv = UNIT_SQUARE[loop.vertex_index]
-        mesh.uv_layers.active = layer
-
 
 def set_up_cycles(scene):
     """CPU, no denoising, adaptive sampling or clamping, light paths as SHGI's bake."""
@@ -101,8 +78,7 @@ def bake_floor(samples, resolution):
 
 
 def main():
-    scene = blender_scenes.build("sun_room", 1.0)
-    lightmap_variant(scene)
+    scene = blender_scenes.build("sun_room", 1.0, lightmap=True)
     set_up_cycles(scene)
     reference = np.load(REQUEST["reference"]) if REQUEST["reference"] else None
     # Untimed: the first bake of a Blender session also loads Cycles' kernels.

@@ -10,6 +10,12 @@ defaults), the area light (with Ray Visibility > Camera on, as the classic box s
 the sun and the window portal (Cycles' area light Portal), the world colour, the camera and the
 resolution times `scale`. Exporting the built scene with shgi_blender.export gives the scene
 examples/scenes.py builds (tests/blender/engine_render_checks.py checks it).
+
+For lightmap bakes pass ``lightmap=True`` (``-- sun_room 1 out.blend lightmap`` on the command
+line), as examples/scenes.py takes it: every quad (a wall, the floor, the ceiling) then faces
+into the room and gets the UV map "LightmapUV" spanning the unit square. Without it the walls
+face out, as the renderers' scenes have them: a bake sees a surface's front, so a lightmap of an
+outward floor would hold the world's light under it.
 """
 
 import math
@@ -24,6 +30,9 @@ SKY = (0.35, 0.5, 0.8)
 CORNELL_SIZE = 2.0
 ROOM_X, ROOM_Y, ROOM_Z = 4.0, 4.0, 2.6
 WINDOW_Y, WINDOW_Z = (1.3, 2.7), (0.9, 2.1)
+LIGHTMAP_UV = "LightmapUV"
+# LightmapUV of a quad's corners c, c + u, c + u + v, c + v (examples/scenes.UNIT_SQUARE).
+UNIT_SQUARE = ((0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0))
 
 
 def reset_file():
@@ -82,11 +91,13 @@ def _cross(a, b):
 # --- data blocks ------------------------------------------------------------------------------
 
 class SceneBuilder:
-    """Adds named parts to the current scene, sharing one material per name."""
+    """Adds named parts to the current scene, sharing one material per name; with `lightmap`
+    quads face the other way (into the room) and get LightmapUV (examples/scenes.py's)."""
 
-    def __init__(self):
+    def __init__(self, lightmap=False):
         self.scene = bpy.context.scene
         self.materials = {}
+        self.lightmap = lightmap
 
     def material(self, name, color):
         """A Principled BSDF at Blender's defaults (= shgi.Material's) with this base colour."""
@@ -101,8 +112,15 @@ class SceneBuilder:
 
     def part(self, name, geometry, material, color):
         vertices, faces = geometry
+        is_quad = self.lightmap and len(vertices) == 4
+        if is_quad:
+            faces = [tuple(reversed(faces[0]))]
         mesh = bpy.data.meshes.new(name)
         mesh.from_pydata(vertices, [], faces)
+        if is_quad:
+            layer = mesh.uv_layers.new(name=LIGHTMAP_UV)
+            for loop in mesh.loops:
+                layer.data[loop.index].uv = UNIT_SQUARE[loop.vertex_index]
         mesh.materials.append(self.material(material, color))
         obj = bpy.data.objects.new(name, mesh)
         self.scene.collection.objects.link(obj)
@@ -139,11 +157,12 @@ class SceneBuilder:
 
 # --- the scenes -------------------------------------------------------------------------------
 
-def cornell_box(scale=1.0):
-    """256 x 256 pixels times `scale` (examples/scenes.cornell_box)."""
-    b = SceneBuilder()
+def cornell_box(scale=1.0, lightmap=False):
+    """256 x 256 pixels times `scale` (examples/scenes.cornell_box). lightmap: walls face into
+    the box, with LightmapUV."""
+    b = SceneBuilder(lightmap)
     size = CORNELL_SIZE
-    walls = [  # normals point into the box
+    walls = [  # u x v points out of the box (lightmap=True turns them inwards)
         ("floor", WHITE, (-1, 0, 0), (0, size, 0), (size, 0, 0)),
         ("ceiling", WHITE, (-1, 0, size), (size, 0, 0), (0, size, 0)),
         ("back", WHITE, (-1, size, 0), (0, 0, size), (size, 0, 0)),
@@ -164,9 +183,10 @@ def cornell_box(scale=1.0):
     return b.scene
 
 
-def sun_room(scale=1.0):
-    """256 x 192 pixels times `scale` (examples/scenes.sun_room)."""
-    b = SceneBuilder()
+def sun_room(scale=1.0, lightmap=False):
+    """256 x 192 pixels times `scale` (examples/scenes.sun_room). lightmap: walls face into the
+    room, with LightmapUV."""
+    b = SceneBuilder(lightmap)
     x0, y0 = -ROOM_X / 2, 0.0
     b.part("floor", quad((x0, y0, 0), (0, ROOM_Y, 0), (ROOM_X, 0, 0)), "plaster", WHITE)
     b.part("ceiling", quad((x0, y0, ROOM_Z), (ROOM_X, 0, 0), (0, ROOM_Y, 0)), "plaster", WHITE)
@@ -199,17 +219,18 @@ def sun_room(scale=1.0):
 SCENES = {"cornell_box": cornell_box, "sun_room": sun_room}
 
 
-def build(name, scale=1.0):
-    """Builds scene `name` ("cornell_box" or "sun_room") in a fresh file; returns the scene."""
+def build(name, scale=1.0, lightmap=False):
+    """Builds scene `name` ("cornell_box" or "sun_room") in a fresh file; returns the scene.
+    lightmap: quads face into the room, with LightmapUV (for bakes)."""
     reset_file()
-    return SCENES[name](scale)
+    return SCENES[name](scale, lightmap)
 
 
 def main():
     args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     name = args[0] if args else "cornell_box"
     scale = float(args[1]) if len(args) > 1 else 1.0
-    build(name, scale)
+    build(name, scale, lightmap=args[3:4] == ["lightmap"])
     if len(args) > 2:
         bpy.ops.wm.save_as_mainfile(filepath=args[2])
 

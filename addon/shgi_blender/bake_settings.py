@@ -69,6 +69,8 @@ BAKE_PROPERTY_DEFAULTS = {
     "shard_index": 0,
     "shard_count": 1,
     "hook_up_material": False,
+    "single_user_materials": True,
+    "bake_side": "FRONT",
 }
 # Where Export Volume writes when its operator's filepath is not set (scene.shgi.bake only).
 VOLUME_PATH_DEFAULT = "//shgi_volume.json"
@@ -78,6 +80,16 @@ UV_LAYOUT_ITEMS = (
     ("LIGHTMAP_PACK", "Lightmap Pack", "Blender's Lightmap Pack: each face its own box"),
     ("XATLAS", "xatlas", "xatlas charts packed into the lightmap's size with padding between "
                          "them (needs the xatlas module: make deps installs it)"),
+)
+
+# Which side of a surface a bake holds (scene.shgi.bake.bake_side; operators/facing_check.py).
+BAKE_SIDE_ITEMS = (
+    ("FRONT", "Front", "Bake each surface's front (its normal's side), as Cycles does; objects "
+                       "facing away from the scene are warned about"),
+    ("FACING_SCENE", "Facing the Scene",
+     "Bake objects whose fronts face away from the scene (a room modelled with its normals "
+     "out) from their backs, the side facing the scene; every such object of the scene is "
+     "turned around for the bake"),
 )
 
 # Denoiser of "Denoise" (scene.shgi.bake.denoiser): shgi.bake.BakeOptions.denoise methods.

@@ -158,6 +158,15 @@ def bake_properties():
             name="Show in Materials", default=B["hook_up_material"],
             description="Add the lightmap to each object's materials (nodes named SHGI "
                         "Lightmap) so that EEVEE and Workbench show it"),
+        "bake_side": EnumProperty(
+            name="Bake Side", items=list(bake_settings.BAKE_SIDE_ITEMS),
+            default=B["bake_side"],
+            description="Which side of a surface the lightmap holds"),
+        "single_user_materials": BoolProperty(
+            name="Make Materials Single-User", default=B["single_user_materials"],
+            description="With Show in Materials: give an object whose material other objects "
+                        "use too a copy of it to show its own lightmap in (off: such materials "
+                        "are left alone)"),
     }
 
 

@@ -1,5 +1,9 @@
 """Command line: ``python -m shgi bake scene.gltf --out DIR`` bakes lightmaps without Blender.
 
+Lightmaps are sized as the Blender add-on sizes them by default: from a texel density of
+shgi.bake.DEFAULT_TEXELS_PER_METRE (--density; --resolution gives a fixed size). A scene no lamp
+and no emissive material lights is refused unless --world-light-only asks to bake it.
+
 Exit status: 0 on success, 1 for an error (the message names the input and the fix), 2 for bad
 arguments, 130 when interrupted (Ctrl-C cancels the running bake; finished lightmaps stay).
 """
@@ -53,7 +57,14 @@ def _positive(text: str) -> float:
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m shgi", description=__doc__.split("\n")[0])
     commands = parser.add_subparsers(dest="command", required=True)
-    bake = commands.add_parser("bake", help="bake lightmaps of a glTF (.gltf/.glb) or OBJ scene")
+    bake = commands.add_parser(
+        "bake", help="bake lightmaps of a glTF (.gltf/.glb) or OBJ scene",
+        description="Bakes lightmaps of a glTF or OBJ scene. Each lightmap is sized from a texel "
+                    f"density of {_bake.DEFAULT_TEXELS_PER_METRE:g} texels per metre of its "
+                    f"surface ({_bake.MIN_RESOLUTION}..{_bake.MAX_RESOLUTION} texels per side), "
+                    "the Blender add-on's default; --density sets another density, --resolution "
+                    "N makes every lightmap N x N. A scene without lamps or emissive materials "
+                    "is refused (see --world-light-only).")
     bake.add_argument("scene", help="scene file (.gltf, .glb or .obj)")
     bake.add_argument("--out", required=True, help="output folder (created if missing)")
     bake.add_argument("--uv-set", default=None,
@@ -68,8 +79,13 @@ def _parser() -> argparse.ArgumentParser:
                       help="comma-separated object names (default: every object with the UV map; "
                            "with --uv xatlas every object)")
     size = bake.add_mutually_exclusive_group()
-    size.add_argument("--resolution", type=_whole(1), default=0, help="texels per side (256)")
-    size.add_argument("--density", type=_positive, default=0.0, help="texels per metre")
+    size.add_argument("--resolution", type=_whole(1), default=0,
+                      help="texels per side of every lightmap (default: sized by --density)")
+    size.add_argument("--density", type=_positive, default=_bake.DEFAULT_TEXELS_PER_METRE,
+                      help="texels per metre of surface, each lightmap "
+                           f"{_bake.MIN_RESOLUTION}..{_bake.MAX_RESOLUTION} texels per side "
+                           f"(default {_bake.DEFAULT_TEXELS_PER_METRE:g}, the Blender add-on's "
+                           "Texel Density)")
     bake.add_argument("--samples", type=_whole(1), default=256, help="samples per texel (256)")
     bake.add_argument("--content", default="DIRECT_INDIRECT",
                       choices=["DIRECT_INDIRECT", "DIRECT", "INDIRECT", "FULL"])
@@ -89,6 +105,10 @@ def _parser() -> argparse.ArgumentParser:
                       help="bake only shard i of N (i/N) into OUT/shards")
     farm.add_argument("--merge", type=_whole(1), default=0, metavar="N",
                       help="merge the N shard files in OUT/shards into the lightmaps")
+    bake.add_argument("--world-light-only", action="store_true",
+                      help="bake a scene without lamps or emissive materials, lit by the "
+                           "loader's default world alone (refused without this flag: a glTF "
+                           "exporter may have left the scene's lights out)")
     bake.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser
 
@@ -128,6 +148,19 @@ def _uv_set(scene, requested, lightmap_uvs: str):
                      "--uv-set NAME, or --uv xatlas to lay one out")
 
 
+def _check_lamps(scene, path: str) -> None:
+    """ValueError when no lamp and no emissive material light the scene: glTF and OBJ files
+    hold no world, so only the loader's dim default world would light the bake."""
+    if _bake.has_lamps_or_emitters(scene):
+        return
+    raise ValueError(
+        f"{path}: no lamp and no emissive material lights the scene, only the loader's default "
+        "world would (the lightmaps would be nearly black); its lights may have been left out "
+        "by the exporter (Blender's glTF exporter writes point, spot and sun lights only with "
+        "Include > Punctual Lights, and no area lights): export them, add an emissive "
+        "material, or pass --world-light-only to bake with the world's light alone")
+
+
 class _Bar:
     """A one-line progress bar on stderr, redrawn at most 10 times a second."""
 
@@ -156,9 +189,12 @@ def _bake_command(args) -> int:
     if args.threads:
         _shgi.set_max_threads(args.threads)
     scene = _load(args.scene)
+    if not args.world_light_only:
+        _check_lamps(scene, args.scene)
     uv_set = _uv_set(scene, args.uv_set, args.uv)
     names = [n.strip() for n in args.objects.split(",") if n.strip()] if args.objects else None
-    jobs = _bake.jobs_for_scene(scene, uv_set, args.resolution, args.density, names, args.uv)
+    density = 0.0 if args.resolution else args.density
+    jobs = _bake.jobs_for_scene(scene, uv_set, args.resolution, density, names, args.uv)
     settings = _shgi.LightmapSettings(samples=args.samples, content=args.content,
                                       directional=args.directional, seed=args.seed)
     options = _bake.BakeOptions(settings=settings, uv_set=uv_set, filter=args.filter,

@@ -67,6 +67,7 @@ __all__ = [
     "shard_path",
     "jobs_for_scene",
     "emits_light",
+    "has_lamps_or_emitters",
     "solve_field",
     "SOURCES",
     "LIGHTMAP_UV_SOURCES",
@@ -77,6 +78,9 @@ __all__ = [
 SH_LAYERS = ("SH.c0", "SH.c1", "SH.c2", "SH.c3")
 # Lightmap sides chosen from a texel density are clamped to this range (texels).
 MIN_RESOLUTION, MAX_RESOLUTION = 16, 4096
+# The texel density (texels per metre of surface) lightmaps are sized by when no size is given:
+# ``python -m shgi bake``'s and the Blender add-on's Texel Density (bake_settings.py) alike.
+DEFAULT_TEXELS_PER_METRE = 32.0
 
 # Shares of one object's progress: rasterizing its UV map and unoccluding the samples are quick
 # next to baking the texels; filtering, dilation and writing the files take the rest.
@@ -378,12 +382,16 @@ NO_LIGHT_MESSAGE = ("the scene has no light (no lamp, no emissive material, a bl
                     "bake would be black; add a light")
 
 
+def has_lamps_or_emitters(scene) -> bool:
+    """True when a light or a material of a shgi.Scene emits, the world aside (a portal only
+    guides the sampling of the world: it emits nothing of its own)."""
+    return (any(not light.portal for light in scene.lights)
+            or any(material.is_emissive() for material in scene.materials))
+
+
 def emits_light(scene) -> bool:
-    """True when a light, a material or the world of a shgi.Scene emits (a portal only guides
-    the sampling of the world: it emits nothing of its own)."""
-    if any(not light.portal for light in scene.lights):
-        return True
-    if any(material.is_emissive() for material in scene.materials):
+    """True when a light, a material or the world of a shgi.Scene emits."""
+    if has_lamps_or_emitters(scene):
         return True
     world = scene.world
     return world.strength > 0.0 and max(world.color) > 0.0

@@ -18,14 +18,16 @@ Background mode (``blender -b --factory-startup --python-exit-code 1 --python ba
    Create UV Map on a mesh without faces, a relative output folder in an unsaved file (the room
    was saved as a copy);
 5. Create UV Map (Lightmap Pack) on the box with Show in Materials, a shared material left
-   alone, and Remove Lightmap Nodes;
+   alone (Make Materials Single-User off) or copied for the object (on), and Remove Lightmap
+   Nodes;
 6. shards: two shard bakes of the floor and the box and Merge Shards against a whole bake;
 7. Export Volume of a probe grid and of a photon lattice (solving first), and its refusals
    for a scene without geometry (the solve's) and for the path tracer; the Bake panel draws; scene.shgi.bake and the operators hold the defaults
    of bake_settings.BAKE_PROPERTY_DEFAULTS.
 Window mode (``-- <build> <addon> <results json> window``, under Xvfb with
 --enable-event-simulate): a modal bake of two objects cancelled by Esc after the first one
-finished, then a modal bake to its end.
+finished (its files written; no image yet: the images come at the bake's end, in its one undo
+step), then a modal bake to its end.
 The pytest side (tests/python/test_blender_bake.py) asserts the figures; it also runs the saved
 file headless with ``--python-expr``. Prints BAKE_CHECKS_OK (BAKE_WINDOW_OK in window mode).
 """
@@ -441,8 +443,9 @@ def xatlas_layout(tmpdir, results):
 
 
 def create_uv_and_materials(tmpdir, results):
-    """Create UV Map on the box with Show in Materials; a shared material is left alone; Remove
-    Lightmap Nodes gives the material back."""
+    """Create UV Map on the box with Show in Materials; a shared material is left alone, or
+    copied for the object with Make Materials Single-User; Remove Lightmap Nodes gives the
+    material back."""
     box = bpy.data.objects["box"]
     bake("box", create_uv=True, hook_up_material=True, resolution=SHARD_RESOLUTION,
          samples=SHARD_SAMPLES, output_folder=os.path.join(tmpdir, "box"))
@@ -464,11 +467,22 @@ def create_uv_and_materials(tmpdir, results):
         # SHGI's export looks through the preview nodes: the box keeps its own material.
         "exported_materials": sorted(material.name for material in export_scene(
             bpy.context.evaluated_depsgraph_get(), with_camera=False).scene.materials)}
-    bake("ceiling", hook_up_material=True, resolution=16, samples=1,
-         output_folder=os.path.join(tmpdir, "ceiling"))
+    bake("ceiling", hook_up_material=True, single_user_materials=False, resolution=16,
+         samples=1, output_folder=os.path.join(tmpdir, "ceiling"))
     results["materials"]["shared_material_nodes"] = [
         node.name for node in bpy.data.materials["white"].node_tree.nodes
         if node.name.startswith("SHGI")]
+    bake("ceiling", hook_up_material=True, resolution=16, samples=1,
+         output_folder=os.path.join(tmpdir, "ceiling"))
+    ceiling = bpy.data.objects["ceiling"].active_material
+    results["materials"]["single_user"] = {
+        "ceiling_material": ceiling.name,
+        "ceiling_image": ceiling.node_tree.nodes["SHGI Lightmap"].image.name,
+        "white_users": sorted(obj.name for obj in bpy.data.objects
+                              if obj.active_material == bpy.data.materials["white"]),
+        "white_nodes": [node.name for node in bpy.data.materials["white"].node_tree.nodes
+                        if node.name.startswith("SHGI")]}
+    bpy.data.objects["ceiling"].active_material = bpy.data.materials["white"]  # as built
     select_only("box")
     bpy.ops.shgi.remove_lightmap_nodes()
     results["materials"]["after_removal"] = {
@@ -623,10 +637,13 @@ def modal_steps(results, out_dir):
                          resolution=MODAL_RESOLUTION, samples=MODAL_SAMPLES)
     results["invoke_status"] = sorted(status)
     start = time.perf_counter()
-    while "box_shgi_lightmap" not in bpy.data.images:  # the first object's image, by the timer
+    # The first object's files (its image waits for the bake's end: one undo step).
+    while not os.path.exists(os.path.join(cancelled_dir, "box.png")):
         if time.perf_counter() - start > MODAL_TIMEOUT_SECONDS or not worker_running():
             raise AssertionError("the first lightmap of the modal bake never arrived")
         yield POLL_SECONDS
+    results["images_while_running"] = sorted(image.name for image in bpy.data.images
+                                             if image.name.endswith("_shgi_lightmap"))
     results["first_image_seconds"] = time.perf_counter() - start
     results["worker_running_at_esc"] = worker_running()
     esc = LatencyClock()

@@ -591,10 +591,11 @@ def face(center, normal, tangent, half):
     return [c + half * (-u - v), c + half * (u - v), c + half * (u + v), c + half * (-u + v)]
 
 
-def room_gltf(lightmap_uv=True):
+def room_gltf(lightmap_uv=True, lamp=True):
     """A glTF (Y up) of a 4 x 4 m floor and a 0.8 m box on it, each with TEXCOORD_0 (every face
     on the whole unit square: overlapping, useless for a lightmap) and TEXCOORD_1 (a lightmap
-    layout without overlaps), lit by a KHR_lights_punctual point light 2.5 m up."""
+    layout without overlaps), lit by a KHR_lights_punctual point light 2.5 m up (without
+    `lamp`, its node is left out, as an exporter drops the lights it cannot write)."""
     floor = face((0, 0, 0), (0, 1, 0), (1, 0, 0), 2.0)
     box = []
     for axis in range(3):
@@ -640,7 +641,7 @@ def room_gltf(lightmap_uv=True):
         "asset": {"version": "2.0"},
         "extensionsUsed": ["KHR_lights_punctual"],
         "scene": 0,
-        "scenes": [{"nodes": [0, 1, 2]}],
+        "scenes": [{"nodes": [0, 1, 2] if lamp else [0, 1]}],
         "nodes": [{"name": "Floor", "mesh": 0}, {"name": "Box", "mesh": 1},
                   {"name": "Lamp", "translation": [0.8, 2.5, -0.6],
                    "extensions": {"KHR_lights_punctual": {"light": 0}}}],
@@ -711,6 +712,58 @@ def test_cli_shards_then_merge_equal_a_plain_bake(build_python_dir, room_file, t
     assert result.returncode == 0, result.stderr
     expected = written_files(plain)
     assert len(expected) == 4 and written_files(farm) == expected
+
+
+def test_cli_refuses_a_scene_without_lamps_unless_asked(build_python_dir, tmp_path):
+    """The room without its lamp (an exporter dropped it): refused, naming the file, the cause
+    and the flag; with --world-light-only it bakes, lit by the loader's default world alone
+    (on average no brighter than that world's radiance, the box shading part of the floor)."""
+    path = tmp_path / "no_lamp.gltf"
+    path.write_text(json.dumps(room_gltf(lamp=False)))
+    out = tmp_path / "out"
+    result = run_cli(build_python_dir, path, "--out", out, *CLI_BAKE)
+    assert result.returncode == 1, result.stderr
+    for words in (f"shgi bake: error: {path}: no lamp and no emissive material",
+                  "left out by the exporter", "--world-light-only"):
+        assert words in result.stderr, result.stderr
+    assert "Traceback" not in result.stderr and not out.exists()
+    result = run_cli(build_python_dir, path, "--out", out, *CLI_BAKE, "--world-light-only")
+    assert result.returncode == 0, result.stderr
+    world = shgi.load_gltf(str(path)).world
+    radiance = world.strength * np.asarray(world.color)
+    floor = shgi.read_exr(out / "Floor.exr")["Lightmap"].mean(axis=(0, 1))
+    assert (0.5 * radiance < floor).all() and (floor <= radiance).all(), (floor, radiance)
+    help_text = run_cli(build_python_dir, "--help").stdout
+    assert "--world-light-only" in help_text
+
+
+def test_cli_sizes_lightmaps_by_the_addon_texel_density(build_python_dir, room_file, tmp_path):
+    """Without a size the CLI sizes each lightmap as the Blender add-on does by default: from
+    its Texel Density (the same default); --resolution still fixes the size; --help says so."""
+    sys.path.insert(0, str(REPO_ROOT / "addon"))
+    from shgi_blender import bake_settings
+
+    density = bake.DEFAULT_TEXELS_PER_METRE
+    assert bake_settings.BAKE_PROPERTY_DEFAULTS["texel_density"] == density
+    assert bake_settings.BAKE_PROPERTY_DEFAULTS["resolution"] == 0  # the density decides
+    scene = shgi.load_gltf(str(room_file))
+    expected = {inst.name: bake.resolution_for_density(scene, index, density)
+                for index, inst in enumerate(scene.instances)}
+    assert len(set(expected.values())) == 2  # the floor and the box differ in size
+    out = tmp_path / "density"
+    result = run_cli(build_python_dir, room_file, "--out", out, "--samples", "2")
+    assert result.returncode == 0, result.stderr
+    for name, side in expected.items():
+        assert shgi.read_exr(out / f"{name}.exr")["Lightmap"].shape == (side, side, 3), name
+    out = tmp_path / "fixed"
+    result = run_cli(build_python_dir, room_file, "--out", out, "--samples", "2",
+                     "--resolution", "20")
+    assert result.returncode == 0, result.stderr
+    for name in expected:
+        assert shgi.read_exr(out / f"{name}.exr")["Lightmap"].shape == (20, 20, 3), name
+    help_text = " ".join(run_cli(build_python_dir, "--help").stdout.split())
+    assert f"texel density of {density:g} texels per metre" in help_text, help_text
+    assert "--resolution N makes every lightmap N x N" in help_text
 
 
 def test_cli_missing_file(build_python_dir, tmp_path):

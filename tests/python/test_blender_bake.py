@@ -8,7 +8,11 @@ Inside Blender: tests/blender/bake_checks.py (background: a closed room's floor 
 and by shgi.bake_lightmaps with each source; the refusals; Create UV Map and the material
 nodes; shards and Merge Shards; Export Volume), the saved room baked headless with
 ``--python-expr`` (refused without the native module, cancelled by Ctrl-C), and under Xvfb the
-modal bake with Esc.
+modal bake with Esc. The traps an artist hits: tests/blender/bake_trap_checks.py (the sun room
+facing out warned about, shared materials made single-user, a headless bake's log lines,
+lightmap nodes without an image dropped on load) and, under Xvfb,
+tests/blender/bake_undo_window.py (one undo after a bake shown in materials, Material
+Preview, redo, a cancelled bake's undo step).
 
 Acceptance against Cycles' DIFFUSE {DIRECT, INDIRECT} bake of the floor, over the covered
 texels: the mean texel difference (the mean over those texels of shgi - Cycles, relative to
@@ -29,7 +33,7 @@ import pytest
 import shgi
 from shgi import bake as shgi_bake
 from blender_support import (ADDON_DIR, BLENDER_SCRIPTS, REPO_ROOT, needs_window,
-                             run_in_window, run_script_once)
+                             run_blender, run_in_window, run_script_once)
 from latency_clock import Latency, LatencyClock
 
 sys.path.insert(0, str(REPO_ROOT / "addon"))
@@ -37,6 +41,8 @@ sys.path.insert(0, str(REPO_ROOT / "examples"))
 
 import scenes  # noqa: E402
 from shgi_blender import bake_settings, settings  # noqa: E402
+from shgi_blender.operators.facing_check import turned_around  # noqa: E402
+from shgi_blender.operators.facing_check import warning as facing_warning  # noqa: E402
 from shgi_blender.engine import field_solvers  # noqa: E402
 from shgi_blender.engine.lightmap_bake import BakeRequest, BakeTask, rgba_pixels  # noqa: E402
 
@@ -300,6 +306,10 @@ def test_create_uv_map_and_material_nodes(blender, build_python_dir, tmp_path_fa
     assert nodes["surface_from"] == "SHGI Lightmap Mix" and nodes["active_node"] == "SHGI Lightmap"
     assert "SHGI fallback" not in nodes["exported_materials"]
     assert nodes["shared_material_nodes"] == []  # 'white' is shared by four objects
+    # Make Materials Single-User (the default): the ceiling shows its lightmap in a copy.
+    assert nodes["single_user"] == {
+        "ceiling_material": "white ceiling", "ceiling_image": "ceiling_shgi_lightmap",
+        "white_users": ["wall_east", "wall_north", "wall_south"], "white_nodes": []}
     assert nodes["after_removal"] == {"nodes": [], "surface_from": "Principled BSDF"}
 
 
@@ -430,7 +440,10 @@ def test_headless_bake_without_the_native_module(blender, build_python_dir, tmp_
 
 
 @needs_window
-def test_modal_bake_shows_results_as_they_come_and_esc_cancels(build_python_dir, tmp_path):
+def test_modal_bake_keeps_the_finished_lightmaps_when_esc_cancels(build_python_dir, tmp_path):
+    """A modal bake of two objects: the first one's files come while it runs, its image only
+    at the end (one undo step for all the bake's data); Esc cancels the second and keeps the
+    first; a second modal bake runs to its end."""
     out = tmp_path / "bake_window.json"
     result = run_in_window("bake_checks.py", WINDOW, build_python_dir, ADDON_DIR, out, "window",
                            options=("--enable-event-simulate",))
@@ -441,6 +454,165 @@ def test_modal_bake_shows_results_as_they_come_and_esc_cancels(build_python_dir,
     print(f"\nmodal bake: first lightmap after {r['first_image_seconds']:.2f} s, cancelled in "
           f"{cancel}")
     assert r["invoke_status"] == ["RUNNING_MODAL"] and r["worker_running_at_esc"]
+    assert r["images_while_running"] == []
     assert cancel.seconds < ESC_LATENCY, str(cancel)
     assert r["cancelled"] == {"images": ["box_shgi_lightmap"], "files": ["box.exr", "box.png"]}
     assert r["finished"] == {"size": [16, 16], "files": ["floor.exr", "floor.png"]}
+
+
+# --- the traps of tests/blender/bake_trap_checks.py --------------------------------------------
+
+# The sun room's objects (examples/blender_scenes.py), in bake order.
+SUN_ROOM_OBJECTS = ["back", "ceiling", "floor", "front", "left_wall_0", "left_wall_1",
+                    "left_wall_2", "left_wall_3", "right", "table"]
+# The floor of the outward room sees only the world under it: its lightmap (irradiance / pi)
+# is the world's colour, to the noise of 16 samples.
+WORLD_COLOR_TOLERANCE = 0.05
+# The floor of the room facing out, baked with every quad turned around, against the floor of
+# the room built facing in (64 samples, a Lightmap Pack layout mirrored between the two): the
+# same light to the noise of the mean.
+SAME_ROOM_TOLERANCE = 0.05
+_TRAP_RUNS = {}
+
+
+def trap_results(blender, build_python_dir, tmp_path_factory):
+    """(results JSON, Blender's output) of bake_trap_checks.py on `blender`, once a session."""
+    if blender.name not in _TRAP_RUNS:
+        out = tmp_path_factory.mktemp(f"bake_traps-{blender.name}") / "bake_traps.json"
+        result = run_blender(BLENDER_SCRIPTS / "bake_trap_checks.py", build_python_dir,
+                             ADDON_DIR, out, blender=blender, timeout=300)
+        output = result.stdout + result.stderr
+        _TRAP_RUNS[blender.name] = (
+            json.loads(out.read_text()) if result.returncode == 0 and out.exists() else None,
+            output)
+    results, output = _TRAP_RUNS[blender.name]
+    assert results is not None and "BAKE_TRAPS_OK" in output, output[-6000:]
+    return results, output
+
+
+def bake_output(output, folder_name):
+    """The part of Blender's output from the bake into folder `folder_name` to the next bake."""
+    part = output.split(f"/{folder_name}: ", 1)[1]
+    return part.split("\nBAKE ", 1)[0]
+
+
+def test_outward_facing_room_is_warned_and_inward_room_bakes_its_light(
+        blender, build_python_dir, tmp_path_factory):
+    """The sun room as the renderers build it faces out: baking its floor warns, naming the
+    floor and the fixes, and the floor's lightmap holds the world's light under it. Built for
+    bakes (facing in), it bakes without the warning and holds the room's light. Facing out
+    but baked with Bake Side "Facing the Scene", every quad is turned around for the bake and
+    the floor holds the light of the room facing in."""
+    results, output = trap_results(blender, build_python_dir, tmp_path_factory)
+    world = np.array(results["world_color"])
+    outward, inward = bake_output(output, "outward"), bake_output(output, "inward")
+    assert results["outward"]["status"] == ["FINISHED"]
+    assert facing_warning("floor") in outward, outward
+    assert "'floor'" in facing_warning("floor") and "Recalculate Inside" in facing_warning("x")
+    assert "Bake Side to Facing the Scene" in facing_warning("x")
+    np.testing.assert_allclose(results["outward"]["floor_mean"], world,
+                               rtol=WORLD_COLOR_TOLERANCE)
+    assert results["inward"]["status"] == ["FINISHED"]
+    assert "faces away from the scene" not in inward, inward
+    floor = np.array(results["inward"]["floor_mean"])
+    assert np.abs(floor / world - 1.0).max() > 5 * WORLD_COLOR_TOLERANCE, floor
+    assert floor.min() > 0.0
+    turned = bake_output(output, "outward_facing_scene")
+    assert results["outward_facing_scene"]["status"] == ["FINISHED"]
+    assert facing_warning("floor") not in turned
+    assert turned_around("floor", baked=True) in turned, turned
+    for name in SUN_ROOM_OBJECTS:
+        if name not in ("floor", "table"):  # the table's box faces out rightly
+            assert turned_around(name, baked=False) in turned, (name, turned)
+    assert "'table'" not in turned
+    np.testing.assert_allclose(results["outward_facing_scene"]["floor_mean"], floor,
+                               rtol=SAME_ROOM_TOLERANCE)
+
+
+def test_show_in_materials_makes_shared_materials_single_user(blender, build_python_dir,
+                                                              tmp_path_factory):
+    """Nine of the sun room's ten objects share "plaster": with Make Materials Single-User
+    (the default) each object shows its own lightmap in a material of its own and the result
+    says so; turned off, the shared material is left alone with a warning per object and the
+    result counts only the material shown."""
+    results, output = trap_results(blender, build_python_dir, tmp_path_factory)
+    single = results["single_user"]
+    assert single["status"] == ["FINISHED"]
+    assert sorted(single["objects"]) == SUN_ROOM_OBJECTS
+    for name, view in single["objects"].items():
+        assert view["image"] == f"{name}_shgi_lightmap", (name, view)
+    materials = [view["material"] for view in single["objects"].values()]
+    assert len(set(materials)) == len(SUN_ROOM_OBJECTS), materials
+    assert ("10 lightmaps baked into" in bake_output(output, "single_user")
+            and "shown in 10 materials (8 of them single-user copies of shared materials)"
+            in bake_output(output, "single_user")), bake_output(output, "single_user")
+    shared = results["left_shared"]
+    assert shared["status"] == ["FINISHED"]
+    shown = {name for name, view in shared["objects"].items() if view["image"]}
+    assert shown == {"table"}  # the one object with a material of its own
+    assert {view["material"] for name, view in shared["objects"].items()
+            if name != "table"} == {"plaster"}
+    text = bake_output(output, "left_shared")
+    assert "shown in 1 material; 9 warnings" in text, text
+    assert text.count("turn on Make Materials Single-User") == 9
+
+
+def test_headless_bake_logs_each_lightmap_and_tenth(blender, build_python_dir,
+                                                    tmp_path_factory):
+    """A background bake (execute) of the ten objects prints a line per finished lightmap, in
+    bake order, and one per 10% of progress, for a farm's log."""
+    _results, output = trap_results(blender, build_python_dir, tmp_path_factory)
+    lines = bake_output(output, "single_user").splitlines()
+    done = [line for line in lines if " done (" in line and line.startswith("SHGI bake: ")]
+    assert done == [f"SHGI bake: {name} done ({k} of 10 lightmaps)"
+                    for k, name in enumerate(SUN_ROOM_OBJECTS, 1)], lines
+    tenths = [int(line.split()[2][:-1]) for line in lines
+              if line.startswith("SHGI bake: ") and line.split()[2].endswith("%")]
+    assert tenths == list(range(10, 101, 10)), lines
+
+
+def test_lightmap_nodes_without_an_image_are_dropped_on_load(blender, build_python_dir,
+                                                             tmp_path_factory):
+    """A material whose lightmap image is gone, saved and opened again, shows its own surface
+    again, without the lightmap nodes (no image-less lightmap node reaches a renderer)."""
+    results, _output = trap_results(blender, build_python_dir, tmp_path_factory)
+    assert results["imageless"] == {"material": "plaster floor", "nodes": [],
+                                    "surface_from": "Principled BSDF"}
+
+
+@needs_window
+def test_undo_after_a_bake_shown_in_materials_then_material_preview(build_python_dir, tmp_path):
+    """The sun room's ten objects baked modally with Show in Materials (Create UV Map for the
+    table), one undo, Material Preview: Blender lives, and the undo took back the UV map, the
+    images, the material copies and the nodes together (the state before the bake); a redo
+    gives the bake's state back whole. Then a bake of two new rugs cancelled by Esc keeps what
+    it finished as one undo step. No state has a lightmap node without its image."""
+    out = tmp_path / "bake_undo_window.json"
+    result = run_in_window("bake_undo_window.py", WINDOW, build_python_dir, ADDON_DIR, out,
+                           options=("--enable-event-simulate",))
+    log = result.stdout[-4000:] + result.stderr[-2000:]
+    assert result.returncode == 0 and "BAKE_UNDO_WINDOW_OK" in result.stdout, log
+    r = json.loads(out.read_text())
+    before, baked = r["before_bake"], r["after_bake"]
+    assert r["invoke_status"] == ["RUNNING_MODAL"]
+    assert baked["images"] == sorted(f"{name}_shgi_lightmap" for name in SUN_ROOM_OBJECTS)
+    assert sorted(baked["nodes"].values()) == baked["images"]  # each shown in a material
+    assert "LightmapUV" in baked["objects"]["table"]["uv_maps"]
+    assert "LightmapUV" not in before["objects"]["table"]["uv_maps"]
+    assert r["undo_status"] == ["FINISHED"] and r["after_undo"] == before
+    assert r["shading"] == "MATERIAL" and r["after_material_preview"] == before
+    assert r["redo_status"] == ["FINISHED"] and r["after_redo"] == baked
+    # A bake cancelled by Esc keeps the first rug's image, and both rugs got the UV map: one
+    # undo step, which one undo takes back whole.
+    rugs_before, cancelled = r["before_cancelled_bake"], r["after_cancelled_bake"]
+    assert r["cancel_invoke_status"] == ["RUNNING_MODAL"] and r["worker_running_at_esc"]
+    assert cancelled["images"] == sorted(baked["images"] + ["rug_a_shgi_lightmap"])
+    for rug in ("rug_a", "rug_b"):
+        assert rugs_before["objects"][rug]["uv_maps"] == [], rug
+        assert cancelled["objects"][rug]["uv_maps"] == ["LightmapUV"], rug
+    assert r["cancelled_undo_status"] == ["FINISHED"]
+    assert r["after_cancelled_undo"] == rugs_before
+    for step in ("before_bake", "after_bake", "after_undo", "after_material_preview",
+                 "after_redo", "before_cancelled_bake", "after_cancelled_bake",
+                 "after_cancelled_undo"):
+        assert r[step]["problems"] == [], (step, r[step]["problems"])

@@ -41,7 +41,7 @@ UNSUPPORTED_GEOMETRY_TYPES = ("CURVES", "POINTCLOUD", "VOLUME", "GPENCIL")
 
 
 def export_scene(depsgraph, scene=None, *, report=None, for_render=None, with_camera=True,
-                 should_stop=None):
+                 should_stop=None, flipped=()):
     """Converts an evaluated depsgraph into a new, uncommitted shgi.Scene.
 
     depsgraph: an evaluated Depsgraph (the render engine's, or
@@ -56,6 +56,8 @@ def export_scene(depsgraph, scene=None, *, report=None, for_render=None, with_ca
     should_stop: a callable polled before each object and between the stages of reading a
         mesh (the render engine's ``test_break``: Esc during F12); when it returns True the
         export raises ExportCancelled.
+    flipped: names of objects exported facing the other way (triangles wound the other way,
+        normals negated): a bake then bakes their back (Bake Side: Facing the Scene).
     Returns ExportResult(scene, warnings, stats, probe_volumes).
     """
     start = time.perf_counter()
@@ -63,6 +65,7 @@ def export_scene(depsgraph, scene=None, *, report=None, for_render=None, with_ca
     if for_render is None:
         for_render = depsgraph.mode == "RENDER"
     exporter = _SceneExporter(depsgraph, WarningLog(report), for_render)
+    exporter.flipped = frozenset(flipped)
     if should_stop is not None:
         exporter.check_stop = _stop_check(should_stop)
     exporter.export_instances()
@@ -102,6 +105,7 @@ class _SceneExporter:
         self.probe_volumes = []  # light_probe.ProbeVolumeRecord of the irradiance volumes
         self.skipped = {}  # object name -> why the object was left out
         self.check_stop = never_stop  # raises ExportCancelled when the caller says stop
+        self.flipped = frozenset()  # names of the objects exported facing the other way
 
     def export_instances(self):
         """Adds every visible object instance's geometry or light; records irradiance volumes."""
@@ -166,9 +170,10 @@ class _SceneExporter:
         """Adds an instance of the object's geometry, converting the geometry on first use."""
         obj = instance.object
         material_ids = tuple(self.materials.slot_ids(obj))
-        key = (self._geometry_key(obj), material_ids)
+        flip = obj.name in self.flipped
+        key = (self._geometry_key(obj), material_ids, flip)
         if key not in self._mesh_ids:
-            self._mesh_ids[key] = self._add_mesh(obj, key[0], material_ids)
+            self._mesh_ids[key] = self._add_mesh(obj, key[0], material_ids, flip)
         mesh_id = self._mesh_ids[key]
         if mesh_id is None:
             if key[0] in self._mesh_problems:  # the geometry another object shares was skipped
@@ -200,14 +205,15 @@ class _SceneExporter:
             return ("DATA", obj.data.original.name_full)
         return ("OBJECT", original.name_full)
 
-    def _add_mesh(self, obj, geometry_key, material_ids):
-        """Id of the new shgi mesh of an evaluated object, or None (empty or skipped)."""
+    def _add_mesh(self, obj, geometry_key, material_ids, flip=False):
+        """Id of the new shgi mesh of an evaluated object (facing the other way with `flip`),
+        or None (empty or skipped)."""
         geometry = self._read_geometry(obj, geometry_key)
         if geometry is None:
             return None
         try:
-            mesh_id = self.shgi_scene.add_mesh(
-                self._shgi_mesh(geometry, geometry_key, material_ids))
+            mesh = self._shgi_mesh(geometry, geometry_key, material_ids)
+            mesh_id = self.shgi_scene.add_mesh(flipped_mesh(mesh) if flip else mesh)
         except ValueError as error:
             self._skip(obj, str(error), geometry_key)
             return None
@@ -242,6 +248,14 @@ class _SceneExporter:
         return shgi.Mesh(positions=split.positions, triangles=split.triangles,
                          normals=split.normals, uvs=split.uvs or None,
                          material_indices=material_indices, name=geometry_key[1])
+
+
+def flipped_mesh(mesh):
+    """A new shgi.Mesh facing the other way: each triangle wound the other way (the front is
+    counter-clockwise), the normals negated."""
+    return shgi.Mesh(positions=mesh.positions, triangles=mesh.triangles[:, ::-1].copy(),
+                     normals=-mesh.normals, uvs=mesh.uv_sets or None,
+                     material_indices=mesh.material_indices, name=mesh.name)
 
 
 @dataclass

@@ -14,12 +14,18 @@ def _classes():
 def register():
     import bpy
 
+    from . import lightmap_images
+
     for cls in _classes():
         bpy.utils.register_class(cls)
+    lightmap_images.register()
 
 
 def unregister():
     import bpy
 
+    from . import lightmap_images
+
+    lightmap_images.unregister()
     for cls in reversed(_classes()):
         bpy.utils.unregister_class(cls)

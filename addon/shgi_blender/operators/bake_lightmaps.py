@@ -7,11 +7,22 @@ created by Lightmap Pack or xatlas when asked), exports the scene (export_scene 
 depsgraph, instances named after their objects), finds each object's instance, checks that
 something emits light and sizes each lightmap. A BakeTask (engine/lightmap_bake.py) then
 commits, solves the field of a field source and runs shgi.bake.bake_scene on a worker thread.
-From the UI (invoke) it runs modal: a timer shows progress in the status bar and turns each
-finished lightmap into an image as it comes; Esc cancels and keeps the lightmaps finished
-before. From a script or in background mode (execute) it waits, so
-``blender -b file.blend --python-expr "bpy.ops.shgi.bake_lightmaps()"`` bakes headless and
-fails with the report's message (RuntimeError) when the bake cannot run.
+From the UI (invoke) it runs modal: a timer shows progress in the status bar; Esc cancels and
+keeps the lightmaps finished before. From a script or in background mode (execute) it waits, so
+``blender -b file.blend --python-expr "bpy.ops.shgi.bake_lightmaps()"`` bakes headless (in
+background mode printing a line per finished lightmap and per 10% of progress, for a farm's
+log) and fails with the report's message (RuntimeError) when the bake cannot run.
+
+Undo: a bake is one undo step. Its only data changes before the end are the UV maps Create UV
+Map adds; the images and material nodes are made together when the bake ends, inside the
+operator, whose UNDO flag pushes one step covering them all (a cancelled bake that kept
+something pushes that step itself). An undo therefore takes back UV maps, images and nodes
+together.
+
+Facing: before baking, operators/facing_check.py looks for objects facing away from the scene
+(front to the world, back to the other objects: a room built with its normals out) and warns,
+naming them and the fixes, as their lightmaps would hold the light outside; with Bake Side
+"Facing the Scene" the export turns them around instead, so their backs are baked.
 
 Results: the files shgi.bake writes into the output folder (``<object>.exr`` and ``.png``;
 with Shards > 1 the raw shard files of shard Shard, which SHGI_OT_merge_lightmap_shards merges
@@ -30,7 +41,7 @@ import bpy
 
 from .. import bake_settings, native, properties
 from ..engine.lightmap_bake import BakeRequest, BakeTask
-from . import lightmap_images, xatlas_uv
+from . import facing_check, lightmap_images, xatlas_uv
 from .modal_task import ModalTaskOperator
 
 REPORT_PREFIX = "SHGI bake: "
@@ -82,10 +93,11 @@ def output_dir(folder):
     return os.path.normpath(bpy.path.abspath(folder))
 
 
-def prepare_uv_maps(context, objects, values, report):
+def prepare_uv_maps(context, objects, values, report, created):
     """Makes sure every object's mesh has the lightmap UV map: creates it when asked (by
     Lightmap Pack or xatlas, values.uv_layout; xatlas's chart count and utilisation go to
-    `report`), else BakeError naming the objects without it and the fixes."""
+    `report`; the meshes' names are appended to `created`), else BakeError naming the objects
+    without it and the fixes."""
     missing = [obj for obj in objects if values.uv_map not in obj.data.uv_layers]
     if not missing:
         return
@@ -100,6 +112,7 @@ def prepare_uv_maps(context, objects, values, report):
         if obj.data.name_full not in done:
             create_lightmap_uv(context, obj, values, report)
             done.add(obj.data.name_full)
+            created.append(obj.data.name_full)
 
 
 def create_lightmap_uv(context, obj, values, report):
@@ -196,9 +209,31 @@ def bake_jobs(export, objects, values):
     return jobs
 
 
-def prepare_bake(context, values, report, merge=False):
+def check_facing(scene, depsgraph, objects, values, report):
+    """Names of the objects the bake exports facing the other way.
+
+    Bake Side "Front": none; each of `objects` (the baked ones) facing away from the scene
+    (facing_check.py) is warned about. "Facing the Scene": every renderable mesh object of the
+    scene facing away, each reported: the baked objects' backs are baked, and the light they
+    get off the others comes off their sides facing the scene too.
+    """
+    if values.bake_side != "FACING_SCENE":
+        for name in facing_check.facing_away(scene, depsgraph, objects):
+            report({"WARNING"}, f"{REPORT_PREFIX}{facing_check.warning(name)}")
+        return []
+    meshes = [obj.original for obj in depsgraph.objects
+              if obj.type == "MESH" and not obj.original.hide_render]
+    away = facing_check.facing_away(scene, depsgraph, meshes)
+    baked = {obj.name for obj in objects}
+    for name in away:
+        report({"INFO"}, f"{REPORT_PREFIX}{facing_check.turned_around(name, name in baked)}")
+    return away
+
+
+def prepare_bake(context, values, report, merge=False, created=None):
     """The BakeRequest of a bake (or, with `merge`, of a merge of shard files) of the
-    selected objects; BakeError when it cannot run."""
+    selected objects; BakeError when it cannot run. The meshes that got a new UV map are
+    appended to `created`; objects facing away from the scene are reported as warnings."""
     shgi = native.module()
     if shgi is None:
         raise BakeError(native.error())
@@ -212,10 +247,12 @@ def prepare_bake(context, values, report, merge=False):
     out_dir = output_dir(values.output_folder)
     if context.mode != "OBJECT":  # edit-mode changes reach the mesh only in object mode
         bpy.ops.object.mode_set(mode="OBJECT")
-    prepare_uv_maps(context, objects, values, report)
+    prepare_uv_maps(context, objects, values, report, [] if created is None else created)
     scene = context.scene
-    export = export_scene(context.evaluated_depsgraph_get(), scene, report=report,
-                          for_render=True, with_camera=False)
+    depsgraph = context.evaluated_depsgraph_get()
+    flipped = check_facing(scene, depsgraph, objects, values, report)
+    export = export_scene(depsgraph, scene, report=report, for_render=True, with_camera=False,
+                          flipped=flipped)
     from shgi import bake as shgi_bake  # shgi is loaded (native.module() above)
 
     if not shgi_bake.emits_light(export.scene):
@@ -239,11 +276,14 @@ def prepare_bake(context, values, report, merge=False):
 class _BakeOperator(ModalTaskOperator):
     """Shared body of the bake and merge operators: checks, a BakeTask, modal or waiting."""
 
-    bl_options = {"REGISTER"}
+    # UNDO: Blender pushes one undo step when the operator finishes, covering every data
+    # change of the bake (see the module's docstring).
+    bl_options = {"REGISTER", "UNDO"}
     MERGE = False
     STATUS_PREFIX = "SHGI bake: "
     STATUS_IDLE = "starting"
     PROGRESS_BAR = True
+    LOG_STEPS = 10  # a headless bake logs its progress in tenths
 
     @classmethod
     def poll(cls, context):
@@ -253,41 +293,82 @@ class _BakeOperator(ModalTaskOperator):
         return task.fraction, task.stage
 
     def _tick(self, _context, task):
-        self._store_finished(task)
+        self._collect(task)
+
+    def _waiting(self, task):
+        self._collect(task)
+        self._log_progress(task.fraction, task.stage)
 
     def _start(self, context):
         """Checks and starts the bake (None, with an ERROR report, when it cannot run)."""
         self._values = bake_values(self, context.scene)
-        self._images = []
+        self._lightmaps = []      # shgi.bake.Lightmaps finished, made into images at the end
+        self._new_uv_maps = []    # meshes that got the lightmap UV map from this bake
+        self._logged_steps = 0
+        self._log = bpy.app.background
         self._started = time.perf_counter()
         try:
-            request = prepare_bake(context, self._values, self.report, merge=self.MERGE)
+            request = prepare_bake(context, self._values, self.report, merge=self.MERGE,
+                                   created=self._new_uv_maps)
         except BakeError as error:
             self.report({"ERROR"}, f"{REPORT_PREFIX}{error}")
+            self._push_undo_step()
             return None
+        self._job_count = len(request.jobs)
         return BakeTask(native.module(), request).start()
 
-    def _store_finished(self, task):
-        """Images (and material nodes) of the lightmaps finished since the last call."""
-        values = self._values
+    def _collect(self, task):
+        """Keeps the lightmaps finished since the last call (logged in background mode); no
+        bpy data changes before the end."""
         for lightmap in task.take_finished():
+            self._lightmaps.append(lightmap)
+            if self._log:
+                print(f"{REPORT_PREFIX}{lightmap.name} done ({len(self._lightmaps)} of "
+                      f"{counted(self._job_count, 'lightmap')})", flush=True)
+
+    def _log_progress(self, fraction, stage):
+        """In background mode, a line for each tenth of the progress reached since the last."""
+        reached = min(self.LOG_STEPS, int(fraction * self.LOG_STEPS + 1e-9))
+        while self._log and self._logged_steps < reached:
+            self._logged_steps += 1
+            print(f"{REPORT_PREFIX}{100 * self._logged_steps // self.LOG_STEPS}% "
+                  f"({stage or self.STATUS_IDLE})", flush=True)
+
+    def _store_lightmaps(self):
+        """The images (and with Show in Materials, the material nodes) of every lightmap kept,
+        made in one go; the lightmap_images.HookUps (its warnings reported)."""
+        values = self._values
+        hook_ups = lightmap_images.HookUps()
+        for lightmap in self._lightmaps:
             image = lightmap_images.store_lightmap_image(lightmap)
-            self._images.append(image.name)
             obj = bpy.data.objects.get(lightmap.name)
             if values.hook_up_material and obj is not None:
-                for warning in lightmap_images.hook_up_lightmap(
-                        obj, image, values.uv_map, values.content != "FULL"):
-                    self.report({"WARNING"}, f"{REPORT_PREFIX}{warning}")
+                lightmap_images.hook_up_lightmap(
+                    obj, image, values.uv_map, values.content != "FULL",
+                    values.single_user_materials, hook_ups)
+        for warning in hook_ups.warnings:
+            self.report({"WARNING"}, f"{REPORT_PREFIX}{warning}")
+        return hook_ups
+
+    def _push_undo_step(self):
+        """One undo step for a bake that ends CANCELLED after changing data (the UNDO flag
+        pushes only for FINISHED)."""
+        if (self._lightmaps or self._new_uv_maps) and bpy.ops.ed.undo_push.poll():
+            bpy.ops.ed.undo_push(message=self.bl_label)
 
     def _finish(self, _context, task):
-        self._store_finished(task)
+        self._collect(task)
+        hook_ups = self._store_lightmaps()
+        if task.error is not None or task.cancelled:
+            self._push_undo_step()
         if task.error is not None:
             self.report({"ERROR"}, f"{REPORT_PREFIX}{task.error}")
             return {"CANCELLED"}
         if task.cancelled:
-            self.report({"WARNING"}, f"{REPORT_PREFIX}cancelled; the {len(self._images)} "
+            self.report({"WARNING"}, f"{REPORT_PREFIX}cancelled; the {len(self._lightmaps)} "
                         "lightmaps finished before are kept")
             return {"CANCELLED"}
+        self._log_progress(1.0, "done")
         seconds = time.perf_counter() - self._started
         request = task.request
         if request.shard is not None:
@@ -295,9 +376,27 @@ class _BakeOperator(ModalTaskOperator):
                         f"{request.shard[1]}: {len(task.results)} shard files in "
                         f"{request.out_dir} ({seconds:.2f} s); merge them with Merge Shards")
         else:
-            self.report({"INFO"}, f"{REPORT_PREFIX}{len(self._images)} lightmaps in "
-                        f"{request.out_dir} ({seconds:.2f} s)")
+            shown = (f"; {describe_hook_ups(hook_ups)}" if self._values.hook_up_material
+                     else "")
+            self.report({"INFO"}, f"{REPORT_PREFIX}{counted(len(self._lightmaps), 'lightmap')} "
+                        f"baked into {request.out_dir} ({seconds:.2f} s){shown}")
         return {"FINISHED"}
+
+
+def describe_hook_ups(hook_ups):
+    """What Show in Materials did, for the bake's result: "shown in 10 materials (8 of them
+    single-user copies of shared materials)", and how many warnings it gave."""
+    text = f"shown in {counted(len(hook_ups.materials), 'material')}"
+    if hook_ups.copies:
+        text += f" ({hook_ups.copies} of them single-user copies of shared materials)"
+    if hook_ups.warnings:
+        text += f"; {counted(len(hook_ups.warnings), 'warning')} (see the Info editor)"
+    return text
+
+
+def counted(count, noun):
+    """"1 lightmap", "10 lightmaps"."""
+    return f"{count} {noun}{'' if count == 1 else 's'}"
 
 
 class SHGI_OT_bake_lightmaps(_BakeOperator, bpy.types.Operator):

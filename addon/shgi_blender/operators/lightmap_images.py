@@ -15,7 +15,14 @@ sits between the material's surface shader and its output, so removing them
     Mix Shader "SHGI Lightmap Mix" (Fac 1): the original surface | the lightmap's emission
 
 SHGI's export reads the original surface through that Mix Shader, so later bakes and renders
-see the material as it was.
+see the material as it was. A material that other objects use too gets the nodes only in a
+copy made for the object ("Make Materials Single-User"), else it is left alone with a warning.
+
+Undo: the bake makes these images and nodes in one go at its end, inside its one undo step.
+Should a "SHGI Lightmap" node still lose its image (an undo that keeps the material but drops
+the image, a file saved so), the handlers registered here take the lightmap nodes out of that
+material after every undo, redo and file load, so no image-less lightmap node reaches a
+renderer.
 
 The lightmap's texels are irradiance / pi (Cycles' Diffuse bake units), so times the base
 colour they are the diffuse radiance a Lambert surface sends out, which an Emission of strength
@@ -23,7 +30,10 @@ colour they are the diffuse radiance a Lambert surface sends out, which an Emiss
 Texture is the material's active node, which Workbench's Texture colour shows.
 """
 
+from dataclasses import dataclass, field
+
 import bpy
+from bpy.app.handlers import persistent
 
 from ..bake_settings import LIGHTMAP_MIX_NODE
 from ..engine.lightmap_bake import rgba_pixels
@@ -65,26 +75,60 @@ def store_lightmap_image(lightmap):
     return image
 
 
-def hook_up_lightmap(obj, image, uv_map, multiply_by_base_color):
-    """Shows `image` through `uv_map` in the object's materials; returns warnings about the
-    materials it left alone (none, shared with other objects, without nodes)."""
-    warnings = []
+@dataclass
+class HookUps:
+    """What "Show in Materials" did over a bake: the materials now showing a lightmap, how many
+    of them are copies made single-user, and warnings about the materials left alone."""
+
+    materials: list = field(default_factory=list)
+    copies: int = 0
+    warnings: list = field(default_factory=list)
+
+
+def hook_up_lightmap(obj, image, uv_map, multiply_by_base_color, single_user, hook_ups):
+    """Shows `image` through `uv_map` in the object's materials, recorded in `hook_ups`
+    (HookUps). A material other objects use too is first copied for this object when
+    `single_user`, else left alone with a warning."""
     materials = {slot.material for slot in obj.material_slots if slot.material is not None}
     if not materials:
-        return [f"object {obj.name!r} has no material to show its lightmap in"]
+        hook_ups.warnings.append(f"object {obj.name!r} has no material to show its lightmap in")
     for material in sorted(materials, key=lambda m: m.name):
-        others = sorted(other.name for other in bpy.data.objects if other != obj and any(
-            slot.material == material for slot in other.material_slots))
+        others = _other_users(obj, material)
+        if others and single_user:
+            material, others = _single_user_copy(obj, material), []
+            hook_ups.copies += 1
         if others:
-            warnings.append(f"material {material.name!r} of {obj.name!r} is also used by "
-                            f"{', '.join(others)}: its lightmap is not shown there (make the "
-                            "material single-user: Object > Relations > Make Single User)")
+            hook_ups.warnings.append(
+                f"material {material.name!r} of {obj.name!r} is also used by "
+                f"{', '.join(others)}: its lightmap is not shown there (turn on Make Materials "
+                "Single-User, or Object > Relations > Make Single User)")
         elif not material.use_nodes or material.node_tree.get_output_node("ALL") is None:
-            warnings.append(f"material {material.name!r} has no node tree with a Material "
-                            "Output: its lightmap is not shown there")
+            hook_ups.warnings.append(f"material {material.name!r} has no node tree with a "
+                                     "Material Output: its lightmap is not shown there")
         else:
             _add_lightmap_nodes(material.node_tree, image, uv_map, multiply_by_base_color)
-    return warnings
+            hook_ups.materials.append(material.name)
+
+
+def _other_users(obj, material):
+    """Names of the other objects whose material slots hold `material`."""
+    return sorted(other.name for other in bpy.data.objects if other != obj and any(
+        slot.material == material for slot in other.material_slots))
+
+
+def _single_user_copy(obj, material):
+    """A copy of `material` ("<material> <object>") in the object's slots that held it; a slot
+    linked to a mesh other objects share is linked to the object instead, so the copy reaches
+    this object only."""
+    copy = material.copy()
+    copy.name = f"{material.name} {obj.name}"
+    shared_mesh = obj.data.users > 1
+    for slot in obj.material_slots:
+        if slot.material == material:
+            if shared_mesh and slot.link == "DATA":
+                slot.link = "OBJECT"
+            slot.material = copy
+    return copy
 
 
 def _add_lightmap_nodes(tree, image, uv_map, multiply_by_base_color):
@@ -156,3 +200,40 @@ def remove_lightmap_nodes_from_tree(tree):
     for node in nodes:
         tree.nodes.remove(node)
     return bool(nodes)
+
+
+def drop_imageless_lightmap_nodes():
+    """Takes the lightmap nodes out of every local material whose "SHGI Lightmap" Image
+    Texture has no image; the number of materials changed."""
+    dropped = 0
+    for material in bpy.data.materials:
+        tree = material.node_tree
+        if tree is None or material.library is not None:
+            continue
+        texture = tree.nodes.get(TEXTURE_NODE)
+        if texture is not None and getattr(texture, "image", None) is None:
+            remove_lightmap_nodes_from_tree(tree)
+            dropped += 1
+    return dropped
+
+
+@persistent
+def _drop_after_undo_or_load(*_args):
+    drop_imageless_lightmap_nodes()
+
+
+HANDLERS = ("undo_post", "redo_post", "load_post")
+
+
+def register():
+    for name in HANDLERS:
+        handlers = getattr(bpy.app.handlers, name)
+        if _drop_after_undo_or_load not in handlers:
+            handlers.append(_drop_after_undo_or_load)
+
+
+def unregister():
+    for name in HANDLERS:
+        handlers = getattr(bpy.app.handlers, name)
+        if _drop_after_undo_or_load in handlers:
+            handlers.remove(_drop_after_undo_or_load)

@@ -7,7 +7,8 @@ task runs on Blender's main thread in one go: a window handles Esc only once it 
 
 A subclass implements _start(context) -> a started task or None (after reporting why),
 _finish(context, task) -> the operator's result, _progress(task) -> (fraction, stage), and may
-override _tick(context, task), called on every timer event before the progress is shown.
+override _tick(context, task), called on every timer event before the progress is shown, and
+_waiting(task), called on every wake of a waiting execute() (a headless run's log lines).
 """
 
 from .keyboard_interrupt import keyboard_interrupts, sigint_watch
@@ -28,6 +29,7 @@ class ModalTaskOperator:
             with keyboard_interrupts(), sigint_watch() as interrupted:
                 task = self._start(context)
                 while task is not None and not task.wait(WAIT_SECONDS):
+                    self._waiting(task)
                     if interrupted():  # a Ctrl-C whose KeyboardInterrupt was swallowed
                         raise KeyboardInterrupt
         except KeyboardInterrupt:
@@ -77,4 +79,7 @@ class ModalTaskOperator:
         return self._finish(context, self._task)
 
     def _tick(self, context, task):
+        pass
+
+    def _waiting(self, task):
         pass

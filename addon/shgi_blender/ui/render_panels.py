@@ -222,7 +222,7 @@ class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         column = layout.column(align=True)
-        for name in ("source", "content", "samples"):
+        for name in ("source", "content", "samples", "bake_side"):
             column.prop(bake, name)
         column = layout.column(align=True)
         column.prop(bake, "uv_map")
@@ -243,6 +243,9 @@ class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
         sub.active = bake.filter
         sub.prop(bake, "denoiser")
         column.prop(bake, "hook_up_material")
+        sub = column.column(align=True)
+        sub.active = bake.hook_up_material
+        sub.prop(bake, "single_user_materials")
         layout.prop(bake, "output_folder")
         column = layout.column(align=True, heading="Farm")
         column.prop(bake, "shard_count")
