@@ -29,7 +29,8 @@ sys.path.insert(0, str(REPO_ROOT / "examples"))
 
 import scenes  # noqa: E402
 from shgi_blender import native, presets, settings  # noqa: E402
-from shgi_blender.engine import field_solvers, field_spheres, passes, scene_checks  # noqa: E402
+from shgi_blender.engine import (field_solvers, field_spheres, passes, render_region,  # noqa: E402
+                                 scene_checks)
 from shgi_blender.engine.render_job import RenderJob, sample_rounds  # noqa: E402
 from shgi_blender.export.light_probe import ProbeVolumeRecord, native_volumes  # noqa: E402
 
@@ -345,6 +346,42 @@ def test_job_errors_are_kept_for_the_engine():
     assert isinstance(job.error, ValueError) and not job.cancelled
 
 
+CAMERA_FIELDS = ("type", "lens", "sensor_width", "sensor_height", "sensor_fit", "ortho_scale",
+                 "shift_x", "shift_y", "clip_start", "clip_end", "resolution_x", "resolution_y",
+                 "world_from_camera")
+# float32 rays of the same film point through two viewplanes.
+RAY_TOLERANCE = 2e-6
+
+
+@pytest.mark.parametrize("fit", ["AUTO", "HORIZONTAL", "VERTICAL"])
+@pytest.mark.parametrize("kind", ["PERSPECTIVE", "ORTHOGRAPHIC"])
+@pytest.mark.parametrize("size", [(64, 48), (40, 70)])
+def test_render_region_camera_traces_the_full_frame_s_rays(fit, kind, size):
+    """The Render Region camera's pixel (i, j) sends the ray of the full frame's pixel
+    (x + i, top + j), whatever the sensor fit, camera type, shift and aspect."""
+    full = shgi.Camera(resolution_x=size[0], resolution_y=size[1], shift_x=0.1, shift_y=-0.05,
+                       sensor_height=20.0, sensor_fit=getattr(shgi.SensorFit, fit),
+                       type=getattr(shgi.CameraType, kind))
+    region = render_region.border_region(*size, 0.2, 0.3, 0.7, 0.65)
+    assert (region.width, region.height) == (int(0.7 * size[0]) - int(0.2 * size[0]),
+                                             int(0.65 * size[1]) - int(0.3 * size[1]))
+    camera = render_region.crop_camera(
+        shgi, shgi.Camera(**{name: getattr(full, name) for name in CAMERA_FIELDS}), region)
+    assert (camera.resolution_x, camera.resolution_y) == (region.width, region.height)
+    rows, columns = np.mgrid[0:region.height, 0:region.width] + 0.5
+    film = np.stack([columns.ravel(), rows.ravel()], axis=1).astype(np.float32)
+    origins, directions = camera.generate_rays(film)
+    full_origins, full_directions = full.generate_rays(
+        film + np.array([region.x, region.top], np.float32))
+    np.testing.assert_allclose(origins, full_origins, atol=RAY_TOLERANCE)
+    np.testing.assert_allclose(directions, full_directions, atol=RAY_TOLERANCE)
+
+
+def test_render_region_without_a_whole_pixel_names_the_fix():
+    with pytest.raises(ValueError, match=r"Render Region 0x13 px of a 64x64 px frame .* draw a larger region"):
+        render_region.border_region(64, 64, 0.5, 0.2, 0.51, 0.4)
+
+
 # --- inside Blender ----------------------------------------------------------------------------
 
 # Scripts that break a render on purpose (Esc, an ERROR report): Blender then quits with exit
@@ -422,6 +459,33 @@ def test_f12_matches_cycles(scene, method, blender, build_python_dir, tmp_path_f
         f"Combined mean ratio {row['mean_ratio']:.4f}")
     assert abs(row["diffind_ratio"] - 1.0) <= DIFFUSE_INDIRECT_TOLERANCE, (
         f"DiffInd x DiffCol mean ratio {row['diffind_ratio']:.4f}")
+
+
+def ui_results(blender, build_python_dir, tmp_path_factory):
+    return run_engine_script("engine_ui_checks.py", "ENGINE_UI_OK", blender, build_python_dir,
+                             tmp_path_factory)
+
+
+@pytest.mark.parametrize("crop", ["crop", "no_crop"])
+def test_render_region_renders_the_region_of_the_full_frame(crop, blender, build_python_dir,
+                                                            tmp_path_factory):
+    """F12 with Render Region renders the border's pixels as Cycles does: a result of the
+    border's size with Crop to Render Region, else the full frame with only the region filled
+    (Blender places it); the region matches the same pixels of a full render within noise."""
+    results = ui_results(blender, build_python_dir, tmp_path_factory)["render_region"]
+    row = results[crop]
+    print(f"{crop}: region {row['region_size']} at {row['region']}, PSNR {row['psnr']:.2f} dB, "
+          f"mean ratio {row['mean_ratio']:.4f}")
+    width, height = row["region_size"]
+    assert 0 < width < results["full_size"][0] and 0 < height < results["full_size"][1]
+    expected_size = row["region_size"] if crop == "crop" else results["full_size"]
+    assert row["result_size"] == expected_size
+    assert not any("Render Region" in warning for warning in row["warnings"]), row["warnings"]
+    assert row["psnr"] >= MIN_PSNR_DB, f"region PSNR {row['psnr']:.2f} dB"
+    assert abs(row["mean_ratio"] - 1.0) <= MEAN_TOLERANCE["PATH_TRACE"], row["mean_ratio"]
+    if crop == "no_crop":
+        assert results["uncropped_holds_cropped"]  # the same pixels, placed at the region
+        assert results["uncropped_outside_max"] == 0.0
 
 
 def test_irradiance_volume_object_places_the_probes(blender, build_python_dir, tmp_path_factory):

@@ -1,0 +1,94 @@
+"""What an artist meets in F12 and the panels, inside Blender (one Blender start).
+
+1. Render Region: the Cornell box rendered with a border, with and without Crop to Render
+   Region, against the full frame. Records the result sizes, where SHGI put the region, the
+   Combined PSNR and mean ratio of the region against the same pixels of the full frame (the
+   region's pixels are seeded by their index in the region, so its noise is its own), whether
+   the uncropped result holds exactly the cropped one at the region and nothing elsewhere.
+
+The pytest side (tests/python/test_blender_engine.py) asserts the figures; this script raises
+only where a check needs Blender state, and prints ENGINE_UI_OK.
+"""
+
+import json
+import os
+import sys
+import tempfile
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import engine_common as common  # noqa: E402
+from blender_test_setup import results_path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import shgi  # noqa: E402
+from shgi.metrics import psnr  # noqa: E402
+from shgi_blender.engine import final_render  # noqa: E402
+
+SCALE = 0.25  # the Cornell box at 64 x 64 pixels
+REGION_SAMPLES = 256
+SEED = 1
+# Render > Output > Render Region: min_x, min_y, max_x, max_y (fractions of the frame, y up).
+BORDER = (0.3, 0.2, 0.8, 0.65)
+
+
+def render_combined(scene, path):
+    return common.render_f12(scene, "SHGI", path)["Combined"]
+
+
+def region_of(image, record):
+    """The pixels of the region the record names, cut from a full-frame image (row 0 on top)."""
+    (x, top), (width, height) = record["region"], record["size"]
+    return image[top:top + height, x:x + width]
+
+
+def check_render_region(tmpdir):
+    scene = common.new_scene("cornell_box", SCALE)
+    scene.shgi.method = "PATH_TRACE"
+    scene.shgi.samples = REGION_SAMPLES
+    scene.shgi.seed = SEED
+    full = render_combined(scene, os.path.join(tmpdir, "full.exr"))
+    render = scene.render
+    render.use_border = True
+    (render.border_min_x, render.border_min_y, render.border_max_x,
+     render.border_max_y) = BORDER
+    results = {"full_size": list(full.shape[1::-1])}
+    images = {}
+    for crop in (True, False):
+        render.use_crop_to_border = crop
+        images[crop] = render_combined(scene, os.path.join(tmpdir, f"region_{crop}.exr"))
+        record = final_render.last_render()
+        if record["errors"] or "region" not in record:
+            raise AssertionError(f"F12 with a Render Region: {record}")
+        reference = region_of(full, record)
+        cropped = images[crop] if crop else region_of(images[crop], record)
+        results["crop" if crop else "no_crop"] = {
+            "result_size": list(images[crop].shape[1::-1]), "region": record["region"],
+            "region_size": list(record["size"]), "warnings": record["warnings"],
+            "psnr": psnr(reference, cropped),
+            "mean_ratio": common.mean_rgb(cropped) / common.mean_rgb(reference)}
+    record = final_render.last_render()
+    outside = images[False].copy()
+    (x, top), (width, height) = record["region"], record["size"]
+    outside[top:top + height, x:x + width] = 0.0
+    results["uncropped_holds_cropped"] = bool(np.array_equal(
+        region_of(images[False], record), images[True]))
+    results["uncropped_outside_max"] = float(np.abs(outside).max())
+    render.use_border = False
+    return results
+
+
+def main():
+    out = results_path("shgi_engine_ui.json")
+    shgi.set_max_threads(common.calibration.THREADS)
+    start = time.perf_counter()
+    results = {}
+    with tempfile.TemporaryDirectory(prefix="shgi_engine_ui_") as tmpdir:
+        results["render_region"] = check_render_region(tmpdir)
+    with open(out, "w") as f:
+        json.dump(results, f, indent=1, default=str)
+    print(json.dumps(results, indent=1, default=str))
+    print(f"\nENGINE_UI_OK in {time.perf_counter() - start:.1f} s -> {out}", flush=True)
+
+
+main()
