@@ -6,6 +6,9 @@
    region's pixels are seeded by their index in the region, so its noise is its own), whether
    the uncropped result holds exactly the cropped one at the region and nothing elsewhere.
 
+2. Last Render panel: the rows it draws after a render (label and value of each), with the
+   render's timings.
+
 The pytest side (tests/python/test_blender_engine.py) asserts the figures; this script raises
 only where a check needs Blender state, and prints ENGINE_UI_OK.
 """
@@ -24,6 +27,7 @@ import numpy as np  # noqa: E402
 import shgi  # noqa: E402
 from shgi.metrics import psnr  # noqa: E402
 from shgi_blender.engine import final_render  # noqa: E402
+from recording_layout import draw_panel_rows  # noqa: E402
 
 SCALE = 0.25  # the Cornell box at 64 x 64 pixels
 REGION_SAMPLES = 256
@@ -78,6 +82,12 @@ def check_render_region(tmpdir):
     return results
 
 
+def last_render_panel():
+    """The rows the Last Render panel draws for the last render, and that render's timings."""
+    return {"rows": draw_panel_rows("SHGI_RENDER_PT_last_render"),
+            "timings": final_render.last_render()["timings"]}
+
+
 def main():
     out = results_path("shgi_engine_ui.json")
     shgi.set_max_threads(common.calibration.THREADS)
@@ -85,6 +95,7 @@ def main():
     results = {}
     with tempfile.TemporaryDirectory(prefix="shgi_engine_ui_") as tmpdir:
         results["render_region"] = check_render_region(tmpdir)
+        results["last_render_panel"] = last_render_panel()
     with open(out, "w") as f:
         json.dump(results, f, indent=1, default=str)
     print(json.dumps(results, indent=1, default=str))

@@ -32,6 +32,7 @@ from shgi_blender import native, presets, settings  # noqa: E402
 from shgi_blender.engine import (field_solvers, field_spheres, passes, render_region,  # noqa: E402
                                  scene_checks)
 from shgi_blender.engine.render_job import RenderJob, sample_rounds  # noqa: E402
+from shgi_blender.ui import figure_rows  # noqa: E402
 from shgi_blender.export.light_probe import ProbeVolumeRecord, native_volumes  # noqa: E402
 
 # Issue 5's acceptance figures against Cycles.
@@ -382,6 +383,16 @@ def test_render_region_without_a_whole_pixel_names_the_fix():
         render_region.border_region(64, 64, 0.5, 0.2, 0.51, 0.4)
 
 
+def test_last_render_rows_put_each_time_beside_its_stage():
+    """A solve of 0.40 s, a render of 3.96 s, 5.19 s in total: each row is its stage's label
+    and its own time, in the order of a render, whatever order the record holds them in."""
+    rows = figure_rows.render_timing_rows({"total": 5.19, "render": 3.96, "solve": 0.40,
+                                           "commit": 0.02})
+    assert rows == [("BVH", "0.02 s"), ("Solve", "0.40 s"), ("Render", "3.96 s"),
+                    ("Total", "5.19 s")]
+    assert figure_rows.render_timing_rows({"denoise": 1.5}) == [("Denoise", "1.50 s")]
+
+
 # --- inside Blender ----------------------------------------------------------------------------
 
 # Scripts that break a render on purpose (Esc, an ERROR report): Blender then quits with exit
@@ -486,6 +497,17 @@ def test_render_region_renders_the_region_of_the_full_frame(crop, blender, build
     if crop == "no_crop":
         assert results["uncropped_holds_cropped"]  # the same pixels, placed at the region
         assert results["uncropped_outside_max"] == 0.0
+
+
+def test_last_render_panel_draws_each_time_beside_its_label(blender, build_python_dir,
+                                                           tmp_path_factory):
+    """After F12 the Last Render panel draws one row per timing of the render's record: its
+    stage's label, then that stage's seconds."""
+    panel = ui_results(blender, build_python_dir, tmp_path_factory)["last_render_panel"]
+    assert set(panel["timings"]) >= {"export", "commit", "render", "total"}
+    for key, seconds in panel["timings"].items():
+        label = figure_rows.RENDER_TIMING_LABELS.get(key, key.capitalize())
+        assert [label, f"{seconds:.2f} s"] in panel["rows"], (key, panel["rows"])
 
 
 def test_irradiance_volume_object_places_the_probes(blender, build_python_dir, tmp_path_factory):

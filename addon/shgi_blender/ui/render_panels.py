@@ -10,6 +10,7 @@ import bpy
 
 from .. import native, presets, settings
 from ..engine import final_render, solution_cache
+from . import figure_rows
 from .compat import ShgiPanel
 
 WRAP_COLUMNS = 56  # characters per line of long messages in a panel of default width
@@ -87,16 +88,7 @@ def draw_frozen_solution(layout, context):
     if solution.signature != settings.solver_signature(props):
         box.label(text="Settings changed since the solve: Solve again to apply them",
                   icon="ERROR")
-    grid = box.grid_flow(columns=2, even_columns=True, align=True)
-    for key, label in solution_cache.TIMING_LABELS.items():
-        if key in solution.timings:
-            grid.label(text=label)
-            grid.label(text=f"{1000.0 * solution.timings[key]:.1f} ms")
-    for label, text in solution.solver.figures():
-        grid.label(text=label)
-        grid.label(text=text)
-    grid.label(text="Memory")
-    grid.label(text=f"{solution.memory_bytes / solution_cache.BYTES_PER_MIB:.2f} MiB")
+    figure_rows.draw_rows(box, figure_rows.solution_rows(solution))
 
 
 class _FieldPanel(ShgiPanel):
@@ -273,10 +265,7 @@ class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
         state = " (cancelled)" if record["cancelled"] else ""
         layout.label(text=f"{record['method']}: {width}x{height} px, {record['samples']} "
                           f"samples{state}")
-        grid = layout.grid_flow(columns=2, even_columns=True, align=True)
-        for name, seconds in record["timings"].items():
-            grid.label(text=name.capitalize())
-            grid.label(text=f"{seconds:.2f} s")
+        figure_rows.draw_rows(layout, figure_rows.render_timing_rows(record["timings"]))
         for message in record["errors"] + record["warnings"]:
             draw_wrapped(layout, message, icon="ERROR" if message in record["errors"]
                          else "INFO")
