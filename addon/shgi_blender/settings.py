@@ -308,6 +308,17 @@ def probe_grid_settings(props, shgi, volumes=()):
         volumes=list(volumes)))
 
 
+# ProbeGridSettings' fields that say how a probe field is read (shgi.ProbeLookupSettings).
+PROBE_LOOKUP_FIELDS = ("normal_bias", "view_bias", "bleed_bias", "visibility")
+
+
+def probe_lookup_settings(props, shgi):
+    """shgi.ProbeLookupSettings of scene.shgi.probe_grid: how a probe field read from a file is
+    looked up, as the grid's own field is."""
+    return shgi.ProbeLookupSettings(**{name: getattr(props.probe_grid, name)
+                                       for name in PROBE_LOOKUP_FIELDS})
+
+
 def solver_signature(props):
     """The values the solve of scene.shgi's method depends on (to tell that a frozen solution
     is out of date): the method, its solver's settings and the seed."""

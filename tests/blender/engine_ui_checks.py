@@ -8,6 +8,12 @@
 
 2. Last Render panel: the rows it draws after a render (label and value of each), with the
    render's timings.
+3. Frozen solution: a Probe Grid solved on the Cornell box, then its light moved: the F12
+   warnings and the probe grid panel's text and buttons before and after the move.
+4. Saved solution: re-solved, rendered, saved in a .blend, the file reopened: whether the
+   solution came back from the file beside it, frozen and not out of date, and how its F12
+   differs from the render before the save; then Export Volume, Clear and Load Solution of
+   the exported volume, and how that render differs.
 
 The pytest side (tests/python/test_blender_engine.py) asserts the figures; this script raises
 only where a check needs Blender state, and prints ENGINE_UI_OK.
@@ -27,13 +33,20 @@ import numpy as np  # noqa: E402
 import shgi  # noqa: E402
 from shgi.metrics import psnr  # noqa: E402
 from shgi_blender.engine import final_render  # noqa: E402
-from recording_layout import draw_panel_rows  # noqa: E402
+from recording_layout import draw_panel, draw_panel_operators, draw_panel_rows  # noqa: E402
+from shgi_blender.engine import solution_cache  # noqa: E402
+import bpy  # noqa: E402
 
 SCALE = 0.25  # the Cornell box at 64 x 64 pixels
 REGION_SAMPLES = 256
 SEED = 1
 # Render > Output > Render Region: min_x, min_y, max_x, max_y (fractions of the frame, y up).
 BORDER = (0.3, 0.2, 0.8, 0.65)
+# A quick probe grid: the checks compare renders of one solution, not its quality.
+PROBE_SETTINGS = {"rays_per_probe": 64}
+PROBE_PASSES = 2
+FROZEN_SAMPLES = 8
+LIGHT_MOVE = (0.3, 0.0, 0.0)
 
 
 def render_combined(scene, path):
@@ -88,6 +101,80 @@ def last_render_panel():
             "timings": final_render.last_render()["timings"]}
 
 
+def probe_grid_scene():
+    scene = common.new_scene("cornell_box", SCALE)
+    scene.shgi.method = "PROBE_GRID"
+    scene.shgi.samples = FROZEN_SAMPLES
+    scene.shgi.seed = SEED
+    scene.shgi.probe_passes = PROBE_PASSES
+    for name, value in PROBE_SETTINGS.items():
+        setattr(scene.shgi.probe_grid, name, value)
+    return scene
+
+
+def solve(scene):
+    if bpy.ops.shgi.solve() != {"FINISHED"} or solution_cache.get(scene.name_full) is None:
+        raise AssertionError("Solve did not store a frozen solution")
+
+
+def frozen_render(scene, path):
+    """F12's Combined and record, which must show a frozen solution."""
+    image = render_combined(scene, path)
+    record = final_render.last_render()
+    if record["errors"] or not record["frozen_solution"]:
+        raise AssertionError(f"F12 did not render the frozen solution: {record}")
+    return image, record
+
+
+def panel_state():
+    """The probe grid panel's text and whether it offers Re-solve."""
+    return {"text": draw_panel("SHGI_RENDER_PT_probe_grid"),
+            "buttons": draw_panel_operators("SHGI_RENDER_PT_probe_grid")}
+
+
+def check_stale_solution(tmpdir):
+    scene = probe_grid_scene()
+    solve(scene)
+    results = {"before": {"panel": panel_state()}}
+    _, record = frozen_render(scene, os.path.join(tmpdir, "frozen.exr"))
+    results["before"]["warnings"] = record["warnings"]
+    light = next(obj for obj in scene.objects if obj.type == "LIGHT")
+    light.location = [a + b for a, b in zip(light.location, LIGHT_MOVE)]
+    bpy.context.view_layer.update()
+    results["after"] = {"panel": panel_state(), "light": light.name}
+    _, record = frozen_render(scene, os.path.join(tmpdir, "stale.exr"))
+    results["after"]["warnings"] = record["warnings"]
+    return scene, results
+
+
+def check_saved_solution(scene, tmpdir):
+    """Re-solve, render, save, reopen, render; Export Volume, Clear, Load, render."""
+    solve(scene)
+    before, _ = frozen_render(scene, os.path.join(tmpdir, "saved_before.exr"))
+    blend = os.path.join(tmpdir, "frozen.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=blend)
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    scene = bpy.context.scene
+    solution = solution_cache.get(scene.name_full, "PROBE_GRID")
+    results = {"saved_files": sorted(os.listdir(os.path.join(tmpdir, "frozen_shgi"))),
+               "loaded": solution is not None}
+    if solution is None:
+        return results
+    results["changed_since"] = solution_cache.changed_since(scene.name_full, solution)
+    after, record = frozen_render(scene, os.path.join(tmpdir, "saved_after.exr"))
+    results.update(warnings=record["warnings"], max_difference=float(np.abs(after - before).max()),
+                   mean=common.mean_rgb(before))
+    volume = os.path.join(tmpdir, "volume.json")
+    if bpy.ops.shgi.export_volume(filepath=volume) != {"FINISHED"}:
+        raise AssertionError("Export Volume failed")
+    bpy.ops.shgi.clear_solution()
+    if bpy.ops.shgi.load_solution(filepath=volume) != {"FINISHED"}:
+        raise AssertionError("Load Solution failed")
+    loaded, record = frozen_render(scene, os.path.join(tmpdir, "loaded.exr"))
+    results["load_volume_max_difference"] = float(np.abs(loaded - before).max())
+    return results
+
+
 def main():
     out = results_path("shgi_engine_ui.json")
     shgi.set_max_threads(common.calibration.THREADS)
@@ -96,6 +183,8 @@ def main():
     with tempfile.TemporaryDirectory(prefix="shgi_engine_ui_") as tmpdir:
         results["render_region"] = check_render_region(tmpdir)
         results["last_render_panel"] = last_render_panel()
+        scene, results["stale_solution"] = check_stale_solution(tmpdir)
+        results["saved_solution"] = check_saved_solution(scene, tmpdir)
     with open(out, "w") as f:
         json.dump(results, f, indent=1, default=str)
     print(json.dumps(results, indent=1, default=str))

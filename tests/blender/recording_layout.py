@@ -5,7 +5,8 @@ draw() with a RecordingLayout instead. Every ``prop(data, name)`` must name an R
 `data` (a typo raises AttributeError, as Blender would print it), every ``operator(idname)`` a
 registered operator; label texts are returned for the caller's checks. ``draw_panel_rows``
 returns the labels per row (each ``row()`` or ``split()`` of the layout), to check what sits
-beside what; ``draw_panel_props`` the (property name, text) of each ``prop`` drawn.
+beside what; ``draw_panel_props`` the (property name, text) of each ``prop`` drawn,
+``draw_panel_operators`` the (operator id, text) of each button.
 """
 
 import bpy
@@ -16,10 +17,11 @@ class _OperatorProperties:
 
 
 class RecordingLayout:
-    def __init__(self, labels, rows=None, props=None, row=None):
+    def __init__(self, labels, rows=None, props=None, row=None, operators=None):
         self.labels = labels
         self.rows = [] if rows is None else rows
         self.props = [] if props is None else props
+        self.operators = [] if operators is None else operators
         self._row = row  # the labels of the row() or split() this layout is in, if any
 
     def label(self, text="", icon="NONE"):
@@ -32,8 +34,8 @@ class RecordingLayout:
             raise AttributeError(f"layout.prop: {type(data).__name__} has no property {name!r}")
         self.props.append((name, data.bl_rna.properties[name].name if text is None else text))
 
-    def operator(self, idname, **_kwargs):
-        _operator_type(idname)
+    def operator(self, idname, text=None, **_kwargs):
+        self.operators.append((idname, _operator_type(idname).name if text is None else text))
         return _OperatorProperties()
 
     def operator_menu_enum(self, idname, property, **_kwargs):
@@ -44,12 +46,12 @@ class RecordingLayout:
         pass
 
     def _child(self, *_args, **_kwargs):
-        return RecordingLayout(self.labels, self.rows, self.props, self._row)
+        return RecordingLayout(self.labels, self.rows, self.props, self._row, self.operators)
 
     def _new_row(self, *_args, **_kwargs):
         row = []
         self.rows.append(row)
-        return RecordingLayout(self.labels, self.rows, self.props, row)
+        return RecordingLayout(self.labels, self.rows, self.props, row, self.operators)
 
     box = column = grid_flow = _child
     row = split = _new_row
@@ -88,3 +90,8 @@ def draw_panel_rows(panel_name, context=None):
 def draw_panel_props(panel_name, context=None):
     """(property name, the text shown for it) of each prop() the panel draws."""
     return _draw(panel_name, context).props
+
+
+def draw_panel_operators(panel_name, context=None):
+    """(operator id, the button's text) of each operator() button the panel draws."""
+    return _draw(panel_name, context).operators

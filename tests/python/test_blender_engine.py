@@ -30,7 +30,7 @@ sys.path.insert(0, str(REPO_ROOT / "examples"))
 import scenes  # noqa: E402
 from shgi_blender import native, presets, settings  # noqa: E402
 from shgi_blender.engine import (field_solvers, field_spheres, passes, render_region,  # noqa: E402
-                                 scene_checks)
+                                 scene_checks, solution_cache)
 from shgi_blender.engine.render_job import RenderJob, sample_rounds  # noqa: E402
 from shgi_blender.ui import figure_rows  # noqa: E402
 from shgi_blender.export.light_probe import ProbeVolumeRecord, native_volumes  # noqa: E402
@@ -383,6 +383,34 @@ def test_render_region_without_a_whole_pixel_names_the_fix():
         render_region.border_region(64, 64, 0.5, 0.2, 0.51, 0.4)
 
 
+@pytest.mark.parametrize("kind, name, moved, reshaped, reshaded, changed", [
+    ("Object", "lamp", True, False, False, "object 'lamp' moved"),
+    ("Object", "cube", False, True, False, "object 'cube' changed"),
+    ("Object", "cube", False, False, True, None),   # re-tagged for shading only
+    ("PointLight", "lamp", False, False, True, "PointLight 'lamp' changed"),
+    ("Material", "red", False, False, True, "Material 'red' changed"),
+    ("ShaderNodeTree", "nodes", False, False, False, None),
+    ("Scene", "Scene", False, False, False, None),  # render settings, selection, frame
+])
+def test_scene_edits_that_change_the_light_are_told(kind, name, moved, reshaped, reshaded,
+                                                    changed):
+    assert solution_cache.edit_description(kind, name, False, moved, reshaped,
+                                           reshaded) == changed
+    assert solution_cache.edit_description(kind, name, True, True, True, True) is None  # camera
+
+
+def test_a_solution_is_out_of_date_after_an_edit_of_its_scene():
+    solution_cache.clear_all()
+    solution = solution_cache.Solution("PROBE_GRID", None, None, None, None, {}, 0,
+                                       edits_seen=solution_cache.edit_count("a"))
+    assert solution_cache.changed_since("a", solution) is None
+    solution_cache.note_edit("b", "object 'x' moved")
+    assert solution_cache.changed_since("a", solution) is None  # another scene
+    solution_cache.note_edit("a", "object 'lamp' moved")
+    assert solution_cache.changed_since("a", solution) == "object 'lamp' moved"
+    solution_cache.clear_all()
+
+
 def test_last_render_rows_put_each_time_beside_its_stage():
     """A solve of 0.40 s, a render of 3.96 s, 5.19 s in total: each row is its stage's label
     and its own time, in the order of a render, whatever order the record holds them in."""
@@ -508,6 +536,36 @@ def test_last_render_panel_draws_each_time_beside_its_label(blender, build_pytho
     for key, seconds in panel["timings"].items():
         label = figure_rows.RENDER_TIMING_LABELS.get(key, key.capitalize())
         assert [label, f"{seconds:.2f} s"] in panel["rows"], (key, panel["rows"])
+
+
+def test_a_frozen_solution_says_when_the_scene_changed_since(blender, build_python_dir,
+                                                             tmp_path_factory):
+    """After Solve, moving a light makes F12 warn (in the render's reports) and the panel say
+    that the solution is out of date, naming the light and offering Re-solve; before the move
+    neither does."""
+    results = ui_results(blender, build_python_dir, tmp_path_factory)["stale_solution"]
+    before, after = results["before"], results["after"]
+    assert not before["warnings"] and "changed since" not in before["panel"]["text"]
+    assert ["shgi.solve", "Re-solve"] not in before["panel"]["buttons"]
+    light = f"object {after['light']!r} moved"
+    assert [w for w in after["warnings"] if "the scene changed since" in w and light in w
+            and "Re-solve" in w], after["warnings"]
+    assert "Using the solution of" in after["panel"]["text"], after["panel"]["text"]
+    assert light in after["panel"]["text"]
+    assert ["shgi.solve", "Re-solve"] in after["panel"]["buttons"], after["panel"]["buttons"]
+
+
+def test_a_frozen_solution_survives_save_and_reload(blender, build_python_dir, tmp_path_factory):
+    """A Probe Grid solution is saved beside the .blend, read back when the file opens, still
+    frozen and up to date, and renders the same pixels; Load Solution of the volume Export
+    Volume wrote renders them too."""
+    results = ui_results(blender, build_python_dir, tmp_path_factory)["saved_solution"]
+    assert "Scene.json" in results["saved_files"], results["saved_files"]
+    assert results["loaded"], results
+    assert results["changed_since"] is None and not results["warnings"], results
+    assert results["mean"] > 0.0
+    assert results["max_difference"] == 0.0  # the same field, scene and seed
+    assert results["load_volume_max_difference"] == 0.0
 
 
 def test_irradiance_volume_object_places_the_probes(blender, build_python_dir, tmp_path_factory):

@@ -160,7 +160,7 @@ class FinalRender:
             return None
         solution = (solution_cache.get(self.scene.name_full, method.identifier)
                     if method.uses_field else None)
-        if solution is not None:
+        if solution is not None and solution.scene is not None:
             return self._start_frozen_job(shgi, props, solution)
         from ..export import ExportCancelled, export_scene  # imports shgi: once it imports
 
@@ -171,15 +171,16 @@ class FinalRender:
             self.record["timings"]["export"] = time.perf_counter() - export_start
             # Ctrl-C under the bpy module raises in whatever Python runs next: until the job
             # has started, that is here.
-            return self._job_for(shgi, props, method, export)
+            return self._job_for(shgi, props, method, export, solution)
         except (ExportCancelled, KeyboardInterrupt):  # Esc; Ctrl-C under the bpy module
             self.record["timings"].setdefault("export", time.perf_counter() - export_start)
             self.record["cancelled"] = True
             self.engine.report({"INFO"}, "SHGI: render cancelled before its native work began")
             return None
 
-    def _job_for(self, shgi, props, method, export):
-        """The started RenderJob of the exported scene (None after a failure)."""
+    def _job_for(self, shgi, props, method, export, solution=None):
+        """The started RenderJob of the exported scene (None after a failure); `solution`: a
+        frozen solution read from a file, whose field it renders."""
         if not export.scene.has_camera:
             self.fail("SHGI: the scene has no usable camera (see the warnings)")
             return None
@@ -187,7 +188,12 @@ class FinalRender:
             self.warn(f"SHGI: {message}")
         if self.region is not None:
             export.scene.set_camera(self._region_camera(shgi, export.scene.camera))
-        if method.uses_field:
+        if solution is not None:
+            self._use_frozen_solution(solution)
+            job = RenderJob(shgi, export.scene, props.samples,
+                            preview_settings=settings.preview_settings(props, shgi),
+                            field=solution.field)
+        elif method.uses_field:
             from .field_solvers import solver_recipe
 
             # Without geometry there is nothing to solve: direct light (the world) only.
@@ -213,14 +219,26 @@ class FinalRender:
         if camera is None:
             self.fail("SHGI: the scene has no usable camera (see the warnings)")
             return None
-        self.record["frozen_solution"] = True
-        self._record_solution(solution)
-        self.engine.report({"INFO"}, "SHGI: rendering the frozen solution solved at "
-                           f"{time.strftime('%H:%M:%S', time.localtime(solution.solved_at))}; "
-                           "Clear it to see later scene edits")
+        self._use_frozen_solution(solution)
         return RenderJob(shgi, solution.scene, props.samples,
                          preview_settings=settings.preview_settings(props, shgi),
                          field=solution.field, camera=self._region_camera(shgi, camera)).start()
+
+    def _use_frozen_solution(self, solution):
+        """Records and reports that the render shows `solution`: a WARNING naming the last
+        edit when the scene changed after it was solved."""
+        self.record["frozen_solution"] = True
+        self._record_solution(solution)
+        solved_at = solution_cache.solved_at_text(solution)
+        changed = solution_cache.changed_since(self.scene.name_full, solution)
+        self.record["stale_solution"] = changed
+        if changed is None:
+            self.engine.report({"INFO"}, f"SHGI: rendering the frozen solution of {solved_at}")
+            return
+        panel = settings.METHODS_BY_ID[solution.method].label
+        self.warn(f"SHGI: using the solution of {solved_at}; the scene changed since ({changed})"
+                  f": Re-solve in Render Properties > {panel}, or Clear it to render the scene "
+                  "as it is now")
 
     def _follow(self, job, log):
         """Polls the job until it ends, then writes the result and reports the outcome."""

@@ -4,12 +4,11 @@ Visibility sub-panel, laid out as EEVEE's irradiance volume settings) with the f
 lightmap bakes and the volume export (scene.shgi.bake), and the last render's figures."""
 
 import textwrap
-import time
 
 import bpy
 
 from .. import native, presets, settings
-from ..engine import final_render, solution_cache
+from ..engine import final_render, solution_cache, solution_files
 from . import figure_rows
 from .compat import ShgiPanel
 
@@ -70,24 +69,38 @@ class SHGI_RENDER_PT_light_paths(ShgiPanel, bpy.types.Panel):
 def draw_frozen_solution(layout, context):
     """The Solve and Clear buttons, and the figures of the scene's frozen solution."""
     props = context.scene.shgi
+    key = context.scene.name_full
     row = layout.row(align=True)
     row.operator("shgi.solve", icon="LIGHT_SUN")
+    if props.method == "PROBE_GRID":
+        row.operator("shgi.load_solution", icon="FILE_FOLDER")
     row.operator("shgi.clear_solution", icon="X")
-    solution = solution_cache.get(context.scene.name_full)
+    solution = solution_cache.get(key)
     if solution is None:
+        problem = solution_files.load_problem(key)
+        if problem is not None:
+            draw_wrapped(layout.box(), problem, icon="ERROR")
         return
     box = layout.box()
-    solved_at = time.strftime("%H:%M:%S", time.localtime(solution.solved_at))
+    solved_at = solution_cache.solved_at_text(solution)
     if solution.method != props.method:
-        box.label(text=f"Frozen {settings.METHODS_BY_ID[solution.method].label} solution "
-                       f"({solved_at}): not used by this method", icon="INFO")
+        draw_wrapped(box, f"Frozen {settings.METHODS_BY_ID[solution.method].label} solution "
+                          f"({solved_at}): not used by this method", icon="INFO")
         return
-    box.label(text=f"Frozen solution ({solved_at}): F12 renders it from any camera",
-              icon="FREEZE")
-    box.label(text="Scene edits made since are not seen: Solve again or Clear")
-    if solution.signature != settings.solver_signature(props):
-        box.label(text="Settings changed since the solve: Solve again to apply them",
-                  icon="ERROR")
+    changed = solution_cache.changed_since(key, solution)
+    if changed is not None:
+        draw_wrapped(box, f"Using the solution of {solved_at}; the scene changed since "
+                          f"({changed})", icon="ERROR")
+        box.operator("shgi.solve", text="Re-solve", icon="FILE_REFRESH")
+    else:
+        draw_wrapped(box, f"Frozen solution ({solved_at}): F12 renders it from any camera",
+                     icon="FREEZE")
+    if solution.signature is not None and solution.signature != settings.solver_signature(props):
+        draw_wrapped(box, "Settings changed since the solve: Re-solve to apply them",
+                     icon="ERROR")
+    if solution.method != "PROBE_GRID":
+        draw_wrapped(box, "Not saved with the file (photon lattices cannot be read back)",
+                     icon="INFO")
     figure_rows.draw_rows(box, figure_rows.solution_rows(solution))
 
 
