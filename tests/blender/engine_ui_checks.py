@@ -14,6 +14,11 @@
    solution came back from the file beside it, frozen and not out of date, and how its F12
    differs from the render before the save; then Export Volume, Clear and Load Solution of
    the exported volume, and how that render differs.
+5. Panels: the Quality menu's text and the matching preset on a new scene; where the Max
+   Bounces and Farm settings are drawn (panel, parent panel); every tooltip of the add-on's
+   properties, enum items and operators; the width in pixels (blf, the UI font at 11 pt) of
+   every property label the SHGI panels draw beside a value, and of the text Blender showed
+   for a label it cut ("Viewport Sa…").
 
 The pytest side (tests/python/test_blender_engine.py) asserts the figures; this script raises
 only where a check needs Blender state, and prints ENGINE_UI_OK.
@@ -33,7 +38,10 @@ import numpy as np  # noqa: E402
 import shgi  # noqa: E402
 from shgi.metrics import psnr  # noqa: E402
 from shgi_blender.engine import final_render  # noqa: E402
-from recording_layout import draw_panel, draw_panel_operators, draw_panel_rows  # noqa: E402
+from recording_layout import (draw_panel, draw_panel_operators, draw_panel_props,  # noqa: E402
+                              draw_panel_rows)
+from shgi_blender import presets  # noqa: E402
+from types import SimpleNamespace  # noqa: E402
 from shgi_blender.engine import solution_cache  # noqa: E402
 import bpy  # noqa: E402
 
@@ -175,6 +183,79 @@ def check_saved_solution(scene, tmpdir):
     return results
 
 
+# Text Blender showed for "Viewport Samples" in the render panel at the default width: the
+# label column holds at least this much.
+CUT_LABEL_SEEN = "Viewport Sa\u2026"
+UI_POINTS = 11
+SHGI_PANELS = ("SHGI_RENDER_PT_method", "SHGI_RENDER_PT_light_paths",
+               "SHGI_RENDER_PT_light_paths_max_bounces", "SHGI_RENDER_PT_photon_lattice",
+               "SHGI_RENDER_PT_probe_grid", "SHGI_RENDER_PT_probe_grid_visibility",
+               "SHGI_RENDER_PT_bake", "SHGI_RENDER_PT_bake_farm")
+
+
+def text_width(text):
+    import blf
+
+    if bpy.app.version < (4, 0, 0):
+        blf.size(0, UI_POINTS, 72)
+    else:
+        blf.size(0, UI_POINTS)
+    return blf.dimensions(0, text)[0]
+
+
+def tooltips():
+    """{where: text} of every tooltip of scene.shgi's groups, their enum items and the
+    add-on's operators."""
+    texts = {}
+    groups = {"scene.shgi": bpy.context.scene.shgi, "probe_grid": bpy.context.scene.shgi.probe_grid,
+              "bake": bpy.context.scene.shgi.bake}
+    for group_name, group in groups.items():
+        for prop in group.bl_rna.properties:
+            texts[f"{group_name}.{prop.identifier}"] = prop.description
+            for item in getattr(prop, "enum_items", ()):
+                texts[f"{group_name}.{prop.identifier}.{item.identifier}"] = item.description
+    for name in dir(bpy.types):
+        if name.startswith("SHGI_OT_"):
+            texts[name] = getattr(bpy.types, name).bl_rna.description
+    return texts
+
+
+def panel_labels(scene):
+    """{label: width in pixels} of every property label the SHGI panels draw, each method."""
+    context = SimpleNamespace(scene=scene, engine="SHGI", selected_objects=[])
+    labels = {}
+    for method in ("PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID"):
+        scene.shgi.method = method
+        for panel in SHGI_PANELS:
+            for group, name, text in draw_panel_props(panel, context):
+                if group.bl_rna.properties[name].type != "BOOLEAN":  # in the value column
+                    labels[text] = text_width(text)
+    return labels
+
+
+def check_panels():
+    scene = common.new_scene("cornell_box", SCALE)
+    scene.render.engine = "SHGI"
+    context = SimpleNamespace(scene=scene, engine="SHGI", selected_objects=[])
+    types = bpy.types
+    results = {
+        "matching_preset": presets.matching_preset(scene.shgi),
+        "quality_menu": [text for idname, text in draw_panel_operators(
+            "SHGI_RENDER_PT_method", context) if idname == "shgi.quality_preset"],
+        "sub_panels": {name: [getattr(types, name).bl_label, getattr(types, name).bl_parent_id]
+                       for name in ("SHGI_RENDER_PT_light_paths_max_bounces",
+                                    "SHGI_RENDER_PT_bake_farm")},
+        "props": {name: [prop for _group, prop, _text in draw_panel_props(name, context)]
+                  for name in ("SHGI_RENDER_PT_light_paths",
+                               "SHGI_RENDER_PT_light_paths_max_bounces",
+                               "SHGI_RENDER_PT_bake", "SHGI_RENDER_PT_bake_farm")},
+        "tooltips": tooltips(),
+        "label_widths": panel_labels(scene),
+        "cut_label_width": text_width(CUT_LABEL_SEEN),
+    }
+    return results
+
+
 def main():
     out = results_path("shgi_engine_ui.json")
     shgi.set_max_threads(common.calibration.THREADS)
@@ -185,6 +266,7 @@ def main():
         results["last_render_panel"] = last_render_panel()
         scene, results["stale_solution"] = check_stale_solution(tmpdir)
         results["saved_solution"] = check_saved_solution(scene, tmpdir)
+        results["panels"] = check_panels()
     with open(out, "w") as f:
         json.dump(results, f, indent=1, default=str)
     print(json.dumps(results, indent=1, default=str))

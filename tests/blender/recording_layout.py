@@ -5,7 +5,7 @@ draw() with a RecordingLayout instead. Every ``prop(data, name)`` must name an R
 `data` (a typo raises AttributeError, as Blender would print it), every ``operator(idname)`` a
 registered operator; label texts are returned for the caller's checks. ``draw_panel_rows``
 returns the labels per row (each ``row()`` or ``split()`` of the layout), to check what sits
-beside what; ``draw_panel_props`` the (property name, text) of each ``prop`` drawn,
+beside what; ``draw_panel_props`` the (data, property name, text) of each ``prop`` drawn,
 ``draw_panel_operators`` the (operator id, text) of each button.
 """
 
@@ -32,15 +32,17 @@ class RecordingLayout:
     def prop(self, data, name, text=None, **_kwargs):
         if name not in data.bl_rna.properties:
             raise AttributeError(f"layout.prop: {type(data).__name__} has no property {name!r}")
-        self.props.append((name, data.bl_rna.properties[name].name if text is None else text))
+        self.props.append((data, name,
+                           data.bl_rna.properties[name].name if text is None else text))
 
     def operator(self, idname, text=None, **_kwargs):
         self.operators.append((idname, _operator_type(idname).name if text is None else text))
         return _OperatorProperties()
 
-    def operator_menu_enum(self, idname, property, **_kwargs):
+    def operator_menu_enum(self, idname, property, text="", **_kwargs):
         if property not in _operator_type(idname).properties:
             raise AttributeError(f"layout.operator_menu_enum: {idname} has no {property!r}")
+        self.operators.append((idname, text))
 
     def separator(self, **_kwargs):
         pass
@@ -88,7 +90,7 @@ def draw_panel_rows(panel_name, context=None):
 
 
 def draw_panel_props(panel_name, context=None):
-    """(property name, the text shown for it) of each prop() the panel draws."""
+    """(data, property name, the text shown for it) of each prop() the panel draws."""
     return _draw(panel_name, context).props
 
 

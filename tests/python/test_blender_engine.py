@@ -121,7 +121,7 @@ def test_refused_settings_are_named_as_the_panels_show_them():
     props.probe_grid.visibility_blur = 0.0  # a value saved before the range was tightened
     with pytest.raises(ValueError, match=r"^Probe Grid > Visibility > Blur is 0; use 0\.01\.\.2"):
         settings.probe_grid_settings(props, shgi)
-    with pytest.raises(ValueError, match=r"^Light Paths > Clamp Indirect is -1"):
+    with pytest.raises(ValueError, match=r"^Light Paths > Clamp is -1"):
         settings.path_tracer_settings(default_props(clamp_indirect=-1.0), shgi)
     assert settings.name_settings(
         "PhotonLatticeSettings.max_bounces is 0; ProbeGridSettings.visibility is x; "
@@ -309,6 +309,37 @@ def test_probe_overlay_shows_each_probe_s_own_irradiance():
             "d,kdc->kc", axis, linear)
     expected = np.maximum(expected, 0.0)
     np.testing.assert_allclose(overlay.irradiance, expected, rtol=2e-3, atol=1e-5)
+
+
+def test_overlay_spheres_resize_and_show_no_black_side():
+    """The spheres' size follows the setting (only positions change) and a side that no
+    indirect light reaches shows the ambient lift's dim grey, not black."""
+    scene = committed(scenes.cornell_box(0.06))
+    grid = shgi.ProbeGrid(scene, shgi.ProbeGridSettings(order=1, rays_per_probe=32, seed=1))
+    grid.update()
+    overlay = field_solvers.probe_overlay(shgi, grid.field())
+    vertices = len(overlay.positions) // len(overlay.centres)
+    for overlay_size in (0.05, 0.3):
+        resized = overlay.resized(overlay_size)
+        offsets = resized.positions.reshape(len(overlay.centres), vertices, 3) - \
+            overlay.centres[:, None, :]
+        np.testing.assert_allclose(np.linalg.norm(offsets, axis=2),
+                                   overlay_size * overlay.spacing, rtol=1e-4)
+        assert resized.colors is overlay.colors
+    lift = shgi.srgb_from_linear(np.full((1, 3), field_spheres.AMBIENT_LIFT * 0.18,
+                                         np.float32))[0, 0]
+    assert overlay.colors[:, :3].min() >= lift - 1e-4
+    dark = field_spheres.sphere_arrays(overlay.centres[:1], 0.1, np.zeros((1, 6, 3), np.float32)
+                                       + np.float32(field_spheres.AMBIENT_LIFT * 0.18))[1]
+    assert dark[:, :3].min() > 0.0
+
+
+def test_a_new_scene_s_counts_are_the_default_preset():
+    props = default_props()
+    assert presets.matching_preset(props) == "DEFAULT"
+    assert presets.preset_label(props) == "Default"
+    props.samples += 1
+    assert presets.preset_label(props) == "Custom"
 
 
 @pytest.mark.parametrize("stage, job_args", [
@@ -566,6 +597,57 @@ def test_a_frozen_solution_survives_save_and_reload(blender, build_python_dir, t
     assert results["mean"] > 0.0
     assert results["max_difference"] == 0.0  # the same field, scene and seed
     assert results["load_volume_max_difference"] == 0.0
+
+
+# Words of the papers and data structures behind the methods: a tooltip says what a setting
+# does to the image instead.
+JARGON = ("ISLLPM", "DDGI", "k-d tree", "octahedral", "moments", "spherical harmonics",
+          "spherical-harmonics", "density estimation", "hysteresis", "seed 00")
+
+
+def panel_results(blender, build_python_dir, tmp_path_factory):
+    return ui_results(blender, build_python_dir, tmp_path_factory)["panels"]
+
+
+def test_no_tooltip_speaks_paper_jargon(blender, build_python_dir, tmp_path_factory):
+    tooltips = panel_results(blender, build_python_dir, tmp_path_factory)["tooltips"]
+    assert len(tooltips) > 50 and "scene.shgi.method.PHOTON_LATTICE" in tooltips
+    found = {where: text for where, text in tooltips.items()
+             if any(word.lower() in text.lower() for word in JARGON)}
+    assert not found, found
+
+
+def test_the_defaults_show_their_preset(blender, build_python_dir, tmp_path_factory):
+    results = panel_results(blender, build_python_dir, tmp_path_factory)
+    assert results["matching_preset"] == "DEFAULT"
+    assert results["quality_menu"] == [presets.PRESET_LABELS["DEFAULT"]]
+
+
+def test_max_bounces_and_farm_are_sub_panels(blender, build_python_dir, tmp_path_factory):
+    """Light Paths > Max Bounces holds the bounce limits (as in Cycles); Bake > Farm the shard
+    settings, which the Bake panel no longer draws."""
+    results = panel_results(blender, build_python_dir, tmp_path_factory)
+    assert results["sub_panels"] == {
+        "SHGI_RENDER_PT_light_paths_max_bounces": ["Max Bounces", "SHGI_RENDER_PT_light_paths"],
+        "SHGI_RENDER_PT_bake_farm": ["Farm", "SHGI_RENDER_PT_bake"]}
+    props = results["props"]
+    bounces = ["max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces"]
+    assert props["SHGI_RENDER_PT_light_paths_max_bounces"][:4] == bounces
+    assert not set(bounces) & set(props["SHGI_RENDER_PT_light_paths"])
+    farm = {"shard_count", "shard_index", "tile_size"}
+    assert set(props["SHGI_RENDER_PT_bake_farm"]) == farm
+    assert not farm & set(props["SHGI_RENDER_PT_bake"])
+
+
+def test_panel_labels_fit_the_default_width(blender, build_python_dir, tmp_path_factory):
+    """Every label the SHGI panels draw beside a value is no wider than the text Blender showed
+    in place of a cut label at the default width ("Viewport Sa..."); checkbox labels sit in the
+    wider value column and are left out."""
+    results = panel_results(blender, build_python_dir, tmp_path_factory)
+    budget = results["cut_label_width"]
+    assert budget > 0 and len(results["label_widths"]) > 30
+    wide = {text: width for text, width in results["label_widths"].items() if width > budget}
+    assert not wide, f"wider than {budget} px: {wide}"
 
 
 def test_irradiance_volume_object_places_the_probes(blender, build_python_dir, tmp_path_factory):

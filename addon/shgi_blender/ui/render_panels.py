@@ -9,7 +9,7 @@ import bpy
 
 from .. import native, presets, settings
 from ..engine import final_render, solution_cache, solution_files
-from . import figure_rows
+from . import field_overlay, figure_rows
 from .compat import ShgiPanel
 
 WRAP_COLUMNS = 56  # characters per line of long messages in a panel of default width
@@ -32,17 +32,19 @@ class SHGI_RENDER_PT_method(ShgiPanel, bpy.types.Panel):
         if error is not None:
             draw_wrapped(layout.box(), error, icon="ERROR")
         props = context.scene.shgi
-        layout.prop(props, "method")
-        row = layout.row(align=True)
-        current = presets.matching_preset(props)
-        for name, label in presets.PRESET_LABELS.items():
-            row.operator("shgi.quality_preset", text=label,
-                         depress=(name == current)).preset = name
         layout.use_property_split = True
         layout.use_property_decorate = False
+        layout.prop(props, "method")
+        # A menu naming the preset the counts match: a row of buttons cut their labels.
+        split = layout.split(factor=0.4)
+        split.alignment = "RIGHT"
+        split.label(text="Quality")
+        split.operator_menu_enum("shgi.quality_preset", "preset",
+                                 text=presets.preset_label(props))
         column = layout.column(align=True)
-        column.prop(props, "viewport_samples", text="Viewport Samples")
-        column.prop(props, "samples", text="Render Samples")
+        column.label(text="Samples")
+        column.prop(props, "viewport_samples", text="Viewport")
+        column.prop(props, "samples", text="Render")
         column.prop(props, "seed")
 
 
@@ -56,14 +58,28 @@ class SHGI_RENDER_PT_light_paths(ShgiPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         props = context.scene.shgi
-        column = layout.column(align=True, heading="Max Bounces")
+        column = layout.column(align=True)
+        column.prop(props, "clamp_indirect", text="Clamp")
+        column.prop(props, "world_sampling", text="World")
+
+
+class SHGI_RENDER_PT_light_paths_max_bounces(ShgiPanel, bpy.types.Panel):
+    """Cycles' Light Paths > Max Bounces sub-panel: Total and the limit per kind of bounce."""
+
+    bl_label = "Max Bounces"
+    bl_context = "render"
+    bl_parent_id = "SHGI_RENDER_PT_light_paths"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        props = context.scene.shgi
+        column = layout.column(align=True)
         for name in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces"):
             column.prop(props, name)
-        column = layout.column(align=True)
-        column.prop(props, "clamp_indirect")
-        column.prop(props, "world_sampling")
         if settings.METHODS_BY_ID[props.method].uses_field:
-            column.prop(props, "max_specular_bounces")
+            column.prop(props, "max_specular_bounces", text="Specular")
 
 
 def draw_frozen_solution(layout, context):
@@ -133,11 +149,12 @@ class SHGI_RENDER_PT_photon_lattice(_FieldPanel, bpy.types.Panel):
         column.prop(props, "caustics")
         sub = column.column(align=True)
         sub.active = props.caustics != "OFF"
-        sub.prop(props, "caustic_resolution")
+        sub.prop(props, "caustic_resolution", text="Resolution")
         layout.prop(props, "world_in_field")
         column = layout.column(align=True)
-        column.prop(props, "viewport_photon_passes", text="Viewport Passes")
-        column.prop(props, "show_lattice_samples", text="Show Lattice Samples")
+        column.label(text="Photon Passes")
+        column.prop(props, "viewport_photon_passes", text="Viewport")
+        field_overlay.draw_overlay_settings(layout, props, "show_lattice_samples")
 
 
 class SHGI_RENDER_PT_probe_grid(_FieldPanel, bpy.types.Panel):
@@ -161,18 +178,21 @@ class SHGI_RENDER_PT_probe_grid(_FieldPanel, bpy.types.Panel):
         sub = column.column(align=True)
         sub.active = volumes == 0
         sub.prop(grid, "spacing")
-        for name in ("order", "rays_per_probe", "hysteresis", "clamp", "bounces"):
+        column.prop(grid, "order")
+        column.prop(grid, "rays_per_probe", text="Rays")
+        for name in ("hysteresis", "clamp", "bounces"):
             column.prop(grid, name)
         column = layout.column(align=True)
-        column.prop(props, "probe_passes", text="Render Passes")
-        column.prop(props, "viewport_probe_passes", text="Viewport Passes")
+        column.label(text="Update Passes")
+        column.prop(props, "probe_passes", text="Render")
+        column.prop(props, "viewport_probe_passes", text="Viewport")
         column = layout.column(align=True, heading="Relocation")
         column.prop(grid, "relocate", text="Move Out of Geometry")
         sub = column.column(align=True)
         sub.active = grid.relocate
         sub.prop(grid, "max_offset")
-        column.prop(grid, "backface_threshold")
-        layout.prop(props, "show_probes", text="Show Probes")
+        column.prop(grid, "backface_threshold", text="Back Faces")
+        field_overlay.draw_overlay_settings(layout, props, "show_probes")
 
 
 class SHGI_RENDER_PT_probe_grid_visibility(_FieldPanel, bpy.types.Panel):
@@ -239,7 +259,7 @@ class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
         column.prop(bake, "resolution")
         sub = column.column(align=True)
         sub.active = bake.resolution == 0
-        sub.prop(bake, "texel_density")
+        sub.prop(bake, "texel_density", text="Texels per m")
         column.prop(bake, "padding")
         column = layout.column(align=True)
         for name in ("directional", "filter"):
@@ -249,18 +269,33 @@ class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
         sub.prop(bake, "denoiser")
         column.prop(bake, "hook_up_material")
         layout.prop(bake, "output_folder")
-        column = layout.column(align=True, heading="Farm")
-        column.prop(bake, "shard_count")
-        sub = column.column(align=True)
-        sub.active = bake.shard_count > 1
-        sub.prop(bake, "shard_index")
-        column.prop(bake, "tile_size")
         layout.operator("shgi.remove_lightmap_nodes", icon="X")
         layout.separator()
         layout.prop(bake, "volume_path")
         row = layout.row()
         row.active = settings.METHODS_BY_ID[context.scene.shgi.method].uses_field
         row.operator("shgi.export_volume", icon="EXPORT")
+
+
+class SHGI_RENDER_PT_bake_farm(ShgiPanel, bpy.types.Panel):
+    """The Bake panel's render farm settings: shards and the tiles they are made of."""
+
+    bl_label = "Farm"
+    bl_context = "render"
+    bl_parent_id = "SHGI_RENDER_PT_bake"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        bake = context.scene.shgi.bake
+        column = layout.column(align=True)
+        column.prop(bake, "shard_count")
+        sub = column.column(align=True)
+        sub.active = bake.shard_count > 1
+        sub.prop(bake, "shard_index")
+        column.prop(bake, "tile_size")
 
 
 class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
@@ -284,6 +319,8 @@ class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
                          else "INFO")
 
 
-CLASSES = (SHGI_RENDER_PT_method, SHGI_RENDER_PT_light_paths, SHGI_RENDER_PT_photon_lattice,
+# Parents before their sub-panels.
+CLASSES = (SHGI_RENDER_PT_method, SHGI_RENDER_PT_light_paths,
+           SHGI_RENDER_PT_light_paths_max_bounces, SHGI_RENDER_PT_photon_lattice,
            SHGI_RENDER_PT_probe_grid, SHGI_RENDER_PT_probe_grid_visibility,
-           SHGI_RENDER_PT_bake, SHGI_RENDER_PT_last_render)
+           SHGI_RENDER_PT_bake, SHGI_RENDER_PT_bake_farm, SHGI_RENDER_PT_last_render)
