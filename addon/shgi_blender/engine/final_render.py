@@ -231,6 +231,9 @@ class FinalRender:
         self._record_solution(solution)
         solved_at = solution_cache.solved_at_text(solution)
         changed = solution_cache.changed_since(self.scene.name_full, solution)
+        if (changed is None and solution.signature is not None
+                and solution.signature != settings.solver_signature(self.scene.shgi)):
+            changed = "its settings"
         self.record["stale_solution"] = changed
         if changed is None:
             self.engine.report({"INFO"}, f"SHGI: rendering the frozen solution of {solved_at}")
