@@ -29,21 +29,20 @@ import os
 import sys
 import tempfile
 import time
+from types import SimpleNamespace
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import engine_common as common  # noqa: E402
 from blender_test_setup import results_path  # noqa: E402
+from recording_layout import (draw_panel, draw_panel_operators, draw_panel_props,  # noqa: E402
+                              draw_panel_rows)
 
+import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 import shgi  # noqa: E402
 from shgi.metrics import psnr  # noqa: E402
-from shgi_blender.engine import final_render  # noqa: E402
-from recording_layout import (draw_panel, draw_panel_operators, draw_panel_props,  # noqa: E402
-                              draw_panel_rows)
 from shgi_blender import presets  # noqa: E402
-from types import SimpleNamespace  # noqa: E402
-from shgi_blender.engine import solution_cache  # noqa: E402
-import bpy  # noqa: E402
+from shgi_blender.engine import final_render, solution_cache  # noqa: E402
 
 SCALE = 0.25  # the Cornell box at 64 x 64 pixels
 REGION_SAMPLES = 256

@@ -410,7 +410,8 @@ def test_render_region_camera_traces_the_full_frame_s_rays(fit, kind, size):
 
 
 def test_render_region_without_a_whole_pixel_names_the_fix():
-    with pytest.raises(ValueError, match=r"Render Region 0x13 px of a 64x64 px frame .* draw a larger region"):
+    with pytest.raises(ValueError, match=r"Render Region 0x13 px of a 64x64 px frame .* draw "
+                                         r"a larger region"):
         render_region.border_region(64, 64, 0.5, 0.2, 0.51, 0.4)
 
 
