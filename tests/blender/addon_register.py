@@ -84,7 +84,7 @@ def check_panels_draw(scene):
     scene.shgi.method = "PHOTON_LATTICE"
     draw_panel("SHGI_RENDER_PT_photon_lattice", context)
     scene.shgi.method = "PROBE_GRID"
-    if "fitted to the scene" not in draw_panel("SHGI_RENDER_PT_probe_grid", context):
+    if "probes fill the scene" not in draw_panel("SHGI_RENDER_PT_probe_grid", context):
         raise AssertionError("the probe grid panel does not say its volume is fitted")
     draw_panel("SHGI_RENDER_PT_probe_grid_visibility", context)
     check_probe_grid_properties(scene)

@@ -43,6 +43,7 @@ import shgi  # noqa: E402
 from shgi.metrics import psnr  # noqa: E402
 from shgi_blender import presets  # noqa: E402
 from shgi_blender.engine import final_render, solution_cache  # noqa: E402
+from shgi_blender.ui import render_panels  # noqa: E402
 
 SCALE = 0.25  # the Cornell box at 64 x 64 pixels
 REGION_SAMPLES = 256
@@ -135,8 +136,9 @@ def frozen_render(scene, path):
 
 def panel_state():
     """The probe grid panel's text and whether it offers Re-solve."""
-    return {"text": draw_panel("SHGI_RENDER_PT_probe_grid"),
-            "buttons": draw_panel_operators("SHGI_RENDER_PT_probe_grid")}
+    text = draw_panel("SHGI_RENDER_PT_probe_grid")
+    return {"text": text, "buttons": draw_panel_operators("SHGI_RENDER_PT_probe_grid"),
+            "label_widths": {label: text_width(label) for label in text.split(" | ")}}
 
 
 def check_stale_solution(tmpdir):
@@ -220,16 +222,21 @@ def tooltips():
 
 
 def panel_labels(scene):
-    """{label: width in pixels} of every property label the SHGI panels draw, each method."""
+    """({property label: width in pixels}, {label text: width}) of what the SHGI panels draw,
+    for each method; booleans' labels sit in the value column and are left out of the first."""
     context = SimpleNamespace(scene=scene, engine="SHGI", selected_objects=[])
-    labels = {}
+    props, texts = {}, {}
     for method in ("PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID"):
         scene.shgi.method = method
-        for panel in SHGI_PANELS:
-            for group, name, text in draw_panel_props(panel, context):
-                if group.bl_rna.properties[name].type != "BOOLEAN":  # in the value column
-                    labels[text] = text_width(text)
-    return labels
+        for show in (False, True):  # with the overlay settings and legend
+            scene.shgi.show_probes = scene.shgi.show_lattice_samples = show
+            for panel in SHGI_PANELS:
+                for group, name, text in draw_panel_props(panel, context):
+                    if group.bl_rna.properties[name].type != "BOOLEAN":
+                        props[text] = text_width(text)
+                for text in draw_panel(panel, context).split(" | "):
+                    texts[text] = text_width(text)
+    return props, texts
 
 
 def check_panels():
@@ -249,9 +256,10 @@ def check_panels():
                                "SHGI_RENDER_PT_light_paths_max_bounces",
                                "SHGI_RENDER_PT_bake", "SHGI_RENDER_PT_bake_farm")},
         "tooltips": tooltips(),
-        "label_widths": panel_labels(scene),
         "cut_label_width": text_width(CUT_LABEL_SEEN),
+        "text_budget": render_panels.DEFAULT_REGION_PIXELS - render_panels.MARGIN_PIXELS,
     }
+    results["label_widths"], results["text_widths"] = panel_labels(scene)
     return results
 
 

@@ -651,6 +651,19 @@ def test_panel_labels_fit_the_default_width(blender, build_python_dir, tmp_path_
     assert not wide, f"wider than {budget} px: {wide}"
 
 
+def test_panel_texts_fit_the_default_width(blender, build_python_dir, tmp_path_factory):
+    """Every text the SHGI panels draw, wrapped messages included (the frozen solution's, out
+    of date or not), fits the default Properties editor (303 px, less its margins)."""
+    results = ui_results(blender, build_python_dir, tmp_path_factory)
+    budget = results["panels"]["text_budget"]
+    texts = dict(results["panels"]["text_widths"])
+    for state in ("before", "after"):
+        texts.update(results["stale_solution"][state]["panel"]["label_widths"])
+    assert len(texts) > 20 and any("changed since" in text for text in texts)
+    wide = {text: width for text, width in texts.items() if width > budget}
+    assert not wide, f"wider than {budget} px: {wide}"
+
+
 def test_irradiance_volume_object_places_the_probes(blender, build_python_dir, tmp_path_factory):
     """The Cornell box with an Irradiance Volume object: F12 and Solve fill its cells with
     probes (each probe within the relocation bound of a cell centre of the object's matrix)."""
