@@ -333,8 +333,10 @@ class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
             return
         width, height = record["size"]
         state = " (cancelled)" if record["cancelled"] else ""
-        layout.label(text=f"{record['method']}: {width}x{height} px, {record['samples']} "
-                          f"samples{state}")
+        method = settings.METHODS_BY_ID.get(record["method"])
+        region = " Render Region" if "region" in record else ""
+        draw_wrapped(layout, f"{method.label if method else record['method']}: {width}x{height} "
+                             f"px{region}, {record['samples']} samples{state}")
         figure_rows.draw_rows(layout, figure_rows.render_timing_rows(record["timings"]))
         for message in record["errors"] + record["warnings"]:
             draw_wrapped(layout, message, icon="ERROR" if message in record["errors"]
