@@ -191,7 +191,7 @@ UI_POINTS = 11
 SHGI_PANELS = ("SHGI_RENDER_PT_method", "SHGI_RENDER_PT_light_paths",
                "SHGI_RENDER_PT_light_paths_max_bounces", "SHGI_RENDER_PT_photon_lattice",
                "SHGI_RENDER_PT_probe_grid", "SHGI_RENDER_PT_probe_grid_visibility",
-               "SHGI_RENDER_PT_bake", "SHGI_RENDER_PT_bake_farm")
+               "SHGI_RENDER_PT_bake", "SHGI_RENDER_PT_bake_farm", "SHGI_RENDER_PT_last_render")
 
 
 def text_width(text):
