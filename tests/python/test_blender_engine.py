@@ -9,7 +9,11 @@ project's Cornell box and sun room with each method against Cycles
 path tracer; DiffInd x DiffCol mean within 10%; Cycles' pass names), PROBE_GRID on the Cornell
 box with a fitted volume and with an Irradiance Volume object (whose cells the probes fill),
 the frozen solutions, Esc, broken scenes rendering with warnings, refusals naming the Blender
-setting or object (and panel ranges the native checks accept), and a missing native module.
+setting or object (and panel ranges the native checks accept), and a missing native module;
+engine_ui_checks.py: Render Region (cropped or not) against the full frame, the Last Render
+panel's rows, a frozen solution out of date after a moved light, saved and reopened with the
+.blend and loaded back from Export Volume's files, and the panels (presets, sub-panels,
+tooltips, label and text widths at the default editor width).
 """
 
 import sys
