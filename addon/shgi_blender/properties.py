@@ -33,7 +33,9 @@ class ShgiProbeGridSettings(bpy.types.PropertyGroup):
 
     order: IntProperty(
         name="SH Order", default=P["order"], min=1, max=4,
-        description="Spherical-harmonics order of the probes (1: 4, 2: 9, 4: 25 coefficients)")
+        description="How much of the light's direction each probe keeps: 1 only soft, broad "
+                    "light; 2 and up sharper shading from nearby lights, with more memory and "
+                    "time")
     spacing: FloatProperty(
         name="Spacing", default=P["spacing"], min=0.0, max=settings.MAX_PROBE_SPACING,
         soft_max=10.0, unit="LENGTH",
@@ -44,9 +46,9 @@ class ShgiProbeGridSettings(bpy.types.PropertyGroup):
         max=settings.MAX_RAYS_PER_PROBE, soft_max=4096,
         description="Paths traced per probe and update pass")
     hysteresis: FloatProperty(
-        name="Hysteresis", default=P["hysteresis"], min=0.0, max=0.999,
-        description="Weight of the history when a pass is blended in (higher: smoother, "
-                    "slower to follow edits)")
+        name="History", default=P["hysteresis"], min=0.0, max=0.999,
+        description="How much of the earlier passes each update keeps: higher gives a calmer, "
+                    "less noisy result that follows scene edits more slowly")
     clamp: FloatProperty(
         name="Clamp", default=P["clamp"], min=0.0, soft_max=100.0,
         description="Largest colour component of a probe's radiance sample against "
@@ -56,11 +58,12 @@ class ShgiProbeGridSettings(bpy.types.PropertyGroup):
         description="Diffuse and glossy scatterings along a probe's path")
     visibility: BoolProperty(
         name="Visibility", default=P["visibility"],
-        description="Weight probes by what they see (distance moments, back faces) so that "
-                    "light does not leak through walls")
+        description="Keep light from leaking through walls: each probe lights only the "
+                    "surfaces it can see")
     visibility_resolution: IntProperty(
         name="Visibility Resolution", default=P["visibility_resolution"], min=2, max=64,
-        description="Texels per side of each probe's octahedral distance map")
+        description="How finely each probe records what it can see, against leaks: higher "
+                    "follows thin walls better and takes more memory")
     visibility_blur: FloatProperty(
         name="Blur", default=P["visibility_blur"], min=settings.MIN_VISIBILITY_BLUR, max=1.5,
         subtype="ANGLE",
@@ -71,8 +74,8 @@ class ShgiProbeGridSettings(bpy.types.PropertyGroup):
                     "the probes (EEVEE's Visibility Bias)")
     view_bias: FloatProperty(
         name="View Bias", default=P["view_bias"], min=0.0, max=1.0,
-        description="Probe spacings a shading point moves towards the viewer before it reads "
-                    "the probes (DDGI's view bias)")
+        description="Probe spacings a shading point moves towards the camera before it reads "
+                    "the probes; raise it when blotches or leaks show near walls")
     bleed_bias: FloatProperty(
         name="Bleed Bias", default=P["bleed_bias"], min=0.0, max=settings.MAX_BLEED_BIAS,
         description="Visibility weights below it become 0, against light bleeding (EEVEE's "
@@ -126,8 +129,8 @@ def bake_properties():
             description="Where the indirect light comes from"),
         "directional": BoolProperty(
             name="Directional", default=B["directional"],
-            description="Also write the L1 spherical harmonics of the incident light per "
-                        "texel (EXR layers SH.c0..c3), for normal-mapped surfaces"),
+            description="Also store the direction light arrives from at each texel (EXR "
+                        "layers SH.c0..c3), so that normal-mapped surfaces can be shaded"),
         "filter": BoolProperty(
             name="Denoise", default=B["filter"],
             description="Denoise the baked texels (never across UV charts) with the Denoiser"),
@@ -222,7 +225,8 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
         description="Cells along the longest side of the global lattice")
     order: IntProperty(
         name="SH Order", default=D["order"], min=1, max=2,
-        description="Spherical-harmonics order of the global lattice (1: 4, 2: 9 coefficients)")
+        description="How much of the light's direction each lattice cell keeps: 1 only soft, "
+                    "broad light; 2 sharper shading near walls and lights, with more memory")
     caustics: EnumProperty(
         name="Caustics", items=CAUSTICS_ITEMS, default=D["caustics"],
         description="Where light -> specular -> diffuse photons go")
@@ -259,11 +263,16 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
         description="Probe update passes the Rendered viewport runs in the background, a new "
                     "frame after each, before it stops refining")
     show_probes: BoolProperty(
-        name="Probes", default=V["show_probes"],
-        description="Draw the active probes as small spheres shaded by their irradiance "
-                    "(Rendered viewport or frozen solution)")
+        name="Show Probes", default=V["show_probes"],
+        description="Draw each probe as a small sphere whose colour on each side is the "
+                    "indirect light arriving from that side (Rendered viewport or frozen "
+                    "solution)")
+    overlay_size: FloatProperty(
+        name="Sphere Size", default=V["overlay_size"], min=0.02, max=0.5, subtype="FACTOR",
+        description="Radius of the probe and lattice spheres in the viewport, as a share of "
+                    "the distance between neighbouring probes or cells")
     show_lattice_samples: BoolProperty(
-        name="Lattice Samples", default=V["show_lattice_samples"],
+        name="Show Lattice Samples", default=V["show_lattice_samples"],
         description="Draw the photon lattice's cells that hold surface as small spheres shaded "
                     "by their indirect light (Rendered viewport or frozen solution)")
 

@@ -51,11 +51,12 @@ METHODS = (
     Method("PATH_TRACE", "Path Tracing",
            "Reference path tracer: unbiased, matches Cycles, slowest to converge", 0),
     Method("PHOTON_LATTICE", "Photon Lattice",
-           "Photons in SH lattices (ISLLPM) for indirect light, exact direct light", 1,
+           "Photons shot from the lights fill a 3D grid of indirect light: fast and smooth, "
+           "best for diffuse scenes; exact direct light", 1,
            "PHOTON_LATTICE"),
     Method("PROBE_GRID", "Probe Grid",
-           "SH probes updated by path tracing, with leak prevention (Irradiance Volume "
-           "objects place them); refined in the background, exact direct light", 2,
+           "Light probes (placed by Irradiance Volume objects) gather indirect light without "
+           "leaking through walls, refined in the background; exact direct light", 2,
            "PROBE_GRID"),
 )
 RESERVED_METHODS = {"PROPAGATION": 3, "RADIANCE_FIELD": 4, "INSTANT_GI": 5}
@@ -76,9 +77,10 @@ ENUM_ITEMS = {
     ),
     "caustics": (
         ("OFF", "Off", "No caustic photons"),
-        ("LATTICE", "Lattice", "Caustic photons in a fine SH lattice"),
+        ("LATTICE", "Lattice", "Caustics (light through glass or off mirrors) in a finer grid: "
+         "smooth, soft caustics"),
         ("PHOTON_MAP", "Photon Map",
-         "Caustic photons in a k-d tree, density estimation per lookup"),
+         "Caustics kept as individual photons: sharper caustics, slower to render"),
     ),
     "interpolation": (
         ("TRILINEAR", "Trilinear", "Blend the 8 nearest cells"),
@@ -151,6 +153,7 @@ VIEWPORT_PROPERTY_DEFAULTS = {
     "viewport_probe_passes": 32,
     "show_lattice_samples": False,
     "show_probes": False,
+    "overlay_size": 0.12,
 }
 # The properties a viewport render depends on (a change restarts it); the overlay toggles are
 # not among them. "probe_grid" stands for the values of the scene.shgi.probe_grid group.
@@ -160,20 +163,20 @@ VIEWPORT_RENDER_PROPERTIES = ("method", *PROPERTY_DEFAULTS, "viewport_samples",
 # Where each property is drawn in Properties > Render ("panel > label"), for messages that name a
 # setting: scene.shgi's, then scene.shgi.probe_grid's (placement_rays is in no panel).
 SETTING_LABELS = {
-    "samples": "SHGI > Render Samples",
+    "samples": "SHGI > Samples > Render",
     "seed": "SHGI > Seed",
     "max_bounces": "Light Paths > Total",
     "diffuse_bounces": "Light Paths > Diffuse",
     "glossy_bounces": "Light Paths > Glossy",
     "transmission_bounces": "Light Paths > Transmission",
-    "clamp_indirect": "Light Paths > Clamp Indirect",
-    "world_sampling": "Light Paths > World Sampling",
-    "max_specular_bounces": "Light Paths > Specular Bounces",
+    "clamp_indirect": "Light Paths > Clamp",
+    "world_sampling": "Light Paths > World",
+    "max_specular_bounces": "Light Paths > Max Bounces > Specular",
     "photons": "Photon Lattice > Photons",
     "resolution": "Photon Lattice > Resolution",
     "order": "Photon Lattice > SH Order",
     "caustics": "Photon Lattice > Caustics",
-    "caustic_resolution": "Photon Lattice > Caustic Resolution",
+    "caustic_resolution": "Photon Lattice > Caustics > Resolution",
     "interpolation": "Photon Lattice > Interpolation",
     "blur_passes": "Photon Lattice > Blur Passes",
     "world_in_field": "Photon Lattice > World in Lattice",
@@ -181,8 +184,8 @@ SETTING_LABELS = {
 PROBE_GRID_LABELS = {
     "order": "Probe Grid > SH Order",
     "spacing": "Probe Grid > Spacing",
-    "rays_per_probe": "Probe Grid > Rays per Probe",
-    "hysteresis": "Probe Grid > Hysteresis",
+    "rays_per_probe": "Probe Grid > Rays",
+    "hysteresis": "Probe Grid > History",
     "clamp": "Probe Grid > Clamp",
     "bounces": "Probe Grid > Bounces",
     "visibility": "Probe Grid > Visibility",
@@ -193,7 +196,7 @@ PROBE_GRID_LABELS = {
     "bleed_bias": "Probe Grid > Visibility > Bleed Bias",
     "relocate": "Probe Grid > Relocation > Move Out of Geometry",
     "max_offset": "Probe Grid > Relocation > Max Offset",
-    "backface_threshold": "Probe Grid > Relocation > Back-face Threshold",
+    "backface_threshold": "Probe Grid > Relocation > Back Faces",
     "placement_rays": "scene.shgi.probe_grid.placement_rays",
 }
 # The native checks' limits the property ranges follow (properties.py), so that the panels offer
@@ -306,6 +309,17 @@ def probe_grid_settings(props, shgi, volumes=()):
     return validated(shgi.ProbeGridSettings(
         **native_fields(props.probe_grid, PROBE_GRID_FIELDS, shgi), seed=props.seed,
         volumes=list(volumes)))
+
+
+# ProbeGridSettings' fields that say how a probe field is read (shgi.ProbeLookupSettings).
+PROBE_LOOKUP_FIELDS = ("normal_bias", "view_bias", "bleed_bias", "visibility")
+
+
+def probe_lookup_settings(props, shgi):
+    """shgi.ProbeLookupSettings of scene.shgi.probe_grid: how a probe field read from a file is
+    looked up, as the grid's own field is."""
+    return shgi.ProbeLookupSettings(**{name: getattr(props.probe_grid, name)
+                                       for name in PROBE_LOOKUP_FIELDS})
 
 
 def solver_signature(props):

@@ -29,7 +29,8 @@ STOCK_PANELS = ("EEVEE_MATERIAL_PT_surface", "EEVEE_WORLD_PT_surface", "RENDER_P
 OWN_CLASSES = ("SHGI_RENDER_PT_method", "SHGI_RENDER_PT_photon_lattice",
                "SHGI_RENDER_PT_probe_grid", "SHGI_RENDER_PT_probe_grid_visibility",
                "SHGI_LIGHT_PT_light", "SHGI_VIEWLAYER_PT_passes", "SHGI_OT_solve",
-               "SHGI_OT_clear_solution", "SHGI_OT_quality_preset")
+               "SHGI_OT_clear_solution", "SHGI_OT_quality_preset", "SHGI_OT_load_solution",
+               "SHGI_RENDER_PT_light_paths_max_bounces", "SHGI_RENDER_PT_bake_farm")
 # scene.shgi.probe_grid mirrors ProbeGridSettings: its Visibility panel shows EEVEE's names.
 VISIBILITY_PROPERTIES = {"normal_bias": "Bias", "bleed_bias": "Bleed Bias",
                          "visibility_blur": "Blur"}
@@ -83,7 +84,7 @@ def check_panels_draw(scene):
     scene.shgi.method = "PHOTON_LATTICE"
     draw_panel("SHGI_RENDER_PT_photon_lattice", context)
     scene.shgi.method = "PROBE_GRID"
-    if "fitted to the scene" not in draw_panel("SHGI_RENDER_PT_probe_grid", context):
+    if "probes fill the scene" not in draw_panel("SHGI_RENDER_PT_probe_grid", context):
         raise AssertionError("the probe grid panel does not say its volume is fitted")
     draw_panel("SHGI_RENDER_PT_probe_grid_visibility", context)
     check_probe_grid_properties(scene)

@@ -78,7 +78,9 @@ class StubEngine:
         return broken
 
     def begin_result(self, x, y, width, height, layer=""):
-        return SimpleNamespace(layers=[SimpleNamespace(passes=[self.combined])])
+        # Blender's RenderResult: its size and the view layer's passes.
+        return SimpleNamespace(resolution_x=width, resolution_y=height,
+                               layers=[SimpleNamespace(passes=[self.combined])])
 
     def update_result(self, result):
         pass

@@ -9,7 +9,11 @@ project's Cornell box and sun room with each method against Cycles
 path tracer; DiffInd x DiffCol mean within 10%; Cycles' pass names), PROBE_GRID on the Cornell
 box with a fitted volume and with an Irradiance Volume object (whose cells the probes fill),
 the frozen solutions, Esc, broken scenes rendering with warnings, refusals naming the Blender
-setting or object (and panel ranges the native checks accept), and a missing native module.
+setting or object (and panel ranges the native checks accept), and a missing native module;
+engine_ui_checks.py: Render Region (cropped or not) against the full frame, the Last Render
+panel's rows, a frozen solution out of date after a moved light, saved and reopened with the
+.blend and loaded back from Export Volume's files, and the panels (presets, sub-panels,
+tooltips, label and text widths at the default editor width).
 """
 
 import sys
@@ -29,8 +33,10 @@ sys.path.insert(0, str(REPO_ROOT / "examples"))
 
 import scenes  # noqa: E402
 from shgi_blender import native, presets, settings  # noqa: E402
-from shgi_blender.engine import field_solvers, field_spheres, passes, scene_checks  # noqa: E402
+from shgi_blender.engine import (field_solvers, field_spheres, passes, render_region,  # noqa: E402
+                                 scene_checks, solution_cache)
 from shgi_blender.engine.render_job import RenderJob, sample_rounds  # noqa: E402
+from shgi_blender.ui import figure_rows  # noqa: E402
 from shgi_blender.export.light_probe import ProbeVolumeRecord, native_volumes  # noqa: E402
 
 # Issue 5's acceptance figures against Cycles.
@@ -119,7 +125,7 @@ def test_refused_settings_are_named_as_the_panels_show_them():
     props.probe_grid.visibility_blur = 0.0  # a value saved before the range was tightened
     with pytest.raises(ValueError, match=r"^Probe Grid > Visibility > Blur is 0; use 0\.01\.\.2"):
         settings.probe_grid_settings(props, shgi)
-    with pytest.raises(ValueError, match=r"^Light Paths > Clamp Indirect is -1"):
+    with pytest.raises(ValueError, match=r"^Light Paths > Clamp is -1"):
         settings.path_tracer_settings(default_props(clamp_indirect=-1.0), shgi)
     assert settings.name_settings(
         "PhotonLatticeSettings.max_bounces is 0; ProbeGridSettings.visibility is x; "
@@ -309,6 +315,37 @@ def test_probe_overlay_shows_each_probe_s_own_irradiance():
     np.testing.assert_allclose(overlay.irradiance, expected, rtol=2e-3, atol=1e-5)
 
 
+def test_overlay_spheres_resize_and_show_no_black_side():
+    """The spheres' size follows the setting (only positions change) and a side that no
+    indirect light reaches shows the ambient lift's dim grey, not black."""
+    scene = committed(scenes.cornell_box(0.06))
+    grid = shgi.ProbeGrid(scene, shgi.ProbeGridSettings(order=1, rays_per_probe=32, seed=1))
+    grid.update()
+    overlay = field_solvers.probe_overlay(shgi, grid.field())
+    vertices = len(overlay.positions) // len(overlay.centres)
+    for overlay_size in (0.05, 0.3):
+        resized = overlay.resized(overlay_size)
+        offsets = resized.positions.reshape(len(overlay.centres), vertices, 3) - \
+            overlay.centres[:, None, :]
+        np.testing.assert_allclose(np.linalg.norm(offsets, axis=2),
+                                   overlay_size * overlay.spacing, rtol=1e-4)
+        assert resized.colors is overlay.colors
+    lift = shgi.srgb_from_linear(np.full((1, 3), field_spheres.AMBIENT_LIFT * 0.18,
+                                         np.float32))[0, 0]
+    assert overlay.colors[:, :3].min() >= lift - 1e-4
+    dark = field_spheres.sphere_arrays(overlay.centres[:1], 0.1, np.zeros((1, 6, 3), np.float32)
+                                       + np.float32(field_spheres.AMBIENT_LIFT * 0.18))[1]
+    assert dark[:, :3].min() > 0.0
+
+
+def test_a_new_scene_s_counts_are_the_default_preset():
+    props = default_props()
+    assert presets.matching_preset(props) == "DEFAULT"
+    assert presets.preset_label(props) == "Default"
+    props.samples += 1
+    assert presets.preset_label(props) == "Custom"
+
+
 @pytest.mark.parametrize("stage, job_args", [
     ("Path tracing", {"path_tracer_settings": shgi.PathTracerSettings()}),
     ("Tracing photons", {"preview_settings": shgi.PreviewSettings(),
@@ -343,6 +380,81 @@ def test_job_errors_are_kept_for_the_engine():
     job = RenderJob(shgi, scene, 1, path_tracer_settings=shgi.PathTracerSettings()).start()
     assert job.wait(10)
     assert isinstance(job.error, ValueError) and not job.cancelled
+
+
+CAMERA_FIELDS = ("type", "lens", "sensor_width", "sensor_height", "sensor_fit", "ortho_scale",
+                 "shift_x", "shift_y", "clip_start", "clip_end", "resolution_x", "resolution_y",
+                 "world_from_camera")
+# float32 rays of the same film point through two viewplanes.
+RAY_TOLERANCE = 2e-6
+
+
+@pytest.mark.parametrize("fit", ["AUTO", "HORIZONTAL", "VERTICAL"])
+@pytest.mark.parametrize("kind", ["PERSPECTIVE", "ORTHOGRAPHIC"])
+@pytest.mark.parametrize("size", [(64, 48), (40, 70)])
+def test_render_region_camera_traces_the_full_frame_s_rays(fit, kind, size):
+    """The Render Region camera's pixel (i, j) sends the ray of the full frame's pixel
+    (x + i, top + j), whatever the sensor fit, camera type, shift and aspect."""
+    full = shgi.Camera(resolution_x=size[0], resolution_y=size[1], shift_x=0.1, shift_y=-0.05,
+                       sensor_height=20.0, sensor_fit=getattr(shgi.SensorFit, fit),
+                       type=getattr(shgi.CameraType, kind))
+    region = render_region.border_region(*size, 0.2, 0.3, 0.7, 0.65)
+    assert (region.width, region.height) == (int(0.7 * size[0]) - int(0.2 * size[0]),
+                                             int(0.65 * size[1]) - int(0.3 * size[1]))
+    camera = render_region.crop_camera(
+        shgi, shgi.Camera(**{name: getattr(full, name) for name in CAMERA_FIELDS}), region)
+    assert (camera.resolution_x, camera.resolution_y) == (region.width, region.height)
+    rows, columns = np.mgrid[0:region.height, 0:region.width] + 0.5
+    film = np.stack([columns.ravel(), rows.ravel()], axis=1).astype(np.float32)
+    origins, directions = camera.generate_rays(film)
+    full_origins, full_directions = full.generate_rays(
+        film + np.array([region.x, region.top], np.float32))
+    np.testing.assert_allclose(origins, full_origins, atol=RAY_TOLERANCE)
+    np.testing.assert_allclose(directions, full_directions, atol=RAY_TOLERANCE)
+
+
+def test_render_region_without_a_whole_pixel_names_the_fix():
+    with pytest.raises(ValueError, match=r"Render Region 0x13 px of a 64x64 px frame .* draw "
+                                         r"a larger region"):
+        render_region.border_region(64, 64, 0.5, 0.2, 0.51, 0.4)
+
+
+@pytest.mark.parametrize("kind, name, moved, reshaped, reshaded, changed", [
+    ("Object", "lamp", True, False, False, "object 'lamp' moved"),
+    ("Object", "cube", False, True, False, "object 'cube' changed"),
+    ("Object", "cube", False, False, True, None),   # re-tagged for shading only
+    ("PointLight", "lamp", False, False, True, "PointLight 'lamp' changed"),
+    ("Material", "red", False, False, True, "Material 'red' changed"),
+    ("ShaderNodeTree", "nodes", False, False, False, None),
+    ("Scene", "Scene", False, False, False, None),  # render settings, selection, frame
+])
+def test_scene_edits_that_change_the_light_are_told(kind, name, moved, reshaped, reshaded,
+                                                    changed):
+    assert solution_cache.edit_description(kind, name, False, moved, reshaped,
+                                           reshaded) == changed
+    assert solution_cache.edit_description(kind, name, True, True, True, True) is None  # camera
+
+
+def test_a_solution_is_out_of_date_after_an_edit_of_its_scene():
+    solution_cache.clear_all()
+    solution = solution_cache.Solution("PROBE_GRID", None, None, None, None, {}, 0,
+                                       edits_seen=solution_cache.edit_count("a"))
+    assert solution_cache.changed_since("a", solution) is None
+    solution_cache.note_edit("b", "object 'x' moved")
+    assert solution_cache.changed_since("a", solution) is None  # another scene
+    solution_cache.note_edit("a", "object 'lamp' moved")
+    assert solution_cache.changed_since("a", solution) == "object 'lamp' moved"
+    solution_cache.clear_all()
+
+
+def test_last_render_rows_put_each_time_beside_its_stage():
+    """A solve of 0.40 s, a render of 3.96 s, 5.19 s in total: each row is its stage's label
+    and its own time, in the order of a render, whatever order the record holds them in."""
+    rows = figure_rows.render_timing_rows({"total": 5.19, "render": 3.96, "solve": 0.40,
+                                           "commit": 0.02})
+    assert rows == [("BVH", "0.02 s"), ("Solve", "0.40 s"), ("Render", "3.96 s"),
+                    ("Total", "5.19 s")]
+    assert figure_rows.render_timing_rows({"denoise": 1.5}) == [("Denoise", "1.50 s")]
 
 
 # --- inside Blender ----------------------------------------------------------------------------
@@ -422,6 +534,138 @@ def test_f12_matches_cycles(scene, method, blender, build_python_dir, tmp_path_f
         f"Combined mean ratio {row['mean_ratio']:.4f}")
     assert abs(row["diffind_ratio"] - 1.0) <= DIFFUSE_INDIRECT_TOLERANCE, (
         f"DiffInd x DiffCol mean ratio {row['diffind_ratio']:.4f}")
+
+
+def ui_results(blender, build_python_dir, tmp_path_factory):
+    return run_engine_script("engine_ui_checks.py", "ENGINE_UI_OK", blender, build_python_dir,
+                             tmp_path_factory)
+
+
+@pytest.mark.parametrize("crop", ["crop", "no_crop"])
+def test_render_region_renders_the_region_of_the_full_frame(crop, blender, build_python_dir,
+                                                            tmp_path_factory):
+    """F12 with Render Region renders the border's pixels as Cycles does: a result of the
+    border's size with Crop to Render Region, else the full frame with only the region filled
+    (Blender places it); the region matches the same pixels of a full render within noise."""
+    results = ui_results(blender, build_python_dir, tmp_path_factory)["render_region"]
+    row = results[crop]
+    print(f"{crop}: region {row['region_size']} at {row['region']}, PSNR {row['psnr']:.2f} dB, "
+          f"mean ratio {row['mean_ratio']:.4f}")
+    width, height = row["region_size"]
+    assert 0 < width < results["full_size"][0] and 0 < height < results["full_size"][1]
+    expected_size = row["region_size"] if crop == "crop" else results["full_size"]
+    assert row["result_size"] == expected_size
+    assert not any("Render Region" in warning for warning in row["warnings"]), row["warnings"]
+    assert row["psnr"] >= MIN_PSNR_DB, f"region PSNR {row['psnr']:.2f} dB"
+    assert abs(row["mean_ratio"] - 1.0) <= MEAN_TOLERANCE["PATH_TRACE"], row["mean_ratio"]
+    if crop == "no_crop":
+        assert results["uncropped_holds_cropped"]  # the same pixels, placed at the region
+        assert results["uncropped_outside_max"] == 0.0
+
+
+def test_last_render_panel_draws_each_time_beside_its_label(blender, build_python_dir,
+                                                           tmp_path_factory):
+    """After F12 the Last Render panel draws one row per timing of the render's record: its
+    stage's label, then that stage's seconds."""
+    panel = ui_results(blender, build_python_dir, tmp_path_factory)["last_render_panel"]
+    assert set(panel["timings"]) >= {"export", "commit", "render", "total"}
+    for key, seconds in panel["timings"].items():
+        label = figure_rows.RENDER_TIMING_LABELS.get(key, key.capitalize())
+        assert [label, f"{seconds:.2f} s"] in panel["rows"], (key, panel["rows"])
+
+
+def test_a_frozen_solution_says_when_the_scene_changed_since(blender, build_python_dir,
+                                                             tmp_path_factory):
+    """After Solve, moving a light makes F12 warn (in the render's reports) and the panel say
+    that the solution is out of date, naming the light and offering Re-solve; before the move
+    neither does."""
+    results = ui_results(blender, build_python_dir, tmp_path_factory)["stale_solution"]
+    before, after = results["before"], results["after"]
+    assert not before["warnings"] and "changed since" not in before["panel"]["text"]
+    assert ["shgi.solve", "Re-solve"] not in before["panel"]["buttons"]
+    light = f"object {after['light']!r} moved"
+    assert [w for w in after["warnings"] if "the scene changed since" in w and light in w
+            and "Re-solve" in w], after["warnings"]
+    assert "Using the solution of" in after["panel"]["text"], after["panel"]["text"]
+    assert light in after["panel"]["text"]
+    assert ["shgi.solve", "Re-solve"] in after["panel"]["buttons"], after["panel"]["buttons"]
+
+
+def test_a_frozen_solution_survives_save_and_reload(blender, build_python_dir, tmp_path_factory):
+    """A Probe Grid solution is saved beside the .blend, read back when the file opens, still
+    frozen and up to date, and renders the same pixels; Load Solution of the volume Export
+    Volume wrote renders them too."""
+    results = ui_results(blender, build_python_dir, tmp_path_factory)["saved_solution"]
+    assert "Scene.json" in results["saved_files"], results["saved_files"]
+    assert results["loaded"], results
+    assert results["changed_since"] is None and not results["warnings"], results
+    assert results["mean"] > 0.0
+    assert results["max_difference"] == 0.0  # the same field, scene and seed
+    assert results["load_volume_max_difference"] == 0.0
+
+
+# Words of the papers and data structures behind the methods: a tooltip says what a setting
+# does to the image instead.
+JARGON = ("ISLLPM", "DDGI", "k-d tree", "octahedral", "moments", "spherical harmonics",
+          "spherical-harmonics", "density estimation", "hysteresis", "seed 00")
+
+
+def panel_results(blender, build_python_dir, tmp_path_factory):
+    return ui_results(blender, build_python_dir, tmp_path_factory)["panels"]
+
+
+def test_no_tooltip_speaks_paper_jargon(blender, build_python_dir, tmp_path_factory):
+    tooltips = panel_results(blender, build_python_dir, tmp_path_factory)["tooltips"]
+    assert len(tooltips) > 50 and "scene.shgi.method.PHOTON_LATTICE" in tooltips
+    found = {where: text for where, text in tooltips.items()
+             if any(word.lower() in text.lower() for word in JARGON)}
+    assert not found, found
+
+
+def test_the_defaults_show_their_preset(blender, build_python_dir, tmp_path_factory):
+    results = panel_results(blender, build_python_dir, tmp_path_factory)
+    assert results["matching_preset"] == "DEFAULT"
+    assert results["quality_menu"] == [presets.PRESET_LABELS["DEFAULT"]]
+
+
+def test_max_bounces_and_farm_are_sub_panels(blender, build_python_dir, tmp_path_factory):
+    """Light Paths > Max Bounces holds the bounce limits (as in Cycles); Bake > Farm the shard
+    settings, which the Bake panel no longer draws."""
+    results = panel_results(blender, build_python_dir, tmp_path_factory)
+    assert results["sub_panels"] == {
+        "SHGI_RENDER_PT_light_paths_max_bounces": ["Max Bounces", "SHGI_RENDER_PT_light_paths"],
+        "SHGI_RENDER_PT_bake_farm": ["Farm", "SHGI_RENDER_PT_bake"]}
+    props = results["props"]
+    bounces = ["max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces"]
+    assert props["SHGI_RENDER_PT_light_paths_max_bounces"][:4] == bounces
+    assert not set(bounces) & set(props["SHGI_RENDER_PT_light_paths"])
+    farm = {"shard_count", "shard_index", "tile_size"}
+    assert set(props["SHGI_RENDER_PT_bake_farm"]) == farm
+    assert not farm & set(props["SHGI_RENDER_PT_bake"])
+
+
+def test_panel_labels_fit_the_default_width(blender, build_python_dir, tmp_path_factory):
+    """Every label the SHGI panels draw beside a value is no wider than the text Blender showed
+    in place of a cut label at the default width ("Viewport Sa..."); checkbox labels sit in the
+    wider value column and are left out."""
+    results = panel_results(blender, build_python_dir, tmp_path_factory)
+    budget = results["cut_label_width"]
+    assert budget > 0 and len(results["label_widths"]) > 30
+    wide = {text: width for text, width in results["label_widths"].items() if width > budget}
+    assert not wide, f"wider than {budget} px: {wide}"
+
+
+def test_panel_texts_fit_the_default_width(blender, build_python_dir, tmp_path_factory):
+    """Every text the SHGI panels draw, wrapped messages included (the frozen solution's, out
+    of date or not), fits the default Properties editor (303 px, less its margins)."""
+    results = ui_results(blender, build_python_dir, tmp_path_factory)
+    budget = results["panels"]["text_budget"]
+    texts = dict(results["panels"]["text_widths"])
+    for state in ("before", "after"):
+        texts.update(results["stale_solution"][state]["panel"]["label_widths"])
+    assert len(texts) > 20 and any("changed since" in text for text in texts)
+    wide = {text: width for text, width in texts.items() if width > budget}
+    assert not wide, f"wider than {budget} px: {wide}"
 
 
 def test_irradiance_volume_object_places_the_probes(blender, build_python_dir, tmp_path_factory):

@@ -117,14 +117,54 @@ class ProbeGridSolver:
         grid = self.grid
         error = grid.relative_error()[grid.active]
         finite = error[np.isfinite(error)]
-        rows = [("Probes active / total", f"{grid.active_count:,} / {grid.probe_count:,}"),
-                ("Update passes", f"{grid.passes}")]
+        rows = probe_figures(grid.active_count, grid.probe_count, grid.passes)
         if len(finite):
             rows.append(("Median relative error", f"{100.0 * float(np.median(finite)):.1f}%"))
         return rows
 
     def overlay(self, _snapshot, _scene):
         return probe_overlay(self._shgi, self.field())
+
+
+class LoadedProbeField:
+    """A ProbeField read from files (a saved solution, or Export Volume's) in a FieldSolver's
+    place: nothing to update, its probes' figures and overlay."""
+
+    METHOD = ProbeGridSolver.METHOD
+
+    def __init__(self, shgi, probe_field, path):
+        self._shgi = shgi
+        self._field = probe_field
+        self.path = path
+
+    @property
+    def passes(self):
+        return self._field.passes
+
+    def field(self):
+        return self._field
+
+    @property
+    def memory_bytes(self):
+        return sum(getattr(self._field, name).nbytes
+                   for name in ("sh", "positions", "active", "variance"))
+
+    @property
+    def timings(self):
+        return {}
+
+    def figures(self):
+        probe_field = self._field
+        return probe_figures(int(probe_field.active.sum()), probe_field.probe_count,
+                             probe_field.passes) + [("Read from", self.path)]
+
+    def overlay(self, _snapshot, _scene):
+        return probe_overlay(self._shgi, self._field)
+
+
+def probe_figures(active, total, passes):
+    """The (label, text) rows every probe field shows: its probes and update passes."""
+    return [("Probes active / total", f"{active:,} / {total:,}"), ("Update passes", f"{passes}")]
 
 
 def probe_overlay(shgi, probe_field):

@@ -8,8 +8,10 @@ way: E(p, ±x), E(p, ±y), E(p, ±z) from IndirectField.irradiance at the sphere
 blended over the sphere's normals with the weights n_x², n_y², n_z² of the positive or negative
 side (an "ambient cube": exact for a field whose SH is at most linear, smooth for L2). The
 colour is the radiance of a white diffuse surface, E / π, scaled so that the spheres' mean
-luminance is middle grey and sRGB-encoded: draw handlers draw after Blender's colour
-management.
+luminance is middle grey, lifted by a dim grey (AMBIENT_LIFT) so that a side no indirect light
+reaches reads as dark rather than as a black hole, and sRGB-encoded: draw handlers draw after
+Blender's colour management. The spheres' radius is a share of the cell or probe spacing the
+artist sets (``resized``: only the positions change).
 
 Everything runs on worker threads; the main thread only uploads the arrays.
 """
@@ -21,7 +23,9 @@ import numpy as np
 import shgi
 from shgi.metrics import LUMINANCE, MIDDLE_GREY
 
-SPHERE_RADIUS_SPACINGS = 0.18  # sphere radius in cells or probe spacings: room to see between
+SPHERE_RADIUS_SPACINGS = 0.12  # sphere radius in cells or probe spacings: room to see between
+# Linear grey added to every sphere colour, as a share of middle grey (after the exposure).
+AMBIENT_LIFT = 0.15
 SPHERE_SUBDIVISIONS = 1        # icosphere levels: 42 vertices, 80 triangles per sphere
 # The six normals of the ambient cube, in the order of ambient_cube_weights' columns.
 AXES = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]],
@@ -40,6 +44,15 @@ class FieldSpheres:
     centres: np.ndarray
     irradiance: np.ndarray
     spacing: float
+    radius_spacings: float = SPHERE_RADIUS_SPACINGS
+
+    def resized(self, radius_spacings):
+        """The same spheres with a radius of `radius_spacings` spacings (self when equal)."""
+        if radius_spacings == self.radius_spacings:
+            return self
+        positions = sphere_positions(self.centres, radius_spacings * self.spacing)
+        return FieldSpheres(positions, self.colors, self.indices, self.centres, self.irradiance,
+                            self.spacing, radius_spacings)
 
 
 def field_spheres(field, centres, spacing):
@@ -51,8 +64,8 @@ def field_spheres(field, centres, spacing):
     radiance = irradiance / np.float32(math.pi)
     mean_luminance = float((radiance @ LUMINANCE).mean())
     scale = MIDDLE_GREY / mean_luminance if mean_luminance > 0.0 else 1.0
-    positions, colors, indices = sphere_arrays(centres, SPHERE_RADIUS_SPACINGS * spacing,
-                                               radiance * np.float32(scale))
+    lifted = radiance * np.float32(scale) + np.float32(AMBIENT_LIFT * MIDDLE_GREY)
+    positions, colors, indices = sphere_arrays(centres, SPHERE_RADIUS_SPACINGS * spacing, lifted)
     return FieldSpheres(positions, colors, indices, centres, irradiance, spacing)
 
 
@@ -89,12 +102,20 @@ def sphere_arrays(centres, radius, cube_radiance):
     """
     unit, faces = icosphere(SPHERE_SUBDIVISIONS)
     count = len(centres)
-    positions = (centres[:, None, :] + radius * unit[None, :, :]).reshape(-1, 3)
+    positions = sphere_positions(centres, radius)
     linear = np.einsum("vs,ksc->kvc", ambient_cube_weights(unit), cube_radiance)
     colors = np.ones((count * len(unit), 4), np.float32)
     colors[:, :3] = shgi.srgb_from_linear(np.ascontiguousarray(linear.reshape(-1, 3)))
     indices = (faces[None, :, :] + (np.arange(count) * len(unit))[:, None, None]).reshape(-1, 3)
-    return positions.astype(np.float32), colors, indices.astype(np.int32)
+    return positions, colors, indices.astype(np.int32)
+
+
+def sphere_positions(centres, radius):
+    """(K * V, 3) float32 vertices of one icosphere of `radius` per centre."""
+    unit, _ = icosphere(SPHERE_SUBDIVISIONS)
+    centres = np.asarray(centres, np.float32)
+    return (centres[:, None, :] + np.float32(radius) * unit[None, :, :]).reshape(-1, 3).astype(
+        np.float32)
 
 
 def _midpoint(vertices, cache, i, j):

@@ -14,6 +14,10 @@ The field methods (PHOTON_LATTICE, PROBE_GRID) solve their field on the job's th
 sampling (field_solvers.py); PROBE_GRID's probes fill the scene's Irradiance Volume objects, or
 one volume fitted to the scene. With a frozen solution of the scene's method (solution_cache,
 the Solve operator), only the camera is exported and the frozen solution is rendered from it.
+
+With Render Region on, only the border's pixels are rendered, through a camera that sees just
+the region (render_region.py); Blender places them in the full frame unless Crop to Render
+Region is on, as it does for Cycles.
 """
 
 import logging
@@ -23,7 +27,7 @@ import time
 import bpy
 
 from .. import native, settings
-from . import passes, scene_checks, solution_cache
+from . import passes, render_region, scene_checks, solution_cache
 from ..operators.keyboard_interrupt import sigint_watch
 from .render_job import RenderJob
 
@@ -71,6 +75,7 @@ class FinalRender:
         self.scene = depsgraph.scene
         self.view_layer = depsgraph.view_layer
         self.width, self.height = engine.resolution_x, engine.resolution_y
+        self.region = None  # the render_region.Region rendered when Render Region is on
         self.record = {"method": self.scene.shgi.method, "warnings": [], "errors": [],
                        "cancelled": False, "samples": 0, "timings": {},
                        "size": (self.width, self.height), "frozen_solution": False,
@@ -117,12 +122,29 @@ class FinalRender:
             self.warn(f"view layer {self.view_layer.name!r}: the {name} pass is not computed "
                       "by SHGI; it is left out")
         if self.scene.render.use_border:
-            self.warn("Render Region is ignored by SHGI: the full frame is rendered")
+            self._use_render_region()
         with sigint_watch() as interrupted:
             self._interrupted = interrupted
             job = self._start_job(shgi)
             if job is not None:
                 self._follow(job, log)
+
+    def _use_render_region(self):
+        """Renders only the border's pixels: Blender's result then has the border's size (and
+        Blender places it in the full frame unless Crop to Render Region is on)."""
+        border = self.scene.render
+        self.region = render_region.border_region(
+            self.width, self.height, border.border_min_x, border.border_min_y,
+            border.border_max_x, border.border_max_y)
+        self.width, self.height = self.region.width, self.region.height
+        self.record["size"] = (self.width, self.height)
+        self.record["region"] = (self.region.x, self.region.top)
+
+    def _region_camera(self, shgi, camera):
+        """`camera` (the full frame's shgi.Camera) seeing only the Render Region, if any."""
+        if self.region is None:
+            return camera
+        return render_region.crop_camera(shgi, camera, self.region)
 
     def _should_stop(self):
         """Esc (Blender's break flag), or a Ctrl-C under the bpy module even if the
@@ -138,7 +160,7 @@ class FinalRender:
             return None
         solution = (solution_cache.get(self.scene.name_full, method.identifier)
                     if method.uses_field else None)
-        if solution is not None:
+        if solution is not None and solution.scene is not None:
             return self._start_frozen_job(shgi, props, solution)
         from ..export import ExportCancelled, export_scene  # imports shgi: once it imports
 
@@ -149,21 +171,29 @@ class FinalRender:
             self.record["timings"]["export"] = time.perf_counter() - export_start
             # Ctrl-C under the bpy module raises in whatever Python runs next: until the job
             # has started, that is here.
-            return self._job_for(shgi, props, method, export)
+            return self._job_for(shgi, props, method, export, solution)
         except (ExportCancelled, KeyboardInterrupt):  # Esc; Ctrl-C under the bpy module
             self.record["timings"].setdefault("export", time.perf_counter() - export_start)
             self.record["cancelled"] = True
             self.engine.report({"INFO"}, "SHGI: render cancelled before its native work began")
             return None
 
-    def _job_for(self, shgi, props, method, export):
-        """The started RenderJob of the exported scene (None after a failure)."""
+    def _job_for(self, shgi, props, method, export, solution=None):
+        """The started RenderJob of the exported scene (None after a failure); `solution`: a
+        frozen solution read from a file, whose field it renders."""
         if not export.scene.has_camera:
             self.fail("SHGI: the scene has no usable camera (see the warnings)")
             return None
         for message in scene_checks.scene_warnings(export.scene):
             self.warn(f"SHGI: {message}")
-        if method.uses_field:
+        if self.region is not None:
+            export.scene.set_camera(self._region_camera(shgi, export.scene.camera))
+        if solution is not None:
+            self._use_frozen_solution(solution)
+            job = RenderJob(shgi, export.scene, props.samples,
+                            preview_settings=settings.preview_settings(props, shgi),
+                            field=solution.field)
+        elif method.uses_field:
             from .field_solvers import solver_recipe
 
             # Without geometry there is nothing to solve: direct light (the world) only.
@@ -189,20 +219,39 @@ class FinalRender:
         if camera is None:
             self.fail("SHGI: the scene has no usable camera (see the warnings)")
             return None
-        self.record["frozen_solution"] = True
-        self._record_solution(solution)
-        self.engine.report({"INFO"}, "SHGI: rendering the frozen solution solved at "
-                           f"{time.strftime('%H:%M:%S', time.localtime(solution.solved_at))}; "
-                           "Clear it to see later scene edits")
+        self._use_frozen_solution(solution)
         return RenderJob(shgi, solution.scene, props.samples,
                          preview_settings=settings.preview_settings(props, shgi),
-                         field=solution.field, camera=camera).start()
+                         field=solution.field, camera=self._region_camera(shgi, camera)).start()
+
+    def _use_frozen_solution(self, solution):
+        """Records and reports that the render shows `solution`: a WARNING naming the last
+        edit when the scene changed after it was solved."""
+        self.record["frozen_solution"] = True
+        self._record_solution(solution)
+        solved_at = solution_cache.solved_at_text(solution)
+        changed = solution_cache.changed_since(self.scene.name_full, solution)
+        if (changed is None and solution.signature is not None
+                and solution.signature != settings.solver_signature(self.scene.shgi)):
+            changed = "its settings"
+        self.record["stale_solution"] = changed
+        if changed is None:
+            self.engine.report({"INFO"}, f"SHGI: rendering the frozen solution of {solved_at}")
+            return
+        panel = settings.METHODS_BY_ID[solution.method].label
+        self.warn(f"SHGI: using the solution of {solved_at}; the scene changed since ({changed})"
+                  f": Re-solve in Render Properties > {panel}, or Clear it to render the scene "
+                  "as it is now")
 
     def _follow(self, job, log):
         """Polls the job until it ends, then writes the result and reports the outcome."""
         result = self.engine.begin_result(0, 0, self.width, self.height,
                                           layer=self.view_layer.name)
         try:
+            if (result.resolution_x, result.resolution_y) != (self.width, self.height):
+                raise RuntimeError(f"Blender's render result is {result.resolution_x}x"
+                                   f"{result.resolution_y} px, SHGI renders {self.width}x"
+                                   f"{self.height} px")
             try:
                 self._poll_until_done(job, result, log)
             except KeyboardInterrupt:

@@ -8,7 +8,7 @@ Blender frees the engine; Material Preview uses EEVEE (bl_use_eevee_viewport).
 import bpy
 
 from .. import native
-from . import final_render, passes, solution_cache, viewport
+from . import final_render, passes, solution_cache, solution_files, viewport
 
 
 class ShgiRenderEngine(bpy.types.RenderEngine):
@@ -60,9 +60,11 @@ def clear_solutions_on_load(_file_path):
 def register():
     bpy.utils.register_class(ShgiRenderEngine)
     bpy.app.handlers.load_pre.append(clear_solutions_on_load)
+    solution_files.register()
 
 
 def unregister():
+    solution_files.unregister()
     if clear_solutions_on_load in bpy.app.handlers.load_pre:
         bpy.app.handlers.load_pre.remove(clear_solutions_on_load)
     solution_cache.clear_all()

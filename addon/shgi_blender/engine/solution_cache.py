@@ -5,14 +5,27 @@ solves the method's field once (a PhotonLattice with the scene's photon count, o
 with its render passes; field_solvers.py) and stores it here with the committed shgi.Scene it
 was solved on. F12 renders of that Blender scene with the same method then render the frozen
 solution from the current camera without exporting the geometry or solving again, until Clear.
-Edits made after the solve are not seen (the panel says so).
+Edits made after the solve are not seen: ``note_edit`` counts the edits of each scene that
+change its light (solution_files.py feeds it from Blender's depsgraph updates), and
+``changed_since`` tells a solution made before the last of them (F12 warns, the panel offers
+Re-solve).
+
+A Probe Grid solution is saved beside the .blend file and read back when the file opens
+(solution_files.py): ``save_solution`` writes the field with the native export
+(ProbeField.export: float EXR + JSON) and a small JSON of the solution's own figures,
+``load_solution`` reads them into a Solution whose field came from the file (LoadedProbeField);
+F12 then exports the scene's geometry once per render, as there is no solved scene to reuse.
+The photon lattice has no native import, so its solutions live until the file closes.
 
 ``solve`` is also how F12 solves a field when nothing is frozen (render_job.RenderJob).
 
-The cache is module state of the add-on (it cannot live in the .blend file); its key is the
-scene's ``name_full``, and loading a file clears it (render_engine.py registers the handler).
+The cache is module state of the add-on; its key is the scene's ``name_full``, and loading a
+file clears it (render_engine.py registers the handler) before the file's saved solutions are
+read.
 """
 
+import json
+import os
 import time
 from dataclasses import dataclass, field
 
@@ -48,6 +61,7 @@ class Solution:
     warnings: list = field(default_factory=list)  # export warnings
     solved_at: float = field(default_factory=time.time)
     overlay: object = None  # its field_spheres.FieldSpheres (the Solve operator's), or None
+    edits_seen: int = 0     # the scene's edit count (edit_count) when it was exported
 
     @property
     def seconds(self):
@@ -88,6 +102,106 @@ def solve(shgi, scene, recipe, signature, progress=None, timings=None, warnings=
 
 
 _solutions = {}
+# {scene key: (edits counted since the file opened, what the last one was)}
+_edits = {}
+# The format of the JSON save_solution writes beside the field's own files.
+SOLUTION_FORMAT = "shgi-frozen-solution"
+SOLUTION_VERSION = 1
+
+
+# Datablocks whose edits leave the light alone: the scene's own settings (render settings, the
+# frame, the selection) and the camera (a frozen solution is rendered from any camera).
+_UNLIT_KINDS = ("Scene", "Camera")
+
+
+def edit_description(kind, name, is_camera, moved, reshaped, reshaded):
+    """What a depsgraph update of datablock `name` of type `kind` ("Object", "PointLight",
+    "Material", ...) changed in the scene's light, or None for an update that changes none:
+    the scene's settings, a camera, an object re-tagged without moving or changing shape."""
+    if kind in _UNLIT_KINDS or is_camera:
+        return None
+    if kind == "Object":
+        if moved:
+            return f"object {name!r} moved"
+        return f"object {name!r} changed" if reshaped else None
+    return f"{kind} {name!r} changed" if moved or reshaped or reshaded else None
+
+
+def note_edit(key, what):
+    """Counts an edit of scene `key` that changes its light; `what` says what changed."""
+    count, _ = _edits.get(key, (0, ""))
+    _edits[key] = (count + 1, what)
+
+
+def edit_count(key):
+    """Edits of scene `key` counted so far (a solution keeps the count at its export)."""
+    return _edits.get(key, (0, ""))[0]
+
+
+def changed_since(key, solution):
+    """What changed in scene `key` after `solution` was exported (the last edit), or None."""
+    count, what = _edits.get(key, (0, ""))
+    return what if count > solution.edits_seen else None
+
+
+def solved_at_text(solution):
+    """The local time of day the solution was solved, e.g. "10:42:07"."""
+    return time.strftime("%H:%M:%S", time.localtime(solution.solved_at))
+
+
+def save_solution(solution, json_path):
+    """Writes a Probe Grid solution: the field's export at json_path's stem + "_field.json"
+    (and its EXR files), and json_path with the solution's method, time, settings signature and
+    figures. ValueError for a solution whose field cannot be written back."""
+    if solution.method != "PROBE_GRID":
+        raise ValueError(f"a {solution.method} solution cannot be saved: only Probe Grid fields "
+                         "have a native import")
+    stem = json_path[: -len(".json")]
+    solution.field.export(f"{stem}_field.json")
+    doc = {"format": SOLUTION_FORMAT, "version": SOLUTION_VERSION, "method": solution.method,
+           "solved_at": solution.solved_at, "field": os.path.basename(f"{stem}_field.json"),
+           "signature": None if solution.signature is None else list(solution.signature),
+           "timings": solution.timings, "warnings": solution.warnings}
+    with open(json_path, "w", encoding="utf-8") as out:
+        json.dump(doc, out, indent=1)
+
+
+def load_solution(shgi, json_path, lookup):
+    """The Solution save_solution wrote at json_path, its probes read with `lookup`
+    (shgi.ProbeLookupSettings); OSError or ValueError naming the file when it is not one."""
+    with open(json_path, encoding="utf-8") as file:
+        doc = json.load(file)
+    if doc.get("format") != SOLUTION_FORMAT or doc.get("version") != SOLUTION_VERSION:
+        raise ValueError(f"{json_path} is not a saved SHGI solution (format "
+                         f"{SOLUTION_FORMAT} {SOLUTION_VERSION})")
+    field_path = os.path.join(os.path.dirname(json_path), doc["field"])
+    solution = loaded_solution(shgi, field_path, lookup)
+    solution.solved_at = doc["solved_at"]
+    solution.signature = (None if doc["signature"] is None
+                          else tuple(tuple(pair) for pair in doc["signature"]))
+    solution.timings = doc["timings"]
+    solution.warnings = doc["warnings"]
+    return solution
+
+
+def loaded_solution(shgi, field_json_path, lookup):
+    """A Solution of the probe field a ProbeField.export wrote (Export Volume's files), read with
+    `lookup`; its scene is None (F12 exports the current one) and its signature None (its
+    settings are unknown). ValueError naming the file for a photon lattice's export."""
+    from .field_solvers import LoadedProbeField
+
+    with open(field_json_path, encoding="utf-8") as file:
+        doc = json.load(file)
+    if "lattices" in doc:
+        raise ValueError(f"{field_json_path} holds photon lattices, which SHGI cannot read back "
+                         "(there is no lattice import): Solve the Photon Lattice instead, or "
+                         "load a Probe Grid volume")
+    solver = LoadedProbeField(shgi, shgi.ProbeField.import_exr(field_json_path, lookup),
+                              field_json_path)
+    return Solution(method=solver.METHOD, scene=None, solver=solver, field=solver.field(),
+                    signature=None, timings={}, memory_bytes=solver.memory_bytes,
+                    solved_at=os.path.getmtime(field_json_path),
+                    overlay=solver.overlay(None, None))
 
 
 def store(key, solution):
@@ -109,3 +223,9 @@ def clear(key):
 
 def clear_all():
     _solutions.clear()
+    _edits.clear()
+
+
+def keys():
+    """The scene keys that have a frozen solution."""
+    return list(_solutions)

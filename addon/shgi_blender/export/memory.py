@@ -53,8 +53,8 @@ def export_memory_problem(triangles, uv_maps, available=None):
     if available is None or needed <= EXPORT_SHARE_OF_AVAILABLE * available:
         return None
     return (f"its {triangles:,} triangles need about {_size(needed)} of memory to export but "
-            f"{_size(available)} is available; lower its Subdivision Surface or Multiresolution "
-            "levels (or set Render Properties > Simplify > Max Subdivision), or free memory")
+            f"{_size(available)} is available; lower the Render levels of its Subdivision "
+            "Surface or Multiresolution modifier (Properties > Modifiers), or free memory")
 
 
 def _size(count):

@@ -6,12 +6,18 @@ Irradiance Volumes with its render passes; engine/field_solvers.py): from the UI
 runs modal, polled by a timer, Esc cancels and the status bar shows progress; from a script or
 in background mode (execute) it waits for the thread. The solution, with its overlay (made on
 the same thread), goes to engine/solution_cache.py under the scene's name; F12 renders it from
-the current camera until SHGI_OT_clear_solution.
+the current camera until SHGI_OT_clear_solution. It keeps the scene's edit count at the export,
+so that later edits mark it out of date (engine/solution_files.py counts them).
+
+SHGI_OT_load_solution reads a probe field Export Volume wrote back as the scene's frozen
+solution (a photon lattice's export cannot be read back: there is no lattice import).
 """
 
+import os
 import time
 
 import bpy
+from bpy.props import StringProperty
 
 from .. import native, settings
 from ..engine import solution_cache
@@ -75,6 +81,7 @@ renders it from any camera without solving again, until Clear"""
             self.report({"ERROR"}, f"SHGI: {error}")
             return None
         self._scene_key = scene.name_full
+        self._edits_seen = solution_cache.edit_count(scene.name_full)
         return _SolveTask(shgi, export.scene, recipe, settings.solver_signature(scene.shgi),
                           timings, export.warnings).start()
 
@@ -86,6 +93,7 @@ renders it from any camera without solving again, until Clear"""
             self.report({"ERROR"}, f"SHGI: {task.error}")
             return {"CANCELLED"}
         solution = task.solution
+        solution.edits_seen = self._edits_seen
         solution_cache.store(self._scene_key, solution)
         figures = ", ".join(f"{label} {text}" for label, text in solution.solver.figures())
         self.report({"INFO"}, f"SHGI: solved in {solution.seconds:.2f} s ({figures}, "
@@ -112,4 +120,49 @@ class SHGI_OT_clear_solution(bpy.types.Operator):
         return {"FINISHED"}
 
 
-CLASSES = (SHGI_OT_solve, SHGI_OT_clear_solution)
+class SHGI_OT_load_solution(bpy.types.Operator):
+    """Read a Probe Grid volume written by Export Volume (its JSON file) as the scene's frozen \
+solution: F12 renders its probes until Clear"""
+
+    bl_idname = "shgi.load_solution"
+    bl_label = "Load"
+    bl_options = {"REGISTER"}
+
+    filepath: StringProperty(
+        name="File Path", subtype="FILE_PATH",
+        description="The JSON file Export Volume wrote (its EXR files beside it)")
+    filter_glob: StringProperty(default="*.json", options={"HIDDEN"})
+
+    @classmethod
+    def poll(cls, context):
+        return (context.scene is not None and native.available()
+                and context.scene.shgi.method == "PROBE_GRID")
+
+    def invoke(self, context, _event):
+        if not self.filepath:
+            self.filepath = bpy.path.abspath(context.scene.shgi.bake.volume_path)
+        context.window_manager.fileselect_add(self)
+        return {"RUNNING_MODAL"}
+
+    def execute(self, context):
+        scene = context.scene
+        path = bpy.path.abspath(self.filepath)
+        if not os.path.isfile(path):
+            self.report({"ERROR"}, f"SHGI: no file {path!r}: choose the JSON file Export Volume "
+                        "wrote")
+            return {"CANCELLED"}
+        shgi = native.module()
+        try:
+            solution = solution_cache.loaded_solution(
+                shgi, path, settings.probe_lookup_settings(scene.shgi, shgi))
+        except (OSError, ValueError, KeyError) as error:
+            self.report({"ERROR"}, f"SHGI: {path} was not read: {error}")
+            return {"CANCELLED"}
+        solution.edits_seen = solution_cache.edit_count(scene.name_full)
+        solution_cache.store(scene.name_full, solution)
+        self.report({"INFO"}, f"SHGI: {solution.field.probe_count} probes read from {path}; "
+                    "F12 renders them until Clear")
+        return {"FINISHED"}
+
+
+CLASSES = (SHGI_OT_solve, SHGI_OT_clear_solution, SHGI_OT_load_solution)

@@ -1,6 +1,7 @@
 """Panels: render settings (render_panels.py), light and view-layer passes (data_panels.py),
-the stock Blender panels shown under SHGI as under Cycles (compat.py), and the field overlay
-of the 3D views (field_overlay.py: lattice samples or probes)."""
+the stock Blender panels shown under SHGI as under Cycles (compat.py), the field overlay
+of the 3D views (field_overlay.py: lattice samples or probes), and the (label, value) rows of
+the figures panels show (figure_rows.py, bpy-free)."""
 
 
 def register():

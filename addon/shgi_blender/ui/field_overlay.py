@@ -50,8 +50,9 @@ def draw_field_overlay():
     overlay = overlay_for(scene)
     if overlay is None:
         return
+    overlay = overlay.resized(scene.shgi.overlay_size)
     shader = builtin_shader(SMOOTH_COLOR_SHADER_NAMES)
-    if _state["overlay"] is not overlay:
+    if _state["overlay"] is not overlay and not _same_spheres(_state["overlay"], overlay):
         _state["batch"] = batch_for_shader(shader, "TRIS", {"pos": overlay.positions,
                                                             "color": overlay.colors},
                                            indices=overlay.indices)
@@ -71,6 +72,27 @@ def draw_field_overlay():
     _state["spheres"] = len(overlay.centres)
 
 
+def _same_spheres(drawn, overlay):
+    """Whether the batch of `drawn` shows `overlay` (a resized copy of the same spheres)."""
+    return (drawn is not None and drawn.colors is overlay.colors
+            and drawn.radius_spacings == overlay.radius_spacings)
+
+
+# The legend of the spheres, drawn under their toggle.
+LEGEND = ("Sphere colours: the indirect light arriving from each side, exposed so that their "
+          "mean is mid grey")
+
+
+def draw_overlay_settings(layout, props, toggle):
+    """The overlay's toggle `toggle` of scene.shgi, its sphere size and legend when shown."""
+    from .render_panels import draw_wrapped
+
+    layout.prop(props, toggle)
+    if getattr(props, toggle):
+        layout.prop(props, "overlay_size", text="Size")
+        draw_wrapped(layout, LEGEND, icon="INFO")
+
+
 def draw_overlay_popover(self, context):
     """Appended to the viewport's Overlays popover (VIEW3D_PT_overlay)."""
     if context.engine != ENGINE:
@@ -78,10 +100,9 @@ def draw_overlay_popover(self, context):
     layout = self.layout
     layout.label(text="SHGI")
     solver = settings.METHODS_BY_ID[context.scene.shgi.method].solver
-    if solver == "PHOTON_LATTICE":
-        layout.prop(context.scene.shgi, "show_lattice_samples")
-    elif solver == "PROBE_GRID":
-        layout.prop(context.scene.shgi, "show_probes")
+    toggle = {"PHOTON_LATTICE": "show_lattice_samples", "PROBE_GRID": "show_probes"}.get(solver)
+    if toggle is not None:
+        draw_overlay_settings(layout, context.scene.shgi, toggle)
 
 
 def register():

@@ -1,24 +1,46 @@
-"""Properties > Render panels of the SHGI engine: method and samples (with the native module's
-import error when it fails), light paths, the photon lattice or the probe grid (with its
-Visibility sub-panel, laid out as EEVEE's irradiance volume settings) with the frozen solution,
-lightmap bakes and the volume export (scene.shgi.bake), and the last render's figures."""
+"""Properties > Render panels of the SHGI engine: method, quality preset and samples (with the
+native module's import error when it fails), light paths (with Cycles' Max Bounces
+sub-panel), the photon lattice or the probe grid (with its Visibility sub-panel, laid out as
+EEVEE's irradiance volume settings) with the frozen solution (out of date after a scene edit:
+Re-solve), lightmap bakes and the volume export (scene.shgi.bake; its Farm sub-panel), and the
+last render's figures.
+
+Labels beside values stay short: the label column of a Properties editor of the default width
+holds about 11 characters (tests/python/test_blender_engine.py measures them)."""
 
 import textwrap
-import time
 
 import bpy
 
 from .. import native, presets, settings
-from ..engine import final_render, solution_cache
+from ..engine import final_render, solution_cache, solution_files
+from . import field_overlay, figure_rows
 from .compat import ShgiPanel
 
-WRAP_COLUMNS = 56  # characters per line of long messages in a panel of default width
+# Long messages are wrapped to the Properties editor's width: the UI font averages about 5.1 px
+# a character at 11 pt and scale 1 in these sentences (blf), and a label loses about 50 px to the
+# panel's margins and its icon. The default editor is 303 px wide (factory startup, 1920 x
+# 1080 window): 46 characters, used when there is no region (scripts, headless tests).
+CHAR_PIXELS = 5.5
+MARGIN_PIXELS = 50
+DEFAULT_REGION_PIXELS = 303
+MIN_WRAP_COLUMNS = 20
+
+
+def wrap_columns(region_width=None, ui_scale=1.0):
+    """Characters per line of a wrapped message in a region `region_width` px wide."""
+    width = region_width if region_width and region_width > 1 else DEFAULT_REGION_PIXELS
+    return max(MIN_WRAP_COLUMNS, int((width - MARGIN_PIXELS * ui_scale) / (CHAR_PIXELS * ui_scale)))
 
 
 def draw_wrapped(layout, text, icon="NONE"):
-    """Draws `text` as several labels (Blender's labels do not wrap)."""
+    """Draws `text` as several labels (Blender's labels do not wrap) that fit the region."""
+    region = getattr(bpy.context, "region", None)
+    # The effective scale (resolution scale x DPI); background Blender has none (0).
+    columns = wrap_columns(getattr(region, "width", None),
+                           bpy.context.preferences.system.ui_scale or 1.0)
     column = layout.column(align=True)
-    for index, line in enumerate(textwrap.wrap(text, WRAP_COLUMNS)):
+    for index, line in enumerate(textwrap.wrap(text, columns)):
         column.label(text=line, icon=icon if index == 0 else "BLANK1")
 
 
@@ -32,17 +54,19 @@ class SHGI_RENDER_PT_method(ShgiPanel, bpy.types.Panel):
         if error is not None:
             draw_wrapped(layout.box(), error, icon="ERROR")
         props = context.scene.shgi
-        layout.prop(props, "method")
-        row = layout.row(align=True)
-        current = presets.matching_preset(props)
-        for name, label in presets.PRESET_LABELS.items():
-            row.operator("shgi.quality_preset", text=label,
-                         depress=(name == current)).preset = name
         layout.use_property_split = True
         layout.use_property_decorate = False
+        layout.prop(props, "method")
+        # A menu naming the preset the counts match: a row of buttons cut their labels.
+        split = layout.split(factor=0.4)
+        split.alignment = "RIGHT"
+        split.label(text="Quality")
+        split.operator_menu_enum("shgi.quality_preset", "preset",
+                                 text=presets.preset_label(props))
         column = layout.column(align=True)
-        column.prop(props, "viewport_samples", text="Viewport Samples")
-        column.prop(props, "samples", text="Render Samples")
+        column.label(text="Samples")
+        column.prop(props, "viewport_samples", text="Viewport")
+        column.prop(props, "samples", text="Render")
         column.prop(props, "seed")
 
 
@@ -56,47 +80,66 @@ class SHGI_RENDER_PT_light_paths(ShgiPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         props = context.scene.shgi
-        column = layout.column(align=True, heading="Max Bounces")
+        column = layout.column(align=True)
+        column.prop(props, "clamp_indirect", text="Clamp")
+        column.prop(props, "world_sampling", text="World")
+
+
+class SHGI_RENDER_PT_light_paths_max_bounces(ShgiPanel, bpy.types.Panel):
+    """Cycles' Light Paths > Max Bounces sub-panel: Total and the limit per kind of bounce."""
+
+    bl_label = "Max Bounces"
+    bl_context = "render"
+    bl_parent_id = "SHGI_RENDER_PT_light_paths"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        props = context.scene.shgi
+        column = layout.column(align=True)
         for name in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces"):
             column.prop(props, name)
-        column = layout.column(align=True)
-        column.prop(props, "clamp_indirect")
-        column.prop(props, "world_sampling")
         if settings.METHODS_BY_ID[props.method].uses_field:
-            column.prop(props, "max_specular_bounces")
+            column.prop(props, "max_specular_bounces", text="Specular")
 
 
 def draw_frozen_solution(layout, context):
     """The Solve and Clear buttons, and the figures of the scene's frozen solution."""
     props = context.scene.shgi
+    key = context.scene.name_full
     row = layout.row(align=True)
     row.operator("shgi.solve", icon="LIGHT_SUN")
+    if props.method == "PROBE_GRID":
+        row.operator("shgi.load_solution", icon="FILE_FOLDER")
     row.operator("shgi.clear_solution", icon="X")
-    solution = solution_cache.get(context.scene.name_full)
+    solution = solution_cache.get(key)
     if solution is None:
+        problem = solution_files.load_problem(key)
+        if problem is not None:
+            draw_wrapped(layout.box(), problem, icon="ERROR")
         return
     box = layout.box()
-    solved_at = time.strftime("%H:%M:%S", time.localtime(solution.solved_at))
+    solved_at = solution_cache.solved_at_text(solution)
     if solution.method != props.method:
-        box.label(text=f"Frozen {settings.METHODS_BY_ID[solution.method].label} solution "
-                       f"({solved_at}): not used by this method", icon="INFO")
+        draw_wrapped(box, f"Frozen {settings.METHODS_BY_ID[solution.method].label} solution "
+                          f"({solved_at}): not used by this method", icon="INFO")
         return
-    box.label(text=f"Frozen solution ({solved_at}): F12 renders it from any camera",
-              icon="FREEZE")
-    box.label(text="Scene edits made since are not seen: Solve again or Clear")
-    if solution.signature != settings.solver_signature(props):
-        box.label(text="Settings changed since the solve: Solve again to apply them",
-                  icon="ERROR")
-    grid = box.grid_flow(columns=2, even_columns=True, align=True)
-    for key, label in solution_cache.TIMING_LABELS.items():
-        if key in solution.timings:
-            grid.label(text=label)
-            grid.label(text=f"{1000.0 * solution.timings[key]:.1f} ms")
-    for label, text in solution.solver.figures():
-        grid.label(text=label)
-        grid.label(text=text)
-    grid.label(text="Memory")
-    grid.label(text=f"{solution.memory_bytes / solution_cache.BYTES_PER_MIB:.2f} MiB")
+    changed = solution_cache.changed_since(key, solution)
+    if changed is not None:
+        draw_wrapped(box, f"Using the solution of {solved_at}; the scene changed since "
+                          f"({changed})", icon="ERROR")
+        box.operator("shgi.solve", text="Re-solve", icon="FILE_REFRESH")
+    else:
+        draw_wrapped(box, f"Frozen solution ({solved_at}): F12 renders it from any camera",
+                     icon="FREEZE")
+    if solution.signature is not None and solution.signature != settings.solver_signature(props):
+        draw_wrapped(box, "Settings changed since the solve: Re-solve to apply them",
+                     icon="ERROR")
+    if solution.method != "PROBE_GRID":
+        draw_wrapped(box, "Not saved with the file (photon lattices cannot be read back)",
+                     icon="INFO")
+    figure_rows.draw_rows(box, figure_rows.solution_rows(solution))
 
 
 class _FieldPanel(ShgiPanel):
@@ -128,11 +171,12 @@ class SHGI_RENDER_PT_photon_lattice(_FieldPanel, bpy.types.Panel):
         column.prop(props, "caustics")
         sub = column.column(align=True)
         sub.active = props.caustics != "OFF"
-        sub.prop(props, "caustic_resolution")
+        sub.prop(props, "caustic_resolution", text="Resolution")
         layout.prop(props, "world_in_field")
         column = layout.column(align=True)
-        column.prop(props, "viewport_photon_passes", text="Viewport Passes")
-        column.prop(props, "show_lattice_samples", text="Show Lattice Samples")
+        column.label(text="Photon Passes")
+        column.prop(props, "viewport_photon_passes", text="Viewport")
+        field_overlay.draw_overlay_settings(layout, props, "show_lattice_samples")
 
 
 class SHGI_RENDER_PT_probe_grid(_FieldPanel, bpy.types.Panel):
@@ -149,25 +193,28 @@ class SHGI_RENDER_PT_probe_grid(_FieldPanel, bpy.types.Panel):
         volumes = irradiance_volume_count(context.scene)
         layout.label(icon="OUTLINER_OB_LIGHTPROBE", text=(
             f"{volumes} Irradiance Volume{'s' if volumes != 1 else ''} place the probes"
-            if volumes else "No Irradiance Volume: one volume fitted to the scene"))
+            if volumes else "No Irradiance Volume: probes fill the scene"))
         layout.use_property_split = True
         layout.use_property_decorate = False
         column = layout.column(align=True)
         sub = column.column(align=True)
         sub.active = volumes == 0
         sub.prop(grid, "spacing")
-        for name in ("order", "rays_per_probe", "hysteresis", "clamp", "bounces"):
+        column.prop(grid, "order")
+        column.prop(grid, "rays_per_probe", text="Rays")
+        for name in ("hysteresis", "clamp", "bounces"):
             column.prop(grid, name)
         column = layout.column(align=True)
-        column.prop(props, "probe_passes", text="Render Passes")
-        column.prop(props, "viewport_probe_passes", text="Viewport Passes")
+        column.label(text="Update Passes")
+        column.prop(props, "probe_passes", text="Render")
+        column.prop(props, "viewport_probe_passes", text="Viewport")
         column = layout.column(align=True, heading="Relocation")
         column.prop(grid, "relocate", text="Move Out of Geometry")
         sub = column.column(align=True)
         sub.active = grid.relocate
         sub.prop(grid, "max_offset")
-        column.prop(grid, "backface_threshold")
-        layout.prop(props, "show_probes", text="Show Probes")
+        column.prop(grid, "backface_threshold", text="Back Faces")
+        field_overlay.draw_overlay_settings(layout, props, "show_probes")
 
 
 class SHGI_RENDER_PT_probe_grid_visibility(_FieldPanel, bpy.types.Panel):
@@ -234,7 +281,7 @@ class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
         column.prop(bake, "resolution")
         sub = column.column(align=True)
         sub.active = bake.resolution == 0
-        sub.prop(bake, "texel_density")
+        sub.prop(bake, "texel_density", text="Texels per m")
         column.prop(bake, "padding")
         column = layout.column(align=True)
         for name in ("directional", "filter"):
@@ -247,18 +294,33 @@ class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
         sub.active = bake.hook_up_material
         sub.prop(bake, "single_user_materials")
         layout.prop(bake, "output_folder")
-        column = layout.column(align=True, heading="Farm")
-        column.prop(bake, "shard_count")
-        sub = column.column(align=True)
-        sub.active = bake.shard_count > 1
-        sub.prop(bake, "shard_index")
-        column.prop(bake, "tile_size")
         layout.operator("shgi.remove_lightmap_nodes", icon="X")
         layout.separator()
         layout.prop(bake, "volume_path")
         row = layout.row()
         row.active = settings.METHODS_BY_ID[context.scene.shgi.method].uses_field
         row.operator("shgi.export_volume", icon="EXPORT")
+
+
+class SHGI_RENDER_PT_bake_farm(ShgiPanel, bpy.types.Panel):
+    """The Bake panel's render farm settings: shards and the tiles they are made of."""
+
+    bl_label = "Farm"
+    bl_context = "render"
+    bl_parent_id = "SHGI_RENDER_PT_bake"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        bake = context.scene.shgi.bake
+        column = layout.column(align=True)
+        column.prop(bake, "shard_count")
+        sub = column.column(align=True)
+        sub.active = bake.shard_count > 1
+        sub.prop(bake, "shard_index")
+        column.prop(bake, "tile_size")
 
 
 class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
@@ -274,17 +336,18 @@ class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
             return
         width, height = record["size"]
         state = " (cancelled)" if record["cancelled"] else ""
-        layout.label(text=f"{record['method']}: {width}x{height} px, {record['samples']} "
-                          f"samples{state}")
-        grid = layout.grid_flow(columns=2, even_columns=True, align=True)
-        for name, seconds in record["timings"].items():
-            grid.label(text=name.capitalize())
-            grid.label(text=f"{seconds:.2f} s")
+        method = settings.METHODS_BY_ID.get(record["method"])
+        region = " Render Region" if "region" in record else ""
+        draw_wrapped(layout, f"{method.label if method else record['method']}: {width}x{height} "
+                             f"px{region}, {record['samples']} samples{state}")
+        figure_rows.draw_rows(layout, figure_rows.render_timing_rows(record["timings"]))
         for message in record["errors"] + record["warnings"]:
             draw_wrapped(layout, message, icon="ERROR" if message in record["errors"]
                          else "INFO")
 
 
-CLASSES = (SHGI_RENDER_PT_method, SHGI_RENDER_PT_light_paths, SHGI_RENDER_PT_photon_lattice,
+# Parents before their sub-panels.
+CLASSES = (SHGI_RENDER_PT_method, SHGI_RENDER_PT_light_paths,
+           SHGI_RENDER_PT_light_paths_max_bounces, SHGI_RENDER_PT_photon_lattice,
            SHGI_RENDER_PT_probe_grid, SHGI_RENDER_PT_probe_grid_visibility,
-           SHGI_RENDER_PT_bake, SHGI_RENDER_PT_last_render)
+           SHGI_RENDER_PT_bake, SHGI_RENDER_PT_bake_farm, SHGI_RENDER_PT_last_render)
