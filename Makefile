@@ -1,4 +1,4 @@
-# SHGI: the two commands of the README ("make demo", "make test"), the install step and the
+# SHGI: the README's two commands ("make demo", "make test"), the install step and the
 # packages ("make dist").
 #
 # Every target first installs missing Debian packages (apt-get when root; otherwise it prints

@@ -5,7 +5,7 @@ operators ``shgi.bake_lightmaps`` and ``shgi.merge_lightmap_shards`` carry the s
 and take every one a caller did not set from that group (operators/bake_lightmaps.py), so a
 script or a farm job overrides only what it names.
 
-Names are the native ones where a native field exists (DESIGN.md: settings mirrored 1:1):
+Names are the native ones where a native field exists (docs/architecture.md: settings mirrored 1:1):
 ``content``, ``samples``, ``directional``, ``tile_size`` are LightmapSettings fields; ``filter``
 and ``padding`` are BakeOptions fields. The one rename is BakeOptions ``uv_set``, shown as
 ``uv_map`` (Blender's word for it). The light-path limits and the seed are not repeated here:

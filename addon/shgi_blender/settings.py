@@ -1,7 +1,7 @@
 """The render settings of ``scene.shgi`` and the native settings structs they fill, without bpy.
 
 ``scene.shgi`` (properties.py) is a PropertyGroup whose names are the native fields' names
-(DESIGN.md: settings mirrored 1:1). One property can feed several structs: ``samples`` is
+(docs/architecture.md: settings mirrored 1:1). One property can feed several structs: ``samples`` is
 PathTracerSettings.samples for PATH_TRACE and PreviewSettings.samples for the field methods,
 as Cycles' one "Max Samples" serves every integrator; ``seed`` seeds every solver. The one
 rename is ``PhotonLatticeSettings.max_bounces`` (photon scatterings after emission), fed by

@@ -1,4 +1,4 @@
-"""Lightmap bakes in Blender (issue 7, item 4): shgi.bake_lightmaps against Cycles' bake.
+"""Lightmap bakes in Blender: shgi.bake_lightmaps against Cycles' bake.
 
 Background mode (``blender -b --factory-startup --python-exit-code 1 --python bake_checks.py --
 <build python dir> <addon dir> <results json>``):

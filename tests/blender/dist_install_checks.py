@@ -85,7 +85,7 @@ def main():
 
     scene = blender_scenes.cornell_box(SCALE)
     # Without the Principled BSDF's specular layer: SHGI's material is Blender 3.4's Principled,
-    # and Cycles 4+ dims the diffuse under the specular (README, "Blender versions"), which is
+    # and Cycles 4+ dims the diffuse under the specular (docs/addon.md, "Blender versions"), which is
     # not what this test is about.
     for material in bpy.data.materials:
         for node in material.node_tree.nodes if material.node_tree else ():

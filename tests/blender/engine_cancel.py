@@ -41,7 +41,7 @@ BREAK_AFTER_SECONDS = 1.5
 HEAVY_OBJECTS = 200
 HEAVY_GRID = 100  # quads per side: 19,602 triangles per object
 EXPORT_BREAK_AFTER_SECONDS = 0.5
-# DESIGN.md: a cancelled native call returns within 0.2 s; the engine polls every 0.05 s.
+# docs/architecture.md: a cancelled native call returns within 0.2 s; the engine polls every 0.05 s.
 CANCEL_LATENCY = 0.5
 # After this long a render that missed the SIGINT is ended and the test fails.
 WATCHDOG_SECONDS = 20.0

@@ -1,4 +1,4 @@
-"""F12 with the SHGI engine against F12 with Cycles on the project's two scenes (issue 5).
+"""F12 with the SHGI engine against F12 with Cycles on the project's two scenes.
 
 For the Cornell box and the sun room (examples/blender_scenes.py at SCALE) this script
 1. checks that exporting the bpy scene gives the scene examples/scenes.py builds;

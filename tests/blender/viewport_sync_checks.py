@@ -1,4 +1,4 @@
-"""The viewport's scene sync in background Blender: which edits read geometry again (issue 5).
+"""The viewport's scene sync in background Blender: which edits read geometry again.
 
 Without a window there is no viewport engine, so a ``depsgraph_update_post`` handler calls
 ViewportSync.sync(depsgraph) with the handler's depsgraph, as ``view_update`` calls it with the

@@ -1,4 +1,4 @@
-"""The live viewport in a real window (issue 5): Rendered shading with the SHGI engine.
+"""The live viewport in a real window: Rendered shading with the SHGI engine.
 
 Runs Blender with a window under Xvfb (Mesa's software OpenGL), not in background mode:
 

@@ -4,7 +4,7 @@ Ground truth first: a Lambert plane under a uniform world bakes to the world's r
 (native/bake/lightmap_baker.h: the texel holds E / pi), also through a UV map that xatlas lays out
 for a mesh without one (BakeOptions.lightmap_uvs, the CLI's --uv xatlas). The file layout is
 checked against the in-memory lightmap (rows flipped to top-first), shard bakes against the single
-bake byte for byte (DESIGN.md, determinism), and every error against the message a user would read.
+bake byte for byte (docs/architecture.md, determinism), and every error against the message a user would read.
 Sizes and sample counts are small: the whole file runs in well under a minute on two cores.
 """
 
@@ -676,7 +676,7 @@ def run_cli(build_python_dir, *args, progress=False):
 
 
 CLI_BAKE = ["--resolution", "32", "--samples", "8", "--seed", "5"]
-# DESIGN.md: a cancelled call returns within 0.2 s; the process also has to exit. Generous, as
+# docs/architecture.md: a cancelled call returns within 0.2 s; the process also has to exit. Generous, as
 # the machine may be loaded.
 CANCEL_SECONDS = 10.0
 

@@ -1,4 +1,4 @@
-"""Lightmap bakes from Blender (issue 7, item 4): the bpy-free parts here, Blender runs below.
+"""Lightmap bakes from Blender: the bpy-free parts here, Blender runs below.
 
 Outside Blender (/usr/bin/python3): the bake properties against LightmapSettings and
 BakeOptions, the settings they fill, shards and sizes, the worker-thread BakeTask (the same
@@ -46,7 +46,7 @@ from shgi_blender.operators.facing_check import warning as facing_warning  # noq
 from shgi_blender.engine import field_solvers  # noqa: E402
 from shgi_blender.engine.lightmap_bake import BakeRequest, BakeTask, rgba_pixels  # noqa: E402
 
-# Issue 7's acceptance: mean texel difference against Cycles' bake.
+# The bake's acceptance (docs/baking.md): mean texel difference against Cycles' bake.
 MEAN_TOLERANCE = {"PATH_TRACER": 0.05, "PHOTON_LATTICE": 0.10, "PROBE_GRID": 0.10}
 # A lightmap in the wrong row order or UV orientation matches Cycles' worse than the right one:
 # mirrored, the floor's box shadow and light fall-off land elsewhere (about 4-11 dB lower in
@@ -54,7 +54,7 @@ MEAN_TOLERANCE = {"PATH_TRACER": 0.05, "PHOTON_LATTICE": 0.10, "PROBE_GRID": 0.1
 ORIENTATION_MARGIN_DB = 3.0
 # Lightmap in the EXR (half floats) against the Blender image (float): relative rounding 2^-11.
 HALF_TOLERANCE = 1e-3
-# DESIGN.md: cancel returns within 0.2 s (a task polled every 5 ms here).
+# docs/architecture.md: cancel returns within 0.2 s (a task polled every 5 ms here).
 CANCEL_LATENCY = 0.5
 # Esc in a window to the end of the worker: Blender's event loop delivers the key between
 # redraws (software OpenGL under Xvfb), then the native cancel (< 0.2 s).

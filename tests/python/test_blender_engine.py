@@ -39,12 +39,12 @@ from shgi_blender.engine.render_job import RenderJob, sample_rounds  # noqa: E40
 from shgi_blender.ui import figure_rows  # noqa: E402
 from shgi_blender.export.light_probe import ProbeVolumeRecord, native_volumes  # noqa: E402
 
-# Issue 5's acceptance figures against Cycles.
+# The engine's acceptance figures against Cycles (docs/methods.md).
 MIN_PSNR_DB = 28.0
 MEAN_TOLERANCE = {"PATH_TRACE": 0.02, "PHOTON_LATTICE": 0.10, "PHOTON_LATTICE frozen": 0.10,
                   "PROBE_GRID": 0.10, "PROBE_GRID volume": 0.10}
 DIFFUSE_INDIRECT_TOLERANCE = 0.10
-# DESIGN.md: cancel returns within 0.2 s; the engine polls every 0.05 s.
+# docs/architecture.md: cancel returns within 0.2 s; the engine polls every 0.05 s.
 CANCEL_LATENCY = 0.5
 
 

@@ -1,4 +1,4 @@
-"""The SHGI engine's live viewport (issue 5): bpy-free parts here, Blender runs below.
+"""The SHGI engine's live viewport: bpy-free parts here, Blender runs below.
 
 Outside Blender (/usr/bin/python3): the viewport camera read back from Blender's projection
 matrices, the frame schedule, the sync plan of depsgraph updates, scene snapshots (build,
@@ -41,7 +41,7 @@ from shgi_blender.export.scene_snapshot import (  # noqa: E402
 
 # Projections agree to float32 rounding of pixel coordinates.
 PROJECTION_TOLERANCE_PX = 1e-3
-# DESIGN.md: cancel returns within 0.2 s; the worker polls nothing, the native call raises.
+# docs/architecture.md: cancel returns within 0.2 s; the worker polls nothing, the native call raises.
 CANCEL_LATENCY = 0.5
 WORKER_TIMEOUT = 60.0
 

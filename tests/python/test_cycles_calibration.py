@@ -1,4 +1,4 @@
-"""Calibration of SHGI's reference path tracer against Cycles (issue 3), run inside Blender.
+"""Calibration of SHGI's reference path tracer against Cycles, run inside Blender.
 
 tests/blender/calibration_lights.py (point, spot, sun, area rectangle and disk, emissive mesh,
 world, lights seen by the camera) and tests/blender/calibration_materials.py (Principled diffuse,

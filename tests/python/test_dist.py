@@ -1,4 +1,4 @@
-"""The packages of `make dist` (issue 8), installed the ways the README shows.
+"""The packages of `make dist`, installed the ways the README shows.
 
 - The wheel: self-contained (auditwheel put Embree, TBB and OpenEXR in shgi.libs under unique
   names), pip-installs into a clean venv, and traces and bakes there from its own libraries.

@@ -1,4 +1,4 @@
-"""The PhotonLattice solver and the preview renderer through Python (issue 4).
+"""The PhotonLattice solver and the preview renderer through Python.
 
 Agreement with the reference path tracer on the project's Cornell box and sun room (fixed seeds,
 default solver and preview settings): the mean of DiffInd x DiffCol within 10%, and Combined

@@ -1,4 +1,4 @@
-"""SH probe grids (issue 6, seed 002) through Python.
+"""SH probe grids (seed 002) through Python.
 
 Agreement with the reference path tracer on the project's Cornell box and sun room for L1, L2
 and L4 probes (fixed seeds; 0.3 m probe spacing, 6 update passes of 256 paths per probe): the

@@ -19,7 +19,7 @@ PASS_CHANNELS = {
 }
 # Five standard errors of the pixel mean: a false failure has probability ~6e-7.
 SIGMAS = 5.0
-# DESIGN.md asks cancel to return within 0.2 s; the test allows for a loaded shared machine.
+# docs/architecture.md asks cancel to return within 0.2 s; the test allows for a loaded shared machine.
 CANCEL_LATENCY_LIMIT = 0.5
 # Seconds for a thread that is about to call render() to enter it and mark the scene in use.
 RENDER_START_GRACE = 0.2

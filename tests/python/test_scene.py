@@ -20,7 +20,7 @@ from scene_support import finishes_in_a_thread
 
 # Embree's watertight intersection is exact to a few float32 ulps at unit scale.
 TOLERANCE = 1e-5
-# DESIGN.md asks cancel to return within 0.2 s; the test allows for a loaded shared machine.
+# docs/architecture.md asks cancel to return within 0.2 s; the test allows for a loaded shared machine.
 CANCEL_LATENCY_LIMIT = 0.5
 MISS = 0xFFFFFFFF
 

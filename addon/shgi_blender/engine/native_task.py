@@ -4,7 +4,7 @@ A NativeTask runs its subclass's ``_work()`` on a daemon thread. Every native ca
 the task's ``progress`` (a shgi.Progress) and releases the GIL, so the main thread stays
 responsive and reads ``progress.fraction`` / ``progress.stage`` while it runs. ``cancel()``
 makes the running call raise ``shgi.Cancelled`` within one chunk of work (< 0.2 s,
-DESIGN.md); the task then ends with ``cancelled`` set. Any other exception ends it with
+docs/architecture.md); the task then ends with ``cancelled`` set. Any other exception ends it with
 ``error`` set, for the main thread to report (a worker thread must not call bpy).
 
 A ValueError (a native check's refusal) is kept with the panel setting named in place of the

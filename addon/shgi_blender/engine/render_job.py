@@ -6,7 +6,7 @@ RenderJob, and then polls it from the main thread: it forwards Esc (``test_break
 result. The thread, the cancel and the outcome are a NativeTask's (native_task.py): every
 native call the job makes releases the GIL, so the main thread stays responsive, and
 ``cancel()`` makes the running call raise ``shgi.Cancelled`` within one chunk of work (< 0.2 s,
-DESIGN.md). The job keeps the last complete snapshot, so an interrupted render still shows
+docs/architecture.md). The job keeps the last complete snapshot, so an interrupted render still shows
 every sample finished before Esc.
 
 Sampling runs in rounds (``sample_rounds``): the first round is one sample per pixel so that an

@@ -1,6 +1,6 @@
 """Frozen field solutions, one per Blender scene, kept between renders. No bpy.
 
-Non-interactive mode (DESIGN.md, use 2c; seed 000 §6.5): the Solve operator exports the scene,
+Non-interactive mode (docs/architecture.md; seed 000 §6.5): the Solve operator exports the scene,
 solves the method's field once (a PhotonLattice with the scene's photon count, or a ProbeGrid
 with its render passes; field_solvers.py) and stores it here with the committed shgi.Scene it
 was solved on. F12 renders of that Blender scene with the same method then render the frozen
