@@ -71,8 +71,9 @@ void bind_loaders(py::module_& m) {
 Loads the default scene of a glTF 2.0 file (.gltf or .glb) into a new, uncommitted Scene, as
 Blender 3.4's glTF importer would import it.
 
-Y-up glTF becomes Z-up ((x, y, z) -> (x, -z, y)); UV v becomes 1 - v; each TRIANGLES primitive
-is one mesh, instanced once per node that uses it; TEXCOORD_n are UV sets "UVMap", "UVMap.001",
+Y-up glTF becomes Z-up ((x, y, z) -> (x, -z, y)); UV v becomes 1 - v; each glTF mesh is
+one mesh (its TRIANGLES primitives merged, a material per triangle, as Blender's material
+slots), instanced once per node that uses it; TEXCOORD_n are UV sets "UVMap", "UVMap.001",
 ...; the base colour texture is decoded to linear RGBA; the first camera node sets the camera.
 lighting_mode: how KHR_lights_punctual intensities become Blender units, as the importer's
     "Lighting Mode": "SPEC" (point/spot W = cd * 4 pi / 683, sun W/m^2 = lux / 683), "COMPAT"

@@ -529,6 +529,8 @@ class GltfImporter {
     void add_node_camera(const tinygltf::Node& node, const mat4& world_from_node);
     const std::vector<uint32_t>& mesh_ids(int mesh_index);
     Mesh build_primitive(int mesh_index, int primitive_index, uint32_t material_id) const;
+    Mesh merged_primitives(int mesh_index, std::vector<Mesh>& parts) const;
+    static Mesh with_flat_normals(const Mesh& part);
     void read_uv_sets(const tinygltf::Primitive& primitive, const std::string& what,
                       size_t vertex_count, Mesh& mesh) const;
     std::vector<uvec3> read_triangles(const tinygltf::Primitive& primitive,
@@ -543,7 +545,7 @@ class GltfImporter {
     const GltfLoadOptions& options_;
     AccessorReader accessors_;
     Scene scene_;
-    std::map<int, std::vector<uint32_t>> mesh_ids_;  // glTF mesh -> one SHGI mesh per primitive
+    std::map<int, std::vector<uint32_t>> mesh_ids_;  // glTF mesh -> its SHGI mesh, if triangles
     std::map<int, uint32_t> material_ids_;           // glTF material -> SHGI material
     std::map<int, int32_t> texture_ids_;             // glTF image -> SHGI texture (or none)
     int64_t default_material_ = -1;
@@ -676,7 +678,7 @@ void GltfImporter::add_node_camera(const tinygltf::Node& node, const mat4& world
 const std::vector<uint32_t>& GltfImporter::mesh_ids(int mesh_index) {
     const auto cached = mesh_ids_.find(mesh_index);
     if (cached != mesh_ids_.end()) return cached->second;
-    std::vector<uint32_t> ids;
+    std::vector<Mesh> parts;
     const tinygltf::Mesh& mesh = model_.meshes[size_t(mesh_index)];
     for (size_t p = 0; p < mesh.primitives.size(); ++p) {
         const tinygltf::Primitive& primitive = mesh.primitives[p];
@@ -687,9 +689,81 @@ const std::vector<uint32_t>& GltfImporter::mesh_ids(int mesh_index) {
         }
         const uint32_t material = primitive.material >= 0 ? material_id(primitive.material)
                                                           : default_material_id();
-        ids.push_back(scene_.add_mesh(build_primitive(mesh_index, int(p), material)));
+        parts.push_back(build_primitive(mesh_index, int(p), material));
     }
+    std::vector<uint32_t> ids;
+    if (!parts.empty()) ids.push_back(scene_.add_mesh(merged_primitives(mesh_index, parts)));
     return mesh_ids_.emplace(mesh_index, std::move(ids)).first->second;
+}
+
+// One mesh per glTF mesh, as Blender's importer makes one mesh with a material slot per
+// primitive: a node is then one object, baked into one lightmap and named once. Triangles keep
+// their primitive's material. A primitive without normals among primitives with them gets the
+// flat normals glTF 2.0 asks for (§3.7.2.1), on corners of its own; a UV set a primitive lacks
+// reads (0, 0) there, as Blender fills it.
+Mesh GltfImporter::merged_primitives(int mesh_index, std::vector<Mesh>& parts) const {
+    if (parts.size() == 1) return std::move(parts.front());
+    const auto has_normals = [](const Mesh& part) { return !part.normals.empty(); };
+    const bool any_normals = std::any_of(parts.begin(), parts.end(), has_normals);
+    size_t uv_set_count = 0, vertex_total = 0;
+    for (Mesh& part : parts) {
+        if (any_normals && !has_normals(part)) part = with_flat_normals(part);
+        uv_set_count = std::max(uv_set_count, part.uv_sets.size());
+        vertex_total += part.positions.size();
+    }
+    if (vertex_total > std::numeric_limits<uint32_t>::max())
+        throw IoError(format_message(path_, ": mesh ", mesh_index, " has ", vertex_total,
+                                     " vertices in all, more than a mesh can index"));
+    Mesh merged;
+    const tinygltf::Mesh& source = model_.meshes[size_t(mesh_index)];
+    merged.name = source.name.empty() ? format_message("mesh_", mesh_index) : source.name;
+    merged.uv_sets.resize(uv_set_count);
+    for (size_t set = 0; set < uv_set_count; ++set)
+        merged.uv_sets[set].name = uv_set_name(int(set));
+    for (const Mesh& part : parts) {
+        const uint32_t first = uint32_t(merged.positions.size());
+        merged.positions.insert(merged.positions.end(), part.positions.begin(),
+                                part.positions.end());
+        merged.normals.insert(merged.normals.end(), part.normals.begin(), part.normals.end());
+        for (size_t set = 0; set < uv_set_count; ++set) {
+            std::vector<vec2>& coords = merged.uv_sets[set].coords;
+            if (set < part.uv_sets.size())
+                coords.insert(coords.end(), part.uv_sets[set].coords.begin(),
+                              part.uv_sets[set].coords.end());
+            else
+                coords.resize(coords.size() + part.positions.size(), vec2(0.0f));
+        }
+        for (const uvec3& t : part.triangles) merged.triangles.push_back(t + first);
+        merged.material_indices.insert(merged.material_indices.end(),
+                                       part.material_indices.begin(), part.material_indices.end());
+    }
+    return merged;
+}
+
+// `part` with three corners of its own per triangle, each holding the face normal.
+Mesh GltfImporter::with_flat_normals(const Mesh& part) {
+    Mesh flat;
+    flat.name = part.name;
+    flat.material_indices = part.material_indices;
+    flat.uv_sets.resize(part.uv_sets.size());
+    for (size_t set = 0; set < part.uv_sets.size(); ++set)
+        flat.uv_sets[set].name = part.uv_sets[set].name;
+    for (const uvec3& t : part.triangles) {
+        const vec3 cross = glm::cross(part.positions[t.y] - part.positions[t.x],
+                                      part.positions[t.z] - part.positions[t.x]);
+        const float length = glm::length(cross);
+        // A degenerate triangle (dropped later by validate_mesh) still needs a unit normal.
+        const vec3 normal = length > 0.0f ? cross / length : vec3(0.0f, 0.0f, 1.0f);
+        const uint32_t first = uint32_t(flat.positions.size());
+        for (int corner = 0; corner < 3; ++corner) {
+            flat.positions.push_back(part.positions[t[corner]]);
+            flat.normals.push_back(normal);
+            for (size_t set = 0; set < part.uv_sets.size(); ++set)
+                flat.uv_sets[set].coords.push_back(part.uv_sets[set].coords[t[corner]]);
+        }
+        flat.triangles.emplace_back(first, first + 1, first + 2);
+    }
+    return flat;
 }
 
 Mesh GltfImporter::build_primitive(int mesh_index, int primitive_index,
@@ -703,7 +777,6 @@ Mesh GltfImporter::build_primitive(int mesh_index, int primitive_index,
 
     Mesh mesh;
     mesh.name = source.name.empty() ? format_message("mesh_", mesh_index) : source.name;
-    if (source.primitives.size() > 1) mesh.name += format_message(".", primitive_index);
     const std::vector<float> p = accessors_.read_floats(position->second, 3, what + " POSITION");
     const size_t vertex_count = p.size() / 3;
     for (size_t i = 0; i < vertex_count; ++i)

@@ -72,8 +72,9 @@ struct GltfLoadOptions {
 };
 
 // Loads the default scene of a .gltf or .glb file (all root nodes when it defines no scenes).
-// Each TRIANGLES primitive used by a node becomes one Mesh (shared by every node using it) and
-// each use one Instance named after the node. Throws IoError naming `path` on any failure.
+// Each glTF mesh used by a node becomes one Mesh (shared by every node using it), its TRIANGLES
+// primitives merged with a material per triangle as Blender's material slots, and each use one
+// Instance named after the node. Throws IoError naming `path` on any failure.
 Scene load_gltf(const std::string& path, const GltfLoadOptions& options = {});
 
 // C in the header text above: Blender (Z-up) coordinates from glTF (Y-up) coordinates.

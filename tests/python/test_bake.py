@@ -766,6 +766,31 @@ def test_cli_sizes_lightmaps_by_the_addon_texel_density(build_python_dir, room_f
     assert "--resolution N makes every lightmap N x N" in help_text
 
 
+def test_cli_bakes_a_mesh_of_two_materials_into_one_lightmap(build_python_dir, tmp_path):
+    """Blender exports a mesh with two material slots as one glTF mesh of two primitives: the
+    node is one object, baked into one lightmap (the CLI refused it as two objects of one name)."""
+    document = room_gltf()
+    floor = document["meshes"][0]["primitives"][0]
+    halves = []
+    for first in (0, 3):  # the floor quad's two triangles, as views into its index accessor
+        accessor = dict(document["accessors"][floor["indices"]], count=3, byteOffset=2 * first)
+        document["accessors"].append(accessor)
+        halves.append(dict(floor, indices=len(document["accessors"]) - 1))
+    document["materials"].append({"name": "Tiles", "pbrMetallicRoughness": {
+        "baseColorFactor": [0.5, 0.5, 0.7, 1.0], "metallicFactor": 0.0}})
+    halves[1]["material"] = 1
+    document["meshes"][0]["primitives"] = halves
+    path = tmp_path / "two_materials.gltf"
+    path.write_text(json.dumps(document))
+    out = tmp_path / "out"
+    result = run_cli(build_python_dir, path, "--out", out, *CLI_BAKE)
+    assert result.returncode == 0, result.stderr
+    assert sorted(os.listdir(out)) == ["Box.exr", "Box.png", "Floor.exr", "Floor.png"]
+    # Both triangles are in the one lightmap: it covers the whole floor.
+    coverage = shgi.read_exr(out / "Floor.exr")["Coverage"][:, :, 0]
+    assert (coverage > 0).mean() > 0.95
+
+
 def test_cli_missing_file(build_python_dir, tmp_path):
     missing = tmp_path / "nowhere.gltf"
     result = run_cli(build_python_dir, missing, "--out", tmp_path / "out")

@@ -97,6 +97,57 @@ def test_load_gltf_counts_materials_lights_and_a_ray_hit(tmp_path):
     assert trace_down(scene, 3.0, 0.0) is None
 
 
+def two_material_document(second_has_normals):
+    """gltf_document's floor as one mesh of two primitives (as Blender exports a mesh with two
+    material slots): the first triangle Green with normals and UVs, the second Red with no UVs
+    and, unless `second_has_normals`, no normals."""
+    document = gltf_document()
+    positions = [-1, 0, 1, 1, 0, 1, 1, 0, -1, -1, 0, -1]
+    data = (struct.pack("<12f", *positions) + struct.pack("<12f", *[0, 1, 0] * 4)
+            + struct.pack("<8f", 0, 0, 1, 0, 1, 1, 0, 1) + struct.pack("<6H", 0, 1, 2, 0, 2, 3))
+    document["buffers"] = [{"byteLength": len(data), "uri": "data:application/octet-stream;"
+                            "base64," + base64.b64encode(data).decode()}]
+    document["bufferViews"] = [{"buffer": 0, "byteOffset": o, "byteLength": n}
+                               for o, n in ((0, 48), (48, 48), (96, 32), (128, 6), (134, 6))]
+    document["accessors"] = [
+        {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},
+        {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"},
+        {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2"},
+        {"bufferView": 3, "componentType": 5123, "count": 3, "type": "SCALAR"},
+        {"bufferView": 4, "componentType": 5123, "count": 3, "type": "SCALAR"}]
+    document["materials"].append({"name": "Red", "pbrMetallicRoughness": {
+        "baseColorFactor": [0.8, 0.1, 0.1, 1.0], "metallicFactor": 0.0}})
+    second = {"POSITION": 0, "NORMAL": 1} if second_has_normals else {"POSITION": 0}
+    document["meshes"] = [{"name": "Floor", "primitives": [
+        {"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3,
+         "material": 0},
+        {"attributes": second, "indices": 4, "material": 1}]}]
+    return document
+
+
+@pytest.mark.parametrize("second_has_normals", [True, False])
+def test_load_gltf_merges_a_meshs_primitives_with_a_material_per_triangle(tmp_path,
+                                                                         second_has_normals):
+    scene = shgi.load_gltf(write_gltf(tmp_path / "two.gltf",
+                                      two_material_document(second_has_normals)))
+    [mesh] = scene.meshes
+    [floor] = [i for i in scene.instances if i.mesh_id == 0]
+    assert floor.name == "Floor" and mesh.name == "Floor"
+    names = [m.name for m in scene.materials]
+    assert [names[i] for i in mesh.material_indices] == ["Green", "Red"]
+    # Four vertices from each primitive; without normals the second gets three flat corners.
+    assert len(mesh.positions) == (8 if second_has_normals else 7)
+    assert len(mesh.normals) == len(mesh.positions)
+    np.testing.assert_allclose(mesh.normals, np.tile([0, 0, 1], (len(mesh.normals), 1)),
+                               atol=1e-6)  # glTF +Y is Blender +Z, and the flat normal agrees
+    uvs = mesh.uv_sets["UVMap"]
+    assert uvs.shape == (len(mesh.positions), 2)
+    np.testing.assert_array_equal(uvs[4:], 0.0)  # the second primitive had no UVs
+    scene.commit()
+    assert trace_down(scene, 0.5, -0.5) == pytest.approx(8.0)  # both triangles are there
+    assert trace_down(scene, -0.5, 0.5) == pytest.approx(8.0)
+
+
 def test_load_gltf_flips_v_and_converts_the_camera(tmp_path):
     scene = shgi.load_gltf(str(write_gltf(tmp_path / "scene.gltf", gltf_document())))
     mesh = scene.meshes[0]
