@@ -5,9 +5,10 @@ The add-on's Preferences (preferences.py) show two buttons built on this module:
 * **Documentation** opens the manual. `make dist` ships README.md and docs/*.md inside the
   add-on, under ``shgi_blender/docs/`` with the repository's layout (``docs/README.md``,
   ``docs/docs/addon.md``, ...) so the pages' links between each other still work; `make install`
-  copies it the same way. An add-on run straight from a checkout has no bundled copy; the repository's README.md beside the add-on's source
-  (``addon/shgi_blender`` -> ``README.md`` two folders up) serves instead. There is no project
-  website to fall back on, so with neither the caller shows ``DOCS_MISSING``.
+  copies it the same way. An add-on run straight from a checkout has no bundled copy; the
+  repository's README.md beside the add-on's source (``addon/shgi_blender`` -> ``README.md`` two
+  folders up) serves instead. There is no project website to fall back on, so with neither the
+  caller shows ``DOCS_MISSING``.
 * **Report a Bug** writes a text file with what a maintainer needs to reproduce a problem
   (Blender and OS, SHGI's version, where ``shgi`` came from and whether it imported, the
   scene's SHGI settings, the errors and warnings of the last render) into a new temporary

@@ -4,7 +4,8 @@ While enabled: the SHGI render engine, scene.shgi with the implemented methods o
 operators, SHGI in the stock light/material/world panels, presets that set the counts, and
 every SHGI panel draws (into recording_layout.RecordingLayout, which checks property and
 operator names), and the add-on's Preferences show Documentation and Report a Bug, which work
-headless (the report is written; the manual is found in this checkout). After each disable: none of it is left behind (and stock panels lose SHGI).
+headless (the report is written; the manual is found in this checkout). After each disable:
+none of it is left behind (and stock panels lose SHGI).
 
 Prints ADDON_REGISTER_OK when every check passed.
 """
