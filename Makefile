@@ -108,13 +108,16 @@ install: build-python
 		$$other -c 'import numpy' 2>/dev/null || $$other -m pip install -q numpy; \
 	fi
 	cd / && $(PYTHON) -c 'import shgi; print("shgi", shgi.__version__, "installed in", shgi.__file__)'
-	@# The add-on goes into Blender's user add-on folder (Preferences > Add-ons lists it as SHGI).
+	@# The add-on goes into Blender's user add-on folder (Preferences > Add-ons lists it as SHGI),
+	@# with the manual in its docs/ as make dist ships it (Preferences > SHGI > Documentation).
 	@addons=$$(env PATH=$(SYSTEM_PATH) blender -b --factory-startup --python-expr \
 		'import bpy; print("ADDONS=" + bpy.utils.user_resource("SCRIPTS", path="addons", create=True))' \
 		2>/dev/null | sed -n 's/^ADDONS=//p'); \
 	if [ -z "$$addons" ]; then echo "Blender did not report its add-on folder"; exit 1; fi; \
 	rm -rf "$$addons/shgi_blender" && cp -r addon/shgi_blender "$$addons/" && \
 	find "$$addons/shgi_blender" -name __pycache__ -prune -exec rm -rf {} + && \
+	mkdir -p "$$addons/shgi_blender/docs/docs" && cp README.md "$$addons/shgi_blender/docs/" && \
+	cp docs/*.md "$$addons/shgi_blender/docs/docs/" && \
 	echo "add-on shgi_blender installed in $$addons"
 
 test-cpp: build

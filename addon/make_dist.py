@@ -13,6 +13,10 @@ Writes two files into --out:
   ``wheels`` and its platform in ``platforms``, and the wheel in wheels/. Blender installs the
   wheel into the extension's site-packages.
 
+Both carry the manual: README.md and docs/*.md (not docs/images) under shgi_blender/docs/, in the
+repository's layout (docs/README.md, docs/docs/addon.md, ...) so that the pages' links to each
+other still work; Preferences > Add-ons > SHGI > Documentation opens it (help.py).
+
 The wheel must be for CPython 3.11 (every Blender from 3.4 to 5.0 embeds 3.11) and carry its
 libraries (auditwheel repair). The add-on's version (bl_info, blender_manifest.toml) must match
 the wheel's.
@@ -26,6 +30,9 @@ import tomllib
 import zipfile
 
 ADDON = pathlib.Path(__file__).resolve().parent / "shgi_blender"
+REPO_ROOT = ADDON.parent.parent
+# The manual's folder inside the add-on (shgi_blender/help.py: BUNDLED_DOCS).
+DOCS_ARCHIVE_DIR = "docs"
 PYTHON_TAG = "cp311"
 # wheel platform tag -> Blender extension platform
 PLATFORMS = {"x86_64": "linux-x64", "aarch64": "linux-arm64"}
@@ -36,6 +43,15 @@ def addon_files():
     return [(path, path.relative_to(ADDON).as_posix()) for path in sorted(ADDON.rglob("*"))
             if path.is_file() and "__pycache__" not in path.parts
             and path.suffix not in (".pyc", ".pyo")]
+
+
+def docs_files():
+    """The manual as (path, archive name under shgi_blender/): README.md and docs/*.md."""
+    pages = [REPO_ROOT / "README.md", *sorted((REPO_ROOT / "docs").glob("*.md"))]
+    if not pages[0].is_file() or len(pages) == 1:
+        raise SystemExit(f"the manual (README.md, docs/*.md) is missing from {REPO_ROOT}")
+    return [(path, f"{DOCS_ARCHIVE_DIR}/{path.relative_to(REPO_ROOT).as_posix()}")
+            for path in pages]
 
 
 def addon_version():
@@ -77,6 +93,8 @@ def write_addon_zip(path, wheel):
         for file, name in addon_files():
             if name != "blender_manifest.toml":  # a 4.2+ extension's file; 3.x ignores it
                 out.write(file, f"shgi_blender/{name}")
+        for file, name in docs_files():
+            out.write(file, f"shgi_blender/{name}")
         for info in source.infolist():
             if info.is_dir() or ".dist-info/" in info.filename:
                 continue
@@ -94,6 +112,8 @@ def write_extension_zip(path, wheel, platform):
                 out.writestr(name, extension_manifest(wheel.name, platform))
             else:
                 out.write(file, name)
+        for file, name in docs_files():
+            out.write(file, name)
         out.write(wheel, f"wheels/{wheel.name}")
 
 

@@ -3,9 +3,9 @@
 This module only describes and registers the add-on; the work lives in its packages:
 properties.py (scene.shgi), engine/ (the SHGI render engine, F12), operators/ (quality presets,
 frozen lattice solutions, lightmap bakes, volume export), ui/ (panels), export/ (Blender scenes
-→ shgi.Scene). It imports without bpy so that the bpy-free parts can be tested with pytest, and
-registers even when the native module ``shgi`` cannot be imported (the render panel then shows
-why and the fix).
+→ shgi.Scene), preferences.py (Documentation and Report a Bug; help.py without bpy). It imports
+without bpy so that the bpy-free parts can be tested with pytest, and registers even when the
+native module ``shgi`` cannot be imported (the render panel then shows why and the fix).
 """
 
 bl_info = {
@@ -20,7 +20,7 @@ bl_info = {
 
 # Registered in this order, unregistered in reverse: properties before the engine and the
 # panels that read them.
-_PACKAGES = ("properties", "engine", "operators", "ui")
+_PACKAGES = ("properties", "engine", "operators", "ui", "preferences")
 
 
 def _modules():

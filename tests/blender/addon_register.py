@@ -3,7 +3,9 @@
 While enabled: the SHGI render engine, scene.shgi with the implemented methods only, the
 operators, SHGI in the stock light/material/world panels, presets that set the counts, and
 every SHGI panel draws (into recording_layout.RecordingLayout, which checks property and
-operator names). After each disable: none of it is left behind (and stock panels lose SHGI).
+operator names), and the add-on's Preferences show Documentation and Report a Bug, which work
+headless (the report is written; the manual is found in this checkout). After each disable:
+none of it is left behind (and stock panels lose SHGI).
 
 Prints ADDON_REGISTER_OK when every check passed.
 """
@@ -19,7 +21,7 @@ setup.add_import_paths()
 
 import addon_utils  # noqa: E402
 import bpy  # noqa: E402
-from recording_layout import draw_panel  # noqa: E402
+from recording_layout import draw_panel, draw_panel_operators  # noqa: E402
 
 MODULE = "shgi_blender"
 ENGINE = "SHGI"
@@ -30,7 +32,11 @@ OWN_CLASSES = ("SHGI_RENDER_PT_method", "SHGI_RENDER_PT_photon_lattice",
                "SHGI_RENDER_PT_probe_grid", "SHGI_RENDER_PT_probe_grid_visibility",
                "SHGI_LIGHT_PT_light", "SHGI_VIEWLAYER_PT_passes", "SHGI_OT_solve",
                "SHGI_OT_clear_solution", "SHGI_OT_quality_preset", "SHGI_OT_load_solution",
-               "SHGI_RENDER_PT_light_paths_max_bounces", "SHGI_RENDER_PT_bake_farm")
+               "SHGI_RENDER_PT_light_paths_max_bounces", "SHGI_RENDER_PT_bake_farm",
+               "SHGI_OT_open_documentation", "SHGI_OT_report_bug")
+# The buttons of the add-on's Preferences (preferences.py).
+PREFERENCES_BUTTONS = {("shgi.open_documentation", "Documentation"),
+                       ("shgi.report_bug", "Report a Bug")}
 # scene.shgi.probe_grid mirrors ProbeGridSettings: its Visibility panel shows EEVEE's names.
 VISIBILITY_PROPERTIES = {"normal_bias": "Bias", "bleed_bias": "Bleed Bias",
                          "visibility_blur": "Blur"}
@@ -67,6 +73,7 @@ def check_registered():
     if scene.shgi.samples != 16:
         raise AssertionError(f"the Preview preset set {scene.shgi.samples} samples")
     check_panels_draw(scene)
+    check_preferences(scene)
     scene.render.engine = "BLENDER_WORKBENCH"  # every Blender has it (EEVEE's id changed in 4.2)
 
 
@@ -95,6 +102,39 @@ def check_panels_draw(scene):
     scene.view_layers[0].use_pass_mist = False
     bpy.data.objects.remove(light_object)
     bpy.data.lights.remove(light)
+
+
+def check_preferences(scene):
+    """The Preferences draw Documentation and Report a Bug; the report holds the scene's
+    settings and the manual is found (this checkout's README.md)."""
+    preferences = bpy.context.preferences.addons[MODULE].preferences
+    if preferences is None:
+        raise AssertionError("the add-on has no AddonPreferences")
+    buttons = set(draw_panel_operators(type(preferences), SimpleNamespace(scene=scene)))
+    if not PREFERENCES_BUTTONS <= buttons:
+        raise AssertionError(f"the Preferences show {buttons}, not {PREFERENCES_BUTTONS}")
+    from shgi_blender import help as shgi_help
+    from shgi_blender import preferences as shgi_preferences
+
+    text = shgi_preferences.bug_report(SimpleNamespace(scene=scene))
+    for expected in (f"Blender: {bpy.app.version_string}", "scene.shgi.method = ",
+                     "scene.shgi.bake.bake_side = ", "Native module shgi: imported from"):
+        if expected not in text:
+            raise AssertionError(f"the bug report lacks {expected!r}:\n{text}")
+    import shutil
+    import tempfile
+
+    folder = tempfile.mkdtemp(prefix="shgi_register_")
+    try:
+        if bpy.ops.shgi.report_bug(directory=folder) != {"FINISHED"}:
+            raise AssertionError("Report a Bug did not finish")
+        with open(os.path.join(folder, shgi_help.REPORT_NAME), encoding="utf-8") as report:
+            if "SHGI bug report" not in report.read():
+                raise AssertionError("Report a Bug wrote no report")
+    finally:
+        shutil.rmtree(folder)
+    if shgi_help.find_docs() is None:
+        raise AssertionError(f"no manual found for the add-on in {shgi_help.ADDON_DIR}")
 
 
 def check_probe_grid_properties(scene):

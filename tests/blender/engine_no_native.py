@@ -3,7 +3,8 @@
 ``import shgi`` is made to fail (sys.modules["shgi"] = None, as when it is not installed for
 Blender's Python). Checks: the add-on enables; the render panel draws the import error and the
 fix (drawn into a recording layout); F12 with the SHGI engine raises RuntimeError carrying the
-same message (the engine's ERROR report) instead of crashing; the add-on disables cleanly.
+same message (the engine's ERROR report) instead of crashing; Preferences' bug report says
+that shgi did not import, and why; the add-on disables cleanly.
 Prints ENGINE_NO_NATIVE_OK.
 """
 
@@ -44,6 +45,11 @@ def main():
             raise AssertionError(f"F12 failed without the fix: {error}") from None
     else:
         raise AssertionError("F12 without the native module reported no error")
+    from shgi_blender import preferences
+
+    report = preferences.bug_report(bpy.context)
+    if "Native module shgi: NOT imported" not in report or FIX not in report:
+        raise AssertionError(f"the bug report does not say shgi failed to import: {report}")
     addon_utils.disable(MODULE, default_set=True, handle_error=None)
     if MODULE in bpy.context.preferences.addons:
         raise AssertionError("the add-on did not disable")

@@ -6,7 +6,8 @@ draw() with a RecordingLayout instead. Every ``prop(data, name)`` must name an R
 registered operator; label texts are returned for the caller's checks. ``draw_panel_rows``
 returns the labels per row (each ``row()`` or ``split()`` of the layout), to check what sits
 beside what; ``draw_panel_props`` the (data, property name, text) of each ``prop`` drawn,
-``draw_panel_operators`` the (operator id, text) of each button.
+``draw_panel_operators`` the (operator id, text) of each button. Each takes a panel's name or
+a class with a draw() (an add-on's AddonPreferences).
 """
 
 import bpy
@@ -69,9 +70,11 @@ def _operator_type(idname):
 
 
 def _draw(panel_name, context):
+    """Draws bpy.types.<panel_name>, or `panel_name` itself when it is a class (an
+    AddonPreferences subclass, which bpy.types does not list)."""
     labels = []
     layout = RecordingLayout(labels)
-    cls = getattr(bpy.types, panel_name)
+    cls = panel_name if isinstance(panel_name, type) else getattr(bpy.types, panel_name)
     # A plain object carrying the class's own attributes (helpers, tables) and the layout.
     members = {name: value for name, value in vars(cls).items() if not name.startswith("__")}
     panel = type("Panel", (), dict(members, layout=layout))()

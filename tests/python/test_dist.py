@@ -3,6 +3,8 @@
 - The wheel: self-contained (auditwheel put Embree, TBB and OpenEXR in shgi.libs under unique
   names), pip-installs into a clean venv, and traces and bakes there from its own libraries.
 - The sdist: holds every file the CMake build reads (`make dist` builds the wheel from it).
+- The add-on zip and the extension carry the manual (README.md, docs/*.md) under
+  shgi_blender/docs/, for Preferences > Add-ons > SHGI > Documentation.
 - The add-on zip on Blender 3.4 and the extension on Blender 4.2+ (the bpy module): installed
   into a clean profile (BLENDER_USER_SCRIPTS and friends pointing at empty folders), enabled,
   and F12 of the Cornell box with the packaged module (tests/blender/dist_install_checks.py).
@@ -61,6 +63,16 @@ def test_the_sdist_holds_the_build():
     assert tracked, "git ls-files listed nothing"
     missing = sorted(set(tracked) - names)
     assert not missing, f"{sdist.name} ({root}) lacks {missing}"
+
+
+def test_both_blender_packages_carry_the_manual():
+    pages = ["README.md"] + sorted(f"docs/{p.name}" for p in (REPO_ROOT / "docs").glob("*.md"))
+    for pattern, root in (("shgi_blender-*-addon.zip", "shgi_blender/docs/"),
+                          ("shgi_blender-*-extension-linux-x64.zip", "docs/")):
+        names = zipfile.ZipFile(one(pattern)).namelist()
+        missing = [page for page in pages if root + page not in names]
+        assert not missing, f"{pattern} lacks {missing} under {root}"
+        assert not any(name.startswith(root + "docs/images/") for name in names)
 
 
 CLEAN_VENV_SCRIPT = """
