@@ -326,9 +326,23 @@ def finish(texel_map, texels, options: BakeOptions, name: str, progress=None) ->
                     report=dict(texel_map.report, charts=texel_map.chart_count))
 
 
+def make_output_folder(folder: str) -> None:
+    """Makes `folder` and its parents; an OSError naming the path when it, or a parent, is a
+    file (os.makedirs says only "[Errno 17] File exists")."""
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except (FileExistsError, NotADirectoryError) as error:
+        blocker = os.path.abspath(folder)
+        while not os.path.exists(blocker):  # the nearest part of the path that exists
+            blocker = os.path.dirname(blocker)
+        raise NotADirectoryError(
+            f"output folder {folder!r}: {blocker!r} is a file, not a folder; choose another "
+            "folder or move the file") from error
+
+
 def write_lightmap(lightmap: Lightmap, out_dir: str, options: BakeOptions) -> list:
     """Writes <name>.exr (and <name>.png); returns the paths."""
-    os.makedirs(out_dir, exist_ok=True)
+    make_output_folder(out_dir)
     stem = os.path.join(out_dir, _file_name(lightmap.name))
     layers = {
         "Lightmap": _top_row_first(lightmap.color).astype(np.float16),
@@ -633,7 +647,7 @@ def _xatlas_version() -> Optional[str]:
 
 
 def _save_shard(path: str, texels, meta: dict) -> None:
-    os.makedirs(os.path.dirname(path), exist_ok=True)
+    make_output_folder(os.path.dirname(path))
     arrays = {"color": texels.color, "variance": texels.variance, "baked": texels.baked,
               "meta": np.array(json.dumps(meta, sort_keys=True))}
     if texels.directional:

@@ -935,3 +935,13 @@ def test_an_array_too_big_to_copy_is_a_memory_error_naming_it():
     pixels = np.broadcast_to(np.zeros(1, np.float16), (2**20, 2**20, 4))
     with pytest.raises(MemoryError, match="pixels: a contiguous float32 copy"):
         shgi.write_png("unused.png", pixels)
+
+
+def test_cli_output_folder_that_is_a_file_is_named(build_python_dir, room_file, tmp_path):
+    blocker = tmp_path / "lightmaps"
+    blocker.write_text("not a folder")
+    for out in (blocker, blocker / "inner"):
+        result = run_cli(build_python_dir, room_file, "--out", out, *CLI_BAKE)
+        assert result.returncode == 1, result.stderr
+        assert f"output folder '{out}': '{blocker}' is a file, not a folder" in result.stderr
+        assert "Errno" not in result.stderr.splitlines()[-1]
