@@ -83,7 +83,8 @@ def test_a_mesh_needing_more_than_the_available_memory_is_refused_with_the_fix()
     problem = memory.export_memory_problem(18_000_000, 2, available=4 * 2**30)
     assert problem.startswith(f"its 18,000,000 triangles need about "
                               f"{18_000_000 * per_triangle / 2**30:.1f} GiB of memory to export "
-                              "but 4.0 GiB is available; lower its Subdivision Surface")
+                              "but 4.0 GiB is available; lower the Render levels of its Subdivision "
+                              "Surface or Multiresolution modifier (Properties > Modifiers)")
     available = memory.available_memory_bytes()  # Linux's MemAvailable
     assert available is not None and 0 < available <= os.sysconf("SC_PHYS_PAGES") * os.sysconf(
         "SC_PAGE_SIZE")
