@@ -132,7 +132,8 @@ void PhotonLattice::solve(Progress* progress) {
     PhotonLatticeTimings timings;
     auto start = now();
     if (progress != nullptr) progress->begin_stage("photons", 0.0f, 0.8f);
-    const PhotonMaps maps = trace_photons(*scene_, tracer_settings(settings_), passes_, progress);
+    const PhotonMaps maps = trace_photons(*scene_, tracer_settings(settings_), passes_, progress,
+                                          "PhotonLatticeSettings");
     timings.emit_trace = seconds_since(start);
     timings.photons_emitted = maps.emitted;
     timings.photons_stored = maps.global.size() + maps.caustic.size();

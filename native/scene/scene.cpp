@@ -18,12 +18,17 @@ using namespace scene_detail;
 // add_material runs before textures may have been added; commit() checks the real count.
 constexpr uint32_t kAnyTextureCount = std::numeric_limits<uint32_t>::max();
 
-// CommitSettings::memory_budget_bytes = 0 leaves a quarter of the machine's RAM to Blender and
-// the rest of SHGI.
+// CommitSettings::memory_budget_bytes = 0 leaves a quarter of what the process may still
+// allocate (util/memory.h) to Blender and the rest of SHGI; an explicit budget is capped by it.
 constexpr double kDefaultBudgetFraction = 0.75;
 
 uint64_t resolve_budget(uint64_t requested) {
-    return requested > 0 ? requested : physical_memory_share(kDefaultBudgetFraction);
+    const MemoryLimits limits = memory_limits();
+    if (requested > 0) return std::min(requested, limits.allowed());
+    const uint64_t allowed = limits.allowed();
+    return allowed == std::numeric_limits<uint64_t>::max()
+               ? allowed
+               : uint64_t(double(allowed) * kDefaultBudgetFraction);
 }
 
 std::string instance_label(const std::vector<Instance>& instances, size_t i) {
@@ -525,8 +530,11 @@ void Scene::commit(const CommitSettings& settings, Progress* progress) {
         throw OutOfMemory(format_message(
             "the scene's BVH needs at least ", estimate, " bytes (", stats().triangles,
             " triangles in ", meshes_.size(), " meshes, ", instances_.size(),
-            " instances) but the memory budget is ", budget,
-            " bytes; raise memory_budget_bytes (0 = 75% of physical RAM) or simplify the scene"));
+            " instances) but the memory budget is ", budget, " bytes (", format_bytes(budget),
+            "; memory_budget_bytes = ", settings.memory_budget_bytes,
+            ", capped by what this process may still allocate: RLIMIT_AS / cgroup / free "
+            "memory); raise memory_budget_bytes (0 = 75% of what the process may allocate), "
+            "free memory or simplify the scene"));
     if (!embree_) embree_ = std::make_unique<EmbreeScene>();
     embree_->set_memory_budget(budget);
     embree_->reset_peak();

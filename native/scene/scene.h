@@ -87,7 +87,9 @@ struct SurfacePoint {
 };
 
 struct CommitSettings {
-    // Upper bound on the memory Embree may allocate for the BVH (bytes); 0 = 75% of physical RAM.
+    // Upper bound on the memory Embree may allocate for the BVH (bytes); 0 = 75% of what the
+    // process may still allocate (util/memory.h: RLIMIT_AS, cgroup limit, free memory), which
+    // also caps an explicit budget.
     uint64_t memory_budget_bytes = 0;
 };
 
