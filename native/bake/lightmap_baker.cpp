@@ -10,6 +10,7 @@
 #include "sh/sh_irradiance.h"
 #include "sh/sh_projection.h"
 #include "util/error.h"
+#include "util/memory.h"
 #include "util/parallel.h"
 #include "util/rng.h"
 #include "util/sampling.h"
@@ -351,6 +352,14 @@ LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const Indi
                                                  " x ", map.height, " lightmap has ", tile_count,
                                                  " tiles of ", settings.tile_size, " texels"));
 
+    const uint64_t texel_bytes = 3 * sizeof(float) + sizeof(float) + sizeof(uint8_t) +
+                                 (settings.directional ? kLightmapShFloats * sizeof(float) : 0);
+    require_memory(saturating_mul(map.texel_count(), texel_bytes),
+                   format_message("bake_lightmap: a ", map.width, " x ", map.height, " lightmap",
+                                  settings.directional ? " (LightmapSettings.directional)" : "",
+                                  " at ", texel_bytes, " bytes per texel"),
+                   "rasterize a lower resolution (TexelRasterSettings.width, height) or bake "
+                   "in tiles");
     LightmapTexels out;
     out.width = map.width;
     out.height = map.height;

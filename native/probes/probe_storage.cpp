@@ -15,6 +15,7 @@
 #include "io/exr_image.h"
 #include "io/image.h"
 #include "util/error.h"
+#include "util/memory.h"
 
 namespace shgi {
 namespace {
@@ -207,6 +208,13 @@ ProbeGridData load_probe_grid(const std::string& path) {
         throw IoError(format_message("probe file \"", path, "\" says ", probes, " probes of ",
                                      probe_bytes, " bytes, but ", remaining,
                                      " bytes follow its header (truncated or damaged?)"));
+    require_memory(saturating_mul(probes, sizeof(vec3) + 1 + sizeof(float) + sizeof(ShRgb) +
+                                              uint64_t(data.visibility_resolution) *
+                                                  data.visibility_resolution * sizeof(vec2)),
+                   format_message("probe file \"", path, "\" with ", probes,
+                                  " probes (visibility_resolution ", data.visibility_resolution,
+                                  ")"),
+                   "load it in a process with more memory, or re-bake with fewer probes");
     data.positions.resize(probes);
     r.bytes(data.positions.data(), probes * sizeof(vec3), "the positions");
     data.active.resize(probes);
