@@ -335,11 +335,7 @@ LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const Indi
                              Progress* progress) {
     validate_lightmap_settings(settings);
     if (!scene.committed()) throw InvalidArgument("bake_lightmap: commit the scene first");
-    if (map.instance_id >= scene.instances().size())
-        throw InvalidArgument(format_message(
-            "bake_lightmap: the texel map is of instance ", map.instance_id,
-            " but the scene has ", scene.instances().size(),
-            " instances; rasterize it from this scene (rasterize_texels(scene, instance, ...))"));
+    check_texel_map(scene, map, "bake_lightmap");
     if (map.sample_offsets.size() != map.texel_count() + 1)
         throw InvalidArgument("bake_lightmap: the texel map is incomplete");
     const uint32_t tile_count = lightmap_tile_count(map.width, map.height, settings.tile_size);

@@ -655,7 +655,41 @@ TexelMap rasterize_texels(const Scene& scene, uint32_t instance_id,
         throw InvalidArgument(object + ": " + error.what());
     }
     map.instance_id = instance_id;
+    map.scene_uid = scene.uid();
+    map.mesh_id = instance.mesh_id;
+    map.mesh_revision = scene.mesh_revision(instance.mesh_id);
+    map.world_from_object = instance.world_from_object;
     return map;
+}
+
+void check_texel_map(const Scene& scene, const TexelMap& map, const char* operation) {
+    const char* again = "; call rasterize_texels(scene, instance_id, settings) again for the "
+                        "scene as it is now";
+    if (map.scene_uid == 0 || map.instance_id == kInvalidId)
+        throw InvalidArgument(format_message(operation, ": the texel map was rasterized from a "
+                                             "bare mesh, not from an instance of this scene",
+                                             again));
+    if (map.scene_uid != scene.uid())
+        throw InvalidArgument(format_message(operation, ": the texel map was made for another "
+                                             "scene (of instance ", map.instance_id, ")",
+                                             again));
+    if (map.instance_id >= scene.instances().size())
+        throw InvalidArgument(format_message(
+            operation, ": the texel map is of instance ", map.instance_id, " but the scene has ",
+            scene.instances().size(), " instances", again));
+    const Instance& instance = scene.instances()[map.instance_id];
+    const std::string object = instance.name.empty()
+                                   ? format_message("instance ", map.instance_id)
+                                   : format_message("instance ", map.instance_id, " '",
+                                                    instance.name, "'");
+    if (instance.mesh_id != map.mesh_id || scene.mesh_revision(map.mesh_id) != map.mesh_revision)
+        throw InvalidArgument(format_message(
+            operation, ": the texel map was made before the mesh of ", object,
+            " changed (set_mesh)", again));
+    if (instance.world_from_object != map.world_from_object)
+        throw InvalidArgument(format_message(
+            operation, ": the texel map was made before ", object,
+            " moved (set_instance_transform changed its world_from_object)", again));
 }
 
 }  // namespace shgi

@@ -1,5 +1,6 @@
 #include "scene/scene.h"
 
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -261,6 +262,18 @@ float radius_of(const Bounds3& bounds) {
 
 }  // namespace
 
+uint64_t Scene::next_uid() {
+    static std::atomic<uint64_t> counter{0};
+    return counter.fetch_add(1, std::memory_order_relaxed) + 1;
+}
+
+uint64_t Scene::mesh_revision(uint32_t mesh_id) const {
+    if (mesh_id >= mesh_revisions_.size())
+        throw InvalidArgument(format_message("mesh_revision: mesh_id = ", mesh_id,
+                                             " but the scene has ", meshes_.size(), " meshes"));
+    return mesh_revisions_[mesh_id];
+}
+
 Scene::Scene() = default;
 Scene::~Scene() = default;
 Scene::Scene(Scene&&) noexcept = default;
@@ -277,6 +290,7 @@ uint32_t Scene::add_mesh(Mesh mesh) {
     mesh_reports_.push_back(report);
     geometry_dirty_ = true;
     invalidate();
+    mesh_revisions_.push_back(revision_);
     return static_cast<uint32_t>(meshes_.size() - 1);
 }
 
@@ -290,6 +304,7 @@ void Scene::set_mesh(uint32_t mesh_id, Mesh mesh) {
     mesh_reports_[mesh_id] = report;
     geometry_dirty_ = true;
     invalidate();
+    mesh_revisions_[mesh_id] = revision_;
 }
 
 uint32_t Scene::add_instance(uint32_t mesh_id, const mat4& world_from_object, std::string name) {
