@@ -405,8 +405,23 @@ ProbeGridData import_probe_grid(const std::string& json_path) {
             };
             const std::string sh_path = path_of("sh_file");
             const std::string vis_path = path_of("visibility_file");
-            const Image sh_image = read_exr(sh_path);
-            const Image vis_image = read_exr(vis_path);
+            // Any failure reading an EXR names it: a bare std::exception from the EXR library
+            // would reach Python as a RuntimeError without the file's name.
+            const auto read_named = [&](const std::string& path) {
+                try {
+                    return read_exr(path);
+                } catch (const Error&) {
+                    throw;
+                } catch (const std::bad_alloc&) {
+                    throw OutOfMemory(format_message("cannot read EXR \"", path, "\" (listed by \"",
+                                                     json_path, "\"): out of memory"));
+                } catch (const std::exception& error) {
+                    throw IoError(format_message("cannot read EXR \"", path, "\" (listed by \"",
+                                                 json_path, "\"): ", error.what()));
+                }
+            };
+            const Image sh_image = read_named(sh_path);
+            const Image vis_image = read_named(vis_path);
             if (sh_image.width() != n.x || sh_image.height() != n.y * n.z ||
                 vis_image.width() != n.x * res || vis_image.height() != n.y * n.z * res)
                 throw IoError(format_message("\"", sh_path, "\" or \"", vis_path,
@@ -459,6 +474,12 @@ ProbeGridData import_probe_grid(const std::string& json_path) {
         return data;
     } catch (const nlohmann::json::exception& e) {
         throw IoError(format_message("\"", json_path, "\" is not a probe grid export: ", e.what()));
+    } catch (const Error&) {
+        throw;
+    } catch (const std::bad_alloc&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw IoError(format_message("cannot import probe grid \"", json_path, "\": ", e.what()));
     }
 }
 
