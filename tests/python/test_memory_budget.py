@@ -9,7 +9,6 @@ import subprocess
 import sys
 import textwrap
 
-import numpy as np
 import pytest
 
 import shgi
@@ -62,7 +61,8 @@ def test_a_fake_rlimit_as_bounds_what_the_process_may_allocate():
         limits = shgi.memory_limits()
         with open("/proc/self/statm") as statm:
             virtual = int(statm.read().split()[0]) * __import__("os").sysconf("SC_PAGE_SIZE")
-        print(limits["address_space_left"], limits["allowed"], limits["limited_by"], virtual, sep="|")
+        print(limits["address_space_left"], limits["allowed"], limits["limited_by"], virtual,
+              sep="|")
     """, limit)
     left, allowed, limited_by, virtual = out.strip().split("|")
     left, allowed, virtual = int(left), int(allowed), int(virtual)
