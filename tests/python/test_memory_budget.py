@@ -182,3 +182,22 @@ def test_commit_budget_is_capped_by_what_the_process_may_allocate():
     assert "raise memory_budget_bytes (0 = 75% of what the process may still allocate: " \
            "RLIMIT_AS / cgroup / free memory)" in message
     assert not scene.committed
+
+
+def test_an_sh_lattice_beyond_a_fake_rlimit_as_is_refused_naming_its_cells():
+    out = run_limited("""
+        import scenes
+        from scene_support import committed
+        scene = committed(scenes.cornell_box(0.1))
+        try:
+            shgi.PhotonLattice(scene, shgi.PhotonLatticeSettings(resolution=400))
+            print("allocated")
+        except MemoryError as error:
+            print(error)
+    """, 6 * 2**30)
+    assert out.startswith("ShLattice: resolution = 400 gives 400 x 400 x 400 = 64000000 cells "
+                          "of 117 bytes (order 2) needs 7.5 GB (7488000000 bytes)")
+    needed, allowed, limited_by = needed_and_allowed(out)
+    assert needed == 64000000 * 117 > allowed
+    assert limited_by == "RLIMIT_AS"
+    assert out.strip().endswith("lower the resolution")
