@@ -489,7 +489,7 @@ void bind_scene_inspection(py::class_<Scene>& cls) {
     cls.def(
            "commit",
            [](Scene& scene, const IndexInt& memory_budget_bytes, Progress* progress) {
-               // 0 = 75% of physical RAM
+               // 0 = 75% of what the process may still allocate
                CommitSettings settings;
                settings.memory_budget_bytes =
                    int_arg<uint64_t>(memory_budget_bytes, "memory_budget_bytes");
@@ -500,7 +500,8 @@ void bind_scene_inspection(py::class_<Scene>& cls) {
            },
            py::arg("memory_budget_bytes") = 0, py::arg("progress") = py::none(),
            "Checks cross references and builds the BVH, with the GIL released. Raises "
-           "MemoryError when the BVH would exceed memory_budget_bytes (0 = 75% of RAM), "
+           "MemoryError when the BVH would exceed memory_budget_bytes (0 = 75% of what the process "
+           "may still allocate: RLIMIT_AS, cgroup limit, free memory), "
            "shgi.Cancelled when progress.cancel() is called.")
         .def_property_readonly("committed", read("committed", &Scene::committed),
                                "True after a successful commit.")

@@ -20,6 +20,7 @@
 #include "struct_fields.h"
 #include "util/error.h"
 #include "util/log.h"
+#include "util/memory.h"
 #include "util/parallel.h"
 #include "util/progress.h"
 #include "util/version.h"
@@ -187,6 +188,26 @@ void bind_util(py::module_& m) {
         py::arg("threads"),
         "Limits SHGI's worker threads (0 = all cores). Results do not depend on it.");
     m.def("max_threads", &max_threads, "The number of worker threads SHGI may use.");
+    m.def(
+        "memory_limits",
+        [] {
+            const MemoryLimits limits = memory_limits();
+            const auto bytes = [](uint64_t value) -> py::object {
+                if (value == UINT64_MAX) return py::none();
+                return py::int_(value);
+            };
+            py::dict out;
+            out["address_space_left"] = bytes(limits.address_space_left);
+            out["cgroup_left"] = bytes(limits.cgroup_left);
+            out["available"] = bytes(limits.available);
+            out["allowed"] = bytes(limits.allowed());
+            out["limited_by"] = limits.binding();
+            return out;
+        },
+        "The bytes this process may still allocate, as every large allocation checks them first "
+        "(docs/robustness-memory.md): {'address_space_left': RLIMIT_AS minus the virtual size, "
+        "'cgroup_left': the cgroup memory limit minus its usage, 'available': MemAvailable, "
+        "'allowed': the smallest, 'limited_by': which}; None where there is no such limit.");
     // Drop Python objects held by native code before the interpreter finalises.
     py::module_::import("atexit").attr("register")(py::cpp_function([]() {
         LogSink previous;

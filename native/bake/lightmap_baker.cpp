@@ -10,6 +10,7 @@
 #include "sh/sh_irradiance.h"
 #include "sh/sh_projection.h"
 #include "util/error.h"
+#include "util/memory.h"
 #include "util/parallel.h"
 #include "util/rng.h"
 #include "util/sampling.h"
@@ -334,11 +335,7 @@ LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const Indi
                              Progress* progress) {
     validate_lightmap_settings(settings);
     if (!scene.committed()) throw InvalidArgument("bake_lightmap: commit the scene first");
-    if (map.instance_id >= scene.instances().size())
-        throw InvalidArgument(format_message(
-            "bake_lightmap: the texel map is of instance ", map.instance_id,
-            " but the scene has ", scene.instances().size(),
-            " instances; rasterize it from this scene (rasterize_texels(scene, instance, ...))"));
+    check_texel_map(scene, map, "bake_lightmap");
     if (map.sample_offsets.size() != map.texel_count() + 1)
         throw InvalidArgument("bake_lightmap: the texel map is incomplete");
     const uint32_t tile_count = lightmap_tile_count(map.width, map.height, settings.tile_size);
@@ -351,6 +348,14 @@ LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const Indi
                                                  " x ", map.height, " lightmap has ", tile_count,
                                                  " tiles of ", settings.tile_size, " texels"));
 
+    const uint64_t texel_bytes = 3 * sizeof(float) + sizeof(float) + sizeof(uint8_t) +
+                                 (settings.directional ? kLightmapShFloats * sizeof(float) : 0);
+    require_memory(saturating_mul(map.texel_count(), texel_bytes),
+                   format_message("bake_lightmap: a ", map.width, " x ", map.height, " lightmap",
+                                  settings.directional ? " (LightmapSettings.directional)" : "",
+                                  " at ", texel_bytes, " bytes per texel"),
+                   "rasterize a lower resolution (TexelRasterSettings.width, height) or bake "
+                   "in tiles");
     LightmapTexels out;
     out.width = map.width;
     out.height = map.height;

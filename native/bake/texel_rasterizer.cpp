@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <numeric>
@@ -10,6 +11,7 @@
 
 #include "render/shading.h"
 #include "util/error.h"
+#include "util/memory.h"
 #include "util/parallel.h"
 
 namespace shgi {
@@ -37,6 +39,29 @@ constexpr double kOverlapTolerance = 1e-3;
 // Triangles per parallel chunk: large enough to amortise scheduling, small enough to poll
 // cancel often (a chunk of big triangles at 16384^2 still takes well under 0.2 s per core).
 constexpr uint64_t kTrianglesPerChunk = 64;
+
+// Texels per slice of the passes over the whole grid (gathering, coverage): a cancel poll and a
+// progress report each, ~10 ms.
+constexpr uint64_t kTexelsPerSlice = uint64_t(1) << 20;
+
+// Progress of the rasterizing stage in texels of the triangles' bounding boxes, reported and
+// polled for cancel once per texel row of a triangle: one large triangle at 16384^2 would
+// otherwise ignore cancel for seconds.
+class RowProgress {
+  public:
+    RowProgress(Progress* progress, uint64_t total) : progress_(progress), total_(total) {}
+    void advance(uint64_t texels) {
+        if (progress_ == nullptr) return;
+        progress_->throw_if_cancelled();
+        const uint64_t done = done_.fetch_add(texels, std::memory_order_relaxed) + texels;
+        progress_->report(std::min(done, total_), total_);
+    }
+
+  private:
+    Progress* progress_;
+    uint64_t total_;
+    std::atomic<uint64_t> done_{0};
+};
 
 std::string mesh_label(const Mesh& mesh) {
     return mesh.name.empty() ? std::string("mesh (unnamed)") : "mesh '" + mesh.name + "'";
@@ -360,7 +385,8 @@ bool world_triangle(const Mesh& mesh, const mat4& world_from_object,
 
 TriangleResult rasterize_triangle(const Mesh& mesh, const UvSet& uv_set,
                                   const mat4& world_from_object, const mat3& normals_to_world,
-                                  uint32_t triangle_id, const TexelRasterSettings& settings) {
+                                  uint32_t triangle_id, const TexelRasterSettings& settings,
+                                  RowProgress& rows) {
     TriangleResult result;
     double twice_area = 0.0;
     const UvTriangle uv = uv_triangle(uv_set, mesh.triangles[triangle_id], settings, &twice_area);
@@ -382,7 +408,8 @@ TriangleResult rasterize_triangle(const Mesh& mesh, const UvSet& uv_set,
     result.clipped = lower.x < 0.0 || lower.y < 0.0 || upper.x > grid.x || upper.y > grid.y;
     lower = glm::max(glm::floor(lower), dvec2(0.0));
     upper = glm::min(glm::ceil(upper), grid);
-    for (double ty = lower.y; ty < upper.y; ++ty)
+    for (double ty = lower.y; ty < upper.y; ++ty) {
+        rows.advance(uint64_t(std::max(upper.x - lower.x, 0.0)));
         for (double tx = lower.x; tx < upper.x; ++tx) {
             const dvec2 origin(tx, ty);
             const Polygon clipped =
@@ -392,6 +419,7 @@ TriangleResult rasterize_triangle(const Mesh& mesh, const UvSet& uv_set,
                 sample_texel(uv, world, clipped, clipped_area, uint32_t(tx), uint32_t(ty),
                              settings, result);
         }
+    }
     return result;
 }
 
@@ -416,7 +444,8 @@ uint32_t float_bits(float value) {
 }
 
 // The chart of every triangle (see TexelMap::chart), by union-find over shared corners.
-std::vector<uint32_t> triangle_charts(const Mesh& mesh, const UvSet& uv_set, uint32_t* count) {
+std::vector<uint32_t> triangle_charts(const Mesh& mesh, const UvSet& uv_set, uint32_t* count,
+                                      const Progress* progress) {
     const size_t n = mesh.triangles.size();
     std::vector<uint32_t> parent(n);
     std::iota(parent.begin(), parent.end(), 0u);
@@ -428,6 +457,7 @@ std::vector<uint32_t> triangle_charts(const Mesh& mesh, const UvSet& uv_set, uin
     first_triangle.reserve(mesh.positions.size());
     for (uint32_t t = 0; t < n; ++t)
         for (int k = 0; k < 3; ++k) {
+            if (k == 0 && (t & 0xffffu) == 0) throw_if_cancelled(progress);
             const uint32_t v = mesh.triangles[t][k];
             const vec3& p = mesh.positions[v];
             const vec2& uv = uv_set.coords[v];
@@ -451,7 +481,7 @@ std::vector<uint32_t> triangle_charts(const Mesh& mesh, const UvSet& uv_set, uin
 
 // Sorts the fragments into texels (stable: by triangle, then stratum) and sums the coverage.
 TexelMap gather(std::vector<TriangleResult>& results, const TexelRasterSettings& settings,
-                const std::vector<uint32_t>& charts) {
+                const std::vector<uint32_t>& charts, Progress* progress) {
     TexelMap map;
     map.width = settings.width;
     map.height = settings.height;
@@ -459,10 +489,17 @@ TexelMap gather(std::vector<TriangleResult>& results, const TexelRasterSettings&
     map.sample_offsets.assign(texels + 1, 0);
     for (const TriangleResult& result : results)
         for (const Fragment& fragment : result.fragments) ++map.sample_offsets[fragment.texel + 1];
+    throw_if_cancelled(progress);
     for (uint64_t t = 0; t < texels; ++t) map.sample_offsets[t + 1] += map.sample_offsets[t];
+    throw_if_cancelled(progress);
     map.samples.resize(map.sample_offsets[texels]);
     std::vector<uint64_t> next(map.sample_offsets.begin(), map.sample_offsets.end() - 1);
+    uint64_t moved = 0;
     for (TriangleResult& result : results) {
+        if (progress && (moved += result.fragments.size() + 1) >= kTexelsPerSlice) {
+            moved = 0;
+            progress->throw_if_cancelled();
+        }
         for (Fragment& fragment : result.fragments)
             map.samples[next[fragment.texel]++] = fragment.sample;
         result.fragments = {};  // release as we go: keeps the peak near one copy of the samples
@@ -471,6 +508,10 @@ TexelMap gather(std::vector<TriangleResult>& results, const TexelRasterSettings&
     map.coverage.assign(texels, 0.0f);
     map.chart.assign(texels, kInvalidId);
     for (uint64_t t = 0; t < texels; ++t) {
+        if ((t & (kTexelsPerSlice - 1)) == 0 && progress) {
+            progress->throw_if_cancelled();
+            progress->report(t, texels);
+        }
         double sum = 0.0;
         float heaviest = -1.0f;
         for (const TexelSample* s = map.samples_begin(t); s != map.samples_end(t); ++s) {
@@ -484,6 +525,64 @@ TexelMap gather(std::vector<TriangleResult>& results, const TexelRasterSettings&
         if (sum > 1.0 + kOverlapTolerance) ++map.report.overlapping_texels;
     }
     return map;
+}
+
+
+// What rasterize_texels will hold, estimated before anything is allocated.
+struct RasterEstimate {
+    double uv_area = 0.0;      // sum of the UV triangles' areas in texels, each clamped to grid
+    uint64_t samples = 0;      // expected samples: uv_area * samples_per_axis^2 + 1 a triangle
+    uint64_t box_texels = 0;   // texels of the triangles' bounding boxes (the work, for progress)
+    uint64_t bytes = 0;        // peak bytes
+};
+
+RasterEstimate estimate_raster(const Mesh& mesh, const UvSet& uv_set,
+                               const TexelRasterSettings& settings) {
+    RasterEstimate estimate;
+    const dvec2 grid(settings.width, settings.height);
+    const double grid_area = grid.x * grid.y;
+    const uint64_t per_texel = uint64_t(settings.samples_per_axis) * settings.samples_per_axis;
+    double samples = 0.0;
+    for (const uvec3& indices : mesh.triangles) {
+        double twice_area = 0.0;
+        const UvTriangle uv = uv_triangle(uv_set, indices, settings, &twice_area);
+        if (twice_area == 0.0) continue;
+        const double area = std::min(0.5 * twice_area, grid_area);
+        estimate.uv_area += area;
+        samples += area * double(per_texel) + 1.0;
+        const dvec2 lower = glm::max(glm::floor(glm::min(uv.p[0], glm::min(uv.p[1], uv.p[2]))),
+                                     dvec2(0.0));
+        const dvec2 upper = glm::min(glm::ceil(glm::max(uv.p[0], glm::max(uv.p[1], uv.p[2]))),
+                                     grid);
+        if (upper.x > lower.x && upper.y > lower.y)
+            estimate.box_texels += uint64_t((upper.x - lower.x) * (upper.y - lower.y));
+    }
+    estimate.box_texels = std::max<uint64_t>(estimate.box_texels, 1);
+    estimate.samples = samples >= 1.8e19 ? UINT64_MAX : uint64_t(samples);
+    // Per texel: sample_offsets and gather's cursor (8 + 8), coverage and chart (4 + 4). Per
+    // sample: its Fragment while rasterizing and its TexelSample in the map, both held while
+    // gathering. Per triangle: its TriangleResult and chart.
+    const uint64_t texels = uint64_t(settings.width) * settings.height;
+    estimate.bytes = saturating_add(
+        saturating_mul(texels, 24),
+        saturating_add(saturating_mul(estimate.samples, sizeof(Fragment) + sizeof(TexelSample)),
+                       saturating_mul(mesh.triangles.size(), sizeof(TriangleResult) + 8)));
+    return estimate;
+}
+
+void require_raster_memory(const Mesh& mesh, const TexelRasterSettings& settings,
+                           const RasterEstimate& estimate) {
+    const uint32_t n = settings.samples_per_axis;
+    const double grid_area = double(settings.width) * double(settings.height);
+    require_memory(
+        estimate.bytes,
+        format_message("TexelRasterSettings.width x height = ", settings.width, " x ",
+                       settings.height, " with ", n * n, " samples per texel (samples_per_axis = ",
+                       n, "; the UV triangles of ", mesh_label(mesh), " cover ",
+                       100.0 * estimate.uv_area / grid_area, "% of the lightmap: about ",
+                       estimate.samples, " samples of ", sizeof(Fragment) + sizeof(TexelSample),
+                       " bytes while rasterizing)"),
+        "lower the resolution (width, height) or samples_per_axis, or bake in tiles");
 }
 
 }  // namespace
@@ -501,18 +600,22 @@ TexelMap rasterize_texels(const Mesh& mesh, const mat4& world_from_object,
     const UvSet& uv_set = find_uv_set(mesh, settings.uv_set);
     check_mesh(mesh, uv_set, world_from_object);
     const mat3 normals_to_world = normal_from_object(world_from_object);
+    const RasterEstimate estimate = estimate_raster(mesh, uv_set, settings);
+    require_raster_memory(mesh, settings, estimate);
 
     // Triangles in parallel, each into its own result: the merge in triangle order makes the
     // map independent of the thread count.
+    if (progress) progress->begin_stage("rasterizing texels", 0.0f, 0.8f);
+    RowProgress rows(progress, estimate.box_texels);
     std::vector<TriangleResult> results(mesh.triangles.size());
-    parallel_for(
-        0, mesh.triangles.size(), kTrianglesPerChunk,
-        [&](uint64_t begin, uint64_t end) {
-            for (uint64_t t = begin; t < end; ++t)
-                results[t] = rasterize_triangle(mesh, uv_set, world_from_object,
-                                                normals_to_world, uint32_t(t), settings);
-        },
-        progress);
+    parallel_for(0, mesh.triangles.size(), kTrianglesPerChunk,
+                 [&](uint64_t begin, uint64_t end) {
+                     throw_if_cancelled(progress);
+                     for (uint64_t t = begin; t < end; ++t)
+                         results[t] =
+                             rasterize_triangle(mesh, uv_set, world_from_object,
+                                                normals_to_world, uint32_t(t), settings, rows);
+                 });
 
     TexelRasterReport report;
     report.triangles = mesh.triangles.size();
@@ -523,8 +626,10 @@ TexelMap rasterize_texels(const Mesh& mesh, const mat4& world_from_object,
         report.conservative_samples += result.conservative_samples;
     }
     uint32_t chart_count = 0;
-    const std::vector<uint32_t> charts = triangle_charts(mesh, uv_set, &chart_count);
-    TexelMap map = gather(results, settings, charts);
+    if (progress) progress->begin_stage("gathering texel samples", 0.8f, 1.0f);
+    const std::vector<uint32_t> charts = triangle_charts(mesh, uv_set, &chart_count, progress);
+    TexelMap map = gather(results, settings, charts, progress);
+    if (progress) progress->report(1, 1);
     map.chart_count = chart_count;
     report.overlapping_texels = map.report.overlapping_texels;
     map.report = report;
@@ -550,7 +655,41 @@ TexelMap rasterize_texels(const Scene& scene, uint32_t instance_id,
         throw InvalidArgument(object + ": " + error.what());
     }
     map.instance_id = instance_id;
+    map.scene_uid = scene.uid();
+    map.mesh_id = instance.mesh_id;
+    map.mesh_revision = scene.mesh_revision(instance.mesh_id);
+    map.world_from_object = instance.world_from_object;
     return map;
+}
+
+void check_texel_map(const Scene& scene, const TexelMap& map, const char* operation) {
+    const char* again = "; call rasterize_texels(scene, instance_id, settings) again for the "
+                        "scene as it is now";
+    if (map.scene_uid == 0 || map.instance_id == kInvalidId)
+        throw InvalidArgument(format_message(operation, ": the texel map was rasterized from a "
+                                             "bare mesh, not from an instance of this scene",
+                                             again));
+    if (map.scene_uid != scene.uid())
+        throw InvalidArgument(format_message(operation, ": the texel map was made for another "
+                                             "scene (of instance ", map.instance_id, ")",
+                                             again));
+    if (map.instance_id >= scene.instances().size())
+        throw InvalidArgument(format_message(
+            operation, ": the texel map is of instance ", map.instance_id, " but the scene has ",
+            scene.instances().size(), " instances", again));
+    const Instance& instance = scene.instances()[map.instance_id];
+    const std::string object = instance.name.empty()
+                                   ? format_message("instance ", map.instance_id)
+                                   : format_message("instance ", map.instance_id, " '",
+                                                    instance.name, "'");
+    if (instance.mesh_id != map.mesh_id || scene.mesh_revision(map.mesh_id) != map.mesh_revision)
+        throw InvalidArgument(format_message(
+            operation, ": the texel map was made before the mesh of ", object,
+            " changed (set_mesh)", again));
+    if (instance.world_from_object != map.world_from_object)
+        throw InvalidArgument(format_message(
+            operation, ": the texel map was made before ", object,
+            " moved (set_instance_transform changed its world_from_object)", again));
 }
 
 }  // namespace shgi

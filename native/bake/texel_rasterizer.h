@@ -94,6 +94,14 @@ struct TexelRasterReport {
 struct TexelMap {
     uint32_t width = 0, height = 0;
     uint32_t instance_id = kInvalidId;  // kInvalidId when rasterized from a bare Mesh
+    // What the map was made from (rasterize_texels(scene, instance, ...)): the Scene's uid(),
+    // the instance's mesh, that mesh's revision and the instance's transform. A bake or
+    // unocclude on another scene, or after the instance moved or its mesh changed, is refused
+    // (check_texel_map): its samples would lie where the surface no longer is.
+    uint64_t scene_uid = 0;  // 0 for a bare Mesh
+    uint32_t mesh_id = kInvalidId;
+    uint64_t mesh_revision = 0;
+    mat4 world_from_object{1.0f};
     std::vector<uint64_t> sample_offsets;  // width * height + 1
     std::vector<TexelSample> samples;
     std::vector<float> coverage;  // width * height, fraction of each texel covered, in [0, 1]
@@ -133,5 +141,11 @@ TexelMap rasterize_texels(const Mesh& mesh, const mat4& world_from_object,
 // instance_id is set. Throws InvalidArgument for an instance id out of range.
 TexelMap rasterize_texels(const Scene& scene, uint32_t instance_id,
                           const TexelRasterSettings& settings, Progress* progress = nullptr);
+
+// Throws InvalidArgument when `map` was not made by rasterize_texels(scene, map.instance_id, ...)
+// for this scene as it is now: made from a bare Mesh or for another Scene, or before the
+// instance moved (set_instance_transform) or its mesh was replaced (set_mesh). The message says
+// which, starting with `operation`, and to call rasterize_texels again.
+void check_texel_map(const Scene& scene, const TexelMap& map, const char* operation);
 
 }  // namespace shgi

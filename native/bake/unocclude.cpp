@@ -68,6 +68,7 @@ bool unocclude_sample(const Scene& scene, const UnoccludeSettings& settings,
 UnoccludeReport unocclude(const Scene& scene, TexelMap& map, const UnoccludeSettings& settings,
                           Progress* progress) {
     check_settings(scene, settings);
+    check_texel_map(scene, map, "unocclude");
     std::atomic<uint64_t> moved{0};
     parallel_for(
         0, map.samples.size(), kSamplesPerChunk,

@@ -202,6 +202,10 @@ fs::path checked_parent_folder(const std::string& path, const std::string& label
     if (parent.empty()) parent = ".";
     std::error_code error;
     if (!fs::is_directory(parent, error)) {
+        if (fs::exists(parent, error))
+            throw IoError(format_message("cannot write ", label, ": \"", parent.string(),
+                                         "\" is a file, not a folder; choose another output "
+                                         "folder or move the file away"));
         throw IoError(format_message("cannot write ", label, ": folder \"", parent.string(),
                                      "\" does not exist; create it first"));
     }

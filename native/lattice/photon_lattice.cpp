@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "util/error.h"
+#include "util/memory.h"
 #include "util/timer.h"
 
 namespace shgi {
@@ -132,7 +133,8 @@ void PhotonLattice::solve(Progress* progress) {
     PhotonLatticeTimings timings;
     auto start = now();
     if (progress != nullptr) progress->begin_stage("photons", 0.0f, 0.8f);
-    const PhotonMaps maps = trace_photons(*scene_, tracer_settings(settings_), passes_, progress);
+    const PhotonMaps maps = trace_photons(*scene_, tracer_settings(settings_), passes_, progress,
+                                          "PhotonLatticeSettings");
     timings.emit_trace = seconds_since(start);
     timings.photons_emitted = maps.emitted;
     timings.photons_stored = maps.global.size() + maps.caustic.size();
@@ -150,7 +152,13 @@ void PhotonLattice::solve(Progress* progress) {
         caustic_injected += caustic_raw.inject(maps.caustic, 1.0f, progress);
     } else if (settings_.caustics == CausticMode::PhotonMap) {
         // All passes so far (unscaled; the map may hold 10^7 photons, half a GB), then this one.
-        caustic_photons.reserve(caustic_map_.size() + maps.caustic.size());
+        const uint64_t caustic_count = caustic_map_.size() + maps.caustic.size();
+        require_memory(saturating_mul(caustic_count, sizeof(Photon)),
+                       format_message("PhotonLatticeSettings.caustics = PHOTON_MAP after ",
+                                      passes_ + 1, " passes: ", caustic_count,
+                                      " caustic photons of ", sizeof(Photon), " bytes"),
+                       "lower PhotonLatticeSettings.photons or use caustics = LATTICE");
+        caustic_photons.reserve(caustic_count);
         append_photons(caustic_photons, caustic_map_.photons(), progress);
         append_photons(caustic_photons, maps.caustic, progress);
     }

@@ -11,6 +11,7 @@
 
 #include "sh/sh_basis.h"
 #include "util/error.h"
+#include "util/memory.h"
 #include "util/parallel.h"
 
 namespace shgi {
@@ -474,6 +475,13 @@ ShLattice::ShLattice(const Bounds3& bounds, int resolution, int order) : order_(
             kClassName, ": resolution = ", resolution, " over bounds of extent ",
             glm::to_string(extent), " gives ", dims_.x, " x ", dims_.y, " x ", dims_.z, " = ",
             cells, " cells, more than ", kMaxCells, "; lower the resolution"));
+    const uint64_t cell_bytes = uint64_t(num_coefficients()) * 3 * sizeof(float) +
+                                sizeof(uint32_t) * 2 + sizeof(uint8_t);
+    require_memory(saturating_mul(cells, cell_bytes),
+                   format_message(kClassName, ": resolution = ", resolution, " gives ", dims_.x,
+                                  " x ", dims_.y, " x ", dims_.z, " = ", cells, " cells of ",
+                                  cell_bytes, " bytes (order ", order, ")"),
+                   "lower the resolution");
     coeffs_.assign(cells * size_t(num_coefficients()) * 3, 0.0f);
     surface_index_.assign(cells, kNoSurface);
     surface_near_.assign(size_t(dims_.x + 2) * size_t(dims_.y + 2) * size_t(dims_.z + 2), 0u);

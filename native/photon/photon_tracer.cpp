@@ -4,6 +4,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <utility>
@@ -30,8 +31,14 @@ constexpr uint64_t kPhotonsPerChunk = 4096;
 // maps, so their records take memory in proportion to a block (~4M photons), not to the whole
 // pass (2^40 photons would need 15 GB of records before the first photon).
 constexpr uint64_t kChunksPerBlock = 1024;
-// Stored photons may take at most this share of the machine's RAM; past it the trace stops
-// with OutOfMemory instead of the system killing the host.
+// Chunks of the first block: a pilot whose stored photons per emitted photon project the whole
+// pass's maps, so that a pass far too large for memory is refused within a fraction of a second
+// instead of after tens of seconds of tracing. Chunk boundaries (and so the result) do not
+// depend on the blocks.
+constexpr uint64_t kPilotChunks = 64;
+// Stored photons may take at most this share of what the process could allocate when the pass
+// began (util/memory.h); past it the trace stops with OutOfMemory instead of the system killing
+// the host.
 constexpr double kStoredPhotonsMemoryFraction = 0.5;
 // Growing the maps holds a map's old and new buffers at once: old, new and the other map's
 // buffer may take at most this share.
@@ -344,7 +351,9 @@ void merge(std::vector<ChunkResult>& chunks, uint64_t count, PhotonMaps& maps,
         throw OutOfMemory(format_message(
             "trace_photons: after ", traced, " of ", settings.photons, " photons, growing the "
             "photon maps would hold ", transient, " bytes at once (old and new buffers), past "
-            "three quarters of the machine's memory; lower the photon count"));
+            "three quarters of what this process could allocate when the pass began (",
+            format_bytes(uint64_t(double(transient_budget) / kGrowingPhotonsMemoryFraction)),
+            ": RLIMIT_AS / cgroup / free memory); lower the photon count"));
     grow_to(maps.global, global_capacity, progress);
     grow_to(maps.caustic, caustic_capacity, progress);
     for (uint64_t c = 0; c < count; ++c) {
@@ -380,8 +389,8 @@ void validate_photon_tracer_settings(const PhotonTracerSettings& settings,
 }
 
 PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& settings, uint64_t pass,
-                         Progress* progress) {
-    validate_photon_tracer_settings(settings);
+                         Progress* progress, const char* settings_name) {
+    validate_photon_tracer_settings(settings, settings_name);
     if (!scene.committed())
         throw InvalidArgument("trace_photons: the scene is not committed; call commit() first");
     throw_if_cancelled(progress);
@@ -389,19 +398,49 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
     const PhotonEmitter emitter(scene);
     if (scene.empty() || emitter.empty()) return maps;
     const uint64_t chunk_count = (settings.photons + kPhotonsPerChunk - 1) / kPhotonsPerChunk;
-    const uint64_t budget = physical_memory_share(kStoredPhotonsMemoryFraction);
-    const uint64_t transient_budget = physical_memory_share(kGrowingPhotonsMemoryFraction);
+    // The allowance is read once: it shrinks as the maps grow.
+    const MemoryLimits limits = memory_limits();
+    const uint64_t allowed = limits.allowed();
+    const bool unlimited = allowed == std::numeric_limits<uint64_t>::max();
+    const uint64_t budget =
+        unlimited ? allowed : uint64_t(double(allowed) * kStoredPhotonsMemoryFraction);
+    const uint64_t transient_budget =
+        unlimited ? allowed : uint64_t(double(allowed) * kGrowingPhotonsMemoryFraction);
     ChunkTracerPool pool(scene, settings, emitter);
     std::vector<ChunkResult> chunks(std::min(chunk_count, kChunksPerBlock));
     std::atomic<uint64_t> chunks_done{0};
-    for (uint64_t block = 0; block < chunk_count; block += kChunksPerBlock) {
-        const uint64_t stored_bytes = (maps.global.size() + maps.caustic.size()) * sizeof(Photon);
+    for (uint64_t block = 0; block < chunk_count;) {
+        const uint64_t traced = std::min(settings.photons, block * kPhotonsPerChunk);
+        const uint64_t stored = maps.global.size() + maps.caustic.size();
+        const uint64_t stored_bytes = stored * sizeof(Photon);
         if (stored_bytes > budget)
             throw OutOfMemory(format_message(
-                "trace_photons: after ", block * kPhotonsPerChunk, " of ", settings.photons,
-                " photons the stored photons take ", stored_bytes, " bytes, past half of the "
-                "machine's memory; lower the photon count"));
-        const uint64_t block_chunks = std::min(kChunksPerBlock, chunk_count - block);
+                "trace_photons: after ", traced, " of ", settings.photons,
+                " photons the stored photons take ", stored_bytes, " bytes, past half of what "
+                "this process could allocate when the pass began (", format_bytes(allowed),
+                ": RLIMIT_AS / cgroup / free memory); lower ", settings_name, ".photons"));
+        if (traced > 0 && stored > 0) {
+            // The maps at the end of the pass, at the rate the traced photons stored, and the
+            // growth that holds old and new buffers at once: refused now, not tens of seconds
+            // (and gigabytes) later.
+            const double per_photon = double(stored) / double(traced);
+            const double projected = per_photon * double(settings.photons) * sizeof(Photon);
+            const uint64_t need = projected >= 1.8e19 ? std::numeric_limits<uint64_t>::max()
+                                                      : uint64_t(projected);
+            require_memory(
+                saturating_mul(need, 2),
+                format_message(settings_name, ".photons = ", settings.photons, " (the first ",
+                               traced, " photons stored ", per_photon,
+                               " photons each, so about ", uint64_t(per_photon *
+                               double(settings.photons)), " stored photons of ",
+                               sizeof(Photon), " bytes, twice: stored photons may take half of the "
+                               "memory, as growing a map holds its old and new buffers)"),
+                format_message("lower ", settings_name, ".photons (or trace more passes of "
+                               "fewer photons)"),
+                limits);
+        }
+        const uint64_t block_chunks =
+            std::min(block == 0 ? kPilotChunks : kChunksPerBlock, chunk_count - block);
         // Grain 1 over chunk indices: each body call traces whole chunks, whatever the split.
         // Progress counts chunks over the whole pass (parallel_for's own would restart at each
         // block), so the body polls the cancel flag itself.
@@ -418,6 +457,7 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
         });
         merge(chunks, block_chunks, maps, transient_budget, settings,
               std::min(settings.photons, (block + block_chunks) * kPhotonsPerChunk), progress);
+        block += block_chunks;
     }
     maps.emitted = settings.photons;
     maps.emitted_power = emitter.total_power();

@@ -68,8 +68,14 @@ struct PhotonMaps {
 // Traces pass `pass` (0, 1, 2, ...: independent RNG streams) on a committed scene (else
 // InvalidArgument). An empty scene or one without emitters returns empty maps (emitted = 0).
 // Throws Cancelled on cancel.
+// Memory (docs/robustness-memory.md): the first block is a short pilot of 2^18 photons; from
+// the photons it stored, the whole pass's stored photons are projected and a pass whose maps
+// would not fit what the process may allocate (util/memory.h) is refused with OutOfMemory
+// naming `settings_name`.photons before the rest is traced. Later blocks re-check the
+// projection and the maps' growth.
 PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& settings, uint64_t pass,
-                         Progress* progress = nullptr);
+                         Progress* progress = nullptr,
+                         const char* settings_name = "PhotonTracerSettings");
 
 // Appends `from` to `to` in slices of 2^20 photons (48 MB, ~10 ms) with a cancel poll before
 // each: maps of 10^7+ photons take long to copy, and a cancel should not wait for it.

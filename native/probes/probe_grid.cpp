@@ -15,6 +15,7 @@
 #include "scene/ray.h"
 #include "sh/sh_projection.h"
 #include "util/error.h"
+#include "util/memory.h"
 #include "util/parallel.h"
 #include "util/rng.h"
 #include "util/sampling.h"
@@ -296,6 +297,11 @@ ProbeGridData ProbeGrid::place(Progress* progress) const {
             "ProbeGridSettings: ", probes, " probes with visibility_resolution ",
             data.visibility_resolution, " need ", bytes / 1e9, " GB; the limit is ",
             double(kMaxProbeBytes) / 1e9, " GB: lower visibility_resolution or the resolutions"));
+    require_memory(uint64_t(bytes),
+                   format_message("ProbeGridSettings: ", probes, " probes with "
+                                  "visibility_resolution ", data.visibility_resolution, " (",
+                                  probe_bytes(data.visibility_resolution), " bytes each)"),
+                   "lower visibility_resolution or the volumes' resolutions");
     const std::vector<vec3> base = probe_base_positions(data.volumes);
     const size_t count = base.size();
     data.positions = base;

@@ -15,6 +15,7 @@
 #include "io/exr_image.h"
 #include "io/image.h"
 #include "util/error.h"
+#include "util/memory.h"
 
 namespace shgi {
 namespace {
@@ -207,6 +208,13 @@ ProbeGridData load_probe_grid(const std::string& path) {
         throw IoError(format_message("probe file \"", path, "\" says ", probes, " probes of ",
                                      probe_bytes, " bytes, but ", remaining,
                                      " bytes follow its header (truncated or damaged?)"));
+    require_memory(saturating_mul(probes, sizeof(vec3) + 1 + sizeof(float) + sizeof(ShRgb) +
+                                              uint64_t(data.visibility_resolution) *
+                                                  data.visibility_resolution * sizeof(vec2)),
+                   format_message("probe file \"", path, "\" with ", probes,
+                                  " probes (visibility_resolution ", data.visibility_resolution,
+                                  ")"),
+                   "load it in a process with more memory, or re-bake with fewer probes");
     data.positions.resize(probes);
     r.bytes(data.positions.data(), probes * sizeof(vec3), "the positions");
     data.active.resize(probes);
@@ -397,8 +405,23 @@ ProbeGridData import_probe_grid(const std::string& json_path) {
             };
             const std::string sh_path = path_of("sh_file");
             const std::string vis_path = path_of("visibility_file");
-            const Image sh_image = read_exr(sh_path);
-            const Image vis_image = read_exr(vis_path);
+            // Any failure reading an EXR names it: a bare std::exception from the EXR library
+            // would reach Python as a RuntimeError without the file's name.
+            const auto read_named = [&](const std::string& path) {
+                try {
+                    return read_exr(path);
+                } catch (const Error&) {
+                    throw;
+                } catch (const std::bad_alloc&) {
+                    throw OutOfMemory(format_message("cannot read EXR \"", path, "\" (listed by \"",
+                                                     json_path, "\"): out of memory"));
+                } catch (const std::exception& error) {
+                    throw IoError(format_message("cannot read EXR \"", path, "\" (listed by \"",
+                                                 json_path, "\"): ", error.what()));
+                }
+            };
+            const Image sh_image = read_named(sh_path);
+            const Image vis_image = read_named(vis_path);
             if (sh_image.width() != n.x || sh_image.height() != n.y * n.z ||
                 vis_image.width() != n.x * res || vis_image.height() != n.y * n.z * res)
                 throw IoError(format_message("\"", sh_path, "\" or \"", vis_path,
@@ -451,6 +474,12 @@ ProbeGridData import_probe_grid(const std::string& json_path) {
         return data;
     } catch (const nlohmann::json::exception& e) {
         throw IoError(format_message("\"", json_path, "\" is not a probe grid export: ", e.what()));
+    } catch (const Error&) {
+        throw;
+    } catch (const std::bad_alloc&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw IoError(format_message("cannot import probe grid \"", json_path, "\": ", e.what()));
     }
 }
 

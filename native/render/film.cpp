@@ -9,10 +9,10 @@
 namespace shgi {
 namespace {
 
-// A film may take at most this share of the machine's RAM: a progressive renderer holds two
-// (ProgressiveFilm), and its passes' images are as large again. Past it the system would kill
-// the host while the sums are zeroed, before any allocation could fail.
-constexpr double kFilmMemoryFraction = 0.25;
+// A film may take at most this share of what the process may still allocate: a progressive
+// renderer holds two (ProgressiveFilm), and its passes' images are as large again. Past it the
+// system would kill the host while the sums are zeroed, before any allocation could fail.
+constexpr uint64_t kFilmCopies = 4;
 
 // Cycles writes this depth where no sample hit anything (film_get_pass_pixel_depth).
 constexpr float kMissDepth = 1e10f;
@@ -55,12 +55,11 @@ Film::Film(int width, int height, FilmPasses passes)
       pass_count_(passes == FilmPasses::All ? size_t(kPassCount) : 1) {
     check_image_size(width, height, "film");
     const uint64_t bytes = uint64_t(pass_count_) * pixel_count() * sizeof(vec3);
-    const uint64_t budget = physical_memory_share(kFilmMemoryFraction);
-    if (bytes > budget)
-        throw OutOfMemory(format_message(
-            "film: ", width, " x ", height, " pixels with ", pass_count_, " passes need ", bytes,
-            " bytes, more than ", int(kFilmMemoryFraction * 100.0), "% of the machine's memory (",
-            budget, " bytes); lower the resolution"));
+    require_memory(saturating_mul(bytes, kFilmCopies),
+                   format_message("the camera resolution (film) ", width, " x ", height,
+                                  " pixels with ", pass_count_, " passes (", kFilmCopies,
+                                  " copies: two films and their images)"),
+                   "lower the camera's resolution_x / resolution_y (or Blender's resolution %)");
     sums_.assign(pass_count_ * pixel_count(), vec3(0.0f));
 }
 

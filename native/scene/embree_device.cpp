@@ -64,7 +64,8 @@ void EmbreeDevice::throw_if_error(const std::string& operation) {
         throw OutOfMemory(format_message(
             operation, " exceeded the memory budget: budget ", budget_.load(), " bytes, ",
             refused_in_use_, " bytes in use, ", refused_bytes_,
-            " more bytes requested; raise memory_budget_bytes (0 = 75% of physical RAM) or "
+            " more bytes requested; raise memory_budget_bytes (0 = 75% of what the process may "
+            "still allocate: RLIMIT_AS / cgroup / free memory) or "
             "simplify the scene"));
     if (code == RTC_ERROR_OUT_OF_MEMORY)
         throw OutOfMemory(format_message(operation, ": Embree ran out of memory (",

@@ -1,7 +1,9 @@
 #include "scene/light.h"
 
 #include <algorithm>
+#include <limits>
 
+#include "scene/scene.h"
 #include "scene/validation.h"
 #include "util/error.h"
 
@@ -16,6 +18,19 @@ void validate_light(const Light& light) {
     require_non_negative(item, "strength", light.strength);
     require_transform(item, "world_from_light", light.world_from_light);
     require_non_negative(item, "radius", light.radius);
+    // The emitted power is color x power (or strength, for a sun): each finite, their product
+    // can still overflow float, and commit() would then blame the power for a bright colour.
+    // Products past kMaxEmittedPower but within float are left to commit()'s scene-wide check.
+    const float brightest = std::max(light.color.x, std::max(light.color.y, light.color.z));
+    const char* amount = light.type == LightType::Sun ? "strength" : "power";
+    const float amount_value = light.type == LightType::Sun ? light.strength : light.power;
+    const double emitted = double(brightest) * double(amount_value);
+    if (!(emitted <= double(std::numeric_limits<float>::max())))
+        throw InvalidArgument(format_message(
+            item, ": color = ", to_string(light.color), " (brightest component ", brightest,
+            ") times ", amount, " = ", amount_value, " is ", emitted,
+            ", beyond the float range (3.4e38); give the color in [0, 1] (Blender's light "
+            "color) and the brightness in ", amount));
     if (light.portal && light.type != LightType::Area)
         throw InvalidArgument(format_message(item, ": portal is set on a light that is not an "
                                              "area light; only area lights can be portals"));
@@ -51,11 +66,13 @@ void validate_light(const Light& light) {
     }
     // Emitted rays start anywhere on the light: its reach must stay within the coordinates
     // scene geometry may use, as its translation does.
-    const double reach = double(size) * double(max_axis_scale(light.world_from_light));
+    const double scale = max_axis_scale(light.world_from_light);
+    const double reach = double(size) * scale;
     if (!(reach <= double(kMaxCoordinate)))
         throw InvalidArgument(format_message(
-            item, ": its size (", size, " m, times the scale of world_from_light) reaches ",
-            reach, " m, beyond ", kMaxCoordinate, " m; make the light smaller"));
+            item, ": world_from_light scales it by ", scale, ", so its size (", size,
+            " m) reaches ", reach, " m, beyond ", kMaxCoordinate,
+            " m; lower the light's scale (its object's scale in Blender) or its size"));
 }
 
 void validate_world(const World& world) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "scene/scene.h"
 #include "scene/validation.h"
 #include "util/error.h"
 
@@ -13,6 +14,13 @@ using namespace scene_detail;
 void validate_material(const Material& material, uint32_t texture_count) {
     const std::string item = label("material", material.name);
     require_non_negative(item, "base_color", material.base_color);
+    for (int c = 0; c < 3; ++c)
+        if (material.base_color[c] > kMaxBaseColor)
+            throw InvalidArgument(format_message(
+                item, ": base_color = ", to_string(material.base_color), " has component ",
+                material.base_color[c], " above ", kMaxBaseColor,
+                "; a reflectance is in [0, 1] (Blender's Base Color); a surface that glows "
+                "takes emission_color and emission_strength"));
     require_in_range(item, "roughness", material.roughness, 0.0f, 1.0f);
     require_in_range(item, "metallic", material.metallic, 0.0f, 1.0f);
     require_in_range(item, "specular", material.specular, 0.0f, 1.0f);
@@ -22,8 +30,22 @@ void validate_material(const Material& material, uint32_t texture_count) {
         throw InvalidArgument(format_message(item, ": ior = ", material.ior, " must be >= 1"));
     require_non_negative(item, "emission_color", material.emission_color);
     require_non_negative(item, "emission_strength", material.emission_strength);
+    const float brightest_emission = std::max(
+        material.emission_color.x, std::max(material.emission_color.y, material.emission_color.z));
+    const double radiance = double(brightest_emission) * double(material.emission_strength);
+    if (!(radiance <= kMaxEmittedPower))
+        throw InvalidArgument(format_message(
+            item, ": emission_color = ", to_string(material.emission_color),
+            " times emission_strength = ", material.emission_strength, " is ", radiance,
+            " W m^-2 sr^-1, beyond the ", kMaxEmittedPower,
+            " that single precision carries; give emission_color in [0, 1] and the "
+            "brightness in emission_strength"));
     const int32_t texture = material.base_color_texture;
-    if (texture != kNoTexture && (texture < 0 || static_cast<uint32_t>(texture) >= texture_count))
+    if (texture < 0 && texture != kNoTexture)
+        throw InvalidArgument(format_message(item, ": base_color_texture = ", texture,
+                                             " is negative; use -1 for none or the id "
+                                             "add_texture returned"));
+    if (texture != kNoTexture && static_cast<uint32_t>(texture) >= texture_count)
         throw InvalidArgument(format_message(item, ": base_color_texture = ", texture,
                                              " but the scene has ", texture_count,
                                              " textures (use -1 for none)"));
@@ -62,6 +84,11 @@ void validate_texture(const Texture& texture) {
             throw InvalidArgument(format_message(item, ": texels[", i, "] = (", texel.x, ", ",
                                                  texel.y, ", ", texel.z, ", ", texel.w,
                                                  ") is not finite"));
+        if (std::max(texel.x, std::max(texel.y, texel.z)) > kMaxBaseColor)
+            throw InvalidArgument(format_message(
+                item, ": texels[", i, "] = (", texel.x, ", ", texel.y, ", ", texel.z,
+                ") has a component above ", kMaxBaseColor,
+                "; base colour textures hold reflectances in [0, 1]"));
     }
 }
 

@@ -43,6 +43,12 @@ enum class MicrofacetDistribution : uint8_t {
     MultiscatterGGX,
 };
 
+// Largest base_color component accepted. A reflectance is in [0, 1]; a little above is an
+// artist's choice the renderers tolerate, but a path's throughput multiplies one albedo per
+// bounce and must stay finite in float: 1000 per bounce over 12 bounces is 1e36, below the
+// 3.4e38 float limit (a base_color of 1e38 rendered inf pixels). Texture texels have the same cap.
+inline constexpr float kMaxBaseColor = 1000.0f;
+
 struct Material {
     std::string name = "default";
     vec3 base_color{0.8f};
@@ -56,7 +62,7 @@ struct Material {
     float transmission = 0.0f;                // 0..1
     float ior = 1.45f;                        // >= 1
     vec3 emission_color{0.0f};
-    float emission_strength = 1.0f;           // >= 0
+    float emission_strength = 1.0f;           // >= 0; emission_color x it <= kMaxEmittedPower
     DiffuseModel diffuse_model = DiffuseModel::Principled;
     PrincipledModel principled_model = PrincipledModel::V1;
     MicrofacetDistribution distribution = MicrofacetDistribution::GGX;

@@ -1,5 +1,6 @@
 #include "scene/scene.h"
 
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -18,12 +19,17 @@ using namespace scene_detail;
 // add_material runs before textures may have been added; commit() checks the real count.
 constexpr uint32_t kAnyTextureCount = std::numeric_limits<uint32_t>::max();
 
-// CommitSettings::memory_budget_bytes = 0 leaves a quarter of the machine's RAM to Blender and
-// the rest of SHGI.
+// CommitSettings::memory_budget_bytes = 0 leaves a quarter of what the process may still
+// allocate (util/memory.h) to Blender and the rest of SHGI; an explicit budget is capped by it.
 constexpr double kDefaultBudgetFraction = 0.75;
 
 uint64_t resolve_budget(uint64_t requested) {
-    return requested > 0 ? requested : physical_memory_share(kDefaultBudgetFraction);
+    const MemoryLimits limits = memory_limits();
+    if (requested > 0) return std::min(requested, limits.allowed());
+    const uint64_t allowed = limits.allowed();
+    return allowed == std::numeric_limits<uint64_t>::max()
+               ? allowed
+               : uint64_t(double(allowed) * kDefaultBudgetFraction);
 }
 
 std::string instance_label(const std::vector<Instance>& instances, size_t i) {
@@ -256,6 +262,18 @@ float radius_of(const Bounds3& bounds) {
 
 }  // namespace
 
+uint64_t Scene::next_uid() {
+    static std::atomic<uint64_t> counter{0};
+    return counter.fetch_add(1, std::memory_order_relaxed) + 1;
+}
+
+uint64_t Scene::mesh_revision(uint32_t mesh_id) const {
+    if (mesh_id >= mesh_revisions_.size())
+        throw InvalidArgument(format_message("mesh_revision: mesh_id = ", mesh_id,
+                                             " but the scene has ", meshes_.size(), " meshes"));
+    return mesh_revisions_[mesh_id];
+}
+
 Scene::Scene() = default;
 Scene::~Scene() = default;
 Scene::Scene(Scene&&) noexcept = default;
@@ -272,6 +290,7 @@ uint32_t Scene::add_mesh(Mesh mesh) {
     mesh_reports_.push_back(report);
     geometry_dirty_ = true;
     invalidate();
+    mesh_revisions_.push_back(revision_);
     return static_cast<uint32_t>(meshes_.size() - 1);
 }
 
@@ -285,6 +304,7 @@ void Scene::set_mesh(uint32_t mesh_id, Mesh mesh) {
     mesh_reports_[mesh_id] = report;
     geometry_dirty_ = true;
     invalidate();
+    mesh_revisions_[mesh_id] = revision_;
 }
 
 uint32_t Scene::add_instance(uint32_t mesh_id, const mat4& world_from_object, std::string name) {
@@ -525,8 +545,11 @@ void Scene::commit(const CommitSettings& settings, Progress* progress) {
         throw OutOfMemory(format_message(
             "the scene's BVH needs at least ", estimate, " bytes (", stats().triangles,
             " triangles in ", meshes_.size(), " meshes, ", instances_.size(),
-            " instances) but the memory budget is ", budget,
-            " bytes; raise memory_budget_bytes (0 = 75% of physical RAM) or simplify the scene"));
+            " instances) but the memory budget is ", budget, " bytes (", format_bytes(budget),
+            "; memory_budget_bytes = ", settings.memory_budget_bytes,
+            ", capped by what this process may still allocate: RLIMIT_AS / cgroup / free "
+            "memory); raise memory_budget_bytes (0 = 75% of what the process may allocate), "
+            "free memory or simplify the scene"));
     if (!embree_) embree_ = std::make_unique<EmbreeScene>();
     embree_->set_memory_budget(budget);
     embree_->reset_peak();

@@ -87,7 +87,9 @@ struct SurfacePoint {
 };
 
 struct CommitSettings {
-    // Upper bound on the memory Embree may allocate for the BVH (bytes); 0 = 75% of physical RAM.
+    // Upper bound on the memory Embree may allocate for the BVH (bytes); 0 = 75% of what the
+    // process may still allocate (util/memory.h: RLIMIT_AS, cgroup limit, free memory), which
+    // also caps an explicit budget.
     uint64_t memory_budget_bytes = 0;
 };
 
@@ -140,6 +142,12 @@ class Scene {
     // Increases with every edit. Consumers that cache data derived from a committed scene (light
     // tables, films sized to the camera) keep the revision they saw and refuse a changed scene.
     uint64_t revision() const { return revision_; }
+    // Unique among the Scene objects of this process (never reused; a moved-to Scene takes the
+    // source's): data derived from one scene (a TexelMap) records it and refuses another.
+    uint64_t uid() const { return uid_; }
+    // The revision() at which mesh `mesh_id` was last added or replaced (set_mesh); throws
+    // InvalidArgument for an id out of range.
+    uint64_t mesh_revision(uint32_t mesh_id) const;
     // True when the scene has no triangles (after dropping degenerate ones).
     bool empty() const;
     // World-space bounds of all instances; throws InvalidArgument for an empty scene.
@@ -195,6 +203,9 @@ class Scene {
     bool has_camera_ = false;
     bool committed_ = false;
     uint64_t revision_ = 0;
+    uint64_t uid_ = next_uid();
+    std::vector<uint64_t> mesh_revisions_;  // per mesh: revision_ when it was added or set
+    static uint64_t next_uid();
     bool geometry_dirty_ = true;  // meshes changed: per-mesh BVHs must be rebuilt
     std::vector<EmissiveTriangle> emissive_;
     // Per instance, world_from_object's cofactor times sign(det): maps object normals to world.

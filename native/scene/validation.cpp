@@ -93,9 +93,14 @@ void require_transform(const std::string& item, const char* field, const mat4& m
                                              kMaxCoordinate, " m"));
 }
 
-float max_axis_scale(const mat4& m) {
-    return std::max(glm::length(vec3(m[0])), std::max(glm::length(vec3(m[1])),
-                                                      glm::length(vec3(m[2]))));
+double max_axis_scale(const mat4& m) {
+    // In double: a float length of a column scaled by 1e20 overflows its squares.
+    double longest = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        const glm::dvec3 column(m[c]);
+        longest = std::max(longest, glm::length(column));
+    }
+    return longest;
 }
 
 }  // namespace shgi::scene_detail

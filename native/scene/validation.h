@@ -42,6 +42,6 @@ bool is_singular(const mat4& m);
 // bounds at commit, a light's on its size.)
 void require_transform(const std::string& item, const char* field, const mat4& m);
 // The largest length of the linear part's columns: how much m stretches an axis.
-float max_axis_scale(const mat4& m);
+double max_axis_scale(const mat4& m);
 
 }  // namespace shgi::scene_detail

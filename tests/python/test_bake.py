@@ -945,3 +945,43 @@ def test_cli_output_folder_that_is_a_file_is_named(build_python_dir, room_file, 
         assert result.returncode == 1, result.stderr
         assert f"output folder '{out}': '{blocker}' is a file, not a folder" in result.stderr
         assert "Errno" not in result.stderr.splitlines()[-1]
+
+
+def test_a_texel_map_is_refused_by_another_scene_or_after_its_instance_changed():
+    """A TexelMap made for one scene baked against another without an error, unocclude ran on a
+    map whose instance had moved, and a map whose mesh was replaced failed with "hit.triangle_id
+    = 1 but its mesh has 1 triangles". The map records the scene, mesh and transform it was
+    made for."""
+    scene = plane_scene()
+    texel_map = shgi.rasterize_texels(scene, 0, shgi.TexelRasterSettings(width=8, height=8))
+    settings = shgi.LightmapSettings(samples=1, tile_size=8)
+    assert shgi.bake_lightmap(scene, texel_map, settings).width == 8
+    again = "call rasterize_texels(scene, instance_id, settings) again"
+
+    other = plane_scene()
+    with pytest.raises(ValueError) as caught:
+        shgi.bake_lightmap(other, texel_map, settings)
+    assert str(caught.value).startswith("bake_lightmap: the texel map was made for another scene")
+    assert again in str(caught.value)
+
+    moved = np.eye(4)
+    moved[2, 3] = 1.0
+    scene.set_instance_transform(0, moved)
+    scene.commit()
+    with pytest.raises(ValueError) as caught:
+        shgi.unocclude(scene, texel_map, shgi.UnoccludeSettings())
+    assert str(caught.value).startswith(
+        "unocclude: the texel map was made before instance 0 'plane' moved")
+    assert again in str(caught.value)
+    texel_map = shgi.rasterize_texels(scene, 0, shgi.TexelRasterSettings(width=8, height=8))
+    assert shgi.unocclude(scene, texel_map, shgi.UnoccludeSettings())["samples"] > 0
+
+    positions = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0]], np.float32)
+    scene.set_mesh(0, shgi.Mesh(positions=positions, triangles=np.array([[0, 1, 2]]),
+                                name="plane", uvs={"LightmapUV": (positions[:, :2] + 1.0) / 2.0}))
+    scene.commit()
+    with pytest.raises(ValueError) as caught:
+        shgi.bake_lightmap(scene, texel_map, settings)
+    assert str(caught.value).startswith(
+        "bake_lightmap: the texel map was made before the mesh of instance 0 'plane' changed")
+    assert "triangle_id" not in str(caught.value)

@@ -256,6 +256,18 @@ def test_write_exr_into_a_missing_folder_raises_os_error(tmp_path):
         shgi.write_exr(path, {"Combined": np.zeros((2, 2, 4), np.float32)})
 
 
+def test_writing_into_a_folder_that_is_a_file_names_the_file(tmp_path):
+    """An output folder that is a file was reported as a folder that "does not exist"."""
+    (tmp_path / "out").write_text("a file")
+    for write, name in ((lambda p: shgi.write_exr(p, {"Combined": np.zeros((2, 2, 4), np.float32)}),
+                         "a.exr"),
+                        (lambda p: shgi.write_png(p, np.zeros((2, 2, 3), np.float32)), "a.png")):
+        with pytest.raises(OSError) as caught:
+            write(tmp_path / "out" / name)
+        assert f'"{tmp_path / "out"}" is a file, not a folder' in str(caught.value)
+    assert (tmp_path / "out").read_text() == "a file"
+
+
 GOOD = np.zeros((2, 3, 4), np.float32)
 
 

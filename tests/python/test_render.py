@@ -61,8 +61,10 @@ def test_a_film_larger_than_the_machine_can_hold_is_a_memory_error():
     scene.set_camera(shgi.Camera(resolution_x=46340, resolution_y=46340))
     scene.commit()
     for make in (lambda: shgi.PathTracer(scene), lambda: shgi.PreviewRenderer(scene)):
-        with pytest.raises(MemoryError, match=r"film: 46340 x 46340 pixels with 14 passes need "
-                                              r"\d+ bytes, .*; lower the resolution"):
+        with pytest.raises(MemoryError, match=r"the camera resolution \(film\) 46340 x 46340 "
+                                              r"pixels with 14 passes .* needs .*\(\d+ bytes\); "
+                                              r"this process may use .*\(\d+ bytes\) more .*: "
+                                              r"lower the camera's resolution_x"):
             make()
 
 

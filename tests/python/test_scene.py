@@ -739,3 +739,41 @@ def test_memory_budget_raises_memory_error():
     assert not scene.committed
     scene.commit(memory_budget_bytes=1 << 30)
     assert scene.committed
+
+
+def test_values_whose_products_overflow_float_are_refused_naming_the_field():
+    """A base colour of 1e38 was accepted and a path-traced Cornell box came out with 1,134 inf
+    pixels; a light colour of 1e38 was blamed on its power; a light scaled by 1e20 "reached
+    -nan m"; base_color_texture = -2 said "the scene has 4294967295 textures"."""
+    scene = shgi.Scene()
+    with pytest.raises(ValueError) as caught:
+        scene.add_material(shgi.Material(name="Red", base_color=(1e38, 0.5, 0.5)))
+    assert str(caught.value).startswith(
+        "material 'Red': base_color = (1e+38, 0.5, 0.5) has component 1e+38 above 1000")
+    assert scene.add_material(shgi.Material(name="Bright", base_color=(1000.0, 1.0, 1.0))) == 0
+    with pytest.raises(ValueError) as caught:
+        scene.add_material(shgi.Material(name="Glow", emission_color=(1e30, 1, 1),
+                                         emission_strength=1e10))
+    assert "material 'Glow': emission_color = (1e+30, 1, 1) times emission_strength = 1e+10" \
+        in str(caught.value)
+    with pytest.raises(ValueError) as caught:
+        scene.add_material(shgi.Material(name="T", base_color_texture=-2))
+    message = str(caught.value)
+    assert message.startswith("material 'T': base_color_texture = -2 is negative; use -1")
+    assert "4294967295" not in message
+    with pytest.raises(ValueError) as caught:
+        scene.add_light(shgi.Light(name="Lamp", color=(1e38, 1, 1), power=100.0))
+    assert str(caught.value).startswith(
+        "light 'Lamp': color = (1e+38, 1, 1) (brightest component 1e+38) times power = 100")
+    huge = np.eye(4)
+    huge[:3, :3] *= 1e20
+    with pytest.raises(ValueError) as caught:
+        scene.add_light(shgi.Light(name="Panel", type=shgi.LightType.AREA, size_x=1.0,
+                                   size_y=1.0, world_from_light=huge))
+    message = str(caught.value)
+    assert "light 'Panel': world_from_light scales it by 1e+20, so its size (1 m) reaches " \
+           "1e+20 m" in message
+    assert "nan" not in message
+    with pytest.raises(ValueError, match=r"texels\[0\] = \(1, 5000, 1\) has a component above"):
+        scene.add_texture(shgi.Texture(name="Hot", pixels=np.full((1, 1, 4), [1, 5000, 1, 1],
+                                                                   np.float32)))

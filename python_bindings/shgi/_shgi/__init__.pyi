@@ -8,7 +8,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'Material', 'Mesh', 'MicrofacetDistribution', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'max_threads', 'merge_lightmap', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'Material', 'Mesh', 'MicrofacetDistribution', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'max_threads', 'memory_limits', 'merge_lightmap', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -2097,7 +2097,7 @@ class Scene:
         """
     def commit(self, memory_budget_bytes: typing.SupportsIndex = 0, progress: Progress = None) -> None:
         """
-        Checks cross references and builds the BVH, with the GIL released. Raises MemoryError when the BVH would exceed memory_budget_bytes (0 = 75% of RAM), shgi.Cancelled when progress.cancel() is called.
+        Checks cross references and builds the BVH, with the GIL released. Raises MemoryError when the BVH would exceed memory_budget_bytes (0 = 75% of what the process may still allocate: RLIMIT_AS, cgroup limit, free memory), shgi.Cancelled when progress.cancel() is called.
         """
     def emissive_triangles(self) -> dict:
         """
@@ -2536,6 +2536,10 @@ def log_level() -> LogLevel:
 def max_threads() -> int:
     """
     The number of worker threads SHGI may use.
+    """
+def memory_limits() -> dict:
+    """
+    The bytes this process may still allocate, as every large allocation checks them first (docs/robustness-memory.md): {'address_space_left': RLIMIT_AS minus the virtual size, 'cgroup_left': the cgroup memory limit minus its usage, 'available': MemAvailable, 'allowed': the smallest, 'limited_by': which}; None where there is no such limit.
     """
 def merge_lightmap(into: LightmapTexels, part: LightmapTexels) -> None:
     """

@@ -357,5 +357,44 @@ TEST(TexelRasterizer, CancelStopsWithCancelled) {
                  Cancelled);
 }
 
+TEST(TexelRasterizer, MapsRecordTheirSceneAndAreRefusedWhenStale) {
+    Scene scene;
+    const uint32_t mesh = scene.add_mesh(test::unit_quad("FloorMesh"));
+    scene.add_instance(mesh, mat4(1.0f), "Floor");
+    const TexelMap map = rasterize_texels(scene, 0, settings_for(4, 4, 1));
+    EXPECT_EQ(map.scene_uid, scene.uid());
+    EXPECT_NO_THROW(check_texel_map(scene, map, "bake_lightmap"));
+    Scene other;
+    other.add_instance(other.add_mesh(test::unit_quad("FloorMesh")), mat4(1.0f), "Floor");
+    EXPECT_NE(other.uid(), scene.uid());
+    expect_contains(rejection([&] { check_texel_map(other, map, "bake_lightmap"); }),
+                    "bake_lightmap: the texel map was made for another scene");
+    scene.set_instance_transform(0, glm::translate(mat4(1.0f), vec3(0, 0, 1)));
+    expect_contains(rejection([&] { check_texel_map(scene, map, "unocclude"); }),
+                    "unocclude: the texel map was made before instance 0 'Floor' moved");
+    scene.set_instance_transform(0, mat4(1.0f));
+    EXPECT_NO_THROW(check_texel_map(scene, map, "unocclude"));
+    scene.set_mesh(mesh, test::unit_quad("FloorMesh"));
+    expect_contains(rejection([&] { check_texel_map(scene, map, "bake_lightmap"); }),
+                    "the texel map was made before the mesh of instance 0 'Floor' changed");
+    const Mesh& quad = scene.meshes()[mesh];
+    const TexelMap bare = rasterize_texels(quad, mat4(1.0f), settings_for(4, 4, 1));
+    expect_contains(rejection([&] { check_texel_map(scene, bare, "bake_lightmap"); }),
+                    "rasterized from a bare mesh");
+}
+
+TEST(TexelRasterizer, BeyondMemoryIsRefusedNamingTheSettings) {
+    Scene scene;
+    scene.add_instance(scene.add_mesh(test::unit_quad("FloorMesh")), mat4(1.0f), "Floor");
+    // 16384^2 texels with 256 samples each: ~11 TB of samples, refused before allocating.
+    const std::string message = rejection<OutOfMemory>(
+        [&] { rasterize_texels(scene, 0, settings_for(16384, 16384, 16)); });
+    expect_contains(message,
+                    "TexelRasterSettings.width x height = 16384 x 16384 with 256 samples per "
+                    "texel (samples_per_axis = 16");
+    expect_contains(message, "this process may use");
+    expect_contains(message, "lower the resolution (width, height) or samples_per_axis");
+}
+
 }  // namespace
 }  // namespace shgi

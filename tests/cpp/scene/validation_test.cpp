@@ -45,6 +45,19 @@ TEST(MaterialValidation, RejectsEachBadField) {
                     "emission_color = (-1, 0, 0) must have every component >= 0");
     expect_contains(bad([](Material& m) { m.base_color_texture = 3; }),
                     "base_color_texture = 3 but the scene has 1 textures");
+    // Finite but absurd values whose products overflow float (inf pixels) are refused by name.
+    expect_contains(bad([](Material& m) { m.base_color = vec3(1e38f, 0.5f, 0.5f); }),
+                    "material 'Red': base_color = (1e+38, 0.5, 0.5) has component 1e+38 above "
+                    "1000");
+    EXPECT_EQ(bad([](Material& m) { m.base_color = vec3(1000.0f); }), "");
+    expect_contains(bad([](Material& m) {
+                        m.emission_color = vec3(1e30f, 1, 1);
+                        m.emission_strength = 1e10f;
+                    }),
+                    "emission_color = (1e+30, 1, 1) times emission_strength = 1e+10");
+    // A negative id other than -1 is named, not compared as 4294967294 against the count.
+    expect_contains(bad([](Material& m) { m.base_color_texture = -2; }),
+                    "material 'Red': base_color_texture = -2 is negative; use -1 for none");
 }
 
 TEST(TextureValidation, RejectsSizeMismatchAndNaN) {
@@ -58,6 +71,9 @@ TEST(TextureValidation, RejectsSizeMismatchAndNaN) {
     texture.texels.assign(4, vec4(1));
     texture.texels[2].w = kNaN;
     expect_contains(rejection([&] { validate_texture(texture); }), "texels[2] = (1, 1, 1, nan)");
+    texture.texels[2] = vec4(1, 2e3f, 1, 1);
+    expect_contains(rejection([&] { validate_texture(texture); }),
+                    "texels[2] = (1, 2000, 1) has a component above 1000");
 }
 
 TEST(LightValidation, RejectsEachBadField) {
@@ -92,11 +108,19 @@ TEST(LightValidation, RejectsEachBadField) {
                             l.size_y = -1.0f;
                         }),
                     "size_y = -1 must be > 0");
+    // A colour whose product with the power overflows float is blamed on the colour.
+    expect_contains(bad(LightType::Point, [](Light& l) { l.color = vec3(1e38f, 1, 1); }),
+                    "light 'Key': color = (1e+38, 1, 1) (brightest component 1e+38) times power");
     // A point light ignores the area size.
     EXPECT_EQ(bad(LightType::Point, [](Light& l) { l.size_x = 0.0f; }), "");
     // Rays start anywhere on a light: beyond Embree's range its emission would abort the process.
     expect_contains(bad(LightType::Area, [](Light& l) { l.size_x = 1e20f; }),
-                    "beyond 1e+12 m; make the light smaller");
+                    "beyond 1e+12 m; lower the light's scale (its object's scale in Blender) or "
+                    "its size");
+    // A scale whose float squares overflow is named, not reported as reaching NaN metres.
+    expect_contains(bad(LightType::Area,
+                        [](Light& l) { l.world_from_light = glm::scale(mat4(1.0f), vec3(1e20f)); }),
+                    "world_from_light scales it by 1e+20, so its size (1 m) reaches 1e+20 m");
     expect_contains(bad(LightType::Area,
                         [](Light& l) { l.world_from_light = glm::scale(mat4(1.0f), vec3(1e19f)); }),
                     "reaches 1e+19 m");
