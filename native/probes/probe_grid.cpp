@@ -36,6 +36,9 @@ constexpr float kMinFrontDistance = 0.1f;
 constexpr int kRelocationSteps = 3;
 // Probes are grouped this many per task; each probe traces rays_per_probe paths.
 constexpr uint64_t kProbesPerTask = 2;
+// A probe's paths between cancel polls within its update: at 2^16 rays a probe, the poll per
+// task alone let a cancel wait ~0.3 s.
+constexpr uint32_t kRaysPerCancelPoll = 1024;
 // Seeds the per-probe rotations apart from the per-ray path streams (same stream ids).
 constexpr uint64_t kRotationSeed = 0x9e3779b97f4a7c15ull;
 
@@ -396,6 +399,8 @@ void ProbeGrid::update(Progress* progress) {
                 double dc_sum = 0.0, dc_sum2 = 0.0;
                 filter.clear();
                 for (uint32_t r = 0; r < n; ++r) {
+                    if (r % kRaysPerCancelPoll == kRaysPerCancelPoll - 1)
+                        throw_if_cancelled(progress);
                     Ray ray;
                     ray.origin = old.positions[probe];
                     ray.direction = glm::normalize(rotation * fibonacci_sphere(r, n));
