@@ -1,53 +1,18 @@
 """Hostile glTF files: each is loaded in a child Python with an address-space cap and a timeout,
 so a crash (a signal), a hang or a runaway allocation fails the test instead of taking pytest
-down. Every case must end in a Python exception that names the file and what is wrong with it.
+down (hostile_support.load_in_child). Every case must end in a Python exception that names the
+file and what is wrong with it.
 """
 
 import json
 import os
 import struct
-import subprocess
-import sys
-import textwrap
 
 import pytest
 
-from conftest import BUILD_PYTHON
-
-# Enough for the interpreter, numpy and the module, far below the machine: a load that tries to
-# allocate without bound meets MemoryError here, not the OOM killer.
-ADDRESS_SPACE_CAP = 4 << 30
-# A load of these small files takes milliseconds; a child still running after this is a hang.
-TIMEOUT_SECONDS = 30
+from hostile_support import load_in_child
 
 BASE_DOCUMENT = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": []}]}
-
-
-def load_in_child(path, loader="load_gltf"):
-    """Loads `path` with shgi.<loader> in a capped child; returns its verdict, ("loaded", "")
-    or (exception type, message), and what it logged (stderr)."""
-    code = textwrap.dedent(f"""
-        import resource, sys
-        resource.setrlimit(resource.RLIMIT_AS, ({ADDRESS_SPACE_CAP}, {ADDRESS_SPACE_CAP}))
-        sys.path.insert(0, {str(BUILD_PYTHON)!r})
-        import shgi
-        try:
-            shgi.{loader}({str(path)!r})
-        except Exception as error:
-            print(type(error).__name__ + ": " + str(error))
-        else:
-            print("loaded")
-    """)
-    try:
-        child = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                               timeout=TIMEOUT_SECONDS)
-    except subprocess.TimeoutExpired:
-        pytest.fail(f"{loader}({path}) still ran after {TIMEOUT_SECONDS} s (a hang)")
-    assert child.returncode == 0, (
-        f"{loader}({path}) ended the process with {child.returncode} "
-        f"(a negative code is a signal):\n{child.stderr[-2000:]}")
-    kind, _, message = child.stdout.strip().rpartition("\n")[2].partition(": ")
-    return (kind, message), child.stderr
 
 
 def deeply_nested(depth):
