@@ -31,6 +31,7 @@ import random
 import struct
 import subprocess
 import sys
+import zlib
 
 import numpy as np
 import pytest
@@ -40,7 +41,7 @@ from hostile_support import CHILD_PRELUDE, TIMEOUT_SECONDS
 from test_loaders import MTL_TEXT, OBJ_TEXT, gltf_document
 
 SEED = int(os.environ.get("SHGI_FUZZ_SEED", "1128"))
-INPUTS = int(os.environ.get("SHGI_FUZZ_INPUTS", "3000"))
+INPUTS = int(os.environ.get("SHGI_FUZZ_INPUTS", "2000"))
 BATCH = 200
 LOG = os.environ.get("SHGI_FUZZ_LOG")  # a file to append every verdict line to (runs by hand)
 # Loading a batch of these small files takes well under a second or two; a batch still running
@@ -102,6 +103,7 @@ def call(reader, path):
     return "loaded"
 
 
+print("ready", flush=True)
 for index, readers, path in json.load(open(sys.argv[1])):
     print(index, "\t".join(call(reader, path) for reader in readers), flush=True)
 '''
@@ -286,6 +288,44 @@ def png_bytes(tmp_path):
     return path.read_bytes()
 
 
+def png_chunk(kind, data):
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(
+        ">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+
+def make_png(width, height, color_type, bit_depth):
+    """A PNG of those dimensions and type (palette: 4 entries), filter 0, pixels in a ramp."""
+    channels = {0: 1, 2: 3, 3: 1, 4: 2, 6: 4}[color_type]
+    row_bytes = (width * channels * bit_depth + 7) // 8
+    raw = b"".join(b"\0" + bytes((7 * x + 31 * y) % 256 if color_type != 3 else (x + y) % 4
+                                  for x in range(row_bytes)) for y in range(height))
+    if color_type == 3:
+        raw = b"".join(b"\0" + bytes([0b00011011] * row_bytes) for _ in range(height))
+    chunks = png_chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, bit_depth, color_type,
+                                            0, 0, 0))
+    if color_type == 3:
+        chunks += png_chunk(b"PLTE", bytes(range(12)))
+    return b"\x89PNG\r\n\x1a\n" + chunks + png_chunk(b"IDAT", zlib.compress(raw)) + png_chunk(
+        b"IEND", b"")
+
+
+def mutate_png(rng, png):
+    """An IHDR field (width, height, depth, colour type, interlace) or the bytes."""
+    if rng.random() < 0.5:
+        data = bytearray(png)
+        at = rng.choice([16, 20, 24, 25, 26, 27, 28])
+        value = rng.choice(HOSTILE_INTS + [rng.randrange(1, 300)])
+        size = 4 if at in (16, 20) else 1
+        data[at:at + size] = (value % (1 << (8 * size))).to_bytes(size, "big")
+        data[29:33] = struct.pack(">I", zlib.crc32(bytes(data[12:29])) & 0xFFFFFFFF)
+        return bytes(data)
+    return mutate_bytes(rng, png)
+
+
+PNG_SEEDS = [make_png(5, 3, 6, 16), make_png(4, 4, 0, 8), make_png(3, 2, 4, 8),
+             make_png(9, 2, 3, 2), make_png(2, 7, 2, 16), make_png(1, 1, 0, 1)]
+
+
 def gltf_seeds(png):
     """The loaders' test scene, and one with a texture, a node hierarchy, strided normals, spot
     and sun lights and an orthographic camera."""
@@ -298,7 +338,7 @@ def gltf_seeds(png):
     rich["materials"][0]["emissiveFactor"] = [1, 0.5, 0]
     rich["materials"].append({"name": "Second", "alphaMode": "MASK", "doubleSided": True})
     rich["meshes"][0]["primitives"].append(
-        {"attributes": {"POSITION": 0, "NORMAL": 3}, "material": 1})
+        {"attributes": {"POSITION": 0, "NORMAL": 3}, "indices": 2, "material": 1})
     data = base64.b64decode(rich["buffers"][0]["uri"].split(",", 1)[1])
     normals = struct.pack("<12f", *[0, 1, 0] * 4)
     sparse_indices = struct.pack("<2H", 1, 3)
@@ -355,8 +395,17 @@ def glb_pack(json_bytes, chunks, version=2):
     return struct.pack("<4sII", b"glTF", version, 12 + len(body)) + body
 
 
+def with_mutated_image(rng, document):
+    """The document with its image replaced by a mutant of one of the PNG seeds."""
+    png = mutate_png(rng, rng.choice(PNG_SEEDS))
+    document["images"][0]["uri"] = "data:image/png;base64," + base64.b64encode(png).decode()
+    return document
+
+
 def mutate_gltf(rng, seed):
     document = json.loads(json.dumps(seed))
+    if "images" in document and rng.random() < 0.2:
+        return dump_json(with_mutated_image(rng, document))
     if rng.random() < 0.8:
         data = dump_json(mutate_json(rng, document))
         return mutate_bytes(rng, data) if rng.random() < 0.1 else data
@@ -364,6 +413,9 @@ def mutate_gltf(rng, seed):
 
 
 def mutate_glb(rng, seed):
+    if "images" in seed and rng.random() < 0.15:
+        document, data = glb_parts(with_mutated_image(rng, json.loads(json.dumps(seed))))
+        return glb_pack(dump_json(document), [(b"BIN\0", data)])
     document, data = glb_parts(seed)
     kind = rng.randrange(10)
     chunks = [(b"BIN\0", data)]
@@ -514,22 +566,48 @@ def mutate_exr(rng, seed):
     data = bytearray(seed)
     for _ in range(rng.choice([1, 1, 2, 3])):
         kind = rng.randrange(10)
-        if kind <= 3:  # a header attribute's size or value
-            names = [name for name in EXR_ATTRIBUTES if name + b"\0" in data]
+        names = [name for name in EXR_ATTRIBUTES if name + b"\0" in data]
+        end = data.find(b"\0\0", 8)  # about where the header ends
+        if kind <= 3 and names:  # a header attribute's size or value
             name = rng.choice(names)
             at = data.find(name + b"\0")
             at = data.find(b"\0", at + len(name) + 1) + 1  # past the type name
             target = at + rng.choice([0, 4, 4, 8, 12, 16, 20]) if kind else at
             word = interesting_word(rng)
             data[target:target + len(word)] = word
-        elif kind == 4 and len(data) > 64:  # the offset table: an 8-byte chunk offset
-            end = data.find(b"\0\0", 8)
+        elif kind == 4 and 8 < end < len(data) - 72:  # the offset table: a chunk offset
             at = rng.randrange(end, min(len(data) - 8, end + 200))
             data[at:at + 8] = rng.choice(HOSTILE_INTS + [len(data), len(data) - 1]).__mod__(
                 2**64).to_bytes(8, "little")
         else:
             data = bytearray(mutate_bytes(rng, bytes(data)))
     return bytes(data)
+
+
+# --- probe field exports (ProbeField.import_exr: a JSON naming an SH and a visibility EXR) ------
+
+def probe_export_seed(workdir):
+    """A small solved probe grid's export: seed.json, seed_volume0.exr, seed_volume0_visibility.exr."""
+    from scene_support import committed
+    from test_probe_grid import scenes, solved_grid
+    scene = committed(scenes.cornell_box(0.05))
+    solved_grid(scene, 1, rays_per_probe=8, spacing=1.0).field().export(str(workdir / "seed.json"))
+    return json.loads((workdir / "seed.json").read_text())
+
+
+def mutate_probe_export(rng, seed, workdir, name):
+    """Writes <name>.json, and <name>_sh.exr or <name>_vis.exr when that one is the mutant."""
+    document = json.loads(json.dumps(seed))
+    volume = document["volumes"][0]
+    target = rng.randrange(4)
+    if target <= 1:
+        document = mutate_json(rng, document)
+    else:
+        key, suffix = [("sh_file", "_sh.exr"), ("visibility_file", "_vis.exr")][target - 2]
+        exr = workdir / (name + suffix)
+        exr.write_bytes(mutate_exr(rng, (workdir / volume[key]).read_bytes()))
+        volume[key] = exr.name
+    (workdir / (name + ".json")).write_bytes(dump_json(document))
 
 
 # --- the runner ---------------------------------------------------------------------------------
@@ -550,6 +628,8 @@ def run_child(tasks, workdir, tag):
         stdout = (expired.stdout or b"").decode(errors="replace")
         stderr = (expired.stderr or b"").decode(errors="replace")
         code = "hang"
+    if not stdout.startswith("ready\n"):  # before any mutant: no finding, a broken harness
+        pytest.fail(f"the fuzzing child did not start (code {code}):\n{stderr[-2000:]}")
     verdicts = {}
     for line in stdout.splitlines():
         index, _, verdict = line.partition(" ")
@@ -559,14 +639,13 @@ def run_child(tasks, workdir, tag):
 
 
 def save_case(fmt, task, files):
-    """Copies a confirmed crasher (and the files beside it that it names) to hostile_cases/."""
-    CASES.mkdir(exist_ok=True)
-    saved = []
+    """Copies a confirmed crasher and the files beside it that it names to its own folder
+    hostile_cases/<format>_seed<seed>_<name>/, under their own names (an OBJ names its MTL)."""
+    folder = CASES / f"{fmt}_seed{SEED}_{pathlib.Path(task.path).stem}"
+    folder.mkdir(parents=True, exist_ok=True)
     for path in files:
-        target = CASES / f"fuzz_{fmt}_{SEED}_{path.name}"
-        target.write_bytes(path.read_bytes())
-        saved.append(target.name)
-    return saved
+        (folder / path.name).write_bytes(path.read_bytes())
+    return str(folder.relative_to(CASES.parent))
 
 
 def fuzz(fmt, tasks, files_of, workdir):
@@ -646,6 +725,14 @@ def build_tasks(fmt, workdir, tmp_path):
             tasks.append(Task(i, ["load_obj"], str(workdir / f"{name}.obj")))
         return tasks, lambda task: [pathlib.Path(task.path),
                                     pathlib.Path(task.path).with_suffix(".mtl")], seed_tasks
+    if fmt == "probe_export":
+        seed = probe_export_seed(workdir)
+        seed_tasks.append(Task(-1, ["import_exr"], str(workdir / "seed.json")))
+        for i in range(INPUTS):
+            mutate_probe_export(rng, seed, workdir, f"m{i:06d}")
+            tasks.append(Task(i, ["import_exr"], str(workdir / f"m{i:06d}.json")))
+        return tasks, lambda task: sorted(pathlib.Path(task.path).parent.glob(
+            pathlib.Path(task.path).stem + "*")) + sorted(workdir.glob("seed_volume0*")), seed_tasks
     assert fmt == "exr"
     seeds = exr_seeds(tmp_path)
     readers = ["read_exr_info", "read_exr"]
@@ -659,7 +746,25 @@ def build_tasks(fmt, workdir, tmp_path):
     return tasks, lambda task: [pathlib.Path(task.path)], seed_tasks
 
 
-@pytest.mark.parametrize("fmt", ["gltf", "glb", "obj", "exr"])
+# Per format: the suffix of the file a reader is given, and the readers.
+FORMATS = {"gltf": (".gltf", ["load_gltf"]), "glb": (".glb", ["load_gltf"]),
+           "obj": (".obj", ["load_obj"]), "exr": (".exr", ["read_exr_info", "read_exr"]),
+           "probe_export": (".json", ["import_exr"])}
+
+
+@pytest.mark.parametrize("case", sorted(p.name for p in CASES.glob("*_seed*") if p.is_dir()))
+def test_saved_reproducers_end_in_documented_exceptions(tmp_path, case):
+    """Every mutant the fuzzer crashed or hung on, kept in hostile_cases/<format>_seed<seed>_<name>/
+    with the files it names, loaded alone."""
+    fmt, _, rest = case.partition("_seed")
+    suffix, readers = FORMATS[fmt]
+    path = CASES / case / (rest.partition("_")[2] + suffix)
+    verdicts, code, stderr = run_child([Task(0, readers, str(path))], tmp_path, "case")
+    assert code == 0, f"{case}: ended with {code}:\n{stderr[-2000:]}"
+    assert not any(v.startswith("unexpected:") for v in verdicts[0].split("\t")), verdicts[0]
+
+
+@pytest.mark.parametrize("fmt", ["gltf", "glb", "obj", "exr", "probe_export"])
 def test_mutated_files_end_in_documented_exceptions(tmp_path, fmt):
     workdir = tmp_path / fmt
     workdir.mkdir()
@@ -678,3 +783,16 @@ def test_mutated_files_end_in_documented_exceptions(tmp_path, fmt):
     assert not findings, summary + "\n" + "\n".join(findings[:20])
     assert counts["clear exceptions"] + counts["loaded fine"] + counts[
         "unexpected exceptions"] + counts["crashes"] + counts["hangs"] == len(tasks), summary
+
+
+def test_the_png_seeds_decode_as_textures(tmp_path):
+    """The PNGs the glTF mutants embed are valid to begin with (a texture that does not decode is
+    only a warning, so the seed check of the fuzz test would not see it)."""
+    document = gltf_seeds(png_bytes(tmp_path))[1]
+    for png in PNG_SEEDS:
+        width, height = struct.unpack(">II", png[16:24])
+        document["images"][0]["uri"] = "data:image/png;base64," + base64.b64encode(png).decode()
+        path = tmp_path / "textured.gltf"
+        path.write_bytes(dump_json(document))
+        textures = shgi.load_gltf(path).textures
+        assert [(t.width, t.height) for t in textures] == [(width, height)]

@@ -4,6 +4,7 @@ down (hostile_support.load_in_child). Every case must end in a Python exception 
 file and what is wrong with it.
 """
 
+import base64
 import json
 import os
 import struct
@@ -92,3 +93,29 @@ def test_a_node_with_two_parents_is_refused(tmp_path):
     path.write_text(json.dumps(dict(BASE_DOCUMENT, scenes=[{"nodes": [0, 1]}], nodes=nodes)))
     (kind, message), _ = load_in_child(path)
     assert kind == "OSError" and "node 2 is reached twice" in message
+
+
+@pytest.mark.parametrize("container", ["gltf", "glb"])
+def test_an_image_buffer_view_past_its_buffer_is_refused_not_read(tmp_path, container):
+    """Found by the fuzzer (a GLB mutant): tinygltf passes an image stored in a buffer view to
+    the decoder as buffer.data + byteOffset without checking the view against the buffer, so a
+    view at byteOffset 2^31 made stb_image read unmapped memory (a segfault)."""
+    png = bytes.fromhex("89504e470d0a1a0a")  # never reached: the view is refused first
+    data = png + b"\0" * (-len(png) % 4)
+    document = dict(BASE_DOCUMENT, buffers=[{"byteLength": len(data)}],
+                    bufferViews=[{"buffer": 0, "byteOffset": 2**31, "byteLength": 142}],
+                    images=[{"bufferView": 0, "mimeType": "image/png"}])
+    path = tmp_path / f"image_view.{container}"
+    if container == "glb":
+        json_chunk = glb_of(json.dumps(document))[12:]
+        body = json_chunk + struct.pack("<I4s", len(data), b"BIN\0") + data
+        path.write_bytes(struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body)
+    else:
+        document["buffers"][0]["uri"] = ("data:application/octet-stream;base64,"
+                                         + base64.b64encode(data).decode())
+        path.write_text(json.dumps(document))
+    (kind, message), _ = load_in_child(path)
+    assert kind == "OSError"
+    assert str(path) in message
+    assert ("image 0: bufferView 0 (byteOffset 2147483648, byteLength 142) lies outside "
+            "buffer 0, which has 8 bytes") in message
