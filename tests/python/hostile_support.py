@@ -2,6 +2,7 @@
 and a timeout, so that a crash (a signal), a hang or a runaway allocation fails a test instead of
 taking pytest (or the machine) down."""
 
+import os
 import subprocess
 import sys
 import textwrap
@@ -20,9 +21,15 @@ TIMEOUT_SECONDS = 30
 # unsupported; ValueError for a bad argument; MemoryError when an allocation fails under the cap.
 DOCUMENTED_ERRORS = (OSError, ValueError, MemoryError)
 
+# Under AddressSanitizer (a build with SHGI_SANITIZE=ON, run with LD_PRELOAD=libasan.so) the
+# shadow memory alone maps terabytes of address space, so the cap would fail every allocation;
+# there, ASan's allocator bounds what one allocation may take (docs/robustness.md).
+UNDER_ASAN = "libasan" in os.environ.get("LD_PRELOAD", "")
+
 CHILD_PRELUDE = f"""
 import resource, sys
-resource.setrlimit(resource.RLIMIT_AS, ({ADDRESS_SPACE_CAP}, {ADDRESS_SPACE_CAP}))
+if not {UNDER_ASAN}:
+    resource.setrlimit(resource.RLIMIT_AS, ({ADDRESS_SPACE_CAP}, {ADDRESS_SPACE_CAP}))
 sys.path.insert(0, {str(BUILD_PYTHON)!r})
 import shgi
 """
