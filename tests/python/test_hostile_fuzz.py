@@ -24,7 +24,6 @@ SHGI_FUZZ_COMMIT=1 also commits (builds the BVH of) every scene that loaded.
 import base64
 import collections
 import json
-import math
 import os
 import pathlib
 import random
@@ -56,6 +55,8 @@ import json
 import numpy as np
 
 import os
+import signal
+import time
 COMMIT = os.environ.get("SHGI_FUZZ_COMMIT") == "1"
 shgi.set_log_level(shgi.LogLevel.ERROR)  # the warnings of thousands of mutants are only noise
 
@@ -92,8 +93,24 @@ def touch_properties(item, depth):
             touch(getattr(item, name), depth)
 
 
+def stand_in(kind):
+    """For the harness's own test: a reader that crashes, hangs or raises what none documents."""
+    def read(path):
+        if kind == "crash":
+            os.kill(os.getpid(), signal.SIGSEGV)
+        if kind == "hang":
+            time.sleep(3600)
+        raise RuntimeError("undocumented")
+    return read
+
+
 def call(reader, path):
-    function = shgi.ProbeField.import_exr if reader == "import_exr" else getattr(shgi, reader)
+    if reader.startswith("stand_in_"):
+        function = stand_in(reader[len("stand_in_"):])
+    elif reader == "import_exr":
+        function = shgi.ProbeField.import_exr
+    else:
+        function = getattr(shgi, reader)
     try:
         touch(function(path))
     except (OSError, ValueError, MemoryError) as error:
@@ -441,8 +458,8 @@ def mutate_glb(rng, seed):
     if kind <= 7:  # a header or chunk-header field
         json_end = 20 + struct.unpack_from("<I", whole, 12)[0]
         at = rng.choice([0, 4, 8, 12, 16, json_end, json_end + 4])
-        whole[at:at + 4] = rng.choice(HOSTILE_INTS + [len(whole), len(whole) + 4, len(whole) - 4,
-                                                      json_end]).__mod__(2**32).to_bytes(4, "little")
+        value = rng.choice(HOSTILE_INTS + [len(whole), len(whole) + 4, len(whole) - 4, json_end])
+        whole[at:at + 4] = (value % 2**32).to_bytes(4, "little")
         return bytes(whole)
     return mutate_bytes(rng, bytes(whole))
 
@@ -466,7 +483,8 @@ HOSTILE_OBJ_LINES = [
 HOSTILE_MTL_LINES = [
     "newmtl", "newmtl Red", "newmtl " + "x" * 10000, "Kd", "Kd 1", "Kd 1 2 3 4 5", "Ke -1 -1 -1",
     "Ns", "Ns -1", "Ns 1e38", "Ni 0", "Ni -1", "Pr 2", "Pm -5", "d", "d -halo", "Tr 2", "illum",
-    "illum 99999999999", "Tf xyz 1 1 1", "Ks spectral", "Ks xyz 1", "map_Kd", "map_Kd -bm nan x.png",
+    "illum 99999999999", "Tf xyz 1 1 1", "Ks spectral", "Ks xyz 1", "map_Kd",
+    "map_Kd -bm nan x.png",
     "map_Kd -o 1 1 1 " + "y" * 5000, "map_Ke /dev/zero", "bump -imfchan z", "refl -type sphere",
     "Pc 1", "aniso nan", "norm x.png", "#", "\x00",
 ]
@@ -587,7 +605,8 @@ def mutate_exr(rng, seed):
 # --- probe field exports (ProbeField.import_exr: a JSON naming an SH and a visibility EXR) ------
 
 def probe_export_seed(workdir):
-    """A small solved probe grid's export: seed.json, seed_volume0.exr, seed_volume0_visibility.exr."""
+    """A small solved probe grid's export: seed.json, seed_volume0.exr and
+    seed_volume0_visibility.exr."""
     from scene_support import committed
     from test_probe_grid import scenes, solved_grid
     scene = committed(scenes.cornell_box(0.05))
@@ -615,11 +634,12 @@ def mutate_probe_export(rng, seed, workdir, name):
 Task = collections.namedtuple("Task", "index readers path")
 
 
-def run_child(tasks, workdir, tag):
-    """Runs `tasks` in one capped child: (verdict lines by index, return code or "hang", stderr)."""
+def run_child(tasks, workdir, tag, timeouts=(BATCH_TIMEOUT_SECONDS, TIMEOUT_SECONDS)):
+    """Runs `tasks` in one capped child: (verdict lines by index, return code or "hang", stderr).
+    timeouts: for a batch, for a task alone."""
     tasks_file = workdir / f"tasks_{tag}.json"
     tasks_file.write_text(json.dumps([list(task) for task in tasks]))
-    timeout = BATCH_TIMEOUT_SECONDS if len(tasks) > 1 else TIMEOUT_SECONDS
+    timeout = timeouts[0] if len(tasks) > 1 else timeouts[1]
     try:
         child = subprocess.run([sys.executable, "-c", CHILD_CODE, str(tasks_file)],
                                capture_output=True, text=True, timeout=timeout)
@@ -638,24 +658,25 @@ def run_child(tasks, workdir, tag):
     return verdicts, code, stderr
 
 
-def save_case(fmt, task, files):
+def save_case(fmt, task, files, cases):
     """Copies a confirmed crasher and the files beside it that it names to its own folder
-    hostile_cases/<format>_seed<seed>_<name>/, under their own names (an OBJ names its MTL)."""
-    folder = CASES / f"{fmt}_seed{SEED}_{pathlib.Path(task.path).stem}"
+    <cases>/<format>_seed<seed>_<name>/, under their own names (an OBJ names its MTL)."""
+    folder = cases / f"{fmt}_seed{SEED}_{pathlib.Path(task.path).stem}"
     folder.mkdir(parents=True, exist_ok=True)
     for path in files:
         (folder / path.name).write_bytes(path.read_bytes())
-    return str(folder.relative_to(CASES.parent))
+    return str(folder)
 
 
-def fuzz(fmt, tasks, files_of, workdir):
+def fuzz(fmt, tasks, files_of, workdir, cases=CASES,
+         timeouts=(BATCH_TIMEOUT_SECONDS, TIMEOUT_SECONDS)):
     """Runs every task in batches; returns Counter of outcomes and the findings' descriptions."""
     counts = collections.Counter()
     findings = []
     for start in range(0, len(tasks), BATCH):
         pending = tasks[start:start + BATCH]
         while pending:
-            verdicts, code, stderr = run_child(pending, workdir, f"{fmt}_{start}")
+            verdicts, code, stderr = run_child(pending, workdir, f"{fmt}_{start}", timeouts)
             done = [task for task in pending if task.index in verdicts]
             if LOG:
                 with open(LOG, "a") as log:
@@ -680,15 +701,15 @@ def fuzz(fmt, tasks, files_of, workdir):
             # The child died (a signal or another code) or hung on the first task without a
             # verdict: confirm that task alone, then go on with the ones after it.
             culprit = pending[len(done)]
-            _, alone_code, alone_stderr = run_child([culprit], workdir, f"{fmt}_alone")
-            kind = "hangs" if alone_code == "hang" else "crashes"
-            if alone_code == 0:
-                kind = "crashes"  # only in company (state left by an earlier mutant): still one
+            _, alone_code, alone_stderr = run_child([culprit], workdir, f"{fmt}_alone", timeouts)
+            hung = "hang" in (code, alone_code)
+            if alone_code == 0:  # only in company (state left by an earlier mutant): still one
                 alone_stderr = stderr
-            counts[kind] += 1
-            saved = save_case(fmt, culprit, files_of(culprit))
-            findings.append(f"{fmt} #{culprit.index} {culprit.path}: {kind[:-2]} (code "
-                            f"{code}, alone {alone_code}); saved as {saved}:\n"
+            counts["hangs" if hung else "crashes"] += 1
+            saved = save_case(fmt, culprit, files_of(culprit), cases)
+            findings.append(f"{fmt} #{culprit.index} {culprit.path}: "
+                            f"{'hang' if hung else 'crash'} (code {code}, alone {alone_code}); "
+                            f"saved as {saved}:\n"
                             f"{alone_stderr[-1500:]}")
             pending = pending[len(done) + 1:]
     counts["inputs"] = len(tasks)
@@ -796,3 +817,26 @@ def test_the_png_seeds_decode_as_textures(tmp_path):
         path.write_bytes(dump_json(document))
         textures = shgi.load_gltf(path).textures
         assert [(t.width, t.height) for t in textures] == [(width, height)]
+
+
+def test_the_harness_pins_a_crash_a_hang_and_an_undocumented_exception_on_their_input(tmp_path):
+    """The detection itself: stand-in readers that crash (SIGSEGV), hang or raise RuntimeError
+    among ordinary loads are each found, named by their input, confirmed alone and saved, and
+    the mutants after them are still loaded. Short timeouts: the stand-in hang never ends."""
+    good = tmp_path / "good.obj"
+    good.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    readers = (["load_obj"] * 3 + ["stand_in_crash"] + ["load_obj"] * 2
+               + ["stand_in_hang", "stand_in_raise", "load_obj"])
+    tasks = [Task(i, [reader], str(good if reader == "load_obj" else tmp_path / f"t{i}.obj"))
+             for i, reader in enumerate(readers)]
+    for task in tasks[3::3]:
+        pathlib.Path(task.path).write_text("v 0 0 0\n")
+    cases = tmp_path / "cases"
+    counts, findings = fuzz("obj", tasks, lambda task: [pathlib.Path(task.path)], tmp_path,
+                            cases, timeouts=(10, 5))
+    assert counts == {"inputs": 9, "loaded fine": 6, "crashes": 1, "hangs": 1,
+                      "unexpected exceptions": 1}, counts
+    assert [f.split(":")[0].split(" #")[1].split(" ")[0] for f in findings] == ["3", "6", "7"]
+    assert "crash (code -11, alone -11)" in findings[0] and "hang (code hang" in findings[1]
+    assert "unexpected:RuntimeError" in findings[2]
+    assert sorted(p.name for p in cases.iterdir()) == [f"obj_seed{SEED}_t3", f"obj_seed{SEED}_t6"]
