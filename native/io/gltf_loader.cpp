@@ -18,11 +18,13 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <limits>
 #include <map>
+#include <new>
 #include <set>
 #include <sstream>
 #include <string>
@@ -222,12 +224,24 @@ tinygltf::Model read_model(const std::string& path, const GltfLoadOptions& optio
     if (binary) require_shallow_glb_json(path, bytes);
     else require_shallow_json(path, bytes.data(), bytes.size());
     const std::string base_dir = std::filesystem::path(path).parent_path().string();
-    const bool ok =
-        binary ? parser.LoadBinaryFromMemory(&model, &error, &warning, bytes.data(),
-                                             static_cast<unsigned int>(bytes.size()), base_dir)
-               : parser.LoadASCIIFromString(&model, &error, &warning,
-                                            reinterpret_cast<const char*>(bytes.data()),
-                                            static_cast<unsigned int>(bytes.size()), base_dir);
+    bool ok = false;
+    // tinygltf reports most damage through `error`, but some reaches a throwing accessor: a GLB
+    // whose BIN buffer declares byteLength 0 made it copy into data.at(0), and std::out_of_range
+    // reached Python as a bare IndexError. Such a throw is the same damage, so the same IoError.
+    try {
+        ok = binary ? parser.LoadBinaryFromMemory(&model, &error, &warning, bytes.data(),
+                                                  static_cast<unsigned int>(bytes.size()),
+                                                  base_dir)
+                    : parser.LoadASCIIFromString(&model, &error, &warning,
+                                                 reinterpret_cast<const char*>(bytes.data()),
+                                                 static_cast<unsigned int>(bytes.size()),
+                                                 base_dir);
+    } catch (const std::bad_alloc&) {
+        throw;  // MemoryError
+    } catch (const std::exception& thrown) {
+        ok = false;
+        error += format_message("the reader stopped at damaged data (", thrown.what(), ")");
+    }
     if (!warning.empty()) log_warning(path, ": ", trimmed(warning));
     for (const std::string& failure : image_decoding.failures) log_warning(path, ": ", failure);
     if (!ok) {

@@ -119,3 +119,17 @@ def test_an_image_buffer_view_past_its_buffer_is_refused_not_read(tmp_path, cont
     assert str(path) in message
     assert ("image 0: bufferView 0 (byteOffset 2147483648, byteLength 142) lies outside "
             "buffer 0, which has 8 bytes") in message
+
+
+def test_a_glb_buffer_of_byte_length_0_is_refused_as_oserror(tmp_path):
+    """Found by the fuzzer (a GLB mutant): a BIN buffer declaring byteLength 0 made tinygltf
+    copy into data.at(0), and std::out_of_range reached Python as a bare IndexError."""
+    document = dict(BASE_DOCUMENT, buffers=[{"byteLength": 0}])
+    json_chunk = glb_of(json.dumps(document))[12:]
+    data = b"\0" * 4
+    body = json_chunk + struct.pack("<I4s", len(data), b"BIN\0") + data
+    path = tmp_path / "empty_buffer.glb"
+    path.write_bytes(struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body)
+    (kind, message), _ = load_in_child(path)
+    assert kind == "OSError", (kind, message)
+    assert str(path) in message and "the reader stopped at damaged data" in message
