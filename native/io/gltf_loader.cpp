@@ -18,11 +18,13 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <limits>
 #include <map>
+#include <new>
 #include <set>
 #include <sstream>
 #include <string>
@@ -72,16 +74,49 @@ std::string trimmed(std::string text) {
 // ---------------------------------------------------------------------------------------------
 // Step 1: reading the file.
 
+// What the image callback needs: the model being read (its buffer views and buffers are parsed
+// before the images) and where to record images that do not decode.
+struct ImageDecoding {
+    const tinygltf::Model* model = nullptr;
+    std::vector<std::string> failures;
+};
+
+// tinygltf hands an image stored in a buffer view to the callback as
+// &buffer.data[bufferView.byteOffset] with int(bufferView.byteLength) bytes, checking neither
+// against the buffer: a view past the buffer's end (a GLB whose image view has byteOffset 2^31)
+// made stb_image read unmapped memory (a segfault). The view is checked here before any byte is
+// read; one that does not fit its buffer is a damaged file, refused like a bad accessor.
+bool image_view_fits(const tinygltf::Image& image, const int image_index,
+                     const tinygltf::Model& model, std::string* err) {
+    if (image.bufferView < 0) return true;  // a URI: tinygltf read exactly the file's bytes
+    // tinygltf checked both indices before calling.
+    const tinygltf::BufferView& view = model.bufferViews[size_t(image.bufferView)];
+    const tinygltf::Buffer& buffer = model.buffers[size_t(view.buffer)];
+    const size_t size = buffer.data.size();
+    if (view.byteOffset <= size && view.byteLength <= size - view.byteOffset &&
+        view.byteLength <= size_t(std::numeric_limits<int>::max()))
+        return true;
+    if (err) {
+        *err += format_message("image ", image_index, ": bufferView ", image.bufferView,
+                               " (byteOffset ", view.byteOffset, ", byteLength ", view.byteLength,
+                               ") lies outside buffer ", view.buffer, ", which has ", size,
+                               " bytes\n");
+    }
+    return false;
+}
+
 // tinygltf fails the whole load when one image does not decode; an undecodable texture should
 // only cost the texture, so the failure is recorded and the image left empty.
-bool decode_image_or_record(tinygltf::Image* image, const int image_index, std::string* /*err*/,
+bool decode_image_or_record(tinygltf::Image* image, const int image_index, std::string* err,
                             std::string* warn, int req_width, int req_height,
-                            const unsigned char* bytes, int size, void* failures) {
+                            const unsigned char* bytes, int size, void* user_data) {
+    auto* decoding = static_cast<ImageDecoding*>(user_data);
+    if (!image_view_fits(*image, image_index, *decoding->model, err)) return false;
     std::string error;
     if (tinygltf::LoadImageData(image, image_index, &error, warn, req_width, req_height, bytes,
                                 size, nullptr))
         return true;
-    static_cast<std::vector<std::string>*>(failures)->push_back(
+    decoding->failures.push_back(
         format_message("image ", image_index, " could not be decoded (", trimmed(error), ")"));
     image->image.clear();
     image->width = image->height = 0;
@@ -166,16 +201,17 @@ bool starts_with_glb_magic(const std::string& path) {
 tinygltf::Model read_model(const std::string& path, const GltfLoadOptions& options) {
     // The container is told by its content, not its extension: some tools write .glb as .gltf.
     const bool binary = starts_with_glb_magic(path);
-    std::vector<std::string> image_failures;
+    tinygltf::Model model;
+    ImageDecoding image_decoding;
+    image_decoding.model = &model;
     tinygltf::TinyGLTF parser;
     parser.SetFsCallbacks({&file_exists, &tinygltf::ExpandFilePath, &read_regular_file,
                            &tinygltf::WriteWholeFile, nullptr});
     if (options.import_textures)
-        parser.SetImageLoader(decode_image_or_record, &image_failures);
+        parser.SetImageLoader(decode_image_or_record, &image_decoding);
     else
         parser.SetImageLoader(skip_image, nullptr);
 
-    tinygltf::Model model;
     std::string error, warning;
     // Read here rather than by tinygltf, so that the JSON's nesting is checked before parsing.
     std::vector<unsigned char> bytes;
@@ -188,14 +224,26 @@ tinygltf::Model read_model(const std::string& path, const GltfLoadOptions& optio
     if (binary) require_shallow_glb_json(path, bytes);
     else require_shallow_json(path, bytes.data(), bytes.size());
     const std::string base_dir = std::filesystem::path(path).parent_path().string();
-    const bool ok =
-        binary ? parser.LoadBinaryFromMemory(&model, &error, &warning, bytes.data(),
-                                             static_cast<unsigned int>(bytes.size()), base_dir)
-               : parser.LoadASCIIFromString(&model, &error, &warning,
-                                            reinterpret_cast<const char*>(bytes.data()),
-                                            static_cast<unsigned int>(bytes.size()), base_dir);
+    bool ok = false;
+    // tinygltf reports most damage through `error`, but some reaches a throwing accessor: a GLB
+    // whose BIN buffer declares byteLength 0 made it copy into data.at(0), and std::out_of_range
+    // reached Python as a bare IndexError. Such a throw is the same damage, so the same IoError.
+    try {
+        ok = binary ? parser.LoadBinaryFromMemory(&model, &error, &warning, bytes.data(),
+                                                  static_cast<unsigned int>(bytes.size()),
+                                                  base_dir)
+                    : parser.LoadASCIIFromString(&model, &error, &warning,
+                                                 reinterpret_cast<const char*>(bytes.data()),
+                                                 static_cast<unsigned int>(bytes.size()),
+                                                 base_dir);
+    } catch (const std::bad_alloc&) {
+        throw;  // MemoryError
+    } catch (const std::exception& thrown) {
+        ok = false;
+        error += format_message("the reader stopped at damaged data (", thrown.what(), ")");
+    }
     if (!warning.empty()) log_warning(path, ": ", trimmed(warning));
-    for (const std::string& failure : image_failures) log_warning(path, ": ", failure);
+    for (const std::string& failure : image_decoding.failures) log_warning(path, ": ", failure);
     if (!ok) {
         throw IoError(format_message(path, ": not a valid glTF ", binary ? "binary (.glb)" : "JSON",
                                      " file: ", trimmed(error)));

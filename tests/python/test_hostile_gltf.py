@@ -1,53 +1,19 @@
 """Hostile glTF files: each is loaded in a child Python with an address-space cap and a timeout,
 so a crash (a signal), a hang or a runaway allocation fails the test instead of taking pytest
-down. Every case must end in a Python exception that names the file and what is wrong with it.
+down (hostile_support.load_in_child). Every case must end in a Python exception that names the
+file and what is wrong with it.
 """
 
+import base64
 import json
 import os
 import struct
-import subprocess
-import sys
-import textwrap
 
 import pytest
 
-from conftest import BUILD_PYTHON
-
-# Enough for the interpreter, numpy and the module, far below the machine: a load that tries to
-# allocate without bound meets MemoryError here, not the OOM killer.
-ADDRESS_SPACE_CAP = 4 << 30
-# A load of these small files takes milliseconds; a child still running after this is a hang.
-TIMEOUT_SECONDS = 30
+from hostile_support import load_in_child
 
 BASE_DOCUMENT = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": []}]}
-
-
-def load_in_child(path, loader="load_gltf"):
-    """Loads `path` with shgi.<loader> in a capped child; returns its verdict, ("loaded", "")
-    or (exception type, message), and what it logged (stderr)."""
-    code = textwrap.dedent(f"""
-        import resource, sys
-        resource.setrlimit(resource.RLIMIT_AS, ({ADDRESS_SPACE_CAP}, {ADDRESS_SPACE_CAP}))
-        sys.path.insert(0, {str(BUILD_PYTHON)!r})
-        import shgi
-        try:
-            shgi.{loader}({str(path)!r})
-        except Exception as error:
-            print(type(error).__name__ + ": " + str(error))
-        else:
-            print("loaded")
-    """)
-    try:
-        child = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                               timeout=TIMEOUT_SECONDS)
-    except subprocess.TimeoutExpired:
-        pytest.fail(f"{loader}({path}) still ran after {TIMEOUT_SECONDS} s (a hang)")
-    assert child.returncode == 0, (
-        f"{loader}({path}) ended the process with {child.returncode} "
-        f"(a negative code is a signal):\n{child.stderr[-2000:]}")
-    kind, _, message = child.stdout.strip().rpartition("\n")[2].partition(": ")
-    return (kind, message), child.stderr
 
 
 def deeply_nested(depth):
@@ -127,3 +93,43 @@ def test_a_node_with_two_parents_is_refused(tmp_path):
     path.write_text(json.dumps(dict(BASE_DOCUMENT, scenes=[{"nodes": [0, 1]}], nodes=nodes)))
     (kind, message), _ = load_in_child(path)
     assert kind == "OSError" and "node 2 is reached twice" in message
+
+
+@pytest.mark.parametrize("container", ["gltf", "glb"])
+def test_an_image_buffer_view_past_its_buffer_is_refused_not_read(tmp_path, container):
+    """Found by the fuzzer (a GLB mutant): tinygltf passes an image stored in a buffer view to
+    the decoder as buffer.data + byteOffset without checking the view against the buffer, so a
+    view at byteOffset 2^31 made stb_image read unmapped memory (a segfault)."""
+    png = bytes.fromhex("89504e470d0a1a0a")  # never reached: the view is refused first
+    data = png + b"\0" * (-len(png) % 4)
+    document = dict(BASE_DOCUMENT, buffers=[{"byteLength": len(data)}],
+                    bufferViews=[{"buffer": 0, "byteOffset": 2**31, "byteLength": 142}],
+                    images=[{"bufferView": 0, "mimeType": "image/png"}])
+    path = tmp_path / f"image_view.{container}"
+    if container == "glb":
+        json_chunk = glb_of(json.dumps(document))[12:]
+        body = json_chunk + struct.pack("<I4s", len(data), b"BIN\0") + data
+        path.write_bytes(struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body)
+    else:
+        document["buffers"][0]["uri"] = ("data:application/octet-stream;base64,"
+                                         + base64.b64encode(data).decode())
+        path.write_text(json.dumps(document))
+    (kind, message), _ = load_in_child(path)
+    assert kind == "OSError"
+    assert str(path) in message
+    assert ("image 0: bufferView 0 (byteOffset 2147483648, byteLength 142) lies outside "
+            "buffer 0, which has 8 bytes") in message
+
+
+def test_a_glb_buffer_of_byte_length_0_is_refused_as_oserror(tmp_path):
+    """Found by the fuzzer (a GLB mutant): a BIN buffer declaring byteLength 0 made tinygltf
+    copy into data.at(0), and std::out_of_range reached Python as a bare IndexError."""
+    document = dict(BASE_DOCUMENT, buffers=[{"byteLength": 0}])
+    json_chunk = glb_of(json.dumps(document))[12:]
+    data = b"\0" * 4
+    body = json_chunk + struct.pack("<I4s", len(data), b"BIN\0") + data
+    path = tmp_path / "empty_buffer.glb"
+    path.write_bytes(struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body)
+    (kind, message), _ = load_in_child(path)
+    assert kind == "OSError", (kind, message)
+    assert str(path) in message and "the reader stopped at damaged data" in message

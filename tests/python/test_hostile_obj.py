@@ -1,10 +1,10 @@
 """Hostile OBJ and MTL files: a number tinyobjloader cannot read ("nan", "inf", "1e39", an index
 past 2^31) must not load as 0 or as another vertex without a word, but be refused with the file,
-the line and the number. Loaded in a capped child (test_hostile_gltf.load_in_child's rules)."""
+the line and the number. Loaded in a capped child (hostile_support.load_in_child)."""
 
 import pytest
 
-from test_hostile_gltf import load_in_child as load_file
+from hostile_support import load_in_child as load_file
 
 
 def load_in_child(path):
