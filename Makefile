@@ -184,6 +184,7 @@ bench: build
 	$(BUILD_DIR)/bench/photon_lattice_bench
 	$(BUILD_DIR)/bench/preview_convergence_bench
 	$(BUILD_DIR)/bench/cancel_latency_bench
+	PYTHONPATH=$(CURDIR)/$(BUILD_DIR)/python $(PYTHON) bench/cancel_latency.py
 	env PATH=$(SYSTEM_PATH) blender -b --factory-startup --python bench/viewport_sync_bench.py -- \
 		$(CURDIR)/$(BUILD_DIR)/python $(CURDIR)/addon
 
