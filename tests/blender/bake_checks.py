@@ -39,7 +39,6 @@ import sys
 import tempfile
 import threading
 import time
-import traceback
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import blender_test_setup as setup  # noqa: E402
@@ -673,27 +672,7 @@ def window_main():
     path = setup.results_path("bake_window.json")
     results = {}
     steps = modal_steps(results, os.path.join(os.path.dirname(path), "modal_bake"))
-
-    def finish(code):
-        with open(path, "w") as out:
-            json.dump(results, out, indent=1)
-        if code == 0:
-            print("BAKE_WINDOW_OK")
-        sys.stdout.flush()
-        os._exit(code)
-
-    def drive():
-        try:
-            return next(steps)
-        except StopIteration:
-            finish(0)
-        except Exception:
-            results["error"] = traceback.format_exc()
-            print(results["error"])
-            finish(1)
-        return None
-
-    bpy.app.timers.register(drive, first_interval=1.0)
+    setup.run_steps_in_window(steps, results, path, "BAKE_WINDOW_OK")
 
 
 if setup.script_args()[3:4] == ["window"]:

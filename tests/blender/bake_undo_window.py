@@ -25,13 +25,11 @@ tests/python/test_blender_bake.py asserts them. Prints BAKE_UNDO_WINDOW_OK; a fa
 writes its error and exits with 1; a crash leaves no results.
 """
 
-import json
 import os
 import sys
 import tempfile
 import threading
 import time
-import traceback
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import blender_test_setup as setup  # noqa: E402
@@ -210,30 +208,6 @@ def steps():
     RESULTS["after_cancelled_undo"] = data_state()
 
 
-_steps = steps()
-
-
-def finish(code):
-    with open(RESULTS_PATH, "w") as handle:
-        json.dump(RESULTS, handle, indent=1)
-    if code == 0:
-        print("BAKE_UNDO_WINDOW_OK")
-    sys.stdout.flush()
-    os._exit(code)
-
-
-def drive():
-    try:
-        return next(_steps)
-    except StopIteration:
-        finish(0)
-    except Exception:
-        RESULTS["error"] = traceback.format_exc()
-        print(RESULTS["error"])
-        finish(1)
-    return None
-
-
 # The factory settings open the splash (Quick Setup) over the 3D view after this script runs.
 bpy.context.preferences.view.show_splash = False
-bpy.app.timers.register(drive, first_interval=1.0)
+setup.run_steps_in_window(steps(), RESULTS, RESULTS_PATH, "BAKE_UNDO_WINDOW_OK")

@@ -8,10 +8,12 @@ environment variables SHGI_BUILD_PYTHON and SHGI_ADDON_DIR. A failed check raise
 Blender exit with 1.
 """
 
+import json
 import os
 import pathlib
 import sys
 import tempfile
+import traceback
 
 import addon_utils
 import bpy
@@ -140,3 +142,32 @@ def check_close(what, actual, expected, tolerance):
     if len(actual_values) != len(expected_values) or any(
             abs(float(a) - float(e)) > tolerance for a, e in zip(actual_values, expected_values)):
         raise AssertionError(f"{what}: {actual} != expected {expected} (tolerance {tolerance})")
+
+
+def run_steps_in_window(steps, results, path, ok_marker, echo_results=False):
+    """Drives the generator `steps` from a Blender timer, each of its yields the seconds until
+    the next step (a windowed test lets Blender redraw between steps). When it ends, writes
+    `results` to `path` as JSON (and prints them with `echo_results`), prints `ok_marker` and
+    exits with 0; an exception puts its traceback in results["error"] and exits with 1."""
+    def finish(code):
+        with open(path, "w") as handle:
+            json.dump(results, handle, indent=1)
+        if echo_results:
+            print(json.dumps(results, indent=1))
+        if code == 0:
+            print(ok_marker)
+        sys.stdout.flush()
+        os._exit(code)
+
+    def drive():
+        try:
+            return next(steps)
+        except StopIteration:
+            finish(0)
+        except Exception:
+            results["error"] = traceback.format_exc()
+            print(results["error"])
+            finish(1)
+        return None
+
+    bpy.app.timers.register(drive, first_interval=1.0)

@@ -28,12 +28,10 @@ Results go to the JSON file; tests/python/test_blender_viewport.py asserts the f
 failed step writes its error there and exits Blender with 1 (exceptions in timers do not).
 """
 
-import json
 import math
 import os
 import sys
 import time
-import traceback
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import blender_test_setup as setup  # noqa: E402
@@ -414,30 +412,6 @@ def sync_report():
 
 # --- the timer driving the steps ---------------------------------------------------------------
 
-_steps = steps()
-
-
-def finish(code):
-    with open(RESULTS_PATH, "w") as handle:
-        json.dump(RESULTS, handle, indent=1)
-    print(json.dumps(RESULTS, indent=1))
-    if code == 0:
-        print("VIEWPORT_WINDOW_OK")
-    sys.stdout.flush()
-    os._exit(code)
-
-
-def drive():
-    try:
-        return next(_steps)
-    except StopIteration:
-        finish(0)
-    except Exception:
-        RESULTS["error"] = traceback.format_exc()
-        finish(1)
-    return None
-
-
 # The factory settings open the splash (Quick Setup) over the 3D view after this script runs.
 bpy.context.preferences.view.show_splash = False
-bpy.app.timers.register(drive, first_interval=1.0)
+setup.run_steps_in_window(steps(), RESULTS, RESULTS_PATH, "VIEWPORT_WINDOW_OK", echo_results=True)
