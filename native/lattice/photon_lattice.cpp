@@ -231,6 +231,17 @@ float PhotonLattice::reuse_distance() const {
     return kReuseShare * distance;
 }
 
+std::shared_ptr<const IndirectField> PhotonLattice::current_field() const {
+    // Non-owning: the lattice is its own field, valid until the next solve() or reset().
+    return std::shared_ptr<const IndirectField>(std::shared_ptr<const IndirectField>(), this);
+}
+
+std::vector<StageSeconds> PhotonLattice::stage_seconds() const {
+    return {{"emit_trace", timings_.emit_trace},
+            {"injection", timings_.injection},
+            {"blur", timings_.blur}};
+}
+
 size_t PhotonLattice::memory_bytes() const {
     return global_raw_.memory_bytes() + global_.memory_bytes() + caustic_raw_.memory_bytes() +
            caustic_.memory_bytes() + caustic_map_.size() * sizeof(Photon);

@@ -32,6 +32,7 @@
 #include "lattice/sh_lattice.h"
 #include "photon/photon_map.h"
 #include "photon/photon_tracer.h"
+#include "render/gi_solver.h"
 #include "render/indirect_field.h"
 #include "scene/scene.h"
 #include "util/progress.h"
@@ -85,7 +86,7 @@ struct PhotonLatticeTimings {
     uint64_t bounces = 0;           // rays traced by the last solve
 };
 
-class PhotonLattice : public IndirectField {
+class PhotonLattice : public IndirectField, public GiSolver {
   public:
     // The scene must be committed and outlive the solver. Measures the lattices' surfaces.
     PhotonLattice(const Scene& scene, const PhotonLatticeSettings& settings,
@@ -97,16 +98,22 @@ class PhotonLattice : public IndirectField {
     // edited since construction or reset().
     void solve(Progress* progress = nullptr);
     // Forgets every pass and re-measures the scene (call after edits and commit()).
-    void reset(Progress* progress = nullptr);
+    void reset(Progress* progress = nullptr) override;
 
-    uint64_t passes() const { return passes_; }
+    // GiSolver: a refinement pass is one solve(); the field is the lattice itself (not to be
+    // read while a pass runs).
+    void refine(Progress* progress = nullptr) override { solve(progress); }
+    std::shared_ptr<const IndirectField> current_field() const override;
+    std::vector<StageSeconds> stage_seconds() const override;
+
+    uint64_t passes() const override { return passes_; }
     const Scene& scene() const { return *scene_; }
     const PhotonLatticeSettings& settings() const { return settings_; }
     const PhotonLatticeTimings& timings() const { return timings_; }
     const ShLattice& global_lattice() const { return global_; }
     const ShLattice& caustic_lattice() const { return caustic_; }
     const PhotonMap& caustic_map() const { return caustic_map_; }
-    size_t memory_bytes() const;
+    size_t memory_bytes() const override;
 
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
     FieldLookup lookup(const vec3& p, const vec3& n) const override;

@@ -42,6 +42,10 @@ constexpr uint32_t kRaysPerCancelPoll = 1024;
 // Seeds the per-probe rotations apart from the per-ray path streams (same stream ids).
 constexpr uint64_t kRotationSeed = 0x9e3779b97f4a7c15ull;
 
+// A fitted volume's axis along which the scene is thinner than this fraction of its longest side
+// is flat (see fitted_volume).
+constexpr float kFlatFraction = 0.01f;
+
 ProbeVolume fitted_volume(const Scene& scene, float spacing) {
     const Bounds3 bounds = scene.bounds();
     vec3 extent = bounds.extent();
@@ -55,9 +59,13 @@ ProbeVolume fitted_volume(const Scene& scene, float spacing) {
                 "ProbeGridSettings.spacing ", step, " m puts ", count, " probes along axis ", a,
                 " of the scene (", extent[a], " m); use a spacing of at least ",
                 extent[a] / float(kMaxProbesPerAxis), " m"));
-        volume.resolution[a] = std::max(1, int(count));
-        // A flat scene still gets a layer of probes, at most as thick as the scene is long (a
-        // spacing beyond the scene's size gives one probe, not a volume of that size).
+        // A flat scene (thinner than kFlatFraction of its longest side along this axis) gets a
+        // layer of probes on each side of it: one layer in its middle lay on its surfaces, and
+        // relocation stepped it off them to one side or the other, so the far side read the
+        // light of the near side through the surface (a ground plane under a sky came out 50%
+        // too bright). Visibility keeps each side to its own probes.
+        const bool flat = count <= 1.0 && extent[a] < kFlatFraction * longest;
+        volume.resolution[a] = flat ? 2 : std::max(1, int(count));
         extent[a] = std::max(extent[a], longest > 0.0f ? std::min(step, longest) : step);
     }
     const vec3 centre = 0.5f * (bounds.lower + bounds.upper);
@@ -465,6 +473,10 @@ std::vector<float> ProbeGrid::relative_error() const {
         out[i] = dc > 0.0f ? std::sqrt(d.variance[i]) / dc : 0.0f;
     }
     return out;
+}
+
+std::vector<StageSeconds> ProbeGrid::stage_seconds() const {
+    return {{"placement", timings_.placement}, {"update", timings_.update}};
 }
 
 size_t ProbeGrid::memory_bytes() const {

@@ -46,6 +46,7 @@
 #include <vector>
 
 #include "probes/probe_field.h"
+#include "render/gi_solver.h"
 #include "render/indirect_field.h"
 #include "scene/scene.h"
 #include "util/progress.h"
@@ -88,7 +89,7 @@ struct ProbeGridTimings {
     uint64_t paths = 0;       // probe directions traced by the last update
 };
 
-class ProbeGrid : public IndirectField {
+class ProbeGrid : public IndirectField, public GiSolver {
   public:
     // The scene must be committed and outlive the grid. Places the probes.
     ProbeGrid(const Scene& scene, const ProbeGridSettings& settings, Progress* progress = nullptr);
@@ -99,17 +100,22 @@ class ProbeGrid : public IndirectField {
     // One update pass over every active probe, blended in. Cancel keeps the previous state.
     void update(Progress* progress = nullptr);
     // Forgets every pass and re-places the probes (after scene edits and commit()).
-    void reset(Progress* progress = nullptr);
+    void reset(Progress* progress = nullptr) override;
+
+    // GiSolver: a refinement pass is one update(); the field is an immutable snapshot (field()).
+    void refine(Progress* progress = nullptr) override { update(progress); }
+    std::shared_ptr<const IndirectField> current_field() const override { return field(); }
+    std::vector<StageSeconds> stage_seconds() const override;
 
     const Scene& scene() const { return *scene_; }
     const ProbeGridSettings& settings() const { return settings_; }
     const ProbeGridTimings& timings() const { return timings_; }
-    uint64_t passes() const { return field()->data().passes; }
+    uint64_t passes() const override { return field()->data().passes; }
     size_t probe_count() const { return field()->data().probe_count(); }
     size_t active_count() const;
     // Per probe: sqrt(variance) / DC luminance (0 for a black probe, inf before any pass).
     std::vector<float> relative_error() const;
-    size_t memory_bytes() const;
+    size_t memory_bytes() const override;
 
     // The current state, shared with every field() taken from it. Valid until the next update()
     // or reset(): while another thread may call those, read field()->data() instead.
