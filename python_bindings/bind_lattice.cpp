@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "bind_methods.h"
 #include "lattice/photon_lattice.h"
 #include "numpy_convert.h"
 #include "interruptible.h"
@@ -99,6 +100,7 @@ void bind_settings(py::module_& m) {
     def_vec3(cls, "bounds_max", &S::bounds_max, "Upper corner (m) when use_bounds.");
     cls.def("validate", &validate_photon_lattice_settings,
             "Raises ValueError naming the first invalid field.");
+    register_settings_type<S>("PhotonLatticeSettings");
 }
 
 // The lattice as an IndirectField (the key renders and lookups guard it by).
@@ -110,7 +112,7 @@ ObjectUse lattice_use(const PhotonLattice& lattice, ObjectUse::Kind kind, const 
 // A read-only property `name` = read(lattice), refused while a solve() or reset() of the lattice
 // runs in another thread (they replace what it reads).
 template <typename Read>
-void def_idle_property(py::class_<PhotonLattice, IndirectField>& cls, const char* name,
+void def_idle_property(py::class_<PhotonLattice, IndirectField, GiSolver>& cls, const char* name,
                        Read read, const char* doc) {
     cls.def_property_readonly(
         name,
@@ -122,12 +124,21 @@ void def_idle_property(py::class_<PhotonLattice, IndirectField>& cls, const char
 }
 
 void bind_photon_lattice(py::module_& m) {
-    py::class_<PhotonLattice, IndirectField> cls(m, "PhotonLattice", R"doc(
+    py::class_<PhotonLattice, IndirectField, GiSolver> cls(m, "PhotonLattice", R"doc(
 The ISLLPM solver (seed 000): photons traced from the lights, injected into SH lattices.
 
-Interactive: call solve() repeatedly; each call traces `photons` more and the lattices
-average all passes. Non-interactive: one solve() with many photons, then render any camera.
+Interactive: call refine() repeatedly; each call traces `photons` more and the lattices
+average all passes. Non-interactive: one refine() with many photons, then render any camera.
 After editing and re-committing the scene, call reset().)doc");
+    // refine() and its older name solve(), each named as called in the messages.
+    const auto pass_named = [](const char* name) {
+        return [name](PhotonLattice& lattice, Progress* progress) {
+            const ObjectUse writes = lattice_use(lattice, ObjectUse::Kind::Write, name);
+            SceneUse use(lattice.scene(), SceneUse::Kind::Query,
+                         (std::string(name) + " (PhotonLattice)").c_str());
+            run_interruptible(progress, [&](Progress* used) { lattice.refine(used); });
+        };
+    };
     cls.def(py::init([](const Scene& scene, const PhotonLatticeSettings& settings,
                          Progress* progress) {
                  validate_photon_lattice_settings(settings);
@@ -139,16 +150,14 @@ After editing and re-committing the scene, call reset().)doc");
              py::arg("scene"), py::arg("settings") = PhotonLatticeSettings{},
              py::arg("progress") = py::none(), py::keep_alive<1, 2>(),
              "Measures the surface inside the lattices' cells (the scene must be committed).")
+        .def("refine", pass_named("refine"), py::arg("progress") = py::none(),
+             "Traces one more pass of photons and rebuilds the lattices (GIL released). Raises "
+             "shgi.Cancelled on cancel, keeping the previous solution.")
+        .def("solve", pass_named("solve"), py::arg("progress") = py::none(),
+             "The same as refine().")
         .def(
-            "solve",
-            [](PhotonLattice& lattice, Progress* progress) {
-                const ObjectUse writes = lattice_use(lattice, ObjectUse::Kind::Write, "solve");
-                SceneUse use(lattice.scene(), SceneUse::Kind::Query, "solve (PhotonLattice)");
-                run_interruptible(progress, [&](Progress* used) { lattice.solve(used); });
-            },
-            py::arg("progress") = py::none(),
-            "Traces one more pass of photons and rebuilds the lattices (GIL released). Raises "
-            "shgi.Cancelled on cancel, keeping the previous solution.")
+            "current_field", [](py::object self) { return self; },
+            "The lattice itself: it is its own IndirectField (not to be read while a pass runs).")
         .def(
             "reset",
             [](PhotonLattice& lattice, Progress* progress) {
@@ -165,6 +174,9 @@ After editing and re-committing the scene, call reset().)doc");
                       [](const PhotonLattice& l) { return timings_to_dict(l.timings()); },
                       "The last solve: seconds of emit_trace, injection, blur; photons_emitted, "
                       "photons_stored, bounces.");
+    def_idle_property(cls, "stage_seconds",
+                      [](const PhotonLattice& l) { return stage_list(l.stage_seconds()); },
+                      "[(stage, seconds)] of the last pass.");
     def_idle_property(cls, "memory_bytes", [](const PhotonLattice& l) { return l.memory_bytes(); },
                       "Bytes held by the lattices and photon map.");
     def_idle_property(

@@ -11,6 +11,7 @@
 
 #include "numpy_convert.h"
 #include "path_arg.h"
+#include "bind_methods.h"
 #include "probes/probe_grid.h"
 #include "probes/probe_storage.h"
 #include "interruptible.h"
@@ -183,6 +184,7 @@ object), with resolution probes along each local axis at the cell centres.)doc")
                        "Share of back-face hits marking a probe as inside geometry (0.25).")
         .def("validate", &validate_probe_grid_settings,
              "Raises ValueError naming the first invalid field.");
+    register_settings_type<S>("ProbeGridSettings");
 }
 
 void bind_field(py::module_& m) {
@@ -232,15 +234,23 @@ py::dict timings_to_dict(const ProbeGridTimings& timings) {
 }
 
 void bind_grid(py::module_& m) {
-    py::class_<ProbeGrid, IndirectField> cls(m, "ProbeGrid", R"doc(
+    py::class_<ProbeGrid, IndirectField, GiSolver> cls(m, "ProbeGrid", R"doc(
 SH probe grids updated by path tracing (seed 002), with DDGI-style relocation and visibility.
 
-Each update() traces rays_per_probe paths per active probe and blends them into the probes
+Each refine() (or update(), its older name) traces rays_per_probe paths per active probe and blends them into the probes
 (running mean, then an exponential blend with `hysteresis`). field() returns a snapshot for
 rendering that later updates leave untouched. After editing and re-committing the scene, call
 reset().)doc");
     // A snapshot per read: update() on another thread may replace the grid's data.
     def_probe_arrays(cls, [](const ProbeGrid& g) { return g.field()->shared_data(); });
+    const auto update = [](ProbeGrid& grid, Progress* progress) {
+        SceneUse use(grid.scene(), SceneUse::Kind::Query, "refine (ProbeGrid)");
+        run_interruptible(progress, [&](Progress* used) { grid.refine(used); });
+    };
+    const auto field_of = [](const ProbeGrid& grid) {
+        const auto snapshot = grid.field();
+        return std::make_unique<ProbeField>(snapshot->shared_data(), snapshot->lookup_settings());
+    };
     cls.def(py::init([](const Scene& scene, const ProbeGridSettings& settings,
                          Progress* progress) {
                  validate_probe_grid_settings(settings);
@@ -260,15 +270,10 @@ reset().)doc");
             },
             py::arg("scene"), py::arg("settings"), py::arg("field"), py::keep_alive<0, 1>(),
             "Continues refining stored probes (their volumes and order replace the settings').")
-        .def(
-            "update",
-            [](ProbeGrid& grid, Progress* progress) {
-                SceneUse use(grid.scene(), SceneUse::Kind::Query, "update (ProbeGrid)");
-                run_interruptible(progress, [&](Progress* used) { grid.update(used); });
-            },
-            py::arg("progress") = py::none(),
-            "One update pass (GIL released). Raises shgi.Cancelled on cancel, keeping the "
-            "previous probes.")
+        .def("refine", update, py::arg("progress") = py::none(),
+             "One update pass (GIL released). Raises shgi.Cancelled on cancel, keeping the "
+             "previous probes.")
+        .def("update", update, py::arg("progress") = py::none(), "The same as refine().")
         .def(
             "reset",
             [](ProbeGrid& grid, Progress* progress) {
@@ -276,14 +281,12 @@ reset().)doc");
                 run_interruptible(progress, [&](Progress* used) { grid.reset(used); });
             },
             py::arg("progress") = py::none(), "Forgets every pass and re-places the probes.")
-        .def(
-            "field",
-            [](const ProbeGrid& grid) {
-                const auto field = grid.field();
-                return std::make_unique<ProbeField>(field->shared_data(), field->lookup_settings());
-            },
-            "An immutable ProbeField of the current probes (safe to render while update() runs "
-            "on another thread).")
+        .def("field", field_of, "An immutable ProbeField of the current probes (safe to render "
+                             "while refine() runs on another thread).")
+        .def("current_field", field_of, "The same as field().")
+        .def_property_readonly(
+            "stage_seconds", [](const ProbeGrid& g) { return stage_list(g.stage_seconds()); },
+            "[(stage, seconds)] of the last placement and pass.")
         .def_property_readonly("passes", &ProbeGrid::passes, "Update passes blended in.")
         .def_property_readonly("active_count", &ProbeGrid::active_count,
                                "Probes outside geometry.")

@@ -41,6 +41,7 @@ void bind_scene(py::module_& m);
 void bind_io(py::module_& m);
 void bind_loaders(py::module_& m);
 void bind_render(py::module_& m);
+void bind_methods(py::module_& m);
 void bind_lattice(py::module_& m);
 void bind_probes(py::module_& m);
 void bind_bake(py::module_& m);
@@ -55,6 +56,7 @@ PYBIND11_MODULE(_shgi, m) {
     shgi::python::bind_io(m);
     shgi::python::bind_loaders(m);  // needs Scene from bind_scene
     shgi::python::bind_render(m);
+    shgi::python::bind_methods(m);  // GiSolver, the base of every solver below
     shgi::python::bind_lattice(m);  // PhotonLattice derives from IndirectField (bind_render)
     shgi::python::bind_probes(m);   // so do ProbeGrid and ProbeField
     shgi::python::bind_bake(m);     // takes any IndirectField

@@ -39,3 +39,16 @@ def _forward_to_logging(level, message):
 
 
 _shgi.set_log_sink(_forward_to_logging)
+
+# The GI methods: one registry for every front end (shgi.method_registry).
+from .method_registry import (  # noqa: E402,F401
+    Method,
+    default_settings,
+    make_solver,
+    method,
+    methods,
+    register_method,
+    settings_from_dict,
+    settings_to_dict,
+    unregister_method,
+)

@@ -11,6 +11,7 @@ arguments, 130 when interrupted (Ctrl-C cancels the running bake; finished light
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 import threading
@@ -18,6 +19,7 @@ import time
 
 from . import _shgi
 from . import bake as _bake
+from . import method_registry as _methods
 
 
 def _shard(text: str):
@@ -89,8 +91,16 @@ def _parser() -> argparse.ArgumentParser:
     bake.add_argument("--samples", type=_whole(1), default=256, help="samples per texel (256)")
     bake.add_argument("--content", default="DIRECT_INDIRECT",
                       choices=["DIRECT_INDIRECT", "DIRECT", "INDIRECT", "FULL"])
-    bake.add_argument("--method", default="PATH_TRACER", choices=_bake.SOURCES,
-                      help="source of indirect light (PATH_TRACER: ground truth)")
+    bake.add_argument("--method", type=_method_name, default="PATH_TRACE",
+                      metavar="{" + ",".join(_bake.sources()) + "}",
+                      help="source of indirect light, a method of shgi.methods() (PATH_TRACE: "
+                           "path tracing, the ground truth)")
+    bake.add_argument("--settings", default=None, metavar="JSON",
+                      help="the method's settings as a JSON file of field: value pairs "
+                           "(shgi.settings_to_dict; the Blender add-on's Export Bake Settings "
+                           "writes one), so a bake here matches the add-on's byte for byte")
+    bake.add_argument("--passes", type=_whole(0), default=None,
+                      help="refinement passes of the method (default: its final_passes)")
     bake.add_argument("--directional", action="store_true", help="also write L1 SH layers")
     bake.add_argument("--filter", action="store_true",
                       help="SHGI's edge-aware denoising filter (the same as --denoise SHGI)")
@@ -111,6 +121,29 @@ def _parser() -> argparse.ArgumentParser:
                            "exporter may have left the scene's lights out)")
     bake.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser
+
+
+def _method_name(name: str) -> str:
+    """--method's value: a method identifier (or an older name), as its identifier."""
+    try:
+        return _methods.method(name.upper()).identifier
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from error
+
+
+def _method_settings(method: str, path, seed: int):
+    """The settings of `method` from the JSON file `path` (None: its defaults with `seed`)."""
+    row = _methods.method(method)
+    if path is None or not row.solves_field:
+        return None
+    try:
+        with open(path, encoding="utf-8") as file:
+            values = json.load(file)
+    except (OSError, ValueError) as error:
+        raise ValueError(f"--settings {path}: {error}") from error
+    if not isinstance(values, dict):
+        raise ValueError(f"--settings {path}: expected a JSON object of field: value pairs")
+    return _methods.settings_from_dict(row.settings_type, values)
 
 
 def _load(path: str):
@@ -208,7 +241,9 @@ def _bake_command(args) -> int:
         if args.merge:
             return laid_out, _bake.merge_shards(scene, laid_out, options, args.out, args.merge,
                                                 progress)
-        field = _bake.solve_field(scene, args.method, args.seed, progress)
+        field = _bake.solve_field(scene, args.method, args.seed, progress,
+                                  _method_settings(args.method, args.settings, args.seed),
+                                  args.passes)
         return laid_out, _bake.bake_scene(scene, laid_out, options, args.out, field, args.shard,
                                           progress)
 

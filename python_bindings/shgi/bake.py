@@ -49,6 +49,7 @@ from typing import Callable, Iterable, Optional, Sequence
 import numpy as np
 
 from . import _shgi, uv_atlas
+from . import method_registry as _methods
 from .denoise import import_optional
 
 __all__ = [
@@ -69,7 +70,7 @@ __all__ = [
     "emits_light",
     "has_lamps_or_emitters",
     "solve_field",
-    "SOURCES",
+    "sources",
     "LIGHTMAP_UV_SOURCES",
     "generate_lightmap_uvs",
     "describe_uv_layout",
@@ -87,11 +88,22 @@ DEFAULT_TEXELS_PER_METRE = 32.0
 _RASTER_SHARE = 0.05
 _FINISH_SHARE = 0.1
 
-# Where the indirect light of a bake comes from (the CLI's --method, the add-on's source).
-SOURCES = ("PATH_TRACER", "PHOTON_LATTICE", "PROBE_GRID")
-# Update passes of a PROBE_GRID source before baking: the grid keeps the exact running mean of
-# its passes this early (hysteresis blending starts later, probes/probe_grid.h).
-PROBE_GRID_PASSES = 8
+
+def sources() -> tuple:
+    """Where the indirect light of a bake can come from (the CLI's --method, the add-on's
+    source): the identifier of every method of shgi.methods(), PATH_TRACE (path tracing every
+    texel) first."""
+    return tuple(row.identifier for row in _methods.methods())
+
+
+def __getattr__(name):
+    # Names of earlier versions, read from the registry so they cannot disagree with it.
+    if name == "SOURCES":
+        return sources()
+    if name == "PROBE_GRID_PASSES":
+        return _methods.method("PROBE_GRID").final_passes
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 # Where an object's lightmap UV map comes from (BakeOptions.lightmap_uvs, the CLI's --uv):
 # the mesh's own, or one laid out by xatlas for meshes without it.
@@ -611,8 +623,8 @@ def _empty_texels(job: BakeJob, options: BakeOptions) -> _shgi.LightmapTexels:
 
 
 def _source_name(field) -> str:
-    """What gave the indirect light: PATH_TRACER, or the field's type (PhotonLattice, ...)."""
-    return "PATH_TRACER" if field is None else type(field).__name__
+    """What gave the indirect light: PATH_TRACE, or the field's type (PhotonLattice, ...)."""
+    return "PATH_TRACE" if field is None else type(field).__name__
 
 
 def _shard_meta(jobs: Sequence[BakeJob], job: BakeJob, options: BakeOptions, shard: int,
@@ -732,24 +744,25 @@ def merge_shards(scene, jobs: Sequence[BakeJob], options: BakeOptions, out_dir: 
     return results
 
 
-def solve_field(scene, source: str, seed: int = 0, progress: Optional[BakeProgress] = None):
-    """The IndirectField a bake takes its indirect light from: None for PATH_TRACER, else a
-    photon lattice or probe grid of the (committed) scene solved with default settings and
-    `seed`. The solve owns no share of `progress` (its bar waits); cancel works."""
-    if source not in SOURCES:
-        raise ValueError(f"source {source!r}: use one of {', '.join(SOURCES)}")
-    if source == "PATH_TRACER":
+def solve_field(scene, source: str, seed: int = 0, progress: Optional[BakeProgress] = None,
+                settings=None, passes: Optional[int] = None):
+    """The IndirectField a bake takes its indirect light from: None for PATH_TRACE (the path
+    tracer bakes every texel), else the field of method `source` (shgi.methods(); older names
+    such as PATH_TRACER are accepted) solved on the (committed) scene with `settings` (None: the
+    method's defaults with `seed`) over `passes` refinement passes (None: the method's
+    final_passes, as the add-on's F12 and bake run). The solve owns no share of `progress` (its
+    bar waits); cancel works."""
+    row = _methods.method(source)
+    if not row.solves_field:
         return None
     progress = progress or BakeProgress()
-    if source == "PHOTON_LATTICE":
-        lattice = _shgi.PhotonLattice(scene, _shgi.PhotonLatticeSettings(seed=seed))
-        lattice.solve(progress.native(0.0, 0.0, "photon lattice"))
-        return lattice
-    grid = _shgi.ProbeGrid(scene, _shgi.ProbeGridSettings(seed=seed),
-                           progress.native(0.0, 0.0, "probe grid"))
-    for _ in range(PROBE_GRID_PASSES):
-        grid.update(progress.native(0.0, 0.0, "probe grid"))
-    return grid.field()
+    if settings is None:
+        settings = _methods.default_settings(row.identifier, seed)
+    native = progress.native(0.0, 0.0, row.label.lower())
+    solver = _methods.make_solver(row.identifier, scene, settings, native)
+    for _ in range(row.final_passes if passes is None else passes):
+        solver.refine(native)
+    return solver.current_field()
 
 
 def jobs_for_scene(scene, uv_set: str, resolution: int = 0, texels_per_metre: float = 0.0,

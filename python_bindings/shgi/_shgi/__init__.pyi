@@ -8,7 +8,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'Material', 'Mesh', 'MicrofacetDistribution', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'max_threads', 'memory_limits', 'merge_lightmap', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'GiSolver', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -345,6 +345,22 @@ class DiffuseModel:
     @property
     def value(self) -> int:
         ...
+class GiSolver:
+    """
+    
+    The interface every GI method implements (PhotonLattice, ProbeGrid, ...): refine(progress) runs
+    one refinement pass, reset(progress) forgets every pass, current_field() is the IndirectField to
+    render (unchanged until the next refine or reset), passes counts the passes, stage_seconds the
+    wall time of the last pass's stages, memory_bytes what the solution holds. Subclass it in
+    Python to prototype a method (register it with shgi.register_method).
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self) -> None:
+        """
+        For Python subclasses.
+        """
 class IndirectField:
     """
     
@@ -1107,6 +1123,47 @@ class MicrofacetDistribution:
     @property
     def value(self) -> int:
         ...
+class NativeMethod:
+    """
+    A row of the native method registry (see shgi.methods()).
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @property
+    def aliases(self) -> list[str]:
+        """
+        Older names still accepted.
+        """
+    @property
+    def description(self) -> str:
+        ...
+    @property
+    def final_passes(self) -> int:
+        """
+        Refinement passes of a final solve (F12, bake, CLI).
+        """
+    @property
+    def identifier(self) -> str:
+        ...
+    @property
+    def label(self) -> str:
+        ...
+    @property
+    def number(self) -> int:
+        """
+        The enum value .blend files store.
+        """
+    @property
+    def settings_type(self) -> str:
+        """
+        Name of the settings class in shgi.
+        """
+    @property
+    def solves_field(self) -> bool:
+        """
+        False for the path tracer, which solves nothing.
+        """
 class PathTracer:
     """
     
@@ -1231,13 +1288,13 @@ class PathTracerSettings:
     @world_sampling.setter
     def world_sampling(self, arg0: WorldSampling) -> None:
         ...
-class PhotonLattice(IndirectField):
+class PhotonLattice(IndirectField, GiSolver):
     """
     
     The ISLLPM solver (seed 000): photons traced from the lights, injected into SH lattices.
     
-    Interactive: call solve() repeatedly; each call traces `photons` more and the lattices
-    average all passes. Non-interactive: one solve() with many photons, then render any camera.
+    Interactive: call refine() repeatedly; each call traces `photons` more and the lattices
+    average all passes. Non-interactive: one refine() with many photons, then render any camera.
     After editing and re-committing the scene, call reset().
     """
     @staticmethod
@@ -1247,13 +1304,21 @@ class PhotonLattice(IndirectField):
         """
         Measures the surface inside the lattices' cells (the scene must be committed).
         """
+    def current_field(self) -> typing.Any:
+        """
+        The lattice itself: it is its own IndirectField (not to be read while a pass runs).
+        """
+    def refine(self, progress: Progress = None) -> None:
+        """
+        Traces one more pass of photons and rebuilds the lattices (GIL released). Raises shgi.Cancelled on cancel, keeping the previous solution.
+        """
     def reset(self, progress: Progress = None) -> None:
         """
         Forgets every pass and re-measures the (re-committed) scene.
         """
     def solve(self, progress: Progress = None) -> None:
         """
-        Traces one more pass of photons and rebuilds the lattices (GIL released). Raises shgi.Cancelled on cancel, keeping the previous solution.
+        The same as refine().
         """
     @property
     def lattices(self) -> dict:
@@ -1274,6 +1339,11 @@ class PhotonLattice(IndirectField):
     def settings(self) -> PhotonLatticeSettings:
         """
         A copy of the settings.
+        """
+    @property
+    def stage_seconds(self) -> list:
+        """
+        [(stage, seconds)] of the last pass.
         """
     @property
     def timings(self) -> dict:
@@ -1675,12 +1745,12 @@ class ProbeField(IndirectField):
         """
         The ProbeVolumes, in probe order.
         """
-class ProbeGrid(IndirectField):
+class ProbeGrid(IndirectField, GiSolver):
     """
     
     SH probe grids updated by path tracing (seed 002), with DDGI-style relocation and visibility.
     
-    Each update() traces rays_per_probe paths per active probe and blends them into the probes
+    Each refine() (or update(), its older name) traces rays_per_probe paths per active probe and blends them into the probes
     (running mean, then an exponential blend with `hysteresis`). field() returns a snapshot for
     rendering that later updates leave untouched. After editing and re-committing the scene, call
     reset().
@@ -1697,13 +1767,21 @@ class ProbeGrid(IndirectField):
         """
         Places the probes (the scene must be committed).
         """
+    def current_field(self) -> ProbeField:
+        """
+        The same as field().
+        """
     def export(self, json_path: str | bytes | os.PathLike) -> None:
         """
         Writes <stem>.json and per volume <stem>_volume<v>.exr (float SH, positions, active, variance) and <stem>_volume<v>_visibility.exr; the JSON states basis, units and layout.
         """
     def field(self) -> ProbeField:
         """
-        An immutable ProbeField of the current probes (safe to render while update() runs on another thread).
+        An immutable ProbeField of the current probes (safe to render while refine() runs on another thread).
+        """
+    def refine(self, progress: Progress = None) -> None:
+        """
+        One update pass (GIL released). Raises shgi.Cancelled on cancel, keeping the previous probes.
         """
     def relative_error(self) -> numpy.typing.NDArray[numpy.float32]:
         """
@@ -1719,7 +1797,7 @@ class ProbeGrid(IndirectField):
         """
     def update(self, progress: Progress = None) -> None:
         """
-        One update pass (GIL released). Raises shgi.Cancelled on cancel, keeping the previous probes.
+        The same as refine().
         """
     @property
     def active(self) -> numpy.typing.NDArray[numpy.bool]:
@@ -1765,6 +1843,11 @@ class ProbeGrid(IndirectField):
     def sh(self) -> numpy.typing.NDArray[numpy.float32]:
         """
         (N, coefficients, 3) float32 incident radiance SH per probe (W m^-2 sr^-1), index l(l+1)+m, no Condon-Shortley phase.
+        """
+    @property
+    def stage_seconds(self) -> list:
+        """
+        [(stage, seconds)] of the last placement and pass.
         """
     @property
     def timings(self) -> dict:
@@ -2533,6 +2616,10 @@ def log_level() -> LogLevel:
     """
     The current minimum log level.
     """
+def make_native_solver(method: str, scene: Scene, settings: typing.Any = None, progress: Progress = None) -> GiSolver:
+    """
+    The solver of a native method on a committed scene (settings None: the defaults); use shgi.make_solver, which also knows methods registered from Python.
+    """
 def max_threads() -> int:
     """
     The number of worker threads SHGI may use.
@@ -2544,6 +2631,10 @@ def memory_limits() -> dict:
 def merge_lightmap(into: LightmapTexels, part: LightmapTexels) -> None:
     """
     Copies the texels `part` baked into `into` (ValueError when shards overlap).
+    """
+def native_methods() -> list[NativeMethod]:
+    """
+    The native registry's rows, in menu order (shgi.methods() adds Python ones).
     """
 def rasterize_texels(scene: Scene, instance: typing.SupportsIndex, settings: TexelRasterSettings = ..., progress: Progress = None) -> TexelMap:
     """
@@ -2574,6 +2665,10 @@ def render_path_traced(scene: Scene, settings: PathTracerSettings = ..., progres
 def render_preview(scene: Scene, field: IndirectField, settings: PreviewSettings = ..., camera: Camera = None, progress: Progress = None) -> tuple[dict, dict]:
     """
     Renders settings.samples samples per pixel with indirect light from `field` (None: direct only); returns (passes dict, timings dict in seconds).
+    """
+def reserved_method_numbers() -> list[tuple[str, int]]:
+    """
+    (identifier, number) of methods still to come: their numbers stay reserved.
     """
 def set_log_level(level: LogLevel) -> None:
     """
