@@ -13,6 +13,7 @@
 
 #include "io/gltf_loader.h"
 #include "io/obj_loader.h"
+#include "interruptible.h"
 #include "path_arg.h"
 #include "scene/scene.h"
 
@@ -42,7 +43,7 @@ void bind_loaders(py::module_& m) {
         "load_gltf",
         [](const PathArg& path, const std::string& lighting_mode,
            bool import_lights, bool import_camera, bool import_textures, float light_radius,
-           float sun_angle) {
+           float sun_angle, Progress* progress) {
             if (!(light_radius >= 0.0f) || !std::isfinite(light_radius))
                 throw py::value_error("light_radius: must be a finite value >= 0 (m), got " +
                                       std::to_string(light_radius));
@@ -56,17 +57,13 @@ void bind_loaders(py::module_& m) {
             options.import_textures = import_textures;
             options.light_radius = light_radius;
             options.sun_angle = sun_angle;
-            std::optional<Scene> scene;
-            {
-                py::gil_scoped_release release;
-                scene.emplace(load_gltf(path.value, options));
-            }
-            return std::move(*scene);
+            return run_interruptible(
+                progress, [&](Progress* used) { return load_gltf(path.value, options, used); });
         },
         py::arg("path"), py::kw_only(), py::arg("lighting_mode") = "SPEC",
         py::arg("import_lights") = true, py::arg("import_camera") = true,
         py::arg("import_textures") = true, py::arg("light_radius") = kBlenderDefaultLightRadius,
-        py::arg("sun_angle") = kBlenderDefaultSunAngle,
+        py::arg("sun_angle") = kBlenderDefaultSunAngle, py::arg("progress") = py::none(),
         R"doc(
 Loads the default scene of a glTF 2.0 file (.gltf or .glb) into a new, uncommitted Scene, as
 Blender 3.4's glTF importer would import it.
@@ -87,17 +84,13 @@ logged as warnings.)doc");
 
     m.def(
         "load_obj",
-        [](const PathArg& path, const std::string& up_axis) {
+        [](const PathArg& path, const std::string& up_axis, Progress* progress) {
             ObjLoadOptions options;
             options.up_axis = up_axis_from_name(up_axis);
-            std::optional<Scene> scene;
-            {
-                py::gil_scoped_release release;
-                scene.emplace(load_obj(path.value, options));
-            }
-            return std::move(*scene);
+            return run_interruptible(
+                progress, [&](Progress* used) { return load_obj(path.value, options, used); });
         },
-        py::arg("path"), py::kw_only(), py::arg("up_axis") = "Y",
+        py::arg("path"), py::kw_only(), py::arg("up_axis") = "Y", py::arg("progress") = py::none(),
         R"doc(
 Loads a Wavefront OBJ file and the .mtl files it names (looked up beside it) into a new,
 uncommitted Scene, as Blender 3.4's OBJ importer would import it.
@@ -108,7 +101,9 @@ maps them: Kd base colour, Ke emission, Ks specular, Ns roughness = 1 - sqrt(Ns 
 Ni IOR, Pr/Pm (PBR extension) roughness/metallic; d/Tr are ignored.
 up_axis: "Y" (the importer's default: forward -Z, up Y, converted to Z-up) or "Z" (no change).
 Raises OSError naming the file when it is missing or malformed, or when a face refers to a
-vertex, normal or UV that does not exist; a missing .mtl is logged as a warning.)doc");
+vertex, normal or UV that does not exist; a missing .mtl is logged as a warning.
+progress: a shgi.Progress ("reading", then "importing" shape by shape); its cancel, or Ctrl-C,
+    stops the load with shgi.Cancelled (KeyboardInterrupt) between shapes.)doc");
 }
 
 }  // namespace shgi::python

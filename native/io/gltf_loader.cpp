@@ -71,6 +71,9 @@ std::string trimmed(std::string text) {
     return text;
 }
 
+// Share of a load's progress given to reading the file (the rest: importing its nodes).
+constexpr float kReadingShare = 0.5f;
+
 // ---------------------------------------------------------------------------------------------
 // Step 1: reading the file.
 
@@ -79,6 +82,7 @@ std::string trimmed(std::string text) {
 struct ImageDecoding {
     const tinygltf::Model* model = nullptr;
     std::vector<std::string> failures;
+    Progress* progress = nullptr;  // polled for cancel before each image
 };
 
 // tinygltf hands an image stored in a buffer view to the callback as
@@ -111,6 +115,7 @@ bool decode_image_or_record(tinygltf::Image* image, const int image_index, std::
                             std::string* warn, int req_width, int req_height,
                             const unsigned char* bytes, int size, void* user_data) {
     auto* decoding = static_cast<ImageDecoding*>(user_data);
+    throw_if_cancelled(decoding->progress);  // Cancelled passes through tinygltf (read_model)
     if (!image_view_fits(*image, image_index, *decoding->model, err)) return false;
     std::string error;
     if (tinygltf::LoadImageData(image, image_index, &error, warn, req_width, req_height, bytes,
@@ -198,12 +203,14 @@ bool starts_with_glb_magic(const std::string& path) {
     return file.gcount() == 4 && std::memcmp(magic.data(), kGlbMagic, 4) == 0;
 }
 
-tinygltf::Model read_model(const std::string& path, const GltfLoadOptions& options) {
+tinygltf::Model read_model(const std::string& path, const GltfLoadOptions& options,
+                           Progress* progress) {
     // The container is told by its content, not its extension: some tools write .glb as .gltf.
     const bool binary = starts_with_glb_magic(path);
     tinygltf::Model model;
     ImageDecoding image_decoding;
     image_decoding.model = &model;
+    image_decoding.progress = progress;
     tinygltf::TinyGLTF parser;
     parser.SetFsCallbacks({&file_exists, &tinygltf::ExpandFilePath, &read_regular_file,
                            &tinygltf::WriteWholeFile, nullptr});
@@ -238,6 +245,8 @@ tinygltf::Model read_model(const std::string& path, const GltfLoadOptions& optio
                                                  base_dir);
     } catch (const std::bad_alloc&) {
         throw;  // MemoryError
+    } catch (const Cancelled&) {
+        throw;  // from the image callback
     } catch (const std::exception& thrown) {
         ok = false;
         error += format_message("the reader stopped at damaged data (", thrown.what(), ")");
@@ -564,8 +573,9 @@ mat4 node_local_matrix(const tinygltf::Node& node) {
 class GltfImporter {
   public:
     GltfImporter(const std::string& path, const tinygltf::Model& model,
-                 const GltfLoadOptions& options)
-        : path_(path), model_(model), options_(options), accessors_(path, model) {}
+                 const GltfLoadOptions& options, Progress* progress)
+        : path_(path), model_(model), options_(options), progress_(progress),
+          accessors_(path, model) {}
 
     Scene run();
 
@@ -591,6 +601,7 @@ class GltfImporter {
     const std::string& path_;
     const tinygltf::Model& model_;
     const GltfLoadOptions& options_;
+    Progress* progress_;
     AccessorReader accessors_;
     Scene scene_;
     std::map<int, std::vector<uint32_t>> mesh_ids_;  // glTF mesh -> its SHGI mesh, if triangles
@@ -643,6 +654,7 @@ Scene GltfImporter::run() {
     const std::vector<int> roots = root_nodes();
     for (auto root = roots.rbegin(); root != roots.rend(); ++root)
         stack.push_back({*root, mat4(1.0f), false});
+    uint64_t nodes_done = 0;
     while (!stack.empty()) {
         const Pending item = stack.back();
         stack.pop_back();
@@ -660,6 +672,8 @@ Scene GltfImporter::run() {
                 "twice as a child or as a root); glTF 2.0 allows each node one parent: re-export "
                 "the file, or use a mesh in several nodes to instance it"));
         on_path[size_t(item.node)] = visited[size_t(item.node)] = 1;
+        throw_if_cancelled(progress_);
+        if (progress_) progress_->report(nodes_done++, model_.nodes.size());
         stack.push_back({item.node, mat4(1.0f), true});
         const mat4 gltf_world = visit_node(item.node, item.gltf_world_from_parent);
         const std::vector<int>& children = model_.nodes[size_t(item.node)].children;
@@ -983,10 +997,15 @@ float gltf_sun_strength(float illuminance, GltfLightingMode mode) {
     return mode == GltfLightingMode::Spec ? illuminance / kPbrWattsToLumens : illuminance;
 }
 
-Scene load_gltf(const std::string& path, const GltfLoadOptions& options) {
-    const tinygltf::Model model = read_model(path, options);
+Scene load_gltf(const std::string& path, const GltfLoadOptions& options, Progress* progress) {
+    if (progress) progress->begin_stage("reading", 0.0f, kReadingShare);
+    throw_if_cancelled(progress);
+    const tinygltf::Model model = read_model(path, options, progress);
+    if (progress) progress->begin_stage("importing", kReadingShare, 1.0f);
     try {
-        return GltfImporter(path, model, options).run();
+        Scene scene = GltfImporter(path, model, options, progress).run();
+        if (progress) progress->set_fraction(1.0f);
+        return scene;
     } catch (const InvalidArgument& error) {
         // Scene::add_* rejected a converted value (NaN vertex, bad light angle, ...).
         throw IoError(format_message(path, ": ", error.what()));

@@ -42,6 +42,7 @@
 
 #include "scene/scene.h"
 #include "util/math.h"
+#include "util/progress.h"
 
 namespace shgi {
 
@@ -75,7 +76,11 @@ struct GltfLoadOptions {
 // Each glTF mesh used by a node becomes one Mesh (shared by every node using it), its TRIANGLES
 // primitives merged with a material per triangle as Blender's material slots, and each use one
 // Instance named after the node. Throws IoError naming `path` on any failure.
-Scene load_gltf(const std::string& path, const GltfLoadOptions& options = {});
+// Progress: "reading" (the file, its buffers and images; cancel is polled before and between
+// images, as tinygltf parses the JSON and buffers in one call) then "importing" (node by node,
+// each mesh built at its first use); Cancelled within one image or one node.
+Scene load_gltf(const std::string& path, const GltfLoadOptions& options = {},
+                Progress* progress = nullptr);
 
 // C in the header text above: Blender (Z-up) coordinates from glTF (Y-up) coordinates.
 mat4 blender_from_gltf();

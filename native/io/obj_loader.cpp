@@ -334,8 +334,9 @@ Material material_from_mtl(const tinyobj::material_t& source, const std::set<std
 
 class ObjImporter {
   public:
-    ObjImporter(const std::string& path, const ObjData& data, const ObjLoadOptions& options)
-        : path_(path), data_(data), options_(options) {}
+    ObjImporter(const std::string& path, const ObjData& data, const ObjLoadOptions& options,
+                Progress* progress)
+        : path_(path), data_(data), options_(options), progress_(progress) {}
 
     Scene run();
 
@@ -352,6 +353,7 @@ class ObjImporter {
     const std::string& path_;
     const ObjData& data_;
     const ObjLoadOptions& options_;
+    Progress* progress_;
     Scene scene_;
     std::map<int, uint32_t> material_ids_;  // tinyobj material (-1 = none) -> SHGI material
     // Corner (v, vt, vn) -> vertex of the mesh being built.
@@ -360,6 +362,8 @@ class ObjImporter {
 
 Scene ObjImporter::run() {
     for (size_t s = 0; s < data_.shapes.size(); ++s) {
+        throw_if_cancelled(progress_);
+        if (progress_) progress_->report(s, data_.shapes.size());
         const tinyobj::shape_t& shape = data_.shapes[s];
         const std::string name = shape.name.empty() ? format_message("shape_", s)
                                                     : utf8_name(shape.name, "shape", path_);
@@ -382,9 +386,14 @@ void ObjImporter::check_corner(const tinyobj::index_t& corner, const std::string
                                          kind, " ", index + 1, " (1-based) but the file has ",
                                          count));
     };
+    // tinyobjloader resolves a negative (relative) index against the vertices read so far, so
+    // one that reaches before the first vertex arrives here below 0, as a missing one would.
     if (corner.vertex_index < 0)
-        throw IoError(format_message(path_, ": shape '", shape, "' face ", face,
-                                     " has a corner without a vertex index"));
+        throw IoError(format_message(
+            path_, ": shape '", shape, "' face ", face, " has a corner whose vertex index is "
+            "missing or points before the first vertex (a negative index counts back from the "
+            "last vertex defined above the face; the file has ", data_.attrib.vertices.size() / 3,
+            " vertices)"));
     check(corner.vertex_index, data_.attrib.vertices.size() / 3, "vertex (v)");
     check(corner.texcoord_index, data_.attrib.texcoords.size() / 2, "texture coordinate (vt)");
     check(corner.normal_index, data_.attrib.normals.size() / 3, "normal (vn)");
@@ -481,10 +490,18 @@ float obj_roughness_from_exponent(float ns) {
     return 1.0f - std::sqrt(std::clamp(ns, 0.0f, kMaxSpecularExponent) / kMaxSpecularExponent);
 }
 
-Scene load_obj(const std::string& path, const ObjLoadOptions& options) {
+// Share of a load's progress given to reading the file (the rest: importing its shapes).
+constexpr float kReadingShare = 0.5f;
+
+Scene load_obj(const std::string& path, const ObjLoadOptions& options, Progress* progress) {
+    if (progress) progress->begin_stage("reading", 0.0f, kReadingShare);
+    throw_if_cancelled(progress);
     const ObjData data = read_obj(path);
+    if (progress) progress->begin_stage("importing", kReadingShare, 1.0f);
     try {
-        return ObjImporter(path, data, options).run();
+        Scene scene = ObjImporter(path, data, options, progress).run();
+        if (progress) progress->set_fraction(1.0f);
+        return scene;
     } catch (const InvalidArgument& error) {
         // Scene::add_* rejected a converted value (NaN vertex, ...).
         throw IoError(format_message(path, ": ", error.what()));

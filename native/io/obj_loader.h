@@ -34,6 +34,7 @@
 #include <string>
 
 #include "scene/scene.h"
+#include "util/progress.h"
 
 namespace shgi {
 
@@ -45,7 +46,10 @@ struct ObjLoadOptions {
 };
 
 // Throws IoError naming `path` on any failure; .mtl files are looked up beside the .obj.
-Scene load_obj(const std::string& path, const ObjLoadOptions& options = {});
+// Progress: "reading" (tinyobjloader parses the file in one call: cancel is polled before and
+// after it) then "importing" (shape by shape); Cancelled within one shape.
+Scene load_obj(const std::string& path, const ObjLoadOptions& options = {},
+               Progress* progress = nullptr);
 
 // Blender's specular-exponent to roughness mapping (see above).
 float obj_roughness_from_exponent(float ns);

@@ -306,3 +306,48 @@ def test_load_obj_malformed_names_the_path(tmp_path):
 def test_load_obj_bad_up_axis_is_valueerror(tmp_path):
     with pytest.raises(ValueError, match="up_axis"):
         shgi.load_obj(write_obj(tmp_path), up_axis="X")
+
+
+def test_a_relative_obj_index_before_the_first_vertex_is_named_as_such(tmp_path):
+    path = write_obj(tmp_path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -7\n")
+    with pytest.raises(OSError, match="points before the first vertex .* the file has 3 "
+                                      "vertices"):
+        shgi.load_obj(path)
+
+
+def many_nodes_document(nodes):
+    """gltf_document's floor quad used by `nodes` nodes (a heavily instanced scene)."""
+    document = gltf_document()
+    document["nodes"] = [{"name": f"Floor.{i}", "mesh": 0, "translation": [0, 2 + i, 0]}
+                         for i in range(nodes)]
+    document["scenes"] = [{"nodes": list(range(nodes))}]
+    return document
+
+
+@pytest.mark.parametrize("loader", ["gltf", "obj"])
+def test_loading_reports_its_stages_and_is_cancelled_by_its_progress(tmp_path, loader):
+    if loader == "gltf":
+        path = write_gltf(tmp_path / "many.gltf", many_nodes_document(200))
+        load = shgi.load_gltf
+    else:
+        text = "".join(f"o Quad.{i}\nv 0 0 {i}\nv 1 0 {i}\nv 0 1 {i}\nf -3 -2 -1\n"
+                       for i in range(200))
+        path = write_obj(tmp_path, text)
+        load = shgi.load_obj
+    seen = []
+    progress = shgi.Progress(lambda fraction, stage: seen.append((stage, fraction)),
+                             min_interval=0.0)
+    scene = load(path, progress=progress)
+    assert len(scene.instances) == 200
+    assert [stage for stage, _ in seen if stage == "reading"] and \
+        [stage for stage, _ in seen if stage == "importing"]
+    fractions = [fraction for _, fraction in seen]
+    assert fractions == sorted(fractions) and fractions[-1] == pytest.approx(1.0)
+
+    def cancel_while_importing(fraction, stage):
+        if stage == "importing" and fraction > 0.6:
+            cancelling.cancel()
+
+    cancelling = shgi.Progress(cancel_while_importing, min_interval=0.0)
+    with pytest.raises(shgi.Cancelled):
+        load(path, progress=cancelling)

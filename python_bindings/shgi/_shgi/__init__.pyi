@@ -2580,7 +2580,7 @@ def linear_from_srgb(encoded: typing.Annotated[numpy.typing.ArrayLike, numpy.flo
     Inverse sRGB transfer function: x / 12.92 up to 0.04045, ((x + 0.055) / 1.055)**2.4 above.
     Input is clamped to [0, 1] (NaN -> 0). Accepts a float or an array (float32 result).
     """
-def load_gltf(path: str | bytes | os.PathLike, *, lighting_mode: str = 'SPEC', import_lights: bool = True, import_camera: bool = True, import_textures: bool = True, light_radius: typing.SupportsFloat | typing.SupportsIndex = 0.25, sun_angle: typing.SupportsFloat | typing.SupportsIndex = 0.009180432185530663) -> Scene:
+def load_gltf(path: str | bytes | os.PathLike, *, lighting_mode: str = 'SPEC', import_lights: bool = True, import_camera: bool = True, import_textures: bool = True, light_radius: typing.SupportsFloat | typing.SupportsIndex = 0.25, sun_angle: typing.SupportsFloat | typing.SupportsIndex = 0.009180432185530663, progress: Progress = None) -> Scene:
     """
     Loads the default scene of a glTF 2.0 file (.gltf or .glb) into a new, uncommitted Scene, as
     Blender 3.4's glTF importer would import it.
@@ -2599,7 +2599,7 @@ def load_gltf(path: str | bytes | os.PathLike, *, lighting_mode: str = 'SPEC', i
     extensions; problems that only cost a part (an undecodable image, a non-triangle primitive) are
     logged as warnings.
     """
-def load_obj(path: str | bytes | os.PathLike, *, up_axis: str = 'Y') -> Scene:
+def load_obj(path: str | bytes | os.PathLike, *, up_axis: str = 'Y', progress: Progress = None) -> Scene:
     """
     Loads a Wavefront OBJ file and the .mtl files it names (looked up beside it) into a new,
     uncommitted Scene, as Blender 3.4's OBJ importer would import it.
@@ -2611,6 +2611,8 @@ def load_obj(path: str | bytes | os.PathLike, *, up_axis: str = 'Y') -> Scene:
     up_axis: "Y" (the importer's default: forward -Z, up Y, converted to Z-up) or "Z" (no change).
     Raises OSError naming the file when it is missing or malformed, or when a face refers to a
     vertex, normal or UV that does not exist; a missing .mtl is logged as a warning.
+    progress: a shgi.Progress ("reading", then "importing" shape by shape); its cancel, or Ctrl-C,
+        stops the load with shgi.Cancelled (KeyboardInterrupt) between shapes.
     """
 def log_level() -> LogLevel:
     """
