@@ -109,6 +109,13 @@ void PhotonLattice::reset(Progress* progress) {
     caustic_radius_ = settings_.caustic_radius > 0.0f
                           ? settings_.caustic_radius
                           : kDefaultCausticRadiusFraction * glm::length(bounds_.extent());
+    // Each lattice checked its own cells against the memory left when it was made (the caustic
+    // one after the global one took its share); the sums over passes are copies of both.
+    require_memory(saturating_add(global.memory_bytes(), caustic.memory_bytes()),
+                   format_message("PhotonLattice: the per-pass sums beside the lattices (resolution ",
+                                  settings_.resolution, ", caustic_resolution ",
+                                  settings_.caustic_resolution, ")"),
+                   "lower resolution or caustic_resolution");
     global_raw_ = global;
     global_ = std::move(global);
     caustic_raw_ = caustic;

@@ -201,3 +201,24 @@ def test_an_sh_lattice_beyond_a_fake_rlimit_as_is_refused_naming_its_cells():
     assert needed == 64000000 * 117 > allowed
     assert limited_by == "RLIMIT_AS"
     assert out.strip().endswith("lower the resolution")
+
+
+def test_a_photon_lattice_whose_lattices_fit_one_by_one_but_not_with_their_sums_is_refused():
+    """The global lattice fits what is left; the per-pass sums beside it (a copy) do not: the
+    lattice checks their sum before copying, naming both resolutions."""
+    out = run_limited("""
+        import scenes
+        from scene_support import committed
+        scene = committed(scenes.cornell_box(0.1))
+        try:
+            shgi.PhotonLattice(scene, shgi.PhotonLatticeSettings(
+                resolution=260, caustics=shgi.CausticMode.OFF))
+            print("allocated")
+        except MemoryError as error:
+            print(error)
+    """, int(3.5 * 2**30))
+    assert out.startswith("PhotonLattice: the per-pass sums beside the lattices (resolution 260, "
+                          "caustic_resolution 64) needs"), out
+    needed, allowed, limited_by = needed_and_allowed(out)
+    assert allowed < needed and limited_by == "RLIMIT_AS"
+    assert out.strip().endswith("lower resolution or caustic_resolution")
