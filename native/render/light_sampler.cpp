@@ -97,31 +97,67 @@ float area_light_area(const Light& light) {
     return is_round(light.shape) ? kEllipseAreaFactor * rectangle : rectangle;
 }
 
+namespace {
+
+// What the light tree knows of a scene light (LightSampler's constructor skips portals and
+// dark lights): its extent, emission cone and intensity along its axis (W/sr, luminance).
+LightBounds light_bounds(const Light& light) {
+    LightBounds b;
+    const float colour = luminance(light.color);
+    if (light.type == LightType::Area) {
+        vec3 ex, ey;
+        area_half_axes(light, &ex, &ey);
+        for (const float sx : {-1.0f, 1.0f})
+            for (const float sy : {-1.0f, 1.0f}) b.bounds.extend(light.position() + sx * ex + sy * ey);
+        b.axis = light.direction();
+        b.theta_o = 0.0f;          // one-sided Lambertian emitter
+        b.theta_e = kPi / 2.0f;
+        b.energy = colour * light.power / 4.0f;  // L A along the axis, L = P / (4 A)
+        return b;
+    }
+    const vec3 r(light.radius);
+    b.bounds.extend(light.position() - r);
+    b.bounds.extend(light.position() + r);
+    b.energy = colour * point_intensity_from_power(light.power);
+    if (light.type == LightType::Spot) {
+        b.axis = light.direction();
+        b.theta_o = std::min(0.5f * light.spot_size, kPi);
+        b.theta_e = 0.0f;
+    }
+    return b;
+}
+
+LightBounds triangle_bounds(const EmissiveTriangle& tri) {
+    LightBounds b;
+    for (const vec3& v : {tri.p0, tri.p1, tri.p2}) b.bounds.extend(v);
+    b.energy = luminance(tri.radiance) * tri.area;  // two-sided: omnidirectional cone
+    return b;
+}
+
+}  // namespace
+
 LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, bool sample_world)
     : scene_(&scene), world_sampling_(world_sampling) {
     if (!scene.committed())
         throw InvalidArgument("LightSampler: the scene is not committed; call commit() first");
-    // Power estimates only steer selection; any positive weights keep the estimator unbiased.
-    const float radius = scene.bounding_radius();
-    const float disk_area = kPi * radius * radius;
-    std::vector<float> weights;
+    // Weights only steer selection; any positive weights keep the estimator unbiased. Local
+    // emitters weigh by intensity (the tree divides by distance squared), distant ones by
+    // irradiance, so the two compare as irradiance estimates at the shading point.
     light_emitter_.assign(scene.lights().size(), kInvalidId);
-    for (uint32_t i = 0; i < scene.lights().size(); ++i) {
-        const Light& light = scene.lights()[i];
-        if (light.portal) continue;  // marks an opening: see scene_portals
-        const float power = light.type == LightType::Sun
-                                ? light.strength * disk_area
-                                : light.power;
-        const float weight = luminance(light.color) * power;
-        if (!(weight > 0.0f)) continue;
-        light_emitter_[i] = uint32_t(emitters_.size());
-        emitters_.push_back({Kind::Light, i});
-        weights.push_back(weight);
-    }
     area_emission_.resize(scene.lights().size());
     for (uint32_t i = 0; i < scene.lights().size(); ++i) {
         const Light& light = scene.lights()[i];
-        if (light_emitter_[i] == kInvalidId || light.type != LightType::Area) continue;
+        if (light.portal) continue;  // marks an opening: see scene_portals
+        const bool sun = light.type == LightType::Sun;
+        const float weight =
+            sun ? luminance(light.color) * light.strength : light_bounds(light).energy;
+        if (!(weight > 0.0f)) continue;
+        light_emitter_[i] = uint32_t(emitters_.size());
+        if (sun)
+            add_distant(Kind::Light, i, weight);
+        else
+            add_local(Kind::Light, i, light_bounds(light));
+        if (light.type != LightType::Area) continue;
         AreaEmission& emission = area_emission_[i];
         emission.normal = area_emit_normal(light);
         emission.area = area_light_area(light);
@@ -129,27 +165,69 @@ LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, boo
     }
     const auto& triangles = scene.emissive_triangles();
     for (uint32_t i = 0; i < triangles.size(); ++i) {
-        const float weight = luminance(triangles[i].radiance) * kPi * triangles[i].area;
-        if (!(weight > 0.0f)) continue;
+        const LightBounds bounds = triangle_bounds(triangles[i]);
+        if (!(bounds.energy > 0.0f)) continue;
         triangle_emitter_[triangle_key(triangles[i].instance_id, triangles[i].triangle_id)] =
             uint32_t(emitters_.size());
-        emitters_.push_back({Kind::Triangle, i});
-        weights.push_back(weight);
+        add_local(Kind::Triangle, i, bounds);
     }
-    const float world_weight = luminance(scene.world().radiance()) * kPi * 4.0f * disk_area;
+    // The world's irradiance on a surface open to it.
+    const float world_weight = luminance(scene.world().radiance()) * kPi;
     if (world_weight > 0.0f && sample_world) {
         world_emitter_ = uint32_t(emitters_.size());
-        emitters_.push_back({Kind::World, 0});
-        weights.push_back(world_weight);
+        add_distant(Kind::World, 0, world_weight);
     }
     portals_ = scene_portals(scene);
-    if (!weights.empty()) distribution_ = DiscreteDistribution(weights);
+    tree_ = LightTree(local_bounds_);
+    if (!distant_weights_.empty()) distant_ = DiscreteDistribution(distant_weights_);
+}
+
+void LightSampler::add_local(Kind kind, uint32_t index, const LightBounds& bounds) {
+    emitters_.push_back({kind, index, uint32_t(local_bounds_.size()), false});
+    local_bounds_.push_back(bounds);
+    local_emitter_.push_back(uint32_t(emitters_.size() - 1));
+}
+
+void LightSampler::add_distant(Kind kind, uint32_t index, float irradiance) {
+    emitters_.push_back({kind, index, uint32_t(distant_weights_.size()), true});
+    distant_weights_.push_back(irradiance);
+    distant_emitter_.push_back(uint32_t(emitters_.size() - 1));
+    distant_total_ += irradiance;
+}
+
+float LightSampler::local_probability(const vec3& p) const {
+    if (tree_.empty()) return 0.0f;
+    if (distant_total_ <= 0.0f) return 1.0f;
+    const float local = tree_.importance(p);
+    return local / (local + distant_total_);
+}
+
+float LightSampler::selection_pdf(uint32_t emitter, const vec3& p) const {
+    const Emitter& e = emitters_[emitter];
+    if (e.distant) return (1.0f - local_probability(p)) * distant_.pdf(e.group_index);
+    return local_probability(p) * tree_.pmf(p, e.group_index);
 }
 
 bool LightSampler::sample(const vec3& p, const vec3& n, float u_select, const vec2& u,
                           LightSample* out) const {
     if (empty()) return false;
-    const uint32_t chosen = distribution_.sample(u_select);
+    const float p_local = local_probability(p);
+    uint32_t chosen;
+    float selection;
+    if (u_select < p_local) {
+        uint32_t local;
+        float pmf;
+        if (!tree_.sample(p, std::min(u_select / p_local, kOneMinusEpsilon), &local, &pmf))
+            return false;
+        chosen = local_emitter_[local];
+        selection = p_local * pmf;
+    } else {
+        const float u_distant =
+            std::min((u_select - p_local) / (1.0f - p_local), kOneMinusEpsilon);
+        const uint32_t distant = distant_.sample(u_distant);
+        chosen = distant_emitter_[distant];
+        selection = (1.0f - p_local) * distant_.pdf(distant);
+    }
     const Emitter& emitter = emitters_[chosen];
     bool ok = false;
     if (emitter.kind == Kind::Light) {
@@ -160,7 +238,7 @@ bool LightSampler::sample(const vec3& p, const vec3& n, float u_select, const ve
         ok = sample_world(p, n, u, out);
     }
     if (!ok) return false;
-    out->pdf *= selection_pdf(chosen);
+    out->pdf *= selection;
     return out->pdf > 0.0f && is_finite(out->radiance);
 }
 
@@ -363,7 +441,7 @@ bool LightSampler::intersect_lights(const vec3& p, const vec3& wi, float t_max, 
         best_t = t;
         found = true;
         out->radiance = radiance;
-        out->light_pdf = selection_pdf(light_emitter_[i]) * t * t / (cos_light * area);
+        out->light_pdf = selection_pdf(light_emitter_[i], p) * t * t / (cos_light * area);
     }
     return found;
 }
@@ -375,14 +453,15 @@ std::vector<EmissionHit> LightSampler::escaped(const vec3& p, const vec3& n, con
     return hits;
 }
 
-EmissionHit LightSampler::triangle_emission(const Hit& hit, const vec3& wi) const {
+EmissionHit LightSampler::triangle_emission(const vec3& p, const Hit& hit, const vec3& wi) const {
     if (triangle_emitter_.empty()) return {};  // spares a hash lookup per hit in most scenes
     const auto found = triangle_emitter_.find(triangle_key(hit.instance_id, hit.triangle_id));
     if (found == triangle_emitter_.end()) return {};
     const EmissiveTriangle& tri = scene_->emissive_triangles()[emitters_[found->second].index];
     const float cos_light = std::fabs(glm::dot(wi, glm::normalize(hit.geometric_normal)));
     if (cos_light <= 0.0f) return {};
-    return {tri.radiance, selection_pdf(found->second) * hit.t * hit.t / (cos_light * tri.area)};
+    return {tri.radiance,
+            selection_pdf(found->second, p) * hit.t * hit.t / (cos_light * tri.area)};
 }
 
 }  // namespace shgi

@@ -34,10 +34,14 @@
 // that mixture, so the estimate stays unbiased for light that enters elsewhere. Suns are not
 // affected (their cone is sampled directly).
 //
-// Selection: one emitter per NEE sample, chosen with probability proportional to an estimate of
-// its power (util DiscreteDistribution). Returned pdfs include that selection probability and are
-// per unit solid angle at the shading point; delta emitters (r = 0 point/spot, angle = 0 sun)
-// return the incident radiance scale (intensity / d^2 or irradiance) with delta = true.
+// Selection: one emitter per NEE sample, chosen for the shading point p. Local emitters (point,
+// spot and area lights, emissive triangles) are chosen by a light tree (render/light_tree.h:
+// their distance, orientation and intensity seen from p), distant ones (suns, the world) by
+// their irradiance (util DiscreteDistribution); the two groups are weighed by the tree's root
+// importance at p against the distant irradiance. Returned pdfs include that selection
+// probability and are per unit solid angle at the shading point; delta emitters (r = 0
+// point/spot, angle = 0 sun) return the incident radiance scale (intensity / d^2 or irradiance)
+// with delta = true.
 #pragma once
 
 #include <cmath>
@@ -45,6 +49,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "render/light_tree.h"
 #include "scene/scene.h"
 #include "util/math.h"
 #include "util/sampling.h"
@@ -86,7 +91,9 @@ class LightSampler {
     // sample_world is false (escaped rays still see it, with a light pdf of 0).
     LightSampler(const Scene& scene, WorldSampling world_sampling, bool sample_world = true);
 
-    bool empty() const { return distribution_.empty(); }
+    bool empty() const { return emitters_.empty(); }
+    // Emitters NEE can choose (selection_pdf's indices run over [0, emitter_count())).
+    size_t emitter_count() const { return emitters_.size(); }
 
     // Samples an emitter for shading point p with (shading) normal n (used by cosine world
     // sampling only). False when the chosen emitter cannot reach p (behind an area light ...).
@@ -107,8 +114,10 @@ class LightSampler {
     // The same, collected (tests).
     std::vector<EmissionHit> escaped(const vec3& p, const vec3& n, const vec3& wi,
                                      bool camera_ray) const;
-    // An emissive triangle hit at `hit` from p.
-    EmissionHit triangle_emission(const Hit& hit, const vec3& wi) const;
+    // An emissive triangle hit at `hit` by a ray from p.
+    EmissionHit triangle_emission(const vec3& p, const Hit& hit, const vec3& wi) const;
+    // The probability that sample() chooses emitter `emitter` (an index of emitters_) at p.
+    float selection_pdf(uint32_t emitter, const vec3& p) const;
     // Everything a ray from p (shading normal n) along wi meets as emission up to its scene hit
     // `hit`: a point/spot disk or area light in front of the hit; else the hit triangle's own
     // emission; else, for a miss, the world and suns (for_each_escaped). Calls
@@ -122,7 +131,13 @@ class LightSampler {
     struct Emitter {
         Kind kind;
         uint32_t index;  // into scene lights / emissive triangles
+        uint32_t group_index = 0;  // in the light tree (local) or distant_ (suns, world)
+        bool distant = false;
     };
+    // The probability of choosing a local emitter (the tree) rather than a distant one at p.
+    float local_probability(const vec3& p) const;
+    void add_local(Kind kind, uint32_t index, const LightBounds& bounds);
+    void add_distant(Kind kind, uint32_t index, float irradiance);  // W/m^2
 
     bool sample_light(uint32_t index, const vec3& p, const vec2& u, LightSample* out) const;
     bool sample_point(const Light& light, const vec3& p, const vec2& u, LightSample* out) const;
@@ -135,7 +150,6 @@ class LightSampler {
     // Portals whose facing side p is on, in scene order; facing_portal(p, k) is the k-th.
     uint32_t facing_portal_count(const vec3& p) const;
     const Light& facing_portal(const vec3& p, uint32_t k) const;
-    float selection_pdf(uint32_t emitter) const { return distribution_.pdf(emitter); }
 
     const Scene* scene_;
     WorldSampling world_sampling_;
@@ -152,7 +166,13 @@ class LightSampler {
     std::unordered_map<uint64_t, uint32_t> triangle_emitter_;  // (instance << 32 | tri) -> emitter
     uint32_t world_emitter_ = kInvalidId;
     std::vector<Portal> portals_;
-    DiscreteDistribution distribution_;
+    LightTree tree_;                          // local emitters
+    std::vector<LightBounds> local_bounds_;   // what the tree is built from
+    std::vector<uint32_t> local_emitter_;     // tree index -> emitter index
+    DiscreteDistribution distant_;            // suns and the world, by irradiance
+    std::vector<float> distant_weights_;
+    std::vector<uint32_t> distant_emitter_;   // distant_ index -> emitter index
+    float distant_total_ = 0.0f;              // W/m^2
 };
 
 template <typename Add>
@@ -161,7 +181,7 @@ void LightSampler::for_each_escaped(const vec3& p, const vec3& n, const vec3& wi
     const vec3 world = scene_->world().radiance();
     if (glm::any(glm::greaterThan(world, vec3(0.0f))))
         add(EmissionHit{world, world_emitter_ != kInvalidId
-                                   ? selection_pdf(world_emitter_) * world_pdf(p, n, wi)
+                                   ? selection_pdf(world_emitter_, p) * world_pdf(p, n, wi)
                                    : 0.0f});
     for (uint32_t i = 0; i < scene_->lights().size(); ++i) {
         const Light& light = scene_->lights()[i];
@@ -172,7 +192,7 @@ void LightSampler::for_each_escaped(const vec3& p, const vec3& n, const vec3& wi
         if (glm::dot(wi, -light.direction()) < cos_max) continue;
         const float solid_angle = kTwoPi * (1.0f - cos_max);
         add(EmissionHit{light.color * (light.strength / solid_angle),
-                        selection_pdf(light_emitter_[i]) / solid_angle});
+                        selection_pdf(light_emitter_[i], p) / solid_angle});
     }
 }
 
@@ -183,7 +203,7 @@ void LightSampler::for_each_emission(const vec3& p, const vec3& n, const vec3& w
     if (intersect_lights(p, wi, hit.valid() ? hit.t : kInfinity, camera_ray, &light_hit)) {
         add(light_hit, false);
     } else if (hit.valid()) {
-        const EmissionHit surface = triangle_emission(hit, wi);
+        const EmissionHit surface = triangle_emission(p, hit, wi);
         if (surface.radiance.x > 0.0f || surface.radiance.y > 0.0f || surface.radiance.z > 0.0f)
             add(surface, false);
     } else {

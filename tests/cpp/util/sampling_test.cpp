@@ -15,15 +15,19 @@
 #include <string>
 #include <vector>
 
+#include "support/chi2.h"
 #include "util/error.h"
 #include "util/rng.h"
 
 namespace shgi {
 namespace {
 
+using testing::chi2_critical_value;
+using testing::chi2_test;
+using testing::kMinExpectedCount;
+using testing::normal_upper_quantile;
+
 constexpr int kSamples = 400000;
-constexpr double kSignificance = 1e-3;
-constexpr double kMinExpectedCount = 5.0;
 constexpr int kZBins = 20;    // bins in cos θ (directions) or r² (disk)
 constexpr int kPhiBins = 16;  // bins in azimuth
 constexpr int kPdfNodes = 8;  // Gauss–Legendre nodes per bin when integrating a pdf
@@ -63,55 +67,6 @@ double integrate(const std::function<double(double)>& f, double a, double b, int
     double sum = 0.0;
     for (int i = 0; i < n; ++i) sum += weights[i] * f(0.5 * (a + b) + 0.5 * (b - a) * nodes[i]);
     return 0.5 * (b - a) * sum;
-}
-
-// Upper quantile of the standard normal: z with P(Z > z) = alpha, by bisection on erfc.
-double normal_upper_quantile(double alpha) {
-    double lo = 0.0, hi = 40.0;
-    for (int i = 0; i < 200; ++i) {
-        const double mid = 0.5 * (lo + hi);
-        (0.5 * std::erfc(mid / std::sqrt(2.0)) > alpha ? lo : hi) = mid;
-    }
-    return 0.5 * (lo + hi);
-}
-
-// Wilson & Hilferty 1931: χ²_k ≈ k (1 - 2/(9k) + z sqrt(2/(9k)))³, accurate to <1% for k >= 3.
-double chi2_critical_value(int dof, double alpha) {
-    const double k = dof, z = normal_upper_quantile(alpha);
-    const double t = 1.0 - 2.0 / (9.0 * k) + z * std::sqrt(2.0 / (9.0 * k));
-    return k * t * t * t;
-}
-
-// Merges bins (in order) until each group's expected count reaches kMinExpectedCount, then runs
-// the test. Returns an empty string on success, else a description of the failure.
-std::string chi2_test(const std::vector<double>& observed, const std::vector<double>& expected) {
-    for (size_t i = 0; i < observed.size(); ++i)
-        if (expected[i] == 0.0 && observed[i] > 0.0)
-            return format_message("bin ", i, " has ", observed[i], " samples but the pdf is 0");
-    std::vector<double> obs, exp;
-    double o = 0.0, e = 0.0;
-    for (size_t i = 0; i < observed.size(); ++i) {
-        o += observed[i];
-        e += expected[i];
-        if (e >= kMinExpectedCount) {
-            obs.push_back(o);
-            exp.push_back(e);
-            o = e = 0.0;
-        }
-    }
-    if (e > 0.0 || o > 0.0) {  // a small remainder joins the last group
-        if (exp.empty()) return "all bins together expect fewer than kMinExpectedCount samples";
-        obs.back() += o;
-        exp.back() += e;
-    }
-    double chi2 = 0.0;
-    for (size_t i = 0; i < obs.size(); ++i) chi2 += (obs[i] - exp[i]) * (obs[i] - exp[i]) / exp[i];
-    const int dof = static_cast<int>(obs.size()) - 1;
-    if (dof < 1) return "fewer than two bins after merging";
-    const double critical = chi2_critical_value(dof, kSignificance);
-    if (chi2 > critical)
-        return format_message("chi2 = ", chi2, " > critical ", critical, " (", dof, " dof)");
-    return "";
 }
 
 // Directions sampled by `sample`, binned in (cos θ in [z_lo, z_hi], φ); pdf(cos θ) is the

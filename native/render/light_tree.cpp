@@ -1,0 +1,175 @@
+#include "render/light_tree.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "util/sampling.h"
+
+namespace shgi {
+namespace {
+
+// Below this length the cross product of two cone axes gives no rotation axis (they are
+// parallel or opposite): the union is then made omnidirectional, which is always conservative.
+constexpr float kMinRotationAxis = 1e-6f;
+// Importance divides by at least this squared distance (m^2): a point on an emitter's box gets
+// a large but finite weight.
+constexpr float kMinDistanceSquared = 1e-8f;
+
+float safe_acos(float x) { return std::acos(std::clamp(x, -1.0f, 1.0f)); }
+
+// The smallest cone holding cones a and b (Conty Estevez and Kulla 2018, Algorithm 1).
+void cone_union(const LightBounds& a_in, const LightBounds& b_in, LightBounds* out) {
+    const LightBounds* a = &a_in;
+    const LightBounds* b = &b_in;
+    if (b->theta_o > a->theta_o) std::swap(a, b);
+    out->theta_e = std::max(a->theta_e, b->theta_e);
+    const float theta_d = safe_acos(glm::dot(a->axis, b->axis));
+    if (std::min(theta_d + b->theta_o, kPi) <= a->theta_o) {
+        out->axis = a->axis;
+        out->theta_o = a->theta_o;
+        return;
+    }
+    const float theta_o = 0.5f * (a->theta_o + theta_d + b->theta_o);
+    const vec3 rotation_axis = glm::cross(a->axis, b->axis);
+    if (theta_o >= kPi || glm::length(rotation_axis) < kMinRotationAxis) {
+        out->axis = a->axis;
+        out->theta_o = kPi;
+        return;
+    }
+    // Rotate a's axis towards b's by theta_o - a.theta_o (Rodrigues; the rotation axis is
+    // perpendicular to it).
+    const float theta_r = theta_o - a->theta_o;
+    const vec3 k = glm::normalize(rotation_axis);
+    out->axis = glm::normalize(a->axis * std::cos(theta_r) + glm::cross(k, a->axis) * std::sin(theta_r));
+    out->theta_o = theta_o;
+}
+
+LightBounds bounds_union(const LightBounds& a, const LightBounds& b) {
+    LightBounds out;
+    out.bounds = a.bounds;
+    out.bounds.extend(b.bounds.lower);
+    out.bounds.extend(b.bounds.upper);
+    cone_union(a, b, &out);
+    out.energy = a.energy + b.energy;
+    return out;
+}
+
+vec3 centroid(const LightBounds& light) { return 0.5f * (light.bounds.lower + light.bounds.upper); }
+
+int widest_axis(const Bounds3& box) {
+    const vec3 extent = box.upper - box.lower;
+    if (extent.x >= extent.y && extent.x >= extent.z) return 0;
+    return extent.y >= extent.z ? 1 : 2;
+}
+
+}  // namespace
+
+LightTree::LightTree(const std::vector<LightBounds>& emitters) {
+    if (emitters.empty()) return;
+    std::vector<uint32_t> order(emitters.size());
+    std::iota(order.begin(), order.end(), 0u);
+    leaf_of_.assign(emitters.size(), 0);
+    nodes_.reserve(2 * emitters.size() - 1);
+    build(order, 0, order.size(), 0, emitters);
+}
+
+// The subtree over order[begin, end): a leaf for one emitter, else a split at the median of
+// the centroids along their widest axis (ties kept in emitter order). Returns its node.
+uint32_t LightTree::build(std::vector<uint32_t>& order, size_t begin, size_t end,
+                          uint32_t parent, const std::vector<LightBounds>& emitters) {
+    const uint32_t index = uint32_t(nodes_.size());
+    nodes_.emplace_back();
+    nodes_[index].parent = parent;
+    if (end - begin == 1) {
+        nodes_[index].leaf = true;
+        nodes_[index].emitter = order[begin];
+        nodes_[index].bounds = emitters[order[begin]];
+        leaf_of_[order[begin]] = index;
+        return index;
+    }
+    Bounds3 centroids;
+    for (size_t i = begin; i < end; ++i) centroids.extend(centroid(emitters[order[i]]));
+    const int axis = widest_axis(centroids);
+    std::stable_sort(order.begin() + std::ptrdiff_t(begin), order.begin() + std::ptrdiff_t(end),
+                     [&](uint32_t a, uint32_t b) {
+                         return centroid(emitters[a])[axis] < centroid(emitters[b])[axis];
+                     });
+    const size_t middle = begin + (end - begin) / 2;
+    const uint32_t left = build(order, begin, middle, index, emitters);
+    const uint32_t right = build(order, middle, end, index, emitters);
+    nodes_[index].left = left;
+    nodes_[index].right = right;
+    nodes_[index].bounds = bounds_union(nodes_[left].bounds, nodes_[right].bounds);
+    return index;
+}
+
+float LightTree::node_importance(const Node& node, const vec3& p) const {
+    const LightBounds& b = node.bounds;
+    const vec3 centre = 0.5f * (b.bounds.lower + b.bounds.upper);
+    const float radius = 0.5f * glm::length(b.bounds.upper - b.bounds.lower);
+    const vec3 to_p = p - centre;
+    const float distance = glm::length(to_p);
+    // Inside the box every direction is possible: only the energy and the box's size count.
+    if (distance <= radius) return b.energy / std::max(radius * radius, kMinDistanceSquared);
+    const float theta_u = std::asin(std::min(radius / distance, 1.0f));
+    const float theta = safe_acos(glm::dot(b.axis, to_p / distance));
+    const float theta_prime = std::max(0.0f, theta - b.theta_o - theta_u);
+    // Strictly beyond: a spot's cone has theta_e = 0 and lights p at theta' = 0.
+    if (theta_prime > b.theta_e) return 0.0f;
+    return b.energy * std::cos(theta_prime) / std::max(distance * distance, kMinDistanceSquared);
+}
+
+void LightTree::child_probabilities(uint32_t index, const vec3& p, float* left,
+                                    float* right) const {
+    const float il = node_importance(nodes_[nodes_[index].left], p);
+    const float ir = node_importance(nodes_[nodes_[index].right], p);
+    const float sum = il + ir;
+    *left = sum > 0.0f ? il / sum : 0.0f;
+    *right = sum > 0.0f ? ir / sum : 0.0f;
+}
+
+float LightTree::importance(const vec3& p) const {
+    return empty() ? 0.0f : node_importance(nodes_[0], p);
+}
+
+bool LightTree::sample(const vec3& p, float u, uint32_t* emitter, float* pmf) const {
+    if (empty()) return false;
+    uint32_t index = 0;
+    float probability = 1.0f;
+    while (!nodes_[index].leaf) {
+        float p_left, p_right;
+        child_probabilities(index, p, &p_left, &p_right);
+        if (!(p_left + p_right > 0.0f)) return false;
+        // u is rescaled to the chosen child's share and reused below it.
+        if (u < p_left) {
+            u = std::min(u / p_left, kOneMinusEpsilon);
+            probability *= p_left;
+            index = nodes_[index].left;
+        } else {
+            u = std::min((u - p_left) / p_right, kOneMinusEpsilon);
+            probability *= p_right;
+            index = nodes_[index].right;
+        }
+    }
+    *emitter = nodes_[index].emitter;
+    *pmf = probability;
+    return probability > 0.0f;
+}
+
+float LightTree::pmf(const vec3& p, uint32_t emitter) const {
+    if (emitter >= leaf_of_.size()) return 0.0f;
+    // The factors sample() multiplies on the way down, from the leaf up.
+    float probability = 1.0f;
+    uint32_t index = leaf_of_[emitter];
+    while (index != 0) {
+        const uint32_t parent = nodes_[index].parent;
+        float p_left, p_right;
+        child_probabilities(parent, p, &p_left, &p_right);
+        probability *= index == nodes_[parent].left ? p_left : p_right;
+        index = parent;
+    }
+    return probability;
+}
+
+}  // namespace shgi
