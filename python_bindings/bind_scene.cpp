@@ -434,6 +434,34 @@ void bind_scene_building(py::class_<Scene>& cls) {
             py::arg("instance_id"), py::arg("world_from_object"),
             "Moves an instance; the next commit() rebuilds only the top-level BVH.")
         .def(
+            "set_light",
+            [](Scene& scene, const IndexInt& light_id, const Light& light) {
+                SceneUse use(scene, SceneUse::Kind::Edit, "set_light");
+                scene.set_light(int_arg<uint32_t>(light_id, "light_id"), light);
+            },
+            py::arg("light_id"), py::arg("light"),
+            "Replaces a Light; the next commit() rebuilds no BVH.")
+        .def("set_lights", edit("set_lights", &Scene::set_lights), py::arg("lights"),
+             "Replaces every Light (ids are the list's indices); the next commit() rebuilds no "
+             "BVH.")
+        .def(
+            "set_material",
+            [](Scene& scene, const IndexInt& material_id, const Material& material) {
+                SceneUse use(scene, SceneUse::Kind::Edit, "set_material");
+                scene.set_material(int_arg<uint32_t>(material_id, "material_id"), material);
+            },
+            py::arg("material_id"), py::arg("material"),
+            "Replaces a Material (triangles keep their material ids); the next commit() "
+            "rebuilds no BVH.")
+        .def(
+            "set_texture",
+            [](Scene& scene, const IndexInt& texture_id, const Texture& texture) {
+                SceneUse use(scene, SceneUse::Kind::Edit, "set_texture");
+                scene.set_texture(int_arg<uint32_t>(texture_id, "texture_id"), texture);
+            },
+            py::arg("texture_id"), py::arg("texture"),
+            "Replaces a Texture; the next commit() rebuilds no BVH.")
+        .def(
             "set_mesh",
             [](Scene& scene, const IndexInt& mesh_id, const Mesh& mesh) {
                 SceneUse use(scene, SceneUse::Kind::Edit, "set_mesh");
@@ -458,6 +486,7 @@ py::dict stats_to_dict(const SceneStats& stats) {
     out["emissive_triangles"] = stats.emissive_triangles;
     out["lights"] = stats.lights;
     out["bvh_bytes"] = stats.bvh_bytes;
+    out["bvh_builds"] = stats.bvh_builds;
     return out;
 }
 
@@ -525,7 +554,8 @@ void bind_scene_inspection(py::class_<Scene>& cls) {
             "stats",
             [](const Scene& scene) { return stats_to_dict(read("stats", &Scene::stats)(scene)); },
             "Dict of counts: meshes, instances, triangles, instanced_triangles, "
-            "dropped_degenerate, emissive_triangles, lights, bvh_bytes (peak of last commit).")
+            "dropped_degenerate, emissive_triangles, lights, bvh_bytes (peak of the last commit "
+            "that built a BVH), bvh_builds (Embree builds so far: per-mesh and top-level).")
         .def(
             "bounds",
             [](const Scene& scene) {

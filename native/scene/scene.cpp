@@ -315,6 +315,7 @@ uint32_t Scene::add_instance(uint32_t mesh_id, const mat4& world_from_object, st
                                              meshes_.size(), " meshes; add the mesh first"));
     require_transform(item, "world_from_object", world_from_object);
     instances_.push_back(Instance{std::move(name), mesh_id, world_from_object});
+    instances_dirty_ = true;
     invalidate();
     return static_cast<uint32_t>(instances_.size() - 1);
 }
@@ -331,6 +332,41 @@ uint32_t Scene::add_texture(Texture texture) {
     textures_.push_back(std::move(texture));
     invalidate();
     return static_cast<uint32_t>(textures_.size() - 1);
+}
+
+void Scene::set_light(uint32_t light_id, Light light) {
+    if (light_id >= lights_.size())
+        throw InvalidArgument(format_message("set_light: light_id = ", light_id,
+                                             " but the scene has ", lights_.size(), " lights"));
+    validate_light(light);
+    lights_[light_id] = std::move(light);
+    invalidate();
+}
+
+void Scene::set_lights(std::vector<Light> lights) {
+    for (const Light& light : lights) validate_light(light);
+    lights_ = std::move(lights);
+    invalidate();
+}
+
+void Scene::set_material(uint32_t material_id, Material material) {
+    if (material_id >= materials_.size())
+        throw InvalidArgument(format_message("set_material: material_id = ", material_id,
+                                             " but the scene has ", materials_.size(),
+                                             " materials"));
+    validate_material(material, kAnyTextureCount);
+    materials_[material_id] = std::move(material);
+    invalidate();
+}
+
+void Scene::set_texture(uint32_t texture_id, Texture texture) {
+    if (texture_id >= textures_.size())
+        throw InvalidArgument(format_message("set_texture: texture_id = ", texture_id,
+                                             " but the scene has ", textures_.size(),
+                                             " textures"));
+    validate_texture(texture);
+    textures_[texture_id] = std::move(texture);
+    invalidate();
 }
 
 uint32_t Scene::add_light(Light light) {
@@ -361,7 +397,8 @@ void Scene::set_instance_transform(uint32_t instance_id, const mat4& world_from_
     require_transform(instance_label(instances_, instance_id), "world_from_object",
                       world_from_object);
     instances_[instance_id].world_from_object = world_from_object;
-    invalidate();  // the per-mesh BVHs stay: only the top level is rebuilt
+    instances_dirty_ = true;  // the per-mesh BVHs stay: only the top level is rebuilt
+    invalidate();
 }
 
 const Camera& Scene::camera() const {
@@ -558,15 +595,21 @@ void Scene::commit(const CommitSettings& settings, Progress* progress) {
             if (progress) progress->begin_stage("building mesh BVHs", 0.05f, 0.85f);
             embree_->build_meshes(meshes_, progress);
             geometry_dirty_ = false;
+            instances_dirty_ = true;  // build_meshes released the top level
+            bvh_builds_ += meshes_.size();
         }
-        if (progress) progress->begin_stage("building instance BVH", 0.85f, 0.95f);
-        embree_->build_instances(instances_, progress);
+        if (instances_dirty_) {
+            if (progress) progress->begin_stage("building instance BVH", 0.85f, 0.95f);
+            embree_->build_instances(instances_, progress);
+            instances_dirty_ = false;
+            ++bvh_builds_;
+            bvh_bytes_ = embree_->peak_bytes();
+        }
     } catch (...) {
         embree_->clear();
-        geometry_dirty_ = true;
+        geometry_dirty_ = instances_dirty_ = true;
         throw;
     }
-    bvh_bytes_ = embree_->peak_bytes();
     if (progress) progress->begin_stage("instance normals", 0.95f, 1.0f);
     normal_from_object_.clear();
     for (const Instance& instance : instances_)
@@ -604,6 +647,7 @@ SceneStats Scene::stats() const {
     stats.emissive_triangles = emissive_.size();
     stats.lights = lights_.size();
     stats.bvh_bytes = bvh_bytes_;
+    stats.bvh_builds = bvh_builds_;
     return stats;
 }
 

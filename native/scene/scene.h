@@ -97,6 +97,7 @@ struct SceneStats {
     uint64_t meshes = 0, instances = 0, triangles = 0, instanced_triangles = 0;
     uint64_t dropped_degenerate = 0, emissive_triangles = 0, lights = 0;
     uint64_t bvh_bytes = 0;  // peak Embree allocation during the last commit
+    uint64_t bvh_builds = 0; // Embree builds (per-mesh and top-level) over the scene's life
 };
 
 class EmbreeScene;  // scene/embree_scene.h: the only place that sees Embree
@@ -123,6 +124,14 @@ class Scene {
     // in every instance of it, e.g. by one with a new lightmap UV set. The next commit()
     // rebuilds the per-mesh BVHs.
     void set_mesh(uint32_t mesh_id, Mesh mesh);
+    // Edits in place that leave every BVH as it is: the next commit() recomputes the material
+    // terms, emissive triangles and power checks only (a light or material edit in the viewport
+    // starts its next frame without a BVH build). set_lights replaces the whole list (lights may
+    // come and go); the ids stay those of the new list.
+    void set_light(uint32_t light_id, Light light);
+    void set_lights(std::vector<Light> lights);
+    void set_material(uint32_t material_id, Material material);
+    void set_texture(uint32_t texture_id, Texture texture);
 
     const std::vector<Mesh>& meshes() const { return meshes_; }
     const std::vector<MeshReport>& mesh_reports() const { return mesh_reports_; }
@@ -206,7 +215,9 @@ class Scene {
     uint64_t uid_ = next_uid();
     std::vector<uint64_t> mesh_revisions_;  // per mesh: revision_ when it was added or set
     static uint64_t next_uid();
-    bool geometry_dirty_ = true;  // meshes changed: per-mesh BVHs must be rebuilt
+    bool geometry_dirty_ = true;   // meshes changed: per-mesh BVHs must be rebuilt
+    bool instances_dirty_ = true;  // instances added or moved: the top level must be rebuilt
+    uint64_t bvh_builds_ = 0;
     std::vector<EmissiveTriangle> emissive_;
     // Per instance, world_from_object's cofactor times sign(det): maps object normals to world.
     std::vector<mat3> normal_from_object_;

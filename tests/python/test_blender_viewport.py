@@ -271,7 +271,8 @@ def test_snapshot_builds_the_scene_and_tells_transforms_apart():
     light = shgi.Light(**{name: getattr(scene.lights[0], name) for name in (
         "type", "shape", "size_x", "size_y", "color", "world_from_light")}, power=120.0)
     brighter.lights = [light]
-    assert brighter.compare(snapshot) == DIFFERENT
+    assert brighter.compare(snapshot) == EDITABLE and brighter.lights_differ(snapshot)
+    assert not brighter.moved_instances(snapshot)
 
 
 def test_snapshot_build_skips_what_native_checks_refuse():
@@ -499,9 +500,12 @@ def test_viewport_in_a_window(build_python_dir, tmp_path):
     (left0, _, right0), (left1, _, right1) = r["thirds_before"], r["thirds_after"]
     assert left1 < left0 * (1 - LIGHT_MOVE_CHANGE) and right1 > right0 * (1 + LIGHT_MOVE_CHANGE)
     assert r["move_sync"]["meshes_read"] == 0
+    assert r["move_sync"]["change"] == EDITABLE  # a moved light: set_lights, no BVH build
     assert r["block_move_sync"]["change"] == EDITABLE
     assert r["block_move_sync"]["meshes_read"] == 0
-    assert r["block_move_sync"]["worker"]["in_place_updates"] == 1
+    # The light's move and the block's, each edited in place on the one scene built first.
+    assert r["block_move_sync"]["worker"]["in_place_updates"] == 2
+    assert r["block_move_sync"]["worker"]["scene_builds"] == 1
     assert r["overlay"]["spheres"] > 100 and r["overlay"]["changed_inside"] > 0.01
     assert r["path_trace_mean"] > 0.1
     probes = r["probe_grid"]
@@ -511,3 +515,45 @@ def test_viewport_in_a_window(build_python_dir, tmp_path):
         assert probes[step]["probes"] == 4 * 3 * 3 and probes[step]["new_grid"], probes
         assert probes[step]["passes"] == 3 and abs(probes[step]["volume_z"] - z) < 1e-5
     assert r["sessions_after_solid"] == 0
+
+
+def test_light_and_material_edits_restart_the_viewport_without_a_bvh_build():
+    """A light's power and a material's colour change in the viewport: the worker edits its
+    scene in place, builds no BVH, and renders the edited scene exactly as a scene built from
+    the edited snapshot renders it."""
+    scene = scenes.cornell_box(0.1).scene
+    view, props = view_of(scene, 24, 24), properties(method="PATH_TRACE", viewport_samples=2)
+    snapshot = snapshot_of(scene)
+    worker = ViewportWorker(shgi)
+    try:
+        worker.request(snapshot, view, props)
+        first = final_frame(worker, 2)
+        builds = worker._scene.stats()["bvh_builds"]
+        edited = moved(snapshot, 0, (0, 0, 0))
+        light = scene.lights[0]
+        brighter = shgi.Light(**{name: getattr(light, name) for name in (
+            "type", "shape", "size_x", "size_y", "color", "world_from_light")},
+            power=4.0 * light.power)
+        edited.lights = [brighter]
+        red = edited.materials[0]
+        table = MaterialTable()
+        table.materials, table.textures = list(edited.materials), list(edited.textures)
+        table.set_material(0, shgi.Material(name=red.name, base_color=(0.9, 0.1, 0.1)))
+        edited._table, edited._frozen = table, None
+        edited.freeze()
+        assert edited.compare(snapshot) == EDITABLE
+        assert worker.request(edited, view, props)
+        second = final_frame(worker, 2, after=first.frame_id)
+        counters = dict(worker.counters)
+        after_builds = worker._scene.stats()["bvh_builds"]
+    finally:
+        worker.stop()
+    assert counters["scene_builds"] == 1 and counters["in_place_updates"] == 1
+    assert after_builds == builds
+    rebuilt, _ = edited.build()
+    rebuilt.set_camera(viewport_camera.shgi_camera(shgi, view))
+    rebuilt.commit()
+    expected = shgi.render_path_traced(rebuilt, settings.path_tracer_settings(
+        SimpleNamespace(**dict(SimpleNamespace(**dict(props)).__dict__, samples=2)), shgi))
+    np.testing.assert_array_equal(second.pixels, expected["Combined"][::-1])
+    assert second.pixels[..., :3].mean() > 1.1 * first.pixels[..., :3].mean()  # 4x the lamp

@@ -11,9 +11,10 @@ request, redoing only what changed. Each run has two shgi.Progress objects: one 
 volumes or the settings change, and one for frames, cancelled by any change: orbiting the view
 never throws away a photon pass or a probe update in flight, it only waits for it. What is
 redone:
-* moved objects, an edited world: edited in place (``set_instance_transform``, ``set_world``)
-  and committed (top-level BVH only); anything else in the snapshot (meshes, materials, lights):
-  a new shgi.Scene and a full commit;
+* moved objects, an edited world, lights, materials or textures: edited in place
+  (``set_instance_transform``, ``set_world``, ``set_lights``, ``set_material``, ``set_texture``)
+  and committed (no BVH build, or the top level only for moved objects); anything else in the
+  snapshot (meshes, which objects use them): a new shgi.Scene and a full commit;
 * the field solver (field_solvers.py: a PhotonLattice, or a ProbeGrid placed in the scene's
   Irradiance Volumes) starts afresh after any scene change, solver setting change or, for a
   probe grid, moved or resized volume; never for a view change (the preview renderer takes
@@ -355,18 +356,19 @@ class ViewportWorker:
 def updated_scene(scene, previous, snapshot, camera):
     """(the uncommitted or committed shgi.Scene of `snapshot`, compare() of the two snapshots).
 
-    scene: the scene built from snapshot `previous`, or None. When only transforms or the world
-    changed it is edited in place (its commit then rebuilds only the top-level BVH); otherwise a
-    new scene is built, with `camera` as its camera (the renderers want one even when they
-    render another camera, so a later view change edits nothing).
+    scene: the scene built from snapshot `previous`, or None. When only transforms, the world,
+    lights, materials or textures changed it is edited in place (its commit then rebuilds at
+    most the top-level BVH); otherwise, or when an edited item is refused, a new scene is built,
+    with `camera` as its camera (the renderers want one even when they render another camera, so
+    a later view change edits nothing).
     """
     change = snapshot.compare(previous) if scene is not None else DIFFERENT
     if change == EDITABLE:
-        for index in snapshot.moved_instances(previous):
-            scene.set_instance_transform(index, snapshot.instances[index].world_from_object)
-        if snapshot.world_differs(previous):
-            scene.set_world(snapshot.world)
-    elif change == DIFFERENT:
+        try:
+            snapshot.edit_in_place(scene, previous)
+        except ValueError:
+            change = DIFFERENT  # build() below skips the refused item with a warning
+    if change == DIFFERENT:
         scene, _ = snapshot.build()  # build() logs its warnings
         scene.set_camera(camera)
     return scene, change

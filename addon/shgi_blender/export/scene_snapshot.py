@@ -12,10 +12,11 @@ replaced at the id it already has, so the cached meshes, whose triangles store m
 stay valid. A snapshot freezes the table's lists when the export ends.
 
 ``build()`` replays a snapshot into a new shgi.Scene on any thread; ``compare()`` tells the
-worker whether two snapshots differ not at all, only in what an shgi.Scene edits in place
-(instance transforms: ``set_instance_transform``; the world: ``set_world``; both keep the
-per-mesh BVHs, so the next commit rebuilds only the top level), or in anything else (meshes,
-materials, textures, lights: shgi.Scene has no call to replace them, so a new scene is built).
+worker whether two snapshots differ not at all, only in what an shgi.Scene edits in place, or in
+their geometry (meshes, or which instances use them: a new scene is built). In place: instance
+transforms (``set_instance_transform``: the next commit rebuilds the top-level BVH only), the
+world, lights, materials and textures (``set_world``, ``set_lights``, ``set_material``,
+``set_texture``: no BVH is built at all, so a light's power edit starts the next frame at once).
 A snapshot also records the scene's irradiance volumes (``probe_volumes``): they are not scene
 content (compare() leaves them out) but the volumes of a probe grid solved on it.
 """
@@ -30,7 +31,7 @@ logger = logging.getLogger("shgi_blender.export")
 
 # What compare() returns.
 SAME = "SAME"
-EDITABLE = "EDITABLE"       # only instance matrices and the world differ
+EDITABLE = "EDITABLE"       # only what an shgi.Scene edits in place differs
 DIFFERENT = "DIFFERENT"
 
 # The shgi.Light fields that define a light (compared between snapshots).
@@ -159,22 +160,49 @@ class SceneSnapshot:
         return scene, warnings
 
     def compare(self, other):
-        """SAME, EDITABLE (only instance matrices or the world differ) or DIFFERENT."""
+        """SAME, EDITABLE (only transforms, the world, lights, materials or textures differ; the
+        material and texture tables only grew) or DIFFERENT."""
         if other is None:
             return DIFFERENT
-        same_content = (
+        same_geometry = (
             _same_items(self.meshes, other.meshes)
-            and _same_items(self.materials, other.materials)
-            and _same_items(self.textures, other.textures)
             and [(i.mesh_id, i.name) for i in self.instances]
             == [(i.mesh_id, i.name) for i in other.instances]
-            and [light_signature(light) for light in self.lights]
-            == [light_signature(light) for light in other.lights])
-        if not same_content:
+            and len(self.materials) >= len(other.materials)
+            and len(self.textures) >= len(other.textures))
+        if not same_geometry:
             return DIFFERENT
-        if self.moved_instances(other) or self.world_differs(other):
+        if (self.moved_instances(other) or self.world_differs(other) or self.lights_differ(other)
+                or _edited(self.materials, other.materials)
+                or _edited(self.textures, other.textures)):
             return EDITABLE
         return SAME
+
+    def lights_differ(self, other):
+        return ([light_signature(light) for light in self.lights]
+                != [light_signature(light) for light in other.lights])
+
+    def edit_in_place(self, scene, previous):
+        """Brings `scene`, built from snapshot `previous` (compare() said EDITABLE), to this
+        snapshot's content by shgi.Scene's in-place edits. ValueError when the native checks
+        refuse an edited item (the caller then builds a new scene, which skips it with a
+        warning)."""
+        for index in _edited(self.textures, previous.textures):
+            if index < len(previous.textures):
+                scene.set_texture(index, self.textures[index])
+            else:
+                scene.add_texture(self.textures[index])
+        for index in _edited(self.materials, previous.materials):
+            if index < len(previous.materials):
+                scene.set_material(index, self.materials[index])
+            else:
+                scene.add_material(self.materials[index])
+        if self.lights_differ(previous):
+            scene.set_lights(list(self.lights))
+        for index in self.moved_instances(previous):
+            scene.set_instance_transform(index, self.instances[index].world_from_object)
+        if self.world_differs(previous):
+            scene.set_world(self.world)
 
     def world_differs(self, other):
         return world_signature(self.world) != world_signature(other.world)
@@ -197,6 +225,11 @@ def world_signature(world):
 
 def _same_items(a, b):
     return len(a) == len(b) and all(x is y for x, y in zip(a, b))
+
+
+def _edited(items, previous):
+    """Indices of `items` that are not the same objects as `previous`'s (new ones included)."""
+    return [i for i, item in enumerate(items) if i >= len(previous) or item is not previous[i]]
 
 
 def _try_add(add, item, what, warnings):

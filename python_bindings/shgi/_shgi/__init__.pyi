@@ -2202,9 +2202,25 @@ class Scene:
         """
         Moves an instance; the next commit() rebuilds only the top-level BVH.
         """
+    def set_light(self, light_id: typing.SupportsIndex, light: Light) -> None:
+        """
+        Replaces a Light; the next commit() rebuilds no BVH.
+        """
+    def set_lights(self, lights: collections.abc.Sequence[Light]) -> None:
+        """
+        Replaces every Light (ids are the list's indices); the next commit() rebuilds no BVH.
+        """
+    def set_material(self, material_id: typing.SupportsIndex, material: Material) -> None:
+        """
+        Replaces a Material (triangles keep their material ids); the next commit() rebuilds no BVH.
+        """
     def set_mesh(self, mesh_id: typing.SupportsIndex, mesh: Mesh) -> None:
         """
         Replaces mesh `mesh_id` (an shgi.Mesh, checked and cleaned as add_mesh does) for every instance of it, e.g. with one that has a new lightmap UV map; the next commit() rebuilds its BVH. ValueError naming the id and the mesh count for a bad mesh_id.
+        """
+    def set_texture(self, texture_id: typing.SupportsIndex, texture: Texture) -> None:
+        """
+        Replaces a Texture; the next commit() rebuilds no BVH.
         """
     def set_world(self, world: World) -> None:
         """
@@ -2212,7 +2228,7 @@ class Scene:
         """
     def stats(self) -> dict:
         """
-        Dict of counts: meshes, instances, triangles, instanced_triangles, dropped_degenerate, emissive_triangles, lights, bvh_bytes (peak of last commit).
+        Dict of counts: meshes, instances, triangles, instanced_triangles, dropped_degenerate, emissive_triangles, lights, bvh_bytes (peak of the last commit that built a BVH), bvh_builds (Embree builds so far: per-mesh and top-level).
         """
     @property
     def camera(self) -> Camera:
