@@ -66,9 +66,9 @@ def check_registered():
         if not hasattr(bpy.types, name):
             raise AssertionError(f"{name} is not registered")
     bpy.ops.shgi.quality_preset(preset="PRODUCTION")
-    if (scene.shgi.samples, scene.shgi.photons) != (1024, 4_000_000):
+    if (scene.shgi.samples, scene.shgi.photon_lattice.photons) != (1024, 4_000_000):
         raise AssertionError(f"the Production preset set {scene.shgi.samples} samples, "
-                             f"{scene.shgi.photons} photons")
+                             f"{scene.shgi.photon_lattice.photons} photons")
     bpy.ops.shgi.quality_preset(preset="PREVIEW")
     if scene.shgi.samples != 16:
         raise AssertionError(f"the Preview preset set {scene.shgi.samples} samples")
