@@ -142,8 +142,8 @@ class ShgiProbeGridSettings(bpy.types.PropertyGroup):
     passes: IntProperty(
         name="Render Passes", default=settings.final_passes("PROBE_GRID", native.module()),
         min=1, soft_max=256,
-        description="Probe update passes of an F12 render, a Solve or a bake (as many as "
-                    "`python -m shgi bake` runs by default)")
+        description="Probe update passes of an F12 render, a Solve or a bake: more give "
+                    "calmer light and take longer")
     viewport_passes: IntProperty(
         name="Viewport Passes", default=VP["PROBE_GRID"], min=1, soft_max=1024,
         description="Probe update passes the Rendered viewport runs in the background, a new "
