@@ -150,12 +150,12 @@ PROBE_GRID_DEFAULTS = {
 
 # Refinement passes of a final solve (F12, Solve, a bake) when ``shgi`` cannot be imported as the
 # add-on registers: the method registry's final_passes, which ``python -m shgi bake`` runs
-# (shgi.bake.PROBE_GRID_PASSES); tests/python/test_blender_engine.py checks that they agree.
+# (shgi.bake.PROBE_GRID_PASSES); tests/python/test_blender_versioning.py checks that they agree.
 FINAL_PASSES_FALLBACK = {"PHOTON_LATTICE": 1, "PROBE_GRID": 8}
 # Passes the Rendered viewport runs (no native struct has them), as Cycles keeps its viewport
-# samples apart: photon passes it solves (each traces `photons`; 1 = the lattice F12 solves), and
-# probe grid update passes it runs in the background before it stops refining (past
-# ~2 / (1 - hysteresis) passes the blend holds as much history as it ever will).
+# samples apart: photon passes it solves (each traces `photons`; as many as `passes` give the
+# lattice F12 solves), and probe grid update passes it runs in the background before it stops
+# refining (past ~2 / (1 - hysteresis) passes the blend holds as much history as it ever will).
 VIEWPORT_PASSES_DEFAULTS = {"PHOTON_LATTICE": 1, "PROBE_GRID": 32}
 
 
@@ -296,7 +296,7 @@ class MethodSettings:
 # Specular, whatever the method).
 LIGHT_PATH_LIMITS = {
     "PHOTON_LATTICE": "Photon Lattice: photons follow Diffuse; Total, Glossy and Transmission "
-                      "apply to path tracing and bakes only",
+                      "apply to path tracing only",
     "PROBE_GRID": f"Probe Grid: Glossy follows Diffuse (at most "
                   f"{MAX_PROBE_BOUNCES + PROBE_PATH_FIRST_BOUNCE}); Total and Transmission are "
                   f"{PROPERTY_DEFAULTS['max_bounces']} and "

@@ -33,6 +33,9 @@ def _set(group, name, value):
 
 def upgrade_scene(scene):
     """Applies the settings upgrade to one scene; returns its notes (empty: nothing lost)."""
+    # A scene linked from a library cannot be edited here: its own file is upgraded when opened.
+    if scene.library is not None:
+        return []
     props = scene.shgi
     if not props.keys():  # nothing stored: today's defaults are all it has
         return []
@@ -41,7 +44,8 @@ def upgrade_scene(scene):
         _set(getattr(props, group), name, value)
     for group, name in upgrade.removed:
         del (getattr(props, group) if group else props)[name]
-    props.settings_version = settings_upgrade.SETTINGS_VERSION
+    if props.get("settings_version") != settings_upgrade.SETTINGS_VERSION:
+        props.settings_version = settings_upgrade.SETTINGS_VERSION
     return upgrade.notes
 
 
@@ -57,6 +61,8 @@ def upgrade_settings(*_args):
 def stamp_settings(*_args):
     """save_pre: records the layout each scene's settings are saved in."""
     for scene in bpy.data.scenes:
+        if scene.library is not None:
+            continue
         # Stored even when it equals the default, which reads the same whether stored or not.
         if scene.shgi.get("settings_version") != settings_upgrade.SETTINGS_VERSION:
             scene.shgi.settings_version = settings_upgrade.SETTINGS_VERSION
