@@ -91,8 +91,12 @@ def check_panels_draw(scene):
     scene.shgi.method = "PHOTON_LATTICE"
     draw_panel("SHGI_RENDER_PT_photon_lattice", context)
     scene.shgi.method = "PROBE_GRID"
-    if "probes fill the scene" not in draw_panel("SHGI_RENDER_PT_probe_grid", context):
+    text = draw_panel("SHGI_RENDER_PT_probe_grid", context)
+    if "probes fill the scene" not in text:
         raise AssertionError("the probe grid panel does not say its volume is fitted")
+    if "Bounces and Clamp follow Light Paths" not in text:
+        raise AssertionError(f"the probe grid panel does not say where its bounces and clamp "
+                             f"are set: {text!r}")
     draw_panel("SHGI_RENDER_PT_probe_grid_visibility", context)
     check_method_groups()
     check_light_path_limits(scene, context)

@@ -207,6 +207,8 @@ class SHGI_RENDER_PT_probe_grid(_FieldPanel, bpy.types.Panel):
         column.prop(grid, "order")
         column.prop(grid, "rays_per_probe", text="Rays")
         column.prop(grid, "hysteresis")
+        # The probes' bounce limit and clamp are Light Paths' (settings.LIGHT_PATH_VALUES).
+        draw_wrapped(layout, "Bounces and Clamp follow Light Paths", icon="INFO")
         column = layout.column(align=True)
         column.label(text="Update Passes")
         column.prop(grid, "passes", text="Render")
