@@ -484,7 +484,8 @@ def render_property_values(props):
     for name in VIEWPORT_RENDER_PROPERTIES:
         value = getattr(props, name)
         if name in groups:
-            value = tuple((field, getattr(value, field)) for field in group_properties(groups[name]))
+            value = tuple((field, getattr(value, field))
+                          for field in group_properties(groups[name]))
         values.append((name, value))
     return tuple(values)
 

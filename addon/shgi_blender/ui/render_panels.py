@@ -1,8 +1,8 @@
 """Properties > Render panels of the SHGI engine: method, quality preset and samples (with the
-native module's import error when it fails), light paths (with Cycles' Max Bounces
-sub-panel, which says what the scene's field method cannot follow), the photon lattice or the probe grid (with its Visibility sub-panel, laid out as
-EEVEE's irradiance volume settings) with the frozen solution (out of date after a scene edit:
-Re-solve), lightmap bakes and the volume export (scene.shgi.bake; its Farm sub-panel), and the
+native module's import error when it fails), light paths (with Cycles' Max Bounces sub-panel,
+which says what the scene's field method cannot follow), the photon lattice or the probe grid
+(with its Visibility sub-panel, laid out as EEVEE's irradiance volume settings) with the frozen
+solution (out of date after a scene edit: Re-solve), lightmap bakes and the volume export (scene.shgi.bake; its Farm sub-panel), and the
 last render's figures.
 
 Labels beside values stay short: the label column of a Properties editor of the default width
