@@ -1,9 +1,10 @@
 """SHGI: spherical-harmonics global illumination for Blender (the add-on).
 
 This module only describes and registers the add-on; the work lives in its packages:
-properties.py (scene.shgi), engine/ (the SHGI render engine, F12), operators/ (quality presets,
-frozen lattice solutions, lightmap bakes, volume export), ui/ (panels), export/ (Blender scenes
-→ shgi.Scene), preferences.py (Documentation and Report a Bug; help.py without bpy). It imports
+properties.py (scene.shgi; versioning.py brings files saved with older settings up to date),
+engine/ (the SHGI render engine, F12), operators/ (quality presets, frozen lattice solutions,
+lightmap bakes, volume export), ui/ (panels), export/ (Blender scenes → shgi.Scene),
+preferences.py (Documentation and Report a Bug; help.py without bpy). It imports
 without bpy so that the bpy-free parts can be tested with pytest, and registers even when the
 native module ``shgi`` cannot be imported (the render panel then shows why and the fix).
 """
@@ -18,9 +19,9 @@ bl_info = {
     "category": "Render",
 }
 
-# Registered in this order, unregistered in reverse: properties before the engine and the
-# panels that read them.
-_PACKAGES = ("properties", "engine", "operators", "ui", "preferences")
+# Registered in this order, unregistered in reverse: properties (and their versioning of older
+# files) before the engine and the panels that read them.
+_PACKAGES = ("properties", "versioning", "engine", "operators", "ui", "preferences")
 
 
 def _modules():

@@ -49,8 +49,8 @@ def file_url(path):
 
 def property_lines(group, prefix):
     """``prefix.name = value`` lines for every property of an RNA property group (scene.shgi),
-    nested groups (probe_grid, bake) under their own prefix. Duck-typed on bl_rna.properties, so
-    that tests can pass stand-ins."""
+    nested groups (photon_lattice, probe_grid, bake) under their own prefix. Duck-typed on
+    bl_rna.properties, so that tests can pass stand-ins."""
     lines = []
     for prop in group.bl_rna.properties:
         name = prop.identifier

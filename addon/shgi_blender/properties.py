@@ -1,23 +1,27 @@
-"""``scene.shgi``: the render settings of the SHGI engine (a PropertyGroup).
+"""``scene.shgi``: the render settings of the SHGI engine (PropertyGroups, one per concern).
 
-Property names are the native settings' field names and their defaults the native defaults
-(settings.py holds the tables and the mapping to PathTracerSettings, PreviewSettings,
-PhotonLatticeSettings and, through the ``scene.shgi.probe_grid`` group, ProbeGridSettings;
-bake_settings.py those of the lightmap bake in ``scene.shgi.bake``, whose properties the bake
-operators carry too: bake_properties()). Enum tables are module-level so Blender keeps them
-alive.
+``scene.shgi`` holds what every method shares (samples, seed, Light Paths) and the viewport's
+overlays; each field method has its own group named after it, mirroring its native settings
+struct by field name, with its pass counts (``passes`` of a final solve, ``viewport_passes`` of
+the Rendered viewport): ``scene.shgi.photon_lattice`` (shgi.PhotonLatticeSettings) and
+``scene.shgi.probe_grid`` (shgi.ProbeGridSettings). settings.py holds the tables, the defaults
+(the native ones) and the mapping to the native structs; bake_settings.py those of the lightmap
+bake in ``scene.shgi.bake``, whose properties the bake operators carry too: bake_properties().
+Files saved before the groups existed are brought up to date when they open (versioning.py).
+Enum tables are module-level so Blender keeps them alive.
 """
 
 import bpy
 from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty,
                        StringProperty)
 
-from . import bake_settings, settings
+from . import bake_settings, native, settings, settings_upgrade
 
 D = settings.PROPERTY_DEFAULTS
+L = settings.PHOTON_LATTICE_DEFAULTS
 P = settings.PROBE_GRID_DEFAULTS
-S = settings.SOLVE_PROPERTY_DEFAULTS
 V = settings.VIEWPORT_PROPERTY_DEFAULTS
+VP = settings.VIEWPORT_PASSES_DEFAULTS
 
 METHOD_ITEMS = [(m.identifier, m.label, m.description, m.number) for m in settings.METHODS]
 WORLD_SAMPLING_ITEMS = list(settings.ENUM_ITEMS["world_sampling"])
@@ -28,8 +32,56 @@ BAKE_SOURCE_ITEMS = list(bake_settings.SOURCE_ITEMS)
 BAKE_CONTENT_ITEMS = list(bake_settings.CONTENT_ITEMS)
 
 
+class ShgiPhotonLatticeSettings(bpy.types.PropertyGroup):
+    """PhotonLatticeSettings of the PHOTON_LATTICE method (``scene.shgi.photon_lattice``); its
+    photon bounce limit is Light Paths > Diffuse."""
+
+    photons: IntProperty(
+        name="Photons", default=L["photons"], min=1, soft_max=50_000_000,
+        description="Photons shot from the lights per pass: more give smoother indirect light "
+                    "and take longer")
+    resolution: IntProperty(
+        name="Resolution", default=L["resolution"], min=1, max=settings.MAX_LATTICE_RESOLUTION,
+        soft_max=256,
+        description="Cells along the longest side of the scene's lattice: more follow the "
+                    "light's changes more closely and need more photons")
+    order: IntProperty(
+        name="SH Order", default=L["order"], min=1, max=2,
+        description="How much of the light's direction each lattice cell keeps: 1 only soft, "
+                    "broad light; 2 sharper shading near walls and lights, with more memory")
+    caustics: EnumProperty(
+        name="Caustics", items=CAUSTICS_ITEMS, default=L["caustics"],
+        description="How light focused by glass and mirrors onto surfaces is kept")
+    caustic_resolution: IntProperty(
+        name="Caustic Resolution", default=L["caustic_resolution"], min=1,
+        max=settings.MAX_LATTICE_RESOLUTION, soft_max=512,
+        description="Cells along the longest side of the caustic lattice: more give sharper "
+                    "caustics")
+    interpolation: EnumProperty(
+        name="Interpolation", items=INTERPOLATION_ITEMS, default=L["interpolation"],
+        description="How the lattice is blended between cells")
+    blur_passes: IntProperty(
+        name="Blur Passes", default=L["blur_passes"], min=0, max=16,
+        description="Times the lattice is blurred: smoother light, darker corners")
+    world_in_field: BoolProperty(
+        name="World in Lattice", default=L["world_in_field"],
+        description="The lattice also carries the sky's direct light: less noise, softer "
+                    "sky shadows")
+    passes: IntProperty(
+        name="Render Passes", default=settings.final_passes("PHOTON_LATTICE", native.module()),
+        min=1, soft_max=64,
+        description="Photon passes of an F12 render, a Solve or a bake, each shooting Photons: "
+                    "more give smoother light")
+    viewport_passes: IntProperty(
+        name="Viewport Passes", default=VP["PHOTON_LATTICE"], min=1, soft_max=64,
+        description="Photon passes the Rendered viewport solves, each shooting Photons (as many "
+                    "as Render Passes give the lattice of a final render; more give a smoother "
+                    "viewport)")
+
+
 class ShgiProbeGridSettings(bpy.types.PropertyGroup):
-    """ProbeGridSettings of the PROBE_GRID method (``scene.shgi.probe_grid``)."""
+    """ProbeGridSettings of the PROBE_GRID method (``scene.shgi.probe_grid``); its paths' bounce
+    limit and clamp come from Light Paths (settings.LIGHT_PATH_VALUES)."""
 
     order: IntProperty(
         name="SH Order", default=P["order"], min=1, max=4,
@@ -49,13 +101,6 @@ class ShgiProbeGridSettings(bpy.types.PropertyGroup):
         name="History", default=P["hysteresis"], min=0.0, max=0.999,
         description="How much of the earlier passes each update keeps: higher gives a calmer, "
                     "less noisy result that follows scene edits more slowly")
-    clamp: FloatProperty(
-        name="Clamp", default=P["clamp"], min=0.0, soft_max=100.0,
-        description="Largest colour component of a probe's radiance sample against "
-                    "fireflies; 0 disables clamping")
-    bounces: IntProperty(
-        name="Bounces", default=P["bounces"], min=1, max=64,
-        description="Diffuse and glossy scatterings along a probe's path")
     visibility: BoolProperty(
         name="Visibility", default=P["visibility"],
         description="Keep light from leaking through walls: each probe lights only the "
@@ -94,6 +139,15 @@ class ShgiProbeGridSettings(bpy.types.PropertyGroup):
         name="Placement Rays", default=P["placement_rays"], min=settings.MIN_PLACEMENT_RAYS,
         max=settings.MAX_RAYS_PER_PROBE, soft_max=4096,
         description="Rays per probe that find probes inside geometry")
+    passes: IntProperty(
+        name="Render Passes", default=settings.final_passes("PROBE_GRID", native.module()),
+        min=1, soft_max=256,
+        description="Probe update passes of an F12 render, a Solve or a bake: more give "
+                    "calmer light and take longer")
+    viewport_passes: IntProperty(
+        name="Viewport Passes", default=VP["PROBE_GRID"], min=1, soft_max=1024,
+        description="Probe update passes the Rendered viewport runs in the background, a new "
+                    "frame after each, before it stops refining")
 
 
 def bake_properties():
@@ -200,7 +254,8 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
         description="Total bounce limit of a path (Cycles' Max Bounces > Total)")
     diffuse_bounces: IntProperty(
         name="Diffuse", default=D["diffuse_bounces"], min=0, max=1024,
-        description="Diffuse bounces of camera paths, and photon scatterings of the lattices")
+        description="Diffuse bounces of a path; the Photon Lattice's photons and the Probe "
+                    "Grid's probes follow it too")
     glossy_bounces: IntProperty(
         name="Glossy", default=D["glossy_bounces"], min=0, max=1024,
         description="Glossy bounce limit")
@@ -209,59 +264,29 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
         description="Transmission bounce limit")
     clamp_indirect: FloatProperty(
         name="Clamp Indirect", default=D["clamp_indirect"], min=0.0, soft_max=100.0,
-        description="Largest colour component of an indirect sample; 0 disables clamping")
+        description="Largest colour component of an indirect light sample, against "
+                    "fireflies (also of the Probe Grid's probe samples); 0 disables clamping")
     world_sampling: EnumProperty(
         name="World Sampling", items=WORLD_SAMPLING_ITEMS, default=D["world_sampling"],
         description="How direct light from the world is sampled")
     max_specular_bounces: IntProperty(
         name="Specular Bounces", default=D["max_specular_bounces"], min=0, max=64,
         description="Mirror and glass bounces followed by the lattice renderer")
-    photons: IntProperty(
-        name="Photons", default=D["photons"], min=1, soft_max=50_000_000,
-        description="Photons emitted per solve")
-    resolution: IntProperty(
-        name="Resolution", default=D["resolution"], min=1, max=settings.MAX_LATTICE_RESOLUTION,
-        soft_max=256,
-        description="Cells along the longest side of the global lattice")
-    order: IntProperty(
-        name="SH Order", default=D["order"], min=1, max=2,
-        description="How much of the light's direction each lattice cell keeps: 1 only soft, "
-                    "broad light; 2 sharper shading near walls and lights, with more memory")
-    caustics: EnumProperty(
-        name="Caustics", items=CAUSTICS_ITEMS, default=D["caustics"],
-        description="Where light -> specular -> diffuse photons go")
-    caustic_resolution: IntProperty(
-        name="Caustic Resolution", default=D["caustic_resolution"], min=1,
-        max=settings.MAX_LATTICE_RESOLUTION, soft_max=512,
-        description="Cells along the longest side of the caustic lattice")
-    interpolation: EnumProperty(
-        name="Interpolation", items=INTERPOLATION_ITEMS, default=D["interpolation"],
-        description="How the lattice is sampled between cells")
-    blur_passes: IntProperty(
-        name="Blur Passes", default=D["blur_passes"], min=0, max=16,
-        description="3x3x3 blurs of the global lattice (smoother, darker corners)")
-    world_in_field: BoolProperty(
-        name="World in Lattice", default=D["world_in_field"],
-        description="The lattice carries the world's direct light (less noise, blurrier)")
     viewport_samples: IntProperty(
         name="Viewport Samples", default=V["viewport_samples"], min=1, max=settings.MAX_SAMPLES,
         soft_max=4096,
         description="Samples per pixel the Rendered viewport accumulates before it stops")
-    viewport_photon_passes: IntProperty(
-        name="Viewport Photon Passes", default=V["viewport_photon_passes"], min=1, soft_max=64,
-        description="Photon passes the Rendered viewport solves, each tracing Photons (1 gives "
-                    "the lattice of a final render; more give a smoother viewport)")
+    photon_lattice: PointerProperty(type=ShgiPhotonLatticeSettings, name="Photon Lattice",
+                                    description="Settings of the Photon Lattice method")
     probe_grid: PointerProperty(type=ShgiProbeGridSettings, name="Probe Grid",
                                 description="Settings of the Probe Grid method")
     bake: PointerProperty(type=ShgiBakeSettings, name="Bake",
                           description="Lightmap bake settings")
-    probe_passes: IntProperty(
-        name="Render Passes", default=S["probe_passes"], min=1, soft_max=256,
-        description="Probe update passes of an F12 render or a Solve")
-    viewport_probe_passes: IntProperty(
-        name="Viewport Passes", default=V["viewport_probe_passes"], min=1, soft_max=1024,
-        description="Probe update passes the Rendered viewport runs in the background, a new "
-                    "frame after each, before it stops refining")
+    settings_version: IntProperty(
+        name="Settings Version", default=settings_upgrade.SETTINGS_VERSION, min=1,
+        options={"HIDDEN"},
+        description="The layout of these settings in the file (versioning.py brings older "
+                    "files up to date when they open)")
     show_probes: BoolProperty(
         name="Show Probes", default=V["show_probes"],
         description="Draw each probe as a small sphere whose colour on each side is the "
@@ -278,7 +303,8 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
 
 
 # Registered in this order: a PointerProperty's group before the group holding it.
-_CLASSES = (ShgiProbeGridSettings, ShgiBakeSettings, ShgiSceneSettings)
+_CLASSES = (ShgiPhotonLatticeSettings, ShgiProbeGridSettings, ShgiBakeSettings,
+            ShgiSceneSettings)
 
 
 def register():

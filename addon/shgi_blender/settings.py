@@ -1,15 +1,23 @@
 """The render settings of ``scene.shgi`` and the native settings structs they fill, without bpy.
 
-``scene.shgi`` (properties.py) is a PropertyGroup whose names are the native fields' names
-(docs/architecture.md: settings mirrored 1:1). One property can feed several structs: ``samples`` is
-PathTracerSettings.samples for PATH_TRACE and PreviewSettings.samples for the field methods,
-as Cycles' one "Max Samples" serves every integrator; ``seed`` seeds every solver. The one
-rename is ``PhotonLatticeSettings.max_bounces`` (photon scatterings after emission), fed by
-``diffuse_bounces``: ``max_bounces`` in scene.shgi is Cycles' total path limit, and a photon
-bounce is the light-side twin of a diffuse camera bounce (both default to 4, as in Cycles).
-ProbeGridSettings' fields live in their own group, ``scene.shgi.probe_grid``, under their
-native names: several of them (order, bounces, clamp) mean something else than the flat
-properties of the same or similar names, exactly as the two native structs differ.
+``scene.shgi`` (properties.py) holds what every method shares: the samples, the seed and Light
+Paths (docs/architecture.md: settings mirrored 1:1, under the native names). One property can
+feed several structs: ``samples`` is PathTracerSettings.samples for PATH_TRACE and
+PreviewSettings.samples for the field methods, as Cycles' one "Max Samples" serves every
+integrator; ``seed`` seeds every solver. Each field method has its own group named after its
+method (METHOD_SETTINGS: ``scene.shgi.photon_lattice`` mirrors shgi.PhotonLatticeSettings,
+``scene.shgi.probe_grid`` shgi.ProbeGridSettings, field by field), so that ``order``,
+``resolution`` and the like mean one thing per group, with the method's pass counts beside them
+(``passes`` of a final solve, ``viewport_passes`` of the Rendered viewport), as Cycles keeps
+``samples`` and ``preview_samples`` side by side.
+
+Light Paths is shared and every method follows it: a native field that Light Paths governs is
+not mirrored in the method's group but derived from it (LIGHT_PATH_VALUES):
+PhotonLatticeSettings.max_bounces (photon scatterings after emission, the light-side twin of a
+diffuse camera bounce) is Diffuse; ProbeGridSettings.bounces is Diffuse - 1 (a probe's path
+starts one bounce after the renderer's surface) and its per-sample ``clamp`` is Clamp. What a
+method cannot follow (the probe grid's one bounce limit for diffuse and glossy, its fixed total
+and transmission limits) the Light Paths panel says under the method's name (ui/render_panels.py).
 
 Everything here takes any object with the property names as attributes (the PropertyGroup, or a
 SimpleNamespace in tests), so pytest checks the mapping outside Blender.
@@ -89,8 +97,9 @@ ENUM_ITEMS = {
     ),
 }
 
-# The native default of every property (checked against the native structs by
-# tests/python/test_blender_engine.py). samples is the path tracer's default; the preview's is 16.
+# scene.shgi's own properties with their native defaults (checked against the native structs by
+# tests/python/test_blender_engine.py): the samples, the seed and Light Paths, which every method
+# shares. samples is the path tracer's default; the preview's is 16.
 PROPERTY_DEFAULTS = {
     "samples": 64,
     "seed": 0,
@@ -101,6 +110,12 @@ PROPERTY_DEFAULTS = {
     "clamp_indirect": 0.0,
     "world_sampling": "COSINE",
     "max_specular_bounces": 8,
+}
+
+# PhotonLatticeSettings' fields in ``scene.shgi.photon_lattice`` with their native defaults. Not
+# mirrored: ``seed`` (scene.shgi.seed seeds every solver) and ``max_bounces`` (Light Paths >
+# Diffuse, LIGHT_PATH_VALUES).
+PHOTON_LATTICE_DEFAULTS = {
     "photons": 200000,
     "resolution": 16,
     "order": 2,
@@ -111,18 +126,16 @@ PROPERTY_DEFAULTS = {
     "world_in_field": False,
 }
 
-# ProbeGridSettings' fields in ``scene.shgi.probe_grid`` with their native defaults (checked
-# against the native struct by tests/python/test_blender_engine.py). Not mirrored: ``seed``
-# (scene.shgi.seed seeds every solver), ``volumes`` (the scene's Irradiance Volume objects,
-# export/light_probe.py) and ``include_direct`` (the renderer adds direct light exactly; probes
-# holding it too would count it twice).
+# ProbeGridSettings' fields in ``scene.shgi.probe_grid`` with their native defaults. Not
+# mirrored: ``seed`` (scene.shgi.seed), ``bounces`` and ``clamp`` (Light Paths,
+# LIGHT_PATH_VALUES), ``volumes`` (the scene's Irradiance Volume objects, export/light_probe.py)
+# and ``include_direct`` (the renderer adds direct light exactly; probes holding it too would
+# count it twice).
 PROBE_GRID_DEFAULTS = {
     "order": 2,
     "spacing": 0.0,
     "rays_per_probe": 256,
     "hysteresis": 0.95,
-    "clamp": 0.0,
-    "bounces": 3,
     "visibility": True,
     "visibility_resolution": 8,
     "visibility_blur": 0.15,
@@ -135,33 +148,38 @@ PROBE_GRID_DEFAULTS = {
     "placement_rays": 128,
 }
 
-# Properties of the engine's solves that no native struct has: the update passes a probe grid
-# runs for an F12 render or a Solve (seed 002 Tables 5.1-5.3 converge in about 6).
-SOLVE_PROPERTY_DEFAULTS = {
-    "probe_passes": 6,
-}
+# Refinement passes of a final solve (F12, Solve, a bake) when ``shgi`` cannot be imported as the
+# add-on registers: the method registry's final_passes, which ``python -m shgi bake`` runs
+# (shgi.bake.PROBE_GRID_PASSES); tests/python/test_blender_versioning.py checks that they agree.
+FINAL_PASSES_FALLBACK = {"PHOTON_LATTICE": 1, "PROBE_GRID": 8}
+# Passes the Rendered viewport runs (no native struct has them), as Cycles keeps its viewport
+# samples apart: photon passes it solves (each traces `photons`; as many as `passes` give the
+# lattice F12 solves), and probe grid update passes it runs in the background before it stops
+# refining (past ~2 / (1 - hysteresis) passes the blend holds as much history as it ever will).
+VIEWPORT_PASSES_DEFAULTS = {"PHOTON_LATTICE": 1, "PROBE_GRID": 32}
 
-# Properties of the live viewport only (no native struct has them), as Cycles keeps its
-# viewport samples apart: samples per pixel a viewport accumulates before it stops, photon passes
-# it solves (each traces `photons`; 1 = the lattice F12 solves), probe grid update passes it runs
-# in the background before it stops refining (past ~2 / (1 - hysteresis) passes the blend holds
-# as much history as it ever will), and whether the overlays draw the lattice's sample spheres
-# or the probes.
+
+def final_passes(solver, shgi=None):
+    """The refinement passes of `solver`'s final solve: the native registry's (what ``python -m
+    shgi bake`` runs) when the module `shgi` is given and has it, else FINAL_PASSES_FALLBACK."""
+    try:
+        return int(shgi.method(solver).final_passes)
+    except (AttributeError, ValueError):
+        return FINAL_PASSES_FALLBACK[solver]
+
+
+# Properties of the live viewport only (no native struct has them): samples per pixel a viewport
+# accumulates before it stops, and whether the overlays draw the lattice's sample spheres or the
+# probes.
 VIEWPORT_PROPERTY_DEFAULTS = {
     "viewport_samples": 64,
-    "viewport_photon_passes": 1,
-    "viewport_probe_passes": 32,
     "show_lattice_samples": False,
     "show_probes": False,
     "overlay_size": 0.12,
 }
-# The properties a viewport render depends on (a change restarts it); the overlay toggles are
-# not among them. "probe_grid" stands for the values of the scene.shgi.probe_grid group.
-VIEWPORT_RENDER_PROPERTIES = ("method", *PROPERTY_DEFAULTS, "viewport_samples",
-                              "viewport_photon_passes", "viewport_probe_passes", "probe_grid")
 
 # Where each property is drawn in Properties > Render ("panel > label"), for messages that name a
-# setting: scene.shgi's, then scene.shgi.probe_grid's (placement_rays is in no panel).
+# setting: scene.shgi's, then each method group's (placement_rays is in no panel).
 SETTING_LABELS = {
     "samples": "SHGI > Samples > Render",
     "seed": "SHGI > Seed",
@@ -172,6 +190,8 @@ SETTING_LABELS = {
     "clamp_indirect": "Light Paths > Clamp",
     "world_sampling": "Light Paths > World",
     "max_specular_bounces": "Light Paths > Max Bounces > Specular",
+}
+PHOTON_LATTICE_LABELS = {
     "photons": "Photon Lattice > Photons",
     "resolution": "Photon Lattice > Resolution",
     "order": "Photon Lattice > SH Order",
@@ -186,8 +206,6 @@ PROBE_GRID_LABELS = {
     "spacing": "Probe Grid > Spacing",
     "rays_per_probe": "Probe Grid > Rays",
     "hysteresis": "Probe Grid > History",
-    "clamp": "Probe Grid > Clamp",
-    "bounces": "Probe Grid > Bounces",
     "visibility": "Probe Grid > Visibility",
     "visibility_resolution": "Probe Grid > Visibility > Resolution",
     "visibility_blur": "Probe Grid > Visibility > Blur",
@@ -207,6 +225,7 @@ MAX_PROBE_SPACING = 1e12             # ProbeGridSettings.spacing, m (kMaxCoordin
 MAX_RAYS_PER_PROBE = 65536           # ProbeGridSettings.rays_per_probe, placement_rays
 MIN_PLACEMENT_RAYS = 4               # ProbeGridSettings.placement_rays
 MIN_VISIBILITY_BLUR = 0.01           # ProbeGridSettings.visibility_blur, radians
+MAX_PROBE_BOUNCES = 64               # ProbeGridSettings.bounces
 # ProbeGridSettings.bleed_bias must stay below 1 and backface_threshold above 0: the nearest
 # values the panels' two decimals show.
 MAX_BLEED_BIAS = 0.99
@@ -215,19 +234,105 @@ MIN_BACKFACE_THRESHOLD = 0.01
 # Diffuse 0, direct light only, has no photon lattice.
 MIN_PHOTON_BOUNCES = 1
 
+
+@dataclass(frozen=True)
+class LightPathValue:
+    """A native field of a method's settings that Light Paths sets: scene.shgi.`prop` + `offset`.
+    Below `minimum` (in the Light Paths setting's values) the method has nothing to solve and
+    refuses; above `maximum` it follows `maximum` (the native limit; None: no limit)."""
+
+    prop: str
+    offset: int = 0
+    minimum: int = None
+    maximum: int = None
+
+
+# A probe's path starts at the probe: the renderer's own surface, where it reads the probes, is
+# the first bounce of the path tracer's path, so a probe path with Diffuse - 1 bounces gives the
+# rendered light the path depth of the path tracer's (Light Paths > Diffuse 4: 3 probe bounces).
+# Diffuse 0, direct light only, has no probe grid (its paths would need -1 bounces).
+PROBE_PATH_FIRST_BOUNCE = 1
+
+# Light Paths in the method's native settings: {native struct: {native field: LightPathValue}}.
+# Every method follows Light Paths > Diffuse (the depth of its indirect light); the probe grid's
+# per-sample clamp is Light Paths > Clamp (a probe's radiance sample is the incident indirect
+# light a renderer's diffuse sample carries, in the same units; the photon lattice has no
+# per-sample clamp: its light is clamped where F12 reads it, PreviewSettings.clamp_indirect).
+LIGHT_PATH_VALUES = {
+    "PhotonLatticeSettings": {
+        "max_bounces": LightPathValue("diffuse_bounces", 0, MIN_PHOTON_BOUNCES),
+    },
+    "ProbeGridSettings": {
+        # Past 64 probe bounces what is left of the light (albedo^64: 6e-7 at 0.8) is invisible.
+        "bounces": LightPathValue("diffuse_bounces", -PROBE_PATH_FIRST_BOUNCE,
+                                  PROBE_PATH_FIRST_BOUNCE,
+                                  MAX_PROBE_BOUNCES + PROBE_PATH_FIRST_BOUNCE),
+        "clamp": LightPathValue("clamp_indirect"),
+    },
+}
+
+
+@dataclass(frozen=True)
+class MethodSettings:
+    """A field method's settings group: ``scene.shgi.<prop>``, mirroring shgi.<native_type> by
+    name, with the method's pass counts: ``passes`` (a final solve: F12, Solve, a bake) and
+    ``viewport_passes`` (the Rendered viewport)."""
+
+    solver: str          # Method.solver: "PHOTON_LATTICE", "PROBE_GRID"
+    label: str           # as the panels name the method
+    prop: str            # scene.shgi.<prop>
+    native_type: str     # the shgi settings class it fills
+    defaults: dict       # {mirrored native field: native default}
+    labels: dict         # {mirrored native field: "panel > label"}
+
+    @property
+    def light_paths(self):
+        """{native field: LightPathValue} of the fields Light Paths sets."""
+        return LIGHT_PATH_VALUES[self.native_type]
+
+
+# What a field method's solve cannot take from Light Paths > Max Bounces, as the panel says under
+# the limits (F12 renders its first surface exactly and follows mirrors and glass up to
+# Specular, whatever the method).
+LIGHT_PATH_LIMITS = {
+    "PHOTON_LATTICE": "Photon Lattice: photons follow Diffuse; Total, Glossy and Transmission "
+                      "apply to path tracing only",
+    "PROBE_GRID": f"Probe Grid: Glossy follows Diffuse (at most "
+                  f"{MAX_PROBE_BOUNCES + PROBE_PATH_FIRST_BOUNCE}); Total and Transmission are "
+                  f"{PROPERTY_DEFAULTS['max_bounces']} and "
+                  f"{PROPERTY_DEFAULTS['transmission_bounces']}",
+}
+
+
+# The field methods' groups, by Method.solver.
+METHOD_SETTINGS = {
+    "PHOTON_LATTICE": MethodSettings("PHOTON_LATTICE", "Photon Lattice", "photon_lattice",
+                                     "PhotonLatticeSettings", PHOTON_LATTICE_DEFAULTS,
+                                     PHOTON_LATTICE_LABELS),
+    "PROBE_GRID": MethodSettings("PROBE_GRID", "Probe Grid", "probe_grid", "ProbeGridSettings",
+                                 PROBE_GRID_DEFAULTS, PROBE_GRID_LABELS),
+}
+# The properties a viewport render depends on (a change restarts it); the overlay toggles and
+# the final solve's passes are not among them. A group name stands for the values of its
+# mirrored fields and viewport_passes.
+VIEWPORT_RENDER_PROPERTIES = ("method", *PROPERTY_DEFAULTS, "viewport_samples",
+                              *(group.prop for group in METHOD_SETTINGS.values()))
+
 # Native struct -> {native field: scene.shgi property}.
 PATH_TRACER_FIELDS = {name: name for name in (
     "samples", "seed", "max_bounces", "diffuse_bounces", "glossy_bounces",
     "transmission_bounces", "clamp_indirect", "world_sampling")}
 PREVIEW_FIELDS = {name: name for name in (
     "samples", "seed", "clamp_indirect", "max_specular_bounces", "world_sampling")}
-PHOTON_LATTICE_FIELDS = dict(
-    {name: name for name in ("photons", "seed", "resolution", "order", "caustics",
-                             "caustic_resolution", "interpolation", "blur_passes",
-                             "world_in_field")},
-    max_bounces="diffuse_bounces")
-# ProbeGridSettings: {native field: scene.shgi.probe_grid property}; the seed is scene.shgi's.
-PROBE_GRID_FIELDS = {name: name for name in PROBE_GRID_DEFAULTS}
+
+
+def _native_labels(group):
+    labels = dict(group.labels)
+    # A derived value is named by its Light Paths setting only when it is that value unchanged.
+    labels.update({field: SETTING_LABELS[value.prop] for field, value in group.light_paths.items()
+                   if value.offset == 0})
+    labels["seed"] = SETTING_LABELS["seed"]
+    return labels
 
 
 # Native struct -> {native field: its label}, for name_settings.
@@ -235,9 +340,7 @@ NATIVE_LABELS = {
     "PathTracerSettings": {name: SETTING_LABELS[prop]
                            for name, prop in PATH_TRACER_FIELDS.items()},
     "PreviewSettings": {name: SETTING_LABELS[prop] for name, prop in PREVIEW_FIELDS.items()},
-    "PhotonLatticeSettings": {name: SETTING_LABELS[prop]
-                              for name, prop in PHOTON_LATTICE_FIELDS.items()},
-    "ProbeGridSettings": dict(PROBE_GRID_LABELS),
+    **{group.native_type: _native_labels(group) for group in METHOD_SETTINGS.values()},
 }
 # A native field in a message: "ProbeGridSettings.visibility_blur".
 _NATIVE_FIELD = re.compile(r"\b([A-Z]\w*Settings)\.(\w+)\b")
@@ -278,6 +381,34 @@ def native_fields(props, fields, shgi):
     return values
 
 
+def light_path_fields(props, group, check=True):
+    """{native field: value} that Light Paths (scene.shgi `props`) gives method `group`. With
+    `check`, ValueError naming the Light Paths setting when it leaves the method nothing to
+    solve."""
+    values = {}
+    for field, value in group.light_paths.items():
+        setting = getattr(props, value.prop)
+        if check and value.minimum is not None and setting < value.minimum:
+            raise ValueError(
+                f"{SETTING_LABELS[value.prop]} is {setting}: the {group.label} stores light "
+                f"after {value.minimum} or more diffuse bounces; set it to {value.minimum} or "
+                "more, or use Path Tracing (which renders 0 as direct light only)")
+        if value.maximum is not None:
+            setting = min(setting, value.maximum)
+        values[field] = setting + value.offset
+    return values
+
+
+def method_native_fields(props, group, shgi):
+    """{native field: value} of method `group`'s settings struct from scene.shgi `props`: its
+    group's mirrored fields, Light Paths' values and the seed."""
+    values = native_fields(getattr(props, group.prop), {name: name for name in group.defaults},
+                           shgi)
+    values.update(light_path_fields(props, group))
+    values["seed"] = props.seed
+    return values
+
+
 def path_tracer_settings(props, shgi):
     """shgi.PathTracerSettings of scene.shgi (ValueError naming a refused setting)."""
     return validated(shgi.PathTracerSettings(**native_fields(props, PATH_TRACER_FIELDS, shgi)))
@@ -290,24 +421,20 @@ def preview_settings(props, shgi):
 
 
 def photon_lattice_settings(props, shgi):
-    """shgi.PhotonLatticeSettings of scene.shgi (ValueError naming a refused setting)."""
-    if props.diffuse_bounces < MIN_PHOTON_BOUNCES:
-        raise ValueError(f"{SETTING_LABELS['diffuse_bounces']} is {props.diffuse_bounces}: the "
-                         f"Photon Lattice stores light after {MIN_PHOTON_BOUNCES} or more diffuse "
-                         f"bounces; set it to {MIN_PHOTON_BOUNCES} or more, or use Path Tracing "
-                         "(which renders 0 as direct light only)")
+    """shgi.PhotonLatticeSettings of scene.shgi: its photon_lattice group, Light Paths and the
+    seed (ValueError naming a refused setting)."""
     return validated(shgi.PhotonLatticeSettings(
-        **native_fields(props, PHOTON_LATTICE_FIELDS, shgi)))
+        **method_native_fields(props, METHOD_SETTINGS["PHOTON_LATTICE"], shgi)))
 
 
 def probe_grid_settings(props, shgi, volumes=()):
-    """shgi.ProbeGridSettings of scene.shgi (its probe_grid group and seed).
+    """shgi.ProbeGridSettings of scene.shgi: its probe_grid group, Light Paths and the seed.
 
     volumes: shgi.ProbeVolume list (the scene's Irradiance Volumes); empty: one volume fitted to
     the scene with the spacing setting. ValueError naming a refused setting.
     """
     return validated(shgi.ProbeGridSettings(
-        **native_fields(props.probe_grid, PROBE_GRID_FIELDS, shgi), seed=props.seed,
+        **method_native_fields(props, METHOD_SETTINGS["PROBE_GRID"], shgi),
         volumes=list(volumes)))
 
 
@@ -324,15 +451,15 @@ def probe_lookup_settings(props, shgi):
 
 def solver_signature(props):
     """The values the solve of scene.shgi's method depends on (to tell that a frozen solution
-    is out of date): the method, its solver's settings and the seed."""
-    solver = METHODS_BY_ID[props.method].solver
-    if solver == "PROBE_GRID":
-        values = [(name, getattr(props.probe_grid, name)) for name in sorted(PROBE_GRID_FIELDS)]
-        values.append(("seed", props.seed))
-    else:
-        values = [(name, getattr(props, prop)) for name, prop in
-                  sorted(PHOTON_LATTICE_FIELDS.items())]
-    return (("method", props.method), *values)
+    is out of date): the method and its native settings' fields, by their native names, so that
+    a signature saved with a solution compares whatever the properties' layout (a Light Paths
+    value the method follows counts under the native field it fills)."""
+    group = METHOD_SETTINGS[METHODS_BY_ID[props.method].solver]
+    group_props = getattr(props, group.prop)
+    values = {name: getattr(group_props, name) for name in group.defaults}
+    values.update(light_path_fields(props, group, check=False))
+    # The seed last, as signatures saved with probe grid solutions have it.
+    return (("method", props.method), *sorted(values.items()), ("seed", props.seed))
 
 
 def overlay_wanted(props):
@@ -343,22 +470,44 @@ def overlay_wanted(props):
             or (solver == "PROBE_GRID" and props.show_probes))
 
 
+def group_properties(group):
+    """The properties of method `group`'s PropertyGroup a viewport render depends on."""
+    return (*group.defaults, "viewport_passes")
+
+
 def render_property_values(props):
     """((name, value), ...) of the VIEWPORT_RENDER_PROPERTIES: plain values a worker thread can
-    read and compare (scene.shgi itself must stay on Blender's main thread). The probe_grid
-    group becomes a nested ((name, value), ...)."""
+    read and compare (scene.shgi itself must stay on Blender's main thread). Each method's group
+    becomes a nested ((name, value), ...)."""
+    groups = {group.prop: group for group in METHOD_SETTINGS.values()}
     values = []
     for name in VIEWPORT_RENDER_PROPERTIES:
         value = getattr(props, name)
-        if name == "probe_grid":
-            value = tuple((field, getattr(value, field)) for field in PROBE_GRID_DEFAULTS)
+        if name in groups:
+            value = tuple((field, getattr(value, field))
+                          for field in group_properties(groups[name]))
         values.append((name, value))
     return tuple(values)
 
 
 def properties_from_values(values):
-    """A namespace with the property names as attributes (and ``probe_grid`` as a nested one)
-    from render_property_values(): what the settings functions above take on a worker thread."""
+    """A namespace with the property names as attributes (and each method group as a nested
+    one) from render_property_values(): what the settings functions above take on a worker
+    thread."""
     props = dict(values)
-    props["probe_grid"] = SimpleNamespace(**dict(props["probe_grid"]))
+    for group in METHOD_SETTINGS.values():
+        props[group.prop] = SimpleNamespace(**dict(props[group.prop]))
     return SimpleNamespace(**props)
+
+
+def default_properties(shgi=None, **overrides):
+    """scene.shgi of a new scene as a namespace (method groups nested), `overrides` set: the
+    stand-in the settings functions take outside Blender. shgi: the module whose registry gives
+    the final passes (FINAL_PASSES_FALLBACK without it)."""
+    values = dict(PROPERTY_DEFAULTS, **VIEWPORT_PROPERTY_DEFAULTS, method=METHODS[0].identifier)
+    for solver, group in METHOD_SETTINGS.items():
+        values[group.prop] = SimpleNamespace(
+            **group.defaults, passes=final_passes(solver, shgi),
+            viewport_passes=VIEWPORT_PASSES_DEFAULTS[solver])
+    values.update(overrides)
+    return SimpleNamespace(**values)

@@ -66,9 +66,9 @@ def check_registered():
         if not hasattr(bpy.types, name):
             raise AssertionError(f"{name} is not registered")
     bpy.ops.shgi.quality_preset(preset="PRODUCTION")
-    if (scene.shgi.samples, scene.shgi.photons) != (1024, 4_000_000):
+    if (scene.shgi.samples, scene.shgi.photon_lattice.photons) != (1024, 4_000_000):
         raise AssertionError(f"the Production preset set {scene.shgi.samples} samples, "
-                             f"{scene.shgi.photons} photons")
+                             f"{scene.shgi.photon_lattice.photons} photons")
     bpy.ops.shgi.quality_preset(preset="PREVIEW")
     if scene.shgi.samples != 16:
         raise AssertionError(f"the Preview preset set {scene.shgi.samples} samples")
@@ -91,10 +91,15 @@ def check_panels_draw(scene):
     scene.shgi.method = "PHOTON_LATTICE"
     draw_panel("SHGI_RENDER_PT_photon_lattice", context)
     scene.shgi.method = "PROBE_GRID"
-    if "probes fill the scene" not in draw_panel("SHGI_RENDER_PT_probe_grid", context):
+    text = draw_panel("SHGI_RENDER_PT_probe_grid", context)
+    if "probes fill the scene" not in text:
         raise AssertionError("the probe grid panel does not say its volume is fitted")
+    if "Bounces and Clamp follow Light Paths" not in text:
+        raise AssertionError(f"the probe grid panel does not say where its bounces and clamp "
+                             f"are set: {text!r}")
     draw_panel("SHGI_RENDER_PT_probe_grid_visibility", context)
-    check_probe_grid_properties(scene)
+    check_method_groups()
+    check_light_path_limits(scene, context)
     draw_panel("SHGI_LIGHT_PT_light", context)
     scene.view_layers[0].use_pass_mist = True
     if "Mist" not in draw_panel("SHGI_VIEWLAYER_PT_passes", context):
@@ -137,21 +142,61 @@ def check_preferences(scene):
         raise AssertionError(f"no manual found for the add-on in {shgi_help.ADDON_DIR}")
 
 
-def check_probe_grid_properties(scene):
-    """scene.shgi.probe_grid holds ProbeGridSettings' defaults; the UI names are EEVEE's."""
+def check_method_groups():
+    """A new scene's scene.shgi.photon_lattice and scene.shgi.probe_grid hold their native
+    structs' defaults and, with Light Paths' defaults, build them (Diffuse 4 gives the probe
+    grid its native 3 bounces); the probe grid's UI names are EEVEE's."""
     import shgi
+    from shgi_blender import settings
 
-    native = shgi.ProbeGridSettings()
+    scene = bpy.data.scenes.new("shgi_defaults")
+    try:
+        check_group_defaults(scene, settings, shgi)
+    finally:
+        bpy.data.scenes.remove(scene)
+
+
+def check_group_defaults(scene, settings, shgi):
+
+    builders = {"PHOTON_LATTICE": settings.photon_lattice_settings,
+                "PROBE_GRID": settings.probe_grid_settings}
+    for solver, group in settings.METHOD_SETTINGS.items():
+        native = getattr(shgi, group.native_type)()
+        built = builders[solver](scene.shgi, shgi)
+        props = getattr(scene.shgi, group.prop)
+        for name in group.defaults:
+            value = getattr(props, name)
+            expected = getattr(native, name)
+            if isinstance(value, str):  # an enum property: the native member's name
+                expected = expected.name
+            elif abs(float(value) - float(expected)) <= 1e-6:
+                expected = value
+            if value != expected:
+                raise AssertionError(f"{group.prop}.{name} is {value}, native default {expected}")
+        for name in group.light_paths:
+            if getattr(built, name) != getattr(native, name):
+                raise AssertionError(f"Light Paths' defaults give {group.native_type}.{name} "
+                                     f"{getattr(built, name)}, native {getattr(native, name)}")
     grid = scene.shgi.probe_grid
-    for name in ("order", "spacing", "rays_per_probe", "hysteresis", "clamp", "bounces",
-                 "normal_bias", "bleed_bias", "visibility_blur", "visibility", "relocate"):
-        if abs(float(getattr(grid, name)) - float(getattr(native, name))) > 1e-6:
-            raise AssertionError(f"probe_grid.{name} is {getattr(grid, name)}, native "
-                                 f"default {getattr(native, name)}")
     for name, label in VISIBILITY_PROPERTIES.items():
         if grid.bl_rna.properties[name].name != label:
             raise AssertionError(f"probe_grid.{name} is labelled "
                                  f"{grid.bl_rna.properties[name].name!r}, not {label!r}")
+
+
+def check_light_path_limits(scene, context):
+    """Under each field method, Max Bounces says which limits the method cannot follow."""
+    from shgi_blender import settings
+
+    for solver, group in settings.METHOD_SETTINGS.items():
+        scene.shgi.method = solver
+        text = draw_panel("SHGI_RENDER_PT_light_paths_max_bounces", context)
+        if f"{group.label}:" not in text:
+            raise AssertionError(f"Max Bounces under {solver} does not name the limits the "
+                                 f"method cannot follow: {text!r}")
+    scene.shgi.method = "PATH_TRACE"
+    if ":" in draw_panel("SHGI_RENDER_PT_light_paths_max_bounces", context):
+        raise AssertionError("Max Bounces names limits a method cannot follow under Path Tracing")
 
 
 def check_unregistered():
@@ -165,6 +210,12 @@ def check_unregistered():
     for name in OWN_CLASSES:
         if hasattr(bpy.types, name):
             raise AssertionError(f"{name} is still registered")
+    # A handler left behind would run the old add-on's code on every file opened or saved.
+    for kind in ("load_post", "save_pre", "save_post", "depsgraph_update_post"):
+        left = [handler.__module__ for handler in getattr(bpy.app.handlers, kind)
+                if handler.__module__.startswith(MODULE)]
+        if left:
+            raise AssertionError(f"{kind} still holds handlers of {left}")
 
 
 def main():

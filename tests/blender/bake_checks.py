@@ -512,9 +512,9 @@ def shard_checks(tmpdir, results):
 
 def export_volume_checks(scene, tmpdir, results):
     """Export Volume solves and freezes the method's field when there is none, then writes it."""
-    scene.shgi.photons = QUICK_PHOTONS
+    scene.shgi.photon_lattice.photons = QUICK_PHOTONS
     scene.shgi.probe_grid.rays_per_probe = QUICK_RAYS_PER_PROBE
-    scene.shgi.probe_passes = QUICK_PROBE_PASSES
+    scene.shgi.probe_grid.passes = QUICK_PROBE_PASSES
     volumes = {}
     for method in ("PROBE_GRID", "PHOTON_LATTICE"):
         scene.shgi.method = method

@@ -145,7 +145,7 @@ def cancel_with_stub(method, during_export=False):
     scene = common.new_scene("cornell_box", SCALE)
     scene.shgi.method = method
     scene.shgi.samples = HUGE_SAMPLES
-    scene.shgi.photons = HUGE_PHOTONS
+    scene.shgi.photon_lattice.photons = HUGE_PHOTONS
     if during_export:
         add_heavy_objects(scene)
     depsgraph = bpy.context.evaluated_depsgraph_get()  # evaluated before the timer starts

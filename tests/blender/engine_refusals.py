@@ -35,15 +35,19 @@ def native_builds(scene):
     building every native setting the group feeds)}."""
     props = scene.shgi
 
-    def scene_settings():
+    def scene_settings():  # Light Paths feeds every method
         settings.path_tracer_settings(props, shgi)
         settings.preview_settings(props, shgi)
         settings.photon_lattice_settings(props, shgi)
+        settings.probe_grid_settings(props, shgi)
         bake_settings.bake_options(props.bake, props, shgi)
 
     bake_names = [*bake_settings.LIGHTMAP_FIELDS.values(), *bake_settings.OPTION_FIELDS.values()]
     return {
         "scene.shgi": (props, list(settings.PROPERTY_DEFAULTS), scene_settings),
+        "scene.shgi.photon_lattice": (props.photon_lattice,
+                                      list(settings.PHOTON_LATTICE_DEFAULTS),
+                                      lambda: settings.photon_lattice_settings(props, shgi)),
         "scene.shgi.probe_grid": (props.probe_grid, list(settings.PROBE_GRID_DEFAULTS),
                                   lambda: settings.probe_grid_settings(props, shgi)),
         "scene.shgi.bake": (props.bake, bake_names,

@@ -128,7 +128,7 @@ def run_case(name, tmpdir):
         edit()
         scene.shgi.method = method
         scene.shgi.samples = SAMPLES
-        scene.shgi.photons = PHOTONS
+        scene.shgi.photon_lattice.photons = PHOTONS
         start = time.perf_counter()
         passes = common.render_f12(scene, "SHGI", os.path.join(tmpdir, f"{name}_{method}.exr"))
         record = final_render.last_render()

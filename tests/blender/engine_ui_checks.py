@@ -114,7 +114,7 @@ def probe_grid_scene():
     scene.shgi.method = "PROBE_GRID"
     scene.shgi.samples = FROZEN_SAMPLES
     scene.shgi.seed = SEED
-    scene.shgi.probe_passes = PROBE_PASSES
+    scene.shgi.probe_grid.passes = PROBE_PASSES
     for name, value in PROBE_SETTINGS.items():
         setattr(scene.shgi.probe_grid, name, value)
     return scene

@@ -91,7 +91,7 @@ def build_scene():
     props = scene.shgi
     props.method = "PHOTON_LATTICE"
     props.samples = props.viewport_samples = SAMPLES
-    props.photons = PHOTONS
+    props.photon_lattice.photons = PHOTONS
     props.seed = SEED
     return scene
 
@@ -356,7 +356,7 @@ def probe_grid(scene, box):
     props = scene.shgi
     props.method = "PROBE_GRID"
     props.viewport_samples = PROBE_SAMPLES
-    props.viewport_probe_passes = PROBE_PASSES
+    props.probe_grid.viewport_passes = PROBE_PASSES
     props.show_probes = True
     last_frame = session().worker.latest_frame().frame_id
     frames, _ = yield from wait_for_samples(PROBE_SAMPLES, CONVERGE_TIMEOUT_SECONDS,

@@ -48,13 +48,14 @@ DIFFUSE_INDIRECT_TOLERANCE = 0.10
 CANCEL_LATENCY = 0.5
 
 
-def default_props(**overrides):
-    """scene.shgi as a plain object with the property defaults."""
-    values = dict(settings.PROPERTY_DEFAULTS, **settings.SOLVE_PROPERTY_DEFAULTS,
-                  **settings.VIEWPORT_PROPERTY_DEFAULTS, method="PATH_TRACE",
-                  probe_grid=SimpleNamespace(**settings.PROBE_GRID_DEFAULTS))
-    values.update(overrides)
-    return SimpleNamespace(**values)
+def default_props(photon_lattice=None, probe_grid=None, **overrides):
+    """scene.shgi as a plain object with the property defaults; the method groups' values
+    overridden from the dicts of their names."""
+    props = settings.default_properties(shgi, **dict({"method": "PATH_TRACE"}, **overrides))
+    for group, values in (("photon_lattice", photon_lattice), ("probe_grid", probe_grid)):
+        for name, value in (values or {}).items():
+            setattr(getattr(props, group), name, value)
+    return props
 
 
 # --- settings, presets, passes (no Blender) ----------------------------------------------------
@@ -62,14 +63,11 @@ def default_props(**overrides):
 @pytest.mark.parametrize("struct, fields", [
     (shgi.PathTracerSettings, settings.PATH_TRACER_FIELDS),
     (shgi.PreviewSettings, settings.PREVIEW_FIELDS),
-    (shgi.PhotonLatticeSettings, settings.PHOTON_LATTICE_FIELDS),
 ])
 def test_property_defaults_are_the_native_defaults(struct, fields):
     native_defaults = struct()
     built = {shgi.PathTracerSettings: settings.path_tracer_settings,
-             shgi.PreviewSettings: settings.preview_settings,
-             shgi.PhotonLatticeSettings: settings.photon_lattice_settings}[struct](
-                 default_props(), shgi)
+             shgi.PreviewSettings: settings.preview_settings}[struct](default_props(), shgi)
     for native_name, prop_name in fields.items():
         expected = getattr(native_defaults, native_name)
         if (struct, native_name) == (shgi.PreviewSettings, "samples"):
@@ -77,22 +75,71 @@ def test_property_defaults_are_the_native_defaults(struct, fields):
         assert getattr(built, native_name) == expected, (struct.__name__, native_name, prop_name)
 
 
-def test_probe_grid_properties_mirror_the_native_settings():
-    native_defaults = shgi.ProbeGridSettings()
-    built = settings.probe_grid_settings(default_props(seed=4), shgi)
-    for name, value in settings.PROBE_GRID_DEFAULTS.items():
-        assert getattr(native_defaults, name) == pytest.approx(value), name
-        assert getattr(built, name) == pytest.approx(value), name
-    assert built.seed == 4 and built.volumes == [] and not built.include_direct
-    mirrored = set(settings.PROBE_GRID_DEFAULTS) | {"seed", "volumes", "include_direct"}
+# Native fields a method group does not mirror, and why: the scene's Irradiance Volumes place
+# the probes; the renderer adds direct light, so probes never hold it; the photon lattice's
+# expert fields (its bounds, the caustic lattice's order and blur, the photon map's density
+# estimate, the caustic lobes' roughness, the lookup offset) keep their native defaults, as
+# `python -m shgi bake` leaves them.
+NOT_MIRRORED = {
+    "ProbeGridSettings": {"volumes", "include_direct"},
+    "PhotonLatticeSettings": {"use_bounds", "bounds_min", "bounds_max", "caustic_order",
+                              "caustic_blur_passes", "caustic_neighbours", "caustic_radius",
+                              "specular_roughness", "normal_offset"},
+}
+
+
+@pytest.mark.parametrize("solver", sorted(settings.METHOD_SETTINGS))
+def test_method_groups_mirror_their_native_settings(solver):
+    """Each group holds its struct's fields under their names with the native defaults; Light
+    Paths fills the others, and with its defaults gives the native defaults too (Diffuse 4 is
+    the probe grid's 3 bounces: the same path depth, see test_probe_grid_follows_light_paths)."""
+    group = settings.METHOD_SETTINGS[solver]
+    struct = getattr(shgi, group.native_type)
+    native_defaults = struct()
+    built = {"PHOTON_LATTICE": settings.photon_lattice_settings,
+             "PROBE_GRID": settings.probe_grid_settings}[solver](default_props(seed=4), shgi)
+    assert set(group.labels) == set(group.defaults)
+    for name, value in group.defaults.items():
+        expected = getattr(native_defaults, name)
+        if name in settings.ENUM_FIELDS:
+            value = getattr(getattr(shgi, settings.ENUM_FIELDS[name]), value)
+        assert expected == pytest.approx(value) if isinstance(value, float) else expected == value
+        assert getattr(built, name) == getattr(native_defaults, name), name
+    for name in group.light_paths:
+        assert getattr(built, name) == pytest.approx(getattr(native_defaults, name)), name
+    assert built.seed == 4
+    mirrored = (set(group.defaults) | set(group.light_paths) | {"seed"}
+                | NOT_MIRRORED[group.native_type])
     native_fields = {name for name in dir(native_defaults)
                      if not name.startswith("_") and name != "validate"}
     assert native_fields == mirrored  # a new native field needs a property (or a reason)
 
 
+def test_probe_grid_follows_light_paths():
+    """A probe's path starts at the probe, one bounce after the renderer's surface: Light
+    Paths > Diffuse d gives the probes d - 1 bounces, so rendered indirect light has the path
+    tracer's depth, up to the native limit of 64 probe bounces. Clamp clamps the probes'
+    samples; Diffuse 0 (no indirect light) is refused by its Light Paths name."""
+    for diffuse in (1, 4, 9, settings.MAX_PROBE_BOUNCES + 1):
+        grid = settings.probe_grid_settings(default_props(diffuse_bounces=diffuse), shgi)
+        assert grid.bounces == diffuse - 1
+    grid = settings.probe_grid_settings(default_props(clamp_indirect=5.0), shgi)
+    assert grid.clamp == 5.0
+    with pytest.raises(ValueError, match=r"^Light Paths > Diffuse is 0: the Probe Grid .* "
+                                         r"set it to 1 or more, or use Path Tracing"):
+        settings.probe_grid_settings(default_props(diffuse_bounces=0), shgi)
+    assert settings.probe_grid_settings(default_props(diffuse_bounces=1024),
+                                        shgi).bounces == settings.MAX_PROBE_BOUNCES
+    # Glossy, Total and Transmission are not the probe grid's to follow: the panel says so.
+    assert settings.probe_grid_settings(default_props(glossy_bounces=1, max_bounces=3),
+                                        shgi).bounces == 3
+    assert set(settings.LIGHT_PATH_LIMITS) == set(settings.METHOD_SETTINGS)
+
+
 def test_settings_follow_the_properties():
-    props = default_props(samples=7, seed=3, caustics="PHOTON_MAP", interpolation="TRILINEAR",
-                          diffuse_bounces=2, world_sampling="UNIFORM")
+    props = default_props(samples=7, seed=3, diffuse_bounces=2, world_sampling="UNIFORM",
+                          photon_lattice={"caustics": "PHOTON_MAP",
+                                          "interpolation": "TRILINEAR"})
     path = settings.path_tracer_settings(props, shgi)
     lattice = settings.photon_lattice_settings(props, shgi)
     preview = settings.preview_settings(props, shgi)
@@ -101,12 +148,15 @@ def test_settings_follow_the_properties():
     assert lattice.caustics == shgi.CausticMode.PHOTON_MAP
     assert lattice.interpolation == shgi.LatticeInterpolation.TRILINEAR
     assert lattice.max_bounces == 2  # photon scatterings follow the diffuse bounce limit
+    props.method = "PHOTON_LATTICE"
     assert settings.solver_signature(props) != settings.solver_signature(
-        default_props(photons=5))
-    grid_props = default_props(method="PROBE_GRID")
-    grid_props.probe_grid.normal_bias = 0.5
+        default_props(method="PHOTON_LATTICE", photon_lattice={"photons": 5}))
+    grid_props = default_props(method="PROBE_GRID", probe_grid={"normal_bias": 0.5})
     assert settings.solver_signature(grid_props) != settings.solver_signature(
         default_props(method="PROBE_GRID"))
+    # Light Paths is part of the probe grid's solve.
+    assert settings.solver_signature(default_props(method="PROBE_GRID", diffuse_bounces=3)) != \
+        settings.solver_signature(default_props(method="PROBE_GRID"))
     values = settings.render_property_values(grid_props)
     assert settings.properties_from_values(values).probe_grid.normal_bias == 0.5
     assert not settings.overlay_wanted(grid_props)
@@ -114,24 +164,57 @@ def test_settings_follow_the_properties():
     assert settings.overlay_wanted(grid_props)
 
 
+def test_pass_counts_live_in_their_method_group():
+    props = default_props(photon_lattice={"passes": 2, "viewport_passes": 3},
+                          probe_grid={"passes": 5, "viewport_passes": 7})
+    for method, final, viewport in (("PHOTON_LATTICE", 2, 3), ("PROBE_GRID", 5, 7)):
+        props.method = method
+        assert field_solvers.solver_recipe(props, shgi).passes == final
+        assert field_solvers.solver_recipe(props, shgi, viewport=True).passes == viewport
+    # The viewport restarts for its own passes, not for F12's.
+    before = settings.render_property_values(props)
+    props.probe_grid.passes = 6
+    assert settings.render_property_values(props) == before
+    props.probe_grid.viewport_passes = 8
+    assert settings.render_property_values(props) != before
+
+
+# The signature a probe grid solution saved by the add-on before the method groups holds
+# (settings at their defaults, seed 0): it still matches the same settings.
+FIRST_LAYOUT_SIGNATURE = (
+    ("method", "PROBE_GRID"), ("backface_threshold", 0.25), ("bleed_bias", 0.0), ("bounces", 3),
+    ("clamp", 0.0), ("hysteresis", 0.949999988079071), ("max_offset", 0.44999998807907104),
+    ("normal_bias", 0.25), ("order", 2), ("placement_rays", 128), ("rays_per_probe", 256),
+    ("relocate", True), ("spacing", 0.0), ("view_bias", 0.0), ("visibility", True),
+    ("visibility_blur", 0.15000000596046448), ("visibility_resolution", 8), ("seed", 0))
+
+
+def test_a_saved_solution_s_signature_still_compares():
+    props = default_props(method="PROBE_GRID", probe_grid={
+        "hysteresis": 0.949999988079071, "max_offset": 0.44999998807907104,
+        "visibility_blur": 0.15000000596046448})  # as Blender's 32-bit floats read back
+    assert settings.solver_signature(props) == FIRST_LAYOUT_SIGNATURE
+    props.diffuse_bounces = 5
+    assert settings.solver_signature(props) != FIRST_LAYOUT_SIGNATURE
+
+
 def test_refused_settings_are_named_as_the_panels_show_them():
     """Every mirrored property has its place in the panels; a native refusal names it there,
     whichever native struct refused it (the lattice's max_bounces is Light Paths > Diffuse)."""
     assert set(settings.SETTING_LABELS) == set(settings.PROPERTY_DEFAULTS)
-    assert set(settings.PROBE_GRID_LABELS) == set(settings.PROBE_GRID_DEFAULTS)
     with pytest.raises(ValueError, match=r"^Light Paths > Diffuse is 0: .* Path Tracing"):
         settings.photon_lattice_settings(default_props(diffuse_bounces=0), shgi)
-    props = default_props(method="PROBE_GRID")
-    props.probe_grid.visibility_blur = 0.0  # a value saved before the range was tightened
+    # a value saved before the range was tightened
+    props = default_props(method="PROBE_GRID", probe_grid={"visibility_blur": 0.0})
     with pytest.raises(ValueError, match=r"^Probe Grid > Visibility > Blur is 0; use 0\.01\.\.2"):
         settings.probe_grid_settings(props, shgi)
     with pytest.raises(ValueError, match=r"^Light Paths > Clamp is -1"):
         settings.path_tracer_settings(default_props(clamp_indirect=-1.0), shgi)
     assert settings.name_settings(
         "PhotonLatticeSettings.max_bounces is 0; ProbeGridSettings.visibility is x; "
-        "ProbeGridSettings.volumes hold 9 probes") == (
+        "ProbeGridSettings.clamp is -1; ProbeGridSettings.volumes hold 9 probes") == (
         "Light Paths > Diffuse is 0; Probe Grid > Visibility is x; "
-        "ProbeGridSettings.volumes hold 9 probes")
+        "Light Paths > Clamp is -1; ProbeGridSettings.volumes hold 9 probes")
 
 
 def test_a_refusal_on_the_worker_names_the_setting():
@@ -184,6 +267,8 @@ def test_quality_presets_grow_and_are_recognised():
         previous = counts
     props = default_props()
     presets.apply_preset(props, "HIGH")
+    assert (props.samples, props.photon_lattice.photons, props.photon_lattice.resolution) == (
+        256, 1_000_000, 32)
     props.samples += 1
     assert presets.matching_preset(props) is None
     with pytest.raises(KeyError, match="ULTRA"):

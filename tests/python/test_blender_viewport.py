@@ -230,13 +230,14 @@ def view_of(scene, width, height):
             "world_from_camera": np.asarray(camera.world_from_camera, np.float64)}
 
 
-def properties(probe_grid=None, **overrides):
-    values = dict(settings.PROPERTY_DEFAULTS, **settings.VIEWPORT_PROPERTY_DEFAULTS,
-                  method="PHOTON_LATTICE")
-    values.update(overrides)
-    values["probe_grid"] = SimpleNamespace(**dict(settings.PROBE_GRID_DEFAULTS,
-                                                  **(probe_grid or {})))
-    return settings.render_property_values(SimpleNamespace(**values))
+def properties(photon_lattice=None, probe_grid=None, **overrides):
+    """render_property_values of scene.shgi's defaults (method PHOTON_LATTICE), `overrides` set
+    and the method groups' values overridden from the dicts of their names."""
+    props = settings.default_properties(shgi, **dict({"method": "PHOTON_LATTICE"}, **overrides))
+    for group, values in (("photon_lattice", photon_lattice), ("probe_grid", probe_grid)):
+        for name, value in (values or {}).items():
+            setattr(getattr(props, group), name, value)
+    return settings.render_property_values(props)
 
 
 def wait_for(predicate, timeout=WORKER_TIMEOUT):
@@ -288,7 +289,8 @@ def test_snapshot_build_skips_what_native_checks_refuse():
 def test_worker_ends_with_the_image_of_one_native_render(method):
     scene = scenes.cornell_box(0.1).scene
     view = view_of(scene, 40, 30)
-    props = properties(method=method, viewport_samples=6, photons=20000, seed=2)
+    props = properties(method=method, viewport_samples=6, seed=2,
+                       photon_lattice={"photons": 20000})
     worker = ViewportWorker(shgi)
     try:
         assert worker.request(snapshot_of(scene), view, props)
@@ -298,7 +300,7 @@ def test_worker_ends_with_the_image_of_one_native_render(method):
     assert not worker.running
     scene.set_camera(viewport_camera.shgi_camera(shgi, view))
     scene.commit()
-    values = SimpleNamespace(**dict(props))
+    values = settings.properties_from_values(props)
     if method == "PATH_TRACE":
         expected = shgi.render_path_traced(
             scene, settings.path_tracer_settings(SimpleNamespace(**dict(values.__dict__,
@@ -312,7 +314,8 @@ def test_worker_ends_with_the_image_of_one_native_render(method):
 
 def test_worker_edits_the_scene_in_place_and_ignores_equal_requests():
     scene = scenes.cornell_box(0.1).scene
-    view, props = view_of(scene, 24, 24), properties(viewport_samples=2, photons=10000)
+    view, props = view_of(scene, 24, 24), properties(viewport_samples=2,
+                                                    photon_lattice={"photons": 10000})
     snapshot = snapshot_of(scene)
     worker = ViewportWorker(shgi)
     try:
@@ -348,13 +351,13 @@ def with_volume(snapshot, centre_z):
 
 
 def test_probe_grid_refines_in_the_background_and_restarts_when_its_volume_moves():
-    """The viewport's probe grid runs viewport_probe_passes updates, a frame after each, and
+    """The viewport's probe grid runs probe_grid.viewport_passes updates, a frame after each, and
     ends with the image of that grid; moving the volume keeps the scene but places new probes."""
     scene = scenes.cornell_box(0.1).scene
     view = view_of(scene, 24, 24)
     snapshot = with_volume(snapshot_of(scene), 1.0)
-    props = properties(method="PROBE_GRID", viewport_samples=2, viewport_probe_passes=3, seed=2,
-                       probe_grid={"rays_per_probe": 16})
+    props = properties(method="PROBE_GRID", viewport_samples=2, seed=2,
+                       probe_grid={"rays_per_probe": 16, "viewport_passes": 3})
     worker = ViewportWorker(shgi)
     try:
         worker.request(snapshot, view, props)
@@ -384,7 +387,7 @@ def test_probe_grid_refines_in_the_background_and_restarts_when_its_volume_moves
 def test_a_view_change_keeps_the_photon_pass_and_a_scene_change_cancels_it():
     scene = scenes.cornell_box(0.25).scene
     view, snapshot = view_of(scene, 24, 24), snapshot_of(scene)
-    slow = properties(viewport_samples=1, photons=3_000_000)
+    slow = properties(viewport_samples=1, photon_lattice={"photons": 3_000_000})
     worker = ViewportWorker(shgi)
     try:
         worker.request(snapshot, view, slow)
@@ -393,7 +396,7 @@ def test_a_view_change_keeps_the_photon_pass_and_a_scene_change_cancels_it():
         worker.request(snapshot, turned, slow)
         final_frame(worker, 1)
         assert worker.counters["solves"] == 1  # the pass in flight was not thrown away
-        endless = properties(viewport_samples=1, photons=200_000_000)
+        endless = properties(viewport_samples=1, photon_lattice={"photons": 200_000_000})
         worker.request(moved(snapshot, 6, (0.1, 0, 0)), turned, endless)
         wait_for(lambda: worker.status.startswith("Tracing photons"))
         time.sleep(0.2)  # well inside the pass

@@ -212,16 +212,18 @@ def solver_recipe(props, shgi, volumes=(), viewport=False):
     """The SolverRecipe of scene.shgi's method (props: scene.shgi or its values as a namespace).
 
     volumes: the scene's irradiance volumes (export/light_probe.ProbeVolumeRecord).
-    viewport: the passes are the viewport's (viewport_photon_passes, viewport_probe_passes);
-        else one photon pass, or probe_passes update passes (F12, Solve).
+    viewport: the method group's viewport_passes; else its passes (F12, Solve, a bake).
     ValueError for a method that solves no field, or a bad volume.
     """
     solver = settings.METHODS_BY_ID[props.method].solver
     if solver == LatticeSolver.METHOD:
-        return SolverRecipe(LatticeSolver, settings.photon_lattice_settings(props, shgi),
-                            props.viewport_photon_passes if viewport else 1)
-    if solver == ProbeGridSolver.METHOD:
-        grid_settings = settings.probe_grid_settings(props, shgi, native_volumes(volumes, shgi))
-        return SolverRecipe(ProbeGridSolver, grid_settings,
-                            props.viewport_probe_passes if viewport else props.probe_passes)
-    raise ValueError(f"method {props.method!r} solves no field")
+        native_settings = settings.photon_lattice_settings(props, shgi)
+        recipe_solver = LatticeSolver
+    elif solver == ProbeGridSolver.METHOD:
+        native_settings = settings.probe_grid_settings(props, shgi, native_volumes(volumes, shgi))
+        recipe_solver = ProbeGridSolver
+    else:
+        raise ValueError(f"method {props.method!r} solves no field")
+    group = getattr(props, settings.METHOD_SETTINGS[solver].prop)
+    return SolverRecipe(recipe_solver, native_settings,
+                        group.viewport_passes if viewport else group.passes)

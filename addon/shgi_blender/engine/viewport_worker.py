@@ -22,7 +22,7 @@ redone:
 * frames follow frame_schedule(): direct light at 1/4 resolution while the first pass runs,
   then 1/4 and 1/2 resolution frames with indirect light, each further pass followed by a new
   1/2 resolution frame of the refined field (the probe grid's background refinement: up to
-  viewport_probe_passes updates while the artist works), then full resolution samples in
+  probe_grid.viewport_passes updates while the artist works), then full resolution samples in
   rounds (render_job.sample_rounds), each round a new Frame.
 
 The path tracer renders the scene's camera, so for PATH_TRACE the view goes into the scene

@@ -6,7 +6,8 @@ from bpy.props import EnumProperty
 from .. import presets
 
 PRESET_ITEMS = [(name, presets.PRESET_LABELS[name],
-                 ", ".join(f"{field} {value:,}" for field, value in values.items()))
+                 ", ".join(f"{presets.field_label(field)} {value:,}"
+                           for field, value in values.items()))
                 for name, values in presets.QUALITY_PRESETS.items()]
 
 
@@ -23,7 +24,7 @@ class SHGI_OT_quality_preset(bpy.types.Operator):
     def description(cls, _context, properties):
         values = presets.QUALITY_PRESETS[properties.preset]
         return f"{presets.PRESET_LABELS[properties.preset]}: " + ", ".join(
-            f"{field.replace('_', ' ')} {value:,}" for field, value in values.items())
+            f"{presets.field_label(field)} {value:,}" for field, value in values.items())
 
     def execute(self, context):
         presets.apply_preset(context.scene.shgi, self.preset)

@@ -1,8 +1,8 @@
 """Properties > Render panels of the SHGI engine: method, quality preset and samples (with the
-native module's import error when it fails), light paths (with Cycles' Max Bounces
-sub-panel), the photon lattice or the probe grid (with its Visibility sub-panel, laid out as
-EEVEE's irradiance volume settings) with the frozen solution (out of date after a scene edit:
-Re-solve), lightmap bakes and the volume export (scene.shgi.bake; its Farm sub-panel), and the
+native module's import error when it fails), light paths (with Cycles' Max Bounces sub-panel,
+which says what the scene's field method cannot follow), the photon lattice or the probe grid
+(with its Visibility sub-panel, laid out as EEVEE's irradiance volume settings) with the frozen
+solution (out of date after a scene edit: Re-solve), lightmap bakes and the volume export (scene.shgi.bake; its Farm sub-panel), and the
 last render's figures.
 
 Labels beside values stay short: the label column of a Properties editor of the default width
@@ -100,8 +100,10 @@ class SHGI_RENDER_PT_light_paths_max_bounces(ShgiPanel, bpy.types.Panel):
         column = layout.column(align=True)
         for name in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces"):
             column.prop(props, name)
-        if settings.METHODS_BY_ID[props.method].uses_field:
+        solver = settings.METHODS_BY_ID[props.method].solver
+        if solver:
             column.prop(props, "max_specular_bounces", text="Specular")
+            draw_wrapped(layout, settings.LIGHT_PATH_LIMITS[solver], icon="INFO")
 
 
 def draw_frozen_solution(layout, context):
@@ -161,21 +163,23 @@ class SHGI_RENDER_PT_photon_lattice(_FieldPanel, bpy.types.Panel):
     def draw(self, context):
         layout = self.layout
         props = context.scene.shgi
+        lattice = props.photon_lattice
         draw_frozen_solution(layout, context)
         layout.use_property_split = True
         layout.use_property_decorate = False
         column = layout.column(align=True)
         for name in ("photons", "resolution", "order", "interpolation", "blur_passes"):
-            column.prop(props, name)
+            column.prop(lattice, name)
         column = layout.column(align=True)
-        column.prop(props, "caustics")
+        column.prop(lattice, "caustics")
         sub = column.column(align=True)
-        sub.active = props.caustics != "OFF"
-        sub.prop(props, "caustic_resolution", text="Resolution")
-        layout.prop(props, "world_in_field")
+        sub.active = lattice.caustics != "OFF"
+        sub.prop(lattice, "caustic_resolution", text="Resolution")
+        layout.prop(lattice, "world_in_field")
         column = layout.column(align=True)
         column.label(text="Photon Passes")
-        column.prop(props, "viewport_photon_passes", text="Viewport")
+        column.prop(lattice, "passes", text="Render")
+        column.prop(lattice, "viewport_passes", text="Viewport")
         field_overlay.draw_overlay_settings(layout, props, "show_lattice_samples")
 
 
@@ -202,12 +206,13 @@ class SHGI_RENDER_PT_probe_grid(_FieldPanel, bpy.types.Panel):
         sub.prop(grid, "spacing")
         column.prop(grid, "order")
         column.prop(grid, "rays_per_probe", text="Rays")
-        for name in ("hysteresis", "clamp", "bounces"):
-            column.prop(grid, name)
+        column.prop(grid, "hysteresis")
+        # The probes' bounce limit and clamp are Light Paths' (settings.LIGHT_PATH_VALUES).
+        draw_wrapped(layout, "Bounces and Clamp follow Light Paths", icon="INFO")
         column = layout.column(align=True)
         column.label(text="Update Passes")
-        column.prop(props, "probe_passes", text="Render")
-        column.prop(props, "viewport_probe_passes", text="Viewport")
+        column.prop(grid, "passes", text="Render")
+        column.prop(grid, "viewport_passes", text="Viewport")
         column = layout.column(align=True, heading="Relocation")
         column.prop(grid, "relocate", text="Move Out of Geometry")
         sub = column.column(align=True)

@@ -1,0 +1,83 @@
+"""How the settings a .blend saved with an earlier add-on map onto today's ``scene.shgi``. No bpy.
+
+Blender stores an add-on's properties in the file by name, so a property that moved reads as
+its default in the new place while its old value lies unused under the old name. Versions of
+``scene.shgi``'s layout:
+
+1. The photon lattice's settings flat on ``scene.shgi`` (photons, resolution, order, …), the
+   pass counts too (viewport_photon_passes, probe_passes, viewport_probe_passes), and
+   ``scene.shgi.probe_grid`` with its own ``bounces`` and ``clamp``.
+2. One group per method (settings.METHOD_SETTINGS) holding its pass counts; Light Paths sets
+   the probe grid's bounce limit and clamp (settings.LIGHT_PATH_VALUES).
+
+``upgrade`` takes what a scene stored (its ID properties as a dict: only values someone set are
+stored, a default is not) and says what to write where, so that the scene renders with the
+values it had. versioning.py applies it when a file opens, as Cycles' versioning.py does.
+"""
+
+from dataclasses import dataclass, field
+
+from . import settings
+
+SETTINGS_VERSION = 2
+
+# Version 1's flat properties of scene.shgi -> (group, property) in version 2.
+MOVED_FROM_1 = {
+    **{name: ("photon_lattice", name) for name in settings.PHOTON_LATTICE_DEFAULTS},
+    "viewport_photon_passes": ("photon_lattice", "viewport_passes"),
+    "probe_passes": ("probe_grid", "passes"),
+    "viewport_probe_passes": ("probe_grid", "viewport_passes"),
+}
+# Version 1's defaults of moved properties whose default has changed since: a scene that left
+# one at its default stored nothing, and rendered with this value.
+DEFAULTS_OF_1 = {"probe_passes": 6}
+# Version 1's probe_grid properties that Light Paths sets in version 2 (LIGHT_PATH_VALUES), with
+# their version 1 defaults: dropped, with a note when the value differs from what Light Paths
+# now gives the probe grid.
+DROPPED_FROM_1 = {"bounces": 3, "clamp": 0.0}
+
+
+@dataclass
+class Upgrade:
+    """What to do to one scene's settings."""
+
+    values: dict = field(default_factory=dict)    # {(group, property): stored value}
+    removed: list = field(default_factory=list)   # [(group or "", name)] of stale ID properties
+    notes: list = field(default_factory=list)     # what could not be kept, for the console
+
+
+def stored_version(stored):
+    """The layout version of a scene's stored settings (`stored`: scene.shgi's ID properties as
+    a dict): its settings_version, else 1 (saved before versions were stamped)."""
+    return int(stored.get("settings_version", 1))
+
+
+def upgrade(stored):
+    """The Upgrade that brings a scene's stored settings (scene.shgi's ID properties as a dict,
+    nested groups as dicts) to SETTINGS_VERSION; empty when they are up to date."""
+    result = Upgrade()
+    if stored_version(stored) >= SETTINGS_VERSION:
+        return result
+    for old, target in MOVED_FROM_1.items():
+        if old in stored:
+            result.values[target] = stored[old]
+            result.removed.append(("", old))
+        elif old in DEFAULTS_OF_1:
+            result.values[target] = DEFAULTS_OF_1[old]
+    grid = stored.get("probe_grid", {})
+    light_paths = settings.default_properties(**{
+        name: stored[name] for name in ("diffuse_bounces", "clamp_indirect") if name in stored})
+    follows = settings.light_path_fields(light_paths, settings.METHOD_SETTINGS["PROBE_GRID"],
+                                         check=False)
+    for name, old_default in DROPPED_FROM_1.items():
+        value = grid.get(name, old_default)
+        if name in grid:
+            result.removed.append(("probe_grid", name))
+        if value != follows[name]:
+            source = settings.LIGHT_PATH_VALUES["ProbeGridSettings"][name].prop
+            result.notes.append(
+                f"Probe Grid > {name.capitalize()} {value} is now set by "
+                f"{settings.SETTING_LABELS[source]} ({getattr(light_paths, source)}), which gives "
+                f"the probe grid {follows[name]}")
+    return result
+

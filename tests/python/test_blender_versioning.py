@@ -1,0 +1,114 @@
+"""Files saved with the add-on's first settings layout (photon-lattice settings flat on
+scene.shgi, the probe grid with its own bounces and clamp) open with the values they were saved
+with: settings_upgrade's table outside Blender, then tests/blender/fixtures/settings_v1.blend
+opened in each Blender (tests/blender/settings_versioning.py)."""
+
+import json
+import sys
+
+import pytest
+
+import shgi
+import shgi.bake
+from blender_support import BLENDER_SCRIPTS, REPO_ROOT, run_script_once
+
+sys.path.insert(0, str(REPO_ROOT / "addon"))
+
+from shgi_blender import settings, settings_upgrade  # noqa: E402
+
+FIXTURE_VALUES = BLENDER_SCRIPTS / "fixtures" / "settings_v1.json"
+
+
+def test_first_layout_values_move_into_the_method_groups():
+    stored = {"photons": 123, "caustics": 2, "viewport_photon_passes": 5,
+              "viewport_probe_passes": 40, "samples": 9, "probe_grid": {"order": 3}}
+    upgrade = settings_upgrade.upgrade(stored)
+    assert upgrade.values == {
+        ("photon_lattice", "photons"): 123, ("photon_lattice", "caustics"): 2,
+        ("photon_lattice", "viewport_passes"): 5, ("probe_grid", "viewport_passes"): 40,
+        # left at the first layout's default, 6, which the scene rendered with
+        ("probe_grid", "passes"): 6}
+    assert sorted(upgrade.removed) == [("", "caustics"), ("", "photons"),
+                                       ("", "viewport_photon_passes"),
+                                       ("", "viewport_probe_passes")]
+    # Bounces 3 and Clamp 0 are what Light Paths' defaults give the probe grid: nothing lost.
+    assert upgrade.notes == []
+
+
+def test_probe_grid_values_light_paths_took_over_are_dropped_with_a_note():
+    upgrade = settings_upgrade.upgrade({"diffuse_bounces": 6, "clamp_indirect": 7.5,
+                                        "probe_grid": {"bounces": 2, "clamp": 12.0}})
+    assert ("probe_grid", "bounces") in upgrade.removed
+    assert ("probe_grid", "clamp") in upgrade.removed
+    assert upgrade.notes == [
+        "Probe Grid > Bounces 2 is now set by Light Paths > Diffuse (6), which gives the probe "
+        "grid 5",
+        "Probe Grid > Clamp 12.0 is now set by Light Paths > Clamp (7.5), which gives the probe "
+        "grid 7.5"]
+
+
+def test_settings_of_today_layout_are_left_alone():
+    stored = {"settings_version": settings_upgrade.SETTINGS_VERSION, "samples": 3,
+              "probe_grid": {"order": 1}}
+    upgrade = settings_upgrade.upgrade(stored)
+    assert (upgrade.values, upgrade.removed, upgrade.notes) == ({}, [], [])
+
+
+def test_every_first_layout_property_has_a_place():
+    """Each property of the fixture's first layout is today's (same name), moved, or taken over
+    by Light Paths."""
+    saved = json.loads(FIXTURE_VALUES.read_text())
+    today = set(settings.PROPERTY_DEFAULTS) | set(settings.VIEWPORT_PROPERTY_DEFAULTS) | {"method"}
+    assert set(saved["shgi"]) == today | set(settings_upgrade.MOVED_FROM_1)
+    assert set(saved["shgi.probe_grid"]) == (set(settings.PROBE_GRID_DEFAULTS)
+                                             | set(settings_upgrade.DROPPED_FROM_1))
+
+
+@pytest.fixture(scope="module")
+def saved():
+    return json.loads(FIXTURE_VALUES.read_text())
+
+
+def test_first_layout_file_opens_with_its_values(blender, build_python_dir, tmp_path_factory,
+                                                  saved):
+    results = run_script_once("settings_versioning.py", "SETTINGS_VERSIONING_OK",
+                              build_python_dir, tmp_path_factory, blender=blender)
+    expected = results["expected"]
+    # Every value the file was saved with, none left out of the check.
+    assert len(expected) == (len(saved["shgi"]) + len(saved["shgi.probe_grid"])
+                             - len(settings_upgrade.DROPPED_FROM_1))
+    assert expected["photon_lattice.photons"] == saved["shgi"]["photons"]
+    assert expected["probe_grid.passes"] == saved["shgi"]["probe_passes"]
+    for read in (results["values"], results["reopened"]):
+        assert set(read) == set(expected)
+        for path, value in expected.items():
+            assert read[path] == pytest.approx(value, abs=1e-6), path
+    assert results["settings_version"] == settings_upgrade.SETTINGS_VERSION
+    # The file's Light Paths reach both methods: Diffuse 6 is 5 probe bounces after the
+    # renderer's own surface, and 6 photon bounces; Clamp 7.5 clamps the probes' samples.
+    light_paths = saved["shgi"]
+    assert results["native"] == {
+        "probe_grid.bounces": light_paths["diffuse_bounces"] - 1,
+        "probe_grid.clamp": light_paths["clamp_indirect"],
+        "photon_lattice.max_bounces": light_paths["diffuse_bounces"]}
+
+
+def test_a_new_scene_solves_as_many_probe_passes_as_the_cli(blender, build_python_dir,
+                                                            tmp_path_factory):
+    results = run_script_once("settings_versioning.py", "SETTINGS_VERSIONING_OK",
+                              build_python_dir, tmp_path_factory, blender=blender)
+    assert results["new_scene_passes"] == results["bake_probe_grid_passes"] == \
+        shgi.bake.PROBE_GRID_PASSES
+    # Saved with today's layout: the default is kept, not read as the first layout's 6.
+    assert results["today_reopened"] == {"samples": 33,
+                                         "probe_grid.passes": shgi.bake.PROBE_GRID_PASSES,
+                                         "settings_version": settings_upgrade.SETTINGS_VERSION}
+
+
+def test_final_passes_fallback_matches_the_cli():
+    """The add-on's defaults when shgi does not import are what `python -m shgi bake` runs."""
+    assert settings.FINAL_PASSES_FALLBACK["PROBE_GRID"] == shgi.bake.PROBE_GRID_PASSES
+    for solver, passes in settings.FINAL_PASSES_FALLBACK.items():
+        assert passes == shgi.method(solver).final_passes
+        assert settings.final_passes(solver, shgi) == passes
+        assert settings.final_passes(solver, None) == passes
