@@ -22,20 +22,24 @@ import math
 
 from . import settings
 
-# Where the indirect light of a bake comes from: identifier, label, description. The field
-# sources solve scene.shgi's photon lattice or probe grid (engine/field_solvers.py), whose
-# render-method identifiers they share.
-SOURCE_ITEMS = (
-    ("PATH_TRACER", "Path Tracer",
-     "Reference path tracer per texel: matches a Cycles bake, slowest"),
-    ("PHOTON_LATTICE", "Photon Lattice",
-     "Indirect light from a photon lattice solved with the Photon Lattice settings; exact "
-     "direct light"),
-    ("PROBE_GRID", "Probe Grid",
-     "Indirect light from a probe grid solved with the Probe Grid settings (Irradiance Volume "
-     "objects place it); exact direct light"),
-)
-FIELD_SOURCES = ("PHOTON_LATTICE", "PROBE_GRID")
+# Where the indirect light of a bake comes from: every method of the registry
+# (settings.METHODS), under the same identifier and file number as the render method. The path
+# tracer bakes every texel by path tracing; the others solve their field first (the Photon
+# Lattice and Probe Grid with their panels' settings, engine/field_solvers.py). Files saved when
+# the path tracer's source was called PATH_TRACER hold its number, 0, and open as PATH_TRACE.
+SOURCE_DESCRIPTIONS = {
+    "PATH_TRACE": "Reference path tracer per texel: matches a Cycles bake, slowest",
+    "PHOTON_LATTICE": "Indirect light from a photon lattice solved with the Photon Lattice "
+                      "settings; exact direct light",
+    "PROBE_GRID": "Indirect light from a probe grid solved with the Probe Grid settings "
+                  "(Irradiance Volume objects place it); exact direct light",
+}
+SOURCE_ITEMS = tuple(
+    (method.identifier, method.label,
+     SOURCE_DESCRIPTIONS.get(method.identifier, f"Indirect light from {method.label}: "
+                                                f"{method.description}"), method.number)
+    for method in settings.METHODS)
+FIELD_SOURCES = tuple(method.identifier for method in settings.METHODS if method.uses_field)
 
 # LightmapSettings.content: what a texel holds, in Cycles' Diffuse bake units.
 CONTENT_ITEMS = (
@@ -59,7 +63,7 @@ BAKE_PROPERTY_DEFAULTS = {
     "texel_density": 32.0,
     "samples": 256,
     "content": "DIRECT_INDIRECT",
-    "source": "PATH_TRACER",
+    "source": "PATH_TRACE",
     "directional": False,
     "filter": False,
     "denoiser": "SHGI",

@@ -32,17 +32,20 @@ import re
 from dataclasses import dataclass
 from types import SimpleNamespace
 
+from . import native
+
 
 @dataclass(frozen=True)
 class Method:
-    """A render method of the engine: an item of ``scene.shgi.method``."""
+    """A render method of the engine: an item of ``scene.shgi.method``, a row of the method
+    registry (shgi.methods(); docs/solvers.md)."""
 
     identifier: str
     label: str
     description: str
     number: int        # the enum value stored in .blend files; never reuse one
-    # The solver whose IndirectField the preview renderer renders (engine/field_solvers.py
-    # SOLVERS): "PHOTON_LATTICE" or "PROBE_GRID"; "" for the path tracer.
+    # The method whose IndirectField the preview renderer renders: its identifier for a method
+    # that solves a field, "" for the path tracer.
     solver: str = ""
 
     @property
@@ -51,11 +54,10 @@ class Method:
         return bool(self.solver)
 
 
-# Selectable methods, in menu order. The solvers still to come keep their identifiers and file
-# numbers reserved (RESERVED_METHODS) so that files saved later open here; each becomes a row of
-# METHODS when its solver lands: PROPAGATION (seed 003), RADIANCE_FIELD (seed 001) and
-# INSTANT_GI (seed 004).
-METHODS = (
+# The native registry's built-in rows (native/methods/method_registry.cpp), for when the module
+# shgi cannot be imported: the add-on then still registers and opens files with their method
+# (tests/python/test_blender_engine.py checks these against the registry).
+BUILT_IN_METHODS = (
     Method("PATH_TRACE", "Path Tracing",
            "Reference path tracer: unbiased, matches Cycles, slowest to converge", 0),
     Method("PHOTON_LATTICE", "Photon Lattice",
@@ -67,6 +69,22 @@ METHODS = (
            "leaking through walls, refined in the background; exact direct light", 2,
            "PROBE_GRID"),
 )
+
+
+def registry_methods(shgi):
+    """Every method of the registry of the module `shgi` (plugins included), in menu order;
+    BUILT_IN_METHODS without the module."""
+    if shgi is None or not hasattr(shgi, "methods"):
+        return BUILT_IN_METHODS
+    return tuple(Method(row.identifier, row.label, row.description, row.number,
+                        row.identifier if row.solves_field else "")
+                 for row in shgi.methods())
+
+
+# Selectable methods, in menu order: the registry's rows when the add-on loads. The solvers still
+# to come keep their identifiers and file numbers reserved (RESERVED_METHODS) so that files saved
+# later open here: PROPAGATION (seed 003), RADIANCE_FIELD (seed 001) and INSTANT_GI (seed 004).
+METHODS = registry_methods(native.module())
 RESERVED_METHODS = {"PROPAGATION": 3, "RADIANCE_FIELD": 4, "INSTANT_GI": 5}
 METHODS_BY_ID = {method.identifier: method for method in METHODS}
 
@@ -304,6 +322,14 @@ LIGHT_PATH_LIMITS = {
 }
 
 
+def light_path_limits(solver):
+    """What method `solver`'s solve takes from Light Paths, as the panel says it."""
+    label = METHODS_BY_ID[solver].label if solver in METHODS_BY_ID else solver
+    return LIGHT_PATH_LIMITS.get(
+        solver, f"{label}: solved with its own settings' defaults; Light Paths apply to the "
+                "traced parts of the render")
+
+
 # The field methods' groups, by Method.solver.
 METHOD_SETTINGS = {
     "PHOTON_LATTICE": MethodSettings("PHOTON_LATTICE", "Photon Lattice", "photon_lattice",
@@ -454,10 +480,12 @@ def solver_signature(props):
     is out of date): the method and its native settings' fields, by their native names, so that
     a signature saved with a solution compares whatever the properties' layout (a Light Paths
     value the method follows counts under the native field it fills)."""
-    group = METHOD_SETTINGS[METHODS_BY_ID[props.method].solver]
-    group_props = getattr(props, group.prop)
-    values = {name: getattr(group_props, name) for name in group.defaults}
-    values.update(light_path_fields(props, group, check=False))
+    group = METHOD_SETTINGS.get(METHODS_BY_ID[props.method].solver)
+    values = {}
+    if group is not None:  # a method without a group (a plugin's) solves with its defaults
+        group_props = getattr(props, group.prop)
+        values = {name: getattr(group_props, name) for name in group.defaults}
+        values.update(light_path_fields(props, group, check=False))
     # The seed last, as signatures saved with probe grid solutions have it.
     return (("method", props.method), *sorted(values.items()), ("seed", props.seed))
 

@@ -194,7 +194,7 @@ def make_lightmap():
     out = os.path.join(TMP, "lightmaps")
     start = time.perf_counter()
     status = bpy.ops.shgi.bake_lightmaps(
-        source="PATH_TRACER", samples=256, resolution=128, create_uv=True,
+        source="PATH_TRACE", samples=256, resolution=128, create_uv=True,
         uv_layout="LIGHTMAP_PACK", filter=True, hook_up_material=True, output_folder=out)
     bake_seconds = time.perf_counter() - start
     if status != {"FINISHED"}:

@@ -8,7 +8,7 @@ Background mode (``blender -b --factory-startup --python-exit-code 1 --python ba
    records which quads face into the room and saves the file;
 2. bakes the floor with Cycles (DIFFUSE, pass_filter {DIRECT, INDIRECT}, CYCLES_SAMPLES, no
    denoising) into a RESOLUTION^2 float image, timed, and once more without margin for its mask;
-3. bakes the floor with shgi.bake_lightmaps for each source (PATH_TRACER, PHOTON_LATTICE,
+3. bakes the floor with shgi.bake_lightmaps for each source (PATH_TRACE, PHOTON_LATTICE,
    PROBE_GRID), timed, and compares the Blender image with Cycles' over the covered texels
    (Cycles' mask and the EXR's Coverage layer): relative mean difference, mean absolute texel
    difference and PSNR (shgi.metrics.psnr), over every covered texel and over the visible ones
@@ -63,7 +63,7 @@ THREADS = 2
 SEED = 1
 # shgi samples per texel of each source. The field sources bake only direct light per sample
 # (next-event estimation); their indirect light comes from the field, so fewer samples do.
-SHGI_SAMPLES = {"PATH_TRACER": 256, "PHOTON_LATTICE": 64, "PROBE_GRID": 64}
+SHGI_SAMPLES = {"PATH_TRACE": 256, "PHOTON_LATTICE": 64, "PROBE_GRID": 64}
 SOURCES = tuple(SHGI_SAMPLES)
 # Cycles' Light Paths limits, used by both bakers (scene.shgi has the same names).
 BOUNCES = {"max_bounces": 12, "diffuse_bounces": 4, "glossy_bounces": 4,
@@ -491,7 +491,7 @@ def create_uv_and_materials(tmpdir, results):
 
 def shard_checks(tmpdir, results):
     """Two shards and Merge Shards against a whole bake of the floor and the box."""
-    common = dict(resolution=SHARD_RESOLUTION, samples=SHARD_SAMPLES, source="PATH_TRACER")
+    common = dict(resolution=SHARD_RESOLUTION, samples=SHARD_SAMPLES, source="PATH_TRACE")
     whole, sharded = os.path.join(tmpdir, "whole"), os.path.join(tmpdir, "sharded")
     bake("box", "floor", output_folder=whole, **common)
     for index in range(SHARD_COUNT):

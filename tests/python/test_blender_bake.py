@@ -47,7 +47,7 @@ from shgi_blender.engine import field_solvers  # noqa: E402
 from shgi_blender.engine.lightmap_bake import BakeRequest, BakeTask, rgba_pixels  # noqa: E402
 
 # The bake's acceptance (docs/baking.md): mean texel difference against Cycles' bake.
-MEAN_TOLERANCE = {"PATH_TRACER": 0.05, "PHOTON_LATTICE": 0.10, "PROBE_GRID": 0.10}
+MEAN_TOLERANCE = {"PATH_TRACE": 0.05, "PHOTON_LATTICE": 0.10, "PROBE_GRID": 0.10}
 # A lightmap in the wrong row order or UV orientation matches Cycles' worse than the right one:
 # mirrored, the floor's box shadow and light fall-off land elsewhere (about 4-11 dB lower in
 # the room of bake_checks.py).
@@ -112,8 +112,11 @@ def test_content_items_are_the_native_names():
     assert identifiers == ["DIRECT_INDIRECT", "DIRECT", "INDIRECT", "FULL"]
     for identifier in identifiers:
         assert shgi.LightmapSettings(content=identifier).content == identifier
-    sources = [item[0] for item in bake_settings.SOURCE_ITEMS]
-    assert sources == ["PATH_TRACER", "PHOTON_LATTICE", "PROBE_GRID"]
+    # The bake's sources are the registry's methods, with the render method's file numbers (a
+    # file saved when the path tracer's source was PATH_TRACER holds 0 and opens as PATH_TRACE).
+    sources = [(item[0], item[3]) for item in bake_settings.SOURCE_ITEMS]
+    assert sources == [(row.identifier, row.number) for row in shgi.methods()]
+    assert sources[:3] == [("PATH_TRACE", 0), ("PHOTON_LATTICE", 1), ("PROBE_GRID", 2)]
     assert set(bake_settings.FIELD_SOURCES) <= set(settings.METHODS_BY_ID)  # solver_recipe
 
 

@@ -249,6 +249,10 @@ def test_enum_properties_offer_the_native_members():
 def test_methods_implemented_and_reserved():
     identifiers = [method.identifier for method in settings.METHODS]
     assert identifiers == ["PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID"]
+    # The add-on's methods are the registry's; its copy for a missing module agrees with it.
+    assert settings.registry_methods(shgi) == settings.METHODS == settings.BUILT_IN_METHODS
+    assert settings.registry_methods(None) == settings.BUILT_IN_METHODS
+    assert settings.RESERVED_METHODS == dict(shgi.reserved_method_numbers())
     assert [method.number for method in settings.METHODS] == [0, 1, 2]  # file values stay
     numbers = [method.number for method in settings.METHODS]
     numbers += list(settings.RESERVED_METHODS.values())

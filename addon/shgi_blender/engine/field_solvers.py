@@ -126,6 +126,52 @@ class ProbeGridSolver:
         return probe_overlay(self._shgi, self.field())
 
 
+class RegisteredSolver:
+    """Any registered method's shgi.GiSolver as a FieldSolver (the methods without a class of
+    their own here, such as a plugin's): refine passes, its field, its stage timings; no
+    overlay."""
+
+    METHOD = ""
+    BUILD_STAGE = "Building the solver"
+    BUILD_TIMING = "build"
+
+    @classmethod
+    def of(cls, method):
+        """This class bound to method `method` (what SolverRecipe.build constructs)."""
+        return type(f"{cls.__name__}[{method}]", (cls,), {"METHOD": method})
+
+    def __init__(self, shgi, scene, native_settings, progress=None):
+        self.solver = shgi.make_solver(self.METHOD, scene, native_settings, progress)
+
+    @staticmethod
+    def pass_stage(number):
+        return f"Refining, pass {number}"
+
+    @property
+    def passes(self):
+        return self.solver.passes
+
+    def update(self, progress=None):
+        self.solver.refine(progress)
+
+    def field(self):
+        return self.solver.current_field()
+
+    @property
+    def memory_bytes(self):
+        return self.solver.memory_bytes
+
+    @property
+    def timings(self):
+        return dict(self.solver.stage_seconds)
+
+    def figures(self):
+        return [("Refinement passes", f"{self.solver.passes}")]
+
+    def overlay(self, _snapshot, _scene):
+        return None
+
+
 class LoadedProbeField:
     """A ProbeField read from files (a saved solution, or Export Volume's) in a FieldSolver's
     place: nothing to update, its probes' figures and overlay."""
@@ -222,6 +268,12 @@ def solver_recipe(props, shgi, volumes=(), viewport=False):
     elif solver == ProbeGridSolver.METHOD:
         native_settings = settings.probe_grid_settings(props, shgi, native_volumes(volumes, shgi))
         recipe_solver = ProbeGridSolver
+    elif solver:
+        # A registered method without a settings group here (a plugin's): its settings'
+        # defaults with the scene's seed, its registry's passes for F12 and the viewport alike.
+        return SolverRecipe(RegisteredSolver.of(solver),
+                            shgi.default_settings(solver, seed=props.seed),
+                            shgi.method(solver).final_passes)
     else:
         raise ValueError(f"method {props.method!r} solves no field")
     group = getattr(props, settings.METHOD_SETTINGS[solver].prop)

@@ -103,7 +103,7 @@ class SHGI_RENDER_PT_light_paths_max_bounces(ShgiPanel, bpy.types.Panel):
         solver = settings.METHODS_BY_ID[props.method].solver
         if solver:
             column.prop(props, "max_specular_bounces", text="Specular")
-            draw_wrapped(layout, settings.LIGHT_PATH_LIMITS[solver], icon="INFO")
+            draw_wrapped(layout, settings.light_path_limits(solver), icon="INFO")
 
 
 def draw_frozen_solution(layout, context):
