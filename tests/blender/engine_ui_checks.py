@@ -43,7 +43,7 @@ import shgi  # noqa: E402
 from shgi.metrics import psnr  # noqa: E402
 from shgi_blender import presets  # noqa: E402
 from shgi_blender.engine import final_render, solution_cache  # noqa: E402
-from shgi_blender.ui import render_panels  # noqa: E402
+from shgi_blender.ui import wrapped_text  # noqa: E402
 
 SCALE = 0.25  # the Cornell box at 64 x 64 pixels
 REGION_SAMPLES = 256
@@ -257,7 +257,7 @@ def check_panels():
                                "SHGI_RENDER_PT_bake", "SHGI_RENDER_PT_bake_farm")},
         "tooltips": tooltips(),
         "cut_label_width": text_width(CUT_LABEL_SEEN),
-        "text_budget": render_panels.DEFAULT_REGION_PIXELS - render_panels.MARGIN_PIXELS,
+        "text_budget": wrapped_text.DEFAULT_REGION_PIXELS - wrapped_text.MARGIN_PIXELS,
     }
     results["label_widths"], results["text_widths"] = panel_labels(scene)
     return results

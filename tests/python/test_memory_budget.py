@@ -9,6 +9,8 @@ import subprocess
 import sys
 import textwrap
 
+import numpy as np
+
 import pytest
 
 import shgi
@@ -175,6 +177,9 @@ def test_commit_budget_is_capped_by_what_the_process_may_allocate():
         print("committed", scene.committed)
     """, 6 * 2**30)
     assert out.split() == ["committed", "True"]
+    # A moved instance makes the next commit build the top-level BVH (a commit that changes no
+    # geometry builds nothing, so no budget can stop it).
+    scene.set_instance_transform(0, np.eye(4))
     with pytest.raises(MemoryError) as caught:
         scene.commit(memory_budget_bytes=1000)
     message = str(caught.value)

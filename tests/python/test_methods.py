@@ -4,8 +4,10 @@ render and refuse bad settings naming the field; a method registered from Python
 SINGLE_PROBE_TEST plugin) reaches shgi.bake and ``python -m shgi bake`` with no other edit; the
 CLI given the same settings writes the same bytes as a script."""
 
+import importlib
 import json
 import os
+import sys
 
 import numpy as np
 import pytest
@@ -13,10 +15,21 @@ import pytest
 import shgi
 from shgi import bake
 
-import method_plugin
 from test_bake import room_gltf, run_cli, written_files
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+# tests/python/method_plugin.py's method (it registers when imported: see the plugin fixture).
+PLUGIN = "SINGLE_PROBE_TEST"
+
+
+@pytest.fixture(scope="module", autouse=True)
+def method_plugin():
+    """The plugin module, registered for this module's tests and unregistered after them, so
+    that no other test sees a method the add-on did not load with."""
+    module = importlib.import_module("method_plugin")
+    yield module
+    shgi.unregister_method(PLUGIN)
+    sys.modules.pop("method_plugin", None)
 
 
 def cornell_like():
@@ -59,7 +72,7 @@ def test_the_registry_lists_every_method_once_with_its_file_number():
         shgi.method("LIGHTCUTS")
 
 
-@pytest.mark.parametrize("identifier", ["PHOTON_LATTICE", "PROBE_GRID", method_plugin.IDENTIFIER])
+@pytest.mark.parametrize("identifier", ["PHOTON_LATTICE", "PROBE_GRID", PLUGIN])
 def test_every_field_method_solves_and_renders_through_the_registry(identifier):
     scene = cornell_like()
     row = shgi.method(identifier)
@@ -77,13 +90,15 @@ def test_every_field_method_solves_and_renders_through_the_registry(identifier):
     assert with_field[..., :3].mean() > 1.1 * direct_only[..., :3].mean()
 
 
-@pytest.mark.parametrize("identifier, settings, field", [
-    ("PHOTON_LATTICE", shgi.PhotonLatticeSettings(resolution=0), "resolution"),
-    ("PROBE_GRID", shgi.ProbeGridSettings(rays_per_probe=0), "rays_per_probe"),
-    (method_plugin.IDENTIFIER, method_plugin.SingleProbeSettings(rays_per_probe=0),
-     "rays_per_probe"),
+@pytest.mark.parametrize("identifier, fields, field", [
+    ("PHOTON_LATTICE", {"resolution": 0}, "resolution"),
+    ("PROBE_GRID", {"rays_per_probe": 0}, "rays_per_probe"),
+    (PLUGIN, {"rays_per_probe": 0}, "rays_per_probe"),
 ])
-def test_a_refused_setting_names_its_field(identifier, settings, field):
+def test_a_refused_setting_names_its_field(identifier, fields, field):
+    settings = shgi.default_settings(identifier)
+    for name, value in fields.items():
+        setattr(settings, name, value)
     with pytest.raises(ValueError, match=field):
         shgi.make_solver(identifier, cornell_like(), settings)
 
@@ -106,7 +121,7 @@ def test_registering_a_taken_or_reserved_name_or_number_is_refused():
     assert "X_TEST" not in {row.identifier for row in shgi.methods()}
 
 
-def test_settings_survive_json_with_every_field():
+def test_settings_survive_json_with_every_field(method_plugin):
     grid = shgi.ProbeGridSettings(seed=3, hysteresis=0.9, visibility=False)
     volume = shgi.ProbeVolume()
     volume.resolution = (2, 3, 4)
@@ -124,18 +139,18 @@ def test_settings_survive_json_with_every_field():
 
 def test_a_python_method_bakes_through_shgi_bake(tmp_path):
     scene = cornell_like()
-    field = bake.solve_field(scene, method_plugin.IDENTIFIER, seed=1)
+    field = bake.solve_field(scene, PLUGIN, seed=1)
     assert isinstance(field, shgi.ProbeField) and field.passes == 2
 
 
 def test_the_cli_bakes_a_plugin_method_and_matches_a_script_byte_for_byte(
-        build_python_dir, tmp_path):
+        build_python_dir, tmp_path, method_plugin):
     """The same scene and settings through `python -m shgi bake --settings` and through
     shgi.bake in this process write identical files, for a native method and a plugin one."""
     room = tmp_path / "room.gltf"
     room.write_text(json.dumps(room_gltf()))
     cases = [("PROBE_GRID", shgi.ProbeGridSettings(seed=4, rays_per_probe=64, order=1)),
-             (method_plugin.IDENTIFIER, method_plugin.SingleProbeSettings(rays_per_probe=64))]
+             (PLUGIN, method_plugin.SingleProbeSettings(rays_per_probe=64))]
     for identifier, settings in cases:
         settings_file = tmp_path / f"{identifier}.json"
         settings_file.write_text(json.dumps(shgi.settings_to_dict(settings)))

@@ -18,6 +18,7 @@ from gpu_extras.batch import batch_for_shader
 
 from .. import settings
 from ..engine import solution_cache, viewport
+from .wrapped_text import draw_wrapped
 from ..engine.frame_display import builtin_shader
 from .compat import ENGINE
 
@@ -85,8 +86,6 @@ LEGEND = ("Sphere colours: the indirect light arriving from each side, exposed s
 
 def draw_overlay_settings(layout, props, toggle):
     """The overlay's toggle `toggle` of scene.shgi, its sphere size and legend when shown."""
-    from .render_panels import draw_wrapped
-
     layout.prop(props, toggle)
     if getattr(props, toggle):
         layout.prop(props, "overlay_size", text="Size")
