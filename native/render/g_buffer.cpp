@@ -1,6 +1,7 @@
 #include "render/g_buffer.h"
 
 #include "util/error.h"
+#include "util/memory.h"
 
 namespace shgi {
 
@@ -9,6 +10,11 @@ GBuffer::GBuffer(int width, int height) : width_(width), height_(height) {
         throw InvalidArgument(format_message("GBuffer: size ", width, " x ", height,
                                              "; both sides must be >= 0"));
     const size_t count = pixel_count();
+    // Four vec3 planes and four 32-bit planes.
+    constexpr uint64_t kBytesPerPixel = 4 * sizeof(vec3) + 4 * sizeof(uint32_t);
+    require_memory(saturating_mul(uint64_t(count), kBytesPerPixel),
+                   format_message("the G-buffer of ", width, " x ", height, " pixels"),
+                   "lower the camera's resolution_x / resolution_y (or Blender's resolution %)");
     position.assign(count, vec3(0.0f));
     shading_normal.assign(count, vec3(0.0f));
     geometric_normal.assign(count, vec3(0.0f));

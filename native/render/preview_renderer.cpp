@@ -59,8 +59,8 @@ PreviewTimings split_wall_time(double wall, const std::vector<StageSeconds>& bus
 // entries, so these vectors never reallocate while paths are in flight.
 struct Wave {
     explicit Wave(size_t capacity)
-        : x(capacity), y(capacity), pixel(capacity), rngs(capacity), samples(capacity), values(capacity),
-          paths(capacity), live(capacity) {
+        : x(capacity), y(capacity), pixel(capacity), rngs(capacity), samples(capacity),
+          values(capacity), paths(capacity), live(capacity) {
         quads.reserve(capacity);
         rays.reserve(capacity);
         hits.reserve(capacity);
