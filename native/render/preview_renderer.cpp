@@ -72,7 +72,9 @@ struct Wave {
 
     size_t count = 0;  // pixels in the wave
     std::vector<int> x, y;
-    std::vector<uint32_t> pixel;  // y * width + x: the pixel's G-buffer index
+    // y * width + x, the pixel's G-buffer index: 32 bits hold it, as a G-buffer of 2^32 pixels
+    // (256 GB) is refused by its memory check first.
+    std::vector<uint32_t> pixel;
     std::vector<Pcg32> rngs;
     std::vector<PixelSample> samples;  // stratified jitter and first light sample
     std::vector<PassValues> values;
