@@ -105,6 +105,9 @@ class PathIntegrator {
     // render/preview_renderer.h) for finish() to use at this path's first surface instead of
     // its own; it must outlive finish().
     void share_first_field_lookup(const FieldLookup* lookup) { shared_lookup_ = lookup; }
+    // The first surface as begin() shaded it (position, shading frame, BSDF), for the G-buffer
+    // (render/g_buffer.h); valid after begin() returned true and before finish().
+    const Shading& first_surface() const { return shading_; }
 
   private:
     const FieldLookup* shared_lookup_ = nullptr;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "render/frame_pipeline.h"
 #include "render/path_integrator.h"
 #include "util/error.h"
 #include "util/parallel.h"
@@ -64,16 +65,16 @@ void PathTracer::render(uint32_t samples, Progress* progress) {
                                              kMaxPathTracerSamples, " per pixel"));
     const Camera& camera = scene_->camera();
     const CameraRayGenerator camera_rays(camera);
-    Film& target = film_.begin();  // committed only when every tile finished
-    const Film& base = film_.base();
-    const int width = target.width(), height = target.height(), tile = settings_.tile_size;
-    const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
-    auto render_tile = [&](uint64_t begin, uint64_t end) {
+    const TileGrid grid(film_.film().width(), film_.film().height(), settings_.tile_size);
+    // Each pixel sums its samples in order, the first onto the sums as they were before this
+    // render (render/film.h, ProgressiveFilm).
+    auto render_tiles = [&](uint64_t begin, uint64_t end, Film& target, const Film& base) {
         for (uint64_t t = begin; t < end; ++t) {
-            const int x0 = int(t % uint64_t(tiles_x)) * tile, y0 = int(t / uint64_t(tiles_x)) * tile;
-            for (int y = y0; y < std::min(y0 + tile, height); ++y) {
-                for (int x = x0; x < std::min(x0 + tile, width); ++x) {
-                    const uint64_t pixel = uint64_t(y) * uint64_t(width) + uint64_t(x);
+            int x0, x1, y0, y1;
+            grid.bounds(t, &x0, &x1, &y0, &y1);
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    const uint64_t pixel = uint64_t(y) * uint64_t(grid.width) + uint64_t(x);
                     for (uint64_t s = first; s < first + samples; ++s) {
                         throw_if_cancelled(progress);  // one relaxed atomic load per path
                         Pcg32 rng(settings_.seed, stream_id(s, pixel));
@@ -85,22 +86,15 @@ void PathTracer::render(uint32_t samples, Progress* progress) {
                                                           stratified.u_light);
                         integrator.trace(camera_rays.generate_ray(vec2(float(x), float(y)) +
                                                                   stratified.jitter));
-                        if (s == first)  // onto the sums as they were before this render
+                        if (s == first)
                             target.accumulate(x, y, base, values);
                         else
                             target.add(x, y, values);
                     }
                 }
-            }
         }
     };
-    try {
-        parallel_for(0, uint64_t(tiles_x) * uint64_t(tiles_y), 1, render_tile, progress);
-    } catch (...) {
-        film_.abandon();
-        throw;
-    }
-    film_.commit(uint32_t(first + samples));
+    render_frame_tiles(film_, grid, 1, samples, progress, render_tiles);
 }
 
 Image render_path_traced(const Scene& scene, const PathTracerSettings& settings,

@@ -12,6 +12,7 @@
 // one bounce of its lobe class, and a path whose counts exceed a limit still adds the emission
 // its last ray meets, then stops (Cycles' PATH_RAY_TERMINATE_ON_NEXT_SURFACE).
 //
+// Tiles: the frame pipeline's tile loop (render/frame_pipeline.h), shared with the preview.
 // Determinism: sample s of pixel i uses its own Pcg32 stream (seed, stream_id(s, i)) and point s
 // of the pixel's Owen-scrambled Sobol' sequences for its jitter and first light sample
 // (pixel_sample in render/path_integrator.h), so the image is bit-identical for any thread count,

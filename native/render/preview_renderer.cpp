@@ -4,6 +4,8 @@
 #include <optional>
 #include <vector>
 
+#include "render/frame_pipeline.h"
+#include "render/lookup_sharing.h"
 #include "render/path_integrator.h"
 #include "util/error.h"
 #include "util/timer.h"
@@ -22,11 +24,6 @@ constexpr size_t kWavePixels = 256;
 // units, plenty to balance the threads, and the per-unit setup stays negligible.
 constexpr uint64_t kChunkPixels = 1024;
 
-// Screen-space reuse of field lookups: the pixels of each aligned 2 x 2 quad share one lookup
-// when their first surfaces lie within the field's reuse_distance() of the quad's lead pixel and
-// their normals agree to within this cosine (~11 degrees).
-constexpr float kReuseMinCosine = 0.98f;
-
 // Seconds one work unit spent in each stage.
 struct StageSeconds {
     double primary = 0.0, direct = 0.0, indirect = 0.0;
@@ -39,28 +36,6 @@ int even_tile_side(int tile_size) {
     const int side = std::min(tile_size, 1 << 21);
     return side + (side & 1);
 }
-
-// The frame's tiles (of even_tile_side(tile_size) pixels), row-major; the last column and row
-// may be cut by the image border.
-struct TileGrid {
-    TileGrid(int image_width, int image_height, int tile_size)
-        : width(image_width), height(image_height), tile(even_tile_side(tile_size)),
-          columns((int64_t(image_width) + tile - 1) / tile),
-          rows((int64_t(image_height) + tile - 1) / tile) {}
-    uint64_t count() const { return uint64_t(columns) * uint64_t(rows); }
-    // Pixel bounds [x0, x1) x [y0, y1) of tile t.
-    void bounds(uint64_t t, int* x0, int* x1, int* y0, int* y1) const {
-        const int64_t left = int64_t(t % uint64_t(columns)) * tile;
-        const int64_t top = int64_t(t / uint64_t(columns)) * tile;
-        *x0 = int(left);
-        *y0 = int(top);
-        *x1 = int(std::min<int64_t>(left + tile, width));
-        *y1 = int(std::min<int64_t>(top + tile, height));
-    }
-
-    int width, height, tile;
-    int64_t columns, rows;
-};
 
 // The stages' wall times: `wall` split in proportion to the threads' seconds in each stage.
 PreviewTimings split_wall_time(double wall, const std::vector<StageSeconds>& busy) {
@@ -84,8 +59,8 @@ PreviewTimings split_wall_time(double wall, const std::vector<StageSeconds>& bus
 // entries, so these vectors never reallocate while paths are in flight.
 struct Wave {
     explicit Wave(size_t capacity)
-        : x(capacity), y(capacity), rngs(capacity), samples(capacity), values(capacity),
-          paths(capacity), live(capacity) {
+        : x(capacity), y(capacity), pixel(capacity), rngs(capacity), samples(capacity),
+          values(capacity), paths(capacity), live(capacity) {
         quads.reserve(capacity);
         rays.reserve(capacity);
         hits.reserve(capacity);
@@ -97,6 +72,9 @@ struct Wave {
 
     size_t count = 0;  // pixels in the wave
     std::vector<int> x, y;
+    // y * width + x, the pixel's G-buffer index: 32 bits hold it, as a G-buffer of 2^32 pixels
+    // (256 GB) is refused by its memory check first.
+    std::vector<uint32_t> pixel;
     std::vector<Pcg32> rngs;
     std::vector<PixelSample> samples;  // stratified jitter and first light sample
     std::vector<PassValues> values;
@@ -113,23 +91,26 @@ struct Wave {
     std::vector<uint8_t> occluded;
 };
 
-// One render() call: samples [first, first + count) of every pixel, summed onto `base` into
-// `target` (which may be base). Threads share it read-only; a work unit writes only its own
-// pixels of `target`.
+// One render() call: samples [first, first + count) of every pixel, summed onto the film's base
+// into its target (which may be the base). Threads share it read-only; a work unit writes only
+// its own pixels of the target and of the G-buffer.
 class FrameWork {
   public:
     FrameWork(const Scene& scene, const Camera& camera, const CameraRayGenerator& camera_rays,
               const LightSampler& lights, const PathTracerSettings& settings,
               const IndirectField& field, const TileGrid& grid, uint64_t first, uint64_t count,
-              const Film& base, Film& target, Progress* progress, bool reuse_lookups)
+              GBuffer& g_buffer, Progress* progress, bool reuse_lookups)
         : scene_(scene), camera_(camera), camera_rays_(camera_rays), lights_(lights),
           settings_(settings), field_(field), grid_(grid), first_(first), count_(count),
-          base_(base), target_(&target), progress_(progress),
-          reuse_(reuse_lookups ? field.reuse_distance() : 0.0f) {}
+          g_buffer_(&g_buffer), progress_(progress),
+          reuse_(reuse_lookups && !field.is_zero() ? field.reuse_distance() : 0.0f),
+          camera_position_(camera.world_from_camera[3]),
+          forward_(glm::normalize(-vec3(camera.world_from_camera[2]))) {}
 
     // Renders tiles [begin, end) of the grid in waves of whole 2 x 2 quads: quads in row-major
     // order within each tile, each quad's pixels row-major.
-    void render_tiles(uint64_t begin, uint64_t end, StageSeconds* seconds) const {
+    void render_tiles(uint64_t begin, uint64_t end, Film& target, const Film& base,
+                      StageSeconds* seconds) const {
         const uint64_t tile_pixels = uint64_t(grid_.tile) * uint64_t(grid_.tile);
         Wave wave(size_t(std::min<uint64_t>(kWavePixels, (end - begin) * tile_pixels)));
         IntegratorClock clock;
@@ -138,23 +119,26 @@ class FrameWork {
             grid_.bounds(t, &x0, &x1, &y0, &y1);
             for (int qy = y0; qy < y1; qy += 2)
                 for (int qx = x0; qx < x1; qx += 2) {
-                    if (wave.count + 4 > wave.capacity()) render_wave(wave, clock, seconds);
+                    if (wave.count + 4 > wave.capacity())
+                        render_wave(wave, clock, target, base, seconds);
                     wave.quads.push_back(uint32_t(wave.count));
                     for (int y = qy; y < std::min(qy + 2, y1); ++y)
                         for (int x = qx; x < std::min(qx + 2, x1); ++x) {
                             wave.x[wave.count] = x;
                             wave.y[wave.count] = y;
+                            wave.pixel[wave.count] = uint32_t(g_buffer_->index(x, y));
                             ++wave.count;
                         }
                 }
         }
-        if (wave.count > 0) render_wave(wave, clock, seconds);
+        if (wave.count > 0) render_wave(wave, clock, target, base, seconds);
     }
 
   private:
     // Every sample of the wave's pixels, one sample index at a time (each pixel's samples are
     // summed in order, as the path tracer does); empties the wave.
-    void render_wave(Wave& wave, IntegratorClock& clock, StageSeconds* seconds) const {
+    void render_wave(Wave& wave, IntegratorClock& clock, Film& target, const Film& base,
+                     StageSeconds* seconds) const {
         for (uint64_t s = first_; s < first_ + count_; ++s) {
             throw_if_cancelled(progress_);
             const TimePoint primary_start = now();
@@ -168,10 +152,10 @@ class FrameWork {
             // integrators add its time to `clock`.
             const double chain_direct = clock.direct;
             share_field_lookups(wave, s);
-            const Film& sums = s == first_ ? base_ : *target_;
+            const Film& sums = s == first_ ? base : target;
             for (size_t i = 0; i < wave.count; ++i) {
                 if (wave.live[i]) wave.paths[i]->finish();
-                target_->accumulate(wave.x[i], wave.y[i], sums, wave.values[i]);
+                target.accumulate(wave.x[i], wave.y[i], sums, wave.values[i]);
             }
             const double shading = seconds_since(shading_start);
             const double chained = clock.direct - chain_direct;
@@ -182,47 +166,38 @@ class FrameWork {
         wave.quads.clear();
     }
 
-    // Screen-space reuse (PreviewRenderer's header): per quad, the lead pixel (the first of the
-    // quad's pixels, from the one at sample index s mod the quad's size on, whose path has a
-    // first surface) makes its field lookup, and every other pixel of the quad whose first
-    // surface lies within reuse_ of the lead's and whose normal agrees takes it instead of its
-    // own. The lead rotates with the sample index, so a progressive render spreads the lookups.
+    // The lookup sharing stage (render/lookup_sharing.h) over the wave's quads, from the
+    // G-buffer: each quad's lead makes its field lookup, its followers take it instead of their
+    // own.
     void share_field_lookups(Wave& wave, uint64_t s) const {
         if (!(reuse_ > 0.0f)) return;
         // Grown to the most quads a wave has held (64 for full 16 x 16 tiles), not to the
         // wave's capacity: the work unit's wave is new, and each lookup is ~0.3 KB to clear.
         if (wave.lookups.size() < wave.quads.size()) wave.lookups.resize(wave.quads.size());
-        const float reuse2 = reuse_ * reuse_;
         for (size_t q = 0; q < wave.quads.size(); ++q) {
             const uint32_t first = wave.quads[q];
             const uint32_t size =
                 (q + 1 < wave.quads.size() ? wave.quads[q + 1] : uint32_t(wave.count)) - first;
+            const QuadLookupSharing sharing =
+                share_quad_lookup(*g_buffer_, &wave.pixel[first], size, s, reuse_);
+            if (sharing.lead == QuadLookupSharing::kNoLead) continue;
+            PathIntegrator& lead = *wave.paths[first + sharing.lead];
             vec3 p, n, wo;
-            uint32_t lead = size;
-            for (uint32_t k = 0; k < size && lead == size; ++k) {
-                const uint32_t i = first + uint32_t((s + k) % size);
-                if (wave.live[i] && wave.paths[i]->first_field_query(&p, &n, &wo)) lead = i;
-            }
-            if (lead == size) continue;
+            if (!lead.first_field_query(&p, &n, &wo)) continue;
             wave.lookups[q] = field_.view_lookup(p, n, wo);
-            wave.paths[lead]->share_first_field_lookup(&wave.lookups[q]);
-            for (uint32_t i = first; i < first + size; ++i) {
-                vec3 pi, ni, woi;
-                if (i == lead || !wave.live[i] ||
-                    !wave.paths[i]->first_field_query(&pi, &ni, &woi))
-                    continue;
-                if (glm::dot(pi - p, pi - p) <= reuse2 && glm::dot(ni, n) >= kReuseMinCosine)
-                    wave.paths[i]->share_first_field_lookup(&wave.lookups[q]);
-            }
+            lead.share_first_field_lookup(&wave.lookups[q]);
+            for (uint32_t k = 0; k < size; ++k)
+                if (sharing.followers & (1u << k))
+                    wave.paths[first + k]->share_first_field_lookup(&wave.lookups[q]);
         }
     }
 
-    // Camera rays of sample s as one stream, then each first surface's shading (the G-buffer).
+    // Camera rays of sample s as one stream, then each first surface's shading, written to the
+    // G-buffer.
     void trace_primary(Wave& wave, uint64_t s, IntegratorClock& clock) const {
-        const uint64_t width = uint64_t(target_->width());
         wave.rays.resize(wave.count);
         for (size_t i = 0; i < wave.count; ++i) {
-            const uint64_t pixel = uint64_t(wave.y[i]) * width + uint64_t(wave.x[i]);
+            const uint64_t pixel = wave.pixel[i];
             wave.rngs[i] = Pcg32(settings_.seed, stream_id(s, pixel));
             wave.samples[i] = pixel_sample(settings_.seed, pixel, s);
             wave.rays[i] = camera_rays_.generate_ray(vec2(float(wave.x[i]), float(wave.y[i])) +
@@ -236,6 +211,11 @@ class FrameWork {
                                                          &clock);
             path.set_first_light_sample(wave.samples[i].u_select, wave.samples[i].u_light);
             wave.live[i] = path.begin(wave.rays[i], wave.hits[i]);
+            if (wave.live[i])
+                g_buffer_->set_surface(wave.pixel[i], scene_, path.first_surface(), wave.hits[i],
+                                       camera_position_, forward_);
+            else
+                g_buffer_->set_miss(wave.pixel[i]);
         }
     }
 
@@ -263,10 +243,10 @@ class FrameWork {
     const IndirectField& field_;
     const TileGrid& grid_;
     uint64_t first_, count_;
-    const Film& base_;
-    Film* target_;  // written by the work units, each in its own pixels
+    GBuffer* g_buffer_;  // written by the work units, each in its own pixels
     Progress* progress_;
     float reuse_;  // the field's reuse distance; 0: every pixel makes its own lookup
+    vec3 camera_position_, forward_;  // the camera's, for the G-buffer's depth
 };
 
 // The path tracer settings that make PathIntegrator follow only specular chains: every
@@ -326,6 +306,14 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const Camera& camera,
       lights_(scene, settings.world_sampling) {
     film_ = ProgressiveFilm(int(camera_.resolution_x), int(camera_.resolution_y),
                             settings.combined_only ? FilmPasses::CombinedOnly : FilmPasses::All);
+    g_buffer_ = GBuffer(int(camera_.resolution_x), int(camera_.resolution_y));
+}
+
+void PreviewRenderer::add_frame_stage(FrameWideStage stage) {
+    if (!stage.run)
+        throw InvalidArgument(format_message("PreviewRenderer::add_frame_stage: stage '",
+                                             stage.name, "' has no function to run"));
+    frame_stages_.push_back(std::move(stage));
 }
 
 const LightSampler& PreviewRenderer::lights_for(const IndirectField& field) {
@@ -352,25 +340,21 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
     field = pinned.get() != nullptr ? pinned.get() : &no_field;  // none: direct light only
     const TimePoint frame_start = now();
     const LightSampler& lights = lights_for(*field);
-    Film& target = film_.begin();
-    const TileGrid grid(target.width(), target.height(), settings_.tile_size);
+    const TileGrid grid(film_.film().width(), film_.film().height(),
+                        even_tile_side(settings_.tile_size));
     const FrameWork work(*scene_, camera_, camera_rays_, lights, path_settings_, *field, grid,
-                         first, samples, film_.base(), target, progress,
-                         settings_.reuse_field_lookups);
+                         first, samples, g_buffer_, progress, settings_.reuse_field_lookups);
     const uint64_t tile_pixels = uint64_t(grid.tile) * uint64_t(grid.tile);
     const uint64_t tiles_per_unit = std::max<uint64_t>(1, kChunkPixels / tile_pixels);
     std::vector<StageSeconds> busy(grid.count());  // per work unit, at its first tile
     const TimePoint tiles_start = now();
-    try {
-        parallel_for(0, grid.count(), tiles_per_unit, [&](uint64_t begin, uint64_t end) {
-            work.render_tiles(begin, end, &busy[begin]);
-        }, progress);
-    } catch (...) {
-        film_.abandon();
-        throw;
-    }
+    render_frame_tiles(
+        film_, grid, tiles_per_unit, samples, progress,
+        [&](uint64_t begin, uint64_t end, Film& target, const Film& base) {
+            work.render_tiles(begin, end, target, base, &busy[begin]);
+        },
+        &g_buffer_, frame_stages_);
     PreviewTimings timings = split_wall_time(seconds_since(tiles_start), busy);
-    film_.commit(uint32_t(first + samples));
     timings.total = seconds_since(frame_start);
     timings_ = timings;
 }

@@ -1,18 +1,22 @@
 // PreviewRenderer: frames from any IndirectField (seed 000 §5.4: G-buffer, exact direct light,
 // indirect light from the solved field), with the passes of the reference path tracer.
 //
-// Work: the frame is cut into tiles (settings.tile_size), handed to the threads a few tiles at a
-// time; inside a chunk of tiles, up to 256 pixels ("a wave", one 16 x 16 tile by default) move
+// Work: the frame pipeline (render/frame_pipeline.h, docs/frame-pipeline.md) cuts the frame into
+// tiles (settings.tile_size), handed to the threads a few tiles at a time; inside a chunk of
+// tiles, up to 256 pixels ("a wave", one 16 x 16 tile by default) move
 // through the stages together, one sample index at a time:
 // - primary (seed 000 Tables 5/6 "Screen G Buffer"): the wave's camera rays are built and
 //   intersected as one Embree ray stream, and each first hit is shaded (surface point, BSDF,
-//   emission the camera sees, the Col/Normal/Depth passes);
+//   emission the camera sees, the Col/Normal/Depth passes) and written to the frame-wide
+//   G-buffer (render/g_buffer.h), which any later stage may read across tile borders;
 // - direct: next-event estimation at each first hit (area lights give soft shadows over
 //   samples), with all the wave's shadow rays traced as one occlusion stream;
 // - indirect: indirect diffuse and glossy light from the field, Dirac / refraction lobes followed
 //   by tracing (mirrors and glass show what they reflect and refract, up to
 //   max_specular_bounces; next-event estimation where such a chain lands counts as direct), and
-//   the sums into the film.
+//   the sums into the film; before them, the lookup sharing stage (below) reads the G-buffer.
+// After the tiles, the frame-wide stages added by add_frame_stage run in order over the whole
+// frame (G-buffer and film), before the film commits.
 // PathIntegrator (render/path_integrator.h, field mode) does the per-path work in these steps.
 // Each stage's wall time is the frame's time split in proportion to the threads' time in it.
 //
@@ -24,26 +28,28 @@
 // The viewport shows only Combined: with combined_only the film sums nothing else, which saves
 // most of the film's memory traffic per frame.
 //
-// Screen-space reuse of field lookups (in the spirit of seed 004's discontinuity-aware sharing of
-// SH between neighbouring pixels): a field's lookup (a 27-cell lattice sample, a photon map's
-// k-nearest density estimate) is the costliest part of a pixel, and it changes little between
-// neighbouring pixels on one surface. The pixels of each aligned 2 x 2 quad (waves hold whole
-// quads; tiles have an even side) share one lookup, made at the first surface of a lead pixel
-// that rotates with the sample index, when their own first surfaces lie within the field's
-// reuse_distance() of it (a quarter of a photon lattice's finest cell or of a probe grid's
-// spacing) and their normals agree within ~11 degrees; the others, across edges and depth jumps,
-// make their own. Each pixel still evaluates irradiance and glossy light with its own normal and
-// view direction, and later vertices of specular chains always look up for themselves. Fields
-// that do not allow it (reuse_distance() 0, the default) and reuse_field_lookups = false give
-// one lookup per pixel. The quads and leads depend only on pixel coordinates and the sample
-// index, so frames stay identical for any thread count and tile size.
+// Screen-space reuse of field lookups (render/lookup_sharing.h, in the spirit of seed 004's
+// discontinuity-aware sharing of SH between neighbouring pixels): the pixels of each aligned
+// 2 x 2 quad (waves hold whole quads; tiles have an even side) share one lookup, made at the
+// first surface of a lead pixel that rotates with the sample index, when their own first
+// surfaces lie within the field's reuse_distance() of it (a quarter of a photon lattice's finest
+// cell or of a probe grid's spacing) and their normals agree within ~11 degrees; the others,
+// across edges and depth jumps, make their own. Each pixel still evaluates irradiance and glossy
+// light with its own normal and view direction, and later vertices of specular chains always
+// look up for themselves. Fields that do not allow it (reuse_distance() 0, the default) and
+// reuse_field_lookups = false give one lookup per pixel. The quads and leads depend only on
+// pixel coordinates, the sample index and the G-buffer, so frames stay identical for any thread
+// count and tile size.
 #pragma once
 
 #include <cstdint>
 #include <optional>
+#include <vector>
 
 #include "io/image.h"
 #include "render/film.h"
+#include "render/frame_pipeline.h"
+#include "render/g_buffer.h"
 #include "render/indirect_field.h"
 #include "render/light_sampler.h"
 #include "render/path_tracer.h"
@@ -90,6 +96,12 @@ class PreviewRenderer {
     const Film& film() const { return film_.film(); }
     Image image() const { return film_.film().image(); }
     const PreviewTimings& timings() const { return timings_; }
+    // The first surfaces of the latest sample index rendered (render/g_buffer.h); every pixel a
+    // miss before the first render. 64 bytes a pixel.
+    const GBuffer& g_buffer() const { return g_buffer_; }
+    // Appends a stage run over the whole frame after its tiles, on every later render()
+    // (render/frame_pipeline.h, FrameWideStage); InvalidArgument when it has no function.
+    void add_frame_stage(FrameWideStage stage);
     const Camera& camera() const { return camera_; }
     const Scene& scene() const { return *scene_; }
 
@@ -106,6 +118,8 @@ class PreviewRenderer {
     // For fields that carry the world's direct light; built by the first render with such a field.
     std::optional<LightSampler> lights_without_world_;
     ProgressiveFilm film_;
+    GBuffer g_buffer_;
+    std::vector<FrameWideStage> frame_stages_;
     PreviewTimings timings_;
 };
 

@@ -423,6 +423,34 @@ TEST(PreviewRenderer, BitIdenticalForAnyThreadCountAndTileSize) {
     expect_same_film(one->film(), render(2, std::numeric_limits<int>::max())->film());
 }
 
+// The lookup sharing stage reads its quads from the frame-wide G-buffer: on the fine room with the
+// photon lattice (where sharing is active: the frame differs from one lookup per pixel), frames
+// are bit-identical for tile sizes 2, 16 and 64 on one thread and on two.
+TEST(PreviewRenderer, LookupSharingIdenticalForAnyTileSizeAndThreadCount) {
+    Scene scene = room_scene();
+    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.9f), 1.8f, 40));
+    scene.commit();
+    const auto lattice = solved_lattice(scene);
+    ASSERT_GT(lattice->reuse_distance(), 0.0f);
+    const auto render = [&](int threads, int tile_size, bool reuse) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+        PreviewSettings settings = preview_settings(4);
+        settings.tile_size = tile_size;
+        settings.reuse_field_lookups = reuse;
+        auto renderer = std::make_unique<PreviewRenderer>(scene, settings);
+        renderer->render(lattice.get(), 4);
+        return renderer;
+    };
+    const auto reference = render(1, 16, true);
+    EXPECT_NE(reference->film().pixels(Pass::DiffInd),
+              render(1, 16, false)->film().pixels(Pass::DiffInd));
+    for (const int threads : {1, 2})
+        for (const int tile_size : {2, 16, 64}) {
+            SCOPED_TRACE(::testing::Message() << threads << " threads, tile " << tile_size);
+            expect_same_film(reference->film(), render(threads, tile_size, true)->film());
+        }
+}
+
 // Screen-space reuse on one flat surface: the pixels of each 2 x 2 quad share one lookup (an
 // 8 x 8 image has 16 quads), and a constant field gives the same DiffInd either way. Reuse
 // within a distance shorter than any two hits' gives one lookup per pixel, as does

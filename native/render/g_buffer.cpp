@@ -1,0 +1,57 @@
+#include "render/g_buffer.h"
+
+#include "util/error.h"
+#include "util/memory.h"
+
+namespace shgi {
+
+GBuffer::GBuffer(int width, int height) : width_(width), height_(height) {
+    if (width < 0 || height < 0)
+        throw InvalidArgument(format_message("GBuffer: size ", width, " x ", height,
+                                             "; both sides must be >= 0"));
+    const size_t count = pixel_count();
+    // Four vec3 planes and four 32-bit planes.
+    constexpr uint64_t kBytesPerPixel = 4 * sizeof(vec3) + 4 * sizeof(uint32_t);
+    require_memory(saturating_mul(uint64_t(count), kBytesPerPixel),
+                   format_message("the G-buffer of ", width, " x ", height, " pixels"),
+                   "lower the camera's resolution_x / resolution_y (or Blender's resolution %)");
+    position.assign(count, vec3(0.0f));
+    shading_normal.assign(count, vec3(0.0f));
+    geometric_normal.assign(count, vec3(0.0f));
+    albedo.assign(count, vec3(0.0f));
+    roughness.assign(count, 0.0f);
+    depth.assign(count, 0.0f);
+    object_id.assign(count, kNoSurface);
+    material_id.assign(count, kNoSurface);
+}
+
+void GBuffer::set_surface(size_t pixel, const Scene& scene, const Shading& shading, const Hit& hit,
+                          const vec3& camera_position, const vec3& forward) {
+    const Mesh& mesh = scene.meshes()[scene.instances()[hit.instance_id].mesh_id];
+    // Meshes without per-triangle materials use material 0 (scene/mesh.h).
+    const uint32_t material =
+        mesh.material_indices.empty() ? 0u : mesh.material_indices[hit.triangle_id];
+    position[pixel] = shading.position;
+    shading_normal[pixel] = shading.frame.z;
+    geometric_normal[pixel] = shading.geometric_normal;
+    albedo[pixel] = shading.bsdf.class_color(LobeClass::Diffuse) +
+                    shading.bsdf.class_color(LobeClass::Glossy) +
+                    shading.bsdf.class_color(LobeClass::Transmission);
+    roughness[pixel] = scene.materials()[material].roughness;
+    depth[pixel] = glm::dot(shading.position - camera_position, forward);
+    object_id[pixel] = hit.instance_id;
+    material_id[pixel] = material;
+}
+
+void GBuffer::set_miss(size_t pixel) {
+    position[pixel] = vec3(0.0f);
+    shading_normal[pixel] = vec3(0.0f);
+    geometric_normal[pixel] = vec3(0.0f);
+    albedo[pixel] = vec3(0.0f);
+    roughness[pixel] = 0.0f;
+    depth[pixel] = 0.0f;
+    object_id[pixel] = kNoSurface;
+    material_id[pixel] = kNoSurface;
+}
+
+}  // namespace shgi

@@ -1,0 +1,65 @@
+// GBuffer: the first surface every pixel's camera ray met, for the whole frame, as a structure of
+// arrays (one plane per attribute, indexed y * width + x with y = 0 the top row), in the shape of
+// pbrt-v4's wavefront integrator (its SOA pixel state, src/pbrt/wavefront/integrator.h) and of
+// seed 000 §5.4's screen G-buffer.
+//
+// The frame pipeline (render/frame_pipeline.h) writes it in tiles, one pixel by the thread that
+// owns the pixel's tile, and a stage may then read any pixel, across tile borders: the frame-wide
+// stages that run after the tiles finish (denoiser guides, screen-space SH filters) and the lookup
+// sharing stage (render/lookup_sharing.h) read their neighbours here.
+//
+// Contents are those of the latest sample index the frame rendered (a progressive frame of one
+// sample: that sample). Units and conventions: world space, metres; normals unit length and facing
+// the camera (render/shading.h: flipped to the side the ray came from); `depth` the distance along
+// the camera's view axis (the Depth pass, Cycles' z-depth); `albedo` the sum of the first
+// surface's closure weights (DiffCol + GlossCol + TransCol, OpenImageDenoise's albedo guide);
+// `roughness` the material's Principled roughness. Where the ray met nothing, object_id is
+// kNoSurface and the other planes hold zeros.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "render/shading.h"
+#include "scene/scene.h"
+#include "util/math.h"
+
+namespace shgi {
+
+class GBuffer {
+  public:
+    // object_id and material_id where a pixel's camera ray met no surface.
+    static constexpr uint32_t kNoSurface = 0xFFFFFFFFu;
+
+    GBuffer() = default;
+    // A width x height buffer, every pixel a miss.
+    GBuffer(int width, int height);
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    size_t pixel_count() const { return size_t(width_) * size_t(height_); }
+    size_t index(int x, int y) const { return size_t(y) * size_t(width_) + size_t(x); }
+    bool has_surface(size_t pixel) const { return object_id[pixel] != kNoSurface; }
+
+    // Pixel `pixel` sees `shading`, the shaded first hit `hit` of a ray from the camera whose
+    // position and unit view axis are `camera_position` and `forward`.
+    void set_surface(size_t pixel, const Scene& scene, const Shading& shading, const Hit& hit,
+                     const vec3& camera_position, const vec3& forward);
+    // Pixel `pixel` sees no surface.
+    void set_miss(size_t pixel);
+
+    // The planes (public: stages read them directly, as pbrt-v4's SOA arrays).
+    std::vector<vec3> position;          // m, world space
+    std::vector<vec3> shading_normal;    // the shading frame's z (after normal maps)
+    std::vector<vec3> geometric_normal;  // the triangle's normal
+    std::vector<vec3> albedo;            // sum of the closure weights, linear Rec.709
+    std::vector<float> roughness;        // Principled roughness, 0..1
+    std::vector<float> depth;            // m along the view axis
+    std::vector<uint32_t> object_id;     // index into Scene::instances(), or kNoSurface
+    std::vector<uint32_t> material_id;   // index into Scene::materials(), or kNoSurface
+
+  private:
+    int width_ = 0, height_ = 0;
+};
+
+}  // namespace shgi
