@@ -206,8 +206,9 @@ uint64_t estimate_bvh_bytes(const std::vector<Mesh>& meshes,
 
 struct EmbreeScene::Impl {
     EmbreeDevice device;                   // declared first: released last
-    std::vector<SceneHandle> mesh_scenes;  // null for meshes without triangles
+    std::vector<SceneHandle> mesh_scenes;  // null for meshes without a BVH of their own
     SceneHandle top;
+    std::vector<GeometryHandle> top_geometries;  // per instance; null for those left out
 
     // Throws if Embree recorded an error during `operation`, or returned null without one.
     template <typename T>
@@ -237,7 +238,7 @@ struct EmbreeScene::Impl {
     GeometryHandle new_triangles(const Mesh& mesh, const mat4* world_from_object,
                                  const std::string& operation);
     SceneHandle build_mesh(const Mesh& mesh, BuildMonitor& monitor);
-    void attach_instance(RTCScene top_scene, const Instance& instance, uint32_t id);
+    GeometryHandle new_instance(const Instance& instance);
 };
 
 GeometryHandle EmbreeScene::Impl::new_triangles(const Mesh& mesh, const mat4* world_from_object,
@@ -276,16 +277,15 @@ SceneHandle EmbreeScene::Impl::build_mesh(const Mesh& mesh, BuildMonitor& monito
     return scene;
 }
 
-void EmbreeScene::Impl::attach_instance(RTCScene top_scene, const Instance& instance,
-                                        uint32_t id) {
+GeometryHandle EmbreeScene::Impl::new_instance(const Instance& instance) {
     GeometryHandle geometry(rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_INSTANCE));
-    if (!geometry) return;  // the caller's throw_if_error reports why
+    if (!geometry) return geometry;  // the caller's throw_if_error reports why
     rtcSetGeometryInstancedScene(geometry.get(), mesh_scenes[instance.mesh_id].get());
     // GLM stores column-major, which is Embree's FLOAT4X4_COLUMN_MAJOR layout.
     rtcSetGeometryTransform(geometry.get(), 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR,
                             &instance.world_from_object[0][0]);
     rtcCommitGeometry(geometry.get());
-    rtcAttachGeometryByID(top_scene, geometry.get(), id);
+    return geometry;
 }
 
 EmbreeScene::EmbreeScene() : impl_(std::make_unique<Impl>()) {}
@@ -297,6 +297,7 @@ void EmbreeScene::reset_peak() { impl_->device.reset_peak(); }
 
 void EmbreeScene::clear() {
     impl_->top.reset();
+    impl_->top_geometries.clear();
     impl_->mesh_scenes.clear();
 }
 
@@ -326,30 +327,63 @@ void EmbreeScene::build_instances(const std::vector<Mesh>& meshes,
                                   const std::vector<Instance>& instances,
                                   const std::vector<uint8_t>& flattened, Progress* progress) {
     impl_->top.reset();
+    impl_->top_geometries.clear();
     impl_->device.clear_error();
     const std::string operation = top_level_operation(meshes, instances, flattened);
+    // Kept per instance so that move_instances edits them in place. Not RTC_SCENE_FLAG_DYNAMIC:
+    // on Debian's Embree 3.13 it did not make the commit after a move any cheaper (a moved
+    // block still cost a rebuild over the flattened 502k-triangle sphere, bench/
+    // scene_query_bench.cpp) and would trade the static SAH build for a two-level one.
     SceneHandle top = impl_->new_scene(operation);
+    std::vector<GeometryHandle> geometries(instances.size());
     for (size_t i = 0; i < instances.size(); ++i) {
         if (i % kInstancesPerPoll == 0) throw_if_cancelled(progress);
         const Instance& instance = instances[i];
-        const Mesh& mesh = meshes[instance.mesh_id];
-        if (mesh.triangles.empty()) continue;
-        const auto id = static_cast<uint32_t>(i);
-        if (flattened[i]) {
-            GeometryHandle geometry =
-                impl_->new_triangles(mesh, &instance.world_from_object, operation);
-            rtcAttachGeometryByID(top.get(), geometry.get(), id);
-            continue;
-        }
-        if (instance.mesh_id >= impl_->mesh_scenes.size() || !impl_->mesh_scenes[instance.mesh_id])
+        if (meshes[instance.mesh_id].triangles.empty()) continue;
+        if (!flattened[i] && (instance.mesh_id >= impl_->mesh_scenes.size() ||
+                              !impl_->mesh_scenes[instance.mesh_id]))
             throw Internal(format_message(operation, ": instance ", i, " uses mesh ",
                                           instance.mesh_id, " which has no BVH; build_meshes first"));
-        impl_->attach_instance(top.get(), instance, id);
+        geometries[i] = flattened[i] ? impl_->new_triangles(meshes[instance.mesh_id],
+                                                            &instance.world_from_object, operation)
+                                     : impl_->new_instance(instance);
+        if (geometries[i]) rtcAttachGeometryByID(top.get(), geometries[i].get(), uint32_t(i));
     }
     impl_->device.throw_if_error(operation);
     BuildMonitor monitor{progress, 0, 1};
     impl_->commit_scene(top.get(), monitor, operation);
     impl_->top = std::move(top);
+    impl_->top_geometries = std::move(geometries);
+}
+
+void EmbreeScene::move_instances(const std::vector<Mesh>& meshes,
+                                 const std::vector<Instance>& instances,
+                                 const std::vector<uint8_t>& flattened,
+                                 const std::vector<uint32_t>& moved, Progress* progress) {
+    impl_->device.clear_error();
+    const std::string operation = "moving instances in the top-level BVH";
+    if (!impl_->top || impl_->top_geometries.size() != instances.size())
+        throw Internal(operation + ": the top level was not built; build_instances first");
+    for (uint32_t i : moved) {
+        RTCGeometry geometry = impl_->top_geometries[i].get();
+        if (!geometry) continue;  // a mesh without triangles
+        const mat4& world_from_object = instances[i].world_from_object;
+        if (flattened[i]) {
+            const Mesh& mesh = meshes[instances[i].mesh_id];
+            auto* vertices =
+                static_cast<vec3*>(rtcGetGeometryBufferData(geometry, RTC_BUFFER_TYPE_VERTEX, 0));
+            for (size_t v = 0; v < mesh.positions.size(); ++v)
+                vertices[v] = vec3(world_from_object * vec4(mesh.positions[v], 1.0f));
+            rtcUpdateGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+        } else {
+            rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR,
+                                    &world_from_object[0][0]);
+        }
+        rtcCommitGeometry(geometry);
+    }
+    impl_->device.throw_if_error(operation);
+    BuildMonitor monitor{progress, 0, 1};
+    impl_->commit_scene(impl_->top.get(), monitor, operation);
 }
 
 // Incoherent rays one by one (rtcIntersect1/rtcOccluded1): Embree 3 traces an incoherent ray

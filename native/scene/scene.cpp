@@ -429,7 +429,7 @@ void Scene::set_instance_transform(uint32_t instance_id, const mat4& world_from_
     require_transform(instance_label(instances_, instance_id), "world_from_object",
                       world_from_object);
     instances_[instance_id].world_from_object = world_from_object;
-    instances_dirty_ = true;  // the per-mesh BVHs stay: only the top level is rebuilt
+    moved_.push_back(instance_id);  // the per-mesh BVHs stay: only the top level changes
     invalidate();
 }
 
@@ -674,10 +674,15 @@ void Scene::build_bvh(Progress* progress) {
         if (instances_dirty_) {
             if (progress) progress->begin_stage("building the top-level BVH", 0.85f, 0.95f);
             embree_->build_instances(meshes_, instances_, flattened_, progress);
-            instances_dirty_ = false;
             ++bvh_builds_;
             bvh_bytes_ = embree_->peak_bytes();
+        } else if (!moved_.empty()) {
+            if (progress) progress->begin_stage("moving instances", 0.85f, 0.95f);
+            embree_->move_instances(meshes_, instances_, flattened_, moved_, progress);
+            ++bvh_builds_;
         }
+        instances_dirty_ = false;
+        moved_.clear();
     } catch (...) {
         embree_->clear();
         geometry_dirty_ = instances_dirty_ = true;

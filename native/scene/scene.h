@@ -228,7 +228,8 @@ class Scene {
     std::vector<uint64_t> mesh_revisions_;  // per mesh: revision_ when it was added or set
     static uint64_t next_uid();
     bool geometry_dirty_ = true;   // meshes changed: per-mesh BVHs must be rebuilt
-    bool instances_dirty_ = true;  // instances added or moved: the top level must be rebuilt
+    bool instances_dirty_ = true;  // instances added: the top level must be rebuilt
+    std::vector<uint32_t> moved_;  // instances moved since the last commit (may repeat)
     uint64_t bvh_builds_ = 0;
     std::vector<EmissiveTriangle> emissive_;
     std::vector<uint8_t> mesh_instanced_;  // per mesh: has its own BVH (embree_scene.h)

@@ -146,6 +146,29 @@ TEST(SceneFlatten, AMeshGainingASecondInstanceBecomesInstanced) {
     EXPECT_EQ(scene.instances()[hit.instance_id].mesh_id, 1u);
 }
 
+// Flattening must not narrow the rays a scene traces: a quad enlarged 10x would put 10x larger
+// numbers into Embree's float triangle test in world space than in its own, so it stays
+// instanced and the scene keeps Embree's whole direction range; unscaled, it is flattened.
+TEST(SceneFlatten, AnInstanceThatWouldNarrowTheRayRangeStaysInstanced) {
+    for (const float scale : {10.0f, 1.0f}) {
+        SCOPED_TRACE(scale);
+        Scene scene;
+        scene.add_instance(scene.add_mesh(test::inward_box(0.5f)),
+                           glm::scale(mat4(1.0f), vec3(scale)));
+        scene.commit();
+        CommitSettings every_mesh_instanced;
+        every_mesh_instanced.flatten_single_use_meshes = false;
+        Scene instanced;
+        instanced.add_instance(instanced.add_mesh(test::inward_box(0.5f)),
+                               glm::scale(mat4(1.0f), vec3(scale)));
+        instanced.commit(every_mesh_instanced);
+        EXPECT_EQ(scene.stats().flattened_instances, scale > 1.0f ? 0u : 1u);
+        EXPECT_EQ(scene.ray_limits().origin, instanced.ray_limits().origin);
+        EXPECT_EQ(scene.ray_limits().direction, instanced.ray_limits().direction);
+        EXPECT_EQ(scene.ray_limits().min_direction, instanced.ray_limits().min_direction);
+    }
+}
+
 TEST(SceneFlatten, ReferenceSceneGivesTheSameHitsAsScene) {
     const Scene scene = mixed_scene(true);
     const EmbreeReference reference(scene);
