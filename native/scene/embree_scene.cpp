@@ -209,6 +209,7 @@ struct EmbreeScene::Impl {
     std::vector<SceneHandle> mesh_scenes;  // null for meshes without a BVH of their own
     SceneHandle top;
     std::vector<GeometryHandle> top_geometries;  // per instance; null for those left out
+    std::vector<uint8_t> top_flattened;          // per instance, as build_instances was told
 
     // Throws if Embree recorded an error during `operation`, or returned null without one.
     template <typename T>
@@ -333,7 +334,7 @@ void EmbreeScene::build_instances(const std::vector<Mesh>& meshes,
     // Kept per instance so that move_instances edits them in place. Not RTC_SCENE_FLAG_DYNAMIC:
     // on Debian's Embree 3.13 it did not make the commit after a move any cheaper (a moved
     // block still cost a rebuild over the flattened 502k-triangle sphere, bench/
-    // scene_query_bench.cpp) and would trade the static SAH build for a two-level one.
+    // scene_query_bench.cpp); Scene instances every mesh of a moving scene instead.
     SceneHandle top = impl_->new_scene(operation);
     std::vector<GeometryHandle> geometries(instances.size());
     for (size_t i = 0; i < instances.size(); ++i) {
@@ -354,11 +355,10 @@ void EmbreeScene::build_instances(const std::vector<Mesh>& meshes,
     impl_->commit_scene(top.get(), monitor, operation);
     impl_->top = std::move(top);
     impl_->top_geometries = std::move(geometries);
+    impl_->top_flattened = flattened;
 }
 
-void EmbreeScene::move_instances(const std::vector<Mesh>& meshes,
-                                 const std::vector<Instance>& instances,
-                                 const std::vector<uint8_t>& flattened,
+void EmbreeScene::move_instances(const std::vector<Instance>& instances,
                                  const std::vector<uint32_t>& moved, Progress* progress) {
     impl_->device.clear_error();
     const std::string operation = "moving instances in the top-level BVH";
@@ -367,18 +367,11 @@ void EmbreeScene::move_instances(const std::vector<Mesh>& meshes,
     for (uint32_t i : moved) {
         RTCGeometry geometry = impl_->top_geometries[i].get();
         if (!geometry) continue;  // a mesh without triangles
-        const mat4& world_from_object = instances[i].world_from_object;
-        if (flattened[i]) {
-            const Mesh& mesh = meshes[instances[i].mesh_id];
-            auto* vertices =
-                static_cast<vec3*>(rtcGetGeometryBufferData(geometry, RTC_BUFFER_TYPE_VERTEX, 0));
-            for (size_t v = 0; v < mesh.positions.size(); ++v)
-                vertices[v] = vec3(world_from_object * vec4(mesh.positions[v], 1.0f));
-            rtcUpdateGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0);
-        } else {
-            rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR,
-                                    &world_from_object[0][0]);
-        }
+        if (impl_->top_flattened[i])
+            throw Internal(format_message(operation, ": instance ", i,
+                                          " is flattened; build_instances instead"));
+        rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR,
+                                &instances[i].world_from_object[0][0]);
         rtcCommitGeometry(geometry);
     }
     impl_->device.throw_if_error(operation);

@@ -56,13 +56,10 @@ class EmbreeScene {
     // out.
     void build_instances(const std::vector<Mesh>& meshes, const std::vector<Instance>& instances,
                          const std::vector<uint8_t>& flattened, Progress* progress);
-    // Moves instances `moved` (ids into `instances`, whose transforms changed) in the built top
-    // level: a flattened one's vertices are transformed again, an instanced one's transform
-    // replaced; then the top level is committed again (Embree rebuilds its BVH, over every
-    // flattened triangle). The other arguments must be those of the last build_instances.
-    void move_instances(const std::vector<Mesh>& meshes, const std::vector<Instance>& instances,
-                        const std::vector<uint8_t>& flattened, const std::vector<uint32_t>& moved,
-                        Progress* progress);
+    // Moves instances `moved` (ids into `instances`, whose transforms changed; none of them
+    // flattened) in the built top level and commits it again, keeping the per-mesh BVHs.
+    void move_instances(const std::vector<Instance>& instances,
+                        const std::vector<uint32_t>& moved, Progress* progress);
     // Releases every Embree object (after a failed build).
     void clear();
 

@@ -10,10 +10,13 @@
 // into the top-level BVH in world space (rays pay no instance transform), a mesh used by several
 // keeps one BVH of its own, instanced once per Instance, so a mesh used a thousand times is
 // stored once (so is a single-use mesh whose instance enlarges it beyond the ray range the rest
-// of the scene allows: flattening must not narrow the rays a scene traces). Any edit un-commits the scene; set_instance_transform() keeps the per-mesh BVHs
-// and rebuilds the top level (with the flattened meshes in it, re-transformed), set_mesh() (a
-// mesh replaced for all its instances) rebuilds the per-mesh BVHs too. Light, material and
-// texture edits rebuild no BVH.
+// of the scene allows: flattening must not narrow the rays a scene traces). Any edit un-commits
+// the scene. set_instance_transform() marks the scene as moving: from its next commit every mesh
+// is instanced (one build of the per-mesh BVHs), and each move then rebuilds only the small top
+// level, as Cycles keeps a dynamic BVH in its viewport; a static scene (final renders, bakes,
+// a viewport where only lights and materials change) keeps the flattened layout. set_mesh() (a
+// mesh replaced for all its instances) rebuilds the per-mesh BVHs. Light, material and texture
+// edits rebuild no BVH.
 //
 // Queries: intersect/occluded for single rays and for batches (Embree ray streams), callable
 // from many threads at once on a committed scene. Every ray is validated first; an invalid ray
@@ -230,6 +233,7 @@ class Scene {
     bool geometry_dirty_ = true;   // meshes changed: per-mesh BVHs must be rebuilt
     bool instances_dirty_ = true;  // instances added: the top level must be rebuilt
     std::vector<uint32_t> moved_;  // instances moved since the last commit (may repeat)
+    bool moving_ = false;          // set_instance_transform was called: flatten nothing
     uint64_t bvh_builds_ = 0;
     std::vector<EmissiveTriangle> emissive_;
     std::vector<uint8_t> mesh_instanced_;  // per mesh: has its own BVH (embree_scene.h)
