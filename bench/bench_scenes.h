@@ -6,7 +6,10 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "scene/camera.h"
+#include "scene/embree_reference.h"
 #include "scene/scene.h"
+#include "util/parallel.h"
 #include "util/rng.h"
 #include "util/sampling.h"
 #include "util/timer.h"
@@ -112,12 +115,20 @@ inline Scene cornell_box_with_dense_sphere(uint32_t width, uint32_t height) {
     return scene;
 }
 
-// Raw Embree rate: random origins inside the box, uniformly random directions, traced through
-// Scene::intersect's batch interface (ray streams, all threads). Rays per second, the best of
-// kRawRuns timed passes (the solvers' figures are best-of-three too, so their ratios to it do
-// not swing with one noisy pass).
+// Scene's ray queries against raw Embree (scene/embree_reference.h: every instance flattened into
+// one one-level BVH, no validation) on the same rays, the same threads and the same chunks, in
+// the same run. Rays per second (or seconds per frame), the best of kRawRuns timed passes that
+// alternate between the two, so both see the same machine (the solvers' figures are
+// best-of-three too, so their ratios to these do not swing with one noisy pass).
 inline constexpr int kRawRuns = 3;
-inline double incoherent_ray_rate(const Scene& scene, size_t count = size_t(1) << 21) {
+
+struct RayRates {
+    double scene = 0.0;   // through Scene's batch queries
+    double embree = 0.0;  // raw Embree
+};
+
+// Random origins inside the box, uniformly random directions: incoherent rays.
+inline std::vector<Ray> incoherent_rays(size_t count) {
     std::vector<Ray> rays(count);
     Pcg32 rng(1, 0);
     for (Ray& ray : rays) {
@@ -125,15 +136,130 @@ inline double incoherent_ray_rate(const Scene& scene, size_t count = size_t(1) <
                      (0.99f * kHalf);
         ray.direction = sample_uniform_sphere(rng.next_vec2());
     }
-    std::vector<Hit> hits;
-    scene.intersect(rays, hits);  // warm-up
-    double best = 0.0;
-    for (int run = 0; run < kRawRuns; ++run) {
-        const auto start = now();
-        scene.intersect(rays, hits);
-        best = std::max(best, double(count) / seconds_since(start));
+    return rays;
+}
+
+// Best-of-`runs` rates of scene_pass() and embree_pass(), each tracing `count` rays.
+template <typename ScenePass, typename EmbreePass>
+RayRates best_rates(double count, int runs, ScenePass&& scene_pass, EmbreePass&& embree_pass) {
+    scene_pass();  // warm-up
+    embree_pass();
+    RayRates best;
+    for (int run = 0; run < runs; ++run) {
+        auto start = now();
+        scene_pass();
+        best.scene = std::max(best.scene, count / seconds_since(start));
+        start = now();
+        embree_pass();
+        best.embree = std::max(best.embree, count / seconds_since(start));
     }
     return best;
+}
+
+// Incoherent closest-hit rays (occluded = false) or shadow queries (true), all threads, in
+// Scene's chunks of Scene::kRaysPerChunk.
+inline RayRates incoherent_ray_rates(const Scene& scene, const EmbreeReference& embree,
+                                     bool occluded = false, size_t count = size_t(1) << 21) {
+    const std::vector<Ray> rays = incoherent_rays(count);
+    std::vector<Hit> hits(count);
+    std::vector<uint8_t> blocked(count);
+    const auto embree_pass = [&] {
+        parallel_for(0, count, Scene::kRaysPerChunk, [&](uint64_t begin, uint64_t end) {
+            if (occluded)
+                embree.occluded(&rays[begin], &blocked[begin], end - begin,
+                                RayCoherence::Incoherent);
+            else
+                embree.intersect(&rays[begin], &hits[begin], end - begin,
+                                 RayCoherence::Incoherent);
+        });
+    };
+    const auto scene_pass = [&] {
+        if (occluded)
+            scene.occluded(rays, blocked);
+        else
+            scene.intersect(rays, hits);
+    };
+    return best_rates(double(count), kRawRuns, scene_pass, embree_pass);
+}
+
+// The raw Embree incoherent closest-hit rate the figures are measured against.
+inline double incoherent_ray_rate(const Scene& scene, size_t count = size_t(1) << 21) {
+    const EmbreeReference embree(scene);
+    return incoherent_ray_rates(scene, embree, false, count).embree;
+}
+
+// A frame's coherent rays, per 16 x 16 tile: one camera ray per pixel (16-wide packets, as the
+// renderer casts them) and one shadow ray from each first hit to a random point of the bench
+// rooms' area light.
+struct FrameRays {
+    std::vector<std::vector<Ray>> camera, shadow;  // per tile
+    double count = 0.0;
+};
+
+inline FrameRays frame_rays(const Scene& scene) {
+    const Camera& camera = scene.camera();
+    const CameraRayGenerator generator(camera);
+    const int width = int(camera.resolution_x), height = int(camera.resolution_y);
+    constexpr int kTile = 16;
+    const int columns = (width + kTile - 1) / kTile, rows = (height + kTile - 1) / kTile;
+    FrameRays frame;
+    frame.camera.resize(size_t(columns) * size_t(rows));
+    frame.shadow.resize(frame.camera.size());
+    std::vector<Hit> hits;
+    for (size_t t = 0; t < frame.camera.size(); ++t) {
+        const int x0 = int(t % size_t(columns)) * kTile, y0 = int(t / size_t(columns)) * kTile;
+        Pcg32 rng(0, t);
+        std::vector<Ray>& rays = frame.camera[t];
+        for (int y = y0; y < std::min(y0 + kTile, height); ++y)
+            for (int x = x0; x < std::min(x0 + kTile, width); ++x)
+                rays.push_back(generator.generate_ray(vec2(float(x), float(y)) + rng.next_vec2()));
+        scene.intersect(rays, hits, nullptr, RayCoherence::Coherent);
+        for (size_t i = 0; i < rays.size(); ++i) {
+            if (!hits[i].valid()) continue;
+            const vec3 p = rays[i].origin + hits[i].t * rays[i].direction;
+            const vec3 to_light = point_on_light(rng) - p;
+            const float distance = glm::length(to_light);
+            if (!(distance > 1e-3f)) continue;
+            Ray shadow;
+            shadow.direction = to_light / distance;
+            shadow.origin = p + 1e-4f * shadow.direction;
+            shadow.tmax = 0.999f * distance;
+            frame.shadow[t].push_back(shadow);
+        }
+        frame.count += double(rays.size() + frame.shadow[t].size());
+    }
+    return frame;
+}
+
+// Frames per second for `frame`'s rays, a few tiles per task on all threads, best of `runs`.
+inline RayRates coherent_frame_rates(const Scene& scene, const EmbreeReference& embree,
+                                     const FrameRays& frame, int runs) {
+    const auto pass = [&](auto&& trace) {
+        parallel_for(0, frame.camera.size(), 4, [&](uint64_t begin, uint64_t end) {
+            std::vector<Hit> hits;
+            std::vector<uint8_t> occluded;
+            for (uint64_t t = begin; t < end; ++t) trace(frame.camera[t], frame.shadow[t], hits,
+                                                         occluded);
+        });
+    };
+    const auto scene_pass = [&] {
+        pass([&](const std::vector<Ray>& camera, const std::vector<Ray>& shadow,
+                 std::vector<Hit>& hits, std::vector<uint8_t>& occluded) {
+            scene.intersect(camera, hits, nullptr, RayCoherence::Coherent);
+            scene.occluded(shadow, occluded, nullptr, RayCoherence::Coherent);
+        });
+    };
+    const auto embree_pass = [&] {
+        pass([&](const std::vector<Ray>& camera, const std::vector<Ray>& shadow,
+                 std::vector<Hit>& hits, std::vector<uint8_t>& occluded) {
+            hits.resize(camera.size());
+            occluded.resize(shadow.size());
+            embree.intersect(camera.data(), hits.data(), camera.size(), RayCoherence::Coherent);
+            embree.occluded(shadow.data(), occluded.data(), shadow.size(),
+                            RayCoherence::Coherent);
+        });
+    };
+    return best_rates(1.0, runs, scene_pass, embree_pass);
 }
 
 }  // namespace shgi::bench

@@ -1,5 +1,5 @@
 // PhotonLattice and preview renderer figures (seed 000 Tables 5 and 6), with the raw
-// Embree incoherent ray rate measured in the same run.
+// Embree incoherent ray rate (and Scene's on the same rays) measured in the same run.
 //
 // Scenes: the Cornell-like room of bench_scenes.h, and the same room holding a UV sphere of
 // ~500k triangles. For each, printed: photon bounces (rays traced by the photon tracer) per
@@ -11,8 +11,9 @@
 // that sums only Combined (the viewport's pattern), also in raw ray queries per pixel, and the
 // same frames without the screen-space reuse of field lookups.
 // Beside them, two floors that no photon tracer or preview frame can go under on this machine:
-// the leanest Lambert photon trace's ratio to the raw rate, and Embree's time alone for one
-// frame's camera and shadow rays.
+// the leanest Lambert photon trace's ratio to the raw rate, and one frame's camera and shadow
+// rays alone, through Scene and through raw Embree. "Raw" is Embree on a flattened one-level
+// scene of the same triangles (scene/embree_reference.h), on the same rays in the same run.
 // Last, the caustic photon map's density estimate (caustics = PhotonMap): the time of one k = 50
 // query over 10^6 photons lying mostly in a dense caustic, on one thread.
 // A plain main printing figures: benchmarks are not tests.
@@ -107,58 +108,11 @@ double lambert_photon_floor(const Scene& scene) {
     return best;
 }
 
-// The floor under any 640 x 360 frame that shows ray-traced direct light: Embree alone, for one
-// camera ray per pixel (16 x 16 tiles as 16-wide packets, as the renderer casts them) and one
-// shadow ray from each first hit to a random point of the bench rooms' area light, traced as
-// the renderer traces them (occlusion packets), on all threads, with nothing shaded. Best of
-// kProgressiveFrames frames.
-double embree_frame_floor(const Scene& scene) {
-    const Camera& camera = scene.camera();
-    const CameraRayGenerator generator(camera);
-    const int width = int(camera.resolution_x), height = int(camera.resolution_y);
-    constexpr int kTile = 16;
-    const int columns = (width + kTile - 1) / kTile, rows = (height + kTile - 1) / kTile;
-    double best = 1e30;
-    for (int frame = 0; frame < kProgressiveFrames; ++frame) {
-        const auto start = now();
-        parallel_for(0, uint64_t(columns) * uint64_t(rows), 4, [&](uint64_t begin, uint64_t end) {
-            std::vector<Ray> rays, shadows;
-            std::vector<Hit> hits;
-            std::vector<uint8_t> occluded;
-            for (uint64_t t = begin; t < end; ++t) {
-                const int x0 = int(t % uint64_t(columns)) * kTile;
-                const int y0 = int(t / uint64_t(columns)) * kTile;
-                Pcg32 rng(uint64_t(frame), t);
-                rays.clear();
-                for (int y = y0; y < std::min(y0 + kTile, height); ++y)
-                    for (int x = x0; x < std::min(x0 + kTile, width); ++x)
-                        rays.push_back(generator.generate_ray(vec2(float(x), float(y)) +
-                                                              rng.next_vec2()));
-                scene.intersect(rays, hits, nullptr, RayCoherence::Coherent);
-                shadows.clear();
-                for (size_t i = 0; i < rays.size(); ++i) {
-                    if (!hits[i].valid()) continue;
-                    const vec3 p = rays[i].origin + hits[i].t * rays[i].direction;
-                    const vec3 to_light = bench::point_on_light(rng) - p;
-                    const float distance = glm::length(to_light);
-                    if (!(distance > 1e-3f)) continue;
-                    Ray shadow;
-                    shadow.direction = to_light / distance;
-                    shadow.origin = p + 1e-4f * shadow.direction;
-                    shadow.tmax = 0.999f * distance;
-                    shadows.push_back(shadow);
-                }
-                scene.occluded(shadows, occluded, nullptr, RayCoherence::Coherent);
-            }
-        });
-        best = std::min(best, seconds_since(start));
-    }
-    return best;
-}
-
 void run(const char* name, Scene& scene) {
     scene.commit();
-    const double raw = bench::incoherent_ray_rate(scene);
+    const EmbreeReference embree(scene);
+    const bench::RayRates rates = bench::incoherent_ray_rates(scene, embree);
+    const double raw = rates.embree;
     PhotonLatticeSettings settings;
     PhotonLattice lattice(scene, settings);
     PhotonLatticeTimings best;
@@ -171,7 +125,9 @@ void run(const char* name, Scene& scene) {
     }
     const double bounce_rate = double(best.bounces) / best.emit_trace;
     std::printf("%s: %zu triangles\n", name, size_t(scene.stats().instanced_triangles));
-    std::printf("  embree incoherent closest-hit: %.3g rays/s\n", raw);
+    std::printf("  raw Embree incoherent closest-hit (flattened one-level scene, rtcIntersect1): "
+                "%.3g rays/s; through Scene::intersect %.3g rays/s (raw is %.2fx Scene)\n",
+                raw, rates.scene, raw / rates.scene);
     std::printf("  photons: %llu emitted, %llu stored, %llu bounces in %.3f s: %.3g bounces/s, "
                 "ratio to raw %.2f\n",
                 (unsigned long long)best.photons_emitted, (unsigned long long)best.photons_stored,
@@ -237,8 +193,14 @@ void run(const char* name, Scene& scene) {
     std::printf("  that frame: %.2f raw ray queries per pixel (%.0f ms at this raw rate: %.2f)\n",
                 fastest.total * raw / pixels, kTargetFrameSeconds * 1e3,
                 kTargetFrameSeconds * raw / pixels);
-    std::printf("  Embree alone for such a frame's camera and shadow rays (best of %d): %.1f ms\n",
-                kProgressiveFrames, embree_frame_floor(scene) * 1e3);
+    // The floor under any frame that shows ray-traced direct light: its camera rays and one
+    // shadow ray per first hit, nothing shaded, through Scene and through raw Embree.
+    const bench::RayRates frame =
+        bench::coherent_frame_rates(scene, embree, bench::frame_rays(scene), kProgressiveFrames);
+    std::printf("  such a frame's camera and shadow rays alone (16-wide packets, best of %d): "
+                "Scene %.2f ms, raw Embree %.2f ms (Scene/raw %.2f)\n",
+                kProgressiveFrames, 1e3 / frame.scene, 1e3 / frame.embree,
+                frame.embree / frame.scene);
 }
 
 // 10^6 photons on a 4 m x 4 m floor, 30% spread evenly and 70% in a caustic (a Gaussian spot of

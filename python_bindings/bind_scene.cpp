@@ -487,6 +487,7 @@ py::dict stats_to_dict(const SceneStats& stats) {
     out["lights"] = stats.lights;
     out["bvh_bytes"] = stats.bvh_bytes;
     out["bvh_builds"] = stats.bvh_builds;
+    out["flattened_instances"] = stats.flattened_instances;
     return out;
 }
 
@@ -517,18 +518,24 @@ py::dict emissive_to_dict(const std::vector<EmissiveTriangle>& triangles) {
 void bind_scene_inspection(py::class_<Scene>& cls) {
     cls.def(
            "commit",
-           [](Scene& scene, const IndexInt& memory_budget_bytes, Progress* progress) {
+           [](Scene& scene, const IndexInt& memory_budget_bytes, Progress* progress,
+              bool flatten_single_use_meshes) {
                // 0 = 75% of what the process may still allocate
                CommitSettings settings;
                settings.memory_budget_bytes =
                    int_arg<uint64_t>(memory_budget_bytes, "memory_budget_bytes");
+               settings.flatten_single_use_meshes = flatten_single_use_meshes;
                SceneUse use(scene, SceneUse::Kind::Commit, "commit");
                run_interruptible(progress, [&](Progress* used) {
                    scene.commit(settings, used);
                });
            },
            py::arg("memory_budget_bytes") = 0, py::arg("progress") = py::none(),
-           "Checks cross references and builds the BVH, with the GIL released. Raises "
+           py::arg("flatten_single_use_meshes") = true,
+           "Checks cross references and builds the BVH, with the GIL released: a mesh used by "
+           "one instance goes into the top-level BVH in world space (flatten_single_use_meshes; "
+           "False instances every mesh, with the same hits), a mesh used by several is "
+           "instanced. Raises "
            "MemoryError when the BVH would exceed memory_budget_bytes (0 = 75% of what the process "
            "may still allocate: RLIMIT_AS, cgroup limit, free memory), "
            "shgi.Cancelled when progress.cancel() is called.")
@@ -555,7 +562,8 @@ void bind_scene_inspection(py::class_<Scene>& cls) {
             [](const Scene& scene) { return stats_to_dict(read("stats", &Scene::stats)(scene)); },
             "Dict of counts: meshes, instances, triangles, instanced_triangles, "
             "dropped_degenerate, emissive_triangles, lights, bvh_bytes (peak of the last commit "
-            "that built a BVH), bvh_builds (Embree builds so far: per-mesh and top-level).")
+            "that built a BVH), bvh_builds (Embree builds so far: per-mesh and top-level), "
+            "flattened_instances (instances whose mesh is in the top-level BVH itself).")
         .def(
             "bounds",
             [](const Scene& scene) {

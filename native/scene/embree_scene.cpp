@@ -1,7 +1,6 @@
 #include "scene/embree_scene.h"
 
 #include <algorithm>
-#include <array>
 #include <cstring>
 
 #include "scene/embree_device.h"
@@ -20,10 +19,6 @@ static_assert(sizeof(uvec3) == 3 * sizeof(uint32_t), "Embree's UINT3 index buffe
 // MEDIUM quality; 32 keeps the estimate a bound), an instance its geometry object and a leaf.
 constexpr uint64_t kMinBvhBytesPerTriangle = 32;
 constexpr uint64_t kMinBytesPerInstance = 256;
-
-// Rays handed to Embree per rtcIntersect1M/rtcOccluded1M call: large enough for Embree's stream
-// traversal to sort rays into packets, small enough for the buffer to live on the stack.
-constexpr size_t kStreamSize = 256;
 
 // Instance geometries attached between cancel polls in the top-level build.
 constexpr size_t kInstancesPerPoll = 4096;
@@ -84,11 +79,17 @@ void to_embree(const Ray& ray, RTCRayHit& out) {
 // Embree marks an occluded ray by setting its tfar to -inf.
 uint8_t occluded_flag(float tfar) { return tfar < 0.0f ? 1 : 0; }
 
+// The top level's geometry i is instance i (EmbreeScene::build_instances): a hit in an
+// instanced mesh names it in instID, a hit on a flattened mesh in geomID.
+uint32_t instance_of(uint32_t geometry_id, uint32_t instance_id) {
+    return instance_id == RTC_INVALID_GEOMETRY_ID ? geometry_id : instance_id;
+}
+
 Hit from_embree(const RTCRayHit& in) {
     Hit hit;
     if (in.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
     hit.t = in.ray.tfar;
-    hit.instance_id = in.hit.instID[0];
+    hit.instance_id = instance_of(in.hit.geomID, in.hit.instID[0]);
     hit.triangle_id = in.hit.primID;
     hit.barycentrics = vec2(in.hit.u, in.hit.v);
     hit.geometric_normal = vec3(in.hit.Ng_x, in.hit.Ng_y, in.hit.Ng_z);
@@ -102,20 +103,38 @@ Hit from_embree(const RTCRayHit& in) {
 // test).
 constexpr unsigned kPacket = 16;
 
-// Lane `lane` of a packet: RTCRayN holds each of RTCRay's twelve 4-byte fields, in RTCRay's
-// order, as an array of kPacket (Embree's RTCRayN_* accessors index it the same way).
-void copy_ray_to_packet(const RTCRay& ray, RTCRayN* packet, unsigned lane) {
-    static_assert(sizeof(RTCRay) == 12 * sizeof(float), "RTCRay: twelve 4-byte fields");
-    const char* in = reinterpret_cast<const char*>(&ray);
-    char* out = reinterpret_cast<char*>(packet);
-    for (unsigned field = 0; field < 12; ++field)
-        std::memcpy(out + (field * kPacket + lane) * sizeof(float), in + field * sizeof(float),
-                    sizeof(float));
+// Lane `lane` of a packet, written field by field into Embree's structure-of-arrays layout
+// (the packing is on every coherent ray's path, so no per-field copies through RTCRay).
+void set_lane(RTCRay16& packet, unsigned lane, const Ray& ray) {
+    packet.org_x[lane] = ray.origin.x;
+    packet.org_y[lane] = ray.origin.y;
+    packet.org_z[lane] = ray.origin.z;
+    packet.tnear[lane] = ray.tmin;
+    packet.dir_x[lane] = ray.direction.x;
+    packet.dir_y[lane] = ray.direction.y;
+    packet.dir_z[lane] = ray.direction.z;
+    packet.time[lane] = 0.0f;
+    packet.tfar[lane] = ray.tmax;
+    packet.mask[lane] = 0xFFFFFFFFu;
+    packet.id[lane] = 0;
+    packet.flags[lane] = 0;
+}
+
+Hit hit_of_lane(const RTCRayHit16& packet, unsigned lane) {
+    Hit hit;
+    if (packet.hit.geomID[lane] == RTC_INVALID_GEOMETRY_ID) return hit;
+    hit.t = packet.ray.tfar[lane];
+    hit.instance_id = instance_of(packet.hit.geomID[lane], packet.hit.instID[0][lane]);
+    hit.triangle_id = packet.hit.primID[lane];
+    hit.barycentrics = vec2(packet.hit.u[lane], packet.hit.v[lane]);
+    hit.geometric_normal =
+        vec3(packet.hit.Ng_x[lane], packet.hit.Ng_y[lane], packet.hit.Ng_z[lane]);
+    return hit;
 }
 
 // For each packet of up to kPacket consecutive rays: fill(lane, ray) for every lane (the
-// masked-off lanes of a partial last packet repeat its last ray), trace(valid), then
-// read(lane, index of the ray) for the packet's rays.
+// masked-off lanes of a partial last packet repeat its last ray, so Embree never reads
+// uninitialised values), trace(valid), then read(lane, index of the ray) for the packet's rays.
 template <typename Fill, typename Trace, typename Read>
 void for_each_packet(const Ray* rays, size_t count, Fill&& fill, Trace&& trace, Read&& read) {
     alignas(64) int valid[kPacket];
@@ -133,33 +152,43 @@ void for_each_packet(const Ray* rays, size_t count, Fill&& fill, Trace&& trace, 
 void intersect_packets(RTCScene scene, RTCIntersectContext* context, const Ray* rays, Hit* hits,
                        size_t count) {
     alignas(64) RTCRayHit16 packet;
-    RTCRayHitN* packet_n = reinterpret_cast<RTCRayHitN*>(&packet);
     for_each_packet(
         rays, count,
         [&](unsigned lane, const Ray& ray) {
-            RTCRayHit single{};
-            to_embree(ray, single);
-            copy_ray_to_packet(single.ray, RTCRayHitN_RayN(packet_n, kPacket), lane);
-            rtcCopyHitToHitN(RTCRayHitN_HitN(packet_n, kPacket), &single.hit, kPacket, lane);
+            set_lane(packet.ray, lane, ray);
+            packet.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
+            packet.hit.instID[0][lane] = RTC_INVALID_GEOMETRY_ID;
         },
         [&](const int* valid) { rtcIntersect16(valid, scene, context, &packet); },
-        [&](unsigned lane, size_t i) {
-            hits[i] = from_embree(rtcGetRayHitFromRayHitN(packet_n, kPacket, lane));
-        });
+        [&](unsigned lane, size_t i) { hits[i] = hit_of_lane(packet, lane); });
 }
 
 void occluded_packets(RTCScene scene, RTCIntersectContext* context, const Ray* rays,
                       uint8_t* occluded, size_t count) {
     alignas(64) RTCRay16 packet;
     for_each_packet(
-        rays, count,
-        [&](unsigned lane, const Ray& ray) {
-            RTCRay single;
-            to_embree(ray, single);
-            copy_ray_to_packet(single, reinterpret_cast<RTCRayN*>(&packet), lane);
-        },
+        rays, count, [&](unsigned lane, const Ray& ray) { set_lane(packet, lane, ray); },
         [&](const int* valid) { rtcOccluded16(valid, scene, context, &packet); },
         [&](unsigned lane, size_t i) { occluded[i] = occluded_flag(packet.tfar[lane]); });
+}
+
+// What a top-level build is called in errors: the flattened meshes' triangles are built there,
+// so a scene of one flattened mesh names that mesh, as its own BVH build would.
+std::string top_level_operation(const std::vector<Mesh>& meshes,
+                                const std::vector<Instance>& instances,
+                                const std::vector<uint8_t>& flattened) {
+    size_t flat = 0, largest = 0;
+    for (size_t i = 0; i < instances.size(); ++i) {
+        if (!flattened[i]) continue;
+        const size_t triangles = meshes[instances[i].mesh_id].triangles.size();
+        if (flat++ == 0 || triangles > meshes[instances[largest].mesh_id].triangles.size())
+            largest = i;
+    }
+    if (flat == 0) return "building the top-level BVH over the instances";
+    const std::string mesh = scene_detail::label("mesh", meshes[instances[largest].mesh_id].name);
+    if (flat == instances.size() && flat == 1) return "building the BVH of " + mesh;
+    return format_message("building the top-level BVH over the instances (", flat,
+                          " meshes flattened into it, the largest ", mesh, ")");
 }
 
 }  // namespace
@@ -177,8 +206,10 @@ uint64_t estimate_bvh_bytes(const std::vector<Mesh>& meshes,
 
 struct EmbreeScene::Impl {
     EmbreeDevice device;                   // declared first: released last
-    std::vector<SceneHandle> mesh_scenes;  // null for meshes without triangles
+    std::vector<SceneHandle> mesh_scenes;  // null for meshes without a BVH of their own
     SceneHandle top;
+    std::vector<GeometryHandle> top_geometries;  // per instance; null for those left out
+    std::vector<uint8_t> top_flattened;          // per instance, as build_instances was told
 
     // Throws if Embree recorded an error during `operation`, or returned null without one.
     template <typename T>
@@ -204,43 +235,58 @@ struct EmbreeScene::Impl {
         device.throw_if_error(operation);
     }
 
+    // A committed triangle geometry of `mesh`, in world space when world_from_object is given.
+    GeometryHandle new_triangles(const Mesh& mesh, const mat4* world_from_object,
+                                 const std::string& operation);
     SceneHandle build_mesh(const Mesh& mesh, BuildMonitor& monitor);
-    void attach_instance(RTCScene top_scene, const Instance& instance, uint32_t id);
+    GeometryHandle new_instance(const Instance& instance);
 };
 
-SceneHandle EmbreeScene::Impl::build_mesh(const Mesh& mesh, BuildMonitor& monitor) {
-    const std::string operation =
-        "building the BVH of " + scene_detail::label("mesh", mesh.name);
-    SceneHandle scene = new_scene(operation);
+GeometryHandle EmbreeScene::Impl::new_triangles(const Mesh& mesh, const mat4* world_from_object,
+                                                const std::string& operation) {
     GeometryHandle geometry(
         require(rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE), operation));
-    void* vertices =
+    auto* vertices = static_cast<vec3*>(
         require(rtcSetNewGeometryBuffer(geometry.get(), RTC_BUFFER_TYPE_VERTEX, 0,
                                         RTC_FORMAT_FLOAT3, sizeof(vec3), mesh.positions.size()),
-                operation);
-    std::memcpy(vertices, mesh.positions.data(), mesh.positions.size() * sizeof(vec3));
+                operation));
+    if (world_from_object) {
+        // Transformed as Scene::surface_point transforms a hit's position, so a flattened
+        // mesh's triangles lie where an instanced one's hit points do.
+        for (size_t i = 0; i < mesh.positions.size(); ++i)
+            vertices[i] = vec3(*world_from_object * vec4(mesh.positions[i], 1.0f));
+    } else {
+        std::memcpy(vertices, mesh.positions.data(), mesh.positions.size() * sizeof(vec3));
+    }
     void* indices =
         require(rtcSetNewGeometryBuffer(geometry.get(), RTC_BUFFER_TYPE_INDEX, 0,
                                         RTC_FORMAT_UINT3, sizeof(uvec3), mesh.triangles.size()),
                 operation);
     std::memcpy(indices, mesh.triangles.data(), mesh.triangles.size() * sizeof(uvec3));
     rtcCommitGeometry(geometry.get());
+    return geometry;
+}
+
+SceneHandle EmbreeScene::Impl::build_mesh(const Mesh& mesh, BuildMonitor& monitor) {
+    const std::string operation =
+        "building the BVH of " + scene_detail::label("mesh", mesh.name);
+    SceneHandle scene = new_scene(operation);
+    GeometryHandle geometry = new_triangles(mesh, nullptr, operation);
     rtcAttachGeometryByID(scene.get(), geometry.get(), 0);
     device.throw_if_error(operation);
     commit_scene(scene.get(), monitor, operation);
     return scene;
 }
 
-void EmbreeScene::Impl::attach_instance(RTCScene top_scene, const Instance& instance,
-                                        uint32_t id) {
+GeometryHandle EmbreeScene::Impl::new_instance(const Instance& instance) {
     GeometryHandle geometry(rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_INSTANCE));
-    if (!geometry) return;  // the caller's throw_if_error reports why
+    if (!geometry) return geometry;  // the caller's throw_if_error reports why
     rtcSetGeometryInstancedScene(geometry.get(), mesh_scenes[instance.mesh_id].get());
     // GLM stores column-major, which is Embree's FLOAT4X4_COLUMN_MAJOR layout.
     rtcSetGeometryTransform(geometry.get(), 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR,
                             &instance.world_from_object[0][0]);
     rtcCommitGeometry(geometry.get());
-    rtcAttachGeometryByID(top_scene, geometry.get(), id);
+    return geometry;
 }
 
 EmbreeScene::EmbreeScene() : impl_(std::make_unique<Impl>()) {}
@@ -252,46 +298,89 @@ void EmbreeScene::reset_peak() { impl_->device.reset_peak(); }
 
 void EmbreeScene::clear() {
     impl_->top.reset();
+    impl_->top_geometries.clear();
     impl_->mesh_scenes.clear();
 }
 
-void EmbreeScene::build_meshes(const std::vector<Mesh>& meshes, Progress* progress) {
+uint64_t EmbreeScene::build_meshes(const std::vector<Mesh>& meshes,
+                                   const std::vector<uint8_t>& instanced, Progress* progress) {
     clear();
     impl_->device.clear_error();
     BuildMonitor monitor{progress, 0, std::max<uint64_t>(meshes.size(), 1)};
+    uint64_t built = 0;
     try {
-        for (const Mesh& mesh : meshes) {
+        for (size_t i = 0; i < meshes.size(); ++i) {
             throw_if_cancelled(progress);
-            impl_->mesh_scenes.push_back(mesh.triangles.empty() ? SceneHandle()
-                                                                : impl_->build_mesh(mesh, monitor));
+            const bool needed = instanced[i] && !meshes[i].triangles.empty();
+            impl_->mesh_scenes.push_back(needed ? impl_->build_mesh(meshes[i], monitor)
+                                                : SceneHandle());
+            built += needed ? 1 : 0;
             ++monitor.index;
         }
     } catch (...) {
         clear();
         throw;
     }
+    return built;
 }
 
-void EmbreeScene::build_instances(const std::vector<Instance>& instances, Progress* progress) {
+void EmbreeScene::build_instances(const std::vector<Mesh>& meshes,
+                                  const std::vector<Instance>& instances,
+                                  const std::vector<uint8_t>& flattened, Progress* progress) {
     impl_->top.reset();
+    impl_->top_geometries.clear();
     impl_->device.clear_error();
-    const std::string operation = "building the top-level BVH over the instances";
+    const std::string operation = top_level_operation(meshes, instances, flattened);
+    // Kept per instance so that move_instances edits them in place. Not RTC_SCENE_FLAG_DYNAMIC:
+    // on Debian's Embree 3.13 it did not make the commit after a move any cheaper (a moved
+    // block still cost a rebuild over the flattened 502k-triangle sphere, bench/
+    // scene_query_bench.cpp); Scene instances every mesh of a moving scene instead.
     SceneHandle top = impl_->new_scene(operation);
+    std::vector<GeometryHandle> geometries(instances.size());
     for (size_t i = 0; i < instances.size(); ++i) {
         if (i % kInstancesPerPoll == 0) throw_if_cancelled(progress);
-        const uint32_t mesh_id = instances[i].mesh_id;
-        if (mesh_id >= impl_->mesh_scenes.size())
-            throw Internal(format_message(operation, ": instance ", i, " uses mesh ", mesh_id,
-                                          " which has no BVH; build_meshes first"));
-        if (!impl_->mesh_scenes[mesh_id]) continue;  // a mesh without triangles
-        impl_->attach_instance(top.get(), instances[i], static_cast<uint32_t>(i));
+        const Instance& instance = instances[i];
+        if (meshes[instance.mesh_id].triangles.empty()) continue;
+        if (!flattened[i] && (instance.mesh_id >= impl_->mesh_scenes.size() ||
+                              !impl_->mesh_scenes[instance.mesh_id]))
+            throw Internal(format_message(operation, ": instance ", i, " uses mesh ",
+                                          instance.mesh_id, " which has no BVH; build_meshes first"));
+        geometries[i] = flattened[i] ? impl_->new_triangles(meshes[instance.mesh_id],
+                                                            &instance.world_from_object, operation)
+                                     : impl_->new_instance(instance);
+        if (geometries[i]) rtcAttachGeometryByID(top.get(), geometries[i].get(), uint32_t(i));
     }
     impl_->device.throw_if_error(operation);
     BuildMonitor monitor{progress, 0, 1};
     impl_->commit_scene(top.get(), monitor, operation);
     impl_->top = std::move(top);
+    impl_->top_geometries = std::move(geometries);
+    impl_->top_flattened = flattened;
 }
 
+void EmbreeScene::move_instances(const std::vector<Instance>& instances,
+                                 const std::vector<uint32_t>& moved, Progress* progress) {
+    impl_->device.clear_error();
+    const std::string operation = "moving instances in the top-level BVH";
+    if (!impl_->top || impl_->top_geometries.size() != instances.size())
+        throw Internal(operation + ": the top level was not built; build_instances first");
+    for (uint32_t i : moved) {
+        RTCGeometry geometry = impl_->top_geometries[i].get();
+        if (!geometry) continue;  // a mesh without triangles
+        if (impl_->top_flattened[i])
+            throw Internal(format_message(operation, ": instance ", i,
+                                          " is flattened; build_instances instead"));
+        rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR,
+                                &instances[i].world_from_object[0][0]);
+        rtcCommitGeometry(geometry);
+    }
+    impl_->device.throw_if_error(operation);
+    BuildMonitor monitor{progress, 0, 1};
+    impl_->commit_scene(impl_->top.get(), monitor, operation);
+}
+
+// Incoherent rays one by one (rtcIntersect1/rtcOccluded1): Embree 3 traces an incoherent ray
+// stream ray by ray anyway, after copying it, so the stream API would add only the copy.
 void EmbreeScene::intersect(const Ray* rays, Hit* hits, size_t count,
                             RayCoherence coherence) const {
     RTCIntersectContext context;
@@ -300,20 +389,11 @@ void EmbreeScene::intersect(const Ray* rays, Hit* hits, size_t count,
         intersect_packets(impl_->top.get(), &context, rays, hits, count);
         return;
     }
-    if (count == 1) {
-        RTCRayHit ray_hit;
-        to_embree(rays[0], ray_hit);
+    RTCRayHit ray_hit;
+    for (size_t i = 0; i < count; ++i) {
+        to_embree(rays[i], ray_hit);
         rtcIntersect1(impl_->top.get(), &context, &ray_hit);
-        hits[0] = from_embree(ray_hit);
-        return;
-    }
-    std::array<RTCRayHit, kStreamSize> stream;
-    for (size_t begin = 0; begin < count; begin += kStreamSize) {
-        const size_t size = std::min(kStreamSize, count - begin);
-        for (size_t i = 0; i < size; ++i) to_embree(rays[begin + i], stream[i]);
-        rtcIntersect1M(impl_->top.get(), &context, stream.data(), static_cast<unsigned>(size),
-                       sizeof(RTCRayHit));
-        for (size_t i = 0; i < size; ++i) hits[begin + i] = from_embree(stream[i]);
+        hits[i] = from_embree(ray_hit);
     }
 }
 
@@ -325,20 +405,11 @@ void EmbreeScene::occluded(const Ray* rays, uint8_t* occluded, size_t count,
         occluded_packets(impl_->top.get(), &context, rays, occluded, count);
         return;
     }
-    if (count == 1) {
-        RTCRay ray;
-        to_embree(rays[0], ray);
+    RTCRay ray;
+    for (size_t i = 0; i < count; ++i) {
+        to_embree(rays[i], ray);
         rtcOccluded1(impl_->top.get(), &context, &ray);
-        occluded[0] = occluded_flag(ray.tfar);
-        return;
-    }
-    std::array<RTCRay, kStreamSize> stream;
-    for (size_t begin = 0; begin < count; begin += kStreamSize) {
-        const size_t size = std::min(kStreamSize, count - begin);
-        for (size_t i = 0; i < size; ++i) to_embree(rays[begin + i], stream[i]);
-        rtcOccluded1M(impl_->top.get(), &context, stream.data(), static_cast<unsigned>(size),
-                      sizeof(RTCRay));
-        for (size_t i = 0; i < size; ++i) occluded[begin + i] = occluded_flag(stream[i].tfar);
+        occluded[i] = occluded_flag(ray.tfar);
     }
 }
 

@@ -3,6 +3,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <tuple>
 
 #include "scene/embree_scene.h"
 #include "scene/validation.h"
@@ -116,32 +117,40 @@ double inf_norm(const glm::dmat3& m) {
     return norm;
 }
 
+// An upper bound on the spectral norm of m: |m|_2^2 is the largest eigenvalue of X = m^T m, at
+// most |X^16|_inf^(1/16): within 3^(1/32) (3.5%) of it, and exact for rotations and axis scales.
+double spectral_bound(const glm::dmat3& m) {
+    glm::dmat3 power = glm::transpose(m) * m;
+    // X^(2^k) = (scale * norm)^(2^k) * (power / norm), renormalised at each squaring.
+    double scale = 1.0;
+    for (int squaring = 0; squaring <= 4; ++squaring) {
+        const double norm = inf_norm(power);
+        if (!(norm > 0.0) || !std::isfinite(norm)) break;
+        scale *= std::pow(norm, 1.0 / double(1 << squaring));
+        if (squaring == 4) return std::sqrt(scale);
+        power /= norm;
+        power = power * power;
+    }
+    return std::numeric_limits<double>::max();
+}
+
 InstanceRange instance_range(const Instance& instance, const MeshReport& report) {
     const glm::dmat4 transform(instance.world_from_object);
     const glm::dmat3 inverse = glm::inverse(glm::dmat3(transform));
     InstanceRange range{inf_norm(inverse), 0.0, 0.0, report.longest_edge};
     if (!std::isfinite(range.magnification))
         range.magnification = std::numeric_limits<double>::max();
-    // |A|_2^2 is the largest eigenvalue of X = A^T A, at most |X^16|_inf^(1/16): within 3^(1/32)
-    // (3.5%) of it, and exact for rotations and axis scales.
-    glm::dmat3 power = glm::transpose(inverse) * inverse;
-    // X^(2^k) = (scale * norm)^(2^k) * (power / norm), renormalised at each squaring.
-    double scale = 1.0;
-    range.stretch = std::numeric_limits<double>::max();
-    for (int squaring = 0; squaring <= 4; ++squaring) {
-        const double norm = inf_norm(power);
-        if (!(norm > 0.0) || !std::isfinite(norm)) break;
-        scale *= std::pow(norm, 1.0 / double(1 << squaring));
-        if (squaring == 4) {
-            range.stretch = std::sqrt(scale);
-            break;
-        }
-        power /= norm;
-        power = power * power;
-    }
+    range.stretch = spectral_bound(inverse);
     range.reach = std::max({std::fabs(transform[3].x), std::fabs(transform[3].y),
                             std::fabs(transform[3].z)});
     return range;
+}
+
+// A flattened instance as Embree sees it: world-space triangles and untransformed rays, its
+// edges up to |M|_2 times the mesh's longest.
+InstanceRange flattened_range(const Instance& instance, const MeshReport& report) {
+    const double scale = spectral_bound(glm::dmat3(glm::dmat4(instance.world_from_object)));
+    return InstanceRange{1.0, 1.0, 0.0, scale * report.longest_edge};
 }
 
 // The scene's ray limits, and what set them.
@@ -149,6 +158,8 @@ struct SceneRayLimits {
     RayLimit origin, direction;
     double min_direction = 0.0;
     RayLimit embree_origin, embree_direction;  // Embree's range alone (cause Magnification)
+    double depth_origin = 0.0;     // the origins' limit after the depth tests
+    double first_direction = 0.0;  // the directions' limit before the edge tests from origins
 };
 
 // Embree maps a ray into an instance's object space and checks it against its range again
@@ -162,12 +173,15 @@ struct SceneRayLimits {
 // area) are not in Embree's scene and do not count.
 SceneRayLimits ray_limits_of(const std::vector<Instance>& instances,
                              const std::vector<MeshReport>& reports, double world_reach) {
-    std::vector<std::pair<size_t, InstanceRange>> ranges;
-    for (size_t i = 0; i < instances.size(); ++i)
-        if (reports[instances[i].mesh_id].longest_edge > 0.0)
-            ranges.emplace_back(i, instance_range(instances[i], reports[instances[i].mesh_id]));
+    std::vector<std::tuple<size_t, InstanceRange, RayLimitCause>> ranges;
+    for (size_t i = 0; i < instances.size(); ++i) {
+        const MeshReport& report = reports[instances[i].mesh_id];
+        if (report.longest_edge > 0.0)
+            ranges.emplace_back(i, instance_range(instances[i], report),
+                                RayLimitCause::TriangleTest);
+    }
     SceneRayLimits result;
-    for (const auto& [i, r] : ranges) {
+    for (const auto& [i, r, cause] : ranges) {
         result.embree_origin.lower(kMaxRayComponent / r.magnification - r.reach,
                                    RayLimitCause::Magnification, i);
         result.embree_direction.lower(kMaxRayComponent / r.magnification,
@@ -175,42 +189,60 @@ SceneRayLimits ray_limits_of(const std::vector<Instance>& instances,
     }
     // Origins: Embree's range and the depth test, which do not depend on the direction.
     RayLimit origin = result.embree_origin;
-    for (const auto& [i, r] : ranges) {
+    for (const auto& [i, r, cause] : ranges) {
         const double depth_test = kTriangleTestBound / (2.0 * r.longest_edge * r.longest_edge);
-        origin.lower((depth_test / r.stretch - world_reach) / kSqrt3, RayLimitCause::TriangleTest,
-                     i);
+        origin.lower((depth_test / r.stretch - world_reach) / kSqrt3, cause, i);
     }
     // Directions: Embree's range, den, and the edge tests from those origins; but never below
     // kShortDirections, in which case the edge tests lower the origins instead (a camera or a
     // light outside the scene's geometry needs origins beyond its extent more than any ray
     // needs a long direction).
+    result.depth_origin = origin.value;
     result.direction = result.embree_direction;
-    for (const auto& [i, r] : ranges)
+    for (const auto& [i, r, cause] : ranges)
         result.direction.lower(kTriangleTestBound /
                                    (2.0 * r.longest_edge * r.longest_edge * r.stretch * kSqrt3),
-                               RayLimitCause::TriangleTest, i);
+                               cause, i);
+    result.first_direction = result.direction.value;
     RayLimit from_origins = result.direction;
-    for (const auto& [i, r] : ranges) {
+    for (const auto& [i, r, cause] : ranges) {
         const double p = r.stretch * (kSqrt3 * std::max(origin.value, 0.0) + world_reach);
         from_origins.lower(kTriangleTestBound / (6.0 * p * r.longest_edge * r.stretch * kSqrt3),
-                           RayLimitCause::TriangleTest, i);
+                           cause, i);
     }
     if (from_origins.value >= kShortDirections)
         result.direction = from_origins;
     else
-        result.direction.lower(kShortDirections, RayLimitCause::TriangleTest,
+        result.direction.lower(kShortDirections, from_origins.cause,
                                from_origins.instance);
     // Origins whose edge tests pass with directions up to that.
-    for (const auto& [i, r] : ranges) {
+    for (const auto& [i, r, cause] : ranges) {
         const double edge_tests = kTriangleTestBound / (6.0 * r.longest_edge * r.stretch *
                                                         kSqrt3 * result.direction.value);
-        origin.lower((edge_tests / r.stretch - world_reach) / kSqrt3, RayLimitCause::TriangleTest,
-                     i);
+        origin.lower((edge_tests / r.stretch - world_reach) / kSqrt3, cause, i);
     }
     result.origin = origin;
     result.origin.value = std::max(result.origin.value, 0.0);
     result.min_direction = (kSqrt3 * result.origin.value + world_reach) / kTriangleTestBound;
     return result;
+}
+
+// Whether flattening an instance (flattened_range: its triangles in world space, rays not
+// transformed) would lower `limits`, which the scene's instanced meshes set: each of
+// ray_limits_of's stages for this range alone, against the value that stage reached. Only an
+// instance that enlarges its mesh can; it then stays instanced, so flattening never narrows the
+// rays a scene traces.
+bool lowers_limits(const InstanceRange& r, const SceneRayLimits& limits, double world_reach) {
+    const double edge = r.longest_edge;
+    const double depth_test = kTriangleTestBound / (2.0 * edge * edge);
+    if ((depth_test - world_reach) / kSqrt3 < limits.depth_origin) return true;
+    if (kTriangleTestBound / (2.0 * edge * edge * kSqrt3) < limits.first_direction) return true;
+    const double p = kSqrt3 * std::max(limits.depth_origin, 0.0) + world_reach;
+    const double from_origins = kTriangleTestBound / (6.0 * p * edge * kSqrt3);
+    if (from_origins < std::max(limits.direction.value, kShortDirections)) return true;
+    const double edge_tests =
+        kTriangleTestBound / (6.0 * edge * kSqrt3 * limits.direction.value);
+    return (edge_tests - world_reach) / kSqrt3 < limits.origin.value;
 }
 
 // Why `limit` is below Embree's own range, for messages.
@@ -397,7 +429,11 @@ void Scene::set_instance_transform(uint32_t instance_id, const mat4& world_from_
     require_transform(instance_label(instances_, instance_id), "world_from_object",
                       world_from_object);
     instances_[instance_id].world_from_object = world_from_object;
-    instances_dirty_ = true;  // the per-mesh BVHs stay: only the top level is rebuilt
+    moved_.push_back(instance_id);  // the per-mesh BVHs stay: only the top level changes
+    // A scene whose objects move (a viewport) instances every mesh from now on, as Cycles keeps
+    // a dynamic BVH in its viewport: a move then rebuilds the small top level over instances,
+    // not one over every flattened triangle (250 ms with the 502k-triangle bench sphere).
+    moving_ = true;
     invalidate();
 }
 
@@ -445,6 +481,13 @@ void Scene::set_ray_limits() {
                                                           glm::abs(glm::dvec3(bounds_.upper))));
     const double needed = std::max(extent, 1.0);
     const SceneRayLimits found = ray_limits_of(instances_, mesh_reports_, world_reach);
+    enlarging_.assign(instances_.size(), 0);
+    for (size_t i = 0; i < instances_.size(); ++i) {
+        const MeshReport& report = mesh_reports_[instances_[i].mesh_id];
+        const InstanceRange world = flattened_range(instances_[i], report);
+        if (report.longest_edge > 0.0 && world.longest_edge > report.longest_edge)
+            enlarging_[i] = lowers_limits(world, found, world_reach) ? 1 : 0;
+    }
     ray_limits_.origin = float(found.origin.value);
     ray_limits_.direction = float(found.direction.value);
     ray_limits_.min_direction = float(found.min_direction);
@@ -574,6 +617,7 @@ void Scene::commit(const CommitSettings& settings, Progress* progress) {
         material_terms_.push_back(shgi::material_terms(material));
     bounds_ = compute_bounds();
     set_ray_limits();
+    if (choose_flattened(settings.flatten_single_use_meshes)) geometry_dirty_ = true;
     gather_emissive();
     check_emitted_power();  // before the BVH is built for nothing
     const uint64_t budget = resolve_budget(settings.memory_budget_bytes);
@@ -590,33 +634,64 @@ void Scene::commit(const CommitSettings& settings, Progress* progress) {
     if (!embree_) embree_ = std::make_unique<EmbreeScene>();
     embree_->set_memory_budget(budget);
     embree_->reset_peak();
+    build_bvh(progress);
+    if (progress) progress->begin_stage("instance normals", 0.95f, 1.0f);
+    normal_from_object_.clear();
+    normal_from_embree_.clear();
+    for (size_t i = 0; i < instances_.size(); ++i) {
+        const mat4& world_from_object = instances_[i].world_from_object;
+        normal_from_object_.push_back(normal_matrix(world_from_object));
+        const float sign = glm::determinant(mat3(world_from_object)) < 0.0f ? -1.0f : 1.0f;
+        normal_from_embree_.push_back(flattened_[i] ? mat3(sign) : normal_from_object_.back());
+    }
+    if (empty()) log_warning("scene has no triangles: every ray misses");
+    committed_ = true;
+    if (progress) progress->set_fraction(1.0f);
+}
+
+bool Scene::choose_flattened(bool flatten_single_use) {
+    std::vector<uint32_t> uses(meshes_.size(), 0);
+    for (const Instance& instance : instances_) ++uses[instance.mesh_id];
+    std::vector<uint8_t> instanced(meshes_.size());
+    for (size_t m = 0; m < meshes_.size(); ++m)
+        instanced[m] = uses[m] > 1 || (uses[m] == 1 && (!flatten_single_use || moving_)) ? 1 : 0;
+    for (size_t i = 0; i < instances_.size(); ++i)
+        if (enlarging_[i]) instanced[instances_[i].mesh_id] = 1;
+    flattened_.resize(instances_.size());
+    for (size_t i = 0; i < instances_.size(); ++i)
+        flattened_[i] = !instanced[instances_[i].mesh_id] &&
+                        !meshes_[instances_[i].mesh_id].triangles.empty();
+    if (instanced == mesh_instanced_) return false;
+    mesh_instanced_ = std::move(instanced);
+    instances_dirty_ = true;  // flattened instances enter or leave the top level
+    return true;
+}
+
+void Scene::build_bvh(Progress* progress) {
     try {
         if (geometry_dirty_) {
             if (progress) progress->begin_stage("building mesh BVHs", 0.05f, 0.85f);
-            embree_->build_meshes(meshes_, progress);
+            bvh_builds_ += embree_->build_meshes(meshes_, mesh_instanced_, progress);
             geometry_dirty_ = false;
             instances_dirty_ = true;  // build_meshes released the top level
-            bvh_builds_ += meshes_.size();
         }
         if (instances_dirty_) {
-            if (progress) progress->begin_stage("building instance BVH", 0.85f, 0.95f);
-            embree_->build_instances(instances_, progress);
-            instances_dirty_ = false;
+            if (progress) progress->begin_stage("building the top-level BVH", 0.85f, 0.95f);
+            embree_->build_instances(meshes_, instances_, flattened_, progress);
             ++bvh_builds_;
             bvh_bytes_ = embree_->peak_bytes();
+        } else if (!moved_.empty()) {
+            if (progress) progress->begin_stage("moving instances", 0.85f, 0.95f);
+            embree_->move_instances(instances_, moved_, progress);
+            ++bvh_builds_;
         }
+        instances_dirty_ = false;
+        moved_.clear();
     } catch (...) {
         embree_->clear();
         geometry_dirty_ = instances_dirty_ = true;
         throw;
     }
-    if (progress) progress->begin_stage("instance normals", 0.95f, 1.0f);
-    normal_from_object_.clear();
-    for (const Instance& instance : instances_)
-        normal_from_object_.push_back(normal_matrix(instance.world_from_object));
-    if (empty()) log_warning("scene has no triangles: every ray misses");
-    committed_ = true;
-    if (progress) progress->set_fraction(1.0f);
 }
 
 bool Scene::empty() const {
@@ -648,6 +723,7 @@ SceneStats Scene::stats() const {
     stats.lights = lights_.size();
     stats.bvh_bytes = bvh_bytes_;
     stats.bvh_builds = bvh_builds_;
+    for (uint8_t flat : flattened_) stats.flattened_instances += flat;
     return stats;
 }
 
@@ -659,7 +735,7 @@ void Scene::require_committed(const char* query) const {
 
 void Scene::finish_hit(Hit& hit) const {
     if (hit.valid())
-        hit.geometric_normal = normal_from_object_[hit.instance_id] * hit.geometric_normal;
+        hit.geometric_normal = normal_from_embree_[hit.instance_id] * hit.geometric_normal;
 }
 
 Hit Scene::intersect(const Ray& ray) const {
@@ -690,13 +766,19 @@ void Scene::intersect(const std::vector<Ray>& rays, std::vector<Hit>& hits,
         throw_if_cancelled(progress);
         return;
     }
-    parallel_for(
-        0, rays.size(), kRaysPerChunk,
-        [&](uint64_t begin, uint64_t end) {
-            embree_->intersect(&rays[begin], &hits[begin], end - begin, coherence);
-            for (uint64_t i = begin; i < end; ++i) finish_hit(hits[i]);
-        },
-        progress);
+    const auto trace = [&](uint64_t begin, uint64_t end) {
+        embree_->intersect(&rays[begin], &hits[begin], end - begin, coherence);
+        for (uint64_t i = begin; i < end; ++i) finish_hit(hits[i]);
+    };
+    // One chunk's worth (a renderer's tile) is traced on the calling thread: a parallel_for's
+    // task set-up would cost more than its rays (a 640 x 360 frame makes ~1,800 such calls).
+    if (rays.size() <= kRaysPerChunk) {
+        throw_if_cancelled(progress);
+        trace(0, rays.size());
+        if (progress) progress->report(rays.size(), rays.size());
+        return;
+    }
+    parallel_for(0, rays.size(), kRaysPerChunk, trace, progress);
 }
 
 void Scene::occluded(const std::vector<Ray>& rays, std::vector<uint8_t>& occluded,
@@ -708,12 +790,16 @@ void Scene::occluded(const std::vector<Ray>& rays, std::vector<uint8_t>& occlude
         throw_if_cancelled(progress);
         return;
     }
-    parallel_for(
-        0, rays.size(), kRaysPerChunk,
-        [&](uint64_t begin, uint64_t end) {
-            embree_->occluded(&rays[begin], &occluded[begin], end - begin, coherence);
-        },
-        progress);
+    const auto trace = [&](uint64_t begin, uint64_t end) {
+        embree_->occluded(&rays[begin], &occluded[begin], end - begin, coherence);
+    };
+    if (rays.size() <= kRaysPerChunk) {  // as in intersect
+        throw_if_cancelled(progress);
+        trace(0, rays.size());
+        if (progress) progress->report(rays.size(), rays.size());
+        return;
+    }
+    parallel_for(0, rays.size(), kRaysPerChunk, trace, progress);
 }
 
 // The ray is not needed: positions come from the barycentrics, which stay on the triangle,

@@ -6,10 +6,17 @@
 // commit() checks cross references (instance -> mesh, triangle -> material, material -> texture;
 // a scene without materials gets one default Material so every triangle has one), gathers
 // emissive triangles, refuses emitted power beyond kMaxEmittedPower (naming the brightest
-// emitter), and builds the BVH: one Embree geometry per mesh, instanced once
-// per Instance, so a mesh used a thousand times is stored once. Any edit un-commits the scene;
-// set_instance_transform() keeps the per-mesh BVHs and re-commits only the top level, set_mesh()
-// (a mesh replaced for all its instances) rebuilds them.
+// emitter), and builds the BVH (scene/embree_scene.h): a mesh used by one instance is flattened
+// into the top-level BVH in world space (rays pay no instance transform), a mesh used by several
+// keeps one BVH of its own, instanced once per Instance, so a mesh used a thousand times is
+// stored once (so is a single-use mesh whose instance enlarges it beyond the ray range the rest
+// of the scene allows: flattening must not narrow the rays a scene traces). Any edit un-commits
+// the scene. set_instance_transform() marks the scene as moving: from its next commit every mesh
+// is instanced (one build of the per-mesh BVHs), and each move then rebuilds only the small top
+// level, as Cycles keeps a dynamic BVH in its viewport; a static scene (final renders, bakes,
+// a viewport where only lights and materials change) keeps the flattened layout. set_mesh() (a
+// mesh replaced for all its instances) rebuilds the per-mesh BVHs. Light, material and texture
+// edits rebuild no BVH.
 //
 // Queries: intersect/occluded for single rays and for batches (Embree ray streams), callable
 // from many threads at once on a committed scene. Every ray is validated first; an invalid ray
@@ -91,6 +98,9 @@ struct CommitSettings {
     // process may still allocate (util/memory.h: RLIMIT_AS, cgroup limit, free memory), which
     // also caps an explicit budget.
     uint64_t memory_budget_bytes = 0;
+    // Meshes used by one instance go into the top-level BVH in world space (faster rays, the
+    // same hits); false instances every mesh, as a reference for tests.
+    bool flatten_single_use_meshes = true;
 };
 
 struct SceneStats {
@@ -98,6 +108,7 @@ struct SceneStats {
     uint64_t dropped_degenerate = 0, emissive_triangles = 0, lights = 0;
     uint64_t bvh_bytes = 0;  // peak Embree allocation during the last commit
     uint64_t bvh_builds = 0; // Embree builds (per-mesh and top-level) over the scene's life
+    uint64_t flattened_instances = 0;  // instances whose mesh is in the top-level BVH itself
 };
 
 class EmbreeScene;  // scene/embree_scene.h: the only place that sees Embree
@@ -199,6 +210,10 @@ class Scene {
     void gather_emissive();
     void check_emitted_power() const;  // after gather_emissive and compute_bounds
     void finish_hit(Hit& hit) const;
+    // Which meshes keep a BVH of their own (used by several instances, or flattening is off);
+    // true when that changed since the per-mesh BVHs were built.
+    bool choose_flattened(bool flatten_single_use);
+    void build_bvh(Progress* progress);
 
     std::vector<Mesh> meshes_;
     std::vector<MeshReport> mesh_reports_;
@@ -216,11 +231,22 @@ class Scene {
     std::vector<uint64_t> mesh_revisions_;  // per mesh: revision_ when it was added or set
     static uint64_t next_uid();
     bool geometry_dirty_ = true;   // meshes changed: per-mesh BVHs must be rebuilt
-    bool instances_dirty_ = true;  // instances added or moved: the top level must be rebuilt
+    bool instances_dirty_ = true;  // instances added: the top level must be rebuilt
+    std::vector<uint32_t> moved_;  // instances moved since the last commit (may repeat)
+    bool moving_ = false;          // set_instance_transform was called: flatten nothing
     uint64_t bvh_builds_ = 0;
     std::vector<EmissiveTriangle> emissive_;
+    std::vector<uint8_t> mesh_instanced_;  // per mesh: has its own BVH (embree_scene.h)
+    std::vector<uint8_t> flattened_;       // per instance: its mesh is copied into the top level
+    // Per instance: flattening it would lower ray_limits_ (it enlarges its mesh, and Embree's
+    // float triangle test would then see larger numbers), so it stays instanced.
+    std::vector<uint8_t> enlarging_;
     // Per instance, world_from_object's cofactor times sign(det): maps object normals to world.
     std::vector<mat3> normal_from_object_;
+    // Per instance, what maps Embree's normal to world (scene.h, "Normals"): normal_from_object_
+    // for an instanced mesh; for a flattened one, whose normal Embree computes from world-space
+    // vertices (the cofactor times the object normal), just sign(det).
+    std::vector<mat3> normal_from_embree_;
     Bounds3 bounds_;  // world bounds of the instanced triangles, cached at commit
     RayLimits ray_limits_;
     std::string ray_limit_reason_;  // why ray_limits_ is below kMaxRayComponent, for messages

@@ -567,6 +567,66 @@ def test_set_mesh_replaces_the_mesh_of_every_instance_at_the_next_commit():
     assert (stats["meshes"], stats["triangles"], stats["dropped_degenerate"]) == (1, 2, 1)
 
 
+def two_quads_and_a_shared_one(flatten):
+    """Two single-use quads (one mirrored and scaled down) and a quad mesh used twice."""
+    positions, triangles = quad_arrays()
+    scene = shgi.Scene()
+    scene.add_material(shgi.Material())
+    mirrored = np.diag([-0.5, 1.0, 1.0, 1.0]) @ translation(0, 0, -1)
+    for name, transform in (("Low", translation(0, 0, -3)), ("Mirrored", mirrored)):
+        scene.add_instance(scene.add_mesh(positions=positions, triangles=triangles, name=name),
+                           transform, name=name)
+    shared = scene.add_mesh(positions=positions, triangles=triangles, name="Shared")
+    scene.add_instance(shared, translation(0.2, 0.1, -2), name="A")
+    scene.add_instance(shared, translation(-0.9, -0.3, -2.5), name="B")
+    scene.commit(flatten_single_use_meshes=flatten)
+    return scene
+
+
+def test_flattened_single_use_meshes_give_the_hits_of_instanced_ones():
+    """Meshes used once go into the top-level BVH in world space, the shared one stays
+    instanced; random rays report the same instances, triangles, t and world normals either
+    way, and again after a flattened instance moves."""
+    flat, instanced = two_quads_and_a_shared_one(True), two_quads_and_a_shared_one(False)
+    assert flat.stats()["flattened_instances"] == 2
+    assert instanced.stats()["flattened_instances"] == 0
+    rng = np.random.default_rng(5)
+    origins = np.column_stack([rng.uniform(-1.2, 1.2, (2000, 2)), np.full(2000, 1.0)])
+    directions = np.column_stack([rng.uniform(-0.3, 0.3, (2000, 2)), -np.ones(2000)])
+    for move in (False, True):
+        if move:
+            for scene in (flat, instanced):
+                scene.set_instance_transform(0, translation(0.4, 0.0, -3.5))
+            flat.commit()
+            instanced.commit(flatten_single_use_meshes=False)
+        a = flat.intersect(origins.astype(np.float32), directions.astype(np.float32))
+        b = instanced.intersect(origins.astype(np.float32), directions.astype(np.float32))
+        np.testing.assert_array_equal(a["instance_id"], b["instance_id"])
+        np.testing.assert_array_equal(a["triangle_id"], b["triangle_id"])
+        assert set(np.unique(a["instance_id"])) == {0, 1, 2, 3, MISS}
+        np.testing.assert_allclose(a["t"][a["hit"]], b["t"][b["hit"]], rtol=1e-5)
+        np.testing.assert_allclose(a["normal"], b["normal"], atol=TOLERANCE)
+
+
+def test_light_and_material_edits_rebuild_no_bvh():
+    scene = two_quads_and_a_shared_one(True)
+    light = shgi.Light()
+    light.power = 10.0
+    scene.add_light(light)
+    scene.commit()
+    builds = scene.stats()["bvh_builds"]
+    light.power = 500.0
+    scene.set_light(0, light)
+    glow = shgi.Material()
+    glow.emission_color = (1.0, 1.0, 1.0)
+    glow.emission_strength = 3.0
+    scene.set_material(0, glow)
+    scene.commit()
+    assert scene.stats()["bvh_builds"] == builds
+    assert scene.lights[0].power == 500.0
+    assert scene.stats()["emissive_triangles"] == 4 * 2
+
+
 def test_set_mesh_rejects_a_bad_id_or_mesh_and_keeps_the_scene():
     scene = quad_scene()
     positions, triangles = quad_arrays()

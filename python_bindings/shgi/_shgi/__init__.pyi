@@ -2178,9 +2178,9 @@ class Scene:
         """
         World-space bounds ((x0, y0, z0), (x1, y1, z1)); ValueError for an empty scene.
         """
-    def commit(self, memory_budget_bytes: typing.SupportsIndex = 0, progress: Progress = None) -> None:
+    def commit(self, memory_budget_bytes: typing.SupportsIndex = 0, progress: Progress = None, flatten_single_use_meshes: bool = True) -> None:
         """
-        Checks cross references and builds the BVH, with the GIL released. Raises MemoryError when the BVH would exceed memory_budget_bytes (0 = 75% of what the process may still allocate: RLIMIT_AS, cgroup limit, free memory), shgi.Cancelled when progress.cancel() is called.
+        Checks cross references and builds the BVH, with the GIL released: a mesh used by one instance goes into the top-level BVH in world space (flatten_single_use_meshes; False instances every mesh, with the same hits), a mesh used by several is instanced. Raises MemoryError when the BVH would exceed memory_budget_bytes (0 = 75% of what the process may still allocate: RLIMIT_AS, cgroup limit, free memory), shgi.Cancelled when progress.cancel() is called.
         """
     def emissive_triangles(self) -> dict:
         """
@@ -2228,7 +2228,7 @@ class Scene:
         """
     def stats(self) -> dict:
         """
-        Dict of counts: meshes, instances, triangles, instanced_triangles, dropped_degenerate, emissive_triangles, lights, bvh_bytes (peak of the last commit that built a BVH), bvh_builds (Embree builds so far: per-mesh and top-level).
+        Dict of counts: meshes, instances, triangles, instanced_triangles, dropped_degenerate, emissive_triangles, lights, bvh_bytes (peak of the last commit that built a BVH), bvh_builds (Embree builds so far: per-mesh and top-level), flattened_instances (instances whose mesh is in the top-level BVH itself).
         """
     @property
     def camera(self) -> Camera:
