@@ -380,6 +380,17 @@ auto edit(const char* method, Result (Scene::*function)(Args...)) {
     };
 }
 
+// An edit of the item with id `id_name` (set_light(light_id, light), ...): the id checked
+// as an index (int_arg), the scene held as edit() holds it.
+template <typename Item>
+auto edit_by_id(const char* method, const char* id_name,
+                void (Scene::*function)(uint32_t, Item)) {
+    return [method, id_name, function](Scene& scene, const IndexInt& id, const Item& item) {
+        SceneUse use(scene, SceneUse::Kind::Edit, method);
+        (scene.*function)(int_arg<uint32_t>(id, id_name), item);
+    };
+}
+
 // A read accessor: copies the result while no other thread commits the scene.
 template <typename Result>
 auto read(const char* method, Result (Scene::*function)() const) {
@@ -433,45 +444,25 @@ void bind_scene_building(py::class_<Scene>& cls) {
             },
             py::arg("instance_id"), py::arg("world_from_object"),
             "Moves an instance; the next commit() rebuilds only the top-level BVH.")
-        .def(
-            "set_light",
-            [](Scene& scene, const IndexInt& light_id, const Light& light) {
-                SceneUse use(scene, SceneUse::Kind::Edit, "set_light");
-                scene.set_light(int_arg<uint32_t>(light_id, "light_id"), light);
-            },
-            py::arg("light_id"), py::arg("light"),
-            "Replaces a Light; the next commit() rebuilds no BVH.")
+        .def("set_light", edit_by_id("set_light", "light_id", &Scene::set_light),
+             py::arg("light_id"), py::arg("light"),
+             "Replaces a Light; the next commit() rebuilds no BVH.")
         .def("set_lights", edit("set_lights", &Scene::set_lights), py::arg("lights"),
              "Replaces every Light (ids are the list's indices); the next commit() rebuilds no "
              "BVH.")
-        .def(
-            "set_material",
-            [](Scene& scene, const IndexInt& material_id, const Material& material) {
-                SceneUse use(scene, SceneUse::Kind::Edit, "set_material");
-                scene.set_material(int_arg<uint32_t>(material_id, "material_id"), material);
-            },
-            py::arg("material_id"), py::arg("material"),
-            "Replaces a Material (triangles keep their material ids); the next commit() "
-            "rebuilds no BVH.")
-        .def(
-            "set_texture",
-            [](Scene& scene, const IndexInt& texture_id, const Texture& texture) {
-                SceneUse use(scene, SceneUse::Kind::Edit, "set_texture");
-                scene.set_texture(int_arg<uint32_t>(texture_id, "texture_id"), texture);
-            },
-            py::arg("texture_id"), py::arg("texture"),
-            "Replaces a Texture; the next commit() rebuilds no BVH.")
-        .def(
-            "set_mesh",
-            [](Scene& scene, const IndexInt& mesh_id, const Mesh& mesh) {
-                SceneUse use(scene, SceneUse::Kind::Edit, "set_mesh");
-                scene.set_mesh(int_arg<uint32_t>(mesh_id, "mesh_id"), mesh);
-            },
-            py::arg("mesh_id"), py::arg("mesh"),
-            "Replaces mesh `mesh_id` (an shgi.Mesh, checked and cleaned as add_mesh does) for "
-            "every instance of it, e.g. with one that has a new lightmap UV map; the next "
-            "commit() rebuilds its BVH. ValueError naming the id and the mesh count for a bad "
-            "mesh_id.");
+        .def("set_material", edit_by_id("set_material", "material_id", &Scene::set_material),
+             py::arg("material_id"), py::arg("material"),
+             "Replaces a Material (triangles keep their material ids); the next commit() "
+             "rebuilds no BVH.")
+        .def("set_texture", edit_by_id("set_texture", "texture_id", &Scene::set_texture),
+             py::arg("texture_id"), py::arg("texture"),
+             "Replaces a Texture; the next commit() rebuilds no BVH.")
+        .def("set_mesh", edit_by_id("set_mesh", "mesh_id", &Scene::set_mesh),
+             py::arg("mesh_id"), py::arg("mesh"),
+             "Replaces mesh `mesh_id` (an shgi.Mesh, checked and cleaned as add_mesh does) for "
+             "every instance of it, e.g. with one that has a new lightmap UV map; the next "
+             "commit() rebuilds its BVH. ValueError naming the id and the mesh count for a bad "
+             "mesh_id.");
 }
 
 // --- commit, inspection ------------------------------------------------------------------------

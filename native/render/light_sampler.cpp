@@ -149,14 +149,14 @@ LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, boo
         const Light& light = scene.lights()[i];
         if (light.portal) continue;  // marks an opening: see scene_portals
         const bool sun = light.type == LightType::Sun;
-        const float weight =
-            sun ? luminance(light.color) * light.strength : light_bounds(light).energy;
+        const LightBounds bounds = sun ? LightBounds{} : light_bounds(light);
+        const float weight = sun ? luminance(light.color) * light.strength : bounds.energy;
         if (!(weight > 0.0f)) continue;
         light_emitter_[i] = uint32_t(emitters_.size());
         if (sun)
             add_distant(Kind::Light, i, weight);
         else
-            add_local(Kind::Light, i, light_bounds(light));
+            add_local(Kind::Light, i, bounds);
         if (light.type != LightType::Area) continue;
         AreaEmission& emission = area_emission_[i];
         emission.normal = area_emit_normal(light);

@@ -759,10 +759,7 @@ def solve_field(scene, source: str, seed: int = 0, progress: Optional[BakeProgre
     if settings is None:
         settings = _methods.default_settings(row.identifier, seed)
     native = progress.native(0.0, 0.0, row.label.lower())
-    solver = _methods.make_solver(row.identifier, scene, settings, native)
-    for _ in range(row.final_passes if passes is None else passes):
-        solver.refine(native)
-    return solver.current_field()
+    return _methods.solve(row.identifier, scene, settings, passes, native).current_field()
 
 
 def jobs_for_scene(scene, uv_set: str, resolution: int = 0, texels_per_metre: float = 0.0,

@@ -1,17 +1,17 @@
 """The solvers of the field methods as the engine drives them: build, update passes, field. No bpy.
 
-PHOTON_LATTICE and PROBE_GRID both solve an IndirectField that the preview renderer renders
-(render_job.make_renderer). They differ in how they are built and refined; a FieldSolver hides
-that from F12 (render_job.RenderJob), frozen solutions (solution_cache.solve, the Solve
-operator) and the viewport worker, which all drive it the same way:
+Every method that solves a field is a shgi.GiSolver (docs/solvers.md); FieldSolver drives one
+for F12 (render_job.RenderJob), frozen solutions (solution_cache.solve, the Solve operator) and
+the viewport worker, which all use it the same way:
 
-* construction (``SolverRecipe.build``) on a committed scene: LatticeSolver measures the
-  lattice's cells; ProbeGridSolver places the probes (relocation out of geometry, DDGI);
-* ``update(progress)``: one pass, a photon pass (PhotonLattice.solve) or a probe update pass
-  (ProbeGrid.update: rays_per_probe paths per active probe, blended in with hysteresis);
-* ``field()``: what to render, the lattice itself or an immutable ProbeField snapshot of the
-  grid, which later updates leave untouched (seed 002 Fig. 4.1: update decoupled from use);
-* ``overlay(snapshot, scene)``: the field_spheres.FieldSpheres the 3D views draw.
+* construction (``SolverRecipe.build``, shgi.make_solver) on a committed scene: the lattice
+  measures its cells, the probe grid places its probes (relocation out of geometry, DDGI);
+* ``update(progress)``: one refinement pass (GiSolver.refine: a photon pass, a probe update
+  pass blended in with hysteresis, ...);
+* ``field()``: what to render (GiSolver.current_field), for the probe grid an immutable
+  ProbeField snapshot that later updates leave untouched (seed 002 Fig. 4.1);
+* ``overlay(snapshot, scene)``: the field_spheres.FieldSpheres the 3D views draw, and
+  ``figures()``, the panel's rows: LatticeSolver's and ProbeGridSolver's own.
 
 Every native call takes a shgi.Progress and releases the GIL; none of this touches bpy.
 """
@@ -25,111 +25,10 @@ from .. import settings
 from ..export.light_probe import native_volumes
 
 
-class LatticeSolver:
-    """A PhotonLattice (seed 000) as a FieldSolver."""
-
-    METHOD = "PHOTON_LATTICE"
-    BUILD_STAGE = "Measuring lattice cells"
-    BUILD_TIMING = "measure"
-
-    def __init__(self, shgi, scene, lattice_settings, progress=None):
-        self.lattice = shgi.PhotonLattice(scene, lattice_settings, progress=progress)
-
-    @staticmethod
-    def pass_stage(number):
-        return f"Tracing photons, pass {number}"
-
-    @property
-    def passes(self):
-        return self.lattice.passes
-
-    def update(self, progress=None):
-        self.lattice.solve(progress=progress)
-
-    def field(self):
-        return self.lattice
-
-    @property
-    def memory_bytes(self):
-        return self.lattice.memory_bytes
-
-    @property
-    def timings(self):
-        """Seconds per stage and the photon counters (PhotonLattice.timings)."""
-        return dict(self.lattice.timings)
-
-    def figures(self):
-        """(label, text) rows describing the solution, for the panel and reports."""
-        timings = self.lattice.timings
-        return [("Photons emitted / stored", f"{int(timings.get('photons_emitted', 0)):,} / "
-                                             f"{int(timings.get('photons_stored', 0)):,}")]
-
-    def overlay(self, snapshot, scene):
-        from .lattice_samples import lattice_overlay
-
-        return lattice_overlay(self.lattice, snapshot, scene, self.lattice.settings.resolution)
-
-
-class ProbeGridSolver:
-    """A ProbeGrid (seed 002) as a FieldSolver."""
-
-    METHOD = "PROBE_GRID"
-    BUILD_STAGE = "Placing probes"
-    BUILD_TIMING = "placement"
-
-    def __init__(self, shgi, scene, grid_settings, progress=None):
-        self._shgi = shgi
-        self.grid = shgi.ProbeGrid(scene, grid_settings, progress=progress)
-        self._update_seconds = 0.0
-        self._snapshot = None
-
-    @staticmethod
-    def pass_stage(number):
-        return f"Updating probes, pass {number}"
-
-    @property
-    def passes(self):
-        return self.grid.passes
-
-    def update(self, progress=None):
-        start = time.perf_counter()
-        try:
-            self.grid.update(progress=progress)
-        finally:  # a cancelled pass still took its time
-            self._update_seconds += time.perf_counter() - start
-
-    def field(self):
-        """The ProbeField of the current pass (one snapshot per pass)."""
-        if self._snapshot is None or self._snapshot.passes != self.grid.passes:
-            self._snapshot = self.grid.field()
-        return self._snapshot
-
-    @property
-    def memory_bytes(self):
-        return self.grid.memory_bytes
-
-    @property
-    def timings(self):
-        """Seconds of all update passes ("update") and the paths of the last one."""
-        return {"update": self._update_seconds, "paths": self.grid.timings["paths"]}
-
-    def figures(self):
-        grid = self.grid
-        error = grid.relative_error()[grid.active]
-        finite = error[np.isfinite(error)]
-        rows = probe_figures(grid.active_count, grid.probe_count, grid.passes)
-        if len(finite):
-            rows.append(("Median relative error", f"{100.0 * float(np.median(finite)):.1f}%"))
-        return rows
-
-    def overlay(self, _snapshot, _scene):
-        return probe_overlay(self._shgi, self.field())
-
-
-class RegisteredSolver:
-    """Any registered method's shgi.GiSolver as a FieldSolver (the methods without a class of
-    their own here, such as a plugin's): refine passes, its field, its stage timings; no
-    overlay."""
+class FieldSolver:
+    """A registered method's shgi.GiSolver as the engine drives it: refine passes, its field,
+    its stage timings. Serves any method as it is (a plugin's: no overlay); LatticeSolver and
+    ProbeGridSolver add their figures and overlays. SolverRecipe.build constructs it."""
 
     METHOD = ""
     BUILD_STAGE = "Building the solver"
@@ -137,10 +36,11 @@ class RegisteredSolver:
 
     @classmethod
     def of(cls, method):
-        """This class bound to method `method` (what SolverRecipe.build constructs)."""
+        """This class bound to method `method`."""
         return type(f"{cls.__name__}[{method}]", (cls,), {"METHOD": method})
 
     def __init__(self, shgi, scene, native_settings, progress=None):
+        self._shgi = shgi
         self.solver = shgi.make_solver(self.METHOD, scene, native_settings, progress)
 
     @staticmethod
@@ -163,13 +63,97 @@ class RegisteredSolver:
 
     @property
     def timings(self):
+        """Seconds of the last pass's stages."""
         return dict(self.solver.stage_seconds)
 
     def figures(self):
+        """(label, text) rows describing the solution, for the panel and reports."""
         return [("Refinement passes", f"{self.solver.passes}")]
 
     def overlay(self, _snapshot, _scene):
         return None
+
+
+class LatticeSolver(FieldSolver):
+    """A PhotonLattice (seed 000) as a FieldSolver."""
+
+    METHOD = "PHOTON_LATTICE"
+    BUILD_STAGE = "Measuring lattice cells"
+    BUILD_TIMING = "measure"
+
+    @property
+    def lattice(self):
+        return self.solver
+
+    @staticmethod
+    def pass_stage(number):
+        return f"Tracing photons, pass {number}"
+
+    @property
+    def timings(self):
+        """Seconds per stage and the photon counters (PhotonLattice.timings)."""
+        return dict(self.lattice.timings)
+
+    def figures(self):
+        timings = self.lattice.timings
+        return [("Photons emitted / stored", f"{int(timings.get('photons_emitted', 0)):,} / "
+                                             f"{int(timings.get('photons_stored', 0)):,}")]
+
+    def overlay(self, snapshot, scene):
+        from .lattice_samples import lattice_overlay
+
+        return lattice_overlay(self.lattice, snapshot, scene, self.lattice.settings.resolution)
+
+
+class ProbeGridSolver(FieldSolver):
+    """A ProbeGrid (seed 002) as a FieldSolver."""
+
+    METHOD = "PROBE_GRID"
+    BUILD_STAGE = "Placing probes"
+    BUILD_TIMING = "placement"
+
+    def __init__(self, shgi, scene, grid_settings, progress=None):
+        super().__init__(shgi, scene, grid_settings, progress)
+        self._update_seconds = 0.0
+        self._snapshot = None
+
+    @property
+    def grid(self):
+        return self.solver
+
+    @staticmethod
+    def pass_stage(number):
+        return f"Updating probes, pass {number}"
+
+    def update(self, progress=None):
+        start = time.perf_counter()
+        try:
+            super().update(progress)
+        finally:  # a cancelled pass still took its time
+            self._update_seconds += time.perf_counter() - start
+
+    def field(self):
+        """The ProbeField of the current pass (one snapshot per pass)."""
+        if self._snapshot is None or self._snapshot.passes != self.grid.passes:
+            self._snapshot = self.grid.field()
+        return self._snapshot
+
+    @property
+    def timings(self):
+        """Seconds of all update passes ("update") and the paths of the last one."""
+        return {"update": self._update_seconds, "paths": self.grid.timings["paths"]}
+
+    def figures(self):
+        grid = self.grid
+        error = grid.relative_error()[grid.active]
+        finite = error[np.isfinite(error)]
+        rows = probe_figures(grid.active_count, grid.probe_count, grid.passes)
+        if len(finite):
+            rows.append(("Median relative error", f"{100.0 * float(np.median(finite)):.1f}%"))
+        return rows
+
+    def overlay(self, _snapshot, _scene):
+        return probe_overlay(self._shgi, self.field())
 
 
 class LoadedProbeField:
@@ -271,7 +255,7 @@ def solver_recipe(props, shgi, volumes=(), viewport=False):
     elif solver:
         # A registered method without a settings group here (a plugin's): its settings'
         # defaults with the scene's seed, its registry's passes for F12 and the viewport alike.
-        return SolverRecipe(RegisteredSolver.of(solver),
+        return SolverRecipe(FieldSolver.of(solver),
                             shgi.default_settings(solver, seed=props.seed),
                             shgi.method(solver).final_passes)
     else:
