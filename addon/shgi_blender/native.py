@@ -10,6 +10,7 @@ numpy ABI mismatch, a missing shared library): the render engine then refuses to
 """
 
 import importlib
+import importlib.util
 import os
 import sys
 
@@ -47,3 +48,15 @@ def error():
 def available():
     """True when ``shgi`` imports."""
     return module() is not None
+
+
+def denoiser_error():
+    """Why renders cannot be denoised (the optional module pyoidn is missing), with the fix; None
+    when they can. Looked up without importing pyoidn."""
+    if importlib.util.find_spec("pyoidn") is not None:
+        return None
+    flag = " --break-system-packages" if os.path.exists("/usr/lib/python3/dist-packages") else ""
+    return (f"Denoising needs OpenImageDenoise, the Python module pyoidn, which {sys.executable} "
+            f"cannot import: renders are shown without denoising. Fix: `{sys.executable} -m pip "
+            f"install{flag} pyoidn` (or `make deps` in the SHGI repository), then restart "
+            "Blender.")

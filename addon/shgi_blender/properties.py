@@ -22,6 +22,8 @@ L = settings.PHOTON_LATTICE_DEFAULTS
 P = settings.PROBE_GRID_DEFAULTS
 V = settings.VIEWPORT_PROPERTY_DEFAULTS
 VP = settings.VIEWPORT_PASSES_DEFAULTS
+DN = settings.DENOISING_DEFAULTS
+T = settings.TIME_LIMIT_DEFAULTS
 
 METHOD_ITEMS = [(m.identifier, m.label, m.description, m.number) for m in settings.METHODS]
 WORLD_SAMPLING_ITEMS = list(settings.ENUM_ITEMS["world_sampling"])
@@ -30,6 +32,28 @@ INTERPOLATION_ITEMS = list(settings.ENUM_ITEMS["interpolation"])
 B = bake_settings.BAKE_PROPERTY_DEFAULTS
 BAKE_SOURCE_ITEMS = list(bake_settings.SOURCE_ITEMS)
 BAKE_CONTENT_ITEMS = list(bake_settings.CONTENT_ITEMS)
+DENOISING_ITEMS = {name: list(items) for name, items in settings.DENOISING_ITEMS.items()}
+
+
+def denoising_properties(prefix, where):
+    """The denoiser's choices of F12 (prefix "") or of the viewport (prefix "viewport_")."""
+    return {
+        f"use_{prefix}denoising": BoolProperty(
+            name="Denoise", default=DN[f"use_{prefix}denoising"],
+            description=f"Denoise {where} with OpenImageDenoise (needs the pyoidn module)"),
+        f"{prefix}denoising_guides": EnumProperty(
+            name="Passes", items=DENOISING_ITEMS["guides"],
+            default=DN[f"{prefix}denoising_guides"],
+            description="Render passes that guide the denoiser"),
+        f"{prefix}denoising_prefilter": EnumProperty(
+            name="Prefilter", items=DENOISING_ITEMS["prefilter"],
+            default=DN[f"{prefix}denoising_prefilter"],
+            description="What is done about the noise of the guiding passes"),
+        f"{prefix}denoising_quality": EnumProperty(
+            name="Quality", items=DENOISING_ITEMS["quality"],
+            default=DN[f"{prefix}denoising_quality"],
+            description="Quality of the denoiser against its time"),
+    }
 
 
 class ShgiPhotonLatticeSettings(bpy.types.PropertyGroup):
@@ -276,6 +300,22 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
         name="Viewport Samples", default=V["viewport_samples"], min=1, max=settings.MAX_SAMPLES,
         soft_max=4096,
         description="Samples per pixel the Rendered viewport accumulates before it stops")
+    time_limit: FloatProperty(
+        name="Time Limit", default=T["time_limit"], min=0.0, soft_max=3600.0,
+        subtype="TIME_ABSOLUTE",
+        description="Longest a final render may take from the end of the scene export (0: no "
+                    "limit); it stops with the best image so far, denoised")
+    viewport_time_limit: FloatProperty(
+        name="Viewport Time Limit", default=T["viewport_time_limit"], min=0.0, soft_max=3600.0,
+        subtype="TIME_ABSOLUTE",
+        description="Longest the Rendered viewport keeps refining an unchanged view (0: no "
+                    "limit)")
+    viewport_denoising_start_sample: IntProperty(
+        name="Start Sample", default=DN["viewport_denoising_start_sample"], min=1,
+        max=settings.MAX_SAMPLES, soft_max=64,
+        description="Sample from which the viewport shows denoised frames")
+    __annotations__.update(denoising_properties("", "the final render"))
+    __annotations__.update(denoising_properties("viewport_", "the Rendered viewport"))
     photon_lattice: PointerProperty(type=ShgiPhotonLatticeSettings, name="Photon Lattice",
                                     description="Settings of the Photon Lattice method")
     probe_grid: PointerProperty(type=ShgiProbeGridSettings, name="Probe Grid",

@@ -2,8 +2,8 @@
 
 Scenes are the project's Cornell box and sun room built with bpy (examples/blender_scenes.py)
 in a file reset as the Cycles calibration resets it (calibration_common.reset_scene: CPU, no
-denoising, 1 px box filter, Standard view, calibration bounce limits, every light pass, EXR
-output). Renders go through F12 (``bpy.ops.render.render``) and are read back from the Render
+denoising for either engine, 1 px box filter, Standard view, calibration bounce limits, every
+light pass, EXR output). Renders go through F12 (``bpy.ops.render.render``) and are read back from the Render
 Result, saved as a multilayer EXR (background Blender gives Python no pixels of it otherwise).
 
 Scripts run as ``blender -b --factory-startup --python-exit-code 1 --python <script> --
@@ -35,6 +35,9 @@ def new_scene(name, scale):
     scene = blender_scenes.SCENES[name](scale)
     for field, value in calibration.BOUNCES.items():  # the same limits for both engines
         setattr(scene.shgi, field, value)
+    # Compared with Cycles undenoised (reset_scene), as references are: the denoiser has its
+    # own tests (engine_denoise_checks.py).
+    scene.shgi.use_denoising = scene.shgi.use_viewport_denoising = False
     return scene
 
 

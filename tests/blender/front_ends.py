@@ -2,8 +2,9 @@
 registered once reaches the add-on with no other edit.
 
 1. F12 through the add-on, and a script that exports the same scene with the add-on's exporter,
-   builds the solver with shgi.make_solver from the add-on's settings and renders with
-   shgi.render_preview, give the same float32 Combined, bit for bit: for the Photon Lattice, the
+   builds the solver with shgi.make_solver from the add-on's settings, renders with
+   shgi.render_preview and denoises with shgi.frame_denoise, give the same float32 Combined,
+   bit for bit: for the Photon Lattice, the
    Probe Grid and SINGLE_PROBE_TEST, the test-only method of tests/python/method_plugin.py.
 2. That method, loaded through SHGI_METHOD_PLUGINS before the add-on imported shgi, is in the
    Render Method menu and in the bake's Indirect Light menu with its registry number, and a bake
@@ -31,6 +32,7 @@ import numpy as np  # noqa: E402
 
 import method_plugin  # noqa: E402
 import shgi  # noqa: E402
+from shgi.frame_denoise import denoise_frame  # noqa: E402
 from shgi_blender import settings  # noqa: E402
 from shgi_blender.engine.field_solvers import solver_recipe  # noqa: E402
 from shgi_blender.export import export_scene  # noqa: E402
@@ -53,12 +55,15 @@ def script_render(scene):
         solver.refine()
     passes, _ = shgi.render_preview(native, solver.current_field(),
                                     settings.preview_settings(props, shgi))
+    denoising = settings.denoising(props)
+    passes = denoise_frame(passes, denoising.quality, denoising.prefilter, denoising.guides)
     return passes["Combined"]
 
 
 def compare_front_ends(results):
     scene = common.new_scene("cornell_box", SCALE)
     scene.shgi.samples = SAMPLES
+    scene.shgi.use_denoising = True  # F12's denoiser is the script's too
     scene.shgi.photon_lattice.photons = 20000
     scene.shgi.probe_grid.rays_per_probe = 32
     folder = tempfile.mkdtemp()

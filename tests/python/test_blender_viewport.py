@@ -12,6 +12,7 @@ real window under Xvfb: Rendered shading, screenshots, F12, a moved light, the o
 probe grid refining with its probes drawn and restarting when its Irradiance Volume moves).
 """
 
+import importlib.util
 import json
 import sys
 import time
@@ -21,6 +22,7 @@ import numpy as np
 import pytest
 
 import shgi
+from shgi.frame_denoise import denoise_frame
 from blender_support import (ADDON_DIR, BLENDER_SCRIPTS, REPO_ROOT, needs_window,
                              run_blender, run_in_window)
 from latency_clock import LatencyClock
@@ -231,9 +233,11 @@ def view_of(scene, width, height):
 
 
 def properties(photon_lattice=None, probe_grid=None, **overrides):
-    """render_property_values of scene.shgi's defaults (method PHOTON_LATTICE), `overrides` set
-    and the method groups' values overridden from the dicts of their names."""
-    props = settings.default_properties(shgi, **dict({"method": "PHOTON_LATTICE"}, **overrides))
+    """render_property_values of scene.shgi's defaults (method PHOTON_LATTICE, frames not
+    denoised unless asked), `overrides` set and the method groups' values overridden from the
+    dicts of their names."""
+    props = settings.default_properties(shgi, **dict(
+        {"method": "PHOTON_LATTICE", "use_viewport_denoising": False}, **overrides))
     for group, values in (("photon_lattice", photon_lattice), ("probe_grid", probe_grid)):
         for name, value in (values or {}).items():
             setattr(getattr(props, group), name, value)
@@ -310,6 +314,59 @@ def test_worker_ends_with_the_image_of_one_native_render(method):
         lattice.solve()
         expected, _ = shgi.render_preview(scene, lattice, shgi.PreviewSettings(samples=6, seed=2))
     np.testing.assert_array_equal(frame.pixels, expected["Combined"][::-1])
+
+
+@pytest.mark.skipif(importlib.util.find_spec("pyoidn") is None, reason="needs pyoidn")
+@pytest.mark.parametrize("method", ["PHOTON_LATTICE", "PATH_TRACE"])
+def test_worker_denoises_its_frames_as_a_script_would(method):
+    """With viewport denoising on, each frame from the start sample on is the renderer's frame
+    denoised by shgi.frame_denoise with the viewport's choices (the renderer then also sums the
+    guides); before the start sample frames stay noisy."""
+    scene = scenes.cornell_box(0.1).scene
+    view = view_of(scene, 40, 30)
+    props = properties(method=method, viewport_samples=6, seed=2, use_viewport_denoising=True,
+                       viewport_denoising_start_sample=2, photon_lattice={"photons": 20000})
+    values = settings.properties_from_values(props)
+    denoising = settings.denoising(values, viewport=True)
+    assert (denoising.guides, denoising.prefilter, denoising.quality) == (
+        "ALBEDO", "FAST", "BALANCED")  # Cycles' viewport defaults
+    worker = ViewportWorker(shgi)
+    try:
+        assert worker.request(snapshot_of(scene), view, props)
+        frame = final_frame(worker, 6)
+        status = worker.status
+    finally:
+        worker.stop()
+    assert "not denoised" not in status
+    scene.set_camera(viewport_camera.shgi_camera(shgi, view))
+    scene.commit()
+    if method == "PATH_TRACE":
+        noisy = shgi.render_path_traced(
+            scene, settings.path_tracer_settings(SimpleNamespace(**dict(values.__dict__,
+                                                                        samples=6)), shgi))
+    else:
+        lattice = shgi.PhotonLattice(scene, settings.photon_lattice_settings(values, shgi))
+        lattice.solve()
+        noisy, _ = shgi.render_preview(scene, lattice, shgi.PreviewSettings(samples=6, seed=2))
+    expected = denoise_frame(noisy, denoising.quality, denoising.prefilter, denoising.guides)
+    assert not np.array_equal(expected["Combined"], noisy["Combined"])
+    np.testing.assert_array_equal(frame.pixels, expected["Combined"][::-1])
+
+
+def test_worker_without_pyoidn_shows_noisy_frames_and_says_why(monkeypatch):
+    monkeypatch.setitem(sys.modules, "pyoidn", None)  # `import pyoidn` raises ImportError
+    scene = scenes.cornell_box(0.1).scene
+    view = view_of(scene, 24, 24)
+    props = properties(method="PATH_TRACE", viewport_samples=2, use_viewport_denoising=True)
+    worker = ViewportWorker(shgi)
+    try:
+        worker.request(snapshot_of(scene), view, props)
+        frame = final_frame(worker, 2)
+        status = worker.status
+    finally:
+        worker.stop()
+    assert "not denoised" in status and "pyoidn" in status, status
+    assert np.isfinite(frame.pixels).all() and frame.pixels[..., :3].mean() > 0.0
 
 
 def test_worker_edits_the_scene_in_place_and_ignores_equal_requests():

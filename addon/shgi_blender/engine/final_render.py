@@ -192,7 +192,7 @@ class FinalRender:
             self._use_frozen_solution(solution)
             job = RenderJob(shgi, export.scene, props.samples,
                             preview_settings=settings.preview_settings(props, shgi),
-                            field=solution.field)
+                            field=solution.field, **self._finishing(props))
         elif method.uses_field:
             from .field_solvers import solver_recipe
 
@@ -201,11 +201,17 @@ class FinalRender:
                       else solver_recipe(props, shgi, export.probe_volumes))
             job = RenderJob(shgi, export.scene, props.samples,
                             preview_settings=settings.preview_settings(props, shgi),
-                            solver_recipe=recipe)
+                            solver_recipe=recipe, **self._finishing(props))
         else:
             job = RenderJob(shgi, export.scene, props.samples,
-                            path_tracer_settings=settings.path_tracer_settings(props, shgi))
+                            path_tracer_settings=settings.path_tracer_settings(props, shgi),
+                            **self._finishing(props))
         return job.start()
+
+    @staticmethod
+    def _finishing(props):
+        """The RenderJob arguments of F12's Denoise and Time Limit."""
+        return {"denoising": settings.denoising(props), "time_limit": props.time_limit}
 
     def _export_warning(self, _level, message):
         self.warn(message)
@@ -222,7 +228,8 @@ class FinalRender:
         self._use_frozen_solution(solution)
         return RenderJob(shgi, solution.scene, props.samples,
                          preview_settings=settings.preview_settings(props, shgi),
-                         field=solution.field, camera=self._region_camera(shgi, camera)).start()
+                         field=solution.field, camera=self._region_camera(shgi, camera),
+                         **self._finishing(props)).start()
 
     def _use_frozen_solution(self, solution):
         """Records and reports that the render shows `solution`: a WARNING naming the last
@@ -316,6 +323,9 @@ class FinalRender:
 
     def _record_job(self, job):
         self.record["samples"] = job.samples_done
+        self.record["denoised"] = job.denoised
+        if job.denoise_error is not None:
+            self.warn(f"SHGI: {job.denoise_error}")
         self.record["timings"].update(job.timings)
         self.record["cancelled"] = job.cancelled
         if job.solution is not None:

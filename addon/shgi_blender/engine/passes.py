@@ -59,6 +59,14 @@ PASSES = (
     PassInfo("Env", "RGB", "COLOR", "use_pass_environment", "Environment"),
 )
 
+# The passes a denoised render adds (shgi.frame_denoise), as Cycles writes them when it denoises
+# (Noisy Image) and stores its denoising data (the guides).
+DENOISING_PASSES = (
+    PassInfo("Noisy Image", "RGBA", "COLOR", ""),
+    PassInfo("Denoising Normal", "XYZ", "VECTOR", ""),
+    PassInfo("Denoising Albedo", "RGB", "COLOR", ""),
+)
+
 # View-layer passes Blender offers that SHGI does not compute: {toggle: Cycles' pass name}.
 # An enabled one is reported once per render and left out of the result.
 UNSUPPORTED_PASSES = {
@@ -73,15 +81,19 @@ UNSUPPORTED_PASSES = {
 }
 
 
-def enabled_passes(view_layer):
-    """The PassInfo of every pass the view layer enables that SHGI fills, Combined first."""
-    return [info for info in PASSES
-            if not info.view_layer_flag or getattr(view_layer, info.view_layer_flag, False)]
+def enabled_passes(view_layer, denoising=False):
+    """The PassInfo of every pass the view layer enables that SHGI fills, Combined first, and
+    with `denoising` (F12 denoises) the DENOISING_PASSES."""
+    enabled = [info for info in PASSES
+               if not info.view_layer_flag or getattr(view_layer, info.view_layer_flag, False)]
+    return enabled + list(DENOISING_PASSES) if denoising else enabled
 
 
 def names_from_blender_names(blender_version):
-    """{pass name in a Blender version's render results: the renderers' name} for PASSES."""
-    return {info.blender_name(blender_version): info.name for info in PASSES}
+    """{pass name in a Blender version's render results: the renderers' name} for PASSES and
+    DENOISING_PASSES."""
+    return {info.blender_name(blender_version): info.name
+            for info in PASSES + DENOISING_PASSES}
 
 
 def unsupported_enabled_passes(view_layer):

@@ -45,7 +45,8 @@ class ShgiRenderEngine(bpy.types.RenderEngine):
         session.stop()
 
     def update_render_passes(self, scene=None, renderlayer=None):
-        for info in passes.enabled_passes(renderlayer):
+        denoising = scene is not None and scene.shgi.use_denoising
+        for info in passes.enabled_passes(renderlayer, denoising):
             self.register_pass(scene, renderlayer, info.blender_name(bpy.app.version),
                                info.channels, info.channel_ids, info.channel_type)
 

@@ -14,6 +14,15 @@ image appears at once; rounds then double, up to an eighth of the total. Both re
 same image however the samples are split between calls, so rounds cost only their snapshots.
 ``make_renderer`` builds either one as a Renderer (add samples, read passes); the viewport
 worker renders through it too.
+
+Time Limit (``time_limit`` seconds from the job's start, after the export): a field method's
+solve may take SOLVE_TIME_SHARE of it (at least one pass); a sampling round is cut to the
+samples that fit the time left, judged by the time per sample so far, keeping room for the
+denoiser (its estimate); at least one sample is rendered. Denoising (``denoising``, a
+settings.Denoising) runs once, on the job's thread, after the last round: the last snapshot then
+holds the denoised Combined and Cycles' ``Noisy Image``, ``Denoising Albedo`` and ``Denoising
+Normal`` passes. Without pyoidn, or after a denoiser failure, the image stays noisy and
+``denoise_error`` says why. A cancelled job is not denoised.
 """
 
 import threading
@@ -28,6 +37,12 @@ COMMIT_SHARE = 0.05
 SOLVE_SHARE = 0.35
 # Rounds grow up to total / MAX_ROUND_DIVISOR samples: about that many image updates at the end.
 MAX_ROUND_DIVISOR = 8
+# The passes of the snapshots taken between rounds: what the image editor shows while F12 runs
+# (converting all 14 passes of a 256 x 256 frame after each round took ~50 ms); the last
+# snapshot, of a finished or cancelled render, holds every pass.
+SHOWN_PASSES = ["Combined"]
+# The share of a Time Limit a field method's solve may take before sampling starts.
+SOLVE_TIME_SHARE = 0.5
 
 
 def sample_rounds(total):
@@ -88,10 +103,13 @@ class RenderJob(NativeTask):
         ProbeGrid and its update passes) when `field` is None, or with direct light only when
         both are None (a scene without geometry has nothing to solve).
     camera: a shgi.Camera replacing the scene's (a frozen solution seen from a new camera).
+    denoising: a settings.Denoising to denoise the result with, or None.
+    time_limit: seconds the job may take (0: no limit).
     """
 
     def __init__(self, shgi, scene, samples, *, path_tracer_settings=None,
-                 preview_settings=None, solver_recipe=None, field=None, camera=None):
+                 preview_settings=None, solver_recipe=None, field=None, camera=None,
+                 denoising=None, time_limit=0.0):
         if (path_tracer_settings is None) == (preview_settings is None):
             raise ValueError("give exactly one of path_tracer_settings and preview_settings")
         super().__init__(shgi, "shgi-render")
@@ -107,8 +125,13 @@ class RenderJob(NativeTask):
         self._snapshot_taken = True
         self._span = (0.0, COMMIT_SHARE)
         self._stage = "Starting"
+        self._denoising = denoising
+        self._deadline = None
+        self.time_limit = time_limit
         self.samples_done = 0
-        self.timings = {}       # seconds per stage: commit, solve, render
+        self.denoised = False
+        self.denoise_error = None  # why a render that should be denoised is not
+        self.timings = {}       # seconds per stage: commit, solve, render, denoise
         self.solution = None    # the solution_cache.Solution the job solved, if any (not cached)
 
     # --- main thread ---------------------------------------------------------------------------
@@ -141,6 +164,8 @@ class RenderJob(NativeTask):
     # --- worker thread -------------------------------------------------------------------------
 
     def _work(self):
+        if self.time_limit > 0.0:
+            self._deadline = time.perf_counter() + self.time_limit
         render_start = COMMIT_SHARE
         if not self.scene.committed:
             self._timed("commit", "Building BVH", (0.0, COMMIT_SHARE),
@@ -149,7 +174,14 @@ class RenderJob(NativeTask):
             render_start = COMMIT_SHARE + SOLVE_SHARE
             self._timed("solve", self._solver_recipe.solver.BUILD_STAGE,
                         (COMMIT_SHARE, render_start), self._solve_field)
-        self._sample(render_start)
+        denoiser = self._make_denoiser()
+        try:
+            self._sample(render_start, denoiser)
+            if denoiser is not None:
+                self._timed("denoise", "Denoising", (1.0, 1.0), lambda: self._denoise(denoiser))
+        finally:
+            if denoiser is not None:
+                denoiser.close()
 
     def _timed(self, name, stage, span, work):
         with self._lock:
@@ -166,23 +198,84 @@ class RenderJob(NativeTask):
             with self._lock:
                 self._stage, self._span = stage, span
 
+        deadline = None
+        if self._deadline is not None:
+            deadline = self._deadline - (1.0 - SOLVE_TIME_SHARE) * self.time_limit
         self.solution = solution_cache.solve(self._shgi, self.scene, self._solver_recipe,
                                              signature=None, progress=self.progress,
-                                             on_stage=on_stage)
+                                             on_stage=on_stage, deadline=deadline)
         self.field = self.solution.field
 
-    def _sample(self, render_start):
+    def _make_denoiser(self):
+        """The FrameDenoiser of the job's Denoising (None when off or unavailable)."""
+        if self._denoising is None:
+            return None
+        try:
+            return self._denoising.make()
+        except ImportError as error:
+            self.denoise_error = f"the render is not denoised: {error}"
+        except (RuntimeError, ValueError) as error:
+            self.denoise_error = f"the render is not denoised: {error}"
+        return None
+
+    def _sample(self, render_start, denoiser):
         renderer = make_renderer(self._shgi, self.scene, self.progress,
                                  path_tracer_settings=self._path_tracer_settings,
                                  preview_settings=self._preview_settings, field=self.field,
                                  camera=self._camera)
         name = "Path tracing" if self._path_tracer_settings is not None else "Rendering"
+        sampling_start = time.perf_counter()
         for count in sample_rounds(self.samples):
+            count = self._samples_in_time(count, sampling_start, denoiser)
+            if count == 0:
+                break
             lo = render_start + (1.0 - render_start) * self.samples_done / self.samples
             hi = render_start + (1.0 - render_start) * (self.samples_done + count) / self.samples
             stage = f"{name}, sample {self.samples_done + count}/{self.samples}"
-            self._timed("render", stage, (lo, hi), lambda: renderer.add(count))
+            try:
+                self._timed("render", stage, (lo, hi), lambda: renderer.add(count))
+            except self._shgi.Cancelled:
+                self._keep(renderer, None)  # every pass of the rounds done before Esc
+                raise
             self.samples_done += count
-            snapshot = Snapshot(renderer.passes(), self.samples_done)
-            with self._lock:
-                self._snapshot, self._snapshot_taken = snapshot, False
+            self._keep(renderer, SHOWN_PASSES)
+        self._keep(renderer, None)
+
+    def _keep(self, renderer, names):
+        """Makes the renderer's passes (`names`, or all) the newest snapshot (none before the
+        first sample)."""
+        if self.samples_done == 0:
+            return
+        snapshot = Snapshot(renderer.passes(names), self.samples_done)
+        with self._lock:
+            self._snapshot, self._snapshot_taken = snapshot, False
+
+    def _samples_in_time(self, count, sampling_start, denoiser):
+        """How many of a round's `count` samples fit before the deadline (all without one; at
+        least one for the first round), judged by the time per sample so far."""
+        if self._deadline is None or self.samples_done == 0:
+            return count
+        now = time.perf_counter()
+        per_sample = (now - sampling_start) / self.samples_done
+        left = self._deadline - now
+        if denoiser is not None:
+            height, width = self._snapshot.passes["Combined"].shape[:2]
+            left -= denoiser.estimate_seconds(width, height)
+        return max(0, min(count, int(left / per_sample))) if per_sample > 0.0 else count
+
+    def _denoise(self, denoiser):
+        """Replaces the last snapshot by its denoised passes (a failure is kept as
+        denoise_error and leaves the snapshot noisy)."""
+        snapshot = self.last_snapshot()
+        if snapshot is None:
+            return
+        try:
+            denoised = denoiser.denoise(snapshot.passes, self.progress)
+        except (RuntimeError, ValueError) as error:
+            self.denoise_error = f"the render is not denoised: {error}"
+            return
+        passes = dict(snapshot.passes, **denoised)
+        with self._lock:
+            self._snapshot = Snapshot(passes, snapshot.samples)
+            self._snapshot_taken = False
+        self.denoised = True

@@ -70,7 +70,7 @@ class Solution:
 
 
 def solve(shgi, scene, recipe, signature, progress=None, timings=None, warnings=(),
-          on_stage=None):
+          on_stage=None, deadline=None):
     """Commits `scene` (if needed), builds the recipe's solver and runs its passes; a Solution.
 
     Runs on any thread (no bpy); raises shgi.Cancelled when `progress` is cancelled.
@@ -78,6 +78,8 @@ def solve(shgi, scene, recipe, signature, progress=None, timings=None, warnings=
     timings: stage seconds measured before (the export), kept in the solution's timings.
     on_stage: called as on_stage(stage name, lo, hi) when a stage starts, [lo, hi] being its
         share of the whole solve (for a progress bar).
+    deadline: a time.perf_counter() value (a render's Time Limit): after the first pass, a pass
+        that would end past it (judged by the last pass's time) is not started.
     """
     on_stage = on_stage or (lambda _stage, _lo, _hi: None)
     timings = dict(timings or {})
@@ -94,7 +96,10 @@ def solve(shgi, scene, recipe, signature, progress=None, timings=None, warnings=
         share = (1.0 - BUILD_SHARE) / recipe.passes
         on_stage(f"{solver.pass_stage(index + 1)}/{recipe.passes}",
                  BUILD_SHARE + index * share, BUILD_SHARE + (index + 1) * share)
+        pass_start = time.perf_counter()
         solver.update(progress)
+        if deadline is not None and 2 * time.perf_counter() - pass_start > deadline:
+            break
     timings.update(solver.timings)
     return Solution(method=recipe.solver.METHOD, scene=scene, solver=solver,
                     field=solver.field(), signature=signature, timings=timings,

@@ -27,10 +27,17 @@ redone:
 
 The path tracer renders the scene's camera, so for PATH_TRACE the view goes into the scene
 (``set_camera``, a top-level commit) for each resolution.
+
+With viewport denoising on (settings.denoising), every frame from the start sample on is
+denoised on this thread before it is published (one shgi.frame_denoise.FrameDenoiser kept while
+its choices stay, so the network's weights load once); the renderers then also sum the guide
+passes. Without pyoidn the frames stay noisy and the status says why. A Viewport Time Limit
+stops the full-resolution rounds once that many seconds passed since the request arrived.
 """
 
 import logging
 import threading
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -125,6 +132,8 @@ class ViewportWorker:
         self._solver = None
         self._solver_key = None
         self._overlay_source = None
+        self._denoiser = None
+        self.denoise_error = None
         self.error = None
         self.counters = {"scene_builds": 0, "in_place_updates": 0, "solves": 0, "frames": 0}
         self._thread = threading.Thread(target=self._loop, name="shgi-viewport", daemon=True)
@@ -168,8 +177,10 @@ class ViewportWorker:
 
     @property
     def status(self):
+        """What the worker does, and why frames are not denoised when they should be."""
         with self._condition:
-            return self._status
+            status, denoise_error = self._status, self.denoise_error
+        return status if denoise_error is None else f"{status} ({denoise_error})"
 
     def stop(self):
         """Cancels the running call and ends the thread (waits up to STOP_TIMEOUT_SECONDS)."""
@@ -195,6 +206,7 @@ class ViewportWorker:
                         and not self._overlay_due():
                     self._condition.wait()
                 if self._stopped:
+                    self._close_denoiser()
                     return
                 request, version = self._request, self._version
                 if version != done_version:
@@ -233,11 +245,18 @@ class ViewportWorker:
             if solver_key != self._solver_key:
                 self._drop_solver()
             self._solver_key = solver_key
+        context.denoising = settings.denoising(props, viewport=True)
+        context.passes = list(VIEWPORT_PASSES)
+        if context.denoising is not None:
+            context.passes = list(context.denoising.passes())
         if method.uses_field:
             context.preview_settings = settings.preview_settings(props, shgi)
-            context.preview_settings.combined_only = True  # the viewport shows nothing else
+            # The viewport shows only Combined; the denoiser's guides need the other passes.
+            context.preview_settings.combined_only = context.passes == VIEWPORT_PASSES
         else:
             context.path_tracer_settings = settings.path_tracer_settings(props, shgi)
+        if props.viewport_time_limit > 0.0:
+            context.deadline = time.perf_counter() + props.viewport_time_limit
         passes_done = self._solver.passes if (uses_field and self._solver) else 0
         solver_passes = context.recipe.passes if uses_field else 0
         for step in frame_schedule(uses_field, props.viewport_samples, solver_passes,
@@ -251,9 +270,12 @@ class ViewportWorker:
                 self._set_status(f"Rendering 1/{step.divisor} resolution")
                 renderer = self._renderer(context, step.divisor, use_field=step.kind == "frame")
                 renderer.add(1)
-                self._publish(renderer.passes(VIEWPORT_PASSES), 1, props.viewport_samples,
-                              step.divisor)
-        self._set_status(f"Done, {props.viewport_samples} samples")
+                self._publish(context, renderer.passes(context.passes), 1,
+                              props.viewport_samples, step.divisor)
+        if context.stopped_at is not None:
+            self._set_status(f"Done, time limit at {context.stopped_at} samples")
+        else:
+            self._set_status(f"Done, {props.viewport_samples} samples")
 
     def _prepare_scene(self, snapshot, view, progress):
         """Makes self._scene the committed scene of `snapshot`, as cheaply as possible."""
@@ -286,10 +308,14 @@ class ViewportWorker:
         done = 0
         for count in sample_rounds(step.samples):
             self._check(context.progress)
+            if context.deadline is not None and time.perf_counter() >= context.deadline:
+                context.stopped_at = done
+                return
             self._set_status(f"Sample {done + count}/{step.samples}")
             renderer.add(count)
             done += count
-            self._publish(renderer.passes(VIEWPORT_PASSES), done, step.samples, step.divisor)
+            self._publish(context, renderer.passes(context.passes), done, step.samples,
+                          step.divisor)
 
     def _renderer(self, context, divisor, use_field):
         """A render_job.Renderer of the request's view at 1/divisor resolution."""
@@ -310,12 +336,37 @@ class ViewportWorker:
                              preview_settings=context.preview_settings, field=field,
                              camera=camera)
 
-    def _publish(self, passes, samples, target_samples, divisor):
+    def _publish(self, context, passes, samples, target_samples, divisor):
+        if context.denoising is not None and samples >= context.denoising.start_sample:
+            passes = self._denoised(context, passes)
         pixels = np.ascontiguousarray(passes["Combined"][::-1], dtype=np.float32)
         with self._condition:
             self._frame_id += 1
             self._frame = Frame(pixels, samples, target_samples, divisor, self._frame_id)
         self.counters["frames"] += 1
+
+    def _denoised(self, context, passes):
+        """`passes` with Combined denoised by the kept FrameDenoiser of context.denoising (the
+        noisy passes when pyoidn is missing or OIDN fails: denoise_error says why)."""
+        if self._denoiser is None or self._denoiser[0] != context.denoising:
+            self._close_denoiser()
+            try:
+                self._denoiser = (context.denoising, context.denoising.make())
+            except (ImportError, RuntimeError) as error:
+                self.denoise_error = f"not denoised: {error}"
+                return passes
+        try:
+            passes = self._denoiser[1].denoise(passes, context.progress.frames)
+        except RuntimeError as error:
+            self.denoise_error = f"not denoised: {error}"
+            return passes
+        self.denoise_error = None
+        return passes
+
+    def _close_denoiser(self):
+        if self._denoiser is not None:
+            self._denoiser[1].close()
+            self._denoiser = None
 
     def _check(self, progress):
         """Between native calls: stops a run whose request was replaced."""
@@ -386,6 +437,10 @@ class _RenderContext:
     progress: _RunProgress
     uses_field: bool
     recipe: object = None   # field_solvers.SolverRecipe when uses_field
+    denoising: object = None   # settings.Denoising of the viewport, None when off
+    passes: list = None        # the passes each frame reads (Combined, and the guides)
+    deadline: float = None     # time.perf_counter() at the Viewport Time Limit, if any
+    stopped_at: int = None     # samples done when the time limit stopped the render
     preview_settings: object = None
     path_tracer_settings: object = None
 

@@ -9,7 +9,7 @@ from ..engine import solution_cache
 
 # The last render's timings (FinalRender.record["timings"]), in the order of a render.
 RENDER_TIMING_LABELS = {"export": "Export", "commit": "BVH", "solve": "Solve",
-                        "render": "Render", "total": "Total"}
+                        "render": "Render", "denoise": "Denoise", "total": "Total"}
 # Share of a row's width taken by the label.
 LABEL_FACTOR = 0.5
 

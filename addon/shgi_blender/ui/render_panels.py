@@ -40,7 +40,37 @@ class SHGI_RENDER_PT_method(ShgiPanel, bpy.types.Panel):
         column.label(text="Samples")
         column.prop(props, "viewport_samples", text="Viewport")
         column.prop(props, "samples", text="Render")
-        column.prop(props, "seed")
+        column = layout.column(align=True)
+        column.label(text="Time Limit")
+        column.prop(props, "viewport_time_limit", text="Viewport")
+        column.prop(props, "time_limit", text="Render")
+        layout.prop(props, "seed")
+
+
+class SHGI_RENDER_PT_denoise(ShgiPanel, bpy.types.Panel):
+    bl_label = "Denoise"
+    bl_context = "render"
+    bl_parent_id = "SHGI_RENDER_PT_method"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        props = context.scene.shgi
+        error = native.denoiser_error()
+        if error is not None:
+            draw_wrapped(layout.box(), error, icon="INFO")
+        for prefix, heading in (("viewport_", "Viewport"), ("", "Render")):
+            column = layout.column(align=True)
+            column.label(text=heading)
+            column.prop(props, f"use_{prefix}denoising", text="Denoise")
+            sub = column.column(align=True)
+            sub.active = getattr(props, f"use_{prefix}denoising") and error is None
+            if prefix:
+                sub.prop(props, "viewport_denoising_start_sample", text="Start")
+            sub.prop(props, f"{prefix}denoising_guides", text="Passes")
+            sub.prop(props, f"{prefix}denoising_prefilter", text="Prefilter")
+            sub.prop(props, f"{prefix}denoising_quality", text="Quality")
 
 
 class SHGI_RENDER_PT_light_paths(ShgiPanel, bpy.types.Panel):
@@ -316,8 +346,9 @@ class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
         state = " (cancelled)" if record["cancelled"] else ""
         method = settings.METHODS_BY_ID.get(record["method"])
         region = " Render Region" if "region" in record else ""
+        denoised = ", denoised" if record.get("denoised") else ""
         draw_wrapped(layout, f"{method.label if method else record['method']}: {width}x{height} "
-                             f"px{region}, {record['samples']} samples{state}")
+                             f"px{region}, {record['samples']} samples{denoised}{state}")
         figure_rows.draw_rows(layout, figure_rows.render_timing_rows(record["timings"]))
         for message in record["errors"] + record["warnings"]:
             draw_wrapped(layout, message, icon="ERROR" if message in record["errors"]
@@ -325,7 +356,7 @@ class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
 
 
 # Parents before their sub-panels.
-CLASSES = (SHGI_RENDER_PT_method, SHGI_RENDER_PT_light_paths,
+CLASSES = (SHGI_RENDER_PT_method, SHGI_RENDER_PT_denoise, SHGI_RENDER_PT_light_paths,
            SHGI_RENDER_PT_light_paths_max_bounces, SHGI_RENDER_PT_photon_lattice,
            SHGI_RENDER_PT_probe_grid, SHGI_RENDER_PT_probe_grid_visibility,
            SHGI_RENDER_PT_bake, SHGI_RENDER_PT_bake_farm, SHGI_RENDER_PT_last_render)

@@ -1,0 +1,334 @@
+"""Denoising rendered frames (F12, the viewport, ``render_preview``) with OpenImageDenoise.
+
+``FrameDenoiser(quality, prefilter, guides).denoise(passes)`` takes the passes a renderer
+returns ({name: float32 (H, W, C)}, row 0 on top: ``PathTracer.passes()``,
+``PreviewRenderer.passes()``) and returns Combined denoised by OIDN's ``RT`` network in HDR mode,
+with the passes Cycles writes beside it: ``Noisy Image`` (Combined before denoising),
+``Denoising Albedo`` and ``Denoising Normal`` (the guides as the network saw them).
+
+Guides, as Cycles builds them: the albedo is the first surface's closure weights,
+DiffCol + GlossCol + TransCol, clipped to [0, 1]; the normal is the Normal pass (the first hit's
+shading normal, world space). Both are sample means, so at low sample counts they carry noise of
+their own (antialiased edges, textures, glossy lobes): ``prefilter`` says what is done about it,
+with Cycles' choices: "ACCURATE" denoises each guide first with the RT network and then tells
+the colour filter they are clean (``cleanAux``); "FAST" passes them as they are and lets the
+colour filter allow for their noise; "NONE" passes them as they are and calls them clean (for
+noise-free guides). ``guides`` chooses the inputs as Cycles' "Passes" does: "NONE" (colour
+only), "ALBEDO", "ALBEDO_NORMAL".
+
+The light the camera sees straight from emitters and the world (the Emit and Env passes, when
+given) is taken out of Combined before the network and added back after it: it is exact, and a
+network shown a lamp 60 times brighter than the walls spreads it into a halo (on the Cornell box
+at 4 spp that added 1-3% to the frame's light; without it the denoised frame keeps the noisy
+frame's mean within 0.3%). Pixels that see only the world (Depth is the miss value everywhere
+in the pixel) keep their noisy value, so the geometry's light never bleeds into the background.
+
+The network's weights are loaded once per filter; keep one FrameDenoiser for a sequence of
+frames (the viewport does). ``denoise`` polls ``progress`` (a ``shgi.Progress``) from OIDN's
+progress monitor and raises ``shgi.Cancelled`` within one slice of the network (~1/27 of its
+work, 60 ms on a 1920 x 1080 frame on 2 cores); called from Python's main thread it runs the
+network on a helper thread so that Ctrl-C raises KeyboardInterrupt within 0.05 s. ``pyoidn``
+is optional: ``import shgi`` works without it, and ``FrameDenoiser`` then raises ImportError
+naming the pip command (``available()`` asks first). OIDN's CPU device gives identical output
+for identical input, so a denoised frame is as deterministic as the noisy one.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+import numpy as np
+
+from . import _shgi
+from .denoise import import_optional
+
+__all__ = ["QUALITIES", "PREFILTERS", "GUIDES", "NOISY_PASS", "ALBEDO_PASS", "NORMAL_PASS",
+           "FrameDenoiser", "available", "denoise_frame", "guide_images"]
+
+QUALITIES = ("HIGH", "BALANCED", "FAST")
+PREFILTERS = ("NONE", "FAST", "ACCURATE")
+GUIDES = ("NONE", "ALBEDO", "ALBEDO_NORMAL")
+# The passes Cycles writes beside a denoised Combined.
+NOISY_PASS = "Noisy Image"
+ALBEDO_PASS = "Denoising Albedo"
+NORMAL_PASS = "Denoising Normal"
+# The passes a renderer must return for each choice of guides.
+GUIDE_PASSES = {"NONE": ("Combined",),
+                "ALBEDO": ("Combined", "DiffCol", "GlossCol", "TransCol", "Depth"),
+                "ALBEDO_NORMAL": ("Combined", "DiffCol", "GlossCol", "TransCol", "Normal",
+                                  "Depth")}
+# What a renderer should return for the best result: the guides and the direct light.
+WANTED_PASSES = {guides: names + ("Emit", "Env") for guides, names in GUIDE_PASSES.items()}
+# The light the camera sees straight from emitters and the world: added back after the network.
+DIRECT_PASSES = ("Emit", "Env")
+# Depth of a pixel where every sample missed (the films' kMissDepth, as Cycles writes it).
+MISS_DEPTH = 1e10
+# Seconds per pixel of a denoise, {(prefilter, quality): s}, measured on a 256 x 256 Cornell box
+# on this project's 2-core machine (ALBEDO_NORMAL guides), for a render that must fit a Time
+# Limit before anything was denoised in this process; then each denoise records its own size and
+# time (MEASURED).
+ESTIMATED_RATES = {
+    ("NONE", "HIGH"): 3.0e-6, ("NONE", "BALANCED"): 1.3e-6, ("NONE", "FAST"): 0.7e-6,
+    ("FAST", "HIGH"): 1.3e-6, ("FAST", "BALANCED"): 1.3e-6, ("FAST", "FAST"): 0.7e-6,
+    ("ACCURATE", "HIGH"): 9.1e-6, ("ACCURATE", "BALANCED"): 4.5e-6, ("ACCURATE", "FAST"): 6.3e-6,
+}
+# Setting the networks up, once per FrameDenoiser.
+SETUP_SECONDS = 0.1
+# {(quality, prefilter, guides): (pixels, seconds) of the last denoise in this process}.
+MEASURED = {}
+# How often a Ctrl-C in the main thread is noticed while the network runs.
+_SIGNAL_POLL_SECONDS = 0.05
+
+
+def available() -> bool:
+    """True when the module pyoidn can be imported (a FrameDenoiser can be made)."""
+    try:
+        import_optional("pyoidn", "denoising frames")
+    except ImportError:
+        return False
+    return True
+
+
+def guide_images(passes: dict, guides: str = "ALBEDO_NORMAL"):
+    """(albedo, normal, background) from a renderer's passes: float32 (H, W, 3) guides (None when
+    not used) and the bool (H, W) mask of pixels that saw only the world."""
+    _check_choice("guides", guides, GUIDES)
+    missing = [name for name in GUIDE_PASSES[guides] if name not in passes]
+    if missing:
+        raise ValueError(f"passes: {', '.join(missing)} missing; denoising with guides "
+                         f"{guides!r} needs {', '.join(GUIDE_PASSES[guides])} (render every pass, "
+                         "not PreviewSettings.combined_only)")
+    combined = np.asarray(passes["Combined"], np.float32)
+    height, width = combined.shape[:2]
+    albedo = normal = None
+    if guides != "NONE":
+        albedo = np.clip(sum(np.asarray(passes[name], np.float32)[..., :3]
+                             for name in ("DiffCol", "GlossCol", "TransCol")), 0.0, 1.0)
+    if guides == "ALBEDO_NORMAL":
+        normal = np.ascontiguousarray(np.asarray(passes["Normal"], np.float32)[..., :3])
+    if "Depth" in passes:
+        depth = np.asarray(passes["Depth"], np.float32).reshape(height, width, -1)[..., 0]
+        background = depth >= MISS_DEPTH
+    else:
+        background = np.zeros((height, width), bool)
+    return albedo, normal, background
+
+
+class FrameDenoiser:
+    """One OIDN CPU device and its RT filters, kept for a sequence of frames (close() or `with`
+    releases them). Not thread-safe: one thread denoises at a time."""
+
+    def __init__(self, quality: str = "HIGH", prefilter: str = "ACCURATE",
+                 guides: str = "ALBEDO_NORMAL"):
+        _check_choice("quality", quality, QUALITIES)
+        _check_choice("prefilter", prefilter, PREFILTERS)
+        _check_choice("guides", guides, GUIDES)
+        self.quality, self.prefilter, self.guides = quality, prefilter, guides
+        self._pyoidn = import_optional("pyoidn", "denoising frames")
+        self._device = self._pyoidn.Device(self._pyoidn.OIDN_DEVICE_TYPE_CPU)
+        # No thread pinning: inside Debian's Blender 3.4.1 it aborts the process (denoise.py).
+        self._device.set_bool("setAffinity", False)
+        self._device.commit()
+        self._check("creating the CPU device")
+        self._filters = {}
+        self._buffers = {}  # {id(filter): ((shape, slots), {slot: its shared buffer})}
+        self._monitor = _ProgressMonitor(self._pyoidn)
+
+    def __enter__(self) -> "FrameDenoiser":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        for flt in self._filters.values():
+            flt.release()
+        self._filters.clear()
+        self._buffers.clear()
+        if self._device is not None:
+            self._device.release()
+            self._device = None
+
+    def estimate_seconds(self, width: int, height: int) -> float:
+        """Seconds a denoise of a width x height frame is expected to take: the last denoise
+        of these choices in this process scaled up to this size (never down: its time holds
+        fixed costs), else ESTIMATED_RATES and SETUP_SECONDS."""
+        pixels = width * height
+        last = MEASURED.get((self.quality, self.prefilter, self.guides))
+        if last is None:
+            return pixels * ESTIMATED_RATES[(self.prefilter, self.quality)] + SETUP_SECONDS
+        last_pixels, seconds = last
+        return seconds * max(1.0, pixels / max(1, last_pixels))
+
+    def denoise(self, passes: dict, progress=None) -> dict:
+        """{"Combined": denoised (H, W, 4), NOISY_PASS: the input Combined, ALBEDO_PASS,
+        NORMAL_PASS: the guides used (when used)}; `progress`: a shgi.Progress whose cancel()
+        makes this raise shgi.Cancelled."""
+        if self._device is None:
+            raise ValueError("FrameDenoiser: closed")
+        noisy = np.asarray(passes["Combined"], np.float32)
+        if noisy.ndim != 3 or noisy.shape[2] not in (3, 4):
+            raise ValueError(f"passes['Combined']: shape {noisy.shape} is not (H, W, 3 or 4)")
+        start = time.perf_counter()
+        albedo, normal, background = guide_images(passes, self.guides)
+        color = _finite(noisy[..., :3])
+        # Emitters and the world seen directly (Emit, Env) go around the network: their light
+        # is exact, and a network given a 60x brighter lamp spreads it over its neighbours (on
+        # the Cornell box at 4 spp that added 1-3% to the frame's light).
+        direct = sum(_finite(passes[name][..., :3]) for name in DIRECT_PASSES if name in passes)
+        images = {"color": np.ascontiguousarray(np.maximum(color - direct, 0.0))}
+        if albedo is not None:
+            images["albedo"] = self._guide("albedo", albedo, progress)
+        if normal is not None:
+            images["normal"] = self._guide("normal", normal, progress)
+        clean = self.prefilter != "FAST"
+        rgb = self._execute(self._filter("color", clean), images, progress, "the frame")
+        rgb += direct
+        rgb[background] = color[background]
+        out = noisy.copy()
+        out[..., :3] = rgb
+        MEASURED[(self.quality, self.prefilter, self.guides)] = (
+            noisy.shape[0] * noisy.shape[1], time.perf_counter() - start)
+        result = {"Combined": out, NOISY_PASS: noisy}
+        if albedo is not None:
+            result[ALBEDO_PASS] = images["albedo"]
+        if normal is not None:
+            result[NORMAL_PASS] = images["normal"]
+        return result
+
+    # --- OIDN ------------------------------------------------------------------------------------
+
+    def _guide(self, name: str, image: np.ndarray, progress) -> np.ndarray:
+        image = np.ascontiguousarray(image, np.float32)
+        if self.prefilter != "ACCURATE":
+            return image
+        return self._execute(self._filter(name, False), {name: image}, progress,
+                             f"the {name} guide")
+
+    def _filter(self, role: str, clean_aux: bool):
+        """The RT filter for the colour (role "color") or for prefiltering one guide."""
+        key = (role, clean_aux)
+        if key not in self._filters:
+            flt = self._pyoidn.Filter(self._device, "RT")
+            self._check("creating the RT filter")
+            if role == "color":
+                flt.set_bool("hdr", True)
+                flt.set_bool("cleanAux", clean_aux)
+            flt.set_quality({"HIGH": self._pyoidn.OIDN_QUALITY_HIGH,
+                             "BALANCED": self._pyoidn.OIDN_QUALITY_BALANCED,
+                             "FAST": self._pyoidn.OIDN_QUALITY_FAST}[self.quality])
+            self._monitor.attach(flt)
+            self._filters[key] = flt
+        return self._filters[key]
+
+    def _execute(self, flt, images: dict, progress, label: str) -> np.ndarray:
+        """Runs filter `flt` over `images` ({slot: (H, W, 3) float32}); returns a new output.
+
+        A filter keeps its shared input and output buffers: while the frame size and slots
+        stay, the inputs are copied into them and the filter runs without a new commit (a
+        commit sets the network up again: 0.1 s per filter, more than the denoise of a small
+        frame)."""
+        shape = next(iter(images.values())).shape
+        buffers = self._buffers.get(id(flt))
+        if buffers is None or buffers[0] != (shape, tuple(images)):
+            for name in ("color", "albedo", "normal"):
+                flt.unset_image(name)
+            owned = {name: np.empty(shape, np.float32) for name in (*images, "output")}
+            for name, image in owned.items():
+                flt.set_image(name, image, self._pyoidn.OIDN_FORMAT_FLOAT3)
+            buffers = self._buffers[id(flt)] = ((shape, tuple(images)), owned)
+            for name, image in images.items():
+                np.copyto(owned[name], image)
+            flt.commit()
+            self._check(f"setting up {label}")
+        else:
+            for name, image in images.items():
+                np.copyto(buffers[1][name], image)
+        self._monitor.run(flt.execute, progress)
+        error = self._device.get_error()
+        if self._monitor.cancelled:
+            raise _shgi.Cancelled(f"denoising {label} was cancelled")
+        if error is not None:
+            raise RuntimeError(f"OpenImageDenoise failed denoising {label}: {error}")
+        return buffers[1]["output"].copy()
+
+    def _check(self, operation: str) -> None:
+        error = self._device.get_error()
+        if error is not None:
+            raise RuntimeError(f"OpenImageDenoise failed {operation}: {error}")
+
+
+def denoise_frame(passes: dict, quality: str = "HIGH", prefilter: str = "ACCURATE",
+                  guides: str = "ALBEDO_NORMAL", progress=None) -> dict:
+    """One frame's FrameDenoiser.denoise with a denoiser made for it."""
+    with FrameDenoiser(quality, prefilter, guides) as denoiser:
+        return denoiser.denoise(passes, progress)
+
+
+class _ProgressMonitor:
+    """OIDN's progress monitor (oidnSetFilterProgressMonitorFunction, which pyoidn does not
+    wrap): returns False, OIDN's cancel, once the current Progress is cancelled or a Ctrl-C
+    arrived."""
+
+    def __init__(self, pyoidn):
+        import cffi
+
+        from pyoidn.capi import oidn_ffi
+
+        self._ffi = cffi.FFI()
+        self._ffi.cdef("typedef _Bool (*ShgiMonitor)(void*, double);"
+                       "void oidnSetFilterProgressMonitorFunction(void*, ShgiMonitor, void*);")
+        library = os.path.join(os.path.dirname(pyoidn.__file__), "oidn", "lib",
+                               "libOpenImageDenoise.so")
+        self._lib = self._ffi.dlopen(library)
+        self._pyoidn_ffi = oidn_ffi
+        self._callback = self._ffi.callback("_Bool(void*, double)", self._keep_going)
+        self._progress = None
+        self._stop = threading.Event()
+
+    @property
+    def cancelled(self) -> bool:
+        return self._stop.is_set()
+
+    def attach(self, flt) -> None:
+        pointer = int(self._pyoidn_ffi.cast("uintptr_t", flt._filter))
+        self._lib.oidnSetFilterProgressMonitorFunction(self._ffi.cast("void*", pointer),
+                                                       self._callback, self._ffi.NULL)
+
+    def _keep_going(self, _user, _fraction) -> bool:
+        if self._progress is not None and self._progress.cancelled:
+            self._stop.set()
+        return not self._stop.is_set()
+
+    def run(self, execute, progress) -> None:
+        """execute() with `progress` watched; in the main thread on a helper thread, so that a
+        Ctrl-C (KeyboardInterrupt) stops the network and propagates."""
+        self._progress = progress
+        self._stop.clear()
+        try:
+            if threading.current_thread() is not threading.main_thread():
+                execute()
+                return
+            worker = threading.Thread(target=execute, name="shgi-oidn", daemon=True)
+            worker.start()
+            try:
+                while worker.is_alive():
+                    worker.join(_SIGNAL_POLL_SECONDS)
+            except KeyboardInterrupt:
+                self._stop.set()
+                worker.join()
+                raise
+        finally:
+            self._progress = None
+
+
+def _finite(image) -> np.ndarray:
+    """float32 `image` with NaN and infinities as 0 (the network turns one into a blotch)."""
+    return np.nan_to_num(np.asarray(image, np.float32), nan=0.0, posinf=0.0, neginf=0.0)
+
+
+def _check_choice(name: str, value: str, choices) -> None:
+    if value not in choices:
+        raise ValueError(f"{name} {value!r}: use one of {', '.join(choices)}")
+
