@@ -299,6 +299,10 @@ void bind_preview(py::module_& m) {
                        "Share one field lookup among the pixels of a 2 x 2 quad whose first "
                        "surfaces lie within the field's reuse distance and whose normals agree "
                        "(True); False: one lookup per pixel.")
+        .def_readwrite("final_gather", &S::final_gather,
+                       "Final gather (False): the first surface sends one BSDF-sampled ray per "
+                       "sample and the field is read where it lands, so the field's blocks and "
+                       "leaks reach the picture only through one more bounce.")
         .def("validate", &validate_preview_settings,
              "Raises ValueError naming the first invalid field.");
 

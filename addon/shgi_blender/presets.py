@@ -1,35 +1,45 @@
 """Quality presets: the counts of scene.shgi for four levels of quality, without bpy.
 
-A preset sets only counts (samples, photons and lattice resolutions), never the method or the
-bounce limits, so it means the same for every method. Photons grow with the lattice's cell count
-(about 25-35 photons per cell of the global lattice per solve) so that a finer lattice is not a
-noisier one.
+A preset sets counts (samples; the photon lattice's photons and resolutions; the probe grid's
+rays per probe and update passes) and the F12 denoiser's effort, never the method or the bounce
+limits, so it means the same quality step for every method. Photons grow with the lattice's cell
+count (about 25-35 photons per cell of the global lattice per solve) so that a finer lattice is
+not a noisier one; probe rays and passes double from step to step (the probes' noise halves
+every two steps, as the samples' does every step); from High on the denoiser prefilters its
+guides (Accurate), whose 0.5 dB costs more time than a preview can give (docs/addon.md).
 
-DEFAULT holds the counts of a new scene (the native defaults, settings.PROPERTY_DEFAULTS and
-PHOTON_LATTICE_DEFAULTS), so that a scene nobody has tuned shows a preset: the panel's Quality
-menu names the preset the counts match, or Custom. Fields are paths below scene.shgi
-("photon_lattice.photons").
+DEFAULT holds the values of a new scene (the native defaults, settings.PROPERTY_DEFAULTS,
+PHOTON_LATTICE_DEFAULTS, PROBE_GRID_DEFAULTS, the final passes and DENOISING_DEFAULTS), so that
+a scene nobody has tuned shows a preset: the panel's Quality menu names the preset the values
+match, or Custom. Fields are paths below scene.shgi ("photon_lattice.photons").
 """
 
-from .settings import PHOTON_LATTICE_DEFAULTS, PROPERTY_DEFAULTS
+from .settings import (DENOISING_DEFAULTS, FINAL_PASSES_FALLBACK, PHOTON_LATTICE_DEFAULTS,
+                       PROBE_GRID_DEFAULTS, PROPERTY_DEFAULTS)
 
-# The counts a preset sets.
+# The values a preset sets: counts, then the denoiser's choices.
 PRESET_FIELDS = ("samples", "photon_lattice.photons", "photon_lattice.resolution",
-                 "photon_lattice.caustic_resolution")
-_DEFAULTS = dict(PROPERTY_DEFAULTS, **{f"photon_lattice.{name}": value
-                                       for name, value in PHOTON_LATTICE_DEFAULTS.items()})
+                 "photon_lattice.caustic_resolution", "probe_grid.rays_per_probe",
+                 "probe_grid.passes", "denoising_prefilter", "denoising_quality")
+_DEFAULTS = dict(PROPERTY_DEFAULTS, **DENOISING_DEFAULTS,
+                 **{f"photon_lattice.{name}": value
+                    for name, value in PHOTON_LATTICE_DEFAULTS.items()},
+                 **{f"probe_grid.{name}": value for name, value in PROBE_GRID_DEFAULTS.items()},
+                 **{"probe_grid.passes": FINAL_PASSES_FALLBACK["PROBE_GRID"]})
 
 
-def _counts(samples, photons, resolution, caustic_resolution):
-    return dict(zip(PRESET_FIELDS, (samples, photons, resolution, caustic_resolution)))
+def _values(samples, photons, resolution, caustic_resolution, rays, passes, prefilter,
+            quality):
+    return dict(zip(PRESET_FIELDS, (samples, photons, resolution, caustic_resolution, rays,
+                                    passes, prefilter, quality)))
 
 
 QUALITY_PRESETS = {
     "DEFAULT": {field: _DEFAULTS[field] for field in PRESET_FIELDS},
-    "PREVIEW": _counts(16, 100_000, 16, 32),
-    "MEDIUM": _counts(64, 400_000, 24, 64),
-    "HIGH": _counts(256, 1_000_000, 32, 96),
-    "PRODUCTION": _counts(1024, 4_000_000, 48, 128),
+    "PREVIEW": _values(16, 100_000, 16, 32, 128, 4, "FAST", "BALANCED"),
+    "MEDIUM": _values(64, 400_000, 24, 64, 256, 8, "FAST", "HIGH"),
+    "HIGH": _values(256, 1_000_000, 32, 96, 512, 16, "ACCURATE", "HIGH"),
+    "PRODUCTION": _values(1024, 4_000_000, 48, 128, 1024, 32, "ACCURATE", "HIGH"),
 }
 PRESET_LABELS = {"DEFAULT": "Default", "PREVIEW": "Preview", "MEDIUM": "Medium", "HIGH": "High",
                  "PRODUCTION": "Production"}
@@ -55,6 +65,11 @@ def preset_value(props, field):
     """The value of a preset's field (a path below scene.shgi) in `props`."""
     owner, _, prop = field.rpartition(".")
     return getattr(_owner(props, owner), prop)
+
+
+def value_text(value):
+    """A preset's value as its tooltip shows it: 1,000,000; "Accurate"."""
+    return f"{value:,}" if isinstance(value, int) else value.capitalize()
 
 
 def field_label(field):

@@ -101,6 +101,10 @@ class ShgiPhotonLatticeSettings(bpy.types.PropertyGroup):
         description="Photon passes the Rendered viewport solves, each shooting Photons (as many "
                     "as Render Passes give the lattice of a final render; more give a smoother "
                     "viewport)")
+    final_gather: BoolProperty(
+        name="Final Gather", default=settings.FINAL_GATHER_DEFAULTS["PHOTON_LATTICE"],
+        description="Read the lattice one bounce away from what the camera sees (a ray per "
+                    "sample): smoother and truer light with fewer blocks, slower per sample")
 
 
 class ShgiProbeGridSettings(bpy.types.PropertyGroup):
@@ -172,6 +176,10 @@ class ShgiProbeGridSettings(bpy.types.PropertyGroup):
         name="Viewport Passes", default=VP["PROBE_GRID"], min=1, soft_max=1024,
         description="Probe update passes the Rendered viewport runs in the background, a new "
                     "frame after each, before it stops refining")
+    final_gather: BoolProperty(
+        name="Final Gather", default=settings.FINAL_GATHER_DEFAULTS["PROBE_GRID"],
+        description="Read the probes one bounce away from what the camera sees (a ray per "
+                    "sample): smoother and truer light with fewer blocks, slower per sample")
 
 
 def bake_properties():

@@ -56,7 +56,7 @@ bool PathIntegrator::enter_surface(const Hit& hit) {
 // light, then the BSDF chooses whether and where the path continues.
 void PathIntegrator::finish() {
     for (;;) {
-        if (field_ != nullptr) add_field(shading_);
+        if (vertex_field() != nullptr) add_field(shading_);
         if (!scatter(shading_, &ray_)) return;
         const int total = bounces_[0] + bounces_[1] + bounces_[2];
         terminate_on_next_surface_ = total > settings_.max_bounces ||
@@ -140,7 +140,7 @@ bool PathIntegrator::prepare_direct(Ray* shadow) {
     const vec3 wi = shading.frame.to_local(ls.wi);
     const bool geometric_above = glm::dot(ls.wi, shading.geometric_normal) > 0.0f;
     if (geometric_above != (wi.z > 0.0f)) return false;  // shading and geometric normals disagree
-    pending_.eval = field_ != nullptr ? shading.bsdf.eval_field(shading.wo, wi)
+    pending_.eval = vertex_field() != nullptr ? shading.bsdf.eval_field(shading.wo, wi)
                                       : shading.bsdf.eval(shading.wo, wi);
     if (max_component(pending_.eval.total()) <= 0.0f) return false;
     shadow->origin = shading.spawn_origin(ls.wi);
@@ -155,7 +155,7 @@ bool PathIntegrator::prepare_direct(Ray* shadow) {
 void PathIntegrator::add_direct() {
     const Shading& shading = shading_;
     const LightSample& ls = pending_.light;
-    const bool mis = !ls.delta && field_ == nullptr;
+    const bool mis = !ls.delta && vertex_field() == nullptr;
     const float weight =
         mis ? power_heuristic(ls.pdf, shading.bsdf.pdf(shading.wo, pending_.wi)) : 1.0f;
     const vec3 scale = throughput_ * ls.radiance * (weight / ls.pdf);
@@ -197,7 +197,7 @@ void PathIntegrator::add_field_light(const FieldLookup& field, const FieldLobes&
 }
 
 bool PathIntegrator::first_field_query(vec3* position, vec3* normal, vec3* wo) const {
-    if (field_ == nullptr || field_->is_zero() || vertex_ != 0) return false;
+    if (vertex_field() == nullptr || field_->is_zero() || vertex_ != 0) return false;
     *position = shading_.position;
     *normal = shading_.frame.z;
     *wo = shading_.frame.to_world(shading_.wo);
@@ -209,8 +209,9 @@ bool PathIntegrator::scatter(const Shading& shading, Ray* ray) {
     BsdfSample bs;
     const float u_lobe = rng_.next_float();
     const vec2 u = rng_.next_vec2();
-    const bool sampled = field_ != nullptr ? shading.bsdf.sample_traced(shading.wo, u_lobe, u, &bs)
-                                           : shading.bsdf.sample(shading.wo, u_lobe, u, &bs);
+    const bool field_vertex = vertex_field() != nullptr;
+    const bool sampled = field_vertex ? shading.bsdf.sample_traced(shading.wo, u_lobe, u, &bs)
+                                      : shading.bsdf.sample(shading.wo, u_lobe, u, &bs);
     if (!sampled) return false;
     const vec3 wi = shading.frame.to_world(bs.wi);
     const bool geometric_above = glm::dot(wi, shading.geometric_normal) > 0.0f;
@@ -226,7 +227,8 @@ bool PathIntegrator::scatter(const Shading& shading, Ray* ray) {
     }
     ++bounces_[int(bs.lobe_class)];
     throughput_ *= bs.weight;
-    last_delta_ = bs.delta || field_ != nullptr;  // a field path's NEE skips traced lobes
+    last_delta_ = bs.delta || field_vertex;  // a field vertex's NEE skips traced lobes
+    if (!bs.delta) ++smooth_bounces_;
     last_pdf_ = bs.pdf;
     last_normal_ = shading.frame.z;
     ++vertex_;

@@ -10,6 +10,13 @@
 // refraction) continue the path, which then sees emitters with weight 1. Field light has
 // scattered at least twice on its way to the camera, so it lands in the Ind passes.
 //
+// Final gather (Jensen's photon mapping with final gathering; seed 001 §4.2): with
+// set_final_gather(n), the field is read only once the path has made n smooth (non-Dirac)
+// scatterings. Until then each vertex is a reference vertex (NEE and BSDF sampling with MIS, the
+// whole BSDF sampled), so with n = 1 the first surface sends one gather ray per sample, and where
+// it lands the field vertex adds direct light by NEE and indirect light from the field. The
+// field's errors (blocks, leaks) then reach the picture only after one more bounce.
+//
 // Steps: trace() runs a whole path. A renderer that traces many paths at once can instead run
 // each path's steps itself: begin() (what the camera ray meets, the first surface's shading),
 // prepare_direct() (next-event estimation up to its shadow ray), add_direct() (only when that
@@ -90,6 +97,10 @@ class PathIntegrator {
     // Indirect light at the current surface and the rest of the path.
     void finish();
 
+    // Smooth scatterings the path makes before it reads the field (0: at the first surface;
+    // 1: final gather). Call before begin().
+    void set_final_gather(int smooth_bounces) { field_from_ = smooth_bounces; }
+
     // Stratified numbers for next-event estimation at the first surface (light selection and
     // the light's 2D sample), e.g. one pixel's Owen-scrambled Sobol' points: they replace the
     // path's random numbers there (which are still drawn, so the rest of the path is unchanged).
@@ -125,6 +136,11 @@ class PathIntegrator {
         BsdfEval eval;
     };
 
+    // The field this vertex reads: null before the path's final-gather bounces are made (and
+    // without a field), which makes the vertex a reference vertex.
+    const IndirectField* vertex_field() const {
+        return smooth_bounces_ >= field_from_ ? field_ : nullptr;
+    }
     bool enter_surface(const Hit& hit);
     void find_emission(const Ray& ray, const Hit& hit);
     void add_emission(const vec3& radiance, float light_pdf, bool is_world);
@@ -158,6 +174,8 @@ class PathIntegrator {
     bool terminate_on_next_surface_ = false;
     vec3 throughput_{1.0f};
     int vertex_ = 0;                   // surfaces shaded so far
+    int smooth_bounces_ = 0;           // non-Dirac scatterings so far
+    int field_from_ = 0;               // smooth scatterings before the field is read
     int bounces_[kLobeClassCount] = {0, 0, 0};
     bool last_delta_ = true;           // camera rays and Dirac lobes take no MIS weight
     float last_pdf_ = 0.0f;

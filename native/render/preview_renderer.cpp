@@ -99,11 +99,13 @@ class FrameWork {
     FrameWork(const Scene& scene, const Camera& camera, const CameraRayGenerator& camera_rays,
               const LightSampler& lights, const PathTracerSettings& settings,
               const IndirectField& field, const TileGrid& grid, uint64_t first, uint64_t count,
-              GBuffer& g_buffer, Progress* progress, bool reuse_lookups)
+              GBuffer& g_buffer, Progress* progress, bool reuse_lookups, bool final_gather)
         : scene_(scene), camera_(camera), camera_rays_(camera_rays), lights_(lights),
           settings_(settings), field_(field), grid_(grid), first_(first), count_(count),
           g_buffer_(&g_buffer), progress_(progress),
-          reuse_(reuse_lookups && !field.is_zero() ? field.reuse_distance() : 0.0f),
+          reuse_(reuse_lookups && !final_gather && !field.is_zero() ? field.reuse_distance()
+                                                                    : 0.0f),
+          final_gather_(final_gather ? 1 : 0),
           camera_position_(camera.world_from_camera[3]),
           forward_(glm::normalize(-vec3(camera.world_from_camera[2]))) {}
 
@@ -210,6 +212,7 @@ class FrameWork {
                                                          &field_, wave.rngs[i], wave.values[i],
                                                          &clock);
             path.set_first_light_sample(wave.samples[i].u_select, wave.samples[i].u_light);
+            path.set_final_gather(final_gather_);
             wave.live[i] = path.begin(wave.rays[i], wave.hits[i]);
             if (wave.live[i])
                 g_buffer_->set_surface(wave.pixel[i], scene_, path.first_surface(), wave.hits[i],
@@ -246,6 +249,7 @@ class FrameWork {
     GBuffer* g_buffer_;  // written by the work units, each in its own pixels
     Progress* progress_;
     float reuse_;  // the field's reuse distance; 0: every pixel makes its own lookup
+    int final_gather_;  // smooth bounces before a path reads the field (PreviewSettings)
     vec3 camera_position_, forward_;  // the camera's, for the G-buffer's depth
 };
 
@@ -343,7 +347,8 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
     const TileGrid grid(film_.film().width(), film_.film().height(),
                         even_tile_side(settings_.tile_size));
     const FrameWork work(*scene_, camera_, camera_rays_, lights, path_settings_, *field, grid,
-                         first, samples, g_buffer_, progress, settings_.reuse_field_lookups);
+                         first, samples, g_buffer_, progress, settings_.reuse_field_lookups,
+                         settings_.final_gather);
     const uint64_t tile_pixels = uint64_t(grid.tile) * uint64_t(grid.tile);
     const uint64_t tiles_per_unit = std::max<uint64_t>(1, kChunkPixels / tile_pixels);
     std::vector<StageSeconds> busy(grid.count());  // per work unit, at its first tile

@@ -70,6 +70,10 @@ struct PreviewSettings {
     // Screen-space reuse of the field's lookups within 2 x 2 pixel quads (see above); false: one
     // lookup per pixel, as the reference would make.
     bool reuse_field_lookups = true;
+    // Final gather (render/path_integrator.h): the first surface sends one BSDF-sampled ray per
+    // sample and the field is read where it lands, not at the first surface. Slower per sample,
+    // but the field's blocks and leaks reach the picture only through one more bounce.
+    bool final_gather = false;
 };
 
 void validate_preview_settings(const PreviewSettings& settings);

@@ -266,13 +266,19 @@ def test_quality_presets_grow_and_are_recognised():
         props = default_props()
         presets.apply_preset(props, name)
         assert presets.matching_preset(props) == name
-        counts = tuple(presets.QUALITY_PRESETS[name].values())
+        counts = tuple(value for value in presets.QUALITY_PRESETS[name].values()
+                       if isinstance(value, int))
+        assert len(counts) == 6  # samples, three lattice counts, probe rays and passes
         assert previous is None or all(a > b for a, b in zip(counts, previous))
         previous = counts
     props = default_props()
     presets.apply_preset(props, "HIGH")
     assert (props.samples, props.photon_lattice.photons, props.photon_lattice.resolution) == (
         256, 1_000_000, 32)
+    assert (props.probe_grid.rays_per_probe, props.probe_grid.passes) == (512, 16)
+    assert (props.denoising_prefilter, props.denoising_quality) == ("ACCURATE", "HIGH")
+    presets.apply_preset(props, "PREVIEW")
+    assert (props.denoising_prefilter, props.denoising_quality) == ("FAST", "BALANCED")
     props.samples += 1
     assert presets.matching_preset(props) is None
     with pytest.raises(KeyError, match="ULTRA"):

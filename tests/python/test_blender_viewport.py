@@ -312,7 +312,10 @@ def test_worker_ends_with_the_image_of_one_native_render(method):
     else:
         lattice = shgi.PhotonLattice(scene, settings.photon_lattice_settings(values, shgi))
         lattice.solve()
-        expected, _ = shgi.render_preview(scene, lattice, shgi.PreviewSettings(samples=6, seed=2))
+        preview = settings.preview_settings(SimpleNamespace(**dict(values.__dict__, samples=6)),
+                                            shgi)
+        assert preview.final_gather  # the lattice's default
+        expected, _ = shgi.render_preview(scene, lattice, preview)
     np.testing.assert_array_equal(frame.pixels, expected["Combined"][::-1])
 
 
@@ -347,7 +350,8 @@ def test_worker_denoises_its_frames_as_a_script_would(method):
     else:
         lattice = shgi.PhotonLattice(scene, settings.photon_lattice_settings(values, shgi))
         lattice.solve()
-        noisy, _ = shgi.render_preview(scene, lattice, shgi.PreviewSettings(samples=6, seed=2))
+        noisy, _ = shgi.render_preview(scene, lattice, settings.preview_settings(
+            SimpleNamespace(**dict(values.__dict__, samples=6)), shgi))
     expected = denoise_frame(noisy, denoising.quality, denoising.prefilter, denoising.guides)
     assert not np.array_equal(expected["Combined"], noisy["Combined"])
     np.testing.assert_array_equal(frame.pixels, expected["Combined"][::-1])

@@ -6,13 +6,14 @@ from bpy.props import EnumProperty
 from .. import presets
 
 PRESET_ITEMS = [(name, presets.PRESET_LABELS[name],
-                 ", ".join(f"{presets.field_label(field)} {value:,}"
+                 ", ".join(f"{presets.field_label(field)} {presets.value_text(value)}"
                            for field, value in values.items()))
                 for name, values in presets.QUALITY_PRESETS.items()]
 
 
 class SHGI_OT_quality_preset(bpy.types.Operator):
-    """Set samples, photons and lattice resolutions for a level of quality"""
+    """Set samples, photons, lattice resolutions, probe rays and passes and the denoiser's effort
+    for a level of quality"""
 
     bl_idname = "shgi.quality_preset"
     bl_label = "SHGI Quality Preset"
@@ -24,7 +25,8 @@ class SHGI_OT_quality_preset(bpy.types.Operator):
     def description(cls, _context, properties):
         values = presets.QUALITY_PRESETS[properties.preset]
         return f"{presets.PRESET_LABELS[properties.preset]}: " + ", ".join(
-            f"{presets.field_label(field)} {value:,}" for field, value in values.items())
+            f"{presets.field_label(field)} {presets.value_text(value)}"
+            for field, value in values.items())
 
     def execute(self, context):
         presets.apply_preset(context.scene.shgi, self.preset)

@@ -183,6 +183,7 @@ class SHGI_RENDER_PT_photon_lattice(_FieldPanel, bpy.types.Panel):
         column.label(text="Photon Passes")
         column.prop(lattice, "passes", text="Render")
         column.prop(lattice, "viewport_passes", text="Viewport")
+        layout.prop(lattice, "final_gather")
         field_overlay.draw_overlay_settings(layout, props, "show_lattice_samples")
 
 
@@ -216,6 +217,7 @@ class SHGI_RENDER_PT_probe_grid(_FieldPanel, bpy.types.Panel):
         column.label(text="Update Passes")
         column.prop(grid, "passes", text="Render")
         column.prop(grid, "viewport_passes", text="Viewport")
+        layout.prop(grid, "final_gather")
         column = layout.column(align=True, heading="Relocation")
         column.prop(grid, "relocate", text="Move Out of Geometry")
         sub = column.column(align=True)
