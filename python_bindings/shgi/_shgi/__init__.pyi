@@ -1300,6 +1300,11 @@ class PhotonLattice(IndirectField, GiSolver):
     @staticmethod
     def _pybind11_conduit_v1_(*args, **kwargs):
         ...
+    @staticmethod
+    def load(path: str | bytes | os.PathLike) -> PhotonLattice:
+        """
+        A PhotonLattice read from save()'s file: it renders and reports as the saved one, but has no scene, so refine() and reset() raise ValueError (OSError naming a bad file).
+        """
     def __init__(self, scene: Scene, settings: PhotonLatticeSettings = ..., progress: Progress = None) -> None:
         """
         Measures the surface inside the lattices' cells (the scene must be committed).
@@ -1315,6 +1320,10 @@ class PhotonLattice(IndirectField, GiSolver):
     def reset(self, progress: Progress = None) -> None:
         """
         Forgets every pass and re-measures the (re-committed) scene.
+        """
+    def save(self, path: str | bytes | os.PathLike) -> None:
+        """
+        Writes the solved lattices, their settings, caustic photons and timings to a binary file (float32 as held, so load() looks up the same light; OSError naming a path that cannot be written).
         """
     def solve(self, progress: Progress = None) -> None:
         """
