@@ -314,6 +314,8 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
 }  // namespace
 
 void bind_bake(py::module_& m) {
+    // The largest lightmap side the bake accepts: the add-on's Resolution property ends here.
+    m.attr("MAX_LIGHTMAP_RESOLUTION") = kMaxLightmapResolution;
     bind_texel_map(m);
     bind_lightmap(m);
 }

@@ -12,6 +12,7 @@
 #include "lattice/photon_lattice.h"
 #include "numpy_convert.h"
 #include "interruptible.h"
+#include "path_arg.h"
 #include "scene_use.h"
 #include "struct_fields.h"
 #include "util/progress.h"
@@ -167,7 +168,28 @@ After editing and re-committing the scene, call reset().)doc");
             },
             py::arg("progress") = py::none(),
             "Forgets every pass and re-measures the (re-committed) scene.")
-        .def_property_readonly("settings", &PhotonLattice::settings, "A copy of the settings.");
+        .def_property_readonly("settings", &PhotonLattice::settings, "A copy of the settings.")
+        .def(
+            "save",
+            [](const PhotonLattice& lattice, const PathArg& path) {
+                const ObjectUse reads = lattice_use(lattice, ObjectUse::Kind::Read, "save");
+                py::gil_scoped_release release;
+                lattice.save(path);
+            },
+            py::arg("path"),
+            "Writes the solved lattices, their settings, caustic photons and timings to a binary "
+            "file (float32 as held, so load() looks up the same light; OSError naming a path "
+            "that cannot be written).")
+        .def_static(
+            "load",
+            [](const PathArg& path) {
+                py::gil_scoped_release release;
+                return PhotonLattice::load(path);
+            },
+            py::arg("path"),
+            "A PhotonLattice read from save()'s file: it renders and reports as the saved one, "
+            "but has no scene, so refine() and reset() raise ValueError (OSError naming a bad "
+            "file).");
     def_idle_property(cls, "passes", [](const PhotonLattice& l) { return l.passes(); },
                       "Solve passes averaged so far.");
     def_idle_property(cls, "timings",

@@ -718,6 +718,9 @@ void bind_scene(py::module_& m) {
             [](const Instance& self) { return from_mat4(self.world_from_object); },
             "(4, 4) row-major matrix_world.");
     bind_scene_class(m);
+    // The largest |coordinate| a scene holds (m): the export checks vertices against it before
+    // it computes their normals, where a larger one would overflow.
+    m.attr("MAX_COORDINATE") = kMaxCoordinate;
 }
 
 }  // namespace shgi::python

@@ -126,9 +126,21 @@ OPTION_FIELDS = {"uv_set": "uv_map", "filter": "filter", "padding": "padding"}
 # (export/material.py), so a preview of baked light never changes what SHGI renders or bakes.
 LIGHTMAP_MIX_NODE = "SHGI Lightmap Mix"
 
-# Lightmap sizes from a texel density stay within these (shgi.bake.resolution_for_density's).
-MIN_DENSITY_RESOLUTION = 16
-MAX_DENSITY_RESOLUTION = 4096
+
+def resolution_range(shgi):
+    """IntProperty keywords bounding the Resolution property by the sizes the bake accepts:
+    max, the native lightmap side limit (shgi.MAX_LIGHTMAP_RESOLUTION; above it rasterize_texels
+    refuses); soft_max, the largest side a texel density picks (shgi.bake.MAX_RESOLUTION).
+    None of them without the module `shgi` (nothing can be baked then).
+
+    The Texel Density needs no maximum: any density gives a side within shgi.bake's
+    [MIN_RESOLUTION, MAX_RESOLUTION] (resolution_for_density clamps it).
+    """
+    if shgi is None:
+        return {}
+    from shgi import bake as shgi_bake
+
+    return {"max": shgi.MAX_LIGHTMAP_RESOLUTION, "soft_max": shgi_bake.MAX_RESOLUTION}
 
 
 def lightmap_settings(bake, props, shgi):
@@ -173,8 +185,7 @@ def lightmap_size(bake, scene, instance):
         raise ValueError("resolution and texel density are both 0: set one of them")
     from shgi import bake as shgi_bake
 
-    return shgi_bake.resolution_for_density(scene, instance, bake.texel_density,
-                                            MIN_DENSITY_RESOLUTION, MAX_DENSITY_RESOLUTION)
+    return shgi_bake.resolution_for_density(scene, instance, bake.texel_density)
 
 
 def uses_field(bake):

@@ -197,7 +197,8 @@ def bake_properties():
             name="Layout", items=list(bake_settings.UV_LAYOUT_ITEMS), default=B["uv_layout"],
             description="How Create UV Map lays out the new UV map"),
         "resolution": IntProperty(
-            name="Resolution", default=B["resolution"], min=0, soft_max=4096,
+            name="Resolution", default=B["resolution"], min=0,
+            **bake_settings.resolution_range(native.module()),
             description="Texels per side of each object's lightmap; 0 sizes each lightmap "
                         "from the texel density"),
         "texel_density": FloatProperty(

@@ -2,9 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <fstream>
 #include <string>
 #include <vector>
 
+#include "io/image.h"
+#include "util/binary_file.h"
 #include "util/error.h"
 #include "util/memory.h"
 #include "util/timer.h"
@@ -14,6 +18,73 @@ namespace {
 
 // Share of the bounds' diagonal used as the caustic density estimate's radius by default.
 constexpr float kDefaultCausticRadiusFraction = 0.02f;
+
+// The file save() writes (little-endian):
+//   "SHGILAT\0" | u32 version | the settings, field by field | Bounds3 | u64 passes |
+//   f32 caustic_radius | u64 caustic photons injected | the timings | global ShLattice |
+//   caustic ShLattice | f32 power_scale, u64 count, Photon[count] of the caustic photon map.
+constexpr char kLatticeMagic[8] = {'S', 'H', 'G', 'I', 'L', 'A', 'T', '\0'};
+constexpr uint32_t kLatticeFileVersion = 1;
+constexpr const char* kLatticeFile = "lattice file";
+
+void write_settings(BinaryWriter& out, const PhotonLatticeSettings& s) {
+    out.put(s.photons);
+    out.put(s.seed);
+    out.put(int32_t(s.max_bounces));
+    out.put(s.specular_roughness);
+    out.put(uint8_t(s.world_in_field));
+    out.put(int32_t(s.resolution));
+    out.put(int32_t(s.order));
+    out.put(int32_t(s.blur_passes));
+    out.put(uint8_t(s.caustics));
+    out.put(int32_t(s.caustic_resolution));
+    out.put(int32_t(s.caustic_order));
+    out.put(int32_t(s.caustic_blur_passes));
+    out.put(int32_t(s.caustic_neighbours));
+    out.put(s.caustic_radius);
+    out.put(uint8_t(s.interpolation));
+    out.put(s.normal_offset);
+    out.put(uint8_t(s.use_bounds));
+    out.put(s.bounds_min);
+    out.put(s.bounds_max);
+}
+
+PhotonLatticeSettings read_settings(BinaryReader& in) {
+    const char* what = "the settings";
+    PhotonLatticeSettings s;
+    s.photons = in.get<uint64_t>(what);
+    s.seed = in.get<uint64_t>(what);
+    s.max_bounces = in.get<int32_t>(what);
+    s.specular_roughness = in.get<float>(what);
+    s.world_in_field = in.get<uint8_t>(what) != 0;
+    s.resolution = in.get<int32_t>(what);
+    s.order = in.get<int32_t>(what);
+    s.blur_passes = in.get<int32_t>(what);
+    const uint8_t caustics = in.get<uint8_t>(what);
+    s.caustic_resolution = in.get<int32_t>(what);
+    s.caustic_order = in.get<int32_t>(what);
+    s.caustic_blur_passes = in.get<int32_t>(what);
+    s.caustic_neighbours = in.get<int32_t>(what);
+    s.caustic_radius = in.get<float>(what);
+    const uint8_t interpolation = in.get<uint8_t>(what);
+    s.normal_offset = in.get<float>(what);
+    s.use_bounds = in.get<uint8_t>(what) != 0;
+    s.bounds_min = in.get<vec3>(what);
+    s.bounds_max = in.get<vec3>(what);
+    if (caustics > uint8_t(CausticMode::PhotonMap) ||
+        interpolation > uint8_t(LatticeInterpolation::Cubic))
+        throw IoError(format_message(kLatticeFile, " \"", in.path(), "\" holds caustics ",
+                                     int(caustics), ", interpolation ", int(interpolation),
+                                     ": no such modes (damaged?)"));
+    s.caustics = CausticMode(caustics);
+    s.interpolation = LatticeInterpolation(interpolation);
+    try {
+        validate_photon_lattice_settings(s);
+    } catch (const InvalidArgument& e) {
+        throw IoError(format_message(kLatticeFile, " \"", in.path(), "\": ", e.what()));
+    }
+    return s;
+}
 
 PhotonTracerSettings tracer_settings(const PhotonLatticeSettings& settings) {
     PhotonTracerSettings tracer;
@@ -96,6 +167,7 @@ PhotonLattice::PhotonLattice(const Scene& scene, const PhotonLatticeSettings& se
 PhotonLattice::~PhotonLattice() = default;
 
 void PhotonLattice::reset(Progress* progress) {
+    scene();  // a loaded lattice has none
     if (!scene_->committed())
         throw InvalidArgument("PhotonLattice: the scene is not committed; call commit() first");
     bounds_ = lattice_bounds(*scene_, settings_);
@@ -127,7 +199,72 @@ void PhotonLattice::reset(Progress* progress) {
     scene_revision_ = scene_->revision();
 }
 
+const Scene& PhotonLattice::scene() const {
+    if (scene_ == nullptr)
+        throw InvalidArgument(format_message(
+            "PhotonLattice: this lattice was read from \"", loaded_from_,
+            "\" and has no scene to trace photons in; make a new PhotonLattice to solve again"));
+    return *scene_;
+}
+
+void PhotonLattice::save(const std::string& path) const {
+    write_file_atomically(path, [&](const std::string& temp) {
+        std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+        BinaryWriter w(out);
+        w.bytes(kLatticeMagic, sizeof(kLatticeMagic));
+        w.put(kLatticeFileVersion);
+        write_settings(w, settings_);
+        w.put(bounds_);
+        w.put(uint64_t(passes_));
+        w.put(caustic_radius_);
+        w.put(caustic_photons_injected_);
+        w.put(timings_);
+        global_.write(w);
+        caustic_.write(w);
+        w.put(caustic_map_.power_scale());
+        w.array(caustic_map_.photons());
+        out.flush();
+        if (!out) throw IoError(format_message("cannot write lattice file \"", path, "\""));
+    });
+}
+
+std::unique_ptr<PhotonLattice> PhotonLattice::load(const std::string& path) {
+    require_readable_file(path, kLatticeFile);
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError(format_message("cannot open lattice file \"", path, "\""));
+    BinaryReader r(in, path, kLatticeFile);
+    char magic[sizeof(kLatticeMagic)];
+    r.bytes(magic, sizeof(magic), "the header");
+    if (std::memcmp(magic, kLatticeMagic, sizeof(kLatticeMagic)) != 0)
+        throw IoError(format_message("\"", path, "\" is not an SHGI lattice file (bad magic)"));
+    const uint32_t version = r.get<uint32_t>("the header");
+    if (version != kLatticeFileVersion)
+        throw IoError(format_message("lattice file \"", path, "\" has version ", version,
+                                     "; this SHGI reads version ", kLatticeFileVersion));
+    std::unique_ptr<PhotonLattice> lattice(new PhotonLattice());
+    lattice->loaded_from_ = path;
+    lattice->settings_ = read_settings(r);
+    lattice->bounds_ = r.get<Bounds3>("the header");
+    lattice->passes_ = r.get<uint64_t>("the header");
+    lattice->caustic_radius_ = r.get<float>("the header");
+    lattice->caustic_photons_injected_ = r.get<uint64_t>("the header");
+    lattice->timings_ = r.get<PhotonLatticeTimings>("the timings");
+    lattice->global_ = ShLattice::read(r);
+    lattice->caustic_ = ShLattice::read(r);
+    const float power_scale = r.get<float>("the caustic photons");
+    std::vector<Photon> photons = r.array<Photon>("the caustic photons");
+    if (in.peek() != std::ifstream::traits_type::eof())
+        throw IoError(format_message("lattice file \"", path, "\" has data after its end"));
+    try {
+        lattice->caustic_map_ = PhotonMap(std::move(photons), power_scale);
+    } catch (const InvalidArgument& e) {
+        throw IoError(format_message("lattice file \"", path, "\": ", e.what()));
+    }
+    return lattice;
+}
+
 void PhotonLattice::check_scene(const char* what) const {
+    scene();  // a loaded lattice has none
     if (scene_->revision() != scene_revision_ || !scene_->committed())
         throw InvalidArgument(format_message(
             "PhotonLattice::", what, ": the scene was edited after the lattices were built "

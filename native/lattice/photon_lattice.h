@@ -28,6 +28,8 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <string>
 
 #include "lattice/sh_lattice.h"
 #include "photon/photon_map.h"
@@ -107,7 +109,8 @@ class PhotonLattice : public IndirectField, public GiSolver {
     std::vector<StageSeconds> stage_seconds() const override;
 
     uint64_t passes() const override { return passes_; }
-    const Scene& scene() const { return *scene_; }
+    // The scene it solves; InvalidArgument for a lattice load() read (it has none).
+    const Scene& scene() const;
     const PhotonLatticeSettings& settings() const { return settings_; }
     const PhotonLatticeTimings& timings() const { return timings_; }
     const ShLattice& global_lattice() const { return global_; }
@@ -124,12 +127,25 @@ class PhotonLattice : public IndirectField, public GiSolver {
     bool includes_world_direct() const override { return settings_.world_in_field; }
     bool is_zero() const override { return passes_ == 0; }  // nothing solved yet
 
+    // A solved lattice on disk, so that a frozen solution outlives the process: save() writes
+    // the settings, the solved (averaged, blurred) lattices with their cell surfaces, the
+    // caustic photons and the last pass's timings to `path` (SHGI's binary, little-endian,
+    // float32 as held: exact); load() reads them back into a lattice whose lookups equal the
+    // saved one's (bit for bit; a caustic photon map rebuilds its k-d tree, which may change
+    // the rounding of its sums). A loaded lattice renders and reports but has no scene:
+    // solve() and reset() throw InvalidArgument. IoError names the file that cannot be written
+    // or read.
+    void save(const std::string& path) const;
+    static std::unique_ptr<PhotonLattice> load(const std::string& path);
+
   private:
+    PhotonLattice() = default;  // load()'s, without a scene
     void check_scene(const char* what) const;
     void build_lattices(Progress* progress);
     ShRgb sample(const ShLattice& lattice, const vec3& p, const vec3& n) const;
 
-    const Scene* scene_;
+    const Scene* scene_ = nullptr;
+    std::string loaded_from_;  // the file load() read, for messages
     uint64_t scene_revision_ = 0;
     PhotonLatticeSettings settings_;
     Bounds3 bounds_;

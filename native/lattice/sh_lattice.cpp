@@ -10,6 +10,7 @@
 #include <glm/gtx/string_cast.hpp>
 
 #include "sh/sh_basis.h"
+#include "util/binary_file.h"
 #include "util/error.h"
 #include "util/memory.h"
 #include "util/parallel.h"
@@ -862,6 +863,69 @@ void ShLattice::update_radiance_near() {
     dilate_along(dilated, dims_, 1, lit);
     dilate_along(lit, dims_, 2, dilated);
     radiance_near_ = std::move(dilated);
+}
+
+void ShLattice::write(BinaryWriter& out) const {
+    out.put(int32_t(order_));
+    out.put(dims_);
+    out.put(origin_);
+    out.put(cell_size_);
+    out.array(coeffs_);
+    out.array(surface_index_);
+    out.put(uint64_t(surfaces_.size()));
+    for (const CellSurface& surface : surfaces_) {  // field by field: no padding bytes
+        out.put(surface.area);
+        for (const vec3& projected : surface.projected) out.put(projected);
+        out.put(surface.bins);
+        out.put(surface.receiving);
+    }
+}
+
+ShLattice ShLattice::read(BinaryReader& in) {
+    const auto refuse = [&](const std::string& problem) {
+        return IoError(format_message(in.kind(), " \"", in.path(), "\": ", problem));
+    };
+    ShLattice lattice;
+    lattice.order_ = in.get<int32_t>("a lattice header");
+    lattice.dims_ = in.get<ivec3>("a lattice header");
+    lattice.origin_ = in.get<vec3>("a lattice header");
+    lattice.cell_size_ = in.get<float>("a lattice header");
+    const ivec3 dims = lattice.dims_;
+    const bool empty = dims == ivec3(0);  // a default ShLattice (no caustic lattice)
+    const bool dims_valid =
+        empty || (glm::all(glm::greaterThanEqual(dims, ivec3(1))) &&
+                  uint64_t(dims.x) * uint64_t(dims.y) * uint64_t(dims.z) <= kMaxCells);
+    if (lattice.order_ < 1 || lattice.order_ > 2 || !dims_valid || !is_finite(lattice.origin_) ||
+        !(lattice.cell_size_ > 0.0f) || !std::isfinite(lattice.cell_size_))
+        throw refuse(format_message("a lattice header holds order ", lattice.order_, ", ", dims.x,
+                                    " x ", dims.y, " x ", dims.z, " cells of ", lattice.cell_size_,
+                                    " m (damaged?)"));
+    const size_t cells = lattice.cell_count();
+    lattice.coeffs_ = in.array<float>("the lattice coefficients");
+    lattice.surface_index_ = in.array<uint32_t>("the lattice cells");
+    if (lattice.coeffs_.size() != cells * size_t(lattice.num_coefficients()) * 3 ||
+        lattice.surface_index_.size() != cells)
+        throw refuse(format_message("a lattice of ", cells, " cells holds ",
+                                    lattice.coeffs_.size(), " coefficients and ",
+                                    lattice.surface_index_.size(), " cell entries (damaged?)"));
+    const uint64_t surfaces = in.get<uint64_t>("the lattice surfaces");
+    if (surfaces > cells) throw refuse(format_message(surfaces, " surfaces in ", cells, " cells"));
+    lattice.surfaces_.resize(surfaces);
+    for (CellSurface& surface : lattice.surfaces_) {
+        surface.area = in.get<float>("the lattice surfaces");
+        for (vec3& projected : surface.projected) projected = in.get<vec3>("the lattice surfaces");
+        surface.bins = in.get<uint8_t>("the lattice surfaces");
+        surface.receiving = in.get<uint8_t>("the lattice surfaces");
+    }
+    for (const uint32_t index : lattice.surface_index_)
+        if (index != kNoSurface && index >= surfaces)
+            throw refuse(format_message("a cell names surface ", index, " of ", surfaces));
+    if (empty) return lattice;
+    lattice.surface_near_.assign(size_t(dims.x + 2) * size_t(dims.y + 2) * size_t(dims.z + 2),
+                                 0u);
+    lattice.update_surface_near();
+    lattice.update_radiance_near();
+    return lattice;
 }
 
 size_t ShLattice::memory_bytes() const {

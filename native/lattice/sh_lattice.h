@@ -79,6 +79,9 @@
 
 namespace shgi {
 
+class BinaryReader;
+class BinaryWriter;
+
 inline constexpr float kMinProjectedFraction = 0.05f;
 inline constexpr float kCubicRadiusCells = 1.75f;
 
@@ -140,6 +143,12 @@ class ShLattice {
     // Raw storage: cell_count() x num_coefficients() x 3 floats.
     const std::vector<float>& coefficients() const { return coeffs_; }
     size_t memory_bytes() const;
+
+    // The whole state (cells, surfaces with their receiving sides, coefficients), for a saved
+    // PhotonLattice: read() gives back a lattice that samples bit for bit as this one, and
+    // throws IoError naming the file for contents no lattice has.
+    void write(BinaryWriter& out) const;
+    static ShLattice read(BinaryReader& in);
 
   private:
     // The surface of a cell that has one: A_c and, per orientation bin, A_b n̄_b (the bin's area

@@ -39,6 +39,7 @@ class PhotonMap {
     size_t size() const { return photons_.size(); }
     size_t shard_count() const;  // nanoflann trees the map is split into (0 when empty)
     const std::vector<Photon>& photons() const { return photons_; }
+    float power_scale() const { return power_scale_; }
 
     // Irradiance (W/m^2) at p on a surface with unit normal n from the k nearest photons.
     // Thread-safe. Throws InvalidArgument for k < 1 or max_radius not finite and > 0.

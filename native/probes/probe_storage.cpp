@@ -14,6 +14,7 @@
 
 #include "io/exr_image.h"
 #include "io/image.h"
+#include "util/binary_file.h"
 #include "util/error.h"
 #include "util/memory.h"
 
@@ -23,44 +24,6 @@ namespace {
 constexpr char kMagic[8] = {'S', 'H', 'G', 'I', 'P', 'R', 'B', '\0'};
 constexpr float kHalfMax = 65504.0f;
 constexpr const char* kFormatName = "shgi-probe-grid";
-
-// --- little-endian binary writing and checked reading ---
-
-class Writer {
-  public:
-    explicit Writer(std::ofstream& out) : out_(out) {}
-    template <typename T>
-    void put(const T& value) {
-        out_.write(reinterpret_cast<const char*>(&value), sizeof(T));
-    }
-    void bytes(const void* data, size_t size) {
-        out_.write(static_cast<const char*>(data), std::streamsize(size));
-    }
-
-  private:
-    std::ofstream& out_;
-};
-
-class Reader {
-  public:
-    Reader(std::ifstream& in, const std::string& path) : in_(in), path_(path) {}
-    template <typename T>
-    T get(const char* what) {
-        T value;
-        bytes(&value, sizeof(T), what);
-        return value;
-    }
-    void bytes(void* data, size_t size, const char* what) {
-        in_.read(static_cast<char*>(data), std::streamsize(size));
-        if (size_t(in_.gcount()) != size)
-            throw IoError(format_message("cannot read probe file \"", path_, "\": it ends inside ",
-                                         what, " (truncated?)"));
-    }
-
-  private:
-    std::ifstream& in_;
-    const std::string& path_;
-};
 
 std::string two_digits(int i) {
     std::ostringstream s;
@@ -78,17 +41,6 @@ std::string json_stem(const std::string& json_path) {
         throw InvalidArgument(format_message("probe export path \"", json_path,
                                              "\" must end in .json"));
     return path.replace_extension().string();
-}
-
-// Bytes from the stream's position to the end of the file; the position is kept.
-uint64_t remaining_bytes(std::ifstream& in, const std::string& path) {
-    const std::streampos here = in.tellg();
-    in.seekg(0, std::ios::end);
-    const std::streampos end = in.tellg();
-    in.seekg(here);
-    if (here < 0 || end < here || !in)
-        throw IoError(format_message("cannot find the size of probe file \"", path, "\""));
-    return uint64_t(end - here);
 }
 
 // validate_probe_volumes for volumes read from `path`: a refusal is a file error naming it.
@@ -136,7 +88,7 @@ void save_probe_grid(const std::string& path, const ProbeGridData& data) {
     validate_probe_grid_data(data);
     write_file_atomically(path, [&](const std::string& temp) {
         std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-        Writer w(out);
+        BinaryWriter w(out);
         w.bytes(kMagic, sizeof(kMagic));
         w.put(kProbeFileVersion);
         w.put(uint32_t(data.order));
@@ -167,7 +119,7 @@ ProbeGridData load_probe_grid(const std::string& path) {
     require_readable_file(path, "probe file");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(format_message("cannot open probe file \"", path, "\""));
-    Reader r(in, path);
+    BinaryReader r(in, path, "probe file");
     char magic[sizeof(kMagic)];
     r.bytes(magic, sizeof(magic), "the header");
     if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0)
@@ -203,7 +155,7 @@ ProbeGridData load_probe_grid(const std::string& path) {
                                  packed_probe_bytes(data.order) +
                                  uint64_t(data.visibility_resolution) *
                                      uint64_t(data.visibility_resolution) * sizeof(vec2);
-    const uint64_t remaining = remaining_bytes(in, path);
+    const uint64_t remaining = r.remaining_bytes();
     if (remaining % probe_bytes != 0 || remaining / probe_bytes != probes)
         throw IoError(format_message("probe file \"", path, "\" says ", probes, " probes of ",
                                      probe_bytes, " bytes, but ", remaining,

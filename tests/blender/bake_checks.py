@@ -564,6 +564,13 @@ def property_defaults(scene, results):
         rna = getattr(bpy.ops.shgi, operator).get_rna_type().properties
         results[f"{operator}_defaults"] = {name: rna[name].default
                                            for name in bake_settings.BAKE_PROPERTY_DEFAULTS}
+    # (hard max, soft max) of Resolution in the group and in each bake operator.
+    owners = {"scene.shgi.bake": scene.shgi.bake.bl_rna.properties}
+    owners.update({operator: getattr(bpy.ops.shgi, operator).get_rna_type().properties
+                   for operator in ("bake_lightmaps", "merge_lightmap_shards")})
+    results["resolution_range"] = {owner: [rna["resolution"].hard_max,
+                                           rna["resolution"].soft_max]
+                                   for owner, rna in owners.items()}
 
 
 # --- background mode -----------------------------------------------------------------------------

@@ -108,6 +108,24 @@ def nan_object():
     return add_mesh_object("Broken", mesh, (0, 0, -20))
 
 
+def inf_object():
+    """A vertex an artist typed inf into (Blender stores its largest float, 3.4e+38)."""
+    mesh = plane_mesh("InfMesh")
+    mesh.vertices[2].co = (0.0, float("inf"), 0.0)
+    return add_mesh_object("Infinite", mesh, (0, 0, -30))
+
+
+def zero_scale_collection_instancer():
+    """An Empty scaled to 0 instancing a collection whose object is in no scene."""
+    collection = bpy.data.collections.new("Instanced")
+    collection.objects.link(bpy.data.objects.new("InstancedSource", plane_mesh("SourceMesh")))
+    instancer = bpy.data.objects.new("FlatInstancer", None)
+    instancer.instance_type = "COLLECTION"
+    instancer.instance_collection = collection
+    instancer.location, instancer.scale = (0, -40, 0), (0.0, 0.0, 0.0)
+    bpy.context.scene.collection.objects.link(instancer)
+
+
 def build_scene():
     """Every case of the issue in one scene; returns what the checks need."""
     setup.clear_scene()
@@ -132,6 +150,8 @@ def build_scene():
                     [diffuse]).hide_viewport = True
     add_mesh_object("Flat", plane_mesh("FlatMesh"), (0, 40, 0)).scale = (1.0, 1.0, 0.0)
     nan_object()
+    inf_object()
+    zero_scale_collection_instancer()
     text = bpy.data.objects.new("Label", bpy.data.curves.new("LabelText", "FONT"))
     text.location = (30, 0, 0)
     bpy.context.scene.collection.objects.link(text)
@@ -285,8 +305,30 @@ def check_warnings(result):
     for fragment in expected:
         if not any(fragment in message for message in result.warnings):
             raise AssertionError(f"no warning mentions {fragment!r}: {result.warnings}")
-    if result.stats.skipped_objects != 2:
-        raise AssertionError(f"skipped_objects = {result.stats.skipped_objects}, expected 2")
+    if result.stats.skipped_objects != 4:
+        raise AssertionError(f"skipped_objects = {result.stats.skipped_objects}, expected 4")
+    check_named_refusals(result)
+
+
+def check_named_refusals(result):
+    """The inf vertex names its object, vertex, coordinate and fix; the instancer scaled to 0
+    is named (not the object it instances) with its scale."""
+    expected = {
+        "Infinite": "object 'Infinite': mesh 'InfMesh': vertex 2 has y = inf; SHGI places "
+                    "coordinates within ±1e+12 m: move the vertex back (Edit Mode, Sidebar > "
+                    "Item > Vertex) or fix the modifier or geometry nodes that put it there",
+        "FlatInstancer": "object 'FlatInstancer': its scale is 0 (world scale (0.0, 0.0, 0.0)), "
+                         "which flattens every instance it makes; give every axis a non-zero "
+                         "scale (Object Properties > Transform > Scale, of it or of its parents)",
+    }
+    for name, message in expected.items():
+        if f"{message}; skipped" not in result.warnings:
+            raise AssertionError(f"no warning {message!r}: {result.warnings}")
+        if name not in result.skipped:
+            raise AssertionError(f"{name} is not among the skipped objects {result.skipped}")
+    if any("InstancedSource" in message for message in result.warnings) or (
+            "InstancedSource" in result.skipped):
+        raise AssertionError(f"the instanced object was blamed: {result.warnings}")
 
 
 def check_ray_hits(result):

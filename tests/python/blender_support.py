@@ -111,15 +111,16 @@ def needs_window(test):
     return pytest.mark.blender(skip(test))
 
 
-def run_in_window(script, size, *args, options=(), timeout=300):
+def run_in_window(script, size, *args, options=(), timeout=300, env=None):
     """Runs BLENDER_SCRIPTS/`script` in a Blender window of `size` (width, height) on a virtual
-    screen (xvfb-run), with Blender `options` before --python and `args` after '--'."""
+    screen (xvfb-run), with Blender `options` before --python and `args` after '--'
+    (environment variables `env` added to blender_env())."""
     width, height = size
     command = [XVFB_RUN, "-a", "-s", f"-screen 0 {width + 160}x{height + 80}x24", BLENDER,
                "--factory-startup", *options, "--window-geometry", "0", "0", str(width),
                str(height), "--python", str(BLENDER_SCRIPTS / script), "--", *map(str, args)]
     return subprocess.run(command, capture_output=True, text=True, timeout=timeout,
-                          env=blender_env())
+                          env={**blender_env(), **(env or {})})
 
 
 def blender_params():

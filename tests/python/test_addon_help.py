@@ -2,16 +2,22 @@
 Documentation button finds the manual, the Report a Bug text, and that `make dist`'s packages
 carry the manual (addon/make_dist.py run on a stand-in wheel, so no build is needed).
 
-Blender's side (the Preferences draw both buttons) is checked by tests/blender/addon_register.py.
+Blender's side: the Preferences draw both buttons and the operators run headless
+(tests/blender/addon_register.py); here, both buttons run from the Preferences window of a real
+Blender window under Xvfb (tests/blender/preferences_window.py).
 """
 
 import datetime
+import json
 import pathlib
+import stat
 import sys
 import zipfile
 from types import SimpleNamespace
 
 import pytest
+
+from blender_support import ADDON_DIR, needs_window, run_in_window
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "addon"))
@@ -130,3 +136,39 @@ def test_the_bundled_layout_keeps_the_pages_links(page):
     """README.md links docs/<page>.md and the pages link ../README.md: the bundle keeps both."""
     text = (REPO / page).read_text()
     assert ("docs/addon.md" in text) if page == "README.md" else ("../README.md" in text)
+
+
+# Stands in for a web browser: Python's webbrowser (Blender's wm.url_open) runs $BROWSER with the
+# URL; this appends the URL to the log named by SHGI_OPENED_URLS instead of opening anything.
+URL_RECORDER = """#!/bin/sh
+printf '%s\\n' "$1" >> "$SHGI_OPENED_URLS"
+"""
+
+
+@needs_window
+def test_preferences_buttons_run_in_a_window(build_python_dir, tmp_path):
+    """The Preferences window of a real Blender window draws the add-on's preferences without
+    an error; from it, Documentation opens this checkout's README.md and Report a Bug writes
+    its report and opens it: each operator finishes, and the system's URL handler is asked for
+    exactly those two files."""
+    recorder = tmp_path / "record_url"
+    recorder.write_text(URL_RECORDER)
+    recorder.chmod(recorder.stat().st_mode | stat.S_IXUSR)
+    opened = tmp_path / "opened_urls.txt"
+    scripts = tmp_path / "scripts"  # Blender's user scripts, the add-on installed in them
+    (scripts / "addons").mkdir(parents=True)
+    (scripts / "addons" / "shgi_blender").symlink_to(ADDON_DIR / "shgi_blender")
+    out, folder = tmp_path / "preferences_window.json", tmp_path / "report"
+    result = run_in_window("preferences_window.py", (800, 600), build_python_dir, ADDON_DIR, out,
+                           folder, env={"BROWSER": str(recorder), "SHGI_OPENED_URLS": str(opened),
+                                        "BLENDER_USER_SCRIPTS": str(scripts)})
+    log = result.stdout[-4000:] + result.stderr[-2000:]
+    assert result.returncode == 0 and "PREFERENCES_WINDOW_OK" in result.stdout, log
+    assert "Traceback" not in result.stdout + result.stderr, log  # e.g. from draw()
+    r = json.loads(out.read_text())
+    assert r["preferences_section"] == "ADDONS" and r["preferences_draws"] > 0, r
+    assert r["documentation"] == ["FINISHED"] and r["report_bug"] == ["FINISHED"], r
+    assert r["manual_path"] == str(REPO / "README.md")
+    assert r["report_first_line"].startswith("SHGI bug report"), r
+    assert opened.read_text().splitlines() == [shgi_help.file_url(r["manual_path"]),
+                                               shgi_help.file_url(r["report_path"])]

@@ -153,6 +153,28 @@ def test_shards_and_sizes():
         bake_settings.lightmap_size(bake_props(texel_density=0.0), scene, floor)
 
 
+def test_resolution_ends_where_the_bake_refuses():
+    """The Resolution property's max is the native lightmap side limit, read from shgi: one
+    texel more is refused by name, the limit itself rasterizes. Its soft max is the largest
+    side a texel density picks; the largest Texel Density Blender stores gives that side."""
+    limit = shgi.MAX_LIGHTMAP_RESOLUTION
+    assert bake_settings.resolution_range(shgi) == {"max": limit,
+                                                    "soft_max": shgi_bake.MAX_RESOLUTION}
+    assert bake_settings.resolution_range(None) == {}  # the add-on registers without shgi
+    scene = lightmap_room()
+    floor = [inst.name for inst in scene.instances].index("floor")
+    with pytest.raises(ValueError, match=rf"^instance 'floor': TexelRasterSettings.width = "
+                                         rf"{limit + 1} is outside \[1, {limit}\]; bake larger "
+                                         r"lightmaps in tiles"):
+        shgi.rasterize_texels(scene, floor, shgi.TexelRasterSettings(width=limit + 1, height=1))
+    widest = shgi.rasterize_texels(scene, floor, shgi.TexelRasterSettings(
+        width=limit, height=1, samples_per_axis=1))
+    assert (widest.width, widest.height) == (limit, 1)
+    blender_float_max = float(np.finfo(np.float32).max)
+    assert bake_settings.lightmap_size(bake_props(texel_density=blender_float_max), scene,
+                                       floor) == shgi_bake.MAX_RESOLUTION
+
+
 def test_rgba_pixels_keep_the_rows_and_add_alpha():
     color = np.arange(2 * 3 * 3, dtype=np.float32).reshape(2, 3, 3)  # row 0 at v = 0
     pixels = rgba_pixels(color).reshape(2, 3, 4)
@@ -260,6 +282,10 @@ def test_properties_hold_the_defaults_in_blender(blender, build_python_dir, tmp_
     results = bake_results(blender, build_python_dir, tmp_path_factory)
     for key in ("group_defaults", "bake_lightmaps_defaults", "merge_lightmap_shards_defaults"):
         assert results[key] == bake_settings.BAKE_PROPERTY_DEFAULTS, key
+    # Resolution ends at the native limit (the panel offers no size the bake refuses).
+    expected = [shgi.MAX_LIGHTMAP_RESOLUTION, shgi_bake.MAX_RESOLUTION]
+    assert results["resolution_range"] == {owner: expected for owner in (
+        "scene.shgi.bake", "bake_lightmaps", "merge_lightmap_shards")}
 
 
 def test_baked_images_are_float_and_packed(blender, build_python_dir, tmp_path_factory):

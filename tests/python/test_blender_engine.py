@@ -16,6 +16,7 @@ panel's rows, a frozen solution out of date after a moved light, saved and reope
 tooltips, label and text widths at the default editor width).
 """
 
+import json
 import sys
 import time
 from types import SimpleNamespace
@@ -24,7 +25,7 @@ import numpy as np
 import pytest
 
 import shgi
-from blender_support import REPO_ROOT, run_script_once
+from blender_support import ADDON_DIR, BLENDER_SCRIPTS, REPO_ROOT, run_blender, run_script_once
 from latency_clock import LatencyClock
 from scene_support import committed
 
@@ -697,6 +698,29 @@ def test_a_frozen_solution_survives_save_and_reload(blender, build_python_dir, t
     assert results["mean"] > 0.0
     assert results["max_difference"] == 0.0  # the same field, scene and seed
     assert results["load_volume_max_difference"] == 0.0
+
+
+def test_a_frozen_photon_lattice_survives_save_and_reload_in_a_new_blender(
+        blender, build_python_dir, tmp_path):
+    """A Photon Lattice solution is saved beside the .blend; a new Blender opening the file reads
+    it back, frozen and up to date, and F12 renders it without solving: the same pixels as F12
+    before the save, bit for bit (the same float32 lattices, scene and seed)."""
+    blend = tmp_path / "frozen_lattice.blend"
+    runs = {}
+    for mode in ("save", "reload"):
+        out = tmp_path / f"{mode}.json"
+        result = run_blender(BLENDER_SCRIPTS / "frozen_lattice_reload.py", build_python_dir,
+                             ADDON_DIR, out, mode, blend, blender=blender, timeout=300)
+        log = result.stdout[-4000:] + result.stderr[-3000:]
+        assert result.returncode == 0 and "FROZEN_LATTICE_OK" in result.stdout, log
+        runs[mode] = json.loads(out.read_text())
+    assert runs["save"]["saved_files"] == ["Scene.json", "Scene_lattice.shlattice"], runs
+    after = runs["reload"]
+    assert after["loaded"] and after["passes"] == 1, after
+    assert after["changed_since"] is None and not after["warnings"], after
+    assert "Read from" in after["figures"] and "solve" not in after["timings"], after
+    assert after["mean"] > 0.0
+    assert after["max_difference"] == 0.0
 
 
 # Words of the papers and data structures behind the methods: a tooltip says what a setting

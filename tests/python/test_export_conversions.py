@@ -284,12 +284,30 @@ def test_split_duplicates_vertices_at_normal_and_uv_seams():
 def test_split_rejects_nan_and_bad_indices():
     positions, corners = quad_corners()
     positions[2, 1] = np.nan
-    with pytest.raises(ValueError, match="'quad': vertex 2 is"):
+    with pytest.raises(ValueError, match=r"^mesh 'quad': vertex 2 has y = nan; SHGI places "
+                                         r"coordinates within ±1e\+12 m: move the vertex back"):
         split_corners(positions, corners, name="quad")
     with pytest.raises(ValueError, match=r"\[0, 4\)"):
         split_corners(quad_corners()[0], np.array([0, 1, 4]), name="quad")
     with pytest.raises(ValueError, match="corner 1"):
         split_corners(quad_corners()[0], corners, np.array([[0, 0, 1], [np.inf, 0, 0]] * 3))
+
+
+def test_split_names_an_inf_vertex_as_the_artist_typed_it():
+    """Blender stores an inf typed into a vertex field as its largest float (3.4e+38): finite,
+    but its normals are NaN. It is refused as inf, before the normals; so is a real inf and a
+    coordinate beyond shgi.MAX_COORDINATE, with its value; the limit itself passes."""
+    largest = np.finfo(np.float32).max
+    for value, text in ((largest, "inf"), (-np.inf, "-inf"), (2e12, "2e\\+12 m")):
+        positions, corners = quad_corners()
+        positions[1, 2], positions[3, 0] = value, value
+        with pytest.raises(ValueError, match=rf"^mesh 'quad': vertex 1 has z = {text} \(and 1 "
+                                             r"more vertices\); SHGI places coordinates within "
+                                             r"±1e\+12 m"):
+            split_corners(positions, corners, name="quad")
+    positions, corners = quad_corners()
+    positions[0] = shgi.MAX_COORDINATE
+    assert split_corners(positions, corners).positions[0].tolist() == [shgi.MAX_COORDINATE] * 3
 
 
 def test_split_of_an_empty_mesh():

@@ -201,3 +201,30 @@ def test_lattice_export_writes_every_coefficient_and_documents_the_layout(tmp_pa
     assert np.abs(solved["global"]["sh"]).max() > 0.0
     with pytest.raises(ValueError, match=".json"):
         export_lattice(lattice, tmp_path / "cornell.exr")
+
+
+def test_a_saved_lattice_loads_back_and_renders_the_same_pixels(tmp_path):
+    """save() then load(): the loaded lattice renders the solved one's image bit for bit (the
+    same float32 lattices and cell surfaces), keeps its settings, passes and timings, and
+    cannot solve again (it has no scene); a truncated file is refused by name."""
+    scene = committed(scenes.cornell_box(0.05))
+    lattice = shgi.PhotonLattice(scene, shgi.PhotonLatticeSettings(photons=20000, seed=4))
+    lattice.solve()
+    lattice.solve()
+    path = tmp_path / "cornell.shlattice"
+    lattice.save(path)
+    loaded = shgi.PhotonLattice.load(path)
+    assert (loaded.passes, loaded.timings, loaded.settings.seed) == (2, lattice.timings, 4)
+    preview = shgi.PreviewSettings(samples=2, seed=3)
+    solved_image, _ = shgi.render_preview(scene, lattice, preview)
+    loaded_image, _ = shgi.render_preview(scene, loaded, preview)
+    assert (solved_image["DiffInd"] > 0.0).any()
+    for name, pixels in solved_image.items():
+        np.testing.assert_array_equal(loaded_image[name], pixels, err_msg=name)
+    with pytest.raises(ValueError, match=rf"read from \"{path}\" and has no scene"):
+        loaded.refine()
+    truncated = tmp_path / "truncated.shlattice"
+    truncated.write_bytes(path.read_bytes()[:1000])
+    with pytest.raises(OSError, match=rf"^cannot read lattice file \"{truncated}\": the lattice "
+                                      r"coefficients \(110592 of 4 bytes\) is longer than"):
+        shgi.PhotonLattice.load(truncated)

@@ -95,9 +95,7 @@ class LatticeSolver(FieldSolver):
         return dict(self.lattice.timings)
 
     def figures(self):
-        timings = self.lattice.timings
-        return [("Photons emitted / stored", f"{int(timings.get('photons_emitted', 0)):,} / "
-                                             f"{int(timings.get('photons_stored', 0)):,}")]
+        return lattice_figures(self.lattice)
 
     def overlay(self, snapshot, scene):
         from .lattice_samples import lattice_overlay
@@ -190,6 +188,56 @@ class LoadedProbeField:
 
     def overlay(self, _snapshot, _scene):
         return probe_overlay(self._shgi, self._field)
+
+
+class LoadedLattice:
+    """A PhotonLattice read from a saved solution's file (PhotonLattice.load) in a FieldSolver's
+    place: nothing to update (it has no scene), the saved figures, and spheres at the cells
+    that hold light."""
+
+    METHOD = LatticeSolver.METHOD
+
+    def __init__(self, lattice, path):
+        self.lattice = lattice
+        self.path = path
+
+    @property
+    def passes(self):
+        return self.lattice.passes
+
+    def field(self):
+        return self.lattice
+
+    @property
+    def memory_bytes(self):
+        return self.lattice.memory_bytes
+
+    @property
+    def timings(self):
+        return dict(self.lattice.timings)
+
+    def figures(self):
+        return lattice_figures(self.lattice) + [("Read from", self.path)]
+
+    def overlay(self, _snapshot, _scene):
+        """Spheres at the centres of the global lattice's cells holding light (the saved file
+        has no scene to find the cells holding surface in), or None when none does."""
+        from .field_spheres import field_spheres
+
+        grid = self.lattice.lattices["global"]
+        lit = np.argwhere(np.any(grid["sh"] != 0.0, axis=(3, 4)))  # (K, 3) as (k, j, i)
+        if len(lit) == 0:
+            return None
+        cell = grid["cell_size"]
+        centres = np.asarray(grid["origin"]) + (lit[:, ::-1] + 0.5) * cell
+        return field_spheres(self.lattice, centres, cell)
+
+
+def lattice_figures(lattice):
+    """The (label, text) rows of a PhotonLattice: the photons of its last pass."""
+    timings = lattice.timings
+    return [("Photons emitted / stored", f"{int(timings.get('photons_emitted', 0)):,} / "
+                                         f"{int(timings.get('photons_stored', 0)):,}")]
 
 
 def probe_figures(active, total, passes):

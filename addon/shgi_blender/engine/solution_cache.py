@@ -10,12 +10,12 @@ change its light (solution_files.py feeds it from Blender's depsgraph updates), 
 ``changed_since`` tells a solution made before the last of them (F12 warns, the panel offers
 Re-solve).
 
-A Probe Grid solution is saved beside the .blend file and read back when the file opens
-(solution_files.py): ``save_solution`` writes the field with the native export
-(ProbeField.export: float EXR + JSON) and a small JSON of the solution's own figures,
-``load_solution`` reads them into a Solution whose field came from the file (LoadedProbeField);
-F12 then exports the scene's geometry once per render, as there is no solved scene to reuse.
-The photon lattice has no native import, so its solutions live until the file closes.
+Probe Grid and Photon Lattice solutions are saved beside the .blend file and read back when the
+file opens (solution_files.py): ``save_solution`` writes the field natively (FIELD_FILES: a
+ProbeField's float EXR + JSON export, a PhotonLattice's binary save) and a small JSON of the
+solution's own figures; ``load_solution`` reads them into a Solution whose field came from the
+file (LoadedProbeField, LoadedLattice), which renders the same pixels as before. F12 then
+exports the scene's geometry once per render, as there is no solved scene to reuse.
 
 ``solve`` is also how F12 solves a field when nothing is frozen (render_job.RenderJob).
 
@@ -114,6 +114,38 @@ SOLUTION_FORMAT = "shgi-frozen-solution"
 SOLUTION_VERSION = 1
 
 
+@dataclass(frozen=True)
+class FieldFile:
+    """How a method's solved field is written beside a saved solution and read back."""
+
+    suffix: str    # appended to the solution JSON's stem
+    write: object  # write(field, path)
+    read: object   # read(shgi, path, lookup) -> (field solver adapter, field)
+
+
+def _read_probe_field(shgi, path, lookup):
+    from .field_solvers import LoadedProbeField
+
+    solver = LoadedProbeField(shgi, shgi.ProbeField.import_exr(path, lookup), path)
+    return solver, solver.field()
+
+
+def _read_lattice(shgi, path, _lookup):
+    from .field_solvers import LoadedLattice
+
+    solver = LoadedLattice(shgi.PhotonLattice.load(path), path)
+    return solver, solver.field()
+
+
+# The methods whose solutions are saved with the .blend, by identifier.
+FIELD_FILES = {
+    "PROBE_GRID": FieldFile("_field.json", lambda field, path: field.export(path),
+                            _read_probe_field),
+    "PHOTON_LATTICE": FieldFile("_lattice.shlattice", lambda field, path: field.save(path),
+                                _read_lattice),
+}
+
+
 # Datablocks whose edits leave the light alone: the scene's own settings (render settings, the
 # frame, the selection) and the camera (a frozen solution is rendered from any camera).
 _UNLIT_KINDS = ("Scene", "Camera")
@@ -155,16 +187,18 @@ def solved_at_text(solution):
 
 
 def save_solution(solution, json_path):
-    """Writes a Probe Grid solution: the field's export at json_path's stem + "_field.json"
-    (and its EXR files), and json_path with the solution's method, time, settings signature and
-    figures. ValueError for a solution whose field cannot be written back."""
-    if solution.method != "PROBE_GRID":
-        raise ValueError(f"a {solution.method} solution cannot be saved: only Probe Grid fields "
-                         "have a native import")
-    stem = json_path[: -len(".json")]
-    solution.field.export(f"{stem}_field.json")
+    """Writes a solution of a method of FIELD_FILES: its field at json_path's stem + the
+    method's suffix (a Probe Grid's EXR files beside it), and json_path with the solution's
+    method, time, settings signature and figures. ValueError for a solution whose field cannot
+    be written back."""
+    field_file = FIELD_FILES.get(solution.method)
+    if field_file is None:
+        raise ValueError(f"a {solution.method} solution cannot be saved: only "
+                         f"{' and '.join(FIELD_FILES)} fields are read back")
+    field_path = json_path[: -len(".json")] + field_file.suffix
+    field_file.write(solution.field, field_path)
     doc = {"format": SOLUTION_FORMAT, "version": SOLUTION_VERSION, "method": solution.method,
-           "solved_at": solution.solved_at, "field": os.path.basename(f"{stem}_field.json"),
+           "solved_at": solution.solved_at, "field": os.path.basename(field_path),
            "signature": None if solution.signature is None else list(solution.signature),
            "timings": solution.timings, "warnings": solution.warnings}
     with open(json_path, "w", encoding="utf-8") as out:
@@ -172,15 +206,19 @@ def save_solution(solution, json_path):
 
 
 def load_solution(shgi, json_path, lookup):
-    """The Solution save_solution wrote at json_path, its probes read with `lookup`
+    """The Solution save_solution wrote at json_path, a probe field's probes read with `lookup`
     (shgi.ProbeLookupSettings); OSError or ValueError naming the file when it is not one."""
     with open(json_path, encoding="utf-8") as file:
         doc = json.load(file)
     if doc.get("format") != SOLUTION_FORMAT or doc.get("version") != SOLUTION_VERSION:
         raise ValueError(f"{json_path} is not a saved SHGI solution (format "
                          f"{SOLUTION_FORMAT} {SOLUTION_VERSION})")
+    field_file = FIELD_FILES.get(doc.get("method"))
+    if field_file is None:
+        raise ValueError(f"{json_path} holds a {doc.get('method')} solution, which this "
+                         "version cannot read")
     field_path = os.path.join(os.path.dirname(json_path), doc["field"])
-    solution = loaded_solution(shgi, field_path, lookup)
+    solution = _read_solution(shgi, field_file, field_path, lookup)
     solution.solved_at = doc["solved_at"]
     solution.signature = (None if doc["signature"] is None
                           else tuple(tuple(pair) for pair in doc["signature"]))
@@ -193,20 +231,23 @@ def loaded_solution(shgi, field_json_path, lookup):
     """A Solution of the probe field a ProbeField.export wrote (Export Volume's files), read with
     `lookup`; its scene is None (F12 exports the current one) and its signature None (its
     settings are unknown). ValueError naming the file for a photon lattice's export."""
-    from .field_solvers import LoadedProbeField
-
     with open(field_json_path, encoding="utf-8") as file:
         doc = json.load(file)
     if "lattices" in doc:
         raise ValueError(f"{field_json_path} holds photon lattices, which SHGI cannot read back "
                          "(there is no lattice import): Solve the Photon Lattice instead, or "
                          "load a Probe Grid volume")
-    solver = LoadedProbeField(shgi, shgi.ProbeField.import_exr(field_json_path, lookup),
-                              field_json_path)
-    return Solution(method=solver.METHOD, scene=None, solver=solver, field=solver.field(),
+    return _read_solution(shgi, FIELD_FILES["PROBE_GRID"], field_json_path, lookup)
+
+
+def _read_solution(shgi, field_file, field_path, lookup):
+    """A Solution of the field at field_path, read as `field_file` says; its scene is None (F12
+    exports the current one), its signature None (its settings are unknown) and its time the
+    file's."""
+    solver, field_ = field_file.read(shgi, field_path, lookup)
+    return Solution(method=solver.METHOD, scene=None, solver=solver, field=field_,
                     signature=None, timings={}, memory_bytes=solver.memory_bytes,
-                    solved_at=os.path.getmtime(field_json_path),
-                    overlay=solver.overlay(None, None))
+                    solved_at=os.path.getmtime(field_path), overlay=solver.overlay(None, None))
 
 
 def store(key, solution):

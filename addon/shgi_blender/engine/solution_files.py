@@ -5,11 +5,13 @@
   or world; not the camera or render settings), so that F12 and the panel can say that a frozen
   solution no longer shows the scene.
 * Saving: after the .blend is written (save_post: Blender 3.4 tells its save_pre handlers no
-  path, and a first save has none before), each scene's Probe Grid solution is written beside
-  it, to ``<file>_shgi/<scene>.json`` (solution_cache.save_solution); the file of a scene
-  without one is removed, so that an older solution does not come back.
+  path, and a first save has none before), each scene's Probe Grid or Photon Lattice solution
+  is written beside it, to ``<file>_shgi/<scene>.json`` and the field's files next to it
+  (solution_cache.save_solution); the file of a scene without one is removed, so that an older
+  solution does not come back.
 * Loading: after a file opens (load_post), each scene's solution file beside it is read back
-  with the scene's probe lookup settings; a file that cannot be read is named in the panel
+  (a probe field with the scene's probe lookup settings); a file that cannot be read is named
+  in the panel
   (``load_problem``).
 """
 
@@ -65,15 +67,15 @@ def _blend_path(file_path):
 
 @bpy.app.handlers.persistent
 def save_solutions(file_path=None, *_args):
-    """save_post: writes each scene's Probe Grid solution beside the saved .blend."""
+    """save_post: writes each scene's frozen solution beside the saved .blend."""
     blend_path = _blend_path(file_path)
     if not blend_path:
         return
     for scene in bpy.data.scenes:
-        solution = solution_cache.get(scene.name_full, "PROBE_GRID")
+        solution = solution_cache.get(scene.name_full)
         path = solution_path(blend_path, scene)
         try:
-            if solution is not None:
+            if solution is not None and solution.method in solution_cache.FIELD_FILES:
                 os.makedirs(os.path.dirname(path), exist_ok=True)
                 solution_cache.save_solution(solution, path)
             elif os.path.exists(path):

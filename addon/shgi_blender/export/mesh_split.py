@@ -10,6 +10,7 @@ with ``np.unique`` over rows.
 from dataclasses import dataclass, field
 
 import numpy as np
+import shgi
 
 
 @dataclass
@@ -27,13 +28,35 @@ def never_stop():
 
 
 def require_finite_positions(positions, name):
-    """ValueError naming the mesh and the first vertex with a NaN or infinite coordinate."""
+    """ValueError naming the mesh, the first vertex with a coordinate SHGI cannot place (NaN,
+    infinite, or beyond shgi.MAX_COORDINATE), that coordinate and the fix.
+
+    Blender keeps an "inf" typed into a vertex field as its largest float, 3.4e+38: finite to
+    numpy, but the normals computed from it are NaN, so it is reported as the inf it was.
+    """
     positions = np.asarray(positions)
-    bad = np.flatnonzero(~np.isfinite(positions).all(axis=1))
+    placeable = np.abs(positions) <= shgi.MAX_COORDINATE  # False for NaN too
+    bad = np.flatnonzero(~placeable.all(axis=1))
     if bad.size:
         vertex = int(bad[0])
-        raise ValueError(f"mesh {name!r}: vertex {vertex} is {tuple(positions[vertex].tolist())}; "
-                         f"all coordinates must be finite ({bad.size} such vertices)")
+        axis = int(np.flatnonzero(~placeable[vertex])[0])
+        value = float(positions[vertex, axis])
+        more = f" (and {bad.size - 1} more vertices)" if bad.size > 1 else ""
+        raise ValueError(
+            f"mesh {name!r}: vertex {vertex} has {'xyz'[axis]} = {_coordinate_text(value)}{more}; "
+            f"SHGI places coordinates within "
+            f"±{shgi.MAX_COORDINATE:g} m: move the vertex back (Edit Mode, Sidebar > Item > "
+            "Vertex) or fix the modifier or geometry nodes that put it there")
+
+
+def _coordinate_text(value):
+    """A coordinate as the artist knows it: nan, ±inf (Blender's largest float included), or
+    the number in metres."""
+    if np.isnan(value):
+        return "nan"
+    if abs(value) >= np.finfo(np.float32).max:
+        return "inf" if value > 0 else "-inf"
+    return f"{value:g} m"
 
 
 def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=None,

@@ -169,6 +169,15 @@ class _SceneExporter:
     def _add_geometry(self, instance):
         """Adds an instance of the object's geometry, converting the geometry on first use."""
         obj = instance.object
+        instancer = _zero_scale_instancer(instance)
+        if instancer is not None:
+            # Every instance it makes is flat: the instancer is what the artist must fix, not
+            # the objects it instances (fine wherever else they are used).
+            scale = tuple(round(axis, 6) for axis in instancer.matrix_world.to_scale())
+            self._skip(instancer, f"its scale is 0 (world scale {scale}), which flattens every "
+                                  "instance it makes; give every axis a non-zero scale (Object "
+                                  "Properties > Transform > Scale, of it or of its parents)")
+            return
         material_ids = tuple(self.materials.slot_ids(obj))
         flip = obj.name in self.flipped
         key = (self._geometry_key(obj), material_ids, flip)
@@ -190,7 +199,8 @@ class _SceneExporter:
         """Leaves an object out, with a warning; `geometry_key`: its geometry is what failed
         (every object sharing it is left out for the same reason)."""
         self.log.warn(f"object {obj.name!r}: {problem}; skipped")
-        self.stats.skipped_objects += 1
+        if obj.name not in self.skipped:  # an instancer is skipped once per instance it makes
+            self.stats.skipped_objects += 1
         self.skipped.setdefault(obj.name, problem)
         if geometry_key is not None:
             self._mesh_problems[geometry_key] = problem
@@ -256,6 +266,15 @@ def flipped_mesh(mesh):
     return shgi.Mesh(positions=mesh.positions, triangles=mesh.triangles[:, ::-1].copy(),
                      normals=-mesh.normals, uvs=mesh.uv_sets or None,
                      material_indices=mesh.material_indices, name=mesh.name)
+
+
+def _zero_scale_instancer(instance):
+    """The object that instances `instance` (a collection instance's Empty, a particle system's
+    or geometry nodes' owner) when its world scale is 0 on some axis, else None."""
+    instancer = instance.parent if instance.is_instance else None
+    if instancer is None or min(map(abs, instancer.matrix_world.to_scale())) > 0.0:
+        return None
+    return instancer
 
 
 @dataclass

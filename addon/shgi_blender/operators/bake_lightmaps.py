@@ -150,7 +150,7 @@ def _xatlas_layout(obj, layer, values, report):
     try:
         layout, disagreeing = xatlas_uv.lay_out(
             obj, layer, values.resolution, values.texel_density,
-            (bake_settings.MIN_DENSITY_RESOLUTION, bake_settings.MAX_DENSITY_RESOLUTION))
+            (shgi_bake.MIN_RESOLUTION, shgi_bake.MAX_RESOLUTION))
     except (ImportError, ValueError) as error:
         obj.data.uv_layers.remove(layer)
         raise BakeError(f"object {obj.name!r}: xatlas could not lay out {values.uv_map!r}: "

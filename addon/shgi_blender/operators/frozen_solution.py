@@ -10,7 +10,8 @@ the current camera until SHGI_OT_clear_solution. It keeps the scene's edit count
 so that later edits mark it out of date (engine/solution_files.py counts them).
 
 SHGI_OT_load_solution reads a probe field Export Volume wrote back as the scene's frozen
-solution (a photon lattice's export cannot be read back: there is no lattice import).
+solution (a photon lattice's EXR export cannot be read back: the lattice is read back only from
+the binary file saved with the .blend, solution_files.py).
 """
 
 import os

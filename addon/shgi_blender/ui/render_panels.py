@@ -141,8 +141,8 @@ def draw_frozen_solution(layout, context):
     if solution.signature is not None and solution.signature != settings.solver_signature(props):
         draw_wrapped(box, "Settings changed since the solve: Re-solve to apply them",
                      icon="ERROR")
-    if solution.method != "PROBE_GRID":
-        draw_wrapped(box, "Not saved with the file (photon lattices cannot be read back)",
+    if solution.method not in solution_cache.FIELD_FILES:
+        draw_wrapped(box, "Not saved with the file (this method's field cannot be read back)",
                      icon="INFO")
     figure_rows.draw_rows(box, figure_rows.solution_rows(solution))
 

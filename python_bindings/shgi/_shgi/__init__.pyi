@@ -8,7 +8,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'GiSolver', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'GiSolver', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -1300,6 +1300,11 @@ class PhotonLattice(IndirectField, GiSolver):
     @staticmethod
     def _pybind11_conduit_v1_(*args, **kwargs):
         ...
+    @staticmethod
+    def load(path: str | bytes | os.PathLike) -> PhotonLattice:
+        """
+        A PhotonLattice read from save()'s file: it renders and reports as the saved one, but has no scene, so refine() and reset() raise ValueError (OSError naming a bad file).
+        """
     def __init__(self, scene: Scene, settings: PhotonLatticeSettings = ..., progress: Progress = None) -> None:
         """
         Measures the surface inside the lattices' cells (the scene must be committed).
@@ -1315,6 +1320,10 @@ class PhotonLattice(IndirectField, GiSolver):
     def reset(self, progress: Progress = None) -> None:
         """
         Forgets every pass and re-measures the (re-committed) scene.
+        """
+    def save(self, path: str | bytes | os.PathLike) -> None:
+        """
+        Writes the solved lattices, their settings, caustic photons and timings to a binary file (float32 as held, so load() looks up the same light; OSError naming a path that cannot be written).
         """
     def solve(self, progress: Progress = None) -> None:
         """
@@ -2739,3 +2748,5 @@ def write_png(path: str | bytes | os.PathLike, pixels: typing.Any, exposure: typ
     Colour is clamped to [0, 1] (NaN -> 0) and encoded with the exact sRGB curve; alpha is stored
     linearly. Raises ValueError for bad arguments, OSError when the file cannot be written.
     """
+MAX_COORDINATE: float = 999999995904.0
+MAX_LIGHTMAP_RESOLUTION: int = 16384

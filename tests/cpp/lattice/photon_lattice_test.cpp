@@ -33,6 +33,7 @@
 #include "render/render_test_scenes.h"
 #include "support/expect_error.h"
 #include "support/noise_stats.h"
+#include "support/test_folder.h"
 #include "util/error.h"
 
 namespace shgi {
@@ -301,6 +302,52 @@ TEST(PhotonLattice, BitIdenticalForAnyThreadCount) {
             EXPECT_EQ(a.irradiance(probe.normal), b.irradiance(probe.normal));
         }
     }
+}
+
+// A solved lattice saved and loaded back looks up the same light at every probe: bit for bit
+// with a caustic lattice; with a caustic photon map, whose k-d tree is rebuilt, within float
+// rounding of its sums. The loaded lattice keeps settings, passes and timings, has no scene
+// (solve() names the file), and a truncated or foreign file is refused by name.
+TEST(PhotonLattice, SavedAndLoadedLookUpTheSameLight) {
+    // Relative rounding of a density estimate summed in another order (float32, ~50 photons).
+    constexpr float kRebuiltMapTolerance = 1e-5f;
+    const Scene scene = room_with_mirror_sphere();
+    for (CausticMode mode : {CausticMode::Lattice, CausticMode::PhotonMap}) {
+        PhotonLatticeSettings settings = small_settings();
+        settings.caustics = mode;
+        PhotonLattice solved(scene, settings);
+        solved.solve();
+        solved.solve();
+        const std::string path = testing::test_file_path(
+            "lattice", mode == CausticMode::Lattice ? "lattice.shlattice" : "map.shlattice");
+        solved.save(path);
+        const std::unique_ptr<PhotonLattice> loaded = PhotonLattice::load(path);
+        EXPECT_EQ(loaded->passes(), 2u);
+        EXPECT_EQ(loaded->settings().caustics, mode);
+        EXPECT_EQ(loaded->timings().photons_emitted, solved.timings().photons_emitted);
+        EXPECT_EQ(global_coefficients(*loaded), global_coefficients(solved));
+        EXPECT_EQ(loaded->caustic_map().size(), solved.caustic_map().size());
+        EXPECT_EQ(loaded->reuse_distance(), solved.reuse_distance());
+        for (const Probe& probe : face_centre_probes()) {
+            const FieldLookup a = solved.lookup(probe.position, probe.normal);
+            const FieldLookup b = loaded->lookup(probe.position, probe.normal);
+            ASSERT_EQ(a.radiance.order, b.radiance.order);
+            for (int i = 0; i < 3 * a.radiance.num_coefficients(); ++i)
+                EXPECT_EQ(a.radiance.data()[i], b.radiance.data()[i]);
+            for (int k = 0; k < 3; ++k)
+                EXPECT_NEAR(a.extra_irradiance[k], b.extra_irradiance[k],
+                            kRebuiltMapTolerance * std::abs(a.extra_irradiance[k]));
+        }
+        testing::expect_invalid_argument([&] { loaded->solve(); }, path);
+    }
+    const std::string truncated = testing::test_file_path("lattice", "truncated.shlattice");
+    testing::write_file(truncated, "SHGILAT");
+    testing::expect_error<IoError>([&] { PhotonLattice::load(truncated); },
+                                   {truncated, "ends inside the header"});
+    const std::string foreign = testing::test_file_path("lattice", "foreign.shlattice");
+    testing::write_file(foreign, "not a lattice at all");
+    testing::expect_error<IoError>([&] { PhotonLattice::load(foreign); },
+                                   {foreign, "not an SHGI lattice file"});
 }
 
 // The lattices hold the average of all passes: two solves equal (bit for bit) the two photon

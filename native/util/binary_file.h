@@ -1,0 +1,87 @@
+// Little-endian binary files of SHGI's own caches (probes/probe_storage, lattice/photon_lattice):
+// BinaryWriter puts values and arrays as they lie in memory (every supported platform is
+// little-endian); BinaryReader reads them back and turns a short read into an IoError naming the
+// file and the part it ended inside, so that a truncated file is never read as zeros.
+#pragma once
+
+#include <cstdint>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "util/error.h"
+
+namespace shgi {
+
+class BinaryWriter {
+  public:
+    explicit BinaryWriter(std::ofstream& out) : out_(out) {}
+    template <typename T>
+    void put(const T& value) {
+        out_.write(reinterpret_cast<const char*>(&value), sizeof(T));
+    }
+    void bytes(const void* data, size_t size) {
+        out_.write(static_cast<const char*>(data), std::streamsize(size));
+    }
+    // The element count (u64), then the elements.
+    template <typename T>
+    void array(const std::vector<T>& values) {
+        put(uint64_t(values.size()));
+        bytes(values.data(), values.size() * sizeof(T));
+    }
+
+  private:
+    std::ofstream& out_;
+};
+
+class BinaryReader {
+  public:
+    // `kind` names the file in messages ("probe file", "lattice file").
+    BinaryReader(std::ifstream& in, const std::string& path, const char* kind)
+        : in_(in), path_(path), kind_(kind) {}
+    template <typename T>
+    T get(const char* what) {
+        T value;
+        bytes(&value, sizeof(T), what);
+        return value;
+    }
+    void bytes(void* data, size_t size, const char* what) {
+        in_.read(static_cast<char*>(data), std::streamsize(size));
+        if (size_t(in_.gcount()) != size)
+            throw IoError(format_message("cannot read ", kind_, " \"", path_,
+                                         "\": it ends inside ", what, " (truncated?)"));
+    }
+    // What BinaryWriter::array wrote: checked against the bytes left in the file before
+    // anything is allocated, so that a damaged count cannot ask for gigabytes.
+    template <typename T>
+    std::vector<T> array(const char* what) {
+        const uint64_t count = get<uint64_t>(what);
+        const uint64_t remaining = remaining_bytes();
+        if (count > remaining / sizeof(T))
+            throw IoError(format_message("cannot read ", kind_, " \"", path_, "\": ", what, " (",
+                                         count, " of ", sizeof(T), " bytes) is longer than the ",
+                                         remaining, " bytes left (truncated?)"));
+        std::vector<T> values(count);
+        bytes(values.data(), count * sizeof(T), what);
+        return values;
+    }
+    // Bytes from the stream's position to the end of the file; the position is kept.
+    uint64_t remaining_bytes() {
+        const std::streampos here = in_.tellg();
+        in_.seekg(0, std::ios::end);
+        const std::streampos end = in_.tellg();
+        in_.seekg(here);
+        if (here < 0 || end < here || !in_)
+            throw IoError(format_message("cannot find the size of ", kind_, " \"", path_, "\""));
+        return uint64_t(end - here);
+    }
+    const std::string& path() const { return path_; }
+    const char* kind() const { return kind_; }
+
+  private:
+    std::ifstream& in_;
+    const std::string& path_;
+    const char* kind_;
+};
+
+}  // namespace shgi
