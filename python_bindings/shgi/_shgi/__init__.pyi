@@ -1586,6 +1586,14 @@ class PreviewSettings:
     def combined_only(self, arg0: bool) -> None:
         ...
     @property
+    def final_gather(self) -> bool:
+        """
+        Final gather (False): the first surface sends one BSDF-sampled ray per sample and the field is read where it lands, so the field's blocks and leaks reach the picture only through one more bounce.
+        """
+    @final_gather.setter
+    def final_gather(self, arg0: bool) -> None:
+        ...
+    @property
     def max_specular_bounces(self) -> int:
         """
         Mirror/glass bounces followed per path (8).
