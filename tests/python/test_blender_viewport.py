@@ -373,6 +373,23 @@ def test_worker_without_pyoidn_shows_noisy_frames_and_says_why(monkeypatch):
     assert np.isfinite(frame.pixels).all() and frame.pixels[..., :3].mean() > 0.0
 
 
+def test_worker_stops_refining_at_its_time_limit():
+    """Asked for 10^6 samples with a Viewport Time Limit, the worker stops its rounds once the
+    limit passed and says so; the last frame it published holds the samples done."""
+    scene = scenes.cornell_box(0.1).scene
+    props = properties(method="PATH_TRACE", viewport_samples=10 ** 6, viewport_time_limit=0.3)
+    worker = ViewportWorker(shgi)
+    try:
+        worker.request(snapshot_of(scene), view_of(scene, 24, 24), props)
+        wait_for(lambda: worker.status.startswith("Done") or worker.error)
+        assert worker.error is None, worker.error
+        status, frame = worker.status, worker.latest_frame()
+    finally:
+        worker.stop()
+    assert status == f"Done, time limit at {frame.samples} samples", status
+    assert frame.divisor == 1 and 1 <= frame.samples < 10 ** 6
+
+
 def test_worker_edits_the_scene_in_place_and_ignores_equal_requests():
     scene = scenes.cornell_box(0.1).scene
     view, props = view_of(scene, 24, 24), properties(viewport_samples=2,
