@@ -28,11 +28,12 @@ import bpy  # noqa: E402
 import calibration_common as calibration  # noqa: E402
 
 
-def new_scene(name, scale):
-    """A fresh file holding project scene `name` at `scale`, ready for Cycles and SHGI."""
+def new_scene(name, scale, lightmap=False):
+    """A fresh file holding project scene `name` at `scale`, ready for Cycles and SHGI; with
+    `lightmap`, its walls face inwards and carry LightmapUV (blender_scenes.SceneBuilder)."""
     calibration.reset_scene()
     setup.enable_addon()
-    scene = blender_scenes.SCENES[name](scale)
+    scene = blender_scenes.SCENES[name](scale, lightmap)
     for field, value in calibration.BOUNCES.items():  # the same limits for both engines
         setattr(scene.shgi, field, value)
     # Compared with Cycles undenoised (reset_scene), as references are: the denoiser has its

@@ -6,7 +6,14 @@ registered once reaches the add-on with no other edit.
    shgi.render_preview and denoises with shgi.frame_denoise, give the same float32 Combined,
    bit for bit: for the Photon Lattice, the
    Probe Grid and SINGLE_PROBE_TEST, the test-only method of tests/python/method_plugin.py.
-2. That method, loaded through SHGI_METHOD_PLUGINS before the add-on imported shgi, is in the
+2. The Bake Lightmaps operator (its settings taken from the Bake panel's scene.shgi.bake), and a
+   script that exports the same scene as the operator does, takes its shgi.bake.BakeOptions from
+   the add-on's own mapping (bake_settings.bake_options), its jobs from shgi.bake.jobs_for_scene,
+   solves the field with shgi.bake.solve_field (the registry's final_passes) and bakes with
+   shgi.bake.bake_scene, give the same float32 lightmap texels, bit for bit: the images the
+   operator made against bake_scene's Lightmap.color, before any file encoding, for the same
+   three methods, on four objects (one of them given its UV map by the operator's Create UV Map).
+3. That method, loaded through SHGI_METHOD_PLUGINS before the add-on imported shgi, is in the
    Render Method menu and in the bake's Indirect Light menu with its registry number, and a bake
    with it writes a lit lightmap.
 
@@ -32,14 +39,23 @@ import numpy as np  # noqa: E402
 
 import method_plugin  # noqa: E402
 import shgi  # noqa: E402
+from shgi import bake as shgi_bake  # noqa: E402
 from shgi.frame_denoise import denoise_frame  # noqa: E402
-from shgi_blender import settings  # noqa: E402
+from shgi_blender import bake_settings, settings  # noqa: E402
 from shgi_blender.engine.field_solvers import solver_recipe  # noqa: E402
 from shgi_blender.export import export_scene  # noqa: E402
+from shgi_blender.operators.lightmap_images import image_name  # noqa: E402
 
 SCALE = 0.25      # of the Cornell box's 128 x 128 pixels
 SAMPLES = 4
 METHODS = ("PHOTON_LATTICE", "PROBE_GRID", method_plugin.IDENTIFIER)
+# The bake: the Cornell box's floor, back and left walls (LightmapUV of their own) and the short
+# block (Lightmap Pack lays out its UV map), at a texel density giving 16-24 texels a side.
+BAKED_OBJECTS = ("back", "floor", "left", "short_block")
+BAKE_TEXELS_PER_METRE = 8.0
+BAKE_SAMPLES = 4
+# Not the default seed: a front end that dropped it would still agree at 0.
+BAKE_SEED = 5
 
 
 def script_render(scene):
@@ -82,6 +98,74 @@ def compare_front_ends(results):
             raise AssertionError(f"{method}: the F12 image is black")
 
 
+def operator_bake(scene, folder):
+    """{object name: float32 (H, W, 3)} of the images the Bake Lightmaps operator made, run as
+    the panel's button runs it (no property set: all of them from scene.shgi.bake)."""
+    bake = scene.shgi.bake
+    bake.output_folder = folder
+    bpy.ops.object.select_all(action="DESELECT")
+    for name in BAKED_OBJECTS:
+        bpy.data.objects[name].select_set(True)
+    bpy.context.view_layer.objects.active = bpy.data.objects[BAKED_OBJECTS[0]]
+    status = bpy.ops.shgi.bake_lightmaps()
+    if status != {"FINISHED"}:
+        raise AssertionError(f"the bake with {bake.source}: {status}")
+    images = {}
+    for name in BAKED_OBJECTS:
+        image = bpy.data.images[image_name(name)]
+        width, height = image.size
+        rgba = np.empty(width * height * 4, np.float32)
+        image.pixels.foreach_get(rgba)
+        images[name] = rgba.reshape(height, width, 4)[..., :3]
+    return images
+
+
+def script_bake(scene, folder):
+    """{object name: float32 (H, W, 3)} of shgi.bake.bake_scene on the scene exported as the
+    operator exports it (every object facing the scene: nothing turned around), with the
+    add-on's own BakeOptions and field settings."""
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    export = export_scene(depsgraph, scene, for_render=True, with_camera=False)
+    native = export.scene
+    native.commit()
+    props, bake = scene.shgi, scene.shgi.bake
+    options = bake_settings.bake_options(bake, props, shgi)
+    jobs = shgi_bake.jobs_for_scene(native, bake.uv_map, texels_per_metre=bake.texel_density,
+                                    names=BAKED_OBJECTS)
+    recipe = solver_recipe(props, shgi, export.probe_volumes)
+    field = shgi_bake.solve_field(native, bake.source, settings=recipe.settings)
+    lightmaps = shgi_bake.bake_scene(native, jobs, options, folder, field)
+    return {lightmap.name: lightmap.color for lightmap in lightmaps}
+
+
+def compare_bakes(results):
+    scene = common.new_scene("cornell_box", SCALE, lightmap=True)
+    scene.shgi.photon_lattice.photons = 20000
+    scene.shgi.probe_grid.rays_per_probe = 32
+    scene.shgi.seed = BAKE_SEED
+    bake = scene.shgi.bake
+    bake.samples, bake.texel_density = BAKE_SAMPLES, BAKE_TEXELS_PER_METRE
+    bake.create_uv = bake.filter = True  # Lightmap Pack for the block; SHGI's filter
+    for method in METHODS:
+        # The operator solves the bake's source; the script's solver_recipe reads the method.
+        scene.shgi.method = bake.source = method
+        operator = operator_bake(scene, tempfile.mkdtemp())
+        script = script_bake(scene, tempfile.mkdtemp())
+        rows = results[f"bake_{method}"] = {}
+        for name in BAKED_OBJECTS:
+            ours, theirs = operator[name], script[name]
+            same = ours.shape == theirs.shape and bool(np.array_equal(ours, theirs))
+            rows[name] = {"identical": same, "shape": list(ours.shape),
+                          "mean": float(ours.mean()),
+                          "max_difference": (float(np.abs(ours - theirs).max())
+                                             if ours.shape == theirs.shape else None)}
+            if not same:
+                raise AssertionError(f"{method}, {name}: the bake operator and shgi.bake differ: "
+                                     f"{rows[name]}, script shape {list(theirs.shape)}")
+            if not rows[name]["mean"] > 0.0:
+                raise AssertionError(f"{method}, {name}: the lightmap is black")
+
+
 def plugin_in_the_menus(results):
     scene = bpy.context.scene
     methods = {item.identifier: item.value
@@ -117,6 +201,7 @@ def plugin_bakes(results):
 def main():
     results = {}
     compare_front_ends(results)
+    compare_bakes(results)
     plugin_in_the_menus(results)
     plugin_bakes(results)
     with open(setup.results_path("front_ends.json"), "w") as out:
