@@ -21,9 +21,14 @@ from shgi.frame_denoise import denoise_frame
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "examples"))
 import scenes  # noqa: E402  (examples/scenes.py)
 
+# Each field solved as the add-on solves it for Light Paths > Diffuse 4: through a final gather
+# one bounce less (addon/shgi_blender/settings.py, light_path_fields), so that every path has
+# the path tracer's 4 diffuse bounces.
 SOLVERS = {
-    "photon lattice": (lambda scene: shgi.PhotonLattice(scene, shgi.PhotonLatticeSettings()), 1),
-    "probe grid": (lambda scene: shgi.ProbeGrid(scene, shgi.ProbeGridSettings()), 8),
+    "photon lattice": (lambda scene, gather: shgi.PhotonLattice(
+        scene, shgi.PhotonLatticeSettings(max_bounces=4 - gather)), 1),
+    "probe grid": (lambda scene, gather: shgi.ProbeGrid(
+        scene, shgi.ProbeGridSettings(bounces=3 - gather)), 8),
 }
 
 
@@ -43,10 +48,10 @@ def main():
         reference = shgi.render_path_traced(
             scene, shgi.PathTracerSettings(samples=args.reference_spp, seed=7))["Combined"]
         for method, (make, passes) in SOLVERS.items():
-            solver = make(scene)
-            for _ in range(passes):
-                solver.refine()
             for gather in (False, True):
+                solver = make(scene, int(gather))
+                for _ in range(passes):
+                    solver.refine()
                 for spp in args.spp:
                     start = time.perf_counter()
                     frame, _ = shgi.render_preview(scene, solver.current_field(),

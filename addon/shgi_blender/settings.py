@@ -176,12 +176,14 @@ FINAL_PASSES_FALLBACK = {"PHOTON_LATTICE": 1, "PROBE_GRID": 8}
 # refining (past ~2 / (1 - hysteresis) passes the blend holds as much history as it ever will).
 VIEWPORT_PASSES_DEFAULTS = {"PHOTON_LATTICE": 1, "PROBE_GRID": 32}
 # Whether F12 and the viewport read each field method's field through a final gather
-# (PreviewSettings.final_gather: one traced bounce, the field read where it lands) rather than at
-# the first surface. Chosen by measurement (docs/methods.md, "Final gather"): on the Cornell box
-# and the sun room the photon lattice gains 1-5 dB at equal time and loses its 2-4% mean bias;
-# the probe grid gains 0.5-2.5 dB but comes out 7-13% brighter in the sun room and the two rooms,
-# where reading it at the first surface is within 1-5%.
-FINAL_GATHER_DEFAULTS = {"PHOTON_LATTICE": True, "PROBE_GRID": False}
+# (PreviewSettings.final_gather: one traced bounce, the field read where it lands, the field one
+# bounce shallower: light_path_fields) rather than at the first surface. Chosen by measurement
+# (docs/methods.md, "Final gather"): denoised, the photon lattice gains 1-4 dB on the Cornell box
+# and the sun room, the probe grid 1.5-4 dB on every scene, and the probe grid's dim room of the
+# two-rooms scene comes within 5% of the path tracer's.
+FINAL_GATHER_DEFAULTS = {"PHOTON_LATTICE": True, "PROBE_GRID": True}
+# The diffuse bounces a final gather traces before the field is read (light_path_fields).
+GATHER_BOUNCES = 1
 
 
 def final_passes(solver, shgi=None):
@@ -491,10 +493,21 @@ def native_fields(props, fields, shgi):
     return values
 
 
-def light_path_fields(props, group, check=True):
+def light_path_fields(props, group, check=True, gather=None):
     """{native field: value} that Light Paths (scene.shgi `props`) gives method `group`. With
     `check`, ValueError naming the Light Paths setting when it leaves the method nothing to
-    solve."""
+    solve.
+
+    With the group's Final Gather on, the renderer traces one diffuse bounce before it reads the
+    field, so the field's depth is one bounce less (GATHER_BOUNCES): the path then has Light
+    Paths > Diffuse bounces in all, as the path tracer's. Without that, a gathered probe grid
+    read 7-13% too bright in closed white rooms (docs/methods.md, "Final gather"). Where the
+    setting leaves the field less than its minimum (Diffuse 1 through a gather) the minimum is
+    kept: one bounce too many at that extreme. `gather`: whether the field is read through a
+    gather (None: as the group's Final Gather says; a bake reads its field directly: False)."""
+    if gather is None:
+        gather = getattr(getattr(props, group.prop, None), "final_gather", False)
+    gathered = bool(gather)
     values = {}
     for field, value in group.light_paths.items():
         setting = getattr(props, value.prop)
@@ -503,18 +516,21 @@ def light_path_fields(props, group, check=True):
                 f"{SETTING_LABELS[value.prop]} is {setting}: the {group.label} stores light "
                 f"after {value.minimum} or more diffuse bounces; set it to {value.minimum} or "
                 "more, or use Path Tracing (which renders 0 as direct light only)")
+        if gathered and value.prop == "diffuse_bounces":
+            setting = max(setting - GATHER_BOUNCES,
+                          value.minimum if value.minimum is not None else 0)
         if value.maximum is not None:
             setting = min(setting, value.maximum)
         values[field] = setting + value.offset
     return values
 
 
-def method_native_fields(props, group, shgi):
+def method_native_fields(props, group, shgi, gather=None):
     """{native field: value} of method `group`'s settings struct from scene.shgi `props`: its
     group's mirrored fields, Light Paths' values and the seed."""
     values = native_fields(getattr(props, group.prop), {name: name for name in group.defaults},
                            shgi)
-    values.update(light_path_fields(props, group))
+    values.update(light_path_fields(props, group, gather=gather))
     values["seed"] = props.seed
     return values
 
@@ -534,21 +550,21 @@ def preview_settings(props, shgi):
     return validated(shgi.PreviewSettings(**values))
 
 
-def photon_lattice_settings(props, shgi):
+def photon_lattice_settings(props, shgi, gather=None):
     """shgi.PhotonLatticeSettings of scene.shgi: its photon_lattice group, Light Paths and the
     seed (ValueError naming a refused setting)."""
     return validated(shgi.PhotonLatticeSettings(
-        **method_native_fields(props, METHOD_SETTINGS["PHOTON_LATTICE"], shgi)))
+        **method_native_fields(props, METHOD_SETTINGS["PHOTON_LATTICE"], shgi, gather)))
 
 
-def probe_grid_settings(props, shgi, volumes=()):
+def probe_grid_settings(props, shgi, volumes=(), gather=None):
     """shgi.ProbeGridSettings of scene.shgi: its probe_grid group, Light Paths and the seed.
 
     volumes: shgi.ProbeVolume list (the scene's Irradiance Volumes); empty: one volume fitted to
     the scene with the spacing setting. ValueError naming a refused setting.
     """
     return validated(shgi.ProbeGridSettings(
-        **method_native_fields(props, METHOD_SETTINGS["PROBE_GRID"], shgi),
+        **method_native_fields(props, METHOD_SETTINGS["PROBE_GRID"], shgi, gather),
         volumes=list(volumes)))
 
 

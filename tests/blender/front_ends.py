@@ -132,7 +132,7 @@ def script_bake(scene, folder):
     options = bake_settings.bake_options(bake, props, shgi)
     jobs = shgi_bake.jobs_for_scene(native, bake.uv_map, texels_per_metre=bake.texel_density,
                                     names=BAKED_OBJECTS)
-    recipe = solver_recipe(props, shgi, export.probe_volumes)
+    recipe = solver_recipe(props, shgi, export.probe_volumes, gather=False)  # read at texels
     field = shgi_bake.solve_field(native, bake.source, settings=recipe.settings)
     lightmaps = shgi_bake.bake_scene(native, jobs, options, folder, field)
     return {lightmap.name: lightmap.color for lightmap in lightmaps}

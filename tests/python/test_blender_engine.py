@@ -97,8 +97,10 @@ def test_method_groups_mirror_their_native_settings(solver):
     group = settings.METHOD_SETTINGS[solver]
     struct = getattr(shgi, group.native_type)
     native_defaults = struct()
+    # Read at the first surface (a final gather takes one bounce off the field: below).
+    direct = default_props(seed=4, **{group.prop: {"final_gather": False}})
     built = {"PHOTON_LATTICE": settings.photon_lattice_settings,
-             "PROBE_GRID": settings.probe_grid_settings}[solver](default_props(seed=4), shgi)
+             "PROBE_GRID": settings.probe_grid_settings}[solver](direct, shgi)
     assert set(group.labels) == set(group.defaults)
     for name, value in group.defaults.items():
         expected = getattr(native_defaults, name)
@@ -121,26 +123,52 @@ def test_probe_grid_follows_light_paths():
     Paths > Diffuse d gives the probes d - 1 bounces, so rendered indirect light has the path
     tracer's depth, up to the native limit of 64 probe bounces. Clamp clamps the probes'
     samples; Diffuse 0 (no indirect light) is refused by its Light Paths name."""
+    direct = {"final_gather": False}
     for diffuse in (1, 4, 9, settings.MAX_PROBE_BOUNCES + 1):
-        grid = settings.probe_grid_settings(default_props(diffuse_bounces=diffuse), shgi)
+        grid = settings.probe_grid_settings(default_props(diffuse_bounces=diffuse,
+                                                          probe_grid=direct), shgi)
         assert grid.bounces == diffuse - 1
     grid = settings.probe_grid_settings(default_props(clamp_indirect=5.0), shgi)
     assert grid.clamp == 5.0
     with pytest.raises(ValueError, match=r"^Light Paths > Diffuse is 0: the Probe Grid .* "
                                          r"set it to 1 or more, or use Path Tracing"):
         settings.probe_grid_settings(default_props(diffuse_bounces=0), shgi)
-    assert settings.probe_grid_settings(default_props(diffuse_bounces=1024),
+    assert settings.probe_grid_settings(default_props(diffuse_bounces=1024, probe_grid=direct),
                                         shgi).bounces == settings.MAX_PROBE_BOUNCES
     # Glossy, Total and Transmission are not the probe grid's to follow: the panel says so.
-    assert settings.probe_grid_settings(default_props(glossy_bounces=1, max_bounces=3),
-                                        shgi).bounces == 3
+    assert settings.probe_grid_settings(default_props(glossy_bounces=1, max_bounces=3,
+                                                      probe_grid=direct), shgi).bounces == 3
+
+
+def test_a_final_gather_takes_one_bounce_off_the_field():
+    """Through a final gather the renderer traces one diffuse bounce before it reads the field,
+    so the field holds one bounce less and every path keeps Light Paths > Diffuse bounces:
+    Diffuse 4 gives the lattice's photons 3 scatterings and the probes 2 bounces. At Diffuse 1
+    each keeps its minimum. The gather is part of the solve's signature (a frozen solution of
+    the other mode is out of date)."""
+    for solver, build, field, expected in (
+            ("PHOTON_LATTICE", settings.photon_lattice_settings, "max_bounces", (3, 1)),
+            ("PROBE_GRID", settings.probe_grid_settings, "bounces", (2, 0))):
+        prop = settings.METHOD_SETTINGS[solver].prop
+        gathered = default_props(method=solver, **{prop: {"final_gather": True}})
+        direct = default_props(method=solver, **{prop: {"final_gather": False}})
+        assert getattr(build(gathered, shgi), field) == expected[0]
+        assert getattr(build(direct, shgi), field) == expected[0] + 1
+        assert getattr(build(default_props(diffuse_bounces=1, **{prop: {"final_gather": True}}),
+                             shgi), field) == expected[1]
+        assert settings.solver_signature(gathered) != settings.solver_signature(direct)
+        assert settings.preview_settings(gathered, shgi).final_gather
+        assert not settings.preview_settings(direct, shgi).final_gather
+        # A bake reads its field at the texels: the full depth whatever Final Gather says.
+        baked = field_solvers.solver_recipe(gathered, shgi, gather=False).settings
+        assert getattr(baked, field) == expected[0] + 1
     assert set(settings.LIGHT_PATH_LIMITS) == set(settings.METHOD_SETTINGS)
 
 
 def test_settings_follow_the_properties():
     props = default_props(samples=7, seed=3, diffuse_bounces=2, world_sampling="UNIFORM",
                           photon_lattice={"caustics": "PHOTON_MAP",
-                                          "interpolation": "TRILINEAR"})
+                                          "interpolation": "TRILINEAR", "final_gather": False})
     path = settings.path_tracer_settings(props, shgi)
     lattice = settings.photon_lattice_settings(props, shgi)
     preview = settings.preview_settings(props, shgi)

@@ -457,7 +457,9 @@ def test_probe_grid_refines_in_the_background_and_restarts_when_its_volume_moves
         settings.properties_from_values(props), shgi, [volume]))
     for _ in range(3):
         grid.update()
-    expected, _ = shgi.render_preview(scene, grid.field(), shgi.PreviewSettings(samples=2, seed=2))
+    values = settings.properties_from_values(props)
+    expected, _ = shgi.render_preview(scene, grid.field(), settings.preview_settings(
+        SimpleNamespace(**dict(values.__dict__, samples=2)), shgi))
     np.testing.assert_array_equal(second.pixels, expected["Combined"][::-1])
     assert not np.array_equal(first.pixels, second.pixels)
 

@@ -286,19 +286,23 @@ class SolverRecipe:
         return self.solver(shgi, scene, self.settings, progress)
 
 
-def solver_recipe(props, shgi, volumes=(), viewport=False):
+def solver_recipe(props, shgi, volumes=(), viewport=False, gather=None):
     """The SolverRecipe of scene.shgi's method (props: scene.shgi or its values as a namespace).
 
     volumes: the scene's irradiance volumes (export/light_probe.ProbeVolumeRecord).
     viewport: the method group's viewport_passes; else its passes (F12, Solve, a bake).
+    gather: whether the field will be read through a final gather (one bounce less in the field;
+        settings.light_path_fields); None: as the group's Final Gather says (F12, the viewport,
+        Solve), False for a bake, which reads its field at the texels.
     ValueError for a method that solves no field, or a bad volume.
     """
     solver = settings.METHODS_BY_ID[props.method].solver
     if solver == LatticeSolver.METHOD:
-        native_settings = settings.photon_lattice_settings(props, shgi)
+        native_settings = settings.photon_lattice_settings(props, shgi, gather)
         recipe_solver = LatticeSolver
     elif solver == ProbeGridSolver.METHOD:
-        native_settings = settings.probe_grid_settings(props, shgi, native_volumes(volumes, shgi))
+        native_settings = settings.probe_grid_settings(props, shgi, native_volumes(volumes, shgi),
+                                                       gather)
         recipe_solver = ProbeGridSolver
     elif solver:
         # A registered method without a settings group here (a plugin's): its settings'

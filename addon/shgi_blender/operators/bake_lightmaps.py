@@ -265,8 +265,9 @@ def prepare_bake(context, values, report, merge=False, created=None):
                                merge_shards=values.shard_count)
         recipe = None
         if bake_settings.uses_field(values):
+            # A bake reads its field at the texels, never through a final gather.
             recipe = solver_recipe(_MethodOf(scene.shgi, values.source), shgi,
-                                   export.probe_volumes)
+                                   export.probe_volumes, gather=False)
         return BakeRequest(export.scene, jobs, options, out_dir, recipe,
                            bake_settings.shard(values))
     except ValueError as error:

@@ -88,6 +88,14 @@ describes them (solving it first when there is no frozen solution)"""
         except (ValueError, OSError) as error:
             return self._error(str(error))
         self.report({"INFO"}, f"{REPORT_PREFIX}{len(paths)} files: {', '.join(paths)}")
+        group = settings.METHOD_SETTINGS.get(method.solver)
+        if group is not None and getattr(scene.shgi, group.prop).final_gather:
+            # Solved for F12's final gather (settings.light_path_fields): one bounce shallower
+            # than a field read directly, as other tools read it.
+            self.report({"WARNING"}, f"{REPORT_PREFIX}the field was solved for Final Gather "
+                        "and holds one diffuse bounce less than Light Paths > Diffuse: for a "
+                        f"volume read directly, turn off {group.label} > Final Gather, Solve "
+                        "again and export")
         return {"FINISHED"}
 
     def _error(self, message):
