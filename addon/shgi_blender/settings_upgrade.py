@@ -9,6 +9,9 @@ its default in the new place while its old value lies unused under the old name.
    ``scene.shgi.probe_grid`` with its own ``bounces`` and ``clamp``.
 2. One group per method (settings.METHOD_SETTINGS) holding its pass counts; Light Paths sets
    the probe grid's bounce limit and clamp (settings.LIGHT_PATH_VALUES).
+3. Each method group's ``final_gather``, on for a new scene (settings.FINAL_GATHER_DEFAULTS). A
+   scene saved before it read its field at the first surface: it keeps doing so (off), so that
+   it renders, and its frozen solutions compare, as they did.
 
 ``upgrade`` takes what a scene stored (its ID properties as a dict: only values someone set are
 stored, a default is not) and says what to write where, so that the scene renders with the
@@ -19,7 +22,7 @@ from dataclasses import dataclass, field
 
 from . import settings
 
-SETTINGS_VERSION = 2
+SETTINGS_VERSION = 3
 
 # Version 1's flat properties of scene.shgi -> (group, property) in version 2.
 MOVED_FROM_1 = {
@@ -56,8 +59,18 @@ def upgrade(stored):
     """The Upgrade that brings a scene's stored settings (scene.shgi's ID properties as a dict,
     nested groups as dicts) to SETTINGS_VERSION; empty when they are up to date."""
     result = Upgrade()
-    if stored_version(stored) >= SETTINGS_VERSION:
-        return result
+    version = stored_version(stored)
+    if version < 2:
+        _upgrade_from_1(stored, result)
+    if version < 3:
+        for group in settings.METHOD_SETTINGS.values():
+            if "final_gather" not in stored.get(group.prop, {}):
+                result.values[(group.prop, "final_gather")] = False
+    return result
+
+
+def _upgrade_from_1(stored, result):
+    """Version 1's flat and dropped properties into `result` (version 2's layout)."""
     for old, target in MOVED_FROM_1.items():
         if old in stored:
             result.values[target] = stored[old]
@@ -68,7 +81,7 @@ def upgrade(stored):
     light_paths = settings.default_properties(**{
         name: stored[name] for name in ("diffuse_bounces", "clamp_indirect") if name in stored})
     follows = settings.light_path_fields(light_paths, settings.METHOD_SETTINGS["PROBE_GRID"],
-                                         check=False)
+                                         check=False, gather=False)
     for name, old_default in DROPPED_FROM_1.items():
         value = grid.get(name, old_default)
         if name in grid:
@@ -79,5 +92,4 @@ def upgrade(stored):
                 f"Probe Grid > {name.capitalize()} {value} is now set by "
                 f"{settings.SETTING_LABELS[source]} ({getattr(light_paths, source)}), which gives "
                 f"the probe grid {follows[name]}")
-    return result
 

@@ -162,7 +162,7 @@ def check_group_defaults(scene, settings, shgi):
                 "PROBE_GRID": settings.probe_grid_settings}
     for solver, group in settings.METHOD_SETTINGS.items():
         native = getattr(shgi, group.native_type)()
-        built = builders[solver](scene.shgi, shgi)
+        built = builders[solver](scene.shgi, shgi, gather=False)  # as read at the surface
         props = getattr(scene.shgi, group.prop)
         for name in group.defaults:
             value = getattr(props, name)

@@ -27,7 +27,9 @@ def test_first_layout_values_move_into_the_method_groups():
         ("photon_lattice", "photons"): 123, ("photon_lattice", "caustics"): 2,
         ("photon_lattice", "viewport_passes"): 5, ("probe_grid", "viewport_passes"): 40,
         # left at the first layout's default, 6, which the scene rendered with
-        ("probe_grid", "passes"): 6}
+        ("probe_grid", "passes"): 6,
+        # the field read at the first surface, as before Final Gather existed
+        ("photon_lattice", "final_gather"): False, ("probe_grid", "final_gather"): False}
     assert sorted(upgrade.removed) == [("", "caustics"), ("", "photons"),
                                        ("", "viewport_photon_passes"),
                                        ("", "viewport_probe_passes")]
@@ -45,6 +47,16 @@ def test_probe_grid_values_light_paths_took_over_are_dropped_with_a_note():
         "grid 5",
         "Probe Grid > Clamp 12.0 is now set by Light Paths > Clamp (7.5), which gives the probe "
         "grid 7.5"]
+
+
+def test_a_second_layout_scene_keeps_reading_its_field_directly():
+    upgrade = settings_upgrade.upgrade({"settings_version": 2, "probe_grid": {"order": 1}})
+    assert upgrade.values == {("photon_lattice", "final_gather"): False,
+                              ("probe_grid", "final_gather"): False}
+    assert (upgrade.removed, upgrade.notes) == ([], [])
+    # One set by hand in that file (it cannot be, but a script may have) is kept.
+    stored = {"settings_version": 2, "probe_grid": {"final_gather": True}}
+    assert settings_upgrade.upgrade(stored).values == {("photon_lattice", "final_gather"): False}
 
 
 def test_settings_of_today_layout_are_left_alone():
