@@ -1,8 +1,9 @@
 """The project's test and demo scenes built with bpy: the same as examples/scenes.py.
 
 Run inside Blender: ``blender -b --factory-startup --python examples/blender_scenes.py --
-[cornell_box|sun_room|two_rooms|caustics] [scale] [out.blend]`` builds one scene in a fresh file (and saves it when
-a path is given); tests import the module and call ``build(name, scale)``.
+[cornell_box|sun_room|two_rooms|caustics] [scale] [out.blend]`` builds one scene in a fresh
+file (and saves it when a path is given); tests import the module and call ``build(name,
+scale)``.
 
 Every part matches examples/scenes.py: the same vertices (quads as one polygon, boxes as six),
 Principled BSDF materials at Blender's defaults but the base colour (which are shgi.Material's
