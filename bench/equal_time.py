@@ -26,6 +26,10 @@ Scores are shgi.metrics.psnr: both images scaled by the reference's auto-exposur
 and clipped to [0, 1]. References are cached as .npy under --cache (keyed by scene, resolution,
 renderer and samples): they take minutes.
 
+A render is read back as the engine tests read theirs (tests/blender/engine_common.py): the
+Render Result saved as a multilayer EXR through tests/blender/blender_test_setup.py, outside the
+timing (background Blender gives Python no pixels of the Render Result otherwise).
+
 Timing: time.perf_counter around ``bpy.ops.render.render(write_still=False)``, the whole F12
 (Blender's scene sync, the renderer's export, BVH, solve and samples, denoising). Each renderer
 renders the scene once untimed first, so that one-time costs (kernels, OIDN's weights, imports)
