@@ -1,15 +1,18 @@
 """The project's test and demo scenes built with bpy: the same as examples/scenes.py.
 
 Run inside Blender: ``blender -b --factory-startup --python examples/blender_scenes.py --
-[cornell_box|sun_room] [scale] [out.blend]`` builds one scene in a fresh file (and saves it when
-a path is given); tests import the module and call ``build(name, scale)``.
+[cornell_box|sun_room|two_rooms|caustics] [scale] [out.blend]`` builds one scene in a fresh
+file (and saves it when a path is given); tests import the module and call ``build(name,
+scale)``.
 
 Every part matches examples/scenes.py: the same vertices (quads as one polygon, boxes as six),
 Principled BSDF materials at Blender's defaults but the base colour (which are shgi.Material's
 defaults), the area light (with Ray Visibility > Camera on, as the classic box shows its light),
 the sun and the window portal (Cycles' area light Portal), the world colour, the camera and the
 resolution times `scale`. Exporting the built scene with shgi_blender.export gives the scene
-examples/scenes.py builds (tests/blender/engine_render_checks.py checks it).
+examples/scenes.py builds (tests/blender/engine_render_checks.py checks it for the first two).
+caustics() alone has no twin in examples/scenes.py: the Cornell box with a glass and a gold
+sphere in place of the blocks, for renderers' caustics (bench/equal_time.py).
 
 For lightmap bakes pass ``lightmap=True`` (``-- sun_room 1 out.blend lightmap`` on the command
 line), as examples/scenes.py takes it: every quad (a wall, the floor, the ceiling) then faces
@@ -21,14 +24,21 @@ outward floor would hold the world's light under it.
 import math
 import sys
 
+import bmesh
 import bpy
 from mathutils import Matrix
 
 WHITE, RED, GREEN = (0.73, 0.73, 0.73), (0.65, 0.05, 0.05), (0.12, 0.45, 0.15)
 WOOD = (0.45, 0.3, 0.18)
+# Gold's base colour (its reflectance at normal incidence, as Blender's Principled BSDF takes it).
+GOLD = (1.0, 0.766, 0.336)
+CLEAR = (1.0, 1.0, 1.0)  # glass that does not tint what is seen through it
 SKY = (0.35, 0.5, 0.8)
 CORNELL_SIZE = 2.0
 ROOM_X, ROOM_Y, ROOM_Z = 4.0, 4.0, 2.6
+TWO_ROOMS_X, TWO_ROOMS_Y, TWO_ROOMS_Z = 6.0, 3.0, 2.5
+# Principled BSDF sockets by Blender version: Blender 4.0 renamed Transmission.
+TRANSMISSION_INPUTS = ("Transmission Weight", "Transmission")
 WINDOW_Y, WINDOW_Z = (1.3, 2.7), (0.9, 2.1)
 LIGHTMAP_UV = "LightmapUV"
 # LightmapUV of a quad's corners c, c + u, c + u + v, c + v (examples/scenes.UNIT_SQUARE).
@@ -69,6 +79,17 @@ def box(center, sx, sy, sz, angle):
     return vertices, faces
 
 
+def uv_sphere(center, radius, segments, rings):
+    """Vertices and faces of a UV sphere (Blender's: 2 poles, `rings` bands of `segments`
+    quads, triangles at the poles): (segments * (rings - 2)) * 2 + 2 * segments triangles."""
+    mesh = bmesh.new()
+    bmesh.ops.create_uvsphere(mesh, u_segments=segments, v_segments=rings, radius=radius)
+    vertices = [tuple(v.co[i] + center[i] for i in range(3)) for v in mesh.verts]
+    faces = [tuple(v.index for v in face.verts) for face in mesh.faces]
+    mesh.free()
+    return vertices, faces
+
+
 def look_at(eye, target, up=(0.0, 0.0, 1.0)):
     """Blender camera/light matrix_world looking down local -Z with +Y up (as scenes.look_at)."""
     forward = [t - e for t, e in zip(target, eye)]
@@ -99,18 +120,22 @@ class SceneBuilder:
         self.materials = {}
         self.lightmap = lightmap
 
-    def material(self, name, color):
-        """A Principled BSDF at Blender's defaults (= shgi.Material's) with this base colour."""
+    def material(self, name, color, **inputs):
+        """A Principled BSDF at Blender's defaults (= shgi.Material's) with this base colour;
+        `inputs`: other sockets by name ("Metallic": 1.0), the first of a tuple of names that
+        this Blender has (TRANSMISSION_INPUTS)."""
         if name not in self.materials:
             material = bpy.data.materials.new(name)
             material.use_nodes = True
             principled = material.node_tree.nodes["Principled BSDF"]
             principled.inputs["Base Color"].default_value = (*color, 1.0)
+            for socket, value in inputs.items():
+                principled.inputs[socket].default_value = value
             material.diffuse_color = (*color, 1.0)  # the Solid viewport colour
             self.materials[name] = material
         return self.materials[name]
 
-    def part(self, name, geometry, material, color):
+    def part(self, name, geometry, material, color, smooth=False):
         vertices, faces = geometry
         is_quad = self.lightmap and len(vertices) == 4
         if is_quad:
@@ -121,6 +146,8 @@ class SceneBuilder:
             layer = mesh.uv_layers.new(name=LIGHTMAP_UV)
             for loop in mesh.loops:
                 layer.data[loop.index].uv = UNIT_SQUARE[loop.vertex_index]
+        if smooth:
+            mesh.polygons.foreach_set("use_smooth", [True] * len(mesh.polygons))
         mesh.materials.append(self.material(material, color))
         obj = bpy.data.objects.new(name, mesh)
         self.scene.collection.objects.link(obj)
@@ -216,11 +243,65 @@ def sun_room(scale=1.0, lightmap=False):
     return b.scene
 
 
-SCENES = {"cornell_box": cornell_box, "sun_room": sun_room}
+def two_rooms(scale=1.0, lightmap=False):
+    """128 x 96 pixels times `scale` (examples/scenes.two_rooms): two closed rooms split by a
+    wall 0.1 m thick, a bright lamp in the left one, a dim lamp in the right one where the camera
+    stands facing the wall; light must not leak through it. The shell faces in (lightmap is
+    accepted for the common signature and changes nothing)."""
+    b = SceneBuilder()
+    sx, sy, sz = TWO_ROOMS_X, TWO_ROOMS_Y, TWO_ROOMS_Z
+    x0 = -sx / 2
+    shell = [  # six faces of the shell, facing in
+        ("floor", (x0, 0, 0), (0, sy, 0), (sx, 0, 0)),
+        ("ceiling", (x0, 0, sz), (sx, 0, 0), (0, sy, 0)),
+        ("front", (x0, 0, 0), (sx, 0, 0), (0, 0, sz)),
+        ("back", (x0, sy, 0), (0, 0, sz), (sx, 0, 0)),
+        ("left", (x0, 0, 0), (0, 0, sz), (0, sy, 0)),
+        ("right", (-x0, 0, 0), (0, sy, 0), (0, 0, sz)),
+    ]
+    for name, corner, u, v in shell:
+        b.part(name, quad(corner, u, v), "plaster", WHITE)
+    b.part("wall", box((0.0, sy / 2, 0.0), 0.1, sy, sz, 0.0), "plaster", WHITE)
+    for name, x, power in [("bright_lamp", -1.5, 2000.0), ("dim_lamp", 1.5, 20.0)]:
+        b.light(name, "POINT", Matrix.Translation((x, sy / 2, 2.0)), energy=power,
+                shadow_soft_size=0.05)
+    b.world((0.0, 0.0, 0.0), 0.0)
+    b.camera(eye=(2.9, 0.2, 1.4), target=(0.0, 2.2, 1.0), lens=18.0, width=128, height=96,
+             scale=scale)
+    return b.scene
+
+
+def caustics(scale=1.0, lightmap=False):
+    """256 x 256 pixels times `scale`: the Cornell box (cornell_box) with a clear glass sphere
+    (IOR 1.5) and a gold sphere (metallic, roughness 0.2) in place of the blocks; the glass
+    sphere focuses the ceiling light into a caustic on the floor."""
+    scene = cornell_box(scale, lightmap)
+    for name in ("short_block", "tall_block"):
+        bpy.data.objects.remove(bpy.data.objects[name], do_unlink=True)
+    b = SceneBuilder(lightmap)
+    transmission = next(name for name in TRANSMISSION_INPUTS if _principled_has(name))
+    b.material("glass", CLEAR, **{"Roughness": 0.0, "IOR": 1.5, transmission: 1.0})
+    b.material("gold", GOLD, **{"Metallic": 1.0, "Roughness": 0.2})
+    b.part("glass_sphere", uv_sphere((0.4, 0.7, 0.4), 0.4, 64, 32), "glass", CLEAR, smooth=True)
+    b.part("gold_sphere", uv_sphere((-0.4, 1.3, 0.4), 0.4, 64, 32), "gold", GOLD, smooth=True)
+    return scene
+
+
+def _principled_has(socket):
+    """True when this Blender's Principled BSDF has an input named `socket`."""
+    material = bpy.data.materials.new("socket_probe")
+    material.use_nodes = True
+    found = socket in material.node_tree.nodes["Principled BSDF"].inputs
+    bpy.data.materials.remove(material)
+    return found
+
+
+SCENES = {"cornell_box": cornell_box, "sun_room": sun_room, "two_rooms": two_rooms,
+          "caustics": caustics}
 
 
 def build(name, scale=1.0, lightmap=False):
-    """Builds scene `name` ("cornell_box" or "sun_room") in a fresh file; returns the scene.
+    """Builds scene `name` (a key of SCENES) in a fresh file; returns the scene.
     lightmap: quads face into the room, with LightmapUV (for bakes)."""
     reset_file()
     return SCENES[name](scale, lightmap)

@@ -1,0 +1,331 @@
+"""Equal-time quality: at the same F12 wall time, is SHGI's preview as good as Cycles + OIDN?
+Prints one table per scene. A benchmark, not a test: nothing is asserted.
+
+    /opt/shgi/bpy-5.0.1/bin/python bench/equal_time.py [--scenes cornell_box,...]
+        [--methods PATH_TRACE,...] [--limits 0.25,0.5,...] [--resolution 200x150]
+        [--cache build/equal_time_cache] [--quick]
+
+(the `bpy` venv: Blender 5.0.1 as a Python module; ``blender -b --python bench/equal_time.py --
+<options>`` runs it too.)
+
+Scenes (examples/blender_scenes.py, built with bpy): cornell_box, sun_room, two_rooms (the probe
+grid's leak test: a thin wall between a bright and a dim room), caustics (glass and gold spheres
+in the Cornell box) and dense (the Cornell box holding a UV sphere of DENSE_SEGMENTS x
+DENSE_RINGS, ~523k triangles, as bench/viewport_sync_bench.py). Every scene renders at the same
+resolution and with the same Light Paths limits in both renderers (BOUNCES).
+
+Each side is scored against its own reference, since the two renderers' Principled BSDFs differ:
+- Cycles (CPU) with OpenImageDenoise at CYCLES_SAMPLES spp (doubled on while a render takes
+  less than the largest budget: stepped_samples), against Cycles at REFERENCE_SAMPLES
+  spp without denoising;
+- SHGI, each render method of shgi_blender.settings.METHODS, against SHGI's PATH_TRACE at
+  REFERENCE_SAMPLES spp without denoising. With the add-on's ``scene.shgi.time_limit`` (and
+  ``use_denoising``, which is then on) a render is made per time limit; without them the limit
+  is emulated by stepping ``scene.shgi.samples`` as Cycles' samples and timing each render.
+Scores are shgi.metrics.psnr: both images scaled by the reference's auto-exposure, sRGB-encoded
+and clipped to [0, 1]. References are cached as .npy under --cache (keyed by scene, resolution,
+renderer and samples): they take minutes.
+
+A render is read back as the engine tests read theirs (tests/blender/engine_common.py): the
+Render Result saved as a multilayer EXR through tests/blender/blender_test_setup.py, outside the
+timing (background Blender gives Python no pixels of the Render Result otherwise).
+
+Timing: time.perf_counter around ``bpy.ops.render.render(write_still=False)``, the whole F12
+(Blender's scene sync, the renderer's export, BVH, solve and samples, denoising). Each renderer
+renders the scene once untimed first, so that one-time costs (kernels, OIDN's weights, imports)
+count against neither. A table row is a time budget; a cell holds the PSNR of the render of most
+samples whose measured time does not exceed it (with time_limit: the render at that limit), its
+samples and seconds beside it, "-" when even one sample took longer.
+"""
+
+import argparse
+import os
+import sys
+import time
+
+import bpy
+
+REPO_ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path[:0] = [os.path.join(REPO_ROOT, "addon"), os.path.join(REPO_ROOT, "build", "python"),
+                os.path.join(REPO_ROOT, "examples"),
+                os.path.join(REPO_ROOT, "tests", "blender")]
+
+import addon_utils  # noqa: E402
+import blender_scenes  # noqa: E402
+import numpy as np  # noqa: E402
+
+ADDON = "shgi_blender"
+SCENES = ("cornell_box", "sun_room", "two_rooms", "caustics", "dense")
+DENSE_SEGMENTS, DENSE_RINGS = 512, 512  # a UV sphere of 523,264 triangles
+LIMITS = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
+CYCLES_SAMPLES = (1, 2, 4, 8, 16, 32, 64)
+REFERENCE_SAMPLES = 4096
+# Stepped samples stop at this share of the reference's: a render is never the reference's twin.
+MAX_STEP_FRACTION = 0.25
+# --quick: a smoke run of the same code.
+QUICK_LIMITS = (0.5, 2.0)
+QUICK_SAMPLES = (1, 4, 16)
+QUICK_REFERENCE_SAMPLES = 256
+# The summary compares budgets from this one up: below it F12's fixed costs dominate both sides.
+SUMMARY_FROM_SECONDS = 0.5
+# Cycles' Light Paths limits (tests/blender/calibration_common.BOUNCES), set in both renderers.
+BOUNCES = {"max_bounces": 8, "diffuse_bounces": 4, "glossy_bounces": 4,
+           "transmission_bounces": 8}
+# The samples of a time-limited SHGI render: the limit, not the samples, ends it.
+TIME_LIMITED_SAMPLES = 1 << 16
+SEED = 1
+
+
+def parse_args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--scenes", default=",".join(SCENES),
+                        help=f"comma-separated, of {', '.join(SCENES)}")
+    parser.add_argument("--methods", default=None,
+                        help="comma-separated SHGI methods (default: every registered one)")
+    parser.add_argument("--limits", default=None,
+                        help=f"comma-separated time budgets in s (default {LIMITS})")
+    parser.add_argument("--resolution", default="200x150", help="WxH pixels")
+    parser.add_argument("--cache", default=os.path.join(REPO_ROOT, "build", "equal_time_cache"),
+                        help="folder of the cached references")
+    parser.add_argument("--quick", action="store_true",
+                        help=f"smoke run: limits {QUICK_LIMITS}, samples {QUICK_SAMPLES}, "
+                             f"{QUICK_REFERENCE_SAMPLES}-spp references")
+    args = parser.parse_args(argv)
+    args.scenes = args.scenes.split(",")
+    unknown = [name for name in args.scenes if name not in SCENES]
+    if unknown:
+        parser.error(f"--scenes: {unknown} not among {list(SCENES)}")
+    args.limits = (tuple(float(x) for x in args.limits.split(",")) if args.limits
+                   else QUICK_LIMITS if args.quick else LIMITS)
+    args.samples = QUICK_SAMPLES if args.quick else CYCLES_SAMPLES
+    args.reference_samples = QUICK_REFERENCE_SAMPLES if args.quick else REFERENCE_SAMPLES
+    args.width, args.height = (int(x) for x in args.resolution.lower().split("x"))
+    return args
+
+
+# --- scenes -----------------------------------------------------------------------------------
+
+def build_scene(name, width, height):
+    """A fresh file holding scene `name` at width x height, set up alike for Cycles and SHGI."""
+    import blender_test_setup as setup
+
+    if name == "dense":
+        scene = blender_scenes.build("cornell_box")
+        builder = blender_scenes.SceneBuilder()
+        builder.part("dense_sphere", blender_scenes.uv_sphere(
+            (0.3, 0.8, 0.9), 0.3, DENSE_SEGMENTS, DENSE_RINGS), "orange", (0.8, 0.4, 0.1),
+            smooth=True)
+    else:
+        scene = blender_scenes.build(name)
+    if ADDON not in bpy.context.preferences.addons:
+        addon_utils.enable(ADDON, default_set=True, handle_error=None)
+    render = scene.render
+    render.resolution_x, render.resolution_y = width, height
+    render.resolution_percentage = 100
+    render.threads_mode = "FIXED"
+    render.threads = os.cpu_count()
+    scene.view_settings.view_transform = "Standard"
+    setup.use_multilayer_exr(render.image_settings)
+    cycles = scene.cycles
+    cycles.device = "CPU"
+    cycles.use_adaptive_sampling = False  # the spp of a row is what Cycles rendered
+    cycles.seed = SEED
+    cycles.denoiser = "OPENIMAGEDENOISE"
+    for field, value in BOUNCES.items():
+        setattr(cycles, field, value)
+        setattr(scene.shgi, field, value)
+    scene.shgi.seed = SEED
+    return scene
+
+
+# --- rendering --------------------------------------------------------------------------------
+
+def render_f12(scene, engine, path):
+    """(seconds of F12, float64 (H, W, 3) Combined read back from the Render Result)."""
+    import blender_test_setup as setup
+
+    scene.render.engine = engine
+    start = time.perf_counter()
+    bpy.ops.render.render(write_still=False)
+    seconds = time.perf_counter() - start
+    bpy.data.images["Render Result"].save_render(path, scene=scene)
+    return seconds, setup.read_render_exr(path)["Combined"][..., :3]
+
+
+def use_cycles(scene, samples, denoise):
+    scene.cycles.samples = samples
+    scene.cycles.use_denoising = denoise
+
+
+def use_shgi(scene, method, samples, time_limit=None, denoise=False):
+    """SHGI's settings for a render; time_limit only where the add-on has it (supports_limit)."""
+    props = scene.shgi
+    props.method = method
+    props.samples = samples
+    if supports_limit(scene):
+        props.time_limit = time_limit or 0.0
+        props.use_denoising = denoise
+
+
+def supports_limit(scene):
+    return hasattr(scene.shgi, "time_limit") and hasattr(scene.shgi, "use_denoising")
+
+
+def reference(scene, key, engine, configure, args):
+    """The cached reference `key` (rendered with `engine` after configure(scene) when absent)."""
+    os.makedirs(args.cache, exist_ok=True)
+    path = os.path.join(args.cache, f"{key}.npy")
+    if os.path.exists(path):
+        return np.load(path)
+    configure(scene)
+    seconds, image = render_f12(scene, engine, os.path.join(args.cache, "render.exr"))
+    print(f"  reference {key}: {seconds:.1f} s", flush=True)
+    np.save(path, image)
+    return image
+
+
+def stepped_samples(args, runs):
+    """args.samples, then doubling on while the last of `runs` (appended by the caller as it
+    goes) was faster than the largest budget, up to MAX_STEP_FRACTION of the reference's
+    samples: a renderer fast at low samples gets rows up to the largest budget too."""
+    yield from args.samples
+    samples = args.samples[-1]
+    while (runs and runs[-1].seconds < max(args.limits)
+           and 2 * samples <= args.reference_samples * MAX_STEP_FRACTION):
+        samples *= 2
+        yield samples
+
+
+class Run:
+    """One measured render: seconds of F12, samples (rendered, or asked for), PSNR (dB), and
+    the time limit it was made for (None when samples were stepped)."""
+
+    def __init__(self, seconds, samples, psnr, limit=None):
+        self.seconds, self.samples, self.psnr, self.limit = seconds, samples, psnr, limit
+
+
+def cycles_runs(scene, ref, args, exr):
+    from shgi import metrics
+
+    use_cycles(scene, 1, True)
+    render_f12(scene, "CYCLES", exr)  # untimed: first-render costs
+    runs = []
+    for samples in stepped_samples(args, runs):
+        use_cycles(scene, samples, True)
+        seconds, image = render_f12(scene, "CYCLES", exr)
+        runs.append(Run(seconds, samples, metrics.psnr(ref, image)))
+        print(f"  Cycles+OIDN {samples:4d} spp: {seconds:6.2f} s {runs[-1].psnr:6.2f} dB",
+              flush=True)
+    return runs
+
+
+def shgi_runs(scene, method, ref, args, exr):
+    from shgi import metrics
+    from shgi_blender.engine import final_render
+
+    use_shgi(scene, method, 1)
+    render_f12(scene, "SHGI", exr)  # untimed: first-render costs
+    runs = []
+    if supports_limit(scene):
+        settings = [(TIME_LIMITED_SAMPLES, limit) for limit in args.limits]
+    else:
+        settings = ((samples, None) for samples in stepped_samples(args, runs))
+    for samples, limit in settings:
+        use_shgi(scene, method, samples, time_limit=limit, denoise=limit is not None)
+        seconds, image = render_f12(scene, "SHGI", exr)
+        record = final_render.last_render()
+        if record.get("errors"):
+            raise RuntimeError(f"SHGI {method} on {scene.name}: {record['errors']}")
+        rendered = record.get("samples") or samples
+        runs.append(Run(seconds, rendered, metrics.psnr(ref, image), limit))
+        print(f"  SHGI {method:14s} {rendered:4d} spp: {seconds:6.2f} s "
+              f"{runs[-1].psnr:6.2f} dB", flush=True)
+    return runs
+
+
+# --- the table --------------------------------------------------------------------------------
+
+def run_within(runs, budget):
+    """The run made for `budget` (time-limited runs), else the one of most samples whose time
+    does not exceed it; None when none fits."""
+    limited = [run for run in runs if run.limit == budget]
+    if limited:
+        return limited[0]
+    fitting = [run for run in runs if run.limit is None and run.seconds <= budget]
+    return max(fitting, key=lambda run: run.samples) if fitting else None
+
+
+def cell(run):
+    if run is None:
+        return "-"
+    return f"{run.psnr:5.1f} ({run.samples} spp, {run.seconds:.2f} s)"
+
+
+def print_table(name, args, cycles, methods, default_method, limited):
+    columns = ["Cycles+OIDN"] + [f"SHGI {method}" for method in methods]
+    width = 26
+    print(f"\n{name} ({args.width}x{args.height}, references {args.reference_samples} spp; "
+          f"PSNR dB, samples and F12 seconds of the render within the budget; SHGI "
+          f"{'time_limit + OIDN' if limited else 'samples stepped, no denoising'})")
+    print(f"{'budget':>7s} " + " ".join(f"{c:>{width}s}" for c in columns))
+    for budget in args.limits:
+        cells = [cell(run_within(cycles, budget))]
+        cells += [cell(run_within(methods[m], budget)) for m in methods]
+        print(f"{budget:6.2f}s " + " ".join(f"{c:>{width}s}" for c in cells))
+    if default_method in methods:
+        print(summary(name, args, cycles, methods[default_method], default_method))
+
+
+def summary(name, args, cycles, shgi, method):
+    """Where SHGI's default method is at or above Cycles+OIDN, from SUMMARY_FROM_SECONDS up."""
+    at_or_above, below, neither = [], [], []
+    for budget in (b for b in args.limits if b >= SUMMARY_FROM_SECONDS):
+        ours, theirs = run_within(shgi, budget), run_within(cycles, budget)
+        label = f"{budget:g} s"
+        if ours is None:
+            (neither if theirs is None else below).append(label)
+        elif theirs is None:  # only SHGI has an image this fast
+            at_or_above.append(label + " (no Cycles render)")
+        elif ours.psnr >= theirs.psnr:
+            at_or_above.append(label)
+        else:
+            below.append(label)
+    return (f"summary {name}: SHGI {method} (the default method) at/above Cycles+OIDN at "
+            f"{', '.join(at_or_above) or 'no budget'}; below at {', '.join(below) or 'none'}"
+            + (f"; neither renders within {', '.join(neither)}" if neither else ""))
+
+
+# --- main -------------------------------------------------------------------------------------
+
+def main():
+    args = parse_args()
+    if ADDON not in bpy.context.preferences.addons:
+        addon_utils.enable(ADDON, default_set=True, handle_error=None)
+    from shgi_blender import settings
+
+    all_methods = [method.identifier for method in settings.METHODS]
+    methods = args.methods.split(",") if args.methods else all_methods
+    unknown = [m for m in methods if m not in all_methods]
+    if unknown:
+        raise SystemExit(f"--methods: {unknown} not among {all_methods}")
+    default_method = bpy.types.Scene.bl_rna.properties["shgi"].fixed_type.bl_rna.properties[
+        "method"].default
+    print(f"equal time: Blender {bpy.app.version_string}, {os.cpu_count()} cores, "
+          f"scenes {args.scenes}, SHGI methods {methods} (default {default_method})")
+    exr = os.path.join(args.cache, "render.exr")
+    for name in args.scenes:
+        scene = build_scene(name, args.width, args.height)
+        limited = supports_limit(scene)
+        key = f"{name}_{args.width}x{args.height}_{{}}_{args.reference_samples}spp"
+        print(f"{name}:", flush=True)
+        cycles_ref = reference(scene, key.format("cycles"), "CYCLES",
+                               lambda s: use_cycles(s, args.reference_samples, False), args)
+        shgi_ref = reference(scene, key.format("shgi"), "SHGI",
+                             lambda s: use_shgi(s, "PATH_TRACE", args.reference_samples), args)
+        cycles = cycles_runs(scene, cycles_ref, args, exr)
+        results = {method: shgi_runs(scene, method, shgi_ref, args, exr) for method in methods}
+        print_table(name, args, cycles, results, default_method, limited)
+
+
+main()
