@@ -52,11 +52,15 @@ sys.path[:0] = [os.path.join(REPO_ROOT, "addon"), os.path.join(REPO_ROOT, "build
 
 import addon_utils  # noqa: E402
 import blender_scenes  # noqa: E402
+import blender_test_setup as setup  # noqa: E402  (tests/blender: multilayer EXR read-back)
 import numpy as np  # noqa: E402
 
 ADDON = "shgi_blender"
 SCENES = ("cornell_box", "sun_room", "two_rooms", "caustics", "dense")
-DENSE_SEGMENTS, DENSE_RINGS = 512, 512  # a UV sphere of 523,264 triangles
+# The dense scene's sphere: bench/viewport_sync_bench.py's, 523,264 triangles.
+DENSE_SEGMENTS, DENSE_RINGS = 512, 512
+DENSE_CENTER, DENSE_RADIUS = (0.3, 0.8, 0.9), 0.3
+DENSE_COLOR = (0.8, 0.4, 0.1)  # orange
 LIMITS = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 CYCLES_SAMPLES = (1, 2, 4, 8, 16, 32, 64)
 REFERENCE_SAMPLES = 4096
@@ -108,14 +112,11 @@ def parse_args():
 
 def build_scene(name, width, height):
     """A fresh file holding scene `name` at width x height, set up alike for Cycles and SHGI."""
-    import blender_test_setup as setup
-
     if name == "dense":
         scene = blender_scenes.build("cornell_box")
         builder = blender_scenes.SceneBuilder()
-        builder.part("dense_sphere", blender_scenes.uv_sphere(
-            (0.3, 0.8, 0.9), 0.3, DENSE_SEGMENTS, DENSE_RINGS), "orange", (0.8, 0.4, 0.1),
-            smooth=True)
+        sphere = blender_scenes.uv_sphere(DENSE_CENTER, DENSE_RADIUS, DENSE_SEGMENTS, DENSE_RINGS)
+        builder.part("dense_sphere", sphere, "orange", DENSE_COLOR, smooth=True)
     else:
         scene = blender_scenes.build(name)
     if ADDON not in bpy.context.preferences.addons:
@@ -143,8 +144,6 @@ def build_scene(name, width, height):
 
 def render_f12(scene, engine, path):
     """(seconds of F12, float64 (H, W, 3) Combined read back from the Render Result)."""
-    import blender_test_setup as setup
-
     scene.render.engine = engine
     start = time.perf_counter()
     bpy.ops.render.render(write_still=False)
