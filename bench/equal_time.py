@@ -327,4 +327,5 @@ def main():
         print_table(name, args, cycles, results, default_method, limited)
 
 
-main()
+if __name__ == "__main__":
+    main()
