@@ -305,15 +305,6 @@ ShRgb blend_cells(int order, const float* coefficients, const CellWeights& cells
     return radiance;
 }
 
-// Smooth falloff of the 27-neighbour filter (seed 001 §4.1): 1 at d = 0, 0 with zero slope at
-// d = r, in cells.
-float cubic_weight(float d) {
-    constexpr float r = kCubicRadiusCells;
-    if (d >= r) return 0.0f;
-    const float x = d * (1.0f / r);
-    return (2.0f * x - 3.0f) * x * x + 1.0f;
-}
-
 // Lattice coordinates in cells of the sample point, or false for a non-finite point. Far-away
 // points are clamped (keeping them outside) so the integer conversions below cannot overflow.
 bool sample_coordinates(const vec3& p, const vec3& n, float normal_offset, const vec3& origin,
@@ -383,7 +374,7 @@ void for_each_cubic_cell(const vec3& cells, const ivec3& centre, uint32_t mask, 
         const size_t cell = size_t(centre_cell + kBlockOffset[ix] + kBlockOffset[iy] * row +
                                    kBlockOffset[iz] * slice);
         const float density = facing(cell);
-        if (density > 0.0f) visit(cell, cubic_weight(std::sqrt(d2)) * density);
+        if (density > 0.0f) visit(cell, cubic_falloff(std::sqrt(d2)) * density);
     }
 }
 
