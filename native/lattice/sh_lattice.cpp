@@ -11,6 +11,7 @@
 
 #include "sh/sh_basis.h"
 #include "util/binary_file.h"
+#include "util/cell_sort.h"
 #include "util/error.h"
 #include "util/memory.h"
 #include "util/parallel.h"
@@ -42,9 +43,6 @@ constexpr float kColumnSlackCells = 1e-3f;
 
 constexpr uint64_t kPhotonsPerChunk = 1 << 16;
 constexpr uint64_t kCellsPerChunk = 512;
-// Photons a sequential pass over the photons handles between cancel polls (a few ms).
-constexpr uint64_t kPhotonsPerCancelPoll = uint64_t(1) << 20;
-constexpr uint32_t kNoCell = std::numeric_limits<uint32_t>::max();
 
 const char* const kClassName = "ShLattice";
 
@@ -248,35 +246,6 @@ void clip_triangles(const InstancedTriangles& triangles, uint64_t begin, uint64_
 // ---------------------------------------------------------------------------------------------
 // Injection
 
-// Photon indices grouped by cell, each group in photon order (a stable counting sort): the
-// photons of cell c are order[start[c]] .. order[start[c + 1] - 1].
-struct PhotonsByCell {
-    std::vector<uint32_t> start;  // cell count + 1 entries
-    std::vector<uint32_t> order;
-};
-
-// `photon_cell` holds each photon's cell index, or kNoCell for photons to skip.
-PhotonsByCell sort_by_cell(const std::vector<uint32_t>& photon_cell, size_t cells,
-                           const Progress* progress) {
-    PhotonsByCell sorted;
-    sorted.start.assign(cells + 1, 0);
-    for_each_slice(photon_cell.size(), kPhotonsPerCancelPoll, progress,
-                   [&](uint64_t begin, uint64_t end) {
-                       for (uint64_t i = begin; i < end; ++i)
-                           if (photon_cell[i] != kNoCell) ++sorted.start[photon_cell[i] + 1];
-                   });
-    for (size_t c = 0; c < cells; ++c) sorted.start[c + 1] += sorted.start[c];
-    sorted.order.resize(sorted.start[cells]);
-    std::vector<uint32_t> next(sorted.start.begin(), sorted.start.end() - 1);
-    for_each_slice(photon_cell.size(), kPhotonsPerCancelPoll, progress,
-                   [&](uint64_t begin, uint64_t end) {
-                       for (uint64_t i = begin; i < end; ++i)
-                           if (photon_cell[i] != kNoCell)
-                               sorted.order[next[photon_cell[i]]++] = uint32_t(i);
-                   });
-    return sorted;
-}
-
 // ---------------------------------------------------------------------------------------------
 // Sampling
 //
@@ -334,15 +303,6 @@ ShRgb blend_cells(int order, const float* coefficients, const CellWeights& cells
     float* out = radiance.data();
     for (int i = 0; i < kFloats; ++i) out[i] = sum[i] * inv_total;
     return radiance;
-}
-
-// Smooth falloff of the 27-neighbour filter (seed 001 §4.1): 1 at d = 0, 0 with zero slope at
-// d = r, in cells.
-float cubic_weight(float d) {
-    constexpr float r = kCubicRadiusCells;
-    if (d >= r) return 0.0f;
-    const float x = d * (1.0f / r);
-    return (2.0f * x - 3.0f) * x * x + 1.0f;
 }
 
 // Lattice coordinates in cells of the sample point, or false for a non-finite point. Far-away
@@ -414,7 +374,7 @@ void for_each_cubic_cell(const vec3& cells, const ivec3& centre, uint32_t mask, 
         const size_t cell = size_t(centre_cell + kBlockOffset[ix] + kBlockOffset[iy] * row +
                                    kBlockOffset[iz] * slice);
         const float density = facing(cell);
-        if (density > 0.0f) visit(cell, cubic_weight(std::sqrt(d2)) * density);
+        if (density > 0.0f) visit(cell, cubic_falloff(std::sqrt(d2)) * density);
     }
 }
 
@@ -630,21 +590,14 @@ uint64_t ShLattice::inject(const std::vector<Photon>& photons, float scale, Prog
         }
     });
 
-    const PhotonsByCell sorted = sort_by_cell(photon_cell, cells, progress);
+    const ItemsByCell sorted = sort_by_cell(photon_cell, cells, progress);
     photon_cell = {};
 
     try {
-        parallel_for(
-            0, cells, kCellsPerChunk,
-            [&](uint64_t begin, uint64_t end) {
-                for (uint64_t cell = begin; cell < end; ++cell) {
-                    // A chunk of cells can hold millions of photons: poll per cell.
-                    throw_if_cancelled(progress);
-                    const uint32_t first = sorted.start[cell];
-                    const uint32_t count = sorted.start[cell + 1] - first;
-                    if (count > 0)
-                        inject_cell(cell, photons, sorted.order.data() + first, count, scale);
-                }
+        for_each_cell(
+            sorted,
+            [&](size_t cell, const uint32_t* order, uint32_t count) {
+                inject_cell(cell, photons, order, count, scale);
             },
             progress);
     } catch (const Cancelled&) {

@@ -75,6 +75,7 @@
 #include "photon/photon.h"
 #include "scene/scene.h"
 #include "sh/sh_coeffs.h"
+#include "sh/sh_volume.h"  // kCubicRadiusCells, cubic_falloff: the seed 001 §4.1 filter
 #include "util/progress.h"
 
 namespace shgi {
@@ -83,7 +84,6 @@ class BinaryReader;
 class BinaryWriter;
 
 inline constexpr float kMinProjectedFraction = 0.05f;
-inline constexpr float kCubicRadiusCells = 1.75f;
 
 class ShLattice {
   public:

@@ -69,6 +69,7 @@ struct StagedPhoton {
 struct ChunkResult {
     std::vector<Photon> global;
     std::vector<Photon> caustic;
+    std::vector<PhotonFirstHit> first_hits;  // in photon order (made in the first step)
     uint64_t bounces = 0;
 };
 
@@ -107,6 +108,7 @@ class ChunkTracer {
     // begin] and samples_[i - begin]; survivors are compacted to *alive onwards.
     void shade_batch(size_t begin, size_t end, size_t* alive);
     void store(const PhotonState& photon, const Shading& shading, const Ray& ray);
+    void record_first_hit(const PhotonState& photon, const Shading& shading, const Ray& ray);
     // The chunk's stores (bounce-major) in photon order: a stable counting sort on their owner
     // keeps each photon's stores in bounce order.
     std::vector<Photon> in_photon_order(const std::vector<StagedPhoton>& staged,
@@ -131,6 +133,7 @@ class ChunkTracer {
     // Stores in the order made (bounce-major) and the counting sort's offsets: kept from chunk
     // to chunk, so only the results' exactly sized vectors are new memory.
     std::vector<StagedPhoton> global_, caustic_;
+    std::vector<PhotonFirstHit> first_hits_;
     std::vector<uint32_t> offsets_;
     uint64_t bounces_ = 0;
 };
@@ -138,6 +141,7 @@ class ChunkTracer {
 ChunkResult ChunkTracer::trace(uint64_t pass, uint64_t begin, uint64_t end) {
     global_.clear();
     caustic_.clear();
+    first_hits_.clear();
     bounces_ = 0;
     emit(pass, begin, end);
     while (!rays_.empty()) {
@@ -151,6 +155,7 @@ ChunkResult ChunkTracer::trace(uint64_t pass, uint64_t begin, uint64_t end) {
     ChunkResult result;
     result.global = in_photon_order(global_, size_t(end - begin));
     result.caustic = in_photon_order(caustic_, size_t(end - begin));
+    result.first_hits = first_hits_;
     result.bounces = bounces_;
     return result;
 }
@@ -206,6 +211,9 @@ void ChunkTracer::shade_batch(size_t begin, size_t end, size_t* alive) {
         const bool direct =
             photon.scatterings == 0 && !(photon.from_world && settings_.store_world_direct);
         if (!direct && shading.bsdf.has_smooth_lobes()) store(photon, shading, rays_[i]);
+        // The first step's photons are in photon order (emit), so these are too.
+        if (photon.scatterings == 0 && settings_.store_first_hits)
+            record_first_hit(photon, shading, rays_[i]);
         sampled_[i - begin] = photon.scatterings < settings_.max_bounces;
     }
     // Russian roulette by albedo, then the survivors' BSDF sample towards their next direction
@@ -249,6 +257,19 @@ void ChunkTracer::store(const PhotonState& photon, const Shading& shading, const
     staged.owner = photon.owner;
     // Only specular scatterings since emission: a caustic path L S+ D.
     (photon.specular_path ? caustic_ : global_).push_back(staged);
+}
+
+void ChunkTracer::record_first_hit(const PhotonState& photon, const Shading& shading,
+                                   const Ray& ray) {
+    PhotonFirstHit hit;
+    hit.position = shading.position;
+    hit.normal = shading.geometric_normal;  // already flipped to the arrival side
+    hit.direction = -ray.direction;
+    hit.power = photon.power;
+    // The diffuse lobe's directional albedo toward the light (reciprocity: the share of the
+    // arriving flux it scatters).
+    hit.reflected_power = shading.bsdf.field_diffuse(shading.wo) * photon.power;
+    first_hits_.push_back(hit);
 }
 
 bool ChunkTracer::scatter(PhotonState& photon, const Shading& shading, const Material& material,
@@ -359,6 +380,8 @@ void merge(std::vector<ChunkResult>& chunks, uint64_t count, PhotonMaps& maps,
     for (uint64_t c = 0; c < count; ++c) {
         append_photons(maps.global, chunks[c].global, progress);
         append_photons(maps.caustic, chunks[c].caustic, progress);
+        maps.first_hits.insert(maps.first_hits.end(), chunks[c].first_hits.begin(),
+                               chunks[c].first_hits.end());  // within the reserved capacity
         maps.bounces += chunks[c].bounces;
         chunks[c] = ChunkResult{};  // release as we go: the maps may be large
     }
@@ -398,6 +421,17 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
     const PhotonEmitter emitter(scene);
     if (scene.empty() || emitter.empty()) return maps;
     const uint64_t chunk_count = (settings.photons + kPhotonsPerChunk - 1) / kPhotonsPerChunk;
+    if (settings.store_first_hits) {
+        // At most one per photon, reserved at once (no growth copies); before the allowance is
+        // read, so an address-space limit counts it.
+        require_memory(saturating_mul(settings.photons, sizeof(PhotonFirstHit)),
+                       format_message(settings_name, ".photons = ", settings.photons,
+                                      " with store_first_hits (up to one first hit of ",
+                                      sizeof(PhotonFirstHit), " bytes per photon)"),
+                       format_message("lower ", settings_name, ".photons (or trace more passes "
+                                      "of fewer photons)"));
+        maps.first_hits.reserve(size_t(settings.photons));
+    }
     // The allowance is read once: it shrinks as the maps grow.
     const MemoryLimits limits = memory_limits();
     const uint64_t allowed = limits.allowed();

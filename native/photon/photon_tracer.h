@@ -7,8 +7,10 @@
 // Emission: photon/photon_emitter.h (each emitter's flux, how its photons leave it, portals, and
 // the stratified choice of emitter).
 //
-// Storage: the first surface a photon hits after emission is not stored (the renderers compute
-// direct light exactly); each later hit on a surface whose BSDF has a non-Dirac lobe stores a
+// Storage: the first surface a photon hits after emission is not stored in the maps (the
+// renderers compute direct light exactly); with store_first_hits it is recorded apart, as a
+// PhotonFirstHit (photon/photon.h), for every photon whose first ray hits a surface, whatever its
+// BSDF; each later hit on a surface whose BSDF has a non-Dirac lobe stores a
 // Photon (the power arriving there) before the photon scatters on. A stored photon whose path
 // since emission bounced only on specular surfaces (Dirac lobes, or lobes with roughness <=
 // specular_roughness), at least once, goes to the caustic map (L S+ D); every other stored
@@ -48,6 +50,9 @@ struct PhotonTracerSettings {
     // Store photons from the world at their first hit too (global map): the maps then carry the
     // world's direct light, which consumers leave out of next-event estimation.
     bool store_world_direct = false;
+    // Also record each light path's first surface hit in PhotonMaps::first_hits (the maps do
+    // not change). Off by default: it costs up to 60 bytes per emitted photon.
+    bool store_first_hits = false;
 };
 
 // Throws InvalidArgument naming the field (photons 0 or > 2^40, max_bounces < 1, roughness
@@ -63,6 +68,9 @@ struct PhotonMaps {
     vec3 emitted_power{0.0f};        // W: exact total flux of the emitters (photon_emitter.h);
                                      // the emitted photons' powers sum to an estimate of it
     uint64_t bounces = 0;            // surface interactions traced (rays cast), for benchmarks
+    // With PhotonTracerSettings::store_first_hits: the first surface hit of every photon whose
+    // first ray hits one, in photon order (at most one per photon). Empty otherwise.
+    std::vector<PhotonFirstHit> first_hits;
 };
 
 // Traces pass `pass` (0, 1, 2, ...: independent RNG streams) on a committed scene (else
@@ -72,7 +80,8 @@ struct PhotonMaps {
 // the photons it stored, the whole pass's stored photons are projected and a pass whose maps
 // would not fit what the process may allocate (util/memory.h) is refused with OutOfMemory
 // naming `settings_name`.photons before the rest is traced. Later blocks re-check the
-// projection and the maps' growth.
+// projection and the maps' growth. With store_first_hits, room for one first hit per photon is
+// checked and reserved before tracing (pages never written are not backed by memory).
 PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& settings, uint64_t pass,
                          Progress* progress = nullptr,
                          const char* settings_name = "PhotonTracerSettings");

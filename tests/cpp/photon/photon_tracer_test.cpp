@@ -320,6 +320,129 @@ TEST(PhotonTracer, CancelledProgressThrowsCancelled) {
     EXPECT_THROW(trace_photons(scene, settings, 0, &cancelled_during), Cancelled);
 }
 
+// ---------------------------------------------------------------------------------------------
+// First hits (PhotonTracerSettings::store_first_hits)
+
+PhotonTracerSettings first_hit_settings(uint64_t photons) {
+    PhotonTracerSettings settings;
+    settings.photons = photons;
+    settings.seed = 3;
+    settings.store_first_hits = true;
+    return settings;
+}
+
+// Every first hit lies on the lit surface facing its light, and reflects albedo × arriving.
+void expect_first_hits_on_lambert(const std::vector<PhotonFirstHit>& hits, float albedo) {
+    for (const PhotonFirstHit& hit : hits) {
+        EXPECT_GT(glm::dot(hit.normal, hit.direction), 0.0f);
+        EXPECT_NEAR(glm::length(hit.direction), 1.0f, 1e-5f);
+        EXPECT_EQ(hit.reflected_power, albedo * hit.power);  // Lambert: exactly base colour × Φ
+        EXPECT_GT(hit.power.x, 0.0f);
+    }
+}
+
+// A point light (Φ = 100 W) at height h over a Lambert square [-a, a]² (albedo 0.6): the flux
+// reaching it is Φ Ω / 4π with Ω = 4 asin(a² / (a² + h²)), the square's solid angle. Each
+// photon carries Φ/N and reaches it with probability p = Ω / 4π, so the sum's standard error is
+// at most Φ √(p(1 − p)/N) (stratified emission only lowers it).
+TEST(PhotonTracerFirstHits, SumToTheEmittedFluxReachingALitPlane) {
+    constexpr float kPower = 100.0f, kHalf = 1.0f, kHeight = 0.8f, kAlbedo = 0.6f;
+    constexpr uint64_t kPhotons = 50000;
+    Scene scene;
+    scene.add_material(test::lambert(kAlbedo));
+    scene.add_instance(scene.add_mesh(test::plane(kHalf)), mat4(1.0f));
+    scene.set_world(test::black_world());
+    scene.add_light(point_light(vec3(0.0f, 0.0f, kHeight), kPower));
+    scene.commit();
+    const PhotonMaps maps = trace_photons(scene, first_hit_settings(kPhotons), 0);
+
+    const double solid_angle = 4.0 * std::asin(double(kHalf * kHalf) /
+                                               double(kHalf * kHalf + kHeight * kHeight));
+    const double p = solid_angle / (4.0 * M_PI);
+    double arriving = 0.0, reflected = 0.0;
+    for (const PhotonFirstHit& hit : maps.first_hits) {
+        arriving += hit.power.x;
+        reflected += hit.reflected_power.y;
+        EXPECT_NEAR(hit.position.z, 0.0f, 1e-5f);
+        EXPECT_LE(std::max(std::fabs(hit.position.x), std::fabs(hit.position.y)), kHalf + 1e-5f);
+        EXPECT_EQ(hit.normal, vec3(0.0f, 0.0f, 1.0f));  // flipped to the lit side
+    }
+    expect_first_hits_on_lambert(maps.first_hits, kAlbedo);
+    const double error = kPower * std::sqrt(p * (1.0 - p) / double(kPhotons));
+    testing::expect_within_noise(arriving, error, kPower * p, 0.0, "first hits' arriving flux");
+    testing::expect_within_noise(reflected, kAlbedo * error, kAlbedo * kPower * p, 0.0,
+                                 "first hits' reflected flux");
+    EXPECT_NEAR(double(maps.first_hits.size()), p * double(kPhotons),
+                testing::kSigmas * std::sqrt(p * (1.0 - p) * double(kPhotons)));
+}
+
+// In a closed box every photon's first ray hits a wall: one first hit per photon, in photon
+// order, and their flux is the light's to float rounding (each carries exactly Φ/N).
+TEST(PhotonTracerFirstHits, FurnaceRecordsOnePerPhotonSummingToTheEmittedFlux) {
+    constexpr float kPower = 10.0f, kAlbedo = 0.5f;
+    constexpr double kRoundingTolerance = 1e-5;  // relative: float Φ/N, summed in double
+    const Scene scene = furnace(kAlbedo, kPower);
+    const PhotonMaps maps = trace_photons(scene, first_hit_settings(3 * 4096 + 7), 0);
+    ASSERT_EQ(maps.first_hits.size(), maps.emitted);
+    double arriving = 0.0;
+    for (const PhotonFirstHit& hit : maps.first_hits) {
+        arriving += hit.power.z;
+        EXPECT_LT(glm::dot(hit.normal, hit.position), 0.0f);  // on a wall, facing inwards
+    }
+    EXPECT_NEAR(arriving, kPower, kPower * kRoundingTolerance);
+    expect_first_hits_on_lambert(maps.first_hits, kAlbedo);
+    // Photon order: the first 64 of a 64-photon pass are those of this pass, scaled by N / 64.
+    PhotonTracerSettings few = first_hit_settings(64);
+    const PhotonMaps small = trace_photons(scene, few, 0);
+    ASSERT_EQ(small.first_hits.size(), 64u);
+    for (size_t i = 0; i < small.first_hits.size(); ++i) {
+        EXPECT_EQ(small.first_hits[i].position, maps.first_hits[i].position) << "photon " << i;
+        EXPECT_EQ(small.first_hits[i].direction, maps.first_hits[i].direction) << "photon " << i;
+    }
+}
+
+// Recording first hits changes nothing else (maps, bounces), is off by default (no first hits),
+// and its output is bit-identical for 1 and 2 threads.
+TEST(PhotonTracerFirstHits, MapsUnchangedAndDeterministic) {
+    const Scene scene = mixed_scene();
+    EXPECT_FALSE(PhotonTracerSettings{}.store_first_hits);
+    const PhotonMaps off = trace_with_threads(scene, 2, 0);
+    EXPECT_TRUE(off.first_hits.empty());
+    PhotonMaps on[2];
+    for (int threads : {1, 2}) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+        PhotonTracerSettings settings;
+        settings.photons = 2 * 4096 + 123;  // as trace_with_threads
+        settings.seed = 11;
+        settings.store_first_hits = true;
+        on[threads - 1] = trace_photons(scene, settings, 0);
+    }
+    for (const PhotonMaps& maps : on) {
+        EXPECT_TRUE(same_photons(off.global, maps.global));
+        EXPECT_TRUE(same_photons(off.caustic, maps.caustic));
+        EXPECT_EQ(off.bounces, maps.bounces);
+    }
+    // Photons of the lights inside the room all hit; some of the world's, aimed at the scene's
+    // bounds from outside, miss the box.
+    ASSERT_GT(on[0].first_hits.size(), 5000u);
+    ASSERT_LT(on[0].first_hits.size(), size_t(on[0].emitted));
+    ASSERT_EQ(on[0].first_hits.size(), on[1].first_hits.size());
+    for (size_t i = 0; i < on[0].first_hits.size(); ++i) {
+        const PhotonFirstHit& a = on[0].first_hits[i];
+        const PhotonFirstHit& b = on[1].first_hits[i];
+        ASSERT_TRUE(a.position == b.position && a.normal == b.normal &&
+                    a.direction == b.direction && a.power == b.power &&
+                    a.reflected_power == b.reflected_power)
+            << "first hit " << i;
+    }
+    // Glass and metal have no diffuse lobe: some first hits reflect nothing diffusely.
+    size_t without_diffuse = 0;
+    for (const PhotonFirstHit& hit : on[0].first_hits)
+        without_diffuse += hit.reflected_power == vec3(0.0f) ? 1 : 0;
+    EXPECT_GT(without_diffuse, 0u);
+    EXPECT_LT(without_diffuse, on[0].first_hits.size());
+}
+
 void expect_invalid(const PhotonTracerSettings& settings, const std::string& expected) {
     testing::expect_invalid_argument([&] { validate_photon_tracer_settings(settings); }, expected);
 }
