@@ -83,7 +83,9 @@ def without_pyoidn(folder, results):
     record = final_render.last_render()
     results["without_pyoidn"] = {"errors": record["errors"], "warnings": record["warnings"],
                                  "denoised": record.get("denoised"),
-                                 "mean": float(passes["Combined"][..., :3].mean())}
+                                 "mean": float(passes["Combined"][..., :3].mean()),
+                                 "noisy_is_combined": bool(np.array_equal(
+                                     passes["Noisy Image"], passes["Combined"]))}
 
 
 def time_limited(folder, results):

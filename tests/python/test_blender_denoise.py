@@ -47,6 +47,7 @@ def test_f12_without_pyoidn_renders_undenoised_and_says_how_to_install_it(
         blender, build_python_dir, tmp_path_factory):
     row = results(blender, build_python_dir, tmp_path_factory)["without_pyoidn"]
     assert not row["errors"] and not row["denoised"] and row["mean"] > 0.0
+    assert row["noisy_is_combined"]  # the registered Noisy Image pass is not left empty
     assert any("not denoised" in warning and "pip install" in warning and "pyoidn" in warning
                for warning in row["warnings"]), row["warnings"]
 

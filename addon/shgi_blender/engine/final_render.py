@@ -314,6 +314,10 @@ class FinalRender:
             if name is None or (names is not None and name not in names):
                 continue
             pixels = snapshot.passes.get(name)
+            if pixels is None and name == passes.DENOISING_PASSES[0].name:
+                # Denoising was asked for but did not run (no pyoidn, cancelled, failed): the
+                # Noisy Image is Combined as it is.
+                pixels = snapshot.passes.get("Combined")
             if pixels is None:
                 continue
             if pixels.shape[:2] != (self.height, self.width):
