@@ -212,9 +212,7 @@ class RenderJob(NativeTask):
             return None
         try:
             return self._denoising.make()
-        except ImportError as error:
-            self.denoise_error = f"the render is not denoised: {error}"
-        except (RuntimeError, ValueError) as error:
+        except (ImportError, RuntimeError, ValueError) as error:  # no pyoidn, an OIDN failure
             self.denoise_error = f"the render is not denoised: {error}"
         return None
 
