@@ -55,8 +55,11 @@ def denoiser_error():
     when they can. Looked up without importing pyoidn."""
     if importlib.util.find_spec("pyoidn") is not None:
         return None
-    flag = " --break-system-packages" if os.path.exists("/usr/lib/python3/dist-packages") else ""
+    command = f"{sys.executable} -m pip install pyoidn"
+    if module() is not None:  # the command for this Python, as shgi's own messages give it
+        from shgi.denoise import pip_command
+
+        command = pip_command("pyoidn")
     return (f"Denoising needs OpenImageDenoise, the Python module pyoidn, which {sys.executable} "
-            f"cannot import: renders are shown without denoising. Fix: `{sys.executable} -m pip "
-            f"install{flag} pyoidn` (or `make deps` in the SHGI repository), then restart "
-            "Blender.")
+            f"cannot import: renders are shown without denoising. Fix: `{command}` (or `make "
+            "deps` in the SHGI repository), then restart Blender.")

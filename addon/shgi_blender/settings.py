@@ -507,7 +507,6 @@ def light_path_fields(props, group, check=True, gather=None):
     gather (None: as the group's Final Gather says; a bake reads its field directly: False)."""
     if gather is None:
         gather = getattr(getattr(props, group.prop, None), "final_gather", False)
-    gathered = bool(gather)
     values = {}
     for field, value in group.light_paths.items():
         setting = getattr(props, value.prop)
@@ -516,7 +515,7 @@ def light_path_fields(props, group, check=True, gather=None):
                 f"{SETTING_LABELS[value.prop]} is {setting}: the {group.label} stores light "
                 f"after {value.minimum} or more diffuse bounces; set it to {value.minimum} or "
                 "more, or use Path Tracing (which renders 0 as direct light only)")
-        if gathered and value.prop == "diffuse_bounces":
+        if gather and value.prop == "diffuse_bounces":
             setting = max(setting - GATHER_BOUNCES,
                           value.minimum if value.minimum is not None else 0)
         if value.maximum is not None:

@@ -60,7 +60,8 @@ import numpy as np
 
 from . import _shgi
 
-__all__ = ["METHODS", "OIDN_FILTERS", "CHART_MARGIN", "denoise_lightmap", "import_optional"]
+__all__ = ["METHODS", "OIDN_FILTERS", "CHART_MARGIN", "denoise_lightmap", "import_optional",
+           "pip_command"]
 
 METHODS = ("OIDN", "SHGI")
 OIDN_FILTERS = ("RTLightmap", "RT")
@@ -76,18 +77,23 @@ SH_L1_BOUND = math.sqrt(3.0)
 _C0_FLOOR = 1e-8
 
 
+def pip_command(module: str) -> str:
+    """The command that installs a PyPI module for this Python (Debian's externally managed
+    Python needs --break-system-packages)."""
+    managed = os.path.exists(os.path.join(sysconfig.get_path("stdlib"), "EXTERNALLY-MANAGED"))
+    flag = " --break-system-packages" if managed else ""
+    return f"{sys.executable} -m pip install{flag} {module}"
+
+
 def import_optional(module: str, feature: str):
     """Imports an optional PyPI module or raises ImportError naming the pip command for this
-    Python (Debian's externally managed Python needs --break-system-packages; `make deps`
-    installs both optional modules)."""
+    Python (`make deps` installs both optional modules)."""
     try:
         return importlib.import_module(module)
     except ImportError as error:
-        managed = os.path.exists(os.path.join(sysconfig.get_path("stdlib"), "EXTERNALLY-MANAGED"))
-        flag = " --break-system-packages" if managed else ""
         raise ImportError(
             f"{feature} needs the Python module '{module}', which is not installed in "
-            f"{sys.executable}: install it with `{sys.executable} -m pip install{flag} {module}` "
+            f"{sys.executable}: install it with `{pip_command(module)}` "
             "(or run `make deps`)") from error
 
 

@@ -302,21 +302,26 @@ def test_worker_ends_with_the_image_of_one_native_render(method):
     finally:
         worker.stop()
     assert not worker.running
+    if method == "PHOTON_LATTICE":  # read through a final gather, the lattice's default
+        assert settings.preview_settings(settings.properties_from_values(props),
+                                         shgi).final_gather
+    expected = script_frame(scene, view, props, 6)
+    np.testing.assert_array_equal(frame.pixels, expected["Combined"][::-1])
+
+
+def script_frame(scene, view, props, samples):
+    """The passes a script renders of `view` with the viewport's render properties `props`
+    (render_property_values) at `samples` per pixel: the path tracer, or a solved lattice."""
     scene.set_camera(viewport_camera.shgi_camera(shgi, view))
     scene.commit()
-    values = settings.properties_from_values(props)
-    if method == "PATH_TRACE":
-        expected = shgi.render_path_traced(
-            scene, settings.path_tracer_settings(SimpleNamespace(**dict(values.__dict__,
-                                                                        samples=6)), shgi))
-    else:
-        lattice = shgi.PhotonLattice(scene, settings.photon_lattice_settings(values, shgi))
-        lattice.solve()
-        preview = settings.preview_settings(SimpleNamespace(**dict(values.__dict__, samples=6)),
-                                            shgi)
-        assert preview.final_gather  # the lattice's default
-        expected, _ = shgi.render_preview(scene, lattice, preview)
-    np.testing.assert_array_equal(frame.pixels, expected["Combined"][::-1])
+    values = SimpleNamespace(**dict(settings.properties_from_values(props).__dict__,
+                                    samples=samples))
+    if values.method == "PATH_TRACE":
+        return shgi.render_path_traced(scene, settings.path_tracer_settings(values, shgi))
+    lattice = shgi.PhotonLattice(scene, settings.photon_lattice_settings(values, shgi))
+    lattice.solve()
+    passes, _ = shgi.render_preview(scene, lattice, settings.preview_settings(values, shgi))
+    return passes
 
 
 @pytest.mark.skipif(importlib.util.find_spec("pyoidn") is None, reason="needs pyoidn")
@@ -341,17 +346,7 @@ def test_worker_denoises_its_frames_as_a_script_would(method):
     finally:
         worker.stop()
     assert "not denoised" not in status
-    scene.set_camera(viewport_camera.shgi_camera(shgi, view))
-    scene.commit()
-    if method == "PATH_TRACE":
-        noisy = shgi.render_path_traced(
-            scene, settings.path_tracer_settings(SimpleNamespace(**dict(values.__dict__,
-                                                                        samples=6)), shgi))
-    else:
-        lattice = shgi.PhotonLattice(scene, settings.photon_lattice_settings(values, shgi))
-        lattice.solve()
-        noisy, _ = shgi.render_preview(scene, lattice, settings.preview_settings(
-            SimpleNamespace(**dict(values.__dict__, samples=6)), shgi))
+    noisy = script_frame(scene, view, props, 6)
     expected = denoise_frame(noisy, denoising.quality, denoising.prefilter, denoising.guides)
     assert not np.array_equal(expected["Combined"], noisy["Combined"])
     np.testing.assert_array_equal(frame.pixels, expected["Combined"][::-1])
