@@ -85,6 +85,21 @@ def pip_command(module: str) -> str:
     return f"{sys.executable} -m pip install{flag} {module}"
 
 
+def cpu_device(pyoidn):
+    """A committed OIDN CPU device (RuntimeError with OIDN's message when it cannot be made)."""
+    device = pyoidn.Device(pyoidn.OIDN_DEVICE_TYPE_CPU)
+    # No thread pinning: it asks TBB for the CPU's core types, which loads TBB's hwloc binding,
+    # and inside Debian's Blender 3.4.1 (jemalloc as malloc) hwloc then aborts the process with
+    # "free(): invalid size". Pinning only speeds up large hybrid CPUs.
+    device.set_bool("setAffinity", False)
+    device.commit()
+    error = device.get_error()
+    if error is not None:
+        device.release()
+        raise RuntimeError(f"OpenImageDenoise failed creating the CPU device: {error}")
+    return device
+
+
 def import_optional(module: str, feature: str):
     """Imports an optional PyPI module or raises ImportError naming the pip command for this
     Python (`make deps` installs both optional modules)."""
@@ -331,13 +346,7 @@ class _Oidn:
         self.filters = {}
 
     def __enter__(self) -> "_Oidn":
-        self.device = self.pyoidn.Device(self.pyoidn.OIDN_DEVICE_TYPE_CPU)
-        # No thread pinning: it asks TBB for the CPU's core types, which loads TBB's hwloc
-        # binding, and inside Debian's Blender 3.4.1 (jemalloc as malloc) hwloc then aborts the
-        # process with "free(): invalid size". Pinning only speeds up large hybrid CPUs.
-        self.device.set_bool("setAffinity", False)
-        self.device.commit()
-        self._check("creating the CPU device")
+        self.device = cpu_device(self.pyoidn)
         return self
 
     def __exit__(self, *exc) -> None:

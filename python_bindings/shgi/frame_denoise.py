@@ -41,7 +41,7 @@ import time
 import numpy as np
 
 from . import _shgi
-from .denoise import import_optional
+from .denoise import cpu_device, import_optional
 
 __all__ = ["QUALITIES", "PREFILTERS", "GUIDES", "NOISY_PASS", "ALBEDO_PASS", "NORMAL_PASS",
            "FrameDenoiser", "available", "denoise_frame", "guide_images"]
@@ -126,11 +126,7 @@ class FrameDenoiser:
         _check_choice("guides", guides, GUIDES)
         self.quality, self.prefilter, self.guides = quality, prefilter, guides
         self._pyoidn = import_optional("pyoidn", "denoising frames")
-        self._device = self._pyoidn.Device(self._pyoidn.OIDN_DEVICE_TYPE_CPU)
-        # No thread pinning: inside Debian's Blender 3.4.1 it aborts the process (denoise.py).
-        self._device.set_bool("setAffinity", False)
-        self._device.commit()
-        self._check("creating the CPU device")
+        self._device = cpu_device(self._pyoidn)
         self._filters = {}
         self._buffers = {}  # {id(filter): ((shape, slots), {slot: its shared buffer})}
         self._monitor = _ProgressMonitor(self._pyoidn)
