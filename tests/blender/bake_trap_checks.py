@@ -13,7 +13,10 @@ without an image.
 2. shared materials: all ten objects of the room facing in (nine share "plaster") baked with
    Show in Materials, Make Materials Single-User on: every object shows its own lightmap;
    the same with it off: only the objects with a material of their own;
-3. the images' nodes: a material whose lightmap image is gone, saved and opened again, has lost
+3. a room that is one closed mesh (a cube, a box and a lamp inside, the camera inside): its
+   normals out, the facing check names it; turned in, it does not; a box with its normals out
+   seen from outside is never named;
+4. the images' nodes: a material whose lightmap image is gone, saved and opened again, has lost
    its lightmap nodes and shows its surface again (the load_post handler).
 The bakes run as a farm's would (execute, background mode): their progress lines go to the same
 output. Prints BAKE_TRAPS_OK.
@@ -31,9 +34,11 @@ setup.add_import_paths()
 sys.path.insert(0, str(setup.REPO_ROOT / "examples"))
 setup.enable_addon()
 
+import bmesh  # noqa: E402
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 import blender_scenes  # noqa: E402
+from shgi_blender.operators import facing_check  # noqa: E402
 
 RESOLUTION, FACING_SAMPLES = 16, 64
 FACING_UV_MAP = "BakeUV"
@@ -80,6 +85,44 @@ def facing_checks(tmpdir, results):
         results[case] = {"status": status, "floor_mean": lightmap_mean("floor")}
 
 
+def add_cube(name, size, location, inward=False):
+    mesh = bpy.data.meshes.new(name)
+    shape = bmesh.new()
+    bmesh.ops.create_cube(shape, size=size)
+    if inward:
+        bmesh.ops.reverse_faces(shape, faces=shape.faces)
+    shape.to_mesh(mesh)
+    shape.free()
+    obj = bpy.data.objects.new(name, mesh)
+    obj.location = location
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
+
+
+def closed_room_checks(results):
+    """What facing_away() names in a 4 m closed cube room with a box and a point lamp inside,
+    the camera inside too: the room's normals out, then in; and a box outside every viewer."""
+    for case, inward, inside in (("closed_room_out", False, True),
+                                 ("closed_room_in", True, True),
+                                 ("box_seen_from_outside", False, False)):
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        setup.enable_addon()
+        scene = bpy.context.scene
+        objects = [add_cube("box", 0.5, (0.5, -0.5, -1.75))]
+        if inside:
+            objects.append(add_cube("room", 4.0, (0.0, 0.0, 0.0), inward=inward))
+        lamp = bpy.data.objects.new("lamp", bpy.data.lights.new("lamp", "POINT"))
+        lamp.location = (0.0, 0.0, 1.5) if inside else (3.0, 0.0, 2.0)
+        camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+        camera.location = (1.2, 1.2, 0.5) if inside else (5.0, 5.0, 3.0)
+        for obj in (lamp, camera):
+            scene.collection.objects.link(obj)
+        scene.camera = camera
+        bpy.context.view_layer.update()
+        results[case] = facing_check.facing_away(scene, bpy.context.evaluated_depsgraph_get(),
+                                                 objects)
+
+
 def material_view(obj):
     """The object's material and what its lightmap nodes show (None without them)."""
     material = obj.material_slots[0].material
@@ -121,6 +164,7 @@ def main():
     results = {"names": None}
     facing_checks(tmpdir, results)
     shared_material_checks(tmpdir, results)
+    closed_room_checks(results)
     imageless_node_checks(tmpdir, results)
     with open(setup.results_path("bake_traps.json"), "w") as out:
         json.dump(results, out, indent=1)

@@ -9,13 +9,20 @@ object whose front rays mostly escape to the world while its back rays mostly hi
 faces away from the scene. Hits on the object itself do not count: a closed object (a box, its
 normals rightly out) sees its own inside from the back wherever it stands.
 
+A room that is one closed mesh with its normals out looks like such a box from its own faces.
+What tells the two apart is where the scene is seen from: the camera and the lamps (suns and
+the world have no place) stand inside the room and see its faces from behind, while they see
+a box from the front. So an object whose front rays mostly escape also faces away when most of
+the rays from the camera and the lamps that end on it end on its back.
+
 The bake warns about such an object, or with Bake Side "Facing the Scene" exports it facing the
 other way (export_scene's `flipped`) so that its back is baked: every such object of the scene,
 as the light the baked objects get off a surface facing away would otherwise be its outside's.
 
-A room that is one closed mesh with its normals out looks like such a box and is not found.
 The module imports without bpy (its warning text is tested outside Blender).
 """
+
+import math
 
 # Surface points sampled per object (spread over its triangles) and the share of them that
 # must agree: front rays escaping and back rays hitting another object.
@@ -24,11 +31,16 @@ AGREEING_SHARE = 0.5
 # Rays start this far off the surface (m), along their direction, not to hit the face itself.
 RAY_OFFSET = 1e-3
 RAY_LENGTH = 1e6
+# Rays cast from each viewer (the camera, each lamp but suns) in a spherical Fibonacci set, and
+# the fewest of them that must end on an object for their sides to count.
+VIEWER_RAYS = 64
+MIN_VIEWER_HITS = 4
 
 
 def facing_away(scene, depsgraph, objects):
     """Names of `objects` (mesh objects) whose fronts see the world and backs see the scene."""
-    return [obj.name for obj in objects if _faces_away(scene, depsgraph, obj)]
+    seen = _sides_seen(scene, depsgraph, _viewers(scene))
+    return [obj.name for obj in objects if _faces_away(scene, depsgraph, obj, seen)]
 
 
 def warning(name):
@@ -47,17 +59,61 @@ def turned_around(name, baked):
             "(Bake Side: Facing the Scene)")
 
 
-def _faces_away(scene, depsgraph, obj):
+def _faces_away(scene, depsgraph, obj, seen):
+    """Whether `obj`'s front rays mostly escape while its back rays mostly hit other objects,
+    or the viewers' rays that end on it mostly end on its back (`seen`: _sides_seen's)."""
     samples = _face_samples(obj.evaluated_get(depsgraph))
     if not samples:
         return False
     escaping = hitting_others = 0
     for point, normal in samples:
-        escaping += _hit_object(scene, depsgraph, point, normal) is None
-        behind = _hit_object(scene, depsgraph, point, -normal)
+        escaping += _hit_object(scene, depsgraph, point, normal)[0] is None
+        behind = _hit_object(scene, depsgraph, point, -normal)[0]
         hitting_others += behind is not None and behind != obj.name
     needed = AGREEING_SHARE * len(samples)
-    return escaping >= needed and hitting_others >= needed
+    if escaping < needed:
+        return False
+    fronts, backs = seen.get(obj.name, (0, 0))
+    seen_from_behind = (fronts + backs >= MIN_VIEWER_HITS
+                        and backs >= AGREEING_SHARE * (fronts + backs))
+    return hitting_others >= needed or seen_from_behind
+
+
+def _viewers(scene):
+    """World positions the scene is seen and lit from: the camera and every lamp with a place
+    (not suns) that renders."""
+    points = [scene.camera.matrix_world.translation] if scene.camera is not None else []
+    points += [obj.matrix_world.translation for obj in scene.objects
+               if obj.type == "LIGHT" and obj.data.type != "SUN" and not obj.hide_render]
+    return points
+
+
+def _sides_seen(scene, depsgraph, viewers):
+    """{object name: (rays ending on its front, rays ending on its back)} over VIEWER_RAYS rays
+    from each viewer."""
+    from mathutils import Vector
+
+    seen = {}
+    for viewer in viewers:
+        for direction in _sphere_directions(VIEWER_RAYS):
+            direction = Vector(direction)
+            name, normal = _hit_object(scene, depsgraph, viewer, direction)
+            if name is not None:
+                fronts, backs = seen.get(name, (0, 0))
+                back = normal.dot(direction) > 0.0
+                seen[name] = (fronts + (not back), backs + back)
+    return seen
+
+
+def _sphere_directions(count):
+    """`count` unit vectors spread evenly over the sphere (a spherical Fibonacci set)."""
+    golden = 2.399963229728653  # pi * (3 - sqrt(5))
+    directions = []
+    for i in range(count):
+        z = 1.0 - (2 * i + 1) / count
+        r = max(0.0, 1.0 - z * z) ** 0.5
+        directions.append((r * math.cos(golden * i), r * math.sin(golden * i), z))
+    return directions
 
 
 def _face_samples(evaluated):
@@ -91,8 +147,8 @@ def _triangle_point(i):
 
 
 def _hit_object(scene, depsgraph, point, direction):
-    """Name of the (original) object a ray from `point` along `direction` (mathutils
-    Vectors) hits first; None when it escapes to the world."""
-    hit, _location, _normal, _index, obj, _matrix = scene.ray_cast(
+    """(name of the original object, world face normal there) of what a ray from `point`
+    along `direction` (mathutils Vectors) hits first; (None, None) when it escapes."""
+    hit, _location, normal, _index, obj, _matrix = scene.ray_cast(
         depsgraph, point + RAY_OFFSET * direction, direction, distance=RAY_LENGTH)
-    return obj.original.name if hit and obj is not None else None
+    return (obj.original.name, normal) if hit and obj is not None else (None, None)
