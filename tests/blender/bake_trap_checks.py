@@ -15,7 +15,8 @@ without an image.
    the same with it off: only the objects with a material of their own;
 3. a room that is one closed mesh (a cube, a box and a lamp inside, the camera inside): its
    normals out, the facing check names it; turned in, it does not; a box with its normals out
-   seen from outside is never named;
+   seen from outside is never named; nor a facade facing the street with a room's furniture
+   behind it (its back rays hit the furniture, but the camera and lamp see its front);
 4. the images' nodes: a material whose lightmap image is gone, saved and opened again, has lost
    its lightmap nodes and shows its surface again (the load_post handler).
 The bakes run as a farm's would (execute, background mode): their progress lines go to the same
@@ -99,22 +100,37 @@ def add_cube(name, size, location, inward=False):
     return obj
 
 
+def add_wall(name, width, height, location):
+    """A one-quad wall facing -Y (towards the street) at `location`."""
+    mesh = bpy.data.meshes.new(name)
+    w, h = width / 2, height / 2
+    mesh.from_pydata([(-w, 0, -h), (w, 0, -h), (w, 0, h), (-w, 0, h)], [], [(0, 1, 2, 3)])
+    obj = bpy.data.objects.new(name, mesh)
+    obj.location = location
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
+
+
 def closed_room_checks(results):
     """What facing_away() names in a 4 m closed cube room with a box and a point lamp inside,
     the camera inside too: the room's normals out, then in; and a box outside every viewer."""
     for case, inward, inside in (("closed_room_out", False, True),
                                  ("closed_room_in", True, True),
-                                 ("box_seen_from_outside", False, False)):
+                                 ("box_seen_from_outside", False, False),
+                                 ("facade", False, False)):
         bpy.ops.wm.read_factory_settings(use_empty=True)
         setup.enable_addon()
         scene = bpy.context.scene
         objects = [add_cube("box", 0.5, (0.5, -0.5, -1.75))]
         if inside:
             objects.append(add_cube("room", 4.0, (0.0, 0.0, 0.0), inward=inward))
+        if case == "facade":  # a 4 x 3 m facade with a wardrobe 0.5 m behind it
+            objects = [add_wall("facade", 4.0, 3.0, (0.0, 0.0, 0.0)),
+                       add_cube("wardrobe", 3.5, (0.0, 2.25, 0.0))]
         lamp = bpy.data.objects.new("lamp", bpy.data.lights.new("lamp", "POINT"))
-        lamp.location = (0.0, 0.0, 1.5) if inside else (3.0, 0.0, 2.0)
+        lamp.location = (0.0, 0.0, 1.5) if inside else (3.0, -4.0, 2.0)
         camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
-        camera.location = (1.2, 1.2, 0.5) if inside else (5.0, 5.0, 3.0)
+        camera.location = (1.2, 1.2, 0.5) if inside else (1.0, -6.0, 1.0)
         for obj in (lamp, camera):
             scene.collection.objects.link(obj)
         scene.camera = camera

@@ -562,11 +562,13 @@ def test_closed_room_facing_out_is_found_by_where_it_is_seen_from(
         blender, build_python_dir, tmp_path_factory):
     """A room that is one closed cube with its normals out sees only itself from behind, as a
     solid box does: the camera and the lamp inside it seeing its back name it. Turned in, or a
-    box seen from outside, nothing is named."""
+    box seen from outside, nothing is named; nor a facade facing the camera and lamp outside
+    with a wardrobe behind it, whose back rays all hit the wardrobe."""
     results, _output = trap_results(blender, build_python_dir, tmp_path_factory)
     assert results["closed_room_out"] == ["room"]
     assert results["closed_room_in"] == []
     assert results["box_seen_from_outside"] == []
+    assert results["facade"] == []
 
 
 def test_show_in_materials_makes_shared_materials_single_user(blender, build_python_dir,

@@ -12,8 +12,11 @@ normals rightly out) sees its own inside from the back wherever it stands.
 A room that is one closed mesh with its normals out looks like such a box from its own faces.
 What tells the two apart is where the scene is seen from: the camera and the lamps (suns and
 the world have no place) stand inside the room and see its faces from behind, while they see
-a box from the front. So an object whose front rays mostly escape also faces away when most of
-the rays from the camera and the lamps that end on it end on its back.
+a box from the front. So for an object whose front rays mostly escape, rays from the viewers to
+its sample points decide when enough of them reach it: it faces away when most of those that
+do see its back. That also
+spares a facade seen from the street with rooms behind it, whose back rays hit the rooms'
+objects. An object the viewers hardly see falls back to the rays from its own faces.
 
 The bake warns about such an object, or with Bake Side "Facing the Scene" exports it facing the
 other way (export_scene's `flipped`) so that its back is baked: every such object of the scene,
@@ -22,8 +25,6 @@ as the light the baked objects get off a surface facing away would otherwise be 
 The module imports without bpy (its warning text is tested outside Blender).
 """
 
-import math
-
 # Surface points sampled per object (spread over its triangles) and the share of them that
 # must agree: front rays escaping and back rays hitting another object.
 SAMPLES_PER_OBJECT = 16
@@ -31,16 +32,15 @@ AGREEING_SHARE = 0.5
 # Rays start this far off the surface (m), along their direction, not to hit the face itself.
 RAY_OFFSET = 1e-3
 RAY_LENGTH = 1e6
-# Rays cast from each viewer (the camera, each lamp but suns) in a spherical Fibonacci set, and
-# the fewest of them that must end on an object for their sides to count.
-VIEWER_RAYS = 64
+# The fewest rays from the viewers (the camera, each lamp but suns) to an object's sample
+# points that must reach it for the side they see to decide.
 MIN_VIEWER_HITS = 4
 
 
 def facing_away(scene, depsgraph, objects):
     """Names of `objects` (mesh objects) whose fronts see the world and backs see the scene."""
-    seen = _sides_seen(scene, depsgraph, _viewers(scene))
-    return [obj.name for obj in objects if _faces_away(scene, depsgraph, obj, seen)]
+    viewers = _viewers(scene)
+    return [obj.name for obj in objects if _faces_away(scene, depsgraph, obj, viewers)]
 
 
 def warning(name):
@@ -59,9 +59,10 @@ def turned_around(name, baked):
             "(Bake Side: Facing the Scene)")
 
 
-def _faces_away(scene, depsgraph, obj, seen):
-    """Whether `obj`'s front rays mostly escape while its back rays mostly hit other objects,
-    or the viewers' rays that end on it mostly end on its back (`seen`: _sides_seen's)."""
+def _faces_away(scene, depsgraph, obj, viewers):
+    """Whether `obj`'s front rays mostly escape and, when the `viewers` see it enough, their
+    rays that end on it mostly end on its back; otherwise, its back rays mostly hit other
+    objects."""
     samples = _face_samples(obj.evaluated_get(depsgraph))
     if not samples:
         return False
@@ -73,10 +74,10 @@ def _faces_away(scene, depsgraph, obj, seen):
     needed = AGREEING_SHARE * len(samples)
     if escaping < needed:
         return False
-    fronts, backs = seen.get(obj.name, (0, 0))
-    seen_from_behind = (fronts + backs >= MIN_VIEWER_HITS
-                        and backs >= AGREEING_SHARE * (fronts + backs))
-    return hitting_others >= needed or seen_from_behind
+    fronts, backs = _sides_seen(scene, depsgraph, obj, samples, viewers)
+    if fronts + backs >= MIN_VIEWER_HITS:  # seen enough: the viewers' side decides
+        return backs >= AGREEING_SHARE * (fronts + backs)
+    return hitting_others >= needed
 
 
 def _viewers(scene):
@@ -88,32 +89,21 @@ def _viewers(scene):
     return points
 
 
-def _sides_seen(scene, depsgraph, viewers):
-    """{object name: (rays ending on its front, rays ending on its back)} over VIEWER_RAYS rays
-    from each viewer."""
-    from mathutils import Vector
-
-    seen = {}
+def _sides_seen(scene, depsgraph, obj, samples, viewers):
+    """(rays ending on `obj`'s front, rays ending on its back) of the rays from each viewer
+    to each of its sample points (_face_samples') that reach `obj` first."""
+    fronts = backs = 0
     for viewer in viewers:
-        for direction in _sphere_directions(VIEWER_RAYS):
-            direction = Vector(direction)
+        for point, _normal in samples:
+            direction = point - viewer
+            if direction.length <= RAY_OFFSET:
+                continue
+            direction = direction.normalized()
             name, normal = _hit_object(scene, depsgraph, viewer, direction)
-            if name is not None:
-                fronts, backs = seen.get(name, (0, 0))
+            if name == obj.name:
                 back = normal.dot(direction) > 0.0
-                seen[name] = (fronts + (not back), backs + back)
-    return seen
-
-
-def _sphere_directions(count):
-    """`count` unit vectors spread evenly over the sphere (a spherical Fibonacci set)."""
-    golden = 2.399963229728653  # pi * (3 - sqrt(5))
-    directions = []
-    for i in range(count):
-        z = 1.0 - (2 * i + 1) / count
-        r = max(0.0, 1.0 - z * z) ** 0.5
-        directions.append((r * math.cos(golden * i), r * math.sin(golden * i), z))
-    return directions
+                fronts, backs = fronts + (not back), backs + back
+    return fronts, backs
 
 
 def _face_samples(evaluated):
