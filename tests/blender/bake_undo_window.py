@@ -10,7 +10,8 @@ The steps run from a timer on Blender's main thread while the window draws. In t
 file's scene it builds the sun room facing in (examples/blender_scenes.py, lightmap=True),
 pushes an undo step, selects the ten objects and pushes another, then:
 1. bakes its ten objects from the 3D view (INVOKE_DEFAULT: modal, as the Bake button does) with
-   Show in Materials and Create UV Map (the table has no LightmapUV);
+   Show in Materials and Create UV Map (the table has no LightmapUV); the bake is not among the
+   registered operators that Adjust Last Operation and Repeat Last would run again;
 2. undoes once (ed.undo in the window): UV maps, images, material copies and nodes must all go
    back to the state before the bake;
 3. switches the 3D view to Material Preview and draws it (EEVEE compiles the materials);
@@ -191,6 +192,10 @@ def steps():
     RESULTS["before_bake"] = data_state()
     yield from baked_room()
     RESULTS["after_bake"] = data_state()
+    # What Adjust Last Operation and Repeat Last may run again (synchronously, the UI waiting):
+    # the operators Blender keeps whose type has REGISTER (UNDO alone keeps them listed only).
+    RESULTS["registered_after_bake"] = [op.bl_idname for op in bpy.context.window_manager.operators
+                                        if "REGISTER" in op.bl_options]
     RESULTS["undo_status"] = in_view(bpy.ops.ed.undo)
     RESULTS["after_undo"] = data_state()
     yield from material_preview()

@@ -627,7 +627,8 @@ def test_undo_after_a_bake_shown_in_materials_then_material_preview(build_python
     """The sun room's ten objects baked modally with Show in Materials (Create UV Map for the
     table), one undo, Material Preview: Blender lives, and the undo took back the UV map, the
     images, the material copies and the nodes together (the state before the bake); a redo
-    gives the bake's state back whole. Then a bake of two new rugs cancelled by Esc keeps what
+    gives the bake's state back whole; the bake is not offered to Adjust Last Operation. Then a
+    bake of two new rugs cancelled by Esc keeps what
     it finished as one undo step. No state has a lightmap node without its image."""
     out = tmp_path / "bake_undo_window.json"
     result = run_in_window("bake_undo_window.py", WINDOW, build_python_dir, ADDON_DIR, out,
@@ -637,6 +638,8 @@ def test_undo_after_a_bake_shown_in_materials_then_material_preview(build_python
     r = json.loads(out.read_text())
     before, baked = r["before_bake"], r["after_bake"]
     assert r["invoke_status"] == ["RUNNING_MODAL"]
+    # Adjust Last Operation / Repeat Last would bake again with the UI waiting: not offered.
+    assert "SHGI_OT_bake_lightmaps" not in r["registered_after_bake"], r["registered_after_bake"]
     assert baked["images"] == sorted(f"{name}_shgi_lightmap" for name in SUN_ROOM_OBJECTS)
     assert sorted(baked["nodes"].values()) == baked["images"]  # each shown in a material
     assert "LightmapUV" in baked["objects"]["table"]["uv_maps"]

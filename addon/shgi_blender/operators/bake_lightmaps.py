@@ -278,8 +278,10 @@ class _BakeOperator(ModalTaskOperator):
     """Shared body of the bake and merge operators: checks, a BakeTask, modal or waiting."""
 
     # UNDO: Blender pushes one undo step when the operator finishes, covering every data
-    # change of the bake (see the module's docstring).
-    bl_options = {"REGISTER", "UNDO"}
+    # change of the bake (see the module's docstring). Not REGISTER: Adjust Last Operation and
+    # Repeat Last would run the bake again through execute(), which waits for it on the UI
+    # thread; the bake's settings live in the Bake panel, and its button bakes again modally.
+    bl_options = {"UNDO"}
     MERGE = False
     STATUS_PREFIX = "SHGI bake: "
     STATUS_IDLE = "starting"
