@@ -355,6 +355,32 @@ def check_viewport_depsgraph():
         raise AssertionError(f"viewport export instances: {sorted(names)}")
 
 
+def check_tiny_scale_instancer():
+    """A collection instance scaled by 1e-17 on x (not 0): the commit refuses the copy it makes, and
+    its message names the instancer; the instanced object, also in the scene, keeps its name
+    (the instance a bake of it picks)."""
+    setup.clear_scene()
+    source = add_mesh_object("InstancedSource", plane_mesh("SourceMesh"))
+    collection = bpy.data.collections.new("Instanced")
+    collection.objects.link(source)
+    instancer = bpy.data.objects.new("TinyInstancer", None)
+    instancer.instance_type = "COLLECTION"
+    instancer.instance_collection = collection
+    instancer.location, instancer.scale = (0, -40, 0), (1e-17, 1.0, 1.0)
+    bpy.context.scene.collection.objects.link(instancer)
+    result = export_scene(bpy.context.evaluated_depsgraph_get(), for_render=True)
+    names = sorted(instance.name for instance in result.scene.instances)
+    if names != ["InstancedSource", "InstancedSource (instanced by TinyInstancer)"]:
+        raise AssertionError(f"instances {names}")
+    try:
+        result.scene.commit()
+    except ValueError as error:
+        if "'InstancedSource (instanced by TinyInstancer)'" not in str(error):
+            raise AssertionError(f"the commit's refusal does not name the instancer: {error}")
+    else:
+        raise AssertionError("a copy shrunk by 1e17 was committed")
+
+
 def main():
     image = build_scene()
     result = export_with_render_depsgraph()
@@ -364,6 +390,7 @@ def main():
     check_warnings(result)
     check_ray_hits(result)
     check_viewport_depsgraph()
+    check_tiny_scale_instancer()
     print("stats:", result.stats)
     print("EXPORT_SCENE_OK")
 

@@ -190,7 +190,7 @@ class _SceneExporter:
             return
         try:
             self.shgi_scene.add_instance(mesh_id, conversions.row_major(instance.matrix_world),
-                                         name=obj.name)
+                                         name=instance_name(instance))
             self.stats.instances += 1
         except ValueError as error:  # e.g. a zero scale makes matrix_world singular
             self._skip(obj, str(error))
@@ -266,6 +266,19 @@ def flipped_mesh(mesh):
     return shgi.Mesh(positions=mesh.positions, triangles=mesh.triangles[:, ::-1].copy(),
                      normals=-mesh.normals, uvs=mesh.uv_sets or None,
                      material_indices=mesh.material_indices, name=mesh.name)
+
+
+def instance_name(instance):
+    """The exported instance's name: its object's, or for a copy an instancer makes (a
+    collection instance's Empty, particles, geometry nodes) "<object> (instanced by
+    <instancer>)", so that a message about the copy (a transform the scene refuses at commit)
+    names the instancer the artist must fix, and the object's own instance keeps its name."""
+    obj = instance.object
+    parent = instance.parent if instance.is_instance else None
+    # A text or metaball object is an instance of its own converted geometry: its own name.
+    if parent is not None and parent.original.name != obj.original.name:
+        return f"{obj.name} (instanced by {parent.name})"
+    return obj.name
 
 
 def _zero_scale_instancer(instance):
