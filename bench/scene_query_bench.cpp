@@ -2,8 +2,8 @@
 //
 // Rooms: bench_scenes.h's Cornell-like room (a single-use room box, one block mesh used twice)
 // and the same room holding a 502k-triangle UV sphere (used once). For each, Scene committed
-// with single-use meshes flattened (the default) and with every mesh instanced (the layout
-// before flattening), and raw Embree on a flattened one-level scene of the same triangles
+// with single-use and small shared meshes flattened (the default) and with every mesh
+// instanced (the layout before flattening), and raw Embree on a flattened one-level scene of the same triangles
 // (scene/embree_reference.h), on the same rays in the same run, all threads:
 //  - incoherent closest-hit and occlusion rays (random origins in the room, random directions);
 //  - coherent rays: one 640 x 360 frame's camera rays in 16 x 16 tiles as 16-wide packets and one
@@ -109,7 +109,7 @@ void edits(Scene& scene) {
 void run(const char* name, Scene scene) {
     std::printf("%s: %llu triangles\n", name,
                 (unsigned long long)scene.stats().instanced_triangles);
-    queries("single-use meshes flattened", scene, true);
+    queries("single-use and small shared meshes flattened", scene, true);
     queries("every mesh instanced", scene, false);
     edits(scene);
 }

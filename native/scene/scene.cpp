@@ -649,12 +649,14 @@ void Scene::commit(const CommitSettings& settings, Progress* progress) {
     if (progress) progress->set_fraction(1.0f);
 }
 
-bool Scene::choose_flattened(bool flatten_single_use) {
-    std::vector<uint32_t> uses(meshes_.size(), 0);
+bool Scene::choose_flattened(bool flatten) {
+    std::vector<uint64_t> uses(meshes_.size(), 0);
     for (const Instance& instance : instances_) ++uses[instance.mesh_id];
     std::vector<uint8_t> instanced(meshes_.size());
-    for (size_t m = 0; m < meshes_.size(); ++m)
-        instanced[m] = uses[m] > 1 || (uses[m] == 1 && (!flatten_single_use || moving_)) ? 1 : 0;
+    for (size_t m = 0; m < meshes_.size(); ++m) {
+        const bool small = uses[m] * meshes_[m].triangles.size() <= kMaxFlattenedCopyTriangles;
+        instanced[m] = uses[m] > 0 && (!flatten || moving_ || (uses[m] > 1 && !small)) ? 1 : 0;
+    }
     for (size_t i = 0; i < instances_.size(); ++i)
         if (enlarging_[i]) instanced[instances_[i].mesh_id] = 1;
     flattened_.resize(instances_.size());

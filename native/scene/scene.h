@@ -7,10 +7,12 @@
 // a scene without materials gets one default Material so every triangle has one), gathers
 // emissive triangles, refuses emitted power beyond kMaxEmittedPower (naming the brightest
 // emitter), and builds the BVH (scene/embree_scene.h): a mesh used by one instance is flattened
-// into the top-level BVH in world space (rays pay no instance transform), a mesh used by several
-// keeps one BVH of its own, instanced once per Instance, so a mesh used a thousand times is
-// stored once (so is a single-use mesh whose instance enlarges it beyond the ray range the rest
-// of the scene allows: flattening must not narrow the rays a scene traces). Any edit un-commits
+// into the top-level BVH in world space (rays pay no instance transform), and so is a small mesh
+// used by several whose copies hold at most kMaxFlattenedCopyTriangles in all (the Cornell box's
+// two blocks: a copy costs less than the instance transform every ray would pay); a larger mesh
+// used by several keeps one BVH of its own, instanced once per Instance, so a mesh used a
+// thousand times is stored once (so is a mesh whose instance enlarges it beyond the ray range
+// the rest of the scene allows: flattening must not narrow the rays a scene traces). Any edit un-commits
 // the scene. set_instance_transform() marks the scene as moving: from its next commit every mesh
 // is instanced (one build of the per-mesh BVHs), and each move then rebuilds only the small top
 // level, as Cycles keeps a dynamic BVH in its viewport; a static scene (final renders, bakes,
@@ -93,13 +95,18 @@ struct SurfacePoint {
     uint32_t triangle_id = kInvalidId;
 };
 
+// A mesh used by several instances is flattened (copied into the top level once per instance)
+// when its copies hold at most this many triangles in all.
+inline constexpr uint64_t kMaxFlattenedCopyTriangles = uint64_t(1) << 16;
+
 struct CommitSettings {
     // Upper bound on the memory Embree may allocate for the BVH (bytes); 0 = 75% of what the
     // process may still allocate (util/memory.h: RLIMIT_AS, cgroup limit, free memory), which
     // also caps an explicit budget.
     uint64_t memory_budget_bytes = 0;
-    // Meshes used by one instance go into the top-level BVH in world space (faster rays, the
-    // same hits); false instances every mesh, as a reference for tests.
+    // Meshes used by one instance, and small meshes used by several (kMaxFlattenedCopyTriangles),
+    // go into the top-level BVH in world space (faster rays, the same hits); false instances
+    // every mesh, as a reference for tests.
     bool flatten_single_use_meshes = true;
 };
 
@@ -210,9 +217,9 @@ class Scene {
     void gather_emissive();
     void check_emitted_power() const;  // after gather_emissive and compute_bounds
     void finish_hit(Hit& hit) const;
-    // Which meshes keep a BVH of their own (used by several instances, or flattening is off);
-    // true when that changed since the per-mesh BVHs were built.
-    bool choose_flattened(bool flatten_single_use);
+    // Which meshes keep a BVH of their own (large and used by several instances, or flattening
+    // is off); true when that changed since the per-mesh BVHs were built.
+    bool choose_flattened(bool flatten);
     void build_bvh(Progress* progress);
 
     std::vector<Mesh> meshes_;

@@ -91,13 +91,31 @@ void expect_same_hits(const Scene& flat, const Scene& instanced, uint32_t seed) 
         expect_same_hit(flat.intersect(rays[i]), instanced.intersect(rays[i]), i);
 }
 
-TEST(SceneFlatten, SingleUseMeshesAreFlattenedAndSharedOnesStayInstanced) {
+TEST(SceneFlatten, SingleUseAndSmallSharedMeshesAreFlattened) {
     const Scene flat = mixed_scene(true);
     const Scene instanced = mixed_scene(false);
-    EXPECT_EQ(flat.stats().flattened_instances, 3u) << "room, sphere and mirrored box";
+    EXPECT_EQ(flat.stats().flattened_instances, 5u)
+        << "room, sphere, mirrored box and both copies of the small shared box";
     EXPECT_EQ(instanced.stats().flattened_instances, 0u);
-    EXPECT_EQ(flat.stats().bvh_builds, 2u) << "the shared box's BVH and the top level";
+    EXPECT_EQ(flat.stats().bvh_builds, 1u) << "the top level only";
     EXPECT_EQ(instanced.stats().bvh_builds, 5u) << "four mesh BVHs and the top level";
+}
+
+// A shared mesh whose copies would hold more than kMaxFlattenedCopyTriangles keeps one BVH,
+// instanced per use; at the limit it is copied.
+TEST(SceneFlatten, LargeSharedMeshesStayInstanced) {
+    // 2 * rings * segments triangles, less the poles' degenerate ones.
+    for (const int rings : {128, 64}) {
+        SCOPED_TRACE(rings);
+        Scene scene;
+        const uint32_t mesh = scene.add_mesh(test::uv_sphere(0.5f, rings, 256));
+        scene.add_instance(mesh, mat4(1.0f));
+        scene.add_instance(mesh, glm::translate(mat4(1.0f), vec3(2.0f, 0.0f, 0.0f)));
+        scene.commit();
+        const uint64_t copies = 2 * scene.meshes()[mesh].triangles.size();
+        EXPECT_EQ(copies > kMaxFlattenedCopyTriangles, rings == 128) << copies;
+        EXPECT_EQ(scene.stats().flattened_instances, rings == 128 ? 0u : 2u);
+    }
 }
 
 TEST(SceneFlatten, FlattenedAndInstancedMeshesGiveTheSameHits) {
@@ -137,15 +155,19 @@ TEST(SceneFlatten, MovedInstancesGiveTheSameHitsAsInstancedOnes) {
     EXPECT_NEAR(hit.t, 2.9f + 1.0f - 0.6f, 1e-2f) << "the sphere's top, radius 0.6";
 }
 
-TEST(SceneFlatten, AMeshGainingASecondInstanceBecomesInstanced) {
+TEST(SceneFlatten, ALargeMeshGainingASecondInstanceBecomesInstanced) {
     Scene scene = mixed_scene(true);
-    const Ray ray{vec3(2.0f, 2.0f, 2.0f), vec3(-0.2f, -0.2f, -1.0f)};
-    scene.add_instance(1, glm::translate(mat4(1.0f), vec3(2.0f, 2.0f, 0.0f)), "second sphere");
+    const uint32_t large = scene.add_mesh(test::uv_sphere(0.5f, 128, 256));
+    scene.add_instance(large, glm::translate(mat4(1.0f), vec3(-2.0f, -2.0f, 0.0f)), "large");
     scene.commit();
-    EXPECT_EQ(scene.stats().flattened_instances, 2u) << "room and mirrored box only";
+    EXPECT_EQ(scene.stats().flattened_instances, 6u);
+    const Ray ray{vec3(2.0f, 2.0f, 2.0f), vec3(0.0f, 0.0f, -1.0f)};
+    scene.add_instance(large, glm::translate(mat4(1.0f), vec3(2.0f, 2.0f, 0.0f)), "second");
+    scene.commit();
+    EXPECT_EQ(scene.stats().flattened_instances, 5u) << "all but the large sphere's copies";
     const Hit hit = scene.intersect(ray);
-    EXPECT_EQ(hit.instance_id, 5u) << "the second sphere, in the top level as an instance";
-    EXPECT_EQ(scene.instances()[hit.instance_id].mesh_id, 1u);
+    EXPECT_EQ(hit.instance_id, 6u) << "the second large sphere, in the top level as an instance";
+    EXPECT_EQ(scene.instances()[hit.instance_id].mesh_id, large);
 }
 
 // Flattening must not narrow the rays a scene traces: a quad enlarged 10x would put 10x larger
