@@ -189,6 +189,10 @@ What and how a lightmap is baked; every field has a default. Content (Cycles' DI
                        "Also bake the L1 SH of the incident radiance (False).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
                        "Max component of an indirect sample; 0 = off (0).")
+        .def_readwrite("final_gather", &S::final_gather,
+                       "With a field: each sample traces one ray that reads the field where it "
+                       "lands, with direct light there, instead of reading it at the texel: "
+                       "the field's blocks and leaks are one bounce further away (False).")
         .def("validate", &validate_lightmap_settings,
              "Raises ValueError naming the first invalid field.");
 

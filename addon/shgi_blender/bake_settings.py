@@ -65,6 +65,7 @@ BAKE_PROPERTY_DEFAULTS = {
     "content": "DIRECT_INDIRECT",
     "source": "PATH_TRACE",
     "directional": False,
+    "final_gather": False,
     "filter": False,
     "denoiser": "SHGI",
     "padding": 4,
@@ -108,7 +109,8 @@ DENOISER_ITEMS = (
 MAX_SAMPLES = 1 << 20
 
 # LightmapSettings field -> scene.shgi.bake property.
-LIGHTMAP_FIELDS = {name: name for name in ("content", "samples", "directional", "tile_size")}
+LIGHTMAP_FIELDS = {name: name for name in (
+    "content", "samples", "directional", "final_gather", "tile_size")}
 # LightmapSettings field -> scene.shgi property (the render settings' light paths and seed).
 LIGHT_PATH_FIELDS = {name: name for name in (
     "seed", "max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
@@ -116,6 +118,7 @@ LIGHT_PATH_FIELDS = {name: name for name in (
 # LightmapSettings field -> where the Bake and Light Paths panels show it, for refusals.
 LIGHTMAP_LABELS = {
     "content": "Bake > Content", "samples": "Bake > Samples", "directional": "Bake > Directional",
+    "final_gather": "Bake > Final Gather",
     "tile_size": "Bake > Farm > Tile Size",
     **{field: settings.SETTING_LABELS[prop] for field, prop in LIGHT_PATH_FIELDS.items()}}
 # BakeOptions field -> scene.shgi.bake property.

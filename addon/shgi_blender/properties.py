@@ -214,6 +214,13 @@ def bake_properties():
         "source": EnumProperty(
             name="Indirect Light", items=BAKE_SOURCE_ITEMS, default=B["source"],
             description="Where the indirect light comes from"),
+        "final_gather": BoolProperty(
+            name="Final Gather", default=B["final_gather"],
+            description="With a solved Indirect Light (not Path Trace): each sample traces one "
+                        "ray and reads the solution where it lands, with that point's direct "
+                        "light, instead of reading it at the texel. Slower (like path tracing "
+                        "one bounce); blocks and light leaking through thin walls are one "
+                        "bounce further away"),
         "directional": BoolProperty(
             name="Directional", default=B["directional"],
             description="Also store the direction light arrives from at each texel (EXR "

@@ -101,7 +101,8 @@ class TexelBaker {
           seed_(settings.seed ^ (kInstanceSeedMix * (uint64_t(map.instance_id) + 1))),
           direct_(wants_direct(settings.content)),
           indirect_(wants_indirect(settings.content) && settings.max_bounces > 0 &&
-                    settings.diffuse_bounces > 0) {}
+                    settings.diffuse_bounces > 0),
+          gather_(field != nullptr && settings.final_gather) {}
 
     // Polls `progress` every kSamplesPerCancelPoll samples.
     void bake_texel(uint64_t texel, LightmapTexels& out, const Progress* progress) const {
@@ -151,7 +152,7 @@ class TexelBaker {
         // The field's light is the same for every sample of the position.
         vec3 field_value(0.0f);
         ShRgb field_sh(1);
-        if (field_ != nullptr && indirect_ && !field_->is_zero()) {
+        if (field_ != nullptr && indirect_ && !gather_ && !field_->is_zero()) {
             const FieldLookup lookup = field_->lookup(sample.ray_origin, n);
             const vec3 irradiance = lookup.irradiance(n);
             const float response = surface.color_channel < 0
@@ -173,7 +174,7 @@ class TexelBaker {
                 field_sh[3] += extra * (k1 * n.x);
             }
         }
-        const bool trace_hemisphere = field_ == nullptr && (indirect_ || direct_);
+        const bool trace_hemisphere = (field_ == nullptr || gather_) && (indirect_ || direct_);
         const Camera camera;  // the continuation's Depth pass is not read
         for (uint32_t i = 0; i < count; ++i) {
             if (i % kSamplesPerCancelPoll == kSamplesPerCancelPoll - 1) throw_if_cancelled(progress);
@@ -253,11 +254,13 @@ class TexelBaker {
     }
 
     // Light that scattered at least once and arrives along the ray: the reference path from
-    // its first hit, less what that path's first segment sees directly.
+    // its first hit (with final gather, a field vertex there), less what that path's first
+    // segment sees directly.
     vec3 continuation(const Ray& ray, const Hit& hit, const Camera& camera, Pcg32& rng) const {
         if (!hit.valid()) return vec3(0.0f);
         PassValues values;
-        PathIntegrator(scene_, camera, lights_, path_settings_, nullptr, rng, values)
+        PathIntegrator(scene_, camera, lights_, path_settings_, gather_ ? field_ : nullptr, rng,
+                       values)
             .trace(ray, hit);
         return path_radiance(values, false, settings_.clamp_indirect);
     }
@@ -270,6 +273,7 @@ class TexelBaker {
     PathTracerSettings path_settings_;
     uint64_t seed_;
     bool direct_, indirect_;
+    bool gather_;  // final gather: the hemisphere ray reads the field where it lands
 };
 
 uint32_t tiles_along(uint32_t texels, uint32_t tile_size) {

@@ -28,7 +28,9 @@
 //     bounce, so a limit of 0 bakes no indirect light.
 //   - IndirectField: direct light by next-event estimation alone, indirect light from the field
 //     once per sample position: its irradiance through the diffuse lobe (as the preview renderer
-//     shades), and its radiance SH for the directional data.
+//     shades), and its radiance SH for the directional data. With final_gather, the path
+//     tracer's estimator whose hemisphere ray reads the field where it lands (the continuation
+//     is a PathIntegrator with the field at its first vertex).
 // Stratification: sample i of a sample position takes point i of that position's own
 // Owen-scrambled Sobol' sequences (render/path_integrator.h pixel_sample, keyed by the
 // position's index in TexelMap::samples) for the hemisphere direction and the light sample, and
@@ -75,6 +77,13 @@ struct LightmapSettings {
     int glossy_bounces = 4;
     int transmission_bounces = 12;
     float clamp_indirect = 0.0f;  // max component of an indirect sample's radiance; 0 = off
+    // With a field: final gather (seed 001 §4.2, as PreviewSettings::final_gather). Each sample
+    // traces one hemisphere ray, as the path tracer does, and where it lands adds direct light by
+    // next-event estimation and indirect light from the field, instead of reading the field at
+    // the texel: the field's blocks and leaks reach the lightmap one bounce later. Direct light
+    // at the texel is then weighted against that ray (MIS), as the path tracer's is. Ignored
+    // without a field.
+    bool final_gather = false;
     // Side (texels) of the square tiles the lightmap is baked in: the unit of work of threads,
     // of progress and cancel, and of shards (lightmap_tiles). 4 .. 1024.
     uint32_t tile_size = 16;

@@ -102,6 +102,11 @@ def _parser() -> argparse.ArgumentParser:
     bake.add_argument("--passes", type=_whole(0), default=None,
                       help="refinement passes of the method (default: its final_passes)")
     bake.add_argument("--directional", action="store_true", help="also write L1 SH layers")
+    bake.add_argument("--final-gather", action="store_true",
+                      help="with a --method that solves a field: each sample traces one ray "
+                           "that reads the field where it lands (slower; the field's blocks and "
+                           "leaks one bounce further away); the field is solved one diffuse "
+                           "bounce shallower, so the light keeps its depth")
     bake.add_argument("--filter", action="store_true",
                       help="SHGI's edge-aware denoising filter (the same as --denoise SHGI)")
     bake.add_argument("--denoise", default="NONE", choices=["NONE", "SHGI", "OIDN"],
@@ -229,7 +234,8 @@ def _bake_command(args) -> int:
     density = 0.0 if args.resolution else args.density
     jobs = _bake.jobs_for_scene(scene, uv_set, args.resolution, density, names, args.uv)
     settings = _shgi.LightmapSettings(samples=args.samples, content=args.content,
-                                      directional=args.directional, seed=args.seed)
+                                      directional=args.directional, seed=args.seed,
+                                      final_gather=args.final_gather)
     options = _bake.BakeOptions(settings=settings, uv_set=uv_set, filter=args.filter,
                                 denoise=args.denoise, padding=args.padding, lightmap_uvs=args.uv)
     bar = _Bar(not args.quiet)
@@ -243,7 +249,7 @@ def _bake_command(args) -> int:
                                                 progress)
         field = _bake.solve_field(scene, args.method, args.seed, progress,
                                   _method_settings(args.method, args.settings, args.seed),
-                                  args.passes)
+                                  args.passes, gather=args.final_gather)
         return laid_out, _bake.bake_scene(scene, laid_out, options, args.out, field, args.shard,
                                           progress)
 

@@ -113,7 +113,8 @@ LIGHTMAP_UV_SOURCES = ("EXISTING", "XATLAS")
 _SHARD_FORMAT = 2
 # The LightmapSettings fields that decide a texel's value: every shard of a bake must agree.
 _SHARD_SETTINGS = ("content", "samples", "seed", "directional", "max_bounces", "diffuse_bounces",
-                   "glossy_bounces", "transmission_bounces", "clamp_indirect", "tile_size")
+                   "glossy_bounces", "transmission_bounces", "clamp_indirect", "final_gather",
+                   "tile_size")
 
 
 @dataclasses.dataclass
@@ -744,20 +745,43 @@ def merge_shards(scene, jobs: Sequence[BakeJob], options: BakeOptions, out_dir: 
     return results
 
 
+# The settings field that holds a field method's depth in diffuse bounces, and its least value.
+# A field read through a final gather (LightmapSettings.final_gather) is solved one bounce
+# shallower, since the gather ray is a bounce itself: the light then has as many bounces as the
+# path tracer's (the add-on does the same from Light Paths > Diffuse). Methods not listed keep
+# their settings (the gather adds a bounce to them).
+GATHER_DEPTH_FIELDS = {"PhotonLatticeSettings": ("max_bounces", 1),
+                       "ProbeGridSettings": ("bounces", 1)}
+
+
+def _gather_settings(settings):
+    """A copy of a field method's settings one diffuse bounce shallower (GATHER_DEPTH_FIELDS),
+    for a field read through a final gather; the settings themselves for a method not listed."""
+    if type(settings).__name__ not in GATHER_DEPTH_FIELDS:
+        return settings
+    name, least = GATHER_DEPTH_FIELDS[type(settings).__name__]
+    shallow = _methods.settings_from_dict(type(settings), _methods.settings_to_dict(settings))
+    setattr(shallow, name, max(least, getattr(settings, name) - 1))
+    return shallow
+
+
 def solve_field(scene, source: str, seed: int = 0, progress: Optional[BakeProgress] = None,
-                settings=None, passes: Optional[int] = None):
+                settings=None, passes: Optional[int] = None, gather: bool = False):
     """The IndirectField a bake takes its indirect light from: None for PATH_TRACE (the path
     tracer bakes every texel), else the field of method `source` (shgi.methods(); older names
     such as PATH_TRACER are accepted) solved on the (committed) scene with `settings` (None: the
     method's defaults with `seed`) over `passes` refinement passes (None: the method's
-    final_passes, as the add-on's F12 and bake run). The solve owns no share of `progress` (its
-    bar waits); cancel works."""
+    final_passes, as the add-on's F12 and bake run); with `gather` (a bake with
+    LightmapSettings.final_gather), one diffuse bounce shallower (GATHER_DEPTH_FIELDS). The
+    solve owns no share of `progress` (its bar waits); cancel works."""
     row = _methods.method(source)
     if not row.solves_field:
         return None
     progress = progress or BakeProgress()
     if settings is None:
         settings = _methods.default_settings(row.identifier, seed)
+    if gather:
+        settings = _gather_settings(settings)
     native = progress.native(0.0, 0.0, row.label.lower())
     return _methods.solve(row.identifier, scene, settings, passes, native).current_field()
 

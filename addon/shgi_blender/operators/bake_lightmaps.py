@@ -265,9 +265,10 @@ def prepare_bake(context, values, report, merge=False, created=None):
                                merge_shards=values.shard_count)
         recipe = None
         if bake_settings.uses_field(values):
-            # A bake reads its field at the texels, never through a final gather.
+            # Read through a final gather (Bake > Final Gather), the field is solved one
+            # bounce shallower, as F12's (settings.light_path_fields).
             recipe = solver_recipe(_MethodOf(scene.shgi, values.source), shgi,
-                                   export.probe_volumes, gather=False)
+                                   export.probe_volumes, gather=values.final_gather)
         return BakeRequest(export.scene, jobs, options, out_dir, recipe,
                            bake_settings.shard(values))
     except ValueError as error:

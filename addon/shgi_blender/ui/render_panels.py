@@ -11,7 +11,7 @@ holds about 11 characters (tests/python/test_blender_engine.py measures them).""
 
 import bpy
 
-from .. import native, presets, settings
+from .. import bake_settings, native, presets, settings
 from ..engine import final_render, solution_cache, solution_files
 from . import field_overlay, figure_rows
 from .compat import ShgiPanel
@@ -281,6 +281,9 @@ class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
         column = layout.column(align=True)
         for name in ("source", "content", "samples", "bake_side"):
             column.prop(bake, name)
+        sub = column.column(align=True)
+        sub.active = bake_settings.uses_field(bake)
+        sub.prop(bake, "final_gather")
         column = layout.column(align=True)
         column.prop(bake, "uv_map")
         column.prop(bake, "create_uv")

@@ -740,6 +740,14 @@ class LightmapSettings:
     def directional(self, arg0: bool) -> None:
         ...
     @property
+    def final_gather(self) -> bool:
+        """
+        With a field: each sample traces one ray that reads the field where it lands, with direct light there, instead of reading it at the texel: the field's blocks and leaks are one bounce further away (False).
+        """
+    @final_gather.setter
+    def final_gather(self, arg0: bool) -> None:
+        ...
+    @property
     def glossy_bounces(self) -> int:
         """
         Cycles' Glossy bounces (4).

@@ -248,6 +248,43 @@ TEST(LightmapBaker, FieldSourceAddsTheFieldsIrradiance) {
     EXPECT_NEAR(direct.color.x, sky, 0.02f * sky);
 }
 
+// Final gather in the emissive furnace of FurnaceSplitsDirectAndIndirectLight with a uniform
+// field of radiance Lf: the gather ray lands on a wall, which adds its direct light a Le (next-
+// event estimation of the emissive walls) and the field's light a Lf; read at the texel, the
+// field gives Lf. With Lf = a Le / (1 - a), the true indirect radiance there, both give it.
+TEST(LightmapBaker, FinalGatherReadsTheFieldWhereTheGatherRayLands) {
+    const float a = 0.5f, le = 1.0f;
+    Scene scene;
+    Material material = test::lambert(a);
+    material.emission_color = vec3(1.0f);
+    material.emission_strength = le;
+    scene.add_material(material);
+    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f), "Furnace");
+    const uint32_t quad = scene.add_instance(
+        scene.add_mesh(floor_mesh(0.25f)), glm::translate(mat4(1.0f), vec3(0.1f, 0.0f, -0.2f)),
+        "Quad");
+    scene.set_world(test::black_world());
+    scene.commit();
+    const TexelMap map = rasterize(scene, quad, 4);
+    LightmapSettings settings;
+    settings.samples = 1024;
+    settings.content = LightmapContent::Indirect;
+    for (const float lf : {0.3f, a * le / (1.0f - a)}) {
+        SCOPED_TRACE(lf);
+        const UniformField field(lf);
+        settings.final_gather = false;
+        EXPECT_NEAR(mean_of(bake_lightmap(scene, map, &field, settings)).color.x, lf, 1e-4f);
+        settings.final_gather = true;
+        const float gathered = a * le + a * lf;
+        EXPECT_NEAR(mean_of(bake_lightmap(scene, map, &field, settings)).color.x, gathered,
+                    0.03f * gathered);
+    }
+    // Direct light with final gather is the path tracer's estimator: Le.
+    settings.content = LightmapContent::Direct;
+    const UniformField field(0.3f);
+    EXPECT_NEAR(mean_of(bake_lightmap(scene, map, &field, settings)).color.x, le, 0.02f * le);
+}
+
 // A lit room corner: floor, a wall and a box standing on the floor, lit by a point light; noisy
 // enough that the tests below see every texel's own random numbers.
 struct Room {
