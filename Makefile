@@ -18,6 +18,11 @@ SITE_DIR := /usr/local/lib/python3.11/dist-packages
 # shgi's optional PyPI modules (shgi.uv_atlas, shgi.denoise), pinned: docs/baking.md's figures
 # were measured with these. PIP_CHECK exits 0 when each is installed at its pinned version.
 PIP_MODULES := xatlas==0.0.11 pyoidn==2.5.1.0
+# The farm engine (shgi.farm, docs/farm.md): `dask[distributed]`, named as its two packages so
+# that PIP_CHECK sees both; 2026.8.0 is the newest whose wheels Debian 12's pip 23.0.1 installs
+# on Python 3.11. For both Pythons (the farm's client and workers, and Debian's Blender, which
+# submits from the add-on), not for the bpy venv: no test runs the farm under the bpy module.
+FARM_MODULES := dask==2026.8.0 distributed==2026.8.0
 PIP_CHECK := import sys, importlib.metadata as m; \
 	sys.exit(any(m.version(n) != v for n, v in (a.split("==") for a in sys.argv[1:])))
 # Blender as a Python module: PyPI's bpy wheel, the newest that Python 3.11 loads, in a venv made
@@ -61,13 +66,15 @@ deps:
 	@# The optional modules for Debian's Python, which Debian's Blender runs: as root into
 	@# SITE_DIR beside shgi (Blender 3.4 ignores user site-packages); Debian marks its Python
 	@# externally managed, and python3-numpy / python3-cffi already satisfy their dependencies.
-	@$(PYTHON) -c '$(PIP_CHECK)' $(PIP_MODULES) 2>/dev/null || \
-		$(PYTHON) -m pip install -q --root-user-action=ignore --break-system-packages $(PIP_MODULES)
+	@$(PYTHON) -c '$(PIP_CHECK)' $(PIP_MODULES) $(FARM_MODULES) 2>/dev/null || \
+		$(PYTHON) -m pip install -q --root-user-action=ignore --break-system-packages \
+		$(PIP_MODULES) $(FARM_MODULES)
 	@# ... and for the python3 on PATH when it is another interpreter (pyenv).
 	@other=$$(command -v python3); \
 	if [ -n "$$other" ] && [ "$$(readlink -f $$other)" != "$$(readlink -f $(PYTHON))" ] && \
-	   $$other -m pip --version >/dev/null 2>&1 && ! $$other -c '$(PIP_CHECK)' $(PIP_MODULES) 2>/dev/null; then \
-		$$other -m pip install -q --root-user-action=ignore $(PIP_MODULES); \
+	   $$other -m pip --version >/dev/null 2>&1 && \
+	   ! $$other -c '$(PIP_CHECK)' $(PIP_MODULES) $(FARM_MODULES) 2>/dev/null; then \
+		$$other -m pip install -q --root-user-action=ignore $(PIP_MODULES) $(FARM_MODULES); \
 	fi
 
 # The bpy venv of the Blender tests (make test); make demo does without it.
