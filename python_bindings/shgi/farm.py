@@ -263,15 +263,16 @@ _SETTINGS_NAME = ".shgi-method-settings.json"
 # --- the client -----------------------------------------------------------------------------------
 
 def local_cluster(workers: int, threads_per_worker: int = 1):
-    """A LocalCluster of `workers` processes on 127.0.0.1, one Dask thread each, no dashboard;
-    a shard may lose one worker and be rerun (the module's retry policy)."""
+    """A LocalCluster of `workers` processes on 127.0.0.1, one Dask thread each; a shard may
+    lose one worker and be rerun (the module's retry policy). The scheduler's HTTP server (its
+    dashboard, with bokeh) takes a free port, not 8787, which another cluster may hold."""
     distributed = import_distributed()
     import dask
 
     with dask.config.set({"distributed.scheduler.allowed-failures": SHARD_ATTEMPTS - 1}):
         return distributed.LocalCluster(n_workers=workers, threads_per_worker=threads_per_worker,
                                         processes=True, host="127.0.0.1",
-                                        dashboard_address=None, silence_logs=logging.ERROR)
+                                        dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR)
 
 
 def run_tasks(client, submit: Callable[[int, int], object], count: int,

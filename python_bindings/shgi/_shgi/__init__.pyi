@@ -1718,6 +1718,10 @@ class ProbeField(IndirectField):
         """
         Writes the compact binary cache (SH at half precision: 56 bytes per L2 probe).
         """
+    def splice(self, brick: ProbeField, first: typing.SupportsInt | typing.SupportsIndex, count: typing.SupportsInt | typing.SupportsIndex) -> ProbeField:
+        """
+        These probes with probes first .. first + count - 1 (their SH, variance and visibility) taken from `brick`, the same grid after the same passes whose probes there were updated apart (ProbeGrid.update_probes): the merge of a solve split into bricks. ValueError names the first difference between the two grids.
+        """
     def with_lookup(self, lookup: ProbeLookupSettings) -> ProbeField:
         """
         The same probes read with other lookup settings.
@@ -1815,6 +1819,10 @@ class ProbeGrid(IndirectField, GiSolver):
     def update(self, progress: Progress = None) -> None:
         """
         The same as refine().
+        """
+    def update_probes(self, first: typing.SupportsInt | typing.SupportsIndex, count: typing.SupportsInt | typing.SupportsIndex, progress: Progress = None) -> None:
+        """
+        One update pass over probes first .. first + count - 1 only (a brick of a solve split over machines); the others keep their state, the pass counts. Bricks updated apart and merged with ProbeField.splice equal update() bit for bit.
         """
     @property
     def active(self) -> numpy.typing.NDArray[numpy.bool]:
