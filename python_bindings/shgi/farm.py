@@ -53,7 +53,8 @@ from . import bake as _bake
 from .denoise import import_optional
 
 __all__ = ["SHARD_ATTEMPTS", "MAX_SHARDS", "ShardFailed", "SceneBundle", "scene_bundle",
-           "import_distributed", "local_cluster", "bake_command_on_cluster", "run_tasks"]
+           "import_distributed", "local_cluster", "bake_command_on_cluster", "run_tasks",
+           "solve_probe_grid"]
 
 # Runs of one shard before the bake fails (see the module's retry policy).
 SHARD_ATTEMPTS = 2
@@ -453,3 +454,115 @@ def _accept_shard(result: dict, jobs, options, out_dir: str, shard: int, shards:
     for incoming, path in staged:
         os.replace(incoming, path)
     return texels
+
+
+# --- probe grids in bricks of probes --------------------------------------------------------------
+
+def solve_probe_grid(client, scene_path: str, settings: "_shgi.ProbeGridSettings", passes: int,
+                     bricks: int, threads: int = 1,
+                     progress: Optional[_bake.BakeProgress] = None) -> "_shgi.ProbeField":
+    """A probe grid of the scene file `scene_path` solved on the client's cluster: its probes
+    split into `bricks` bricks of consecutive probes, each a task that updates its brick for
+    `passes` passes (ProbeGrid.update_probes), merged with ProbeField.splice into the field a
+    single machine's ProbeGrid(scene, settings) and `passes` update() calls give, bit for bit.
+    Export it with ProbeField.export (the add-on's Export Volume format). Progress: "bricks
+    d/B, P probes/s"; the retry policy and cancel of the lightmap shards."""
+    from . import __main__ as cli
+    from .method_registry import settings_to_dict
+
+    distributed = import_distributed()
+    settings.validate()
+    for name, value, low in (("passes", passes, 1), ("bricks", bricks, 1), ("threads", threads, 1)):
+        if not (isinstance(value, int) and value >= low):
+            raise ValueError(f"{name} must be a whole number >= {low}, got {value!r}")
+    progress = progress or _bake.BakeProgress()
+    scene = cli._load(scene_path)
+    # Placement here too: the probe count splits the bricks (placement is deterministic, so the
+    # workers place the same probes; splice checks it).
+    probes = _shgi.ProbeGrid(scene, settings, progress.native(0.0, 0.0, "placing probes"))
+    count = probes.probe_count
+    bricks = min(bricks, count)
+    ranges = [(count * i // bricks, count * (i + 1) // bricks - count * i // bricks)
+              for i in range(bricks)]
+    wanted = settings_to_dict(settings)
+    bundle = scene_bundle(scene_path)
+    cancel_name = f"shgi-cancel-{uuid.uuid4().hex}"
+    cancel = distributed.Event(cancel_name, client=client)
+    [bundle_future] = client.scatter([bundle], hash=True, broadcast=True)
+    run_id = uuid.uuid4().hex[:8]
+    fields = {}
+
+    def submit(i: int, attempt: int):
+        first, size = ranges[i]
+        return client.submit(_probe_brick_task, bundle_future, wanted, passes, first, size,
+                             threads, cancel_name, pure=False,
+                             key=f"shgi-probes-{i}-of-{bricks}-{run_id}-{attempt}")
+
+    def accept(i: int, result: dict) -> int:
+        if result.get("settings") != wanted:
+            raise ValueError(f"it was solved with settings {result.get('settings')}, the grid's "
+                             f"are {wanted}")
+        field = _field_from_files(result["files"])
+        if field.passes != passes or field.probe_count != count:
+            raise ValueError(f"it holds {field.probe_count} probes after {field.passes} passes, "
+                             f"the grid {count} after {passes}")
+        fields[i] = field
+        return ranges[i][1]
+
+    start = time.perf_counter()
+
+    def on_progress(done: int, solved: int) -> None:
+        rate = solved / max(time.perf_counter() - start, 1e-9)
+        _report(progress, done / bricks, f"bricks {done}/{bricks}, {rate:,.1f} probes/s")
+
+    try:
+        run_tasks(client, submit, bricks, accept, on_progress, "brick",
+                  lambda: progress.cancelled)
+    except BaseException:
+        cancel.set()
+        raise
+    merged = fields[0]
+    for i in range(1, bricks):
+        merged = merged.splice(fields[i], *ranges[i])
+    return merged
+
+
+def _probe_brick_task(bundle: SceneBundle, settings: dict, passes: int, first: int, count: int,
+                      threads: int, cancel_name: str) -> dict:
+    """Probes first .. first + count - 1 of a probe grid, on a worker: {"files": the grid's
+    export (ProbeField.export, float EXR: exact), "settings", "worker", "seconds"}."""
+    from . import __main__ as cli
+    from .method_registry import settings_from_dict, settings_to_dict
+
+    scene_path = _scene_on_this_machine(bundle)
+    grid_settings = settings_from_dict(_shgi.ProbeGridSettings, settings)
+    progress = _bake.BakeProgress()
+
+    def work():
+        scene = cli._load(scene_path)
+        grid = _shgi.ProbeGrid(scene, grid_settings, progress.native(0.0, 0.0, "placing"))
+        for k in range(passes):
+            grid.update_probes(first, count, progress.native(k / passes, (k + 1) / passes,
+                                                             "updating probes"))
+        with tempfile.TemporaryDirectory(prefix="shgi-probes-") as folder:
+            grid.field().export(os.path.join(folder, "brick.json"))
+            files = {}
+            for name in os.listdir(folder):
+                with open(os.path.join(folder, name), "rb") as file:
+                    files[name] = file.read()
+        return files
+
+    files, worker, seconds = _run_cancellable(cancel_name, threads, work, progress)
+    return {"files": files, "settings": settings_to_dict(grid_settings), "worker": worker,
+            "seconds": seconds}
+
+
+def _field_from_files(files: dict) -> "_shgi.ProbeField":
+    """The ProbeField of a brick's export files (OSError/ValueError when they are damaged)."""
+    with tempfile.TemporaryDirectory(prefix="shgi-probes-") as folder:
+        for name, data in files.items():
+            if os.path.basename(name) != name:
+                raise ValueError(f"a brick file named {name!r}")
+            with open(os.path.join(folder, name), "wb") as file:
+                file.write(data)
+        return _shgi.ProbeField.import_exr(os.path.join(folder, "brick.json"))

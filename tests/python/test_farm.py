@@ -337,3 +337,41 @@ def test_shards_without_a_cluster_are_refused(build_python_dir,
     code, _, stderr = run_cli(build_python_dir, sun_room_file, "--out", tmp_path, *BAKE,
                               "--workers", "2", "--shard", "0/2")
     assert code == 2 and "not allowed with argument" in stderr
+
+
+# --- probe grids in bricks ------------------------------------------------------------------------
+
+def test_probe_grid_solved_in_four_bricks_equals_the_single_machine_grid(local_client,
+                                                                        sun_room_file, tmp_path):
+    settings = shgi.ProbeGridSettings(order=2, rays_per_probe=16, spacing=1.0, seed=7)
+    passes = 2
+    progress = []
+    merged = farm.solve_probe_grid(local_client, str(sun_room_file), settings, passes, 4,
+                                   progress=bake.BakeProgress(
+                                       lambda f, stage: progress.append(stage)))
+    scene = shgi.load_gltf(str(sun_room_file))
+    scene.commit()
+    grid = shgi.ProbeGrid(scene, settings)
+    for _ in range(passes):
+        grid.update()
+    assert merged.probe_count == grid.probe_count > 4 and merged.passes == passes
+    np.testing.assert_array_equal(merged.positions, grid.positions)
+    np.testing.assert_array_equal(merged.active, grid.active)
+    assert np.array_equal(merged.sh, grid.sh) and np.array_equal(merged.variance, grid.variance)
+    assert np.abs(grid.sh).max() > 0  # lit probes: the comparison means something
+    # Exported (the add-on's Export Volume format), every file equals the single machine's:
+    # the visibility maps too.
+    (tmp_path / "farm").mkdir()
+    (tmp_path / "one").mkdir()
+    merged.export(tmp_path / "farm" / "grid.json")
+    grid.field().export(tmp_path / "one" / "grid.json")
+    assert written(tmp_path / "farm") == written(tmp_path / "one")
+    assert len(written(tmp_path / "one")) >= 3
+    assert progress[-1].startswith("bricks 4/4, ")
+    # A brick solved with other settings is refused by the splice (placement differs).
+    other = shgi.ProbeGridSettings(order=2, rays_per_probe=16, spacing=0.9, seed=7)
+    brick = shgi.ProbeGrid(scene, other)
+    brick.update_probes(0, 3)
+    brick.update_probes(0, 3)
+    with pytest.raises(ValueError, match="splice_probes: the brick's probe count"):
+        merged.splice(brick.field(), 0, 3)
