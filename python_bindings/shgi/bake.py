@@ -665,9 +665,10 @@ def _save_shard(path: str, texels, meta: dict) -> None:
     if texels.directional:
         arrays["sh"] = texels.sh
     # Written under another name and renamed, so a shard killed mid-write leaves no file that
-    # looks complete.
+    # looks complete. Compressed: a shard's arrays are the whole lightmap's, zero outside its
+    # 1/N of the tiles, so a farm moves about 1/N of the dense bytes per shard (docs/farm.md).
     temp = path + ".partial.npz"
-    np.savez(temp, **arrays)
+    np.savez_compressed(temp, **arrays)
     os.replace(temp, path)
 
 
