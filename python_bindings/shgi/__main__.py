@@ -303,8 +303,13 @@ def _farm_command(args) -> int:
     """A bake on a Dask cluster (shgi.farm): shards as tasks, then the merge here."""
     from . import farm
 
-    if args.shards and args.shards > farm.MAX_SHARDS:
-        raise ValueError(f"--shards {args.shards}: at most {farm.MAX_SHARDS}")
+    if args.shards > farm.MAX_SHARDS:
+        raise ValueError(f"--shards {args.shards}: at most {farm.MAX_SHARDS} (each shard returns "
+                         "its objects' whole arrays; see docs/farm.md)")
+    if args.workers > farm.MAX_LOCAL_WORKERS:
+        raise ValueError(f"--workers {args.workers}: a local cluster runs at most "
+                         f"{farm.MAX_LOCAL_WORKERS} worker processes on this machine; for more, "
+                         "start a Dask cluster over several hosts and pass --scheduler")
     bar = _Bar(not args.quiet)
     progress = _bake.BakeProgress(bar)
     interrupted = False

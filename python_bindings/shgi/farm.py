@@ -52,7 +52,7 @@ from . import _shgi
 from . import bake as _bake
 from .denoise import import_optional
 
-__all__ = ["SHARD_ATTEMPTS", "MAX_SHARDS", "ShardFailed", "SceneBundle", "scene_bundle",
+__all__ = ["SHARD_ATTEMPTS", "MAX_SHARDS", "MAX_LOCAL_WORKERS", "ShardFailed", "SceneBundle", "scene_bundle",
            "import_distributed", "local_cluster", "bake_command_on_cluster", "run_tasks",
            "solve_probe_grid"]
 
@@ -61,6 +61,9 @@ SHARD_ATTEMPTS = 2
 # More shards than this only adds per-task overhead: every shard returns each object's whole
 # lightmap arrays (docs/farm.md).
 MAX_SHARDS = 4096
+# Worker processes of a local cluster (--workers): each holds the scene and ~100 MB of Python,
+# so more than this on one machine is a mistake, not a farm.
+MAX_LOCAL_WORKERS = 256
 # How often the client looks at its futures (Ctrl-C lands between looks) and a task at the
 # cancel event: the native bake then stops within its own 0.2 s.
 _POLL_SECONDS = 0.1

@@ -337,6 +337,12 @@ def test_shards_without_a_cluster_are_refused(build_python_dir,
     code, _, stderr = run_cli(build_python_dir, sun_room_file, "--out", tmp_path, *BAKE,
                               "--workers", "2", "--shard", "0/2")
     assert code == 2 and "not allowed with argument" in stderr
+    code, _, stderr = run_cli(build_python_dir, sun_room_file, "--out", tmp_path, *BAKE,
+                              "--workers", "100000")
+    assert code == 1 and "--workers 100000: a local cluster runs at most 256" in stderr
+    code, _, stderr = run_cli(build_python_dir, sun_room_file, "--out", tmp_path, *BAKE,
+                              "--workers", "2", "--shards", "5000")
+    assert code == 1 and "--shards 5000: at most 4096" in stderr
 
 
 # --- probe grids in bricks ------------------------------------------------------------------------
