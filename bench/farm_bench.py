@@ -47,6 +47,8 @@ def main():
     import scene_gltf
     import scenes
     from distributed import Client
+
+    import shgi
     from shgi import farm
 
     env = dict(os.environ)
@@ -54,10 +56,8 @@ def main():
     scene = scene_gltf.write_gltf(scenes.sun_room(1.0, lightmap=True).scene,
                                   folder / "sun_room.gltf")
     single = bake(env, scene, folder / "single", args.samples, "--threads", "1")
-    texels = 0
-    import shgi
-    for path in (folder / "single").glob("*.exr"):
-        texels += shgi.read_exr(path)["Lightmap"].shape[0] * shgi.read_exr(path)["Lightmap"].shape[1]
+    texels = sum(shgi.read_exr(path)["Lightmap"][:, :, 0].size
+                 for path in (folder / "single").glob("*.exr"))
     print(f"scene {scene.stat().st_size} bytes, {texels} texels, {args.samples} samples")
     print(f"one process, one thread: {single:.1f} s ({texels / single:,.0f} texels/s)")
     reference = {p.name: p.read_bytes() for p in (folder / "single").iterdir() if p.is_file()}

@@ -109,7 +109,8 @@ def _parser() -> argparse.ArgumentParser:
                            "(needs the pyoidn module)")
     bake.add_argument("--padding", type=_whole(0), default=4, help="dilation texels (4)")
     bake.add_argument("--seed", type=_whole(0), default=0)
-    bake.add_argument("--threads", type=_whole(0), default=0, help="native threads; 0: all cores (on a farm: per worker, default 1)")
+    bake.add_argument("--threads", type=_whole(0), default=0,
+                      help="native threads; 0: all cores (on a farm: per worker, default 1)")
     farm = bake.add_mutually_exclusive_group()
     farm.add_argument("--shard", type=_shard, default=None,
                       help="bake only shard i of N (i/N) into OUT/shards")

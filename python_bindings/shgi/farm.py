@@ -43,6 +43,7 @@ import logging
 import os
 import struct
 import tempfile
+import threading
 import time
 import urllib.parse
 import uuid
@@ -52,8 +53,8 @@ from . import _shgi
 from . import bake as _bake
 from .denoise import import_optional
 
-__all__ = ["SHARD_ATTEMPTS", "MAX_SHARDS", "MAX_LOCAL_WORKERS", "ShardFailed", "SceneBundle", "scene_bundle",
-           "import_distributed", "local_cluster", "bake_command_on_cluster", "run_tasks",
+__all__ = ["SHARD_ATTEMPTS", "MAX_SHARDS", "MAX_LOCAL_WORKERS", "ShardFailed", "SceneBundle",
+           "scene_bundle", "import_distributed", "local_cluster", "bake_command_on_cluster", "run_tasks",
            "solve_probe_grid"]
 
 # Runs of one shard before the bake fails (see the module's retry policy).
@@ -199,8 +200,6 @@ def _scene_on_this_machine(bundle: SceneBundle) -> str:
 def _watch_cancel(distributed, cancel_name: str, cancel: Callable[[], None]):
     """Starts a thread that calls cancel() once the client sets the Event `cancel_name`; returns
     a function that stops the thread."""
-    import threading
-
     client = distributed.get_client()
     event = distributed.Event(cancel_name, client=client)
     done = threading.Event()
