@@ -2730,9 +2730,9 @@ def srgb_from_linear(linear: typing.Annotated[numpy.typing.ArrayLike, numpy.floa
     sRGB transfer function (IEC 61966-2-1): 12.92 x up to 0.0031308, 1.055 x**(1/2.4) - 0.055
     above. Input is clamped to [0, 1] (NaN -> 0). Accepts a float or an array (float32 result).
     """
-def unocclude(scene: Scene, map: TexelMap, settings: UnoccludeSettings = ..., progress: Progress = None) -> dict:
+def unocclude(scene: Scene, map: TexelMap, settings: UnoccludeSettings = ..., progress: Progress = None, tiles: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex] = [], tile_size: typing.SupportsInt | typing.SupportsIndex = 16) -> dict:
     """
-    Moves the ray origins of samples inside other geometry out of it; returns counts.
+    Moves the ray origins of samples inside other geometry out of it; returns counts. `tiles` (lightmap tiles of `tile_size` texels, as bake_lightmap numbers them; empty: all): only their texels' samples, each moved exactly as by a whole unocclude (what a shard bakes).
     """
 def version() -> str:
     """
