@@ -175,12 +175,13 @@ def test_ctrl_c_during_a_distributed_bake_returns_quickly_leaving_no_lightmap(
     out = tmp_path / "farm"
     process = cli(build_python_dir, sun_room_file, "--out", out, *SLOW_BAKE, "--workers", "2",
                   env={"SHGI_PROGRESS": "1"})
-    # Wait until the shards run (the bar shows "shards 0/8"), then a little into them.
+    # Wait until the shards run (the bar shows "shards 0/8"), then a little into them (less
+    # than a worker's first shard takes: it imports shgi and loads the scene first).
     deadline = time.monotonic() + 120
     seen = ""
     while "shards 0/" not in seen and time.monotonic() < deadline:
         seen += os.read(process.stderr.fileno(), 4096).decode(errors="replace")
-    time.sleep(1.0)
+    time.sleep(0.3)
     assert process.poll() is None, "the bake ended before Ctrl-C"
     start = time.monotonic()
     process.send_signal(signal.SIGINT)
