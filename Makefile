@@ -134,12 +134,13 @@ test-cpp: build
 # 3.4.1 and the bpy module of BPY_VENV) and the packages of `make dist`. The python3 on PATH, when
 # it is another interpreter (pyenv, with numpy 2) that has pytest, runs them again but for the
 # Blender and package tests (marked `blender`, `dist`), whose Blenders and venvs are its same,
-# and the tests whose time goes to a long path-traced reference (marked `reference`, ~60 s):
+# the tests whose time goes to a long path-traced reference (marked `reference`, ~60 s) and the
+# Dask farm tests (marked `farm`, ~1 min of cluster starts):
 # the same native code, whose numpy interface the other tests cover under both interpreters.
 # The first run ends with its 12 slowest tests: where the suite's time goes.
 PYTEST := pytest -q -p no:cacheprovider
 TEST_ENV := PYTHONPATH=$(CURDIR)/$(BUILD_DIR)/python SHGI_BPY_PYTHON=$(BPY_VENV)/bin/python \
-	SHGI_DIST_DIR=$(CURDIR)/$(DIST_DIR)
+	SHGI_DIST_DIR=$(CURDIR)/$(DIST_DIR) SHGI_REQUIRE_FARM=1
 test-python: build dist bpy-venv
 	cd tests/python && $(TEST_ENV) $(PYTHON) -m $(PYTEST) --durations=12 .
 	@other=$$(command -v python3); \
@@ -147,7 +148,7 @@ test-python: build dist bpy-venv
 		if $$other -c 'import numpy, pytest' 2>/dev/null; then \
 			echo "Python tests again under $$other: no Blender, package or reference tests"; \
 			cd tests/python && $(TEST_ENV) $$other -m $(PYTEST) \
-				-m 'not blender and not dist and not reference' .; \
+				-m 'not blender and not dist and not reference and not farm' .; \
 		else echo "note: $$other lacks numpy/pytest; its Python tests were skipped"; fi; \
 	fi
 

@@ -149,11 +149,12 @@ The sample positions of every texel of one object's lightmap (rasterize_texels).
                        "Texels past the wall, [0, 16] (0.05).");
     m.def(
         "unocclude",
-        [](const Scene& scene, TexelMap& map, const U settings, Progress* progress) {
+        [](const Scene& scene, TexelMap& map, const U settings, Progress* progress,
+           const std::vector<uint32_t>& tiles, uint32_t tile_size) {
             SceneUse use(scene, SceneUse::Kind::Query, "unocclude");
             UnoccludeReport report;
             report = run_interruptible(progress, [&](Progress* used) {
-                    return unocclude(scene, map, settings, used);
+                    return unocclude(scene, map, settings, tiles, tile_size, used);
                 });
             py::dict d;
             d["samples"] = report.samples;
@@ -161,8 +162,12 @@ The sample positions of every texel of one object's lightmap (rasterize_texels).
             return d;
         },
         py::arg("scene"), py::arg("map"), py::arg("settings") = U{},
-        py::arg("progress") = py::none(),
-        "Moves the ray origins of samples inside other geometry out of it; returns counts.");
+        py::arg("progress") = py::none(), py::arg("tiles") = std::vector<uint32_t>{},
+        py::arg("tile_size") = LightmapSettings{}.tile_size,
+        "Moves the ray origins of samples inside other geometry out of it; returns counts. "
+        "`tiles` (lightmap tiles of `tile_size` texels, as bake_lightmap numbers them; empty: "
+        "all): only their texels' samples, each moved exactly as by a whole unocclude (what a "
+        "shard bakes).");
 }
 
 void bind_lightmap(py::module_& m) {

@@ -221,7 +221,21 @@ From ProbeGrid.field(), ProbeField.load(path) or ProbeField.import_exr(json_path
             [](const ProbeField& f, const ProbeLookupSettings& lookup) {
                 return std::make_unique<ProbeField>(f.shared_data(), lookup);
             },
-            py::arg("lookup"), "The same probes read with other lookup settings.");
+            py::arg("lookup"), "The same probes read with other lookup settings.")
+        .def(
+            "splice",
+            [](const ProbeField& f, const ProbeField& brick, size_t first, size_t count) {
+                auto data = std::make_shared<const ProbeGridData>([&] {
+                    py::gil_scoped_release release;
+                    return splice_probes(f.data(), brick.data(), first, count);
+                }());
+                return std::make_unique<ProbeField>(data, f.lookup_settings());
+            },
+            py::arg("brick"), py::arg("first"), py::arg("count"),
+            "These probes with probes first .. first + count - 1 (their SH, variance and "
+            "visibility) taken from `brick`, the same grid after the same passes whose probes "
+            "there were updated apart (ProbeGrid.update_probes): the merge of a solve split "
+            "into bricks. ValueError names the first difference between the two grids.");
 }
 
 py::dict timings_to_dict(const ProbeGridTimings& timings) {
@@ -274,6 +288,17 @@ reset().)doc");
              "One update pass (GIL released). Raises shgi.Cancelled on cancel, keeping the "
              "previous probes.")
         .def("update", update, py::arg("progress") = py::none(), "The same as refine().")
+        .def(
+            "update_probes",
+            [](ProbeGrid& grid, uint64_t first, uint64_t count, Progress* progress) {
+                SceneUse use(grid.scene(), SceneUse::Kind::Query, "update_probes (ProbeGrid)");
+                run_interruptible(progress,
+                                  [&](Progress* used) { grid.update_probes(first, count, used); });
+            },
+            py::arg("first"), py::arg("count"), py::arg("progress") = py::none(),
+            "One update pass over probes first .. first + count - 1 only (a brick of a solve "
+            "split over machines); the others keep their state, the pass counts. Bricks "
+            "updated apart and merged with ProbeField.splice equal update() bit for bit.")
         .def(
             "reset",
             [](ProbeGrid& grid, Progress* progress) {

@@ -1,8 +1,11 @@
 #include "bake/unocclude.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <utility>
 
+#include "bake/lightmap_baker.h"
 #include "render/shading.h"
 #include "util/error.h"
 #include "util/parallel.h"
@@ -64,6 +67,50 @@ bool unocclude_sample(const Scene& scene, const UnoccludeSettings& settings,
 }
 
 }  // namespace
+
+UnoccludeReport unocclude(const Scene& scene, TexelMap& map, const UnoccludeSettings& settings,
+                          const std::vector<uint32_t>& tiles, uint32_t tile_size,
+                          Progress* progress) {
+    if (tiles.empty()) return unocclude(scene, map, settings, progress);
+    check_settings(scene, settings);
+    check_texel_map(scene, map, "unocclude");
+    if (map.sample_offsets.size() != map.texel_count() + 1)
+        throw InvalidArgument("unocclude: the texel map is incomplete");
+    const uint32_t tile_count = lightmap_tile_count(map.width, map.height, tile_size);
+    const uint32_t tiles_x = (map.width + tile_size - 1) / tile_size;
+    // Each tile row's texels are consecutive, so its samples are one range.
+    std::vector<std::pair<uint64_t, uint64_t>> ranges;
+    for (uint32_t tile : tiles) {
+        if (tile >= tile_count)
+            throw InvalidArgument(format_message("unocclude: tile ", tile, " but a ", map.width,
+                                                 " x ", map.height, " lightmap has ", tile_count,
+                                                 " tiles of ", tile_size, " texels"));
+        const uint32_t x0 = (tile % tiles_x) * tile_size, y0 = (tile / tiles_x) * tile_size;
+        const uint32_t x1 = std::min(x0 + tile_size, map.width);
+        for (uint32_t y = y0; y < std::min(y0 + tile_size, map.height); ++y) {
+            const uint64_t row = uint64_t(y) * map.width;
+            ranges.emplace_back(map.sample_offsets[row + x0], map.sample_offsets[row + x1]);
+        }
+    }
+    std::atomic<uint64_t> moved{0}, examined{0};
+    parallel_for(
+        0, ranges.size(), 1,
+        [&](uint64_t begin, uint64_t end) {
+            uint64_t moved_here = 0, examined_here = 0;
+            for (uint64_t r = begin; r < end; ++r) {
+                for (uint64_t i = ranges[r].first; i < ranges[r].second; ++i)
+                    moved_here += unocclude_sample(scene, settings, map.samples[i]);
+                examined_here += ranges[r].second - ranges[r].first;
+            }
+            moved += moved_here;
+            examined += examined_here;
+        },
+        progress);
+    UnoccludeReport report;
+    report.samples = examined.load();
+    report.moved_samples = moved.load();
+    return report;
+}
 
 UnoccludeReport unocclude(const Scene& scene, TexelMap& map, const UnoccludeSettings& settings,
                           Progress* progress) {

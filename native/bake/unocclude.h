@@ -19,6 +19,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "bake/texel_rasterizer.h"
 #include "scene/scene.h"
@@ -46,6 +47,13 @@ struct UnoccludeReport {
 // committed and be the one the map's samples lie in. Throws InvalidArgument for an uncommitted
 // scene or settings out of range; polls `progress` between chunks (Cancelled).
 UnoccludeReport unocclude(const Scene& scene, TexelMap& map, const UnoccludeSettings& settings,
+                          Progress* progress = nullptr);
+// Only the samples of the texels in `tiles` (lightmap tiles of tile_size texels, numbered as
+// bake_lightmap numbers them; all samples when empty): what a shard bakes, so a shard prepares
+// its own share of the lightmap, not all of it. Samples are independent, so each moves exactly
+// as in a whole unocclude(). InvalidArgument for a tile out of range.
+UnoccludeReport unocclude(const Scene& scene, TexelMap& map, const UnoccludeSettings& settings,
+                          const std::vector<uint32_t>& tiles, uint32_t tile_size,
                           Progress* progress = nullptr);
 
 }  // namespace shgi

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 
 #include "probes/probe_visibility.h"
@@ -142,6 +143,43 @@ void validate_probe_grid_data(const ProbeGridData& data) {
         if (!is_finite(data.visibility[i]) || data.visibility[i].x < 0.0f)
             throw InvalidArgument(format_message("ProbeGridData.visibility[", i, "] is not a "
                                                  "finite, non-negative distance"));
+}
+
+ProbeGridData splice_probes(const ProbeGridData& into, const ProbeGridData& from, size_t first,
+                            size_t count) {
+    const size_t probes = into.probe_count();
+    if (first > probes || count > probes - first)
+        throw InvalidArgument(format_message("splice_probes: probes ", first, " .. ",
+                                             first + count, " lie beyond the grid's ", probes));
+    const auto differ = [](const char* what, auto a, auto b) {
+        throw InvalidArgument(format_message("splice_probes: the brick's ", what, " is ", b,
+                                             ", the grid's ", a, "; solve every brick of one grid "
+                                             "with the same settings and passes"));
+    };
+    if (from.order != into.order) differ("SH order", into.order, from.order);
+    if (from.probe_count() != probes) differ("probe count", probes, from.probe_count());
+    if (from.visibility_resolution != into.visibility_resolution)
+        differ("visibility resolution", into.visibility_resolution, from.visibility_resolution);
+    if (from.passes != into.passes) differ("pass count", into.passes, from.passes);
+    if (from.includes_direct != into.includes_direct)
+        differ("includes_direct", into.includes_direct, from.includes_direct);
+    if (from.volumes.size() != into.volumes.size())
+        differ("volume count", into.volumes.size(), from.volumes.size());
+    for (size_t i = 0; i < probes; ++i) {
+        // Placement is deterministic: the same scene and settings place every probe alike.
+        if (from.positions[i] != into.positions[i] || from.active[i] != into.active[i])
+            throw InvalidArgument(format_message(
+                "splice_probes: probe ", i, " was placed differently in the brick (another "
+                "scene or placement settings?)"));
+    }
+    ProbeGridData out = into;
+    const size_t texels = size_t(into.visibility_resolution) * into.visibility_resolution;
+    std::copy_n(from.sh.begin() + ptrdiff_t(first), count, out.sh.begin() + ptrdiff_t(first));
+    std::copy_n(from.variance.begin() + ptrdiff_t(first), count,
+                out.variance.begin() + ptrdiff_t(first));
+    std::copy_n(from.visibility.begin() + ptrdiff_t(first * texels), count * texels,
+                out.visibility.begin() + ptrdiff_t(first * texels));
+    return out;
 }
 
 ProbeField::ProbeField(std::shared_ptr<const ProbeGridData> data,

@@ -98,6 +98,14 @@ std::vector<vec3> probe_base_positions(const std::vector<ProbeVolume>& volumes);
 // of another order, NaN values...): data read from files passes through here before any lookup.
 void validate_probe_grid_data(const ProbeGridData& data);
 
+// `into` with the updated state (SH, variance, visibility) of probes first .. first + count - 1
+// taken from `from`: the merge of a probe-grid solve split into bricks (ProbeGrid::
+// update_probes). Both must be the same grid after the same passes (order, volumes, positions,
+// active flags, visibility resolution, passes, includes_direct); InvalidArgument names the first
+// difference, or a range beyond the probes.
+ProbeGridData splice_probes(const ProbeGridData& into, const ProbeGridData& from, size_t first,
+                            size_t count);
+
 class ProbeField : public IndirectField {
   public:
     // Validates both arguments.

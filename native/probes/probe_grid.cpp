@@ -371,6 +371,10 @@ ProbeGridData ProbeGrid::place(Progress* progress) const {
 }
 
 void ProbeGrid::update(Progress* progress) {
+    update_probes(0, std::numeric_limits<uint64_t>::max(), progress);
+}
+
+void ProbeGrid::update_probes(uint64_t first, uint64_t count, Progress* progress) {
     const Serial serial(*this, "update", progress);
     check_scene("update");
     const auto start = now();
@@ -390,8 +394,11 @@ void ProbeGrid::update(Progress* progress) {
 
     std::atomic<uint64_t> paths{0}, rays{0};
     if (progress) progress->begin_stage("updating probes");
+    const uint64_t begin_probe = std::min<uint64_t>(first, old.probe_count());
+    const uint64_t end_probe =
+        begin_probe + std::min<uint64_t>(count, old.probe_count() - begin_probe);
     parallel_for(
-        0, old.probe_count(), kProbesPerTask,
+        begin_probe, end_probe, kProbesPerTask,
         [&](uint64_t begin, uint64_t end) {
             VisibilityFilter filter(old.visibility_resolution, settings_.visibility_blur);
             IntegratorClock clock;  // counts the paths' rays; their time is not split

@@ -99,6 +99,11 @@ class ProbeGrid : public IndirectField, public GiSolver {
 
     // One update pass over every active probe, blended in. Cancel keeps the previous state.
     void update(Progress* progress = nullptr);
+    // One update pass over the active probes first .. first + count - 1 only (a brick of a
+    // solve split over machines, clamped to the probes there are); the others keep their state
+    // and the pass still counts. A probe's pass depends only on (seed, pass, probe) and its own
+    // history, so bricks updated apart and spliced (splice_probes) equal update() bit for bit.
+    void update_probes(uint64_t first, uint64_t count, Progress* progress = nullptr);
     // Forgets every pass and re-places the probes (after scene edits and commit()).
     void reset(Progress* progress = nullptr) override;
 

@@ -114,18 +114,33 @@ def _parser() -> argparse.ArgumentParser:
                            "(needs the pyoidn module)")
     bake.add_argument("--padding", type=_whole(0), default=4, help="dilation texels (4)")
     bake.add_argument("--seed", type=_whole(0), default=0)
-    bake.add_argument("--threads", type=_whole(0), default=0, help="0: all cores")
+    bake.add_argument("--threads", type=_whole(0), default=0,
+                      help="native threads; 0: all cores (on a farm: per worker, default 1)")
     farm = bake.add_mutually_exclusive_group()
     farm.add_argument("--shard", type=_shard, default=None,
                       help="bake only shard i of N (i/N) into OUT/shards")
     farm.add_argument("--merge", type=_whole(1), default=0, metavar="N",
                       help="merge the N shard files in OUT/shards into the lightmaps")
+    farm.add_argument("--workers", type=_whole(1), default=0, metavar="N",
+                      help="bake on a local Dask cluster of N worker processes (one native "
+                           "thread each unless --threads says otherwise), shards as tasks, "
+                           "merged into the lightmaps a plain bake writes (docs/farm.md)")
+    farm.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                      help="bake on the running Dask cluster of this scheduler instead")
+    bake.add_argument("--shards", type=_whole(1), default=0, metavar="K",
+                      help="with --workers or --scheduler: shards of the bake (default: "
+                           f"{_FARM_SHARDS_PER_WORKER} per worker)")
     bake.add_argument("--world-light-only", action="store_true",
                       help="bake a scene without lamps or emissive materials, lit by the "
                            "loader's default world alone (refused without this flag: a glTF "
                            "exporter may have left the scene's lights out)")
     bake.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser
+
+
+# A farm bake's default shards per worker: several, so that a slow or lost worker's share is
+# small and the others keep busy (docs/farm.md).
+_FARM_SHARDS_PER_WORKER = 4
 
 
 def _method_name(name: str) -> str:
@@ -223,9 +238,9 @@ class _Bar:
             sys.stderr.write("\n")
 
 
-def _bake_command(args) -> int:
-    if args.threads:
-        _shgi.set_max_threads(args.threads)
+def _prepare(args):
+    """(scene, jobs, options) of a bake command: the scene loaded and checked, the objects and
+    their sizes, the bake options. A farm's workers prepare from the same arguments (shgi.farm)."""
     scene = _load(args.scene)
     if not args.world_light_only:
         _check_lamps(scene, args.scene)
@@ -238,20 +253,37 @@ def _bake_command(args) -> int:
                                       final_gather=args.final_gather)
     options = _bake.BakeOptions(settings=settings, uv_set=uv_set, filter=args.filter,
                                 denoise=args.denoise, padding=args.padding, lightmap_uvs=args.uv)
+    return scene, jobs, options
+
+
+def _bake_shard_or_all(args, scene, jobs, options, progress):
+    """(jobs with their UV layouts, results) of a plain bake, a --shard or a --merge."""
+    # UV layouts first: a solved field belongs to the scene with its final meshes.
+    laid_out = _bake.generate_lightmap_uvs(scene, jobs, options, progress)
+    if args.merge:
+        return laid_out, _bake.merge_shards(scene, laid_out, options, args.out, args.merge,
+                                            progress)
+    field = _bake.solve_field(scene, args.method, args.seed, progress,
+                              _method_settings(args.method, args.settings, args.seed),
+                              args.passes, gather=args.final_gather)
+    return laid_out, _bake.bake_scene(scene, laid_out, options, args.out, field, args.shard,
+                                      progress)
+
+
+def _bake_command(args) -> int:
+    if args.workers or args.scheduler:
+        return _farm_command(args)
+    if args.shards:
+        raise ValueError("--shards splits a farm bake: give --workers N or --scheduler ADDRESS "
+                         "too (or --shard i/N to bake one shard here)")
+    if args.threads:
+        _shgi.set_max_threads(args.threads)
+    scene, jobs, options = _prepare(args)
     bar = _Bar(not args.quiet)
     progress = _bake.BakeProgress(bar)
 
     def work():
-        # UV layouts first: a solved field belongs to the scene with its final meshes.
-        laid_out = _bake.generate_lightmap_uvs(scene, jobs, options, progress)
-        if args.merge:
-            return laid_out, _bake.merge_shards(scene, laid_out, options, args.out, args.merge,
-                                                progress)
-        field = _bake.solve_field(scene, args.method, args.seed, progress,
-                                  _method_settings(args.method, args.settings, args.seed),
-                                  args.passes, gather=args.final_gather)
-        return laid_out, _bake.bake_scene(scene, laid_out, options, args.out, field, args.shard,
-                                          progress)
+        return _bake_shard_or_all(args, scene, jobs, options, progress)
 
     interrupted = False
     try:
@@ -271,6 +303,37 @@ def _bake_command(args) -> int:
             print(item)
         else:
             print(f"{item.name}: {' '.join(item.paths)}")
+    return 0
+
+
+def _farm_command(args) -> int:
+    """A bake on a Dask cluster (shgi.farm): shards as tasks, then the merge here."""
+    from . import farm
+
+    if args.shards > farm.MAX_SHARDS:
+        raise ValueError(f"--shards {args.shards}: at most {farm.MAX_SHARDS} (each shard returns "
+                         "its objects' whole arrays; see docs/farm.md)")
+    if args.workers > farm.MAX_LOCAL_WORKERS:
+        raise ValueError(f"--workers {args.workers}: a local cluster runs at most "
+                         f"{farm.MAX_LOCAL_WORKERS} worker processes on this machine; for more, "
+                         "start a Dask cluster over several hosts and pass --scheduler")
+    bar = _Bar(not args.quiet)
+    progress = _bake.BakeProgress(bar)
+    interrupted = False
+    try:
+        lightmaps = farm.bake_command_on_cluster(
+            args, progress, workers=args.workers, scheduler=args.scheduler,
+            threads=args.threads or 1, shards=args.shards,
+            shards_per_worker=_FARM_SHARDS_PER_WORKER, run=_run_on_worker)
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        bar.done()
+    if interrupted:
+        print("cancelled", file=sys.stderr)
+        return 130
+    for item in lightmaps:
+        print(f"{item.name}: {' '.join(item.paths)}")
     return 0
 
 

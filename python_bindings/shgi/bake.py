@@ -274,7 +274,10 @@ def _raster_settings(job: BakeJob, options: BakeOptions) -> _shgi.TexelRasterSet
                                      samples_per_axis=options.samples_per_axis)
 
 
-def _texel_map(scene, job: BakeJob, options: BakeOptions, progress) -> _shgi.TexelMap:
+def _texel_map(scene, job: BakeJob, options: BakeOptions, progress,
+               tiles: Sequence[int] = ()) -> _shgi.TexelMap:
+    """The texel map of the job's lightmap, its samples moved out of walls (only those of
+    `tiles` when given: what a shard bakes; each moves as in a whole unocclusion)."""
     texel_map = _shgi.rasterize_texels(scene, job.instance, _raster_settings(job, options),
                                        progress)
     if texel_map.sample_count == 0:
@@ -283,7 +286,8 @@ def _texel_map(scene, job: BakeJob, options: BakeOptions, progress) -> _shgi.Tex
             f"{job.width} x {job.height} lightmap (all UVs outside [0, 1] or collapsed); "
             "unwrap it (Smart UV Project or Lightmap Pack) into the unit square")
     if options.unocclude:
-        _shgi.unocclude(scene, texel_map, _shgi.UnoccludeSettings(), progress)
+        _shgi.unocclude(scene, texel_map, _shgi.UnoccludeSettings(), progress, list(tiles),
+                        options.settings.tile_size)
     return texel_map
 
 
@@ -298,7 +302,7 @@ def bake_object(scene, job: BakeJob, options: BakeOptions, field=None, tiles: Se
 def _bake_object(scene, job, options, field, tiles, stage, bake_end):
     """bake_object with stage(a, b) (BakeProgress.stages) giving each step its share, the bake
     ending at `bake_end` of the object's progress."""
-    texel_map = _texel_map(scene, job, options, stage(0.0, _RASTER_SHARE))
+    texel_map = _texel_map(scene, job, options, stage(0.0, _RASTER_SHARE), tiles)
     texels = _shgi.bake_lightmap(scene, texel_map, options.settings, field, list(tiles),
                                  stage(_RASTER_SHARE, bake_end))
     return texel_map, texels
@@ -666,9 +670,10 @@ def _save_shard(path: str, texels, meta: dict) -> None:
     if texels.directional:
         arrays["sh"] = texels.sh
     # Written under another name and renamed, so a shard killed mid-write leaves no file that
-    # looks complete.
+    # looks complete. Compressed: a shard's arrays are the whole lightmap's, zero outside its
+    # 1/N of the tiles, so a farm moves about 1/N of the dense bytes per shard (docs/farm.md).
     temp = path + ".partial.npz"
-    np.savez(temp, **arrays)
+    np.savez_compressed(temp, **arrays)
     os.replace(temp, path)
 
 

@@ -100,15 +100,16 @@ def cpu_device(pyoidn):
     return device
 
 
-def import_optional(module: str, feature: str):
+def import_optional(module: str, feature: str, package: Optional[str] = None):
     """Imports an optional PyPI module or raises ImportError naming the pip command for this
-    Python (`make deps` installs both optional modules)."""
+    Python (`make deps` installs the optional modules); `package`: what pip installs, when it is
+    not the module's name (dask's 'dask[distributed]' for the module distributed)."""
     try:
         return importlib.import_module(module)
     except ImportError as error:
         raise ImportError(
             f"{feature} needs the Python module '{module}', which is not installed in "
-            f"{sys.executable}: install it with `{pip_command(module)}` "
+            f"{sys.executable}: install it with `{pip_command(package or module)}` "
             "(or run `make deps`)") from error
 
 

@@ -49,6 +49,9 @@ def pytest_configure(config):
     config.addinivalue_line("markers", "blender: runs Blender (the program or the bpy module)")
     config.addinivalue_line("markers", "dist: installs the packages of `make dist`")
     config.addinivalue_line(
+        "markers", "farm: starts Dask clusters of worker processes (the second interpreter of "
+        "`make test-python` skips it: the same Python code, whose time goes to cluster starts)")
+    config.addinivalue_line(
         "markers", "reference: spends its time computing a long path-traced reference (the "
         "second interpreter of `make test-python` skips it: same native code, whose numpy "
         "interface the other tests cover)")

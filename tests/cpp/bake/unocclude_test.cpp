@@ -147,6 +147,33 @@ TEST(Unocclude, DeterministicAndIdempotent) {
     EXPECT_EQ(origins(one), origins(many));
 }
 
+TEST(Unocclude, TilesMoveTheirSamplesAsAWholeUnoccludeAndNoOthers) {
+    // A shard unoccludes only its tiles: tiles 1 and 2 of 8-texel tiles (columns 8..15 of rows
+    // 0..7, and columns 0..7 of rows 8..15) of the 16 x 16 floor, whose column 8 lies under
+    // the wall's edge.
+    const FloorWithBox fixture = floor_with_box();
+    TexelMap whole = rasterize_floor(fixture);
+    unocclude(fixture.scene, whole, UnoccludeSettings{});
+    TexelMap part = rasterize_floor(fixture);
+    const TexelMap untouched = part;
+    constexpr uint32_t kTile = 8;
+    const UnoccludeReport report =
+        unocclude(fixture.scene, part, UnoccludeSettings{}, {1, 2}, kTile);
+    EXPECT_EQ(report.samples, 2u * kTile * kTile);  // one sample per texel
+    EXPECT_GT(report.moved_samples, 0u);
+    for (uint32_t y = 0; y < kResolution; ++y) {
+        for (uint32_t x = 0; x < kResolution; ++x) {
+            const uint32_t tile = (y / kTile) * (kResolution / kTile) + x / kTile;
+            const bool in_tiles = tile == 1 || tile == 2;
+            const vec3 expected = texel_sample(in_tiles ? whole : untouched, x, y).ray_origin;
+            EXPECT_EQ(texel_sample(part, x, y).ray_origin, expected) << x << ", " << y;
+        }
+    }
+    expect_contains(
+        rejection([&] { unocclude(fixture.scene, part, UnoccludeSettings{}, {4}, kTile); }),
+        "tile 4 but a 16 x 16 lightmap has 4 tiles of 8 texels");
+}
+
 TEST(Unocclude, RejectsAnUncommittedSceneAndBadSettings) {
     FloorWithBox fixture = floor_with_box();
     TexelMap map = rasterize_floor(fixture);

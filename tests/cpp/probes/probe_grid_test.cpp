@@ -189,6 +189,55 @@ TEST(ProbeGrid, BitIdenticalForAnyThreadCount) {
     EXPECT_EQ(one.visibility, two.visibility);
 }
 
+TEST(ProbeGrid, BricksUpdatedApartAndSplicedEqualTheWholeGrid) {
+    // A solve split over machines: 4 bricks of probes, each updated by a grid of its own for the
+    // same passes (ProbeGrid::update_probes), spliced into one grid that must equal the grid
+    // updated whole, bit for bit.
+    const Scene scene = test::emissive_furnace(0.6f, vec3(1.0f, 0.5f, 0.25f), 1.0f);
+    ProbeGridSettings settings;
+    ProbeVolume volume;
+    volume.world_from_volume = glm::scale(mat4(1.0f), vec3(0.8f));
+    volume.resolution = ivec3(3, 2, 2);  // 12 probes: bricks of 3
+    settings.volumes = {volume};
+    settings.rays_per_probe = 32;
+    constexpr int kPasses = 2;
+    ProbeGrid whole(scene, settings);
+    for (int pass = 0; pass < kPasses; ++pass) whole.update();
+    const size_t probes = whole.probe_count(), brick = 3;
+    const ProbeGridData placed = ProbeGrid(scene, settings).data();
+    ProbeGridData merged = placed;
+    merged.passes = kPasses;  // the untouched base: every brick's probes replace its own
+    for (size_t first = 0; first < probes; first += brick) {
+        ProbeGrid part(scene, settings);
+        for (int pass = 0; pass < kPasses; ++pass) part.update_probes(first, brick);
+        EXPECT_EQ(part.passes(), uint64_t(kPasses));
+        // Probes outside the brick keep their placement state.
+        const size_t outside = (first + brick) % probes;
+        EXPECT_EQ(part.data().variance[outside], placed.variance[outside]);
+        merged = splice_probes(merged, part.data(), first, brick);
+    }
+    const ProbeGridData& expected = whole.data();
+    for (size_t i = 0; i < probes; ++i) {
+        for (int c = 0; c < sh_num_coefficients(expected.order); ++c)
+            EXPECT_EQ(merged.sh[i][c], expected.sh[i][c]) << "probe " << i;
+        EXPECT_EQ(merged.variance[i], expected.variance[i]) << "probe " << i;
+    }
+    EXPECT_EQ(merged.visibility, expected.visibility);
+    EXPECT_EQ(merged.passes, expected.passes);
+
+    // Bricks of another grid, or beyond the probes, are refused.
+    ProbeGrid once(scene, settings);
+    once.update_probes(0, brick);
+    testing::expect_invalid_argument([&] { splice_probes(merged, once.data(), 0, brick); },
+                                  "pass count is 1, the grid's 2");
+    testing::expect_invalid_argument([&] { splice_probes(merged, merged, probes - 1, 2); },
+                                  "beyond the grid's 12");
+    ProbeGridSettings other = settings;
+    other.volumes[0].resolution = ivec3(2, 2, 2);
+    testing::expect_invalid_argument(
+        [&] { splice_probes(merged, ProbeGrid(scene, other).data(), 0, 1); }, "probe count");
+}
+
 TEST(ProbeGrid, CancelKeepsThePreviousState) {
     const Scene scene = test::emissive_furnace(0.5f, vec3(1.0f), 1.0f);
     ProbeGridSettings settings;

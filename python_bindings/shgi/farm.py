@@ -1,0 +1,570 @@
+"""Bakes on a Dask cluster: the shards of a bake as tasks, merged here into the lightmaps that a
+plain bake writes, byte for byte.
+
+``python -m shgi bake SCENE --out DIR --workers N`` starts a local cluster of N worker processes
+(``distributed.LocalCluster``, one native thread each unless ``--threads``); ``--scheduler
+tcp://HOST:PORT`` uses a running one (``dask scheduler`` and ``dask worker`` on any hosts). The
+optional module is ``dask[distributed]`` (``make deps`` installs it); shgi imports without it.
+
+A bake on the cluster:
+
+1. The client prepares the bake as the command line does (``shgi.__main__._prepare``: scene,
+   objects, sizes, options; xatlas layouts), so bad input fails before any worker starts.
+2. The scene file and the files it references (glTF buffers and images, OBJ materials and
+   textures), and a ``--settings`` file, travel as one *bundle* keyed by the SHA-256 of their
+   contents: scattered once (Dask's content-hashed key), written by each worker into its cache
+   folder under that hash (checked again there). Workers need no shared disk.
+3. Shard i of K is one task: the worker bakes it exactly as ``--shard i/K`` does
+   (``_bake_shard_or_all``) and returns the shard files' bytes.
+4. Each returned shard is *validated* before it is accepted: every object's file must load, and
+   its fingerprint (``bake._shard_meta``: objects, sizes, UV map and source, the
+   LightmapSettings that decide texel values) must equal this bake's, as the merge checks.
+5. When every shard is in, ``bake.merge_shards`` writes the lightmaps (shards are deterministic,
+   so the files equal a plain bake's). Nothing is written into DIR but DIR/shards before then.
+
+Faults (the retry policy): a shard gets at most ``SHARD_ATTEMPTS`` (2) runs. A shard whose
+worker is lost (killed, out of memory) is rerun on another worker by Dask's scheduler; the local
+cluster allows one such loss per shard (``distributed.scheduler.allowed-failures`` = 1), an
+external scheduler its own setting (Dask's default 3). A shard that raises, or whose result
+fails validation, is submitted once more by the client. A second failure fails the bake with
+``ShardFailed``, naming the shard, the worker and the error.
+
+Cancel: Ctrl-C (``KeyboardInterrupt``) or ``BakeProgress.cancel()`` sets a Dask ``Event`` that
+every running task watches (its native bake cancels within 0.2 s), cancels the futures and
+closes a local cluster; no lightmap file is written.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import logging
+import os
+import struct
+import tempfile
+import threading
+import time
+import urllib.parse
+import uuid
+from typing import Callable, Optional
+
+from . import _shgi
+from . import bake as _bake
+from .denoise import import_optional
+
+__all__ = ["SHARD_ATTEMPTS", "MAX_SHARDS", "MAX_LOCAL_WORKERS", "ShardFailed", "SceneBundle",
+           "scene_bundle", "import_distributed", "local_cluster", "bake_command_on_cluster", "run_tasks",
+           "solve_probe_grid"]
+
+# Runs of one shard before the bake fails (see the module's retry policy).
+SHARD_ATTEMPTS = 2
+# More shards than this only adds per-task overhead: every shard returns each object's whole
+# lightmap arrays (docs/farm.md).
+MAX_SHARDS = 4096
+# Worker processes of a local cluster (--workers): each holds the scene and ~100 MB of Python,
+# so more than this on one machine is a mistake, not a farm.
+MAX_LOCAL_WORKERS = 256
+# How often the client looks at its futures (Ctrl-C lands between looks) and a task at the
+# cancel event: the native bake then stops within its own 0.2 s.
+_POLL_SECONDS = 0.1
+# Share of the progress bar the shards own; the merge owns the rest.
+_SHARDS_SHARE = 0.9
+
+
+class ShardFailed(RuntimeError):
+    """A task of a farm bake failed SHARD_ATTEMPTS times; the message names it and the worker."""
+
+
+def import_distributed():
+    """The ``distributed`` module, or ImportError naming the pip command for this Python."""
+    return import_optional("distributed", "baking on a Dask cluster (--workers, --scheduler)",
+                           package="'dask[distributed]'")
+
+
+# --- the scene by content hash --------------------------------------------------------------------
+
+class SceneBundle:
+    """A scene file and every file it references, as bytes: ``name`` (the scene file's path
+    relative to the bundle), ``files`` {relative path: bytes}, ``digest`` (SHA-256 of all)."""
+
+    def __init__(self, name: str, files: dict):
+        self.name = name
+        self.files = dict(files)
+        self.digest = _digest(self.files)
+
+    @property
+    def size(self) -> int:
+        return sum(len(data) for data in self.files.values())
+
+
+def _digest(files: dict) -> str:
+    sha = hashlib.sha256()
+    for name in sorted(files):
+        data = files[name]
+        sha.update(name.encode("utf-8") + b"\0" + struct.pack("<Q", len(data)))
+        sha.update(data)
+    return sha.hexdigest()
+
+
+def scene_bundle(path: str, extra: Optional[dict] = None) -> SceneBundle:
+    """The bundle of the scene file `path`: it and the files it references (glTF buffers and
+    images, OBJ material libraries and their textures), paths relative to its folder; `extra`
+    {name: bytes} travels with it (a settings file). OSError naming a missing file, ValueError
+    for a reference that leaves the scene's folder (workers could not place it)."""
+    folder, name = os.path.split(os.path.abspath(path))
+    files = {name: _read(path)}
+    pending = [name]
+    while pending:
+        current = pending.pop()
+        for reference in _references(current, files[current]):
+            relative = os.path.normpath(os.path.join(os.path.dirname(current), reference))
+            if os.path.isabs(relative) or relative.split(os.sep)[0] == "..":
+                raise ValueError(f"{path}: '{reference}' lies outside the scene's folder; copy "
+                                 "it beside the scene so that farm workers receive it")
+            if relative not in files:
+                files[relative] = _read(os.path.join(folder, relative))
+                pending.append(relative)
+    for key, data in (extra or {}).items():
+        files[key] = data
+    return SceneBundle(name, files)
+
+
+def _read(path: str) -> bytes:
+    try:
+        with open(path, "rb") as file:
+            return file.read()
+    except OSError as error:
+        raise OSError(f"scene file {path}: {error.strerror or error}") from error
+
+
+def _references(name: str, data: bytes) -> list:
+    """Relative paths a scene file names: glTF/GLB buffer and image URIs (not data: URIs), OBJ
+    mtllib files, MTL texture maps."""
+    lower = name.lower()
+    if lower.endswith((".gltf", ".glb")):
+        try:
+            document = json.loads(_gltf_json(data, lower.endswith(".glb")))
+        except (ValueError, struct.error):
+            return []  # the loader reports a malformed file, with its own message
+        uris = [item.get("uri") for key in ("buffers", "images")
+                for item in document.get(key, []) if isinstance(item, dict)]
+        return [urllib.parse.unquote(uri) for uri in uris
+                if isinstance(uri, str) and uri and not uri.startswith("data:")]
+    if lower.endswith((".obj", ".mtl")):
+        keys = ("mtllib",) if lower.endswith(".obj") else (
+            "map_kd", "map_ks", "map_ke", "map_ns", "map_d", "map_bump", "bump", "norm", "disp")
+        found = []
+        for line in data.decode("utf-8", "replace").splitlines():
+            words = line.split()
+            if len(words) >= 2 and words[0].lower() in keys:
+                found.append(words[-1])  # options come first; the file name is last
+        return found
+    return []
+
+
+def _gltf_json(data: bytes, binary: bool) -> bytes:
+    if not binary:
+        return data
+    length, kind = struct.unpack_from("<II", data, 12)  # the first chunk holds the JSON
+    if kind != 0x4E4F534A:
+        raise ValueError("GLB without a JSON chunk")
+    return data[20:20 + length]
+
+
+def _scene_on_this_machine(bundle: SceneBundle) -> str:
+    """Writes the bundle into this machine's cache folder under its digest (once; checked
+    against the digest first) and returns the scene file's path there."""
+    if _digest(bundle.files) != bundle.digest:
+        raise ValueError(f"the scene bundle's contents do not match its digest {bundle.digest}")
+    root = os.path.join(tempfile.gettempdir(), "shgi-farm-scenes")
+    folder = os.path.join(root, bundle.digest)
+    if not os.path.isdir(folder):
+        os.makedirs(root, exist_ok=True)
+        staging = tempfile.mkdtemp(dir=root, prefix=".incoming-")
+        for name, data in bundle.files.items():
+            target = os.path.join(staging, name)
+            os.makedirs(os.path.dirname(target), exist_ok=True)
+            with open(target, "wb") as file:
+                file.write(data)
+        try:
+            os.rename(staging, folder)  # atomic: another task of this machine may race us
+        except OSError:
+            if not os.path.isdir(folder):
+                raise
+    return os.path.join(folder, bundle.name)
+
+
+# --- tasks on the workers -------------------------------------------------------------------------
+
+def _watch_cancel(distributed, cancel_name: str, cancel: Callable[[], None]):
+    """Starts a thread that calls cancel() once the client sets the Event `cancel_name`; returns
+    a function that stops the thread."""
+    client = distributed.get_client()
+    event = distributed.Event(cancel_name, client=client)
+    done = threading.Event()
+
+    def watch():
+        while not done.is_set():
+            try:
+                if event.wait(timeout=_POLL_SECONDS * 5):
+                    cancel()
+                    return
+            except Exception:  # the scheduler is gone: this worker is going too
+                return
+
+    thread = threading.Thread(target=watch, name="shgi-farm-cancel", daemon=True)
+    thread.start()
+    return done.set
+
+
+def _run_cancellable(cancel_name: str, threads: int, work, progress):
+    """work() on this worker with `threads` native threads, cancelled when the client sets the
+    Event `cancel_name`; returns (result, worker address, seconds)."""
+    distributed = import_distributed()
+    _shgi.set_max_threads(threads)
+    stop = _watch_cancel(distributed, cancel_name, progress.cancel)
+    start = time.perf_counter()
+    try:
+        return work(), distributed.get_worker().address, time.perf_counter() - start
+    finally:
+        stop()
+
+
+def _bake_shard_task(bundle: SceneBundle, args, shard: int, shards: int, threads: int,
+                     cancel_name: str) -> dict:
+    """One shard of a bake, on a worker: {"files": {object name: shard file bytes}, "worker",
+    "seconds"}. `args`: the bake command's arguments (its paths are replaced by this
+    worker's)."""
+    from . import __main__ as cli
+
+    scene_path = _scene_on_this_machine(bundle)
+    with tempfile.TemporaryDirectory(prefix="shgi-shard-") as out:
+        local = copy.copy(args)
+        local.scene, local.out, local.shard, local.merge = scene_path, out, (shard, shards), 0
+        if args.settings is not None:
+            local.settings = os.path.join(os.path.dirname(scene_path), _SETTINGS_NAME)
+        progress = _bake.BakeProgress()
+
+        def work():
+            scene, jobs, options = cli._prepare(local)
+            _, paths = cli._bake_shard_or_all(local, scene, jobs, options, progress)
+            files = {}
+            for job, path in zip(jobs, paths):
+                with open(path, "rb") as file:
+                    files[job.name] = file.read()
+            return files
+
+        files, worker, seconds = _run_cancellable(cancel_name, threads, work, progress)
+    return {"files": files, "worker": worker, "seconds": seconds}
+
+
+# A --settings file's name inside the scene bundle (beside the scene).
+_SETTINGS_NAME = ".shgi-method-settings.json"
+
+
+# --- the client -----------------------------------------------------------------------------------
+
+def local_cluster(workers: int, threads_per_worker: int = 1):
+    """A LocalCluster of `workers` processes on 127.0.0.1, one Dask thread each; a shard may
+    lose one worker and be rerun (the module's retry policy). The scheduler's HTTP server (its
+    dashboard, with bokeh) takes a free port, not 8787, which another cluster may hold."""
+    distributed = import_distributed()
+    import dask
+
+    with dask.config.set({"distributed.scheduler.allowed-failures": SHARD_ATTEMPTS - 1}):
+        return distributed.LocalCluster(n_workers=workers, threads_per_worker=threads_per_worker,
+                                        processes=True, host="127.0.0.1",
+                                        dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR)
+
+
+def run_tasks(client, submit: Callable[[int, int], object], count: int,
+              accept: Callable[[int, dict], int], on_progress: Callable[[int, int], None],
+              what: str, cancelled: Callable[[], bool] = lambda: False) -> None:
+    """Runs `count` tasks on the cluster: submit(i, attempt) makes task i's future; accept(i,
+    result) validates and keeps its result (ValueError/OSError: rejected) and returns how many
+    items it held (texels, probes); on_progress(done, items) after each. A task that fails
+    (raises, or is rejected) is submitted again, up to SHARD_ATTEMPTS runs; then ShardFailed
+    names `what` i, the worker and the error. Raises KeyboardInterrupt (after cancelling every
+    future) when cancelled() turns true."""
+    futures = {submit(i, 1): (i, 1) for i in range(count)}
+    done = items = 0
+    try:
+        while futures:
+            if cancelled():
+                raise KeyboardInterrupt
+            finished = [future for future in futures if future.done()]
+            if not finished:
+                time.sleep(_POLL_SECONDS)  # Ctrl-C lands here
+            for future in finished:
+                i, attempt = futures.pop(future)
+                error, worker = _outcome(future, client)
+                if error is None:
+                    result = future.result()
+                    worker = result.get("worker", worker)
+                    try:
+                        items += accept(i, result)
+                        done += 1
+                        on_progress(done, items)
+                        continue
+                    except (ValueError, OSError) as rejected:
+                        error = f"its result was rejected: {rejected}"
+                if attempt >= SHARD_ATTEMPTS or error.startswith("KilledWorker"):
+                    raise ShardFailed(f"{what} {i} of {count} failed {SHARD_ATTEMPTS} times, "
+                                      f"last on worker {worker}: {error}")
+                futures[submit(i, attempt + 1)] = (i, attempt + 1)
+    except BaseException:
+        client.cancel(list(futures), force=True)
+        raise
+
+
+def _outcome(future, client):
+    """(error text or None, worker address) of a finished future."""
+    if future.status == "finished":
+        return None, "?"
+    try:
+        future.result(timeout=5)
+        return None, "?"
+    except Exception as error:  # a task's own error, or Dask's KilledWorker
+        worker = getattr(getattr(error, "last_worker", None), "address", None)
+        if worker is None:
+            worker = _failed_on(future, client)
+        return f"{type(error).__name__}: {error}", worker
+
+
+def _failed_on(future, client) -> str:
+    """The worker a failed task last ran on, from the scheduler's story of its key."""
+    try:
+        for event in reversed(client.story(future.key)):
+            for item in event:
+                if isinstance(item, str) and item.startswith("tcp://"):
+                    return item
+    except Exception:
+        pass
+    return "unknown"
+
+
+def bake_command_on_cluster(args, progress: _bake.BakeProgress, workers: int = 0,
+                            scheduler: Optional[str] = None, threads: int = 1, shards: int = 0,
+                            shards_per_worker: int = 4, run=None) -> list:
+    """The bake of command-line `args` (``python -m shgi bake``'s) on a local cluster of
+    `workers` processes, or on the cluster of `scheduler`; returns the merged Lightmaps.
+    `shards` 0: shards_per_worker per worker. `run(work, progress)` runs the merge (the CLI's
+    _run_on_worker, so that Ctrl-C cancels it). Progress: "shards d/K, R texels/s"."""
+    from . import __main__ as cli
+
+    distributed = import_distributed()
+    if not (isinstance(threads, int) and threads >= 1):
+        raise ValueError(f"threads per worker must be a whole number >= 1, got {threads!r}")
+    scene, jobs, options = cli._prepare(args)  # refuses bad input before a worker starts
+    jobs = _bake.generate_lightmap_uvs(scene, jobs, options, progress)
+    extra = {}
+    if args.settings is not None:
+        extra[_SETTINGS_NAME] = _read(args.settings)
+    bundle = scene_bundle(args.scene, extra)
+    cluster = local_cluster(workers) if not scheduler else None
+    try:
+        client = distributed.Client(cluster if cluster is not None else scheduler,
+                                    timeout="30s")
+    except OSError as error:
+        if cluster is not None:
+            cluster.close()
+        raise OSError(f"--scheduler {scheduler}: no Dask scheduler answers there ({error}); "
+                      "start one with `dask scheduler` and workers with `dask worker "
+                      "ADDRESS`") from error
+    try:
+        if not shards:
+            shards = shards_per_worker * max(1, len(client.scheduler_info()["workers"]))
+        _bake_shards_on(client, distributed, bundle, args, scene, jobs, options, shards,
+                        threads, progress)
+    finally:
+        # Cancelled or failed: the tasks were cancelled and watch the cancel event, so a local
+        # cluster's workers stop within about a second (measured: 1.0 s for 2 workers).
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    merge = _bake.BakeProgress(lambda fraction, stage: _report(
+        progress, _SHARDS_SHARE + (1.0 - _SHARDS_SHARE) * fraction, f"merge: {stage}"))
+    return (run or (lambda work, _: work()))(
+        lambda: _bake.merge_shards(scene, jobs, options, args.out, shards, merge), merge)
+
+
+def _report(progress: _bake.BakeProgress, fraction: float, stage: str) -> None:
+    progress.fraction, progress.stage = fraction, stage
+    if progress.callback is not None:
+        progress.callback(fraction, stage)
+
+
+def _bake_shards_on(client, distributed, bundle, args, scene, jobs, options, shards: int,
+                    threads: int, progress) -> None:
+    """Bakes the `shards` shards on the client's cluster into args.out/shards."""
+    cancel_name = f"shgi-cancel-{uuid.uuid4().hex}"
+    cancel = distributed.Event(cancel_name, client=client)
+    # Keyed by its content; on every worker, so that a lost worker loses no copy that others need
+    # (workers that join later fetch it from a peer).
+    [bundle_future] = client.scatter([bundle], hash=True, broadcast=True)
+    run_id = uuid.uuid4().hex[:8]
+
+    def submit(i: int, attempt: int):
+        return client.submit(_bake_shard_task, bundle_future, args, i, shards, threads,
+                             cancel_name, key=f"shgi-shard-{i}-of-{shards}-{run_id}-{attempt}",
+                             pure=False)
+
+    def accept(i: int, result: dict) -> int:
+        return _accept_shard(result, jobs, options, args.out, i, shards)
+
+    start = time.perf_counter()
+
+    def on_progress(done: int, texels: int) -> None:
+        rate = texels / max(time.perf_counter() - start, 1e-9)
+        _report(progress, _SHARDS_SHARE * done / shards,
+                f"shards {done}/{shards}, {rate:,.0f} texels/s")
+
+    _report(progress, 0.0, f"shards 0/{shards}")
+    try:
+        run_tasks(client, submit, shards, accept, on_progress, "shard",
+                  lambda: progress.cancelled)
+    except BaseException:
+        cancel.set()
+        raise
+
+
+def _accept_shard(result: dict, jobs, options, out_dir: str, shard: int, shards: int) -> int:
+    """Checks a returned shard (every object's file loads and carries this bake's fingerprint)
+    and only then moves it into out_dir/shards; returns its baked texels."""
+    files = result.get("files") or {}
+    if sorted(files) != sorted(job.name for job in jobs):
+        raise ValueError(f"it holds objects {sorted(files)}, the bake has "
+                         f"{sorted(job.name for job in jobs)}")
+    staged, texels = [], 0
+    for job in jobs:
+        path = _bake.shard_path(out_dir, job.name, shard, shards)
+        incoming = path + ".incoming.npz"
+        _bake.make_output_folder(os.path.dirname(path))
+        with open(incoming, "wb") as file:
+            file.write(files[job.name])
+        staged.append((incoming, path))
+        try:
+            part, meta = _bake._load_shard(incoming)
+            _bake._check_shard_meta(incoming, meta,
+                                    _bake._shard_meta(jobs, job, options, shard, shards, None))
+        except (OSError, ValueError):
+            for name, _ in staged:
+                os.remove(name)
+            raise
+        texels += int(part.baked.sum())
+    for incoming, path in staged:
+        os.replace(incoming, path)
+    return texels
+
+
+# --- probe grids in bricks of probes --------------------------------------------------------------
+
+def solve_probe_grid(client, scene_path: str, settings: "_shgi.ProbeGridSettings", passes: int,
+                     bricks: int, threads: int = 1,
+                     progress: Optional[_bake.BakeProgress] = None) -> "_shgi.ProbeField":
+    """A probe grid of the scene file `scene_path` solved on the client's cluster: its probes
+    split into `bricks` bricks of consecutive probes, each a task that updates its brick for
+    `passes` passes (ProbeGrid.update_probes), merged with ProbeField.splice into the field a
+    single machine's ProbeGrid(scene, settings) and `passes` update() calls give, bit for bit.
+    Export it with ProbeField.export (the add-on's Export Volume format). Progress: "bricks
+    d/B, P probes/s"; the retry policy and cancel of the lightmap shards."""
+    from . import __main__ as cli
+    from .method_registry import settings_to_dict
+
+    distributed = import_distributed()
+    settings.validate()
+    for name, value, low in (("passes", passes, 1), ("bricks", bricks, 1), ("threads", threads, 1)):
+        if not (isinstance(value, int) and value >= low):
+            raise ValueError(f"{name} must be a whole number >= {low}, got {value!r}")
+    progress = progress or _bake.BakeProgress()
+    scene = cli._load(scene_path)
+    # Placement here too: the probe count splits the bricks (placement is deterministic, so the
+    # workers place the same probes; splice checks it).
+    probes = _shgi.ProbeGrid(scene, settings, progress.native(0.0, 0.0, "placing probes"))
+    count = probes.probe_count
+    bricks = min(bricks, count)
+    ranges = [(count * i // bricks, count * (i + 1) // bricks - count * i // bricks)
+              for i in range(bricks)]
+    wanted = settings_to_dict(settings)
+    bundle = scene_bundle(scene_path)
+    cancel_name = f"shgi-cancel-{uuid.uuid4().hex}"
+    cancel = distributed.Event(cancel_name, client=client)
+    [bundle_future] = client.scatter([bundle], hash=True, broadcast=True)
+    run_id = uuid.uuid4().hex[:8]
+    fields = {}
+
+    def submit(i: int, attempt: int):
+        first, size = ranges[i]
+        return client.submit(_probe_brick_task, bundle_future, wanted, passes, first, size,
+                             threads, cancel_name, pure=False,
+                             key=f"shgi-probes-{i}-of-{bricks}-{run_id}-{attempt}")
+
+    def accept(i: int, result: dict) -> int:
+        if result.get("settings") != wanted:
+            raise ValueError(f"it was solved with settings {result.get('settings')}, the grid's "
+                             f"are {wanted}")
+        field = _field_from_files(result["files"])
+        if field.passes != passes or field.probe_count != count:
+            raise ValueError(f"it holds {field.probe_count} probes after {field.passes} passes, "
+                             f"the grid {count} after {passes}")
+        fields[i] = field
+        return ranges[i][1]
+
+    start = time.perf_counter()
+
+    def on_progress(done: int, solved: int) -> None:
+        rate = solved / max(time.perf_counter() - start, 1e-9)
+        _report(progress, done / bricks, f"bricks {done}/{bricks}, {rate:,.1f} probes/s")
+
+    try:
+        run_tasks(client, submit, bricks, accept, on_progress, "brick",
+                  lambda: progress.cancelled)
+    except BaseException:
+        cancel.set()
+        raise
+    merged = fields[0]
+    for i in range(1, bricks):
+        merged = merged.splice(fields[i], *ranges[i])
+    return merged
+
+
+def _probe_brick_task(bundle: SceneBundle, settings: dict, passes: int, first: int, count: int,
+                      threads: int, cancel_name: str) -> dict:
+    """Probes first .. first + count - 1 of a probe grid, on a worker: {"files": the grid's
+    export (ProbeField.export, float EXR: exact), "settings", "worker", "seconds"}."""
+    from . import __main__ as cli
+    from .method_registry import settings_from_dict, settings_to_dict
+
+    scene_path = _scene_on_this_machine(bundle)
+    grid_settings = settings_from_dict(_shgi.ProbeGridSettings, settings)
+    progress = _bake.BakeProgress()
+
+    def work():
+        scene = cli._load(scene_path)
+        grid = _shgi.ProbeGrid(scene, grid_settings, progress.native(0.0, 0.0, "placing"))
+        for k in range(passes):
+            grid.update_probes(first, count, progress.native(k / passes, (k + 1) / passes,
+                                                             "updating probes"))
+        with tempfile.TemporaryDirectory(prefix="shgi-probes-") as folder:
+            grid.field().export(os.path.join(folder, "brick.json"))
+            files = {}
+            for name in os.listdir(folder):
+                with open(os.path.join(folder, name), "rb") as file:
+                    files[name] = file.read()
+        return files
+
+    files, worker, seconds = _run_cancellable(cancel_name, threads, work, progress)
+    return {"files": files, "settings": settings_to_dict(grid_settings), "worker": worker,
+            "seconds": seconds}
+
+
+def _field_from_files(files: dict) -> "_shgi.ProbeField":
+    """The ProbeField of a brick's export files (OSError/ValueError when they are damaged)."""
+    with tempfile.TemporaryDirectory(prefix="shgi-probes-") as folder:
+        for name, data in files.items():
+            if os.path.basename(name) != name:
+                raise ValueError(f"a brick file named {name!r}")
+            with open(os.path.join(folder, name), "wb") as file:
+                file.write(data)
+        return _shgi.ProbeField.import_exr(os.path.join(folder, "brick.json"))
