@@ -150,7 +150,12 @@ The sample positions of every texel of one object's lightmap (rasterize_texels).
     m.def(
         "unocclude",
         [](const Scene& scene, TexelMap& map, const U settings, Progress* progress,
-           const std::vector<uint32_t>& tiles, uint32_t tile_size) {
+           const std::vector<IndexInt>& tile_args, const IndexInt& tile_size_arg) {
+            std::vector<uint32_t> tiles(tile_args.size());
+            for (size_t i = 0; i < tiles.size(); ++i)
+                tiles[i] = int_arg<uint32_t>(tile_args[i],
+                                             ("tiles[" + std::to_string(i) + "]").c_str());
+            const uint32_t tile_size = int_arg<uint32_t>(tile_size_arg, "tile_size");
             SceneUse use(scene, SceneUse::Kind::Query, "unocclude");
             UnoccludeReport report;
             report = run_interruptible(progress, [&](Progress* used) {
@@ -162,8 +167,8 @@ The sample positions of every texel of one object's lightmap (rasterize_texels).
             return d;
         },
         py::arg("scene"), py::arg("map"), py::arg("settings") = U{},
-        py::arg("progress") = py::none(), py::arg("tiles") = std::vector<uint32_t>{},
-        py::arg("tile_size") = LightmapSettings{}.tile_size,
+        py::arg("progress") = py::none(), py::arg("tiles") = std::vector<IndexInt>{},
+        py::arg("tile_size") = IndexInt{py::int_(LightmapSettings{}.tile_size)},
         "Moves the ray origins of samples inside other geometry out of it; returns counts. "
         "`tiles` (lightmap tiles of `tile_size` texels, as bake_lightmap numbers them; empty: "
         "all): only their texels' samples, each moved exactly as by a whole unocclude (what a "

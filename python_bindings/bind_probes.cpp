@@ -224,7 +224,10 @@ From ProbeGrid.field(), ProbeField.load(path) or ProbeField.import_exr(json_path
             py::arg("lookup"), "The same probes read with other lookup settings.")
         .def(
             "splice",
-            [](const ProbeField& f, const ProbeField& brick, size_t first, size_t count) {
+            [](const ProbeField& f, const ProbeField& brick, const IndexInt& first_arg,
+               const IndexInt& count_arg) {
+                const size_t first = int_arg<size_t>(first_arg, "first");
+                const size_t count = int_arg<size_t>(count_arg, "count");
                 auto data = std::make_shared<const ProbeGridData>([&] {
                     py::gil_scoped_release release;
                     return splice_probes(f.data(), brick.data(), first, count);
@@ -290,7 +293,10 @@ reset().)doc");
         .def("update", update, py::arg("progress") = py::none(), "The same as refine().")
         .def(
             "update_probes",
-            [](ProbeGrid& grid, uint64_t first, uint64_t count, Progress* progress) {
+            [](ProbeGrid& grid, const IndexInt& first_arg, const IndexInt& count_arg,
+               Progress* progress) {
+                const uint64_t first = int_arg<uint64_t>(first_arg, "first");
+                const uint64_t count = int_arg<uint64_t>(count_arg, "count");
                 SceneUse use(grid.scene(), SceneUse::Kind::Query, "update_probes (ProbeGrid)");
                 run_interruptible(progress,
                                   [&](Progress* used) { grid.update_probes(first, count, used); });

@@ -1726,7 +1726,7 @@ class ProbeField(IndirectField):
         """
         Writes the compact binary cache (SH at half precision: 56 bytes per L2 probe).
         """
-    def splice(self, brick: ProbeField, first: typing.SupportsInt | typing.SupportsIndex, count: typing.SupportsInt | typing.SupportsIndex) -> ProbeField:
+    def splice(self, brick: ProbeField, first: typing.SupportsIndex, count: typing.SupportsIndex) -> ProbeField:
         """
         These probes with probes first .. first + count - 1 (their SH, variance and visibility) taken from `brick`, the same grid after the same passes whose probes there were updated apart (ProbeGrid.update_probes): the merge of a solve split into bricks. ValueError names the first difference between the two grids.
         """
@@ -1828,7 +1828,7 @@ class ProbeGrid(IndirectField, GiSolver):
         """
         The same as refine().
         """
-    def update_probes(self, first: typing.SupportsInt | typing.SupportsIndex, count: typing.SupportsInt | typing.SupportsIndex, progress: Progress = None) -> None:
+    def update_probes(self, first: typing.SupportsIndex, count: typing.SupportsIndex, progress: Progress = None) -> None:
         """
         One update pass over probes first .. first + count - 1 only (a brick of a solve split over machines); the others keep their state, the pass counts. Bricks updated apart and merged with ProbeField.splice equal update() bit for bit.
         """
@@ -2738,7 +2738,7 @@ def srgb_from_linear(linear: typing.Annotated[numpy.typing.ArrayLike, numpy.floa
     sRGB transfer function (IEC 61966-2-1): 12.92 x up to 0.0031308, 1.055 x**(1/2.4) - 0.055
     above. Input is clamped to [0, 1] (NaN -> 0). Accepts a float or an array (float32 result).
     """
-def unocclude(scene: Scene, map: TexelMap, settings: UnoccludeSettings = ..., progress: Progress = None, tiles: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex] = [], tile_size: typing.SupportsInt | typing.SupportsIndex = 16) -> dict:
+def unocclude(scene: Scene, map: TexelMap, settings: UnoccludeSettings = ..., progress: Progress = None, tiles: collections.abc.Sequence[typing.SupportsIndex] = [], tile_size: typing.SupportsIndex = 16) -> dict:
     """
     Moves the ray origins of samples inside other geometry out of it; returns counts. `tiles` (lightmap tiles of `tile_size` texels, as bake_lightmap numbers them; empty: all): only their texels' samples, each moved exactly as by a whole unocclude (what a shard bakes).
     """
