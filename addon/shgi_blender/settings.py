@@ -83,9 +83,9 @@ def registry_methods(shgi):
 
 # Selectable methods, in menu order: the registry's rows when the add-on loads. The solvers still
 # to come keep their identifiers and file numbers reserved (RESERVED_METHODS) so that files saved
-# later open here: PROPAGATION (seed 003), RADIANCE_FIELD (seed 001) and INSTANT_GI (seed 004).
+# later open here: PROPAGATION (seed 003) and INSTANT_GI (seed 004).
 METHODS = registry_methods(native.module())
-RESERVED_METHODS = {"PROPAGATION": 3, "RADIANCE_FIELD": 4, "INSTANT_GI": 5}
+RESERVED_METHODS = {"PROPAGATION": 3, "INSTANT_GI": 5}
 METHODS_BY_ID = {method.identifier: method for method in METHODS}
 
 # Enum-valued fields: property identifier -> name of the shgi enum type (values are the enum's
