@@ -30,6 +30,8 @@ constexpr uint64_t kHitsPerChunk = 4096;
 constexpr float kRelookCells = 1e-3f;
 // Default R_max of the obscurance, in cells.
 constexpr float kDefaultObscuranceCells = 2.0f;
+// Past this many bounces the light left (albedo^64: 6e-7 at 0.8) is invisible.
+constexpr int kMaxBounces = 64;
 // Above this resolution the dense L2 field alone passes 600 MB.
 constexpr int kMaxResolution = 128;
 
@@ -37,7 +39,11 @@ PhotonTracerSettings tracer_settings(const RadianceFieldSettings& s) {
     PhotonTracerSettings tracer;
     tracer.photons = s.photons;
     tracer.seed = s.seed;
-    tracer.max_bounces = s.max_bounces;
+    // The field reflects every photon once more where it lands (the faces hold reflected
+    // light): photons stored after max_bounces − 1 scatterings give light of max_bounces
+    // bounces at the shading point, as a camera path of max_bounces diffuse bounces. With
+    // max_bounces = 1 only the first hits count (the tracer's stored photons are dropped).
+    tracer.max_bounces = std::max(1, s.max_bounces - 1);
     tracer.specular_roughness = s.specular_roughness;
     // The first hits from the world come through first_hits: storing them in the maps as well
     // would count them twice.
@@ -78,29 +84,41 @@ Bounds3 field_bounds(const Scene& scene, const RadianceFieldSettings& settings) 
     return scene.bounds();
 }
 
-// The flux the surface under a stored photon scatters diffusely, found by a short ray back along
-// the photon's path (a stored Photon keeps no material); zero when the surface is not found.
-vec3 reflected_power(const Scene& scene, const Photon& photon, float reach) {
+// The flux the surface under a stored photon or first hit (position, normal, direction towards
+// the source, arriving power) scatters into the grid, found by a short ray back along the
+// photon's path (a stored Photon keeps no material); zero when the surface is not found. The
+// diffuse lobe always; with glossy_in_grid the rough glossy lobes too (see the header).
+vec3 reflected_power(const Scene& scene, const RadianceFieldSettings& settings,
+                     const vec3& position, const vec3& normal, const vec3& direction,
+                     const vec3& power, float reach) {
     Ray ray;
-    ray.origin = photon.position + photon.direction * reach;
-    ray.direction = -photon.direction;
+    ray.origin = position + direction * reach;
+    ray.direction = -direction;
     ray.tmax = 2.0f * reach;
     Hit hit = scene.intersect(ray);
     if (!hit.valid()) {  // a grazing photon: come back along the normal instead
-        ray.origin = photon.position + photon.normal * reach;
-        ray.direction = -photon.normal;
+        ray.origin = position + normal * reach;
+        ray.direction = -normal;
         hit = scene.intersect(ray);
         if (!hit.valid()) return vec3(0.0f);
     }
     const Shading shading =
         make_shading(scene, scene.surface_point(ray, hit), ray.direction, PathOrigin::Light);
-    return shading.bsdf.field_diffuse(shading.wo) * photon.power;
+    vec3 albedo = shading.bsdf.field_diffuse(shading.wo);
+    if (settings.glossy_in_grid) {
+        PrincipledBsdf::GlossyLobe lobes[2];
+        const int count = shading.bsdf.field_glossy_lobes(shading.wo, lobes);
+        for (int i = 0; i < count; ++i)
+            if (lobes[i].roughness > settings.specular_roughness) albedo += lobes[i].albedo;
+    }
+    return albedo * power;
 }
 
 }  // namespace
 
 void validate_radiance_field_settings(const RadianceFieldSettings& s) {
     validate_photon_tracer_settings(tracer_settings(s), kSettings);
+    check_int(s.max_bounces, 1, kMaxBounces, "max_bounces");
     check_int(s.resolution, 1, kMaxResolution, "resolution");
     check_int(s.gather_rays, 1, 1 << 20, "gather_rays");
     if (s.face_estimator != FaceEstimator::ProjectedArea && s.face_estimator != FaceEstimator::Paper)
@@ -201,25 +219,34 @@ std::vector<ReflectedHit> RadianceField::reflected_hits(Progress* progress,
         trace_photons(*scene_, tracer_settings(settings_), passes_, progress, kSettings);
     timings->photons_emitted = maps.emitted;
     const size_t first = maps.first_hits.size();
-    const size_t stored = maps.global.size() + maps.caustic.size();
+    const size_t stored =
+        settings_.max_bounces > 1 ? maps.global.size() + maps.caustic.size() : 0;
     require_memory(saturating_mul(first + stored, sizeof(ReflectedHit)),
                    format_message(kSettings, ".photons = ", settings_.photons, ": ",
                                   first + stored, " reflected hits"),
                    "lower RadianceFieldSettings.photons");
     std::vector<ReflectedHit> hits(first + stored);
-    for (size_t i = 0; i < first; ++i) {
-        const PhotonFirstHit& h = maps.first_hits[i];
-        hits[i] = {h.position, h.normal, h.direction, h.reflected_power};
-    }
     const float reach = kRelookCells * grid_.cell_size(0);
     parallel_for(
-        0, stored, kHitsPerChunk,
+        0, first + stored, kHitsPerChunk,
         [&](uint64_t begin, uint64_t end) {
             for (uint64_t i = begin; i < end; ++i) {
-                const Photon& p = i < maps.global.size() ? maps.global[i]
-                                                         : maps.caustic[i - maps.global.size()];
-                hits[first + i] = {p.position, p.normal, p.direction,
-                                   reflected_power(*scene_, p, reach)};
+                ReflectedHit& hit = hits[i];
+                vec3 power;
+                if (i < first) {
+                    const PhotonFirstHit& h = maps.first_hits[i];
+                    hit = {h.position, h.normal, h.direction, h.reflected_power};
+                    if (!settings_.glossy_in_grid) continue;  // the tracer's diffuse share
+                    power = h.power;
+                } else {
+                    const size_t k = i - first;
+                    const Photon& p = k < maps.global.size() ? maps.global[k]
+                                                             : maps.caustic[k - maps.global.size()];
+                    hit = {p.position, p.normal, p.direction, vec3(0.0f)};
+                    power = p.power;
+                }
+                hit.reflected_power = reflected_power(*scene_, settings_, hit.position,
+                                                      hit.normal, hit.direction, power, reach);
             }
         },
         progress);
@@ -272,6 +299,7 @@ RadianceField::Gathered RadianceField::gather(uint64_t pass, Progress* progress)
                         if (closed_instance_[hit.instance_id] && facing > 0.0f) {
                             ++out.backfaces[i];  // inside a solid: no light there
                         } else {
+                            bool lit = false;
                             // Footprint 4πd²/(N cos β) against the finest face (§3.4.3).
                             const float cosine =
                                 std::max(std::fabs(facing), settings_.min_footprint_cosine);
@@ -281,7 +309,10 @@ RadianceField::Gathered RadianceField::gather(uint64_t pass, Progress* progress)
                                     ? std::max(0.0f, 0.5f * std::log2(footprint / base_area))
                                     : 0.0f;
                             radiance = grid_.radiance_toward(x, x + hit.t * d, d, level,
-                                                             settings_.face_sigma);
+                                                             settings_.face_sigma, &lit);
+                            // The unlit side of an open surface counts as a back face: a point
+                            // beyond a room's single-sided wall sees the wall's outside.
+                            if (!lit) ++out.backfaces[i];
                         }
                     }
                     sh_eval(kFieldOrder, d, y);

@@ -10,9 +10,17 @@
 //                sh_lattice.h's clipping, §3.1's boundary cells without a GPU voxeliser); sample
 //                points at the centres of boundary cells and of their 26 neighbours.
 //   photons    — one pass of `photons` photons (photon/photon_tracer.h) with the first hits
-//                stored; every hit scatters reflected_power = diffuse albedo × arriving flux
-//                (first hits carry it; for the others the surface is looked up again by a short
-//                ray back along the photon's path).
+//                stored, traced for max_bounces − 1 scatterings (the grid reflects each hit once
+//                more, so the field's light has at most max_bounces bounces where it is shaded,
+//                as a camera path with max_bounces diffuse bounces; the photon lattice, which
+//                stores arriving light, traces max_bounces); every hit scatters
+//                reflected_power = diffuse albedo × arriving flux (found by a short ray back
+//                along the photon's path: a stored photon keeps no material); with
+//                glossy_in_grid, plus the directional albedo of the glossy lobes rougher than
+//                specular_roughness, spread as if diffuse. The seed's grid holds diffuse
+//                reflection only, but a Principled surface's default rough specular layer
+//                reflects 4-10% of the light, which then reaches nothing: the Cornell box read
+//                12% dark without it.
 //   radiance_grid — the hits' flux on the faces, mean over passes, and the mips.
 //   sh_field   — at each sample point, gather_rays directions of a spherical Fibonacci lattice
 //                under a rotation drawn per pass (the same for every point), traced with Embree;
@@ -60,9 +68,10 @@ namespace shgi {
 struct RadianceFieldSettings {
     uint64_t photons = 200000;          // emitted per pass
     uint64_t seed = 0;
-    int max_bounces = 4;                // photon scatterings after emission (as PhotonLattice)
+    int max_bounces = 4;                // bounces of the field's light, as Light Paths > Diffuse
     float specular_roughness = 0.1f;    // lobes up to this roughness count as specular
     bool world_in_field = false;        // escaped gather rays read the world (see above)
+    bool glossy_in_grid = true;         // rough glossy reflection enters the grid (see above)
     int resolution = 32;                // SH-grid cells along the longest side (seed: 32³, 64³)
     int gather_rays = 400;              // N_sh per sample point and pass (seed §3.4.2)
     FaceEstimator face_estimator = FaceEstimator::ProjectedArea;
@@ -112,6 +121,7 @@ class RadianceField : public IndirectField, public GiSolver {
     std::vector<StageSeconds> stage_seconds() const override;
     size_t memory_bytes() const override;
 
+    const Scene& scene() const { return *scene_; }
     const RadianceFieldSettings& settings() const { return settings_; }
     const RadianceFieldTimings& timings() const { return timings_; }
     const RadianceGrid& radiance_grid() const { return grid_; }

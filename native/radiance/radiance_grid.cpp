@@ -78,6 +78,7 @@ RadianceGrid::RadianceGrid(ShLattice surfaces, int levels, FaceEstimator estimat
         dims = glm::max((dims + 1) / 2, ivec3(1));
         cell_size *= 2.0f;
     }
+    update_levels(nullptr);  // the faces' areas; no radiance before the first pass
 }
 
 void RadianceGrid::clear() {
@@ -201,7 +202,7 @@ void RadianceGrid::set_face_radiance(const ivec3& cell, int face, const vec3& ra
 }
 
 vec3 RadianceGrid::read_level(int level, const ivec3& cell0, const vec3& x, const vec3& d,
-                              float sigma) const {
+                              float sigma, bool* lit) const {
     const Level& l = levels_[size_t(level)];
     const ivec3 cell = glm::min(cell0 / (1 << level), l.dims - 1);
     const size_t base = l.index(cell) * kFaceCount;
@@ -212,30 +213,37 @@ vec3 RadianceGrid::read_level(int level, const ivec3& cell0, const vec3& x, cons
     for (int j = 0; j < kFaceCount; ++j) {
         if (!(l.area[base + size_t(j)] > 0.0f)) continue;  // no surface faces that way
         const vec3 n = face_normal(j);
-        const vec3 to_x = x - (centre + 0.5f * l.cell_size * n);
-        const float distance = glm::length(to_x);
-        if (!(distance > 0.0f)) continue;
-        const float cos_beta = glm::dot(n, to_x) / distance;
+        // β from the ray itself rather than from the face's centre: x may lie in the hit cell or
+        // beside it (a sample point over a floor), where the direction to a face's centre says
+        // nothing about which side of the surface x sees.
+        const float cos_beta = -glm::dot(n, d);
         if (cos_beta <= 0.0f) continue;  // the face looks away from x
-        const float alpha = std::acos(std::clamp(-glm::dot(d, to_x) / distance, -1.0f, 1.0f));
-        const float w = std::exp(-alpha * alpha * inv_two_sigma2) * cos_beta;
+        const vec3 to_face = centre + 0.5f * l.cell_size * n - x;
+        const float distance = glm::length(to_face);
+        const float alpha =
+            distance > 0.0f ? std::acos(std::clamp(glm::dot(d, to_face) / distance, -1.0f, 1.0f))
+                            : 0.0f;
+        const float w = std::exp(-alpha * alpha * inv_two_sigma2) * cos_beta * l.area[base + size_t(j)];
         const size_t f = (base + size_t(j)) * 3;
         sum += w * vec3(l.radiance[f], l.radiance[f + 1], l.radiance[f + 2]);
         weights += w;
     }
+    if (lit != nullptr) *lit = weights > 0.0f;
     return weights > 0.0f ? sum / weights : vec3(0.0f);
 }
 
 vec3 RadianceGrid::radiance_toward(const vec3& x, const vec3& hit, const vec3& d, float level,
-                                   float sigma) const {
+                                   float sigma, bool* lit) const {
     const ivec3 cell0 = surface_cell(hit, -d);
+    if (lit != nullptr) *lit = false;
     if (cell0.x < 0) return vec3(0.0f);
+    if (lit != nullptr) read_level(0, cell0, x, d, sigma, lit);
     const float clamped = std::clamp(level, 0.0f, float(levels() - 1));
     const int lo = int(clamped);
     const float t = clamped - float(lo);
-    const vec3 fine = read_level(lo, cell0, x, d, sigma);
+    const vec3 fine = read_level(lo, cell0, x, d, sigma, nullptr);
     if (t <= 0.0f || lo + 1 >= levels()) return fine;
-    return (1.0f - t) * fine + t * read_level(lo + 1, cell0, x, d, sigma);
+    return (1.0f - t) * fine + t * read_level(lo + 1, cell0, x, d, sigma, nullptr);
 }
 
 size_t RadianceGrid::memory_bytes() const {

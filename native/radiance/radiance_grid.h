@@ -37,7 +37,8 @@
 // from the surface point `hit`: in the cell holding `hit` (on the side facing x), the faces
 // with surface that face x, weighted by g(α_j) cos β_j / Σ_k g(α_k) cos β_k, with α_j the angle
 // between d and the direction from x to the face's centre, g a Gaussian of standard deviation
-// sigma, and β_j the angle between n_j and the direction from the face's centre to x. (The seed
+// sigma, and β_j the angle between n_j and −d (the seed measures it towards x from the face's
+// centre, which points the wrong way when x lies in or beside the hit cell). (The seed
 // normalises by Σ g alone and multiplies L_j by cos β_j after, which reads a uniform field dark;
 // with cos β inside the normalisation a uniform field reads exactly its radiance.) A fractional
 // level interpolates the two levels around it. Determinism: sums per cell in hit order
@@ -98,9 +99,12 @@ class RadianceGrid {
     // Tests: sets one level-0 face's radiance, then rebuilds the mips from level 0.
     void set_face_radiance(const ivec3& cell, int face, const vec3& radiance);
 
-    // Radiance arriving at x along unit d from surface point `hit` (see "Reading").
+    // Radiance arriving at x along unit d from surface point `hit` (see "Reading"). *lit (when
+    // given) is false when no face of the finest cell there both holds surface that light has
+    // reached and faces x: x looks at a side no light arrives on (the outside of a room's wall,
+    // seen from beyond it), whose radiance is then zero.
     vec3 radiance_toward(const vec3& x, const vec3& hit, const vec3& d, float level,
-                         float sigma) const;
+                         float sigma, bool* lit = nullptr) const;
 
     size_t memory_bytes() const;
 
@@ -116,8 +120,8 @@ class RadianceGrid {
     };
     void update_levels(Progress* progress);  // level 0 from the sums, then the mips
     void build_mips();
-    vec3 read_level(int level, const ivec3& cell0, const vec3& x, const vec3& d,
-                    float sigma) const;
+    vec3 read_level(int level, const ivec3& cell0, const vec3& x, const vec3& d, float sigma,
+                    bool* lit) const;
 
     ShLattice surfaces_;
     FaceEstimator estimator_ = FaceEstimator::ProjectedArea;
