@@ -79,6 +79,9 @@ void bind_settings(py::module_& m) {
                        "Skip sample points behind the shading point's tangent plane (True).")
         .def_readwrite("visibility_test", &S::visibility_test,
                        "Skip sample points the distance SH says are hidden (False).")
+        .def_readwrite("occlusion_test", &S::occlusion_test,
+                       "Skip sample points a surface separates from the shading point (a shadow "
+                       "ray per lookup; not in the paper) (True).")
         .def_readwrite("obscurance", &S::obscurance,
                        "Multiply the field by the paper's obscurance, an ambient-occlusion look "
                        "(False).")

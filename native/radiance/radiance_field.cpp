@@ -28,6 +28,8 @@ constexpr uint64_t kRaysPerChunk = 8192;
 constexpr uint64_t kHitsPerChunk = 4096;
 // A photon's surface is looked up again by a ray of this length (in cells) back along its path.
 constexpr float kRelookCells = 1e-3f;
+// How far (in cells) a shading point's shadow rays start off its surface.
+constexpr float kSideNudge = 1e-3f;
 // Default R_max of the obscurance, in cells.
 constexpr float kDefaultObscuranceCells = 2.0f;
 // Past this many bounces the light left (albedo^64: 6e-7 at 0.8) is invisible.
@@ -69,6 +71,22 @@ void check_float(float value, float lo, float hi, bool lo_open, const char* name
 const RadianceFieldSettings& validated(const RadianceFieldSettings& settings) {
     validate_radiance_field_settings(settings);
     return settings;
+}
+
+// Bit of the neighbour at offset (dx, dy, dz) in RadianceField::sees_.
+constexpr uint32_t neighbour_bit(const ivec3& offset) {
+    return 1u << uint32_t((offset.z + 1) * 9 + (offset.y + 1) * 3 + (offset.x + 1));
+}
+
+// True when nothing lies on the segment from `from` to `to` (its ends excluded by a hair).
+bool segment_clear(const Scene& scene, const vec3& from, const vec3& to) {
+    constexpr float kEndShare = 1e-3f;  // of the segment, at either end
+    Ray ray;
+    ray.origin = from;
+    ray.direction = to - from;
+    ray.tmin = kEndShare;
+    ray.tmax = 1.0f - kEndShare;
+    return !scene.occluded(ray);
 }
 
 Bounds3 field_bounds(const Scene& scene, const RadianceFieldSettings& settings) {
@@ -182,6 +200,38 @@ void RadianceField::reset(Progress* progress) {
     std::vector<uint32_t> sample_cells;
     for (size_t c = 0; c < near.size(); ++c)
         if (near[c]) sample_cells.push_back(uint32_t(c));
+    // The sample points' mutual visibility, for the occlusion test.
+    std::vector<uint32_t> sees(settings_.occlusion_test ? near.size() : 0, 0);
+    if (settings_.occlusion_test) {
+        const float s = surfaces.cell_size();
+        const vec3 origin = surfaces.origin();
+        parallel_for(
+            0, sample_cells.size(), 256,
+            [&](uint64_t begin, uint64_t end) {
+                for (uint64_t i = begin; i < end; ++i) {
+                    const uint32_t c = sample_cells[i];
+                    const ivec3 cell(int(c % uint32_t(dims.x)),
+                                     int((c / uint32_t(dims.x)) % uint32_t(dims.y)),
+                                     int(c / (uint32_t(dims.x) * uint32_t(dims.y))));
+                    const vec3 centre = origin + (vec3(cell) + 0.5f) * s;
+                    uint32_t mask = neighbour_bit(ivec3(0));
+                    for (int dz = -1; dz <= 1; ++dz)
+                        for (int dy = -1; dy <= 1; ++dy)
+                            for (int dx = -1; dx <= 1; ++dx) {
+                                const ivec3 o(dx, dy, dz);
+                                const ivec3 n = cell + o;
+                                if (o == ivec3(0) || glm::any(glm::lessThan(n, ivec3(0))) ||
+                                    glm::any(glm::greaterThanEqual(n, dims)) ||
+                                    !near[surfaces.cell_index(n)])
+                                    continue;
+                                if (segment_clear(*scene_, centre, origin + (vec3(n) + 0.5f) * s))
+                                    mask |= neighbour_bit(o);
+                            }
+                    sees[c] = mask;
+                }
+            },
+            progress);
+    }
     ShVolume field(surfaces.origin(), surfaces.cell_size(), dims, kFieldOrder);
     ShVolume field_sum = field;
     std::vector<uint8_t> closed(scene_->instances().size());
@@ -193,6 +243,7 @@ void RadianceField::reset(Progress* progress) {
     grid_ = std::move(grid);
     sample_cells_ = std::move(sample_cells);
     active_.assign(near.size(), 0);
+    sees_ = std::move(sees);
     field_ = std::move(field);
     field_sum_ = std::move(field_sum);
     distance_.assign(near.size() * kFieldCoefficients, 0.0f);
@@ -429,9 +480,13 @@ bool RadianceField::for_each_neighbour(const vec3& p, const vec3& n, bool tests,
     const ivec3 dims = field_.counts();
     const vec3 q = (p - field_.origin()) / s;
     const ivec3 base = glm::clamp(ivec3(glm::floor(q)), ivec3(0), dims - 1);
-    std::array<std::pair<size_t, float>, 27> picked;
+    struct Candidate {
+        size_t index;
+        ivec3 cell;
+        float weight;
+    };
+    std::array<Candidate, 27> picked;
     int count = 0;
-    float total = 0.0f;
     for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
@@ -444,24 +499,49 @@ bool RadianceField::for_each_neighbour(const vec3& p, const vec3& n, bool tests,
                 if (!(w > 0.0f)) continue;
                 const vec3 centre = field_.cell_centre(c);
                 if (tests && settings_.side_test && glm::dot(centre - p, n) < 0.0f) continue;
-                if (tests && settings_.visibility_test) {
-                    const vec3 to_p = p - centre;
-                    const float length = glm::length(to_p);
-                    if (length > s) {
-                        float y[kFieldCoefficients];
-                        sh_eval(kFieldOrder, to_p / length, y);
-                        float seen = 0.0f;
-                        for (int k = 0; k < kFieldCoefficients; ++k)
-                            seen += y[k] * distance_[index * kFieldCoefficients + size_t(k)];
-                        if (seen < length - s) continue;  // a surface lies between
-                    }
-                }
-                picked[size_t(count++)] = {index, w};
-                total += w;
+                if (tests && settings_.visibility_test && hidden_by_distance(index, centre, p))
+                    continue;
+                picked[size_t(count++)] = {index, c, w};
             }
+    if (tests && settings_.occlusion_test && count > 0) {
+        // The anchor: the heaviest sample point p sees; the others must see the anchor.
+        std::sort(picked.begin(), picked.begin() + count,
+                  [](const Candidate& a, const Candidate& b) {
+                      return a.weight > b.weight || (a.weight == b.weight && a.index < b.index);
+                  });
+        const vec3 from = p + n * (kSideNudge * s);
+        int anchor = -1;
+        for (int i = 0; i < count && anchor < 0; ++i)
+            if (segment_clear(*scene_, from, field_.cell_centre(picked[size_t(i)].cell)))
+                anchor = i;
+        if (anchor >= 0) {
+            const Candidate a = picked[size_t(anchor)];
+            const uint32_t mask = sees_[a.index];
+            int kept = 0;
+            for (int i = 0; i < count; ++i)
+                if (mask & neighbour_bit(picked[size_t(i)].cell - a.cell))
+                    picked[size_t(kept++)] = picked[size_t(i)];
+            count = kept;
+        }
+    }
+    float total = 0.0f;
+    for (int i = 0; i < count; ++i) total += picked[size_t(i)].weight;
     if (!(total > 0.0f)) return false;
-    for (int i = 0; i < count; ++i) visit(picked[size_t(i)].first, picked[size_t(i)].second / total);
+    for (int i = 0; i < count; ++i) visit(picked[size_t(i)].index, picked[size_t(i)].weight / total);
     return true;
+}
+
+bool RadianceField::hidden_by_distance(size_t index, const vec3& centre, const vec3& p) const {
+    const vec3 to_p = p - centre;
+    const float length = glm::length(to_p);
+    const float s = field_.cell_size();
+    if (!(length > s)) return false;
+    float y[kFieldCoefficients];
+    sh_eval(kFieldOrder, to_p / length, y);
+    float seen = 0.0f;
+    for (int k = 0; k < kFieldCoefficients; ++k)
+        seen += y[k] * distance_[index * kFieldCoefficients + size_t(k)];
+    return seen < length - s;  // a surface lies between
 }
 
 ShRgb RadianceField::radiance_sh(const vec3& p, const vec3& n) const {

@@ -232,16 +232,18 @@ double rms_difference(const RadianceField& a, const RadianceField& reference) {
 }
 
 // Seed 001 Fig. 5: with few gather rays, reading the finest faces aliases (each ray picks one
-// noisy face); the mips filter by the ray's footprint and come closer to a dense gather.
+// face, noisy with few photons); the mips filter by the ray's footprint and come closer to a
+// dense gather (N_sh = 4096) of a converged grid (16x the photons).
 TEST(RadianceField, MipsLowerTheErrorAgainstADenseGather) {
     const Scene scene = lit_room();
     RadianceFieldSettings settings;
-    settings.photons = 50000;
+    settings.photons = 800000;
     settings.resolution = 12;
     settings.use_mips = false;
     settings.gather_rays = 4096;
     RadianceField reference(scene, settings);
     reference.refine();
+    settings.photons = 50000;
     settings.gather_rays = 64;
     RadianceField fine(scene, settings);
     fine.refine();
