@@ -28,6 +28,8 @@ constexpr uint64_t kRaysPerChunk = 8192;
 constexpr uint64_t kHitsPerChunk = 4096;
 // A photon's surface is looked up again by a ray of this length (in cells) back along its path.
 constexpr float kRelookCells = 1e-3f;
+// Gather rays ignore hits nearer than this (in cells) to their sample point.
+constexpr float kSelfHitCells = 1e-4f;
 // How far (in cells) a shading point's shadow rays start off its surface.
 constexpr float kSideNudge = 1e-3f;
 // Default R_max of the obscurance, in cells.
@@ -339,6 +341,9 @@ RadianceField::Gathered RadianceField::gather(uint64_t pass, Progress* progress)
                     Ray ray;
                     ray.origin = x;
                     ray.direction = d;
+                    // A sample point on a surface (a flat scene's single layer of cells is
+                    // centred on it) must not see that surface at t = 0 in every direction.
+                    ray.tmin = kSelfHitCells * grid_.cell_size(0);
                     const Hit hit = scene_->intersect(ray);
                     vec3 radiance = world;
                     float t = far;
