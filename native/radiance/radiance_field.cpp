@@ -415,8 +415,15 @@ void RadianceField::refine(Progress* progress) {
     timings.gather_rays = gathered.rays;
 
     ++passes_;
+    timings.sample_points = fold_in(gathered);
+    timings_ = timings;
+    if (progress != nullptr) progress->set_fraction(1.0f);
+}
+
+uint64_t RadianceField::fold_in(const Gathered& gathered) {
     const float mean = 1.0f / float(passes_);
-    const uint32_t n = uint32_t(settings_.gather_rays);
+    const float inside_rays =
+        settings_.backface_threshold * float(settings_.gather_rays) * float(passes_);
     uint64_t active = 0;
     for (size_t i = 0; i < sample_cells_.size(); ++i) {
         const size_t c = sample_cells_[i];
@@ -428,43 +435,25 @@ void RadianceField::refine(Progress* progress) {
                 value[k * 3 + ch] = sum[k * 3 + ch] * mean;
             }
         for (int k = 0; k < kFieldCoefficients; ++k) {
-            distance_sum_[c * kFieldCoefficients + size_t(k)] += gathered.distance[i][size_t(k)];
-            distance_[c * kFieldCoefficients + size_t(k)] =
-                distance_sum_[c * kFieldCoefficients + size_t(k)] * mean;
+            const size_t f = c * kFieldCoefficients + size_t(k);
+            distance_sum_[f] += gathered.distance[i][size_t(k)];
+            distance_[f] = distance_sum_[f] * mean;
         }
         inside_votes_[i] += gathered.backfaces[i];
-        active_[c] = float(inside_votes_[i]) <= settings_.backface_threshold * float(n) *
-                                                     float(passes_)
-                         ? 1
-                         : 0;
+        active_[c] = float(inside_votes_[i]) <= inside_rays ? 1 : 0;
         active += active_[c];
     }
-    timings.sample_points = active;
-    timings_ = timings;
-    if (progress != nullptr) progress->set_fraction(1.0f);
+    return active;
 }
 
 void RadianceField::rebuild_field(Progress* progress) {
+    const Gathered gathered = gather(0, progress);
     std::fill(field_sum_.cell_data(0), field_sum_.cell_data(0) + field_sum_.coefficients().size(),
               0.0f);
     std::fill(distance_sum_.begin(), distance_sum_.end(), 0.0f);
     std::fill(inside_votes_.begin(), inside_votes_.end(), 0u);
-    passes_ = 0;
-    const Gathered gathered = gather(0, progress);
     passes_ = 1;
-    const uint32_t n = uint32_t(settings_.gather_rays);
-    for (size_t i = 0; i < sample_cells_.size(); ++i) {
-        const size_t c = sample_cells_[i];
-        float* sum = field_sum_.cell_data(c);
-        float* value = field_.cell_data(c);
-        for (int k = 0; k < kFieldCoefficients; ++k)
-            for (int ch = 0; ch < 3; ++ch) value[k * 3 + ch] = sum[k * 3 + ch] = gathered.radiance[i][k][ch];
-        for (int k = 0; k < kFieldCoefficients; ++k)
-            distance_[c * kFieldCoefficients + size_t(k)] =
-                distance_sum_[c * kFieldCoefficients + size_t(k)] = gathered.distance[i][size_t(k)];
-        inside_votes_[i] = gathered.backfaces[i];
-        active_[c] = float(inside_votes_[i]) <= settings_.backface_threshold * float(n) ? 1 : 0;
-    }
+    fold_in(gathered);
 }
 
 ShRgb RadianceField::sample_point_sh(const ivec3& cell) const {

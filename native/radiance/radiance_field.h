@@ -133,7 +133,7 @@ class RadianceField : public IndirectField, public GiSolver {
     const RadianceFieldTimings& timings() const { return timings_; }
     const RadianceGrid& radiance_grid() const { return grid_; }
     // Tests: the grid to gather from (e.g. faces set by hand), then rebuild_field() gathers one
-    // pass from it without tracing photons.
+    // pass from it without tracing photons and makes it the only pass.
     RadianceGrid& mutable_radiance_grid() { return grid_; }
     void rebuild_field(Progress* progress = nullptr);
     // The SH at sample point `cell` (zero for cells that are not sample points) and whether it is
@@ -155,6 +155,9 @@ class RadianceField : public IndirectField, public GiSolver {
     void check_scene() const;
     std::vector<ReflectedHit> reflected_hits(Progress* progress, RadianceFieldTimings* timings);
     Gathered gather(uint64_t pass, Progress* progress) const;
+    // Adds a pass's gather to the sums (passes_ already counts it), updates the means and which
+    // sample points are inside geometry; returns how many are not.
+    uint64_t fold_in(const Gathered& gathered);
     // Normalised cubic weights of the sample points around p (the tests of the header); calls
     // visit(cell index, weight) for each, returns false when none counts.
     template <typename Visit>
