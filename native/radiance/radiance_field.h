@@ -29,8 +29,11 @@
 //                the world when world_in_field. Projected to L2 with weight 4π/N (eq. 1; the seed
 //                prints θ over [0, 2π], it is [0, π]); the field is the mean over passes. Hit
 //                distances go into a scalar L2 channel (§3.4.4). A point whose rays see back faces
-//                of closed meshes in more than backface_threshold of them is inside geometry and
-//                never read (probes/probe_grid.h's test).
+//                of closed meshes (probes/probe_grid.h's test), or sides of any surface that no
+//                photon has reached (the outside of a room's single-sided wall), in more than
+//                backface_threshold of them is inside geometry or outside the lit scene and never
+//                read. (A side no photon reached reads zero either way; with very few photons a
+//                dim corner may count so too.)
 //
 // Field units and what it holds: incident radiance (W m⁻² sr⁻¹) of light that scattered at least
 // once; emitters and the world seen directly are left to the consumer's exact direct light,
