@@ -25,7 +25,7 @@ from . import settings
 # Where the indirect light of a bake comes from: every method of the registry
 # (settings.METHODS), under the same identifier and file number as the render method. The path
 # tracer bakes every texel by path tracing; the others solve their field first (the Photon
-# Lattice and Probe Grid with their panels' settings, engine/field_solvers.py). Files saved when
+# Lattice, Probe Grid and Radiance Field with their panels' settings, engine/field_solvers.py). Files saved when
 # the path tracer's source was called PATH_TRACER hold its number, 0, and open as PATH_TRACE.
 SOURCE_DESCRIPTIONS = {
     "PATH_TRACE": "Reference path tracer per texel: matches a Cycles bake, slowest",
@@ -33,6 +33,8 @@ SOURCE_DESCRIPTIONS = {
                       "settings; exact direct light",
     "PROBE_GRID": "Indirect light from a probe grid solved with the Probe Grid settings "
                   "(Irradiance Volume objects place it); exact direct light",
+    "RADIANCE_FIELD": "Indirect light from a radiance field solved with the Radiance Field "
+                      "settings; exact direct light",
 }
 SOURCE_ITEMS = tuple(
     (method.identifier, method.label,

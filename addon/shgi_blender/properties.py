@@ -4,7 +4,8 @@
 overlays; each field method has its own group named after it, mirroring its native settings
 struct by field name, with its pass counts (``passes`` of a final solve, ``viewport_passes`` of
 the Rendered viewport): ``scene.shgi.photon_lattice`` (shgi.PhotonLatticeSettings) and
-``scene.shgi.probe_grid`` (shgi.ProbeGridSettings). settings.py holds the tables, the defaults
+``scene.shgi.probe_grid`` (shgi.ProbeGridSettings), ``scene.shgi.radiance_field``
+(shgi.RadianceFieldSettings). settings.py holds the tables, the defaults
 (the native ones) and the mapping to the native structs; bake_settings.py those of the lightmap
 bake in ``scene.shgi.bake``, whose properties the bake operators carry too: bake_properties().
 Files saved before the groups existed are brought up to date when they open (versioning.py).
@@ -20,6 +21,7 @@ from . import bake_settings, native, settings, settings_upgrade
 D = settings.PROPERTY_DEFAULTS
 L = settings.PHOTON_LATTICE_DEFAULTS
 P = settings.PROBE_GRID_DEFAULTS
+R = settings.RADIANCE_FIELD_DEFAULTS
 V = settings.VIEWPORT_PROPERTY_DEFAULTS
 VP = settings.VIEWPORT_PASSES_DEFAULTS
 DN = settings.DENOISING_DEFAULTS
@@ -29,6 +31,7 @@ METHOD_ITEMS = [(m.identifier, m.label, m.description, m.number) for m in settin
 WORLD_SAMPLING_ITEMS = list(settings.ENUM_ITEMS["world_sampling"])
 CAUSTICS_ITEMS = list(settings.ENUM_ITEMS["caustics"])
 INTERPOLATION_ITEMS = list(settings.ENUM_ITEMS["interpolation"])
+FACE_ESTIMATOR_ITEMS = list(settings.ENUM_ITEMS["face_estimator"])
 B = bake_settings.BAKE_PROPERTY_DEFAULTS
 BAKE_SOURCE_ITEMS = list(bake_settings.SOURCE_ITEMS)
 BAKE_CONTENT_ITEMS = list(bake_settings.CONTENT_ITEMS)
@@ -105,6 +108,67 @@ class ShgiPhotonLatticeSettings(bpy.types.PropertyGroup):
         name="Final Gather", default=settings.FINAL_GATHER_DEFAULTS["PHOTON_LATTICE"],
         description="Read the lattice one bounce away from what the camera sees (a ray per "
                     "sample): smoother and truer light with fewer blocks, slower per sample")
+
+
+class ShgiRadianceFieldSettings(bpy.types.PropertyGroup):
+    """RadianceFieldSettings of the RADIANCE_FIELD method (``scene.shgi.radiance_field``); its
+    photon bounce limit is Light Paths > Diffuse."""
+
+    photons: IntProperty(
+        name="Photons", default=R["photons"], min=1, soft_max=50_000_000,
+        description="Photons shot from the lights per pass: more give smoother indirect light "
+                    "and take longer")
+    resolution: IntProperty(
+        name="Resolution", default=R["resolution"], min=1, max=settings.MAX_RADIANCE_RESOLUTION,
+        soft_max=96,
+        description="Cells along the longest side of the scene's grid: more follow the light's "
+                    "changes more closely and cost more gather rays")
+    gather_rays: IntProperty(
+        name="Gather Rays", default=R["gather_rays"], min=1, max=settings.MAX_GATHER_RAYS,
+        soft_max=4096,
+        description="Rays each grid point near a surface traces per pass to gather the light "
+                    "around it: more give smoother light")
+    face_estimator: EnumProperty(
+        name="Face Estimator", items=FACE_ESTIMATOR_ITEMS, default=R["face_estimator"],
+        description="How photons become the light leaving each cell's surfaces")
+    use_mips: BoolProperty(
+        name="Mip Filtering", default=R["use_mips"],
+        description="Distant surfaces are read from coarser, averaged cells: less noise")
+    mip_levels: IntProperty(
+        name="Levels", default=R["mip_levels"], min=1, max=settings.MAX_MIP_LEVELS,
+        description="Coarser levels of the surface light grid, the finest included")
+    side_test: BoolProperty(
+        name="Side Test", default=R["side_test"],
+        description="Ignore grid points behind the shaded surface (less light through thin "
+                    "walls)")
+    visibility_test: BoolProperty(
+        name="Visibility Test", default=R["visibility_test"],
+        description="Ignore grid points that see a surface between them and the shaded point")
+    occlusion_test: BoolProperty(
+        name="Occlusion Test", default=R["occlusion_test"],
+        description="Ignore grid points a wall separates from the shaded point (stops light "
+                    "through walls; one shadow ray per shaded point)")
+    obscurance: BoolProperty(
+        name="Obscurance", default=R["obscurance"],
+        description="Darken indirect light in creases (an ambient-occlusion look, not "
+                    "physically based)")
+    world_in_field: BoolProperty(
+        name="World in Field", default=R["world_in_field"],
+        description="The field also carries the sky's direct light: less noise, softer sky "
+                    "shadows")
+    passes: IntProperty(
+        name="Render Passes", default=settings.final_passes("RADIANCE_FIELD", native.module()),
+        min=1, soft_max=64,
+        description="Passes of an F12 render, a Solve or a bake, each shooting Photons and "
+                    "gathering again: more give smoother light")
+    viewport_passes: IntProperty(
+        name="Viewport Passes", default=VP["RADIANCE_FIELD"], min=1, soft_max=64,
+        description="Passes the Rendered viewport solves, each shooting Photons and gathering "
+                    "again")
+    final_gather: BoolProperty(
+        name="Final Gather", default=settings.FINAL_GATHER_DEFAULTS["RADIANCE_FIELD"],
+        description="Read the field one bounce away from what the camera sees (a ray per "
+                    "sample): truer light in corners, slower per sample")
 
 
 class ShgiProbeGridSettings(bpy.types.PropertyGroup):
@@ -336,6 +400,8 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
                                     description="Settings of the Photon Lattice method")
     probe_grid: PointerProperty(type=ShgiProbeGridSettings, name="Probe Grid",
                                 description="Settings of the Probe Grid method")
+    radiance_field: PointerProperty(type=ShgiRadianceFieldSettings, name="Radiance Field",
+                                    description="Settings of the Radiance Field method")
     bake: PointerProperty(type=ShgiBakeSettings, name="Bake",
                           description="Lightmap bake settings")
     settings_version: IntProperty(
@@ -359,7 +425,8 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
 
 
 # Registered in this order: a PointerProperty's group before the group holding it.
-_CLASSES = (ShgiPhotonLatticeSettings, ShgiProbeGridSettings, ShgiBakeSettings,
+_CLASSES = (ShgiPhotonLatticeSettings, ShgiProbeGridSettings, ShgiRadianceFieldSettings,
+            ShgiBakeSettings,
             ShgiSceneSettings)
 
 

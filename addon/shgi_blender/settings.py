@@ -68,6 +68,11 @@ BUILT_IN_METHODS = (
            "Light probes (placed by Irradiance Volume objects) gather indirect light without "
            "leaking through walls, refined in the background; exact direct light", 2,
            "PROBE_GRID"),
+    Method("RADIANCE_FIELD", "Radiance Field",
+           "Photons shot from the lights are gathered on a grid of surface radiance, and rays "
+           "from points near surfaces turn it into smooth indirect light: photon mapping with a "
+           "cheap final gather; exact direct light", 4,
+           "RADIANCE_FIELD"),
 )
 
 
@@ -83,9 +88,9 @@ def registry_methods(shgi):
 
 # Selectable methods, in menu order: the registry's rows when the add-on loads. The solvers still
 # to come keep their identifiers and file numbers reserved (RESERVED_METHODS) so that files saved
-# later open here: PROPAGATION (seed 003), RADIANCE_FIELD (seed 001) and INSTANT_GI (seed 004).
+# later open here: PROPAGATION (seed 003) and INSTANT_GI (seed 004).
 METHODS = registry_methods(native.module())
-RESERVED_METHODS = {"PROPAGATION": 3, "RADIANCE_FIELD": 4, "INSTANT_GI": 5}
+RESERVED_METHODS = {"PROPAGATION": 3, "INSTANT_GI": 5}
 METHODS_BY_ID = {method.identifier: method for method in METHODS}
 
 # Enum-valued fields: property identifier -> name of the shgi enum type (values are the enum's
@@ -94,6 +99,7 @@ ENUM_FIELDS = {
     "world_sampling": "WorldSampling",
     "caustics": "CausticMode",
     "interpolation": "LatticeInterpolation",
+    "face_estimator": "FaceEstimator",
 }
 # Their items (identifier = the shgi member name, label, description), for the EnumProperties.
 ENUM_ITEMS = {
@@ -112,6 +118,14 @@ ENUM_ITEMS = {
         ("TRILINEAR", "Trilinear", "Blend the 8 nearest cells"),
         ("CUBIC", "Cubic", "Blend the 27 nearest cells, weighted by how their surface faces "
          "the normal (smoother, fewer leaks)"),
+    ),
+    "face_estimator": (
+        ("PROJECTED_AREA", "Projected Area",
+         "Divide each cell face's photon flux by the area of surface facing it: exact for flat "
+         "surfaces at any angle"),
+        ("PAPER", "Paper",
+         "The original paper's estimate (flux split over faces, divided by the face's area): "
+         "darker on surfaces not aligned with the grid, for comparison"),
     ),
 }
 
@@ -166,22 +180,41 @@ PROBE_GRID_DEFAULTS = {
     "placement_rays": 128,
 }
 
+# RadianceFieldSettings' fields in ``scene.shgi.radiance_field`` with their native defaults. Not
+# mirrored: ``seed`` (scene.shgi.seed), ``max_bounces`` (Light Paths > Diffuse,
+# LIGHT_PATH_VALUES) and the constants an artist has no reason to change (glossy_in_grid,
+# face_sigma, min_footprint_cosine, backface_threshold, specular_roughness, the obscurance's
+# weight, distance and rays, the bounds), which keep the native defaults.
+RADIANCE_FIELD_DEFAULTS = {
+    "photons": 200000,
+    "resolution": 32,
+    "gather_rays": 400,
+    "face_estimator": "PROJECTED_AREA",
+    "use_mips": True,
+    "mip_levels": 4,
+    "side_test": True,
+    "visibility_test": False,
+    "occlusion_test": True,
+    "obscurance": False,
+    "world_in_field": False,
+}
+
 # Refinement passes of a final solve (F12, Solve, a bake) when ``shgi`` cannot be imported as the
 # add-on registers: the method registry's final_passes, which ``python -m shgi bake`` runs
 # (shgi.bake.PROBE_GRID_PASSES); tests/python/test_blender_versioning.py checks that they agree.
-FINAL_PASSES_FALLBACK = {"PHOTON_LATTICE": 1, "PROBE_GRID": 8}
+FINAL_PASSES_FALLBACK = {"PHOTON_LATTICE": 1, "PROBE_GRID": 8, "RADIANCE_FIELD": 1}
 # Passes the Rendered viewport runs (no native struct has them), as Cycles keeps its viewport
 # samples apart: photon passes it solves (each traces `photons`; as many as `passes` give the
 # lattice F12 solves), and probe grid update passes it runs in the background before it stops
 # refining (past ~2 / (1 - hysteresis) passes the blend holds as much history as it ever will).
-VIEWPORT_PASSES_DEFAULTS = {"PHOTON_LATTICE": 1, "PROBE_GRID": 32}
+VIEWPORT_PASSES_DEFAULTS = {"PHOTON_LATTICE": 1, "PROBE_GRID": 32, "RADIANCE_FIELD": 1}
 # Whether F12 and the viewport read each field method's field through a final gather
 # (PreviewSettings.final_gather: one traced bounce, the field read where it lands, the field one
 # bounce shallower: light_path_fields) rather than at the first surface. Chosen by measurement
 # (docs/methods.md, "Final gather"): denoised, the photon lattice gains 1-4 dB on the Cornell box
 # and the sun room, the probe grid 1.5-4 dB on every scene, and the probe grid's dim room of the
 # two-rooms scene comes within 5% of the path tracer's.
-FINAL_GATHER_DEFAULTS = {"PHOTON_LATTICE": True, "PROBE_GRID": True}
+FINAL_GATHER_DEFAULTS = {"PHOTON_LATTICE": True, "PROBE_GRID": True, "RADIANCE_FIELD": True}
 # The diffuse bounces a final gather traces before the field is read (light_path_fields).
 GATHER_BOUNCES = 1
 
@@ -319,6 +352,19 @@ PROBE_GRID_LABELS = {
     "backface_threshold": "Probe Grid > Relocation > Back Faces",
     "placement_rays": "scene.shgi.probe_grid.placement_rays",
 }
+RADIANCE_FIELD_LABELS = {
+    "photons": "Radiance Field > Photons",
+    "resolution": "Radiance Field > Resolution",
+    "gather_rays": "Radiance Field > Gather Rays",
+    "face_estimator": "Radiance Field > Face Estimator",
+    "use_mips": "Radiance Field > Mip Filtering",
+    "mip_levels": "Radiance Field > Mip Filtering > Levels",
+    "side_test": "Radiance Field > Side Test",
+    "visibility_test": "Radiance Field > Visibility Test",
+    "occlusion_test": "Radiance Field > Occlusion Test",
+    "obscurance": "Radiance Field > Obscurance",
+    "world_in_field": "Radiance Field > World in Field",
+}
 # The native checks' limits the property ranges follow (properties.py), so that the panels offer
 # only values the native code accepts.
 MAX_SAMPLES = 1 << 24                # Path/PreviewSettings.samples (kMaxPathTracerSamples)
@@ -328,6 +374,9 @@ MAX_RAYS_PER_PROBE = 65536           # ProbeGridSettings.rays_per_probe, placeme
 MIN_PLACEMENT_RAYS = 4               # ProbeGridSettings.placement_rays
 MIN_VISIBILITY_BLUR = 0.01           # ProbeGridSettings.visibility_blur, radians
 MAX_PROBE_BOUNCES = 64               # ProbeGridSettings.bounces
+MAX_RADIANCE_RESOLUTION = 128        # RadianceFieldSettings.resolution
+MAX_GATHER_RAYS = 1 << 20            # RadianceFieldSettings.gather_rays
+MAX_MIP_LEVELS = 16                  # RadianceFieldSettings.mip_levels
 # ProbeGridSettings.bleed_bias must stay below 1 and backface_threshold above 0: the nearest
 # values the panels' two decimals show.
 MAX_BLEED_BIAS = 0.99
@@ -362,6 +411,9 @@ PROBE_PATH_FIRST_BOUNCE = 1
 # per-sample clamp: its light is clamped where F12 reads it, PreviewSettings.clamp_indirect).
 LIGHT_PATH_VALUES = {
     "PhotonLatticeSettings": {
+        "max_bounces": LightPathValue("diffuse_bounces", 0, MIN_PHOTON_BOUNCES),
+    },
+    "RadianceFieldSettings": {
         "max_bounces": LightPathValue("diffuse_bounces", 0, MIN_PHOTON_BOUNCES),
     },
     "ProbeGridSettings": {
@@ -403,6 +455,8 @@ LIGHT_PATH_LIMITS = {
                   f"{MAX_PROBE_BOUNCES + PROBE_PATH_FIRST_BOUNCE}); Total and Transmission are "
                   f"{PROPERTY_DEFAULTS['max_bounces']} and "
                   f"{PROPERTY_DEFAULTS['transmission_bounces']}",
+    "RADIANCE_FIELD": "Radiance Field: photons follow Diffuse; Total, Glossy and Transmission "
+                      "apply to path tracing only",
 }
 
 
@@ -421,6 +475,9 @@ METHOD_SETTINGS = {
                                      PHOTON_LATTICE_LABELS),
     "PROBE_GRID": MethodSettings("PROBE_GRID", "Probe Grid", "probe_grid", "ProbeGridSettings",
                                  PROBE_GRID_DEFAULTS, PROBE_GRID_LABELS),
+    "RADIANCE_FIELD": MethodSettings("RADIANCE_FIELD", "Radiance Field", "radiance_field",
+                                     "RadianceFieldSettings", RADIANCE_FIELD_DEFAULTS,
+                                     RADIANCE_FIELD_LABELS),
 }
 # The properties a viewport render depends on (a change restarts it); the overlay toggles and
 # the final solve's passes are not among them. A group name stands for the values of its
@@ -565,6 +622,13 @@ def probe_grid_settings(props, shgi, volumes=(), gather=None):
     return validated(shgi.ProbeGridSettings(
         **method_native_fields(props, METHOD_SETTINGS["PROBE_GRID"], shgi, gather),
         volumes=list(volumes)))
+
+
+def radiance_field_settings(props, shgi, gather=None):
+    """shgi.RadianceFieldSettings of scene.shgi: its radiance_field group, Light Paths and the
+    seed (ValueError naming a refused setting)."""
+    return validated(shgi.RadianceFieldSettings(
+        **method_native_fields(props, METHOD_SETTINGS["RADIANCE_FIELD"], shgi, gather)))
 
 
 # ProbeGridSettings' fields that say how a probe field is read (shgi.ProbeLookupSettings).

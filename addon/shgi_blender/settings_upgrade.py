@@ -24,6 +24,10 @@ from . import settings
 
 SETTINGS_VERSION = 3
 
+# The method groups that version 2 had: a scene saved then could render only with these, so
+# only they keep reading their field directly (groups added later start with their defaults).
+GROUPS_BEFORE_3 = ("photon_lattice", "probe_grid")
+
 # Version 1's flat properties of scene.shgi -> (group, property) in version 2.
 MOVED_FROM_1 = {
     **{name: ("photon_lattice", name) for name in settings.PHOTON_LATTICE_DEFAULTS},
@@ -63,9 +67,9 @@ def upgrade(stored):
     if version < 2:
         _upgrade_from_1(stored, result)
     if version < 3:
-        for group in settings.METHOD_SETTINGS.values():
-            if "final_gather" not in stored.get(group.prop, {}):
-                result.values[(group.prop, "final_gather")] = False
+        for prop in GROUPS_BEFORE_3:
+            if "final_gather" not in stored.get(prop, {}):
+                result.values[(prop, "final_gather")] = False
     return result
 
 

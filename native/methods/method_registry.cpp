@@ -5,6 +5,7 @@
 
 #include "lattice/photon_lattice.h"
 #include "probes/probe_grid.h"
+#include "radiance/radiance_field.h"
 
 namespace shgi {
 namespace {
@@ -27,6 +28,12 @@ std::vector<MethodInfo> built_in_rows() {
                     "without leaking through walls, refined in the background; exact direct light",
                     2, {}, "ProbeGridSettings", 8,
                     solver_factory<ProbeGrid, ProbeGridSettings>("ProbeGridSettings")});
+    rows.push_back({"RADIANCE_FIELD", "Radiance Field",
+                    "Photons shot from the lights are gathered on a grid of surface radiance, and "
+                    "rays from points near surfaces turn it into smooth indirect light: photon "
+                    "mapping with a cheap final gather; exact direct light",
+                    4, {}, "RadianceFieldSettings", 1,
+                    solver_factory<RadianceField, RadianceFieldSettings>("RadianceFieldSettings")});
     return rows;
 }
 
@@ -88,7 +95,7 @@ std::vector<MethodInfo> registered_methods() {
 }
 
 std::vector<std::pair<std::string, int>> reserved_method_numbers() {
-    return {{"PROPAGATION", 3}, {"RADIANCE_FIELD", 4}, {"INSTANT_GI", 5}};
+    return {{"PROPAGATION", 3}, {"INSTANT_GI", 5}};
 }
 
 MethodInfo find_method(std::string_view name) {

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <unordered_map>
 
 #include "scene/validation.h"
 #include "util/error.h"
@@ -170,6 +172,39 @@ float triangle_area(const Mesh& mesh, uint32_t triangle) {
     const uvec3& tri = mesh.triangles[triangle];
     const vec3& p0 = mesh.positions[tri.x];
     return 0.5f * glm::length(glm::cross(mesh.positions[tri.y] - p0, mesh.positions[tri.z] - p0));
+}
+
+bool is_closed_surface(const Mesh& mesh) {
+    std::unordered_map<uint64_t, uint32_t> welded;
+    std::vector<uint32_t> vertex(mesh.positions.size());
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+        const vec3& p = mesh.positions[i];
+        uint32_t bits[3];
+        std::memcpy(bits, &p, sizeof(bits));
+        const uint64_t key = (uint64_t(bits[0]) * 0x9e3779b97f4a7c15ull) ^
+                             (uint64_t(bits[1]) * 0xc2b2ae3d27d4eb4full) ^
+                             (uint64_t(bits[2]) * 0x165667b19e3779f9ull);
+        // Hash collisions of distinct points would only merge two vertices: a mesh could then
+        // be taken as open (its back faces ignored), never the other way round in practice.
+        vertex[i] = welded.emplace(key, uint32_t(welded.size())).first->second;
+    }
+    std::unordered_map<uint64_t, int> edges;  // directed edge -> count (reverse subtracts)
+    for (const uvec3& t : mesh.triangles) {
+        const uint32_t v[3] = {vertex[t.x], vertex[t.y], vertex[t.z]};
+        for (int e = 0; e < 3; ++e) {
+            const uint32_t a = v[e], b = v[(e + 1) % 3];
+            if (a == b) return false;
+            const uint64_t forward = (uint64_t(a) << 32) | b;
+            const uint64_t backward = (uint64_t(b) << 32) | a;
+            auto it = edges.find(backward);
+            if (it != edges.end()) {
+                if (--it->second == 0) edges.erase(it);
+            } else if (++edges[forward] > 1) {
+                return false;  // the same edge twice the same way: inconsistent winding
+            }
+        }
+    }
+    return edges.empty() && !mesh.triangles.empty();
 }
 
 }  // namespace shgi

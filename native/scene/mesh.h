@@ -53,4 +53,11 @@ void check_material_indices(const Mesh& mesh, uint32_t material_count);
 // Area of triangle `i` in object space.
 float triangle_area(const Mesh& mesh, uint32_t triangle);
 
+// True when every edge of the mesh (vertices welded by exact position, as split normals and UV
+// seams duplicate them) is shared by exactly one other triangle running it the other way: a
+// closed, consistently wound surface, whose back faces mean "inside". Single-sided walls and
+// planes are open: which way they face is an accident of modelling (Cycles shades both sides
+// alike), so their back faces say nothing about being inside.
+bool is_closed_surface(const Mesh& mesh);
+
 }  // namespace shgi

@@ -43,17 +43,18 @@ from shgi_blender.export.light_probe import ProbeVolumeRecord, native_volumes  #
 # The engine's acceptance figures against Cycles (docs/methods.md).
 MIN_PSNR_DB = 28.0
 MEAN_TOLERANCE = {"PATH_TRACE": 0.02, "PHOTON_LATTICE": 0.10, "PHOTON_LATTICE frozen": 0.10,
-                  "PROBE_GRID": 0.10, "PROBE_GRID volume": 0.10}
+                  "PROBE_GRID": 0.10, "PROBE_GRID volume": 0.10, "RADIANCE_FIELD": 0.10}
 DIFFUSE_INDIRECT_TOLERANCE = 0.10
 # docs/architecture.md: cancel returns within 0.2 s; the engine polls every 0.05 s.
 CANCEL_LATENCY = 0.5
 
 
-def default_props(photon_lattice=None, probe_grid=None, **overrides):
+def default_props(photon_lattice=None, probe_grid=None, radiance_field=None, **overrides):
     """scene.shgi as a plain object with the property defaults; the method groups' values
     overridden from the dicts of their names."""
     props = settings.default_properties(shgi, **dict({"method": "PATH_TRACE"}, **overrides))
-    for group, values in (("photon_lattice", photon_lattice), ("probe_grid", probe_grid)):
+    for group, values in (("photon_lattice", photon_lattice), ("probe_grid", probe_grid),
+                          ("radiance_field", radiance_field)):
         for name, value in (values or {}).items():
             setattr(getattr(props, group), name, value)
     return props
@@ -86,6 +87,11 @@ NOT_MIRRORED = {
     "PhotonLatticeSettings": {"use_bounds", "bounds_min", "bounds_max", "caustic_order",
                               "caustic_blur_passes", "caustic_neighbours", "caustic_radius",
                               "specular_roughness", "normal_offset"},
+    # The radiance field's constants an artist has no reason to change keep their defaults.
+    "RadianceFieldSettings": {"use_bounds", "bounds_min", "bounds_max", "specular_roughness",
+                              "glossy_in_grid", "face_sigma", "min_footprint_cosine",
+                              "backface_threshold", "obscurance_weight", "obscurance_distance",
+                              "obscurance_rays"},
 }
 
 
@@ -100,7 +106,8 @@ def test_method_groups_mirror_their_native_settings(solver):
     # Read at the first surface (a final gather takes one bounce off the field: below).
     direct = default_props(seed=4, **{group.prop: {"final_gather": False}})
     built = {"PHOTON_LATTICE": settings.photon_lattice_settings,
-             "PROBE_GRID": settings.probe_grid_settings}[solver](direct, shgi)
+             "PROBE_GRID": settings.probe_grid_settings,
+             "RADIANCE_FIELD": settings.radiance_field_settings}[solver](direct, shgi)
     assert set(group.labels) == set(group.defaults)
     for name, value in group.defaults.items():
         expected = getattr(native_defaults, name)
@@ -148,7 +155,8 @@ def test_a_final_gather_takes_one_bounce_off_the_field():
     the other mode is out of date)."""
     for solver, build, field, expected in (
             ("PHOTON_LATTICE", settings.photon_lattice_settings, "max_bounces", (3, 1)),
-            ("PROBE_GRID", settings.probe_grid_settings, "bounces", (2, 0))):
+            ("PROBE_GRID", settings.probe_grid_settings, "bounces", (2, 0)),
+            ("RADIANCE_FIELD", settings.radiance_field_settings, "max_bounces", (3, 1))):
         prop = settings.METHOD_SETTINGS[solver].prop
         gathered = default_props(method=solver, **{prop: {"final_gather": True}})
         direct = default_props(method=solver, **{prop: {"final_gather": False}})
@@ -279,12 +287,12 @@ def test_enum_properties_offer_the_native_members():
 
 def test_methods_implemented_and_reserved():
     identifiers = [method.identifier for method in settings.METHODS]
-    assert identifiers == ["PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID"]
+    assert identifiers == ["PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID", "RADIANCE_FIELD"]
     # The add-on's methods are the registry's; its copy for a missing module agrees with it.
     assert settings.registry_methods(shgi) == settings.METHODS == settings.BUILT_IN_METHODS
     assert settings.registry_methods(None) == settings.BUILT_IN_METHODS
     assert settings.RESERVED_METHODS == dict(shgi.reserved_method_numbers())
-    assert [method.number for method in settings.METHODS] == [0, 1, 2]  # file values stay
+    assert [method.number for method in settings.METHODS] == [0, 1, 2, 4]  # file values stay
     numbers = [method.number for method in settings.METHODS]
     numbers += list(settings.RESERVED_METHODS.values())
     assert len(set(numbers)) == len(numbers)
@@ -645,7 +653,7 @@ def test_f12_refusals_name_the_blender_setting_or_object(case, words, blender, b
 RENDER_CASES = [(scene, method) for scene in ("cornell_box", "sun_room")
                 for method in ("PATH_TRACE", "PHOTON_LATTICE")] + [
     ("sun_room", "PHOTON_LATTICE frozen"), ("cornell_box", "PROBE_GRID"),
-    ("cornell_box", "PROBE_GRID volume")]
+    ("cornell_box", "PROBE_GRID volume"), ("cornell_box", "RADIANCE_FIELD")]
 
 
 @pytest.mark.parametrize("scene, method", RENDER_CASES)

@@ -116,8 +116,10 @@ def test_registering_a_taken_or_reserved_name_or_number_is_refused():
         shgi.register_method("X_TEST", "X", "", 77, dict, None, aliases=["PROBE_GRID"])
     with pytest.raises(ValueError, match="number 2 is taken"):
         shgi.register_method("X_TEST", "X", "", 2, dict, None)
-    with pytest.raises(ValueError, match="reserved for method 'RADIANCE_FIELD'"):
+    with pytest.raises(ValueError, match="number 4 is taken by method 'RADIANCE_FIELD'"):
         shgi.register_method("X_TEST", "X", "", 4, dict, None)
+    with pytest.raises(ValueError, match="reserved for method 'PROPAGATION'"):
+        shgi.register_method("X_TEST", "X", "", 3, dict, None)
     assert "X_TEST" not in {row.identifier for row in shgi.methods()}
 
 

@@ -300,6 +300,9 @@ def solver_recipe(props, shgi, volumes=(), viewport=False, gather=None):
     if solver == LatticeSolver.METHOD:
         native_settings = settings.photon_lattice_settings(props, shgi, gather)
         recipe_solver = LatticeSolver
+    elif solver == "RADIANCE_FIELD":
+        native_settings = settings.radiance_field_settings(props, shgi, gather)
+        recipe_solver = FieldSolver.of(solver)
     elif solver == ProbeGridSolver.METHOD:
         native_settings = settings.probe_grid_settings(props, shgi, native_volumes(volumes, shgi),
                                                        gather)

@@ -187,6 +187,36 @@ class SHGI_RENDER_PT_photon_lattice(_FieldPanel, bpy.types.Panel):
         field_overlay.draw_overlay_settings(layout, props, "show_lattice_samples")
 
 
+class SHGI_RENDER_PT_radiance_field(_FieldPanel, bpy.types.Panel):
+    bl_label = "Radiance Field"
+    SOLVER = "RADIANCE_FIELD"
+
+    def draw(self, context):
+        layout = self.layout
+        props = context.scene.shgi
+        field = props.radiance_field
+        draw_frozen_solution(layout, context)
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        column = layout.column(align=True)
+        for name in ("photons", "resolution", "gather_rays", "face_estimator"):
+            column.prop(field, name)
+        column = layout.column(align=True)
+        column.prop(field, "use_mips")
+        sub = column.column(align=True)
+        sub.active = field.use_mips
+        sub.prop(field, "mip_levels")
+        column = layout.column(align=True)
+        for name in ("side_test", "visibility_test", "occlusion_test", "obscurance",
+                     "world_in_field"):
+            column.prop(field, name)
+        column = layout.column(align=True)
+        column.label(text="Passes")
+        column.prop(field, "passes", text="Render")
+        column.prop(field, "viewport_passes", text="Viewport")
+        layout.prop(field, "final_gather")
+
+
 class SHGI_RENDER_PT_probe_grid(_FieldPanel, bpy.types.Panel):
     """The probe grid's settings; its volumes are the scene's Irradiance Volume objects."""
 
@@ -363,5 +393,6 @@ class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
 # Parents before their sub-panels.
 CLASSES = (SHGI_RENDER_PT_method, SHGI_RENDER_PT_denoise, SHGI_RENDER_PT_light_paths,
            SHGI_RENDER_PT_light_paths_max_bounces, SHGI_RENDER_PT_photon_lattice,
+           SHGI_RENDER_PT_radiance_field,
            SHGI_RENDER_PT_probe_grid, SHGI_RENDER_PT_probe_grid_visibility,
            SHGI_RENDER_PT_bake, SHGI_RENDER_PT_bake_farm, SHGI_RENDER_PT_last_render)

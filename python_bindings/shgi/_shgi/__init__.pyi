@@ -8,7 +8,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'GiSolver', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'RadianceField', 'RadianceFieldSettings', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -329,6 +329,56 @@ class DiffuseModel:
         ...
     @typing.overload
     def __ne__(self, other: DiffuseModel) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
+class FaceEstimator:
+    """
+    How photon flux becomes radiance on the radiance grid's cell faces.
+    
+    Members:
+    
+      PROJECTED_AREA
+    
+      PAPER
+    """
+    PAPER: typing.ClassVar[FaceEstimator]  # value = <FaceEstimator.PAPER: 1>
+    PROJECTED_AREA: typing.ClassVar[FaceEstimator]  # value = <FaceEstimator.PROJECTED_AREA: 0>
+    __members__: typing.ClassVar[dict[str, FaceEstimator]]  # value = {'PROJECTED_AREA': <FaceEstimator.PROJECTED_AREA: 0>, 'PAPER': <FaceEstimator.PAPER: 1>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: FaceEstimator) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: FaceEstimator) -> bool:
         ...
     @typing.overload
     def __ne__(self, other: typing.Any) -> bool:
@@ -2173,6 +2223,266 @@ class Progress:
         """
         Name of the current stage.
         """
+class RadianceField(IndirectField, GiSolver):
+    """
+    
+    The radiance-field solver (seed 001): photons on a face radiance grid, SH field by gather rays.
+    
+    Each refine() traces `photons` more, adds their reflected flux to the grid and gathers the SH
+    field again (the field is the mean of all passes). After editing and re-committing the scene,
+    call reset().
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, scene: Scene, settings: RadianceFieldSettings = ..., progress: Progress = None) -> None:
+        """
+        Voxelises the scene: cells, their surfaces and sample points (the scene must be committed).
+        """
+    def current_field(self) -> typing.Any:
+        """
+        The solver itself: it is its own IndirectField (not to be read while a pass runs).
+        """
+    def refine(self, progress: Progress = None) -> None:
+        """
+        Traces one more pass of photons, updates the radiance grid and gathers the SH field (GIL released). Raises shgi.Cancelled on cancel, keeping the previous solution.
+        """
+    def reset(self, progress: Progress = None) -> None:
+        """
+        Forgets every pass and voxelises the (re-committed) scene again.
+        """
+    @property
+    def memory_bytes(self) -> int:
+        """
+        Bytes held by the grids and the SH field.
+        """
+    @property
+    def passes(self) -> int:
+        """
+        Passes averaged so far.
+        """
+    @property
+    def settings(self) -> RadianceFieldSettings:
+        """
+        A copy of the settings.
+        """
+    @property
+    def stage_seconds(self) -> list:
+        """
+        [(stage, seconds)] of the last pass.
+        """
+    @property
+    def timings(self) -> dict:
+        """
+        The last pass: seconds of voxelise (construction/reset), photons, radiance_grid, sh_field; photons_emitted, hits, sample_points, gather_rays.
+        """
+class RadianceFieldSettings:
+    """
+    Settings of the RadianceField solver; every field has a default.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        RadianceFieldSettings(**fields), e.g. RadianceFieldSettings(gather_rays=200).
+        """
+    def validate(self) -> None:
+        """
+        Raises ValueError naming the first invalid field.
+        """
+    @property
+    def backface_threshold(self) -> float:
+        """
+        Share of gather rays seeing back faces of closed meshes that marks a sample point inside geometry (0.25).
+        """
+    @backface_threshold.setter
+    def backface_threshold(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def bounds_max(self) -> tuple:
+        """
+        Upper corner (m) when use_bounds.
+        """
+    @bounds_max.setter
+    def bounds_max(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def bounds_min(self) -> tuple:
+        """
+        Lower corner (m) when use_bounds.
+        """
+    @bounds_min.setter
+    def bounds_min(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def face_estimator(self) -> FaceEstimator:
+        """
+        FaceEstimator: PROJECTED_AREA (exact for lit planes) or the paper's PAPER.
+        """
+    @face_estimator.setter
+    def face_estimator(self, arg0: FaceEstimator) -> None:
+        ...
+    @property
+    def face_sigma(self) -> float:
+        """
+        Standard deviation (rad) of the Gaussian weights of a hit cell's faces (0.5).
+        """
+    @face_sigma.setter
+    def face_sigma(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def gather_rays(self) -> int:
+        """
+        Gather rays per sample point and pass, N_sh (400, the paper's).
+        """
+    @gather_rays.setter
+    def gather_rays(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def glossy_in_grid(self) -> bool:
+        """
+        Rough glossy reflection enters the radiance grid as if diffuse (the paper's holds diffuse only) (True).
+        """
+    @glossy_in_grid.setter
+    def glossy_in_grid(self, arg0: bool) -> None:
+        ...
+    @property
+    def max_bounces(self) -> int:
+        """
+        Photon scatterings after emission; 4 matches Cycles' default diffuse bounces.
+        """
+    @max_bounces.setter
+    def max_bounces(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def min_footprint_cosine(self) -> float:
+        """
+        Floor of cos(beta) in a ray's footprint 4 pi d^2 / (N cos beta) (0.1).
+        """
+    @min_footprint_cosine.setter
+    def min_footprint_cosine(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def mip_levels(self) -> int:
+        """
+        Levels of the radiance grid's mip chain, the finest included (4).
+        """
+    @mip_levels.setter
+    def mip_levels(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def obscurance(self) -> bool:
+        """
+        Multiply the field by the paper's obscurance, an ambient-occlusion look (False).
+        """
+    @obscurance.setter
+    def obscurance(self, arg0: bool) -> None:
+        ...
+    @property
+    def obscurance_distance(self) -> float:
+        """
+        R_max (m) of the obscurance; 0 = two cells.
+        """
+    @obscurance_distance.setter
+    def obscurance_distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def obscurance_rays(self) -> int:
+        """
+        Directions N_d of the obscurance estimate (32, the paper's).
+        """
+    @obscurance_rays.setter
+    def obscurance_rays(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def obscurance_weight(self) -> float:
+        """
+        w_oc of the obscurance (1).
+        """
+    @obscurance_weight.setter
+    def obscurance_weight(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def occlusion_test(self) -> bool:
+        """
+        Skip sample points a surface separates from the shading point (a shadow ray per lookup; not in the paper) (True).
+        """
+    @occlusion_test.setter
+    def occlusion_test(self, arg0: bool) -> None:
+        ...
+    @property
+    def photons(self) -> int:
+        """
+        Photons emitted per pass (200000).
+        """
+    @photons.setter
+    def photons(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def resolution(self) -> int:
+        """
+        SH-grid cells along the bounds' longest side, 1..128 (32, the paper's).
+        """
+    @resolution.setter
+    def resolution(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def seed(self) -> int:
+        """
+        Random seed (0).
+        """
+    @seed.setter
+    def seed(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def side_test(self) -> bool:
+        """
+        Skip sample points behind the shading point's tangent plane (True).
+        """
+    @side_test.setter
+    def side_test(self, arg0: bool) -> None:
+        ...
+    @property
+    def specular_roughness(self) -> float:
+        """
+        Lobes up to this roughness make caustic paths (0.1).
+        """
+    @specular_roughness.setter
+    def specular_roughness(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def use_bounds(self) -> bool:
+        """
+        Use bounds_min/bounds_max instead of the scene's bounds (False).
+        """
+    @use_bounds.setter
+    def use_bounds(self, arg0: bool) -> None:
+        ...
+    @property
+    def use_mips(self) -> bool:
+        """
+        Read coarser radiance-grid levels for distant hits (True).
+        """
+    @use_mips.setter
+    def use_mips(self, arg0: bool) -> None:
+        ...
+    @property
+    def visibility_test(self) -> bool:
+        """
+        Skip sample points the distance SH says are hidden (False).
+        """
+    @visibility_test.setter
+    def visibility_test(self, arg0: bool) -> None:
+        ...
+    @property
+    def world_in_field(self) -> bool:
+        """
+        Gather rays that leave the scene read the world, and renderers skip the world in next-event estimation (False).
+        """
+    @world_in_field.setter
+    def world_in_field(self, arg0: bool) -> None:
+        ...
 class Scene:
     """
     

@@ -19,6 +19,7 @@
 #include "lattice/photon_lattice.h"
 #include "methods/method_registry.h"
 #include "probes/probe_grid.h"
+#include "radiance/radiance_field.h"
 #include "render/path_tracer.h"
 #include "render/preview_renderer.h"
 #include "render/render_test_scenes.h"
@@ -82,6 +83,14 @@ std::any conformance_settings(const std::string& method, uint64_t seed) {
         ProbeGridSettings s;
         s.seed = seed;
         s.bounces = 16;
+        return s;
+    }
+    if (method == "RADIANCE_FIELD") {
+        RadianceFieldSettings s;
+        s.seed = seed;
+        s.max_bounces = 16;
+        s.photons = 100000;
+        s.resolution = 16;
         return s;
     }
     if (method == kTestMethod) {
@@ -244,8 +253,8 @@ TEST(MethodRegistry, TakenOrReservedNamesAndNumbersRefused) {
     taken_name.aliases = {"PROBE_GRID"};
     expect_error<InvalidArgument>([&] { register_method(taken_name); }, {"taken by method"});
     MethodInfo reserved = row;
-    reserved.number = 4;
-    expect_error<InvalidArgument>([&] { register_method(reserved); }, {"RADIANCE_FIELD"});
+    reserved.number = 3;
+    expect_error<InvalidArgument>([&] { register_method(reserved); }, {"PROPAGATION"});
     register_method(row);
     expect_error<InvalidArgument>([&] { register_method(row); }, {"taken by method"});
     EXPECT_TRUE(unregister_method("ANOTHER_TEST"));
