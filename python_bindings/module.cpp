@@ -44,6 +44,7 @@ void bind_render(py::module_& m);
 void bind_methods(py::module_& m);
 void bind_lattice(py::module_& m);
 void bind_probes(py::module_& m);
+void bind_propagation(py::module_& m);
 void bind_bake(py::module_& m);
 }  // namespace shgi::python
 
@@ -59,6 +60,7 @@ PYBIND11_MODULE(_shgi, m) {
     shgi::python::bind_methods(m);  // GiSolver, the base of every solver below
     shgi::python::bind_lattice(m);  // PhotonLattice derives from IndirectField (bind_render)
     shgi::python::bind_probes(m);   // so do ProbeGrid and ProbeField
+    shgi::python::bind_propagation(m);  // PropagationField too; PropagationVolume is a GiSolver
     shgi::python::bind_bake(m);     // takes any IndirectField
     refuse_bare_new(m);             // after every class exists
 }

@@ -5,6 +5,7 @@
 
 #include "lattice/photon_lattice.h"
 #include "probes/probe_grid.h"
+#include "propagation/propagation_volume.h"
 
 namespace shgi {
 namespace {
@@ -27,6 +28,13 @@ std::vector<MethodInfo> built_in_rows() {
                     "without leaking through walls, refined in the background; exact direct light",
                     2, {}, "ProbeGridSettings", 8,
                     solver_factory<ProbeGrid, ProbeGridSettings>("ProbeGridSettings")});
+    rows.push_back({"PROPAGATION", "Light Propagation Volumes",
+                    "Light from the lights' first hits spread cell to cell through a coarse "
+                    "grid (LPV / HOLPV): fixed cost whatever the noise, soft and approximate; "
+                    "exact direct light",
+                    3, {}, "PropagationSettings", 1,
+                    solver_factory<PropagationVolume, PropagationSettings>(
+                        "PropagationSettings")});
     return rows;
 }
 

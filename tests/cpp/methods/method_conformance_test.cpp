@@ -19,6 +19,7 @@
 #include "lattice/photon_lattice.h"
 #include "methods/method_registry.h"
 #include "probes/probe_grid.h"
+#include "propagation/propagation_volume.h"
 #include "render/path_tracer.h"
 #include "render/preview_renderer.h"
 #include "render/render_test_scenes.h"
@@ -82,6 +83,15 @@ std::any conformance_settings(const std::string& method, uint64_t seed) {
         ProbeGridSettings s;
         s.seed = seed;
         s.bounces = 16;
+        return s;
+    }
+    if (method == "PROPAGATION") {
+        // Enough steps for light to cross the box (16 cells) and come back.
+        PropagationSettings s;
+        s.seed = seed;
+        s.vpl_bounces = 16;
+        s.resolution = 16;
+        s.steps = 32;
         return s;
     }
     if (method == kTestMethod) {
