@@ -44,7 +44,7 @@ void bind_settings(py::module_& m) {
                        "Geometry volume blocking from the second step on (True).")
         .def_readwrite("normal_offset", &S::normal_offset,
                        "Cells along the shading normal before the lookup, against "
-                       "self-lighting (0.5).");
+                       "self-lighting and leaks through walls (1.0).");
     cls.def("validate", &validate_propagation_settings,
             "Raises ValueError naming the first invalid field.");
     register_settings_type<S>("PropagationSettings");

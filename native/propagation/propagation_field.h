@@ -56,7 +56,7 @@ class PropagationField : public IndirectField {
 
   private:
     std::shared_ptr<const ShVolume> accumulated_;
-    float normal_offset_ = 0.5f;
+    float normal_offset_ = 1.0f;
     float radiance_scale_ = 0.0f;  // k / s²
 };
 

@@ -2187,7 +2187,7 @@ class PropagationSettings:
     @property
     def normal_offset(self) -> float:
         """
-        Cells along the shading normal before the lookup, against self-lighting (0.5).
+        Cells along the shading normal before the lookup, against self-lighting and leaks through walls (1.0).
         """
     @normal_offset.setter
     def normal_offset(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
