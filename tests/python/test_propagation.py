@@ -159,3 +159,27 @@ def test_a_field_stays_valid_while_the_next_pass_runs():
     worker.join()
     assert (during == before).all()
     assert volume.passes == 2
+
+
+@pytest.mark.reference
+def test_cornell_floor_holpv_closer_than_lpv_and_self_lighting_reported():
+    """Seed 003 §5.7: on the Cornell box's floor the HOLPV's mean indirect light is closer to
+    the path tracer's than the LPV's; the ceiling-to-floor ratio of indirect light (against the
+    reference's) is the self-lighting measure (a lit floor's own VPLs light it again)."""
+    ref, _ = rendered("cornell_box", 1)
+    normal_z = ref["Normal"][..., 2]
+    floor, ceiling = normal_z > 0.9, normal_z < -0.9
+    assert floor.any() and ceiling.any()
+
+    def means(passes):
+        return float(passes["DiffInd"][floor].mean()), float(passes["DiffInd"][ceiling].mean())
+
+    ref_floor, ref_ceiling = means(ref)
+    errors = {}
+    for order in (1, 2):
+        floor_mean, ceiling_mean = means(rendered("cornell_box", order)[1])
+        errors[order] = abs(floor_mean / ref_floor - 1.0)
+        print(f"order {order}: floor {floor_mean / ref_floor:.3f}x the reference, "
+              f"ceiling/floor {ceiling_mean / floor_mean:.3f} "
+              f"(reference {ref_ceiling / ref_floor:.3f})")
+    assert errors[2] < errors[1]
