@@ -33,6 +33,8 @@ SOURCE_DESCRIPTIONS = {
                       "settings; exact direct light",
     "PROBE_GRID": "Indirect light from a probe grid solved with the Probe Grid settings "
                   "(Irradiance Volume objects place it); exact direct light",
+    "PROPAGATION": "Indirect light from a light propagation volume solved with the Light "
+                   "Propagation settings; exact direct light",
 }
 SOURCE_ITEMS = tuple(
     (method.identifier, method.label,

@@ -55,6 +55,9 @@ def stored_version(stored):
     return int(stored.get("settings_version", 1))
 
 
+VERSION_2_GROUPS = ("PHOTON_LATTICE", "PROBE_GRID")
+
+
 def upgrade(stored):
     """The Upgrade that brings a scene's stored settings (scene.shgi's ID properties as a dict,
     nested groups as dicts) to SETTINGS_VERSION; empty when they are up to date."""
@@ -63,7 +66,9 @@ def upgrade(stored):
     if version < 2:
         _upgrade_from_1(stored, result)
     if version < 3:
-        for group in settings.METHOD_SETTINGS.values():
+        # The groups version 2 had; a method added later has no older scene to upgrade.
+        for solver in VERSION_2_GROUPS:
+            group = settings.METHOD_SETTINGS[solver]
             if "final_gather" not in stored.get(group.prop, {}):
                 result.values[(group.prop, "final_gather")] = False
     return result

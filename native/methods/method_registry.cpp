@@ -29,9 +29,9 @@ std::vector<MethodInfo> built_in_rows() {
                     2, {}, "ProbeGridSettings", 8,
                     solver_factory<ProbeGrid, ProbeGridSettings>("ProbeGridSettings")});
     rows.push_back({"PROPAGATION", "Light Propagation Volumes",
-                    "Light from the lights' first hits spread cell to cell through a coarse "
-                    "grid (LPV / HOLPV): fixed cost whatever the noise, soft and approximate; "
-                    "exact direct light",
+                    "Light from where the lights land spreads cell to cell through a coarse "
+                    "grid: a fixed cost, soft and approximate light that may leak through thin "
+                    "walls; exact direct light",
                     3, {}, "PropagationSettings", 1,
                     solver_factory<PropagationVolume, PropagationSettings>(
                         "PropagationSettings")});
@@ -96,7 +96,7 @@ std::vector<MethodInfo> registered_methods() {
 }
 
 std::vector<std::pair<std::string, int>> reserved_method_numbers() {
-    return {{"PROPAGATION", 3}, {"RADIANCE_FIELD", 4}, {"INSTANT_GI", 5}};
+    return {{"RADIANCE_FIELD", 4}, {"INSTANT_GI", 5}};
 }
 
 MethodInfo find_method(std::string_view name) {
