@@ -15,12 +15,15 @@
 //   3. Geometry volume (§3.2.2), made once per reset: a lattice of the same cell size offset by
 //      half a cell, so its cell centres are the propagation cells' corners, holding each cell's
 //      exact surface (lattice/sh_lattice.h, triangles clipped to the cell). A cell blocks light
-//      along ω with potential B(ω) = min(1, D_c(ω)/s²), D_c the projected area of its surface
-//      seen from ω (both sides) and s the cell size; the seed's L1 expansion of a cosine lobe is
-//      replaced by this exact measure. The transfer from a neighbour at offset d is attenuated by
-//      1 − B(d/|d|) interpolated trilinearly at the midpoint of the two cell centres: bilinear
-//      over the 4 corners of the shared face (face neighbours, as in the seed), linear over the 2
-//      ends of the shared edge, the shared corner itself.
+//      along ω with potential B(ω) = min(1, D_c(ω) / (s² max_i |ω_i|)), D_c the projected area
+//      of its surface seen from ω (both sides), s the cell size and s² max_i |ω_i| what a wall
+//      across the transfer shows of the cell (the seed's s² for face neighbours); the seed's L1
+//      expansion of a cosine lobe is replaced by this exact measure. The transfer from a
+//      neighbour at offset d is attenuated by 1 − B(d/|d|) interpolated trilinearly at the
+//      midpoint of the two cell centres: bilinear over the 4 corners of the shared face (face
+//      neighbours, as in the seed), linear over the 2 ends of the shared edge, the shared corner
+//      itself. The same transmittances of all 26 neighbours weight the field's lookup
+//      (propagation_field.h).
 //   4. Propagation (eq. 3.3, §3.3, §4.3): `steps` gather steps with ping-pong volumes, each added
 //      to the accumulation volume (which starts with the injection); occlusion is skipped on the
 //      first step (§3.2.3: the VPLs' own surfaces would block them). Stencil, flux factor and
@@ -117,7 +120,9 @@ class PropagationVolume : public GiSolver {
     uint64_t last_vpl_count_ = 0;
     ShVolume injected_sum_;   // Σ over passes of each pass's injection
     ShVolume injected_;       // the mean: what the last propagation started from
-    PropagationTransmittance transmittance_;
+    PropagationTransmittance transmittance_;  // of the stencil (propagation)
+    // Of all 26 neighbours (the field's lookup); null without occlusion.
+    std::shared_ptr<const NeighbourTransmittance> lookup_transmittance_;
     double geometry_seconds_ = 0.0;
     std::shared_ptr<const PropagationField> field_;
     std::vector<StageSeconds> stage_seconds_;
