@@ -196,7 +196,10 @@ void PropagationVolume::reset(Progress* progress) {
     geometry.measure_surfaces(*scene_, progress);
     const float s = geometry.cell_size();
     ShVolume volume(geometry.origin() - 0.5f * s, s, geometry.dims() + 1, settings_.order);
-    require_memory(saturating_mul(volume.coefficients().size() * sizeof(float), 5),
+    // Five volumes (the injection's sum and mean, ping, pong, accumulation) and the
+    // transmittances (26 neighbours, and the LPV's 6 beside them).
+    require_memory(saturating_add(saturating_mul(volume.coefficients().size() * sizeof(float), 5),
+                                  saturating_mul(volume.cell_count(), (26 + 6) * sizeof(float))),
                    format_message("PropagationVolume: resolution ", settings_.resolution,
                                   " gives ", volume.counts().x, " x ", volume.counts().y, " x ",
                                   volume.counts().z, " cells, 5 volumes of them"),
