@@ -268,13 +268,13 @@ std::vector<VirtualPointLight> PropagationVolume::trace_vpls(Progress* progress,
 
 void PropagationVolume::refine(Progress* progress) {
     check_scene("refine");
-    stage_seconds_.clear();
+    std::vector<StageSeconds> stages;  // the solver's once the pass is committed
     auto start = now();
     if (progress) progress->begin_stage("tracing VPLs", 0.0f, kTraceShare);
     double reflect_seconds = 0.0;
     const std::vector<VirtualPointLight> vpls = trace_vpls(progress, &reflect_seconds);
-    stage_seconds_.push_back({"vpl_trace", seconds_since(start) - reflect_seconds});
-    if (settings_.vpl_bounces > 1) stage_seconds_.push_back({"vpl_reflect", reflect_seconds});
+    stages.push_back({"vpl_trace", seconds_since(start) - reflect_seconds});
+    if (settings_.vpl_bounces > 1) stages.push_back({"vpl_reflect", reflect_seconds});
 
     start = now();
     if (progress) progress->begin_stage("injecting VPLs", kTraceShare, kInjectShare);
@@ -293,8 +293,8 @@ void PropagationVolume::refine(Progress* progress) {
                            mean_data[i] = sum_data[i] * inv_passes;
                        }
                    });
-    stage_seconds_.push_back({"injection", seconds_since(start)});
-    stage_seconds_.push_back({"geometry_volume", geometry_seconds_});
+    stages.push_back({"injection", seconds_since(start)});
+    stages.push_back({"geometry_volume", geometry_seconds_});
 
     if (progress) progress->begin_stage("propagating", kInjectShare, 1.0f);
     const PropagationStep step(stencil_of(settings_.order), settings_.order, LobeClamp::Rescaled);
@@ -303,8 +303,7 @@ void PropagationVolume::refine(Progress* progress) {
         propagate(mean, step, settings_.steps, settings_.occlusion ? &transmittance_ : nullptr,
                   progress, &step_seconds);
     for (size_t k = 0; k < step_seconds.size(); ++k)
-        stage_seconds_.push_back(
-            {format_message("propagation_step_", k + 1), step_seconds[k]});
+        stages.push_back({format_message("propagation_step_", k + 1), step_seconds[k]});
 
     // Nothing above changed the solver: commit the pass.
     injected_sum_ = std::move(sum);
@@ -313,6 +312,7 @@ void PropagationVolume::refine(Progress* progress) {
         std::make_shared<const ShVolume>(std::move(accumulated)), settings_.normal_offset,
         lookup_transmittance_);
     last_vpl_count_ = vpls.size();
+    stage_seconds_ = std::move(stages);
     ++passes_;
     if (progress) progress->set_fraction(1.0f);
 }
