@@ -15,9 +15,9 @@ constexpr float kCosineBand[3] = {kPi, 2.0f * kPi / 3.0f, kPi / 4.0f};
 constexpr int kBandOf[9] = {0, 1, 1, 1, 2, 2, 2, 2, 2};
 // √(4π): ∫ Y₀₀ dω, so a cell's flux is √(4π) c₀.
 constexpr float kSqrtFourPi = 3.5449077018110318f;
-// Destination cells per parallel task: a 64³ volume is 64 tasks per step, each well under the
+// Destination cells per parallel task: a 64³ volume is 256 tasks per step, each well under the
 // 0.2 s cancel budget. The tasks poll cancel but report no progress: the caller reports per step.
-constexpr uint64_t kCellsPerTask = 4096;
+constexpr uint64_t kCellsPerTask = 1024;
 
 // Index in lobes_ of an axis-aligned unit normal: 2·axis + (negative ? 1 : 0).
 int normal_index(const vec3& normal) {
