@@ -62,6 +62,10 @@ def make_calls():
             box, lattice, shgi.PreviewSettings(samples=10**6), progress=p),
         "PhotonLattice.solve": lambda p: shgi.PhotonLattice(
             box, shgi.PhotonLatticeSettings(photons=10**8, max_bounces=1)).solve(p),
+        "PropagationVolume.refine": lambda p: shgi.PropagationVolume(
+            box, shgi.PropagationSettings(photons=20000, resolution=96, steps=1000), p).refine(p),
+        "PropagationVolume.refine (VPLs)": lambda p: shgi.PropagationVolume(
+            box, shgi.PropagationSettings(photons=10**8, resolution=8), p).refine(p),
         "ProbeGrid.update": lambda p: shgi.ProbeGrid(
             box, shgi.ProbeGridSettings(rays_per_probe=2**16)).update(p),
         "rasterize_texels": lambda p: shgi.rasterize_texels(

@@ -35,6 +35,8 @@ SOURCE_DESCRIPTIONS = {
                   "(Irradiance Volume objects place it); exact direct light",
     "RADIANCE_FIELD": "Indirect light from a radiance field solved with the Radiance Field "
                       "settings; exact direct light",
+    "PROPAGATION": "Indirect light from a light propagation volume solved with the Light "
+                   "Propagation settings; exact direct light",
 }
 SOURCE_ITEMS = tuple(
     (method.identifier, method.label,

@@ -22,6 +22,7 @@ D = settings.PROPERTY_DEFAULTS
 L = settings.PHOTON_LATTICE_DEFAULTS
 P = settings.PROBE_GRID_DEFAULTS
 R = settings.RADIANCE_FIELD_DEFAULTS
+LP = settings.PROPAGATION_DEFAULTS
 V = settings.VIEWPORT_PROPERTY_DEFAULTS
 VP = settings.VIEWPORT_PASSES_DEFAULTS
 DN = settings.DENOISING_DEFAULTS
@@ -331,6 +332,50 @@ def bake_properties():
     }
 
 
+class ShgiPropagationSettings(bpy.types.PropertyGroup):
+    """PropagationSettings of the PROPAGATION method (``scene.shgi.propagation``); its light
+    paths' bounce limit is Light Paths > Diffuse."""
+
+    photons: IntProperty(
+        name="Light Paths", default=LP["photons"], min=1, soft_max=10_000_000,
+        description="Light paths traced from the lights per pass; where they land become the "
+                    "little lights the grid spreads: more give smoother light")
+    resolution: IntProperty(
+        name="Resolution", default=LP["resolution"], min=2,
+        max=settings.MAX_PROPAGATION_RESOLUTION, soft_max=128,
+        description="Cells along the longest side of the scene: more keep light and shadow "
+                    "sharper, and each step costs more")
+    steps: IntProperty(
+        name="Steps", default=LP["steps"], min=0, max=settings.MAX_PROPAGATION_STEPS,
+        soft_max=64,
+        description="How many cells light spreads from where it lands: more reach farther "
+                    "and brighten closed rooms")
+    order: IntProperty(
+        name="Order", default=LP["order"], min=1, max=2,
+        description="1: light spreads to the 6 face neighbours with broad directions (faster); "
+                    "2: to all 26 neighbours with sharper directions")
+    occlusion: BoolProperty(
+        name="Occlusion", default=LP["occlusion"],
+        description="Walls and objects block the light spreading through the grid")
+    normal_offset: FloatProperty(
+        name="Normal Offset", default=LP["normal_offset"], min=0.0,
+        max=settings.MAX_PROPAGATION_NORMAL_OFFSET,
+        description="Cells in front of a surface where its light is read: less shows finer "
+                    "detail, more keeps light on the far side of thin walls out")
+    passes: IntProperty(
+        name="Render Passes", default=settings.final_passes("PROPAGATION", native.module()),
+        min=1, soft_max=64,
+        description="Passes of an F12 render, a Solve or a bake, each tracing Light Paths: "
+                    "more give smoother light")
+    viewport_passes: IntProperty(
+        name="Viewport Passes", default=VP["PROPAGATION"], min=1, soft_max=64,
+        description="Passes the Rendered viewport solves, each tracing Light Paths")
+    final_gather: BoolProperty(
+        name="Final Gather", default=settings.FINAL_GATHER_DEFAULTS["PROPAGATION"],
+        description="Read the grid one bounce away from what the camera sees (a ray per "
+                    "sample): fewer blocks and leaks, slower per sample")
+
+
 class ShgiBakeSettings(bpy.types.PropertyGroup):
     """Lightmap bake settings (``scene.shgi.bake``) that the Bake panel shows."""
 
@@ -402,6 +447,8 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
                                 description="Settings of the Probe Grid method")
     radiance_field: PointerProperty(type=ShgiRadianceFieldSettings, name="Radiance Field",
                                     description="Settings of the Radiance Field method")
+    propagation: PointerProperty(type=ShgiPropagationSettings, name="Light Propagation",
+                                 description="Settings of the Light Propagation Volumes method")
     bake: PointerProperty(type=ShgiBakeSettings, name="Bake",
                           description="Lightmap bake settings")
     settings_version: IntProperty(
@@ -426,8 +473,7 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
 
 # Registered in this order: a PointerProperty's group before the group holding it.
 _CLASSES = (ShgiPhotonLatticeSettings, ShgiProbeGridSettings, ShgiRadianceFieldSettings,
-            ShgiBakeSettings,
-            ShgiSceneSettings)
+            ShgiPropagationSettings, ShgiBakeSettings, ShgiSceneSettings)
 
 
 def register():

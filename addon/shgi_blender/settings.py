@@ -73,6 +73,11 @@ BUILT_IN_METHODS = (
            "from points near surfaces turn it into smooth indirect light: photon mapping with a "
            "cheap final gather; exact direct light", 4,
            "RADIANCE_FIELD"),
+    Method("PROPAGATION", "Light Propagation Volumes",
+           "Light from where the lights land spreads cell to cell through a coarse grid: a "
+           "fixed cost, soft and approximate light that may leak through thin walls; exact "
+           "direct light", 3,
+           "PROPAGATION"),
 )
 
 
@@ -88,9 +93,9 @@ def registry_methods(shgi):
 
 # Selectable methods, in menu order: the registry's rows when the add-on loads. The solvers still
 # to come keep their identifiers and file numbers reserved (RESERVED_METHODS) so that files saved
-# later open here: PROPAGATION (seed 003) and INSTANT_GI (seed 004).
+# later open here: INSTANT_GI (seed 004).
 METHODS = registry_methods(native.module())
-RESERVED_METHODS = {"PROPAGATION": 3, "INSTANT_GI": 5}
+RESERVED_METHODS = {"INSTANT_GI": 5}
 METHODS_BY_ID = {method.identifier: method for method in METHODS}
 
 # Enum-valued fields: property identifier -> name of the shgi enum type (values are the enum's
@@ -199,22 +204,39 @@ RADIANCE_FIELD_DEFAULTS = {
     "world_in_field": False,
 }
 
+# PropagationSettings' fields in ``scene.shgi.propagation`` with their native defaults. Not
+# mirrored: ``seed`` (scene.shgi.seed) and ``vpl_bounces`` (Light Paths > Diffuse,
+# LIGHT_PATH_VALUES).
+PROPAGATION_DEFAULTS = {
+    "photons": 100000,
+    "resolution": 32,
+    "steps": 8,
+    "order": 2,
+    "occlusion": True,
+    "normal_offset": 1.0,
+}
+
 # Refinement passes of a final solve (F12, Solve, a bake) when ``shgi`` cannot be imported as the
 # add-on registers: the method registry's final_passes, which ``python -m shgi bake`` runs
 # (shgi.bake.PROBE_GRID_PASSES); tests/python/test_blender_versioning.py checks that they agree.
-FINAL_PASSES_FALLBACK = {"PHOTON_LATTICE": 1, "PROBE_GRID": 8, "RADIANCE_FIELD": 1}
+FINAL_PASSES_FALLBACK = {"PHOTON_LATTICE": 1, "PROBE_GRID": 8, "RADIANCE_FIELD": 1,
+                         "PROPAGATION": 1}
 # Passes the Rendered viewport runs (no native struct has them), as Cycles keeps its viewport
 # samples apart: photon passes it solves (each traces `photons`; as many as `passes` give the
 # lattice F12 solves), and probe grid update passes it runs in the background before it stops
 # refining (past ~2 / (1 - hysteresis) passes the blend holds as much history as it ever will).
-VIEWPORT_PASSES_DEFAULTS = {"PHOTON_LATTICE": 1, "PROBE_GRID": 32, "RADIANCE_FIELD": 1}
+VIEWPORT_PASSES_DEFAULTS = {"PHOTON_LATTICE": 1, "PROBE_GRID": 32, "RADIANCE_FIELD": 1,
+                            "PROPAGATION": 1}
 # Whether F12 and the viewport read each field method's field through a final gather
 # (PreviewSettings.final_gather: one traced bounce, the field read where it lands, the field one
 # bounce shallower: light_path_fields) rather than at the first surface. Chosen by measurement
 # (docs/methods.md, "Final gather"): denoised, the photon lattice gains 1-4 dB on the Cornell box
 # and the sun room, the probe grid 1.5-4 dB on every scene, and the probe grid's dim room of the
 # two-rooms scene comes within 5% of the path tracer's.
-FINAL_GATHER_DEFAULTS = {"PHOTON_LATTICE": True, "PROBE_GRID": True, "RADIANCE_FIELD": True}
+# The light propagation volume is read directly: its cost is the propagation, and a gather would
+# multiply the render's cost for it.
+FINAL_GATHER_DEFAULTS = {"PHOTON_LATTICE": True, "PROBE_GRID": True, "RADIANCE_FIELD": True,
+                         "PROPAGATION": False}
 # The diffuse bounces a final gather traces before the field is read (light_path_fields).
 GATHER_BOUNCES = 1
 
@@ -365,6 +387,14 @@ RADIANCE_FIELD_LABELS = {
     "obscurance": "Radiance Field > Obscurance",
     "world_in_field": "Radiance Field > World in Field",
 }
+PROPAGATION_LABELS = {
+    "photons": "Light Propagation > Light Paths",
+    "resolution": "Light Propagation > Resolution",
+    "steps": "Light Propagation > Steps",
+    "order": "Light Propagation > Order",
+    "occlusion": "Light Propagation > Occlusion",
+    "normal_offset": "Light Propagation > Normal Offset",
+}
 # The native checks' limits the property ranges follow (properties.py), so that the panels offer
 # only values the native code accepts.
 MAX_SAMPLES = 1 << 24                # Path/PreviewSettings.samples (kMaxPathTracerSamples)
@@ -381,6 +411,10 @@ MAX_MIP_LEVELS = 16                  # RadianceFieldSettings.mip_levels
 # values the panels' two decimals show.
 MAX_BLEED_BIAS = 0.99
 MIN_BACKFACE_THRESHOLD = 0.01
+MAX_PROPAGATION_RESOLUTION = 256    # PropagationSettings.resolution (min 2)
+MAX_PROPAGATION_STEPS = 1024        # PropagationSettings.steps
+MAX_PROPAGATION_NORMAL_OFFSET = 2.0  # PropagationSettings.normal_offset, cells
+MAX_VPL_BOUNCES = 64                # PropagationSettings.vpl_bounces
 # A photon is stored after at least one scattering (PhotonLatticeSettings.max_bounces >= 1):
 # Diffuse 0, direct light only, has no photon lattice.
 MIN_PHOTON_BOUNCES = 1
@@ -423,6 +457,10 @@ LIGHT_PATH_VALUES = {
                                   MAX_PROBE_BOUNCES + PROBE_PATH_FIRST_BOUNCE),
         "clamp": LightPathValue("clamp_indirect"),
     },
+    # A VPL is a surface hit of a light path, so the volume's bounces are Diffuse's (at least 1).
+    "PropagationSettings": {
+        "vpl_bounces": LightPathValue("diffuse_bounces", 0, 1, MAX_VPL_BOUNCES),
+    },
 }
 
 
@@ -457,6 +495,8 @@ LIGHT_PATH_LIMITS = {
                   f"{PROPERTY_DEFAULTS['transmission_bounces']}",
     "RADIANCE_FIELD": "Radiance Field: photons follow Diffuse; Total, Glossy and Transmission "
                       "apply to path tracing only",
+    "PROPAGATION": "Light Propagation: light paths follow Diffuse; Total, Glossy and "
+                   "Transmission apply to path tracing only",
 }
 
 
@@ -478,6 +518,9 @@ METHOD_SETTINGS = {
     "RADIANCE_FIELD": MethodSettings("RADIANCE_FIELD", "Radiance Field", "radiance_field",
                                      "RadianceFieldSettings", RADIANCE_FIELD_DEFAULTS,
                                      RADIANCE_FIELD_LABELS),
+    "PROPAGATION": MethodSettings("PROPAGATION", "Light Propagation", "propagation",
+                                  "PropagationSettings", PROPAGATION_DEFAULTS,
+                                  PROPAGATION_LABELS),
 }
 # The properties a viewport render depends on (a change restarts it); the overlay toggles and
 # the final solve's passes are not among them. A group name stands for the values of its
@@ -629,6 +672,13 @@ def radiance_field_settings(props, shgi, gather=None):
     seed (ValueError naming a refused setting)."""
     return validated(shgi.RadianceFieldSettings(
         **method_native_fields(props, METHOD_SETTINGS["RADIANCE_FIELD"], shgi, gather)))
+
+
+def propagation_settings(props, shgi, gather=None):
+    """shgi.PropagationSettings of scene.shgi: its propagation group, Light Paths and the seed
+    (ValueError naming a refused setting)."""
+    return validated(shgi.PropagationSettings(
+        **method_native_fields(props, METHOD_SETTINGS["PROPAGATION"], shgi, gather)))
 
 
 # ProbeGridSettings' fields that say how a probe field is read (shgi.ProbeLookupSettings).

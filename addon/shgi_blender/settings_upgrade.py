@@ -59,6 +59,7 @@ def stored_version(stored):
     return int(stored.get("settings_version", 1))
 
 
+
 def upgrade(stored):
     """The Upgrade that brings a scene's stored settings (scene.shgi's ID properties as a dict,
     nested groups as dicts) to SETTINGS_VERSION; empty when they are up to date."""

@@ -6,6 +6,7 @@
 #include "lattice/photon_lattice.h"
 #include "probes/probe_grid.h"
 #include "radiance/radiance_field.h"
+#include "propagation/propagation_volume.h"
 
 namespace shgi {
 namespace {
@@ -34,6 +35,13 @@ std::vector<MethodInfo> built_in_rows() {
                     "mapping with a cheap final gather; exact direct light",
                     4, {}, "RadianceFieldSettings", 1,
                     solver_factory<RadianceField, RadianceFieldSettings>("RadianceFieldSettings")});
+    rows.push_back({"PROPAGATION", "Light Propagation Volumes",
+                    "Light from where the lights land spreads cell to cell through a coarse "
+                    "grid: a fixed cost, soft and approximate light that may leak through thin "
+                    "walls; exact direct light",
+                    3, {}, "PropagationSettings", 1,
+                    solver_factory<PropagationVolume, PropagationSettings>(
+                        "PropagationSettings")});
     return rows;
 }
 
@@ -95,7 +103,7 @@ std::vector<MethodInfo> registered_methods() {
 }
 
 std::vector<std::pair<std::string, int>> reserved_method_numbers() {
-    return {{"PROPAGATION", 3}, {"INSTANT_GI", 5}};
+    return {{"INSTANT_GI", 5}};
 }
 
 MethodInfo find_method(std::string_view name) {

@@ -21,15 +21,16 @@ setup.add_import_paths()
 
 import addon_utils  # noqa: E402
 import bpy  # noqa: E402
-from recording_layout import draw_panel, draw_panel_operators  # noqa: E402
+from recording_layout import draw_panel, draw_panel_operators, draw_panel_props  # noqa: E402
 
 MODULE = "shgi_blender"
 ENGINE = "SHGI"
-METHODS = {"PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID"}
+METHODS = {"PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID", "PROPAGATION"}
 STOCK_PANELS = ("EEVEE_MATERIAL_PT_surface", "EEVEE_WORLD_PT_surface", "RENDER_PT_format",
                 "RENDER_PT_color_management", "DATA_PT_context_light")
 OWN_CLASSES = ("SHGI_RENDER_PT_method", "SHGI_RENDER_PT_photon_lattice",
                "SHGI_RENDER_PT_probe_grid", "SHGI_RENDER_PT_probe_grid_visibility",
+               "SHGI_RENDER_PT_propagation",
                "SHGI_LIGHT_PT_light", "SHGI_VIEWLAYER_PT_passes", "SHGI_OT_solve",
                "SHGI_OT_clear_solution", "SHGI_OT_quality_preset", "SHGI_OT_load_solution",
                "SHGI_RENDER_PT_light_paths_max_bounces", "SHGI_RENDER_PT_bake_farm",
@@ -90,6 +91,13 @@ def check_panels_draw(scene):
             draw_panel(name, context)
     scene.shgi.method = "PHOTON_LATTICE"
     draw_panel("SHGI_RENDER_PT_photon_lattice", context)
+    scene.shgi.method = "PROPAGATION"
+    from shgi_blender import settings
+
+    shown = {name for _, name, _ in draw_panel_props("SHGI_RENDER_PT_propagation", context)}
+    if shown != set(settings.PROPAGATION_DEFAULTS) | {"passes", "viewport_passes",
+                                                      "final_gather"}:
+        raise AssertionError(f"the light propagation panel shows {sorted(shown)}")
     scene.shgi.method = "PROBE_GRID"
     text = draw_panel("SHGI_RENDER_PT_probe_grid", context)
     if "probes fill the scene" not in text:
@@ -159,7 +167,8 @@ def check_method_groups():
 def check_group_defaults(scene, settings, shgi):
 
     builders = {"PHOTON_LATTICE": settings.photon_lattice_settings,
-                "PROBE_GRID": settings.probe_grid_settings}
+                "PROBE_GRID": settings.probe_grid_settings,
+                "PROPAGATION": settings.propagation_settings}
     for solver, group in settings.METHOD_SETTINGS.items():
         native = getattr(shgi, group.native_type)()
         built = builders[solver](scene.shgi, shgi, gather=False)  # as read at the surface

@@ -49,12 +49,14 @@ DIFFUSE_INDIRECT_TOLERANCE = 0.10
 CANCEL_LATENCY = 0.5
 
 
-def default_props(photon_lattice=None, probe_grid=None, radiance_field=None, **overrides):
+def default_props(**overrides):
     """scene.shgi as a plain object with the property defaults; the method groups' values
-    overridden from the dicts of their names."""
+    (photon_lattice=, probe_grid=, radiance_field=, propagation=) overridden from the dicts of
+    their names."""
+    groups = {group.prop for group in settings.METHOD_SETTINGS.values()}
+    group_values = {name: overrides.pop(name) for name in list(overrides) if name in groups}
     props = settings.default_properties(shgi, **dict({"method": "PATH_TRACE"}, **overrides))
-    for group, values in (("photon_lattice", photon_lattice), ("probe_grid", probe_grid),
-                          ("radiance_field", radiance_field)):
+    for group, values in group_values.items():
         for name, value in (values or {}).items():
             setattr(getattr(props, group), name, value)
     return props
@@ -84,6 +86,7 @@ def test_property_defaults_are_the_native_defaults(struct, fields):
 # `python -m shgi bake` leaves them.
 NOT_MIRRORED = {
     "ProbeGridSettings": {"volumes", "include_direct"},
+    "PropagationSettings": set(),
     "PhotonLatticeSettings": {"use_bounds", "bounds_min", "bounds_max", "caustic_order",
                               "caustic_blur_passes", "caustic_neighbours", "caustic_radius",
                               "specular_roughness", "normal_offset"},
@@ -107,7 +110,8 @@ def test_method_groups_mirror_their_native_settings(solver):
     direct = default_props(seed=4, **{group.prop: {"final_gather": False}})
     built = {"PHOTON_LATTICE": settings.photon_lattice_settings,
              "PROBE_GRID": settings.probe_grid_settings,
-             "RADIANCE_FIELD": settings.radiance_field_settings}[solver](direct, shgi)
+             "RADIANCE_FIELD": settings.radiance_field_settings,
+             "PROPAGATION": settings.propagation_settings}[solver](direct, shgi)
     assert set(group.labels) == set(group.defaults)
     for name, value in group.defaults.items():
         expected = getattr(native_defaults, name)
@@ -287,12 +291,13 @@ def test_enum_properties_offer_the_native_members():
 
 def test_methods_implemented_and_reserved():
     identifiers = [method.identifier for method in settings.METHODS]
-    assert identifiers == ["PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID", "RADIANCE_FIELD"]
+    assert identifiers == ["PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID", "RADIANCE_FIELD",
+                           "PROPAGATION"]
     # The add-on's methods are the registry's; its copy for a missing module agrees with it.
     assert settings.registry_methods(shgi) == settings.METHODS == settings.BUILT_IN_METHODS
     assert settings.registry_methods(None) == settings.BUILT_IN_METHODS
     assert settings.RESERVED_METHODS == dict(shgi.reserved_method_numbers())
-    assert [method.number for method in settings.METHODS] == [0, 1, 2, 4]  # file values stay
+    assert [method.number for method in settings.METHODS] == [0, 1, 2, 4, 3]  # file values stay
     numbers = [method.number for method in settings.METHODS]
     numbers += list(settings.RESERVED_METHODS.values())
     assert len(set(numbers)) == len(numbers)
@@ -422,6 +427,26 @@ def test_probe_grid_job_renders_the_grid_of_its_passes():
     grid.update()
     grid.update()
     expected, _ = shgi.render_preview(scene, grid.field(), shgi.PreviewSettings(samples=3, seed=2))
+    for name, pixels in expected.items():
+        np.testing.assert_array_equal(job.last_snapshot().passes[name], pixels, err_msg=name)
+
+
+def test_propagation_job_renders_the_volume_of_its_settings():
+    """F12's PROPAGATION job, from scene.shgi.propagation and Light Paths: the same image as the
+    native solver and preview renderer give directly."""
+    scene = committed(scenes.cornell_box(0.06))
+    props = default_props(method="PROPAGATION", diffuse_bounces=2,
+                          propagation={"photons": 20000, "resolution": 16, "steps": 4})
+    recipe = field_solvers.solver_recipe(props, shgi)
+    assert recipe.settings.vpl_bounces == 2 and recipe.passes == 1
+    job = RenderJob(shgi, scene, 3, preview_settings=shgi.PreviewSettings(seed=2),
+                    solver_recipe=recipe).start()
+    assert job.wait(60) and job.error is None, job.error
+    assert list(job.solution.timings)[-1] == "propagation_step_4"
+    volume = shgi.PropagationVolume(scene, recipe.settings)
+    volume.refine()
+    expected, _ = shgi.render_preview(scene, volume.current_field(),
+                                      shgi.PreviewSettings(samples=3, seed=2))
     for name, pixels in expected.items():
         np.testing.assert_array_equal(job.last_snapshot().passes[name], pixels, err_msg=name)
 

@@ -72,7 +72,7 @@ def test_the_registry_lists_every_method_once_with_its_file_number():
         shgi.method("LIGHTCUTS")
 
 
-@pytest.mark.parametrize("identifier", ["PHOTON_LATTICE", "PROBE_GRID", PLUGIN])
+@pytest.mark.parametrize("identifier", ["PHOTON_LATTICE", "PROBE_GRID", "PROPAGATION", PLUGIN])
 def test_every_field_method_solves_and_renders_through_the_registry(identifier):
     scene = cornell_like()
     row = shgi.method(identifier)
@@ -93,6 +93,7 @@ def test_every_field_method_solves_and_renders_through_the_registry(identifier):
 @pytest.mark.parametrize("identifier, fields, field", [
     ("PHOTON_LATTICE", {"resolution": 0}, "resolution"),
     ("PROBE_GRID", {"rays_per_probe": 0}, "rays_per_probe"),
+    ("PROPAGATION", {"order": 3}, "order"),
     (PLUGIN, {"rays_per_probe": 0}, "rays_per_probe"),
 ])
 def test_a_refused_setting_names_its_field(identifier, fields, field):
@@ -118,8 +119,10 @@ def test_registering_a_taken_or_reserved_name_or_number_is_refused():
         shgi.register_method("X_TEST", "X", "", 2, dict, None)
     with pytest.raises(ValueError, match="number 4 is taken by method 'RADIANCE_FIELD'"):
         shgi.register_method("X_TEST", "X", "", 4, dict, None)
-    with pytest.raises(ValueError, match="reserved for method 'PROPAGATION'"):
+    with pytest.raises(ValueError, match="number 3 is taken by method 'PROPAGATION'"):
         shgi.register_method("X_TEST", "X", "", 3, dict, None)
+    with pytest.raises(ValueError, match="reserved for method 'INSTANT_GI'"):
+        shgi.register_method("X_TEST", "X", "", 5, dict, None)
     assert "X_TEST" not in {row.identifier for row in shgi.methods()}
 
 
@@ -152,6 +155,7 @@ def test_the_cli_bakes_a_plugin_method_and_matches_a_script_byte_for_byte(
     room = tmp_path / "room.gltf"
     room.write_text(json.dumps(room_gltf()))
     cases = [("PROBE_GRID", shgi.ProbeGridSettings(seed=4, rays_per_probe=64, order=1)),
+             ("PROPAGATION", shgi.PropagationSettings(seed=4, photons=20000, resolution=16)),
              (PLUGIN, method_plugin.SingleProbeSettings(rays_per_probe=64))]
     for identifier, settings in cases:
         settings_file = tmp_path / f"{identifier}.json"

@@ -307,6 +307,9 @@ def solver_recipe(props, shgi, volumes=(), viewport=False, gather=None):
         native_settings = settings.probe_grid_settings(props, shgi, native_volumes(volumes, shgi),
                                                        gather)
         recipe_solver = ProbeGridSolver
+    elif solver == "PROPAGATION":
+        native_settings = settings.propagation_settings(props, shgi, gather)
+        recipe_solver = FieldSolver.of(solver)
     elif solver:
         # A registered method without a settings group here (a plugin's): its settings'
         # defaults with the scene's seed, its registry's passes for F12 and the viewport alike.

@@ -281,6 +281,27 @@ class SHGI_RENDER_PT_probe_grid_visibility(_FieldPanel, bpy.types.Panel):
         column.prop(grid, "visibility_resolution", text="Resolution")
 
 
+class SHGI_RENDER_PT_propagation(_FieldPanel, bpy.types.Panel):
+    bl_label = "Light Propagation"
+    SOLVER = "PROPAGATION"
+
+    def draw(self, context):
+        layout = self.layout
+        volume = context.scene.shgi.propagation
+        draw_frozen_solution(layout, context)
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        column = layout.column(align=True)
+        for name in ("photons", "resolution", "steps", "order", "normal_offset"):
+            column.prop(volume, name)
+        layout.prop(volume, "occlusion")
+        column = layout.column(align=True)
+        column.label(text="Passes")
+        column.prop(volume, "passes", text="Render")
+        column.prop(volume, "viewport_passes", text="Viewport")
+        layout.prop(volume, "final_gather")
+
+
 def irradiance_volume_count(scene):
     """Irradiance Volume objects of the scene that render."""
     from ..export.light_probe import is_irradiance_volume
@@ -395,4 +416,5 @@ CLASSES = (SHGI_RENDER_PT_method, SHGI_RENDER_PT_denoise, SHGI_RENDER_PT_light_p
            SHGI_RENDER_PT_light_paths_max_bounces, SHGI_RENDER_PT_photon_lattice,
            SHGI_RENDER_PT_radiance_field,
            SHGI_RENDER_PT_probe_grid, SHGI_RENDER_PT_probe_grid_visibility,
+           SHGI_RENDER_PT_propagation,
            SHGI_RENDER_PT_bake, SHGI_RENDER_PT_bake_farm, SHGI_RENDER_PT_last_render)

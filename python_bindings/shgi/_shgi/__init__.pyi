@@ -8,7 +8,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'RadianceField', 'RadianceFieldSettings', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -2222,6 +2222,151 @@ class Progress:
     def stage(self) -> str:
         """
         Name of the current stage.
+        """
+class PropagationField(IndirectField):
+    """
+    An immutable light propagation volume as an IndirectField (its accumulated light).
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @property
+    def memory_bytes(self) -> int:
+        """
+        Bytes of its volume.
+        """
+class PropagationSettings:
+    """
+    Settings of the PropagationVolume solver (light propagation volumes); every field has a default.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        PropagationSettings(**fields), e.g. PropagationSettings(order=1, steps=16).
+        """
+    def validate(self) -> None:
+        """
+        Raises ValueError naming the first invalid field.
+        """
+    @property
+    def normal_offset(self) -> float:
+        """
+        Cells along the shading normal before the lookup, against self-lighting and leaks through walls (1.0).
+        """
+    @normal_offset.setter
+    def normal_offset(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def occlusion(self) -> bool:
+        """
+        Geometry volume blocking from the second step on (True).
+        """
+    @occlusion.setter
+    def occlusion(self, arg0: bool) -> None:
+        ...
+    @property
+    def order(self) -> int:
+        """
+        1: LPV (L1 SH, 6 directions); 2: HOLPV (L2 SH, 26 directions) (2).
+        """
+    @order.setter
+    def order(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def photons(self) -> int:
+        """
+        Light paths traced per pass; their surface hits are the VPLs (100000).
+        """
+    @photons.setter
+    def photons(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def resolution(self) -> int:
+        """
+        Cells along the longest side of the scene (32).
+        """
+    @resolution.setter
+    def resolution(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def seed(self) -> int:
+        """
+        Random seed (0).
+        """
+    @seed.setter
+    def seed(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def steps(self) -> int:
+        """
+        Propagation steps (8).
+        """
+    @steps.setter
+    def steps(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def vpl_bounces(self) -> int:
+        """
+        Surface hits per light path that become VPLs: 1 is the published single bounce, n gives n bounces of indirect light (4).
+        """
+    @vpl_bounces.setter
+    def vpl_bounces(self, arg1: typing.SupportsIndex) -> None:
+        ...
+class PropagationVolume(GiSolver):
+    """
+    
+    Light propagation volumes (seed 003): VPLs from traced light paths, injected as cosine lobes
+    into an SH grid and propagated step by step (LPV: 6 directions, L1; HOLPV: 26 directions, L2).
+    
+    Each refine() traces `photons` more light paths and propagates the mean of every pass's VPLs.
+    current_field() is an immutable snapshot. After editing and re-committing the scene, call
+    reset().
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, scene: Scene, settings: PropagationSettings = ..., progress: Progress = None) -> None:
+        """
+        Builds the geometry volume (the scene must be committed).
+        """
+    def current_field(self) -> PropagationField:
+        """
+        The PropagationField of the last pass (safe to render while refine() runs).
+        """
+    def refine(self, progress: Progress = None) -> None:
+        """
+        One pass: traces VPLs, injects, propagates (GIL released). Raises shgi.Cancelled on cancel, keeping the previous field.
+        """
+    def reset(self, progress: Progress = None) -> None:
+        """
+        Forgets every pass and rebuilds the geometry volume of the (re-committed) scene.
+        """
+    @property
+    def memory_bytes(self) -> int:
+        """
+        Bytes held by the volumes.
+        """
+    @property
+    def passes(self) -> int:
+        """
+        Passes averaged so far.
+        """
+    @property
+    def settings(self) -> PropagationSettings:
+        """
+        A copy of the settings.
+        """
+    @property
+    def stage_seconds(self) -> list:
+        """
+        [(stage, seconds)] of the last pass: vpl_trace, vpl_reflect, injection, geometry_volume (of the last reset), propagation_step_1 ... N.
+        """
+    @property
+    def vpl_count(self) -> int:
+        """
+        VPLs injected by the last pass.
         """
 class RadianceField(IndirectField, GiSolver):
     """

@@ -1,0 +1,76 @@
+// PropagationField: the IndirectField of a light propagation volume (seed 003 §3.2.4, eq. 3.4):
+// an immutable accumulation volume of intensities (W/sr, propagation/propagation_stencil.h)
+// turned into incident radiance at shading points.
+//
+// A cell's intensity I(ω) is the light in the cell travelling along ω; spread over the cell's
+// cross-section it is a radiance, and light arriving at p from direction ω_i (pointing back to
+// where it came from) travels along −ω_i:
+//     L_i(p, ω_i) = k · I_p(−ω_i) / s²,
+// so the irradiance E(n) = ∫ L_i max(0, n·ω_i) dω_i is the intensity against the cosine lobe
+// at −n (the seed's text says −n; its eq. 3.4 writes n). I_p is the trilinear interpolation of
+// the cells at p moved normal_offset cells along n, each weighted by the geometry's transmittance
+// from the cell holding that point (when the solver gives it: occlusion on), the weights
+// normalised.
+//
+// The seed gives no intensity-to-radiance factor k. The accumulation volume sums the light of
+// every step, so k is the inverse of the cells light advances per step times the lobes' mean
+// cosine, which depends on the stencil. It is fixed by the single-VPL test
+// (tests/cpp/propagation/propagation_volume_test.cpp): a VPL of flux Φ in an empty volume must
+// light a plane facing it with Φ cos θ / (π r²). Over the near field (r = 1.5–3 cells, θ = 0–60°,
+// 24 steps) the unscaled ratio has geometric mean 0.786 for the LPV and 0.465 for the HOLPV
+// (its diagonal steps move light farther per step); k is their inverse. Farther out the LPV falls
+// below 1/r² (its broad L1 lobes turn propagation into diffusion: 0.70 of the closed form at 4
+// cells, 0.34 at 6 after 24 steps), the HOLPV much less (0.93 and 0.84).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "render/indirect_field.h"
+#include "sh/sh_volume.h"
+
+namespace shgi {
+
+// k by SH order of the volume (1: LPV's stencil, 2: HOLPV's), see above.
+inline constexpr float kLpvRadianceScale = 1.0f / 0.786f;
+inline constexpr float kHolpvRadianceScale = 1.0f / 0.465f;
+inline float propagation_radiance_scale(int order) {
+    return order == 1 ? kLpvRadianceScale : kHolpvRadianceScale;
+}
+
+// Per cell of a volume and offset of PropagationStencil::Neighbours26's order
+// (propagation_offsets), the transmittance of the geometry from the neighbour at −offset into
+// the cell (propagation/propagation_stencil.h's PropagationTransmittance, 26 offsets).
+using NeighbourTransmittance = std::vector<float>;
+
+class PropagationField : public IndirectField {
+  public:
+    PropagationField() = default;  // no light
+    // Copies share the volume. With `transmittance` (26 per cell, may be null) the lookup
+    // weights each of its 8 cells by the transmittance from the cell holding the lookup point
+    // to it, so that light on the far side of a wall within a cell of the point is not read
+    // (the light propagation keeps it out, the interpolation would let it in).
+    PropagationField(std::shared_ptr<const ShVolume> accumulated, float normal_offset,
+                     std::shared_ptr<const NeighbourTransmittance> transmittance = nullptr);
+
+    ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
+    bool is_zero() const override { return !accumulated_ || accumulated_->cell_count() == 0; }
+    // A quarter cell: the trilinear lookup changes little over it.
+    float reuse_distance() const override {
+        return accumulated_ ? 0.25f * accumulated_->cell_size() : 0.0f;
+    }
+
+    // Null before the first pass.
+    const std::shared_ptr<const ShVolume>& accumulated() const { return accumulated_; }
+    size_t memory_bytes() const {
+        return accumulated_ ? accumulated_->coefficients().size() * sizeof(float) : 0;
+    }
+
+  private:
+    std::shared_ptr<const ShVolume> accumulated_;
+    std::shared_ptr<const NeighbourTransmittance> transmittance_;
+    float normal_offset_ = 1.0f;
+    float radiance_scale_ = 0.0f;  // k / s²
+};
+
+}  // namespace shgi

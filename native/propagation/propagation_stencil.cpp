@@ -1,0 +1,217 @@
+#include "propagation/propagation_stencil.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "sh/sh_basis.h"
+#include "util/error.h"
+#include "util/parallel.h"
+
+namespace shgi {
+namespace {
+
+// Â_l = √(4π/(2l+1)) Z_l of the clamped cosine (sh/sh_irradiance.h), bands 0..2.
+constexpr float kCosineBand[3] = {kPi, 2.0f * kPi / 3.0f, kPi / 4.0f};
+constexpr int kBandOf[9] = {0, 1, 1, 1, 2, 2, 2, 2, 2};
+// √(4π): ∫ Y₀₀ dω, so a cell's flux is √(4π) c₀.
+constexpr float kSqrtFourPi = 3.5449077018110318f;
+// Destination cells per parallel task: a 64³ volume is 256 tasks per step, each well under the
+// 0.2 s cancel budget. The tasks poll cancel but report no progress: the caller reports per step.
+constexpr uint64_t kCellsPerTask = 1024;
+
+// Index in lobes_ of an axis-aligned unit normal: 2·axis + (negative ? 1 : 0).
+int normal_index(const vec3& normal) {
+    for (int axis = 0; axis < 3; ++axis)
+        if (normal[axis] != 0.0f) return 2 * axis + (normal[axis] < 0.0f ? 1 : 0);
+    return 0;
+}
+
+bool same_layout(const ShVolume& a, const ShVolume& b) {
+    return a.counts() == b.counts() && a.order() == b.order();
+}
+
+}  // namespace
+
+double rectangle_solid_angle(double x0, double x1, double y0, double y1, double distance) {
+    // Ω of [0, x] × [0, y] (signed by the quadrant) is atan2(x y, d √(x² + y² + d²)); the
+    // rectangle is the inclusion–exclusion of its four corners.
+    const auto corner = [distance](double x, double y) {
+        return std::atan2(x * y, distance * std::sqrt(x * x + y * y + distance * distance));
+    };
+    return corner(x1, y1) - corner(x0, y1) - corner(x1, y0) + corner(x0, y0);
+}
+
+std::vector<PropagationFace> propagation_faces(PropagationStencil stencil) {
+    std::vector<PropagationFace> faces;
+    for (const ivec3& d : propagation_offsets(stencil)) {
+        for (int axis = 0; axis < 3; ++axis) {
+            for (int sign : {1, -1}) {
+                // LPV: every face of the destination that does not touch the source (normal ·
+                // d >= 0); HOLPV: the faces on the outside of the 3×3×3 block (d_axis = sign).
+                const bool outer = stencil == PropagationStencil::Faces6
+                                       ? sign * d[axis] >= 0
+                                       : d[axis] == sign;
+                if (!outer) continue;
+                PropagationFace face;
+                face.offset = d;
+                face.normal = vec3(0.0f);
+                face.normal[axis] = float(sign);
+                const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+                const double plane = double(d[axis]) + 0.5 * sign;
+                face.solid_angle = rectangle_solid_angle(d[u] - 0.5, d[u] + 0.5, d[v] - 0.5,
+                                                         d[v] + 0.5, std::fabs(plane));
+                vec3 centre = vec3(d);
+                centre[axis] = float(plane);
+                face.direction = glm::normalize(centre);
+                faces.push_back(face);
+            }
+        }
+    }
+    return faces;
+}
+
+std::vector<ivec3> propagation_offsets(PropagationStencil stencil) {
+    std::vector<ivec3> offsets;
+    for (int z = -1; z <= 1; ++z)
+        for (int y = -1; y <= 1; ++y)
+            for (int x = -1; x <= 1; ++x) {
+                const int nonzero = (x != 0) + (y != 0) + (z != 0);
+                if (nonzero == 0) continue;
+                if (stencil == PropagationStencil::Faces6 && nonzero != 1) continue;
+                offsets.emplace_back(x, y, z);
+            }
+    return offsets;
+}
+
+void add_cosine_lobe(float* cell, int order, const vec3& normal, const vec3& power) {
+    float basis[9];
+    sh_eval(order, normal, basis);
+    const vec3 scale = power * kInvPi;
+    for (int i = 0; i < sh_num_coefficients(order); ++i) {
+        const float w = kCosineBand[kBandOf[i]] * basis[i];
+        cell[3 * i + 0] += w * scale.x;
+        cell[3 * i + 1] += w * scale.y;
+        cell[3 * i + 2] += w * scale.z;
+    }
+}
+
+vec3 cell_flux(const float* cell) { return kSqrtFourPi * vec3(cell[0], cell[1], cell[2]); }
+
+PropagationStep::PropagationStep(PropagationStencil stencil, int order, LobeClamp clamp)
+    : order_(order), coefficients_(sh_num_coefficients(order)), clamp_(clamp) {
+    if (order < 1 || order > 2)
+        throw InvalidArgument(format_message("PropagationStep: order ", order,
+                                             " must be 1 (L1, LPV) or 2 (L2, HOLPV)"));
+    for (int n = 0; n < 6; ++n) {
+        vec3 normal(0.0f);
+        normal[n / 2] = n % 2 == 0 ? 1.0f : -1.0f;
+        float basis[9];
+        sh_eval(order, normal, basis);
+        for (int i = 0; i < coefficients_; ++i)
+            lobes_[n][i] = kCosineBand[kBandOf[i]] * basis[i] * kInvPi;
+    }
+    for (const PropagationFace& f : propagation_faces(stencil)) {
+        if (offsets_.empty() || offsets_.back().offset != f.offset) offsets_.push_back({f.offset, {}});
+        Face face;
+        face.flux_factor = float(f.solid_angle / kPiD);
+        sh_eval(order, f.direction, face.basis);
+        face.normal_index = normal_index(f.normal);
+        offsets_.back().faces.push_back(face);
+    }
+}
+
+vec3 PropagationStep::face_intensity(const float* cell, const Face& face) const {
+    vec3 intensity(0.0f);
+    for (int i = 0; i < coefficients_; ++i)
+        intensity += face.basis[i] * vec3(cell[3 * i], cell[3 * i + 1], cell[3 * i + 2]);
+    return intensity;
+}
+
+void PropagationStep::rescale_factors(const ShVolume& source, std::vector<vec3>& factors,
+                                      Progress* progress) const {
+    factors.assign(source.cell_count(), vec3(1.0f));
+    if (clamp_ != LobeClamp::Rescaled) return;
+    parallel_for(
+        0, source.cell_count(), kCellsPerTask,
+        [&](uint64_t begin, uint64_t end) {
+            throw_if_cancelled(progress);
+            for (uint64_t c = begin; c < end; ++c) {
+                const float* cell = source.cell_data(c);
+                vec3 total(0.0f), clamped(0.0f);
+                for (const Offset& offset : offsets_)
+                    for (const Face& face : offset.faces) {
+                        const vec3 intensity = face_intensity(cell, face);
+                        total += face.flux_factor * intensity;
+                        clamped += face.flux_factor * glm::max(intensity, vec3(0.0f));
+                    }
+                // A cell whose unclamped total is not positive sends nothing (its clamped
+                // samples are noise of the truncation).
+                for (int ch = 0; ch < 3; ++ch)
+                    factors[c][ch] =
+                        total[ch] > 0.0f && clamped[ch] > 0.0f ? total[ch] / clamped[ch] : 0.0f;
+            }
+        });
+}
+
+void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
+                                 const PropagationTransmittance* transmittance,
+                                 Progress* progress) const {
+    if (!same_layout(source, destination) || source.order() != order_)
+        throw InvalidArgument(format_message(
+            "PropagationStep: source and destination volumes must both be order ", order_,
+            " with the same counts (orders ", source.order(), ", ", destination.order(), ")"));
+    const ivec3 counts = source.counts();
+    if (transmittance != nullptr &&
+        (transmittance->offsets != offset_count() ||
+         transmittance->values.size() != source.cell_count() * size_t(offset_count())))
+        throw InvalidArgument(format_message(
+            "PropagationStep: transmittance has ", transmittance->values.size(), " values for ",
+            transmittance->offsets, " offsets; expected ", source.cell_count(), " cells × ",
+            offset_count(), " offsets"));
+    std::vector<vec3> factors;
+    rescale_factors(source, factors, progress);
+    const bool clamp = clamp_ != LobeClamp::None;
+    const int floats = source.floats_per_cell();
+    parallel_for(
+        0, source.cell_count(), kCellsPerTask,
+        [&](uint64_t begin, uint64_t end) {
+            throw_if_cancelled(progress);
+            for (uint64_t c = begin; c < end; ++c) {
+                const ivec3 cell(int(c % uint64_t(counts.x)),
+                                 int((c / uint64_t(counts.x)) % uint64_t(counts.y)),
+                                 int(c / (uint64_t(counts.x) * uint64_t(counts.y))));
+                // Flux re-injected along each of the 6 axis normals, then one lobe per normal.
+                vec3 flux[6] = {};
+                for (int o = 0; o < offset_count(); ++o) {
+                    const Offset& offset = offsets_[size_t(o)];
+                    const ivec3 from = cell - offset.offset;
+                    if (glm::any(glm::lessThan(from, ivec3(0))) ||
+                        glm::any(glm::greaterThanEqual(from, counts)))
+                        continue;
+                    const float t = transmittance != nullptr
+                                        ? transmittance->values[c * size_t(offset_count()) + size_t(o)]
+                                        : 1.0f;
+                    if (t <= 0.0f) continue;
+                    const size_t s = source.cell_index(from);
+                    const float* src = source.cell_data(s);
+                    for (const Face& face : offset.faces) {
+                        vec3 intensity = face_intensity(src, face);
+                        if (clamp) intensity = glm::max(intensity, vec3(0.0f)) * factors[s];
+                        flux[face.normal_index] += (face.flux_factor * kPi * t) * intensity;
+                    }
+                }
+                float* dst = destination.cell_data(c);
+                std::fill(dst, dst + floats, 0.0f);
+                for (int n = 0; n < 6; ++n) {
+                    if (flux[n] == vec3(0.0f)) continue;
+                    for (int i = 0; i < coefficients_; ++i) {
+                        dst[3 * i + 0] += lobes_[n][i] * flux[n].x;
+                        dst[3 * i + 1] += lobes_[n][i] * flux[n].y;
+                        dst[3 * i + 2] += lobes_[n][i] * flux[n].z;
+                    }
+                }
+            }
+        });
+}
+
+}  // namespace shgi

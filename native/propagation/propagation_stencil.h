@@ -1,0 +1,124 @@
+// PropagationStencil: the faces light crosses in one step of a light propagation volume (seed 003
+// §3.2.3, §4.2 and Appendix A), and one gather step over a dense SH volume of intensities.
+//
+// Units and conventions: a propagation volume (sh/sh_volume.h) stores per cell the radiant
+// intensity I(ω) in W/sr of the light in the cell, ω the direction the light travels; its
+// integral over the sphere is the cell's flux (W). Cells are unit cubes here (solid angles do not
+// depend on the cell size). A clamped-cosine lobe of flux Φ pointing along n is the expansion of
+// (Φ/π) max(0, n·ω): coefficient i of band l is (Φ/π) Â_l Y_i(n) with Â_l = π, 2π/3, π/4
+// (seed 003 eq. 3.2 with Z₀ = √π/2, Z₁ = √(π/3), Z₂ = √(5π)/8; §4.1.1 misprints Z₂ as √(5π/8)).
+//
+// Stencils, the source cell at the origin, destination cells at integer offsets d:
+//   Faces6 (LPV, §3.2.3): the 6 face neighbours, each with its 5 faces that do not touch the
+//       source (30 faces): front 0.4006697 sr, side 0.4234314 sr (the 0.4234413544 copied into
+//       many shaders is wrong).
+//   Neighbours26 (HOLPV, §4.2): all 26 neighbours and the 54 outer faces of the 3×3×3 block:
+//       face-centred 0.4006697, edge 0.2506920, corner 0.1727394 sr.
+// Each stencil's faces partition the sphere seen from the source centre (every ray leaves the
+// source cell into exactly one neighbour and leaves that through exactly one listed face), so
+// their solid angles sum to 4π. Solid angles are exact (rectangle_solid_angle, with atan2).
+//
+// One step (gather form, §3.3 and §4.3): every destination cell sums, over the stencil's faces
+// f and their source cells c − d_f, the light Ω_f I_src(ω_f) T_f crossing face f, re-injected as
+// a cosine lobe of that flux along the face's outward normal n_f; ω_f points from the source
+// centre to the face centre and T_f is the transmittance of the geometry between (1 without
+// occlusion). Two corrections to eq. 3.3:
+//   - eq. 3.3 scales by Ω_f/4π, but the light crossing the face is Ω_f I(ω_f) and a cosine lobe
+//     (Φ/π) max(0, n·ω) holds Φ: the lobe re-injected for that light has Φ_f = Ω_f I(ω_f), i.e.
+//     the thesis' lobe Φ' max(0, n·ω) with Φ' = (Ω_f/π) I(ω_f). With Ω_f/4π three quarters of the
+//     flux are lost at every step;
+//   - an L1/L2 expansion of a lobe is negative behind it; clamping those samples at zero adds
+//     energy (+12.5% per step for an L1 cosine lobe). LobeClamp::Rescaled clamps, then scales
+//     the source cell's clamped fluxes to its unclamped total Σ_f Ω_f I(ω_f), which equals
+//     ∫ I dω (the stencils integrate bands 0..2 exactly by their symmetry): no energy is made.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "sh/sh_volume.h"
+#include "util/math.h"
+#include "util/progress.h"
+
+namespace shgi {
+
+enum class PropagationStencil : uint8_t {
+    Faces6,        // LPV: 6 face neighbours × 5 faces
+    Neighbours26,  // HOLPV: 26 neighbours, the 54 outer faces of the 3×3×3 block
+};
+
+enum class LobeClamp : uint8_t {
+    Rescaled,  // clamp negative samples, then rescale to the unclamped total (conserves flux)
+    Clamped,   // clamp only (the published method: gains energy each step)
+    None,      // no clamp (linear; conserves flux; may carry negative intensity)
+};
+
+// Solid angle (sr) of the rectangle [x0, x1] × [y0, y1] in the plane at `distance` > 0 from the
+// viewpoint, x and y measured from the viewpoint's foot on that plane (Appendix A, with atan2 so
+// that every quadrant is right).
+double rectangle_solid_angle(double x0, double x1, double y0, double y1, double distance);
+
+// One face of a stencil: where its light goes and how much of the sphere it takes.
+struct PropagationFace {
+    ivec3 offset{0};       // destination cell − source cell
+    vec3 direction{0.0f};  // unit, source centre → face centre (ω_f)
+    vec3 normal{0.0f};     // the face's outward unit normal (axis-aligned)
+    double solid_angle = 0.0;  // Ω_f, sr, seen from the source centre
+};
+
+// The faces of a stencil, grouped by offset (offsets in a fixed order).
+std::vector<PropagationFace> propagation_faces(PropagationStencil stencil);
+// The distinct offsets of a stencil, in the order of propagation_faces.
+std::vector<ivec3> propagation_offsets(PropagationStencil stencil);
+
+// Adds to `cell` (floats_per_cell of an order-`order` volume, [coeff][rgb]) a clamped-cosine lobe
+// along unit `normal` holding flux `power` (W per channel).
+void add_cosine_lobe(float* cell, int order, const vec3& normal, const vec3& power);
+
+// Flux (W per channel) of a cell's intensity expansion: ∫ I dω = √(4π) c₀.
+vec3 cell_flux(const float* cell);
+
+// Per destination cell and stencil offset, the transmittance of the transfer from the source
+// cell (destination − offset): transmittance[cell · offsets + o]. Empty: no occlusion.
+struct PropagationTransmittance {
+    std::vector<float> values;
+    int offsets = 0;
+};
+
+// One propagation step: `destination` = the light of `source` moved by one step (gather form).
+// Both volumes have the same layout; light leaving the volume is lost. Parallel over destination
+// cells, each summed in a fixed order: bit-identical for any thread count. Cancellable (polled
+// per 4096 cells; no progress is reported: a step is one unit of the caller's stage); throws InvalidArgument for volumes of different layouts or a
+// transmittance of the wrong size.
+class PropagationStep {
+  public:
+    PropagationStep(PropagationStencil stencil, int order, LobeClamp clamp);
+    void operator()(const ShVolume& source, ShVolume& destination,
+                    const PropagationTransmittance* transmittance = nullptr,
+                    Progress* progress = nullptr) const;
+    int offset_count() const { return int(offsets_.size()); }
+
+  private:
+    struct Face {
+        float flux_factor = 0.0f;                   // Ω_f / π
+        float basis[9] = {};                        // Y_i(ω_f), i < 9
+        int normal_index = 0;                       // index into lobes_
+    };
+    struct Offset {
+        ivec3 offset{0};
+        std::vector<Face> faces;
+    };
+    // Per source cell and channel, the factor that takes its clamped face fluxes to the
+    // unclamped total (Rescaled), else 1.
+    void rescale_factors(const ShVolume& source, std::vector<vec3>& factors,
+                         Progress* progress) const;
+    vec3 face_intensity(const float* cell, const Face& face) const;
+
+    int order_ = 1;
+    int coefficients_ = 4;
+    LobeClamp clamp_ = LobeClamp::Rescaled;
+    std::vector<Offset> offsets_;
+    float lobes_[6][9] = {};  // cosine lobe Â_l Y_i(n)/π along ±x, ±y, ±z (flux 1)
+};
+
+}  // namespace shgi

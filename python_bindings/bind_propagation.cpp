@@ -1,0 +1,151 @@
+// Bindings for native/propagation: the PropagationVolume solver (light propagation volumes, LPV
+// and HOLPV, seed 003; propagation/propagation_volume.h) and its settings, mirrored field by
+// field with the same names and defaults, and the PropagationField snapshots it renders from.
+//
+// A PropagationVolume keeps its Scene alive; refine() and reset() release the GIL and report
+// progress. Its field is an immutable snapshot: renders may read one while the next refine()
+// runs.
+#include <pybind11/pybind11.h>
+
+#include <memory>
+#include <string>
+
+#include "bind_methods.h"
+#include "interruptible.h"
+#include "propagation/propagation_volume.h"
+#include "scene_use.h"
+#include "struct_fields.h"
+#include "util/progress.h"
+
+namespace py = pybind11;
+
+namespace shgi::python {
+namespace {
+
+void bind_settings(py::module_& m) {
+    using S = PropagationSettings;
+    py::class_<S> cls(m, "PropagationSettings",
+                      "Settings of the PropagationVolume solver (light propagation volumes); "
+                      "every field has a default.");
+    def_integer(cls, "photons", &S::photons,
+                "Light paths traced per pass; their surface hits are the VPLs (100000).", 1);
+    def_integer(cls, "seed", &S::seed, "Random seed (0).");
+    def_integer(cls, "vpl_bounces", &S::vpl_bounces,
+                "Surface hits per light path that become VPLs: 1 is the published single "
+                "bounce, n gives n bounces of indirect light (4).");
+    def_integer(cls, "resolution", &S::resolution,
+                "Cells along the longest side of the scene (32).");
+    def_integer(cls, "steps", &S::steps, "Propagation steps (8).");
+    def_integer(cls, "order", &S::order,
+                "1: LPV (L1 SH, 6 directions); 2: HOLPV (L2 SH, 26 directions) (2).");
+    cls.def(py::init(&from_kwargs<S>),
+            "PropagationSettings(**fields), e.g. PropagationSettings(order=1, steps=16).")
+        .def_readwrite("occlusion", &S::occlusion,
+                       "Geometry volume blocking from the second step on (True).")
+        .def_readwrite("normal_offset", &S::normal_offset,
+                       "Cells along the shading normal before the lookup, against "
+                       "self-lighting and leaks through walls (1.0).");
+    cls.def("validate", &validate_propagation_settings,
+            "Raises ValueError naming the first invalid field.");
+    register_settings_type<S>("PropagationSettings");
+}
+
+ObjectUse volume_use(const PropagationVolume& volume, ObjectUse::Kind kind, const char* method) {
+    return ObjectUse(&volume, kind, std::string("PropagationVolume.") + method,
+                     kind == ObjectUse::Kind::Write
+                         ? "the volume is in use in another thread; wait for that call to return"
+                         : "a refine() or reset() of this volume is running in another thread; "
+                           "wait for it to return");
+}
+
+void bind_volume(py::module_& m) {
+    py::class_<PropagationField, IndirectField>(
+        m, "PropagationField",
+        "An immutable light propagation volume as an IndirectField (its accumulated light).")
+        .def_property_readonly(
+            "memory_bytes", &PropagationField::memory_bytes, "Bytes of its volume.");
+
+    py::class_<PropagationVolume, GiSolver> cls(m, "PropagationVolume", R"doc(
+Light propagation volumes (seed 003): VPLs from traced light paths, injected as cosine lobes
+into an SH grid and propagated step by step (LPV: 6 directions, L1; HOLPV: 26 directions, L2).
+
+Each refine() traces `photons` more light paths and propagates the mean of every pass's VPLs.
+current_field() is an immutable snapshot. After editing and re-committing the scene, call
+reset().)doc");
+    cls.def(py::init([](const Scene& scene, const PropagationSettings& settings,
+                         Progress* progress) {
+                 validate_propagation_settings(settings);
+                 SceneUse use(scene, SceneUse::Kind::Query, "PropagationVolume");
+                 return run_interruptible(progress, [&](Progress* used) {
+                     return std::make_unique<PropagationVolume>(scene, settings, used);
+                 });
+             }),
+             py::arg("scene"), py::arg("settings") = PropagationSettings{},
+             py::arg("progress") = py::none(), py::keep_alive<1, 2>(),
+             "Builds the geometry volume (the scene must be committed).")
+        .def(
+            "refine",
+            [](PropagationVolume& volume, Progress* progress) {
+                const ObjectUse writes = volume_use(volume, ObjectUse::Kind::Write, "refine");
+                run_interruptible(progress, [&](Progress* used) { volume.refine(used); });
+            },
+            py::arg("progress") = py::none(),
+            "One pass: traces VPLs, injects, propagates (GIL released). Raises shgi.Cancelled on "
+            "cancel, keeping the previous field.")
+        .def(
+            "reset",
+            [](PropagationVolume& volume, Progress* progress) {
+                const ObjectUse writes = volume_use(volume, ObjectUse::Kind::Write, "reset");
+                run_interruptible(progress, [&](Progress* used) { volume.reset(used); });
+            },
+            py::arg("progress") = py::none(),
+            "Forgets every pass and rebuilds the geometry volume of the (re-committed) scene.")
+        .def(
+            "current_field",
+            [](const PropagationVolume& volume) {
+                const ObjectUse reads =
+                    volume_use(volume, ObjectUse::Kind::Check, "current_field");
+                return std::make_unique<PropagationField>(*volume.field());
+            },
+            "The PropagationField of the last pass (safe to render while refine() runs).")
+        .def_property_readonly(
+            "passes",
+            [](const PropagationVolume& v) {
+                const ObjectUse reads = volume_use(v, ObjectUse::Kind::Check, "passes");
+                return v.passes();
+            },
+            "Passes averaged so far.")
+        .def_property_readonly(
+            "stage_seconds",
+            [](const PropagationVolume& v) {
+                const ObjectUse reads = volume_use(v, ObjectUse::Kind::Check, "stage_seconds");
+                return stage_list(v.stage_seconds());
+            },
+            "[(stage, seconds)] of the last pass: vpl_trace, vpl_reflect, injection, "
+            "geometry_volume (of the last reset), propagation_step_1 ... N.")
+        .def_property_readonly(
+            "memory_bytes",
+            [](const PropagationVolume& v) {
+                const ObjectUse reads = volume_use(v, ObjectUse::Kind::Check, "memory_bytes");
+                return v.memory_bytes();
+            },
+            "Bytes held by the volumes.")
+        .def_property_readonly(
+            "vpl_count",
+            [](const PropagationVolume& v) {
+                const ObjectUse reads = volume_use(v, ObjectUse::Kind::Check, "vpl_count");
+                return v.last_vpl_count();
+            },
+            "VPLs injected by the last pass.")
+        .def_property_readonly("settings", &PropagationVolume::settings,
+                               "A copy of the settings.");
+}
+
+}  // namespace
+
+void bind_propagation(py::module_& m) {
+    bind_settings(m);
+    bind_volume(m);
+}
+
+}  // namespace shgi::python

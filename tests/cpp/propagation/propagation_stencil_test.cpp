@@ -1,0 +1,147 @@
+// The propagation stencils against their closed forms (seed 003 Appendix A) and one step's energy
+// balance: the faces of each stencil tile the sphere (solid angles summing to 4π), the solid
+// angles are the exact values (not the 0.4234413544 copied into many shaders), and a step moves
+// all of a cell's flux to its neighbours — exactly without clamping, exactly with clamp-then-
+// rescale, and with a gain when clamping alone (the error the rescale corrects).
+#include "propagation/propagation_stencil.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "util/math.h"
+
+namespace shgi {
+namespace {
+
+// Solid angles are computed in double: their sum meets 4π to rounding.
+constexpr double kSolidAngleSumTolerance = 1e-6;
+// Appendix A's values are given to 7 digits.
+constexpr double kPublishedDigits = 5e-8;
+// A step's flux is summed in float over ~10³ cells of ~10 coefficients.
+constexpr double kFluxTolerance = 1e-5;
+
+double total_solid_angle(PropagationStencil stencil) {
+    double sum = 0.0;
+    for (const PropagationFace& face : propagation_faces(stencil)) sum += face.solid_angle;
+    return sum;
+}
+
+TEST(PropagationStencil, FacesTileTheSphere) {
+    EXPECT_EQ(propagation_faces(PropagationStencil::Faces6).size(), 30u);
+    EXPECT_EQ(propagation_faces(PropagationStencil::Neighbours26).size(), 54u);
+    EXPECT_NEAR(total_solid_angle(PropagationStencil::Faces6), 4.0 * kPiD,
+                kSolidAngleSumTolerance);
+    EXPECT_NEAR(total_solid_angle(PropagationStencil::Neighbours26), 4.0 * kPiD,
+                kSolidAngleSumTolerance);
+}
+
+TEST(PropagationStencil, ExactSolidAngles) {
+    // LPV, destination (0, 0, 1): the front face at z = 1.5 and a side face at x = 0.5.
+    for (const PropagationFace& face : propagation_faces(PropagationStencil::Faces6)) {
+        if (face.offset != ivec3(0, 0, 1)) continue;
+        const double expected = face.normal.z > 0.0f ? 0.4006697 : 0.4234314;
+        EXPECT_NEAR(face.solid_angle, expected, kPublishedDigits)
+            << "normal " << face.normal.x << " " << face.normal.y << " " << face.normal.z;
+        EXPECT_GT(std::fabs(face.solid_angle - 0.4234413544), 9e-6) << "the shaders' value";
+    }
+    // HOLPV: face-, edge- and corner-cell faces by how many offset components are non-zero.
+    const double expected[4] = {0.0, 0.4006697, 0.2506920, 0.1727394};
+    for (const PropagationFace& face : propagation_faces(PropagationStencil::Neighbours26)) {
+        const int nonzero = (face.offset.x != 0) + (face.offset.y != 0) + (face.offset.z != 0);
+        EXPECT_NEAR(face.solid_angle, expected[nonzero], kPublishedDigits) << nonzero;
+    }
+    // The formula against a direct case: a square of side 2a at distance d seen from its axis
+    // subtends 4 asin(a² / (a² + d²)).
+    const double a = 0.7, d = 1.3;
+    EXPECT_NEAR(rectangle_solid_angle(-a, a, -a, a, d), 4.0 * std::asin(a * a / (a * a + d * d)),
+                1e-12);
+}
+
+// Faces point away from the source: ω_f from the source centre to the face, the normal outwards.
+TEST(PropagationStencil, FacesLookOutward) {
+    for (PropagationStencil stencil :
+         {PropagationStencil::Faces6, PropagationStencil::Neighbours26}) {
+        for (const PropagationFace& face : propagation_faces(stencil)) {
+            EXPECT_NEAR(glm::length(face.direction), 1.0f, 1e-6f);
+            EXPECT_GT(glm::dot(face.direction, face.normal), 0.0f);
+            EXPECT_GE(glm::dot(vec3(face.offset), face.normal), 0.0f);
+        }
+    }
+}
+
+struct StepCase {
+    PropagationStencil stencil;
+    int order;
+};
+
+// Total flux of a volume: Σ_c √(4π) c₀.
+vec3 volume_flux(const ShVolume& volume) {
+    vec3 sum(0.0f);
+    for (size_t c = 0; c < volume.cell_count(); ++c) sum += cell_flux(volume.cell_data(c));
+    return sum;
+}
+
+// A 5³ volume with one cosine lobe (and a dimmer one along another normal) in its centre cell.
+ShVolume lobe_in_centre(int order) {
+    ShVolume volume(vec3(0.0f), 1.0f, ivec3(5), order);
+    float* centre = volume.cell_data(volume.cell_index(ivec3(2)));
+    add_cosine_lobe(centre, order, glm::normalize(vec3(0.3f, -0.5f, 0.8f)), vec3(1.0f, 2.0f, 0.5f));
+    add_cosine_lobe(centre, order, glm::normalize(vec3(-0.9f, 0.1f, 0.2f)), vec3(0.4f));
+    return volume;
+}
+
+// Relative flux change of one step from the centre cell (no light reaches the volume's sides).
+vec3 one_step_gain(const StepCase& c, LobeClamp clamp) {
+    const ShVolume source = lobe_in_centre(c.order);
+    ShVolume destination(source.origin(), source.cell_size(), source.counts(), c.order);
+    PropagationStep(c.stencil, c.order, clamp)(source, destination);
+    return volume_flux(destination) / volume_flux(source) - 1.0f;
+}
+
+TEST(PropagationStep, UnclampedAndRescaledStepsConserveFlux) {
+    for (const StepCase& c : {StepCase{PropagationStencil::Faces6, 1},
+                              StepCase{PropagationStencil::Faces6, 2},
+                              StepCase{PropagationStencil::Neighbours26, 1},
+                              StepCase{PropagationStencil::Neighbours26, 2}}) {
+        for (LobeClamp clamp : {LobeClamp::None, LobeClamp::Rescaled}) {
+            const vec3 gain = one_step_gain(c, clamp);
+            for (int ch = 0; ch < 3; ++ch)
+                EXPECT_NEAR(gain[ch], 0.0, kFluxTolerance)
+                    << "stencil " << int(c.stencil) << " order " << c.order << " clamp "
+                    << int(clamp) << " channel " << ch;
+        }
+    }
+}
+
+// Clamping alone makes energy: the L1 lobe's negative back (−π/8 of its π) sampled at zero.
+// The continuous gain is 12.5%; the stencils sample it at 30 or 54 directions.
+TEST(PropagationStep, ClampingAloneGainsEnergy) {
+    for (PropagationStencil stencil :
+         {PropagationStencil::Faces6, PropagationStencil::Neighbours26}) {
+        ShVolume source(vec3(0.0f), 1.0f, ivec3(3), 1);
+        add_cosine_lobe(source.cell_data(source.cell_index(ivec3(1))), 1, vec3(0.0f, 0.0f, 1.0f),
+                        vec3(1.0f));
+        ShVolume destination(source.origin(), 1.0f, source.counts(), 1);
+        PropagationStep(stencil, 1, LobeClamp::Clamped)(source, destination);
+        const float gain = volume_flux(destination).x / volume_flux(source).x - 1.0f;
+        EXPECT_GT(gain, 0.05f) << "stencil " << int(stencil);
+        EXPECT_LT(gain, 0.2f) << "stencil " << int(stencil);
+    }
+}
+
+TEST(PropagationStep, CosineLobeHoldsItsFlux) {
+    for (int order : {1, 2}) {
+        std::vector<float> cell(size_t(3 * sh_num_coefficients(order)), 0.0f);
+        add_cosine_lobe(cell.data(), order, glm::normalize(vec3(1.0f, 2.0f, -2.0f)),
+                        vec3(3.0f, 1.0f, 0.5f));
+        const vec3 flux = cell_flux(cell.data());
+        EXPECT_NEAR(flux.x, 3.0f, 1e-6f);
+        EXPECT_NEAR(flux.y, 1.0f, 1e-6f);
+        EXPECT_NEAR(flux.z, 0.5f, 1e-6f);
+    }
+}
+
+}  // namespace
+}  // namespace shgi

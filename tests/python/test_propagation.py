@@ -1,0 +1,203 @@
+"""Light propagation volumes (seed 003; the PROPAGATION method) through Python.
+
+Agreement with the reference path tracer on the project's Cornell box, sun room and two rooms
+(the same references as the photon lattice's and probe grid's tests), for the LPV (order 1) and
+the HOLPV (order 2), default settings (multi-bounce VPLs, 32 cells, 8 steps): the mean of
+DiffInd x DiffCol within 10% and the HOLPV's Combined PSNR above the LPV's. Where the method
+misses a target the test stays, marked as an expected failure with the measured figure (strict:
+an improvement that meets it must remove the mark).
+"""
+
+import sys
+import threading
+
+import pytest
+
+import shgi
+from blender_support import REPO_ROOT
+from shgi.metrics import psnr
+from scene_support import committed, path_traced_reference
+
+sys.path.insert(0, str(REPO_ROOT / "examples"))
+import scenes  # noqa: E402  (examples/ is not a package)
+
+SCALE = 0.25
+REFERENCE_SAMPLES = 2048
+# The two rooms at the probe grid's leak-test size.
+REFERENCES = {"cornell_box": (SCALE, REFERENCE_SAMPLES), "sun_room": (SCALE, REFERENCE_SAMPLES),
+              "two_rooms": (0.5, 512)}
+
+_RENDERS = {}
+
+
+def indirect_diffuse(passes):
+    return float((passes["DiffInd"] * passes["DiffCol"]).mean())
+
+
+def rendered(name, order):
+    """(reference passes, preview passes over the volume's field) for a scene and order."""
+    key = (name, order)
+    if key not in _RENDERS:
+        scale, samples = REFERENCES[name]
+        scene, ref = path_traced_reference(getattr(scenes, name), scale, samples)
+        volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(seed=5, order=order))
+        volume.refine()
+        preview, _ = shgi.render_preview(scene, volume.current_field(),
+                                         shgi.PreviewSettings(seed=5))
+        _RENDERS[key] = ref, preview
+    return _RENDERS[key]
+
+
+def missed(figure):
+    return pytest.mark.xfail(strict=True, reason=f"target missed; measured {figure}")
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name, order", [
+    pytest.param("cornell_box", 1, marks=missed("DiffInd 0.86x")),
+    pytest.param("cornell_box", 2, marks=missed("DiffInd 0.87x")),
+    ("sun_room", 1),
+    ("sun_room", 2),
+    ("two_rooms", 1),
+    pytest.param("two_rooms", 2, marks=missed("DiffInd 1.22x: light through the wall")),
+])
+def test_indirect_diffuse_agrees_with_path_tracer(name, order):
+    ref, preview = rendered(name, order)
+    ratio = indirect_diffuse(preview) / indirect_diffuse(ref)
+    print(f"{name} order {order}: DiffInd x DiffCol {ratio:.3f} x the path tracer's, "
+          f"Combined PSNR {psnr(ref['Combined'], preview['Combined']):.2f} dB")
+    assert abs(ratio - 1.0) < 0.10, ratio
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name", [
+    pytest.param("cornell_box", marks=missed("PSNR HOLPV 24.9 dB, LPV 25.2 dB")),
+    "sun_room",
+    "two_rooms",
+])
+def test_holpv_is_closer_than_lpv(name):
+    ref, lpv = rendered(name, 1)
+    _, holpv = rendered(name, 2)
+    lpv_psnr, holpv_psnr = psnr(ref["Combined"], lpv["Combined"]), psnr(ref["Combined"],
+                                                                         holpv["Combined"])
+    print(f"{name}: Combined PSNR LPV {lpv_psnr:.2f} dB, HOLPV {holpv_psnr:.2f} dB")
+    assert holpv_psnr > lpv_psnr
+
+
+def test_settings_mirror_cpp_defaults_and_validate():
+    s = shgi.PropagationSettings()
+    assert (s.photons, s.seed, s.vpl_bounces, s.resolution, s.steps, s.order) == (
+        100000, 0, 4, 32, 8, 2)
+    assert s.occlusion and s.normal_offset == pytest.approx(1.0)
+    assert shgi.settings_from_dict(shgi.PropagationSettings,
+                                   shgi.settings_to_dict(s)).steps == 8
+    with pytest.raises(TypeError, match="no field 'step'"):
+        shgi.PropagationSettings(step=3)
+    with pytest.raises(ValueError, match=r"photons: must be in \[1, "):
+        shgi.PropagationSettings(photons=0)
+    scene = committed(scenes.cornell_box(0.05))
+    for field, value in [("order", 3), ("steps", -1), ("resolution", 1), ("vpl_bounces", 0),
+                         ("normal_offset", float("nan"))]:
+        with pytest.raises(ValueError, match=f"PropagationSettings.{field} is"):
+            shgi.PropagationVolume(scene, shgi.PropagationSettings(**{field: value}))
+
+
+def test_an_empty_or_uncommitted_scene_is_refused():
+    with pytest.raises(ValueError, match="not committed"):
+        shgi.PropagationVolume(scenes.cornell_box(0.05).scene)
+    empty = shgi.Scene()
+    empty.commit()
+    with pytest.raises(ValueError, match="no geometry"):
+        shgi.PropagationVolume(empty)
+
+
+def field_irradiance(volume):
+    import numpy as np
+    points = np.array([[0.0, 0.0, 0.1], [0.5, -0.5, 1.0], [-0.7, 0.3, 1.8]], np.float32)
+    normals = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]], np.float32)
+    return volume.current_field().irradiance(points, normals)
+
+
+def test_passes_are_deterministic_and_report_their_stages():
+    scene = committed(scenes.cornell_box(0.05))
+    settings = shgi.PropagationSettings(seed=3, photons=20000, resolution=16, steps=4)
+    volumes = [shgi.PropagationVolume(scene, settings) for _ in range(2)]
+    for volume in volumes:
+        assert volume.passes == 0 and field_irradiance(volume).max() == 0.0
+        volume.refine()
+    assert volumes[0].passes == 1 and volumes[0].vpl_count > 0
+    assert (field_irradiance(volumes[0]) == field_irradiance(volumes[1])).all()
+    assert field_irradiance(volumes[0]).max() > 0.0
+    stages = [name for name, _ in volumes[0].stage_seconds]
+    assert stages == ["vpl_trace", "vpl_reflect", "injection", "geometry_volume",
+                      "propagation_step_1", "propagation_step_2", "propagation_step_3",
+                      "propagation_step_4"]
+    assert all(seconds >= 0.0 for _, seconds in volumes[0].stage_seconds)
+
+
+def test_cancel_keeps_the_previous_field():
+    scene = committed(scenes.cornell_box(0.05))
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(photons=20000, steps=4))
+    volume.refine()
+    before = field_irradiance(volume)
+    progress = shgi.Progress(lambda fraction, stage: progress.cancel())
+    with pytest.raises(shgi.Cancelled):
+        volume.refine(progress)
+    assert volume.passes == 1
+    assert (field_irradiance(volume) == before).all()
+
+
+def test_a_field_stays_valid_while_the_next_pass_runs():
+    scene = committed(scenes.cornell_box(0.05))
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(photons=20000, steps=4))
+    volume.refine()
+    field = volume.current_field()
+    before = field.irradiance([[0.0, 0.0, 0.1]], [[0.0, 0.0, 1.0]])
+    worker = threading.Thread(target=volume.refine)
+    worker.start()
+    during = field.irradiance([[0.0, 0.0, 0.1]], [[0.0, 0.0, 1.0]])
+    worker.join()
+    assert (during == before).all()
+    assert volume.passes == 2
+
+
+@pytest.mark.reference
+def test_cornell_floor_holpv_closer_than_lpv_and_self_lighting_reported():
+    """Seed 003 §5.7: on the Cornell box's floor the HOLPV's mean indirect light is closer to
+    the path tracer's than the LPV's; the ceiling-to-floor ratio of indirect light (against the
+    reference's) is the self-lighting measure (a lit floor's own VPLs light it again)."""
+    ref, _ = rendered("cornell_box", 1)
+    normal_z = ref["Normal"][..., 2]
+    floor, ceiling = normal_z > 0.9, normal_z < -0.9
+    assert floor.any() and ceiling.any()
+
+    def means(passes):
+        return float(passes["DiffInd"][floor].mean()), float(passes["DiffInd"][ceiling].mean())
+
+    ref_floor, ref_ceiling = means(ref)
+    errors = {}
+    for order in (1, 2):
+        floor_mean, ceiling_mean = means(rendered("cornell_box", order)[1])
+        errors[order] = abs(floor_mean / ref_floor - 1.0)
+        print(f"order {order}: floor {floor_mean / ref_floor:.3f}x the reference, "
+              f"ceiling/floor {ceiling_mean / floor_mean:.3f} "
+              f"(reference {ref_ceiling / ref_floor:.3f})")
+    assert errors[2] < errors[1]
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("order", [1, pytest.param(2, marks=missed("Combined 1.096x"))])
+def test_dim_room_through_a_final_gather_is_within_five_percent(order):
+    """The two rooms' dim room read through a final gather, with one VPL bounce less (the
+    add-on's accounting: Light Paths > Diffuse 4 gives 3 behind the gather): its Combined mean
+    within 5% of the path tracer's, the leak target the probe grid meets too."""
+    scale, samples = REFERENCES["two_rooms"]
+    scene, ref = path_traced_reference(scenes.two_rooms, scale, samples)
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(seed=5, order=order,
+                                                                    vpl_bounces=3))
+    volume.refine()
+    preview, _ = shgi.render_preview(scene, volume.current_field(),
+                                     shgi.PreviewSettings(seed=5, samples=64, final_gather=True))
+    ratio = float(preview["Combined"][..., :3].mean() / ref["Combined"][..., :3].mean())
+    print(f"order {order}: dim room through a final gather {ratio:.3f} x the path tracer's")
+    assert abs(ratio - 1.0) < 0.05
