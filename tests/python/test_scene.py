@@ -169,7 +169,9 @@ def integer_fields():
 TYPE_RANGES = [(-2**31, 2**31 - 1), (0, 2**32 - 1), (0, 2**64 - 1)]  # int, uint32, uint64
 NARROWER_RANGES = {("PathTracerSettings", "samples"): (1, 2**24),
                    ("PreviewSettings", "samples"): (1, 2**24),
-                   ("PhotonLatticeSettings", "photons"): (1, 2**64 - 1)}
+                   ("PhotonLatticeSettings", "photons"): (1, 2**64 - 1),
+                   ("RadianceFieldSettings", "photons"): (1, 2**64 - 1),
+                   ("PropagationSettings", "photons"): (1, 2**64 - 1)}
 
 
 def test_every_enum_accepts_only_its_named_values():
