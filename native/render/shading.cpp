@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "render/normal_map.h"
+
 namespace shgi {
 
 vec3 offset_origin(const vec3& p, const vec3& normal) {
@@ -32,17 +34,27 @@ Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray
         ng = -ng;
         ns = -ns;
     }
+    const Material& material = scene.materials()[sp.material_id];
+    // A normal map bends the interpolated normal; Cycles then keeps the view ray's mirror image
+    // above the geometric surface (render/normal_map.h).
+    const vec3 smooth = ns;
+    if (material.normal_texture != kNoTexture) {
+        ns = mapped_normal(material, scene.textures()[size_t(material.normal_texture)], sp, ns,
+                           back_face, scene.normal_from_object(sp.instance_id));
+        if (ns != smooth) ns = ensure_valid_reflection(ng, -ray_direction, ns);
+    }
     // An interpolated normal facing away from the viewer would make wo.z <= 0: fall back.
     if (glm::dot(ns, -ray_direction) <= 0.0f) ns = ng;
     const Frame frame = Frame::from_z(ns);
     const vec3 wo = frame.to_local(-ray_direction);
-    const Material& material = scene.materials()[sp.material_id];
     vec3 base_color = material.base_color;
     if (material.base_color_texture != kNoTexture)
         base_color *= texture_bilinear(scene.textures()[size_t(material.base_color_texture)], sp.uv);
-    return Shading{sp.position, ng, frame, wo,
-                   PrincipledBsdf(material, scene.material_terms()[sp.material_id], base_color,
-                                  back_face, wo.z, origin)};
+    Shading shading{sp.position, ng, frame, wo,
+                    PrincipledBsdf(material, scene.material_terms()[sp.material_id], base_color,
+                                   back_face, wo.z, origin)};
+    if (ns != smooth) shading.bsdf.set_smooth_normal(frame.to_local(smooth));
+    return shading;
 }
 
 vec3 Shading::spawn_origin(const vec3& wi) const {
