@@ -5,6 +5,12 @@
 #include "render/shading.h"
 
 namespace shgi {
+namespace {
+
+// Light this close to the interpolated horizon is fully shadowed (Cycles' 1e-6).
+constexpr float kMinBumpCosine = 1e-6f;
+
+}  // namespace
 
 vec3 ensure_valid_reflection(const vec3& ng, const vec3& wo, const vec3& n) {
     const float cos_ng_wo = glm::dot(ng, wo);
@@ -45,6 +51,19 @@ float bump_shadowing_term(const vec3& smooth, const vec3& bent, const vec3& wi) 
     // Smooth step to 1 at g = 1 with zero slope there, so no crease at the terminator.
     const float g2 = g * g;
     return -g2 * g + g2 + g;
+}
+
+float bump_shadowing_microfacet(const vec3& smooth, const vec3& bent, const vec3& wi) {
+    const float cos_smooth_wi = glm::dot(smooth, wi);
+    const float cos_bend = glm::dot(smooth, bent);
+    if (cos_smooth_wi * cos_bend * glm::dot(bent, wi) < 0.0f) return 0.0f;  // behind the surface
+    const float cos_i = std::fabs(cos_smooth_wi), cos_d = std::fabs(cos_bend);
+    if (cos_d >= 1.0f || cos_i >= 1.0f) return 1.0f;
+    if (cos_i < kMinBumpCosine) return 0.0f;
+    // The bend as a GGX roughness: the wider the bend, the rougher the implied microsurface.
+    const float alpha2 = std::min(1.0f, (1.0f / (cos_d * cos_d) - 1.0f) / 8.0f);
+    const float tan2_i = (1.0f - cos_i * cos_i) / (cos_i * cos_i);
+    return 2.0f / (1.0f + std::sqrt(1.0f + alpha2 * tan2_i));
 }
 
 vec3 mapped_normal(const Material& material, const Texture& texture, const SurfacePoint& sp,

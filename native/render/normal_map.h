@@ -14,11 +14,14 @@
 // direction of the view ray point into the geometric surface, where no light arrives; Cycles
 // tilts the normal back towards the geometric normal, in the plane of the two, just enough that
 // the reflected view ray leaves the surface at a small elevation. The tilt is solved in closed
-// form in that plane (ensure_valid_reflection below).
+// form in that plane (ensure_valid_reflection below). Cycles 3.x corrects the normal of every
+// closure; Cycles 4+ only that of its specular closures (render/shading.cpp picks accordingly,
+// from the material's PrincipledModel).
 //
-// Bump shadowing (Chiang, Li and Burley 2019, "Taming the Shadow Terminator"): a diffuse lobe
-// whose normal was bent is scaled by a smooth factor G(wi) in [0, 1] that fades light arriving
-// from beyond the interpolated normal's horizon, as Cycles applies to diffuse closures.
+// Bump shadowing: a diffuse lobe whose normal was bent is scaled by a smooth factor G(wi) in
+// [0, 1] that fades light arriving from beyond the interpolated normal's horizon, as Cycles
+// applies to diffuse closures: Chiang, Li and Burley 2019, "Taming the Shadow Terminator" in
+// Cycles 3.x, a microfacet shadowing term (Conty Estevez et al. 2021) in Cycles 4+.
 #pragma once
 
 #include "scene/material.h"
@@ -45,6 +48,16 @@ vec3 ensure_valid_reflection(const vec3& ng, const vec3& wo, const vec3& n);
 // from the interpolated normal `smooth`: 1 while wi is well above the interpolated horizon, a
 // smooth cubic falling to 0 at it.
 float bump_shadowing_term(const vec3& smooth, const vec3& bent, const vec3& wi);
+
+// Cycles 4+'s replacement (Conty Estevez, Lecocq and Stein 2021, "A Microfacet-Based Shadowing
+// Function to Solve the Bump Terminator Problem"): 0 for light below the interpolated horizon,
+// else GGX's Smith G1 for the light's angle to the interpolated normal, with alpha^2 =
+// min(1, tan^2(bend) / 8) from the bend between the two normals.
+float bump_shadowing_microfacet(const vec3& smooth, const vec3& bent, const vec3& wi);
+
+// Which of the two a Material's diffuse lobe gets (PrincipledModel V1: Cycles 3.x's Chiang et
+// al.; V2: Cycles 4+'s microfacet term).
+enum class BumpShadowing : uint8_t { Chiang, Microfacet };
 
 // The world-space shading normal of `material`'s normal map at `sp`, on the side of `smooth`
 // (sp.shading_normal flipped to the viewer's side: back_face says whether it was), before the

@@ -186,6 +186,43 @@ TEST(NormalMap, BumpShadowingTerm) {
                 1e-4f);
 }
 
+// Cycles 4+'s microfacet term: 1 without a bend, 0 below the interpolated horizon, and GGX's
+// Smith G1 with alpha^2 = tan^2(bend) / 8 in between, which falls as the light grazes.
+TEST(NormalMap, BumpShadowingMicrofacet) {
+    const vec3 smooth(0.0f, 0.0f, 1.0f);
+    const vec3 grazing = glm::normalize(vec3(1.0f, 0.0f, 0.1f));
+    EXPECT_EQ(bump_shadowing_microfacet(smooth, smooth, grazing), 1.0f);
+    const float bend = 0.6f;
+    const vec3 bent(std::sin(bend), 0.0f, std::cos(bend));
+    EXPECT_EQ(bump_shadowing_microfacet(smooth, bent, glm::normalize(vec3(1.0f, 0.0f, -0.1f))),
+              0.0f);
+    const float tan_bend = std::tan(bend), cos_i = 0.1f;
+    const float alpha2 = tan_bend * tan_bend / 8.0f;
+    const float tan2_i = (1.0f - cos_i * cos_i) / (cos_i * cos_i);
+    const vec3 wi(std::sqrt(1.0f - cos_i * cos_i), 0.0f, cos_i);
+    EXPECT_NEAR(bump_shadowing_microfacet(smooth, bent, wi),
+                2.0f / (1.0f + std::sqrt(1.0f + alpha2 * tan2_i)), 1e-5f);
+    EXPECT_LT(bump_shadowing_microfacet(smooth, bent, wi),
+              bump_shadowing_microfacet(smooth, bent, glm::normalize(vec3(1.0f, 0.0f, 1.0f))));
+}
+
+// Blender 4+ (PrincipledModel::V2) Lambert-only material: Cycles leaves the bent normal
+// uncorrected, even facing away from the viewer; so does SHGI. Blender 3.x corrects it.
+TEST(NormalMap, BlenderFourKeepsTheBentNormalOfALambertMaterial) {
+    const vec3 texel = glm::normalize(vec3(-0.6f, 0.0f, 0.8f));  // tilted away from the viewer
+    const vec3 grazing = glm::normalize(vec3(-1.0f, 0.0f, -0.15f));
+    Material v2 = test::lambert(0.8f);
+    v2.principled_model = PrincipledModel::V2;
+    const Shading kept = plane_with_map(texel, v2).shade(grazing);
+    expect_unit_near(kept.frame.z, texel, "V2 keeps the bent normal");
+    EXPECT_GT(kept.wo.z, 0.0f);
+    const Shading corrected = plane_with_map(texel).shade(grazing);
+    const vec3 wo = -grazing;
+    const vec3 reflected = 2.0f * glm::dot(corrected.frame.z, wo) * corrected.frame.z - wo;
+    EXPECT_NEAR(reflected.z, std::min(kReflectionCosineShare * wo.z, kMinReflectionCosine), 1e-4f)
+        << "V1 corrects it";
+}
+
 // A sun straight above a Lambert plane whose normal map tilts every normal by `tilt`:
 // L = rho / pi x S cos(tilt) (no correction: the view's reflection stays well above the surface;
 // no bump shadowing: the light is above both horizons). The Normal pass holds the tilted normal.
