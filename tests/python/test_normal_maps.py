@@ -65,6 +65,23 @@ def test_the_normal_pass_holds_the_mapped_normal_and_light_follows_it():
     assert passes["Combined"][..., 0].mean() == pytest.approx(expected, rel=2e-3)
 
 
+def test_a_lightmap_bake_shades_the_mapped_normal(tmp_path):
+    """The bake's texels see the sun at the tilt: Lambert DIRECT = S cos(tilt) / pi exactly
+    (a delta light and one Lambert lobe: every sample is the expectation)."""
+    from shgi import bake
+
+    tangents = np.tile(np.array([1, 0, 0, 1], np.float32), (4, 1))
+    scene = normal_mapped_plane(tangents, uvs={"UVMap": UVS, "LightmapUV": UVS})
+    settings = shgi.LightmapSettings(samples=8, seed=3, content="DIRECT")
+    job = bake.BakeJob(instance=0, name="plane", width=8, height=8)
+    [lightmap] = bake.bake_scene(scene, [job], bake.BakeOptions(settings=settings),
+                                 str(tmp_path))
+    color = lightmap.color.reshape(-1, 3)
+    covered = color[color[:, 0] > 0]
+    assert len(covered) > 32
+    np.testing.assert_allclose(covered, 3.0 * math.cos(TILT) / math.pi, rtol=1e-4)
+
+
 def test_material_fields_round_trip_and_are_checked():
     material = shgi.Material(normal_texture=2, normal_uv_set="Detail", normal_strength=0.5,
                              normal_space=shgi.NormalMapSpace.OBJECT)
