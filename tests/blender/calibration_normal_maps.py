@@ -1,5 +1,6 @@
 """Cycles calibration of normal maps: a tangent-space Normal Map node (an Image Texture of
-bumps, Non-Color) on a UV-mapped plane under a sun, a point and an area light, and on the floor
+bumps, Non-Color) on a UV-mapped plane under a sun (also at Strength 0.5), a point and an area
+light, and on the floor
 and walls of the open-topped room lit by an area light (indirect light between normal-mapped
 surfaces).
 
@@ -90,6 +91,17 @@ def plane_sun(name, tmpdir, results):
     compare(name, ("DiffDir",), tmpdir, results)
 
 
+def plane_half_strength(name, tmpdir, results):
+    # The sun case with the Normal Map's Strength at 0.5: the blend between the normals.
+    plane_scene()
+    for node in bpy.data.materials["plane"].node_tree.nodes:
+        if node.bl_idname == "ShaderNodeNormalMap":
+            node.inputs["Strength"].default_value = 0.5
+    cal.add_light("SUN", (0.0, 0.0, 5.0), (math.radians(45), 0.0, math.radians(120)),
+                  energy=3.0, angle=math.radians(2))
+    compare(name, ("DiffDir",), tmpdir, results)
+
+
 def plane_point(name, tmpdir, results):
     plane_scene()
     cal.add_light("POINT", (-0.8, 0.5, 1.5), energy=300.0, shadow_soft_size=0.1)
@@ -146,7 +158,8 @@ def without_normal_maps(samples):
             for p in ("Combined", "DiffInd") if cal.last_cycles_mean(p) > 0.0}
 
 
-CASES = {"normal_map_sun": plane_sun, "normal_map_point": plane_point,
+CASES = {"normal_map_sun": plane_sun, "normal_map_half_strength": plane_half_strength,
+         "normal_map_point": plane_point,
          "normal_map_area": plane_area, "normal_map_room": room}
 
 if __name__ == "__main__":
