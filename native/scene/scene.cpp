@@ -1,5 +1,6 @@
 #include "scene/scene.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -472,6 +473,11 @@ void Scene::check_references() {
 // Tangent-space normal maps need tangents and UVs; a mesh without them is shaded with its
 // interpolated normals, and the artist is told which mesh and material.
 void Scene::warn_missing_tangent_frames() const {
+    const auto tangent_mapped = [](const Material& material) {
+        return material.normal_texture != kNoTexture &&
+               material.normal_space == NormalMapSpace::Tangent;
+    };
+    if (std::none_of(materials_.begin(), materials_.end(), tangent_mapped)) return;
     for (const Mesh& mesh : meshes_) {
         if (!mesh.tangents.empty() && !mesh.uv_sets.empty()) continue;
         std::vector<uint8_t> used(materials_.size(), 0);
@@ -479,9 +485,7 @@ void Scene::warn_missing_tangent_frames() const {
         for (uint32_t index : mesh.material_indices) used[index] = 1;
         for (size_t m = 0; m < materials_.size(); ++m) {
             const Material& material = materials_[m];
-            if (!used[m] || material.normal_texture == kNoTexture ||
-                material.normal_space != NormalMapSpace::Tangent)
-                continue;
+            if (!used[m] || !tangent_mapped(material)) continue;
             log_warning(scene_detail::label("mesh", mesh.name), ": material '", material.name,
                         "' has a tangent-space normal map but the mesh has no ",
                         mesh.uv_sets.empty() ? "UV map" : "tangents",
