@@ -81,12 +81,14 @@ py::dict uv_sets_to_dict(const std::vector<UvSet>& sets) {
 
 Mesh mesh_from_arrays(const py::object& positions, const py::object& triangles,
                       const py::object& normals, const py::object& uvs,
-                      const py::object& material_indices, const std::string& name) {
+                      const py::object& material_indices, const std::string& name,
+                      const py::object& tangents) {
     Mesh mesh;
     mesh.name = name;
     mesh.positions = to_vec3_array(positions, "positions");
     mesh.triangles = to_uvec3_array(triangles, "triangles");
     if (!normals.is_none()) mesh.normals = to_vec3_array(normals, "normals");
+    if (!tangents.is_none()) mesh.tangents = to_vec4_array(tangents, "tangents", true);
     mesh.uv_sets = to_uv_sets(uvs);
     if (!material_indices.is_none())
         mesh.material_indices = to_uint_array(material_indices, "material_indices");
@@ -96,13 +98,17 @@ Mesh mesh_from_arrays(const py::object& positions, const py::object& triangles,
 constexpr const char* kMeshArgsDoc =
     "positions: (N, 3) float, object space (m); triangles: (T, 3) int vertex indices, "
     "counter-clockwise = front; normals: (N, 3) float or None; uvs: (N, 2) float (UV map "
-    "'UVMap'), a dict {name: (N, 2)} or None; material_indices: (T,) int or None (all 0).";
+    "'UVMap'), a dict {name: (N, 2)} or None; material_indices: (T,) int or None (all 0); "
+    "tangents: (N, 4) float (object-space MikkTSpace tangent of the normal map's UV map, then "
+    "the bitangent sign +-1) or None; NaN or zero tangents are dropped with a warning (no "
+    "normal map there).";
 
 void bind_mesh(py::module_& m) {
     py::class_<Mesh> cls(m, "Mesh", "A triangle mesh in object space (see scene/mesh.h).");
     cls.def(py::init(&mesh_from_arrays), py::arg("positions"), py::arg("triangles"),
             py::arg("normals") = py::none(), py::arg("uvs") = py::none(),
             py::arg("material_indices") = py::none(), py::arg("name") = "",
+            py::arg("tangents") = py::none(),
             (std::string("Builds a mesh from numpy arrays. ") + kMeshArgsDoc).c_str())
         .def_readwrite("name", &Mesh::name, "The mesh's name (Blender's mesh data name).")
         .def_property(
@@ -121,6 +127,13 @@ void bind_mesh(py::module_& m) {
                 mesh.normals = v.is_none() ? std::vector<vec3>{} : to_vec3_array(v, "normals");
             },
             "(N, 3) float32 vertex normals, or (0, 3) when the mesh has none.")
+        .def_property(
+            "tangents", [](const Mesh& mesh) { return to_numpy(mesh.tangents); },
+            [](Mesh& mesh, const py::object& v) {
+                mesh.tangents =
+                    v.is_none() ? std::vector<vec4>{} : to_vec4_array(v, "tangents", true);
+            },
+            "(N, 4) float32 vertex tangents (xyz object space, w bitangent sign), or (0, 4).")
         .def_property(
             "uv_sets", [](const Mesh& mesh) { return uv_sets_to_dict(mesh.uv_sets); },
             [](Mesh& mesh, const py::object& v) { mesh.uv_sets = to_uv_sets(v); },
@@ -164,14 +177,28 @@ void bind_material(py::module_& m) {
     py::class_<Material> cls(m, "Material",
                              "Principled BSDF subset (Blender 3.4 semantics, or 4.x's with "
                              "principled_model V2), linear Rec.709.");
+    named_values_only(py::enum_<NormalMapSpace>(m, "NormalMapSpace",
+                                                "The space of a Material's normal map texels.")
+        .value("TANGENT", NormalMapSpace::Tangent,
+               "along the mesh's tangents (Mesh.tangents; glTF's normalTexture)")
+        .value("OBJECT", NormalMapSpace::Object, "object space")
+        .value("WORLD", NormalMapSpace::World, "world space"));
     def_integer(cls, "base_color_texture", &Material::base_color_texture,
                 "Index into the scene's textures, or -1 for none.");
+    def_integer(cls, "normal_texture", &Material::normal_texture,
+                "Normal map: index into the scene's textures (non-colour data), or -1 for none.");
     cls.def(py::init(&from_kwargs<Material>),
             "Material(**fields): a default material with the given fields set, e.g. "
             "Material(name='Red', base_color=(0.8, 0.1, 0.1), roughness=0.3).")
         .def_readwrite("name", &Material::name, "Blender's material name.")
         .def_readwrite("base_color_uv_set", &Material::base_color_uv_set,
                        "UV map used by the texture ('' = the first).")
+        .def_readwrite("normal_uv_set", &Material::normal_uv_set,
+                       "UV map used by the normal map ('' = the first).")
+        .def_readwrite("normal_strength", &Material::normal_strength,
+                       "Normal Map Strength, 0..100 (0: the interpolated normal, 1: the map's).")
+        .def_readwrite("normal_space", &Material::normal_space,
+                       "NormalMapSpace of the normal map (TANGENT).")
         .def_readwrite("roughness", &Material::roughness, "0..1 (GGX alpha = roughness^2).")
         .def_readwrite("metallic", &Material::metallic, "0..1.")
         .def_readwrite("specular", &Material::specular, "0..1 (F0 = 0.08 * specular).")
@@ -355,7 +382,8 @@ void bind_camera(py::module_& m) {
 
 uint32_t add_mesh(Scene& scene, const py::object& mesh, const py::object& positions,
                   const py::object& triangles, const py::object& normals, const py::object& uvs,
-                  const py::object& material_indices, const std::string& name) {
+                  const py::object& material_indices, const std::string& name,
+                  const py::object& tangents) {
     SceneUse use(scene, SceneUse::Kind::Edit, "add_mesh");
     if (!mesh.is_none()) {
         if (!py::isinstance<Mesh>(mesh))
@@ -368,7 +396,7 @@ uint32_t add_mesh(Scene& scene, const py::object& mesh, const py::object& positi
     if (positions.is_none() || triangles.is_none())
         throw_value_error("positions", "add_mesh needs a Mesh, or both positions= and triangles=");
     return scene.add_mesh(
-        mesh_from_arrays(positions, triangles, normals, uvs, material_indices, name));
+        mesh_from_arrays(positions, triangles, normals, uvs, material_indices, name, tangents));
 }
 
 // An edit method: checks nobody is committing or querying, then forwards.
@@ -407,6 +435,7 @@ void bind_scene_building(py::class_<Scene>& cls) {
              py::arg("positions") = py::none(), py::arg("triangles") = py::none(),
              py::arg("normals") = py::none(), py::arg("uvs") = py::none(),
              py::arg("material_indices") = py::none(), py::arg("name") = "",
+             py::arg("tangents") = py::none(),
              (std::string("Adds a mesh (an shgi.Mesh, or keyword arrays) and returns its id. "
                           "Degenerate triangles are dropped (see stats()). ") +
               kMeshArgsDoc)

@@ -123,6 +123,11 @@ std::vector<vec3> to_vec3_array(const py::handle& obj, const char* arg_name) {
     return rows_to_vectors<vec3>(to_float_rows(obj, arg_name, 3));
 }
 
+std::vector<vec4> to_vec4_array(const py::handle& obj, const char* arg_name,
+                                bool allow_non_finite) {
+    return rows_to_vectors<vec4>(to_float_rows(obj, arg_name, 4, allow_non_finite));
+}
+
 namespace {
 
 // Integer input of any width: values must lie in [0, 2^32 - 1).
@@ -200,6 +205,9 @@ py::array_t<float> to_numpy(const std::vector<vec2>& values) {
 }
 py::array_t<float> to_numpy(const std::vector<vec3>& values) {
     return rows_to_numpy<float, vec3, 3>(values);
+}
+py::array_t<float> to_numpy(const std::vector<vec4>& values) {
+    return rows_to_numpy<float, vec4, 4>(values);
 }
 py::array_t<uint32_t> to_numpy(const std::vector<uvec3>& values) {
     return rows_to_numpy<uint32_t, uvec3, 3>(values);

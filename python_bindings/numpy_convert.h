@@ -27,6 +27,10 @@ std::vector<float> to_float_rows(const py::handle& obj, const char* arg_name, in
 
 std::vector<vec2> to_vec2_array(const py::handle& obj, const char* arg_name);
 std::vector<vec3> to_vec3_array(const py::handle& obj, const char* arg_name);
+// (N, 4) rows; NaN and infinities pass through when allow_non_finite (the native side then
+// decides, e.g. Mesh tangents, which validate_mesh drops with a warning).
+std::vector<vec4> to_vec4_array(const py::handle& obj, const char* arg_name,
+                                bool allow_non_finite = false);
 std::vector<uvec3> to_uvec3_array(const py::handle& obj, const char* arg_name);
 std::vector<uint32_t> to_uint_array(const py::handle& obj, const char* arg_name);
 
@@ -40,6 +44,7 @@ py::array_t<float> from_mat4(const mat4& m);
 // (N, k) float32 arrays out.
 py::array_t<float> to_numpy(const std::vector<vec2>& values);
 py::array_t<float> to_numpy(const std::vector<vec3>& values);
+py::array_t<float> to_numpy(const std::vector<vec4>& values);
 py::array_t<uint32_t> to_numpy(const std::vector<uvec3>& values);
 
 // "(H, W, 3)", "float64" and "(H, W, 3) float64", for error messages.

@@ -451,9 +451,56 @@ vec3 rgb_or(const std::vector<double>& values, const vec3& fallback) {
                               : fallback;
 }
 
+// Per-vertex tangents of a UV set for a mesh without glTF TANGENTs, in the spirit of
+// MikkTSpace: each triangle's unit tangent and bitangent (the directions of +U and +V on it)
+// are summed at its corners weighted by the corner angle, then the tangent is made orthogonal
+// to the vertex normal and the sign is the bitangent's side. On planar and regularly mapped
+// meshes this is MikkTSpace's answer; MikkTSpace itself also splits vertices whose corners'
+// tangents disagree (mirrored UV islands sharing a vertex), which this does not.
+std::vector<vec4> vertex_tangents(const Mesh& mesh, const UvSet& set) {
+    const size_t count = mesh.positions.size();
+    std::vector<vec3> tangent_sum(count, vec3(0.0f)), bitangent_sum(count, vec3(0.0f));
+    std::vector<vec3> face_normal_sum(count, vec3(0.0f));
+    for (const uvec3& t : mesh.triangles) {
+        const vec3 e1 = mesh.positions[t.y] - mesh.positions[t.x];
+        const vec3 e2 = mesh.positions[t.z] - mesh.positions[t.x];
+        const vec2 d1 = set.coords[t.y] - set.coords[t.x];
+        const vec2 d2 = set.coords[t.z] - set.coords[t.x];
+        const float det = d1.x * d2.y - d2.x * d1.y;
+        if (!(std::fabs(det) > 0.0f)) continue;  // UVs collapsed: no direction on this face
+        const vec3 tangent = (e1 * d2.y - e2 * d1.y) / det;
+        const vec3 bitangent = (e2 * d1.x - e1 * d2.x) / det;
+        const float tangent_length = glm::length(tangent);
+        const float bitangent_length = glm::length(bitangent);
+        if (!(tangent_length > 0.0f) || !(bitangent_length > 0.0f)) continue;
+        const vec3 face_normal = glm::cross(e1, e2);
+        for (int corner = 0; corner < 3; ++corner) {
+            const vec3& p = mesh.positions[t[corner]];
+            const vec3 a = mesh.positions[t[(corner + 1) % 3]] - p;
+            const vec3 b = mesh.positions[t[(corner + 2) % 3]] - p;
+            const float cos_angle = glm::dot(a, b) / (glm::length(a) * glm::length(b));
+            const float angle = std::acos(std::clamp(cos_angle, -1.0f, 1.0f));
+            tangent_sum[t[corner]] += angle * tangent / tangent_length;
+            bitangent_sum[t[corner]] += angle * bitangent / bitangent_length;
+            face_normal_sum[t[corner]] += face_normal;
+        }
+    }
+    std::vector<vec4> tangents(count, vec4(0.0f));  // zero: no frame (validate_mesh warns)
+    for (size_t i = 0; i < count; ++i) {
+        const vec3 n = glm::normalize(mesh.normals.empty() ? face_normal_sum[i] : mesh.normals[i]);
+        const vec3 t = tangent_sum[i] - glm::dot(tangent_sum[i], n) * n;
+        const float length = glm::length(t);
+        if (!(length > 0.0f) || !is_finite(n)) continue;
+        const float sign = glm::dot(glm::cross(n, t), bitangent_sum[i]) < 0.0f ? -1.0f : 1.0f;
+        tangents[i] = vec4(t / length, sign);
+    }
+    return tangents;
+}
+
 // Decoded tinygltf image (8 or 16 bits, 1-4 channels, top row first) -> linear RGBA texture
-// with the bottom row first. Colour channels are sRGB-encoded (glTF spec, baseColorTexture).
-Texture texture_from_image(const tinygltf::Image& image, const std::string& name) {
+// with the bottom row first. Colour channels are sRGB-encoded for colour textures (glTF spec,
+// baseColorTexture) and plain data for a normalTexture (srgb false).
+Texture texture_from_image(const tinygltf::Image& image, const std::string& name, bool srgb) {
     Texture texture;
     texture.name = name;
     texture.width = uint32_t(image.width);
@@ -477,8 +524,9 @@ Texture texture_from_image(const tinygltf::Image& image, const std::string& name
                 c[3] = channels == 2 ? c[1] : 1.0f;
                 c[1] = c[2] = c[0];
             }
-            texture.texels[y * texture.width + x] = vec4(
-                linear_from_srgb(c[0]), linear_from_srgb(c[1]), linear_from_srgb(c[2]), c[3]);
+            if (srgb)
+                for (int k = 0; k < 3; ++k) c[k] = linear_from_srgb(c[k]);
+            texture.texels[y * texture.width + x] = vec4(c[0], c[1], c[2], c[3]);
         }
     }
     return texture;
@@ -591,11 +639,14 @@ class GltfImporter {
     static Mesh with_flat_normals(const Mesh& part);
     void read_uv_sets(const tinygltf::Primitive& primitive, const std::string& what,
                       size_t vertex_count, Mesh& mesh) const;
+    void read_tangents(const tinygltf::Primitive& primitive, const std::string& what,
+                       const Material& material, Mesh& mesh) const;
     std::vector<uvec3> read_triangles(const tinygltf::Primitive& primitive,
                                       const std::string& what, size_t vertex_count) const;
     uint32_t material_id(int material_index);
     uint32_t default_material_id();
-    int32_t base_color_texture_id(const tinygltf::TextureInfo& info, const std::string& what);
+    // The SHGI texture of glTF texture `index` (sRGB-decoded or data), or kNoTexture.
+    int32_t texture_id(int index, bool srgb, const std::string& what);
     void check_index(int index, size_t size, const std::string& what) const;
 
     const std::string& path_;
@@ -606,7 +657,7 @@ class GltfImporter {
     Scene scene_;
     std::map<int, std::vector<uint32_t>> mesh_ids_;  // glTF mesh -> its SHGI mesh, if triangles
     std::map<int, uint32_t> material_ids_;           // glTF material -> SHGI material
-    std::map<int, int32_t> texture_ids_;             // glTF image -> SHGI texture (or none)
+    std::map<std::pair<int, bool>, int32_t> texture_ids_;  // (glTF image, sRGB) -> SHGI texture
     int64_t default_material_ = -1;
 };
 
@@ -767,6 +818,8 @@ Mesh GltfImporter::merged_primitives(int mesh_index, std::vector<Mesh>& parts) c
     if (parts.size() == 1) return std::move(parts.front());
     const auto has_normals = [](const Mesh& part) { return !part.normals.empty(); };
     const bool any_normals = std::any_of(parts.begin(), parts.end(), has_normals);
+    const bool any_tangents = std::any_of(parts.begin(), parts.end(),
+                                          [](const Mesh& part) { return !part.tangents.empty(); });
     size_t uv_set_count = 0, vertex_total = 0;
     for (Mesh& part : parts) {
         if (any_normals && !has_normals(part)) part = with_flat_normals(part);
@@ -787,6 +840,21 @@ Mesh GltfImporter::merged_primitives(int mesh_index, std::vector<Mesh>& parts) c
         merged.positions.insert(merged.positions.end(), part.positions.begin(),
                                 part.positions.end());
         merged.normals.insert(merged.normals.end(), part.normals.begin(), part.normals.end());
+        if (any_tangents) {
+            // A part without tangents has no normal map (its material has none, or it lacks the
+            // map's UVs and was warned about): its placeholder frame is never read; zero where a
+            // normal map would read it, so it falls back to the interpolated normal.
+            const bool mapped = scene_.materials()[part.material_indices.empty()
+                                                       ? 0
+                                                       : part.material_indices[0]]
+                                    .normal_texture != kNoTexture;
+            if (part.tangents.empty())
+                merged.tangents.resize(merged.tangents.size() + part.positions.size(),
+                                       mapped ? vec4(0.0f) : vec4(1.0f, 0.0f, 0.0f, 1.0f));
+            else
+                merged.tangents.insert(merged.tangents.end(), part.tangents.begin(),
+                                       part.tangents.end());
+        }
         for (size_t set = 0; set < uv_set_count; ++set) {
             std::vector<vec2>& coords = merged.uv_sets[set].coords;
             if (set < part.uv_sets.size())
@@ -820,6 +888,7 @@ Mesh GltfImporter::with_flat_normals(const Mesh& part) {
         for (int corner = 0; corner < 3; ++corner) {
             flat.positions.push_back(part.positions[t[corner]]);
             flat.normals.push_back(normal);
+            if (!part.tangents.empty()) flat.tangents.push_back(part.tangents[t[corner]]);
             for (size_t set = 0; set < part.uv_sets.size(); ++set)
                 flat.uv_sets[set].coords.push_back(part.uv_sets[set].coords[t[corner]]);
         }
@@ -857,7 +926,35 @@ Mesh GltfImporter::build_primitive(int mesh_index, int primitive_index,
 
     mesh.triangles = read_triangles(primitive, what, vertex_count);
     mesh.material_indices.assign(mesh.triangles.size(), material_id);
+    const Material& material = scene_.materials()[material_id];
+    if (material.normal_texture != kNoTexture) read_tangents(primitive, what, material, mesh);
     return mesh;
+}
+
+// The primitive's TANGENT attribute, else tangents computed from the normal map's UV set.
+// TANGENT's w is kept: glTF's bitangent w cross(normal, tangent) points up the image (its -V),
+// which is Blender's +V after the flip of V (read_uv_sets): the same direction in space.
+void GltfImporter::read_tangents(const tinygltf::Primitive& primitive, const std::string& what,
+                                 const Material& material, Mesh& mesh) const {
+    const auto tangent = primitive.attributes.find("TANGENT");
+    if (tangent != primitive.attributes.end()) {
+        const std::vector<float> t = accessors_.read_floats(tangent->second, 4, what + " TANGENT");
+        if (t.size() != 4 * mesh.positions.size())
+            throw IoError(format_message(path_, ": ", what, " has ", t.size() / 4,
+                                         " tangents for ", mesh.positions.size(), " vertices"));
+        for (size_t i = 0; i < mesh.positions.size(); ++i)
+            mesh.tangents.emplace_back(
+                blender_from_gltf_vector(vec3(t[4 * i], t[4 * i + 1], t[4 * i + 2])),
+                t[4 * i + 3]);
+        return;
+    }
+    for (const UvSet& set : mesh.uv_sets)
+        if (set.name == material.normal_uv_set) {
+            mesh.tangents = vertex_tangents(mesh, set);
+            return;
+        }
+    log_warning(path_, ": ", what, ": its normalTexture reads ", material.normal_uv_set,
+                ", which the primitive does not have; it is shaded without its normal map");
 }
 
 std::vector<uvec3> GltfImporter::read_triangles(const tinygltf::Primitive& primitive,
@@ -940,38 +1037,53 @@ uint32_t GltfImporter::material_id(int material_index) {
     material.transmission = float(extension_number(source.extensions, "KHR_materials_transmission",
                                                    "transmissionFactor", 0.0));
     if (pbr.baseColorTexture.index >= 0 && options_.import_textures) {
-        material.base_color_texture = base_color_texture_id(pbr.baseColorTexture, what);
+        material.base_color_texture =
+            texture_id(pbr.baseColorTexture.index, true, what + ": baseColorTexture");
         if (material.base_color_texture != kNoTexture)
             material.base_color_uv_set = uv_set_name(pbr.baseColorTexture.texCoord);
+    }
+    // normalTexture: tangent space; its scale becomes the Normal Map node's Strength, as Blender's
+    // importer sets it (glTF scales the texel's x and y instead: the same for scale 1).
+    if (source.normalTexture.index >= 0 && options_.import_textures) {
+        material.normal_texture =
+            texture_id(source.normalTexture.index, false, what + ": normalTexture");
+        if (material.normal_texture != kNoTexture) {
+            material.normal_uv_set = uv_set_name(source.normalTexture.texCoord);
+            material.normal_strength = float(source.normalTexture.scale);
+            if (!(material.normal_strength >= 0.0f && material.normal_strength <= kMaxNormalStrength)) {
+                log_warning(path_, ": ", what, ": normalTexture.scale ", material.normal_strength,
+                            " is outside [0, ", kMaxNormalStrength, "]; using 1");
+                material.normal_strength = 1.0f;
+            }
+        }
     }
     const uint32_t id = scene_.add_material(std::move(material));
     material_ids_.emplace(material_index, id);
     return id;
 }
 
-int32_t GltfImporter::base_color_texture_id(const tinygltf::TextureInfo& info,
-                                            const std::string& what) {
-    check_index(info.index, model_.textures.size(), what + ": baseColorTexture");
-    const int image_index = model_.textures[size_t(info.index)].source;
+int32_t GltfImporter::texture_id(int index, bool srgb, const std::string& what) {
+    check_index(index, model_.textures.size(), what);
+    const int image_index = model_.textures[size_t(index)].source;
     if (image_index < 0) {
-        log_warning(path_, ": ", what, ": texture ", info.index,
+        log_warning(path_, ": ", what, ": texture ", index,
                     " has no source image (extension-only textures are not supported)");
         return kNoTexture;
     }
     check_index(image_index, model_.images.size(), what + ": image");
-    const auto cached = texture_ids_.find(image_index);
+    const auto cached = texture_ids_.find({image_index, srgb});
     if (cached != texture_ids_.end()) return cached->second;
     const tinygltf::Image& image = model_.images[size_t(image_index)];
     int32_t id = kNoTexture;
     if (image_is_decoded(image)) {
         const std::string name =
             !image.name.empty() ? image.name : format_message("image_", image_index);
-        id = int32_t(scene_.add_texture(texture_from_image(image, name)));
+        id = int32_t(scene_.add_texture(texture_from_image(image, name, srgb)));
     } else {
         log_warning(path_, ": ", what, ": image ", image_index, " ('", image.uri,
-                    "') has no decoded pixels; using baseColorFactor only");
+                    "') has no decoded pixels; the texture is left out");
     }
-    texture_ids_.emplace(image_index, id);
+    texture_ids_.emplace(std::make_pair(image_index, srgb), id);
     return id;
 }
 

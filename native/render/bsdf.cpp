@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include "render/normal_map.h"
 #include "util/sampling.h"
 
 namespace shgi {
@@ -544,6 +545,11 @@ void PrincipledBsdf::lobe_eval_pdf(const Lobe& lobe, const vec3& wo, const vec3&
     if (lobe.kind == LobeKind::Diffuse) {
         float cos_factor = diffuse_brdf(wo, wi, terms->cos_ih) * wi.z;
         if (v2_.from_light) cos_factor *= light_path_side(wi, terms).layer_transmittance;
+        if (bent_) {
+            const vec3 bent(0.0f, 0.0f, 1.0f);
+            cos_factor *= microfacet_bump_ ? bump_shadowing_microfacet(smooth_normal_, bent, wi)
+                                           : bump_shadowing_term(smooth_normal_, bent, wi);
+        }
         *f = lobe.weight * cos_factor;
         *pdf = wi.z * kInvPi;
         return;

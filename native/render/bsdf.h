@@ -104,6 +104,16 @@ class PrincipledBsdf {
     // No lobes (black: eval 0, sample fails); a placeholder in arrays of Shading to assign later.
     PrincipledBsdf() = default;
 
+    // The interpolated normal, in the local frame, when the frame's normal was bent by a normal
+    // map: the diffuse lobe is then scaled by bump_shadowing_term (render/normal_map.h), as
+    // Cycles scales a diffuse closure whose normal differs from the interpolated one.
+    // microfacet: Cycles 4+'s term instead of Cycles 3.x's (render/normal_map.h).
+    void set_smooth_normal(const vec3& local_smooth_normal, bool microfacet) {
+        smooth_normal_ = local_smooth_normal;
+        bent_ = true;
+        microfacet_bump_ = microfacet;
+    }
+
     BsdfEval eval(const vec3& wo, const vec3& wi) const;
     float pdf(const vec3& wo, const vec3& wi) const;
     // u_lobe picks the lobe, u the direction. False when the sample is invalid (below the
@@ -226,6 +236,9 @@ class PrincipledBsdf {
         vec3 metal_fss{0.0f};
     } v2_;
     vec3 glossy_albedo_{0.0f};  // V2: GlossCol of the specular lobe (toward wo)
+    vec3 smooth_normal_{0.0f, 0.0f, 1.0f};  // set_smooth_normal
+    bool bent_ = false;
+    bool microfacet_bump_ = false;
     vec3 albedo_estimate_{0.0f};
 };
 

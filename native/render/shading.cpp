@@ -2,7 +2,16 @@
 
 #include <cmath>
 
+#include "render/normal_map.h"
+
 namespace shgi {
+namespace {
+
+// wo.z of a mirrored view direction that lies in the bent normal's tangent plane: positive, as
+// the lobes require, and irrelevant to a Lambert lobe's value.
+constexpr float kMinLambertCosine = 1e-6f;
+
+}  // namespace
 
 vec3 offset_origin(const vec3& p, const vec3& normal) {
     const float scale = 1.0f + max_abs_component(p);
@@ -32,17 +41,42 @@ Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray
         ng = -ng;
         ns = -ns;
     }
-    // An interpolated normal facing away from the viewer would make wo.z <= 0: fall back.
-    if (glm::dot(ns, -ray_direction) <= 0.0f) ns = ng;
-    const Frame frame = Frame::from_z(ns);
-    const vec3 wo = frame.to_local(-ray_direction);
     const Material& material = scene.materials()[sp.material_id];
+    const MaterialTerms& terms = scene.material_terms()[sp.material_id];
+    // A normal map bends the interpolated normal; Cycles then keeps the view ray's mirror image
+    // above the geometric surface (render/normal_map.h): Cycles 3.x for every closure, Cycles 4+
+    // for the specular closures only. SHGI's lobes share one frame: it is corrected unless the
+    // material is a Blender 4+ one with only its (Lambert) diffuse lobe, which keeps the bent
+    // normal even facing away from the viewer: Cycles shades it as it is, and a Lambert lobe
+    // does not depend on wo, so wo is mirrored to the normal's side below (the lobes' convention
+    // wo.z > 0) without changing a value.
+    const vec3 smooth = ns;
+    bool bent = false, keep_bent = false;
+    if (material.normal_texture != kNoTexture) {
+        ns = mapped_normal(material, scene.textures()[size_t(material.normal_texture)], sp, ns,
+                           back_face, scene.normal_from_object(sp.instance_id));
+        bent = ns != smooth;
+        const bool lambert_only = material.diffuse_model == DiffuseModel::Lambert &&
+                                  !terms.specular && terms.transmission <= 0.0f;
+        keep_bent = bent && material.principled_model == PrincipledModel::V2 && lambert_only;
+        if (bent && !keep_bent) ns = ensure_valid_reflection(ng, -ray_direction, ns);
+    }
+    // An interpolated normal facing away from the viewer would make wo.z <= 0: fall back.
+    if (glm::dot(ns, -ray_direction) <= 0.0f && !keep_bent) ns = ng;
+    const Frame frame = Frame::from_z(ns);
+    vec3 wo = frame.to_local(-ray_direction);
+    if (keep_bent) wo.z = std::max(std::fabs(wo.z), kMinLambertCosine);
     vec3 base_color = material.base_color;
     if (material.base_color_texture != kNoTexture)
         base_color *= texture_bilinear(scene.textures()[size_t(material.base_color_texture)], sp.uv);
-    return Shading{sp.position, ng, frame, wo,
-                   PrincipledBsdf(material, scene.material_terms()[sp.material_id], base_color,
-                                  back_face, wo.z, origin)};
+    Shading shading{sp.position, ng, frame, wo,
+                    PrincipledBsdf(material, terms, base_color, back_face, wo.z, origin)};
+    // Cycles fades a diffuse closure whose normal differs from the interpolated one; a normal
+    // that fell back to the geometric one above is not such a closure.
+    if (bent && ns != ng)
+        shading.bsdf.set_smooth_normal(frame.to_local(smooth),
+                                       material.principled_model == PrincipledModel::V2);
+    return shading;
 }
 
 vec3 Shading::spawn_origin(const vec3& wi) const {

@@ -11,6 +11,22 @@ namespace shgi {
 
 using namespace scene_detail;
 
+namespace {
+
+void require_texture_id(const std::string& item, const char* field, int32_t texture,
+                        uint32_t texture_count) {
+    if (texture < 0 && texture != kNoTexture)
+        throw InvalidArgument(format_message(item, ": ", field, " = ", texture,
+                                             " is negative; use -1 for none or the id "
+                                             "add_texture returned"));
+    if (texture != kNoTexture && static_cast<uint32_t>(texture) >= texture_count)
+        throw InvalidArgument(format_message(item, ": ", field, " = ", texture,
+                                             " but the scene has ", texture_count,
+                                             " textures (use -1 for none)"));
+}
+
+}  // namespace
+
 void validate_material(const Material& material, uint32_t texture_count) {
     const std::string item = label("material", material.name);
     require_non_negative(item, "base_color", material.base_color);
@@ -40,15 +56,9 @@ void validate_material(const Material& material, uint32_t texture_count) {
             " W m^-2 sr^-1, beyond the ", kMaxEmittedPower,
             " that single precision carries; give emission_color in [0, 1] and the "
             "brightness in emission_strength"));
-    const int32_t texture = material.base_color_texture;
-    if (texture < 0 && texture != kNoTexture)
-        throw InvalidArgument(format_message(item, ": base_color_texture = ", texture,
-                                             " is negative; use -1 for none or the id "
-                                             "add_texture returned"));
-    if (texture != kNoTexture && static_cast<uint32_t>(texture) >= texture_count)
-        throw InvalidArgument(format_message(item, ": base_color_texture = ", texture,
-                                             " but the scene has ", texture_count,
-                                             " textures (use -1 for none)"));
+    require_texture_id(item, "base_color_texture", material.base_color_texture, texture_count);
+    require_texture_id(item, "normal_texture", material.normal_texture, texture_count);
+    require_in_range(item, "normal_strength", material.normal_strength, 0.0f, kMaxNormalStrength);
 }
 
 MaterialTerms material_terms(const Material& material) {

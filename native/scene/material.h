@@ -1,5 +1,6 @@
 // Materials: the subset of Blender's Principled BSDF that SHGI renders (3.4 semantics, or 4.x's
-// layering with principled_model V2), and textures for the base colour.
+// layering with principled_model V2), textures for the base colour, and a normal map (Blender's
+// Normal Map node: tangent, object or world space, with its Strength; glTF's normalTexture).
 //
 // Colours are linear Rec.709. `specular` is Principled's 0..1 "Specular" (F0 = 0.08 * specular
 // for dielectrics); Blender 4.x's "Specular IOR Level" maps onto it in the exporter. Emitted
@@ -49,6 +50,18 @@ enum class MicrofacetDistribution : uint8_t {
 // 3.4e38 float limit (a base_color of 1e38 rendered inf pixels). Texture texels have the same cap.
 inline constexpr float kMaxBaseColor = 1000.0f;
 
+// The space a normal map's texels are in, as Blender's Normal Map node's `space` (TANGENT,
+// OBJECT, WORLD). Texels hold (n + 1) / 2 per component, read as non-colour data.
+enum class NormalMapSpace : uint8_t {
+    Tangent,  // along the mesh's tangent frame (Mesh::tangents, MikkTSpace; glTF's only space)
+    Object,   // object space, mapped to world by the instance's normal transform
+    World,
+};
+
+// The largest Normal Map Strength accepted (Blender's soft maximum is 10): beyond it the
+// extrapolated normal is the texel's direction anyway.
+inline constexpr float kMaxNormalStrength = 100.0f;
+
 struct Material {
     std::string name = "default";
     vec3 base_color{0.8f};
@@ -56,6 +69,13 @@ struct Material {
     // passes base_color = 1 when a texture drives Principled's Base Color.
     int32_t base_color_texture = kNoTexture;  // index into Scene::textures(), or kNoTexture
     std::string base_color_uv_set;            // UV set used by the texture ("" = first)
+    // The normal map: render/normal_map.h. Strength blends from the interpolated normal (0) to
+    // the mapped one (1) and beyond, as Blender's Normal Map node; glTF's normalTexture.scale
+    // arrives here too (Blender's glTF importer maps it to the node's Strength).
+    int32_t normal_texture = kNoTexture;      // index into Scene::textures(), or kNoTexture
+    std::string normal_uv_set;                // UV set of the normal map ("" = first)
+    float normal_strength = 1.0f;             // 0..kMaxNormalStrength
+    NormalMapSpace normal_space = NormalMapSpace::Tangent;
     float roughness = 0.5f;                   // 0..1, GGX alpha = roughness^2
     float metallic = 0.0f;                    // 0..1
     float specular = 0.5f;                    // 0..1 (F0 = 0.08 * specular)

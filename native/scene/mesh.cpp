@@ -37,6 +37,9 @@ void check_sizes(const Mesh& mesh) {
     if (!mesh.normals.empty())
         check_count(mesh, "normals", mesh.normals.size(), "positions", vertices,
                     "give one normal per vertex or none");
+    if (!mesh.tangents.empty())
+        check_count(mesh, "tangents", mesh.tangents.size(), "positions", vertices,
+                    "give one tangent (x, y, z, sign) per vertex or none");
     for (const UvSet& uv_set : mesh.uv_sets)
         check_count(mesh, ("uv set '" + uv_set.name + "'").c_str(), uv_set.coords.size(),
                     "positions", vertices, "give one UV per vertex");
@@ -133,6 +136,24 @@ uint64_t fix_normals(Mesh& mesh) {
     return fixed;
 }
 
+// Zeroes tangents that cannot orient a normal map (NaN, infinite, or too short to normalise:
+// broken importers, UV maps collapsed to a point) and makes every sign +-1. A zero tangent is
+// what surface_point reads as "no tangent frame here": the normal map is skipped, as Cycles
+// renders a Normal Map node without a usable tangent.
+uint64_t fix_tangents(Mesh& mesh) {
+    uint64_t dropped = 0;
+    for (vec4& tangent : mesh.tangents) {
+        const vec3 t(tangent);
+        if (!is_finite(t) || !std::isfinite(tangent.w) || !(glm::length(t) >= kMinNormalLength)) {
+            tangent = vec4(0.0f);
+            ++dropped;
+            continue;
+        }
+        tangent.w = tangent.w < 0.0f ? -1.0f : 1.0f;
+    }
+    return dropped;
+}
+
 }  // namespace
 
 void check_material_indices(const Mesh& mesh, uint32_t material_count) {
@@ -151,6 +172,7 @@ MeshReport validate_mesh(Mesh& mesh, uint32_t material_count) {
     MeshReport report;
     report.dropped_degenerate = drop_degenerate(mesh);
     report.fixed_normals = fix_normals(mesh);
+    report.dropped_tangents = fix_tangents(mesh);
     // Squared lengths (in double: a float square of 1e12 m edges is close to float's range),
     // one square root at the end.
     double edge2 = 0.0;

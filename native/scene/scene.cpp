@@ -1,5 +1,6 @@
 #include "scene/scene.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -277,14 +278,17 @@ Bounds3 instance_bounds(const Mesh& mesh, const mat4& world_from_object) {
     return bounds;
 }
 
-// The UV set a material's texture reads on a mesh with at least one set: the one it names, else
-// the first (as Blender's Image Texture without a UV Map node uses the active render UV map,
-// which the exporter puts first).
-const UvSet& texture_uv_set(const Mesh& mesh, const Material& material) {
-    if (!material.base_color_uv_set.empty())
+// The UV set named `name` on a mesh with at least one set, else the first (as Blender's Image
+// Texture without a UV Map node uses the active render UV map, which the exporter puts first).
+const UvSet& named_uv_set(const Mesh& mesh, const std::string& name) {
+    if (!name.empty())
         for (const UvSet& set : mesh.uv_sets)
-            if (set.name == material.base_color_uv_set) return set;
+            if (set.name == name) return set;
     return mesh.uv_sets.front();
+}
+
+vec2 interpolate_uv(const UvSet& set, const uvec3& tri, float b0, float b1, float b2) {
+    return b0 * set.coords[tri.x] + b1 * set.coords[tri.y] + b2 * set.coords[tri.z];
 }
 
 // Scene::bounding_radius of non-empty bounds.
@@ -316,8 +320,22 @@ void Scene::invalidate() {
     ++revision_;
 }
 
+namespace {
+
+// A mesh whose tangents were dropped renders those triangles without their normal map.
+void warn_dropped_tangents(const Mesh& mesh, const MeshReport& report) {
+    if (report.dropped_tangents > 0)
+        log_warning(scene_detail::label("mesh", mesh.name), ": ", report.dropped_tangents, " of ",
+                    mesh.tangents.size(),
+                    " tangents are NaN, infinite or zero; the triangles using them are shaded "
+                    "without their normal map (recompute the tangents from a valid UV map)");
+}
+
+}  // namespace
+
 uint32_t Scene::add_mesh(Mesh mesh) {
     MeshReport report = validate_mesh(mesh, kAnyMaterialCount);
+    warn_dropped_tangents(mesh, report);
     meshes_.push_back(std::move(mesh));
     mesh_reports_.push_back(report);
     geometry_dirty_ = true;
@@ -332,6 +350,7 @@ void Scene::set_mesh(uint32_t mesh_id, Mesh mesh) {
                                              meshes_.size(), " meshes; add_mesh() adds a new one"));
     // Validated before anything changes, so a rejected mesh leaves the scene as it was.
     const MeshReport report = validate_mesh(mesh, kAnyMaterialCount);
+    warn_dropped_tangents(mesh, report);
     meshes_[mesh_id] = std::move(mesh);
     mesh_reports_[mesh_id] = report;
     geometry_dirty_ = true;
@@ -449,6 +468,31 @@ void Scene::check_references() {
     for (const Material& material : materials_)
         validate_material(material, static_cast<uint32_t>(textures_.size()));
     for (const Mesh& mesh : meshes_) check_material_indices(mesh, material_count);
+}
+
+// Tangent-space normal maps need tangents and UVs; a mesh without them is shaded with its
+// interpolated normals, and the artist is told which mesh and material.
+void Scene::warn_missing_tangent_frames() const {
+    const auto tangent_mapped = [](const Material& material) {
+        return material.normal_texture != kNoTexture &&
+               material.normal_space == NormalMapSpace::Tangent;
+    };
+    if (std::none_of(materials_.begin(), materials_.end(), tangent_mapped)) return;
+    for (const Mesh& mesh : meshes_) {
+        if (!mesh.tangents.empty() && !mesh.uv_sets.empty()) continue;
+        std::vector<uint8_t> used(materials_.size(), 0);
+        if (mesh.material_indices.empty()) used[0] = 1;
+        for (uint32_t index : mesh.material_indices) used[index] = 1;
+        for (size_t m = 0; m < materials_.size(); ++m) {
+            const Material& material = materials_[m];
+            if (!used[m] || !tangent_mapped(material)) continue;
+            log_warning(scene_detail::label("mesh", mesh.name), ": material '", material.name,
+                        "' has a tangent-space normal map but the mesh has no ",
+                        mesh.uv_sets.empty() ? "UV map" : "tangents",
+                        "; it is shaded with its interpolated normals (give the mesh a UV map "
+                        "and tangents)");
+        }
+    }
 }
 
 Bounds3 Scene::compute_bounds() const {
@@ -620,6 +664,7 @@ void Scene::commit(const CommitSettings& settings, Progress* progress) {
     if (choose_flattened(settings.flatten_single_use_meshes)) geometry_dirty_ = true;
     gather_emissive();
     check_emitted_power();  // before the BVH is built for nothing
+    if (geometry_dirty_) warn_missing_tangent_frames();
     const uint64_t budget = resolve_budget(settings.memory_budget_bytes);
     const uint64_t estimate = estimate_bvh_bytes(meshes_, instances_);
     if (estimate > budget)
@@ -840,11 +885,41 @@ SurfacePoint Scene::surface_point(const Ray& /*ray*/, const Hit& hit) const {
         if (length > 0.0f) point.shading_normal = n / length;
     }
     point.material_id = mesh.material_indices.empty() ? 0 : mesh.material_indices[hit.triangle_id];
+    const Material& material = materials_[point.material_id];
     if (!mesh.uv_sets.empty()) {
-        const std::vector<vec2>& uv = texture_uv_set(mesh, materials_[point.material_id]).coords;
-        point.uv = b0 * uv[tri.x] + b1 * uv[tri.y] + b2 * uv[tri.z];
+        point.uv = interpolate_uv(named_uv_set(mesh, material.base_color_uv_set), tri, b0, b1, b2);
+        if (material.normal_texture != kNoTexture)
+            point.normal_uv = interpolate_uv(named_uv_set(mesh, material.normal_uv_set), tri, b0,
+                                             b1, b2);
     }
+    if (material.normal_texture != kNoTexture &&
+        material.normal_space == NormalMapSpace::Tangent && !mesh.tangents.empty())
+        tangent_frame(mesh, tri, vec3(b0, b1, b2), normal_from_object, &point);
     return point;
+}
+
+// SurfacePoint::tangent and bitangent from the unnormalised interpolated object-space tangent,
+// sign and normal (the face normal on a mesh without normals), as Cycles' Normal Map node reads
+// them. Left zero where a vertex's tangent was dropped (validate_mesh) or the frame collapses.
+void Scene::tangent_frame(const Mesh& mesh, const uvec3& tri, const vec3& b,
+                          const mat3& normal_from_object, SurfacePoint* point) const {
+    const vec4& t0 = mesh.tangents[tri.x];
+    const vec4& t1 = mesh.tangents[tri.y];
+    const vec4& t2 = mesh.tangents[tri.z];
+    if (t0.w == 0.0f || t1.w == 0.0f || t2.w == 0.0f) return;  // dropped: no frame
+    const vec3 tangent = b.x * vec3(t0) + b.y * vec3(t1) + b.z * vec3(t2);
+    const float sign = b.x * t0.w + b.y * t1.w + b.z * t2.w < 0.0f ? -1.0f : 1.0f;
+    vec3 normal;
+    if (mesh.normals.empty()) {
+        const vec3& p0 = mesh.positions[tri.x];
+        normal = glm::normalize(glm::cross(mesh.positions[tri.y] - p0, mesh.positions[tri.z] - p0));
+    } else {
+        normal = b.x * mesh.normals[tri.x] + b.y * mesh.normals[tri.y] + b.z * mesh.normals[tri.z];
+    }
+    const float scale = glm::length(normal_from_object * normal);
+    if (!(scale > 0.0f)) return;
+    point->tangent = normal_from_object * tangent / scale;
+    point->bitangent = normal_from_object * (sign * glm::cross(normal, tangent)) / scale;
 }
 
 }  // namespace shgi

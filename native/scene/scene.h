@@ -82,14 +82,23 @@ struct EmissiveTriangle {
 };
 
 // Where a ray hit, with everything shading needs. Normals are unit length, world space;
-// `shading_normal` is interpolated from vertex normals (or equals the geometric one).
+// `shading_normal` is interpolated from vertex normals (or equals the geometric one); a normal
+// map bends it in render/shading.h (render/normal_map.h).
 struct SurfacePoint {
     vec3 position{0.0f};
     vec3 geometric_normal{0.0f, 0.0f, 1.0f};
     vec3 shading_normal{0.0f, 0.0f, 1.0f};
+    // The tangent frame of a tangent-space normal map, world space: the interpolated object-space
+    // tangent and bitangent (sign x cross(normal, tangent)) mapped by the instance's normal
+    // transform, with the scale that makes the mapped interpolated normal unit (shading_normal),
+    // so x tangent + y bitangent + z shading_normal is Cycles' object-space combination mapped to
+    // world. Zero when the mesh has no tangents or the material no tangent-space normal map.
+    vec3 tangent{0.0f};
+    vec3 bitangent{0.0f};
     // The UV set the material's texture names (Material::base_color_uv_set), else the first;
     // (0,0) when the mesh has none.
     vec2 uv{0.0f};
+    vec2 normal_uv{0.0f};  // the same for the normal map (Material::normal_uv_set)
     uint32_t material_id = 0;
     uint32_t instance_id = kInvalidId;
     uint32_t triangle_id = kInvalidId;
@@ -201,6 +210,11 @@ class Scene {
                   RayCoherence coherence = RayCoherence::Incoherent) const;
     // Shading data at a valid hit (InvalidArgument for a miss or ids out of range).
     SurfacePoint surface_point(const Ray& ray, const Hit& hit) const;
+    // What maps instance `instance_id`'s object-space normals to world (scene.h, "Normals");
+    // valid on a committed scene (object-space normal maps read it).
+    const mat3& normal_from_object(uint32_t instance_id) const {
+        return normal_from_object_[instance_id];
+    }
 
     static constexpr uint64_t kRaysPerChunk = 4096;
     // The origin and direction components the committed scene traces: kMaxRayComponent, less
@@ -212,11 +226,14 @@ class Scene {
     void invalidate();
     void require_committed(const char* query) const;
     void check_references();
+    void warn_missing_tangent_frames() const;  // after check_references
     Bounds3 compute_bounds() const;
     void set_ray_limits();  // from the instances and bounds_
     void gather_emissive();
     void check_emitted_power() const;  // after gather_emissive and compute_bounds
     void finish_hit(Hit& hit) const;
+    void tangent_frame(const Mesh& mesh, const uvec3& tri, const vec3& barycentrics,
+                       const mat3& normal_from_object, SurfacePoint* point) const;
     // Which meshes keep a BVH of their own (large and used by several instances, or flattening
     // is off); true when that changed since the per-mesh BVHs were built.
     bool choose_flattened(bool flatten);

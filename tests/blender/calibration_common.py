@@ -265,6 +265,7 @@ def compare(case, compared_passes, cycles_samples, shgi_samples, tmpdir, results
     """
     start = time.perf_counter()
     cycles_batches = render_cycles(cycles_samples, tmpdir)
+    _last_cycles_batches[:] = cycles_batches
     cycles_seconds = time.perf_counter() - start
     start = time.perf_counter()
     warnings, shgi_batches = render_shgi(shgi_samples, **(shgi_settings or {}))
@@ -283,6 +284,14 @@ def compare(case, compared_passes, cycles_samples, shgi_samples, tmpdir, results
                          "shgi_samples": shgi_samples, "cycles_seconds": cycles_seconds,
                          "shgi_seconds": shgi_seconds, "warnings": warnings}
         print_case(name, results[name])
+
+
+_last_cycles_batches = []  # the Cycles renders of the last compare(), for diagnostics
+
+
+def last_cycles_mean(name):
+    """The mean of a pass in the last compare()'s Cycles renders (pass_mean's naming)."""
+    return pass_mean(_last_cycles_batches, name)[0]
 
 
 def _row(name, cycles_batches, shgi_batches, asserted):

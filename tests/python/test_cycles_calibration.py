@@ -2,7 +2,9 @@
 
 tests/blender/calibration_lights.py (point, spot, sun, area rectangle and disk, emissive mesh,
 world, lights seen by the camera) and tests/blender/calibration_materials.py (Principled diffuse,
-Diffuse BSDF, glossy metal, rough glass) render each case with Cycles and with
+Diffuse BSDF, glossy metal, rough glass) and tests/blender/calibration_normal_maps.py (a
+tangent-space Normal Map node on a plane under a sun, a point and an area light, and in a room)
+render each case with Cycles and with
 shgi.render_path_traced on the exported scene and write per-case image means as JSON. Each
 script runs once (one Blender start); each case is one test here.
 
@@ -24,6 +26,9 @@ SCRIPTS = {
     "calibration_materials.py": ("CALIBRATION_MATERIALS_DONE", [
         "diffuse", "diffuse_gloss_passes", "diffuse_bsdf",
         "glossy_metal", "glossy_metal_gloss_passes", "glass"]),
+    "calibration_normal_maps.py": ("CALIBRATION_NORMAL_MAPS_DONE", [
+        "normal_map_sun", "normal_map_half_strength", "normal_map_point", "normal_map_area",
+        "normal_map_room"]),
 }
 
 CASES = [(script, case) for script, (_, cases) in SCRIPTS.items() for case in cases]

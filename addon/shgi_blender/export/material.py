@@ -4,7 +4,10 @@ Reads the node feeding the active Material Output's Surface input (through the M
 lightmap preview, bake_settings.LIGHTMAP_MIX_NODE): a Principled BSDF, an Emission shader or a
 Diffuse BSDF. Socket names and units are mapped in conversions.py. An Image Texture node linked
 to the Principled Base Color becomes an shgi.Texture with base_color = 1 (SHGI multiplies
-texture × base_color). Anything else gets the documented fallback material
+texture × base_color). A Normal Map node on the Principled Normal input, fed by an Image Texture,
+becomes the material's normal map (tangent, object or world space, with its Strength); the
+meshes using it then export tangents of the node's UV map (MeshExporter asks
+tangent_uv_map()). Anything else gets the documented fallback material
 (conversions.fallback_material_fields) and a warning naming the material, and so does an input
 holding NaN or an infinity; an emission brighter than SHGI renders (conversions.MAX_EMISSION) is
 turned off with a warning. Image pixels that are NaN or infinite are read as 0, with a warning
@@ -21,6 +24,9 @@ from . import conversions, node_tree
 MATERIAL_OUTPUT_NODE = "ShaderNodeOutputMaterial"
 IMAGE_TEXTURE_NODE = "ShaderNodeTexImage"
 UV_MAP_NODE = "ShaderNodeUVMap"
+NORMAL_MAP_NODE = "ShaderNodeNormalMap"
+# The Normal Map node's spaces SHGI renders (its BLENDER_OBJECT and BLENDER_WORLD flip two axes).
+NORMAL_MAP_SPACES = {"TANGENT": "TANGENT", "OBJECT": "OBJECT", "WORLD": "WORLD"}
 # The name of the one material shared by every surface without a usable material.
 FALLBACK_MATERIAL_NAME = "SHGI fallback"
 RGB_CHANNELS = 3
@@ -39,6 +45,9 @@ class MaterialExporter:
         self._fallback_id = None
         self._stale = set()  # material and image keys to convert again, in place
         self.conversions = 0  # materials converted so far (the viewport's sync counts them)
+        # Scene material id → the UV map whose tangents its tangent-space normal map reads
+        # ('' = the render UV map).
+        self._tangent_uv_maps = {}
 
     @property
     def texture_count(self):
@@ -70,6 +79,14 @@ class MaterialExporter:
                 ids.append(self.material_id(slot.material))
         return ids
 
+    def tangent_uv_map(self, material_ids):
+        """The UV map whose tangents the first of these materials with a tangent-space normal
+        map needs ('' = the render UV map), or None when none has one."""
+        for material_id in material_ids:
+            if material_id in self._tangent_uv_maps:
+                return self._tangent_uv_maps[material_id]
+        return None
+
     def invalidate(self, material_keys=None):
         """Marks materials (by ``original.name_full``; None: all materials and images) to be
         converted again on their next use, keeping their ids (the viewport's edits)."""
@@ -97,7 +114,12 @@ class MaterialExporter:
             self._material_ids[key] = self.fallback_id()
         else:
             self._material_ids[key] = self._scene.add_material(converted)
-        return self._material_ids[key]
+        material_id = self._material_ids[key]
+        self._tangent_uv_maps.pop(material_id, None)
+        if (converted is not None and converted.normal_texture >= 0
+                and converted.normal_space == shgi.NormalMapSpace.TANGENT):
+            self._tangent_uv_maps[material_id] = converted.normal_uv_set
+        return material_id
 
     def _convert(self, material):
         """shgi.Material of a Blender material, or None (after a warning) for the fallback."""
@@ -174,8 +196,49 @@ class MaterialExporter:
                 fields.update(base_color=(1.0, 1.0, 1.0), base_color_texture=texture_id,
                               base_color_uv_set=_uv_map_name(texture_node))
                 handled = (base_socket,)
+        if self._normal_map_fields(material, node, fields):
+            handled += ("Normal",)
         self._warn_linked_inputs(material, node, handled)
         return fields
+
+    def _normal_map_fields(self, material, node, fields):
+        """Adds the normal map of a Normal Map node (fed by an Image Texture) on the shader's
+        Normal input to `fields`; True when it did."""
+        if "Normal" not in node.inputs:
+            return False
+        normal_map = node_tree.linked_node(node.inputs["Normal"])
+        if normal_map is None or normal_map.bl_idname != NORMAL_MAP_NODE:
+            return False
+        space = NORMAL_MAP_SPACES.get(normal_map.space)
+        if space is None:
+            self._log.warn(f"material {material.name!r}: Normal Map space {normal_map.space!r} "
+                           "is not rendered by SHGI (Tangent, Object and World Space are); "
+                           "the normal map is ignored")
+            return True
+        texture_node = node_tree.linked_node(normal_map.inputs["Color"])
+        if texture_node is None or texture_node.bl_idname != IMAGE_TEXTURE_NODE:
+            self._log.warn(f"material {material.name!r}: the Normal Map node's Color is not an "
+                           "Image Texture; the normal map is ignored")
+            return True
+        image = texture_node.image
+        if image is not None and conversions.texture_needs_srgb_decode(
+                image.colorspace_settings.name, image.is_float):
+            # Decoded as Cycles decodes it, so both render the same (bent) normals.
+            self._log.warn(f"material {material.name!r}: normal map image {image.name!r} is in "
+                           f"colour space {image.colorspace_settings.name!r}; normal maps are "
+                           "non-colour data (set the image's Color Space to Non-Color)")
+        texture_id = self._texture_id(texture_node.image, material.name)
+        if texture_id is None:
+            return True
+        strength_socket = normal_map.inputs["Strength"]
+        if strength_socket.is_linked:
+            self._log.warn(f"material {material.name!r}: the Normal Map's Strength is driven by "
+                           "a node SHGI does not evaluate; its unlinked value is used")
+        uv_map = normal_map.uv_map if space == "TANGENT" else _uv_map_name(texture_node)
+        fields.update(normal_texture=texture_id, normal_uv_set=uv_map,
+                      normal_strength=float(strength_socket.default_value),
+                      normal_space=getattr(shgi.NormalMapSpace, space))
+        return True
 
     def _warn_linked_inputs(self, material, node, handled):
         """Warns about linked inputs whose unlinked value is used instead."""

@@ -4,7 +4,9 @@ Bulk data goes through ``foreach_get`` into numpy: vertex positions, the loop tr
 vertices and material indices, the corner ("split") normals and every UV map. Corner normals
 come from ``Mesh.corner_normals`` on Blender 4.1+ and ``calc_normals_split()`` before.
 UV maps are ordered with the active render UV map first: SHGI textures read the first UV set,
-as Blender reads the render UV map when an Image Texture's Vector input is unlinked.
+as Blender reads the render UV map when an Image Texture's Vector input is unlinked. Tangents,
+when a material's normal map asks for them, are Blender's own MikkTSpace tangents of that UV map
+(``Mesh.calc_tangents``), per corner with their bitangent sign, as Cycles reads them.
 """
 
 import numpy as np
@@ -12,11 +14,13 @@ import numpy as np
 from .mesh_split import never_stop, require_finite_positions, split_corners
 
 
-def read_mesh(mesh, name, check_stop=never_stop):
+def read_mesh(mesh, name, check_stop=never_stop, tangent_uv_map=None, log=None):
     """(SplitMesh, (T,) int32 Blender material index per triangle) of a Blender mesh.
 
-    Raises ValueError naming the mesh for a non-finite vertex. check_stop is called between
-    the reading stages and may raise to stop.
+    tangent_uv_map: None, or the UV map whose tangents a normal map reads ('' = the render UV
+    map); tangents that cannot be computed (no such UV map, n-gons) are left out with a
+    warning to `log`. Raises ValueError naming the mesh for a non-finite vertex. check_stop is
+    called between the reading stages and may raise to stop.
     """
     positions = _foreach(mesh.vertices, "co", np.float32, len(mesh.vertices) * 3).reshape(-1, 3)
     # Check before the normals are computed, which would spread the NaN around.
@@ -34,8 +38,14 @@ def read_mesh(mesh, name, check_stop=never_stop):
     corner_uvs = {layer.name: _foreach(layer.data, "uv", np.float32,
                                        len(mesh.loops) * 2).reshape(-1, 2)[corner_loops]
                   for layer in _uv_layers_render_first(mesh)}
+    corner_tangents = None
+    if tangent_uv_map is not None:
+        corner_tangents = _loop_tangents(mesh, tangent_uv_map, name, log)
+        if corner_tangents is not None:
+            corner_tangents = corner_tangents[corner_loops]
+    check_stop()
     split = split_corners(positions, corner_vertices, corner_normals, corner_uvs, name=name,
-                          check_stop=check_stop)
+                          check_stop=check_stop, corner_tangents=corner_tangents)
     return split, material_indices
 
 
@@ -51,6 +61,32 @@ def _loop_normals(mesh):
         return _foreach(mesh.corner_normals, "vector", np.float32, loops * 3).reshape(-1, 3)
     mesh.calc_normals_split()
     return _foreach(mesh.loops, "normal", np.float32, loops * 3).reshape(-1, 3)
+
+
+def _loop_tangents(mesh, uv_map, name, log):
+    """(L, 4) float32 MikkTSpace tangents and bitangent signs of `uv_map` ('' = the render UV
+    map), or None after a warning when Blender cannot compute them."""
+    layers = _uv_layers_render_first(mesh)
+    if uv_map == "" and layers:
+        uv_map = layers[0].name
+    if uv_map not in [layer.name for layer in layers]:
+        if log is not None:
+            log.warn(f"mesh {name!r}: a normal map reads UV map {uv_map!r}, which the mesh does "
+                     "not have; it is shaded without its normal map")
+        return None
+    try:
+        mesh.calc_tangents(uvmap=uv_map)
+    except RuntimeError as error:  # e.g. n-gons: Blender computes tangents of tris and quads
+        if log is not None:
+            log.warn(f"mesh {name!r}: Blender cannot compute tangents of UV map {uv_map!r} "
+                     f"({error}); it is shaded without its normal map (triangulate it)")
+        return None
+    loops = len(mesh.loops)
+    tangents = np.empty((loops, 4), dtype=np.float32)
+    tangents[:, :3] = _foreach(mesh.loops, "tangent", np.float32, loops * 3).reshape(-1, 3)
+    tangents[:, 3] = _foreach(mesh.loops, "bitangent_sign", np.float32, loops)
+    mesh.free_tangents()
+    return tangents
 
 
 def _uv_layers_render_first(mesh):

@@ -21,6 +21,7 @@ class SplitMesh:
     triangles: np.ndarray                        # (T, 3) int32
     normals: np.ndarray | None = None            # (N, 3) float32 or None
     uvs: dict = field(default_factory=dict)      # {uv map name: (N, 2) float32}, in order
+    tangents: np.ndarray | None = None           # (N, 4) float32 (xyz, bitangent sign) or None
 
 
 def never_stop():
@@ -60,12 +61,13 @@ def _coordinate_text(value):
 
 
 def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=None,
-                  name="mesh", check_stop=never_stop):
+                  name="mesh", check_stop=never_stop, corner_tangents=None):
     """Builds per-vertex arrays from per-corner data of a triangle list.
 
     positions: (V, 3) Blender vertex positions. corner_vertices: (3T,) vertex index of each
     triangle corner, three per triangle in winding order. corner_normals: (3T, 3) or None.
-    corner_uvs: {uv map name: (3T, 2)} or None. Attributes are compared as the float32 values
+    corner_uvs: {uv map name: (3T, 2)} or None. corner_tangents: (3T, 4) (tangent, bitangent
+    sign) or None; NaN tangents are kept (shgi drops them with a warning). Attributes are compared as the float32 values
     the SplitMesh stores (so 0.0 and -0.0 share a vertex). Returns a SplitMesh whose vertices
     are ordered by Blender vertex index, then by the first corner that uses them.
     Raises ValueError naming the mesh for mismatched sizes, bad indices or non-finite data.
@@ -93,6 +95,17 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
     corner_uvs = {uv_name: _corner_array(uv, corners, 2, f"mesh {name!r}: UV map {uv_name!r}")
                   for uv_name, uv in (corner_uvs or {}).items()}
     attributes.extend(corner_uvs.values())
+    if corner_tangents is not None:
+        corner_tangents = np.asarray(corner_tangents, dtype=np.float32)
+        if corner_tangents.size != corners * 4:
+            raise ValueError(f"mesh {name!r}: tangents: {corner_tangents.size} values for "
+                             f"{corners} corners × 4")
+        corner_tangents = corner_tangents.reshape(corners, 4)
+        # Compared as finite values (NaN != NaN would split every such corner): zero them,
+        # which shgi reads as "no tangent" as it would the NaN.
+        corner_tangents = np.where(np.isfinite(corner_tangents), corner_tangents,
+                                   np.float32(0.0))
+        attributes.append(corner_tangents)
     check_stop()
 
     # Group the corners by Blender vertex; each group's first corner is its representative.
@@ -143,6 +156,8 @@ def split_corners(positions, corner_vertices, corner_normals=None, corner_uvs=No
     if corner_normals is not None:
         split.normals = corner_normals[first_corners]
     split.uvs = {uv_name: uv[first_corners] for uv_name, uv in corner_uvs.items()}
+    if corner_tangents is not None:
+        split.tangents = corner_tangents[first_corners]
     return split
 
 

@@ -218,7 +218,8 @@ class _SceneExporter:
     def _add_mesh(self, obj, geometry_key, material_ids, flip=False):
         """Id of the new shgi mesh of an evaluated object (facing the other way with `flip`),
         or None (empty or skipped)."""
-        geometry = self._read_geometry(obj, geometry_key)
+        geometry = self._read_geometry(obj, geometry_key,
+                                       self.materials.tangent_uv_map(material_ids))
         if geometry is None:
             return None
         try:
@@ -231,8 +232,9 @@ class _SceneExporter:
         self.stats.triangles += len(geometry.split.triangles)
         return mesh_id
 
-    def _read_geometry(self, obj, geometry_key):
-        """The evaluated object's triangles as a MeshGeometry, or None (empty or skipped)."""
+    def _read_geometry(self, obj, geometry_key, tangent_uv_map=None):
+        """The evaluated object's triangles as a MeshGeometry, or None (empty or skipped);
+        with tangents of `tangent_uv_map` (see mesh.read_mesh) unless it is None."""
         mesh = obj.to_mesh()
         try:
             if mesh is None or not mesh.polygons:
@@ -241,7 +243,8 @@ class _SceneExporter:
             if problem is not None:
                 self._skip(obj, problem, geometry_key)
                 return None
-            split, blender_indices = read_mesh(mesh, geometry_key[1], self.check_stop)
+            split, blender_indices = read_mesh(mesh, geometry_key[1], self.check_stop,
+                                               tangent_uv_map, self.log)
             return MeshGeometry(split, blender_indices)
         except ValueError as error:
             self._skip(obj, str(error), geometry_key)
@@ -257,15 +260,21 @@ class _SceneExporter:
         split = geometry.split
         return shgi.Mesh(positions=split.positions, triangles=split.triangles,
                          normals=split.normals, uvs=split.uvs or None,
-                         material_indices=material_indices, name=geometry_key[1])
+                         material_indices=material_indices, name=geometry_key[1],
+                         tangents=split.tangents)
 
 
 def flipped_mesh(mesh):
     """A new shgi.Mesh facing the other way: each triangle wound the other way (the front is
-    counter-clockwise), the normals negated."""
+    counter-clockwise), the normals negated, and the tangents' bitangent signs too, so that
+    sign × cross(normal, tangent) still points along +V."""
+    tangents = None
+    if len(mesh.tangents):
+        tangents = mesh.tangents.copy()
+        tangents[:, 3] = -tangents[:, 3]
     return shgi.Mesh(positions=mesh.positions, triangles=mesh.triangles[:, ::-1].copy(),
                      normals=-mesh.normals, uvs=mesh.uv_sets or None,
-                     material_indices=mesh.material_indices, name=mesh.name)
+                     material_indices=mesh.material_indices, name=mesh.name, tangents=tangents)
 
 
 def instance_name(instance):

@@ -8,7 +8,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'NormalMapSpace', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -1037,6 +1037,38 @@ class Material:
     def name(self, arg0: str) -> None:
         ...
     @property
+    def normal_space(self) -> NormalMapSpace:
+        """
+        NormalMapSpace of the normal map (TANGENT).
+        """
+    @normal_space.setter
+    def normal_space(self, arg0: NormalMapSpace) -> None:
+        ...
+    @property
+    def normal_strength(self) -> float:
+        """
+        Normal Map Strength, 0..100 (0: the interpolated normal, 1: the map's).
+        """
+    @normal_strength.setter
+    def normal_strength(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def normal_texture(self) -> int:
+        """
+        Normal map: index into the scene's textures (non-colour data), or -1 for none.
+        """
+    @normal_texture.setter
+    def normal_texture(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def normal_uv_set(self) -> str:
+        """
+        UV map used by the normal map ('' = the first).
+        """
+    @normal_uv_set.setter
+    def normal_uv_set(self, arg0: str) -> None:
+        ...
+    @property
     def principled_model(self) -> PrincipledModel:
         """
         PrincipledModel (V1; the exporter sets V2 from Blender 4.0).
@@ -1075,9 +1107,9 @@ class Mesh:
     @staticmethod
     def _pybind11_conduit_v1_(*args, **kwargs):
         ...
-    def __init__(self, positions: typing.Any, triangles: typing.Any, normals: typing.Any = None, uvs: typing.Any = None, material_indices: typing.Any = None, name: str = '') -> None:
+    def __init__(self, positions: typing.Any, triangles: typing.Any, normals: typing.Any = None, uvs: typing.Any = None, material_indices: typing.Any = None, name: str = '', tangents: typing.Any = None) -> None:
         """
-        Builds a mesh from numpy arrays. positions: (N, 3) float, object space (m); triangles: (T, 3) int vertex indices, counter-clockwise = front; normals: (N, 3) float or None; uvs: (N, 2) float (UV map 'UVMap'), a dict {name: (N, 2)} or None; material_indices: (T,) int or None (all 0).
+        Builds a mesh from numpy arrays. positions: (N, 3) float, object space (m); triangles: (T, 3) int vertex indices, counter-clockwise = front; normals: (N, 3) float or None; uvs: (N, 2) float (UV map 'UVMap'), a dict {name: (N, 2)} or None; material_indices: (T,) int or None (all 0); tangents: (N, 4) float (object-space MikkTSpace tangent of the normal map's UV map, then the bitangent sign +-1) or None; NaN or zero tangents are dropped with a warning (no normal map there).
         """
     def __repr__(self) -> str:
         """
@@ -1114,6 +1146,14 @@ class Mesh:
         """
     @positions.setter
     def positions(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def tangents(self) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        (N, 4) float32 vertex tangents (xyz object space, w bitangent sign), or (0, 4).
+        """
+    @tangents.setter
+    def tangents(self, arg1: typing.Any) -> None:
         ...
     @property
     def triangles(self) -> numpy.typing.NDArray[numpy.uint32]:
@@ -1222,6 +1262,59 @@ class NativeMethod:
         """
         False for the path tracer, which solves nothing.
         """
+class NormalMapSpace:
+    """
+    The space of a Material's normal map texels.
+    
+    Members:
+    
+      TANGENT : along the mesh's tangents (Mesh.tangents; glTF's normalTexture)
+    
+      OBJECT : object space
+    
+      WORLD : world space
+    """
+    OBJECT: typing.ClassVar[NormalMapSpace]  # value = <NormalMapSpace.OBJECT: 1>
+    TANGENT: typing.ClassVar[NormalMapSpace]  # value = <NormalMapSpace.TANGENT: 0>
+    WORLD: typing.ClassVar[NormalMapSpace]  # value = <NormalMapSpace.WORLD: 2>
+    __members__: typing.ClassVar[dict[str, NormalMapSpace]]  # value = {'TANGENT': <NormalMapSpace.TANGENT: 0>, 'OBJECT': <NormalMapSpace.OBJECT: 1>, 'WORLD': <NormalMapSpace.WORLD: 2>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: NormalMapSpace) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: NormalMapSpace) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
 class PathTracer:
     """
     
@@ -2654,9 +2747,9 @@ class Scene:
         """
         Adds a Material; returns its id (the index triangles' material_indices use).
         """
-    def add_mesh(self, mesh: typing.Any = None, *, positions: typing.Any = None, triangles: typing.Any = None, normals: typing.Any = None, uvs: typing.Any = None, material_indices: typing.Any = None, name: str = '') -> int:
+    def add_mesh(self, mesh: typing.Any = None, *, positions: typing.Any = None, triangles: typing.Any = None, normals: typing.Any = None, uvs: typing.Any = None, material_indices: typing.Any = None, name: str = '', tangents: typing.Any = None) -> int:
         """
-        Adds a mesh (an shgi.Mesh, or keyword arrays) and returns its id. Degenerate triangles are dropped (see stats()). positions: (N, 3) float, object space (m); triangles: (T, 3) int vertex indices, counter-clockwise = front; normals: (N, 3) float or None; uvs: (N, 2) float (UV map 'UVMap'), a dict {name: (N, 2)} or None; material_indices: (T,) int or None (all 0).
+        Adds a mesh (an shgi.Mesh, or keyword arrays) and returns its id. Degenerate triangles are dropped (see stats()). positions: (N, 3) float, object space (m); triangles: (T, 3) int vertex indices, counter-clockwise = front; normals: (N, 3) float or None; uvs: (N, 2) float (UV map 'UVMap'), a dict {name: (N, 2)} or None; material_indices: (T,) int or None (all 0); tangents: (N, 4) float (object-space MikkTSpace tangent of the normal map's UV map, then the bitangent sign +-1) or None; NaN or zero tangents are dropped with a warning (no normal map there).
         """
     def add_texture(self, texture: Texture) -> int:
         """

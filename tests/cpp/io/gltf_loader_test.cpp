@@ -241,6 +241,35 @@ TEST_F(GltfLoaderTest, BaseColorTextureIsLinearWithBottomRowFirst) {
     EXPECT_EQ(texture.texels[3], vec4(0, 1, 0, 1));
 }
 
+// normalTexture: the same image as data (no sRGB decoding, a texture of its own), scale as the
+// Strength, and tangents along +U computed from the UV set (the quad's V runs down Blender's -Y,
+// so the bitangent sign is -1).
+TEST(GltfLoader, NormalTextureIsDataWithComputedTangents) {
+    const std::string path = test_file_path("gltf", "normal_texture.gltf");
+    write_file(path, replaced(scene_json(), R"("emissiveFactor")",
+                              R"("normalTexture": {"index": 0, "scale": 0.5}, "emissiveFactor")"));
+    const Scene scene = load_gltf(path);
+    const Material& red = scene.materials()[0];
+    ASSERT_EQ(red.normal_texture, 1);
+    EXPECT_EQ(red.normal_uv_set, "UVMap");
+    EXPECT_FLOAT_EQ(red.normal_strength, 0.5f);
+    EXPECT_NEAR(scene.textures()[1].texels[1].x, 128.0f / 255.0f, kTolerance) << "not decoded";
+    const Mesh& quad = scene.meshes()[0];
+    ASSERT_EQ(quad.tangents.size(), quad.positions.size());
+    for (const vec4& tangent : quad.tangents) {
+        expect_near(vec3(tangent), vec3(1, 0, 0));
+        EXPECT_EQ(tangent.w, -1.0f);
+    }
+    EXPECT_TRUE(scene.meshes()[1].tangents.empty()) << "no normal map, no tangents";
+}
+
+TEST(GltfLoaderErrors, TangentCountMustMatchTheVertices) {
+    std::string json = replaced(scene_json(), R"("emissiveFactor")",
+                                R"("normalTexture": {"index": 0}, "emissiveFactor")");
+    json = replaced(json, R"("TEXCOORD_0": 2})", R"("TEXCOORD_0": 2, "TANGENT": 2})");
+    expect_io_error("tangent_count.gltf", json, "TANGENT");
+}
+
 TEST_F(GltfLoaderTest, PunctualLightsUseBlendersUnits) {
     ASSERT_EQ(scene_.lights().size(), 3u);
     const Light& point = scene_.lights()[0];

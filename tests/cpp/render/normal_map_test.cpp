@@ -1,0 +1,317 @@
+// Normal maps against closed forms: texel decoding through the tangent frame of a plane (also
+// rotated, mirrored in its bitangent, in object and world space, with Strength), Cycles'
+// below-surface correction and bump shadowing term, a sun over a normal-mapped Lambert plane
+// (L = rho / pi x S cos(tilt)), and hostile input: NaN tangents, zero texels, missing UVs.
+#include <cmath>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+
+#include "render/normal_map.h"
+#include "render/path_tracer.h"
+#include "render/shading.h"
+#include "render_test_scenes.h"
+#include "support/log_capture.h"
+#include "support/noise_stats.h"
+#include "util/rng.h"
+
+namespace shgi {
+namespace {
+
+// Unit vectors computed in float agree to a few ulps of their largest component.
+constexpr float kUnitTolerance = 1e-5f;
+
+// A one-texel texture encoding the unit normal n (n = 2c - 1).
+Texture normal_texel(const vec3& n) {
+    Texture texture;
+    texture.name = "normal";
+    texture.width = texture.height = 1;
+    texture.texels = {vec4(0.5f * n + vec3(0.5f), 1.0f)};
+    return texture;
+}
+
+// The plane z = 0, UV = (x, y) / 2 + 0.5, tangent +X with bitangent sign `sign`.
+Mesh mapped_plane(float sign) {
+    Mesh mesh = test::plane(1.0f);
+    UvSet uv{"UVMap", {}};
+    for (const vec3& p : mesh.positions) uv.coords.push_back(0.5f * vec2(p) + vec2(0.5f));
+    mesh.uv_sets.push_back(uv);
+    mesh.tangents.assign(mesh.positions.size(), vec4(1.0f, 0.0f, 0.0f, sign));
+    return mesh;
+}
+
+struct MappedPlane {
+    Scene scene;
+    Shading shade(const vec3& direction = vec3(0.0f, 0.0f, -1.0f)) const {
+        Ray ray;
+        ray.direction = direction;
+        ray.origin = vec3(0.1f, 0.2f, 0.0f) - 2.0f * direction;
+        ray.tmax = kInfinity;
+        const Hit hit = scene.intersect(ray);
+        EXPECT_TRUE(hit.valid());
+        return make_shading(scene, scene.surface_point(ray, hit), ray.direction);
+    }
+};
+
+MappedPlane plane_with_map(const vec3& texel_normal, Material material = test::lambert(0.8f),
+                           const mat4& world_from_object = mat4(1.0f), float sign = 1.0f,
+                           Mesh mesh = mapped_plane(1.0f)) {
+    if (sign < 0.0f) mesh = mapped_plane(sign);
+    MappedPlane plane;
+    material.normal_texture = int32_t(plane.scene.add_texture(normal_texel(texel_normal)));
+    plane.scene.add_material(material);
+    plane.scene.add_instance(plane.scene.add_mesh(std::move(mesh)), world_from_object);
+    plane.scene.commit();
+    return plane;
+}
+
+void expect_unit_near(const vec3& actual, const vec3& expected, const char* what) {
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(actual[c], expected[c], kUnitTolerance) << what;
+}
+
+TEST(NormalMap, FlatTexelKeepsTheInterpolatedNormal) {
+    const MappedPlane plane = plane_with_map(vec3(0.0f, 0.0f, 1.0f));
+    expect_unit_near(plane.shade().frame.z, vec3(0.0f, 0.0f, 1.0f), "flat texel");
+}
+
+TEST(NormalMap, TangentFrameOfAPlane) {
+    const float tilt = 0.4f;
+    const vec3 texel(std::sin(tilt), 0.0f, std::cos(tilt));
+    expect_unit_near(plane_with_map(texel).shade().frame.z, texel, "tilt along +U");
+    // +V is the bitangent sign x cross(N, T) = +Y; a negative sign mirrors it.
+    const vec3 along_v(0.0f, std::sin(tilt), std::cos(tilt));
+    expect_unit_near(plane_with_map(along_v).shade().frame.z, along_v, "tilt along +V");
+    expect_unit_near(plane_with_map(along_v, test::lambert(0.8f), mat4(1.0f), -1.0f)
+                         .shade()
+                         .frame.z,
+                     vec3(0.0f, -along_v.y, along_v.z), "mirrored bitangent");
+}
+
+// The tangent turns with the object: a quarter turn about Z sends a +U tilt towards +Y; a
+// non-uniform scale transforms the object-space combination by the inverse transpose, as Cycles.
+TEST(NormalMap, TangentFrameFollowsTheInstance) {
+    const float tilt = 0.4f;
+    const vec3 texel(std::sin(tilt), 0.0f, std::cos(tilt));
+    const mat4 turn = glm::rotate(mat4(1.0f), 0.5f * kPi, vec3(0.0f, 0.0f, 1.0f));
+    expect_unit_near(plane_with_map(texel, test::lambert(0.8f), turn).shade().frame.z,
+                     vec3(0.0f, std::sin(tilt), std::cos(tilt)), "turned");
+    const mat4 stretch = glm::scale(mat4(1.0f), vec3(2.0f, 1.0f, 1.0f));
+    // Inverse transpose of diag(2, 1, 1) applied to (sin, 0, cos): (sin / 2, 0, cos).
+    expect_unit_near(plane_with_map(texel, test::lambert(0.8f), stretch).shade().frame.z,
+                     glm::normalize(vec3(0.5f * std::sin(tilt), 0.0f, std::cos(tilt))),
+                     "stretched");
+}
+
+TEST(NormalMap, ObjectAndWorldSpace) {
+    const vec3 texel = glm::normalize(vec3(0.3f, -0.2f, 0.9f));
+    const mat4 turn = glm::rotate(mat4(1.0f), 0.5f * kPi, vec3(0.0f, 0.0f, 1.0f));
+    Material material = test::lambert(0.8f);
+    material.normal_space = NormalMapSpace::Object;
+    expect_unit_near(plane_with_map(texel, material, turn).shade().frame.z,
+                     vec3(-texel.y, texel.x, texel.z), "object space, turned");
+    material.normal_space = NormalMapSpace::World;
+    expect_unit_near(plane_with_map(texel, material, turn).shade().frame.z, texel,
+                     "world space ignores the instance");
+}
+
+// (A gentle texel: extrapolated twice it stays clear of the below-surface correction.)
+TEST(NormalMap, StrengthBlendsWithTheInterpolatedNormal) {
+    const vec3 texel = glm::normalize(vec3(0.2f, 0.0f, 0.98f));
+    for (const float strength : {0.0f, 0.5f, 2.0f}) {
+        Material material = test::lambert(0.8f);
+        material.normal_strength = strength;
+        const vec3 expected = glm::normalize(vec3(0, 0, 1) + strength * (texel - vec3(0, 0, 1)));
+        expect_unit_near(plane_with_map(texel, material).shade().frame.z, expected, "strength");
+    }
+}
+
+// Seen from below, the back face's normal map is flipped with the surface.
+TEST(NormalMap, BackFaceFlipsTheMappedNormal) {
+    const vec3 texel = glm::normalize(vec3(0.3f, 0.0f, 0.9f));
+    expect_unit_near(plane_with_map(texel).shade(vec3(0.0f, 0.0f, 1.0f)).frame.z, -texel,
+                     "back face");
+}
+
+// The corrected normal lies in the plane of ng and n, between them, and its reflection of wo
+// leaves the surface at exactly the threshold elevation; a normal whose reflection is already
+// above the threshold is kept. Random configurations over the hemisphere.
+TEST(NormalMap, EnsureValidReflection) {
+    Pcg32 rng(7);
+    const vec3 ng(0.0f, 0.0f, 1.0f);
+    int corrected = 0;
+    for (int i = 0; i < 2000; ++i) {
+        const float cos_wo = 0.02f + 0.98f * rng.next_float();
+        const float phi_wo = kTwoPi * rng.next_float();
+        const vec3 wo = spherical_direction(std::sqrt(1.0f - cos_wo * cos_wo), cos_wo, phi_wo);
+        const float cos_n = 0.05f + 0.95f * rng.next_float();
+        const vec3 n = spherical_direction(std::sqrt(1.0f - cos_n * cos_n), cos_n,
+                                           kTwoPi * rng.next_float());
+        const vec3 result = ensure_valid_reflection(ng, wo, n);
+        EXPECT_NEAR(glm::length(result), 1.0f, kUnitTolerance);
+        const float threshold =
+            std::min(kReflectionCosineShare * cos_wo, kMinReflectionCosine);
+        const vec3 reflected = 2.0f * glm::dot(result, wo) * result - wo;
+        const vec3 original = 2.0f * glm::dot(n, wo) * n - wo;
+        if (glm::dot(original, ng) >= threshold) {
+            EXPECT_EQ(result, n);
+            continue;
+        }
+        ++corrected;
+        EXPECT_NEAR(glm::dot(reflected, ng), threshold, 1e-4f) << "case " << i;
+        EXPECT_NEAR(glm::dot(glm::cross(ng, n), result), 0.0f, 1e-5f) << "in the plane";
+        EXPECT_GE(result.z, n.z - 1e-6f) << "tilted towards ng, not away";
+    }
+    EXPECT_GT(corrected, 100) << "the random cases must exercise the correction";
+}
+
+// Chiang et al.'s term: 1 with no bend or light above the bent horizon's reach, 0 at the
+// interpolated horizon, and g = 0.5 gives -g^3 + g^2 + g = 0.625.
+TEST(NormalMap, BumpShadowingTerm) {
+    const vec3 smooth(0.0f, 0.0f, 1.0f);
+    EXPECT_EQ(bump_shadowing_term(smooth, smooth, glm::normalize(vec3(1.0f, 0.0f, 0.2f))), 1.0f);
+    const float bend = 0.5f;
+    const vec3 bent(std::sin(bend), 0.0f, std::cos(bend));
+    EXPECT_EQ(bump_shadowing_term(smooth, bent, vec3(0.0f, 0.0f, 1.0f)), 1.0f);
+    EXPECT_EQ(bump_shadowing_term(smooth, bent, vec3(1.0f, 0.0f, 0.0f)), 0.0f);
+    // g = cos(wi, smooth) / (cos(wi, bent) cos(bend)): pick wi's elevation so g = 1/2.
+    // With wi = (sin a, 0, cos a): cos a / (cos(a - bend) cos bend) = 1/2.
+    float a = 0.0f;
+    float lo = 0.0f, hi = 0.5f * kPi;
+    for (int step = 0; step < 40; ++step) {  // bisection: 2^-40 of the interval, below float's
+        a = 0.5f * (lo + hi);
+        const float g = std::cos(a) / (std::cos(a - bend) * std::cos(bend));
+        (g > 0.5f ? lo : hi) = a;
+    }
+    EXPECT_NEAR(bump_shadowing_term(smooth, bent, vec3(std::sin(a), 0.0f, std::cos(a))), 0.625f,
+                1e-4f);
+}
+
+// Cycles 4+'s microfacet term: 1 without a bend, 0 below the interpolated horizon, and GGX's
+// Smith G1 with alpha^2 = tan^2(bend) / 8 in between, which falls as the light grazes.
+TEST(NormalMap, BumpShadowingMicrofacet) {
+    const vec3 smooth(0.0f, 0.0f, 1.0f);
+    const vec3 grazing = glm::normalize(vec3(1.0f, 0.0f, 0.1f));
+    EXPECT_EQ(bump_shadowing_microfacet(smooth, smooth, grazing), 1.0f);
+    const float bend = 0.6f;
+    const vec3 bent(std::sin(bend), 0.0f, std::cos(bend));
+    EXPECT_EQ(bump_shadowing_microfacet(smooth, bent, glm::normalize(vec3(1.0f, 0.0f, -0.1f))),
+              0.0f);
+    const float tan_bend = std::tan(bend), cos_i = 0.1f;
+    const float alpha2 = tan_bend * tan_bend / 8.0f;
+    const float tan2_i = (1.0f - cos_i * cos_i) / (cos_i * cos_i);
+    const vec3 wi(std::sqrt(1.0f - cos_i * cos_i), 0.0f, cos_i);
+    EXPECT_NEAR(bump_shadowing_microfacet(smooth, bent, wi),
+                2.0f / (1.0f + std::sqrt(1.0f + alpha2 * tan2_i)), 1e-5f);
+    EXPECT_LT(bump_shadowing_microfacet(smooth, bent, wi),
+              bump_shadowing_microfacet(smooth, bent, glm::normalize(vec3(1.0f, 0.0f, 1.0f))));
+}
+
+// Blender 4+ (PrincipledModel::V2) Lambert-only material: Cycles leaves the bent normal
+// uncorrected, even facing away from the viewer; so does SHGI. Blender 3.x corrects it.
+TEST(NormalMap, BlenderFourKeepsTheBentNormalOfALambertMaterial) {
+    const vec3 texel = glm::normalize(vec3(-0.6f, 0.0f, 0.8f));  // tilted away from the viewer
+    const vec3 grazing = glm::normalize(vec3(-1.0f, 0.0f, -0.15f));
+    Material v2 = test::lambert(0.8f);
+    v2.principled_model = PrincipledModel::V2;
+    const Shading kept = plane_with_map(texel, v2).shade(grazing);
+    expect_unit_near(kept.frame.z, texel, "V2 keeps the bent normal");
+    EXPECT_GT(kept.wo.z, 0.0f);
+    const Shading corrected = plane_with_map(texel).shade(grazing);
+    const vec3 wo = -grazing;
+    const vec3 reflected = 2.0f * glm::dot(corrected.frame.z, wo) * corrected.frame.z - wo;
+    EXPECT_NEAR(reflected.z, std::min(kReflectionCosineShare * wo.z, kMinReflectionCosine), 1e-4f)
+        << "V1 corrects it";
+}
+
+// A sun straight above a Lambert plane whose normal map tilts every normal by `tilt`:
+// L = rho / pi x S cos(tilt) (no correction: the view's reflection stays well above the surface;
+// no bump shadowing: the light is above both horizons). The Normal pass holds the tilted normal.
+TEST(NormalMap, SunOverNormalMappedPlane) {
+    const float albedo = 0.5f, strength = 3.0f, tilt = 0.5f;
+    Scene scene;
+    Material material = test::lambert(albedo);
+    material.normal_texture =
+        int32_t(scene.add_texture(normal_texel(vec3(std::sin(tilt), 0.0f, std::cos(tilt)))));
+    scene.add_material(material);
+    Mesh mesh = mapped_plane(1.0f);
+    for (vec3& p : mesh.positions) p *= 50.0f;
+    scene.add_instance(scene.add_mesh(mesh), mat4(1.0f));
+    scene.set_world(test::black_world());
+    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.5f), 0.01f, 4));
+    Light sun;
+    sun.type = LightType::Sun;
+    sun.strength = strength;
+    scene.add_light(sun);
+    scene.commit();
+    PathTracer tracer(scene, test::settings_with_samples(4));
+    tracer.render(4);
+    const test::PixelStats stats = test::pixel_stats(tracer.film(), Pass::Combined);
+    const double expected = albedo * kInvPi * strength * std::cos(tilt);
+    testing::expect_within_noise(stats.mean, stats.standard_error, expected, 2e-3 * expected,
+                                 "normal-mapped sun");
+    EXPECT_NEAR(test::pixel_stats(tracer.film(), Pass::Normal, 0).mean, std::sin(tilt), 1e-5);
+    EXPECT_NEAR(test::pixel_stats(tracer.film(), Pass::Normal, 2).mean, std::cos(tilt), 1e-5);
+}
+
+// --- hostile input: the map is skipped where it cannot apply, with a warning, never a crash.
+
+TEST(NormalMap, NanTangentFallsBackWithAWarning) {
+    Mesh mesh = mapped_plane(1.0f);
+    mesh.tangents[0] = vec4(std::nanf(""), 0.0f, 0.0f, 1.0f);
+    mesh.tangents[2] = vec4(0.0f);  // zero length: no direction either
+    testing::LogCapture log;
+    const MappedPlane plane =
+        plane_with_map(glm::normalize(vec3(0.5f, 0.0f, 0.8f)), test::lambert(0.8f), mat4(1.0f),
+                       1.0f, mesh);
+    EXPECT_EQ(plane.scene.mesh_reports()[0].dropped_tangents, 2u);
+    EXPECT_NE(log.warnings.find("2 of 4 tangents are NaN, infinite or zero"), std::string::npos)
+        << log.warnings;
+    // Both triangles use vertex 0 or 2: shaded by the interpolated normal.
+    expect_unit_near(plane.shade().frame.z, vec3(0.0f, 0.0f, 1.0f), "dropped tangent");
+}
+
+TEST(NormalMap, ZeroTexelFallsBackToTheInterpolatedNormal) {
+    const MappedPlane plane = plane_with_map(vec3(0.0f));  // a (0.5, 0.5, 0.5) grey texel
+    expect_unit_near(plane.shade().frame.z, vec3(0.0f, 0.0f, 1.0f), "zero texel");
+}
+
+TEST(NormalMap, MeshWithoutUvsWarnsAndRendersUnmapped) {
+    Mesh mesh = test::plane(1.0f);  // no UVs, no tangents
+    testing::LogCapture log;
+    const MappedPlane plane = plane_with_map(glm::normalize(vec3(0.5f, 0.0f, 0.8f)),
+                                             test::lambert(0.8f), mat4(1.0f), 1.0f, mesh);
+    EXPECT_NE(log.warnings.find("has a tangent-space normal map but the mesh has no UV map"),
+              std::string::npos)
+        << log.warnings;
+    expect_unit_near(plane.shade().frame.z, vec3(0.0f, 0.0f, 1.0f), "no UVs");
+}
+
+TEST(NormalMap, RejectsBadMaterialFields) {
+    Scene scene;
+    Material material;
+    material.name = "Bumpy";
+    material.normal_texture = 0;
+    EXPECT_THROW(
+        {
+            try {
+                scene.add_material(material);
+                scene.add_instance(scene.add_mesh(test::plane(1.0f)), mat4(1.0f));
+                scene.commit();
+            } catch (const InvalidArgument& error) {
+                EXPECT_NE(std::string(error.what()).find(
+                              "material 'Bumpy': normal_texture = 0 but the scene has 0 textures"),
+                          std::string::npos)
+                    << error.what();
+                throw;
+            }
+        },
+        InvalidArgument);
+    material.normal_texture = kNoTexture;
+    material.normal_strength = std::nanf("");
+    EXPECT_THROW(scene.add_material(material), InvalidArgument);
+    material.normal_strength = -1.0f;
+    EXPECT_THROW(scene.add_material(material), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace shgi
