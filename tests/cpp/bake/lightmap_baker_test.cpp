@@ -186,22 +186,33 @@ TEST(LightmapBaker, PointLightIsExactPerTexel) {
     }
 }
 
-// A two-sided quad of the furnace's own material floating inside it: every point sees radiance
-// Le / (1 - a) from everywhere, Le of it straight from an emitter.
-TEST(LightmapBaker, FurnaceSplitsDirectAndIndirectLight) {
-    const float a = 0.5f, le = 1.0f;
+// A closed emissive box of albedo a and emission Le (black world) with a two-sided quad of the
+// same material floating inside it, committed: every point sees radiance Le / (1 - a) from
+// everywhere, Le of it straight from an emitter.
+struct Furnace {
     Scene scene;
+    uint32_t quad = 0;
+};
+
+Furnace furnace(float a, float le) {
+    Furnace f;
     Material material = test::lambert(a);
     material.emission_color = vec3(1.0f);
     material.emission_strength = le;
-    scene.add_material(material);
-    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f), "Furnace");
-    Mesh quad = floor_mesh(0.25f);
-    const uint32_t quad_instance = scene.add_instance(
-        scene.add_mesh(quad), glm::translate(mat4(1.0f), vec3(0.1f, 0.0f, -0.2f)), "Quad");
-    scene.set_world(test::black_world());
-    scene.commit();
-    const TexelMap map = rasterize(scene, quad_instance, 4);
+    f.scene.add_material(material);
+    f.scene.add_instance(f.scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f), "Furnace");
+    f.quad = f.scene.add_instance(f.scene.add_mesh(floor_mesh(0.25f)),
+                                  glm::translate(mat4(1.0f), vec3(0.1f, 0.0f, -0.2f)), "Quad");
+    f.scene.set_world(test::black_world());
+    f.scene.commit();
+    return f;
+}
+
+TEST(LightmapBaker, FurnaceSplitsDirectAndIndirectLight) {
+    const float a = 0.5f, le = 1.0f;
+    const Furnace f = furnace(a, le);
+    const Scene& scene = f.scene;
+    const TexelMap map = rasterize(scene, f.quad, 4);
     LightmapSettings settings;
     settings.samples = 1024;
     settings.max_bounces = settings.diffuse_bounces = 64;
@@ -254,18 +265,9 @@ TEST(LightmapBaker, FieldSourceAddsTheFieldsIrradiance) {
 // field gives Lf. With Lf = a Le / (1 - a), the true indirect radiance there, both give it.
 TEST(LightmapBaker, FinalGatherReadsTheFieldWhereTheGatherRayLands) {
     const float a = 0.5f, le = 1.0f;
-    Scene scene;
-    Material material = test::lambert(a);
-    material.emission_color = vec3(1.0f);
-    material.emission_strength = le;
-    scene.add_material(material);
-    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f), "Furnace");
-    const uint32_t quad = scene.add_instance(
-        scene.add_mesh(floor_mesh(0.25f)), glm::translate(mat4(1.0f), vec3(0.1f, 0.0f, -0.2f)),
-        "Quad");
-    scene.set_world(test::black_world());
-    scene.commit();
-    const TexelMap map = rasterize(scene, quad, 4);
+    const Furnace f = furnace(a, le);
+    const Scene& scene = f.scene;
+    const TexelMap map = rasterize(scene, f.quad, 4);
     LightmapSettings settings;
     settings.samples = 1024;
     settings.content = LightmapContent::Indirect;
