@@ -26,6 +26,22 @@ def path_traced_reference(make_scene, scale, samples, seed=11):
     return _REFERENCES[key]
 
 
+_FIELD_RENDERS = {}
+
+
+def field_agreement(method, make_scene, scale, samples, solve, seed=5):
+    """(path-traced reference passes, (preview passes, timings) over the field that
+    `solve(committed scene)` returns) of `make_scene(scale)`, once per session and `method` (a
+    name for the cache): the field methods' agreement tests."""
+    key = (method, make_scene, scale, samples)
+    if key not in _FIELD_RENDERS:
+        scene, reference = path_traced_reference(make_scene, scale, samples)
+        field = solve(scene)
+        _FIELD_RENDERS[key] = reference, shgi.render_preview(scene, field,
+                                                              shgi.PreviewSettings(seed=seed))
+    return _FIELD_RENDERS[key]
+
+
 def finishes_in_a_thread(call, timeout=30.0):
     """Runs call() in a daemon thread: a deadlock fails the test instead of hanging the run."""
     outcome = {}

@@ -16,7 +16,7 @@ import pytest
 import shgi
 from blender_support import REPO_ROOT
 from shgi.metrics import psnr  # the figure the Blender tests use too
-from scene_support import committed, path_traced_reference
+from scene_support import committed, field_agreement
 
 sys.path.insert(0, str(REPO_ROOT / "examples"))
 import scenes  # noqa: E402  (examples/ is not a package)
@@ -25,19 +25,18 @@ SCALE = 0.25            # 64 x 64 (Cornell box) and 64 x 48 (sun room) pixels
 REFERENCE_SAMPLES = 2048
 
 
-_AGREEMENT = {}
+def solved(scene):
+    lattice = shgi.PhotonLattice(scene, shgi.PhotonLatticeSettings(seed=5))
+    lattice.solve()
+    return lattice
 
 
 def agreement(name):
     """(reference passes, preview passes) for a project scene, computed once per session."""
-    if name not in _AGREEMENT:
-        scene, reference = path_traced_reference(getattr(scenes, name), SCALE, REFERENCE_SAMPLES)
-        lattice = shgi.PhotonLattice(scene, shgi.PhotonLatticeSettings(seed=5))
-        lattice.solve()
-        preview, timings = shgi.render_preview(scene, lattice, shgi.PreviewSettings(seed=5))
-        assert set(timings) == {"primary", "direct", "indirect", "total"}
-        _AGREEMENT[name] = reference, preview
-    return _AGREEMENT[name]
+    reference, (preview, timings) = field_agreement("PHOTON_LATTICE", getattr(scenes, name),
+                                                    SCALE, REFERENCE_SAMPLES, solved)
+    assert set(timings) == {"primary", "direct", "indirect", "total"}
+    return reference, preview
 
 
 @pytest.mark.reference

@@ -15,7 +15,7 @@ import pytest
 
 import shgi
 from blender_support import REPO_ROOT
-from scene_support import committed, path_traced_reference
+from scene_support import committed, field_agreement
 from shgi.metrics import psnr
 
 sys.path.insert(0, str(REPO_ROOT / "examples"))
@@ -29,18 +29,17 @@ def indirect_diffuse(passes):
     return float((passes["DiffInd"] * passes["DiffCol"]).mean())
 
 
-_AGREEMENT = {}
+def solved(scene):
+    field = shgi.RadianceField(scene, shgi.RadianceFieldSettings(seed=5))
+    field.refine()
+    return field
 
 
 def agreement(name):
     """(reference passes, preview passes) of a project scene, once per session."""
-    if name not in _AGREEMENT:
-        scene, reference = path_traced_reference(getattr(scenes, name), SCALE, REFERENCE_SAMPLES)
-        field = shgi.RadianceField(scene, shgi.RadianceFieldSettings(seed=5))
-        field.refine()
-        preview, _ = shgi.render_preview(scene, field, shgi.PreviewSettings(seed=5))
-        _AGREEMENT[name] = reference, preview
-    return _AGREEMENT[name]
+    reference, (preview, _) = field_agreement("RADIANCE_FIELD", getattr(scenes, name), SCALE,
+                                              REFERENCE_SAMPLES, solved)
+    return reference, preview
 
 
 def test_settings_mirror_cpp_defaults():
