@@ -25,12 +25,12 @@ from recording_layout import draw_panel, draw_panel_operators, draw_panel_props 
 
 MODULE = "shgi_blender"
 ENGINE = "SHGI"
-METHODS = {"PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID", "PROPAGATION"}
+METHODS = {"PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID", "RADIANCE_FIELD", "PROPAGATION"}
 STOCK_PANELS = ("EEVEE_MATERIAL_PT_surface", "EEVEE_WORLD_PT_surface", "RENDER_PT_format",
                 "RENDER_PT_color_management", "DATA_PT_context_light")
 OWN_CLASSES = ("SHGI_RENDER_PT_method", "SHGI_RENDER_PT_photon_lattice",
                "SHGI_RENDER_PT_probe_grid", "SHGI_RENDER_PT_probe_grid_visibility",
-               "SHGI_RENDER_PT_propagation",
+               "SHGI_RENDER_PT_radiance_field", "SHGI_RENDER_PT_propagation",
                "SHGI_LIGHT_PT_light", "SHGI_VIEWLAYER_PT_passes", "SHGI_OT_solve",
                "SHGI_OT_clear_solution", "SHGI_OT_quality_preset", "SHGI_OT_load_solution",
                "SHGI_RENDER_PT_light_paths_max_bounces", "SHGI_RENDER_PT_bake_farm",
@@ -91,8 +91,11 @@ def check_panels_draw(scene):
             draw_panel(name, context)
     scene.shgi.method = "PHOTON_LATTICE"
     draw_panel("SHGI_RENDER_PT_photon_lattice", context)
-    scene.shgi.method = "PROPAGATION"
     from shgi_blender import settings
+
+    scene.shgi.method = "RADIANCE_FIELD"
+    draw_panel("SHGI_RENDER_PT_radiance_field", context)
+    scene.shgi.method = "PROPAGATION"
 
     shown = {name for _, name, _ in draw_panel_props("SHGI_RENDER_PT_propagation", context)}
     if shown != set(settings.PROPAGATION_DEFAULTS) | {"passes", "viewport_passes",
@@ -168,6 +171,7 @@ def check_group_defaults(scene, settings, shgi):
 
     builders = {"PHOTON_LATTICE": settings.photon_lattice_settings,
                 "PROBE_GRID": settings.probe_grid_settings,
+                "RADIANCE_FIELD": settings.radiance_field_settings,
                 "PROPAGATION": settings.propagation_settings}
     for solver, group in settings.METHOD_SETTINGS.items():
         native = getattr(shgi, group.native_type)()
