@@ -30,8 +30,9 @@ class IncrementalExport:
         self.log = WarningLog(report)
         self.table = MaterialTable()
         self.materials = MaterialExporter(self.table, self.log)
-        self.geometries = {}   # geometry key -> MeshGeometry, or None (empty or skipped)
-        self.meshes = {}       # (geometry key, material ids) -> shgi.Mesh
+        # (*geometry key, tangent UV map) -> MeshGeometry, or None (empty or skipped)
+        self.geometries = {}
+        self.meshes = {}       # ((*geometry key, tangent UV map), material ids) -> shgi.Mesh
         self.world = None
         self.meshes_read = 0
 
@@ -79,15 +80,20 @@ class _CachedWalk(_SceneExporter):
         self.caches = caches
         self.used_geometries = set()
 
-    def _read_geometry(self, obj, geometry_key):
-        self.used_geometries.add(geometry_key)
-        if geometry_key not in self.caches.geometries:
+    # A geometry is cached with the UV map its tangents come from (None: none; a material's
+    # normal map asks for them), so a material that gains a normal map reads its meshes again.
+    def _read_geometry(self, obj, geometry_key, tangent_uv_map=None):
+        key = (*geometry_key, tangent_uv_map)
+        self.used_geometries.add(key)
+        if key not in self.caches.geometries:
             self.caches.meshes_read += 1
-            self.caches.geometries[geometry_key] = super()._read_geometry(obj, geometry_key)
-        return self.caches.geometries[geometry_key]
+            self.caches.geometries[key] = super()._read_geometry(obj, geometry_key,
+                                                                 tangent_uv_map)
+        return self.caches.geometries[key]
 
     def _shgi_mesh(self, geometry, geometry_key, material_ids):
-        key = (geometry_key, tuple(material_ids))
+        tangents = self.materials.tangent_uv_map(material_ids)
+        key = ((*geometry_key, tangents), tuple(material_ids))
         if key not in self.caches.meshes:
             self.caches.meshes[key] = super()._shgi_mesh(geometry, geometry_key, material_ids)
         return self.caches.meshes[key]
