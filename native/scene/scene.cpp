@@ -698,9 +698,14 @@ bool Scene::choose_flattened(bool flatten) {
     std::vector<uint64_t> uses(meshes_.size(), 0);
     for (const Instance& instance : instances_) ++uses[instance.mesh_id];
     std::vector<uint8_t> instanced(meshes_.size());
+    // Shared meshes are copied in mesh order while the copies fit the scene's one budget, so a
+    // thousand small shared meshes cannot copy a thousand budgets' worth of triangles.
+    uint64_t copy_budget = kMaxFlattenedCopyTriangles;
     for (size_t m = 0; m < meshes_.size(); ++m) {
-        const bool small = uses[m] * meshes_[m].triangles.size() <= kMaxFlattenedCopyTriangles;
-        instanced[m] = uses[m] > 0 && (!flatten || moving_ || (uses[m] > 1 && !small)) ? 1 : 0;
+        const uint64_t copies = uses[m] * meshes_[m].triangles.size();
+        const bool copied = uses[m] > 1 && copies <= copy_budget;
+        if (flatten && !moving_ && copied) copy_budget -= copies;
+        instanced[m] = uses[m] > 0 && (!flatten || moving_ || (uses[m] > 1 && !copied)) ? 1 : 0;
     }
     for (size_t i = 0; i < instances_.size(); ++i)
         if (enlarging_[i]) instanced[instances_[i].mesh_id] = 1;

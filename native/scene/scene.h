@@ -7,9 +7,9 @@
 // a scene without materials gets one default Material so every triangle has one), gathers
 // emissive triangles, refuses emitted power beyond kMaxEmittedPower (naming the brightest
 // emitter), and builds the BVH (scene/embree_scene.h): a mesh used by one instance is flattened
-// into the top-level BVH in world space (rays pay no instance transform), and so is a small mesh
-// used by several whose copies hold at most kMaxFlattenedCopyTriangles in all (the Cornell box's
-// two blocks: a copy costs less than the instance transform every ray would pay); a larger mesh
+// into the top-level BVH in world space (rays pay no instance transform), and so are small meshes
+// used by several while all their copies hold at most kMaxFlattenedCopyTriangles (the Cornell
+// box's two blocks: a copy costs less than the instance transform every ray would pay); a mesh
 // used by several keeps one BVH of its own, instanced once per Instance, so a mesh used a
 // thousand times is stored once (so is a mesh whose instance enlarges it beyond the ray range
 // the rest of the scene allows: flattening must not narrow the rays a scene traces). Any edit un-commits
@@ -104,8 +104,8 @@ struct SurfacePoint {
     uint32_t triangle_id = kInvalidId;
 };
 
-// A mesh used by several instances is flattened (copied into the top level once per instance)
-// when its copies hold at most this many triangles in all.
+// Meshes used by several instances are flattened (copied into the top level once per instance)
+// while all their copies together hold at most this many triangles (taken in mesh order).
 inline constexpr uint64_t kMaxFlattenedCopyTriangles = uint64_t(1) << 16;
 
 struct CommitSettings {

@@ -155,6 +155,23 @@ TEST(SceneFlatten, MovedInstancesGiveTheSameHitsAsInstancedOnes) {
     EXPECT_NEAR(hit.t, 2.9f + 1.0f - 0.6f, 1e-2f) << "the sphere's top, radius 0.6";
 }
 
+// The copy budget is the scene's, not each mesh's: two shared meshes whose copies each fit it
+// but not together, the first (in mesh order) is copied and the second instanced.
+TEST(SceneFlatten, SharedMeshesShareOneCopyBudget) {
+    Scene scene;
+    for (int mesh = 0; mesh < 2; ++mesh) {
+        const uint32_t id = scene.add_mesh(test::uv_sphere(0.5f, 64, 256));
+        for (int copy = 0; copy < 2; ++copy)
+            scene.add_instance(id, glm::translate(mat4(1.0f), vec3(2.0f * copy, 2.0f * mesh, 0)));
+    }
+    scene.commit();
+    const uint64_t copies = 2 * scene.meshes()[0].triangles.size();
+    ASSERT_LE(copies, kMaxFlattenedCopyTriangles);
+    ASSERT_GT(2 * copies, kMaxFlattenedCopyTriangles);
+    EXPECT_EQ(scene.stats().flattened_instances, 2u);
+    EXPECT_TRUE(scene.intersect(Ray{vec3(0.0f, 2.0f, 2.0f), vec3(0.0f, 0.0f, -1.0f)}).valid());
+}
+
 TEST(SceneFlatten, ALargeMeshGainingASecondInstanceBecomesInstanced) {
     Scene scene = mixed_scene(true);
     const uint32_t large = scene.add_mesh(test::uv_sphere(0.5f, 128, 256));
