@@ -280,13 +280,15 @@ def local_cluster(workers: int, threads_per_worker: int = 1):
 
 def run_tasks(client, submit: Callable[[int, int], object], count: int,
               accept: Callable[[int, dict], int], on_progress: Callable[[int, int], None],
-              what: str, cancelled: Callable[[], bool] = lambda: False) -> None:
+              what: str, cancelled: Callable[[], bool] = lambda: False,
+              cancel_event=None) -> None:
     """Runs `count` tasks on the cluster: submit(i, attempt) makes task i's future; accept(i,
     result) validates and keeps its result (ValueError/OSError: rejected) and returns how many
     items it held (texels, probes); on_progress(done, items) after each. A task that fails
     (raises, or is rejected) is submitted again, up to SHARD_ATTEMPTS runs; then ShardFailed
     names `what` i, the worker and the error. Raises KeyboardInterrupt (after cancelling every
-    future) when cancelled() turns true."""
+    future) when cancelled() turns true. Whatever ends it early also sets `cancel_event` (the
+    Dask Event the running tasks watch), when given."""
     futures = {submit(i, 1): (i, 1) for i in range(count)}
     done = items = 0
     try:
@@ -314,6 +316,8 @@ def run_tasks(client, submit: Callable[[int, int], object], count: int,
                                       f"last on worker {worker}: {error}")
                 futures[submit(i, attempt + 1)] = (i, attempt + 1)
     except BaseException:
+        if cancel_event is not None:
+            cancel_event.set()
         client.cancel(list(futures), force=True)
         raise
 
@@ -421,12 +425,8 @@ def _bake_shards_on(client, distributed, bundle, args, scene, jobs, options, sha
                 f"shards {done}/{shards}, {rate:,.0f} texels/s")
 
     _report(progress, 0.0, f"shards 0/{shards}")
-    try:
-        run_tasks(client, submit, shards, accept, on_progress, "shard",
-                  lambda: progress.cancelled)
-    except BaseException:
-        cancel.set()
-        raise
+    run_tasks(client, submit, shards, accept, on_progress, "shard", lambda: progress.cancelled,
+              cancel)
 
 
 def _accept_shard(result: dict, jobs, options, out_dir: str, shard: int, shards: int) -> int:
@@ -517,12 +517,8 @@ def solve_probe_grid(client, scene_path: str, settings: "_shgi.ProbeGridSettings
         rate = solved / max(time.perf_counter() - start, 1e-9)
         _report(progress, done / bricks, f"bricks {done}/{bricks}, {rate:,.1f} probes/s")
 
-    try:
-        run_tasks(client, submit, bricks, accept, on_progress, "brick",
-                  lambda: progress.cancelled)
-    except BaseException:
-        cancel.set()
-        raise
+    run_tasks(client, submit, bricks, accept, on_progress, "brick", lambda: progress.cancelled,
+              cancel)
     merged = fields[0]
     for i in range(1, bricks):
         merged = merged.splice(fields[i], *ranges[i])
