@@ -10,10 +10,11 @@ BUILD_DIR ?= build
 JOBS ?= 2
 PYTHON := /usr/bin/python3
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release -DSHGI_WERROR=ON
+# nodejs: the Flamenco job type's tests (tests/python/test_flamenco_job.py, examples/flamenco).
 DEB_PACKAGES := build-essential cmake pkg-config libembree-dev libglm-dev libopenexr-dev \
 	libimath-dev pybind11-dev libtbb-dev libgtest-dev libtinygltf-dev \
 	libtinyobjloader-dev libpcg-cpp-dev libpng-dev libnanoflann-dev nlohmann-json3-dev python3-dev python3-numpy python3-pytest \
-	python3-pip python3-venv python3-cffi blender xvfb xauth
+	python3-pip python3-venv python3-cffi blender xvfb xauth nodejs
 SITE_DIR := /usr/local/lib/python3.11/dist-packages
 # shgi's optional PyPI modules (shgi.uv_atlas, shgi.denoise), pinned: docs/baking.md's figures
 # were measured with these. PIP_CHECK exits 0 when each is installed at its pinned version.

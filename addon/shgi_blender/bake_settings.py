@@ -19,6 +19,7 @@ operator, or a SimpleNamespace in tests).
 """
 
 import math
+from dataclasses import dataclass
 
 from . import settings
 
@@ -77,6 +78,9 @@ BAKE_PROPERTY_DEFAULTS = {
     "output_folder": "//lightmaps",
     "shard_index": 0,
     "shard_count": 1,
+    "farm": "LOCAL",
+    "scheduler": "",
+    "workers": 2,
     "hook_up_material": False,
     "single_user_materials": True,
     "bake_side": "FRONT",
@@ -107,6 +111,23 @@ DENOISER_ITEMS = (
     ("OIDN", "OpenImageDenoise", "Intel OpenImageDenoise, lightmap filter, per UV chart (needs "
                                  "the pyoidn module: make deps installs it)"),
 )
+
+# Where a bake runs (scene.shgi.bake.farm): the Bake panel's Farm section.
+FARM_ITEMS = (
+    ("LOCAL", "This Computer",
+     "Bake here; with Shards > 1, only shard Shard (a farm job runs the others, Merge Shards "
+     "joins them)"),
+    ("DASK", "Dask",
+     "Bake the shards as tasks on a Dask cluster (the Scheduler's address; empty: Workers "
+     "processes on this computer) and merge them here into the lightmaps a bake here writes"),
+    ("FLAMENCO", "Flamenco",
+     "Write a job of the SHGI Lightmap Bake job type (examples/flamenco) for a Flamenco farm: "
+     "its workers open this saved .blend file"),
+)
+# Worker processes of a Dask bake on this computer (Scheduler empty): shgi.farm's limit.
+MAX_FARM_WORKERS = 256
+# Shards per Dask worker when Shards is 1 (shgi.farm.bake_scene_on_cluster's default).
+SHARDS_PER_WORKER = 4
 
 # LightmapSettings.samples' native limit (native/bake/lightmap_baker.cpp kMaxSamples): the
 # Samples property's range.
@@ -180,6 +201,55 @@ def shard(bake):
         raise ValueError(f"shard {bake.shard_index} of {bake.shard_count}: the shard index must "
                          f"lie in 0..{bake.shard_count - 1}")
     return (bake.shard_index, bake.shard_count)
+
+
+@dataclass
+class FarmTarget:
+    """Where a Dask bake runs (shgi.farm.connect): a scheduler's address, or `workers` processes
+    on this computer; `shards` 0: SHARDS_PER_WORKER per worker."""
+
+    scheduler: str
+    workers: int
+    shards: int
+
+
+def farm_target(bake):
+    """The FarmTarget of a bake with Farm "Dask", else None. ValueError for an address that is
+    not tcp://HOST:PORT (naming Bake > Farm > Scheduler)."""
+    if bake.farm != "DASK":
+        return None
+    address = bake.scheduler.strip()
+    if address:
+        host, _, port = address.removeprefix("tcp://").rpartition(":")
+        if not address.startswith("tcp://") or not host or not port.isdigit():
+            raise ValueError(f"Bake > Farm > Scheduler {address!r} is not an address like "
+                             "tcp://192.168.1.20:8786 (what `dask scheduler` prints); empty "
+                             "bakes on Workers processes on this computer")
+    if not 1 <= bake.workers <= MAX_FARM_WORKERS:
+        raise ValueError(f"Bake > Farm > Workers must lie in 1..{MAX_FARM_WORKERS}, got "
+                         f"{bake.workers}")
+    return FarmTarget(address, bake.workers, bake.shard_count if bake.shard_count > 1 else 0)
+
+
+# The Flamenco job type of examples/flamenco/shgi_bake.js, as a Manager names a job compiler
+# script: its file name, "_" as "-".
+FLAMENCO_JOB_TYPE = "shgi-bake"
+# The job's settings taken from scene.shgi.bake under the same names (shgi_bake.js's keys).
+FLAMENCO_SETTINGS = ("uv_map", "create_uv", "resolution", "texel_density", "samples", "content",
+                     "source", "directional", "filter", "padding", "shard_count")
+
+
+def flamenco_job(bake, objects, blendfile, output_folder, name):
+    """A job of the SHGI Lightmap Bake job type (examples/flamenco/shgi_bake.js) as the body a
+    Flamenco Manager's job submission takes ({"name", "type", "priority", "settings",
+    "metadata"}): the Bake panel's settings (`bake`), the names of the objects to bake, the
+    saved .blend file every task opens (runner "blender") and the absolute output folder.
+    examples/flamenco/preview_job.js compiles it and runs its tasks on one machine."""
+    settings = {key: getattr(bake, key) for key in FLAMENCO_SETTINGS}
+    settings.update(objects=", ".join(sorted(objects)), output_folder=output_folder,
+                    runner="blender", blendfile=blendfile)
+    return {"name": name, "type": FLAMENCO_JOB_TYPE, "priority": 50, "settings": settings,
+            "metadata": {"created_by": "SHGI Write Flamenco Job"}}
 
 
 def lightmap_size(bake, scene, instance):

@@ -313,9 +313,23 @@ def bake_properties():
             description="Which shard this bake writes, 0 .. Shards - 1"),
         "shard_count": IntProperty(
             name="Shards", default=B["shard_count"], min=1, soft_max=1024,
-            description="Split the bake into this many shards for a render farm (each writes "
-                        "raw shard files; Merge Shards writes the lightmaps); 1 bakes whole "
-                        "lightmaps"),
+            description="Split the bake into this many shards for a render farm. This "
+                        "Computer: each bake writes one shard's raw files, Merge Shards writes "
+                        "the lightmaps (1 bakes whole lightmaps); Dask: the tasks of the bake "
+                        "(1: four per worker); Flamenco: the job's shard tasks"),
+        "farm": EnumProperty(
+            name="Farm", items=list(bake_settings.FARM_ITEMS), default=B["farm"],
+            description="Where the bake runs"),
+        "scheduler": StringProperty(
+            name="Scheduler", default=B["scheduler"],
+            description="Address of the Dask scheduler (tcp://HOST:PORT, what `dask scheduler` "
+                        "prints); empty: start Workers Dask worker processes on this computer "
+                        "for the bake"),
+        "workers": IntProperty(
+            name="Workers", default=B["workers"], min=1, max=bake_settings.MAX_FARM_WORKERS,
+            soft_max=64,
+            description="Dask worker processes the bake starts on this computer when Scheduler "
+                        "is empty (one native thread each)"),
         "hook_up_material": BoolProperty(
             name="Show in Materials", default=B["hook_up_material"],
             description="Add the lightmap to each object's materials (nodes named SHGI "

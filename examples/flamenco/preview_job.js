@@ -4,8 +4,10 @@
 // sees it.
 //
 //   node preview_job.js '{"runner": "python", "scene_file": "room.gltf", ...}' [--run]
+//   node preview_job.js @shgi_flamenco_job.json [--run]
 //
-// The JSON holds job settings; the rest take the defaults of JOB_TYPE. Only the parts of
+// The JSON holds job settings, or a whole job with them under "settings" (the add-on's Write
+// Flamenco Job); the rest take the defaults of JOB_TYPE. Only the parts of
 // Flamenco's job-compiler API that shgi_bake.js uses are provided (author.Task,
 // author.Command, job.addTask, task.addDependency, print). Variables as Flamenco's default
 // configuration expands them: {blender} -> "blender", {blenderArgs} -> "-b -y".
@@ -74,7 +76,11 @@ function main() {
     const args = process.argv.slice(2);
     const run = args.includes("--run");
     const json = args.find((arg) => arg !== "--run");
-    const tasks = compile(nodePath.join(__dirname, "shgi_bake.js"), json ? JSON.parse(json) : {});
+    // Job settings, or a whole job as a Manager takes it ({"name", "type", "settings", ...}:
+    // what the add-on's Write Flamenco Job writes), inline or as @file.
+    const text = json && json.startsWith("@") ? fs.readFileSync(json.slice(1), "utf8") : json;
+    const parsed = text ? JSON.parse(text) : {};
+    const tasks = compile(nodePath.join(__dirname, "shgi_bake.js"), parsed.settings || parsed);
     for (const task of dependencyOrder(tasks)) {
         const after = task.dependencies.map((d) => d.name).join(", ") || "nothing";
         console.log(`task ${task.name} (${task.type}), after ${after}`);

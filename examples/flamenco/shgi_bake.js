@@ -60,7 +60,7 @@ const JOB_TYPE = {
           choices: ["DIRECT_INDIRECT", "DIRECT", "INDIRECT", "FULL"],
           description: "What a texel holds, in the units of Cycles' Diffuse bake" },
         { key: "source", type: "string", default: "PATH_TRACE", visible: "submission",
-          choices: ["PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID"],
+          choices: ["PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID", "RADIANCE_FIELD", "PROPAGATION"],
           description: "Where the indirect light comes from (PATH_TRACE: ground truth)" },
         { key: "directional", type: "bool", default: false, visible: "submission",
           description: "Also write the L1 SH layers SH.c0..c3 per texel" },
@@ -158,11 +158,13 @@ function py(value) {
 // The operator properties every bake and merge task passes: the same for all of them. The
 // operators take the rest (tile size, seed, light paths) from the .blend file's scene, which
 // every task opens. create_uv=False: prepare made the UV maps; a shard must not lay out its own.
+// farm='LOCAL': each task bakes its own shard on its worker (a file saved with Bake > Farm set
+// to Flamenco or Dask would otherwise refuse, or send the shard on to a Dask cluster).
 function operatorArguments(settings) {
     const names = ["uv_map", "resolution", "texel_density", "samples", "content", "source",
                    "directional", "filter", "padding", "output_folder"];
     const values = names.map((name) => `${name}=${py(settings[name])}`);
-    return values.concat(["create_uv=False"]).join(", ");
+    return values.concat(["create_uv=False", "farm='LOCAL'"]).join(", ");
 }
 
 // Python that selects exactly the job's objects (the operators bake the selected meshes) and
@@ -218,8 +220,9 @@ const blenderCommands = {
             "ops = importlib.import_module(addon + '.operators.bake_lightmaps')",
             "objects = ops.selected_meshes(bpy.context)",
             `values = types.SimpleNamespace(uv_map=${py(settings.uv_map)}, ` +
-                `create_uv=${py(settings.create_uv)})`,
-            "ops.prepare_uv_maps(bpy.context, objects, values)",
+                `create_uv=${py(settings.create_uv)}, uv_layout='LIGHTMAP_PACK')`,
+            "ops.prepare_uv_maps(bpy.context, objects, values, " +
+                "lambda level, text: print(*level, text), [])",
             `os.makedirs(os.path.join(ops.output_dir(${py(settings.output_folder)}), 'shards'), ` +
                 "exist_ok=True)",
             "print(f'SHGI farm bake: {len(objects)} objects ready:', " +

@@ -52,3 +52,8 @@ from .method_registry import (  # noqa: E402,F401
     settings_to_dict,
     unregister_method,
 )
+
+# A Scene and the settings structs pickle (shgi.pickling): a farm's workers get the scene itself.
+from . import pickling as _pickling  # noqa: E402
+
+_pickling.register_structs()

@@ -36,12 +36,16 @@ closes a local cluster; no lightmap file is written.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import hashlib
 import json
 import logging
 import os
+import pickle
 import struct
+import subprocess
+import sys
 import tempfile
 import threading
 import time
@@ -51,11 +55,13 @@ from typing import Callable, Optional
 
 from . import _shgi
 from . import bake as _bake
+from . import method_registry as _methods
 from .denoise import import_optional
 
 __all__ = ["SHARD_ATTEMPTS", "MAX_SHARDS", "MAX_LOCAL_WORKERS", "ShardFailed", "SceneBundle",
-           "scene_bundle", "import_distributed", "local_cluster", "bake_command_on_cluster", "run_tasks",
-           "solve_probe_grid"]
+           "scene_bundle", "import_distributed", "local_cluster", "bake_command_on_cluster",
+           "run_tasks", "solve_probe_grid", "SceneBlob", "bake_scene_on_cluster",
+           "ProcessCluster", "connect"]
 
 # Runs of one shard before the bake fails (see the module's retry policy).
 SHARD_ATTEMPTS = 2
@@ -68,6 +74,8 @@ MAX_LOCAL_WORKERS = 256
 # How often the client looks at its futures (Ctrl-C lands between looks) and a task at the
 # cancel event: the native bake then stops within its own 0.2 s.
 _POLL_SECONDS = 0.1
+# Seconds a client waits for a scheduler's answer.
+CONNECT_SECONDS = 10
 # Share of the progress bar the shards own; the merge owns the rest.
 _SHARDS_SHARE = 0.9
 
@@ -78,8 +86,16 @@ class ShardFailed(RuntimeError):
 
 def import_distributed():
     """The ``distributed`` module, or ImportError naming the pip command for this Python."""
-    return import_optional("distributed", "baking on a Dask cluster (--workers, --scheduler)",
-                           package="'dask[distributed]'")
+    distributed = import_optional("distributed",
+                                  "baking on a Dask cluster (--workers, --scheduler)",
+                                  package="'dask[distributed]'")
+    # multiprocessing (imported by distributed) keeps __main__ as sys.modules["__mp_main__"],
+    # which only a spawned child needs (it sets its own). In Blender, __main__ is the module of
+    # the script Blender runs, freed when the script ends while the alias still names it:
+    # Blender 3.4.1 then crashes when it quits (it looks at every module in sys.modules).
+    if sys.modules.get("__mp_main__") is sys.modules.get("__main__"):
+        del sys.modules["__mp_main__"]
+    return distributed
 
 
 # --- the scene by content hash --------------------------------------------------------------------
@@ -278,6 +294,99 @@ def local_cluster(workers: int, threads_per_worker: int = 1):
                                         dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR)
 
 
+class ProcessCluster:
+    """A Dask scheduler in this process and `workers` worker processes started as ``python -m
+    distributed.cli.dask_worker`` with the interpreter `python`, each able to import this shgi
+    (its folder on their PYTHONPATH). For hosts where local_cluster's multiprocessing spawn does
+    not work: in Blender, spawn would start sys.executable (whatever Python Blender found) and
+    run Blender's __main__, the script Blender runs, again in every worker. The workers stop
+    when close() is called, and on their own `death_timeout` seconds after the scheduler goes
+    (Blender quitting or crashing leaves no worker behind)."""
+
+    def __init__(self, workers: int, threads_per_worker: int = 1, python: Optional[str] = None,
+                 death_timeout: float = 10.0):
+        if not (isinstance(workers, int) and 1 <= workers <= MAX_LOCAL_WORKERS):
+            raise ValueError(f"workers must be a whole number in 1..{MAX_LOCAL_WORKERS}, got "
+                             f"{workers!r}")
+        distributed = import_distributed()
+        import dask
+
+        self.python = python or sys.executable
+        with dask.config.set({"distributed.scheduler.allowed-failures": SHARD_ATTEMPTS - 1}):
+            self._scheduler = distributed.LocalCluster(
+                n_workers=0, processes=False, protocol="tcp", host="127.0.0.1",
+                dashboard_address="127.0.0.1:0",
+                silence_logs=logging.ERROR)
+        self.scheduler_address = self._scheduler.scheduler_address
+        package_root = os.path.dirname(os.path.dirname(os.path.abspath(_shgi.__file__)))
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+            filter(None, (package_root, os.environ.get("PYTHONPATH")))))
+        self.processes = []
+        try:
+            for i in range(workers):
+                self.processes.append(subprocess.Popen(
+                    [self.python, "-m", "distributed.cli.dask_worker", self.scheduler_address,
+                     "--nthreads", str(threads_per_worker), "--nworkers", "1",
+                     "--no-dashboard", "--name", f"shgi-{i}",
+                     "--death-timeout", str(death_timeout)],
+                    env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                    stderr=subprocess.DEVNULL, start_new_session=True))
+        except OSError as error:
+            self.close()
+            raise OSError(f"could not start Dask workers with the Python {self.python!r}: "
+                          f"{error}") from error
+
+    def close(self) -> None:
+        for process in self.processes:
+            if process.poll() is None:
+                process.terminate()
+        for process in self.processes:
+            try:
+                process.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+        self._scheduler.close()
+
+
+@contextlib.contextmanager
+def connect(scheduler: Optional[str] = None, workers: int = 0, threads_per_worker: int = 1,
+            python: Optional[str] = None, cancelled: Callable[[], bool] = lambda: False,
+            start_seconds: float = 60.0):
+    """A distributed.Client of the cluster at `scheduler` (tcp://HOST:PORT), or of a
+    ProcessCluster of `workers` processes on this machine when `scheduler` is empty, waiting
+    until they have joined (shgi.Cancelled when cancelled() turns true meanwhile). Closes the
+    client, and a cluster it started, on leaving."""
+    distributed = import_distributed()
+    cluster = None
+    if scheduler:
+        try:
+            client = distributed.Client(scheduler, timeout=f"{CONNECT_SECONDS}s")
+        except (OSError, ValueError, TypeError) as error:
+            raise OSError(f"no Dask scheduler answers at {scheduler!r} ({error}); start one with "
+                          "`dask scheduler` and workers with `dask worker ADDRESS`") from error
+    else:
+        cluster = ProcessCluster(workers, threads_per_worker, python)
+        client = distributed.Client(cluster.scheduler_address, timeout=f"{CONNECT_SECONDS}s")
+    try:
+        if cluster is not None:
+            deadline = time.perf_counter() + start_seconds
+            while len(client.scheduler_info()["workers"]) < workers:
+                if cancelled():
+                    raise _shgi.Cancelled("bake cancelled")
+                failed = [p.returncode for p in cluster.processes if p.poll() is not None]
+                if failed or time.perf_counter() > deadline:
+                    raise OSError(f"the Dask workers did not start with the Python "
+                                  f"{cluster.python!r} (exit codes {failed}); it needs "
+                                  "dask[distributed] (make deps installs it) and numpy")
+                time.sleep(_POLL_SECONDS)
+        yield client
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
 def run_tasks(client, submit: Callable[[int, int], object], count: int,
               accept: Callable[[int, dict], int], on_progress: Callable[[int, int], None],
               what: str, cancelled: Callable[[], bool] = lambda: False,
@@ -369,7 +478,7 @@ def bake_command_on_cluster(args, progress: _bake.BakeProgress, workers: int = 0
     cluster = local_cluster(workers) if not scheduler else None
     try:
         client = distributed.Client(cluster if cluster is not None else scheduler,
-                                    timeout="30s")
+                                    timeout=f"{CONNECT_SECONDS}s")
     except OSError as error:
         if cluster is not None:
             cluster.close()
@@ -456,6 +565,150 @@ def _accept_shard(result: dict, jobs, options, out_dir: str, shard: int, shards:
     for incoming, path in staged:
         os.replace(incoming, path)
     return texels
+
+
+# --- a scene built in this process (the add-on's export, a script's) ----------------------------
+
+class SceneBlob:
+    """A Scene pickled (shgi.pickling) with the SHA-256 of its bytes: what a bake of a scene made
+    in memory sends to the workers, scattered once under that hash."""
+
+    def __init__(self, scene: "_shgi.Scene"):
+        self.data = pickle.dumps(scene, protocol=pickle.HIGHEST_PROTOCOL)
+        self.digest = hashlib.sha256(self.data).hexdigest()
+
+    @property
+    def size(self) -> int:
+        return len(self.data)
+
+
+# On a worker: the scene of the last SceneBlob it got, committed once, and the fields solved on
+# it, so the shards a worker runs share one BVH build and one solve ({digest: (scene, fields)}).
+_worker_scenes: dict = {}
+_worker_lock = threading.Lock()
+
+
+def _worker_scene(blob: SceneBlob, recipe: Optional[tuple], progress) -> tuple:
+    """(committed scene, field or None) of a blob on this worker; recipe: (method, settings,
+    passes) of the field, None for the path tracer."""
+    with _worker_lock:
+        entry = _worker_scenes.get(blob.digest)
+        if entry is None:
+            if hashlib.sha256(blob.data).hexdigest() != blob.digest:
+                raise ValueError(f"the scene's bytes do not match their digest {blob.digest}")
+            scene = pickle.loads(blob.data)
+            scene.commit(progress=progress.native(0.0, 0.0, "Building BVH"))
+            _worker_scenes.clear()  # one scene per worker process: a new bake drops the last
+            entry = _worker_scenes[blob.digest] = (scene, {})
+        scene, fields = entry
+        if recipe is None:
+            return scene, None
+        method, settings, passes = recipe
+        key = (method, pickle.dumps(settings), passes)
+        if key not in fields:
+            native = progress.native(0.0, 0.0, f"solving {method}")
+            solver = _methods.solve(method, scene, settings, passes, native)
+            fields[key] = solver.current_field()
+        return scene, fields[key]
+
+
+def _scene_shard_task(blob: SceneBlob, jobs, options, recipe: Optional[tuple], shard: int,
+                      shards: int, threads: int, cancel_name: str) -> dict:
+    """One shard of bake_scene_on_cluster, on a worker: {"files": {object name: shard file
+    bytes}, "worker", "seconds"}."""
+    progress = _bake.BakeProgress()
+
+    def work():
+        scene, field = _worker_scene(blob, recipe, progress)
+        with tempfile.TemporaryDirectory(prefix="shgi-shard-") as out:
+            paths = _bake.bake_scene(scene, jobs, options, out, field, (shard, shards), progress)
+            files = {}
+            for job, path in zip(jobs, paths):
+                files[job.name] = _read(path)
+            return files
+
+    files, worker, seconds = _run_cancellable(cancel_name, threads, work, progress)
+    return {"files": files, "worker": worker, "seconds": seconds}
+
+
+def bake_scene_on_cluster(client, scene: "_shgi.Scene", jobs, options: _bake.BakeOptions,
+                          out_dir: str, recipe: Optional[tuple] = None, shards: int = 0,
+                          threads: int = 1, progress: Optional[_bake.BakeProgress] = None,
+                          on_lightmap: Optional[Callable] = None,
+                          shards_per_worker: int = 4) -> list:
+    """shgi.bake.bake_scene of a scene built in this process, its shards baked on the cluster
+    of `client` (a distributed.Client); returns the merged Lightmaps, written into out_dir
+    byte-identical to bake_scene's (on_lightmap(lightmap) as each is merged).
+
+    The scene travels pickled (SceneBlob); each worker commits it and solves the field once.
+    recipe: (method, settings, passes) of the field that gives the indirect light, solved on the
+    workers as shgi.method_registry.solve does (settings as they are: a final gather's
+    shallower settings are the caller's, as the add-on's recipe holds them); None: the path
+    tracer. shards 0: shards_per_worker per worker. Progress, retries, validation and cancel as
+    the command line's farm bake (the module's docstring); nothing but out_dir/shards is
+    written before every shard is in."""
+    distributed = import_distributed()
+    progress = progress or _bake.BakeProgress()
+    if not (isinstance(threads, int) and threads >= 1):
+        raise ValueError(f"threads per worker must be a whole number >= 1, got {threads!r}")
+    if not (isinstance(shards, int) and 0 <= shards <= MAX_SHARDS):
+        raise ValueError(f"shards must be a whole number in 0..{MAX_SHARDS}, got {shards!r}")
+    if recipe is not None:
+        method, settings, passes = recipe
+        row = _methods.method(method)  # ValueError naming the choices
+        if not row.solves_field:
+            recipe = None
+        else:
+            recipe = (row.identifier, settings, passes)
+    _bake._check_jobs(scene, jobs)
+    options.settings.validate()
+    _bake.denoise_method(options)
+    _bake._check_padding(options)
+    if not shards:
+        shards = shards_per_worker * max(1, len(client.scheduler_info()["workers"]))
+    blob = SceneBlob(scene)
+    cancel_name = f"shgi-cancel-{uuid.uuid4().hex}"
+    cancel = distributed.Event(cancel_name, client=client)
+    [blob_future] = client.scatter([blob], hash=True, broadcast=True)
+    run_id = uuid.uuid4().hex[:8]
+
+    def submit(i: int, attempt: int):
+        return client.submit(_scene_shard_task, blob_future, jobs, options, recipe, i, shards,
+                             threads, cancel_name,
+                             key=f"shgi-shard-{i}-of-{shards}-{run_id}-{attempt}", pure=False)
+
+    def accept(i: int, result: dict) -> int:
+        return _accept_shard(result, jobs, options, out_dir, i, shards)
+
+    start = time.perf_counter()
+
+    def on_progress(done: int, texels: int) -> None:
+        rate = texels / max(time.perf_counter() - start, 1e-9)
+        _report(progress, _SHARDS_SHARE * done / shards,
+                f"shards {done}/{shards}, {rate:,.0f} texels/s")
+
+    _report(progress, 0.0, f"shards 0/{shards}")
+    try:
+        run_tasks(client, submit, shards, accept, on_progress, "shard",
+                  lambda: progress.cancelled, cancel)
+    except KeyboardInterrupt:
+        if progress.cancelled:  # cancel(), not Ctrl-C: as bake_scene ends
+            raise _shgi.Cancelled("bake cancelled") from None
+        raise
+    cancel.set()  # every task is done: their cancel watchers return now, not at a cluster's close
+
+    def on_merge(fraction: float, stage: str) -> None:
+        if progress.cancelled:
+            merge.cancel()  # the merge's native call stops within one object
+        _report(progress, _SHARDS_SHARE + (1.0 - _SHARDS_SHARE) * fraction, f"merge: {stage}")
+
+    merge = _bake.BakeProgress(on_merge)
+    lightmaps = []
+    for lightmap in _bake.merge_shards(scene, jobs, options, out_dir, shards, merge):
+        lightmaps.append(lightmap)
+        if on_lightmap is not None:
+            on_lightmap(lightmap)
+    return lightmaps
 
 
 # --- probe grids in bricks of probes --------------------------------------------------------------

@@ -21,8 +21,13 @@ auto-exposure and sRGB, shgi.metrics.psnr) and the mean absolute texel differenc
 over all covered texels and over the visible ones (not under the box).
 """
 
+import importlib.util
 import json
+import os
 import pathlib
+import re
+import shutil
+import subprocess
 import sys
 import time
 from types import SimpleNamespace
@@ -32,8 +37,9 @@ import pytest
 
 import shgi
 from shgi import bake as shgi_bake
-from blender_support import (ADDON_DIR, BLENDER_SCRIPTS, REPO_ROOT, needs_window,
-                             run_blender, run_in_window, run_script_once)
+from blender_support import (ADDON_DIR, BLENDER_SCRIPTS, REPO_ROOT, WINDOWED_BLENDER,
+                             blender_env, needs_window, run_blender, run_in_window,
+                             run_script_once)
 from latency_clock import Latency, LatencyClock
 
 sys.path.insert(0, str(REPO_ROOT / "addon"))
@@ -242,6 +248,73 @@ def test_cancel_keeps_the_lightmaps_finished_before(tmp_path):
     assert latency.seconds < CANCEL_LATENCY, str(latency)
     assert task.cancelled and task.error is None and task.take_finished() == []
     assert sorted(path.name for path in tmp_path.iterdir()) == ["floor.exr", "floor.png"]
+
+
+# --- Bake > Farm (no Blender) ------------------------------------------------------------------
+
+# The Dask farm's tests need dask[distributed]; `make test` sets SHGI_REQUIRE_FARM=1, where a
+# missing dask fails them instead.
+needs_dask = pytest.mark.skipif(
+    importlib.util.find_spec("distributed") is None and os.environ.get("SHGI_REQUIRE_FARM") != "1",
+    reason="dask[distributed] is not installed (make deps installs it)")
+
+
+def test_farm_settings_name_the_target_and_refuse_a_bad_address():
+    assert bake_settings.farm_target(bake_props()) is None  # This Computer
+    assert bake_settings.farm_target(bake_props(farm="FLAMENCO")) is None
+    assert bake_settings.farm_target(bake_props(farm="DASK", workers=3)) == \
+        bake_settings.FarmTarget("", 3, 0)  # Shards 1: four per worker
+    assert bake_settings.farm_target(bake_props(
+        farm="DASK", scheduler=" tcp://10.0.0.2:8786 ", shard_count=12)) == \
+        bake_settings.FarmTarget("tcp://10.0.0.2:8786", 2, 12)
+    for address in ("10.0.0.2:8786", "tcp://10.0.0.2", "tcp://:8786", "tcp://host:port"):
+        with pytest.raises(ValueError, match=r"Bake > Farm > Scheduler .* is not an address "
+                                             r"like tcp://"):
+            bake_settings.farm_target(bake_props(farm="DASK", scheduler=address))
+    with pytest.raises(ValueError, match=r"Bake > Farm > Workers must lie in 1\.\.256"):
+        bake_settings.farm_target(bake_props(farm="DASK", workers=0))
+
+
+@needs_dask
+@pytest.mark.farm
+def test_bake_task_on_a_dask_farm_equals_the_bake_here(tmp_path):
+    """The add-on's BakeTask with Farm "Dask" (2 worker processes it starts, 3 shards): the
+    same files as the task baking here, from the path tracer and from a field its workers
+    solve; progress ends with the merge."""
+    scene = lightmap_room()
+    options = shgi_bake.BakeOptions(settings=shgi.LightmapSettings(samples=4, seed=3))
+    recipe = field_solvers.SolverRecipe(field_solvers.LatticeSolver,
+                                        shgi.PhotonLatticeSettings(photons=20000, seed=2), 1)
+    for name, field in (("path", None), ("lattice", recipe)):
+        here = run_task(BakeRequest(scene, jobs(scene, "floor", "back"), options,
+                                    str(tmp_path / f"{name}-here"), field))
+        farm = run_task(BakeRequest(scene, jobs(scene, "floor", "back"), options,
+                                    str(tmp_path / f"{name}-farm"), field,
+                                    farm=bake_settings.FarmTarget("", 2, 3)))
+        assert [lightmap.name for lightmap in farm.take_finished()] == ["floor", "back"]
+        assert farm.fraction == pytest.approx(1.0) and "connect" in farm.timings
+        files = sorted(path.name for path in (tmp_path / f"{name}-here").iterdir())
+        assert files == ["back.exr", "back.png", "floor.exr", "floor.png"]
+        for file in files:
+            assert (tmp_path / f"{name}-farm" / file).read_bytes() == \
+                (tmp_path / f"{name}-here" / file).read_bytes(), (name, file)
+        assert here.take_finished() != []
+
+
+def test_flamenco_job_holds_the_bake_panel_and_the_selection():
+    job = bake_settings.flamenco_job(bake_props(samples=64, shard_count=8, source="PROBE_GRID"),
+                                     ["wall", "floor"], "/farm/room.blend", "/farm/out",
+                                     "room lightmaps")
+    assert (job["name"], job["type"]) == ("room lightmaps", "shgi-bake")
+    settings = job["settings"]
+    assert (settings["objects"], settings["samples"], settings["shard_count"],
+            settings["source"]) == ("floor, wall", 64, 8, "PROBE_GRID")
+    assert (settings["runner"], settings["blendfile"], settings["output_folder"]) == (
+        "blender", "/farm/room.blend", "/farm/out")
+    # Every setting is one the job type declares (a key it does not know would be dropped).
+    script = (REPO_ROOT / "examples" / "flamenco" / "shgi_bake.js").read_text()
+    declared = set(re.findall(r'\{ key: "(\w+)"', script))
+    assert set(settings) <= declared, set(settings) - declared
 
 
 # --- inside Blender ----------------------------------------------------------------------------
@@ -487,6 +560,70 @@ def test_modal_bake_keeps_the_finished_lightmaps_when_esc_cancels(build_python_d
     assert cancel.seconds < ESC_LATENCY, str(cancel)
     assert r["cancelled"] == {"images": ["box_shgi_lightmap"], "files": ["box.exr", "box.png"]}
     assert r["finished"] == {"size": [16, 16], "files": ["floor.exr", "floor.png"]}
+
+
+# --- Bake > Farm in Blender (tests/blender/farm_checks.py) -------------------------------------
+
+def addon_installed_for(tmp_path, build_python_dir):
+    """Environment variables under which Blender starts with the add-on enabled in its user
+    preferences and shgi in the add-on's vendor folder, as a farm worker's Blender is set up
+    (examples/flamenco/README.md): a copy of the add-on in a user scripts folder."""
+    scripts, config = tmp_path / "scripts", tmp_path / "config"
+    addon = scripts / "addons" / "shgi_blender"
+    shutil.copytree(ADDON_DIR / "shgi_blender", addon,
+                    ignore=shutil.ignore_patterns("__pycache__", "vendor"))
+    (addon / "vendor").mkdir()
+    (addon / "vendor" / "shgi").symlink_to(pathlib.Path(build_python_dir) / "shgi")
+    env = {"BLENDER_USER_SCRIPTS": str(scripts), "BLENDER_USER_CONFIG": str(config)}
+    enable = ("import addon_utils, bpy; addon_utils.enable('shgi_blender', default_set=True); "
+              "bpy.ops.wm.save_userpref()")
+    result = WINDOWED_BLENDER.run("--python-exit-code", "1", "--python-expr", enable, env=env)
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    return env
+
+
+@needs_dask
+@pytest.mark.farm
+@pytest.mark.blender
+@WINDOWED_BLENDER.skip_mark
+def test_bake_panel_farm_dask_and_flamenco_in_blender(build_python_dir, tmp_path):
+    """Debian's Blender 3.4.1 (whose Python has dask): Farm "Dask" bakes byte-identical to This
+    Computer; a bad Scheduler is refused by name; Blender quits cleanly after importing dask;
+    Write Flamenco Job writes a job that, run task by task (preview_job.js --run: prepare, three
+    shards, merge, each a Blender with the add-on as a farm worker has it), writes the lightmaps
+    a bake here writes."""
+    out = tmp_path / "farm_checks.json"
+    result = run_blender(BLENDER_SCRIPTS / "farm_checks.py", build_python_dir, ADDON_DIR, out,
+                         timeout=300)
+    log = result.stdout[-4000:] + result.stderr[-2000:]
+    assert result.returncode == 0 and "FARM_CHECKS_OK" in result.stdout, log
+    r = json.loads(out.read_text())
+    for source in ("PATH_TRACE", "PROBE_GRID"):
+        dask, here = r[source]["dask"], r[source]["local"]
+        assert dask["status"] == here["status"] == ["FINISHED"], source
+        assert len(here["files"]) == 8 and dask["files"] == here["files"], source
+    assert "Info: SHGI bake: 4 lightmaps baked on 2 Dask workers here" in result.stdout
+    assert "Bake > Farm > Scheduler 'my-farm:8786' is not an address like tcp://" in \
+        r["bad_scheduler"]
+    assert "Farm is Flamenco: Write Flamenco Job writes the job" in r["flamenco_bake"]
+    assert r["flamenco_status"] == r["flamenco_reference_status"] == ["FINISHED"]
+    job = r["flamenco_job"]
+    assert job["settings"]["blendfile"] == r["blend"] and job["settings"]["shard_count"] == 3
+    job_file = tmp_path / "job.json"
+    job_file.write_text(json.dumps(job))
+    env = {**blender_env(), **addon_installed_for(tmp_path, build_python_dir)}
+    run = subprocess.run(["node", str(REPO_ROOT / "examples" / "flamenco" / "preview_job.js"),
+                          f"@{job_file}", "--run"], capture_output=True, text=True, env=env,
+                         timeout=600)
+    assert run.returncode == 0, run.stdout[-4000:] + run.stderr[-4000:]
+    tasks = re.findall(r"^task (\S+) \(blender\)", run.stdout, re.MULTILINE)
+    assert tasks == ["prepare", "bake-shard-0", "bake-shard-1", "bake-shard-2", "merge"]
+    merged = pathlib.Path(job["settings"]["output_folder"])
+    reference = pathlib.Path(r["flamenco_reference"])
+    names = sorted(p.name for p in reference.iterdir() if p.suffix in (".exr", ".png"))
+    assert len(names) == 8
+    for name in names:
+        assert (merged / name).read_bytes() == (reference / name).read_bytes(), name
 
 
 # --- the traps of tests/blender/bake_trap_checks.py --------------------------------------------

@@ -382,3 +382,77 @@ def test_probe_grid_solved_in_four_bricks_equals_the_single_machine_grid(local_c
     brick.update_probes(0, 3)
     with pytest.raises(ValueError, match="splice_probes: the brick's probe count"):
         merged.splice(brick.field(), 0, 3)
+
+
+# --- a scene built in this process (the add-on's bake on Dask) ---------------------------------
+
+def in_memory_bake(scene, samples=4):
+    """(jobs, options): the floor, back and right walls of the sun room, 16 texels, directional."""
+    jobs = bake.jobs_for_scene(scene, "LightmapUV", 16, names=["floor", "back", "right"])
+    options = bake.BakeOptions(settings=shgi.LightmapSettings(samples=samples, seed=3,
+                                                              directional=True))
+    return jobs, options
+
+
+def test_a_scene_built_in_memory_bakes_on_the_cluster_byte_identical(local_client, tmp_path):
+    """shgi.farm.bake_scene_on_cluster: the pickled scene goes to the workers, which solve the
+    field themselves; the merged files equal one bake_scene call, for the path tracer and for a
+    probe grid."""
+    scene = scenes.sun_room(0.25, lightmap=True).scene
+    scene.commit()
+    jobs, options = in_memory_bake(scene)
+    grid = shgi.ProbeGridSettings(rays_per_probe=16, spacing=1.0, seed=3)
+    for name, recipe in (("path", None), ("grid", ("PROBE_GRID", grid, 2))):
+        field = None if recipe is None else bake.solve_field(scene, "PROBE_GRID", 3, None,
+                                                             grid, 2)
+        bake.bake_scene(scene, jobs, options, str(tmp_path / f"{name}-one"), field)
+        stages, merged = [], []
+        lightmaps = farm.bake_scene_on_cluster(
+            local_client, scene, jobs, options, str(tmp_path / f"{name}-farm"), recipe,
+            shards=5, progress=bake.BakeProgress(lambda f, stage: stages.append(stage)),
+            on_lightmap=merged.append)
+        assert [lightmap.name for lightmap in lightmaps] == ["floor", "back", "right"]
+        assert merged == lightmaps
+        assert any(stage.startswith("shards 5/5, ") for stage in stages)
+        one = written(tmp_path / f"{name}-one")
+        assert len(one) == 6 and written(tmp_path / f"{name}-farm") == one, name
+
+
+def test_a_cancelled_scene_bake_on_the_cluster_raises_cancelled_and_writes_no_lightmap(
+        local_client, tmp_path):
+    scene = scenes.sun_room(0.25, lightmap=True).scene
+    scene.commit()
+    jobs, options = in_memory_bake(scene, samples=4096)
+    progress = bake.BakeProgress(lambda f, stage: stage.startswith("shards") and
+                                 progress.cancel())
+    with pytest.raises(shgi.Cancelled):
+        farm.bake_scene_on_cluster(local_client, scene, jobs, options, str(tmp_path / "out"),
+                                   shards=4, progress=progress)
+    left = [p for p in (tmp_path / "out").rglob("*") if p.suffix in (".exr", ".png")]
+    assert left == []
+
+
+def alive(pid):
+    """Whether process `pid` runs (a zombie does not)."""
+    try:
+        return not pathlib.Path(f"/proc/{pid}/stat").read_text().split(") ")[1].startswith("Z")
+    except FileNotFoundError:
+        return False
+
+
+def test_connect_starts_worker_processes_and_names_a_scheduler_that_does_not_answer():
+    """farm.connect without an address starts worker processes with this Python (what the
+    add-on does inside Blender, where multiprocessing's spawn cannot); they run shgi and are
+    gone after. An address where no scheduler answers fails naming it."""
+    with farm.connect(workers=2) as client:
+        assert len(client.scheduler_info()["workers"]) == 2
+        assert client.submit(lambda: __import__("shgi").version()).result() == shgi.version()
+        processes = [worker for worker in client.run(os.getpid).values()]
+    assert len(set(processes)) == 2 and os.getpid() not in processes
+    deadline = time.monotonic() + 30  # a worker's nanny stops it once its own process ends
+    while any(alive(pid) for pid in processes) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not any(alive(pid) for pid in processes)
+    with pytest.raises(OSError, match=r"no Dask scheduler answers at 'tcp://127\.0\.0\.1:9'"):
+        with farm.connect("tcp://127.0.0.1:9"):
+            pass

@@ -6,7 +6,10 @@ the main thread (a BakeRequest), then a BakeTask does the native work on a Nativ
 1. commit the exported scene (the BVH);
 2. for a field source, solve the field with solution_cache.solve (the recipe of
    engine/field_solvers.py: scene.shgi's photon lattice or probe grid settings);
-3. shgi.bake.bake_scene (whole lightmaps, or one shard's raw files) or shgi.bake.merge_shards.
+3. shgi.bake.bake_scene (whole lightmaps, or one shard's raw files) or shgi.bake.merge_shards;
+   with a farm target (Bake > Farm "Dask"), shgi.farm.bake_scene_on_cluster instead: the scene
+   travels to the Dask workers, which solve the field (step 2 is skipped here) and bake the
+   shards, merged here into the lightmaps a bake here writes.
 
 Each lightmap that completes is queued (``take_finished``): a worker thread must not touch bpy,
 so the main thread turns them into Blender images, as they come in a modal bake's timer or at
@@ -40,6 +43,7 @@ class BakeRequest:
     recipe: object = None    # field_solvers.SolverRecipe of the field source; None: path tracer
     shard: tuple = None      # (index, count): write that shard's raw files; None: whole bake
     merge_shards: int = 0    # > 0: merge that many shard files instead of baking
+    farm: object = None      # bake_settings.FarmTarget: bake the shards on a Dask cluster
 
 
 class BakeTask(NativeTask):
@@ -98,6 +102,9 @@ class BakeTask(NativeTask):
         if not request.scene.committed:
             request.scene.commit(progress=self.bake_progress.native(0.0, 0.0, "Building BVH"))
         self.timings["commit"] = time.perf_counter() - start
+        if request.farm is not None:
+            self._bake_on_farm()
+            return
         field = self._solve_field() if request.recipe is not None else None
         start = time.perf_counter()
         bake = self._bake_module
@@ -111,6 +118,27 @@ class BakeTask(NativeTask):
             self.results = bake.bake_scene(request.scene, request.jobs, request.options,
                                            request.out_dir, field, request.shard,
                                            self.bake_progress, on_lightmap=self._finished.put)
+        self.timings["bake"] = time.perf_counter() - start
+
+    def _bake_on_farm(self):
+        """The bake's shards on the Dask cluster of request.farm, merged here."""
+        from shgi import farm
+
+        request, target = self.request, self.request.farm
+        recipe = None
+        if request.recipe is not None:
+            recipe = (request.recipe.solver.METHOD, request.recipe.settings,
+                      request.recipe.passes)
+        start = time.perf_counter()
+        self.bake_progress.note(f"starting {target.workers} Dask workers" if not target.scheduler
+                                else f"connecting to {target.scheduler}")
+        with farm.connect(target.scheduler, target.workers,
+                          cancelled=lambda: self.bake_progress.cancelled) as client:
+            self.timings["connect"] = time.perf_counter() - start
+            start = time.perf_counter()
+            self.results = farm.bake_scene_on_cluster(
+                client, request.scene, request.jobs, request.options, request.out_dir, recipe,
+                target.shards, progress=self.bake_progress, on_lightmap=self._finished.put)
         self.timings["bake"] = time.perf_counter() - start
 
     def _solve_field(self):

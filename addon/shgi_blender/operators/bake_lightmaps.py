@@ -240,6 +240,9 @@ def prepare_bake(context, values, report, merge=False, created=None):
     from ..engine.field_solvers import solver_recipe
     from ..export import export_scene
 
+    if values.farm == "FLAMENCO" and not merge:
+        raise BakeError("Farm is Flamenco: Write Flamenco Job writes the job for the farm; set "
+                        "Farm to This Computer or Dask to bake from here")
     if merge and values.shard_count <= 1:
         raise BakeError("Shards is 1: there are no shard files to merge; set Shards to the "
                         "number of shards the farm baked")
@@ -269,6 +272,9 @@ def prepare_bake(context, values, report, merge=False, created=None):
             # bounce shallower, as F12's (settings.light_path_fields).
             recipe = solver_recipe(_MethodOf(scene.shgi, values.source), shgi,
                                    export.probe_volumes, gather=values.final_gather)
+        farm = bake_settings.farm_target(values)
+        if farm is not None:  # the farm splits the bake itself: no shard of it here
+            return BakeRequest(export.scene, jobs, options, out_dir, recipe, farm=farm)
         return BakeRequest(export.scene, jobs, options, out_dir, recipe,
                            bake_settings.shard(values))
     except ValueError as error:
@@ -375,7 +381,11 @@ class _BakeOperator(ModalTaskOperator):
         self._log_progress(1.0, "done")
         seconds = time.perf_counter() - self._started
         request = task.request
-        if request.shard is not None:
+        if request.farm is not None:
+            where = request.farm.scheduler or f"{request.farm.workers} Dask workers here"
+            self.report({"INFO"}, f"{REPORT_PREFIX}{counted(len(self._lightmaps), 'lightmap')} "
+                        f"baked on {where} into {request.out_dir} ({seconds:.2f} s)")
+        elif request.shard is not None:
             self.report({"INFO"}, f"{REPORT_PREFIX}shard {request.shard[0]} of "
                         f"{request.shard[1]}: {len(task.results)} shard files in "
                         f"{request.out_dir} ({seconds:.2f} s); merge them with Merge Shards")
@@ -421,6 +431,52 @@ exactly as one whole bake writes them"""
     __annotations__ = properties.bake_properties()
 
 
+class SHGI_OT_write_flamenco_job(bpy.types.Operator):
+    """Write a Flamenco job that bakes the selected objects' lightmaps on a Flamenco farm (the \
+SHGI Lightmap Bake job type): its tasks open this saved .blend file"""
+
+    bl_idname = "shgi.write_flamenco_job"
+    bl_label = "Write Flamenco Job"
+    bl_options = {"REGISTER"}
+
+    filepath: bpy.props.StringProperty(
+        name="File", subtype="FILE_PATH", default="",
+        description="Where the job's JSON goes (empty: shgi_flamenco_job.json in the Output "
+                    "Folder)")
+
+    def execute(self, context):
+        import json
+
+        values = context.scene.shgi.bake
+        try:
+            if not bpy.data.filepath:
+                raise BakeError("the .blend file has not been saved: every task of the job "
+                                "opens it, so save it first")
+            objects = selected_meshes(context)
+            out_dir = output_dir(values.output_folder)
+        except BakeError as error:
+            self.report({"ERROR"}, f"{REPORT_PREFIX}{error}")
+            return {"CANCELLED"}
+        name = f"{bpy.path.display_name_from_filepath(bpy.data.filepath)} lightmaps"
+        job = bake_settings.flamenco_job(values, [obj.name for obj in objects],
+                                         bpy.data.filepath, out_dir, name)
+        path = (bpy.path.abspath(self.filepath) if self.filepath
+                else os.path.join(out_dir, "shgi_flamenco_job.json"))
+        try:
+            os.makedirs(os.path.dirname(path), exist_ok=True)
+            with open(path, "w", encoding="utf-8") as file:
+                json.dump(job, file, indent=2)
+        except OSError as error:
+            self.report({"ERROR"}, f"{REPORT_PREFIX}could not write the job {path!r}: {error}")
+            return {"CANCELLED"}
+        if bpy.data.is_dirty:
+            self.report({"WARNING"}, f"{REPORT_PREFIX}the .blend file has unsaved changes, "
+                        "which the job's tasks will not see: save it before submitting")
+        self.report({"INFO"}, f"{REPORT_PREFIX}Flamenco job ({values.shard_count} shards, "
+                    f"{counted(len(objects), 'object')}) written to {path}")
+        return {"FINISHED"}
+
+
 class SHGI_OT_remove_lightmap_nodes(bpy.types.Operator):
     """Remove the SHGI Lightmap nodes from the selected objects' materials, giving back the \
 surfaces they had"""
@@ -441,4 +497,5 @@ surfaces they had"""
         return {"FINISHED"}
 
 
-CLASSES = (SHGI_OT_bake_lightmaps, SHGI_OT_merge_lightmap_shards, SHGI_OT_remove_lightmap_nodes)
+CLASSES = (SHGI_OT_bake_lightmaps, SHGI_OT_merge_lightmap_shards, SHGI_OT_write_flamenco_job,
+           SHGI_OT_remove_lightmap_nodes)

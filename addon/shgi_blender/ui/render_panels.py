@@ -324,8 +324,11 @@ class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
         layout.label(text=f"{meshes} selected mesh object{'s' if meshes != 1 else ''} to bake",
                      icon="OBJECT_DATA")
         row = layout.row(align=True)
-        row.operator("shgi.bake_lightmaps", icon="RENDER_STILL")
-        if bake.shard_count > 1:
+        if bake.farm == "FLAMENCO":
+            row.operator("shgi.write_flamenco_job", icon="EXPORT")
+        else:
+            row.operator("shgi.bake_lightmaps", icon="RENDER_STILL")
+        if bake.shard_count > 1 and bake.farm != "DASK":
             row.operator("shgi.merge_lightmap_shards", icon="NODE_COMPOSITING")
         layout.use_property_split = True
         layout.use_property_decorate = False
@@ -367,7 +370,8 @@ class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
 
 
 class SHGI_RENDER_PT_bake_farm(ShgiPanel, bpy.types.Panel):
-    """The Bake panel's render farm settings: shards and the tiles they are made of."""
+    """The Bake panel's render farm settings: where the bake runs (this computer, a Dask
+    cluster, a Flamenco job), its shards and the tiles they are made of."""
 
     bl_label = "Farm"
     bl_context = "render"
@@ -379,12 +383,22 @@ class SHGI_RENDER_PT_bake_farm(ShgiPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         bake = context.scene.shgi.bake
+        layout.prop(bake, "farm")
         column = layout.column(align=True)
+        if bake.farm == "DASK":
+            column.prop(bake, "scheduler")
+            sub = column.column(align=True)
+            sub.active = not bake.scheduler.strip()
+            sub.prop(bake, "workers")
         column.prop(bake, "shard_count")
-        sub = column.column(align=True)
-        sub.active = bake.shard_count > 1
-        sub.prop(bake, "shard_index")
+        if bake.farm == "LOCAL":
+            sub = column.column(align=True)
+            sub.active = bake.shard_count > 1
+            sub.prop(bake, "shard_index")
         column.prop(bake, "tile_size")
+        if bake.farm == "DASK" and bake.shard_count <= 1:
+            layout.label(text=f"{bake_settings.SHARDS_PER_WORKER} shards per worker",
+                         icon="INFO")
 
 
 class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
