@@ -811,8 +811,9 @@ def test_the_defaults_show_their_preset(blender, build_python_dir, tmp_path_fact
 
 
 def test_max_bounces_and_farm_are_sub_panels(blender, build_python_dir, tmp_path_factory):
-    """Light Paths > Max Bounces holds the bounce limits (as in Cycles); Bake > Farm the shard
-    settings, which the Bake panel no longer draws."""
+    """Light Paths > Max Bounces holds the bounce limits (as in Cycles); Bake > Farm where the
+    bake runs and the shard settings, which the Bake panel no longer draws (with Farm This
+    Computer, the default: no Scheduler or Workers)."""
     results = panel_results(blender, build_python_dir, tmp_path_factory)
     assert results["sub_panels"] == {
         "SHGI_RENDER_PT_light_paths_max_bounces": ["Max Bounces", "SHGI_RENDER_PT_light_paths"],
@@ -821,7 +822,7 @@ def test_max_bounces_and_farm_are_sub_panels(blender, build_python_dir, tmp_path
     bounces = ["max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces"]
     assert props["SHGI_RENDER_PT_light_paths_max_bounces"][:4] == bounces
     assert not set(bounces) & set(props["SHGI_RENDER_PT_light_paths"])
-    farm = {"shard_count", "shard_index", "tile_size"}
+    farm = {"farm", "shard_count", "shard_index", "tile_size"}
     assert set(props["SHGI_RENDER_PT_bake_farm"]) == farm
     assert not farm & set(props["SHGI_RENDER_PT_bake"])
 
