@@ -349,6 +349,42 @@ class ProcessCluster:
         self._scheduler.close()
 
 
+def _client_of(distributed, scheduler: str, cancelled: Callable[[], bool]):
+    """A Client of the scheduler at `scheduler`, made on a thread so that cancelled() is looked
+    at every _POLL_SECONDS while Dask tries for up to CONNECT_SECONDS (shgi.Cancelled; a client
+    that connects after that is closed by its thread)."""
+    outcome, lock = {}, threading.Lock()
+
+    def make():
+        try:
+            client = distributed.Client(scheduler, timeout=f"{CONNECT_SECONDS}s")
+        except Exception as error:  # an address Dask cannot parse, or no answer
+            outcome["error"] = error
+            return
+        with lock:
+            if outcome.get("abandoned"):
+                client.close()
+            else:
+                outcome["client"] = client
+
+    thread = threading.Thread(target=make, name="shgi-farm-connect", daemon=True)
+    thread.start()
+    while thread.is_alive():
+        if cancelled():
+            with lock:
+                outcome["abandoned"] = True
+                client = outcome.pop("client", None)
+            if client is not None:
+                client.close()
+            raise _shgi.Cancelled("bake cancelled")
+        thread.join(_POLL_SECONDS)
+    if "error" in outcome:
+        error = outcome["error"]
+        raise OSError(f"no Dask scheduler answers at {scheduler!r} ({error}); start one with "
+                      "`dask scheduler` and workers with `dask worker ADDRESS`") from error
+    return outcome["client"]
+
+
 @contextlib.contextmanager
 def connect(scheduler: Optional[str] = None, workers: int = 0, threads_per_worker: int = 1,
             python: Optional[str] = None, cancelled: Callable[[], bool] = lambda: False,
@@ -360,11 +396,7 @@ def connect(scheduler: Optional[str] = None, workers: int = 0, threads_per_worke
     distributed = import_distributed()
     cluster = None
     if scheduler:
-        try:
-            client = distributed.Client(scheduler, timeout=f"{CONNECT_SECONDS}s")
-        except (OSError, ValueError, TypeError) as error:
-            raise OSError(f"no Dask scheduler answers at {scheduler!r} ({error}); start one with "
-                          "`dask scheduler` and workers with `dask worker ADDRESS`") from error
+        client = _client_of(distributed, scheduler, cancelled)
     else:
         cluster = ProcessCluster(workers, threads_per_worker, python)
         client = distributed.Client(cluster.scheduler_address, timeout=f"{CONNECT_SECONDS}s")

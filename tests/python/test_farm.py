@@ -456,3 +456,9 @@ def test_connect_starts_worker_processes_and_names_a_scheduler_that_does_not_ans
     with pytest.raises(OSError, match=r"no Dask scheduler answers at 'tcp://127\.0\.0\.1:9'"):
         with farm.connect("tcp://127.0.0.1:9"):
             pass
+    # Cancelled while Dask still tries to reach it (the add-on's Esc): Cancelled, not the error.
+    looks = []
+    with pytest.raises(shgi.Cancelled):
+        with farm.connect("tcp://127.0.0.1:9", cancelled=lambda: looks.append(1) or
+                          len(looks) > 3):
+            pass
