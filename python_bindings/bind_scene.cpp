@@ -182,7 +182,11 @@ void bind_material(py::module_& m) {
         .value("TANGENT", NormalMapSpace::Tangent,
                "along the mesh's tangents (Mesh.tangents; glTF's normalTexture)")
         .value("OBJECT", NormalMapSpace::Object, "object space")
-        .value("WORLD", NormalMapSpace::World, "world space"));
+        .value("WORLD", NormalMapSpace::World, "world space")
+        .value("BLENDER_OBJECT", NormalMapSpace::BlenderObject,
+               "Blender's object space (Y and Z negated)")
+        .value("BLENDER_WORLD", NormalMapSpace::BlenderWorld,
+               "Blender's world space (Y and Z negated)"));
     def_integer(cls, "base_color_texture", &Material::base_color_texture,
                 "Index into the scene's textures, or -1 for none.");
     def_integer(cls, "normal_texture", &Material::normal_texture,

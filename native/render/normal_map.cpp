@@ -76,6 +76,10 @@ vec3 mapped_normal(const Material& material, const Texture& texture, const Surfa
             break;
         case NormalMapSpace::Object: n = normal_from_object * texel; break;
         case NormalMapSpace::World: n = texel; break;
+        case NormalMapSpace::BlenderObject:
+            n = normal_from_object * vec3(texel.x, -texel.y, -texel.z);
+            break;
+        case NormalMapSpace::BlenderWorld: n = vec3(texel.x, -texel.y, -texel.z); break;
     }
     if (material.normal_space == NormalMapSpace::Tangent && sp.tangent == vec3(0.0f))
         return smooth;  // no tangent frame at this hit (no tangents or UVs, a dropped tangent)

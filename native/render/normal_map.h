@@ -6,7 +6,8 @@
 // interpolated tangent T, bitangent B = sign x cross(N, T) and interpolated normal N, all
 // unnormalised and in object space, then mapped to world by the instance's normal transform
 // (SurfacePoint carries T, B and N already mapped, scale shared, so the result is the same).
-// Object space: n mapped by the normal transform; world space: n as it is. The result is flipped
+// Object space: n mapped by the normal transform; world space: n as it is; Blender's object and
+// world spaces: the same with n's Y and Z negated (Cycles' node_normal_map). The result is flipped
 // with the surface on a back-face hit, then Strength blends it with the interpolated normal:
 // normalize(N + strength (n - N)). A zero result (a grey (0.5, 0.5, 0.5) texel) falls back to N.
 //

@@ -51,11 +51,16 @@ enum class MicrofacetDistribution : uint8_t {
 inline constexpr float kMaxBaseColor = 1000.0f;
 
 // The space a normal map's texels are in, as Blender's Normal Map node's `space` (TANGENT,
-// OBJECT, WORLD). Texels hold (n + 1) / 2 per component, read as non-colour data.
+// OBJECT, WORLD, BLENDER_OBJECT, BLENDER_WORLD). Texels hold (n + 1) / 2 per component, read
+// as non-colour data.
 enum class NormalMapSpace : uint8_t {
     Tangent,  // along the mesh's tangent frame (Mesh::tangents, MikkTSpace; glTF's only space)
     Object,   // object space, mapped to world by the instance's normal transform
     World,
+    // Blender's own convention ("Blender Object Space", "Blender World Space", as Blender's
+    // internal renderer baked them): n's Y and Z negated, then as Object and World.
+    BlenderObject,
+    BlenderWorld,
 };
 
 // The largest Normal Map Strength accepted (Blender's soft maximum is 10): beyond it the

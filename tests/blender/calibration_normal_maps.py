@@ -1,6 +1,6 @@
 """Cycles calibration of normal maps: a tangent-space Normal Map node (an Image Texture of
-bumps, Non-Color) on a UV-mapped plane under a sun (also at Strength 0.5), a point and an area
-light, and on the floor
+bumps, Non-Color) on a UV-mapped plane under a sun (also at Strength 0.5, and as a Blender
+Object Space map on the plane turned and tilted), a point and an area light, and on the floor
 and walls of the open-topped room lit by an area light (indirect light between normal-mapped
 surfaces).
 
@@ -30,12 +30,15 @@ MAX_SLOPE = 0.8
 UV_SCALE = 0.5
 
 
-def bump_image():
-    """A tangent-space normal map of h = sin(2 pi B u) sin(2 pi B v) bumps, float, Non-Color."""
-    image = bpy.data.images.get("bumps")
+def bump_image(blender_space=False):
+    """A tangent-space normal map of h = sin(2 pi B u) sin(2 pi B v) bumps, float, Non-Color;
+    with `blender_space`, the same normals in Blender's own object-space convention (Y and Z
+    negated) for a plane whose u and v run along its object's X and Y."""
+    name = "bumps_blender" if blender_space else "bumps"
+    image = bpy.data.images.get(name)
     if image is not None:
         return image
-    image = bpy.data.images.new("bumps", IMAGE_SIZE, IMAGE_SIZE, float_buffer=True)
+    image = bpy.data.images.new(name, IMAGE_SIZE, IMAGE_SIZE, float_buffer=True)
     image.colorspace_settings.name = "Non-Color"
     t = (np.arange(IMAGE_SIZE) + 0.5) / IMAGE_SIZE * 2.0 * math.pi * BUMPS
     v, u = np.meshgrid(t, t, indexing="ij")  # rows are v (bottom first), columns u
@@ -43,20 +46,23 @@ def bump_image():
     slope_v = MAX_SLOPE * np.sin(u) * np.cos(v)
     normal = np.stack([-slope_u, -slope_v, np.ones_like(u)], axis=-1)
     normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
+    if blender_space:
+        normal[..., 1:] *= -1.0
     pixels = np.concatenate([0.5 * normal + 0.5, np.ones_like(u)[..., None]], axis=-1)
     image.pixels.foreach_set(pixels.astype(np.float32).ravel())
     image.pack()
     return image
 
 
-def normal_mapped(name, color):
-    """A Principled material (specular 0, as the room's) with the bump normal map."""
+def normal_mapped(name, color, space="TANGENT"):
+    """A Principled material (specular 0, as the room's) with the bump normal map, in tangent
+    space or in Blender's object space."""
     material = cal.principled(name, color)
     tree = material.node_tree
     texture = tree.nodes.new("ShaderNodeTexImage")
-    texture.image = bump_image()
+    texture.image = bump_image(blender_space=space == "BLENDER_OBJECT")
     normal_map = tree.nodes.new("ShaderNodeNormalMap")
-    normal_map.space = "TANGENT"
+    normal_map.space = space
     normal_map.uv_map = "UVMap"
     tree.links.new(texture.outputs["Color"], normal_map.inputs["Color"])
     tree.links.new(normal_map.outputs["Normal"], tree.nodes["Principled BSDF"].inputs["Normal"])
@@ -97,6 +103,20 @@ def plane_half_strength(name, tmpdir, results):
     for node in bpy.data.materials["plane"].node_tree.nodes:
         if node.bl_idname == "ShaderNodeNormalMap":
             node.inputs["Strength"].default_value = 0.5
+    cal.add_light("SUN", (0.0, 0.0, 5.0), (math.radians(45), 0.0, math.radians(120)),
+                  energy=3.0, angle=math.radians(2))
+    compare(name, ("DiffDir",), tmpdir, results)
+
+
+def plane_blender_object_space(name, tmpdir, results):
+    # The sun case with the bumps as a Blender Object Space map on the plane turned 40 degrees
+    # about Z and tilted 15 degrees about X (the object's rotation turns the normals).
+    cal.reset_scene()
+    plane = cal.add_quad("plane", (-3, -3, 0), (6, 0, 0), (0, 6, 0),
+                         normal_mapped("plane", (0.8, 0.8, 0.8), "BLENDER_OBJECT"))
+    add_uvs(plane)
+    plane.rotation_euler = (math.radians(15), 0.0, math.radians(40))
+    cal.add_camera(location=(0.0, -3.2, 2.6), target=(0.0, 0.0, 0.0))
     cal.add_light("SUN", (0.0, 0.0, 5.0), (math.radians(45), 0.0, math.radians(120)),
                   energy=3.0, angle=math.radians(2))
     compare(name, ("DiffDir",), tmpdir, results)
@@ -159,6 +179,7 @@ def without_normal_maps(samples):
 
 
 CASES = {"normal_map_sun": plane_sun, "normal_map_half_strength": plane_half_strength,
+         "normal_map_blender_object_space": plane_blender_object_space,
          "normal_map_point": plane_point,
          "normal_map_area": plane_area, "normal_map_room": room}
 

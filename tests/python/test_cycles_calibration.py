@@ -27,7 +27,8 @@ SCRIPTS = {
         "diffuse", "diffuse_gloss_passes", "diffuse_bsdf",
         "glossy_metal", "glossy_metal_gloss_passes", "glass"]),
     "calibration_normal_maps.py": ("CALIBRATION_NORMAL_MAPS_DONE", [
-        "normal_map_sun", "normal_map_half_strength", "normal_map_point", "normal_map_area",
+        "normal_map_sun", "normal_map_half_strength", "normal_map_blender_object_space",
+        "normal_map_point", "normal_map_area",
         "normal_map_room"]),
 }
 

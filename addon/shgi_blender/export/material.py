@@ -25,8 +25,10 @@ MATERIAL_OUTPUT_NODE = "ShaderNodeOutputMaterial"
 IMAGE_TEXTURE_NODE = "ShaderNodeTexImage"
 UV_MAP_NODE = "ShaderNodeUVMap"
 NORMAL_MAP_NODE = "ShaderNodeNormalMap"
-# The Normal Map node's spaces SHGI renders (its BLENDER_OBJECT and BLENDER_WORLD flip two axes).
-NORMAL_MAP_SPACES = {"TANGENT": "TANGENT", "OBJECT": "OBJECT", "WORLD": "WORLD"}
+# The Normal Map node's spaces, as shgi.NormalMapSpace names them (all of them: Blender's own
+# object and world spaces negate the texel's Y and Z).
+NORMAL_MAP_SPACES = {name: name for name in ("TANGENT", "OBJECT", "WORLD", "BLENDER_OBJECT",
+                                             "BLENDER_WORLD")}
 # The name of the one material shared by every surface without a usable material.
 FALLBACK_MATERIAL_NAME = "SHGI fallback"
 RGB_CHANNELS = 3
@@ -212,8 +214,7 @@ class MaterialExporter:
         space = NORMAL_MAP_SPACES.get(normal_map.space)
         if space is None:
             self._log.warn(f"material {material.name!r}: Normal Map space {normal_map.space!r} "
-                           "is not rendered by SHGI (Tangent, Object and World Space are); "
-                           "the normal map is ignored")
+                           "is not one SHGI knows; the normal map is ignored")
             return True
         texture_node = node_tree.linked_node(normal_map.inputs["Color"])
         if texture_node is None or texture_node.bl_idname != IMAGE_TEXTURE_NODE:

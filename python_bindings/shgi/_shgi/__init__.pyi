@@ -1273,11 +1273,17 @@ class NormalMapSpace:
       OBJECT : object space
     
       WORLD : world space
+    
+      BLENDER_OBJECT : Blender's object space (Y and Z negated)
+    
+      BLENDER_WORLD : Blender's world space (Y and Z negated)
     """
+    BLENDER_OBJECT: typing.ClassVar[NormalMapSpace]  # value = <NormalMapSpace.BLENDER_OBJECT: 3>
+    BLENDER_WORLD: typing.ClassVar[NormalMapSpace]  # value = <NormalMapSpace.BLENDER_WORLD: 4>
     OBJECT: typing.ClassVar[NormalMapSpace]  # value = <NormalMapSpace.OBJECT: 1>
     TANGENT: typing.ClassVar[NormalMapSpace]  # value = <NormalMapSpace.TANGENT: 0>
     WORLD: typing.ClassVar[NormalMapSpace]  # value = <NormalMapSpace.WORLD: 2>
-    __members__: typing.ClassVar[dict[str, NormalMapSpace]]  # value = {'TANGENT': <NormalMapSpace.TANGENT: 0>, 'OBJECT': <NormalMapSpace.OBJECT: 1>, 'WORLD': <NormalMapSpace.WORLD: 2>}
+    __members__: typing.ClassVar[dict[str, NormalMapSpace]]  # value = {'TANGENT': <NormalMapSpace.TANGENT: 0>, 'OBJECT': <NormalMapSpace.OBJECT: 1>, 'WORLD': <NormalMapSpace.WORLD: 2>, 'BLENDER_OBJECT': <NormalMapSpace.BLENDER_OBJECT: 3>, 'BLENDER_WORLD': <NormalMapSpace.BLENDER_WORLD: 4>}
     @staticmethod
     def _pybind11_conduit_v1_(*args, **kwargs):
         ...

@@ -114,6 +114,22 @@ TEST(NormalMap, ObjectAndWorldSpace) {
                      "world space ignores the instance");
 }
 
+// Blender's own object and world spaces read the texel's Y and Z negated (Cycles'
+// node_normal_map: "strange blender convention"): a texel pointing down and back along -Z, -Y
+// is the normal up and forward.
+TEST(NormalMap, BlenderObjectAndWorldSpaceNegateYAndZ) {
+    const vec3 texel = glm::normalize(vec3(0.3f, 0.2f, -0.9f));
+    const vec3 blender(texel.x, -texel.y, -texel.z);
+    const mat4 turn = glm::rotate(mat4(1.0f), 0.5f * kPi, vec3(0.0f, 0.0f, 1.0f));
+    Material material = test::lambert(0.8f);
+    material.normal_space = NormalMapSpace::BlenderObject;
+    expect_unit_near(plane_with_map(texel, material, turn).shade().frame.z,
+                     vec3(-blender.y, blender.x, blender.z), "Blender object space, turned");
+    material.normal_space = NormalMapSpace::BlenderWorld;
+    expect_unit_near(plane_with_map(texel, material, turn).shade().frame.z, blender,
+                     "Blender world space ignores the instance");
+}
+
 // (A gentle texel: extrapolated twice it stays clear of the below-surface correction.)
 TEST(NormalMap, StrengthBlendsWithTheInterpolatedNormal) {
     const vec3 texel = glm::normalize(vec3(0.2f, 0.0f, 0.98f));
