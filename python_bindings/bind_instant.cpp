@@ -42,14 +42,14 @@ void bind_settings(py::module_& m) {
                 "Light paths traced per set and pass; each leaves a VPL at its first "
                 "vpl_bounces hits (16).", 1);
     def_integer(cls, "vpl_bounces", &S::vpl_bounces,
-                "Hits of a light path that leave a VPL: 1 is one bounce of indirect light (8).");
+                "Hits of a light path that leave a VPL: 1 is one bounce of indirect light (12).");
     def_integer(cls, "seed", &S::seed, "Random seed (0).");
     cls.def(py::init(&from_kwargs<S>),
             "InstantGiSettings(**fields), e.g. InstantGiSettings(sets_x=3, sets_y=3).")
         .def_readwrite("clamp_distance", &S::clamp_distance,
                        "m: a VPL closer than this counts as this far (the 1/d^2 spike's clamp; "
                        "0 = off) (0.05).")
-        .def_readwrite("filter", &S::filter,
+        .def_readwrite("filter_mode", &S::filter_mode,
                        "InstantGiFilter: SH (the paper's), IRRADIANCE (each pixel's irradiance, "
                        "same edges), STRICT (irradiance, also stopping at shading-normal "
                        "changes), NONE (each pixel its own set).")

@@ -90,9 +90,9 @@ void validate_instant_gi_settings(const InstantGiSettings& s) {
                                              "; it must be in [1, 2^24]"));
     check_int(s.vpl_bounces, 1, 16, "vpl_bounces");
     check_float(s.clamp_distance, 0.0f, 1e6f, "clamp_distance");
-    const int filter = int(s.filter);
+    const int filter = int(s.filter_mode);
     if (filter < 0 || filter > int(InstantGiFilter::None))
-        throw InvalidArgument(format_message(kSettings, ".filter is ", filter,
+        throw InvalidArgument(format_message(kSettings, ".filter_mode is ", filter,
                                              "; it must be Sh, Irradiance, Strict or None"));
     check_float(s.depth_threshold, 0.0f, 1e6f, "depth_threshold");
     check_float(s.normal_threshold, -1.0f, 1.0f, "normal_threshold");
@@ -210,7 +210,7 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
 
     // 2. filter.
     start = now();
-    const InstantGiFilter mode = settings_.filter;
+    const InstantGiFilter mode = settings_.filter_mode;
     const bool filter_sh = mode == InstantGiFilter::Sh;
     const bool filter_irradiance =
         mode == InstantGiFilter::Irradiance || mode == InstantGiFilter::Strict;

@@ -310,6 +310,9 @@ def solver_recipe(props, shgi, volumes=(), viewport=False, gather=None):
     elif solver == "PROPAGATION":
         native_settings = settings.propagation_settings(props, shgi, gather)
         recipe_solver = FieldSolver.of(solver)
+    elif solver == "INSTANT_GI":
+        native_settings = settings.instant_gi_settings(props, shgi, gather)
+        recipe_solver = FieldSolver.of(solver)
     elif solver:
         # A registered method without a settings group here (a plugin's): its settings'
         # defaults with the scene's seed, its registry's passes for F12 and the viewport alike.
