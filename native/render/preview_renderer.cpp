@@ -352,6 +352,21 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
     const ZeroField no_field;
     const PinnedField pinned(field);  // one state of the field for the whole frame
     field = pinned.get() != nullptr ? pinned.get() : &no_field;  // none: direct light only
+    if (field->shades_first_surfaces() && samples > 1) {
+        // A screen-space field lights the G-buffer of one sample index: one frame per sample,
+        // so that n samples at once give the frames of n calls of one sample each. A cancel
+        // keeps the samples finished before it.
+        PreviewTimings sum;
+        for (uint32_t s = 0; s < samples; ++s) {
+            render(field, 1, progress);
+            sum.primary += timings_.primary;
+            sum.direct += timings_.direct;
+            sum.indirect += timings_.indirect;
+            sum.total += timings_.total;
+        }
+        timings_ = sum;
+        return;
+    }
     const TimePoint frame_start = now();
     const LightSampler& lights = lights_for(*field);
     const bool screen_space = field->shades_first_surfaces();

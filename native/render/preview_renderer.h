@@ -94,7 +94,9 @@ class PreviewRenderer {
     PreviewRenderer(const Scene& scene, const Camera& camera, const PreviewSettings& settings);
 
     // Adds `samples` samples per pixel with indirect light from `field` (may be null). Cancel
-    // leaves the film as it was. InvalidArgument if the scene was edited since construction.
+    // leaves the film as it was (with a screen-space field, render/indirect_field.h, each sample
+    // is a frame of its own and a cancel keeps the samples finished before it).
+    // InvalidArgument if the scene was edited since construction.
     void render(const IndirectField* field, uint32_t samples, Progress* progress = nullptr);
 
     const Film& film() const { return film_.film(); }
