@@ -42,7 +42,7 @@ void bind_settings(py::module_& m) {
                 "Light paths traced per set and pass; each leaves a VPL at its first "
                 "vpl_bounces hits (16).", 1);
     def_integer(cls, "vpl_bounces", &S::vpl_bounces,
-                "Hits of a light path that leave a VPL: 1 is one bounce of indirect light (12).");
+                "Hits of a light path that leave a VPL: 1 is one bounce of indirect light (4).");
     def_integer(cls, "seed", &S::seed, "Random seed (0).");
     cls.def(py::init(&from_kwargs<S>),
             "InstantGiSettings(**fields), e.g. InstantGiSettings(sets_x=3, sets_y=3).")

@@ -395,11 +395,6 @@ class ShgiInstantGiSettings(bpy.types.PropertyGroup):
         description="Light paths traced per set and pass; where they land become the little "
                     "lights each pixel sees with exact shadows: more give smoother light and "
                     "cost more per pixel")
-    vpl_bounces: IntProperty(
-        name="VPL Bounces", default=IG["vpl_bounces"], min=1,
-        max=settings.MAX_INSTANT_VPL_BOUNCES,
-        description="Surfaces each light path leaves a little light on: more bounces of light "
-                    "between surfaces")
     clamp_distance: FloatProperty(
         name="Clamp Distance", default=IG["clamp_distance"], min=0.0, soft_max=1.0,
         subtype="DISTANCE",

@@ -233,11 +233,9 @@ PROPAGATION_DEFAULTS = {
 }
 
 # InstantGiSettings' fields in ``scene.shgi.instant_gi`` with their native defaults. Not
-# mirrored: ``seed`` (scene.shgi.seed). ``vpl_bounces`` is the group's own, not Light Paths >
-# Diffuse: Diffuse 4 as VPL bounces gives 0.89x the path tracer's DiffInd on the Cornell box
-# (docs/methods.md, "Instant GI").
+# mirrored: ``seed`` (scene.shgi.seed) and ``vpl_bounces`` (Light Paths > Diffuse,
+# LIGHT_PATH_VALUES).
 INSTANT_GI_DEFAULTS = {
-    "vpl_bounces": 12,
     "sets_x": 4,
     "sets_y": 4,
     "photons_per_set": 16,
@@ -432,7 +430,6 @@ INSTANT_GI_LABELS = {
     "sets_x": "Instant GI > Sets X",
     "sets_y": "Instant GI > Sets Y",
     "photons_per_set": "Instant GI > Light Paths per Set",
-    "vpl_bounces": "Instant GI > VPL Bounces",
     "clamp_distance": "Instant GI > Clamp Distance",
     "filter_mode": "Instant GI > Filter",
     "depth_threshold": "Instant GI > Depth Threshold",
@@ -507,8 +504,10 @@ LIGHT_PATH_VALUES = {
     "PropagationSettings": {
         "vpl_bounces": LightPathValue("diffuse_bounces", 0, 1, MAX_VPL_BOUNCES),
     },
-    # Instant GI takes nothing from Light Paths (INSTANT_GI_DEFAULTS).
-    "InstantGiSettings": {},
+    # A VPL is a surface hit of a light path, as the propagation volume's.
+    "InstantGiSettings": {
+        "vpl_bounces": LightPathValue("diffuse_bounces", 0, 1, MAX_INSTANT_VPL_BOUNCES),
+    },
 }
 
 
@@ -545,8 +544,8 @@ LIGHT_PATH_LIMITS = {
                       "apply to path tracing only",
     "PROPAGATION": "Light Propagation: light paths follow Diffuse; Total, Glossy and "
                    "Transmission apply to path tracing only",
-    "INSTANT_GI": "Instant GI: light paths follow its own VPL Bounces; Light Paths apply to "
-                  "path tracing only",
+    "INSTANT_GI": "Instant GI: light paths follow Diffuse; Total, Glossy and Transmission "
+                  "apply to path tracing only",
 }
 
 

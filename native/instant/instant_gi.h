@@ -54,9 +54,8 @@ struct InstantGiSettings {
     int sets_x = 4;                   // n: interleave period across
     int sets_y = 4;                   // m: interleave period down
     uint64_t photons_per_set = 16;    // light paths traced per set and pass
-    // Hits of a light path that leave a VPL (1: first only). 12: the path tracer's DiffInd on
-    // the Cornell box (its defaults) is met within 0.1%; 4 gives 0.89x, 8 gives 0.98x.
-    int vpl_bounces = 12;
+    // Hits of a light path that leave a VPL (1: first only); the add-on: Light Paths > Diffuse.
+    int vpl_bounces = 4;
     float clamp_distance = 0.05f;     // m: d² below clamp_distance² counts as clamp_distance²
     InstantGiFilter filter_mode = InstantGiFilter::Sh;
     float depth_threshold = 0.1f;     // neighbours whose depth differs by more (relative) stop

@@ -362,6 +362,7 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
             sum.primary += timings_.primary;
             sum.direct += timings_.direct;
             sum.indirect += timings_.indirect;
+            sum.frame_stages += timings_.frame_stages;
             sum.total += timings_.total;
         }
         timings_ = sum;
@@ -371,7 +372,9 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
     const LightSampler& lights = lights_for(*field);
     const bool screen_space = field->shades_first_surfaces();
     g_buffer_.set_field_lobes(screen_space);
-    // A screen-space field's frame-wide stage runs first, so later stages see its light.
+    // A screen-space field's frame-wide stage runs first, so later stages see its light. Every
+    // frame-wide stage is timed apart from the tiles.
+    double stage_seconds = 0.0;
     std::vector<FrameWideStage> screen_stages;
     if (screen_space) {
         const vec3 camera_position(camera_.world_from_camera[3]);
@@ -383,7 +386,17 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
                                                                  first_sample, count, p);
                                  }});
         screen_stages.insert(screen_stages.end(), frame_stages_.begin(), frame_stages_.end());
+    } else {
+        screen_stages = frame_stages_;
     }
+    for (FrameWideStage& stage : screen_stages)
+        stage.run = [run = std::move(stage.run), &stage_seconds](
+                        const GBuffer& g, Film& film, uint64_t first_sample, uint64_t count,
+                        Progress* p) {
+            const TimePoint start = now();
+            run(g, film, first_sample, count, p);
+            stage_seconds += seconds_since(start);
+        };
     const TileGrid grid(film_.film().width(), film_.film().height(),
                         even_tile_side(settings_.tile_size));
     const FrameWork work(*scene_, camera_, camera_rays_, lights, path_settings_, *field, grid,
@@ -398,8 +411,10 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
         [&](uint64_t begin, uint64_t end, Film& target, const Film& base) {
             work.render_tiles(begin, end, target, base, &busy[begin]);
         },
-        &g_buffer_, screen_space ? screen_stages : frame_stages_);
-    PreviewTimings timings = split_wall_time(seconds_since(tiles_start), busy);
+        &g_buffer_, screen_stages);
+    PreviewTimings timings =
+        split_wall_time(std::max(0.0, seconds_since(tiles_start) - stage_seconds), busy);
+    timings.frame_stages = stage_seconds;
     timings.total = seconds_since(frame_start);
     timings_ = timings;
 }

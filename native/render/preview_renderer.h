@@ -83,6 +83,7 @@ struct PreviewTimings {
     double primary = 0.0;   // camera rays, their intersection and the G-buffer of first hits
     double direct = 0.0;    // next-event estimation and its shadow rays
     double indirect = 0.0;  // field lookups, traced specular chains and the film sums
+    double frame_stages = 0.0;  // the frame-wide stages after the tiles (a screen-space field's)
     double total = 0.0;
 };
 

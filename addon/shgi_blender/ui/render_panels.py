@@ -313,7 +313,7 @@ class SHGI_RENDER_PT_instant_gi(_FieldPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         column = layout.column(align=True)
-        for name in ("sets_x", "sets_y", "photons_per_set", "vpl_bounces", "clamp_distance"):
+        for name in ("sets_x", "sets_y", "photons_per_set", "clamp_distance"):
             column.prop(instant, name)
         column = layout.column(align=True)
         for name in ("filter_mode", "depth_threshold", "normal_threshold"):

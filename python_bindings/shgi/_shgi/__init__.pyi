@@ -663,7 +663,7 @@ class InstantGiSettings:
     @property
     def vpl_bounces(self) -> int:
         """
-        Hits of a light path that leave a VPL: 1 is one bounce of indirect light (12).
+        Hits of a light path that leave a VPL: 1 is one bounce of indirect light (4).
         """
     @vpl_bounces.setter
     def vpl_bounces(self, arg1: typing.SupportsIndex) -> None:
