@@ -58,7 +58,10 @@ void bind_settings(py::module_& m) {
                        "blended (0.1).")
         .def_readwrite("normal_threshold", &S::normal_threshold,
                        "Neighbours whose geometric normals' cosine is below this are not "
-                       "blended (0.9).");
+                       "blended (0.9).")
+        .def_readwrite("glossy_vpls", &S::glossy_vpls,
+                       "A VPL's surface scatters with its rough glossy lobes too, as if "
+                       "diffuse; False: its diffuse lobe only (True).");
     cls.def("validate", &validate_instant_gi_settings,
             "Raises ValueError naming the first invalid field.");
     register_settings_type<S>("InstantGiSettings");

@@ -80,6 +80,39 @@ bool joins(const GBuffer& g, size_t p, size_t q, const InstantGiSettings& s, boo
     return true;
 }
 
+// Lobes up to this roughness are mirror-like: their light is not spread as if diffuse.
+constexpr float kSpecularRoughness = 0.1f;
+
+// The flux the surface under a photon hit (position, normal, direction towards the source,
+// arriving power) scatters into its VPL, found by a short ray back along the photon's path (the
+// photon maps keep no material); zero when the surface is not found. As the radiance field's
+// reflected_power.
+vec3 vpl_power(const Scene& scene, bool glossy, const vec3& position, const vec3& normal,
+               const vec3& direction, const vec3& power) {
+    constexpr float kReach = 1e-3f;
+    Ray ray;
+    ray.origin = position + direction * kReach;
+    ray.direction = -direction;
+    ray.tmax = 2.0f * kReach;
+    Hit hit = scene.intersect(ray);
+    if (!hit.valid()) {  // a grazing photon: come back along the normal instead
+        ray.origin = position + normal * kReach;
+        ray.direction = -normal;
+        hit = scene.intersect(ray);
+    }
+    if (!hit.valid()) return vec3(0.0f);
+    const Shading shading =
+        make_shading(scene, scene.surface_point(ray, hit), ray.direction, PathOrigin::Light);
+    vec3 albedo = shading.bsdf.field_diffuse(shading.wo);
+    if (glossy) {
+        PrincipledBsdf::GlossyLobe lobes[2];
+        const int count = shading.bsdf.field_glossy_lobes(shading.wo, lobes);
+        for (int i = 0; i < count; ++i)
+            if (lobes[i].roughness > kSpecularRoughness) albedo += lobes[i].albedo;
+    }
+    return albedo * power;
+}
+
 }  // namespace
 
 void validate_instant_gi_settings(const InstantGiSettings& s) {
@@ -329,38 +362,32 @@ void InstantGi::refine(Progress* progress) {
     if (progress) progress->begin_stage("tracing VPLs", 0.0f, 0.8f);
     PhotonMaps maps = trace_photons(*scene_, tracer_settings(settings_), passes_, progress,
                                     kSettings);
-    std::vector<InstantVpl> vpls;
-    vpls.reserve(maps.first_hits.size() + maps.global.size() + maps.caustic.size());
-    for (const PhotonFirstHit& hit : maps.first_hits)
-        if (hit.reflected_power != vec3(0.0f))
-            vpls.push_back({hit.position, hit.normal, hit.reflected_power});
+    // Every hit as a photon: first hits, then (vpl_bounces > 1) the stored later hits.
+    std::vector<Photon> hits;
+    hits.reserve(maps.first_hits.size() + maps.global.size() + maps.caustic.size());
+    for (const PhotonFirstHit& h : maps.first_hits)
+        hits.push_back({h.position, h.power, h.normal, h.direction});
+    if (settings_.vpl_bounces > 1) {
+        hits.insert(hits.end(), maps.global.begin(), maps.global.end());
+        hits.insert(hits.end(), maps.caustic.begin(), maps.caustic.end());
+    }
     const double trace_seconds = seconds_since(start);
     start = now();
-    if (settings_.vpl_bounces > 1) {
-        if (progress) progress->begin_stage("reflecting VPLs", 0.8f, 1.0f);
-        // Later hits carry the power arriving; the surface scatters its diffuse albedo of it,
-        // which a short ray back onto the stored point finds (the photon maps keep no material).
-        std::vector<Photon> later = std::move(maps.global);
-        later.insert(later.end(), maps.caustic.begin(), maps.caustic.end());
-        std::vector<vec3> reflected(later.size(), vec3(0.0f));
-        parallel_for(0, later.size(), kVplsPerTask, [&](uint64_t begin, uint64_t end) {
-            throw_if_cancelled(progress);
-            for (uint64_t i = begin; i < end; ++i) {
-                const Photon& photon = later[i];
-                Ray ray;
-                ray.origin = offset_origin(photon.position, photon.normal);
-                ray.direction = -photon.direction;
-                const Hit hit = scene_->intersect(ray);
-                if (!hit.valid()) continue;
-                const Shading shading = make_shading(*scene_, scene_->surface_point(ray, hit),
-                                                     ray.direction, PathOrigin::Light);
-                reflected[i] = shading.bsdf.field_diffuse(shading.wo) * photon.power;
-            }
-        }, progress);
-        for (size_t i = 0; i < later.size(); ++i)
-            if (reflected[i] != vec3(0.0f))
-                vpls.push_back({later[i].position, later[i].normal, reflected[i]});
-    }
+    if (progress) progress->begin_stage("reflecting VPLs", 0.8f, 1.0f);
+    std::vector<vec3> reflected(hits.size(), vec3(0.0f));
+    const bool glossy = settings_.glossy_vpls;
+    parallel_for(0, hits.size(), kVplsPerTask, [&](uint64_t begin, uint64_t end) {
+        throw_if_cancelled(progress);
+        for (uint64_t i = begin; i < end; ++i) {
+            const Photon& h = hits[i];
+            reflected[i] = vpl_power(*scene_, glossy, h.position, h.normal, h.direction, h.power);
+        }
+    }, progress);
+    std::vector<InstantVpl> vpls;
+    vpls.reserve(hits.size());
+    for (size_t i = 0; i < hits.size(); ++i)
+        if (reflected[i] != vec3(0.0f) && is_finite(reflected[i]))
+            vpls.push_back({hits[i].position, hits[i].normal, reflected[i]});
     throw_if_cancelled(progress);
     // Deal the pass's VPLs into the sets in turn, after the earlier passes' ones.
     std::vector<std::vector<InstantVpl>> sets = field_->sets();

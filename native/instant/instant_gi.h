@@ -2,9 +2,9 @@
 // (seed 004, Segovia & Wald; docs/methods.md "Instant GI").
 //
 // Solve (refine, one pass): photons from every emitter (photon/photon_tracer.h) leave virtual
-// point lights (VPLs) at their first hits (the diffusely reflected flux, PhotonFirstHit) and,
-// with vpl_bounces > 1, at later hits (the power arriving there times the surface's diffuse
-// albedo, found by a short ray as the propagation volume does). The pass's VPLs are dealt in turn
+// point lights (VPLs) at their first hits and, with vpl_bounces > 1, at later hits: the power
+// arriving there times the surface's diffuse albedo (and, with glossy_vpls, its rough glossy
+// lobes' albedo), the surface found by a short ray back along the photon's path. The pass's VPLs are dealt in turn
 // into sets_x × sets_y sets (§2.2–2.3, §3.2: uncorrelated sets, each an unbiased estimate of all
 // the light when scaled by the number of sets); every pass adds new sets' worth of VPLs, and a
 // set holds its VPLs of every pass so far (scaled by 1 / passes).
@@ -60,6 +60,11 @@ struct InstantGiSettings {
     InstantGiFilter filter_mode = InstantGiFilter::Sh;
     float depth_threshold = 0.1f;     // neighbours whose depth differs by more (relative) stop
     float normal_threshold = 0.9f;    // ... whose normals' cosine is below this stop
+    // Rough glossy lobes (roughness above 0.1) of a VPL's surface scatter into it as if diffuse,
+    // as the radiance field's glossy_in_grid: with the diffuse lobe alone a VPL loses the light
+    // the surface's specular layer reflects (Principled specular 0.5: the Cornell box's DiffInd
+    // came out 0.89x the path tracer's, the sun room's 0.93x).
+    bool glossy_vpls = true;
     uint64_t seed = 0;
 };
 

@@ -87,7 +87,8 @@ def test_property_defaults_are_the_native_defaults(struct, fields):
 NOT_MIRRORED = {
     "ProbeGridSettings": {"volumes", "include_direct"},
     "PropagationSettings": set(),
-    "InstantGiSettings": set(),
+    # As the radiance field's glossy_in_grid: no reason for an artist to change it.
+    "InstantGiSettings": {"glossy_vpls"},
     "PhotonLatticeSettings": {"use_bounds", "bounds_min", "bounds_max", "caustic_order",
                               "caustic_blur_passes", "caustic_neighbours", "caustic_radius",
                               "specular_roughness", "normal_offset"},

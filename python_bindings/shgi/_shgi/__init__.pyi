@@ -621,6 +621,14 @@ class InstantGiSettings:
     def filter_mode(self, arg0: InstantGiFilter) -> None:
         ...
     @property
+    def glossy_vpls(self) -> bool:
+        """
+        A VPL's surface scatters with its rough glossy lobes too, as if diffuse; False: its diffuse lobe only (True).
+        """
+    @glossy_vpls.setter
+    def glossy_vpls(self, arg0: bool) -> None:
+        ...
+    @property
     def normal_threshold(self) -> float:
         """
         Neighbours whose geometric normals' cosine is below this are not blended (0.9).
