@@ -131,20 +131,36 @@ void validate_instant_gi_settings(const InstantGiSettings& s) {
     check_float(s.normal_threshold, -1.0f, 1.0f, "normal_threshold");
 }
 
-bool add_vpl_sh(ShRgb& sh, const vec3& p, const vec3& ng, const InstantVpl& vpl, float scale,
-                float clamp_distance) {
+namespace {
+
+// The delta's weight (zero when the VPL faces away or lies below the surface) and direction.
+vec3 vpl_delta(const vec3& p, const vec3& ng, const InstantVpl& vpl, float scale,
+               float clamp_distance, vec3* direction) {
     const vec3 d = vpl.position - p;
     const float dist2 = glm::dot(d, d);
-    if (!(dist2 > 0.0f)) return false;
+    if (!(dist2 > 0.0f)) return vec3(0.0f);
     const vec3 w = d / std::sqrt(dist2);
     const float cos_vpl = -glm::dot(vpl.normal, w);
-    if (cos_vpl <= 0.0f || glm::dot(ng, w) <= 0.0f) return false;
-    const float weight =
-        scale * cos_vpl * kInvPi / std::max(dist2, clamp_distance * clamp_distance);
+    if (cos_vpl <= 0.0f || glm::dot(ng, w) <= 0.0f) return vec3(0.0f);
+    *direction = w;
+    return vpl.power *
+           (scale * cos_vpl * kInvPi / std::max(dist2, clamp_distance * clamp_distance));
+}
+
+void add_delta(vec3* sh, const vec3& e, const vec3& w) {
     float basis[kCoeffs];
     sh_eval(kOrder, w, basis);
-    const vec3 e = vpl.power * weight;
-    for (int i = 0; i < kCoeffs; ++i) sh.coeffs[i] += e * basis[i];
+    for (int i = 0; i < kCoeffs; ++i) sh[i] += e * basis[i];
+}
+
+}  // namespace
+
+bool add_vpl_sh(ShRgb& sh, const vec3& p, const vec3& ng, const InstantVpl& vpl, float scale,
+                float clamp_distance) {
+    vec3 w;
+    const vec3 e = vpl_delta(p, ng, vpl, scale, clamp_distance, &w);
+    if (e == vec3(0.0f)) return false;
+    add_delta(sh.coeffs.data(), e, w);
     return true;
 }
 
@@ -206,37 +222,41 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
         throw_if_cancelled(progress);
         std::vector<Ray> rays;
         std::vector<uint32_t> ray_pixel;
-        std::vector<ShRgb> contributions;
+        std::vector<vec3> weights, directions;
         std::vector<uint8_t> occluded;
+        // Rays set by set, VPL by VPL, pixel by pixel along the row: the pixels of one set
+        // sending rays to one VPL after another are neighbours, a coherent stream.
         for (uint64_t y = y0; y < y1; ++y)
-            for (int x = 0; x < width; ++x) {
-                const size_t p = g.index(x, int(y));
-                if (!g.has_surface(p)) continue;
-                const vec3 pos = g.position[p], ng = g.geometric_normal[p];
-                const vec3 origin = offset_origin(pos, ng);
-                const auto& set = sets_[size_t(int(y) % m) * size_t(n) + size_t(x % n)];
-                for (const InstantVpl& vpl : set) {
-                    ShRgb one(kOrder);
-                    if (!add_vpl_sh(one, pos, ng, vpl, set_scale_, settings_.clamp_distance))
-                        continue;
-                    const vec3 d = vpl.position - origin;
-                    const float dist = glm::length(d);
-                    if (!(dist > 0.0f)) continue;
-                    Ray ray;
-                    ray.origin = origin;
-                    ray.direction = d / dist;
-                    ray.tmax = dist * (1.0f - kShadowShorten);
-                    rays.push_back(ray);
-                    ray_pixel.push_back(uint32_t(p));
-                    contributions.push_back(one);
-                }
+            for (int sx = 0; sx < std::min(n, width); ++sx) {
+                const auto& set = sets_[size_t(int(y) % m) * size_t(n) + size_t(sx)];
+                for (const InstantVpl& vpl : set)
+                    for (int x = sx; x < width; x += n) {
+                        const size_t p = g.index(x, int(y));
+                        if (!g.has_surface(p)) continue;
+                        const vec3 pos = g.position[p], ng = g.geometric_normal[p];
+                        vec3 w;
+                        const vec3 e =
+                            vpl_delta(pos, ng, vpl, set_scale_, settings_.clamp_distance, &w);
+                        if (e == vec3(0.0f)) continue;
+                        const vec3 origin = offset_origin(pos, ng);
+                        const vec3 d = vpl.position - origin;
+                        const float dist = glm::length(d);
+                        if (!(dist > 0.0f)) continue;
+                        Ray ray;
+                        ray.origin = origin;
+                        ray.direction = d / dist;
+                        ray.tmax = dist * (1.0f - kShadowShorten);
+                        rays.push_back(ray);
+                        ray_pixel.push_back(uint32_t(p));
+                        weights.push_back(e);
+                        directions.push_back(w);
+                    }
             }
         if (rays.empty()) return;
-        scene_->occluded(rays, occluded, nullptr, RayCoherence::Incoherent);
+        scene_->occluded(rays, occluded, nullptr, RayCoherence::Coherent);
         for (size_t r = 0; r < rays.size(); ++r) {  // in ray order: a fixed sum per pixel
             if (occluded[r]) continue;
-            vec3* out = &raw[size_t(ray_pixel[r]) * kCoeffs];
-            for (int i = 0; i < kCoeffs; ++i) out[i] += contributions[r].coeffs[i];
+            add_delta(&raw[size_t(ray_pixel[r]) * kCoeffs], weights[r], directions[r]);
         }
     }, progress);
     timings_->gather = seconds_since(start);
