@@ -43,7 +43,8 @@ from shgi_blender.export.light_probe import ProbeVolumeRecord, native_volumes  #
 # The engine's acceptance figures against Cycles (docs/methods.md).
 MIN_PSNR_DB = 28.0
 MEAN_TOLERANCE = {"PATH_TRACE": 0.02, "PHOTON_LATTICE": 0.10, "PHOTON_LATTICE frozen": 0.10,
-                  "PROBE_GRID": 0.10, "PROBE_GRID volume": 0.10, "RADIANCE_FIELD": 0.10}
+                  "PROBE_GRID": 0.10, "PROBE_GRID volume": 0.10, "RADIANCE_FIELD": 0.10,
+                  "INSTANT_GI": 0.10}
 DIFFUSE_INDIRECT_TOLERANCE = 0.10
 # docs/architecture.md: cancel returns within 0.2 s; the engine polls every 0.05 s.
 CANCEL_LATENCY = 0.5
@@ -704,7 +705,8 @@ def test_f12_refusals_name_the_blender_setting_or_object(case, words, blender, b
 RENDER_CASES = [(scene, method) for scene in ("cornell_box", "sun_room")
                 for method in ("PATH_TRACE", "PHOTON_LATTICE")] + [
     ("sun_room", "PHOTON_LATTICE frozen"), ("cornell_box", "PROBE_GRID"),
-    ("cornell_box", "PROBE_GRID volume"), ("cornell_box", "RADIANCE_FIELD")]
+    ("cornell_box", "PROBE_GRID volume"), ("cornell_box", "RADIANCE_FIELD"),
+    ("cornell_box", "INSTANT_GI")]
 
 
 @pytest.mark.parametrize("scene, method", RENDER_CASES)
