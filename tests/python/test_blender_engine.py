@@ -468,6 +468,9 @@ def test_instant_gi_job_renders_the_sets_of_its_settings():
                     solver_recipe=recipe).start()
     assert job.wait(60) and job.error is None, job.error
     assert list(job.solution.timings)[-2:] == ["vpl_trace", "vpl_sets"]
+    figures = dict(job.solution.solver.figures())
+    assert figures["Refinement passes"] == "2" and figures["VPLs"].endswith("in 12 sets")
+    assert figures["Last frame"].startswith("gather "), figures
     solver = shgi.InstantGi(scene, recipe.settings)
     solver.refine()
     solver.refine()
