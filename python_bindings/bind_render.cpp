@@ -220,6 +220,7 @@ py::dict timings_to_dict(const PreviewTimings& timings) {
     out["primary"] = timings.primary;
     out["direct"] = timings.direct;
     out["indirect"] = timings.indirect;
+    out["frame_stages"] = timings.frame_stages;
     out["total"] = timings.total;
     return out;
 }

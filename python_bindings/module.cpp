@@ -46,6 +46,7 @@ void bind_lattice(py::module_& m);
 void bind_probes(py::module_& m);
 void bind_radiance(py::module_& m);
 void bind_propagation(py::module_& m);
+void bind_instant(py::module_& m);
 void bind_bake(py::module_& m);
 }  // namespace shgi::python
 
@@ -63,6 +64,7 @@ PYBIND11_MODULE(_shgi, m) {
     shgi::python::bind_probes(m);   // so do ProbeGrid and ProbeField
     shgi::python::bind_radiance(m);  // and RadianceField
     shgi::python::bind_propagation(m);  // PropagationField too; PropagationVolume is a GiSolver
+    shgi::python::bind_instant(m);  // InstantGiField too; InstantGi is a GiSolver
     shgi::python::bind_bake(m);     // takes any IndirectField
     refuse_bare_new(m);             // after every class exists
 }

@@ -38,6 +38,8 @@ SOURCE_DESCRIPTIONS = {
                       "settings; exact direct light",
     "PROPAGATION": "Indirect light from a light propagation volume solved with the Light "
                    "Propagation settings; exact direct light",
+    "INSTANT_GI": "Indirect light from the Instant GI's virtual point lights (every set, exact "
+                  "shadows, no screen-space filter); exact direct light",
 }
 SOURCE_ITEMS = tuple(
     (method.identifier, method.label,

@@ -23,6 +23,7 @@ L = settings.PHOTON_LATTICE_DEFAULTS
 P = settings.PROBE_GRID_DEFAULTS
 R = settings.RADIANCE_FIELD_DEFAULTS
 LP = settings.PROPAGATION_DEFAULTS
+IG = settings.INSTANT_GI_DEFAULTS
 V = settings.VIEWPORT_PROPERTY_DEFAULTS
 VP = settings.VIEWPORT_PASSES_DEFAULTS
 DN = settings.DENOISING_DEFAULTS
@@ -33,6 +34,7 @@ WORLD_SAMPLING_ITEMS = list(settings.ENUM_ITEMS["world_sampling"])
 CAUSTICS_ITEMS = list(settings.ENUM_ITEMS["caustics"])
 INTERPOLATION_ITEMS = list(settings.ENUM_ITEMS["interpolation"])
 FACE_ESTIMATOR_ITEMS = list(settings.ENUM_ITEMS["face_estimator"])
+INSTANT_FILTER_ITEMS = list(settings.ENUM_ITEMS["filter_mode"])
 B = bake_settings.BAKE_PROPERTY_DEFAULTS
 BAKE_SOURCE_ITEMS = list(bake_settings.SOURCE_ITEMS)
 BAKE_CONTENT_ITEMS = list(bake_settings.CONTENT_ITEMS)
@@ -390,6 +392,51 @@ class ShgiPropagationSettings(bpy.types.PropertyGroup):
                     "sample): fewer blocks and leaks, slower per sample")
 
 
+class ShgiInstantGiSettings(bpy.types.PropertyGroup):
+    """InstantGiSettings of the INSTANT_GI method (``scene.shgi.instant_gi``); its light paths'
+    bounce limit is Light Paths > Diffuse."""
+
+    sets_x: IntProperty(
+        name="Sets X", default=IG["sets_x"], min=1, max=settings.MAX_INSTANT_SETS,
+        description="Sets of little lights across: neighbouring pixels see different sets, "
+                    "blended over this many pixels")
+    sets_y: IntProperty(
+        name="Sets Y", default=IG["sets_y"], min=1, max=settings.MAX_INSTANT_SETS,
+        description="Sets of little lights down, blended over this many pixels")
+    photons_per_set: IntProperty(
+        name="Light Paths per Set", default=IG["photons_per_set"], min=1,
+        max=settings.MAX_INSTANT_PHOTONS_PER_SET, soft_max=1024,
+        description="Light paths traced per set and pass; where they land become the little "
+                    "lights each pixel sees with exact shadows: more give smoother light and "
+                    "cost more per pixel")
+    clamp_distance: FloatProperty(
+        name="Clamp Distance", default=IG["clamp_distance"], min=0.0, soft_max=1.0,
+        subtype="DISTANCE",
+        description="Little lights closer than this count as this far: no bright spots in "
+                    "corners, slightly darker corners")
+    filter_mode: EnumProperty(
+        name="Filter", items=INSTANT_FILTER_ITEMS, default=IG["filter_mode"],
+        description="What is blended between neighbouring pixels")
+    depth_threshold: FloatProperty(
+        name="Depth Threshold", default=IG["depth_threshold"], min=0.0, soft_max=1.0,
+        description="Neighbours whose depth differs by more than this fraction are not blended")
+    normal_threshold: FloatProperty(
+        name="Normal Threshold", default=IG["normal_threshold"], min=-1.0, max=1.0,
+        description="Neighbours whose surfaces' normals have a cosine below this are not "
+                    "blended (normal maps do not count)")
+    passes: IntProperty(
+        name="Render Passes", default=settings.final_passes("INSTANT_GI", native.module()),
+        min=1, soft_max=64,
+        description="Passes of an F12 render, a Solve or a bake, each adding Light Paths per "
+                    "Set to every set: more give smoother light and cost more per pixel")
+    viewport_passes: IntProperty(
+        name="Viewport Passes", default=VP["INSTANT_GI"], min=1, soft_max=64,
+        description="Passes the Rendered viewport solves")
+    final_gather: BoolProperty(
+        name="Final Gather", default=settings.FINAL_GATHER_DEFAULTS["INSTANT_GI"],
+        description="Unused by Instant GI, which lights what the camera sees in screen space")
+
+
 class ShgiBakeSettings(bpy.types.PropertyGroup):
     """Lightmap bake settings (``scene.shgi.bake``) that the Bake panel shows."""
 
@@ -461,6 +508,8 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
                                 description="Settings of the Probe Grid method")
     radiance_field: PointerProperty(type=ShgiRadianceFieldSettings, name="Radiance Field",
                                     description="Settings of the Radiance Field method")
+    instant_gi: PointerProperty(type=ShgiInstantGiSettings, name="Instant GI",
+                                description="Settings of the Instant GI method")
     propagation: PointerProperty(type=ShgiPropagationSettings, name="Light Propagation",
                                  description="Settings of the Light Propagation Volumes method")
     bake: PointerProperty(type=ShgiBakeSettings, name="Bake",
@@ -487,7 +536,8 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
 
 # Registered in this order: a PointerProperty's group before the group holding it.
 _CLASSES = (ShgiPhotonLatticeSettings, ShgiProbeGridSettings, ShgiRadianceFieldSettings,
-            ShgiPropagationSettings, ShgiBakeSettings, ShgiSceneSettings)
+            ShgiPropagationSettings, ShgiInstantGiSettings, ShgiBakeSettings,
+            ShgiSceneSettings)
 
 
 def register():

@@ -78,6 +78,11 @@ BUILT_IN_METHODS = (
            "fixed cost, soft and approximate light that may leak through thin walls; exact "
            "direct light", 3,
            "PROPAGATION"),
+    Method("INSTANT_GI", "Instant GI",
+           "Light from a few hundred virtual point lights with exact shadows, each pixel seeing "
+           "its own set, then blended across neighbouring pixels in SH so normal maps keep their "
+           "detail; exact direct light", 5,
+           "INSTANT_GI"),
 )
 
 
@@ -91,11 +96,11 @@ def registry_methods(shgi):
                  for row in shgi.methods())
 
 
-# Selectable methods, in menu order: the registry's rows when the add-on loads. The solvers still
-# to come keep their identifiers and file numbers reserved (RESERVED_METHODS) so that files saved
-# later open here: INSTANT_GI (seed 004).
+# Selectable methods, in menu order: the registry's rows when the add-on loads. Solvers still to
+# come would keep their identifiers and file numbers reserved here (RESERVED_METHODS) so that
+# files saved later open; none is reserved now.
 METHODS = registry_methods(native.module())
-RESERVED_METHODS = {"INSTANT_GI": 5}
+RESERVED_METHODS = {}
 METHODS_BY_ID = {method.identifier: method for method in METHODS}
 
 # Enum-valued fields: property identifier -> name of the shgi enum type (values are the enum's
@@ -105,6 +110,7 @@ ENUM_FIELDS = {
     "caustics": "CausticMode",
     "interpolation": "LatticeInterpolation",
     "face_estimator": "FaceEstimator",
+    "filter_mode": "InstantGiFilter",
 }
 # Their items (identifier = the shgi member name, label, description), for the EnumProperties.
 ENUM_ITEMS = {
@@ -131,6 +137,16 @@ ENUM_ITEMS = {
         ("PAPER", "Paper",
          "The original paper's estimate (flux split over faces, divided by the face's area): "
          "darker on surfaces not aligned with the grid, for comparison"),
+    ),
+    "filter_mode": (
+        ("SH", "SH", "Blend the light arriving from every direction between neighbouring "
+         "pixels, then shade each pixel with its own (normal-mapped) normal: smooth and "
+         "detailed"),
+        ("IRRADIANCE", "Irradiance", "Blend each pixel's shaded light: smooth, but normal-map "
+         "detail is blurred away (for comparison)"),
+        ("STRICT", "Strict", "Blend shaded light only between pixels whose normals agree: "
+         "keeps detail, but the pattern of the light sets shows on bumpy surfaces"),
+        ("NONE", "None", "No blending: each pixel shows its own set's light (the raw pattern)"),
     ),
 }
 
@@ -216,17 +232,30 @@ PROPAGATION_DEFAULTS = {
     "normal_offset": 1.0,
 }
 
+# InstantGiSettings' fields in ``scene.shgi.instant_gi`` with their native defaults. Not
+# mirrored: ``seed`` (scene.shgi.seed) and ``vpl_bounces`` (Light Paths > Diffuse,
+# LIGHT_PATH_VALUES).
+INSTANT_GI_DEFAULTS = {
+    "sets_x": 4,
+    "sets_y": 4,
+    "photons_per_set": 16,
+    "clamp_distance": 0.05,
+    "filter_mode": "SH",
+    "depth_threshold": 0.1,
+    "normal_threshold": 0.9,
+}
+
 # Refinement passes of a final solve (F12, Solve, a bake) when ``shgi`` cannot be imported as the
 # add-on registers: the method registry's final_passes, which ``python -m shgi bake`` runs
 # (shgi.bake.PROBE_GRID_PASSES); tests/python/test_blender_versioning.py checks that they agree.
 FINAL_PASSES_FALLBACK = {"PHOTON_LATTICE": 1, "PROBE_GRID": 8, "RADIANCE_FIELD": 1,
-                         "PROPAGATION": 1}
+                         "PROPAGATION": 1, "INSTANT_GI": 4}
 # Passes the Rendered viewport runs (no native struct has them), as Cycles keeps its viewport
 # samples apart: photon passes it solves (each traces `photons`; as many as `passes` give the
 # lattice F12 solves), and probe grid update passes it runs in the background before it stops
 # refining (past ~2 / (1 - hysteresis) passes the blend holds as much history as it ever will).
 VIEWPORT_PASSES_DEFAULTS = {"PHOTON_LATTICE": 1, "PROBE_GRID": 32, "RADIANCE_FIELD": 1,
-                            "PROPAGATION": 1}
+                            "PROPAGATION": 1, "INSTANT_GI": 1}
 # Whether F12 and the viewport read each field method's field through a final gather
 # (PreviewSettings.final_gather: one traced bounce, the field read where it lands, the field one
 # bounce shallower: light_path_fields) rather than at the first surface. Chosen by measurement
@@ -235,8 +264,10 @@ VIEWPORT_PASSES_DEFAULTS = {"PHOTON_LATTICE": 1, "PROBE_GRID": 32, "RADIANCE_FIE
 # two-rooms scene comes within 5% of the path tracer's.
 # The light propagation volume is read directly: its cost is the propagation, and a gather would
 # multiply the render's cost for it.
+# Instant GI lights what the camera sees in screen space: the renderer makes no final gather for
+# it whatever the setting says (render/indirect_field.h, shades_first_surfaces).
 FINAL_GATHER_DEFAULTS = {"PHOTON_LATTICE": True, "PROBE_GRID": True, "RADIANCE_FIELD": True,
-                         "PROPAGATION": False}
+                         "PROPAGATION": False, "INSTANT_GI": False}
 # The diffuse bounces a final gather traces before the field is read (light_path_fields).
 GATHER_BOUNCES = 1
 
@@ -395,6 +426,15 @@ PROPAGATION_LABELS = {
     "occlusion": "Light Propagation > Occlusion",
     "normal_offset": "Light Propagation > Normal Offset",
 }
+INSTANT_GI_LABELS = {
+    "sets_x": "Instant GI > Sets X",
+    "sets_y": "Instant GI > Sets Y",
+    "photons_per_set": "Instant GI > Light Paths per Set",
+    "clamp_distance": "Instant GI > Clamp Distance",
+    "filter_mode": "Instant GI > Filter",
+    "depth_threshold": "Instant GI > Depth Threshold",
+    "normal_threshold": "Instant GI > Normal Threshold",
+}
 # The native checks' limits the property ranges follow (properties.py), so that the panels offer
 # only values the native code accepts.
 MAX_SAMPLES = 1 << 24                # Path/PreviewSettings.samples (kMaxPathTracerSamples)
@@ -415,6 +455,9 @@ MAX_PROPAGATION_RESOLUTION = 256    # PropagationSettings.resolution (min 2)
 MAX_PROPAGATION_STEPS = 1024        # PropagationSettings.steps
 MAX_PROPAGATION_NORMAL_OFFSET = 2.0  # PropagationSettings.normal_offset, cells
 MAX_VPL_BOUNCES = 64                # PropagationSettings.vpl_bounces
+MAX_INSTANT_SETS = 16               # InstantGiSettings.sets_x, sets_y
+MAX_INSTANT_PHOTONS_PER_SET = 1 << 24  # InstantGiSettings.photons_per_set
+MAX_INSTANT_VPL_BOUNCES = 16        # InstantGiSettings.vpl_bounces
 # A photon is stored after at least one scattering (PhotonLatticeSettings.max_bounces >= 1):
 # Diffuse 0, direct light only, has no photon lattice.
 MIN_PHOTON_BOUNCES = 1
@@ -461,6 +504,10 @@ LIGHT_PATH_VALUES = {
     "PropagationSettings": {
         "vpl_bounces": LightPathValue("diffuse_bounces", 0, 1, MAX_VPL_BOUNCES),
     },
+    # A VPL is a surface hit of a light path, as the propagation volume's.
+    "InstantGiSettings": {
+        "vpl_bounces": LightPathValue("diffuse_bounces", 0, 1, MAX_INSTANT_VPL_BOUNCES),
+    },
 }
 
 
@@ -497,6 +544,8 @@ LIGHT_PATH_LIMITS = {
                       "apply to path tracing only",
     "PROPAGATION": "Light Propagation: light paths follow Diffuse; Total, Glossy and "
                    "Transmission apply to path tracing only",
+    "INSTANT_GI": "Instant GI: light paths follow Diffuse; Total, Glossy and Transmission "
+                  "apply to path tracing only",
 }
 
 
@@ -521,6 +570,8 @@ METHOD_SETTINGS = {
     "PROPAGATION": MethodSettings("PROPAGATION", "Light Propagation", "propagation",
                                   "PropagationSettings", PROPAGATION_DEFAULTS,
                                   PROPAGATION_LABELS),
+    "INSTANT_GI": MethodSettings("INSTANT_GI", "Instant GI", "instant_gi", "InstantGiSettings",
+                                 INSTANT_GI_DEFAULTS, INSTANT_GI_LABELS),
 }
 # The properties a viewport render depends on (a change restarts it); the overlay toggles and
 # the final solve's passes are not among them. A group name stands for the values of its
@@ -679,6 +730,13 @@ def propagation_settings(props, shgi, gather=None):
     (ValueError naming a refused setting)."""
     return validated(shgi.PropagationSettings(
         **method_native_fields(props, METHOD_SETTINGS["PROPAGATION"], shgi, gather)))
+
+
+def instant_gi_settings(props, shgi, gather=None):
+    """shgi.InstantGiSettings of scene.shgi: its instant_gi group, Light Paths and the seed
+    (ValueError naming a refused setting)."""
+    return validated(shgi.InstantGiSettings(
+        **method_native_fields(props, METHOD_SETTINGS["INSTANT_GI"], shgi, gather)))
 
 
 # ProbeGridSettings' fields that say how a probe field is read (shgi.ProbeLookupSettings).

@@ -6,6 +6,7 @@
 #include "lattice/photon_lattice.h"
 #include "probes/probe_grid.h"
 #include "radiance/radiance_field.h"
+#include "instant/instant_gi.h"
 #include "propagation/propagation_volume.h"
 
 namespace shgi {
@@ -42,6 +43,12 @@ std::vector<MethodInfo> built_in_rows() {
                     3, {}, "PropagationSettings", 1,
                     solver_factory<PropagationVolume, PropagationSettings>(
                         "PropagationSettings")});
+    rows.push_back({"INSTANT_GI", "Instant GI",
+                    "Light from a few hundred virtual point lights with exact shadows, each pixel "
+                    "seeing its own set, then blended across neighbouring pixels in SH so normal "
+                    "maps keep their detail; exact direct light",
+                    5, {}, "InstantGiSettings", 4,
+                    solver_factory<InstantGi, InstantGiSettings>("InstantGiSettings")});
     return rows;
 }
 
@@ -103,7 +110,7 @@ std::vector<MethodInfo> registered_methods() {
 }
 
 std::vector<std::pair<std::string, int>> reserved_method_numbers() {
-    return {{"INSTANT_GI", 5}};
+    return {};
 }
 
 MethodInfo find_method(std::string_view name) {

@@ -58,6 +58,16 @@ class GBuffer {
     std::vector<uint32_t> object_id;     // index into Scene::instances(), or kNoSurface
     std::vector<uint32_t> material_id;   // index into Scene::materials(), or kNoSurface
 
+    // The first surface's field lobes (render/bsdf.h: field_diffuse, field_glossy_lobes; what
+    // a screen-space field's light is weighted by), only with set_field_lobes(true): empty
+    // otherwise. Up to two glossy lobes; an absent lobe has albedo 0.
+    std::vector<vec3> field_diffuse;
+    std::vector<vec3> glossy_albedo[2];
+    std::vector<float> glossy_roughness[2];
+    bool has_field_lobes() const { return !field_diffuse.empty(); }
+    // Allocates (all zero) or frees the field-lobe planes; 32 more bytes a pixel.
+    void set_field_lobes(bool on);
+
   private:
     int width_ = 0, height_ = 0;
 };

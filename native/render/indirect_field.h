@@ -14,12 +14,17 @@
 // multiplies by the lobe's directional albedo.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 
 #include "sh/sh_coeffs.h"
 #include "util/math.h"
 
 namespace shgi {
+
+class Film;
+class GBuffer;
+class Progress;
 
 struct FieldLookup {
     ShRgb radiance;                  // incident radiance SH, W m^-2 sr^-1
@@ -63,6 +68,22 @@ class IndirectField {
     // that are read directly (the default). Consumers of many lookups take it once through
     // PinnedField, rather than have each lookup pin the state again.
     virtual std::shared_ptr<const IndirectField> snapshot() const { return nullptr; }
+
+    // Screen-space fields (seed 004, INSTANT_GI): true when the field lights the camera's first
+    // surfaces itself, over the whole frame. The preview renderer then gives first surfaces no
+    // lookup (no final gather either), records their field lobes in the G-buffer, and calls
+    // shade_first_surfaces as its first frame-wide stage (docs/frame-pipeline.md); lookups at
+    // later vertices (specular chains) and bakes still go through lookup().
+    virtual bool shades_first_surfaces() const { return false; }
+    // Adds `count` samples' worth of the first surfaces' indirect light (DiffInd, GlossInd and
+    // Combined) to `film` from the frame's G-buffer; `camera_position` gives each pixel's view
+    // direction. Deterministic for any thread count; throws Cancelled on cancel.
+    virtual void shade_first_surfaces(const GBuffer& g_buffer, const vec3& camera_position,
+                                      Film& film, uint64_t first, uint64_t count,
+                                      Progress* progress) const {
+        static_cast<void>(g_buffer), static_cast<void>(camera_position), static_cast<void>(film),
+            static_cast<void>(first), static_cast<void>(count), static_cast<void>(progress);
+    }
 
     vec3 irradiance(const vec3& p, const vec3& n) const { return lookup(p, n).irradiance(n); }
     vec3 glossy(const vec3& p, const vec3& n, const vec3& wo, float roughness) const {

@@ -103,9 +103,12 @@ class FrameWork {
         : scene_(scene), camera_(camera), camera_rays_(camera_rays), lights_(lights),
           settings_(settings), field_(field), grid_(grid), first_(first), count_(count),
           g_buffer_(&g_buffer), progress_(progress),
-          reuse_(reuse_lookups && !final_gather && !field.is_zero() ? field.reuse_distance()
-                                                                    : 0.0f),
-          final_gather_(final_gather ? 1 : 0),
+          screen_space_(field.shades_first_surfaces()),
+          reuse_(reuse_lookups && !final_gather && !field.is_zero() && !screen_space_
+                     ? field.reuse_distance()
+                     : 0.0f),
+          // A screen-space field lights the first surfaces itself: no gather ray before it.
+          final_gather_(final_gather && !screen_space_ ? 1 : 0),
           camera_position_(camera.world_from_camera[3]),
           forward_(glm::normalize(-vec3(camera.world_from_camera[2]))) {}
 
@@ -172,6 +175,11 @@ class FrameWork {
     // G-buffer: each quad's lead makes its field lookup, its followers take it instead of their
     // own.
     void share_field_lookups(Wave& wave, uint64_t s) const {
+        if (screen_space_) {  // the first surfaces' field light comes from a frame-wide stage
+            for (size_t i = 0; i < wave.count; ++i)
+                if (wave.live[i]) wave.paths[i]->share_first_field_lookup(&no_light_);
+            return;
+        }
         if (!(reuse_ > 0.0f)) return;
         // Grown to the most quads a wave has held (64 for full 16 x 16 tiles), not to the
         // wave's capacity: the work unit's wave is new, and each lookup is ~0.3 KB to clear.
@@ -248,6 +256,8 @@ class FrameWork {
     uint64_t first_, count_;
     GBuffer* g_buffer_;  // written by the work units, each in its own pixels
     Progress* progress_;
+    bool screen_space_;  // the field shades_first_surfaces()
+    const FieldLookup no_light_{ShRgb(2), vec3(0.0f)};  // first surfaces' lookup then
     float reuse_;  // the field's reuse distance; 0: every pixel makes its own lookup
     int final_gather_;  // smooth bounces before a path reads the field (PreviewSettings)
     vec3 camera_position_, forward_;  // the camera's, for the G-buffer's depth
@@ -342,8 +352,51 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
     const ZeroField no_field;
     const PinnedField pinned(field);  // one state of the field for the whole frame
     field = pinned.get() != nullptr ? pinned.get() : &no_field;  // none: direct light only
+    if (field->shades_first_surfaces() && samples > 1) {
+        // A screen-space field lights the G-buffer of one sample index: one frame per sample,
+        // so that n samples at once give the frames of n calls of one sample each. A cancel
+        // keeps the samples finished before it.
+        PreviewTimings sum;
+        for (uint32_t s = 0; s < samples; ++s) {
+            render(field, 1, progress);
+            sum.primary += timings_.primary;
+            sum.direct += timings_.direct;
+            sum.indirect += timings_.indirect;
+            sum.frame_stages += timings_.frame_stages;
+            sum.total += timings_.total;
+        }
+        timings_ = sum;
+        return;
+    }
     const TimePoint frame_start = now();
     const LightSampler& lights = lights_for(*field);
+    const bool screen_space = field->shades_first_surfaces();
+    g_buffer_.set_field_lobes(screen_space);
+    // A screen-space field's frame-wide stage runs first, so later stages see its light. Every
+    // frame-wide stage is timed apart from the tiles.
+    double stage_seconds = 0.0;
+    std::vector<FrameWideStage> screen_stages;
+    if (screen_space) {
+        const vec3 camera_position(camera_.world_from_camera[3]);
+        screen_stages.push_back({"screen_space_field",
+                                 [field, camera_position](const GBuffer& g, Film& film,
+                                                          uint64_t first_sample, uint64_t count,
+                                                          Progress* p) {
+                                     field->shade_first_surfaces(g, camera_position, film,
+                                                                 first_sample, count, p);
+                                 }});
+        screen_stages.insert(screen_stages.end(), frame_stages_.begin(), frame_stages_.end());
+    } else {
+        screen_stages = frame_stages_;
+    }
+    for (FrameWideStage& stage : screen_stages)
+        stage.run = [run = std::move(stage.run), &stage_seconds](
+                        const GBuffer& g, Film& film, uint64_t first_sample, uint64_t count,
+                        Progress* p) {
+            const TimePoint start = now();
+            run(g, film, first_sample, count, p);
+            stage_seconds += seconds_since(start);
+        };
     const TileGrid grid(film_.film().width(), film_.film().height(),
                         even_tile_side(settings_.tile_size));
     const FrameWork work(*scene_, camera_, camera_rays_, lights, path_settings_, *field, grid,
@@ -358,8 +411,10 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
         [&](uint64_t begin, uint64_t end, Film& target, const Film& base) {
             work.render_tiles(begin, end, target, base, &busy[begin]);
         },
-        &g_buffer_, frame_stages_);
-    PreviewTimings timings = split_wall_time(seconds_since(tiles_start), busy);
+        &g_buffer_, screen_stages);
+    PreviewTimings timings =
+        split_wall_time(std::max(0.0, seconds_since(tiles_start) - stage_seconds), busy);
+    timings.frame_stages = stage_seconds;
     timings.total = seconds_since(frame_start);
     timings_ = timings;
 }

@@ -83,6 +83,7 @@ struct PreviewTimings {
     double primary = 0.0;   // camera rays, their intersection and the G-buffer of first hits
     double direct = 0.0;    // next-event estimation and its shadow rays
     double indirect = 0.0;  // field lookups, traced specular chains and the film sums
+    double frame_stages = 0.0;  // the frame-wide stages after the tiles (a screen-space field's)
     double total = 0.0;
 };
 
@@ -94,7 +95,9 @@ class PreviewRenderer {
     PreviewRenderer(const Scene& scene, const Camera& camera, const PreviewSettings& settings);
 
     // Adds `samples` samples per pixel with indirect light from `field` (may be null). Cancel
-    // leaves the film as it was. InvalidArgument if the scene was edited since construction.
+    // leaves the film as it was (with a screen-space field, render/indirect_field.h, each sample
+    // is a frame of its own and a cancel keeps the samples finished before it).
+    // InvalidArgument if the scene was edited since construction.
     void render(const IndirectField* field, uint32_t samples, Progress* progress = nullptr);
 
     const Film& film() const { return film_.film(); }

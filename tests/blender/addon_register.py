@@ -25,12 +25,14 @@ from recording_layout import draw_panel, draw_panel_operators, draw_panel_props 
 
 MODULE = "shgi_blender"
 ENGINE = "SHGI"
-METHODS = {"PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID", "RADIANCE_FIELD", "PROPAGATION"}
+METHODS = {"PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID", "RADIANCE_FIELD", "PROPAGATION",
+           "INSTANT_GI"}
 STOCK_PANELS = ("EEVEE_MATERIAL_PT_surface", "EEVEE_WORLD_PT_surface", "RENDER_PT_format",
                 "RENDER_PT_color_management", "DATA_PT_context_light")
 OWN_CLASSES = ("SHGI_RENDER_PT_method", "SHGI_RENDER_PT_photon_lattice",
                "SHGI_RENDER_PT_probe_grid", "SHGI_RENDER_PT_probe_grid_visibility",
                "SHGI_RENDER_PT_radiance_field", "SHGI_RENDER_PT_propagation",
+               "SHGI_RENDER_PT_instant_gi",
                "SHGI_LIGHT_PT_light", "SHGI_VIEWLAYER_PT_passes", "SHGI_OT_solve",
                "SHGI_OT_clear_solution", "SHGI_OT_quality_preset", "SHGI_OT_load_solution",
                "SHGI_RENDER_PT_light_paths_max_bounces", "SHGI_RENDER_PT_bake_farm",
@@ -101,6 +103,10 @@ def check_panels_draw(scene):
     if shown != set(settings.PROPAGATION_DEFAULTS) | {"passes", "viewport_passes",
                                                       "final_gather"}:
         raise AssertionError(f"the light propagation panel shows {sorted(shown)}")
+    scene.shgi.method = "INSTANT_GI"
+    shown = {name for _, name, _ in draw_panel_props("SHGI_RENDER_PT_instant_gi", context)}
+    if shown != set(settings.INSTANT_GI_DEFAULTS) | {"passes", "viewport_passes"}:
+        raise AssertionError(f"the instant GI panel shows {sorted(shown)}")
     scene.shgi.method = "PROBE_GRID"
     text = draw_panel("SHGI_RENDER_PT_probe_grid", context)
     if "probes fill the scene" not in text:
@@ -172,7 +178,8 @@ def check_group_defaults(scene, settings, shgi):
     builders = {"PHOTON_LATTICE": settings.photon_lattice_settings,
                 "PROBE_GRID": settings.probe_grid_settings,
                 "RADIANCE_FIELD": settings.radiance_field_settings,
-                "PROPAGATION": settings.propagation_settings}
+                "PROPAGATION": settings.propagation_settings,
+                "INSTANT_GI": settings.instant_gi_settings}
     for solver, group in settings.METHOD_SETTINGS.items():
         native = getattr(shgi, group.native_type)()
         built = builders[solver](scene.shgi, shgi, gather=False)  # as read at the surface

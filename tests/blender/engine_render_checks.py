@@ -50,7 +50,8 @@ EXTRA_PASS_FLAGS = ("use_pass_z", "use_pass_normal")
 EXPORT_TOLERANCE = 1e-5
 CAMERA_NUDGE = Matrix.Translation((0.05, 0.0, 0.0))
 PASS_TOGGLE_CASE = ("Depth", "DiffInd")
-METHODS = {"cornell_box": ("PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID", "RADIANCE_FIELD"),
+METHODS = {"cornell_box": ("PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID", "RADIANCE_FIELD",
+                           "INSTANT_GI"),
            "sun_room": ("PATH_TRACE", "PHOTON_LATTICE")}
 # The Irradiance Volume object of the Cornell box: 7 x 6 x 5 probes in most of the room (the
 # box spans x -1..1, y 0..2, z 0..2); some fall inside the blocks and get relocated or disabled.

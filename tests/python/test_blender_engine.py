@@ -43,7 +43,8 @@ from shgi_blender.export.light_probe import ProbeVolumeRecord, native_volumes  #
 # The engine's acceptance figures against Cycles (docs/methods.md).
 MIN_PSNR_DB = 28.0
 MEAN_TOLERANCE = {"PATH_TRACE": 0.02, "PHOTON_LATTICE": 0.10, "PHOTON_LATTICE frozen": 0.10,
-                  "PROBE_GRID": 0.10, "PROBE_GRID volume": 0.10, "RADIANCE_FIELD": 0.10}
+                  "PROBE_GRID": 0.10, "PROBE_GRID volume": 0.10, "RADIANCE_FIELD": 0.10,
+                  "INSTANT_GI": 0.10}
 DIFFUSE_INDIRECT_TOLERANCE = 0.10
 # docs/architecture.md: cancel returns within 0.2 s; the engine polls every 0.05 s.
 CANCEL_LATENCY = 0.5
@@ -87,6 +88,8 @@ def test_property_defaults_are_the_native_defaults(struct, fields):
 NOT_MIRRORED = {
     "ProbeGridSettings": {"volumes", "include_direct"},
     "PropagationSettings": set(),
+    # As the radiance field's glossy_in_grid: no reason for an artist to change it.
+    "InstantGiSettings": {"glossy_vpls"},
     "PhotonLatticeSettings": {"use_bounds", "bounds_min", "bounds_max", "caustic_order",
                               "caustic_blur_passes", "caustic_neighbours", "caustic_radius",
                               "specular_roughness", "normal_offset"},
@@ -111,7 +114,8 @@ def test_method_groups_mirror_their_native_settings(solver):
     built = {"PHOTON_LATTICE": settings.photon_lattice_settings,
              "PROBE_GRID": settings.probe_grid_settings,
              "RADIANCE_FIELD": settings.radiance_field_settings,
-             "PROPAGATION": settings.propagation_settings}[solver](direct, shgi)
+             "PROPAGATION": settings.propagation_settings,
+             "INSTANT_GI": settings.instant_gi_settings}[solver](direct, shgi)
     assert set(group.labels) == set(group.defaults)
     for name, value in group.defaults.items():
         expected = getattr(native_defaults, name)
@@ -292,12 +296,12 @@ def test_enum_properties_offer_the_native_members():
 def test_methods_implemented_and_reserved():
     identifiers = [method.identifier for method in settings.METHODS]
     assert identifiers == ["PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID", "RADIANCE_FIELD",
-                           "PROPAGATION"]
+                           "PROPAGATION", "INSTANT_GI"]
     # The add-on's methods are the registry's; its copy for a missing module agrees with it.
     assert settings.registry_methods(shgi) == settings.METHODS == settings.BUILT_IN_METHODS
     assert settings.registry_methods(None) == settings.BUILT_IN_METHODS
     assert settings.RESERVED_METHODS == dict(shgi.reserved_method_numbers())
-    assert [method.number for method in settings.METHODS] == [0, 1, 2, 4, 3]  # file values stay
+    assert [method.number for method in settings.METHODS] == [0, 1, 2, 4, 3, 5]  # file values stay
     numbers = [method.number for method in settings.METHODS]
     numbers += list(settings.RESERVED_METHODS.values())
     assert len(set(numbers)) == len(numbers)
@@ -447,6 +451,32 @@ def test_propagation_job_renders_the_volume_of_its_settings():
     volume.refine()
     expected, _ = shgi.render_preview(scene, volume.current_field(),
                                       shgi.PreviewSettings(samples=3, seed=2))
+    for name, pixels in expected.items():
+        np.testing.assert_array_equal(job.last_snapshot().passes[name], pixels, err_msg=name)
+
+
+def test_instant_gi_job_renders_the_sets_of_its_settings():
+    """F12's INSTANT_GI job, from scene.shgi.instant_gi: its passes of VPL sets and the
+    screen-space filter give the same image as the native solver and preview renderer."""
+    scene = committed(scenes.cornell_box(0.06))
+    props = default_props(method="INSTANT_GI",
+                          instant_gi={"photons_per_set": 8, "sets_x": 3, "passes": 2})
+    recipe = field_solvers.solver_recipe(props, shgi)
+    assert recipe.settings.sets_x == 3 and recipe.settings.photons_per_set == 8
+    assert recipe.passes == 2
+    job = RenderJob(shgi, scene, 3, preview_settings=shgi.PreviewSettings(seed=2),
+                    solver_recipe=recipe).start()
+    assert job.wait(60) and job.error is None, job.error
+    assert list(job.solution.timings)[-2:] == ["vpl_trace", "vpl_sets"]
+    figures = dict(job.solution.solver.figures())
+    assert figures["Refinement passes"] == "2" and figures["VPLs"].endswith("in 12 sets")
+    assert figures["Last frame"].startswith("gather "), figures
+    solver = shgi.InstantGi(scene, recipe.settings)
+    solver.refine()
+    solver.refine()
+    expected, _ = shgi.render_preview(scene, solver.current_field(),
+                                      shgi.PreviewSettings(samples=3, seed=2))
+    assert expected["DiffInd"].max() > 0.0
     for name, pixels in expected.items():
         np.testing.assert_array_equal(job.last_snapshot().passes[name], pixels, err_msg=name)
 
@@ -678,7 +708,8 @@ def test_f12_refusals_name_the_blender_setting_or_object(case, words, blender, b
 RENDER_CASES = [(scene, method) for scene in ("cornell_box", "sun_room")
                 for method in ("PATH_TRACE", "PHOTON_LATTICE")] + [
     ("sun_room", "PHOTON_LATTICE frozen"), ("cornell_box", "PROBE_GRID"),
-    ("cornell_box", "PROBE_GRID volume"), ("cornell_box", "RADIANCE_FIELD")]
+    ("cornell_box", "PROBE_GRID volume"), ("cornell_box", "RADIANCE_FIELD"),
+    ("cornell_box", "INSTANT_GI")]
 
 
 @pytest.mark.parametrize("scene, method", RENDER_CASES)

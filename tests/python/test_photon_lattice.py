@@ -35,7 +35,7 @@ def agreement(name):
     """(reference passes, preview passes) for a project scene, computed once per session."""
     reference, (preview, timings) = field_agreement("PHOTON_LATTICE", getattr(scenes, name),
                                                     SCALE, REFERENCE_SAMPLES, solved)
-    assert set(timings) == {"primary", "direct", "indirect", "total"}
+    assert set(timings) == {"primary", "direct", "indirect", "frame_stages", "total"}
     return reference, preview
 
 

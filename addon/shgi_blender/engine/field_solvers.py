@@ -74,6 +74,28 @@ class FieldSolver:
         return None
 
 
+class InstantGiSolver(FieldSolver):
+    """An InstantGi (seed 004) as a FieldSolver: its figures add the VPL sets and the last
+    frame's screen-space stages (gather, filter, shade)."""
+
+    METHOD = "INSTANT_GI"
+
+    @staticmethod
+    def pass_stage(number):
+        return f"Tracing VPLs, pass {number}"
+
+    def figures(self):
+        field = self.solver.current_field()
+        sizes = field.set_sizes
+        rows = [("Refinement passes", f"{self.solver.passes}"),
+                ("VPLs", f"{field.vpl_count} in {len(sizes)} sets")]
+        frame = field.frame_timings
+        if any(frame.values()):
+            rows.append(("Last frame", ", ".join(f"{stage} {seconds:.3f} s"
+                                                  for stage, seconds in frame.items())))
+        return rows
+
+
 class LatticeSolver(FieldSolver):
     """A PhotonLattice (seed 000) as a FieldSolver."""
 
@@ -310,6 +332,9 @@ def solver_recipe(props, shgi, volumes=(), viewport=False, gather=None):
     elif solver == "PROPAGATION":
         native_settings = settings.propagation_settings(props, shgi, gather)
         recipe_solver = FieldSolver.of(solver)
+    elif solver == InstantGiSolver.METHOD:
+        native_settings = settings.instant_gi_settings(props, shgi, gather)
+        recipe_solver = InstantGiSolver
     elif solver:
         # A registered method without a settings group here (a plugin's): its settings'
         # defaults with the scene's seed, its registry's passes for F12 and the viewport alike.

@@ -302,6 +302,28 @@ class SHGI_RENDER_PT_propagation(_FieldPanel, bpy.types.Panel):
         layout.prop(volume, "final_gather")
 
 
+class SHGI_RENDER_PT_instant_gi(_FieldPanel, bpy.types.Panel):
+    bl_label = "Instant GI"
+    SOLVER = "INSTANT_GI"
+
+    def draw(self, context):
+        layout = self.layout
+        instant = context.scene.shgi.instant_gi
+        draw_frozen_solution(layout, context)
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        column = layout.column(align=True)
+        for name in ("sets_x", "sets_y", "photons_per_set", "clamp_distance"):
+            column.prop(instant, name)
+        column = layout.column(align=True)
+        for name in ("filter_mode", "depth_threshold", "normal_threshold"):
+            column.prop(instant, name)
+        column = layout.column(align=True)
+        column.label(text="Passes")
+        column.prop(instant, "passes", text="Render")
+        column.prop(instant, "viewport_passes", text="Viewport")
+
+
 def irradiance_volume_count(scene):
     """Irradiance Volume objects of the scene that render."""
     from ..export.light_probe import is_irradiance_volume
@@ -430,5 +452,5 @@ CLASSES = (SHGI_RENDER_PT_method, SHGI_RENDER_PT_denoise, SHGI_RENDER_PT_light_p
            SHGI_RENDER_PT_light_paths_max_bounces, SHGI_RENDER_PT_photon_lattice,
            SHGI_RENDER_PT_radiance_field,
            SHGI_RENDER_PT_probe_grid, SHGI_RENDER_PT_probe_grid_visibility,
-           SHGI_RENDER_PT_propagation,
+           SHGI_RENDER_PT_propagation, SHGI_RENDER_PT_instant_gi,
            SHGI_RENDER_PT_bake, SHGI_RENDER_PT_bake_farm, SHGI_RENDER_PT_last_render)

@@ -8,7 +8,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'NormalMapSpace', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'InstantGi', 'InstantGiField', 'InstantGiFilter', 'InstantGiSettings', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'NormalMapSpace', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -452,6 +452,230 @@ class Instance:
         """
         (4, 4) row-major matrix_world.
         """
+class InstantGi(GiSolver):
+    """
+    
+    Instant GI with a discontinuity-aware screen-space SH filter (seed 004): VPLs from traced light
+    paths, dealt into sets_x x sets_y interleaved sets; each pixel gathers its set's VPLs as L2 SH of
+    the incident radiance with exact shadow rays, the SH is blended over an interleave-wide window
+    that stops at depth, geometric-normal and object edges, and each pixel is shaded with its own
+    shading normal (normal-map detail kept).
+    
+    Each refine() adds a pass of new VPLs to every set. current_field() is an immutable snapshot.
+    After editing and re-committing the scene, call reset().
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, scene: Scene, settings: InstantGiSettings = ..., progress: Progress = None) -> None:
+        """
+        A solver with no VPLs yet (the scene must be committed).
+        """
+    def current_field(self) -> InstantGiField:
+        """
+        The InstantGiField of the last pass (safe to render while refine() runs).
+        """
+    def refine(self, progress: Progress = None) -> None:
+        """
+        One pass: traces light paths and adds their VPLs to the sets (GIL released). Raises shgi.Cancelled on cancel, keeping the previous sets.
+        """
+    def reset(self, progress: Progress = None) -> None:
+        """
+        Forgets every pass (re-reads the scene).
+        """
+    @property
+    def memory_bytes(self) -> int:
+        """
+        Bytes held by the VPL sets.
+        """
+    @property
+    def passes(self) -> int:
+        """
+        Passes so far.
+        """
+    @property
+    def settings(self) -> InstantGiSettings:
+        """
+        A copy of the settings.
+        """
+    @property
+    def stage_seconds(self) -> list:
+        """
+        [(stage, seconds)] of the last pass: vpl_trace, vpl_sets (reflection of later hits and dealing into sets).
+        """
+class InstantGiField(IndirectField):
+    """
+    Immutable VPL sets as an IndirectField: the preview renderer's first surfaces are lit by the interleaved sets and the screen-space filter; lookups elsewhere gather every VPL.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @property
+    def frame_timings(self) -> dict:
+        """
+        {gather, filter, shade}: seconds of the latest frame this field lit.
+        """
+    @property
+    def set_sizes(self) -> list[int]:
+        """
+        VPLs per set, set (i, j) at index j * sets_x + i.
+        """
+    @property
+    def vpl_count(self) -> int:
+        """
+        VPLs in all sets.
+        """
+class InstantGiFilter:
+    """
+    What the Instant GI's screen-space filter blends between pixels.
+    
+    Members:
+    
+      SH
+    
+      IRRADIANCE
+    
+      STRICT
+    
+      NONE
+    """
+    IRRADIANCE: typing.ClassVar[InstantGiFilter]  # value = <InstantGiFilter.IRRADIANCE: 1>
+    NONE: typing.ClassVar[InstantGiFilter]  # value = <InstantGiFilter.NONE: 3>
+    SH: typing.ClassVar[InstantGiFilter]  # value = <InstantGiFilter.SH: 0>
+    STRICT: typing.ClassVar[InstantGiFilter]  # value = <InstantGiFilter.STRICT: 2>
+    __members__: typing.ClassVar[dict[str, InstantGiFilter]]  # value = {'SH': <InstantGiFilter.SH: 0>, 'IRRADIANCE': <InstantGiFilter.IRRADIANCE: 1>, 'STRICT': <InstantGiFilter.STRICT: 2>, 'NONE': <InstantGiFilter.NONE: 3>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: InstantGiFilter) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: InstantGiFilter) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
+class InstantGiSettings:
+    """
+    Settings of the InstantGi solver (seed 004); every field has a default.
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    def __init__(self, **kwargs) -> None:
+        """
+        InstantGiSettings(**fields), e.g. InstantGiSettings(sets_x=3, sets_y=3).
+        """
+    def validate(self) -> None:
+        """
+        Raises ValueError naming the first invalid field.
+        """
+    @property
+    def clamp_distance(self) -> float:
+        """
+        m: a VPL closer than this counts as this far (the 1/d^2 spike's clamp; 0 = off) (0.05).
+        """
+    @clamp_distance.setter
+    def clamp_distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def depth_threshold(self) -> float:
+        """
+        Neighbours whose depth differs by more than this fraction are not blended (0.1).
+        """
+    @depth_threshold.setter
+    def depth_threshold(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def filter_mode(self) -> InstantGiFilter:
+        """
+        InstantGiFilter: SH (the paper's), IRRADIANCE (each pixel's irradiance, same edges), STRICT (irradiance, also stopping at shading-normal changes), NONE (each pixel its own set).
+        """
+    @filter_mode.setter
+    def filter_mode(self, arg0: InstantGiFilter) -> None:
+        ...
+    @property
+    def glossy_vpls(self) -> bool:
+        """
+        A VPL's surface scatters with its rough glossy lobes too, as if diffuse; False: its diffuse lobe only (True).
+        """
+    @glossy_vpls.setter
+    def glossy_vpls(self, arg0: bool) -> None:
+        ...
+    @property
+    def normal_threshold(self) -> float:
+        """
+        Neighbours whose geometric normals' cosine is below this are not blended (0.9).
+        """
+    @normal_threshold.setter
+    def normal_threshold(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def photons_per_set(self) -> int:
+        """
+        Light paths traced per set and pass; each leaves a VPL at its first vpl_bounces hits (16).
+        """
+    @photons_per_set.setter
+    def photons_per_set(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def seed(self) -> int:
+        """
+        Random seed (0).
+        """
+    @seed.setter
+    def seed(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def sets_x(self) -> int:
+        """
+        n: VPL sets across; pixel (x, y) uses set (x mod n, y mod m), 1..16 (4).
+        """
+    @sets_x.setter
+    def sets_x(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def sets_y(self) -> int:
+        """
+        m: VPL sets down, 1..16 (4).
+        """
+    @sets_y.setter
+    def sets_y(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def vpl_bounces(self) -> int:
+        """
+        Hits of a light path that leave a VPL: 1 is one bounce of indirect light (4).
+        """
+    @vpl_bounces.setter
+    def vpl_bounces(self, arg1: typing.SupportsIndex) -> None:
+        ...
 class LatticeInterpolation:
     """
     How lattices are sampled.

@@ -1,0 +1,427 @@
+#include "instant/instant_gi.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "photon/photon_tracer.h"
+#include "render/film.h"
+#include "render/g_buffer.h"
+#include "render/shading.h"
+#include "sh/sh_basis.h"
+#include "sh/sh_irradiance.h"
+#include "util/error.h"
+#include "util/memory.h"
+#include "util/parallel.h"
+#include "util/timer.h"
+
+namespace shgi {
+namespace {
+
+constexpr const char* kSettings = "InstantGiSettings";
+constexpr int kOrder = 2;
+constexpr int kCoeffs = 9;
+// VPLs whose albedo is found per parallel task (one short ray each).
+constexpr uint64_t kVplsPerTask = 4096;
+// Shadow rays per batch of the gather: rows are gathered a few at a time, so a cancel is polled
+// every ~10^5 rays (~10 ms on one core).
+constexpr uint64_t kRaysPerBatch = 1 << 17;
+
+void check_int(int64_t value, int64_t lo, int64_t hi, const char* name) {
+    if (value < lo || value > hi)
+        throw InvalidArgument(format_message(kSettings, ".", name, " is ", value,
+                                             "; it must be in [", lo, ", ", hi, "]"));
+}
+
+void check_float(float value, float lo, float hi, const char* name) {
+    if (!std::isfinite(value) || value < lo || value > hi)
+        throw InvalidArgument(format_message(kSettings, ".", name, " is ", value,
+                                             "; it must be finite and in [", lo, ", ", hi, "]"));
+}
+
+PhotonTracerSettings tracer_settings(const InstantGiSettings& s) {
+    PhotonTracerSettings tracer;
+    tracer.photons = uint64_t(s.sets_x) * uint64_t(s.sets_y) * s.photons_per_set;
+    tracer.seed = s.seed;
+    // First hits are recorded before any scattering; a photon stored after k scatterings is the
+    // (k + 1)-th hit of its path.
+    tracer.max_bounces = std::max(1, s.vpl_bounces - 1);
+    tracer.store_first_hits = true;
+    return tracer;
+}
+
+// Taps of an interleave period: offsets -h..h; for even periods n + 1 taps with the two end taps
+// at half weight (each set counts once), for odd periods n taps of weight 1.
+struct Taps {
+    int half = 0;
+    bool half_ends = false;
+    float weight(int offset) const {
+        return half_ends && (offset == -half || offset == half) ? 0.5f : 1.0f;
+    }
+};
+
+Taps taps_for(int period) {
+    Taps taps;
+    taps.half = period / 2;
+    taps.half_ends = period % 2 == 0 && period > 1;
+    if (period == 1) taps.half = 0;
+    return taps;
+}
+
+// Whether neighbour q joins pixel p's filter: same object, depths within the relative threshold,
+// geometric normals (and shading normals when `strict`) within the normal threshold.
+bool joins(const GBuffer& g, size_t p, size_t q, const InstantGiSettings& s, bool strict) {
+    if (!g.has_surface(q) || g.object_id[q] != g.object_id[p]) return false;
+    if (std::abs(g.depth[q] - g.depth[p]) > s.depth_threshold * std::max(g.depth[p], 1e-6f))
+        return false;
+    if (glm::dot(g.geometric_normal[q], g.geometric_normal[p]) < s.normal_threshold) return false;
+    if (strict && glm::dot(g.shading_normal[q], g.shading_normal[p]) < s.normal_threshold)
+        return false;
+    return true;
+}
+
+// Lobes up to this roughness are mirror-like: their light is not spread as if diffuse.
+constexpr float kSpecularRoughness = 0.1f;
+
+// The flux the surface under a photon hit (position, normal, direction towards the source,
+// arriving power) scatters into its VPL, found by a short ray back along the photon's path (the
+// photon maps keep no material); zero when the surface is not found. As the radiance field's
+// reflected_power.
+vec3 vpl_power(const Scene& scene, bool glossy, const vec3& position, const vec3& normal,
+               const vec3& direction, const vec3& power) {
+    constexpr float kReach = 1e-3f;
+    Ray ray;
+    ray.origin = position + direction * kReach;
+    ray.direction = -direction;
+    ray.tmax = 2.0f * kReach;
+    Hit hit = scene.intersect(ray);
+    if (!hit.valid()) {  // a grazing photon: come back along the normal instead
+        ray.origin = position + normal * kReach;
+        ray.direction = -normal;
+        hit = scene.intersect(ray);
+    }
+    if (!hit.valid()) return vec3(0.0f);
+    const Shading shading =
+        make_shading(scene, scene.surface_point(ray, hit), ray.direction, PathOrigin::Light);
+    vec3 albedo = shading.bsdf.field_diffuse(shading.wo);
+    if (glossy) {
+        PrincipledBsdf::GlossyLobe lobes[2];
+        const int count = shading.bsdf.field_glossy_lobes(shading.wo, lobes);
+        for (int i = 0; i < count; ++i)
+            if (lobes[i].roughness > kSpecularRoughness) albedo += lobes[i].albedo;
+    }
+    return albedo * power;
+}
+
+}  // namespace
+
+void validate_instant_gi_settings(const InstantGiSettings& s) {
+    check_int(s.sets_x, 1, 16, "sets_x");
+    check_int(s.sets_y, 1, 16, "sets_y");
+    if (s.photons_per_set == 0 || s.photons_per_set > (uint64_t(1) << 24))
+        throw InvalidArgument(format_message(kSettings, ".photons_per_set is ", s.photons_per_set,
+                                             "; it must be in [1, 2^24]"));
+    check_int(s.vpl_bounces, 1, 16, "vpl_bounces");
+    check_float(s.clamp_distance, 0.0f, 1e6f, "clamp_distance");
+    const int filter = int(s.filter_mode);
+    if (filter < 0 || filter > int(InstantGiFilter::None))
+        throw InvalidArgument(format_message(kSettings, ".filter_mode is ", filter,
+                                             "; it must be Sh, Irradiance, Strict or None"));
+    check_float(s.depth_threshold, 0.0f, 1e6f, "depth_threshold");
+    check_float(s.normal_threshold, -1.0f, 1.0f, "normal_threshold");
+}
+
+namespace {
+
+// The delta's weight (zero when the VPL faces away or lies below the surface) and direction.
+vec3 vpl_delta(const vec3& p, const vec3& ng, const InstantVpl& vpl, float scale,
+               float clamp_distance, vec3* direction) {
+    const vec3 d = vpl.position - p;
+    const float dist2 = glm::dot(d, d);
+    if (!(dist2 > 0.0f)) return vec3(0.0f);
+    const vec3 w = d / std::sqrt(dist2);
+    const float cos_vpl = -glm::dot(vpl.normal, w);
+    if (cos_vpl <= 0.0f || glm::dot(ng, w) <= 0.0f) return vec3(0.0f);
+    *direction = w;
+    return vpl.power *
+           (scale * cos_vpl * kInvPi / std::max(dist2, clamp_distance * clamp_distance));
+}
+
+void add_delta(vec3* sh, const vec3& e, const vec3& w) {
+    float basis[kCoeffs];
+    sh_eval(kOrder, w, basis);
+    for (int i = 0; i < kCoeffs; ++i) sh[i] += e * basis[i];
+}
+
+}  // namespace
+
+bool add_vpl_sh(ShRgb& sh, const vec3& p, const vec3& ng, const InstantVpl& vpl, float scale,
+                float clamp_distance) {
+    vec3 w;
+    const vec3 e = vpl_delta(p, ng, vpl, scale, clamp_distance, &w);
+    if (e == vec3(0.0f)) return false;
+    add_delta(sh.coeffs.data(), e, w);
+    return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// InstantGiField
+
+InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& settings,
+                               std::vector<std::vector<InstantVpl>> sets, uint64_t passes)
+    : scene_(&scene), settings_(settings), sets_(std::move(sets)), passes_(passes),
+      timings_(std::make_shared<InstantGiFrameTimings>()) {
+    for (const auto& set : sets_) vpl_count_ += set.size();
+    set_scale_ = passes_ > 0 ? float(sets_.size()) / float(passes_) : 0.0f;
+}
+
+InstantGiFrameTimings InstantGiField::frame_timings() const { return *timings_; }
+
+ShRgb InstantGiField::radiance_sh(const vec3& p, const vec3& n) const {
+    ShRgb sh(kOrder);
+    if (is_zero()) return sh;
+    // Every set: the sum over sets of set_scale × set / sets = all VPLs / passes.
+    const float scale = 1.0f / float(passes_);
+    const vec3 origin = offset_origin(p, n);
+    for (const auto& set : sets_)
+        for (const InstantVpl& vpl : set) {
+            ShRgb one(kOrder);
+            if (!add_vpl_sh(one, p, n, vpl, scale, settings_.clamp_distance)) continue;
+            Ray ray;
+            ray.origin = origin;
+            const vec3 d = vpl.position - origin;
+            const float dist = glm::length(d);
+            ray.direction = d / dist;
+            ray.tmax = dist * (1.0f - kShadowShorten);
+            if (scene_->occluded(ray)) continue;
+            for (int i = 0; i < kCoeffs; ++i) sh.coeffs[i] += one.coeffs[i];
+        }
+    return sh;
+}
+
+void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_position,
+                                          Film& film, uint64_t first, uint64_t count,
+                                          Progress* progress) const {
+    static_cast<void>(first);
+    *timings_ = InstantGiFrameTimings{};
+    if (is_zero() || count == 0) return;
+    const int width = g.width(), height = g.height();
+    const size_t pixels = g.pixel_count();
+    const int n = settings_.sets_x, m = settings_.sets_y;
+    require_memory(saturating_mul(uint64_t(pixels), uint64_t(2 * kCoeffs * sizeof(vec3))),
+                   format_message("the SH planes of ", width, " x ", height, " pixels"),
+                   "lower the camera's resolution_x / resolution_y");
+    // 1. gather: the pixel's set as L2 SH, visibility by exact shadow rays.
+    TimePoint start = now();
+    std::vector<vec3> raw(pixels * kCoeffs, vec3(0.0f));
+    size_t largest_set = 1;
+    for (const auto& set : sets_) largest_set = std::max(largest_set, set.size());
+    const uint64_t rows_per_task =
+        std::max<uint64_t>(1, kRaysPerBatch / (uint64_t(std::max(width, 1)) * largest_set));
+    parallel_for(0, uint64_t(height), rows_per_task, [&](uint64_t y0, uint64_t y1) {
+        throw_if_cancelled(progress);
+        std::vector<Ray> rays;
+        std::vector<uint32_t> ray_pixel;
+        std::vector<vec3> weights, directions;
+        std::vector<uint8_t> occluded;
+        // Rays set by set, VPL by VPL, pixel by pixel along the row: the pixels of one set
+        // sending rays to one VPL after another are neighbours, a coherent stream.
+        for (uint64_t y = y0; y < y1; ++y)
+            for (int sx = 0; sx < std::min(n, width); ++sx) {
+                const auto& set = sets_[size_t(int(y) % m) * size_t(n) + size_t(sx)];
+                for (const InstantVpl& vpl : set)
+                    for (int x = sx; x < width; x += n) {
+                        const size_t p = g.index(x, int(y));
+                        if (!g.has_surface(p)) continue;
+                        const vec3 pos = g.position[p], ng = g.geometric_normal[p];
+                        vec3 w;
+                        const vec3 e =
+                            vpl_delta(pos, ng, vpl, set_scale_, settings_.clamp_distance, &w);
+                        if (e == vec3(0.0f)) continue;
+                        const vec3 origin = offset_origin(pos, ng);
+                        const vec3 d = vpl.position - origin;
+                        const float dist = glm::length(d);
+                        if (!(dist > 0.0f)) continue;
+                        Ray ray;
+                        ray.origin = origin;
+                        ray.direction = d / dist;
+                        ray.tmax = dist * (1.0f - kShadowShorten);
+                        rays.push_back(ray);
+                        ray_pixel.push_back(uint32_t(p));
+                        weights.push_back(e);
+                        directions.push_back(w);
+                    }
+            }
+        if (rays.empty()) return;
+        scene_->occluded(rays, occluded, nullptr, RayCoherence::Coherent);
+        for (size_t r = 0; r < rays.size(); ++r) {  // in ray order: a fixed sum per pixel
+            if (occluded[r]) continue;
+            add_delta(&raw[size_t(ray_pixel[r]) * kCoeffs], weights[r], directions[r]);
+        }
+    }, progress);
+    timings_->gather = seconds_since(start);
+
+    // 2. filter.
+    start = now();
+    const InstantGiFilter mode = settings_.filter_mode;
+    const bool filter_sh = mode == InstantGiFilter::Sh;
+    const bool filter_irradiance =
+        mode == InstantGiFilter::Irradiance || mode == InstantGiFilter::Strict;
+    const Taps tx = taps_for(n), ty = taps_for(m);
+    std::vector<vec3> filtered;  // SH (mode Sh) or E (Irradiance, Strict)
+    std::vector<vec3> irradiance;
+    if (filter_irradiance) {
+        irradiance.assign(pixels, vec3(0.0f));
+        parallel_for(0, uint64_t(pixels), 4096, [&](uint64_t b, uint64_t e) {
+            for (uint64_t p = b; p < e; ++p) {
+                if (!g.has_surface(p)) continue;
+                ShRgb sh(kOrder);
+                std::copy_n(&raw[p * kCoeffs], kCoeffs, sh.coeffs.begin());
+                irradiance[p] = glm::max(sh_irradiance(sh, g.shading_normal[p]), vec3(0.0f));
+            }
+        });
+    }
+    if (filter_sh || filter_irradiance) {
+        const int stride = filter_sh ? kCoeffs : 1;
+        const std::vector<vec3>& source = filter_sh ? raw : irradiance;
+        filtered.assign(pixels * size_t(stride), vec3(0.0f));
+        const bool strict = mode == InstantGiFilter::Strict;
+        parallel_for(0, uint64_t(height), 8, [&](uint64_t y0, uint64_t y1) {
+            throw_if_cancelled(progress);
+            for (uint64_t y = y0; y < y1; ++y)
+                for (int x = 0; x < width; ++x) {
+                    const size_t p = g.index(x, int(y));
+                    if (!g.has_surface(p)) continue;
+                    vec3* out = &filtered[p * size_t(stride)];
+                    float total = 0.0f;
+                    for (int dy = -ty.half; dy <= ty.half; ++dy) {
+                        const int qy = int(y) + dy;
+                        if (qy < 0 || qy >= height) continue;
+                        for (int dx = -tx.half; dx <= tx.half; ++dx) {
+                            const int qx = x + dx;
+                            if (qx < 0 || qx >= width) continue;
+                            const size_t q = g.index(qx, qy);
+                            if (q != p && !joins(g, p, q, settings_, strict)) continue;
+                            const float w = tx.weight(dx) * ty.weight(dy);
+                            const vec3* in = &source[q * size_t(stride)];
+                            for (int i = 0; i < stride; ++i) out[i] += w * in[i];
+                            total += w;
+                        }
+                    }
+                    for (int i = 0; i < stride; ++i) out[i] /= total;
+                }
+        }, progress);
+    }
+    timings_->filter = seconds_since(start);
+
+    // 3. shade: SH dot products with the pixel's shading normal, into the film.
+    start = now();
+    const std::vector<vec3>& sh_source = filter_sh ? filtered : raw;
+    const float samples = float(count);
+    const bool lobes = g.has_field_lobes();
+    parallel_for(0, uint64_t(height), 16, [&](uint64_t y0, uint64_t y1) {
+        for (uint64_t y = y0; y < y1; ++y)
+            for (int x = 0; x < width; ++x) {
+                const size_t p = g.index(x, int(y));
+                if (!g.has_surface(p) || !lobes) continue;
+                FieldLookup lookup;
+                lookup.radiance = ShRgb(kOrder);
+                std::copy_n(&sh_source[p * kCoeffs], kCoeffs, lookup.radiance.coeffs.begin());
+                const vec3 ns = g.shading_normal[p];
+                const vec3 e = filter_irradiance ? filtered[p] : lookup.irradiance(ns);
+                const vec3 diffuse = g.field_diffuse[p] * e * kInvPi;
+                vec3 glossy(0.0f);
+                const vec3 wo = glm::normalize(camera_position - g.position[p]);
+                for (int k = 0; k < 2; ++k)
+                    if (max_component(g.glossy_albedo[k][p]) > 0.0f)
+                        glossy += g.glossy_albedo[k][p] *
+                                  lookup.glossy(ns, wo, g.glossy_roughness[k][p]);
+                if (!is_finite(diffuse) || !is_finite(glossy)) continue;
+                PassValues values;
+                values[Pass::DiffInd] = diffuse * samples;
+                values[Pass::GlossInd] = glossy * samples;
+                values[Pass::Combined] = (diffuse + glossy) * samples;
+                film.add(x, int(y), values);
+            }
+    });
+    timings_->shade = seconds_since(start);
+}
+
+// ---------------------------------------------------------------------------------------------
+// InstantGi
+
+InstantGi::InstantGi(const Scene& scene, const InstantGiSettings& settings, Progress* progress)
+    : scene_(&scene), settings_(settings) {
+    validate_instant_gi_settings(settings_);
+    reset(progress);
+}
+
+void InstantGi::check_scene(const char* what) const {
+    if (!scene_->committed() || scene_->revision() != scene_revision_)
+        throw InvalidArgument(format_message("InstantGi.", what,
+                                             ": the scene was edited since the solver was made; "
+                                             "commit() it and call reset() first"));
+}
+
+void InstantGi::reset(Progress* progress) {
+    if (!scene_->committed())
+        throw InvalidArgument("InstantGi: the scene is not committed; call commit() first");
+    scene_revision_ = scene_->revision();
+    passes_ = 0;
+    stage_seconds_.clear();
+    field_ = std::make_shared<InstantGiField>(
+        *scene_, settings_,
+        std::vector<std::vector<InstantVpl>>(size_t(settings_.sets_x) * size_t(settings_.sets_y)),
+        0);
+    if (progress) progress->set_fraction(1.0f);
+}
+
+void InstantGi::refine(Progress* progress) {
+    check_scene("refine");
+    TimePoint start = now();
+    if (progress) progress->begin_stage("tracing VPLs", 0.0f, 0.8f);
+    PhotonMaps maps = trace_photons(*scene_, tracer_settings(settings_), passes_, progress,
+                                    kSettings);
+    // Every hit as a photon: first hits, then (vpl_bounces > 1) the stored later hits.
+    std::vector<Photon> hits;
+    hits.reserve(maps.first_hits.size() + maps.global.size() + maps.caustic.size());
+    for (const PhotonFirstHit& h : maps.first_hits)
+        hits.push_back({h.position, h.power, h.normal, h.direction});
+    if (settings_.vpl_bounces > 1) {
+        hits.insert(hits.end(), maps.global.begin(), maps.global.end());
+        hits.insert(hits.end(), maps.caustic.begin(), maps.caustic.end());
+    }
+    const double trace_seconds = seconds_since(start);
+    start = now();
+    if (progress) progress->begin_stage("reflecting VPLs", 0.8f, 1.0f);
+    std::vector<vec3> reflected(hits.size(), vec3(0.0f));
+    const bool glossy = settings_.glossy_vpls;
+    parallel_for(0, hits.size(), kVplsPerTask, [&](uint64_t begin, uint64_t end) {
+        throw_if_cancelled(progress);
+        for (uint64_t i = begin; i < end; ++i) {
+            const Photon& h = hits[i];
+            reflected[i] = vpl_power(*scene_, glossy, h.position, h.normal, h.direction, h.power);
+        }
+    }, progress);
+    std::vector<InstantVpl> vpls;
+    vpls.reserve(hits.size());
+    for (size_t i = 0; i < hits.size(); ++i)
+        if (reflected[i] != vec3(0.0f) && is_finite(reflected[i]))
+            vpls.push_back({hits[i].position, hits[i].normal, reflected[i]});
+    throw_if_cancelled(progress);
+    // Deal the pass's VPLs into the sets in turn, after the earlier passes' ones.
+    std::vector<std::vector<InstantVpl>> sets = field_->sets();
+    const size_t set_count = sets.size();
+    for (size_t i = 0; i < vpls.size(); ++i) sets[i % set_count].push_back(vpls[i]);
+    const double deal_seconds = seconds_since(start);
+    field_ = std::make_shared<InstantGiField>(*scene_, settings_, std::move(sets), passes_ + 1);
+    ++passes_;
+    stage_seconds_ = {{"vpl_trace", trace_seconds}, {"vpl_sets", deal_seconds}};
+    if (progress) progress->set_fraction(1.0f);
+}
+
+size_t InstantGi::memory_bytes() const {
+    return size_t(field_->vpl_count()) * sizeof(InstantVpl);
+}
+
+}  // namespace shgi

@@ -1,0 +1,144 @@
+// INSTANT_GI: instant global illumination with a discontinuity-aware screen-space SH filter
+// (seed 004, Segovia & Wald; docs/methods.md "Instant GI").
+//
+// Solve (refine, one pass): photons from every emitter (photon/photon_tracer.h) leave virtual
+// point lights (VPLs) at their first hits and, with vpl_bounces > 1, at later hits: the power
+// arriving there times the surface's diffuse albedo (and, with glossy_vpls, its rough glossy
+// lobes' albedo), the surface found by a short ray back along the photon's path. The pass's VPLs are dealt in turn
+// into sets_x × sets_y sets (§2.2–2.3, §3.2: uncorrelated sets, each an unbiased estimate of all
+// the light when scaled by the number of sets); every pass adds new sets' worth of VPLs, and a
+// set holds its VPLs of every pass so far (scaled by 1 / passes).
+//
+// Render (a screen-space field, render/indirect_field.h shades_first_surfaces): the preview
+// renderer's frame-wide stage, over its G-buffer:
+//  1. gather: pixel (x, y) sums the VPLs of set (x mod sets_x, y mod sets_y) as L2 SH of the
+//     incident radiance (§3.2, §4.1): a VPL at y with normal n_y and reflected flux Φ is a delta
+//     of weight Φ cos θ_y / (π max(d², clamp_distance²)) in its direction, counted only when it
+//     faces the pixel, lies above the pixel's geometric surface and an exact shadow ray finds the
+//     segment free;
+//  2. filter (§3): each pixel averages the SH of the pixels of an interleave-wide window
+//     (sets_x or sets_x + 1 taps across — for even n, n + 1 taps with half weight on both ends so
+//     each set counts once — and likewise down), skipping neighbours across depth, geometric-normal
+//     and object edges but not across shading-normal changes; the G-buffer is frame-wide, so there
+//     are no tile seams;
+//  3. shade (§3.1, §3.3): the filtered SH through the pixel's own shading normal: diffuse closure
+//     weight × E(n) / π (the clamped-cosine, i.e. Lambert, convolution of sh/sh_irradiance.h) and,
+//     per glossy lobe, its albedo × the fitted GGX ZH lobe's pre-filtered radiance
+//     (FieldLookup::glossy, sh/ggx_zh.h).
+// Only indirect light goes through the SH; direct light stays the renderer's next-event
+// estimation. The filter modes (filter_mode) Irradiance and Strict (the comparisons of §4.2,
+// Figs. 2 and 4) filter each pixel's irradiance E(n_s) instead; Strict also stops at
+// shading-normal changes. None keeps each pixel's own set.
+//
+// Elsewhere (specular chains, bakes), lookup(p, n) gathers every VPL of every set the same way
+// (no filter).
+//
+// Determinism: photons as the tracer's (seed, pass); each pixel's gather and filter depend only
+// on the G-buffer, so frames are identical for any thread count and tile size.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "render/gi_solver.h"
+#include "render/indirect_field.h"
+#include "scene/scene.h"
+#include "util/progress.h"
+
+namespace shgi {
+
+enum class InstantGiFilter : uint8_t { Sh, Irradiance, Strict, None };
+
+struct InstantGiSettings {
+    int sets_x = 4;                   // n: interleave period across
+    int sets_y = 4;                   // m: interleave period down
+    uint64_t photons_per_set = 16;    // light paths traced per set and pass
+    // Hits of a light path that leave a VPL (1: first only); the add-on: Light Paths > Diffuse.
+    int vpl_bounces = 4;
+    float clamp_distance = 0.05f;     // m: d² below clamp_distance² counts as clamp_distance²
+    InstantGiFilter filter_mode = InstantGiFilter::Sh;
+    float depth_threshold = 0.1f;     // neighbours whose depth differs by more (relative) stop
+    float normal_threshold = 0.9f;    // ... whose normals' cosine is below this stop
+    // Rough glossy lobes (roughness above 0.1) of a VPL's surface scatter into it as if diffuse,
+    // as the radiance field's glossy_in_grid: with the diffuse lobe alone a VPL loses the light
+    // the surface's specular layer reflects (Principled specular 0.5: the Cornell box's DiffInd
+    // came out 0.89x the path tracer's, the sun room's 0.93x).
+    bool glossy_vpls = true;
+    uint64_t seed = 0;
+};
+
+// InvalidArgument naming the field and its range.
+void validate_instant_gi_settings(const InstantGiSettings& settings);
+
+struct InstantVpl {
+    vec3 position{0.0f};
+    vec3 normal{0.0f, 0.0f, 1.0f};  // the side the light left from
+    vec3 power{0.0f};               // W reflected diffusely
+};
+
+// Adds one VPL's incident radiance at `p` (geometric normal `ng`, facing the viewer) to `sh`
+// (order 2) as a delta of weight `scale` Φ cos θ_y / (π max(d², clamp²)), without the shadow
+// test; false (nothing added) when the VPL faces away or lies below the surface.
+bool add_vpl_sh(ShRgb& sh, const vec3& p, const vec3& ng, const InstantVpl& vpl, float scale,
+                float clamp_distance);
+
+// Per-frame timings of the last frame-wide stage (seconds).
+struct InstantGiFrameTimings {
+    double gather = 0.0;  // VPL SH and shadow rays
+    double filter = 0.0;
+    double shade = 0.0;   // SH dot products and film
+};
+
+// The solved VPL sets: an immutable snapshot, the field the renderers read.
+class InstantGiField : public IndirectField {
+  public:
+    InstantGiField(const Scene& scene, const InstantGiSettings& settings,
+                   std::vector<std::vector<InstantVpl>> sets, uint64_t passes);
+
+    ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
+    bool is_zero() const override { return passes_ == 0 || vpl_count_ == 0; }
+    bool shades_first_surfaces() const override { return true; }
+    void shade_first_surfaces(const GBuffer& g_buffer, const vec3& camera_position, Film& film,
+                              uint64_t first, uint64_t count, Progress* progress) const override;
+
+    const std::vector<std::vector<InstantVpl>>& sets() const { return sets_; }
+    uint64_t vpl_count() const { return vpl_count_; }
+    // Timings of the latest shade_first_surfaces (one frame at a time per field).
+    InstantGiFrameTimings frame_timings() const;
+
+  private:
+    const Scene* scene_;
+    InstantGiSettings settings_;
+    std::vector<std::vector<InstantVpl>> sets_;
+    uint64_t passes_ = 0, vpl_count_ = 0;
+    float set_scale_ = 0.0f;  // sets / passes
+    std::shared_ptr<InstantGiFrameTimings> timings_;
+};
+
+class InstantGi : public GiSolver {
+  public:
+    InstantGi(const Scene& scene, const InstantGiSettings& settings, Progress* progress = nullptr);
+
+    void refine(Progress* progress = nullptr) override;
+    void reset(Progress* progress = nullptr) override;
+    uint64_t passes() const override { return passes_; }
+    std::shared_ptr<const IndirectField> current_field() const override { return field_; }
+    std::vector<StageSeconds> stage_seconds() const override { return stage_seconds_; }
+    size_t memory_bytes() const override;
+
+    const InstantGiSettings& settings() const { return settings_; }
+    std::shared_ptr<const InstantGiField> field() const { return field_; }
+
+  private:
+    void check_scene(const char* what) const;
+
+    const Scene* scene_;
+    InstantGiSettings settings_;
+    uint64_t scene_revision_ = 0;
+    uint64_t passes_ = 0;
+    std::shared_ptr<const InstantGiField> field_;
+    std::vector<StageSeconds> stage_seconds_;
+};
+
+}  // namespace shgi

@@ -1,0 +1,85 @@
+// InstantGi (seed 004): one VPL's L2 SH against the analytic kernel, the settings' refusals.
+#include "instant/instant_gi.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "sh/sh_irradiance.h"
+#include "util/error.h"
+
+namespace shgi {
+namespace {
+
+// One VPL projected into L2 SH and dotted with the Lambert (clamped-cosine) lobe gives
+// E0 (3/32 + mu/2 + 15 mu^2/32), mu the cosine between the normal and the VPL's direction
+// (the L2 truncation of E0 max(0, mu): band factors pi, 2 pi / 3, pi / 4).
+TEST(InstantGi, OneVplAgainstTheAnalyticKernel) {
+    const vec3 p(0.2f, -0.1f, 0.3f);
+    const vec3 to_vpl = glm::normalize(vec3(0.3f, 0.4f, 1.0f));
+    const float d = 1.7f;
+    InstantVpl vpl;
+    vpl.position = p + d * to_vpl;
+    const vec3 vpl_normal = glm::normalize(vec3(-0.2f, 0.1f, -1.0f));
+    vpl.normal = vpl_normal;
+    vpl.power = vec3(2.0f, 1.0f, 0.5f);
+    const float cos_vpl = -glm::dot(vpl_normal, to_vpl);
+    ASSERT_GT(cos_vpl, 0.0f);
+    const vec3 e0 = vpl.power * cos_vpl / (kPi * d * d);
+    ShRgb sh(2);
+    ASSERT_TRUE(add_vpl_sh(sh, p, vec3(0.0f, 0.0f, 1.0f), vpl, 1.0f, 0.0f));
+    // Normals over the whole sphere: mu from -1 to 1.
+    for (int i = 0; i <= 40; ++i)
+        for (int j = 0; j < 8; ++j) {
+            const float theta = kPi * float(i) / 40.0f, phi = 2.0f * kPi * float(j) / 8.0f;
+            const vec3 n(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                         std::cos(theta));
+            const float mu = glm::dot(n, to_vpl);
+            const float kernel = 3.0f / 32.0f + mu / 2.0f + 15.0f * mu * mu / 32.0f;
+            const vec3 e = sh_irradiance(sh, n);
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(e[c] / e0[c], kernel, 1e-5f) << "mu " << mu << " channel " << c;
+        }
+}
+
+TEST(InstantGi, ClampAndFacing) {
+    InstantVpl vpl;
+    vpl.position = vec3(0.0f, 0.0f, 0.01f);
+    vpl.normal = vec3(0.0f, 0.0f, -1.0f);
+    vpl.power = vec3(1.0f);
+    ShRgb near(2), clamped(2);
+    const vec3 ng(0.0f, 0.0f, 1.0f);
+    ASSERT_TRUE(add_vpl_sh(near, vec3(0.0f), ng, vpl, 1.0f, 0.0f));
+    ASSERT_TRUE(add_vpl_sh(clamped, vec3(0.0f), ng, vpl, 1.0f, 0.1f));
+    // 1/d^2 with d = 0.01 against d clamped to 0.1: 100x.
+    EXPECT_NEAR(near[0].x / clamped[0].x, 100.0f, 1e-2f);
+    ShRgb none(2);
+    EXPECT_FALSE(add_vpl_sh(none, vec3(0.0f), -ng, vpl, 1.0f, 0.0f));  // below the surface
+    vpl.normal = -vpl.normal;
+    EXPECT_FALSE(add_vpl_sh(none, vec3(0.0f), ng, vpl, 1.0f, 0.0f));   // faces away
+    EXPECT_EQ(none[0], vec3(0.0f));
+}
+
+TEST(InstantGi, SettingsRefusalsNameTheField) {
+    auto refused = [](auto edit, const char* field) {
+        InstantGiSettings s;
+        edit(s);
+        try {
+            validate_instant_gi_settings(s);
+            ADD_FAILURE() << field << " accepted";
+        } catch (const InvalidArgument& e) {
+            EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+        }
+    };
+    validate_instant_gi_settings(InstantGiSettings{});
+    refused([](InstantGiSettings& s) { s.sets_x = 0; }, "sets_x");
+    refused([](InstantGiSettings& s) { s.sets_y = 17; }, "sets_y");
+    refused([](InstantGiSettings& s) { s.photons_per_set = 0; }, "photons_per_set");
+    refused([](InstantGiSettings& s) { s.vpl_bounces = 0; }, "vpl_bounces");
+    refused([](InstantGiSettings& s) { s.clamp_distance = NAN; }, "clamp_distance");
+    refused([](InstantGiSettings& s) { s.depth_threshold = -1.0f; }, "depth_threshold");
+    refused([](InstantGiSettings& s) { s.normal_threshold = 2.0f; }, "normal_threshold");
+}
+
+}  // namespace
+}  // namespace shgi

@@ -1,0 +1,356 @@
+"""Instant GI with the discontinuity-aware screen-space SH filter (seed 004; the INSTANT_GI
+method) through Python.
+
+Settings and refusals, the registry row, determinism (thread count, tile size), cancel keeping
+the sets; the issue's Show list: the SH filter against the irradiance filter on the diffuse
+Cornell box (section 4.2), the normal-mapped floor against brute force (Figs. 2 and 4: the SH
+filter keeps the normal map's detail that the irradiance filter blurs, without the interleave
+pattern the strict filter leaves; images under docs/images/), agreement with the path tracer on
+the Cornell box and the sun room with >= 1024 VPLs, and the two rooms' dim room (exact
+visibility: no leak). A missed target stays as a strict xfail carrying the measured figure.
+"""
+
+import math
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+import shgi
+from blender_support import REPO_ROOT
+from shgi.metrics import psnr
+from scene_support import finishes_in_a_thread, path_traced_reference
+
+sys.path.insert(0, str(REPO_ROOT / "examples"))
+import scenes  # noqa: E402  (examples/ is not a package)
+
+IMAGES = REPO_ROOT / "docs" / "images"
+SCALE = 0.25
+REFERENCE_SAMPLES = 2048
+REFERENCES = {"cornell_box": (SCALE, REFERENCE_SAMPLES), "sun_room": (SCALE, REFERENCE_SAMPLES),
+              "two_rooms": (0.5, 512)}
+# Passes of the agreement renders: 4 passes of 16 sets x 16 light paths leave >= 1024 VPLs.
+PASSES = 4
+
+
+def missed(figure):
+    return pytest.mark.xfail(strict=True, reason=f"target missed; measured {figure}")
+
+
+def indirect_diffuse(passes):
+    return float((passes["DiffInd"] * passes["DiffCol"]).mean())
+
+
+def solved(scene, passes=PASSES, **fields):
+    solver = shgi.InstantGi(scene, shgi.InstantGiSettings(seed=5, **fields))
+    for _ in range(passes):
+        solver.refine()
+    return solver
+
+
+def preview(scene, field, samples=16, **fields):
+    image, _ = shgi.render_preview(scene, field,
+                                   shgi.PreviewSettings(seed=5, samples=samples, **fields))
+    return image
+
+
+def small_cornell():
+    builder = scenes.cornell_box(0.1)
+    builder.scene.commit()
+    return builder.scene
+
+
+# --- settings, registry, determinism, cancel ------------------------------------------------
+
+def test_settings_defaults_and_refusals():
+    s = shgi.InstantGiSettings()
+    assert (s.sets_x, s.sets_y, s.photons_per_set, s.vpl_bounces) == (4, 4, 16, 4)
+    assert s.filter_mode == shgi.InstantGiFilter.SH
+    assert s.clamp_distance == pytest.approx(0.05)
+    s.validate()
+    for field, value in (("sets_x", 0), ("sets_y", 17), ("vpl_bounces", 0),
+                         ("clamp_distance", -1.0), ("depth_threshold", float("nan")),
+                         ("normal_threshold", 1.5)):
+        bad = shgi.InstantGiSettings(**{field: value})
+        with pytest.raises(ValueError, match=field):
+            bad.validate()
+        with pytest.raises(ValueError, match=field):
+            shgi.InstantGi(small_cornell(), bad)
+
+
+def test_registry_row():
+    row = shgi.method("INSTANT_GI")
+    assert row.number == 5 and row.settings_type is shgi.InstantGiSettings
+    assert row.final_passes == 4 and row.solves_field
+    assert "INSTANT_GI" not in dict(shgi.reserved_method_numbers())
+    solver = shgi.make_solver("INSTANT_GI", small_cornell(), shgi.InstantGiSettings(seed=1))
+    assert isinstance(solver, shgi.InstantGi)
+
+
+def test_sets_grow_by_a_pass_each_and_hold_every_vpl():
+    solver = shgi.InstantGi(small_cornell(), shgi.InstantGiSettings(seed=2, sets_x=3, sets_y=2))
+    assert solver.passes == 0 and solver.current_field().vpl_count == 0
+    solver.refine()
+    first = solver.current_field()
+    assert len(first.set_sizes) == 6 and sum(first.set_sizes) == first.vpl_count > 0
+    assert max(first.set_sizes) - min(first.set_sizes) <= 1  # dealt in turn
+    solver.refine()
+    second = solver.current_field()
+    assert second.vpl_count > first.vpl_count and solver.passes == 2
+    assert [name for name, _ in solver.stage_seconds] == ["vpl_trace", "vpl_sets"]
+    assert solver.memory_bytes > 0
+
+
+def test_frames_do_not_depend_on_threads_or_tiles():
+    """The gather, the filter and the shading are frame-wide over the G-buffer: no tile seams,
+    the same bits for 1 and 2 threads and for tile sizes 2 and 16."""
+    scene = small_cornell()
+    field = solved(scene, passes=1).current_field()
+    images = []
+    try:
+        for threads, tile in ((1, 16), (2, 16), (2, 2)):
+            shgi.set_max_threads(threads)
+            images.append(preview(scene, field, samples=2, tile_size=tile))
+    finally:
+        shgi.set_max_threads(0)
+    assert images[0]["DiffInd"].max() > 0.0
+    for other in images[1:]:
+        for name in ("Combined", "DiffInd", "GlossInd"):
+            np.testing.assert_array_equal(images[0][name], other[name], err_msg=name)
+
+
+def test_samples_at_once_equal_samples_one_by_one():
+    scene = small_cornell()
+    field = solved(scene, passes=1).current_field()
+    at_once = preview(scene, field, samples=3)
+    renderer = shgi.PreviewRenderer(scene, shgi.PreviewSettings(seed=5, samples=3))
+    for _ in range(3):
+        renderer.render(field, 1)
+    one_by_one = renderer.passes()
+    for name in ("Combined", "DiffInd"):
+        np.testing.assert_array_equal(at_once[name], one_by_one[name], err_msg=name)
+
+
+def test_cancel_keeps_the_sets():
+    scene = small_cornell()
+    solver = solved(scene, passes=1)
+    before = solver.current_field().set_sizes
+    progress = shgi.Progress()
+    progress.cancel()
+    with pytest.raises(shgi.Cancelled):
+        finishes_in_a_thread(lambda: solver.refine(progress))
+    assert solver.passes == 1 and solver.current_field().set_sizes == before
+
+
+def test_field_lookups_elsewhere_gather_every_set():
+    """Off the camera's first surfaces (specular chains, bakes) the field is every VPL with
+    exact shadows: on the Cornell box floor it holds light from above, none from below."""
+    scene = small_cornell()
+    field = solved(scene, passes=1).current_field()
+    sh = np.asarray(field.radiance_sh((0.0, 1.0, 0.01), (0.0, 0.0, 1.0)))
+    assert sh[0].min() > 0.0  # the DC term of every channel
+    up = np.asarray(field.irradiance([(0.0, 1.0, 0.01)], [(0.0, 0.0, 1.0)]))
+    assert up.min() > 0.0
+
+
+# --- the Show list: agreement with the path tracer -------------------------------------------
+
+_RENDERS = {}
+
+
+def rendered(name, **fields):
+    key = (name, tuple(sorted(fields.items())))
+    if key not in _RENDERS:
+        scale, samples = REFERENCES[name]
+        scene, ref = path_traced_reference(getattr(scenes, name), scale, samples)
+        solver = solved(scene, **fields)
+        field = solver.current_field()
+        _RENDERS[key] = ref, preview(scene, field), field
+    return _RENDERS[key]
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name", ["cornell_box", "sun_room"])
+def test_indirect_diffuse_agrees_with_path_tracer(name):
+    ref, image, field = rendered(name)
+    assert field.vpl_count >= 1024
+    ratio = indirect_diffuse(image) / indirect_diffuse(ref)
+    quality = psnr(ref["Combined"], image["Combined"])
+    print(f"{name}: {field.vpl_count} VPLs, DiffInd x DiffCol {ratio:.3f} x the path tracer's, "
+          f"Combined PSNR {quality:.2f} dB")
+    assert abs(ratio - 1.0) < 0.05, ratio
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name", [
+    "cornell_box",
+    pytest.param("sun_room", marks=missed("PSNR 31.1 dB")),
+])
+def test_psnr_against_path_tracer(name):
+    ref, image, field = rendered(name)
+    quality = psnr(ref["Combined"], image["Combined"])
+    print(f"{name}: Combined PSNR {quality:.2f} dB with {field.vpl_count} VPLs")
+    assert quality >= 32.0
+
+
+@pytest.mark.reference
+def test_dim_room_is_within_five_percent():
+    """The two rooms' dim room: every VPL reaches a pixel only through an exact shadow ray, so
+    the bright room's light does not come through the wall. The dim lamp has 1% of the power,
+    so 1% of the light paths: 128 per set (8x the default; with 16 per set, seeds 5 and 6 read
+    Combined 1.20x and 0.84x: too few VPLs in the dim room, not leaks)."""
+    ref, image, _ = rendered("two_rooms", photons_per_set=128)
+    combined = float(image["Combined"][..., :3].mean() / ref["Combined"][..., :3].mean())
+    indirect = indirect_diffuse(image) / indirect_diffuse(ref)
+    print(f"dim room: Combined {combined:.3f}, DiffInd x DiffCol {indirect:.3f} x the path "
+          f"tracer's")
+    assert abs(combined - 1.0) < 0.05
+    assert abs(indirect - 1.0) < 0.05
+
+
+@pytest.mark.reference
+def test_sh_filter_matches_irradiance_filter_on_a_diffuse_box():
+    """Section 4.2: without normal maps, filtering SH and filtering irradiance agree."""
+    scale, samples = REFERENCES["cornell_box"]
+    scene, _ = path_traced_reference(scenes.cornell_box, scale, samples)
+    field_sh = solved(scene).current_field()
+    field_e = solved(scene, filter_mode=shgi.InstantGiFilter.IRRADIANCE).current_field()
+    sh_image, e_image = preview(scene, field_sh, samples=4), preview(scene, field_e, samples=4)
+    ratio = indirect_diffuse(sh_image) / indirect_diffuse(e_image)
+    sh_ind, e_ind = sh_image["DiffInd"][..., :3], e_image["DiffInd"][..., :3]
+    relative_rmse = float(np.sqrt(((sh_ind - e_ind) ** 2).mean()) / e_ind.mean())
+    print(f"Cornell box: SH filter / irradiance filter {ratio:.4f}, relative RMSE "
+          f"{relative_rmse:.4f}")
+    assert abs(ratio - 1.0) < 0.02
+    assert relative_rmse < 0.02
+
+
+# --- the Show list: the normal-mapped floor (Figs. 2 and 4) ---------------------------------
+
+STRIPES = 12      # normal-map stripes across the floor
+TILT = 0.6        # radians: the stripes' normals lean this far towards -x and +x in turn
+
+
+def look_at(eye, target, up=(0.0, 0.0, 1.0)):
+    eye, target, up = (np.asarray(v, np.float64) for v in (eye, target, up))
+    back = eye - target
+    back /= np.linalg.norm(back)
+    right = np.cross(up, back)
+    right /= np.linalg.norm(right)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = right, np.cross(back, right), back, eye
+    return m
+
+
+def striped_normal_texture(size=96):
+    u = (np.arange(size) + 0.5) / size
+    angle = TILT * np.sign(np.sin(2.0 * math.pi * STRIPES * u))
+    n = np.stack([np.sin(angle), np.zeros(size), np.cos(angle)], axis=-1)
+    texels = np.concatenate([0.5 * n + 0.5, np.ones((size, 1))], axis=-1)
+    return shgi.Texture(np.ascontiguousarray(np.tile(texels[None], (8, 1, 1)), np.float32),
+                        name="stripes")
+
+
+def normal_mapped_floor():
+    """A 2 m floor with a striped tangent-space normal map and a white wall at x = +1, a point
+    light 0.4 m from the wall: the floor's indirect light comes mostly from the wall, and the
+    stripes lean towards it and away from it in turn."""
+    scene = shgi.Scene()
+    texture = scene.add_texture(striped_normal_texture())
+    bumpy = scene.add_material(shgi.Material(name="bumpy", base_color=(0.7, 0.7, 0.7),
+                                             specular=0.0,
+                                             diffuse_model=shgi.DiffuseModel.LAMBERT,
+                                             normal_texture=texture))
+    white = scene.add_material(shgi.Material(name="white", base_color=(0.8, 0.8, 0.8),
+                                             specular=0.0,
+                                             diffuse_model=shgi.DiffuseModel.LAMBERT))
+    tris = np.array([[0, 1, 2], [0, 2, 3]], np.int32)
+    floor = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float32)
+    uvs = 0.5 * floor[:, :2] + 0.5
+    tangents = np.tile(np.array([1, 0, 0, 1], np.float32), (4, 1))
+    scene.add_instance(scene.add_mesh(positions=floor, triangles=tris, uvs=uvs,
+                                      tangents=tangents, material_indices=[bumpy, bumpy]),
+                       np.eye(4))
+    wall = np.array([[1, -1, 0], [1, 1, 0], [1, 1, 2], [1, -1, 2]], np.float32)
+    scene.add_instance(scene.add_mesh(positions=wall, triangles=tris,
+                                      material_indices=[white, white]), np.eye(4))
+    lamp = np.eye(4)
+    lamp[:3, 3] = (0.6, 0.0, 0.8)
+    scene.add_light(shgi.Light(type=shgi.LightType.POINT, power=100.0, world_from_light=lamp))
+    scene.set_world(shgi.World(strength=0.0))
+    camera = shgi.Camera(lens=30.0, resolution_x=96, resolution_y=72)
+    camera.world_from_camera = look_at((-0.6, 0.0, 1.3), (0.2, 0.0, 0.0))
+    scene.set_camera(camera)
+    scene.commit()
+    return scene
+
+
+_FLOOR = {}
+
+
+def floor_images():
+    """DiffInd of the floor scene for each filter (4 x 4 sets) and of brute force (the same
+    VPLs in one set, every pixel gathering all of them), 4 samples each."""
+    if not _FLOOR:
+        scene = normal_mapped_floor()
+        images = {}
+        for mode in ("SH", "IRRADIANCE", "STRICT", "NONE"):
+            field = solved(scene, passes=2, photons_per_set=32,
+                           filter_mode=getattr(shgi.InstantGiFilter, mode)).current_field()
+            images[mode] = preview(scene, field, samples=4)["DiffInd"][..., :3]
+        field = solved(scene, passes=2, photons_per_set=16 * 32, sets_x=1, sets_y=1,
+                       filter_mode=shgi.InstantGiFilter.NONE).current_field()
+        images["BRUTE_FORCE"] = preview(scene, field, samples=4)["DiffInd"][..., :3]
+        _FLOOR.update(images)
+    return _FLOOR
+
+
+def save_floor_images(images):
+    IMAGES.mkdir(parents=True, exist_ok=True)
+    scale = np.percentile(images["BRUTE_FORCE"], 99)
+    for mode, pixels in images.items():
+        rgb = np.clip(pixels / scale, 0.0, 1.0)  # write_png encodes sRGB
+        rgba = np.concatenate([rgb, np.ones(rgb.shape[:2] + (1,))], axis=-1)
+        shgi.write_png(str(IMAGES / f"instant_gi_floor_{mode.lower()}.png"),
+                       np.ascontiguousarray(rgba, np.float32))
+
+
+def rmse(image, reference):
+    return float(np.sqrt(((image - reference) ** 2).mean()))
+
+
+@pytest.mark.reference
+def test_sh_filter_keeps_normal_map_detail():
+    """Figs. 2 and 4: against brute force, the SH filter's RMSE is at most half the irradiance
+    filter's (which blends across the stripes) and below the strict filter's (which stops at
+    the stripes and keeps the interleave pattern)."""
+    images = floor_images()
+    save_floor_images(images)
+    brute = images["BRUTE_FORCE"]
+    assert brute.mean() > 0.0
+    errors = {mode: rmse(images[mode], brute) / float(brute.mean())
+              for mode in ("SH", "IRRADIANCE", "STRICT", "NONE")}
+    print("relative RMSE against brute force: " +
+          ", ".join(f"{mode} {error:.4f}" for mode, error in errors.items()))
+    assert errors["SH"] <= 0.5 * errors["IRRADIANCE"]
+    assert errors["SH"] < errors["STRICT"]
+
+
+@pytest.mark.reference
+@missed("largest residual per phase 2.1% (unfiltered 20.7%)")
+def test_sh_filter_residual_per_interleave_phase_is_under_one_percent():
+    """Each of the 16 interleave phases (pixels (x mod 4, y mod 4)) averages within 1% of brute
+    force over the same pixels: no set shows through the filter."""
+    images = floor_images()
+    sh, brute = images["SH"].sum(-1), images["BRUTE_FORCE"].sum(-1)
+    residuals = []
+    for j in range(4):
+        for i in range(4):
+            residuals.append(sh[j::4, i::4].mean() / brute[j::4, i::4].mean() - 1.0)
+    none = images["NONE"].sum(-1)
+    raw = [none[j::4, i::4].mean() / brute[j::4, i::4].mean() - 1.0
+           for j in range(4) for i in range(4)]
+    print(f"largest residual per phase: SH filter {max(map(abs, residuals)):.4f}, "
+          f"unfiltered {max(map(abs, raw)):.4f}")
+    assert max(map(abs, residuals)) < 0.01
