@@ -108,6 +108,10 @@ void bind_settings(py::module_& m) {
                 "Transmission bounce limit (12).");
     def_integer(cls, "russian_roulette_depth", &S::russian_roulette_depth,
                 "Surfaces before Russian roulette may end a path (3).");
+    def_integer(cls, "light_splits", &S::light_splits,
+                "Most emitters one next-event estimate samples: the light tree's splitting, "
+                "one shadow ray each (4; 1 = one emitter per shadow ray).",
+                1, kMaxLightSplits);
     def_integer(cls, "tile_size", &S::tile_size, "Tile side in pixels (16).");
     cls.def(py::init(&from_kwargs<S>),
             "PathTracerSettings(**fields), e.g. PathTracerSettings(samples=16, seed=3).")

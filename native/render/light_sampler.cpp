@@ -136,10 +136,14 @@ LightBounds triangle_bounds(const EmissiveTriangle& tri) {
 
 }  // namespace
 
-LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, bool sample_world)
-    : scene_(&scene), world_sampling_(world_sampling) {
+LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, bool sample_world,
+                           int light_splits)
+    : scene_(&scene), world_sampling_(world_sampling), light_splits_(light_splits) {
     if (!scene.committed())
         throw InvalidArgument("LightSampler: the scene is not committed; call commit() first");
+    if (light_splits < 1 || light_splits > kMaxLightSplits)
+        throw InvalidArgument(format_message("LightSampler: light_splits is ", light_splits,
+                                             "; it must be in [1, ", kMaxLightSplits, "]"));
     // Weights only steer selection; any positive weights keep the estimator unbiased. Local
     // emitters weigh by intensity (the tree divides by distance squared), distant ones by
     // irradiance, so the two compare as irradiance estimates at the shading point.
@@ -205,41 +209,48 @@ float LightSampler::local_probability(const vec3& p) const {
 float LightSampler::selection_pdf(uint32_t emitter, const vec3& p) const {
     const Emitter& e = emitters_[emitter];
     if (e.distant) return (1.0f - local_probability(p)) * distant_.pdf(e.group_index);
-    return local_probability(p) * tree_.pmf(p, e.group_index);
+    return local_probability(p) * tree_.pmf(p, e.group_index, light_splits_);
 }
 
 bool LightSampler::sample(const vec3& p, const vec3& n, float u_select, const vec2& u,
                           LightSample* out) const {
-    if (empty()) return false;
+    if (light_splits_ != 1)
+        throw Internal("LightSampler::sample on a sampler with light_splits > 1: its selection "
+                       "pdfs are those of sample_split");
+    return sample_split(p, n, u_select, u, out) == 1;
+}
+
+int LightSampler::sample_split(const vec3& p, const vec3& n, float u_select, const vec2& u,
+                               LightSample* out) const {
+    if (empty()) return 0;
     const float p_local = local_probability(p);
-    uint32_t chosen;
-    float selection;
     if (u_select < p_local) {
-        uint32_t local;
-        float pmf;
-        if (!tree_.sample(p, std::min(u_select / p_local, kOneMinusEpsilon), &local, &pmf))
-            return false;
-        chosen = local_emitter_[local];
-        selection = p_local * pmf;
-    } else {
-        const float u_distant =
-            std::min((u_select - p_local) / (1.0f - p_local), kOneMinusEpsilon);
-        const uint32_t distant = distant_.sample(u_distant);
-        chosen = distant_emitter_[distant];
-        selection = (1.0f - p_local) * distant_.pdf(distant);
+        uint32_t local[kMaxLightSplits];
+        float pmf[kMaxLightSplits];
+        const int count = tree_.sample_split(p, std::min(u_select / p_local, kOneMinusEpsilon),
+                                             light_splits_, local, pmf);
+        int written = 0;
+        for (int i = 0; i < count; ++i) {
+            if (!sample_emitter(local_emitter_[local[i]], p, n, u, &out[written])) continue;
+            out[written].pdf *= p_local * pmf[i];
+            if (out[written].pdf > 0.0f && is_finite(out[written].radiance)) ++written;
+        }
+        return written;
     }
+    const float u_distant = std::min((u_select - p_local) / (1.0f - p_local), kOneMinusEpsilon);
+    const uint32_t distant = distant_.sample(u_distant);
+    if (!sample_emitter(distant_emitter_[distant], p, n, u, out)) return 0;
+    out->pdf *= (1.0f - p_local) * distant_.pdf(distant);
+    return out->pdf > 0.0f && is_finite(out->radiance) ? 1 : 0;
+}
+
+bool LightSampler::sample_emitter(uint32_t chosen, const vec3& p, const vec3& n, const vec2& u,
+                                  LightSample* out) const {
     const Emitter& emitter = emitters_[chosen];
-    bool ok = false;
-    if (emitter.kind == Kind::Light) {
-        ok = sample_light(emitter.index, p, u, out);
-    } else if (emitter.kind == Kind::Triangle) {
-        ok = sample_triangle(scene_->emissive_triangles()[emitter.index], p, u, out);
-    } else {
-        ok = sample_world(p, n, u, out);
-    }
-    if (!ok) return false;
-    out->pdf *= selection;
-    return out->pdf > 0.0f && is_finite(out->radiance);
+    if (emitter.kind == Kind::Light) return sample_light(emitter.index, p, u, out);
+    if (emitter.kind == Kind::Triangle)
+        return sample_triangle(scene_->emissive_triangles()[emitter.index], p, u, out);
+    return sample_world(p, n, u, out);
 }
 
 bool LightSampler::sample_light(uint32_t index, const vec3& p, const vec2& u,

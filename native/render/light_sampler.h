@@ -38,7 +38,11 @@
 // spot and area lights, emissive triangles) are chosen by a light tree (render/light_tree.h:
 // their distance, orientation and intensity seen from p), distant ones (suns, the world) by
 // their irradiance (util DiscreteDistribution); the two groups are weighed by the tree's root
-// importance at p against the distant irradiance. Returned pdfs include that selection
+// importance at p against the distant irradiance. With light_splits > 1 (the path tracer's
+// PathTracerSettings.light_splits) a next-event estimate is sample_split(): when the local group
+// is chosen, one emitter from each node of the tree's cut at p (LightTree::sample_split: lights
+// whose distances from p differ widely each get a shadow ray, so a dim lamp beside p is not
+// starved by a bright one behind a wall), and selection_pdf() is that of the split. Returned pdfs include that selection
 // probability and are per unit solid angle at the shading point; delta emitters (r = 0
 // point/spot, angle = 0 sun) return the incident radiance scale (intensity / d^2 or irradiance)
 // with delta = true.
@@ -88,8 +92,11 @@ struct EmissionHit {
 class LightSampler {
   public:
     // The scene must be committed. Emitters with zero power are left out; so is the world when
-    // sample_world is false (escaped rays still see it, with a light pdf of 0).
-    LightSampler(const Scene& scene, WorldSampling world_sampling, bool sample_world = true);
+    // sample_world is false (escaped rays still see it, with a light pdf of 0). light_splits:
+    // the most emitters one next-event estimate samples, in [1, kMaxLightSplits] (1: one, by
+    // sample(); more: by sample_split()).
+    LightSampler(const Scene& scene, WorldSampling world_sampling, bool sample_world = true,
+                 int light_splits = 1);
 
     bool empty() const { return emitters_.empty(); }
     // Emitters NEE can choose (selection_pdf's indices run over [0, emitter_count())).
@@ -97,8 +104,15 @@ class LightSampler {
 
     // Samples an emitter for shading point p with (shading) normal n (used by cosine world
     // sampling only). False when the chosen emitter cannot reach p (behind an area light ...).
+    // Only for a sampler made with light_splits = 1 (throws Internal otherwise).
     bool sample(const vec3& p, const vec3& n, float u_select, const vec2& u,
                 LightSample* out) const;
+    // A next-event estimate of up to light_splits() samples (see the header), written to out[];
+    // returns how many. Equal to sample() when light_splits() is 1. Each sample's pdf holds
+    // its own selection probability; the estimate is the sum over the samples.
+    int sample_split(const vec3& p, const vec3& n, float u_select, const vec2& u,
+                     LightSample* out) const;
+    int light_splits() const { return light_splits_; }
 
     // Closest point/spot disk or area light along p + t wi for t in (0, t_max). A camera ray
     // sees only lights with visible_camera.
@@ -151,8 +165,12 @@ class LightSampler {
     uint32_t facing_portal_count(const vec3& p) const;
     const Light& facing_portal(const vec3& p, uint32_t k) const;
 
+    bool sample_emitter(uint32_t chosen, const vec3& p, const vec3& n, const vec2& u,
+                        LightSample* out) const;
+
     const Scene* scene_;
     WorldSampling world_sampling_;
+    int light_splits_ = 1;
     std::vector<Emitter> emitters_;
     std::vector<uint32_t> light_emitter_;  // scene light index -> emitter index (or kInvalidId)
     // Per scene light (used for area lights): what sample_area needs that depends on the light

@@ -135,7 +135,12 @@ float LightTree::importance(const vec3& p) const {
 
 bool LightTree::sample(const vec3& p, float u, uint32_t* emitter, float* pmf) const {
     if (empty()) return false;
-    uint32_t index = 0;
+    return sample_below(0, p, u, emitter, pmf);
+}
+
+bool LightTree::sample_below(uint32_t node, const vec3& p, float u, uint32_t* emitter,
+                             float* pmf) const {
+    uint32_t index = node;
     float probability = 1.0f;
     while (!nodes_[index].leaf) {
         float p_left, p_right;
@@ -157,12 +162,58 @@ bool LightTree::sample(const vec3& p, float u, uint32_t* emitter, float* pmf) co
     return probability > 0.0f;
 }
 
-float LightTree::pmf(const vec3& p, uint32_t emitter) const {
+bool LightTree::should_split(const Node& node, const vec3& p) const {
+    if (node.leaf) return false;
+    const Bounds3& box = node.bounds.bounds;
+    const float radius = 0.5f * glm::length(box.upper - box.lower);
+    const float distance = glm::length(p - 0.5f * (box.lower + box.upper));
+    return distance <= radius || radius > kSplitRadiusRatio * distance;
+}
+
+int LightTree::cut(const vec3& p, int max_samples, uint32_t* nodes) const {
+    if (empty() || !(node_importance(nodes_[0], p) > 0.0f)) return 0;
+    const int limit = std::clamp(max_samples, 1, kMaxLightSplits);
+    int count = 1;
+    nodes[0] = 0;
+    // Each node in turn is replaced by its children (those that can light p) while it should
+    // split and the cut has room; a replaced slot is looked at again.
+    for (int i = 0; i < count;) {
+        const Node& node = nodes_[nodes[i]];
+        if (count >= limit || !should_split(node, p)) {
+            ++i;
+            continue;
+        }
+        const bool left = node_importance(nodes_[node.left], p) > 0.0f;
+        const bool right = node_importance(nodes_[node.right], p) > 0.0f;
+        nodes[i] = left ? node.left : node.right;  // the root's importance > 0: one of them is
+        if (left && right) nodes[count++] = node.right;
+    }
+    return count;
+}
+
+int LightTree::sample_split(const vec3& p, float u, int max_samples, uint32_t* emitters,
+                            float* pmfs) const {
+    uint32_t nodes[kMaxLightSplits];
+    const int count = cut(p, max_samples, nodes);
+    int written = 0;
+    for (int i = 0; i < count; ++i)
+        if (sample_below(nodes[i], p, u, &emitters[written], &pmfs[written])) ++written;
+    return written;
+}
+
+float LightTree::pmf(const vec3& p, uint32_t emitter, int max_samples) const {
     if (emitter >= leaf_of_.size()) return 0.0f;
-    // The factors sample() multiplies on the way down, from the leaf up.
+    uint32_t nodes[kMaxLightSplits];
+    const int count = max_samples <= 1 ? (empty() ? 0 : 1) : cut(p, max_samples, nodes);
+    if (max_samples <= 1) nodes[0] = 0;  // no cut: the root (pmf() of the one-emitter choice)
+    const auto in_cut = [&](uint32_t index) {
+        return std::find(nodes, nodes + count, index) != nodes + count;
+    };
+    // The factors sample_below() multiplies on the way down from the cut node, from the leaf up.
     float probability = 1.0f;
     uint32_t index = leaf_of_[emitter];
-    while (index != 0) {
+    while (!in_cut(index)) {
+        if (index == 0) return 0.0f;  // the root, and no node of the cut above the emitter
         const uint32_t parent = nodes_[index].parent;
         float p_left, p_right;
         child_probabilities(parent, p, &p_left, &p_right);

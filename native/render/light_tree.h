@@ -16,6 +16,20 @@
 // (behind every one-sided area light of it, outside every spot cone), never by the shading
 // normal: transmissive surfaces receive light from below it.
 //
+// Splitting (the paper's adaptive tree splitting, section 5): one emitter per next-event estimate
+// cannot tell which lights p actually sees. Two rooms split by a wall, a 2000 W lamp in one and a
+// 20 W lamp in the other: in the dim room the tree weighs the bright lamp 30-100 times higher,
+// so nearly every shadow ray goes to the lamp behind the wall and the lamp that lights the room
+// gets a few percent of them. sample_split(p, u, max_samples) therefore samples one emitter from
+// each node of a cut of the tree: starting from the root, a node whose bounding sphere is large
+// seen from p (radius > kSplitRadiusRatio x distance, or p inside it: where 1/d^2 varies by more
+// than ~3x over the node, so its importance says little about its emitters) is replaced by its
+// children while the cut holds fewer than max_samples nodes. The cut depends on p and
+// max_samples alone, so pmf(p, emitter, max_samples) rebuilds it: an emitter's probability is
+// the product of the descent's choices below its cut node, and the estimator (the sum of one
+// sample per cut node) stays unbiased with MIS against BSDF sampling. max_samples = 1 is the
+// plain one-emitter selection.
+//
 // Energy is in units that make importance an irradiance estimate (W/m^2): intensity (W/sr) for
 // local emitters, irradiance for the distant ones LightSampler weighs against the tree.
 // Determinism: building depends only on the emitters' order; sampling only on p and u.
@@ -28,6 +42,11 @@
 #include "util/math.h"
 
 namespace shgi {
+
+// Largest cut sample_split() makes (emitters per next-event estimate).
+inline constexpr int kMaxLightSplits = 8;
+// A node is split when its bounding sphere's radius exceeds this share of its distance from p.
+inline constexpr float kSplitRadiusRatio = 0.25f;
 
 // What the tree knows of one emitter.
 struct LightBounds {
@@ -51,7 +70,18 @@ class LightTree {
     // emitter can light p.
     bool sample(const vec3& p, float u, uint32_t* emitter, float* pmf) const;
     // The probability that sample() chooses `emitter` at p.
-    float pmf(const vec3& p, uint32_t emitter) const;
+    float pmf(const vec3& p, uint32_t emitter) const { return pmf(p, emitter, 1); }
+
+    // One emitter from each node of the cut at p (see the header), each chosen with u as
+    // sample() chooses below the root: writes up to max_samples (clamped to [1,
+    // kMaxLightSplits]) emitters and their probabilities, returns how many (0: none can light p).
+    int sample_split(const vec3& p, float u, int max_samples, uint32_t* emitters,
+                     float* pmfs) const;
+    // The probability that sample_split(p, ., max_samples) returns `emitter` among its samples.
+    float pmf(const vec3& p, uint32_t emitter, int max_samples) const;
+    // The cut at p: writes its nodes (at most max_samples, clamped as above) and returns their
+    // count; 0 when no emitter can light p.
+    int cut(const vec3& p, int max_samples, uint32_t* nodes) const;
 
   private:
     struct Node {
@@ -64,6 +94,10 @@ class LightTree {
     uint32_t build(std::vector<uint32_t>& order, size_t begin, size_t end, uint32_t parent,
                    const std::vector<LightBounds>& emitters);
     float node_importance(const Node& node, const vec3& p) const;
+    bool should_split(const Node& node, const vec3& p) const;
+    // sample() below `node`.
+    bool sample_below(uint32_t node, const vec3& p, float u, uint32_t* emitter,
+                      float* pmf) const;
     // Probabilities of descending from interior node `index` to its left and right child.
     void child_probabilities(uint32_t index, const vec3& p, float* left, float* right) const;
 

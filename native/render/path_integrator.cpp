@@ -120,51 +120,62 @@ void PathIntegrator::record_first_hit(const Shading& shading, const Ray& ray, co
 // Next-event estimation at the current surface, MIS-weighted against BSDF sampling.
 void PathIntegrator::sample_direct() {
     ScopedTimer timer(clock_ != nullptr && clock_->time_direct ? &clock_->direct : nullptr);
-    Ray shadow;
-    if (!prepare_direct(&shadow)) return;
-    if (clock_ != nullptr) ++clock_->rays;
-    if (!scene_.occluded(shadow)) add_direct();
+    Ray shadows[kMaxLightSplits];
+    const int count = prepare_direct(shadows);
+    for (int k = 0; k < count; ++k) {
+        if (clock_ != nullptr) ++clock_->rays;
+        if (!scene_.occluded(shadows[k])) add_direct(k);
+    }
 }
 
-bool PathIntegrator::prepare_direct(Ray* shadow) {
+int PathIntegrator::prepare_direct(Ray* shadows) {
     const Shading& shading = shading_;
-    if (!shading.bsdf.has_smooth_lobes()) return false;  // a Dirac lobe never meets a light sample
-    LightSample ls;
+    if (!shading.bsdf.has_smooth_lobes()) return 0;  // a Dirac lobe never meets a light sample
+    LightSample samples[kMaxLightSplits];
     float u_select = rng_.next_float();
     vec2 u = rng_.next_vec2();
     if (vertex_ == 0 && first_light_sample_) {
         u_select = first_light_sample_->u_select;
         u = first_light_sample_->u;
     }
-    if (!lights_.sample(shading.position, shading.frame.z, u_select, u, &ls)) return false;
-    const vec3 wi = shading.frame.to_local(ls.wi);
-    const bool geometric_above = glm::dot(ls.wi, shading.geometric_normal) > 0.0f;
-    if (geometric_above != (wi.z > 0.0f)) return false;  // shading and geometric normals disagree
-    pending_.eval = vertex_field() != nullptr ? shading.bsdf.eval_field(shading.wo, wi)
-                                      : shading.bsdf.eval(shading.wo, wi);
-    if (max_component(pending_.eval.total()) <= 0.0f) return false;
-    shadow->origin = shading.spawn_origin(ls.wi);
-    shadow->direction = ls.wi;
-    shadow->tmin = 0.0f;
-    shadow->tmax = std::isinf(ls.distance) ? kInfinity : ls.distance * (1.0f - kShadowShorten);
-    pending_.light = ls;
-    pending_.wi = wi;
-    return true;
+    const int sampled = lights_.sample_split(shading.position, shading.frame.z, u_select, u,
+                                             samples);
+    int count = 0;
+    for (int i = 0; i < sampled; ++i) {
+        const LightSample& ls = samples[i];
+        const vec3 wi = shading.frame.to_local(ls.wi);
+        const bool geometric_above = glm::dot(ls.wi, shading.geometric_normal) > 0.0f;
+        if (geometric_above != (wi.z > 0.0f)) continue;  // shading and geometric normals disagree
+        PendingDirect& pending = pending_[count];
+        pending.eval = vertex_field() != nullptr ? shading.bsdf.eval_field(shading.wo, wi)
+                                                 : shading.bsdf.eval(shading.wo, wi);
+        if (max_component(pending.eval.total()) <= 0.0f) continue;
+        Ray& shadow = shadows[count];
+        shadow.origin = shading.spawn_origin(ls.wi);
+        shadow.direction = ls.wi;
+        shadow.tmin = 0.0f;
+        shadow.tmax = std::isinf(ls.distance) ? kInfinity : ls.distance * (1.0f - kShadowShorten);
+        pending.light = ls;
+        pending.wi = wi;
+        ++count;
+    }
+    return count;
 }
 
-void PathIntegrator::add_direct() {
+void PathIntegrator::add_direct(int k) {
     const Shading& shading = shading_;
-    const LightSample& ls = pending_.light;
+    const PendingDirect& pending = pending_[k];
+    const LightSample& ls = pending.light;
     const bool mis = !ls.delta && vertex_field() == nullptr;
     const float weight =
-        mis ? power_heuristic(ls.pdf, shading.bsdf.pdf(shading.wo, pending_.wi)) : 1.0f;
+        mis ? power_heuristic(ls.pdf, shading.bsdf.pdf(shading.wo, pending.wi)) : 1.0f;
     const vec3 scale = throughput_ * ls.radiance * (weight / ls.pdf);
     if (vertex_ == 0) {  // direct light at the first surface, split by the lobes it lit
         for (int c = 0; c < kLobeClassCount; ++c)
-            add_light(pending_.eval.by_class[c] * scale, c, true);
+            add_light(pending.eval.by_class[c] * scale, c, true);
         return;
     }
-    add_split(pending_.eval.total() * scale, false);
+    add_split(pending.eval.total() * scale, false);
 }
 
 // Indirect light from the field through the field lobes (see the header).

@@ -19,8 +19,9 @@
 //
 // Steps: trace() runs a whole path. A renderer that traces many paths at once can instead run
 // each path's steps itself: begin() (what the camera ray meets, the first surface's shading),
-// prepare_direct() (next-event estimation up to its shadow ray), add_direct() (only when that
-// ray was not occluded), finish() (field light and the rest of the path); and trace the shadow
+// prepare_direct() (next-event estimation up to its shadow rays: one per light sample, more than
+// one where the light sampler splits, render/light_tree.h), add_direct(k) (for each shadow ray k
+// that was not occluded), finish() (field light and the rest of the path); and trace the shadow
 // rays of many paths as one Embree stream between the second and third step. The random numbers
 // and the order of every addition are those of trace(), so the result is bit-identical.
 //
@@ -88,12 +89,13 @@ class PathIntegrator {
     // Adds what the camera ray meets and shades its first surface; false when the path ends
     // there (a miss). The steps below may be called only after it returned true.
     bool begin(const Ray& camera_ray, const Hit& first_hit);
-    // Samples a light for the current surface and evaluates the BSDF: true when a contribution
-    // waits on the shadow ray written to *shadow.
-    bool prepare_direct(Ray* shadow);
-    // Adds the waiting contribution; call it after prepare_direct() returned true and only when
-    // the shadow ray was not occluded.
-    void add_direct();
+    // Samples lights for the current surface and evaluates the BSDF: returns how many
+    // contributions wait on the shadow rays written to shadows[0, count) (room for
+    // kMaxLightSplits).
+    int prepare_direct(Ray* shadows);
+    // Adds waiting contribution k; call it after prepare_direct() and only when shadow ray k
+    // was not occluded, in increasing k.
+    void add_direct(int k);
     // Indirect light at the current surface and the rest of the path.
     void finish();
 
@@ -170,7 +172,7 @@ class PathIntegrator {
 
     Ray ray_;                          // the ray that reached the current surface
     Shading shading_;                  // the current surface (set by enter_surface)
-    PendingDirect pending_;
+    PendingDirect pending_[kMaxLightSplits];
     bool terminate_on_next_surface_ = false;
     vec3 throughput_{1.0f};
     int vertex_ = 0;                   // surfaces shaded so far

@@ -37,6 +37,10 @@ void validate_path_tracer_settings(const PathTracerSettings& settings) {
         throw InvalidArgument(format_message("PathTracerSettings.clamp_indirect is ",
                                              settings.clamp_indirect,
                                              "; it must be finite and >= 0 (0 = off)"));
+    if (settings.light_splits < 1 || settings.light_splits > kMaxLightSplits)
+        throw InvalidArgument(format_message("PathTracerSettings.light_splits is ",
+                                             settings.light_splits, "; it must be in [1, ",
+                                             kMaxLightSplits, "] (1: one light per shadow ray)"));
     if (settings.tile_size < 1)
         throw InvalidArgument(format_message("PathTracerSettings.tile_size is ",
                                              settings.tile_size, "; it must be >= 1"));
@@ -46,7 +50,7 @@ PathTracer::PathTracer(const Scene& scene, const PathTracerSettings& settings)
     : scene_(&scene),
       scene_revision_(scene.revision()),
       settings_(validated(settings)),
-      lights_(scene, settings.world_sampling) {
+      lights_(scene, settings.world_sampling, true, settings.light_splits) {
     const Camera& camera = scene.camera();
     film_ = ProgressiveFilm(int(camera.resolution_x), int(camera.resolution_y));
 }

@@ -1,7 +1,9 @@
 // PathTracer: the reference unidirectional path tracer every SHGI solver is checked against.
 //
 // Algorithm (Veach 1997, ch. 9; pbrt-v4 §13.4 "PathIntegrator"): at each surface, next-event
-// estimation samples one emitter (LightSampler, chosen by power) and the BSDF (PrincipledBsdf)
+// estimation samples an emitter (LightSampler, chosen by a light tree; where the tree's nodes
+// are large seen from the shading point, one emitter from each of up to `light_splits` nodes,
+// render/light_tree.h) and the BSDF (PrincipledBsdf)
 // is sampled to continue; emitters found by BSDF rays (emissive triangles, point/spot disks,
 // area lights, sun cones, the world) are weighted against NEE by the power heuristic (beta = 2).
 // Russian roulette starts after `russian_roulette_depth` surfaces with survival probability
@@ -43,6 +45,9 @@ struct PathTracerSettings {
     int russian_roulette_depth = 3;    // surfaces before roulette may end a path
     float clamp_indirect = 0.0f;       // max component of an indirect sample; 0 = off
     WorldSampling world_sampling = WorldSampling::Cosine;
+    // Most emitters one next-event estimate samples, [1, kMaxLightSplits]: the light tree's
+    // splitting (render/light_tree.h); 1 = one emitter per shadow ray.
+    int light_splits = 4;
     int tile_size = 16;                // pixels per tile side (work unit of the thread pool)
 };
 

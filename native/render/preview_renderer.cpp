@@ -66,6 +66,7 @@ struct Wave {
         hits.reserve(capacity);
         shadow_rays.reserve(capacity);
         shadow_paths.reserve(capacity);
+        shadow_slots.reserve(capacity);
         occluded.reserve(capacity);
     }
     size_t capacity() const { return x.size(); }
@@ -88,6 +89,7 @@ struct Wave {
     std::vector<Hit> hits;
     std::vector<Ray> shadow_rays;
     std::vector<uint32_t> shadow_paths;  // the path each shadow ray belongs to
+    std::vector<uint8_t> shadow_slots;   // and which of its light samples (add_direct's k)
     std::vector<uint8_t> occluded;
 };
 
@@ -234,16 +236,21 @@ class FrameWork {
     void trace_direct(Wave& wave) const {
         wave.shadow_rays.clear();
         wave.shadow_paths.clear();
-        Ray shadow;
+        wave.shadow_slots.clear();
+        Ray shadows[kMaxLightSplits];
         for (size_t i = 0; i < wave.count; ++i) {
-            if (!wave.live[i] || !wave.paths[i]->prepare_direct(&shadow)) continue;
-            wave.shadow_rays.push_back(shadow);
-            wave.shadow_paths.push_back(uint32_t(i));
+            if (!wave.live[i]) continue;
+            const int count = wave.paths[i]->prepare_direct(shadows);
+            for (int k = 0; k < count; ++k) {
+                wave.shadow_rays.push_back(shadows[k]);
+                wave.shadow_paths.push_back(uint32_t(i));
+                wave.shadow_slots.push_back(uint8_t(k));
+            }
         }
         if (wave.shadow_rays.empty()) return;
         scene_.occluded(wave.shadow_rays, wave.occluded, nullptr, RayCoherence::Coherent);
         for (size_t j = 0; j < wave.shadow_rays.size(); ++j)
-            if (!wave.occluded[j]) wave.paths[wave.shadow_paths[j]]->add_direct();
+            if (!wave.occluded[j]) wave.paths[wave.shadow_paths[j]]->add_direct(wave.shadow_slots[j]);
     }
 
     const Scene& scene_;
@@ -317,7 +324,7 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const Camera& camera,
       camera_rays_(camera),
       settings_(validated(settings)),
       path_settings_(path_settings_for(settings)),
-      lights_(scene, settings.world_sampling) {
+      lights_(scene, settings.world_sampling, true, path_settings_.light_splits) {
     film_ = ProgressiveFilm(int(camera_.resolution_x), int(camera_.resolution_y),
                             settings.combined_only ? FilmPasses::CombinedOnly : FilmPasses::All);
     g_buffer_ = GBuffer(int(camera_.resolution_x), int(camera_.resolution_y));
@@ -333,7 +340,8 @@ void PreviewRenderer::add_frame_stage(FrameWideStage stage) {
 const LightSampler& PreviewRenderer::lights_for(const IndirectField& field) {
     if (!field.includes_world_direct()) return lights_;
     if (!lights_without_world_)
-        lights_without_world_.emplace(*scene_, settings_.world_sampling, false);
+        lights_without_world_.emplace(*scene_, settings_.world_sampling, false,
+                                      path_settings_.light_splits);
     return *lights_without_world_;
 }
 

@@ -73,7 +73,10 @@ def test_indirect_diffuse_agrees_with_path_tracer(name, order):
 @pytest.mark.parametrize("name", [
     pytest.param("cornell_box", marks=missed("PSNR HOLPV 24.9 dB, LPV 25.2 dB")),
     "sun_room",
-    "two_rooms",
+    # Passed (HOLPV 19.10 dB, LPV 18.85 dB) while the path tracer's two-room renders were noisy;
+    # with light tree splitting the noise no longer hides HOLPV's light through the wall
+    # (DiffInd 1.22x, test_indirect_diffuse_agrees_with_path_tracer[two_rooms-2]).
+    pytest.param("two_rooms", marks=missed("PSNR HOLPV 20.9 dB, LPV 21.5 dB")),
 ])
 def test_holpv_is_closer_than_lpv(name):
     ref, lpv = rendered(name, 1)

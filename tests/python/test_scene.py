@@ -168,6 +168,7 @@ def integer_fields():
 
 TYPE_RANGES = [(-2**31, 2**31 - 1), (0, 2**32 - 1), (0, 2**64 - 1)]  # int, uint32, uint64
 NARROWER_RANGES = {("PathTracerSettings", "samples"): (1, 2**24),
+                   ("PathTracerSettings", "light_splits"): (1, 8),  # kMaxLightSplits
                    ("PreviewSettings", "samples"): (1, 2**24),
                    ("PhotonLatticeSettings", "photons"): (1, 2**64 - 1),
                    ("RadianceFieldSettings", "photons"): (1, 2**64 - 1),

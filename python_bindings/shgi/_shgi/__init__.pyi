@@ -1614,6 +1614,14 @@ class PathTracerSettings:
     def glossy_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
+    def light_splits(self) -> int:
+        """
+        Most emitters one next-event estimate samples: the light tree's splitting, one shadow ray each (4; 1 = one emitter per shadow ray).
+        """
+    @light_splits.setter
+    def light_splits(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
     def max_bounces(self) -> int:
         """
         Total bounce limit, Cycles' (12).

@@ -1,6 +1,8 @@
 // Many-light selection (render/light_tree.h, render/light_sampler.h) against its own pdf: the
 // tree's choices pass a χ² test against pmf(), its pmfs sum to one, emitters that cannot light a
-// point (behind a one-sided area light, outside a spot's cone) get none of its samples, the
+// point (behind a one-sided area light, outside a spot's cone) get none of its samples, split
+// sampling (one emitter per node of a cut) passes the same test against its own pmf and gives
+// the lamp of the two rooms' seen room a shadow ray at every point, the
 // light sampler's selection pdfs sum to one over local and distant emitters, and next-event
 // estimation over many lights converges to their analytic irradiance.
 #include "render/light_tree.h"
@@ -8,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -15,6 +18,7 @@
 #include "render/light_sampler.h"
 #include "render/render_test_scenes.h"
 #include "support/chi2.h"
+#include "util/error.h"
 #include "util/rng.h"
 
 namespace shgi {
@@ -113,6 +117,71 @@ TEST(LightTree, ANearDimLightTakesMostSamplesFromAFarBrightOne) {
     EXPECT_GT(tree.pmf(vec3(0.0f, 0.0f, 1.8f), 0), 0.5f);
 }
 
+// Splitting: one emitter from each node of the cut; each choice has the probability pmf(p, e, K)
+// claims, the pmfs sum to the cut's size, and the cut has more than one node near the lights.
+TEST(LightTree, SplitChoicesPassChiSquareAgainstTheirPmf) {
+    const std::vector<LightBounds> lights = mixed_lights();
+    const LightTree tree(lights);
+    constexpr int kSplits = 4;
+    Pcg32 rng(12);
+    for (const vec3& p : {vec3(0.0f), vec3(-8.0f, 4.0f, 1.0f), vec3(3.0f, 3.0f, 0.0f)}) {
+        uint32_t nodes[kMaxLightSplits];
+        const int cut = tree.cut(p, kSplits, nodes);
+        EXPECT_GT(cut, 1) << "at (" << p.x << ", " << p.y << ", " << p.z << ")";
+        EXPECT_LE(cut, kSplits);
+        double sum = 0.0;
+        std::vector<double> expected(lights.size());
+        for (uint32_t i = 0; i < lights.size(); ++i) {
+            expected[i] = double(tree.pmf(p, i, kSplits)) * kSamples;
+            sum += tree.pmf(p, i, kSplits);
+        }
+        EXPECT_NEAR(sum, double(cut), kPmfSumTolerance * cut);
+        std::vector<double> observed(lights.size(), 0.0);
+        for (int s = 0; s < kSamples; ++s) {
+            uint32_t chosen[kMaxLightSplits];
+            float pmf[kMaxLightSplits];
+            const int count = tree.sample_split(p, rng.next_float(), kSplits, chosen, pmf);
+            ASSERT_EQ(count, cut);
+            for (int k = 0; k < count; ++k) {
+                EXPECT_FLOAT_EQ(pmf[k], tree.pmf(p, chosen[k], kSplits));
+                observed[chosen[k]] += 1.0;
+            }
+        }
+        // Independent multinomials, one per cut node: their bins pooled are the same test.
+        const std::string failure = chi2_test(observed, expected);
+        EXPECT_TRUE(failure.empty()) << failure;
+    }
+}
+
+// The two rooms of examples/scenes.two_rooms: a 20 W lamp at x = 1.5 in the room the camera sees
+// (x in [0.05, 3]), a 2000 W lamp at x = -1.5 beyond the 0.1 m wall. Without splitting the tree
+// sends the seen lamp a few percent of the shadow rays from the seen room (measured over a
+// 0.25 m grid of it: 6.1% on average, under 5% at 1004 of 1716 points); with splitting every
+// next-event estimate there samples it.
+TEST(LightTree, SplittingGivesTheSeenRoomsLampAShadowRayEverywhereInIt) {
+    const LightTree tree({point_bounds(vec3(-1.5f, 1.5f, 2.0f), 2000.0f / (4.0f * kPi)),
+                          point_bounds(vec3(1.5f, 1.5f, 2.0f), 20.0f / (4.0f * kPi))});
+    constexpr uint32_t kSeenLamp = 1;
+    double share = 0.0;
+    int points = 0, starved = 0;  // points where the seen lamp gets under 5% of the rays
+    for (float x = 0.05f; x <= 3.0f; x += 0.25f)
+        for (float y = 0.0f; y <= 3.0f; y += 0.25f)
+            for (float z = 0.0f; z <= 2.5f; z += 0.25f) {
+                const vec3 p(x, y, z);
+                const float pmf = tree.pmf(p, kSeenLamp);
+                share += pmf;
+                starved += pmf < 0.05f;
+                ++points;
+                EXPECT_EQ(tree.pmf(p, kSeenLamp, 4), 1.0f) << "at (" << x << ", " << y << ", " << z << ")";
+            }
+    share /= points;
+    EXPECT_LT(share, 0.1);
+    EXPECT_GT(starved, points / 2);
+    std::printf("seen lamp's share of shadow rays in the seen room without splitting: %.3f mean, "
+                "under 0.05 at %d of %d points; with splitting 1 at every point\n", share,
+                starved, points);
+}
+
 // A scene with every kind of emitter for LightSampler.
 Scene many_light_scene() {
     Scene scene;
@@ -190,6 +259,53 @@ TEST(LightSampler, NextEventEstimationOverManyPointLightsIsUnbiased) {
     const double mean = sum / kSamples;
     const double error = std::sqrt(std::max(0.0, sum2 / kSamples - mean * mean) / kSamples);
     EXPECT_NEAR(mean, expected, 5.0 * error + 1e-6 * expected);
+}
+
+// The same with the tree's splitting: the estimate (the sum over one next-event estimate's
+// samples) still converges to the analytic irradiance, and selection pdfs of the local emitters
+// sum to the cut's size.
+TEST(LightSampler, NextEventEstimationWithSplitsIsUnbiased) {
+    Scene scene;
+    scene.add_material(test::lambert(0.5f));
+    scene.add_instance(scene.add_mesh(test::plane(0.1f)), glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, -5.0f)));
+    double expected = 0.0;
+    const vec3 p(0.3f, -0.2f, 0.0f), n(0.0f, 0.0f, 1.0f);
+    for (int i = 0; i < 12; ++i) {
+        const vec3 position(-6.0f + float(i), 0.5f * float(i % 3), 1.0f + 0.3f * float(i));
+        const float power = 5.0f + 20.0f * float(i % 4);
+        scene.add_light(test::point_light(position, power));
+        const vec3 d = position - p;
+        expected += point_intensity_from_power(power) * glm::dot(glm::normalize(d), n) / glm::dot(d, d);
+    }
+    World dark;
+    dark.strength = 0.0f;
+    scene.set_world(dark);
+    scene.commit();
+    constexpr int kSplits = 4;
+    const LightSampler lights(scene, WorldSampling::Cosine, true, kSplits);
+    double pmf_sum = 0.0;
+    for (uint32_t e = 0; e < lights.emitter_count(); ++e) pmf_sum += lights.selection_pdf(e, p);
+    EXPECT_GT(pmf_sum, 1.5);  // split here
+    EXPECT_LE(pmf_sum, kSplits + kPmfSumTolerance);
+    EXPECT_NEAR(pmf_sum, std::round(pmf_sum), kPmfSumTolerance * kSplits);
+    Pcg32 rng(3);
+    double sum = 0.0, sum2 = 0.0;
+    for (int s = 0; s < kSamples; ++s) {
+        LightSample ls[kMaxLightSplits];
+        double value = 0.0;
+        const int count = lights.sample_split(p, n, rng.next_float(), rng.next_vec2(), ls);
+        for (int k = 0; k < count; ++k)
+            value += ls[k].radiance.x * std::max(0.0f, glm::dot(ls[k].wi, n)) / ls[k].pdf;
+        sum += value;
+        sum2 += value * value;
+    }
+    const double mean = sum / kSamples;
+    const double error = std::sqrt(std::max(0.0, sum2 / kSamples - mean * mean) / kSamples);
+    EXPECT_NEAR(mean, expected, 5.0 * error + 1e-6 * expected);
+    LightSample one;
+    EXPECT_THROW(lights.sample(p, n, 0.5f, vec2(0.5f), &one), Internal);
+    EXPECT_THROW(LightSampler(scene, WorldSampling::Cosine, true, kMaxLightSplits + 1),
+                 InvalidArgument);
 }
 
 }  // namespace
