@@ -24,7 +24,7 @@ constexpr float kDefaultCausticRadiusFraction = 0.02f;
 //   f32 caustic_radius | u64 caustic photons injected | the timings | global ShLattice |
 //   caustic ShLattice | f32 power_scale, u64 count, Photon[count] of the caustic photon map.
 constexpr char kLatticeMagic[8] = {'S', 'H', 'G', 'I', 'L', 'A', 'T', '\0'};
-constexpr uint32_t kLatticeFileVersion = 1;
+constexpr uint32_t kLatticeFileVersion = 2;  // 2: the lattices hold visibility masks
 constexpr const char* kLatticeFile = "lattice file";
 
 void write_settings(BinaryWriter& out, const PhotonLatticeSettings& s) {
