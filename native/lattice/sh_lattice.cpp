@@ -961,7 +961,7 @@ void ShLattice::write(BinaryWriter& out) const {
     }
 }
 
-ShLattice ShLattice::read(BinaryReader& in) {
+ShLattice ShLattice::read(BinaryReader& in, bool with_visibility) {
     const auto refuse = [&](const std::string& problem) {
         return IoError(format_message(in.kind(), " \"", in.path(), "\": ", problem));
     };
@@ -983,7 +983,7 @@ ShLattice ShLattice::read(BinaryReader& in) {
     const size_t cells = lattice.cell_count();
     lattice.coeffs_ = in.array<float>("the lattice coefficients");
     lattice.surface_index_ = in.array<uint32_t>("the lattice cells");
-    lattice.visible_near_ = in.array<uint32_t>("the lattice visibility");
+    if (with_visibility) lattice.visible_near_ = in.array<uint32_t>("the lattice visibility");
     if (lattice.coeffs_.size() != cells * size_t(lattice.num_coefficients()) * 3 ||
         lattice.surface_index_.size() != cells)
         throw refuse(format_message("a lattice of ", cells, " cells holds ",
@@ -1003,6 +1003,7 @@ ShLattice ShLattice::read(BinaryReader& in) {
             throw refuse(format_message("a cell names surface ", index, " of ", surfaces));
     const size_t padded_cells =
         empty ? 0 : size_t(dims.x + 2) * size_t(dims.y + 2) * size_t(dims.z + 2);
+    if (!with_visibility) lattice.visible_near_.assign(padded_cells, kFullBlock);
     if (lattice.visible_near_.size() != padded_cells)
         throw refuse(format_message("a lattice of ", cells, " cells holds ",
                                     lattice.visible_near_.size(), " visibility masks, not ",

@@ -167,7 +167,9 @@ class ShLattice {
     // PhotonLattice: read() gives back a lattice that samples bit for bit as this one, and
     // throws IoError naming the file for contents no lattice has.
     void write(BinaryWriter& out) const;
-    static ShLattice read(BinaryReader& in);
+    // `with_visibility` false reads a lattice written before the visibility masks (lattice file
+    // version 1): it samples as it did then, every cell of a block seen.
+    static ShLattice read(BinaryReader& in, bool with_visibility = true);
 
   private:
     // The surface of a cell that has one: A_c and, per orientation bin, A_b n̄_b (the bin's area
