@@ -163,9 +163,9 @@ class ShLattice {
     const std::vector<float>& coefficients() const { return coeffs_; }
     size_t memory_bytes() const;
 
-    // The whole state (cells, surfaces with their receiving sides, coefficients), for a saved
-    // PhotonLattice: read() gives back a lattice that samples bit for bit as this one, and
-    // throws IoError naming the file for contents no lattice has.
+    // The whole state (cells, surfaces with their receiving sides, visibility masks,
+    // coefficients), for a saved PhotonLattice: read() gives back a lattice that samples bit for
+    // bit as this one, and throws IoError naming the file for contents no lattice has.
     void write(BinaryWriter& out) const;
     // `with_visibility` false reads a lattice written before the visibility masks (lattice file
     // version 1): it samples as it did then, every cell of a block seen.
