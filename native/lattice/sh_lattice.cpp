@@ -153,10 +153,11 @@ int dominant_axis(const vec3& v) {
     return a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
 }
 
-// Calls emit(cell, area in cells², centroid in cell coordinates) for every cell the triangle q0 q1 q2 (cell coordinates) has
-// area in. The cells visited are those of the triangle's bounding box, walked column by column
-// along the dominant axis of its normal and limited in each column to the span the plane
-// crosses, so the work grows with the cells the triangle touches, not with its box's volume.
+// Calls emit(cell, area in cells², centroid in cell coordinates) for every cell the triangle
+// q0 q1 q2 (cell coordinates) has area in. The cells visited are those of the triangle's
+// bounding box, walked column by column along the dominant axis of its normal and limited in
+// each column to the span the plane crosses, so the work grows with the cells the triangle
+// touches, not with its box's volume.
 template <typename Emit>
 void for_each_cell_piece(const vec3 q[3], const ivec3& dims, Emit&& emit) {
     const vec3 lo = glm::min(q[0], glm::min(q[1], q[2]));
@@ -355,7 +356,8 @@ void for_each_trilinear_cell(const vec3& cells, const ivec3& dims, uint32_t seen
             const float wyz = (y == base.y ? 1.0f - t.y : t.y) * wz;
             const size_t row = size_t(dims.x) * (size_t(y) + size_t(dims.y) * size_t(z));
             for (int x = lo.x; x <= hi.x; ++x) {
-                const int bit = (z - centre.z + 1) * 9 + (y - centre.y + 1) * 3 + (x - centre.x + 1);
+                const int bit =
+                    (z - centre.z + 1) * 9 + (y - centre.y + 1) * 3 + (x - centre.x + 1);
                 if (!(seen & (uint32_t(1) << bit))) continue;
                 const size_t cell = row + size_t(x);
                 const float density = facing(cell);
@@ -590,7 +592,8 @@ void ShLattice::measure_surfaces(const Scene& scene, Progress* progress, bool vi
         // side its triangles face), where light it receives comes from.
         vec3 anchor = sum.centroid / surface.area;
         const float front = glm::length(sum.front);
-        if (front > kAnchorMinFrontShare * surface.area) anchor += (anchor_offset / front) * sum.front;
+        if (front > kAnchorMinFrontShare * surface.area)
+            anchor += (anchor_offset / front) * sum.front;
         index = uint32_t(surfaces.size());
         surfaces.push_back(surface);
         anchors.push_back(anchor);
