@@ -24,7 +24,7 @@ constexpr float kDefaultCausticRadiusFraction = 0.02f;
 //   f32 caustic_radius | u64 caustic photons injected | the timings | global ShLattice |
 //   caustic ShLattice | f32 power_scale, u64 count, Photon[count] of the caustic photon map.
 constexpr char kLatticeMagic[8] = {'S', 'H', 'G', 'I', 'L', 'A', 'T', '\0'};
-constexpr uint32_t kLatticeFileVersion = 1;
+constexpr uint32_t kLatticeFileVersion = 2;  // 2: the lattices hold visibility masks
 constexpr const char* kLatticeFile = "lattice file";
 
 void write_settings(BinaryWriter& out, const PhotonLatticeSettings& s) {
@@ -238,9 +238,11 @@ std::unique_ptr<PhotonLattice> PhotonLattice::load(const std::string& path) {
     if (std::memcmp(magic, kLatticeMagic, sizeof(kLatticeMagic)) != 0)
         throw IoError(format_message("\"", path, "\" is not an SHGI lattice file (bad magic)"));
     const uint32_t version = r.get<uint32_t>("the header");
-    if (version != kLatticeFileVersion)
+    // Version 1 lattices (before the visibility masks) still open, and sample as they did.
+    if (version != kLatticeFileVersion && version != 1)
         throw IoError(format_message("lattice file \"", path, "\" has version ", version,
-                                     "; this SHGI reads version ", kLatticeFileVersion));
+                                     "; this SHGI reads versions 1 to ", kLatticeFileVersion));
+    const bool with_visibility = version >= 2;
     std::unique_ptr<PhotonLattice> lattice(new PhotonLattice());
     lattice->loaded_from_ = path;
     lattice->settings_ = read_settings(r);
@@ -249,8 +251,8 @@ std::unique_ptr<PhotonLattice> PhotonLattice::load(const std::string& path) {
     lattice->caustic_radius_ = r.get<float>("the header");
     lattice->caustic_photons_injected_ = r.get<uint64_t>("the header");
     lattice->timings_ = r.get<PhotonLatticeTimings>("the timings");
-    lattice->global_ = ShLattice::read(r);
-    lattice->caustic_ = ShLattice::read(r);
+    lattice->global_ = ShLattice::read(r, with_visibility);
+    lattice->caustic_ = ShLattice::read(r, with_visibility);
     const float power_scale = r.get<float>("the caustic photons");
     std::vector<Photon> photons = r.array<Photon>("the caustic photons");
     if (in.peek() != std::ifstream::traits_type::eof())

@@ -41,6 +41,11 @@ constexpr int kClipCapacity = 16;
 // is exact, so visiting one cell too many costs only time, and one too few loses area.
 constexpr float kColumnSlackCells = 1e-3f;
 
+// Anchors (update_visible_near) sit this far off their cell's surface, in cells; a surface whose
+// front normals cancel (|Σ area × front| below this share of its area) keeps its anchor on it.
+constexpr float kAnchorOffsetCells = 0.01f;
+constexpr float kAnchorMinFrontShare = 0.05f;
+
 constexpr uint64_t kPhotonsPerChunk = 1 << 16;
 constexpr uint64_t kCellsPerChunk = 512;
 
@@ -53,18 +58,24 @@ const char* const kClassName = "ShLattice";
 struct SurfaceFragment {
     uint32_t cell;
     uint32_t bin;
-    float area;   // m^2
-    vec3 normal;  // unit, sign-folded
+    float area;     // m^2
+    vec3 normal;    // unit, sign-folded
+    vec3 centroid;  // m, world
+    vec3 front;     // unit, the triangle's own (unfolded) normal
 };
 
 // Per cell, per orientation bin: Σ area and Σ area × sign-folded unit normal.
 struct BinSums {
     float area[3] = {0.0f, 0.0f, 0.0f};
     vec3 normal[3] = {vec3(0.0f), vec3(0.0f), vec3(0.0f)};
+    vec3 centroid{0.0f};  // Σ area × centroid, all bins
+    vec3 front{0.0f};     // Σ area × front normal, all bins
 
     void add(const SurfaceFragment& fragment) {
         area[fragment.bin] += fragment.area;
         normal[fragment.bin] += fragment.area * fragment.normal;
+        centroid += fragment.area * fragment.centroid;
+        front += fragment.area * fragment.front;
     }
 };
 
@@ -108,9 +119,9 @@ bool clip_against_plane(const ClipPolygon& in, int axis, bool upper, ClipPolygon
     return true;
 }
 
-// Area (in cells²) of the triangle q0 q1 q2 (cell coordinates) inside cell `cell`; `unit_normal`
-// is the triangle's.
-float clipped_area(const vec3 q[3], const ivec3& cell, const vec3& unit_normal) {
+// Area (in cells²) of the triangle q0 q1 q2 (cell coordinates) inside cell `cell`, and the
+// centroid of that piece (cell coordinates); `unit_normal` is the triangle's.
+float clipped_area(const vec3 q[3], const ivec3& cell, const vec3& unit_normal, vec3& centroid) {
     ClipPolygon buffers[2];
     ClipPolygon* polygon = &buffers[0];
     ClipPolygon* clipped = &buffers[1];
@@ -123,9 +134,17 @@ float clipped_area(const vec3 q[3], const ivec3& cell, const vec3& unit_normal) 
         if (polygon->count < 3) return 0.0f;
     }
     vec3 twice_area(0.0f);
+    vec3 moment(0.0f);  // Σ (twice the fan triangle's signed area) × its centroid
+    float weight = 0.0f;
     const vec3* v = polygon->vertices.data();
-    for (int i = 1; i + 1 < polygon->count; ++i)
-        twice_area += glm::cross(v[i] - v[0], v[i + 1] - v[0]);
+    for (int i = 1; i + 1 < polygon->count; ++i) {
+        const vec3 twice = glm::cross(v[i] - v[0], v[i + 1] - v[0]);
+        twice_area += twice;
+        const float w = glm::dot(twice, unit_normal);
+        moment += w * (v[0] + v[i] + v[i + 1]) / 3.0f;
+        weight += w;
+    }
+    centroid = corner + (weight != 0.0f ? moment / weight : v[0]);
     return 0.5f * std::fabs(glm::dot(twice_area, unit_normal));
 }
 
@@ -134,10 +153,11 @@ int dominant_axis(const vec3& v) {
     return a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
 }
 
-// Calls emit(cell, area in cells²) for every cell the triangle q0 q1 q2 (cell coordinates) has
-// area in. The cells visited are those of the triangle's bounding box, walked column by column
-// along the dominant axis of its normal and limited in each column to the span the plane
-// crosses, so the work grows with the cells the triangle touches, not with its box's volume.
+// Calls emit(cell, area in cells², centroid in cell coordinates) for every cell the triangle
+// q0 q1 q2 (cell coordinates) has area in. The cells visited are those of the triangle's
+// bounding box, walked column by column along the dominant axis of its normal and limited in
+// each column to the span the plane crosses, so the work grows with the cells the triangle
+// touches, not with its box's volume.
 template <typename Emit>
 void for_each_cell_piece(const vec3 q[3], const ivec3& dims, Emit&& emit) {
     const vec3 lo = glm::min(q[0], glm::min(q[1], q[2]));
@@ -154,7 +174,7 @@ void for_each_cell_piece(const vec3 q[3], const ivec3& dims, Emit&& emit) {
     const bool inside_lattice = glm::all(glm::greaterThanEqual(lo, vec3(0.0f))) &&
                                 glm::all(glm::lessThan(hi, dims_f));
     if (inside_lattice && first == last) {
-        emit(first, 0.5f * twice_area);  // the whole triangle lies in one cell
+        emit(first, 0.5f * twice_area, (q[0] + q[1] + q[2]) / 3.0f);  // all in one cell
         return;
     }
     const int w = dominant_axis(m), u = (w + 1) % 3, v = (w + 2) % 3;
@@ -175,8 +195,9 @@ void for_each_cell_piece(const vec3 q[3], const ivec3& dims, Emit&& emit) {
             const int k1 = std::min(last[w], int(std::floor(std::min(
                                                  w_max + kColumnSlackCells, float(last[w])))));
             for (cell[w] = k0; cell[w] <= k1; ++cell[w]) {
-                const float area = clipped_area(q, cell, unit_normal);
-                if (area > 0.0f) emit(cell, area);
+                vec3 centroid(0.0f);
+                const float area = clipped_area(q, cell, unit_normal, centroid);
+                if (area > 0.0f) emit(cell, area, centroid);
             }
         }
     }
@@ -232,13 +253,16 @@ void clip_triangles(const InstancedTriangles& triangles, uint64_t begin, uint64_
         const float length = glm::length(normal);
         if (!(length > 0.0f) || !std::isfinite(length)) return;  // degenerate in world space
         normal /= length;
+        const vec3 front = normal;
         const int bin = dominant_axis(normal);
         if (normal[bin] < 0.0f) normal = -normal;
         const vec3 q[3] = {(p0 - origin) / cell_size, (p1 - origin) / cell_size,
                            (p2 - origin) / cell_size};
-        for_each_cell_piece(q, lattice.dims(), [&](const ivec3& cell, float area_cells) {
+        for_each_cell_piece(q, lattice.dims(), [&](const ivec3& cell, float area_cells,
+                                                   const vec3& centroid_cells) {
             out.push_back({uint32_t(lattice.cell_index(cell)), uint32_t(bin),
-                           area_cells * cell_face, normal});
+                           area_cells * cell_face, normal, origin + centroid_cells * cell_size,
+                           front});
         });
     });
 }
@@ -317,11 +341,13 @@ bool sample_coordinates(const vec3& p, const vec3& n, float normal_offset, const
 
 // visit(cell index, trilinear weight × facing(cell)) for the lattice cells among the 8 whose
 // centres surround `cells` and that face the normal (facing(cell) > 0).
+// `seen` is the block mask (below) of the cells around floor(cells) the sample may read.
 template <typename Facing, typename Visit>
-void for_each_trilinear_cell(const vec3& cells, const ivec3& dims, Facing&& facing,
+void for_each_trilinear_cell(const vec3& cells, const ivec3& dims, uint32_t seen, Facing&& facing,
                              Visit&& visit) {
     const vec3 f = cells - 0.5f;  // relative to cell centres
     const ivec3 base(glm::floor(f));
+    const ivec3 centre(glm::floor(cells));  // base or base + 1 on each axis
     const vec3 t = f - vec3(base);
     const ivec3 lo = glm::max(base, ivec3(0)), hi = glm::min(base + 1, dims - 1);
     for (int z = lo.z; z <= hi.z; ++z) {
@@ -330,6 +356,9 @@ void for_each_trilinear_cell(const vec3& cells, const ivec3& dims, Facing&& faci
             const float wyz = (y == base.y ? 1.0f - t.y : t.y) * wz;
             const size_t row = size_t(dims.x) * (size_t(y) + size_t(dims.y) * size_t(z));
             for (int x = lo.x; x <= hi.x; ++x) {
+                const int bit =
+                    (z - centre.z + 1) * 9 + (y - centre.y + 1) * 3 + (x - centre.x + 1);
+                if (!(seen & (uint32_t(1) << bit))) continue;
                 const size_t cell = row + size_t(x);
                 const float density = facing(cell);
                 if (density > 0.0f) visit(cell, (x == base.x ? 1.0f - t.x : t.x) * wyz * density);
@@ -446,6 +475,7 @@ ShLattice::ShLattice(const Bounds3& bounds, int resolution, int order) : order_(
     coeffs_.assign(cells * size_t(num_coefficients()) * 3, 0.0f);
     surface_index_.assign(cells, kNoSurface);
     surface_near_.assign(size_t(dims_.x + 2) * size_t(dims_.y + 2) * size_t(dims_.z + 2), 0u);
+    visible_near_.assign(surface_near_.size(), kFullBlock);
     radiance_near_.assign(cells, 0);
 }
 
@@ -507,7 +537,7 @@ uint8_t ShLattice::CellSurface::side_facing(const vec3& normal,
 // Triangles are clipped in parallel chunks; each chunk lists its fragments in triangle order and
 // the chunks are merged in chunk order, so the float sums do not depend on the thread count.
 // Chunks are processed in batches to bound the fragments held at once.
-void ShLattice::measure_surfaces(const Scene& scene, Progress* progress) {
+void ShLattice::measure_surfaces(const Scene& scene, Progress* progress, bool visibility) {
     if (!scene.committed())
         throw InvalidArgument(format_message(kClassName, "::measure_surfaces: the scene was edited "
                                              "or never committed; call commit() first"));
@@ -544,7 +574,10 @@ void ShLattice::measure_surfaces(const Scene& scene, Progress* progress) {
     // Stored in cell order, so that neighbouring cells' surfaces, which a lookup reads together,
     // are close in memory too.
     std::vector<CellSurface> surfaces;
+    std::vector<vec3> anchors;  // per surface: the point its visibility is tested from
     surfaces.reserve(sums.size());
+    anchors.reserve(sums.size());
+    const float anchor_offset = kAnchorOffsetCells * cell_size_;
     for (uint32_t& index : surface_index) {
         if (index == kNoSurface) continue;
         const BinSums& sum = sums[index];
@@ -555,13 +588,94 @@ void ShLattice::measure_surfaces(const Scene& scene, Progress* progress) {
             if (surface.projected[b] != vec3(0.0f)) surface.bins |= uint8_t(1u << b);
             surface.area += sum.area[b];
         }
+        // The surface's area-weighted centroid, moved off it along its mean front normal (to the
+        // side its triangles face), where light it receives comes from.
+        vec3 anchor = sum.centroid / surface.area;
+        const float front = glm::length(sum.front);
+        if (front > kAnchorMinFrontShare * surface.area)
+            anchor += (anchor_offset / front) * sum.front;
         index = uint32_t(surfaces.size());
         surfaces.push_back(surface);
+        anchors.push_back(anchor);
     }
+    // Cancel keeps the previous surfaces: the new ones are measured aside, then swapped in.
+    std::vector<uint32_t> previous_index = std::move(surface_index_);
+    std::vector<CellSurface> previous_surfaces = std::move(surfaces_);
+    std::vector<uint32_t> previous_near = surface_near_, previous_visible = visible_near_;
     surface_index_ = std::move(surface_index);
     surfaces_ = std::move(surfaces);
     update_surface_near();
+    try {
+        if (visibility)
+            update_visible_near(scene, anchors, progress);
+        else
+            visible_near_.assign(surface_near_.size(), kFullBlock);
+    } catch (const Cancelled&) {
+        surface_index_ = std::move(previous_index);
+        surfaces_ = std::move(previous_surfaces);
+        surface_near_ = std::move(previous_near);
+        visible_near_ = std::move(previous_visible);
+        throw;
+    }
     if (progress) progress->set_fraction(1.0f);
+}
+
+// Per block centre, the block's surface cells whose anchors the centre's anchor sees (the segment
+// between them hits nothing). A centre's anchor is its surface's (anchors[surface index]) or, for
+// a cell without surface, its middle. Each segment is traced from the anchor of the cell with the
+// lower padded index, so that two surface cells see each other or not both ways, whatever the
+// thread count.
+void ShLattice::update_visible_near(const Scene& scene, const std::vector<vec3>& anchors,
+                                    Progress* progress) {
+    const ivec3 padded = dims_ + 2;
+    const size_t count = surface_near_.size();
+    visible_near_.assign(count, 0u);
+    const auto anchor_of = [&](const ivec3& at) {
+        const bool inside = glm::all(glm::greaterThanEqual(at, ivec3(0))) &&
+                            glm::all(glm::lessThan(at, dims_));
+        if (inside) {
+            const uint32_t index = surface_index_[cell_index(at)];
+            if (index != kNoSurface) return anchors[index];
+        }
+        return origin_ + (vec3(at) + 0.5f) * cell_size_;
+    };
+    parallel_for(0, count, kCellsPerChunk, [&](uint64_t begin, uint64_t end) {
+        throw_if_cancelled(progress);
+        for (size_t pc = begin; pc < end; ++pc) {
+            uint32_t mask = surface_near_[pc];
+            if (mask == 0) continue;
+            const ivec3 at(int(pc % size_t(padded.x)) - 1,
+                           int((pc / size_t(padded.x)) % size_t(padded.y)) - 1,
+                           int(pc / (size_t(padded.x) * size_t(padded.y))) - 1);
+            const vec3 from = anchor_of(at);
+            uint32_t seen = 0;
+            while (mask != 0) {
+                const int k = __builtin_ctz(mask);
+                mask &= mask - 1;
+                const ivec3 offset(kBlockOffset[k % 3], kBlockOffset[k / 3 % 3],
+                                   kBlockOffset[k / 9]);
+                if (offset == ivec3(0)) {
+                    seen |= uint32_t(1) << k;
+                    continue;
+                }
+                const ivec3 other = at + offset;
+                const vec3 to = anchors[surface_index_[cell_index(other)]];
+                const bool forward = padded_index(other) > pc;
+                const vec3 a = forward ? from : to, b = forward ? to : from;
+                const float distance = glm::length(b - a);
+                if (!(distance > 0.0f)) {
+                    seen |= uint32_t(1) << k;
+                    continue;
+                }
+                Ray ray;
+                ray.origin = a;
+                ray.direction = (b - a) / distance;
+                ray.tmax = distance;
+                if (!scene.occluded(ray)) seen |= uint32_t(1) << k;
+            }
+            visible_near_[pc] = seen;
+        }
+    });
 }
 
 // Photons are counting-sorted by cell (stable, so each cell keeps photon order) and each cell
@@ -666,12 +780,16 @@ void ShLattice::blur(int passes) {
     auto for_each_like_neighbour = [&](size_t c, auto&& body) {
         const ivec3 cell(int(c % size_t(dims_.x)), int((c / size_t(dims_.x)) % size_t(dims_.y)),
                          int(c / (size_t(dims_.x) * size_t(dims_.y))));
+        const uint32_t seen = visible_near_[padded_index(cell)];  // symmetric between cells
         const ivec3 lo = glm::max(cell - 1, ivec3(0)), hi = glm::min(cell + 1, dims_ - 1);
         for (int z = lo.z; z <= hi.z; ++z)
             for (int y = lo.y; y <= hi.y; ++y)
                 for (int x = lo.x; x <= hi.x; ++x) {
                     const size_t n = cell_index(ivec3(x, y, z));
-                    if (area[n] > 0.0f && sides[n] == sides[c]) body(n);
+                    const int bit = (z - cell.z + 1) * 9 + (y - cell.y + 1) * 3 + (x - cell.x + 1);
+                    if (area[n] > 0.0f && sides[n] == sides[c] &&
+                        (seen & (uint32_t(1) << bit)))
+                        body(n);
                 }
     };
     parallel_for(0, cells, kCellsPerChunk, [&](uint64_t begin, uint64_t end) {
@@ -738,13 +856,18 @@ void ShLattice::set_cell_radiance(size_t cell, const ShRgb& radiance) {
 }
 
 template <typename ForEachCell>
-ShRgb ShLattice::blend(const vec3& n, ForEachCell&& for_each_cell) const {
+ShRgb ShLattice::blend(const vec3& n, uint32_t near, uint32_t seen,
+                       ForEachCell&& for_each_cell) const {
     const auto facing = [&](size_t cell) {  // D_c(n)
         const CellSurface* surface = cell_surface(cell);
         return surface ? surface->projected_area(n) : 0.0f;
     };
     CellWeights cells;
-    for_each_cell(facing, [&](size_t cell, float weight) { cells.add(cell, weight); });
+    const auto visit = [&](size_t cell, float weight) { cells.add(cell, weight); };
+    for_each_cell(seen, facing, visit);
+    // No visible cell faces n (an anchor on the wrong side of a surface whose normals face away
+    // from its light): every cell of the block, as without visibility, rather than black.
+    if (cells.count == 0 && seen != near) for_each_cell(near, facing, visit);
     if (order_ == 1) return blend_cells<4 * 3>(order_, coeffs_.data(), cells);
     return blend_cells<9 * 3>(order_, coeffs_.data(), cells);
 }
@@ -762,8 +885,12 @@ ShRgb ShLattice::sample_trilinear(const vec3& p, const vec3& n, float normal_off
     if (!sample_coordinates(p, n, normal_offset, origin_, cell_size_, dims_, cells) ||
         !radiance_near(cells))
         return zero_radiance(order_);
-    return blend(n, [&](auto&& facing, auto&& visit) {
-        for_each_trilinear_cell(cells, dims_, facing, visit);
+    const ivec3 centre(glm::floor(cells));
+    const bool in_padded = glm::all(glm::greaterThanEqual(centre, ivec3(-1))) &&
+                           glm::all(glm::lessThanEqual(centre, dims_));
+    const uint32_t seen = in_padded ? visible_near_[padded_index(centre)] : kFullBlock;
+    return blend(n, kFullBlock, seen, [&](uint32_t mask, auto&& facing, auto&& visit) {
+        for_each_trilinear_cell(cells, dims_, mask, facing, visit);
     });
 }
 
@@ -775,10 +902,12 @@ ShRgb ShLattice::sample_cubic(const vec3& p, const vec3& n, float normal_offset)
     const ivec3 centre(glm::floor(cells));
     if (glm::any(glm::lessThan(centre, ivec3(-1))) || glm::any(glm::greaterThan(centre, dims_)))
         return zero_radiance(order_);  // the block holds no lattice cell
-    return blend(n, [&](auto&& facing, auto&& visit) {
-        for_each_cubic_cell(cells, centre, surface_near_[padded_index(centre)], dims_, facing,
-                            visit);
-    });
+    const size_t block = padded_index(centre);
+    const uint32_t near = surface_near_[block];
+    return blend(n, near, near & visible_near_[block],
+                 [&](uint32_t mask, auto&& facing, auto&& visit) {
+                     for_each_cubic_cell(cells, centre, mask, dims_, facing, visit);
+                 });
 }
 
 size_t ShLattice::padded_index(const ivec3& cell) const {
@@ -825,6 +954,7 @@ void ShLattice::write(BinaryWriter& out) const {
     out.put(cell_size_);
     out.array(coeffs_);
     out.array(surface_index_);
+    out.array(visible_near_);
     out.put(uint64_t(surfaces_.size()));
     for (const CellSurface& surface : surfaces_) {  // field by field: no padding bytes
         out.put(surface.area);
@@ -834,7 +964,7 @@ void ShLattice::write(BinaryWriter& out) const {
     }
 }
 
-ShLattice ShLattice::read(BinaryReader& in) {
+ShLattice ShLattice::read(BinaryReader& in, bool with_visibility) {
     const auto refuse = [&](const std::string& problem) {
         return IoError(format_message(in.kind(), " \"", in.path(), "\": ", problem));
     };
@@ -856,6 +986,7 @@ ShLattice ShLattice::read(BinaryReader& in) {
     const size_t cells = lattice.cell_count();
     lattice.coeffs_ = in.array<float>("the lattice coefficients");
     lattice.surface_index_ = in.array<uint32_t>("the lattice cells");
+    if (with_visibility) lattice.visible_near_ = in.array<uint32_t>("the lattice visibility");
     if (lattice.coeffs_.size() != cells * size_t(lattice.num_coefficients()) * 3 ||
         lattice.surface_index_.size() != cells)
         throw refuse(format_message("a lattice of ", cells, " cells holds ",
@@ -873,6 +1004,13 @@ ShLattice ShLattice::read(BinaryReader& in) {
     for (const uint32_t index : lattice.surface_index_)
         if (index != kNoSurface && index >= surfaces)
             throw refuse(format_message("a cell names surface ", index, " of ", surfaces));
+    const size_t padded_cells =
+        empty ? 0 : size_t(dims.x + 2) * size_t(dims.y + 2) * size_t(dims.z + 2);
+    if (!with_visibility) lattice.visible_near_.assign(padded_cells, kFullBlock);
+    if (lattice.visible_near_.size() != padded_cells)
+        throw refuse(format_message("a lattice of ", cells, " cells holds ",
+                                    lattice.visible_near_.size(), " visibility masks, not ",
+                                    padded_cells, " (damaged?)"));
     if (empty) return lattice;
     lattice.surface_near_.assign(size_t(dims.x + 2) * size_t(dims.y + 2) * size_t(dims.z + 2),
                                  0u);
@@ -883,7 +1021,8 @@ ShLattice ShLattice::read(BinaryReader& in) {
 
 size_t ShLattice::memory_bytes() const {
     return sizeof(*this) + coeffs_.capacity() * sizeof(float) +
-           (surface_index_.capacity() + surface_near_.capacity()) * sizeof(uint32_t) +
+           (surface_index_.capacity() + surface_near_.capacity() + visible_near_.capacity()) *
+               sizeof(uint32_t) +
            surfaces_.capacity() * sizeof(CellSurface) + radiance_near_.capacity();
 }
 

@@ -16,7 +16,7 @@ import pytest
 import shgi
 from blender_support import REPO_ROOT
 from shgi.metrics import psnr  # the figure the Blender tests use too
-from scene_support import committed, field_agreement
+from scene_support import committed, field_agreement, path_traced_reference
 
 sys.path.insert(0, str(REPO_ROOT / "examples"))
 import scenes  # noqa: E402  (examples/ is not a package)
@@ -227,3 +227,119 @@ def test_a_saved_lattice_loads_back_and_renders_the_same_pixels(tmp_path):
     with pytest.raises(OSError, match=rf"^cannot read lattice file \"{truncated}\": the lattice "
                                       r"coefficients \(110592 of 4 bytes\) is longer than"):
         shgi.PhotonLattice.load(truncated)
+
+
+# The add-on's quality presets (addon/shgi_blender/presets.py), read without bpy.
+sys.path.insert(0, str(REPO_ROOT / "addon"))
+from shgi_blender.presets import QUALITY_PRESETS  # noqa: E402
+
+
+def two_rooms(bright_lamp_power):
+    """The two rooms (scale 0.5) with the lamp beyond the wall at `bright_lamp_power` W."""
+    builder = scenes.two_rooms(0.5)
+    lights = list(builder.scene.lights)
+    for light in lights:
+        if light.name == "bright_lamp":
+            light.power = bright_lamp_power
+    builder.scene.set_lights(lights)
+    return committed(builder)
+
+
+def dim_room_means(scene, preset, final_gather=True):
+    """(Combined, DiffInd x DiffCol) means of the dim room (all the camera sees) with the lattice
+    solved at `preset`'s counts as the add-on solves it for Light Paths > Diffuse 4 (one photon
+    scattering less through a final gather, settings.light_path_fields)."""
+    values = QUALITY_PRESETS[preset]
+    lattice = shgi.PhotonLattice(scene, shgi.PhotonLatticeSettings(
+        seed=5, photons=values["photon_lattice.photons"],
+        resolution=values["photon_lattice.resolution"],
+        caustic_resolution=values["photon_lattice.caustic_resolution"],
+        max_bounces=4 - int(final_gather)))
+    lattice.solve()
+    preview, _ = shgi.render_preview(scene, lattice.current_field(), shgi.PreviewSettings(
+        seed=5, samples=64, final_gather=final_gather))
+    return (float(preview["Combined"][..., :3].mean()),
+            float((preview["DiffInd"] * preview["DiffCol"]).mean()))
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("preset", list(QUALITY_PRESETS))
+def test_no_light_crosses_the_two_rooms_wall(preset):
+    """The leak itself: a 2000 W lamp beyond a 0.1 m wall, thinner than every preset's cells
+    (0.125-0.375 m), adds nothing to the dim room in the path tracer, and (through the lattice's
+    visibility masks) at most 1.5% to the lattice's dim room, Combined and indirect diffuse,
+    direct lookup and final gather. Before the masks it added (direct lookup, Combined /
+    indirect) 66% / 95% at Default and 8% / 11% at Production: the bright room's cells were
+    blended into the dim room's lookups through the wall. The lamps
+    share the photons by power, so with the bright lamp on the dim room holds 1% of them and its
+    mean moves by their noise (measured -2.4% at Medium, direct lookup): bounded at 5% below."""
+    dark = two_rooms(0.0)
+    lit = two_rooms(2000.0)
+    for gather in (False, True):
+        ratios = [with_lamp / without for with_lamp, without in
+                  zip(dim_room_means(lit, preset, gather), dim_room_means(dark, preset, gather))]
+        print(f"{preset}, final gather {gather}: dim room with / without the bright lamp "
+              f"(Combined, indirect): {ratios[0]:.3f}, {ratios[1]:.3f}")
+        assert all(0.95 < ratio < 1.015 for ratio in ratios), (gather, ratios)
+
+
+@pytest.mark.reference
+@pytest.mark.xfail(strict=True, reason=(
+    "no leak is left (test_no_light_crosses_the_two_rooms_wall), but the lattice reads a closed "
+    "white room lit by a point lamp low by itself: 0.942-0.947 Combined and 0.922-0.931 indirect "
+    "at the five presets (2026-11-28; 0.953 / 0.936 for the dim room alone without any wall), "
+    "the few per cent of docs/methods.md's Limits"))
+@pytest.mark.parametrize("preset", list(QUALITY_PRESETS))
+def test_dim_room_through_a_final_gather_is_within_five_percent(preset):
+    """The issue's target: the dim room read through a final gather within 5% of the path
+    tracer's (Combined and indirect diffuse) at every preset. Before the visibility masks it read
+    1.58x (Preview) to 1.01x (Production) too bright; since, 0.94x."""
+    scene, reference = path_traced_reference(scenes.two_rooms, 0.5, 512)
+    measured = dim_room_means(scene, preset)
+    ratios = (measured[0] / float(reference["Combined"][..., :3].mean()),
+              measured[1] / float((reference["DiffInd"] * reference["DiffCol"]).mean()))
+    print(f"{preset}: dim room through a final gather (Combined, indirect) / path tracer: "
+          f"{ratios[0]:.3f}, {ratios[1]:.3f}")
+    assert all(abs(ratio - 1.0) < 0.05 for ratio in ratios), ratios
+
+
+def test_a_lattice_saved_before_the_visibility_masks_opens_and_samples_as_it_did():
+    """Lattice file version 1 (no visibility masks; solutions saved with a .blend by the earlier
+    add-on) still loads, and its lookups are those of the build that saved it, bit for bit."""
+    import json
+    folder = pathlib.Path(__file__).parent / "lattice_files"
+    expected = json.loads((folder / "cornell_box_v1.json").read_text())
+    lattice = shgi.PhotonLattice.load(str(folder / "cornell_box_v1.shlattice"))
+    for (point, normal), values in zip(expected["points"], expected["radiance_sh"]):
+        np.testing.assert_array_equal(np.asarray(lattice.radiance_sh(point, normal)),
+                                      np.asarray(values, np.float32))
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "not built: per-cell storage by side of the surface. Both floors lie in one 0.25 m cell (and "
+    "the floor's lookup offset reaches past the shelf), so the unlit floor reads the shelf's "
+    "light: ratio 1.000 measured 2026-11-28, with and without the visibility masks"))
+def test_an_unlit_floor_one_centimetre_under_a_lit_shelf_reads_zero():
+    """The minimal thin-gap scene: a 2 x 2 m shelf whose top is lit by the light a ceiling
+    reflects, and a 1 x 1 m floor 1 cm under its middle, both facing up. No light reaches the
+    floor (the path tracer's answer is 0 up to the light through the 1 cm slit, 0.5 m away):
+    the lattice's lookup there should read (nearly) nothing."""
+    from scenes import SceneBuilder, WHITE, quad
+    builder = SceneBuilder()
+    builder.part("ceiling", quad((-2, -2, 2.5), (0, 4, 0), (4, 0, 0)), "plaster", WHITE)
+    builder.part("shelf", quad((-1, -1, 0.51), (2, 0, 0), (0, 2, 0)), "plaster", WHITE)
+    builder.part("floor", quad((-0.5, -0.5, 0.50), (1, 0, 0), (0, 1, 0)), "plaster", WHITE)
+    lamp = shgi.Light(name="lamp", type=shgi.LightType.POINT, power=100.0, radius=0.05)
+    lamp.world_from_light = np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 2.0], [0, 0, 0, 1]],
+                                     np.float32)
+    builder.scene.add_light(lamp)
+    builder.scene.set_world(shgi.World(color=(0.0, 0.0, 0.0), strength=0.0))
+    scene = committed(builder)
+    lattice = shgi.PhotonLattice(scene, shgi.PhotonLatticeSettings(
+        seed=5, photons=200000, resolution=16, max_bounces=2))
+    lattice.solve()
+    shelf = np.asarray(lattice.radiance_sh((0.1, 0.1, 0.51), (0, 0, 1)))[0]
+    floor = np.asarray(lattice.radiance_sh((0.1, 0.1, 0.50), (0, 0, 1)))[0]
+    print(f"L00 on the shelf {shelf}, on the floor under it {floor}")
+    assert shelf.min() > 0.1
+    assert floor.max() < 0.01 * shelf.min(), (floor, shelf)

@@ -27,6 +27,10 @@ namespace {
 constexpr double kAreaTolerance = 1e-5;
 // Sums and weight normalisations of O(10) floats of magnitude ~1.
 constexpr float kFloatTolerance = 1e-5f;
+// The interpolation and blur tests below check the weights' formulas on planes that part the
+// cells (stacked floors, a wall through a floor): without the visibility masks, which would
+// rightly keep the cells of different floors apart (sh_lattice_visibility_test.cpp tests them).
+constexpr bool kNoVisibility = false;
 
 const vec3 kUp(0.0f, 0.0f, 1.0f);
 
@@ -346,7 +350,7 @@ constexpr float kKernelTolerance = 3e-5f;
 // block (the seed's uniform kernel).
 TEST(ShLattice, BlurIsTheUniform27KernelInAFullyCoveredInterior) {
     ShLattice lattice(Bounds3{vec3(0.0f), vec3(5.0f)}, 5, 1);
-    lattice.measure_surfaces(test::layered_planes(lattice));
+    lattice.measure_surfaces(test::layered_planes(lattice), nullptr, kNoVisibility);
     const ivec3 centre(2, 2, 2);
     ShRgb impulse(1);
     impulse[0] = vec3(27.0f, 0.0f, 54.0f);
@@ -394,7 +398,7 @@ void fill_linear(ShLattice& lattice) {
 // first and last cell centres, and the normal offset moves the sample point along n.
 TEST(ShLattice, TrilinearIsExactOnLinearFields) {
     ShLattice lattice(Bounds3{vec3(0.0f), vec3(4.0f)}, 4, 2);
-    lattice.measure_surfaces(test::layered_planes(lattice));
+    lattice.measure_surfaces(test::layered_planes(lattice), nullptr, kNoVisibility);
     fill_linear(lattice);
     const vec3 first = cell_centre(lattice, ivec3(0)), last = cell_centre(lattice, ivec3(3));
     Pcg32 rng(9, 0);
@@ -424,7 +428,7 @@ double smoothstep_weight(double d) {
 // reproduced exactly, also next to the lattice's boundary.
 TEST(ShLattice, CubicWeightsFollowTheSmoothstepAndKeepConstants) {
     ShLattice lattice(Bounds3{vec3(0.0f), vec3(5.0f)}, 5, 1);
-    lattice.measure_surfaces(test::layered_planes(lattice));
+    lattice.measure_surfaces(test::layered_planes(lattice), nullptr, kNoVisibility);
     const ivec3 impulse_cell(2, 2, 2);
     ShRgb impulse(1);
     impulse[0] = vec3(1.0f, 0.0f, 0.0f);
@@ -481,7 +485,7 @@ TEST(ShLattice, CubicSamplesWeighOnlyTheCellsWithSurface) {
         {test::quad(o + vec3(-1.0f, -1.0f, 2.5f * s), vec3(5.0f * s + 2.0f, 0, 0),
                     vec3(0, 5.0f * s + 2.0f, 0)),
          test::quad(o + vec3(3.5f * s, -1.0f, -1.0f), vec3(0, 5.0f * s + 2.0f, 0),
-                    vec3(0, 0, 5.0f * s + 2.0f))}));
+                    vec3(0, 0, 5.0f * s + 2.0f))}), nullptr, kNoVisibility);
     const ivec3 impulse_cells[2] = {ivec3(2, 2, 2), ivec3(0, 2, 2)};
     for (int i = 0; i < 2; ++i) {
         ShRgb impulse(1);
@@ -608,7 +612,7 @@ TEST(ShLattice, SamplesOfSparseRadianceMatchTheFullSum) {
          test::triangle(vec3(-0.9f, -0.8f, -0.2f), vec3(0.8f, 0.1f, 0.9f),
                         vec3(0.2f, 0.9f, -0.9f))});
     ShLattice lattice(scene.bounds(), 12, 2);
-    lattice.measure_surfaces(scene);
+    lattice.measure_surfaces(scene, nullptr, kNoVisibility);
     Pcg32 rng(17, 3);
     for (const ivec3& lit : {ivec3(1, 2, 0), ivec3(9, 9, 9), ivec3(5, 0, 6), ivec3(11, 4, 3)}) {
         ShRgb radiance(2);
@@ -653,7 +657,7 @@ TEST(ShLattice, SamplesOfSparseRadianceMatchTheFullSum) {
 
 TEST(ShLattice, ClearAndScaleActOnEveryCoefficient) {
     ShLattice lattice(Bounds3{vec3(0.0f), vec3(1.0f)}, 3, 1);
-    lattice.measure_surfaces(test::layered_planes(lattice));
+    lattice.measure_surfaces(test::layered_planes(lattice), nullptr, kNoVisibility);
     fill_random(lattice, 3);
     const std::vector<float> before = lattice.coefficients();
     lattice.scale(-2.0f);
