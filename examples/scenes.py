@@ -149,11 +149,12 @@ def sun_room(scale=1.0, lightmap=False):
     return b
 
 
-def two_rooms(scale=1.0):
+def two_rooms(scale=1.0, bright_power=2000.0, dim_power=20.0):
     """Two closed rooms side by side, split by a solid wall 0.1 m thick: the left room lit by a
     bright lamp, the right one by a dim lamp. The camera stands in the dim room facing the wall.
     The leak test of probe grids (docs/methods.md): light must not cross the wall.
-    128 x 96 px x scale."""
+    128 x 96 px x scale. The lamps' powers (W) can be changed (0 turns one off) to tell the
+    light that crosses the wall from the dim room's own."""
     b = SceneBuilder()
     sx, sy, sz = 6.0, 3.0, 2.5  # the shell spans x in [-3, 3]
     shell = [  # six faces of the shell, facing in
@@ -167,7 +168,7 @@ def two_rooms(scale=1.0):
     for name, corner, u, v in shell:
         b.part(name, quad(corner, u, v), "plaster", WHITE)
     b.part("wall", box((0.0, sy / 2, 0.0), 0.1, sy, sz, 0.0), "plaster", WHITE)
-    for name, x, power in [("bright_lamp", -1.5, 2000.0), ("dim_lamp", 1.5, 20.0)]:
+    for name, x, power in [("bright_lamp", -1.5, bright_power), ("dim_lamp", 1.5, dim_power)]:
         lamp = shgi.Light(name=name, type=shgi.LightType.POINT, power=power, radius=0.05)
         lamp.world_from_light = np.array([[1, 0, 0, x], [0, 1, 0, sy / 2], [0, 0, 1, 2.0],
                                           [0, 0, 0, 1]], np.float32)

@@ -214,6 +214,8 @@ PROPAGATION_DEFAULTS = {
     "order": 2,
     "occlusion": True,
     "normal_offset": 1.0,
+    "damping": False,
+    "occlude_first_step": False,
 }
 
 # Refinement passes of a final solve (F12, Solve, a bake) when ``shgi`` cannot be imported as the
@@ -394,6 +396,8 @@ PROPAGATION_LABELS = {
     "order": "Light Propagation > Order",
     "occlusion": "Light Propagation > Occlusion",
     "normal_offset": "Light Propagation > Normal Offset",
+    "damping": "Light Propagation > Damping",
+    "occlude_first_step": "Light Propagation > Occlude First Step",
 }
 # The native checks' limits the property ranges follow (properties.py), so that the panels offer
 # only values the native code accepts.
