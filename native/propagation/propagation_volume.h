@@ -148,8 +148,8 @@ void inject_vpls(ShVolume& volume, const std::vector<VirtualPointLight>& vpls,
                  Progress* progress = nullptr);
 
 // `steps` steps from `injected` (see above), the accumulation returned; `transmittance` (may be
-// null) applies from the second step, or from the first with occlude_first_step. Seconds of each step are appended to `step_seconds` when
-// it is not null; progress is reported per step.
+// null) applies from the second step, or from the first with occlude_first_step. Seconds of
+// each step are appended to `step_seconds` when it is not null; progress is reported per step.
 ShVolume propagate(const ShVolume& injected, const PropagationStep& step, int steps,
                    const PropagationTransmittance* transmittance, Progress* progress = nullptr,
                    std::vector<double>* step_seconds = nullptr,

@@ -59,7 +59,8 @@ def missed(figure):
     ("sun_room", 1),
     ("sun_room", 2),
     ("two_rooms", 1),
-    pytest.param("two_rooms", 2, marks=missed("DiffInd 1.21x: light through the wall on the first step")),
+    pytest.param("two_rooms", 2,
+                 marks=missed("DiffInd 1.21x: light through the wall on the first step")),
 ])
 def test_indirect_diffuse_agrees_with_path_tracer(name, order):
     ref, preview = rendered(name, order)
