@@ -8,7 +8,8 @@ volume shows there crossed a wall.
 - the sun room with its window shut (a plaster quad over it, sky off): the light inside,
   against the open sun room's indirect light (path traced).
 
-Per order, with the seed's unoccluded first step, with occlude_first_step and with damping.
+Per order, with the seed's unoccluded first step, with occlude_first_step, with damping and
+with drop_outward_vpls.
 DiffInd x DiffCol means over the 16-spp preview. A plain script printing a table.
 
     PYTHONPATH=build/python python3 bench/propagation_leaks.py [--reference-spp 256]
@@ -24,21 +25,11 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "examples")
 import scenes  # noqa: E402  (examples/scenes.py)
 
 VARIANTS = [("first step unoccluded", {}), ("occlude_first_step", {"occlude_first_step": True}),
-            ("damping", {"damping": True})]
+            ("damping", {"damping": True}), ("drop_outward_vpls", {"drop_outward_vpls": True})]
 
 
 def indirect(passes):
     return float((passes["DiffInd"] * passes["DiffCol"]).mean())
-
-
-def shut_sun_room(scale):
-    """examples/scenes.py's sun room with a plaster quad over the window and the sky off."""
-    builder = scenes.sun_room(scale)
-    x0, win_y, win_z = -2.0, (1.3, 2.7), (0.9, 2.1)
-    builder.part("shutter", scenes.quad((x0, win_y[0], win_z[0]), (0, 0, win_z[1] - win_z[0]),
-                                        (0, win_y[1] - win_y[0], 0)), "plaster", scenes.WHITE)
-    builder.scene.set_world(shgi.World(color=(0.35, 0.5, 0.8), strength=0.0))
-    return builder
 
 
 def committed(builder):
@@ -64,7 +55,7 @@ def main():
     cases.append(("two rooms, bright lamp only", committed(scenes.two_rooms(0.5, dim_power=0.0)),
                   own))
     open_room = indirect(shgi.render_path_traced(committed(scenes.sun_room(0.25)), traced))
-    shut = committed(shut_sun_room(0.25))
+    shut = committed(scenes.sun_room(0.25, window_shut=True))
     shut_reference = indirect(shgi.render_path_traced(shut, traced))
     cases.append(("sun room, window shut", shut, open_room))
     print(f"shut sun room, path traced: {shut_reference / open_room:.4f} x the open room's")

@@ -110,8 +110,10 @@ def cornell_box(scale=1.0, lightmap=False):
     return b
 
 
-def sun_room(scale=1.0, lightmap=False):
-    """256 x 192 pixels times `scale`. lightmap: walls face into the room, with LightmapUV."""
+def sun_room(scale=1.0, lightmap=False, window_shut=False):
+    """256 x 192 pixels times `scale`. lightmap: walls face into the room, with LightmapUV.
+    window_shut: a plaster quad over the window and the sky off (no light enters: light a
+    method shows inside came through the walls)."""
     b = SceneBuilder(lightmap)
     room_x, room_y, room_z = 4.0, 4.0, 2.6
     x0, y0 = -room_x / 2, 0.0
@@ -143,7 +145,10 @@ def sun_room(scale=1.0, lightmap=False):
                         size_y=win_z[1] - win_z[0])
     portal.world_from_light = look_at(window_center, np.add(window_center, (1.0, 0.0, 0.0)))
     b.scene.add_light(portal)
-    b.scene.set_world(shgi.World(color=(0.35, 0.5, 0.8), strength=1.0))
+    b.scene.set_world(shgi.World(color=(0.35, 0.5, 0.8), strength=0.0 if window_shut else 1.0))
+    if window_shut:
+        b.part("shutter", quad((x0, win_y[0], win_z[0]), (0, 0, win_z[1] - win_z[0]),
+                               (0, win_y[1] - win_y[0], 0)), "plaster", WHITE)
     b.camera(eye=(1.7, 0.25, 1.5), target=(-0.8, 2.6, 0.8), lens=16.0, width=256, height=192,
              scale=scale)
     return b

@@ -53,7 +53,11 @@ void bind_settings(py::module_& m) {
                        "(False).")
         .def_readwrite("occlude_first_step", &S::occlude_first_step,
                        "Geometry volume blocking on the first step too (the seed skips it): "
-                       "keeps the light of VPLs next to a thin wall from crossing it (False).");
+                       "keeps the light of VPLs next to a thin wall from crossing it (False).")
+        .def_readwrite("drop_outward_vpls", &S::drop_outward_vpls,
+                       "Drop the VPLs that light nothing: on the scene's bounds facing out (a "
+                       "sunlit roof or outer wall), whose light otherwise reaches the interior "
+                       "through the cells their surface runs through (False).");
     cls.def("validate", &validate_propagation_settings,
             "Raises ValueError naming the first invalid field.");
     register_settings_type<S>("PropagationSettings");

@@ -370,6 +370,10 @@ class ShgiPropagationSettings(bpy.types.PropertyGroup):
         name="Occlude First Step", default=LP["occlude_first_step"],
         description="Walls block light from its first step on: keeps light next to a thin "
                     "wall from crossing it, and darkens closed rooms a little")
+    drop_outward_vpls: BoolProperty(
+        name="Drop Outward Lights", default=LP["drop_outward_vpls"],
+        description="Leave out the light of sunlit roofs and outer walls facing away from the "
+                    "scene: it lights nothing, and otherwise seeps into the rooms behind them")
     passes: IntProperty(
         name="Render Passes", default=settings.final_passes("PROPAGATION", native.module()),
         min=1, soft_max=64,

@@ -216,6 +216,7 @@ PROPAGATION_DEFAULTS = {
     "normal_offset": 1.0,
     "damping": False,
     "occlude_first_step": False,
+    "drop_outward_vpls": False,
 }
 
 # Refinement passes of a final solve (F12, Solve, a bake) when ``shgi`` cannot be imported as the
@@ -398,6 +399,7 @@ PROPAGATION_LABELS = {
     "normal_offset": "Light Propagation > Normal Offset",
     "damping": "Light Propagation > Damping",
     "occlude_first_step": "Light Propagation > Occlude First Step",
+    "drop_outward_vpls": "Light Propagation > Drop Outward Lights",
 }
 # The native checks' limits the property ranges follow (properties.py), so that the panels offer
 # only values the native code accepts.

@@ -255,11 +255,23 @@ std::vector<VirtualPointLight> PropagationVolume::trace_vpls(Progress* progress,
                                                              double* reflect_seconds) {
     PhotonMaps maps = trace_photons(*scene_, tracer_settings(settings_), passes_, progress,
                                     kSettings);
+    // With drop_outward_vpls, a VPL whose lit half-space holds nothing of the scene's bounds (a
+    // surface on the bounds facing out: a sunlit roof or outer wall) is dropped: it can light no
+    // surface, and injected it lit the cells its surface runs through, which interior lookups
+    // read (the sun room with its window shut).
+    const Bounds3 bounds = scene_->bounds();
+    const float tolerance = 1e-4f * max_component(bounds.upper - bounds.lower);
+    const auto lights_the_scene = [&](const vec3& position, const vec3& normal) {
+        if (!settings_.drop_outward_vpls) return true;
+        const vec3 farthest = glm::mix(bounds.lower, bounds.upper,
+                                       vec3(glm::greaterThan(normal, vec3(0.0f))));
+        return glm::dot(normal, farthest - position) > tolerance;
+    };
     std::vector<VirtualPointLight> vpls;
     vpls.reserve(maps.first_hits.size() +
                  (settings_.vpl_bounces > 1 ? maps.global.size() + maps.caustic.size() : 0));
     for (const PhotonFirstHit& hit : maps.first_hits)
-        if (hit.reflected_power != vec3(0.0f))
+        if (hit.reflected_power != vec3(0.0f) && lights_the_scene(hit.position, hit.normal))
             vpls.push_back({hit.position, hit.normal, hit.reflected_power});
     if (settings_.vpl_bounces == 1) return vpls;
     // Later hits carry the power arriving; the surface scatters its diffuse albedo of it, which
@@ -283,7 +295,7 @@ std::vector<VirtualPointLight> PropagationVolume::trace_vpls(Progress* progress,
         }
     });
     for (size_t i = 0; i < later.size(); ++i)
-        if (reflected[i] != vec3(0.0f))
+        if (reflected[i] != vec3(0.0f) && lights_the_scene(later[i].position, later[i].normal))
             vpls.push_back({later[i].position, later[i].normal, reflected[i]});
     *reflect_seconds = seconds_since(start);
     return vpls;

@@ -2352,6 +2352,14 @@ class PropagationSettings:
     def damping(self, arg0: bool) -> None:
         ...
     @property
+    def drop_outward_vpls(self) -> bool:
+        """
+        Drop the VPLs that light nothing: on the scene's bounds facing out (a sunlit roof or outer wall), whose light otherwise reaches the interior through the cells their surface runs through (False).
+        """
+    @drop_outward_vpls.setter
+    def drop_outward_vpls(self, arg0: bool) -> None:
+        ...
+    @property
     def normal_offset(self) -> float:
         """
         Cells along the shading normal before the lookup, against self-lighting and leaks through walls (1.0).
