@@ -110,8 +110,10 @@ def cornell_box(scale=1.0, lightmap=False):
     return b
 
 
-def sun_room(scale=1.0, lightmap=False):
-    """256 x 192 pixels times `scale`. lightmap: walls face into the room, with LightmapUV."""
+def sun_room(scale=1.0, lightmap=False, window_shut=False):
+    """256 x 192 pixels times `scale`. lightmap: walls face into the room, with LightmapUV.
+    window_shut: a plaster quad over the window and the sky off (no light enters: light a
+    method shows inside came through the walls)."""
     b = SceneBuilder(lightmap)
     room_x, room_y, room_z = 4.0, 4.0, 2.6
     x0, y0 = -room_x / 2, 0.0
@@ -143,17 +145,21 @@ def sun_room(scale=1.0, lightmap=False):
                         size_y=win_z[1] - win_z[0])
     portal.world_from_light = look_at(window_center, np.add(window_center, (1.0, 0.0, 0.0)))
     b.scene.add_light(portal)
-    b.scene.set_world(shgi.World(color=(0.35, 0.5, 0.8), strength=1.0))
+    b.scene.set_world(shgi.World(color=(0.35, 0.5, 0.8), strength=0.0 if window_shut else 1.0))
+    if window_shut:
+        b.part("shutter", quad((x0, win_y[0], win_z[0]), (0, 0, win_z[1] - win_z[0]),
+                               (0, win_y[1] - win_y[0], 0)), "plaster", WHITE)
     b.camera(eye=(1.7, 0.25, 1.5), target=(-0.8, 2.6, 0.8), lens=16.0, width=256, height=192,
              scale=scale)
     return b
 
 
-def two_rooms(scale=1.0):
+def two_rooms(scale=1.0, bright_power=2000.0, dim_power=20.0):
     """Two closed rooms side by side, split by a solid wall 0.1 m thick: the left room lit by a
     bright lamp, the right one by a dim lamp. The camera stands in the dim room facing the wall.
     The leak test of probe grids (docs/methods.md): light must not cross the wall.
-    128 x 96 px x scale."""
+    128 x 96 px x scale. The lamps' powers (W) can be changed (0 turns one off) to tell the
+    light that crosses the wall from the dim room's own."""
     b = SceneBuilder()
     sx, sy, sz = 6.0, 3.0, 2.5  # the shell spans x in [-3, 3]
     shell = [  # six faces of the shell, facing in
@@ -167,7 +173,7 @@ def two_rooms(scale=1.0):
     for name, corner, u, v in shell:
         b.part(name, quad(corner, u, v), "plaster", WHITE)
     b.part("wall", box((0.0, sy / 2, 0.0), 0.1, sy, sz, 0.0), "plaster", WHITE)
-    for name, x, power in [("bright_lamp", -1.5, 2000.0), ("dim_lamp", 1.5, 20.0)]:
+    for name, x, power in [("bright_lamp", -1.5, bright_power), ("dim_lamp", 1.5, dim_power)]:
         lamp = shgi.Light(name=name, type=shgi.LightType.POINT, power=power, radius=0.05)
         lamp.world_from_light = np.array([[1, 0, 0, x], [0, 1, 0, sy / 2], [0, 0, 1, 2.0],
                                           [0, 0, 0, 1]], np.float32)

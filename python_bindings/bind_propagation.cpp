@@ -41,10 +41,23 @@ void bind_settings(py::module_& m) {
     cls.def(py::init(&from_kwargs<S>),
             "PropagationSettings(**fields), e.g. PropagationSettings(order=1, steps=16).")
         .def_readwrite("occlusion", &S::occlusion,
-                       "Geometry volume blocking from the second step on (True).")
+                       "Geometry volume blocking from the second step on, or the first with "
+                       "occlude_first_step (True).")
         .def_readwrite("normal_offset", &S::normal_offset,
                        "Cells along the shading normal before the lookup, against "
-                       "self-lighting and leaks through walls (1.0).");
+                       "self-lighting and leaks through walls (1.0).")
+        .def_readwrite("damping", &S::damping,
+                       "Damp the lookup where the light arriving against the normal is stronger "
+                       "half a cell behind the lookup point than in front of it (seed 003 "
+                       "§3.2.4's directional derivative, against self-lighting and bleeding) "
+                       "(False).")
+        .def_readwrite("occlude_first_step", &S::occlude_first_step,
+                       "Geometry volume blocking on the first step too (the seed skips it): "
+                       "keeps the light of VPLs next to a thin wall from crossing it (False).")
+        .def_readwrite("drop_outward_vpls", &S::drop_outward_vpls,
+                       "Drop the VPLs that light nothing: on the scene's bounds facing out (a "
+                       "sunlit roof or outer wall), whose light otherwise reaches the interior "
+                       "through the cells their surface runs through (False).");
     cls.def("validate", &validate_propagation_settings,
             "Raises ValueError naming the first invalid field.");
     register_settings_type<S>("PropagationSettings");

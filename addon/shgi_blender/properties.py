@@ -378,6 +378,18 @@ class ShgiPropagationSettings(bpy.types.PropertyGroup):
         max=settings.MAX_PROPAGATION_NORMAL_OFFSET,
         description="Cells in front of a surface where its light is read: less shows finer "
                     "detail, more keeps light on the far side of thin walls out")
+    damping: BoolProperty(
+        name="Damping", default=LP["damping"],
+        description="Dim a surface where the light arriving at it is stronger just behind it "
+                    "than in front of it (its own light, or light from behind a wall)")
+    occlude_first_step: BoolProperty(
+        name="Occlude First Step", default=LP["occlude_first_step"],
+        description="Walls block light from its first step on: keeps light next to a thin "
+                    "wall from crossing it, and darkens closed rooms a little")
+    drop_outward_vpls: BoolProperty(
+        name="Drop Outward Lights", default=LP["drop_outward_vpls"],
+        description="Leave out the light of sunlit roofs and outer walls facing away from the "
+                    "scene: it lights nothing, and otherwise seeps into the rooms behind them")
     passes: IntProperty(
         name="Render Passes", default=settings.final_passes("PROPAGATION", native.module()),
         min=1, soft_max=64,

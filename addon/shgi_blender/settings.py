@@ -230,6 +230,9 @@ PROPAGATION_DEFAULTS = {
     "order": 2,
     "occlusion": True,
     "normal_offset": 1.0,
+    "damping": False,
+    "occlude_first_step": False,
+    "drop_outward_vpls": False,
 }
 
 # InstantGiSettings' fields in ``scene.shgi.instant_gi`` with their native defaults. Not
@@ -425,6 +428,9 @@ PROPAGATION_LABELS = {
     "order": "Light Propagation > Order",
     "occlusion": "Light Propagation > Occlusion",
     "normal_offset": "Light Propagation > Normal Offset",
+    "damping": "Light Propagation > Damping",
+    "occlude_first_step": "Light Propagation > Occlude First Step",
+    "drop_outward_vpls": "Light Propagation > Drop Outward Lights",
 }
 INSTANT_GI_LABELS = {
     "sets_x": "Instant GI > Sets X",

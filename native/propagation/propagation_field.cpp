@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <utility>
 
+#include "sh/sh_irradiance.h"
+
 namespace shgi {
 namespace {
 
@@ -17,19 +19,19 @@ int neighbour_index(const ivec3& d) {
 
 PropagationField::PropagationField(std::shared_ptr<const ShVolume> accumulated,
                                    float normal_offset,
-                                   std::shared_ptr<const NeighbourTransmittance> transmittance)
+                                   std::shared_ptr<const NeighbourTransmittance> transmittance,
+                                   bool damping)
     : accumulated_(std::move(accumulated)),
       transmittance_(std::move(transmittance)),
-      normal_offset_(normal_offset) {
+      normal_offset_(normal_offset),
+      damping_(damping) {
     if (!accumulated_) return;
     const float s = accumulated_->cell_size();
     radiance_scale_ = propagation_radiance_scale(accumulated_->order()) / (s * s);
 }
 
-ShRgb PropagationField::radiance_sh(const vec3& p, const vec3& n) const {
-    if (is_zero()) return ShRgb(1);
+ShRgb PropagationField::weighted_lookup(const vec3& q) const {
     const ShVolume& volume = *accumulated_;
-    const vec3 q = p + normal_offset_ * volume.cell_size() * n;
     ShRgb sh(volume.order());
     if (!is_finite(q)) return sh;
     // ShVolume::sample_trilinear's cells and weights, each times the transmittance from the
@@ -63,6 +65,24 @@ ShRgb PropagationField::radiance_sh(const vec3& p, const vec3& n) const {
         const bool odd = i >= 1 && i < 4;
         sh[i] *= (odd ? -radiance_scale_ : radiance_scale_) / total;
     }
+    return sh;
+}
+
+ShRgb PropagationField::radiance_sh(const vec3& p, const vec3& n) const {
+    if (is_zero()) return ShRgb(1);
+    const float s = accumulated_->cell_size();
+    const vec3 q = p + normal_offset_ * s * n;
+    ShRgb sh = weighted_lookup(q);
+    if (!damping_) return sh;
+    // §3.2.4: the light arriving along −n half a cell in front of q and half a cell behind it.
+    // Light from a source in front of the surface weakens towards the surface or stays; where it
+    // is stronger behind (towards and into the surface), it is the surface's own light or light
+    // from behind a wall, and the lookup is damped by front / back.
+    const float front = luminance(sh_irradiance(weighted_lookup(q + 0.5f * s * n), n));
+    const float back = luminance(sh_irradiance(weighted_lookup(q - 0.5f * s * n), n));
+    if (!(back > front)) return sh;
+    const float factor = std::max(0.0f, front) / back;
+    for (int i = 0; i < sh.num_coefficients(); ++i) sh[i] *= factor;
     return sh;
 }
 

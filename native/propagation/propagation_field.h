@@ -50,8 +50,11 @@ class PropagationField : public IndirectField {
     // weights each of its 8 cells by the transmittance from the cell holding the lookup point
     // to it, so that light on the far side of a wall within a cell of the point is not read
     // (the light propagation keeps it out, the interpolation would let it in).
+    // With `damping` the lookup is damped by the directional derivative along the normal
+    // (seed 003 §3.2.4, Kaplanyan & Dachsbacher 2010): see radiance_sh.
     PropagationField(std::shared_ptr<const ShVolume> accumulated, float normal_offset,
-                     std::shared_ptr<const NeighbourTransmittance> transmittance = nullptr);
+                     std::shared_ptr<const NeighbourTransmittance> transmittance = nullptr,
+                     bool damping = false);
 
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
     bool is_zero() const override { return !accumulated_ || accumulated_->cell_count() == 0; }
@@ -67,10 +70,14 @@ class PropagationField : public IndirectField {
     }
 
   private:
+    // The radiance SH at q: the transmittance-weighted trilinear lookup, scaled to radiance.
+    ShRgb weighted_lookup(const vec3& q) const;
+
     std::shared_ptr<const ShVolume> accumulated_;
     std::shared_ptr<const NeighbourTransmittance> transmittance_;
     float normal_offset_ = 1.0f;
     float radiance_scale_ = 0.0f;  // k / s²
+    bool damping_ = false;
 };
 
 }  // namespace shgi

@@ -62,14 +62,25 @@ uint32_t cell_of(const ShVolume& volume, const vec3& p) {
 
 // Per propagation cell and stencil offset, 1 − the geometry's blocking potential between the
 // cell and its source (see the header): the lattice's cell centres are the volume's corners.
-PropagationTransmittance geometry_transmittance(const ShLattice& geometry, const ShVolume& volume,
-                                                PropagationStencil stencil, Progress* progress) {
+PropagationTransmittance geometry_transmittance(const ShLattice& geometry, const Bounds3& bounds,
+                                                const ShVolume& volume, PropagationStencil stencil,
+                                                Progress* progress) {
     const std::vector<ivec3> offsets = propagation_offsets(stencil);
     PropagationTransmittance transmittance;
     transmittance.offsets = int(offsets.size());
     transmittance.values.assign(volume.cell_count() * offsets.size(), 1.0f);
     const ivec3 dims = geometry.dims(), counts = volume.counts();
-    const float area = geometry.cell_size() * geometry.cell_size();
+    const float s = geometry.cell_size();
+    // The cross-section a wall can have in lattice cell g, perpendicular to `axis`: the cell
+    // clipped to the scene's bounds (the lattice overhangs them: the two rooms' floor and
+    // ceiling layers are 2/3 inside, and their wall, which fills the inside, blocked only 2/3
+    // there: 17% of the bright room's light near its floor and ceiling crossed the wall).
+    const auto cross_section = [&](const ivec3& g, int axis) {
+        const vec3 lo = geometry.origin() + vec3(g) * s;
+        const vec3 extent = glm::max(glm::min(lo + s, bounds.upper) - glm::max(lo, bounds.lower),
+                                     vec3(0.0f));
+        return extent[(axis + 1) % 3] * extent[(axis + 2) % 3];
+    };
     parallel_for(0, volume.cell_count(), kCellsPerTask, [&](uint64_t begin, uint64_t end) {
         throw_if_cancelled(progress);
         for (uint64_t c = begin; c < end; ++c) {
@@ -85,7 +96,7 @@ PropagationTransmittance geometry_transmittance(const ShLattice& geometry, const
                 // axis of the offset, seen along dir (s² for face neighbours, s²/√2 and s²/√3
                 // across edges and corners). With s² alone a wall blocked only 71% and 58% of
                 // the edge and corner transfers, and the HOLPV's light went through walls.
-                const float full_wall = area * max_abs_component(dir);
+                const float largest = max_abs_component(dir);
                 const ivec3 lo(glm::floor(q));
                 const vec3 f = q - vec3(lo);
                 float blocking = 0.0f;
@@ -97,6 +108,12 @@ PropagationTransmittance geometry_transmittance(const ShLattice& geometry, const
                     if (w == 0.0f || glm::any(glm::lessThan(g, ivec3(0))) ||
                         glm::any(glm::greaterThanEqual(g, dims)))
                         continue;
+                    // The smallest of the walls across the transfer's dominant axes.
+                    float full_wall = kInfinity;
+                    for (int axis = 0; axis < 3; ++axis)
+                        if (std::fabs(dir[axis]) == largest)
+                            full_wall = std::min(full_wall, cross_section(g, axis) * largest);
+                    if (!(full_wall > 0.0f)) continue;
                     const float d = geometry.projected_area(geometry.cell_index(g), dir);
                     blocking += w * std::min(1.0f, d / full_wall);
                 }
@@ -147,7 +164,7 @@ void inject_vpls(ShVolume& volume, const std::vector<VirtualPointLight>& vpls,
 
 ShVolume propagate(const ShVolume& injected, const PropagationStep& step, int steps,
                    const PropagationTransmittance* transmittance, Progress* progress,
-                   std::vector<double>* step_seconds) {
+                   std::vector<double>* step_seconds, bool occlude_first_step) {
     // Copies of a large volume take a while (~0.1 s at 97³ L2): a cancel poll after each.
     ShVolume accumulated = injected;
     throw_if_cancelled(progress);
@@ -159,8 +176,9 @@ ShVolume propagate(const ShVolume& injected, const PropagationStep& step, int st
     const size_t floats = accumulated.coefficients().size();
     for (int k = 0; k < steps; ++k) {
         const auto start = now();
-        // §3.2.3: no occlusion on the first step, whose light leaves the VPLs' own surfaces.
-        step(ping, pong, k == 0 ? nullptr : transmittance, progress);
+        // §3.2.3: no occlusion on the first step, whose light leaves the VPLs' own surfaces
+        // (unless occlude_first_step).
+        step(ping, pong, k == 0 && !occlude_first_step ? nullptr : transmittance, progress);
         const float* next = pong.cell_data(0);
         for_each_slice(floats, uint64_t(1) << 22, progress, [&](uint64_t begin, uint64_t end) {
             for (uint64_t i = begin; i < end; ++i) acc[i] += next[i];
@@ -213,10 +231,10 @@ void PropagationVolume::reset(Progress* progress) {
     std::shared_ptr<const NeighbourTransmittance> lookup;
     if (settings_.occlusion) {
         PropagationTransmittance all = geometry_transmittance(
-            geometry, volume, PropagationStencil::Neighbours26, progress);
+            geometry, scene_->bounds(), volume, PropagationStencil::Neighbours26, progress);
         transmittance = settings_.order == 2
                             ? all
-                            : geometry_transmittance(geometry, volume,
+                            : geometry_transmittance(geometry, scene_->bounds(), volume,
                                                      PropagationStencil::Faces6, progress);
         lookup = std::make_shared<const NeighbourTransmittance>(std::move(all.values));
     }
@@ -237,11 +255,23 @@ std::vector<VirtualPointLight> PropagationVolume::trace_vpls(Progress* progress,
                                                              double* reflect_seconds) {
     PhotonMaps maps = trace_photons(*scene_, tracer_settings(settings_), passes_, progress,
                                     kSettings);
+    // With drop_outward_vpls, a VPL whose lit half-space holds nothing of the scene's bounds (a
+    // surface on the bounds facing out: a sunlit roof or outer wall) is dropped: it can light no
+    // surface, and injected it lit the cells its surface runs through, which interior lookups
+    // read (the sun room with its window shut).
+    const Bounds3 bounds = scene_->bounds();
+    const float tolerance = 1e-4f * max_component(bounds.upper - bounds.lower);
+    const auto lights_the_scene = [&](const vec3& position, const vec3& normal) {
+        if (!settings_.drop_outward_vpls) return true;
+        const vec3 farthest = glm::mix(bounds.lower, bounds.upper,
+                                       vec3(glm::greaterThan(normal, vec3(0.0f))));
+        return glm::dot(normal, farthest - position) > tolerance;
+    };
     std::vector<VirtualPointLight> vpls;
     vpls.reserve(maps.first_hits.size() +
                  (settings_.vpl_bounces > 1 ? maps.global.size() + maps.caustic.size() : 0));
     for (const PhotonFirstHit& hit : maps.first_hits)
-        if (hit.reflected_power != vec3(0.0f))
+        if (hit.reflected_power != vec3(0.0f) && lights_the_scene(hit.position, hit.normal))
             vpls.push_back({hit.position, hit.normal, hit.reflected_power});
     if (settings_.vpl_bounces == 1) return vpls;
     // Later hits carry the power arriving; the surface scatters its diffuse albedo of it, which
@@ -265,7 +295,7 @@ std::vector<VirtualPointLight> PropagationVolume::trace_vpls(Progress* progress,
         }
     });
     for (size_t i = 0; i < later.size(); ++i)
-        if (reflected[i] != vec3(0.0f))
+        if (reflected[i] != vec3(0.0f) && lights_the_scene(later[i].position, later[i].normal))
             vpls.push_back({later[i].position, later[i].normal, reflected[i]});
     *reflect_seconds = seconds_since(start);
     return vpls;
@@ -309,7 +339,7 @@ void PropagationVolume::refine(Progress* progress) {
     std::vector<double> step_seconds;
     ShVolume accumulated =
         propagate(mean, step, settings_.steps, settings_.occlusion ? &transmittance_ : nullptr,
-                  progress, &step_seconds);
+                  progress, &step_seconds, settings_.occlude_first_step);
     for (size_t k = 0; k < step_seconds.size(); ++k)
         stages.push_back({format_message("propagation_step_", k + 1), step_seconds[k]});
 
@@ -318,7 +348,7 @@ void PropagationVolume::refine(Progress* progress) {
     injected_ = std::move(mean);
     field_ = std::make_shared<PropagationField>(
         std::make_shared<const ShVolume>(std::move(accumulated)), settings_.normal_offset,
-        lookup_transmittance_);
+        lookup_transmittance_, settings_.damping);
     last_vpl_count_ = vpls.size();
     stage_seconds_ = std::move(stages);
     ++passes_;

@@ -17,7 +17,9 @@
 //      exact surface (lattice/sh_lattice.h, triangles clipped to the cell). A cell blocks light
 //      along ω with potential B(ω) = min(1, D_c(ω) / (s² max_i |ω_i|)), D_c the projected area
 //      of its surface seen from ω (both sides), s the cell size and s² max_i |ω_i| what a wall
-//      across the transfer shows of the cell (the seed's s² for face neighbours); the seed's L1
+//      across the transfer shows of the cell (the seed's s² for face neighbours; in a cell the
+//      lattice's overhang puts partly outside the scene's bounds, the inside part's cross-section,
+//      so that a wall filling the inside blocks fully); the seed's L1
 //      expansion of a cosine lobe is replaced by this exact measure. The transfer from a
 //      neighbour at offset d is attenuated by 1 − B(d/|d|) interpolated trilinearly at the
 //      midpoint of the two cell centres: bilinear over the 4 corners of the shared face (face
@@ -26,7 +28,9 @@
 //      (propagation_field.h).
 //   4. Propagation (eq. 3.3, §3.3, §4.3): `steps` gather steps with ping-pong volumes, each added
 //      to the accumulation volume (which starts with the injection); occlusion is skipped on the
-//      first step (§3.2.3: the VPLs' own surfaces would block them). Stencil, flux factor and
+//      first step (§3.2.3: the VPLs' own surfaces would block them) unless occlude_first_step
+//      (then a VPL beside a thin wall, injected into the cell the wall runs through, does not
+//      send its light across). Stencil, flux factor and
 //      clamping: propagation_stencil.h (Ω_f/π instead of eq. 3.3's Ω_f/4π; clamp then rescale).
 // The field (propagation/propagation_field.h) is an immutable snapshot of the accumulation
 // volume: renderers read it while the next pass runs.
@@ -70,6 +74,20 @@ struct PropagationSettings {
     // sunlit outside of its walls and roof) half a cell gave 5.9x the path tracer's indirect light
     // (L1), one cell 0.97x.
     float normal_offset = 1.0f;
+    // Seed 003 §3.2.4 (Kaplanyan & Dachsbacher 2010): damp the lookup where the light arriving
+    // along −n is stronger half a cell behind the lookup point than half a cell in front of it
+    // (the surface's own light or light from behind a wall), by front / back.
+    bool damping = false;
+    // Occlusion on the first step too (the seed skips it, §3.2.3). A VPL within half a cell of
+    // a thin wall is injected into the cell the wall runs through, and with the first step
+    // unoccluded its light crosses the wall: in the two rooms that was +20% (LPV) and +36%
+    // (HOLPV) of the dim room's indirect light, 2% with this on (docs/methods.md).
+    bool occlude_first_step = false;
+    // Drop the VPLs that can light nothing: those on the scene's bounds facing out (a sunlit
+    // roof or outer wall), whose lit half-space holds none of the scene. Exact, but off by
+    // default for now: their light reached the interior (the sun room's outside put 0.31 of its
+    // indirect light inside) and hid the closed rooms' shortfall there (docs/methods.md).
+    bool drop_outward_vpls = false;
 };
 
 // Throws InvalidArgument naming the field and its allowed range.
@@ -135,10 +153,11 @@ void inject_vpls(ShVolume& volume, const std::vector<VirtualPointLight>& vpls,
                  Progress* progress = nullptr);
 
 // `steps` steps from `injected` (see above), the accumulation returned; `transmittance` (may be
-// null) applies from the second step. Seconds of each step are appended to `step_seconds` when
-// it is not null; progress is reported per step.
+// null) applies from the second step, or from the first with occlude_first_step. Seconds of
+// each step are appended to `step_seconds` when it is not null; progress is reported per step.
 ShVolume propagate(const ShVolume& injected, const PropagationStep& step, int steps,
                    const PropagationTransmittance* transmittance, Progress* progress = nullptr,
-                   std::vector<double>* step_seconds = nullptr);
+                   std::vector<double>* step_seconds = nullptr,
+                   bool occlude_first_step = false);
 
 }  // namespace shgi

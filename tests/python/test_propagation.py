@@ -59,7 +59,8 @@ def missed(figure):
     ("sun_room", 1),
     ("sun_room", 2),
     ("two_rooms", 1),
-    pytest.param("two_rooms", 2, marks=missed("DiffInd 1.22x: light through the wall")),
+    pytest.param("two_rooms", 2,
+                 marks=missed("DiffInd 1.21x: light through the wall on the first step")),
 ])
 def test_indirect_diffuse_agrees_with_path_tracer(name, order):
     ref, preview = rendered(name, order)
@@ -92,6 +93,7 @@ def test_settings_mirror_cpp_defaults_and_validate():
     assert (s.photons, s.seed, s.vpl_bounces, s.resolution, s.steps, s.order) == (
         100000, 0, 4, 32, 8, 2)
     assert s.occlusion and s.normal_offset == pytest.approx(1.0)
+    assert not s.damping and not s.occlude_first_step and not s.drop_outward_vpls
     assert shgi.settings_from_dict(shgi.PropagationSettings,
                                    shgi.settings_to_dict(s)).steps == 8
     with pytest.raises(TypeError, match="no field 'step'"):
@@ -189,7 +191,7 @@ def test_cornell_floor_holpv_closer_than_lpv_and_self_lighting_reported():
 
 
 @pytest.mark.reference
-@pytest.mark.parametrize("order", [1, pytest.param(2, marks=missed("Combined 1.096x"))])
+@pytest.mark.parametrize("order", [1, pytest.param(2, marks=missed("Combined 1.089x"))])
 def test_dim_room_through_a_final_gather_is_within_five_percent(order):
     """The two rooms' dim room read through a final gather, with one VPL bounce less (the
     add-on's accounting: Light Paths > Diffuse 4 gives 3 behind the gather): its Combined mean
@@ -204,3 +206,52 @@ def test_dim_room_through_a_final_gather_is_within_five_percent(order):
     ratio = float(preview["Combined"][..., :3].mean() / ref["Combined"][..., :3].mean())
     print(f"order {order}: dim room through a final gather {ratio:.3f} x the path tracer's")
     assert abs(ratio - 1.0) < 0.05
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("order", [1, 2])
+def test_first_step_occlusion_keeps_the_bright_room_out(order):
+    """The two rooms' leak taken apart: with only the bright lamp on, the dim room's exact
+    indirect light is 0, so whatever the volume puts there crossed the wall; it is compared with
+    the dim room's own indirect light (only the dim lamp on, path traced). With the first step
+    unoccluded (the seed, §3.2.3), VPLs within half a cell of the wall are injected into the
+    cell the wall runs through and their first step crosses it: measured +20% (LPV) and +36%
+    (HOLPV) of the dim room's own light. occlude_first_step keeps it under 5%."""
+    dim_scene = committed(scenes.two_rooms(0.5, bright_power=0.0))
+    dim = shgi.render_path_traced(dim_scene, shgi.PathTracerSettings(samples=128, seed=11))
+    bright_scene = committed(scenes.two_rooms(0.5, dim_power=0.0))
+    leaks = {}
+    for occlude in (False, True):
+        volume = shgi.PropagationVolume(bright_scene, shgi.PropagationSettings(
+            seed=5, order=order, occlude_first_step=occlude))
+        volume.refine()
+        preview, _ = shgi.render_preview(bright_scene, volume.current_field(),
+                                         shgi.PreviewSettings(seed=5))
+        leaks[occlude] = indirect_diffuse(preview) / indirect_diffuse(dim)
+    print(f"order {order}: light through the wall, x the dim room's own indirect light: "
+          f"{leaks[False]:.3f} (first step unoccluded), {leaks[True]:.3f} (occluded)")
+    assert leaks[True] < 0.05
+    assert leaks[True] < leaks[False]
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("order", [1, 2])
+def test_outward_vpls_dropped_keep_the_outside_out(order):
+    """The sun room with its window shut and the sky off: no light enters (the path tracer
+    finds none inside), yet the sunlit roof and outer walls' VPLs, injected into the cells those
+    surfaces run through, showed inside (measured 0.139 LPV, 0.127 HOLPV x the open room's
+    indirect light). drop_outward_vpls leaves out the VPLs that can light nothing (on the
+    scene's bounds, facing out): nothing is left inside."""
+    _, open_reference = path_traced_reference(scenes.sun_room, *REFERENCES["sun_room"])
+    shut = committed(scenes.sun_room(SCALE, window_shut=True))
+    inside = {}
+    for drop in (False, True):
+        volume = shgi.PropagationVolume(shut, shgi.PropagationSettings(
+            seed=5, order=order, drop_outward_vpls=drop))
+        volume.refine()
+        preview, _ = shgi.render_preview(shut, volume.current_field(),
+                                         shgi.PreviewSettings(seed=5))
+        inside[drop] = indirect_diffuse(preview) / indirect_diffuse(open_reference)
+    print(f"order {order}: light inside the shut sun room, x the open room's indirect light: "
+          f"{inside[False]:.3f} (all VPLs), {inside[True]:.4f} (outward ones dropped)")
+    assert inside[True] < 0.001

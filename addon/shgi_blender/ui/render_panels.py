@@ -294,7 +294,9 @@ class SHGI_RENDER_PT_propagation(_FieldPanel, bpy.types.Panel):
         column = layout.column(align=True)
         for name in ("photons", "resolution", "steps", "order", "normal_offset"):
             column.prop(volume, name)
-        layout.prop(volume, "occlusion")
+        column = layout.column(align=True)
+        for name in ("occlusion", "occlude_first_step", "drop_outward_vpls", "damping"):
+            column.prop(volume, name)
         column = layout.column(align=True)
         column.label(text="Passes")
         column.prop(volume, "passes", text="Render")

@@ -2582,6 +2582,22 @@ class PropagationSettings:
         Raises ValueError naming the first invalid field.
         """
     @property
+    def damping(self) -> bool:
+        """
+        Damp the lookup where the light arriving against the normal is stronger half a cell behind the lookup point than in front of it (seed 003 §3.2.4's directional derivative, against self-lighting and bleeding) (False).
+        """
+    @damping.setter
+    def damping(self, arg0: bool) -> None:
+        ...
+    @property
+    def drop_outward_vpls(self) -> bool:
+        """
+        Drop the VPLs that light nothing: on the scene's bounds facing out (a sunlit roof or outer wall), whose light otherwise reaches the interior through the cells their surface runs through (False).
+        """
+    @drop_outward_vpls.setter
+    def drop_outward_vpls(self, arg0: bool) -> None:
+        ...
+    @property
     def normal_offset(self) -> float:
         """
         Cells along the shading normal before the lookup, against self-lighting and leaks through walls (1.0).
@@ -2590,9 +2606,17 @@ class PropagationSettings:
     def normal_offset(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
+    def occlude_first_step(self) -> bool:
+        """
+        Geometry volume blocking on the first step too (the seed skips it): keeps the light of VPLs next to a thin wall from crossing it (False).
+        """
+    @occlude_first_step.setter
+    def occlude_first_step(self, arg0: bool) -> None:
+        ...
+    @property
     def occlusion(self) -> bool:
         """
-        Geometry volume blocking from the second step on (True).
+        Geometry volume blocking from the second step on, or the first with occlude_first_step (True).
         """
     @occlusion.setter
     def occlusion(self, arg0: bool) -> None:
