@@ -83,35 +83,8 @@ bool joins(const GBuffer& g, size_t p, size_t q, const InstantGiSettings& s, boo
 // Lobes up to this roughness are mirror-like: their light is not spread as if diffuse.
 constexpr float kSpecularRoughness = 0.1f;
 
-// The flux the surface under a photon hit (position, normal, direction towards the source,
-// arriving power) scatters into its VPL, found by a short ray back along the photon's path (the
-// photon maps keep no material); zero when the surface is not found. As the radiance field's
-// reflected_power.
-vec3 vpl_power(const Scene& scene, bool glossy, const vec3& position, const vec3& normal,
-               const vec3& direction, const vec3& power) {
-    constexpr float kReach = 1e-3f;
-    Ray ray;
-    ray.origin = position + direction * kReach;
-    ray.direction = -direction;
-    ray.tmax = 2.0f * kReach;
-    Hit hit = scene.intersect(ray);
-    if (!hit.valid()) {  // a grazing photon: come back along the normal instead
-        ray.origin = position + normal * kReach;
-        ray.direction = -normal;
-        hit = scene.intersect(ray);
-    }
-    if (!hit.valid()) return vec3(0.0f);
-    const Shading shading =
-        make_shading(scene, scene.surface_point(ray, hit), ray.direction, PathOrigin::Light);
-    vec3 albedo = shading.bsdf.field_diffuse(shading.wo);
-    if (glossy) {
-        PrincipledBsdf::GlossyLobe lobes[2];
-        const int count = shading.bsdf.field_glossy_lobes(shading.wo, lobes);
-        for (int i = 0; i < count; ++i)
-            if (lobes[i].roughness > kSpecularRoughness) albedo += lobes[i].albedo;
-    }
-    return albedo * power;
-}
+// The reach of the ray back along a photon's path that finds its surface (scattered_flux).
+constexpr float kReach = 1e-3f;
 
 }  // namespace
 
@@ -400,7 +373,8 @@ void InstantGi::refine(Progress* progress) {
         throw_if_cancelled(progress);
         for (uint64_t i = begin; i < end; ++i) {
             const Photon& h = hits[i];
-            reflected[i] = vpl_power(*scene_, glossy, h.position, h.normal, h.direction, h.power);
+            reflected[i] = scattered_flux(*scene_, h.position, h.normal, h.direction, h.power,
+                                         kReach, glossy ? kSpecularRoughness : -1.0f);
         }
     }, progress);
     std::vector<InstantVpl> vpls;

@@ -498,4 +498,30 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
     return maps;
 }
 
+vec3 scattered_flux(const Scene& scene, const vec3& position, const vec3& normal,
+                    const vec3& direction, const vec3& power, float reach,
+                    float glossy_min_roughness) {
+    Ray ray;
+    ray.origin = position + direction * reach;
+    ray.direction = -direction;
+    ray.tmax = 2.0f * reach;
+    Hit hit = scene.intersect(ray);
+    if (!hit.valid()) {  // a grazing photon: come back along the normal instead
+        ray.origin = position + normal * reach;
+        ray.direction = -normal;
+        hit = scene.intersect(ray);
+        if (!hit.valid()) return vec3(0.0f);
+    }
+    const Shading shading =
+        make_shading(scene, scene.surface_point(ray, hit), ray.direction, PathOrigin::Light);
+    vec3 albedo = shading.bsdf.field_diffuse(shading.wo);
+    if (glossy_min_roughness >= 0.0f) {
+        PrincipledBsdf::GlossyLobe lobes[2];
+        const int count = shading.bsdf.field_glossy_lobes(shading.wo, lobes);
+        for (int i = 0; i < count; ++i)
+            if (lobes[i].roughness > glossy_min_roughness) albedo += lobes[i].albedo;
+    }
+    return albedo * power;
+}
+
 }  // namespace shgi

@@ -86,6 +86,17 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
                          Progress* progress = nullptr,
                          const char* settings_name = "PhotonTracerSettings");
 
+// The flux the surface under a photon hit scatters (its position, normal, unit direction
+// towards the source and arriving power): the surface is found again by a ray back along the
+// photon's path over 2 x `reach` m (from `reach` before the hit; a grazing photon: along the
+// normal), since a stored Photon keeps no material; zero when it is not found. The diffuse
+// lobe's albedo always; with glossy_min_roughness >= 0 also the albedo of the glossy lobes
+// rougher than it (spread as if diffuse: the radiance field's glossy_in_grid, Instant GI's
+// glossy_vpls). Times the power.
+vec3 scattered_flux(const Scene& scene, const vec3& position, const vec3& normal,
+                    const vec3& direction, const vec3& power, float reach,
+                    float glossy_min_roughness);
+
 // Appends `from` to `to` in slices of 2^20 photons (48 MB, ~10 ms) with a cancel poll before
 // each: maps of 10^7+ photons take long to copy, and a cancel should not wait for it.
 void append_photons(std::vector<Photon>& to, const std::vector<Photon>& from,

@@ -104,36 +104,6 @@ Bounds3 field_bounds(const Scene& scene, const RadianceFieldSettings& settings) 
     return scene.bounds();
 }
 
-// The flux the surface under a stored photon or first hit (position, normal, direction towards
-// the source, arriving power) scatters into the grid, found by a short ray back along the
-// photon's path (a stored Photon keeps no material); zero when the surface is not found. The
-// diffuse lobe always; with glossy_in_grid the rough glossy lobes too (see the header).
-vec3 reflected_power(const Scene& scene, const RadianceFieldSettings& settings,
-                     const vec3& position, const vec3& normal, const vec3& direction,
-                     const vec3& power, float reach) {
-    Ray ray;
-    ray.origin = position + direction * reach;
-    ray.direction = -direction;
-    ray.tmax = 2.0f * reach;
-    Hit hit = scene.intersect(ray);
-    if (!hit.valid()) {  // a grazing photon: come back along the normal instead
-        ray.origin = position + normal * reach;
-        ray.direction = -normal;
-        hit = scene.intersect(ray);
-        if (!hit.valid()) return vec3(0.0f);
-    }
-    const Shading shading =
-        make_shading(scene, scene.surface_point(ray, hit), ray.direction, PathOrigin::Light);
-    vec3 albedo = shading.bsdf.field_diffuse(shading.wo);
-    if (settings.glossy_in_grid) {
-        PrincipledBsdf::GlossyLobe lobes[2];
-        const int count = shading.bsdf.field_glossy_lobes(shading.wo, lobes);
-        for (int i = 0; i < count; ++i)
-            if (lobes[i].roughness > settings.specular_roughness) albedo += lobes[i].albedo;
-    }
-    return albedo * power;
-}
-
 }  // namespace
 
 void validate_radiance_field_settings(const RadianceFieldSettings& s) {
@@ -298,8 +268,11 @@ std::vector<ReflectedHit> RadianceField::reflected_hits(Progress* progress,
                     hit = {p.position, p.normal, p.direction, vec3(0.0f)};
                     power = p.power;
                 }
-                hit.reflected_power = reflected_power(*scene_, settings_, hit.position,
-                                                      hit.normal, hit.direction, power, reach);
+                // The diffuse lobe always; with glossy_in_grid the rough glossy lobes too (see
+                // the header).
+                hit.reflected_power = scattered_flux(
+                    *scene_, hit.position, hit.normal, hit.direction, power, reach,
+                    settings_.glossy_in_grid ? settings_.specular_roughness : -1.0f);
             }
         },
         progress);
