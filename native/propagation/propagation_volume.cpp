@@ -108,11 +108,17 @@ PropagationTransmittance geometry_transmittance(const ShLattice& geometry, const
                     if (w == 0.0f || glm::any(glm::lessThan(g, ivec3(0))) ||
                         glm::any(glm::greaterThanEqual(g, dims)))
                         continue;
-                    // The smallest of the walls across the transfer's dominant axes.
+                    // The smallest of the walls across the transfer's dominant axes. Where the
+                    // scene's bounds are flat across an axis (a single plane: its bounds have no
+                    // height), no wall fits inside them and the whole face s² stands in: else
+                    // the plane blocked no transfer along that axis (a plane under a sky read
+                    // 5% bright in the conformance test).
                     float full_wall = kInfinity;
-                    for (int axis = 0; axis < 3; ++axis)
-                        if (std::fabs(dir[axis]) == largest)
-                            full_wall = std::min(full_wall, cross_section(g, axis) * largest);
+                    for (int axis = 0; axis < 3; ++axis) {
+                        if (std::fabs(dir[axis]) != largest) continue;
+                        const float wall = cross_section(g, axis);
+                        full_wall = std::min(full_wall, (wall > 0.0f ? wall : s * s) * largest);
+                    }
                     if (!(full_wall > 0.0f)) continue;
                     const float d = geometry.projected_area(geometry.cell_index(g), dir);
                     blocking += w * std::min(1.0f, d / full_wall);
