@@ -172,7 +172,8 @@ NARROWER_RANGES = {("PathTracerSettings", "samples"): (1, 2**24),
                    ("PreviewSettings", "samples"): (1, 2**24),
                    ("PhotonLatticeSettings", "photons"): (1, 2**64 - 1),
                    ("RadianceFieldSettings", "photons"): (1, 2**64 - 1),
-                   ("PropagationSettings", "photons"): (1, 2**64 - 1)}
+                   ("PropagationSettings", "photons"): (1, 2**64 - 1),
+                   ("InstantGiSettings", "photons_per_set"): (1, 2**64 - 1)}
 
 
 def test_every_enum_accepts_only_its_named_values():
