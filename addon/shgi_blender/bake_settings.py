@@ -128,7 +128,8 @@ FARM_ITEMS = (
 )
 # Worker processes of a Dask bake on this computer (Scheduler empty): shgi.farm's limit.
 MAX_FARM_WORKERS = 256
-# Shards per Dask worker when Shards is 1 (shgi.farm.bake_scene_on_cluster's default).
+# Shards per Dask worker when Shards is 1: shgi.farm.SHARDS_PER_WORKER (this module imports no
+# shgi; tests/python/test_blender_bake.py checks the two agree).
 SHARDS_PER_WORKER = 4
 
 # LightmapSettings.samples' native limit (native/bake/lightmap_baker.cpp kMaxSamples): the

@@ -19,6 +19,7 @@ import time
 
 from . import _shgi
 from . import bake as _bake
+from . import farm as _farm
 from . import method_registry as _methods
 
 
@@ -129,18 +130,13 @@ def _parser() -> argparse.ArgumentParser:
                       help="bake on the running Dask cluster of this scheduler instead")
     bake.add_argument("--shards", type=_whole(1), default=0, metavar="K",
                       help="with --workers or --scheduler: shards of the bake (default: "
-                           f"{_FARM_SHARDS_PER_WORKER} per worker)")
+                           f"{_farm.SHARDS_PER_WORKER} per worker)")
     bake.add_argument("--world-light-only", action="store_true",
                       help="bake a scene without lamps or emissive materials, lit by the "
                            "loader's default world alone (refused without this flag: a glTF "
                            "exporter may have left the scene's lights out)")
     bake.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser
-
-
-# A farm bake's default shards per worker: several, so that a slow or lost worker's share is
-# small and the others keep busy (docs/farm.md).
-_FARM_SHARDS_PER_WORKER = 4
 
 
 def _method_name(name: str) -> str:
@@ -308,23 +304,20 @@ def _bake_command(args) -> int:
 
 def _farm_command(args) -> int:
     """A bake on a Dask cluster (shgi.farm): shards as tasks, then the merge here."""
-    from . import farm
-
-    if args.shards > farm.MAX_SHARDS:
-        raise ValueError(f"--shards {args.shards}: at most {farm.MAX_SHARDS} (each shard returns "
+    if args.shards > _farm.MAX_SHARDS:
+        raise ValueError(f"--shards {args.shards}: at most {_farm.MAX_SHARDS} (each shard returns "
                          "its objects' whole arrays; see docs/farm.md)")
-    if args.workers > farm.MAX_LOCAL_WORKERS:
+    if args.workers > _farm.MAX_LOCAL_WORKERS:
         raise ValueError(f"--workers {args.workers}: a local cluster runs at most "
-                         f"{farm.MAX_LOCAL_WORKERS} worker processes on this machine; for more, "
+                         f"{_farm.MAX_LOCAL_WORKERS} worker processes on this machine; for more, "
                          "start a Dask cluster over several hosts and pass --scheduler")
     bar = _Bar(not args.quiet)
     progress = _bake.BakeProgress(bar)
     interrupted = False
     try:
-        lightmaps = farm.bake_command_on_cluster(
+        lightmaps = _farm.bake_command_on_cluster(
             args, progress, workers=args.workers, scheduler=args.scheduler,
-            threads=args.threads or 1, shards=args.shards,
-            shards_per_worker=_FARM_SHARDS_PER_WORKER, run=_run_on_worker)
+            threads=args.threads or 1, shards=args.shards, run=_run_on_worker)
     except KeyboardInterrupt:
         interrupted = True
     finally:

@@ -74,6 +74,9 @@ MAX_LOCAL_WORKERS = 256
 # How often the client looks at its futures (Ctrl-C lands between looks) and a task at the
 # cancel event: the native bake then stops within its own 0.2 s.
 _POLL_SECONDS = 0.1
+# Shards of a farm bake per worker when the caller names no number: several, so that a slow or
+# lost worker's share is small and the others keep busy (docs/farm.md).
+SHARDS_PER_WORKER = 4
 # Seconds a client waits for a scheduler's answer.
 CONNECT_SECONDS = 10
 # Share of the progress bar the shards own; the merge owns the rest.
@@ -491,10 +494,10 @@ def _failed_on(future, client) -> str:
 
 def bake_command_on_cluster(args, progress: _bake.BakeProgress, workers: int = 0,
                             scheduler: Optional[str] = None, threads: int = 1, shards: int = 0,
-                            shards_per_worker: int = 4, run=None) -> list:
+                            run=None) -> list:
     """The bake of command-line `args` (``python -m shgi bake``'s) on a local cluster of
     `workers` processes, or on the cluster of `scheduler`; returns the merged Lightmaps.
-    `shards` 0: shards_per_worker per worker. `run(work, progress)` runs the merge (the CLI's
+    `shards` 0: SHARDS_PER_WORKER per worker. `run(work, progress)` runs the merge (the CLI's
     _run_on_worker, so that Ctrl-C cancels it). Progress: "shards d/K, R texels/s"."""
     from . import __main__ as cli
 
@@ -518,10 +521,8 @@ def bake_command_on_cluster(args, progress: _bake.BakeProgress, workers: int = 0
                       "start one with `dask scheduler` and workers with `dask worker "
                       "ADDRESS`") from error
     try:
-        if not shards:
-            shards = shards_per_worker * max(1, len(client.scheduler_info()["workers"]))
-        _bake_shards_on(client, distributed, bundle, args, scene, jobs, options, shards,
-                        threads, progress)
+        shards = _bake_shards_on(client, distributed, _bake_shard_task, bundle, (args,), jobs,
+                                 options, args.out, shards, threads, progress)
     finally:
         # Cancelled or failed: the tasks were cancelled and watch the cancel event, so a local
         # cluster's workers stop within about a second (measured: 1.0 s for 2 workers).
@@ -540,23 +541,27 @@ def _report(progress: _bake.BakeProgress, fraction: float, stage: str) -> None:
         progress.callback(fraction, stage)
 
 
-def _bake_shards_on(client, distributed, bundle, args, scene, jobs, options, shards: int,
-                    threads: int, progress) -> None:
-    """Bakes the `shards` shards on the client's cluster into args.out/shards."""
+def _bake_shards_on(client, distributed, task, shared, task_args: tuple, jobs, options,
+                    out_dir: str, shards: int, threads: int, progress) -> int:
+    """Bakes a bake's shards on the client's cluster into out_dir/shards: shard i is the task
+    task(<shared, scattered>, *task_args, i, shards, threads, cancel name), which returns the
+    shard files' bytes (_accept_shard checks them). `shards` 0: SHARDS_PER_WORKER per worker.
+    Returns the number of shards."""
+    if not shards:
+        shards = SHARDS_PER_WORKER * max(1, len(client.scheduler_info()["workers"]))
     cancel_name = f"shgi-cancel-{uuid.uuid4().hex}"
     cancel = distributed.Event(cancel_name, client=client)
     # Keyed by its content; on every worker, so that a lost worker loses no copy that others need
     # (workers that join later fetch it from a peer).
-    [bundle_future] = client.scatter([bundle], hash=True, broadcast=True)
+    [shared_future] = client.scatter([shared], hash=True, broadcast=True)
     run_id = uuid.uuid4().hex[:8]
 
     def submit(i: int, attempt: int):
-        return client.submit(_bake_shard_task, bundle_future, args, i, shards, threads,
-                             cancel_name, key=f"shgi-shard-{i}-of-{shards}-{run_id}-{attempt}",
-                             pure=False)
+        return client.submit(task, shared_future, *task_args, i, shards, threads, cancel_name,
+                             key=f"shgi-shard-{i}-of-{shards}-{run_id}-{attempt}", pure=False)
 
     def accept(i: int, result: dict) -> int:
-        return _accept_shard(result, jobs, options, args.out, i, shards)
+        return _accept_shard(result, jobs, options, out_dir, i, shards)
 
     start = time.perf_counter()
 
@@ -568,6 +573,8 @@ def _bake_shards_on(client, distributed, bundle, args, scene, jobs, options, sha
     _report(progress, 0.0, f"shards 0/{shards}")
     run_tasks(client, submit, shards, accept, on_progress, "shard", lambda: progress.cancelled,
               cancel)
+    cancel.set()  # every task is done: their cancel watchers return now, not at a cluster's close
+    return shards
 
 
 def _accept_shard(result: dict, jobs, options, out_dir: str, shard: int, shards: int) -> int:
@@ -666,8 +673,7 @@ def _scene_shard_task(blob: SceneBlob, jobs, options, recipe: Optional[tuple], s
 def bake_scene_on_cluster(client, scene: "_shgi.Scene", jobs, options: _bake.BakeOptions,
                           out_dir: str, recipe: Optional[tuple] = None, shards: int = 0,
                           threads: int = 1, progress: Optional[_bake.BakeProgress] = None,
-                          on_lightmap: Optional[Callable] = None,
-                          shards_per_worker: int = 4) -> list:
+                          on_lightmap: Optional[Callable] = None) -> list:
     """shgi.bake.bake_scene of a scene built in this process, its shards baked on the cluster
     of `client` (a distributed.Client); returns the merged Lightmaps, written into out_dir
     byte-identical to bake_scene's (on_lightmap(lightmap) as each is merged).
@@ -676,7 +682,7 @@ def bake_scene_on_cluster(client, scene: "_shgi.Scene", jobs, options: _bake.Bak
     recipe: (method, settings, passes) of the field that gives the indirect light, solved on the
     workers as shgi.method_registry.solve does (settings as they are: a final gather's
     shallower settings are the caller's, as the add-on's recipe holds them); None: the path
-    tracer. shards 0: shards_per_worker per worker. Progress, retries, validation and cancel as
+    tracer. shards 0: SHARDS_PER_WORKER per worker. Progress, retries, validation and cancel as
     the command line's farm bake (the module's docstring); nothing but out_dir/shards is
     written before every shard is in."""
     distributed = import_distributed()
@@ -696,38 +702,14 @@ def bake_scene_on_cluster(client, scene: "_shgi.Scene", jobs, options: _bake.Bak
     options.settings.validate()
     _bake.denoise_method(options)
     _bake._check_padding(options)
-    if not shards:
-        shards = shards_per_worker * max(1, len(client.scheduler_info()["workers"]))
-    blob = SceneBlob(scene)
-    cancel_name = f"shgi-cancel-{uuid.uuid4().hex}"
-    cancel = distributed.Event(cancel_name, client=client)
-    [blob_future] = client.scatter([blob], hash=True, broadcast=True)
-    run_id = uuid.uuid4().hex[:8]
-
-    def submit(i: int, attempt: int):
-        return client.submit(_scene_shard_task, blob_future, jobs, options, recipe, i, shards,
-                             threads, cancel_name,
-                             key=f"shgi-shard-{i}-of-{shards}-{run_id}-{attempt}", pure=False)
-
-    def accept(i: int, result: dict) -> int:
-        return _accept_shard(result, jobs, options, out_dir, i, shards)
-
-    start = time.perf_counter()
-
-    def on_progress(done: int, texels: int) -> None:
-        rate = texels / max(time.perf_counter() - start, 1e-9)
-        _report(progress, _SHARDS_SHARE * done / shards,
-                f"shards {done}/{shards}, {rate:,.0f} texels/s")
-
-    _report(progress, 0.0, f"shards 0/{shards}")
     try:
-        run_tasks(client, submit, shards, accept, on_progress, "shard",
-                  lambda: progress.cancelled, cancel)
+        shards = _bake_shards_on(client, distributed, _scene_shard_task, SceneBlob(scene),
+                                 (jobs, options, recipe), jobs, options, out_dir, shards, threads,
+                                 progress)
     except KeyboardInterrupt:
         if progress.cancelled:  # cancel(), not Ctrl-C: as bake_scene ends
             raise _shgi.Cancelled("bake cancelled") from None
         raise
-    cancel.set()  # every task is done: their cancel watchers return now, not at a cluster's close
 
     def on_merge(fraction: float, stage: str) -> None:
         if progress.cancelled:

@@ -273,6 +273,8 @@ def test_farm_settings_name_the_target_and_refuse_a_bad_address():
             bake_settings.farm_target(bake_props(farm="DASK", scheduler=address))
     with pytest.raises(ValueError, match=r"Bake > Farm > Workers must lie in 1\.\.256"):
         bake_settings.farm_target(bake_props(farm="DASK", workers=0))
+    from shgi import farm
+    assert bake_settings.SHARDS_PER_WORKER == farm.SHARDS_PER_WORKER  # the panel's hint
 
 
 @needs_dask

@@ -81,7 +81,8 @@ TEST(LightTree, ChoicesPassChiSquareAgainstPmfWhichSumsToOne) {
             expected[i] = double(tree.pmf(p, i)) * kSamples;
             sum += tree.pmf(p, i);
         }
-        EXPECT_NEAR(sum, 1.0, kPmfSumTolerance) << "at (" << p.x << ", " << p.y << ", " << p.z << ")";
+        EXPECT_NEAR(sum, 1.0, kPmfSumTolerance)
+            << "at (" << p.x << ", " << p.y << ", " << p.z << ")";
         std::vector<double> observed(lights.size(), 0.0);
         for (int s = 0; s < kSamples; ++s) {
             uint32_t chosen;
@@ -172,7 +173,8 @@ TEST(LightTree, SplittingGivesTheSeenRoomsLampAShadowRayEverywhereInIt) {
                 share += pmf;
                 starved += pmf < 0.05f;
                 ++points;
-                EXPECT_EQ(tree.pmf(p, kSeenLamp, 4), 1.0f) << "at (" << x << ", " << y << ", " << z << ")";
+                EXPECT_EQ(tree.pmf(p, kSeenLamp, 4), 1.0f)
+                    << "at (" << x << ", " << y << ", " << z << ")";
             }
     share /= points;
     EXPECT_LT(share, 0.1);
@@ -219,32 +221,43 @@ TEST(LightSampler, SelectionPdfsOfLocalAndDistantEmittersSumToOne) {
     const Scene scene = many_light_scene();
     const LightSampler lights(scene, WorldSampling::Cosine);
     ASSERT_EQ(lights.emitter_count(), 6u + 1u + 1u + 2u + 1u);  // lamps, area, sun, quad, world
-    for (const vec3& p : {vec3(0.0f, 0.0f, 0.01f), vec3(5.0f, 5.0f, 0.01f), vec3(-9.0f, 0.0f, 2.0f)}) {
+    for (const vec3& p :
+         {vec3(0.0f, 0.0f, 0.01f), vec3(5.0f, 5.0f, 0.01f), vec3(-9.0f, 0.0f, 2.0f)}) {
         double sum = 0.0;
         for (uint32_t e = 0; e < lights.emitter_count(); ++e) sum += lights.selection_pdf(e, p);
         EXPECT_NEAR(sum, 1.0, kPmfSumTolerance);
     }
 }
 
-// Irradiance on an upward unit normal at p from point lights alone (no occluder between): the
-// NEE estimate over many lights converges to sum I cos / d^2.
-TEST(LightSampler, NextEventEstimationOverManyPointLightsIsUnbiased) {
+// Twelve point lights of four powers above a small plane 5 m below, the world dark, committed;
+// *irradiance: the analytic irradiance sum I cos / d^2 they give at p on unit normal n.
+Scene twelve_point_lights(const vec3& p, const vec3& n, double* irradiance) {
     Scene scene;
     scene.add_material(test::lambert(0.5f));
-    scene.add_instance(scene.add_mesh(test::plane(0.1f)), glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, -5.0f)));
-    double expected = 0.0;
-    const vec3 p(0.3f, -0.2f, 0.0f), n(0.0f, 0.0f, 1.0f);
+    scene.add_instance(scene.add_mesh(test::plane(0.1f)),
+                       glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, -5.0f)));
+    *irradiance = 0.0;
     for (int i = 0; i < 12; ++i) {
         const vec3 position(-6.0f + float(i), 0.5f * float(i % 3), 1.0f + 0.3f * float(i));
         const float power = 5.0f + 20.0f * float(i % 4);
         scene.add_light(test::point_light(position, power));
         const vec3 d = position - p;
-        expected += point_intensity_from_power(power) * glm::dot(glm::normalize(d), n) / glm::dot(d, d);
+        *irradiance += point_intensity_from_power(power) * glm::dot(glm::normalize(d), n) /
+                       glm::dot(d, d);
     }
     World dark;
     dark.strength = 0.0f;
     scene.set_world(dark);
     scene.commit();
+    return scene;
+}
+
+// Irradiance on an upward unit normal at p from point lights alone (no occluder between): the
+// NEE estimate over many lights converges to sum I cos / d^2.
+TEST(LightSampler, NextEventEstimationOverManyPointLightsIsUnbiased) {
+    const vec3 p(0.3f, -0.2f, 0.0f), n(0.0f, 0.0f, 1.0f);
+    double expected = 0.0;
+    const Scene scene = twelve_point_lights(p, n, &expected);
     const LightSampler lights(scene, WorldSampling::Cosine);
     Pcg32 rng(3);
     double sum = 0.0, sum2 = 0.0;
@@ -265,22 +278,9 @@ TEST(LightSampler, NextEventEstimationOverManyPointLightsIsUnbiased) {
 // samples) still converges to the analytic irradiance, and selection pdfs of the local emitters
 // sum to the cut's size.
 TEST(LightSampler, NextEventEstimationWithSplitsIsUnbiased) {
-    Scene scene;
-    scene.add_material(test::lambert(0.5f));
-    scene.add_instance(scene.add_mesh(test::plane(0.1f)), glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, -5.0f)));
-    double expected = 0.0;
     const vec3 p(0.3f, -0.2f, 0.0f), n(0.0f, 0.0f, 1.0f);
-    for (int i = 0; i < 12; ++i) {
-        const vec3 position(-6.0f + float(i), 0.5f * float(i % 3), 1.0f + 0.3f * float(i));
-        const float power = 5.0f + 20.0f * float(i % 4);
-        scene.add_light(test::point_light(position, power));
-        const vec3 d = position - p;
-        expected += point_intensity_from_power(power) * glm::dot(glm::normalize(d), n) / glm::dot(d, d);
-    }
-    World dark;
-    dark.strength = 0.0f;
-    scene.set_world(dark);
-    scene.commit();
+    double expected = 0.0;
+    const Scene scene = twelve_point_lights(p, n, &expected);
     constexpr int kSplits = 4;
     const LightSampler lights(scene, WorldSampling::Cosine, true, kSplits);
     double pmf_sum = 0.0;
