@@ -510,16 +510,16 @@ def bake_command_on_cluster(args, progress: _bake.BakeProgress, workers: int = 0
     if args.settings is not None:
         extra[_SETTINGS_NAME] = _read(args.settings)
     bundle = scene_bundle(args.scene, extra)
-    cluster = local_cluster(workers) if not scheduler else None
-    try:
-        client = distributed.Client(cluster if cluster is not None else scheduler,
-                                    timeout=f"{CONNECT_SECONDS}s")
-    except OSError as error:
-        if cluster is not None:
+    cluster = None
+    if scheduler:
+        client = _client_of(distributed, scheduler, lambda: progress.cancelled)
+    else:
+        cluster = local_cluster(workers)
+        try:
+            client = distributed.Client(cluster, timeout=f"{CONNECT_SECONDS}s")
+        except BaseException:
             cluster.close()
-        raise OSError(f"--scheduler {scheduler}: no Dask scheduler answers there ({error}); "
-                      "start one with `dask scheduler` and workers with `dask worker "
-                      "ADDRESS`") from error
+            raise
     try:
         shards = _bake_shards_on(client, distributed, _bake_shard_task, bundle, (args,), jobs,
                                  options, args.out, shards, threads, progress)
