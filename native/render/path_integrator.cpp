@@ -47,8 +47,8 @@ bool PathIntegrator::begin(const Ray& camera_ray, const Hit& first_hit) {
 bool PathIntegrator::enter_surface(const Hit& hit) {
     find_emission(ray_, hit);
     if (!hit.valid() || terminate_on_next_surface_) return false;
-    make_shading_in(&shading_, scene_, scene_.surface_point(ray_, hit), ray_.direction);
-    if (vertex_ == 0) record_first_hit(shading_, ray_, hit);
+    make_shading_in(&shading_.value, scene_, scene_.surface_point(ray_, hit), ray_.direction);
+    if (vertex_ == 0) record_first_hit(shading_.value, ray_, hit);
     return true;
 }
 
@@ -56,8 +56,8 @@ bool PathIntegrator::enter_surface(const Hit& hit) {
 // light, then the BSDF chooses whether and where the path continues.
 void PathIntegrator::finish() {
     for (;;) {
-        if (vertex_field() != nullptr) add_field(shading_);
-        if (!scatter(shading_, &ray_)) return;
+        if (vertex_field() != nullptr) add_field(shading_.value);
+        if (!scatter(shading_.value, &ray_)) return;
         const int total = bounces_[0] + bounces_[1] + bounces_[2];
         terminate_on_next_surface_ = total > settings_.max_bounces ||
                                      bounces_[0] > settings_.diffuse_bounces ||
@@ -129,7 +129,7 @@ void PathIntegrator::sample_direct() {
 }
 
 int PathIntegrator::prepare_direct(Ray* shadows) {
-    const Shading& shading = shading_;
+    const Shading& shading = shading_.value;
     if (!shading.bsdf.has_smooth_lobes()) return 0;  // a Dirac lobe never meets a light sample
     LightSample samples[kMaxLightSplits];
     float u_select = rng_.next_float();
@@ -146,25 +146,23 @@ int PathIntegrator::prepare_direct(Ray* shadows) {
         const vec3 wi = shading.frame.to_local(ls.wi);
         const bool geometric_above = glm::dot(ls.wi, shading.geometric_normal) > 0.0f;
         if (geometric_above != (wi.z > 0.0f)) continue;  // shading and geometric normals disagree
-        PendingDirect& pending = pending_[count];
-        pending.eval = vertex_field() != nullptr ? shading.bsdf.eval_field(shading.wo, wi)
-                                                 : shading.bsdf.eval(shading.wo, wi);
-        if (max_component(pending.eval.total()) <= 0.0f) continue;
+        const BsdfEval eval = vertex_field() != nullptr ? shading.bsdf.eval_field(shading.wo, wi)
+                                                        : shading.bsdf.eval(shading.wo, wi);
+        if (max_component(eval.total()) <= 0.0f) continue;
         Ray& shadow = shadows[count];
         shadow.origin = shading.spawn_origin(ls.wi);
         shadow.direction = ls.wi;
         shadow.tmin = 0.0f;
         shadow.tmax = std::isinf(ls.distance) ? kInfinity : ls.distance * (1.0f - kShadowShorten);
-        pending.light = ls;
-        pending.wi = wi;
+        ::new (&pending_[count].value) PendingDirect{ls, wi, eval};
         ++count;
     }
     return count;
 }
 
 void PathIntegrator::add_direct(int k) {
-    const Shading& shading = shading_;
-    const PendingDirect& pending = pending_[k];
+    const Shading& shading = shading_.value;
+    const PendingDirect& pending = pending_[k].value;
     const LightSample& ls = pending.light;
     const bool mis = !ls.delta && vertex_field() == nullptr;
     const float weight =
@@ -209,9 +207,9 @@ void PathIntegrator::add_field_light(const FieldLookup& field, const FieldLobes&
 
 bool PathIntegrator::first_field_query(vec3* position, vec3* normal, vec3* wo) const {
     if (vertex_field() == nullptr || field_->is_zero() || vertex_ != 0) return false;
-    *position = shading_.position;
-    *normal = shading_.frame.z;
-    *wo = shading_.frame.to_world(shading_.wo);
+    *position = shading_.value.position;
+    *normal = shading_.value.frame.z;
+    *wo = shading_.value.frame.to_world(shading_.value.wo);
     return true;
 }
 
