@@ -72,6 +72,18 @@ LightTree::LightTree(const std::vector<LightBounds>& emitters) {
     leaf_of_.assign(emitters.size(), 0);
     nodes_.reserve(2 * emitters.size() - 1);
     build(order, 0, order.size(), 0, emitters);
+    finish_nodes();
+}
+
+void LightTree::finish_nodes() {
+    for (Node& node : nodes_) {
+        const LightBounds& b = node.bounds;
+        node.centre = 0.5f * (b.bounds.lower + b.bounds.upper);
+        node.radius = 0.5f * glm::length(b.bounds.upper - b.bounds.lower);
+        node.cos_theta_o = std::cos(b.theta_o);
+        node.sin_theta_o = std::sin(b.theta_o);
+        node.cos_theta_e = std::cos(b.theta_e);
+    }
 }
 
 // The subtree over order[begin, end): a leaf for one emitter, else a split at the median of
@@ -104,20 +116,45 @@ uint32_t LightTree::build(std::vector<uint32_t>& order, size_t begin, size_t end
     return index;
 }
 
+namespace {
+
+// cos(max(0, a - b)) and sin(max(0, a - b)) from the cosines and sines of angles a, b in [0, pi].
+void cos_sin_of_clamped_difference(float cos_a, float sin_a, float cos_b, float sin_b,
+                                   float* cos_out, float* sin_out) {
+    if (cos_a >= cos_b) {  // a <= b
+        *cos_out = 1.0f;
+        *sin_out = 0.0f;
+        return;
+    }
+    *cos_out = cos_a * cos_b + sin_a * sin_b;
+    *sin_out = sin_a * cos_b - cos_a * sin_b;
+}
+
+}  // namespace
+
+// The header's formula with its angles as cosines and sines: theta - theta_o - theta_u is taken
+// as two clamped differences, and theta' > theta_e as cos(theta') < cos(theta_e).
 float LightTree::node_importance(const Node& node, const vec3& p) const {
     const LightBounds& b = node.bounds;
-    const vec3 centre = 0.5f * (b.bounds.lower + b.bounds.upper);
-    const float radius = 0.5f * glm::length(b.bounds.upper - b.bounds.lower);
-    const vec3 to_p = p - centre;
-    const float distance = glm::length(to_p);
+    const vec3 to_p = p - node.centre;
+    const float distance_squared = glm::dot(to_p, to_p);
+    const float radius_squared = node.radius * node.radius;
     // Inside the box every direction is possible: only the energy and the box's size count.
-    if (distance <= radius) return b.energy / std::max(radius * radius, kMinDistanceSquared);
-    const float theta_u = std::asin(std::min(radius / distance, 1.0f));
-    const float theta = safe_acos(glm::dot(b.axis, to_p / distance));
-    const float theta_prime = std::max(0.0f, theta - b.theta_o - theta_u);
-    // Strictly beyond: a spot's cone has theta_e = 0 and lights p at theta' = 0.
-    if (theta_prime > b.theta_e) return 0.0f;
-    return b.energy * std::cos(theta_prime) / std::max(distance * distance, kMinDistanceSquared);
+    if (distance_squared <= radius_squared)
+        return b.energy / std::max(radius_squared, kMinDistanceSquared);
+    const float distance = std::sqrt(distance_squared);
+    const float cos_theta = std::clamp(glm::dot(b.axis, to_p) / distance, -1.0f, 1.0f);
+    const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - cos_theta * cos_theta));
+    const float sin_theta_u = node.radius / distance;  // < 1 outside the box
+    const float cos_theta_u = std::sqrt(std::max(0.0f, 1.0f - sin_theta_u * sin_theta_u));
+    float cos_x, sin_x, cos_prime, sin_prime;
+    cos_sin_of_clamped_difference(cos_theta, sin_theta, node.cos_theta_o, node.sin_theta_o,
+                                  &cos_x, &sin_x);
+    cos_sin_of_clamped_difference(cos_x, sin_x, cos_theta_u, sin_theta_u, &cos_prime,
+                                  &sin_prime);
+    // Strictly beyond: a spot's cone has theta_e = 0 and lights p at theta' = 0 (cos 1).
+    if (cos_prime < node.cos_theta_e) return 0.0f;
+    return b.energy * cos_prime / std::max(distance_squared, kMinDistanceSquared);
 }
 
 void LightTree::child_probabilities(uint32_t index, const vec3& p, float* left,
@@ -164,10 +201,8 @@ bool LightTree::sample_below(uint32_t node, const vec3& p, float u, uint32_t* em
 
 bool LightTree::should_split(const Node& node, const vec3& p) const {
     if (node.leaf) return false;
-    const Bounds3& box = node.bounds.bounds;
-    const float radius = 0.5f * glm::length(box.upper - box.lower);
-    const float distance = glm::length(p - 0.5f * (box.lower + box.upper));
-    return distance <= radius || radius > kSplitRadiusRatio * distance;
+    const float distance = glm::length(p - node.centre);
+    return distance <= node.radius || node.radius > kSplitRadiusRatio * distance;
 }
 
 int LightTree::cut(const vec3& p, int max_samples, uint32_t* nodes) const {

@@ -90,9 +90,15 @@ class LightTree {
         uint32_t emitter = 0;          // leaf: the emitter
         uint32_t parent = 0;
         bool leaf = false;
+        // Of `bounds`, once per tree (finish_nodes): what node_importance() reads at every
+        // shading point, so that it needs no trigonometry (pbrt-v4's LightBounds::Importance).
+        vec3 centre{0.0f};
+        float radius = 0.0f;           // half the box's diagonal
+        float cos_theta_o = -1.0f, sin_theta_o = 0.0f, cos_theta_e = 0.0f;
     };
     uint32_t build(std::vector<uint32_t>& order, size_t begin, size_t end, uint32_t parent,
                    const std::vector<LightBounds>& emitters);
+    void finish_nodes();
     float node_importance(const Node& node, const vec3& p) const;
     bool should_split(const Node& node, const vec3& p) const;
     // sample() below `node`.
