@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -108,6 +109,42 @@ TEST(LightTree, EmittersThatCannotLightAPointAreNeverChosen) {
     double total = 0.0;
     for (const LightBounds& light : lights) total += light.energy;
     EXPECT_GT(tree.pmf(vec3(3.0f, 3.0f, 0.0f), spot), lights[spot].energy / total);
+}
+
+// A node's importance (the header's formula, computed without trigonometry) against the same
+// formula written with the angles themselves, for a box with an orientation cone seen from
+// points all around it: inside the cone, beyond it by less than theta_e, and past theta_e.
+TEST(LightTree, ImportanceEqualsTheAngleFormula) {
+    LightBounds b;
+    b.bounds.extend(vec3(-0.3f, -0.2f, 0.9f));
+    b.bounds.extend(vec3(0.3f, 0.2f, 1.1f));
+    b.axis = glm::normalize(vec3(0.2f, 0.0f, -1.0f));
+    b.theta_o = 0.4f;
+    b.theta_e = kPi / 2.0f;
+    b.energy = 7.0f;
+    const LightTree tree({b});
+    const vec3 centre = 0.5f * (b.bounds.lower + b.bounds.upper);
+    const float radius = 0.5f * glm::length(b.bounds.upper - b.bounds.lower);
+    Pcg32 rng(11);
+    int lit = 0, unlit = 0;
+    for (int i = 0; i < 2000; ++i) {
+        const vec3 p = centre + vec3(rng.next_float() - 0.5f, rng.next_float() - 0.5f,
+                                     rng.next_float() - 0.5f) * 8.0f;
+        const vec3 to_p = p - centre;
+        const float d = glm::length(to_p);
+        if (d <= radius * 1.001f) continue;  // inside the box: energy / r^2, no angles
+        const float theta_u = std::asin(radius / d);
+        const float theta = std::acos(std::clamp(glm::dot(b.axis, to_p / d), -1.0f, 1.0f));
+        const float theta_prime = std::max(0.0f, theta - b.theta_o - theta_u);
+        const float expected = theta_prime > b.theta_e ? 0.0f
+                                                       : b.energy * std::cos(theta_prime) / (d * d);
+        const float got = tree.importance(p);
+        if (std::fabs(theta_prime - b.theta_e) < 1e-3f) continue;  // the cut-off's own rounding
+        EXPECT_NEAR(got, expected, 1e-4f * b.energy / (d * d) + 1e-5f * expected) << "at " << i;
+        (expected > 0.0f ? lit : unlit) += 1;
+    }
+    EXPECT_GT(lit, 100);
+    EXPECT_GT(unlit, 100);
 }
 
 // Two rooms: a dim lamp here, one 100x brighter 6 m away behind the wall. Selection by power
