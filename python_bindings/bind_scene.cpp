@@ -191,6 +191,9 @@ void bind_material(py::module_& m) {
                 "Index into the scene's textures, or -1 for none.");
     def_integer(cls, "normal_texture", &Material::normal_texture,
                 "Normal map: index into the scene's textures (non-colour data), or -1 for none.");
+    def_integer(cls, "bump_texture", &Material::bump_texture,
+                "Bump node's Height: index into the scene's textures (its luminance is the "
+                "height), or -1 for none.");
     cls.def(py::init(&from_kwargs<Material>),
             "Material(**fields): a default material with the given fields set, e.g. "
             "Material(name='Red', base_color=(0.8, 0.1, 0.1), roughness=0.3).")
@@ -203,6 +206,12 @@ void bind_material(py::module_& m) {
                        "Normal Map Strength, 0..100 (0: the interpolated normal, 1: the map's).")
         .def_readwrite("normal_space", &Material::normal_space,
                        "NormalMapSpace of the normal map (TANGENT).")
+        .def_readwrite("bump_uv_set", &Material::bump_uv_set,
+                       "UV map used by the bump map ('' = the first).")
+        .def_readwrite("bump_strength", &Material::bump_strength,
+                       "Bump Strength, 0..1 (0: the unbumped normal).")
+        .def_readwrite("bump_distance", &Material::bump_distance,
+                       "Bump Distance in scene units, -1000..1000 (negative: Invert).")
         .def_readwrite("roughness", &Material::roughness, "0..1 (GGX alpha = roughness^2).")
         .def_readwrite("metallic", &Material::metallic, "0..1.")
         .def_readwrite("specular", &Material::specular, "0..1 (F0 = 0.08 * specular).")

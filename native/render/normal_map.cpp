@@ -96,4 +96,47 @@ vec3 mapped_normal(const Material& material, const Texture& texture, const Surfa
     return n;
 }
 
+namespace {
+
+// A texel's height as the Bump node reads a colour: its luminance (Rec. 709, Blender's default
+// colour management).
+float texel_height(const Texture& texture, const vec2& uv) {
+    return luminance(texture_bilinear(texture, uv));
+}
+
+}  // namespace
+
+vec3 bumped_normal(const Material& material, const Texture& texture, const SurfacePoint& sp,
+                   const vec3& normal_in) {
+    if (sp.dpdu == vec3(0.0f) && sp.dpdv == vec3(0.0f)) return normal_in;  // no UVs here
+    // The height's UV derivatives by central differences half a texel either side (the
+    // bilinear texture's slope around the point, as a pixel footprint sees it).
+    const float du = 0.5f / float(std::max(texture.width, 1u));
+    const float dv = 0.5f / float(std::max(texture.height, 1u));
+    const vec2& uv = sp.bump_uv;
+    const float dh_du = (texel_height(texture, uv + vec2(du, 0.0f)) -
+                         texel_height(texture, uv - vec2(du, 0.0f))) / (2.0f * du);
+    const float dh_dv = (texel_height(texture, uv + vec2(0.0f, dv)) -
+                         texel_height(texture, uv - vec2(0.0f, dv))) / (2.0f * dv);
+    // Cycles' svm_node_set_bump with the surface derivatives along u and v in place of the
+    // pixel's: R_u, R_v span the plane normal to normal_in, and surfgrad / det is the height's
+    // gradient in that plane.
+    const vec3 r_u = glm::cross(sp.dpdv, normal_in);
+    const vec3 r_v = glm::cross(normal_in, sp.dpdu);
+    const float det = glm::dot(sp.dpdu, r_u);
+    const vec3 surfgrad = dh_du * r_u + dh_dv * r_v;
+    vec3 n = std::fabs(det) * normal_in -
+             material.bump_distance * (det < 0.0f ? -1.0f : 1.0f) * surfgrad;
+    const float length = glm::length(n);
+    if (!(length > 0.0f) || !std::isfinite(length)) return normal_in;
+    n /= length;
+    if (material.bump_strength != 1.0f) {
+        n = material.bump_strength * n + (1.0f - material.bump_strength) * normal_in;
+        const float blended = glm::length(n);
+        if (!(blended > 0.0f)) return normal_in;
+        n /= blended;
+    }
+    return n;
+}
+
 }  // namespace shgi

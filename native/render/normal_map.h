@@ -68,4 +68,14 @@ enum class BumpShadowing : uint8_t { Chiang, Microfacet };
 vec3 mapped_normal(const Material& material, const Texture& texture, const SurfacePoint& sp,
                    const vec3& smooth, bool back_face, const mat3& normal_from_object);
 
+// The Bump node (Cycles' svm_node_set_bump) with an Image Texture as its Height: the height h
+// is the texel's luminance (Cycles' colour-to-float conversion), and the normal
+//   normalize(normal_in - bump_distance * grad h),
+// grad h the height's gradient along the surface in the plane normal to normal_in, blended with
+// normal_in by bump_strength. normal_in is the normal on the viewer's side (the normal map's
+// result where the material has one: the Bump node's Normal input). normal_in when the hit has
+// no UV derivatives (SurfacePoint::dpdu, dpdv zero) or the result collapses.
+vec3 bumped_normal(const Material& material, const Texture& texture, const SurfacePoint& sp,
+                   const vec3& normal_in);
+
 }  // namespace shgi

@@ -50,16 +50,21 @@ Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray
     // normal even facing away from the viewer: Cycles shades it as it is, and a Lambert lobe
     // does not depend on wo, so wo is mirrored to the normal's side below (the lobes' convention
     // wo.z > 0) without changing a value.
+    // A Bump node bends the result once more (its Normal input is the normal map's output), and
+    // its normal takes the same guards.
     const vec3 smooth = ns;
     bool bent = false, keep_bent = false;
-    if (material.normal_texture != kNoTexture) {
+    if (material.normal_texture != kNoTexture)
         ns = mapped_normal(material, scene.textures()[size_t(material.normal_texture)], sp, ns,
                            back_face, scene.normal_from_object(sp.instance_id));
-        bent = ns != smooth;
+    if (material.bump_texture != kNoTexture)
+        ns = bumped_normal(material, scene.textures()[size_t(material.bump_texture)], sp, ns);
+    if (ns != smooth) {
+        bent = true;
         const bool lambert_only = material.diffuse_model == DiffuseModel::Lambert &&
                                   !terms.specular && terms.transmission <= 0.0f;
-        keep_bent = bent && material.principled_model == PrincipledModel::V2 && lambert_only;
-        if (bent && !keep_bent) ns = ensure_valid_reflection(ng, -ray_direction, ns);
+        keep_bent = material.principled_model == PrincipledModel::V2 && lambert_only;
+        if (!keep_bent) ns = ensure_valid_reflection(ng, -ray_direction, ns);
     }
     // An interpolated normal facing away from the viewer would make wo.z <= 0: fall back.
     if (glm::dot(ns, -ray_direction) <= 0.0f && !keep_bent) ns = ng;

@@ -59,6 +59,10 @@ void validate_material(const Material& material, uint32_t texture_count) {
     require_texture_id(item, "base_color_texture", material.base_color_texture, texture_count);
     require_texture_id(item, "normal_texture", material.normal_texture, texture_count);
     require_in_range(item, "normal_strength", material.normal_strength, 0.0f, kMaxNormalStrength);
+    require_texture_id(item, "bump_texture", material.bump_texture, texture_count);
+    require_in_range(item, "bump_strength", material.bump_strength, 0.0f, 1.0f);
+    require_in_range(item, "bump_distance", material.bump_distance, -kMaxBumpDistance,
+                     kMaxBumpDistance);
 }
 
 MaterialTerms material_terms(const Material& material) {

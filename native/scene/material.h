@@ -63,6 +63,9 @@ enum class NormalMapSpace : uint8_t {
     BlenderWorld,
 };
 
+// The largest |Distance| of a Bump node accepted (Blender's own limit).
+inline constexpr float kMaxBumpDistance = 1000.0f;
+
 // The largest Normal Map Strength accepted (Blender's soft maximum is 10): beyond it the
 // extrapolated normal is the texel's direction anyway.
 inline constexpr float kMaxNormalStrength = 100.0f;
@@ -81,6 +84,13 @@ struct Material {
     std::string normal_uv_set;                // UV set of the normal map ("" = first)
     float normal_strength = 1.0f;             // 0..kMaxNormalStrength
     NormalMapSpace normal_space = NormalMapSpace::Tangent;
+    // The Bump node with an Image Texture as its Height (render/normal_map.h): the height is the
+    // texel's luminance; the node's Normal input is the normal map above when there is one.
+    // Distance is signed (Invert negates it); Strength blends from the unbumped normal (0).
+    int32_t bump_texture = kNoTexture;        // index into Scene::textures(), or kNoTexture
+    std::string bump_uv_set;                  // UV set of the height texture ("" = first)
+    float bump_strength = 1.0f;               // 0..1
+    float bump_distance = 1.0f;               // -kMaxBumpDistance..kMaxBumpDistance
     float roughness = 0.5f;                   // 0..1, GGX alpha = roughness^2
     float metallic = 0.0f;                    // 0..1
     float specular = 0.5f;                    // 0..1 (F0 = 0.08 * specular)

@@ -470,14 +470,19 @@ void Scene::check_references() {
     for (const Mesh& mesh : meshes_) check_material_indices(mesh, material_count);
 }
 
-// Tangent-space normal maps need tangents and UVs; a mesh without them is shaded with its
-// interpolated normals, and the artist is told which mesh and material.
+// Tangent-space normal maps need tangents and UVs, bump maps UVs; a mesh without them is shaded
+// with its interpolated normals, and the artist is told which mesh and material.
 void Scene::warn_missing_tangent_frames() const {
     const auto tangent_mapped = [](const Material& material) {
         return material.normal_texture != kNoTexture &&
                material.normal_space == NormalMapSpace::Tangent;
     };
-    if (std::none_of(materials_.begin(), materials_.end(), tangent_mapped)) return;
+    const auto bumped = [](const Material& material) {
+        return material.bump_texture != kNoTexture;
+    };
+    if (std::none_of(materials_.begin(), materials_.end(), tangent_mapped) &&
+        std::none_of(materials_.begin(), materials_.end(), bumped))
+        return;
     for (const Mesh& mesh : meshes_) {
         if (!mesh.tangents.empty() && !mesh.uv_sets.empty()) continue;
         std::vector<uint8_t> used(materials_.size(), 0);
@@ -485,12 +490,17 @@ void Scene::warn_missing_tangent_frames() const {
         for (uint32_t index : mesh.material_indices) used[index] = 1;
         for (size_t m = 0; m < materials_.size(); ++m) {
             const Material& material = materials_[m];
-            if (!used[m] || !tangent_mapped(material)) continue;
-            log_warning(scene_detail::label("mesh", mesh.name), ": material '", material.name,
-                        "' has a tangent-space normal map but the mesh has no ",
-                        mesh.uv_sets.empty() ? "UV map" : "tangents",
-                        "; it is shaded with its interpolated normals (give the mesh a UV map "
-                        "and tangents)");
+            if (!used[m]) continue;
+            if (tangent_mapped(material))
+                log_warning(scene_detail::label("mesh", mesh.name), ": material '", material.name,
+                            "' has a tangent-space normal map but the mesh has no ",
+                            mesh.uv_sets.empty() ? "UV map" : "tangents",
+                            "; it is shaded with its interpolated normals (give the mesh a UV "
+                            "map and tangents)");
+            if (bumped(material) && mesh.uv_sets.empty())
+                log_warning(scene_detail::label("mesh", mesh.name), ": material '", material.name,
+                            "' has a bump map but the mesh has no UV map; it is shaded without "
+                            "its bumps (give the mesh a UV map)");
         }
     }
 }
@@ -900,6 +910,20 @@ SurfacePoint Scene::surface_point(const Ray& /*ray*/, const Hit& hit) const {
     if (material.normal_texture != kNoTexture &&
         material.normal_space == NormalMapSpace::Tangent && !mesh.tangents.empty())
         tangent_frame(mesh, tri, vec3(b0, b1, b2), normal_from_object, &point);
+    if (material.bump_texture != kNoTexture && !mesh.uv_sets.empty()) {
+        const UvSet& set = named_uv_set(mesh, material.bump_uv_set);
+        point.bump_uv = interpolate_uv(set, tri, b0, b1, b2);
+        // p1 - p0 = du1 dP/du + dv1 dP/dv, p2 - p0 = du2 dP/du + dv2 dP/dv, solved.
+        const vec2 d1 = set.coords[tri.y] - set.coords[tri.x];
+        const vec2 d2 = set.coords[tri.z] - set.coords[tri.x];
+        const float det = d1.x * d2.y - d1.y * d2.x;
+        if (std::fabs(det) > 1e-12f) {
+            const mat3 world_from_object(instance.world_from_object);
+            const vec3 e1 = world_from_object * (p1 - p0), e2 = world_from_object * (p2 - p0);
+            point.dpdu = (d2.y * e1 - d1.y * e2) / det;
+            point.dpdv = (d1.x * e2 - d2.x * e1) / det;
+        }
+    }
     return point;
 }
 

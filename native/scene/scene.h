@@ -99,6 +99,10 @@ struct SurfacePoint {
     // (0,0) when the mesh has none.
     vec2 uv{0.0f};
     vec2 normal_uv{0.0f};  // the same for the normal map (Material::normal_uv_set)
+    // The bump map's UV (Material::bump_uv_set) and the surface's derivatives along it, world
+    // space (the triangle's dP/du, dP/dv); zero without a bump map or where the UVs collapse.
+    vec2 bump_uv{0.0f};
+    vec3 dpdu{0.0f}, dpdv{0.0f};
     uint32_t material_id = 0;
     uint32_t instance_id = kInvalidId;
     uint32_t triangle_id = kInvalidId;

@@ -1205,6 +1205,38 @@ class Material:
     def base_color_uv_set(self, arg0: str) -> None:
         ...
     @property
+    def bump_distance(self) -> float:
+        """
+        Bump Distance in scene units, -1000..1000 (negative: Invert).
+        """
+    @bump_distance.setter
+    def bump_distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def bump_strength(self) -> float:
+        """
+        Bump Strength, 0..1 (0: the unbumped normal).
+        """
+    @bump_strength.setter
+    def bump_strength(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def bump_texture(self) -> int:
+        """
+        Bump node's Height: index into the scene's textures (its luminance is the height), or -1 for none.
+        """
+    @bump_texture.setter
+    def bump_texture(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def bump_uv_set(self) -> str:
+        """
+        UV map used by the bump map ('' = the first).
+        """
+    @bump_uv_set.setter
+    def bump_uv_set(self, arg0: str) -> None:
+        ...
+    @property
     def diffuse_model(self) -> DiffuseModel:
         """
         DiffuseModel (PRINCIPLED; the exporter sets LAMBERT for a Diffuse BSDF).

@@ -329,5 +329,148 @@ TEST(NormalMap, RejectsBadMaterialFields) {
     EXPECT_THROW(scene.add_material(material), InvalidArgument);
 }
 
+// --- the Bump node: normalize(N - distance grad h), grad h along the surface (Cycles'
+// svm_node_set_bump), on the plane z = 0 with UV = (x, y) / 2 + 0.5 (du/dx = dv/dy = 1/2).
+
+// A height texture rising linearly by `rise` across it along u (along_u) or v: bilinear lookups
+// between the first and last texel centres give h exactly, and grad h = rise / 2 per unit of x
+// (or y) on the plane. `colour` weights the rise per channel (the height is the luminance).
+Texture height_ramp(float rise, bool along_u, const vec3& colour = vec3(1.0f)) {
+    constexpr uint32_t kTexels = 64;
+    Texture texture;
+    texture.name = "height";
+    texture.width = along_u ? kTexels : 1;
+    texture.height = along_u ? 1 : kTexels;
+    for (uint32_t i = 0; i < kTexels; ++i)
+        texture.texels.push_back(vec4(colour * (rise * (float(i) + 0.5f) / float(kTexels)), 1.0f));
+    return texture;
+}
+
+MappedPlane bumped_plane(const Texture& height, float distance, float strength = 1.0f,
+                         const mat4& world_from_object = mat4(1.0f),
+                         Mesh mesh = mapped_plane(1.0f), Material material = test::lambert(0.8f)) {
+    MappedPlane plane;
+    material.bump_texture = int32_t(plane.scene.add_texture(height));
+    material.bump_distance = distance;
+    material.bump_strength = strength;
+    plane.scene.add_material(material);
+    plane.scene.add_instance(plane.scene.add_mesh(std::move(mesh)), world_from_object);
+    plane.scene.commit();
+    return plane;
+}
+
+TEST(BumpMap, LinearRampTiltsTheNormalAgainstItsGradient) {
+    const float rise = 1.0f, distance = 0.3f;
+    // grad h = (rise / 2, 0, 0): N - distance grad h.
+    expect_unit_near(bumped_plane(height_ramp(rise, true), distance).shade().frame.z,
+                     glm::normalize(vec3(-distance * 0.5f * rise, 0.0f, 1.0f)), "ramp along u");
+    expect_unit_near(bumped_plane(height_ramp(rise, false), distance).shade().frame.z,
+                     glm::normalize(vec3(0.0f, -distance * 0.5f * rise, 1.0f)), "ramp along v");
+    // Invert: a negative distance bends the other way.
+    expect_unit_near(bumped_plane(height_ramp(rise, true), -distance).shade().frame.z,
+                     glm::normalize(vec3(distance * 0.5f * rise, 0.0f, 1.0f)), "inverted");
+}
+
+TEST(BumpMap, StrengthBlendsWithTheUnbumpedNormal) {
+    const vec3 full = glm::normalize(vec3(-0.3f * 0.5f, 0.0f, 1.0f));
+    expect_unit_near(bumped_plane(height_ramp(1.0f, true), 0.3f, 0.4f).shade().frame.z,
+                     glm::normalize(0.4f * full + 0.6f * vec3(0.0f, 0.0f, 1.0f)), "strength 0.4");
+    expect_unit_near(bumped_plane(height_ramp(1.0f, true), 0.3f, 0.0f).shade().frame.z,
+                     vec3(0.0f, 0.0f, 1.0f), "strength 0");
+}
+
+// The height is in texture space, the gradient in world space: an instance stretched twice along
+// X halves du/dx and so the slope.
+TEST(BumpMap, GradientFollowsTheInstanceScale) {
+    const mat4 stretch = glm::scale(mat4(1.0f), vec3(2.0f, 1.0f, 1.0f));
+    expect_unit_near(bumped_plane(height_ramp(1.0f, true), 0.3f, 1.0f, stretch).shade().frame.z,
+                     glm::normalize(vec3(-0.3f * 0.25f, 0.0f, 1.0f)), "stretched");
+}
+
+// Blender converts the texture's colour to the Height float by its luminance.
+TEST(BumpMap, HeightIsTheTexelsLuminance) {
+    const float red_only = luminance(vec3(1.0f, 0.0f, 0.0f));
+    expect_unit_near(
+        bumped_plane(height_ramp(1.0f, true, vec3(1.0f, 0.0f, 0.0f)), 0.3f).shade().frame.z,
+        glm::normalize(vec3(-0.3f * 0.5f * red_only, 0.0f, 1.0f)), "red ramp");
+}
+
+// The Bump node's Normal input is the normal map's output: a flat height keeps it.
+TEST(BumpMap, FlatHeightKeepsTheNormalMapsNormal) {
+    const float tilt = 0.4f;
+    const vec3 texel(std::sin(tilt), 0.0f, std::cos(tilt));
+    Material material = test::lambert(0.8f);
+    MappedPlane plane;
+    material.normal_texture = int32_t(plane.scene.add_texture(normal_texel(texel)));
+    material.bump_texture = int32_t(plane.scene.add_texture(height_ramp(0.0f, true)));
+    plane.scene.add_material(material);
+    plane.scene.add_instance(plane.scene.add_mesh(mapped_plane(1.0f)), mat4(1.0f));
+    plane.scene.commit();
+    expect_unit_near(plane.shade().frame.z, texel, "flat bump over a normal map");
+}
+
+// A sun straight above a Lambert plane bumped by a ramp: L = rho / pi x S cos(tilt), the tilt
+// atan(distance x rise / 2).
+TEST(BumpMap, SunOverBumpedPlane) {
+    const float albedo = 0.5f, strength = 3.0f, distance = 0.6f, rise = 1.0f;
+    Scene scene;
+    Material material = test::lambert(albedo);
+    material.bump_texture = int32_t(scene.add_texture(height_ramp(rise, true)));
+    material.bump_distance = distance;
+    scene.add_material(material);
+    scene.add_instance(scene.add_mesh(mapped_plane(1.0f)), mat4(1.0f));
+    scene.set_world(test::black_world());
+    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.5f), 0.01f, 4));
+    Light sun;
+    sun.type = LightType::Sun;
+    sun.strength = strength;
+    scene.add_light(sun);
+    scene.commit();
+    PathTracer tracer(scene, test::settings_with_samples(4));
+    tracer.render(4);
+    const test::PixelStats stats = test::pixel_stats(tracer.film(), Pass::Combined);
+    const double expected = albedo * kInvPi * strength * std::cos(std::atan(distance * rise * 0.5));
+    testing::expect_within_noise(stats.mean, stats.standard_error, expected, 2e-3 * expected,
+                                 "bumped sun");
+}
+
+TEST(BumpMap, MeshWithoutUvsWarnsAndRendersUnbumped) {
+    testing::LogCapture log;
+    const MappedPlane plane = bumped_plane(height_ramp(1.0f, true), 0.3f, 1.0f, mat4(1.0f),
+                                           test::plane(1.0f));
+    EXPECT_NE(log.warnings.find("has a bump map but the mesh has no UV map"), std::string::npos)
+        << log.warnings;
+    expect_unit_near(plane.shade().frame.z, vec3(0.0f, 0.0f, 1.0f), "no UVs");
+}
+
+TEST(BumpMap, RejectsBadMaterialFields) {
+    Scene scene;
+    Material material;
+    material.name = "Bumpy";
+    material.bump_texture = 3;
+    try {
+        scene.add_material(material);
+        scene.add_instance(scene.add_mesh(test::plane(1.0f)), mat4(1.0f));
+        scene.commit();
+        ADD_FAILURE() << "a bump_texture past the scene's textures was accepted";
+    } catch (const InvalidArgument& error) {
+        EXPECT_NE(std::string(error.what()).find(
+                      "material 'Bumpy': bump_texture = 3 but the scene has 0 textures"),
+                  std::string::npos)
+            << error.what();
+    }
+    Scene other;
+    material.bump_texture = kNoTexture;
+    for (const float strength : {std::nanf(""), -0.1f, 1.5f}) {
+        material.bump_strength = strength;
+        EXPECT_THROW(other.add_material(material), InvalidArgument) << strength;
+    }
+    material.bump_strength = 1.0f;
+    for (const float distance : {std::nanf(""), INFINITY, -2000.0f, 1e6f}) {
+        material.bump_distance = distance;
+        EXPECT_THROW(other.add_material(material), InvalidArgument) << distance;
+    }
+}
+
 }  // namespace
 }  // namespace shgi
