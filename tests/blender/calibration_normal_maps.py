@@ -2,10 +2,12 @@
 bumps, Non-Color) on a UV-mapped plane under a sun (also at Strength 0.5, and as a Blender
 Object Space map on the plane turned and tilted), a point and an area light, and on the floor
 and walls of the open-topped room lit by an area light (indirect light between normal-mapped
-surfaces).
+surfaces); and a Bump node fed by an Image Texture of heights on the plane, under the sun and,
+inverted at Strength 0.6, under the point light.
 
 Each case also reports, as information, SHGI's Combined and DiffInd with the normal maps taken
-out of the exported scene: how far from Cycles a renderer that ignores them is.
+(and bump maps) taken out of the exported scene: how far from Cycles a renderer that ignores
+them is.
 
 Run by tests/python/test_cycles_calibration.py; prints CALIBRATION_NORMAL_MAPS_DONE and writes
 the per-case results as JSON (see calibration_common.py).
@@ -52,6 +54,46 @@ def bump_image(blender_space=False):
     image.pixels.foreach_set(pixels.astype(np.float32).ravel())
     image.pack()
     return image
+
+
+# The height image of the Bump cases: h = 0.5 + HEIGHT_AMPLITUDE sin(2 pi B u) sin(2 pi B v) with
+# HEIGHT_BUMPS periods per UV unit (one per metre at UV_SCALE 0.5: many pixels per bump, so
+# Cycles' pixel-footprint differences and SHGI's texel differences see the same slope); at
+# Distance 1 the surface slopes reach 2 pi B A UV_SCALE = 0.63.
+HEIGHT_SIZE = 128
+HEIGHT_BUMPS = 2
+HEIGHT_AMPLITUDE = 0.1
+
+
+def height_image():
+    """The bump cases' height field as a float, Non-Color image (the same value in R, G, B)."""
+    image = bpy.data.images.get("heights")
+    if image is not None:
+        return image
+    image = bpy.data.images.new("heights", HEIGHT_SIZE, HEIGHT_SIZE, float_buffer=True)
+    image.colorspace_settings.name = "Non-Color"
+    t = (np.arange(HEIGHT_SIZE) + 0.5) / HEIGHT_SIZE * 2.0 * math.pi * HEIGHT_BUMPS
+    v, u = np.meshgrid(t, t, indexing="ij")
+    h = 0.5 + HEIGHT_AMPLITUDE * np.sin(u) * np.sin(v)
+    pixels = np.stack([h, h, h, np.ones_like(h)], axis=-1)
+    image.pixels.foreach_set(pixels.astype(np.float32).ravel())
+    image.pack()
+    return image
+
+
+def bumped(name, color, strength=1.0, invert=False):
+    """A Principled material (specular 0) whose Normal is a Bump node of the height image."""
+    material = cal.principled(name, color)
+    tree = material.node_tree
+    texture = tree.nodes.new("ShaderNodeTexImage")
+    texture.image = height_image()
+    bump = tree.nodes.new("ShaderNodeBump")
+    bump.invert = invert
+    bump.inputs["Strength"].default_value = strength
+    bump.inputs["Distance"].default_value = 1.0
+    tree.links.new(texture.outputs["Color"], bump.inputs["Height"])
+    tree.links.new(bump.outputs["Normal"], tree.nodes["Principled BSDF"].inputs["Normal"])
+    return material
 
 
 def normal_mapped(name, color, space="TANGENT"):
@@ -122,6 +164,26 @@ def plane_blender_object_space(name, tmpdir, results):
     compare(name, ("DiffDir",), tmpdir, results)
 
 
+def bump_plane_scene(**bump):
+    cal.reset_scene()
+    add_uvs(cal.add_quad("plane", (-3, -3, 0), (6, 0, 0), (0, 6, 0),
+                         bumped("plane", (0.8, 0.8, 0.8), **bump)))
+    cal.add_camera(location=(0.0, -3.2, 2.6), target=(0.0, 0.0, 0.0))
+
+
+def bump_sun(name, tmpdir, results):
+    bump_plane_scene()
+    cal.add_light("SUN", (0.0, 0.0, 5.0), (math.radians(45), 0.0, math.radians(120)),
+                  energy=3.0, angle=math.radians(2))
+    compare(name, ("DiffDir",), tmpdir, results)
+
+
+def bump_point_inverted(name, tmpdir, results):
+    bump_plane_scene(strength=0.6, invert=True)
+    cal.add_light("POINT", (-0.8, 0.5, 1.5), energy=300.0, shadow_soft_size=0.1)
+    compare(name, ("DiffDir",), tmpdir, results)
+
+
 def plane_point(name, tmpdir, results):
     plane_scene()
     cal.add_light("POINT", (-0.8, 0.5, 1.5), energy=300.0, shadow_soft_size=0.1)
@@ -166,6 +228,7 @@ def without_normal_maps(samples):
     scene = result.scene
     for index, material in enumerate(scene.materials):
         material.normal_texture = -1
+        material.bump_texture = -1
         scene.set_material(index, material)
     scene.commit()
     batches = []
@@ -181,7 +244,8 @@ def without_normal_maps(samples):
 CASES = {"normal_map_sun": plane_sun, "normal_map_half_strength": plane_half_strength,
          "normal_map_blender_object_space": plane_blender_object_space,
          "normal_map_point": plane_point,
-         "normal_map_area": plane_area, "normal_map_room": room}
+         "normal_map_area": plane_area, "normal_map_room": room,
+         "bump_map_sun": bump_sun, "bump_map_point_inverted": bump_point_inverted}
 
 if __name__ == "__main__":
     cal.run_cases(CASES, "CALIBRATION_NORMAL_MAPS_DONE")

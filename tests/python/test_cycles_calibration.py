@@ -29,7 +29,7 @@ SCRIPTS = {
     "calibration_normal_maps.py": ("CALIBRATION_NORMAL_MAPS_DONE", [
         "normal_map_sun", "normal_map_half_strength", "normal_map_blender_object_space",
         "normal_map_point", "normal_map_area",
-        "normal_map_room"]),
+        "normal_map_room", "bump_map_sun", "bump_map_point_inverted"]),
 }
 
 CASES = [(script, case) for script, (_, cases) in SCRIPTS.items() for case in cases]

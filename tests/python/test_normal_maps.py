@@ -141,3 +141,41 @@ def test_a_gltf_normal_texture_renders_as_the_blend(blender, build_python_dir):
     output = result.stdout[-4000:] + result.stderr[-4000:]
     assert result.returncode == 0, output
     assert "GLTF_NORMAL_MAP_OK" in result.stdout, output
+
+
+@pytest.mark.blender
+def test_the_bump_node_exports_with_its_settings_and_refuses_what_it_cannot_read(
+        blender, build_python_dir):
+    result = run_blender(BLENDER_SCRIPTS / "bump_export_checks.py", build_python_dir,
+                         ADDON_DIR, blender=blender, timeout=300)
+    output = result.stdout[-4000:] + result.stderr[-4000:]
+    assert result.returncode == 0, output
+    assert "BUMP_EXPORT_OK" in result.stdout, output
+
+
+def test_a_bumped_plane_under_the_sun_matches_the_closed_form():
+    """A height ramp h = u across a plane 100 m wide (UV 0..1): grad h = 1/100 per m, so at
+    Distance 20 every normal tilts by atan(0.2) towards -x, and a Lambert plane under a sun
+    overhead reads rho / pi S cos(tilt); the Normal pass holds the tilted normal."""
+    scene = shgi.Scene()
+    texels = np.ones((2, 64, 4), np.float32)  # h = u at the texel centres: exact in between
+    texels[..., :3] = ((np.arange(64) + 0.5) / 64).astype(np.float32)[None, :, None]
+    height = scene.add_texture(shgi.Texture(texels, name="ramp"))
+    scene.add_material(shgi.Material(name="bumpy", base_color=(0.5, 0.5, 0.5), specular=0.0,
+                                     diffuse_model=shgi.DiffuseModel.LAMBERT,
+                                     bump_texture=height, bump_distance=20.0))
+    mesh = scene.add_mesh(positions=PLANE * 50, triangles=QUADS, uvs=UVS)
+    scene.add_instance(mesh, np.eye(4))
+    scene.add_light(shgi.Light(type=shgi.LightType.SUN, strength=3.0))
+    scene.set_world(shgi.World(strength=0.0))
+    camera = np.eye(4)
+    camera[2, 3] = 0.5
+    scene.set_camera(shgi.Camera(type=shgi.CameraType.ORTHOGRAPHIC, ortho_scale=0.01,
+                                 resolution_x=4, resolution_y=4, world_from_camera=camera))
+    scene.commit()
+    passes = render(scene)
+    tilt = math.atan(20.0 / 100.0)
+    combined = np.asarray(passes["Combined"])[..., :3].mean()
+    assert combined == pytest.approx(0.5 / math.pi * 3.0 * math.cos(tilt), rel=2e-3)
+    normal = np.asarray(passes["Normal"])[..., :3].reshape(-1, 3).mean(axis=0)
+    np.testing.assert_allclose(normal, [-math.sin(tilt), 0.0, math.cos(tilt)], atol=1e-4)

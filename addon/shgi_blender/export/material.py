@@ -25,6 +25,7 @@ MATERIAL_OUTPUT_NODE = "ShaderNodeOutputMaterial"
 IMAGE_TEXTURE_NODE = "ShaderNodeTexImage"
 UV_MAP_NODE = "ShaderNodeUVMap"
 NORMAL_MAP_NODE = "ShaderNodeNormalMap"
+BUMP_NODE = "ShaderNodeBump"
 # The Normal Map node's spaces, as shgi.NormalMapSpace names them (all of them: Blender's own
 # object and world spaces negate the texel's Y and Z).
 NORMAL_MAP_SPACES = {name: name for name in ("TANGENT", "OBJECT", "WORLD", "BLENDER_OBJECT",
@@ -198,29 +199,71 @@ class MaterialExporter:
                 fields.update(base_color=(1.0, 1.0, 1.0), base_color_texture=texture_id,
                               base_color_uv_set=_uv_map_name(texture_node))
                 handled = (base_socket,)
-        if self._normal_map_fields(material, node, fields):
+        if self._normal_fields(material, node, fields):
             handled += ("Normal",)
         self._warn_linked_inputs(material, node, handled)
         return fields
 
-    def _normal_map_fields(self, material, node, fields):
-        """Adds the normal map of a Normal Map node (fed by an Image Texture) on the shader's
-        Normal input to `fields`; True when it did."""
+    def _normal_fields(self, material, node, fields):
+        """Adds what drives the shader's Normal input to `fields`: a Normal Map node, or a Bump
+        node (with a Normal Map node on its own Normal input, or none); True when it is one of
+        those (handled, or ignored with a warning)."""
         if "Normal" not in node.inputs:
             return False
-        normal_map = node_tree.linked_node(node.inputs["Normal"])
-        if normal_map is None or normal_map.bl_idname != NORMAL_MAP_NODE:
+        source = node_tree.linked_node(node.inputs["Normal"])
+        if source is None:
             return False
+        if source.bl_idname == NORMAL_MAP_NODE:
+            self._normal_map_fields(material, source, fields)
+            return True
+        if source.bl_idname != BUMP_NODE:
+            return False
+        self._bump_fields(material, source, fields)
+        below = node_tree.linked_node(source.inputs["Normal"])
+        if below is not None and below.bl_idname == NORMAL_MAP_NODE:
+            self._normal_map_fields(material, below, fields)
+        elif below is not None:
+            self._log.warn(f"material {material.name!r}: the Bump node's Normal is driven by a "
+                           f"{below.bl_idname} node that SHGI does not evaluate; the bump is "
+                           "applied to the interpolated normal")
+        return True
+
+    def _bump_fields(self, material, bump, fields):
+        """Adds a Bump node whose Height is an Image Texture's Color to `fields` (else warns
+        and leaves it out)."""
+        height = node_tree.linked_output(bump.inputs["Height"])
+        if height is None:
+            return  # an unlinked Height is a constant: no bumps
+        texture_node = height.node
+        if texture_node.bl_idname != IMAGE_TEXTURE_NODE or height.name != "Color":
+            self._log.warn(f"material {material.name!r}: the Bump node's Height is not an Image "
+                           "Texture's Color; the bump is ignored")
+            return
+        texture_id = self._texture_id(texture_node.image, material.name)
+        if texture_id is None:
+            return
+        for name in ("Strength", "Distance", "Filter Width"):
+            if name in bump.inputs and bump.inputs[name].is_linked:
+                self._log.warn(f"material {material.name!r}: the Bump node's {name} is driven "
+                               "by a node SHGI does not evaluate; its unlinked value is used")
+        distance = float(bump.inputs["Distance"].default_value)
+        fields.update(bump_texture=texture_id, bump_uv_set=_uv_map_name(texture_node),
+                      bump_strength=min(max(float(bump.inputs["Strength"].default_value), 0.0),
+                                        1.0),
+                      bump_distance=-distance if bump.invert else distance)
+
+    def _normal_map_fields(self, material, normal_map, fields):
+        """Adds the normal map of a Normal Map node (fed by an Image Texture) to `fields`."""
         space = NORMAL_MAP_SPACES.get(normal_map.space)
         if space is None:
             self._log.warn(f"material {material.name!r}: Normal Map space {normal_map.space!r} "
                            "is not one SHGI knows; the normal map is ignored")
-            return True
+            return
         texture_node = node_tree.linked_node(normal_map.inputs["Color"])
         if texture_node is None or texture_node.bl_idname != IMAGE_TEXTURE_NODE:
             self._log.warn(f"material {material.name!r}: the Normal Map node's Color is not an "
                            "Image Texture; the normal map is ignored")
-            return True
+            return
         image = texture_node.image
         if image is not None and conversions.texture_needs_srgb_decode(
                 image.colorspace_settings.name, image.is_float):
@@ -230,7 +273,7 @@ class MaterialExporter:
                            "non-colour data (set the image's Color Space to Non-Color)")
         texture_id = self._texture_id(texture_node.image, material.name)
         if texture_id is None:
-            return True
+            return
         strength_socket = normal_map.inputs["Strength"]
         if strength_socket.is_linked:
             self._log.warn(f"material {material.name!r}: the Normal Map's Strength is driven by "
@@ -239,7 +282,6 @@ class MaterialExporter:
         fields.update(normal_texture=texture_id, normal_uv_set=uv_map,
                       normal_strength=float(strength_socket.default_value),
                       normal_space=getattr(shgi.NormalMapSpace, space))
-        return True
 
     def _warn_linked_inputs(self, material, node, handled):
         """Warns about linked inputs whose unlinked value is used instead."""

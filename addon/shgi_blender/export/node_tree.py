@@ -16,17 +16,23 @@ def active_output(node_tree, output_idname):
     return (active or outputs or [None])[0]
 
 
-def linked_node(socket):
-    """The node whose output drives `socket` (through reroutes, skipping muted links), or None."""
+def linked_output(socket):
+    """The output socket that drives `socket` (through reroutes, skipping muted links), or None."""
     while socket is not None and socket.is_linked:
         links = [link for link in socket.links if not getattr(link, "is_muted", False)]
         if not links:
             return None
         node = links[0].from_node
         if node.bl_idname != REROUTE_NODE:
-            return node
+            return links[0].from_socket
         socket = node.inputs[0] if node.inputs else None
     return None
+
+
+def linked_node(socket):
+    """The node whose output drives `socket` (through reroutes, skipping muted links), or None."""
+    output = linked_output(socket)
+    return None if output is None else output.node
 
 
 def input_values(node):
