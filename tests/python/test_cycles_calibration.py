@@ -3,7 +3,8 @@
 tests/blender/calibration_lights.py (point, spot, sun, area rectangle and disk, emissive mesh,
 world, lights seen by the camera) and tests/blender/calibration_materials.py (Principled diffuse,
 Diffuse BSDF, glossy metal, rough glass) and tests/blender/calibration_normal_maps.py (a
-tangent-space Normal Map node on a plane under a sun, a point and an area light, and in a room)
+tangent-space Normal Map node on a plane under a sun, a point and an area light, and in a room;
+a Bump node of an image's heights under a sun and a point light)
 render each case with Cycles and with
 shgi.render_path_traced on the exported scene and write per-case image means as JSON. Each
 script runs once (one Blender start); each case is one test here.

@@ -1,5 +1,6 @@
-"""Normal maps through the Python API and the add-on's bpy-free mesh code, plus the Blender
-round trip of a glTF normalTexture (tests/blender/gltf_normal_map_checks.py).
+"""Normal and bump maps through the Python API and the add-on's bpy-free mesh code, plus the
+Blender round trip of a glTF normalTexture (tests/blender/gltf_normal_map_checks.py) and the
+export of Blender's Bump node (tests/blender/bump_export_checks.py).
 
 The Cycles calibration of normal maps is in test_cycles_calibration.py
 (tests/blender/calibration_normal_maps.py); the closed forms in tests/cpp/render/
