@@ -125,17 +125,22 @@ def add_uvs(obj):
                                      UV_SCALE * p.dot(edge_v.normalized()))
 
 
-def plane_scene():
+def plane_scene(material=lambda: normal_mapped("plane", (0.8, 0.8, 0.8))):
+    """The UV-mapped 6 m plane with the material `material()` makes (made after the reset, which
+    removes materials) and the camera."""
     cal.reset_scene()
-    add_uvs(cal.add_quad("plane", (-3, -3, 0), (6, 0, 0), (0, 6, 0),
-                         normal_mapped("plane", (0.8, 0.8, 0.8))))
+    add_uvs(cal.add_quad("plane", (-3, -3, 0), (6, 0, 0), (0, 6, 0), material()))
     cal.add_camera(location=(0.0, -3.2, 2.6), target=(0.0, 0.0, 0.0))
+
+
+def add_sun():
+    cal.add_light("SUN", (0.0, 0.0, 5.0), (math.radians(45), 0.0, math.radians(120)),
+                  energy=3.0, angle=math.radians(2))
 
 
 def plane_sun(name, tmpdir, results):
     plane_scene()
-    cal.add_light("SUN", (0.0, 0.0, 5.0), (math.radians(45), 0.0, math.radians(120)),
-                  energy=3.0, angle=math.radians(2))
+    add_sun()
     compare(name, ("DiffDir",), tmpdir, results)
 
 
@@ -145,8 +150,7 @@ def plane_half_strength(name, tmpdir, results):
     for node in bpy.data.materials["plane"].node_tree.nodes:
         if node.bl_idname == "ShaderNodeNormalMap":
             node.inputs["Strength"].default_value = 0.5
-    cal.add_light("SUN", (0.0, 0.0, 5.0), (math.radians(45), 0.0, math.radians(120)),
-                  energy=3.0, angle=math.radians(2))
+    add_sun()
     compare(name, ("DiffDir",), tmpdir, results)
 
 
@@ -159,27 +163,18 @@ def plane_blender_object_space(name, tmpdir, results):
     add_uvs(plane)
     plane.rotation_euler = (math.radians(15), 0.0, math.radians(40))
     cal.add_camera(location=(0.0, -3.2, 2.6), target=(0.0, 0.0, 0.0))
-    cal.add_light("SUN", (0.0, 0.0, 5.0), (math.radians(45), 0.0, math.radians(120)),
-                  energy=3.0, angle=math.radians(2))
+    add_sun()
     compare(name, ("DiffDir",), tmpdir, results)
 
 
-def bump_plane_scene(**bump):
-    cal.reset_scene()
-    add_uvs(cal.add_quad("plane", (-3, -3, 0), (6, 0, 0), (0, 6, 0),
-                         bumped("plane", (0.8, 0.8, 0.8), **bump)))
-    cal.add_camera(location=(0.0, -3.2, 2.6), target=(0.0, 0.0, 0.0))
-
-
 def bump_sun(name, tmpdir, results):
-    bump_plane_scene()
-    cal.add_light("SUN", (0.0, 0.0, 5.0), (math.radians(45), 0.0, math.radians(120)),
-                  energy=3.0, angle=math.radians(2))
+    plane_scene(lambda: bumped("plane", (0.8, 0.8, 0.8)))
+    add_sun()
     compare(name, ("DiffDir",), tmpdir, results)
 
 
 def bump_point_inverted(name, tmpdir, results):
-    bump_plane_scene(strength=0.6, invert=True)
+    plane_scene(lambda: bumped("plane", (0.8, 0.8, 0.8), strength=0.6, invert=True))
     cal.add_light("POINT", (-0.8, 0.5, 1.5), energy=300.0, shadow_soft_size=0.1)
     compare(name, ("DiffDir",), tmpdir, results)
 

@@ -69,6 +69,18 @@ void expect_unit_near(const vec3& actual, const vec3& expected, const char* what
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(actual[c], expected[c], kUnitTolerance) << what;
 }
 
+// A black world, a sun of `strength` straight above the plane z = 0 and a 4 x 4 px orthographic
+// camera looking down at its origin; commits the scene.
+void light_from_above(Scene& scene, float strength) {
+    scene.set_world(test::black_world());
+    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.5f), 0.01f, 4));
+    Light sun;
+    sun.type = LightType::Sun;
+    sun.strength = strength;
+    scene.add_light(sun);
+    scene.commit();
+}
+
 TEST(NormalMap, FlatTexelKeepsTheInterpolatedNormal) {
     const MappedPlane plane = plane_with_map(vec3(0.0f, 0.0f, 1.0f));
     expect_unit_near(plane.shade().frame.z, vec3(0.0f, 0.0f, 1.0f), "flat texel");
@@ -252,13 +264,7 @@ TEST(NormalMap, SunOverNormalMappedPlane) {
     Mesh mesh = mapped_plane(1.0f);
     for (vec3& p : mesh.positions) p *= 50.0f;
     scene.add_instance(scene.add_mesh(mesh), mat4(1.0f));
-    scene.set_world(test::black_world());
-    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.5f), 0.01f, 4));
-    Light sun;
-    sun.type = LightType::Sun;
-    sun.strength = strength;
-    scene.add_light(sun);
-    scene.commit();
+    light_from_above(scene, strength);
     PathTracer tracer(scene, test::settings_with_samples(4));
     tracer.render(4);
     const test::PixelStats stats = test::pixel_stats(tracer.film(), Pass::Combined);
@@ -419,13 +425,7 @@ TEST(BumpMap, SunOverBumpedPlane) {
     material.bump_distance = distance;
     scene.add_material(material);
     scene.add_instance(scene.add_mesh(mapped_plane(1.0f)), mat4(1.0f));
-    scene.set_world(test::black_world());
-    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.5f), 0.01f, 4));
-    Light sun;
-    sun.type = LightType::Sun;
-    sun.strength = strength;
-    scene.add_light(sun);
-    scene.commit();
+    light_from_above(scene, strength);
     PathTracer tracer(scene, test::settings_with_samples(4));
     tracer.render(4);
     const test::PixelStats stats = test::pixel_stats(tracer.film(), Pass::Combined);
