@@ -292,6 +292,10 @@ void bind_preview(py::module_& m) {
                 "Mirror/glass bounces followed per path (8).");
     def_integer(cls, "tile_size", &S::tile_size,
                 "Tile side in pixels (16), rounded up to an even number.");
+    def_integer(cls, "light_splits", &S::light_splits,
+                "Most emitters one next-event estimate samples, as "
+                "PathTracerSettings.light_splits (4).",
+                1, kMaxLightSplits);
     cls.def(py::init(&from_kwargs<S>),
             "PreviewSettings(**fields), e.g. PreviewSettings(samples=4, seed=1).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,

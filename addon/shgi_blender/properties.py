@@ -491,6 +491,12 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
     world_sampling: EnumProperty(
         name="World Sampling", items=WORLD_SAMPLING_ITEMS, default=D["world_sampling"],
         description="How direct light from the world is sampled")
+    light_splits: IntProperty(
+        name="Light Splits", default=D["light_splits"], min=1, max=settings.MAX_LIGHT_SPLITS,
+        description="Most lights one shading point sends a shadow ray to: where a group of "
+                    "lights is large or near, the light tree splits it and samples each part. "
+                    "1 picks one light per shadow ray; more cuts the noise of scenes with many "
+                    "lights at a little more cost per sample")
     max_specular_bounces: IntProperty(
         name="Specular Bounces", default=D["max_specular_bounces"], min=0, max=64,
         description="Mirror and glass bounces followed by the lattice renderer")

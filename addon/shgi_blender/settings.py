@@ -162,6 +162,7 @@ PROPERTY_DEFAULTS = {
     "transmission_bounces": 12,
     "clamp_indirect": 0.0,
     "world_sampling": "COSINE",
+    "light_splits": 4,
     "max_specular_bounces": 8,
 }
 
@@ -380,6 +381,7 @@ SETTING_LABELS = {
     "transmission_bounces": "Light Paths > Transmission",
     "clamp_indirect": "Light Paths > Clamp",
     "world_sampling": "Light Paths > World",
+    "light_splits": "Light Paths > Light Splits",
     "max_specular_bounces": "Light Paths > Max Bounces > Specular",
 }
 PHOTON_LATTICE_LABELS = {
@@ -460,6 +462,7 @@ MIN_BACKFACE_THRESHOLD = 0.01
 MAX_PROPAGATION_RESOLUTION = 256    # PropagationSettings.resolution (min 2)
 MAX_PROPAGATION_STEPS = 1024        # PropagationSettings.steps
 MAX_PROPAGATION_NORMAL_OFFSET = 2.0  # PropagationSettings.normal_offset, cells
+MAX_LIGHT_SPLITS = 8                # kMaxLightSplits (render/light_tree.h)
 MAX_VPL_BOUNCES = 64                # PropagationSettings.vpl_bounces
 MAX_INSTANT_SETS = 16               # InstantGiSettings.sets_x, sets_y
 MAX_INSTANT_PHOTONS_PER_SET = 1 << 24  # InstantGiSettings.photons_per_set
@@ -590,9 +593,10 @@ VIEWPORT_RENDER_PROPERTIES = ("method", *PROPERTY_DEFAULTS, "viewport_samples",
 # Native struct -> {native field: scene.shgi property}.
 PATH_TRACER_FIELDS = {name: name for name in (
     "samples", "seed", "max_bounces", "diffuse_bounces", "glossy_bounces",
-    "transmission_bounces", "clamp_indirect", "world_sampling")}
+    "transmission_bounces", "clamp_indirect", "world_sampling", "light_splits")}
 PREVIEW_FIELDS = {name: name for name in (
-    "samples", "seed", "clamp_indirect", "max_specular_bounces", "world_sampling")}
+    "samples", "seed", "clamp_indirect", "max_specular_bounces", "world_sampling",
+    "light_splits")}
 
 
 def _native_labels(group):

@@ -282,6 +282,7 @@ PathTracerSettings path_settings_for(const PreviewSettings& settings) {
     path.russian_roulette_depth = settings.max_specular_bounces + 1;  // chains are short
     path.clamp_indirect = settings.clamp_indirect;
     path.world_sampling = settings.world_sampling;
+    path.light_splits = settings.light_splits;
     return path;
 }
 
@@ -311,6 +312,10 @@ void validate_preview_settings(const PreviewSettings& settings) {
     if (settings.tile_size < 1)
         throw InvalidArgument(format_message("PreviewSettings.tile_size is ", settings.tile_size,
                                              "; it must be >= 1"));
+    if (settings.light_splits < 1 || settings.light_splits > kMaxLightSplits)
+        throw InvalidArgument(format_message("PreviewSettings.light_splits is ",
+                                             settings.light_splits, "; it must be in [1, ",
+                                             kMaxLightSplits, "]"));
 }
 
 PreviewRenderer::PreviewRenderer(const Scene& scene, const PreviewSettings& settings)

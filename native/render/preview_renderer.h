@@ -65,6 +65,7 @@ struct PreviewSettings {
     int max_specular_bounces = 8;       // Dirac and refraction bounces followed per path
     float clamp_indirect = 0.0f;        // as PathTracerSettings.clamp_indirect; 0 = off
     WorldSampling world_sampling = WorldSampling::Cosine;
+    int light_splits = 4;               // as PathTracerSettings.light_splits (1..kMaxLightSplits)
     int tile_size = 16;                 // rounded up to an even number (whole 2 x 2 quads)
     bool combined_only = false;         // sum only the Combined pass (the viewport's)
     // Screen-space reuse of the field's lookups within 2 x 2 pixel quads (see above); false: one

@@ -80,6 +80,15 @@ def test_property_defaults_are_the_native_defaults(struct, fields):
         assert getattr(built, native_name) == expected, (struct.__name__, native_name, prop_name)
 
 
+def test_light_tree_splits_reach_the_native_limit_and_no_further():
+    """Light Paths > Light Splits' maximum is the native kMaxLightSplits."""
+    for struct in (shgi.PathTracerSettings, shgi.PreviewSettings):
+        assert struct(light_splits=settings.MAX_LIGHT_SPLITS).light_splits == \
+            settings.MAX_LIGHT_SPLITS
+        with pytest.raises(ValueError, match="light_splits"):
+            struct(light_splits=settings.MAX_LIGHT_SPLITS + 1)
+
+
 # Native fields a method group does not mirror, and why: the scene's Irradiance Volumes place
 # the probes; the renderer adds direct light, so probes never hold it; the photon lattice's
 # expert fields (its bounds, the caustic lattice's order and blur, the photon map's density
@@ -183,6 +192,7 @@ def test_a_final_gather_takes_one_bounce_off_the_field():
 
 def test_settings_follow_the_properties():
     props = default_props(samples=7, seed=3, diffuse_bounces=2, world_sampling="UNIFORM",
+                          light_splits=2,
                           photon_lattice={"caustics": "PHOTON_MAP",
                                           "interpolation": "TRILINEAR", "final_gather": False})
     path = settings.path_tracer_settings(props, shgi)
@@ -190,6 +200,7 @@ def test_settings_follow_the_properties():
     preview = settings.preview_settings(props, shgi)
     assert (path.samples, path.seed, path.diffuse_bounces) == (7, 3, 2)
     assert path.world_sampling == preview.world_sampling == shgi.WorldSampling.UNIFORM
+    assert path.light_splits == preview.light_splits == 2
     assert lattice.caustics == shgi.CausticMode.PHOTON_MAP
     assert lattice.interpolation == shgi.LatticeInterpolation.TRILINEAR
     assert lattice.max_bounces == 2  # photon scatterings follow the diffuse bounce limit

@@ -170,6 +170,7 @@ TYPE_RANGES = [(-2**31, 2**31 - 1), (0, 2**32 - 1), (0, 2**64 - 1)]  # int, uint
 NARROWER_RANGES = {("PathTracerSettings", "samples"): (1, 2**24),
                    ("PathTracerSettings", "light_splits"): (1, 8),  # kMaxLightSplits
                    ("PreviewSettings", "samples"): (1, 2**24),
+                   ("PreviewSettings", "light_splits"): (1, 8),  # kMaxLightSplits
                    ("PhotonLatticeSettings", "photons"): (1, 2**64 - 1),
                    ("RadianceFieldSettings", "photons"): (1, 2**64 - 1),
                    ("PropagationSettings", "photons"): (1, 2**64 - 1),

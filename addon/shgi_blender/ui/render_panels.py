@@ -86,6 +86,7 @@ class SHGI_RENDER_PT_light_paths(ShgiPanel, bpy.types.Panel):
         column = layout.column(align=True)
         column.prop(props, "clamp_indirect", text="Clamp")
         column.prop(props, "world_sampling", text="World")
+        column.prop(props, "light_splits", text="Light Splits")
 
 
 class SHGI_RENDER_PT_light_paths_max_bounces(ShgiPanel, bpy.types.Panel):

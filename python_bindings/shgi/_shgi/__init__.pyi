@@ -2015,6 +2015,14 @@ class PreviewSettings:
     def final_gather(self, arg0: bool) -> None:
         ...
     @property
+    def light_splits(self) -> int:
+        """
+        Most emitters one next-event estimate samples, as PathTracerSettings.light_splits (4).
+        """
+    @light_splits.setter
+    def light_splits(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
     def max_specular_bounces(self) -> int:
         """
         Mirror/glass bounces followed per path (8).
