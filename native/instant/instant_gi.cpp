@@ -173,8 +173,8 @@ ShRgb InstantGiField::radiance_sh(const vec3& p, const vec3& n) const {
 }
 
 void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_position,
-                                          Film& film, uint64_t first, uint64_t count,
-                                          Progress* progress) const {
+                                          float clamp_indirect, Film& film, uint64_t first,
+                                          uint64_t count, Progress* progress) const {
     static_cast<void>(first);
     *timings_ = InstantGiFrameTimings{};
     if (is_zero() || count == 0) return;
@@ -302,13 +302,15 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                 std::copy_n(&sh_source[p * kCoeffs], kCoeffs, lookup.radiance.coeffs.begin());
                 const vec3 ns = g.shading_normal[p];
                 const vec3 e = filter_irradiance ? filtered[p] : lookup.irradiance(ns);
-                const vec3 diffuse = g.field_diffuse[p] * e * kInvPi;
+                // Light Paths > Clamp, per lobe class and sample, as PathIntegrator::add_light.
+                const vec3 diffuse = clamp_peak(g.field_diffuse[p] * e * kInvPi, clamp_indirect);
                 vec3 glossy(0.0f);
                 const vec3 wo = glm::normalize(camera_position - g.position[p]);
                 for (int k = 0; k < 2; ++k)
                     if (max_component(g.glossy_albedo[k][p]) > 0.0f)
                         glossy += g.glossy_albedo[k][p] *
                                   lookup.glossy(ns, wo, g.glossy_roughness[k][p]);
+                glossy = clamp_peak(glossy, clamp_indirect);
                 if (!is_finite(diffuse) || !is_finite(glossy)) continue;
                 PassValues values;
                 values[Pass::DiffInd] = diffuse * samples;

@@ -99,8 +99,9 @@ class InstantGiField : public IndirectField {
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
     bool is_zero() const override { return passes_ == 0 || vpl_count_ == 0; }
     bool shades_first_surfaces() const override { return true; }
-    void shade_first_surfaces(const GBuffer& g_buffer, const vec3& camera_position, Film& film,
-                              uint64_t first, uint64_t count, Progress* progress) const override;
+    void shade_first_surfaces(const GBuffer& g_buffer, const vec3& camera_position,
+                              float clamp_indirect, Film& film, uint64_t first, uint64_t count,
+                              Progress* progress) const override;
 
     const std::vector<std::vector<InstantVpl>>& sets() const { return sets_; }
     uint64_t vpl_count() const { return vpl_count_; }

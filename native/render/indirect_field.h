@@ -77,12 +77,15 @@ class IndirectField {
     virtual bool shades_first_surfaces() const { return false; }
     // Adds `count` samples' worth of the first surfaces' indirect light (DiffInd, GlossInd and
     // Combined) to `film` from the frame's G-buffer; `camera_position` gives each pixel's view
-    // direction. Deterministic for any thread count; throws Cancelled on cancel.
+    // direction, `clamp_indirect` the renderer's clamp of an indirect sample (each lobe class's
+    // light per pixel and sample clamped to it, as PathIntegrator clamps; 0: off). Deterministic
+    // for any thread count; throws Cancelled on cancel.
     virtual void shade_first_surfaces(const GBuffer& g_buffer, const vec3& camera_position,
-                                      Film& film, uint64_t first, uint64_t count,
-                                      Progress* progress) const {
-        static_cast<void>(g_buffer), static_cast<void>(camera_position), static_cast<void>(film),
-            static_cast<void>(first), static_cast<void>(count), static_cast<void>(progress);
+                                      float clamp_indirect, Film& film, uint64_t first,
+                                      uint64_t count, Progress* progress) const {
+        static_cast<void>(g_buffer), static_cast<void>(camera_position),
+            static_cast<void>(clamp_indirect), static_cast<void>(film), static_cast<void>(first),
+            static_cast<void>(count), static_cast<void>(progress);
     }
 
     vec3 irradiance(const vec3& p, const vec3& n) const { return lookup(p, n).irradiance(n); }

@@ -391,11 +391,12 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
     std::vector<FrameWideStage> screen_stages;
     if (screen_space) {
         const vec3 camera_position(camera_.world_from_camera[3]);
+        const float clamp = settings_.clamp_indirect;
         screen_stages.push_back({"screen_space_field",
-                                 [field, camera_position](const GBuffer& g, Film& film,
-                                                          uint64_t first_sample, uint64_t count,
-                                                          Progress* p) {
-                                     field->shade_first_surfaces(g, camera_position, film,
+                                 [field, camera_position, clamp](const GBuffer& g, Film& film,
+                                                                 uint64_t first_sample,
+                                                                 uint64_t count, Progress* p) {
+                                     field->shade_first_surfaces(g, camera_position, clamp, film,
                                                                  first_sample, count, p);
                                  }});
         screen_stages.insert(screen_stages.end(), frame_stages_.begin(), frame_stages_.end());

@@ -132,6 +132,27 @@ def test_samples_at_once_equal_samples_one_by_one():
         np.testing.assert_array_equal(at_once[name], one_by_one[name], err_msg=name)
 
 
+def test_light_paths_clamp_limits_the_screen_space_indirect_light():
+    """Light Paths > Clamp (PreviewSettings.clamp_indirect) clamps each pixel's DiffInd and
+    GlossInd per sample, as the path tracer clamps an indirect sample; direct light is not
+    clamped."""
+    scene = small_cornell()
+    field = solved(scene, passes=1).current_field()
+
+    def light(image, lobe):  # Cycles' passes hold light / colour: the light itself
+        return (image[f"{lobe}Ind"] * image[f"{lobe}Col"])[..., :3].max(axis=-1)
+
+    free = preview(scene, field, samples=1)
+    limit = 0.5 * float(np.percentile(light(free, "Diff"), 90))
+    clamped = preview(scene, field, samples=1, clamp_indirect=limit)
+    for lobe in ("Diff", "Gloss"):
+        assert light(clamped, lobe).max() <= limit * (1 + 1e-5), lobe
+        below = light(free, lobe) <= limit
+        np.testing.assert_array_equal(clamped[f"{lobe}Ind"][below], free[f"{lobe}Ind"][below])
+    assert (light(free, "Diff") > limit).mean() > 0.1  # the check has teeth
+    np.testing.assert_array_equal(clamped["DiffDir"], free["DiffDir"])
+
+
 def test_cancel_keeps_the_sets():
     scene = small_cornell()
     solver = solved(scene, passes=1)
