@@ -15,6 +15,7 @@
 
 #include "bake/lightmap_baker.h"
 #include "bake/lightmap_filter.h"
+#include "render/light_tree.h"
 #include "bake/texel_rasterizer.h"
 #include "bake/unocclude.h"
 #include "numpy_convert.h"
@@ -190,6 +191,10 @@ What and how a lightmap is baked; every field has a default. Content (Cycles' DI
     def_integer(settings_cls, "glossy_bounces", &S::glossy_bounces, "Cycles' Glossy bounces (4).");
     def_integer(settings_cls, "transmission_bounces", &S::transmission_bounces,
                 "Cycles' Transmission bounces (12).");
+    def_integer(settings_cls, "light_splits", &S::light_splits,
+                "Most emitters one next-event estimate samples, as "
+                "PathTracerSettings.light_splits (4).",
+                1, kMaxLightSplits);
     settings_cls.def(py::init(&from_kwargs<S>), "LightmapSettings(**fields)")
         .def_property(
             "content", [](const S& s) { return std::string(lightmap_content_name(s.content)); },

@@ -14,6 +14,7 @@
 #include "bind_methods.h"
 #include "probes/probe_grid.h"
 #include "probes/probe_storage.h"
+#include "render/light_tree.h"
 #include "interruptible.h"
 #include "scene_use.h"
 #include "struct_fields.h"
@@ -155,6 +156,10 @@ object), with resolution probes along each local axis at the cell centres.)doc")
     def_integer(cls, "bounces", &S::bounces,
                 "Diffuse and glossy scatterings along a probe path (3: with the "
                 "renderer's surface, Cycles' default 4).");
+    def_integer(cls, "light_splits", &S::light_splits,
+                "Most emitters one next-event estimate on a probe path samples, as "
+                "PathTracerSettings.light_splits (4).",
+                1, kMaxLightSplits);
     def_integer(cls, "visibility_resolution", &S::visibility_resolution,
                 "Octahedral visibility texels per side per probe (8).");
     cls.def(py::init(&from_kwargs<S>), "ProbeGridSettings(**fields), e.g. ProbeGridSettings(order=1).")

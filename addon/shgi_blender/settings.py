@@ -548,7 +548,8 @@ LIGHT_PATH_LIMITS = {
     "PROBE_GRID": f"Probe Grid: Glossy follows Diffuse (at most "
                   f"{MAX_PROBE_BOUNCES + PROBE_PATH_FIRST_BOUNCE}); Total and Transmission are "
                   f"{PROPERTY_DEFAULTS['max_bounces']} and "
-                  f"{PROPERTY_DEFAULTS['transmission_bounces']}",
+                  f"{PROPERTY_DEFAULTS['transmission_bounces']}; probe paths split at "
+                  f"{PROPERTY_DEFAULTS['light_splits']} lights",
     "RADIANCE_FIELD": "Radiance Field: photons follow Diffuse; Total, Glossy and Transmission "
                       "apply to path tracing only",
     "PROPAGATION": "Light Propagation: light paths follow Diffuse; Total, Glossy and "

@@ -96,7 +96,7 @@ class TexelBaker {
                const LightmapSettings& settings)
         : scene_(scene), map_(map), field_(field), settings_(settings),
           lights_(scene, WorldSampling::Cosine,
-                  field == nullptr || !field->includes_world_direct()),
+                  field == nullptr || !field->includes_world_direct(), settings.light_splits),
           path_settings_(continuation_settings(settings)),
           seed_(settings.seed ^ (kInstanceSeedMix * (uint64_t(map.instance_id) + 1))),
           direct_(wants_direct(settings.content)),
@@ -189,25 +189,28 @@ class TexelBaker {
                                              : sample_cosine_hemisphere_pdf(cos_theta);
             };
             if (direct_) {
-                LightSample ls;
-                if (lights_.sample(sample.ray_origin, n, ps.u_select, ps.u_light, &ls) &&
-                    glm::dot(ls.wi, surface.geometric_normal) > 0.0f) {
+                // One emitter from each node of the light tree's cut (light_splits), a shadow
+                // ray each; each sample's pdf is that of its own choice (PathIntegrator's NEE).
+                LightSample samples[kMaxLightSplits];
+                const int sampled =
+                    lights_.sample_split(sample.ray_origin, n, ps.u_select, ps.u_light, samples);
+                for (int k = 0; k < sampled; ++k) {
+                    const LightSample& ls = samples[k];
+                    if (!(glm::dot(ls.wi, surface.geometric_normal) > 0.0f)) continue;
                     const float cos_theta = glm::dot(ls.wi, n);
-                    if (cos_theta > 0.0f) {
-                        Ray shadow;
-                        shadow.origin = sample.ray_origin;
-                        shadow.direction = ls.wi;
-                        shadow.tmax = std::isinf(ls.distance) ? kInfinity
-                                                              : ls.distance * (1.0f - kShadowShorten);
-                        if (!scene_.occluded(shadow)) {
-                            const float mis = ls.delta || !trace_hemisphere
-                                                  ? 1.0f
-                                                  : power_heuristic(ls.pdf, hemisphere_pdf(cos_theta));
-                            const vec3 incident = ls.radiance * (mis / ls.pdf);
-                            value += incident * surface.diffuse_response(ls.wi);
-                            if (sh) sh_add_sample(*sh, ls.wi, incident);
-                        }
-                    }
+                    if (!(cos_theta > 0.0f)) continue;
+                    Ray shadow;
+                    shadow.origin = sample.ray_origin;
+                    shadow.direction = ls.wi;
+                    shadow.tmax = std::isinf(ls.distance) ? kInfinity
+                                                          : ls.distance * (1.0f - kShadowShorten);
+                    if (scene_.occluded(shadow)) continue;
+                    const float mis = ls.delta || !trace_hemisphere
+                                          ? 1.0f
+                                          : power_heuristic(ls.pdf, hemisphere_pdf(cos_theta));
+                    const vec3 incident = ls.radiance * (mis / ls.pdf);
+                    value += incident * surface.diffuse_response(ls.wi);
+                    if (sh) sh_add_sample(*sh, ls.wi, incident);
                 }
             }
             if (trace_hemisphere) {
@@ -313,6 +316,9 @@ void validate_lightmap_settings(const LightmapSettings& s) {
                                              s.clamp_indirect, ": use 0 (off) or a positive value"));
     if (size_t(s.content) >= std::size(kContentNames))
         throw InvalidArgument("LightmapSettings.content is not a LightmapContent");
+    if (s.light_splits < 1 || s.light_splits > kMaxLightSplits)
+        throw InvalidArgument(format_message("LightmapSettings.light_splits = ", s.light_splits,
+                                             ": use 1 .. ", kMaxLightSplits));
 }
 
 uint32_t lightmap_tile_count(uint32_t width, uint32_t height, uint32_t tile_size) {

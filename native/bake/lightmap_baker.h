@@ -77,6 +77,9 @@ struct LightmapSettings {
     int glossy_bounces = 4;
     int transmission_bounces = 12;
     float clamp_indirect = 0.0f;  // max component of an indirect sample's radiance; 0 = off
+    // Most emitters one next-event estimate samples, as PathTracerSettings.light_splits (the
+    // light tree's splitting; 1 = one emitter per shadow ray), 1 .. kMaxLightSplits.
+    int light_splits = 4;
     // With a field: final gather (seed 001 §4.2, as PreviewSettings::final_gather). Each sample
     // traces one hemisphere ray, as the path tracer does, and where it lands adds direct light by
     // next-event estimation and indirect light from the field, instead of reading the field at

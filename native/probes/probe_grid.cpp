@@ -148,6 +148,9 @@ void validate_probe_grid_settings(const ProbeGridSettings& s) {
         throw InvalidArgument(format_message(name, ".clamp is ", s.clamp, "; use >= 0 (0 = off)"));
     if (s.bounces < 0 || s.bounces > 64)
         throw InvalidArgument(format_message(name, ".bounces is ", s.bounces, "; use 0..64"));
+    if (s.light_splits < 1 || s.light_splits > kMaxLightSplits)
+        throw InvalidArgument(format_message(name, ".light_splits is ", s.light_splits,
+                                             "; use 1..", kMaxLightSplits));
     if (s.visibility_resolution < 1 || s.visibility_resolution > 64)
         throw InvalidArgument(format_message(name, ".visibility_resolution is ",
                                              s.visibility_resolution, "; use 1..64"));
@@ -347,7 +350,7 @@ void ProbeGrid::update_probes(uint64_t first, uint64_t count, Progress* progress
     const float a = std::max(1.0f - settings_.hysteresis, 1.0f / float(pass + 1));
     const uint32_t n = settings_.rays_per_probe;
     const float far = max_scene_distance(*scene_, old.positions);
-    const LightSampler lights(*scene_, WorldSampling::Cosine);
+    const LightSampler lights(*scene_, WorldSampling::Cosine, true, settings_.light_splits);
     const PathTracerSettings path_settings = probe_path_settings(settings_);
     const Camera camera;  // probe rays are not camera rays; only the unused Depth pass reads it
     const int vis_texels = old.visibility_resolution * old.visibility_resolution;

@@ -63,6 +63,7 @@ struct ProbeGridSettings {
     float clamp = 0.0f;                 // max component of a radiance sample; 0 = off
     bool include_direct = false;        // keep emitters and world seen straight from the probe
     int bounces = 3;                    // diffuse and glossy scatterings along a probe's path
+    int light_splits = 4;               // as PathTracerSettings.light_splits, for probe paths
     // Leak prevention (probes/probe_visibility.h; EEVEE's Bias, Bleed Bias, Blur).
     bool visibility = true;
     int visibility_resolution = 8;      // octahedral texels per side, per probe

@@ -171,6 +171,8 @@ NARROWER_RANGES = {("PathTracerSettings", "samples"): (1, 2**24),
                    ("PathTracerSettings", "light_splits"): (1, 8),  # kMaxLightSplits
                    ("PreviewSettings", "samples"): (1, 2**24),
                    ("PreviewSettings", "light_splits"): (1, 8),  # kMaxLightSplits
+                   ("LightmapSettings", "light_splits"): (1, 8),
+                   ("ProbeGridSettings", "light_splits"): (1, 8),
                    ("PhotonLatticeSettings", "photons"): (1, 2**64 - 1),
                    ("RadianceFieldSettings", "photons"): (1, 2**64 - 1),
                    ("PropagationSettings", "photons"): (1, 2**64 - 1),

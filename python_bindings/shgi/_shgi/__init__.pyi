@@ -1030,6 +1030,14 @@ class LightmapSettings:
     def glossy_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
+    def light_splits(self) -> int:
+        """
+        Most emitters one next-event estimate samples, as PathTracerSettings.light_splits (4).
+        """
+    @light_splits.setter
+    def light_splits(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
     def max_bounces(self) -> int:
         """
         Cycles' Total bounces (12).
@@ -2380,6 +2388,14 @@ class ProbeGridSettings:
         """
     @include_direct.setter
     def include_direct(self, arg0: bool) -> None:
+        ...
+    @property
+    def light_splits(self) -> int:
+        """
+        Most emitters one next-event estimate on a probe path samples, as PathTracerSettings.light_splits (4).
+        """
+    @light_splits.setter
+    def light_splits(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def max_offset(self) -> float:
