@@ -758,7 +758,8 @@ def merge_shards(scene, jobs: Sequence[BakeJob], options: BakeOptions, out_dir: 
 GATHER_DEPTH_FIELDS = {"PhotonLatticeSettings": ("max_bounces", 1),
                        "ProbeGridSettings": ("bounces", 1),
                        "RadianceFieldSettings": ("max_bounces", 1),
-                       "PropagationSettings": ("vpl_bounces", 1)}
+                       "PropagationSettings": ("vpl_bounces", 1),
+                       "InstantGiSettings": ("vpl_bounces", 1)}
 
 
 def _gather_settings(settings):
