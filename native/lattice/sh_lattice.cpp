@@ -548,6 +548,9 @@ void ShLattice::measure_surfaces(const Scene& scene, Progress* progress, bool vi
     std::vector<BinSums> sums;  // per cell with surface, in order of its first fragment
     std::vector<std::vector<SurfaceFragment>> fragments(std::min(chunk_count, kChunksPerBatch));
     std::atomic<uint64_t> done{0};
+    // Progress: the triangles' clipping, then (with visibility) the visibility rays, which take
+    // as long or longer: each half of the range.
+    const uint64_t span = visibility ? 2 * total : total;
 
     for (uint64_t batch = 0; batch < chunk_count; batch += kChunksPerBatch) {
         const uint64_t batch_end = std::min(chunk_count, batch + kChunksPerBatch);
@@ -557,7 +560,7 @@ void ShLattice::measure_surfaces(const Scene& scene, Progress* progress, bool vi
                 const uint64_t first = chunk * kTrianglesPerChunk;
                 const uint64_t last = std::min(total, first + kTrianglesPerChunk);
                 clip_triangles(triangles, first, last, *this, fragments[chunk - batch]);
-                if (progress) progress->report(done += last - first, total);
+                if (progress) progress->report(done += last - first, span);
             }
         });
         for (uint64_t chunk = batch; chunk < batch_end; ++chunk) {
@@ -607,7 +610,7 @@ void ShLattice::measure_surfaces(const Scene& scene, Progress* progress, bool vi
     update_surface_near();
     try {
         if (visibility)
-            update_visible_near(scene, anchors, progress);
+            update_visible_near(scene, anchors, progress, total, span);
         else
             visible_near_.assign(surface_near_.size(), kFullBlock);
     } catch (const Cancelled&) {
@@ -626,9 +629,10 @@ void ShLattice::measure_surfaces(const Scene& scene, Progress* progress, bool vi
 // lower padded index, so that two surface cells see each other or not both ways, whatever the
 // thread count.
 void ShLattice::update_visible_near(const Scene& scene, const std::vector<vec3>& anchors,
-                                    Progress* progress) {
+                                    Progress* progress, uint64_t reported, uint64_t span) {
     const ivec3 padded = dims_ + 2;
     const size_t count = surface_near_.size();
+    std::atomic<uint64_t> cells_done{0};
     visible_near_.assign(count, 0u);
     const auto anchor_of = [&](const ivec3& at) {
         const bool inside = glm::all(glm::greaterThanEqual(at, ivec3(0))) &&
@@ -674,6 +678,10 @@ void ShLattice::update_visible_near(const Scene& scene, const std::vector<vec3>&
                 if (!scene.occluded(ray)) seen |= uint32_t(1) << k;
             }
             visible_near_[pc] = seen;
+        }
+        if (progress) {
+            const double share = double(cells_done += end - begin) / double(count);
+            progress->report(reported + uint64_t(share * double(span - reported)), span);
         }
     });
 }

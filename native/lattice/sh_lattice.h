@@ -224,9 +224,10 @@ class ShLattice {
     // D_c(n): those of block mask `seen`, or of `near` when none of those faces n.
     template <typename ForEachCell>
     ShRgb blend(const vec3& n, uint32_t near, uint32_t seen, ForEachCell&& for_each_cell) const;
-    // Recomputes visible_near_ from surface_near_ and the surfaces' anchors. Cancellable.
+    // Recomputes visible_near_ from surface_near_ and the surfaces' anchors. Cancellable;
+    // reports progress from `reported` to `span` units (measure_surfaces' second half).
     void update_visible_near(const Scene& scene, const std::vector<vec3>& anchors,
-                             Progress* progress);
+                             Progress* progress, uint64_t reported, uint64_t span);
     // False when no cell a sample at lattice coordinates `cells` reads holds radiance.
     bool radiance_near(const vec3& cells) const;
     void update_radiance_near();  // recomputes radiance_near_ from the coefficients

@@ -343,3 +343,16 @@ def test_an_unlit_floor_one_centimetre_under_a_lit_shelf_reads_zero():
     print(f"L00 on the shelf {shelf}, on the floor under it {floor}")
     assert shelf.min() > 0.1
     assert floor.max() < 0.01 * shelf.min(), (floor, shelf)
+
+
+def test_reset_reports_progress_through_the_visibility_rays():
+    """A reset measures the cells' surfaces (clipping the triangles: the first half of its
+    progress), then traces the visibility rays between neighbouring cells (the second half, which
+    reported nothing before and looked stuck at 100% in the status bar while it ran)."""
+    scene = committed(scenes.cornell_box(0.1))
+    lattice = shgi.PhotonLattice(scene, shgi.PhotonLatticeSettings(
+        resolution=24, caustics=shgi.CausticMode.OFF))
+    fractions = []  # every report: no minimum interval between callbacks
+    lattice.reset(shgi.Progress(lambda fraction, stage: fractions.append(fraction), 0.0))
+    assert fractions == sorted(fractions) and fractions[-1] == pytest.approx(1.0)
+    assert len({f for f in fractions if 0.5 < f < 1.0}) >= 3, fractions
