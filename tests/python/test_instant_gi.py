@@ -227,6 +227,21 @@ def test_filter_direct_carries_the_skys_direct_light():
     np.testing.assert_allclose(ratio, 1.0, atol=0.02)
 
 
+def test_filter_direct_frames_do_not_depend_on_threads_or_tiles():
+    scene = sky_over_a_floor()
+    field = solved(scene, passes=1, filter_direct=True).current_field()
+    images = []
+    try:
+        for threads, tile in ((1, 16), (2, 4)):
+            shgi.set_max_threads(threads)
+            images.append(preview(scene, field, samples=1, tile_size=tile))
+    finally:
+        shgi.set_max_threads(0)
+    assert images[0]["DiffDir"].max() > 0.0
+    for name in ("Combined", "DiffDir", "GlossDir", "DiffInd"):
+        np.testing.assert_array_equal(images[0][name], images[1][name], err_msg=name)
+
+
 def test_a_bake_with_filter_direct_counts_the_sky_once():
     """A bake over a filter_direct field: the field includes the world's direct light, so the
     baker's next-event estimation leaves the world out. A Lambert plane under a uniform world
