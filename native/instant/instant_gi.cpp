@@ -484,7 +484,9 @@ void InstantGi::refine(Progress* progress) {
 }
 
 size_t InstantGi::memory_bytes() const {
-    return size_t(field_->vpl_count()) * sizeof(InstantVpl);
+    size_t sky = 0;
+    for (const auto& set : field_->sky_sets()) sky += set.size();
+    return size_t(field_->vpl_count()) * sizeof(InstantVpl) + sky * sizeof(vec3);
 }
 
 }  // namespace shgi
