@@ -61,7 +61,11 @@ void bind_settings(py::module_& m) {
                        "blended (0.9).")
         .def_readwrite("glossy_vpls", &S::glossy_vpls,
                        "A VPL's surface scatters with its rough glossy lobes too, as if "
-                       "diffuse; False: its diffuse lobe only (True).");
+                       "diffuse; False: its diffuse lobe only (True).")
+        .def_readwrite("filter_direct", &S::filter_direct,
+                       "The world's (sky's) direct light through the SH filter as directional "
+                       "VPLs (photons_per_set per set and pass), as the paper filters direct "
+                       "light; lamps and suns stay next-event estimation (False).");
     cls.def("validate", &validate_instant_gi_settings,
             "Raises ValueError naming the first invalid field.");
     register_settings_type<S>("InstantGiSettings");

@@ -436,6 +436,11 @@ class ShgiInstantGiSettings(bpy.types.PropertyGroup):
         name="Normal Threshold", default=IG["normal_threshold"], min=-1.0, max=1.0,
         description="Neighbours whose surfaces' normals have a cosine below this are not "
                     "blended (normal maps do not count)")
+    filter_direct: BoolProperty(
+        name="Filter Sky Light", default=IG["filter_direct"],
+        description="The world's direct light comes from as many sky directions per set as "
+                    "Light Paths per Set, blended like the indirect light; lamps and suns stay "
+                    "sampled directly. Off: the world is sampled directly too")
     passes: IntProperty(
         name="Render Passes", default=settings.final_passes("INSTANT_GI", native.module()),
         min=1, soft_max=64,

@@ -247,6 +247,7 @@ INSTANT_GI_DEFAULTS = {
     "filter_mode": "SH",
     "depth_threshold": 0.1,
     "normal_threshold": 0.9,
+    "filter_direct": False,
 }
 
 # Refinement passes of a final solve (F12, Solve, a bake) when ``shgi`` cannot be imported as the
@@ -442,6 +443,7 @@ INSTANT_GI_LABELS = {
     "filter_mode": "Instant GI > Filter",
     "depth_threshold": "Instant GI > Depth Threshold",
     "normal_threshold": "Instant GI > Normal Threshold",
+    "filter_direct": "Instant GI > Filter Sky Light",
 }
 # The native checks' limits the property ranges follow (properties.py), so that the panels offer
 # only values the native code accepts.

@@ -13,6 +13,8 @@
 #include "util/error.h"
 #include "util/memory.h"
 #include "util/parallel.h"
+#include "util/rng.h"
+#include "util/sampling.h"
 #include "util/timer.h"
 
 namespace shgi {
@@ -141,9 +143,12 @@ bool add_vpl_sh(ShRgb& sh, const vec3& p, const vec3& ng, const InstantVpl& vpl,
 // InstantGiField
 
 InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& settings,
-                               std::vector<std::vector<InstantVpl>> sets, uint64_t passes)
-    : scene_(&scene), settings_(settings), sets_(std::move(sets)), passes_(passes),
-      timings_(std::make_shared<InstantGiFrameTimings>()) {
+                               std::vector<std::vector<InstantVpl>> sets, uint64_t passes,
+                               std::vector<std::vector<vec3>> sky_sets)
+    : scene_(&scene), settings_(settings), sets_(std::move(sets)), sky_sets_(std::move(sky_sets)),
+      passes_(passes), timings_(std::make_shared<InstantGiFrameTimings>()) {
+    if (!sky_sets_.empty() && sky_sets_.size() != sets_.size())
+        throw Internal("InstantGiField: sky_sets and sets differ in count");
     for (const auto& set : sets_) vpl_count_ += set.size();
     set_scale_ = passes_ > 0 ? float(sets_.size()) / float(passes_) : 0.0f;
 }
@@ -169,6 +174,21 @@ ShRgb InstantGiField::radiance_sh(const vec3& p, const vec3& n) const {
             if (scene_->occluded(ray)) continue;
             for (int i = 0; i < kCoeffs; ++i) sh.coeffs[i] += one.coeffs[i];
         }
+    // filter_direct: the world's direct light from every set's directional VPLs.
+    size_t sky_count = 0;
+    for (const auto& set : sky_sets_) sky_count += set.size();
+    if (sky_count == 0) return sh;
+    const vec3 sky = scene_->world().radiance() * (kFourPi / float(sky_count));
+    for (const auto& set : sky_sets_)
+        for (const vec3& w : set) {
+            if (glm::dot(w, n) <= 0.0f) continue;
+            Ray ray;
+            ray.origin = origin;
+            ray.direction = w;
+            ray.tmax = kInfinity;
+            if (scene_->occluded(ray)) continue;
+            add_delta(sh.coeffs.data(), sky, w);
+        }
     return sh;
 }
 
@@ -181,14 +201,20 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
     const int width = g.width(), height = g.height();
     const size_t pixels = g.pixel_count();
     const int n = settings_.sets_x, m = settings_.sets_y;
-    require_memory(saturating_mul(uint64_t(pixels), uint64_t(2 * kCoeffs * sizeof(vec3))),
+    const bool sky = !sky_sets_.empty() && scene_->world().radiance() != vec3(0.0f);
+    require_memory(saturating_mul(uint64_t(pixels),
+                                  uint64_t((sky ? 4 : 2) * kCoeffs * sizeof(vec3))),
                    format_message("the SH planes of ", width, " x ", height, " pixels"),
                    "lower the camera's resolution_x / resolution_y");
     // 1. gather: the pixel's set as L2 SH, visibility by exact shadow rays.
     TimePoint start = now();
     std::vector<vec3> raw(pixels * kCoeffs, vec3(0.0f));
+    // filter_direct: the sky's direct light, a plane of its own (DiffDir / GlossDir).
+    std::vector<vec3> raw_direct(sky ? pixels * kCoeffs : 0, vec3(0.0f));
     size_t largest_set = 1;
-    for (const auto& set : sets_) largest_set = std::max(largest_set, set.size());
+    for (size_t s = 0; s < sets_.size(); ++s)
+        largest_set = std::max(largest_set,
+                               sets_[s].size() + (sky ? sky_sets_[s].size() : size_t(0)));
     const uint64_t rows_per_task =
         std::max<uint64_t>(1, kRaysPerBatch / (uint64_t(std::max(width, 1)) * largest_set));
     parallel_for(0, uint64_t(height), rows_per_task, [&](uint64_t y0, uint64_t y1) {
@@ -196,7 +222,7 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
         std::vector<Ray> rays;
         std::vector<uint32_t> ray_pixel;
         std::vector<vec3> weights, directions;
-        std::vector<uint8_t> occluded;
+        std::vector<uint8_t> occluded, ray_direct;
         // Rays set by set, VPL by VPL, pixel by pixel along the row: the pixels of one set
         // sending rays to one VPL after another are neighbours, a coherent stream.
         for (uint64_t y = y0; y < y1; ++y)
@@ -223,13 +249,37 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                         ray_pixel.push_back(uint32_t(p));
                         weights.push_back(e);
                         directions.push_back(w);
+                        ray_direct.push_back(0);
+                    }
+                if (!sky) continue;
+                // The set's directional VPLs: the world seen along each, to infinity.
+                const size_t s = size_t(int(y) % m) * size_t(n) + size_t(sx);
+                const auto& sky_set = sky_sets_[s];
+                if (sky_set.empty()) continue;
+                const vec3 e = scene_->world().radiance() * (kFourPi / float(sky_set.size()));
+                for (const vec3& w : sky_set)
+                    for (int x = sx; x < width; x += n) {
+                        const size_t p = g.index(x, int(y));
+                        if (!g.has_surface(p)) continue;
+                        const vec3 ng = g.geometric_normal[p];
+                        if (glm::dot(w, ng) <= 0.0f) continue;
+                        Ray ray;
+                        ray.origin = offset_origin(g.position[p], ng);
+                        ray.direction = w;
+                        ray.tmax = kInfinity;
+                        rays.push_back(ray);
+                        ray_pixel.push_back(uint32_t(p));
+                        weights.push_back(e);
+                        directions.push_back(w);
+                        ray_direct.push_back(1);
                     }
             }
         if (rays.empty()) return;
         scene_->occluded(rays, occluded, nullptr, RayCoherence::Coherent);
         for (size_t r = 0; r < rays.size(); ++r) {  // in ray order: a fixed sum per pixel
             if (occluded[r]) continue;
-            add_delta(&raw[size_t(ray_pixel[r]) * kCoeffs], weights[r], directions[r]);
+            std::vector<vec3>& plane = ray_direct[r] ? raw_direct : raw;
+            add_delta(&plane[size_t(ray_pixel[r]) * kCoeffs], weights[r], directions[r]);
         }
     }, progress);
     timings_->gather = seconds_since(start);
@@ -241,55 +291,62 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
     const bool filter_irradiance =
         mode == InstantGiFilter::Irradiance || mode == InstantGiFilter::Strict;
     const Taps tx = taps_for(n), ty = taps_for(m);
-    std::vector<vec3> filtered;  // SH (mode Sh) or E (Irradiance, Strict)
-    std::vector<vec3> irradiance;
-    if (filter_irradiance) {
-        irradiance.assign(pixels, vec3(0.0f));
-        parallel_for(0, uint64_t(pixels), 4096, [&](uint64_t b, uint64_t e) {
-            for (uint64_t p = b; p < e; ++p) {
-                if (!g.has_surface(p)) continue;
-                ShRgb sh(kOrder);
-                std::copy_n(&raw[p * kCoeffs], kCoeffs, sh.coeffs.begin());
-                irradiance[p] = glm::max(sh_irradiance(sh, g.shading_normal[p]), vec3(0.0f));
-            }
-        });
-    }
-    if (filter_sh || filter_irradiance) {
-        const int stride = filter_sh ? kCoeffs : 1;
-        const std::vector<vec3>& source = filter_sh ? raw : irradiance;
-        filtered.assign(pixels * size_t(stride), vec3(0.0f));
-        const bool strict = mode == InstantGiFilter::Strict;
-        parallel_for(0, uint64_t(height), 8, [&](uint64_t y0, uint64_t y1) {
-            throw_if_cancelled(progress);
-            for (uint64_t y = y0; y < y1; ++y)
-                for (int x = 0; x < width; ++x) {
-                    const size_t p = g.index(x, int(y));
+    // One plane (indirect, or filter_direct's sky) through the filter: SH (mode Sh) or E
+    // (Irradiance, Strict) into `out_plane`.
+    const auto filter_plane = [&](const std::vector<vec3>& plane, std::vector<vec3>& out_plane) {
+        std::vector<vec3> irradiance;
+        if (filter_irradiance) {
+            irradiance.assign(pixels, vec3(0.0f));
+            parallel_for(0, uint64_t(pixels), 4096, [&](uint64_t b, uint64_t e) {
+                for (uint64_t p = b; p < e; ++p) {
                     if (!g.has_surface(p)) continue;
-                    vec3* out = &filtered[p * size_t(stride)];
-                    float total = 0.0f;
-                    for (int dy = -ty.half; dy <= ty.half; ++dy) {
-                        const int qy = int(y) + dy;
-                        if (qy < 0 || qy >= height) continue;
-                        for (int dx = -tx.half; dx <= tx.half; ++dx) {
-                            const int qx = x + dx;
-                            if (qx < 0 || qx >= width) continue;
-                            const size_t q = g.index(qx, qy);
-                            if (q != p && !joins(g, p, q, settings_, strict)) continue;
-                            const float w = tx.weight(dx) * ty.weight(dy);
-                            const vec3* in = &source[q * size_t(stride)];
-                            for (int i = 0; i < stride; ++i) out[i] += w * in[i];
-                            total += w;
-                        }
-                    }
-                    for (int i = 0; i < stride; ++i) out[i] /= total;
+                    ShRgb sh(kOrder);
+                    std::copy_n(&plane[p * kCoeffs], kCoeffs, sh.coeffs.begin());
+                    irradiance[p] = glm::max(sh_irradiance(sh, g.shading_normal[p]), vec3(0.0f));
                 }
-        }, progress);
-    }
+            });
+        }
+        if (filter_sh || filter_irradiance) {
+            const int stride = filter_sh ? kCoeffs : 1;
+            const std::vector<vec3>& source = filter_sh ? plane : irradiance;
+            out_plane.assign(pixels * size_t(stride), vec3(0.0f));
+            const bool strict = mode == InstantGiFilter::Strict;
+            parallel_for(0, uint64_t(height), 8, [&](uint64_t y0, uint64_t y1) {
+                throw_if_cancelled(progress);
+                for (uint64_t y = y0; y < y1; ++y)
+                    for (int x = 0; x < width; ++x) {
+                        const size_t p = g.index(x, int(y));
+                        if (!g.has_surface(p)) continue;
+                        vec3* out = &out_plane[p * size_t(stride)];
+                        float total = 0.0f;
+                        for (int dy = -ty.half; dy <= ty.half; ++dy) {
+                            const int qy = int(y) + dy;
+                            if (qy < 0 || qy >= height) continue;
+                            for (int dx = -tx.half; dx <= tx.half; ++dx) {
+                                const int qx = x + dx;
+                                if (qx < 0 || qx >= width) continue;
+                                const size_t q = g.index(qx, qy);
+                                if (q != p && !joins(g, p, q, settings_, strict)) continue;
+                                const float w = tx.weight(dx) * ty.weight(dy);
+                                const vec3* in = &source[q * size_t(stride)];
+                                for (int i = 0; i < stride; ++i) out[i] += w * in[i];
+                                total += w;
+                            }
+                        }
+                        for (int i = 0; i < stride; ++i) out[i] /= total;
+                    }
+            }, progress);
+        }
+    };
+    std::vector<vec3> filtered, filtered_direct;
+    filter_plane(raw, filtered);
+    if (sky) filter_plane(raw_direct, filtered_direct);
     timings_->filter = seconds_since(start);
 
     // 3. shade: SH dot products with the pixel's shading normal, into the film.
     start = now();
     const std::vector<vec3>& sh_source = filter_sh ? filtered : raw;
+    const std::vector<vec3>& sh_direct = filter_sh ? filtered_direct : raw_direct;
     const float samples = float(count);
     const bool lobes = g.has_field_lobes();
     parallel_for(0, uint64_t(height), 16, [&](uint64_t y0, uint64_t y1) {
@@ -297,25 +354,42 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
             for (int x = 0; x < width; ++x) {
                 const size_t p = g.index(x, int(y));
                 if (!g.has_surface(p) || !lobes) continue;
-                FieldLookup lookup;
-                lookup.radiance = ShRgb(kOrder);
-                std::copy_n(&sh_source[p * kCoeffs], kCoeffs, lookup.radiance.coeffs.begin());
                 const vec3 ns = g.shading_normal[p];
-                const vec3 e = filter_irradiance ? filtered[p] : lookup.irradiance(ns);
-                // Light Paths > Clamp, per lobe class and sample, as PathIntegrator::add_light.
-                const vec3 diffuse = clamp_peak(g.field_diffuse[p] * e * kInvPi, clamp_indirect);
-                vec3 glossy(0.0f);
                 const vec3 wo = glm::normalize(camera_position - g.position[p]);
-                for (int k = 0; k < 2; ++k)
-                    if (max_component(g.glossy_albedo[k][p]) > 0.0f)
-                        glossy += g.glossy_albedo[k][p] *
-                                  lookup.glossy(ns, wo, g.glossy_roughness[k][p]);
+                // The pixel's diffuse and glossy light from one plane's SH (or filtered E).
+                const auto shade = [&](const std::vector<vec3>& sh,
+                                       const std::vector<vec3>& e_plane, vec3& diffuse,
+                                       vec3& glossy) {
+                    FieldLookup lookup;
+                    lookup.radiance = ShRgb(kOrder);
+                    std::copy_n(&sh[p * kCoeffs], kCoeffs, lookup.radiance.coeffs.begin());
+                    const vec3 e = filter_irradiance ? e_plane[p] : lookup.irradiance(ns);
+                    diffuse = g.field_diffuse[p] * e * kInvPi;
+                    glossy = vec3(0.0f);
+                    for (int k = 0; k < 2; ++k)
+                        if (max_component(g.glossy_albedo[k][p]) > 0.0f)
+                            glossy += g.glossy_albedo[k][p] *
+                                      lookup.glossy(ns, wo, g.glossy_roughness[k][p]);
+                };
+                vec3 diffuse, glossy;
+                shade(sh_source, filtered, diffuse, glossy);
+                // Light Paths > Clamp, per lobe class and sample, as PathIntegrator::add_light.
+                diffuse = clamp_peak(diffuse, clamp_indirect);
                 glossy = clamp_peak(glossy, clamp_indirect);
-                if (!is_finite(diffuse) || !is_finite(glossy)) continue;
+                vec3 diffuse_direct(0.0f), glossy_direct(0.0f);
+                if (sky) shade(sh_direct, filtered_direct, diffuse_direct, glossy_direct);
+                if (!is_finite(diffuse) || !is_finite(glossy) || !is_finite(diffuse_direct) ||
+                    !is_finite(glossy_direct))
+                    continue;
                 PassValues values;
                 values[Pass::DiffInd] = diffuse * samples;
                 values[Pass::GlossInd] = glossy * samples;
-                values[Pass::Combined] = (diffuse + glossy) * samples;
+                values[Pass::Combined] =
+                    (diffuse + glossy + diffuse_direct + glossy_direct) * samples;
+                if (sky) {
+                    values[Pass::DiffDir] = diffuse_direct * samples;
+                    values[Pass::GlossDir] = glossy_direct * samples;
+                }
                 film.add(x, int(y), values);
             }
     });
@@ -389,15 +463,30 @@ void InstantGi::refine(Progress* progress) {
     std::vector<std::vector<InstantVpl>> sets = field_->sets();
     const size_t set_count = sets.size();
     for (size_t i = 0; i < vpls.size(); ++i) sets[i % set_count].push_back(vpls[i]);
+    // filter_direct: photons_per_set directional VPLs for the world per set and pass, uniform
+    // over the sphere (one random stream per pass and set: the same for any thread count).
+    std::vector<std::vector<vec3>> sky_sets;
+    if (settings_.filter_direct) {
+        sky_sets = field_->sky_sets();
+        sky_sets.resize(set_count);
+        for (size_t s = 0; s < set_count; ++s) {
+            Pcg32 rng(settings_.seed ^ 0x5b1d5ca7e5u, passes_ * set_count + s);
+            for (uint64_t k = 0; k < settings_.photons_per_set; ++k)
+                sky_sets[s].push_back(sample_uniform_sphere(rng.next_vec2()));
+        }
+    }
     const double deal_seconds = seconds_since(start);
-    field_ = std::make_shared<InstantGiField>(*scene_, settings_, std::move(sets), passes_ + 1);
+    field_ = std::make_shared<InstantGiField>(*scene_, settings_, std::move(sets), passes_ + 1,
+                                              std::move(sky_sets));
     ++passes_;
     stage_seconds_ = {{"vpl_trace", trace_seconds}, {"vpl_sets", deal_seconds}};
     if (progress) progress->set_fraction(1.0f);
 }
 
 size_t InstantGi::memory_bytes() const {
-    return size_t(field_->vpl_count()) * sizeof(InstantVpl);
+    size_t sky = 0;
+    for (const auto& set : field_->sky_sets()) sky += set.size();
+    return size_t(field_->vpl_count()) * sizeof(InstantVpl) + sky * sizeof(vec3);
 }
 
 }  // namespace shgi

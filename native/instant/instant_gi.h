@@ -65,6 +65,15 @@ struct InstantGiSettings {
     // the surface's specular layer reflects (Principled specular 0.5: the Cornell box's DiffInd
     // came out 0.89x the path tracer's, the sun room's 0.93x).
     bool glossy_vpls = true;
+    // The world's (sky's) direct light through the SH filter, as the paper filters direct light
+    // (§3.2): every pass adds photons_per_set directional VPLs to each set (uniform directions
+    // over the sphere, each weighing the world's radiance × 4π / the set's directions), gathered
+    // with a shadow ray to infinity and filtered like the VPLs; the renderer then leaves the
+    // world out of next-event estimation (includes_world_direct) and the stage writes that
+    // light to DiffDir / GlossDir. Lamps (point, spot, area) and suns stay next-event
+    // estimation. Off by default: L2 SH blurs direct light (issue 50: a point light's L2
+    // reconstruction is off by up to +6%); a uniform sky's hemisphere is exact in L2.
+    bool filter_direct = false;
     uint64_t seed = 0;
 };
 
@@ -93,17 +102,25 @@ struct InstantGiFrameTimings {
 // The solved VPL sets: an immutable snapshot, the field the renderers read.
 class InstantGiField : public IndirectField {
   public:
+    // sky_sets: per set, the directions of its directional VPLs for the world (filter_direct;
+    // empty otherwise).
     InstantGiField(const Scene& scene, const InstantGiSettings& settings,
-                   std::vector<std::vector<InstantVpl>> sets, uint64_t passes);
+                   std::vector<std::vector<InstantVpl>> sets, uint64_t passes,
+                   std::vector<std::vector<vec3>> sky_sets = {});
 
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
-    bool is_zero() const override { return passes_ == 0 || vpl_count_ == 0; }
+    bool is_zero() const override {
+        return passes_ == 0 || (vpl_count_ == 0 && sky_sets_.empty());
+    }
     bool shades_first_surfaces() const override { return true; }
+    // filter_direct: the sky's direct light is the field's (its directional VPLs).
+    bool includes_world_direct() const override { return settings_.filter_direct; }
     void shade_first_surfaces(const GBuffer& g_buffer, const vec3& camera_position,
                               float clamp_indirect, Film& film, uint64_t first, uint64_t count,
                               Progress* progress) const override;
 
     const std::vector<std::vector<InstantVpl>>& sets() const { return sets_; }
+    const std::vector<std::vector<vec3>>& sky_sets() const { return sky_sets_; }
     uint64_t vpl_count() const { return vpl_count_; }
     // Timings of the latest shade_first_surfaces (one frame at a time per field).
     InstantGiFrameTimings frame_timings() const;
@@ -112,6 +129,7 @@ class InstantGiField : public IndirectField {
     const Scene* scene_;
     InstantGiSettings settings_;
     std::vector<std::vector<InstantVpl>> sets_;
+    std::vector<std::vector<vec3>> sky_sets_;
     uint64_t passes_ = 0, vpl_count_ = 0;
     float set_scale_ = 0.0f;  // sets / passes
     std::shared_ptr<InstantGiFrameTimings> timings_;

@@ -319,7 +319,7 @@ class SHGI_RENDER_PT_instant_gi(_FieldPanel, bpy.types.Panel):
         for name in ("sets_x", "sets_y", "photons_per_set", "clamp_distance"):
             column.prop(instant, name)
         column = layout.column(align=True)
-        for name in ("filter_mode", "depth_threshold", "normal_threshold"):
+        for name in ("filter_mode", "depth_threshold", "normal_threshold", "filter_direct"):
             column.prop(instant, name)
         column = layout.column(align=True)
         column.label(text="Passes")

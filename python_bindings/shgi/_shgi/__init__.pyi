@@ -613,6 +613,14 @@ class InstantGiSettings:
     def depth_threshold(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
+    def filter_direct(self) -> bool:
+        """
+        The world's (sky's) direct light through the SH filter as directional VPLs (photons_per_set per set and pass), as the paper filters direct light; lamps and suns stay next-event estimation (False).
+        """
+    @filter_direct.setter
+    def filter_direct(self, arg0: bool) -> None:
+        ...
+    @property
     def filter_mode(self) -> InstantGiFilter:
         """
         InstantGiFilter: SH (the paper's), IRRADIANCE (each pixel's irradiance, same edges), STRICT (irradiance, also stopping at shading-normal changes), NONE (each pixel its own set).
