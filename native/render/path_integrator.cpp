@@ -13,7 +13,8 @@ PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample) {
     const uint32_t base = hash_seed(seed, pixel);
     const uint32_t index = uint32_t(sample);
     return {owen_sobol_2d(index, hash_seed(base, 0)), owen_sobol_1d(index, hash_seed(base, 1)),
-            owen_sobol_2d(index, hash_seed(base, 2))};
+            owen_sobol_2d(index, hash_seed(base, 2)), owen_sobol_1d(index, hash_seed(base, 3)),
+            owen_sobol_2d(index, hash_seed(base, 4))};
 }
 vec3 path_radiance(const PassValues& values, bool include_direct, float clamp) {
     vec3 radiance = values[Pass::Combined];
@@ -216,8 +217,12 @@ bool PathIntegrator::first_field_query(vec3* position, vec3* normal, vec3* wo) c
 // Samples the BSDF, updates throughput, bounce counts and MIS state; false ends the path.
 bool PathIntegrator::scatter(const Shading& shading, Ray* ray) {
     BsdfSample bs;
-    const float u_lobe = rng_.next_float();
-    const vec2 u = rng_.next_vec2();
+    float u_lobe = rng_.next_float();
+    vec2 u = rng_.next_vec2();
+    if (vertex_ == 0 && first_bsdf_sample_) {
+        u_lobe = first_bsdf_sample_->u_select;
+        u = first_bsdf_sample_->u;
+    }
     const bool field_vertex = vertex_field() != nullptr;
     const bool sampled = field_vertex ? shading.bsdf.sample_traced(shading.wo, u_lobe, u, &bs)
                                       : shading.bsdf.sample(shading.wo, u_lobe, u, &bs);

@@ -61,6 +61,8 @@ struct PixelSample {
     vec2 jitter{0.5f};
     float u_select = 0.0f;
     vec2 u_light{0.0f};
+    float u_lobe = 0.0f;  // the first surface's BSDF sample (lobe choice and direction)
+    vec2 u_bsdf{0.0f};
 };
 PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample);
 
@@ -111,6 +113,14 @@ class PathIntegrator {
         first_light_sample_ = FirstLightSample{u_select, u};
     }
 
+    // Stratified numbers for the BSDF sample at the first surface (lobe choice and direction),
+    // as set_first_light_sample: the first bounce of every power-of-two count of samples
+    // covers the hemisphere evenly (indirect light that comes from a small bright patch, as the
+    // sun room's sunlit floor, is found at a steadier rate).
+    void set_first_bsdf_sample(float u_lobe, const vec2& u) {
+        first_bsdf_sample_ = FirstLightSample{u_lobe, u};
+    }
+
     // The field query finish() will make at the first surface (after begin()): its position,
     // shading normal and the direction towards the viewer, world space. False without a field
     // to query (none, or one that holds no light).
@@ -130,6 +140,7 @@ class PathIntegrator {
         vec2 u;
     };
     std::optional<FirstLightSample> first_light_sample_;
+    std::optional<FirstLightSample> first_bsdf_sample_;  // u_select holds u_lobe
 
     // A next-event estimate waiting on its shadow ray: the light sample, its direction in the
     // shading frame and f |cos| by class there.

@@ -88,6 +88,7 @@ void PathTracer::render(uint32_t samples, Progress* progress) {
                                                   rng, values);
                         integrator.set_first_light_sample(stratified.u_select,
                                                           stratified.u_light);
+                        integrator.set_first_bsdf_sample(stratified.u_lobe, stratified.u_bsdf);
                         integrator.trace(camera_rays.generate_ray(vec2(float(x), float(y)) +
                                                                   stratified.jitter));
                         if (s == first)

@@ -16,10 +16,10 @@
 //
 // Tiles: the frame pipeline's tile loop (render/frame_pipeline.h), shared with the preview.
 // Determinism: sample s of pixel i uses its own Pcg32 stream (seed, stream_id(s, i)) and point s
-// of the pixel's Owen-scrambled Sobol' sequences for its jitter and first light sample
-// (pixel_sample in render/path_integrator.h), so the image is bit-identical for any thread count,
-// any tile split and any split of the samples into progressive render() calls. Pixel filter: a
-// box of one pixel (stratified jitter), where
+// of the pixel's Owen-scrambled Sobol' sequences for its jitter, first light sample and first
+// BSDF sample (pixel_sample in render/path_integrator.h), so the image is bit-identical for any
+// thread count, any tile split and any split of the samples into progressive render() calls.
+// Pixel filter: a box of one pixel (stratified jitter), where
 // Cycles defaults to a 1.5 px Blackman-Harris; set Cycles' Filter Size to 0.01 to compare.
 // Passes: see render/film.h. Units and emitters: see render/light_sampler.h.
 #pragma once
