@@ -9,12 +9,17 @@
 
 namespace shgi {
 
-PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample) {
+PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample, bool first_bsdf) {
     const uint32_t base = hash_seed(seed, pixel);
     const uint32_t index = uint32_t(sample);
-    return {owen_sobol_2d(index, hash_seed(base, 0)), owen_sobol_1d(index, hash_seed(base, 1)),
-            owen_sobol_2d(index, hash_seed(base, 2)), owen_sobol_1d(index, hash_seed(base, 3)),
-            owen_sobol_2d(index, hash_seed(base, 4))};
+    PixelSample out{owen_sobol_2d(index, hash_seed(base, 0)),
+                    owen_sobol_1d(index, hash_seed(base, 1)),
+                    owen_sobol_2d(index, hash_seed(base, 2))};
+    if (first_bsdf) {
+        out.u_lobe = owen_sobol_1d(index, hash_seed(base, 3));
+        out.u_bsdf = owen_sobol_2d(index, hash_seed(base, 4));
+    }
+    return out;
 }
 vec3 path_radiance(const PassValues& values, bool include_direct, float clamp) {
     vec3 radiance = values[Pass::Combined];

@@ -64,7 +64,10 @@ struct PixelSample {
     float u_lobe = 0.0f;  // the first surface's BSDF sample (lobe choice and direction)
     vec2 u_bsdf{0.0f};
 };
-PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample);
+// With `first_bsdf`, also u_lobe and u_bsdf (the path tracer's first bounce); without, they stay
+// 0: the preview and the bake do not use them, and two more scrambled points a pixel were ~2% of
+// a preview frame.
+PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample, bool first_bsdf = false);
 
 // The radiance a path started with PathIntegrator::trace(ray, first_hit) brought back along its
 // ray, for tracers whose rays leave a surface or a probe rather than a camera (probe updates,

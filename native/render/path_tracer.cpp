@@ -82,7 +82,7 @@ void PathTracer::render(uint32_t samples, Progress* progress) {
                     for (uint64_t s = first; s < first + samples; ++s) {
                         throw_if_cancelled(progress);  // one relaxed atomic load per path
                         Pcg32 rng(settings_.seed, stream_id(s, pixel));
-                        const PixelSample stratified = pixel_sample(settings_.seed, pixel, s);
+                        const PixelSample stratified = pixel_sample(settings_.seed, pixel, s, true);
                         PassValues values;
                         PathIntegrator integrator(*scene_, camera, lights_, settings_, nullptr,
                                                   rng, values);
