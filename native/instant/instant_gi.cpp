@@ -150,6 +150,7 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
     if (!sky_sets_.empty() && sky_sets_.size() != sets_.size())
         throw Internal("InstantGiField: sky_sets and sets differ in count");
     for (const auto& set : sets_) vpl_count_ += set.size();
+    for (const auto& set : sky_sets_) sky_count_ += set.size();
     set_scale_ = passes_ > 0 ? float(sets_.size()) / float(passes_) : 0.0f;
 }
 
@@ -175,10 +176,8 @@ ShRgb InstantGiField::radiance_sh(const vec3& p, const vec3& n) const {
             for (int i = 0; i < kCoeffs; ++i) sh.coeffs[i] += one.coeffs[i];
         }
     // filter_direct: the world's direct light from every set's directional VPLs.
-    size_t sky_count = 0;
-    for (const auto& set : sky_sets_) sky_count += set.size();
-    if (sky_count == 0) return sh;
-    const vec3 sky = scene_->world().radiance() * (kFourPi / float(sky_count));
+    if (sky_count_ == 0) return sh;
+    const vec3 sky = scene_->world().radiance() * (kFourPi / float(sky_count_));
     for (const auto& set : sky_sets_)
         for (const vec3& w : set) {
             if (glm::dot(w, n) <= 0.0f) continue;
@@ -484,9 +483,8 @@ void InstantGi::refine(Progress* progress) {
 }
 
 size_t InstantGi::memory_bytes() const {
-    size_t sky = 0;
-    for (const auto& set : field_->sky_sets()) sky += set.size();
-    return size_t(field_->vpl_count()) * sizeof(InstantVpl) + sky * sizeof(vec3);
+    return size_t(field_->vpl_count()) * sizeof(InstantVpl) +
+           size_t(field_->sky_count()) * sizeof(vec3);
 }
 
 }  // namespace shgi

@@ -122,6 +122,7 @@ class InstantGiField : public IndirectField {
     const std::vector<std::vector<InstantVpl>>& sets() const { return sets_; }
     const std::vector<std::vector<vec3>>& sky_sets() const { return sky_sets_; }
     uint64_t vpl_count() const { return vpl_count_; }
+    uint64_t sky_count() const { return sky_count_; }  // directions over every sky set
     // Timings of the latest shade_first_surfaces (one frame at a time per field).
     InstantGiFrameTimings frame_timings() const;
 
@@ -130,7 +131,7 @@ class InstantGiField : public IndirectField {
     InstantGiSettings settings_;
     std::vector<std::vector<InstantVpl>> sets_;
     std::vector<std::vector<vec3>> sky_sets_;
-    uint64_t passes_ = 0, vpl_count_ = 0;
+    uint64_t passes_ = 0, vpl_count_ = 0, sky_count_ = 0;
     float set_scale_ = 0.0f;  // sets / passes
     std::shared_ptr<InstantGiFrameTimings> timings_;
 };
