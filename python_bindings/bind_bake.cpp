@@ -274,6 +274,23 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
         py::arg("width"), py::arg("height"), py::arg("tile_size"), py::arg("shard"),
         py::arg("shards"), "Tiles shard i of N bakes: every tile t with t % N == i.");
     m.def(
+        "lightmap_read_tiles",
+        [](const IndexInt& width, const IndexInt& height, const IndexInt& tile_size,
+           const std::vector<IndexInt>& tile_args, const IndirectField* field) {
+            std::vector<uint32_t> tiles(tile_args.size());
+            for (size_t i = 0; i < tiles.size(); ++i)
+                tiles[i] = int_arg<uint32_t>(tile_args[i],
+                                             ("tiles[" + std::to_string(i) + "]").c_str());
+            const ObjectUse reads = field_use(field, ObjectUse::Kind::Read, "lightmap_read_tiles");
+            return lightmap_read_tiles(int_arg<uint32_t>(width, "width"),
+                                       int_arg<uint32_t>(height, "height"),
+                                       int_arg<uint32_t>(tile_size, "tile_size"), tiles, field);
+        },
+        py::arg("width"), py::arg("height"), py::arg("tile_size"), py::arg("tiles"),
+        py::arg("field") = py::none(),
+        "The tiles whose texels a bake of `tiles` with `field` reads (an interleaved field's "
+        "filter reaches into neighbouring tiles): a shard unoccludes these. Empty for all.");
+    m.def(
         "bake_lightmap",
         [](const Scene& scene, const TexelMap& map, const S settings, const IndirectField* field,
            const std::vector<IndexInt>& tile_args, Progress* progress) {

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 
+#include "bake/lightmap_filter.h"
 #include "render/light_sampler.h"
 #include "render/path_integrator.h"
 #include "render/shading.h"
@@ -25,6 +26,9 @@ constexpr uint32_t kMaxSamples = 1u << 20;
 constexpr uint64_t kInstanceSeedMix = 0x9e3779b97f4a7c15ull;
 // A texel's samples between cancel polls: a few milliseconds of paths with a bounce or two.
 constexpr uint32_t kSamplesPerCancelPoll = 256;
+// Interleaved fields: a neighbour texel joins the filter only within this many texel sizes of
+// the texel's plane (with the normal test, it lies on the same surface).
+constexpr float kInterleavePlaneTexels = 1.0f;
 
 const char* const kContentNames[] = {"INDIRECT", "DIRECT", "DIRECT_INDIRECT", "FULL"};
 
@@ -83,6 +87,12 @@ TexelSurface texel_surface(const Scene& scene, uint32_t instance, const TexelSam
     return surface;
 }
 
+// a += scale b, at the larger of the two orders (coefficients past an order are zero).
+void add_sh(ShRgb& a, const ShRgb& b, float scale) {
+    a.order = std::max(a.order, b.order);
+    for (int i = 0; i < b.num_coefficients(); ++i) a.coeffs[i] += scale * b.coeffs[i];
+}
+
 // Sums of one sample position.
 struct PositionSums {
     vec3 value{0.0f};
@@ -102,10 +112,105 @@ class TexelBaker {
           direct_(wants_direct(settings.content)),
           indirect_(wants_indirect(settings.content) && settings.max_bounces > 0 &&
                     settings.diffuse_bounces > 0),
-          gather_(field != nullptr && settings.final_gather) {}
+          gather_(field != nullptr && settings.final_gather),
+          interleave_(field != nullptr ? field->interleave() : IndirectField::Interleave{}) {
+        if (interleave_.interleaved() && (interleave_.sets_x < 1 || interleave_.sets_y < 1))
+            throw Internal("an interleaved field with no sets along an axis");
+    }
 
-    // Polls `progress` every kSamplesPerCancelPoll samples.
-    void bake_texel(uint64_t texel, LightmapTexels& out, const Progress* progress) const {
+    // Whether texels read an interleaved field's sets (interleaved_sh) instead of looking the
+    // field up at each sample position.
+    bool interleaved() const { return interleave_.interleaved() && reads_field(); }
+
+    // The filtered radiance SH of the texels of tile [x0, x1) x [y0, y1), row-major: every texel
+    // of the tile and of a halo half the pattern wide gathers its own set (x mod sets_x,
+    // y mod sets_y; the mean over its sample positions), then each texel of the tile averages
+    // the texels of its window (Interleave::tap_weight) that lie in its UV chart on its surface,
+    // set by set.
+    // A texel's value depends only on its neighbourhood, not on the tile or shard it is baked in.
+    std::vector<ShRgb> interleaved_sh(uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1,
+                                      const Progress* progress) const {
+        using Interleave = IndirectField::Interleave;
+        const int hx = interleave_.filter ? Interleave::half_width(interleave_.sets_x) : 0;
+        const int hy = interleave_.filter ? Interleave::half_width(interleave_.sets_y) : 0;
+        const uint32_t ax = uint32_t(std::max(0, int(x0) - hx));
+        const uint32_t ay = uint32_t(std::max(0, int(y0) - hy));
+        const uint32_t bx = std::min(map_.width, x1 + uint32_t(hx));
+        const uint32_t by = std::min(map_.height, y1 + uint32_t(hy));
+        const uint32_t w = bx - ax;
+        std::vector<ShRgb> raw(size_t(w) * (by - ay), ShRgb(0));
+        std::vector<TexelGeometry> geometry(raw.size());
+        for (uint32_t y = ay; y < by; ++y)
+            for (uint32_t x = ax; x < bx; ++x) {
+                const uint64_t t = map_.texel_index(x, y);
+                if (!map_.covered(t)) continue;
+                throw_if_cancelled(progress);
+                const size_t i = size_t(y - ay) * w + (x - ax);
+                geometry[i] = texel_geometry(map_, t);
+                double weight_sum = 0.0;
+                for (const TexelSample* s = map_.samples_begin(t); s != map_.samples_end(t); ++s)
+                    weight_sum += s->weight;
+                for (const TexelSample* s = map_.samples_begin(t); s != map_.samples_end(t); ++s)
+                    add_sh(raw[i],
+                           field_->set_radiance_sh(s->ray_origin, s->geometric_normal,
+                                                   int(x % uint32_t(interleave_.sets_x)),
+                                                   int(y % uint32_t(interleave_.sets_y))),
+                           float(s->weight / weight_sum));
+            }
+        std::vector<ShRgb> out(size_t(x1 - x0) * (y1 - y0), ShRgb(0));
+        const int sets = interleave_.sets_x * interleave_.sets_y;
+        std::vector<ShRgb> set_sum(size_t(sets), ShRgb(0));
+        std::vector<float> set_weight(size_t(sets), 0.0f);
+        for (uint32_t y = y0; y < y1; ++y)
+            for (uint32_t x = x0; x < x1; ++x) {
+                const uint64_t t = map_.texel_index(x, y);
+                if (!map_.covered(t)) continue;
+                const size_t p = size_t(y - ay) * w + (x - ax);
+                const TexelGeometry& gp = geometry[p];
+                for (int dy = -hy; dy <= hy; ++dy)
+                    for (int dx = -hx; dx <= hx; ++dx) {
+                        const int qx = int(x) + dx, qy = int(y) + dy;
+                        if (qx < int(ax) || qx >= int(bx) || qy < int(ay) || qy >= int(by))
+                            continue;
+                        const uint64_t tq = map_.texel_index(uint32_t(qx), uint32_t(qy));
+                        if (!map_.covered(tq) || map_.chart[tq] != map_.chart[t]) continue;
+                        const size_t q = size_t(qy - int(ay)) * w + size_t(qx - int(ax));
+                        const TexelGeometry& gq = geometry[q];
+                        if (q != p &&
+                            (glm::dot(gq.normal, gp.normal) < interleave_.normal_threshold ||
+                             std::abs(glm::dot(gq.position - gp.position, gp.normal)) >
+                                 kInterleavePlaneTexels * std::max(gp.texel_size, gq.texel_size)))
+                            continue;
+                        const float weight = Interleave::tap_weight(interleave_.sets_x, dx) *
+                                             Interleave::tap_weight(interleave_.sets_y, dy);
+                        const size_t set = size_t(qy % interleave_.sets_y) *
+                                               size_t(interleave_.sets_x) +
+                                           size_t(qx % interleave_.sets_x);
+                        add_sh(set_sum[set], raw[q], weight);
+                        set_weight[set] += weight;
+                    }
+                // The mean of the sets the window holds, each set's texels averaged first: a
+                // window cut short by the chart's edge or a fold loses whole sets, not the
+                // balance between them (every set is an estimate of all the light). A full
+                // window holds each set at weight 1: the plain mean of the window.
+                ShRgb& sh = out[size_t(y - y0) * (x1 - x0) + (x - x0)];
+                int present = 0;
+                for (size_t set = 0; set < size_t(sets); ++set) {
+                    if (set_weight[set] == 0.0f) continue;
+                    add_sh(sh, set_sum[set], 1.0f / set_weight[set]);
+                    set_sum[set] = ShRgb(0);
+                    set_weight[set] = 0.0f;
+                    ++present;
+                }
+                for (vec3& c : sh.coeffs) c /= float(present);
+            }
+        return out;
+    }
+
+    // Polls `progress` every kSamplesPerCancelPoll samples. `field_sh`: the texel's radiance
+    // SH from an interleaved field (interleaved_sh), read instead of the field.
+    void bake_texel(uint64_t texel, LightmapTexels& out, const Progress* progress,
+                    const ShRgb* field_sh = nullptr) const {
         const uint64_t positions = map_.sample_count(texel);
         if (positions == 0) return;
         const uint32_t per_position = uint32_t(std::max<uint64_t>(1, settings_.samples / positions));
@@ -117,8 +222,8 @@ class TexelBaker {
         double variance = 0.0;
         for (uint64_t k = 0; k < positions; ++k) {
             // The sample's global index in the map names its random streams.
-            const PositionSums sums =
-                bake_position(samples[k], map_.sample_offsets[texel] + k, per_position, progress);
+            const PositionSums sums = bake_position(samples[k], map_.sample_offsets[texel] + k,
+                                                    per_position, progress, field_sh);
             const float w = float(samples[k].weight / weight_sum);
             const float scale = w / float(per_position);
             color += sums.value * scale;
@@ -142,8 +247,12 @@ class TexelBaker {
     }
 
   private:
+    bool reads_field() const {
+        return field_ != nullptr && indirect_ && !gather_ && !field_->is_zero();
+    }
+
     PositionSums bake_position(const TexelSample& sample, uint64_t stream, uint32_t count,
-                               const Progress* progress) const {
+                               const Progress* progress, const ShRgb* texel_sh) const {
         const TexelSurface surface = texel_surface(scene_, map_.instance_id, sample);
         const vec3 n = surface.frame.z;
         const vec3 color_scale =
@@ -152,8 +261,12 @@ class TexelBaker {
         // The field's light is the same for every sample of the position.
         vec3 field_value(0.0f);
         ShRgb field_sh(1);
-        if (field_ != nullptr && indirect_ && !gather_ && !field_->is_zero()) {
-            const FieldLookup lookup = field_->lookup(sample.ray_origin, n);
+        if (reads_field()) {
+            FieldLookup lookup;
+            if (texel_sh != nullptr)
+                lookup.radiance = *texel_sh;
+            else
+                lookup = field_->lookup(sample.ray_origin, n);
             const vec3 irradiance = lookup.irradiance(n);
             const float response = surface.color_channel < 0
                                        ? 1.0f
@@ -277,6 +390,7 @@ class TexelBaker {
     uint64_t seed_;
     bool direct_, indirect_;
     bool gather_;  // final gather: the hemisphere ray reads the field where it lands
+    IndirectField::Interleave interleave_;
 };
 
 uint32_t tiles_along(uint32_t texels, uint32_t tile_size) {
@@ -340,6 +454,39 @@ std::vector<uint32_t> lightmap_shard_tiles(uint32_t width, uint32_t height, uint
     return tiles;
 }
 
+std::vector<uint32_t> lightmap_read_tiles(uint32_t width, uint32_t height, uint32_t tile_size,
+                                          const std::vector<uint32_t>& tiles,
+                                          const IndirectField* field) {
+    const uint32_t count = lightmap_tile_count(width, height, tile_size);
+    for (uint32_t tile : tiles)
+        if (tile >= count)
+            throw InvalidArgument(format_message("lightmap_read_tiles: tile ", tile, " but a ",
+                                                 width, " x ", height, " lightmap has ", count,
+                                                 " tiles of ", tile_size, " texels"));
+    const PinnedField pinned(field);
+    const IndirectField::Interleave pattern =
+        pinned.get() != nullptr ? pinned.get()->interleave() : IndirectField::Interleave{};
+    if (tiles.empty() || !pattern.interleaved() || !pattern.filter) return tiles;
+    using Interleave = IndirectField::Interleave;
+    const auto reach = [&](int sets) {
+        return int(tiles_along(uint32_t(Interleave::half_width(sets)), tile_size));
+    };
+    const int reach_x = reach(pattern.sets_x), reach_y = reach(pattern.sets_y);
+    const int tiles_x = int(tiles_along(width, tile_size));
+    const int tiles_y = int(tiles_along(height, tile_size));
+    std::vector<uint8_t> read(count, 0);
+    for (uint32_t tile : tiles) {
+        const int tx = int(tile) % tiles_x, ty = int(tile) / tiles_x;
+        for (int y = std::max(0, ty - reach_y); y <= std::min(tiles_y - 1, ty + reach_y); ++y)
+            for (int x = std::max(0, tx - reach_x); x <= std::min(tiles_x - 1, tx + reach_x); ++x)
+                read[size_t(y) * size_t(tiles_x) + size_t(x)] = 1;
+    }
+    std::vector<uint32_t> out;
+    for (uint32_t i = 0; i < count; ++i)
+        if (read[i]) out.push_back(i);
+    return out;
+}
+
 LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const IndirectField* field,
                              const LightmapSettings& settings, const std::vector<uint32_t>& tiles,
                              Progress* progress) {
@@ -392,10 +539,16 @@ LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const Indi
                 // Polled per texel, and within a texel every kSamplesPerCancelPoll samples: a
                 // row of a tile at thousands of samples per texel, or one texel at a million,
                 // takes longer than the 0.2 s a cancel may take.
+                const std::vector<ShRgb> field_sh =
+                    baker.interleaved() ? baker.interleaved_sh(x0, y0, x1, y1, progress)
+                                        : std::vector<ShRgb>{};
                 for (uint32_t y = y0; y < y1; ++y)
                     for (uint32_t x = x0; x < x1; ++x) {
                         throw_if_cancelled(progress);
-                        baker.bake_texel(map.texel_index(x, y), out, progress);
+                        baker.bake_texel(map.texel_index(x, y), out, progress,
+                                         field_sh.empty()
+                                             ? nullptr
+                                             : &field_sh[size_t(y - y0) * (x1 - x0) + (x - x0)]);
                     }
                 const uint64_t finished = done.fetch_add(1) + 1;
                 if (progress) progress->report(finished, work.size());

@@ -28,7 +28,14 @@
 //     bounce, so a limit of 0 bakes no indirect light.
 //   - IndirectField: direct light by next-event estimation alone, indirect light from the field
 //     once per sample position: its irradiance through the diffuse lobe (as the preview renderer
-//     shades), and its radiance SH for the directional data. With final_gather, the path
+//     shades), and its radiance SH for the directional data. An interleaved field (INSTANT_GI's
+//     VPL sets, IndirectField::interleave; seed 004 applied to texels) is read once per texel
+//     instead: texel (x, y) gathers set (x mod n, y mod m) alone, and each texel takes the mean
+//     of the sets in its interleave-wide window of texels of its own UV chart and surface (each
+//     set's texels averaged first, so a window cut short by a chart's edge drops whole sets), no
+//     luminance edge-stop; each tile gathers the halo its windows reach itself, so the result
+//     does not depend on tiles or shards (whose samples must be unoccluded over
+//     lightmap_read_tiles). With final_gather, the path
 //     tracer's estimator whose hemisphere ray reads the field where it lands (the continuation
 //     is a PathIntegrator with the field at its first vertex).
 // Stratification: sample i of a sample position takes point i of that position's own
@@ -116,6 +123,13 @@ uint32_t lightmap_tile_count(uint32_t width, uint32_t height, uint32_t tile_size
 // The tiles shard `shard` of `shards` bakes: every tile i with i % shards == shard.
 std::vector<uint32_t> lightmap_shard_tiles(uint32_t width, uint32_t height, uint32_t tile_size,
                                            uint32_t shard, uint32_t shards);
+
+// The tiles whose texels a bake of `tiles` reads: `tiles` itself, and with an interleaved field
+// (IndirectField::interleave, filtered) every tile its filter window reaches from them. A shard
+// prepares (unocclude) these texels' samples, not only its own. Empty `tiles` (all): empty.
+std::vector<uint32_t> lightmap_read_tiles(uint32_t width, uint32_t height, uint32_t tile_size,
+                                          const std::vector<uint32_t>& tiles,
+                                          const IndirectField* field);
 
 // Bakes `tiles` (all tiles when empty) of `map`, an instance of `scene` (committed; map from
 // rasterize_texels(scene, ...)). field null: the path tracer; otherwise the field's indirect

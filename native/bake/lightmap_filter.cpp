@@ -17,26 +17,29 @@ constexpr float kLuminanceEpsilon = 1e-4f;
 
 }  // namespace
 
+TexelGeometry texel_geometry(const TexelMap& map, uint64_t texel) {
+    TexelGeometry g;
+    double weight = 0.0;
+    vec3 position(0.0f), normal(0.0f);
+    float texel_size = 0.0f;
+    for (const TexelSample* s = map.samples_begin(texel); s != map.samples_end(texel); ++s) {
+        position += s->position * s->weight;
+        normal += s->normal * s->weight;
+        texel_size += s->texel_size * s->weight;
+        weight += s->weight;
+    }
+    if (weight > 0.0) {
+        g.position = position / float(weight);
+        g.texel_size = texel_size / float(weight);
+        const float length = glm::length(normal);
+        if (length > 0.0f) g.normal = normal / length;
+    }
+    return g;
+}
+
 std::vector<TexelGeometry> texel_geometry(const TexelMap& map) {
     std::vector<TexelGeometry> out(map.texel_count());
-    for (uint64_t t = 0; t < map.texel_count(); ++t) {
-        double weight = 0.0;
-        vec3 position(0.0f), normal(0.0f);
-        float texel_size = 0.0f;
-        for (const TexelSample* s = map.samples_begin(t); s != map.samples_end(t); ++s) {
-            position += s->position * s->weight;
-            normal += s->normal * s->weight;
-            texel_size += s->texel_size * s->weight;
-            weight += s->weight;
-        }
-        if (weight > 0.0) {
-            TexelGeometry& g = out[t];
-            g.position = position / float(weight);
-            g.texel_size = texel_size / float(weight);
-            const float length = glm::length(normal);
-            if (length > 0.0f) g.normal = normal / length;
-        }
-    }
+    for (uint64_t t = 0; t < map.texel_count(); ++t) out[t] = texel_geometry(map, t);
     return out;
 }
 

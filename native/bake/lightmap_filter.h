@@ -37,6 +37,7 @@ struct TexelGeometry {
     float texel_size = 0.0f;
 };
 std::vector<TexelGeometry> texel_geometry(const TexelMap& map);
+TexelGeometry texel_geometry(const TexelMap& map, uint64_t texel);  // one texel's
 
 struct LightmapFilterSettings {
     // A-trous passes, 0 = off; k passes span 4 * 2^k - 3 texels. Two keep the light's own

@@ -52,24 +52,6 @@ PhotonTracerSettings tracer_settings(const InstantGiSettings& s) {
     return tracer;
 }
 
-// Taps of an interleave period: offsets -h..h; for even periods n + 1 taps with the two end taps
-// at half weight (each set counts once), for odd periods n taps of weight 1.
-struct Taps {
-    int half = 0;
-    bool half_ends = false;
-    float weight(int offset) const {
-        return half_ends && (offset == -half || offset == half) ? 0.5f : 1.0f;
-    }
-};
-
-Taps taps_for(int period) {
-    Taps taps;
-    taps.half = period / 2;
-    taps.half_ends = period % 2 == 0 && period > 1;
-    if (period == 1) taps.half = 0;
-    return taps;
-}
-
 // Whether neighbour q joins pixel p's filter: same object, depths within the relative threshold,
 // geometric normals (and shading normals when `strict`) within the normal threshold.
 bool joins(const GBuffer& g, size_t p, size_t q, const InstantGiSettings& s, bool strict) {
@@ -156,38 +138,71 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
 
 InstantGiFrameTimings InstantGiField::frame_timings() const { return *timings_; }
 
+void InstantGiField::gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t set,
+                                float vpl_scale, const vec3& sky_weight) const {
+    const vec3 origin = offset_origin(p, n);
+    for (const InstantVpl& vpl : sets_[set]) {
+        ShRgb one(kOrder);
+        if (!add_vpl_sh(one, p, n, vpl, vpl_scale, settings_.clamp_distance)) continue;
+        Ray ray;
+        ray.origin = origin;
+        const vec3 d = vpl.position - origin;
+        const float dist = glm::length(d);
+        if (!(dist > 0.0f)) continue;
+        ray.direction = d / dist;
+        ray.tmax = dist * (1.0f - kShadowShorten);
+        if (scene_->occluded(ray)) continue;
+        for (int i = 0; i < kCoeffs; ++i) sh.coeffs[i] += one.coeffs[i];
+    }
+    // filter_direct: the world's direct light from the set's directional VPLs.
+    if (sky_sets_.empty() || sky_weight == vec3(0.0f)) return;
+    for (const vec3& w : sky_sets_[set]) {
+        if (glm::dot(w, n) <= 0.0f) continue;
+        Ray ray;
+        ray.origin = origin;
+        ray.direction = w;
+        ray.tmax = kInfinity;
+        if (scene_->occluded(ray)) continue;
+        add_delta(sh.coeffs.data(), sky_weight, w);
+    }
+}
+
 ShRgb InstantGiField::radiance_sh(const vec3& p, const vec3& n) const {
     ShRgb sh(kOrder);
     if (is_zero()) return sh;
-    // Every set: the sum over sets of set_scale × set / sets = all VPLs / passes.
-    const float scale = 1.0f / float(passes_);
-    const vec3 origin = offset_origin(p, n);
-    for (const auto& set : sets_)
-        for (const InstantVpl& vpl : set) {
-            ShRgb one(kOrder);
-            if (!add_vpl_sh(one, p, n, vpl, scale, settings_.clamp_distance)) continue;
-            Ray ray;
-            ray.origin = origin;
-            const vec3 d = vpl.position - origin;
-            const float dist = glm::length(d);
-            ray.direction = d / dist;
-            ray.tmax = dist * (1.0f - kShadowShorten);
-            if (scene_->occluded(ray)) continue;
-            for (int i = 0; i < kCoeffs; ++i) sh.coeffs[i] += one.coeffs[i];
-        }
-    // filter_direct: the world's direct light from every set's directional VPLs.
-    if (sky_count_ == 0) return sh;
-    const vec3 sky = scene_->world().radiance() * (kFourPi / float(sky_count_));
-    for (const auto& set : sky_sets_)
-        for (const vec3& w : set) {
-            if (glm::dot(w, n) <= 0.0f) continue;
-            Ray ray;
-            ray.origin = origin;
-            ray.direction = w;
-            ray.tmax = kInfinity;
-            if (scene_->occluded(ray)) continue;
-            add_delta(sh.coeffs.data(), sky, w);
-        }
+    // Every set: the sum over sets of set_scale × set / sets = all VPLs / passes; the sky's
+    // directions of every set share 4 pi.
+    const vec3 sky = sky_count_ > 0
+                         ? scene_->world().radiance() * (kFourPi / float(sky_count_))
+                         : vec3(0.0f);
+    for (size_t s = 0; s < sets_.size(); ++s) gather_set(sh, p, n, s, 1.0f / float(passes_), sky);
+    return sh;
+}
+
+IndirectField::Interleave InstantGiField::interleave() const {
+    Interleave pattern;
+    pattern.sets_x = settings_.sets_x;
+    pattern.sets_y = settings_.sets_y;
+    pattern.normal_threshold = settings_.normal_threshold;
+    pattern.filter = settings_.filter_mode != InstantGiFilter::None;
+    return pattern;
+}
+
+ShRgb InstantGiField::set_radiance_sh(const vec3& p, const vec3& n, int set_x, int set_y) const {
+    ShRgb sh(kOrder);
+    if (is_zero()) return sh;
+    if (set_x < 0 || set_x >= settings_.sets_x || set_y < 0 || set_y >= settings_.sets_y)
+        throw InvalidArgument(format_message("InstantGiField.set_radiance_sh: set (", set_x, ", ",
+                                             set_y, ") of ", settings_.sets_x, " x ",
+                                             settings_.sets_y, " sets"));
+    // One set alone, scaled as the frame-wide stage scales it: set_scale × the set's VPLs, its
+    // sky directions sharing 4 pi.
+    const size_t s = size_t(set_y) * size_t(settings_.sets_x) + size_t(set_x);
+    const size_t directions = sky_sets_.empty() ? 0 : sky_sets_[s].size();
+    const vec3 sky = directions > 0
+                         ? scene_->world().radiance() * (kFourPi / float(directions))
+                         : vec3(0.0f);
+    gather_set(sh, p, n, s, set_scale_, sky);
     return sh;
 }
 
@@ -289,7 +304,7 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
     const bool filter_sh = mode == InstantGiFilter::Sh;
     const bool filter_irradiance =
         mode == InstantGiFilter::Irradiance || mode == InstantGiFilter::Strict;
-    const Taps tx = taps_for(n), ty = taps_for(m);
+    const int half_x = Interleave::half_width(n), half_y = Interleave::half_width(m);
     // One plane (indirect, or filter_direct's sky) through the filter: SH (mode Sh) or E
     // (Irradiance, Strict) into `out_plane`.
     const auto filter_plane = [&](const std::vector<vec3>& plane, std::vector<vec3>& out_plane) {
@@ -318,15 +333,16 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                         if (!g.has_surface(p)) continue;
                         vec3* out = &out_plane[p * size_t(stride)];
                         float total = 0.0f;
-                        for (int dy = -ty.half; dy <= ty.half; ++dy) {
+                        for (int dy = -half_y; dy <= half_y; ++dy) {
                             const int qy = int(y) + dy;
                             if (qy < 0 || qy >= height) continue;
-                            for (int dx = -tx.half; dx <= tx.half; ++dx) {
+                            for (int dx = -half_x; dx <= half_x; ++dx) {
                                 const int qx = x + dx;
                                 if (qx < 0 || qx >= width) continue;
                                 const size_t q = g.index(qx, qy);
                                 if (q != p && !joins(g, p, q, settings_, strict)) continue;
-                                const float w = tx.weight(dx) * ty.weight(dy);
+                                const float w = Interleave::tap_weight(n, dx) *
+                                                Interleave::tap_weight(m, dy);
                                 const vec3* in = &source[q * size_t(stride)];
                                 for (int i = 0; i < stride; ++i) out[i] += w * in[i];
                                 total += w;

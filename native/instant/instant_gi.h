@@ -30,8 +30,9 @@
 // Figs. 2 and 4) filter each pixel's irradiance E(n_s) instead; Strict also stops at
 // shading-normal changes. None keeps each pixel's own set.
 //
-// Elsewhere (specular chains, bakes), lookup(p, n) gathers every VPL of every set the same way
-// (no filter).
+// Elsewhere (specular chains), lookup(p, n) gathers every VPL of every set the same way (no
+// filter). Bakes interleave the sets over the lightmap's texels and filter them within UV charts
+// (interleave(), set_radiance_sh; bake/lightmap_baker.h).
 //
 // Determinism: photons as the tracer's (seed, pass); each pixel's gather and filter depend only
 // on the G-buffer, so frames are identical for any thread count and tile size.
@@ -109,6 +110,10 @@ class InstantGiField : public IndirectField {
                    std::vector<std::vector<vec3>> sky_sets = {});
 
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
+    // The sets as an interleave pattern (bakes: texel (x, y) gathers one set, a filter within
+    // the UV chart restores the whole; filter_mode None keeps each texel's own set).
+    Interleave interleave() const override;
+    ShRgb set_radiance_sh(const vec3& p, const vec3& n, int set_x, int set_y) const override;
     bool is_zero() const override {
         return passes_ == 0 || (vpl_count_ == 0 && sky_sets_.empty());
     }
@@ -127,6 +132,11 @@ class InstantGiField : public IndirectField {
     InstantGiFrameTimings frame_timings() const;
 
   private:
+    // Adds set `set`'s VPLs (each scaled by vpl_scale) and, with filter_direct, its sky
+    // directions (each of radiance sky_weight) seen from p as SH, with exact shadow rays.
+    void gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t set, float vpl_scale,
+                    const vec3& sky_weight) const;
+
     const Scene* scene_;
     InstantGiSettings settings_;
     std::vector<std::vector<InstantVpl>> sets_;

@@ -88,6 +88,33 @@ class IndirectField {
             static_cast<void>(count), static_cast<void>(progress);
     }
 
+    // Interleaved sets (seed 004 §2.2–2.3, INSTANT_GI): a field whose light is dealt into
+    // sets_x × sets_y uncorrelated sets, each an unbiased estimate of all of it. A consumer may
+    // have element (x, y) of a grid (a lightmap's texels) read set (x mod sets_x, y mod sets_y)
+    // alone through set_radiance_sh, then average an interleave-wide window of neighbours that
+    // lie on the same surface (geometric normals' cosine at least normal_threshold) to restore
+    // the whole: 1 / (sets_x sets_y) of the lookups' cost. `filter` false: each element keeps its
+    // own set. The default, one set, is no interleave.
+    struct Interleave {
+        int sets_x = 1, sets_y = 1;
+        float normal_threshold = 0.9f;
+        bool filter = true;
+        bool interleaved() const { return sets_x * sets_y > 1; }
+        // The filter's taps along an axis of `sets` sets: offsets -half_width .. half_width; for
+        // an even count (sets + 1 taps) the two end taps weigh 1/2, so each set counts once.
+        static int half_width(int sets) { return sets / 2; }
+        static float tap_weight(int sets, int offset) {
+            return sets % 2 == 0 && (offset == -sets / 2 || offset == sets / 2) ? 0.5f : 1.0f;
+        }
+    };
+    virtual Interleave interleave() const { return {}; }
+    // The incident radiance SH at p (unit geometric normal n) from set (set_x, set_y) alone,
+    // scaled to estimate all of the field's light (what radiance_sh gives from every set).
+    virtual ShRgb set_radiance_sh(const vec3& p, const vec3& n, int set_x, int set_y) const {
+        static_cast<void>(set_x), static_cast<void>(set_y);
+        return radiance_sh(p, n);
+    }
+
     vec3 irradiance(const vec3& p, const vec3& n) const { return lookup(p, n).irradiance(n); }
     vec3 glossy(const vec3& p, const vec3& n, const vec3& wo, float roughness) const {
         return lookup(p, n).glossy(n, wo, roughness);

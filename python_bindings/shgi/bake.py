@@ -275,9 +275,10 @@ def _raster_settings(job: BakeJob, options: BakeOptions) -> _shgi.TexelRasterSet
 
 
 def _texel_map(scene, job: BakeJob, options: BakeOptions, progress,
-               tiles: Sequence[int] = ()) -> _shgi.TexelMap:
-    """The texel map of the job's lightmap, its samples moved out of walls (only those of
-    `tiles` when given: what a shard bakes; each moves as in a whole unocclusion)."""
+               tiles: Sequence[int] = (), field=None) -> _shgi.TexelMap:
+    """The texel map of the job's lightmap, its samples moved out of walls (only those a bake
+    of `tiles` with `field` reads, when given: what a shard bakes and, for an interleaved field,
+    its filter's reach; each moves as in a whole unocclusion)."""
     texel_map = _shgi.rasterize_texels(scene, job.instance, _raster_settings(job, options),
                                        progress)
     if texel_map.sample_count == 0:
@@ -286,7 +287,9 @@ def _texel_map(scene, job: BakeJob, options: BakeOptions, progress,
             f"{job.width} x {job.height} lightmap (all UVs outside [0, 1] or collapsed); "
             "unwrap it (Smart UV Project or Lightmap Pack) into the unit square")
     if options.unocclude:
-        _shgi.unocclude(scene, texel_map, _shgi.UnoccludeSettings(), progress, list(tiles),
+        read = _shgi.lightmap_read_tiles(job.width, job.height, options.settings.tile_size,
+                                         list(tiles), field)
+        _shgi.unocclude(scene, texel_map, _shgi.UnoccludeSettings(), progress, read,
                         options.settings.tile_size)
     return texel_map
 
@@ -302,7 +305,7 @@ def bake_object(scene, job: BakeJob, options: BakeOptions, field=None, tiles: Se
 def _bake_object(scene, job, options, field, tiles, stage, bake_end):
     """bake_object with stage(a, b) (BakeProgress.stages) giving each step its share, the bake
     ending at `bake_end` of the object's progress."""
-    texel_map = _texel_map(scene, job, options, stage(0.0, _RASTER_SHARE), tiles)
+    texel_map = _texel_map(scene, job, options, stage(0.0, _RASTER_SHARE), tiles, field)
     texels = _shgi.bake_lightmap(scene, texel_map, options.settings, field, list(tiles),
                                  stage(_RASTER_SHARE, bake_end))
     return texel_map, texels

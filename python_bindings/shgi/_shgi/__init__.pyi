@@ -8,7 +8,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'InstantGi', 'InstantGiField', 'InstantGiFilter', 'InstantGiSettings', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'NormalMapSpace', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'InstantGi', 'InstantGiField', 'InstantGiFilter', 'InstantGiSettings', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'NormalMapSpace', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_read_tiles', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -3491,6 +3491,10 @@ def dilate_lightmap(texels: LightmapTexels, padding: typing.SupportsIndex = 4, p
 def filter_lightmap(map: TexelMap, texels: LightmapTexels, settings: LightmapFilterSettings = ..., progress: Progress = None) -> None:
     """
     Filters the baked texels in place.
+    """
+def lightmap_read_tiles(width: typing.SupportsIndex, height: typing.SupportsIndex, tile_size: typing.SupportsIndex, tiles: collections.abc.Sequence[typing.SupportsIndex], field: IndirectField = None) -> list[int]:
+    """
+    The tiles whose texels a bake of `tiles` with `field` reads (an interleaved field's filter reaches into neighbouring tiles): a shard unoccludes these. Empty for all.
     """
 def lightmap_shard_tiles(width: typing.SupportsIndex, height: typing.SupportsIndex, tile_size: typing.SupportsIndex, shard: typing.SupportsIndex, shards: typing.SupportsIndex) -> list[int]:
     """
