@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "bake/lightmap_filter.h"
+#include "render/interleave_window.h"
 #include "render/light_sampler.h"
 #include "render/path_integrator.h"
 #include "render/shading.h"
@@ -130,9 +131,8 @@ class TexelBaker {
     // A texel's value depends only on its neighbourhood, not on the tile or shard it is baked in.
     std::vector<ShRgb> interleaved_sh(uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1,
                                       const Progress* progress) const {
-        using Interleave = IndirectField::Interleave;
-        const int hx = interleave_.filter ? Interleave::half_width(interleave_.sets_x) : 0;
-        const int hy = interleave_.filter ? Interleave::half_width(interleave_.sets_y) : 0;
+        const int hx = interleave_.filter ? InterleaveWindow::reach(interleave_.sets_x) : 0;
+        const int hy = interleave_.filter ? InterleaveWindow::reach(interleave_.sets_y) : 0;
         const uint32_t ax = uint32_t(std::max(0, int(x0) - hx));
         const uint32_t ay = uint32_t(std::max(0, int(y0) - hy));
         const uint32_t bx = std::min(map_.width, x1 + uint32_t(hx));
@@ -158,51 +158,32 @@ class TexelBaker {
                            float(s->weight / weight_sum));
             }
         std::vector<ShRgb> out(size_t(x1 - x0) * (y1 - y0), ShRgb(0));
-        const int sets = interleave_.sets_x * interleave_.sets_y;
-        std::vector<ShRgb> set_sum(size_t(sets), ShRgb(0));
-        std::vector<float> set_weight(size_t(sets), 0.0f);
+        InterleaveWindow window(interleave_.sets_x, interleave_.sets_y);
         for (uint32_t y = y0; y < y1; ++y)
             for (uint32_t x = x0; x < x1; ++x) {
                 const uint64_t t = map_.texel_index(x, y);
                 if (!map_.covered(t)) continue;
-                const size_t p = size_t(y - ay) * w + (x - ax);
-                const TexelGeometry& gp = geometry[p];
-                for (int dy = -hy; dy <= hy; ++dy)
-                    for (int dx = -hx; dx <= hx; ++dx) {
-                        const int qx = int(x) + dx, qy = int(y) + dy;
-                        if (qx < int(ax) || qx >= int(bx) || qy < int(ay) || qy >= int(by))
-                            continue;
-                        const uint64_t tq = map_.texel_index(uint32_t(qx), uint32_t(qy));
-                        if (!map_.covered(tq) || map_.chart[tq] != map_.chart[t]) continue;
-                        const size_t q = size_t(qy - int(ay)) * w + size_t(qx - int(ax));
-                        const TexelGeometry& gq = geometry[q];
-                        if (q != p &&
-                            (glm::dot(gq.normal, gp.normal) < interleave_.normal_threshold ||
-                             std::abs(glm::dot(gq.position - gp.position, gp.normal)) >
-                                 kInterleavePlaneTexels * std::max(gp.texel_size, gq.texel_size)))
-                            continue;
-                        const float weight = Interleave::tap_weight(interleave_.sets_x, dx) *
-                                             Interleave::tap_weight(interleave_.sets_y, dy);
-                        const size_t set = size_t(qy % interleave_.sets_y) *
-                                               size_t(interleave_.sets_x) +
-                                           size_t(qx % interleave_.sets_x);
-                        add_sh(set_sum[set], raw[q], weight);
-                        set_weight[set] += weight;
-                    }
-                // The mean of the sets the window holds, each set's texels averaged first: a
-                // window cut short by the chart's edge or a fold loses whole sets, not the
-                // balance between them (every set is an estimate of all the light). A full
-                // window holds each set at weight 1: the plain mean of the window.
+                const TexelGeometry& gp = geometry[size_t(y - ay) * w + (x - ax)];
                 ShRgb& sh = out[size_t(y - y0) * (x1 - x0) + (x - x0)];
-                int present = 0;
-                for (size_t set = 0; set < size_t(sets); ++set) {
-                    if (set_weight[set] == 0.0f) continue;
-                    add_sh(sh, set_sum[set], 1.0f / set_weight[set]);
-                    set_sum[set] = ShRgb(0);
-                    set_weight[set] = 0.0f;
-                    ++present;
+                if (!interleave_.filter) {
+                    sh = raw[size_t(y - ay) * w + (x - ax)];
+                    continue;
                 }
-                for (vec3& c : sh.coeffs) c /= float(present);
+                // The halo is the window's reach, so every tap lies in [ax, bx) x [ay, by).
+                window.visit(
+                    int(x), int(y), int(map_.width), int(map_.height),
+                    [&](int u, int v) {
+                        const uint64_t tq = map_.texel_index(uint32_t(u), uint32_t(v));
+                        if (!map_.covered(tq) || map_.chart[tq] != map_.chart[t]) return false;
+                        const TexelGeometry& gq =
+                            geometry[size_t(v - int(ay)) * w + size_t(u - int(ax))];
+                        return glm::dot(gq.normal, gp.normal) >= interleave_.normal_threshold &&
+                               std::abs(glm::dot(gq.position - gp.position, gp.normal)) <=
+                                   kInterleavePlaneTexels * std::max(gp.texel_size, gq.texel_size);
+                    },
+                    [&](int u, int v, float weight) {
+                        add_sh(sh, raw[size_t(v - int(ay)) * w + size_t(u - int(ax))], weight);
+                    });
             }
         return out;
     }
@@ -467,9 +448,8 @@ std::vector<uint32_t> lightmap_read_tiles(uint32_t width, uint32_t height, uint3
     const IndirectField::Interleave pattern =
         pinned.get() != nullptr ? pinned.get()->interleave() : IndirectField::Interleave{};
     if (tiles.empty() || !pattern.interleaved() || !pattern.filter) return tiles;
-    using Interleave = IndirectField::Interleave;
     const auto reach = [&](int sets) {
-        return int(tiles_along(uint32_t(Interleave::half_width(sets)), tile_size));
+        return int(tiles_along(uint32_t(InterleaveWindow::reach(sets)), tile_size));
     };
     const int reach_x = reach(pattern.sets_x), reach_y = reach(pattern.sets_y);
     const int tiles_x = int(tiles_along(width, tile_size));

@@ -31,11 +31,11 @@
 //     shades), and its radiance SH for the directional data. An interleaved field (INSTANT_GI's
 //     VPL sets, IndirectField::interleave; seed 004 applied to texels) is read once per texel
 //     instead: texel (x, y) gathers set (x mod n, y mod m) alone, and each texel takes the mean
-//     of the sets in its interleave-wide window of texels of its own UV chart and surface (each
-//     set's texels averaged first, so a window cut short by a chart's edge drops whole sets), no
-//     luminance edge-stop; each tile gathers the halo its windows reach itself, so the result
-//     does not depend on tiles or shards (whose samples must be unoccluded over
-//     lightmap_read_tiles). With final_gather, the path
+//     over the sets of their nearest texels in its own UV chart and on its surface
+//     (render/interleave_window.h: the paper's window, with sets a chart's edge cuts off read a
+//     period nearer), no luminance edge-stop; each tile gathers the halo its windows reach
+//     itself, so the result does not depend on tiles or shards (whose samples must be
+//     unoccluded over lightmap_read_tiles). With final_gather, the path
 //     tracer's estimator whose hemisphere ray reads the field where it lands (the continuation
 //     is a PathIntegrator with the field at its first vertex).
 // Stratification: sample i of a sample position takes point i of that position's own
