@@ -725,6 +725,43 @@ def bake_scene_on_cluster(client, scene: "_shgi.Scene", jobs, options: _bake.Bak
     return lightmaps
 
 
+# --- solves split into tasks (probe bricks, photon batches) -------------------------------------
+
+def _run_scene_tasks(client, scene_path: str, task, task_args: list, accept, what: str,
+                     plural: str, unit: str, share: float, progress: _bake.BakeProgress) -> None:
+    """Runs task i = task(<the scene bundle of scene_path>, *task_args[i], cancel event name) on
+    the client's cluster by run_tasks: the scene travels by content hash (scattered to every
+    worker once), accept(i, result) validates and keeps a result and returns its items, a task
+    that fails or is rejected runs once more, and progress reports "{plural} d/N, R {unit}/s"
+    over [0, share]. progress.cancel() raises shgi.Cancelled and Ctrl-C KeyboardInterrupt, after
+    setting the event the running tasks watch and cancelling every task."""
+    distributed = import_distributed()
+    count = len(task_args)
+    bundle = scene_bundle(scene_path)
+    cancel_name = f"shgi-cancel-{uuid.uuid4().hex}"
+    cancel = distributed.Event(cancel_name, client=client)
+    [bundle_future] = client.scatter([bundle], hash=True, broadcast=True)
+    run_id = uuid.uuid4().hex[:8]
+
+    def submit(i: int, attempt: int):
+        return client.submit(task, bundle_future, *task_args[i], cancel_name, pure=False,
+                             key=f"shgi-{plural}-{i}-of-{count}-{run_id}-{attempt}")
+
+    start = time.perf_counter()
+
+    def on_progress(done: int, items: int) -> None:
+        rate = items / max(time.perf_counter() - start, 1e-9)
+        _report(progress, share * done / count, f"{plural} {done}/{count}, {rate:,.1f} {unit}/s")
+
+    try:
+        run_tasks(client, submit, count, accept, on_progress, what, lambda: progress.cancelled,
+                  cancel)
+    except KeyboardInterrupt:
+        if progress.cancelled:  # cancel(), not Ctrl-C: as bake_scene_on_cluster ends
+            raise _shgi.Cancelled(f"{what} tasks cancelled") from None
+        raise
+
+
 # --- probe grids in bricks of probes --------------------------------------------------------------
 
 def solve_probe_grid(client, scene_path: str, settings: "_shgi.ProbeGridSettings", passes: int,
@@ -735,11 +772,11 @@ def solve_probe_grid(client, scene_path: str, settings: "_shgi.ProbeGridSettings
     `passes` passes (ProbeGrid.update_probes), merged with ProbeField.splice into the field a
     single machine's ProbeGrid(scene, settings) and `passes` update() calls give, bit for bit.
     Export it with ProbeField.export (the add-on's Export Volume format). Progress: "bricks
-    d/B, P probes/s"; the retry policy and cancel of the lightmap shards."""
+    d/B, P probes/s"; the retry policy and cancel of the lightmap shards (_run_scene_tasks)."""
     from . import __main__ as cli
     from .method_registry import settings_to_dict
 
-    distributed = import_distributed()
+    import_distributed()
     settings.validate()
     for name, value, low in (("passes", passes, 1), ("bricks", bricks, 1), ("threads", threads, 1)):
         if not (isinstance(value, int) and value >= low):
@@ -754,18 +791,7 @@ def solve_probe_grid(client, scene_path: str, settings: "_shgi.ProbeGridSettings
     ranges = [(count * i // bricks, count * (i + 1) // bricks - count * i // bricks)
               for i in range(bricks)]
     wanted = settings_to_dict(settings)
-    bundle = scene_bundle(scene_path)
-    cancel_name = f"shgi-cancel-{uuid.uuid4().hex}"
-    cancel = distributed.Event(cancel_name, client=client)
-    [bundle_future] = client.scatter([bundle], hash=True, broadcast=True)
-    run_id = uuid.uuid4().hex[:8]
     fields = {}
-
-    def submit(i: int, attempt: int):
-        first, size = ranges[i]
-        return client.submit(_probe_brick_task, bundle_future, wanted, passes, first, size,
-                             threads, cancel_name, pure=False,
-                             key=f"shgi-probes-{i}-of-{bricks}-{run_id}-{attempt}")
 
     def accept(i: int, result: dict) -> int:
         if result.get("settings") != wanted:
@@ -778,14 +804,9 @@ def solve_probe_grid(client, scene_path: str, settings: "_shgi.ProbeGridSettings
         fields[i] = field
         return ranges[i][1]
 
-    start = time.perf_counter()
-
-    def on_progress(done: int, solved: int) -> None:
-        rate = solved / max(time.perf_counter() - start, 1e-9)
-        _report(progress, done / bricks, f"bricks {done}/{bricks}, {rate:,.1f} probes/s")
-
-    run_tasks(client, submit, bricks, accept, on_progress, "brick", lambda: progress.cancelled,
-              cancel)
+    _run_scene_tasks(client, scene_path, _probe_brick_task,
+                     [(wanted, passes, first, size, threads) for first, size in ranges], accept,
+                     "brick", "bricks", "probes", 1.0, progress)
     merged = fields[0]
     for i in range(1, bricks):
         merged = merged.splice(fields[i], *ranges[i])
@@ -851,13 +872,12 @@ def solve_photon_lattice(client, scene_path: str, settings: "_shgi.PhotonLattice
     stored photons; here each pass's batches are merged in photon order (PhotonLattice.
     solve_batches) into the lattice that PhotonLattice(scene, settings) and `passes` solve()
     calls give, bit for bit. Export it with shgi.volume_export.export_lattice (the add-on's
-    Export Volume). Progress: "batches d/B, P photons/s", then the merge; the retry policy of the
-    lightmap shards; cancel (progress.cancel()) raises shgi.Cancelled, Ctrl-C KeyboardInterrupt,
-    after cancelling every task."""
+    Export Volume). Progress: "batches d/B, P photons/s", then the merge; the retry policy and
+    cancel of the lightmap shards (_run_scene_tasks)."""
     from . import __main__ as cli
     from .method_registry import settings_to_dict
 
-    distributed = import_distributed()
+    import_distributed()
     settings.validate()
     for name, value, low in (("passes", passes, 1), ("batches", batches, 1),
                              ("threads", threads, 1)):
@@ -865,43 +885,22 @@ def solve_photon_lattice(client, scene_path: str, settings: "_shgi.PhotonLattice
             raise ValueError(f"{name} must be a whole number >= {low}, got {value!r}")
     progress = progress or _bake.BakeProgress()
     scene = cli._load(scene_path)
-    # Measured here while the workers trace (the lattice's cells and surfaces need no photons).
+    # The lattice's cells measured first, so that a scene or settings it refuses fail before any
+    # task runs (a fraction of a second: 0.07 s on the sun room).
     lattice = _shgi.PhotonLattice(scene, settings,
                                   progress.native(0.0, 0.0, "measuring the lattice"))
     ranges = photon_ranges(settings.photons, batches)
     count = len(ranges)
     wanted = settings_to_dict(settings)
-    bundle = scene_bundle(scene_path)
-    cancel_name = f"shgi-cancel-{uuid.uuid4().hex}"
-    cancel = distributed.Event(cancel_name, client=client)
-    [bundle_future] = client.scatter([bundle], hash=True, broadcast=True)
-    run_id = uuid.uuid4().hex[:8]
     traced = {}
-
-    def submit(i: int, attempt: int):
-        begin, end = ranges[i]
-        return client.submit(_photon_batch_task, bundle_future, wanted, passes, begin, end,
-                             threads, cancel_name, pure=False,
-                             key=f"shgi-photons-{i}-of-{count}-{run_id}-{attempt}")
 
     def accept(i: int, result: dict) -> int:
         traced[i] = _accept_photon_batches(result, wanted, passes, *ranges[i], i)
         return (ranges[i][1] - ranges[i][0]) * passes
 
-    start = time.perf_counter()
-
-    def on_progress(done: int, photons: int) -> None:
-        rate = photons / max(time.perf_counter() - start, 1e-9)
-        _report(progress, _SHARDS_SHARE * done / count,
-                f"batches {done}/{count}, {rate:,.0f} photons/s")
-
-    try:
-        run_tasks(client, submit, count, accept, on_progress, "batch",
-                  lambda: progress.cancelled, cancel)
-    except KeyboardInterrupt:
-        if progress.cancelled:  # cancel(), not Ctrl-C
-            raise _shgi.Cancelled("photon lattice solve cancelled") from None
-        raise
+    _run_scene_tasks(client, scene_path, _photon_batch_task,
+                     [(wanted, passes, begin, end, threads) for begin, end in ranges], accept,
+                     "batch", "batches", "photons", _SHARDS_SHARE, progress)
     share = (1.0 - _SHARDS_SHARE) / passes
     for k in range(passes):
         lo = _SHARDS_SHARE + k * share

@@ -573,7 +573,8 @@ TEST(PhotonLattice, AnyBatchSplitEqualsTheWholeSolve) {
                 << "threads " << threads;
             EXPECT_EQ(merged.caustic_lattice().coefficients(),
                       whole.caustic_lattice().coefficients());
-            EXPECT_TRUE(same_photons(merged.caustic_map().photons(), whole.caustic_map().photons()));
+            EXPECT_TRUE(
+                same_photons(merged.caustic_map().photons(), whole.caustic_map().photons()));
             EXPECT_EQ(merged.caustic_map().power_scale(), whole.caustic_map().power_scale());
             for (const Probe& probe : probes) {
                 const FieldLookup a = merged.lookup(probe.position, probe.normal);
