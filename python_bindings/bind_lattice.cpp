@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <stdexcept>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "bind_methods.h"
@@ -162,13 +161,14 @@ After editing and re-committing the scene, call reset().)doc");
              "The same as refine().")
         .def(
             "solve_batches",
-            [](PhotonLattice& lattice, std::vector<PhotonBatch> batches, Progress* progress) {
+            [](PhotonLattice& lattice, const std::vector<const PhotonBatch*>& batches,
+               Progress* progress) {
                 const ObjectUse writes = lattice_use(lattice, ObjectUse::Kind::Write,
                                                      "solve_batches");
                 SceneUse use(lattice.scene(), SceneUse::Kind::Query,
                              "solve_batches (PhotonLattice)");
                 run_interruptible(progress, [&](Progress* used) {
-                    lattice.solve_batches(std::move(batches), used);
+                    lattice.solve_batches(batches, used);
                 });
             },
             py::arg("batches"), py::arg("progress") = py::none(),

@@ -408,14 +408,24 @@ void PhotonLattice::solve(Progress* progress) {
     add_pass(batch.global, batch.caustic, timings, progress);
 }
 
-void PhotonLattice::solve_batches(std::vector<PhotonBatch> batches, Progress* progress) {
+void PhotonLattice::solve_batches(const std::vector<PhotonBatch>& batches, Progress* progress) {
+    std::vector<const PhotonBatch*> pointers;
+    for (const PhotonBatch& batch : batches) pointers.push_back(&batch);
+    solve_batches(pointers, progress);
+}
+
+void PhotonLattice::solve_batches(const std::vector<const PhotonBatch*>& given,
+                                  Progress* progress) {
     check_scene("solve_batches");
-    if (batches.empty())
+    if (given.empty())
         throw InvalidArgument("PhotonLattice::solve_batches: no batches; pass the batches that "
                               "cover the pass's photons [0, settings.photons)");
     const std::string wanted = settings_bytes(settings_);
-    for (size_t i = 0; i < batches.size(); ++i) {
-        const PhotonBatch& batch = batches[i];
+    for (size_t i = 0; i < given.size(); ++i) {
+        if (given[i] == nullptr)
+            throw InvalidArgument(format_message("PhotonLattice::solve_batches: batch ", i,
+                                                 " is None; pass PhotonBatch objects"));
+        const PhotonBatch& batch = *given[i];
         if (settings_bytes(batch.settings) != wanted)
             throw InvalidArgument(format_message(
                 "PhotonLattice::solve_batches: batch ", i, " (photons [", batch.begin, ", ",
@@ -429,16 +439,18 @@ void PhotonLattice::solve_batches(std::vector<PhotonBatch> batches, Progress* pr
                 passes_, "; trace it for pass ", passes_));
     }
     // Photon order; then the ranges must tile [0, photons) exactly.
-    std::stable_sort(batches.begin(), batches.end(),
-                     [](const PhotonBatch& a, const PhotonBatch& b) { return a.begin < b.begin; });
+    std::vector<const PhotonBatch*> batches = given;
+    std::stable_sort(
+        batches.begin(), batches.end(),
+        [](const PhotonBatch* a, const PhotonBatch* b) { return a->begin < b->begin; });
     uint64_t covered = 0;
-    for (const PhotonBatch& batch : batches) {
-        if (batch.begin != covered || batch.end <= batch.begin)
+    for (const PhotonBatch* batch : batches) {
+        if (batch->begin != covered || batch->end <= batch->begin)
             throw InvalidArgument(format_message(
                 "PhotonLattice::solve_batches: the batches' photon ranges must cover [0, ",
                 settings_.photons, ") without gaps or overlaps; after [0, ", covered,
-                ") comes a batch of [", batch.begin, ", ", batch.end, ")"));
-        covered = batch.end;
+                ") comes a batch of [", batch->begin, ", ", batch->end, ")"));
+        covered = batch->end;
     }
     if (covered != settings_.photons)
         throw InvalidArgument(format_message(
@@ -449,32 +461,29 @@ void PhotonLattice::solve_batches(std::vector<PhotonBatch> batches, Progress* pr
     if (progress != nullptr) progress->begin_stage("photons", 0.0f, 0.8f);
     PhotonLatticeTimings timings;
     uint64_t global_count = 0, caustic_count = 0;
-    for (const PhotonBatch& batch : batches) {
-        timings.emit_trace += batch.seconds;  // the batches' tracing time, wherever it ran
-        timings.photons_emitted += batch.emitted;
-        timings.bounces += batch.bounces;
-        global_count += batch.global.size();
-        caustic_count += batch.caustic.size();
+    for (const PhotonBatch* batch : batches) {
+        timings.emit_trace += batch->seconds;  // the batches' tracing time, wherever it ran
+        timings.photons_emitted += batch->emitted;
+        timings.bounces += batch->bounces;
+        global_count += batch->global.size();
+        caustic_count += batch->caustic.size();
     }
     timings.photons_stored = global_count + caustic_count;
-    std::vector<Photon> global, caustic;
     if (batches.size() == 1) {
-        global = std::move(batches[0].global);
-        caustic = std::move(batches[0].caustic);
-    } else {
-        require_memory(saturating_mul(global_count + caustic_count, sizeof(Photon)),
-                       format_message("PhotonLattice::solve_batches: the pass's ",
-                                      global_count + caustic_count, " stored photons of ",
-                                      sizeof(Photon), " bytes in one list"),
-                       "lower PhotonLatticeSettings.photons (or merge fewer at once)");
-        global.reserve(global_count);
-        caustic.reserve(caustic_count);
-        for (PhotonBatch& batch : batches) {
-            append_photons(global, batch.global, progress);
-            append_photons(caustic, batch.caustic, progress);
-            batch.global = std::vector<Photon>();  // release as we go
-            batch.caustic = std::vector<Photon>();
-        }
+        add_pass(batches[0]->global, batches[0]->caustic, timings, progress);
+        return;
+    }
+    require_memory(saturating_mul(global_count + caustic_count, sizeof(Photon)),
+                   format_message("PhotonLattice::solve_batches: the pass's ",
+                                  global_count + caustic_count, " stored photons of ",
+                                  sizeof(Photon), " bytes in one list"),
+                   "lower PhotonLatticeSettings.photons (or merge fewer at once)");
+    std::vector<Photon> global, caustic;
+    global.reserve(global_count);
+    caustic.reserve(caustic_count);
+    for (const PhotonBatch* batch : batches) {
+        append_photons(global, batch->global, progress);
+        append_photons(caustic, batch->caustic, progress);
     }
     add_pass(global, caustic, timings, progress);
 }

@@ -136,9 +136,12 @@ class PhotonLattice : public IndirectField, public GiSolver {
     // The next pass (passes()) from batches traced apart that together cover its photons
     // [0, settings.photons) (in any order: they are put in photon order), equal bit for bit to
     // what solve() would have made. InvalidArgument (nothing changes) for a batch traced with
-    // other settings, of another pass, or ranges that overlap or leave photons out; Cancelled
-    // keeps the previous solution. The batches' photons move into the lattice.
-    void solve_batches(std::vector<PhotonBatch> batches, Progress* progress = nullptr);
+    // other settings, of another pass, or ranges that overlap or leave photons out (or a null
+    // batch); Cancelled keeps the previous solution. The batches are not changed: a pass of
+    // several batches holds one concatenated copy of their photons while it is injected.
+    void solve_batches(const std::vector<const PhotonBatch*>& batches,
+                       Progress* progress = nullptr);
+    void solve_batches(const std::vector<PhotonBatch>& batches, Progress* progress = nullptr);
     // Forgets every pass and re-measures the scene (call after edits and commit()).
     void reset(Progress* progress = nullptr) override;
 

@@ -458,6 +458,8 @@ def test_a_photon_batch_with_other_settings_is_refused(sun_room_file):
     import pickle
     halves = [shgi.trace_photon_batch(scene, settings, 0, 1000, 2000),
               shgi.trace_photon_batch(scene, settings, 0, 0, 1000)]
+    with pytest.raises(ValueError, match="batch 1 is None"):
+        lattice.solve_batches([halves[0], None])
     lattice.solve_batches(pickle.loads(pickle.dumps(halves)))
     single = shgi.PhotonLattice(scene, settings)
     single.solve()

@@ -613,7 +613,8 @@ TEST(PhotonLattice, SolveBatchesRefusesBatchesThatDoNotMakeThePass) {
     testing::expect_invalid_argument(
         [&] { lattice.solve_batches(traced_batches(scene, settings, 1, {0, 19999})); },
         "photons [19999, 20000) are missing");
-    testing::expect_invalid_argument([&] { lattice.solve_batches({}); }, "no batches");
+    testing::expect_invalid_argument(
+        [&] { lattice.solve_batches(std::vector<PhotonBatch>{}); }, "no batches");
     testing::expect_invalid_argument([&] { trace_photon_batch(scene, settings, 1, 5, 5); },
                                      "it needs begin < end <= 20000");
     testing::expect_invalid_argument([&] { trace_photon_batch(scene, settings, 1, 0, 20001); },
