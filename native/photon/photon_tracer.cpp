@@ -435,7 +435,8 @@ PhotonMaps trace_photon_range(const Scene& scene, const PhotonTracerSettings& se
     if (scene.empty() || emitter.empty()) return maps;
     // The chunks are those of the whole pass (photon c * kPhotonsPerChunk onwards), cut to the
     // range: a range that starts and ends on chunk boundaries traces exactly the whole pass's
-    // chunks. (A photon's path does not depend on its chunk's other photons either way.)
+    // chunks. (A photon's path does not depend on its chunk's other photons either way: the
+    // wavefront's rays are intersected one by one, Scene::intersect's incoherent default.)
     const uint64_t photons = end - begin;
     const uint64_t first_chunk = begin / kPhotonsPerChunk;
     const uint64_t chunk_count = (end + kPhotonsPerChunk - 1) / kPhotonsPerChunk - first_chunk;
