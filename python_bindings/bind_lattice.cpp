@@ -4,9 +4,12 @@
 // A PhotonLattice keeps its Scene alive; solve() releases the GIL and reports progress. It is a
 // shgi.IndirectField, so shgi.render_preview and the PreviewRenderer take it directly.
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
 
 #include <algorithm>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "bind_methods.h"
 #include "lattice/photon_lattice.h"
@@ -157,6 +160,24 @@ After editing and re-committing the scene, call reset().)doc");
         .def("solve", pass_named("solve"), py::arg("progress") = py::none(),
              "The same as refine().")
         .def(
+            "solve_batches",
+            [](PhotonLattice& lattice, const std::vector<const PhotonBatch*>& batches,
+               Progress* progress) {
+                const ObjectUse writes = lattice_use(lattice, ObjectUse::Kind::Write,
+                                                     "solve_batches");
+                SceneUse use(lattice.scene(), SceneUse::Kind::Query,
+                             "solve_batches (PhotonLattice)");
+                run_interruptible(progress, [&](Progress* used) {
+                    lattice.solve_batches(batches, used);
+                });
+            },
+            py::arg("batches"), py::arg("progress") = py::none(),
+            "The next pass from PhotonBatch objects traced apart (shgi.trace_photon_batch) that "
+            "together cover its photons [0, settings.photons), in any order: the lattice then "
+            "equals the one solve() makes, bit for bit (GIL released). ValueError, changing "
+            "nothing, for a batch with other settings, of another pass, or ranges with gaps or "
+            "overlaps; shgi.Cancelled keeps the previous solution.")
+        .def(
             "current_field", [](py::object self) { return self; },
             "The lattice itself: it is its own IndirectField (not to be read while a pass runs).")
         .def(
@@ -216,10 +237,80 @@ After editing and re-committing the scene, call reset().)doc");
         "origin + (i + 0.5, j + 0.5, k + 0.5) cell_size.");
 }
 
+void bind_photon_batch(py::module_& m) {
+    py::class_<PhotonBatch> cls(m, "PhotonBatch", R"doc(
+Photons [begin, end) of one pass of a PhotonLattice, traced apart (shgi.trace_photon_batch, on
+any machine with the same scene): the stored photons in photon order. PhotonLattice.solve_batches
+merges the batches of a pass into exactly the lattice solve() makes (shgi.farm traces them as
+tasks of a Dask cluster). Pickles as to_bytes().)doc");
+    cls.def_property_readonly(
+           "settings", [](const PhotonBatch& b) { return b.settings; },
+           "The PhotonLatticeSettings it was traced with.")
+        .def_readonly("pass_index", &PhotonBatch::pass, "The pass (0, 1, ...) it belongs to.")
+        .def_readonly("begin", &PhotonBatch::begin, "Its first photon index.")
+        .def_readonly("end", &PhotonBatch::end, "One past its last photon index.")
+        .def_readonly("emitted", &PhotonBatch::emitted,
+                      "Photons emitted (end - begin; 0 in a scene without emitters).")
+        .def_readonly("bounces", &PhotonBatch::bounces, "Rays traced.")
+        .def_readonly("seconds", &PhotonBatch::seconds, "Tracing time.")
+        .def_property_readonly(
+            "photons_stored",
+            [](const PhotonBatch& b) { return b.global.size() + b.caustic.size(); },
+            "Stored photons (global and caustic).")
+        .def(
+            "to_bytes",
+            [](const PhotonBatch& b) {
+                std::string bytes;
+                {
+                    py::gil_scoped_release release;
+                    bytes = b.to_bytes();
+                }
+                return py::bytes(bytes);
+            },
+            "The batch as bytes (exact: float32 as held; 48 bytes per stored photon).")
+        .def_static(
+            "from_bytes",
+            [](const py::bytes& data, const std::string& what) {
+                std::string bytes = data;
+                py::gil_scoped_release release;
+                return PhotonBatch::from_bytes(bytes, what);
+            },
+            py::arg("data"), py::arg("what") = "bytes",
+            "The batch to_bytes() made; OSError naming `what` for bytes that are not one.")
+        .def(py::pickle(
+            [](const PhotonBatch& b) { return py::bytes(b.to_bytes()); },
+            [](const py::bytes& data) { return PhotonBatch::from_bytes(data, "a pickled batch"); }))
+        .def("__repr__", [](const PhotonBatch& b) {
+            return "PhotonBatch(pass_index=" + std::to_string(b.pass) + ", photons [" +
+                   std::to_string(b.begin) + ", " + std::to_string(b.end) + "), " +
+                   std::to_string(b.global.size() + b.caustic.size()) + " stored)";
+        });
+    m.def(
+        "trace_photon_batch",
+        [](const Scene& scene, const PhotonLatticeSettings& settings, const IndexInt& pass_arg,
+           const IndexInt& begin_arg, const IndexInt& end_arg, Progress* progress) {
+            const uint64_t pass = int_arg<uint64_t>(pass_arg, "pass_index");
+            const uint64_t begin = int_arg<uint64_t>(begin_arg, "begin");
+            const uint64_t end = int_arg<uint64_t>(end_arg, "end");
+            validate_photon_lattice_settings(settings);
+            SceneUse use(scene, SceneUse::Kind::Query, "trace_photon_batch");
+            return run_interruptible(progress, [&](Progress* used) {
+                return trace_photon_batch(scene, settings, pass, begin, end, used);
+            });
+        },
+        py::arg("scene"), py::arg("settings"), py::arg("pass_index"), py::arg("begin"),
+        py::arg("end"), py::arg("progress") = py::none(),
+        "Photons [begin, end) of pass `pass_index` of a PhotonLattice with `settings` on the "
+        "committed scene, as a PhotonBatch (GIL released; shgi.Cancelled on cancel; ValueError "
+        "unless begin < end <= settings.photons). Each photon's path depends only on the seed, "
+        "the pass, its index and settings.photons, so any split merges into the single solve.");
+}
+
 }  // namespace
 
 void bind_lattice(py::module_& m) {
     bind_settings(m);
+    bind_photon_batch(m);  // before PhotonLattice.solve_batches names it in its signature
     bind_photon_lattice(m);
 }
 

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "io/image.h"
@@ -73,7 +75,7 @@ PhotonLatticeSettings read_settings(BinaryReader& in) {
     s.bounds_max = in.get<vec3>(what);
     if (caustics > uint8_t(CausticMode::PhotonMap) ||
         interpolation > uint8_t(LatticeInterpolation::Cubic))
-        throw IoError(format_message(kLatticeFile, " \"", in.path(), "\" holds caustics ",
+        throw IoError(format_message(in.kind(), " \"", in.path(), "\" holds caustics ",
                                      int(caustics), ", interpolation ", int(interpolation),
                                      ": no such modes (damaged?)"));
     s.caustics = CausticMode(caustics);
@@ -81,7 +83,7 @@ PhotonLatticeSettings read_settings(BinaryReader& in) {
     try {
         validate_photon_lattice_settings(s);
     } catch (const InvalidArgument& e) {
-        throw IoError(format_message(kLatticeFile, " \"", in.path(), "\": ", e.what()));
+        throw IoError(format_message(in.kind(), " \"", in.path(), "\": ", e.what()));
     }
     return s;
 }
@@ -121,12 +123,130 @@ void add_sh(ShRgb& a, const ShRgb& b) {
     for (int i = 0; i < count; ++i) a[i] += b[i];
 }
 
+// The settings as save() writes them: equal bytes, equal settings (every field, exactly).
+std::string settings_bytes(const PhotonLatticeSettings& settings) {
+    std::ostringstream out(std::ios::binary);
+    BinaryWriter w(out);
+    write_settings(w, settings);
+    return out.str();
+}
+
+template <typename T>
+double as_number(T value) {
+    if constexpr (std::is_enum_v<T>)
+        return double(static_cast<std::underlying_type_t<T>>(value));
+    else
+        return double(value);
+}
+
+// The first field in which `got` differs from `wanted`, for messages.
+std::string settings_difference(const PhotonLatticeSettings& got,
+                                const PhotonLatticeSettings& wanted) {
+#define SHGI_FIELD(name)                                                                   \
+    if (!(got.name == wanted.name))                                                        \
+        return format_message(#name " ", as_number(got.name), " instead of ",                \
+                              as_number(wanted.name));
+    SHGI_FIELD(photons)
+    SHGI_FIELD(seed)
+    SHGI_FIELD(max_bounces)
+    SHGI_FIELD(specular_roughness)
+    SHGI_FIELD(world_in_field)
+    SHGI_FIELD(resolution)
+    SHGI_FIELD(order)
+    SHGI_FIELD(blur_passes)
+    SHGI_FIELD(caustics)
+    SHGI_FIELD(caustic_resolution)
+    SHGI_FIELD(caustic_order)
+    SHGI_FIELD(caustic_blur_passes)
+    SHGI_FIELD(caustic_neighbours)
+    SHGI_FIELD(caustic_radius)
+    SHGI_FIELD(interpolation)
+    SHGI_FIELD(normal_offset)
+    SHGI_FIELD(use_bounds)
+#undef SHGI_FIELD
+    return "bounds_min/bounds_max differ";
+}
+
+// A photon batch's bytes (PhotonBatch::to_bytes, little-endian):
+//   "SHGIPHB\0" | u32 version | the settings, field by field | u64 pass, begin, end, emitted,
+//   bounces | f64 seconds | global Photon array | caustic Photon array.
+constexpr char kBatchMagic[8] = {'S', 'H', 'G', 'I', 'P', 'H', 'B', '\0'};
+constexpr uint32_t kBatchVersion = 1;
+constexpr const char* kBatchKind = "photon batch";
+
 const PhotonLatticeSettings& validated(const PhotonLatticeSettings& settings) {
     validate_photon_lattice_settings(settings);
     return settings;
 }
 
 }  // namespace
+
+std::string PhotonBatch::to_bytes() const {
+    std::ostringstream out(std::ios::binary);
+    BinaryWriter w(out);
+    w.bytes(kBatchMagic, sizeof(kBatchMagic));
+    w.put(kBatchVersion);
+    write_settings(w, settings);
+    w.put(pass);
+    w.put(begin);
+    w.put(end);
+    w.put(emitted);
+    w.put(bounces);
+    w.put(seconds);
+    w.array(global);
+    w.array(caustic);
+    return out.str();
+}
+
+PhotonBatch PhotonBatch::from_bytes(const std::string& bytes, const std::string& what) {
+    std::istringstream in(bytes, std::ios::binary);
+    BinaryReader r(in, what, kBatchKind);
+    char magic[sizeof(kBatchMagic)];
+    r.bytes(magic, sizeof(magic), "the header");
+    if (std::memcmp(magic, kBatchMagic, sizeof(kBatchMagic)) != 0)
+        throw IoError(format_message("\"", what, "\" is not an SHGI photon batch (bad magic)"));
+    const uint32_t version = r.get<uint32_t>("the header");
+    if (version != kBatchVersion)
+        throw IoError(format_message(kBatchKind, " \"", what, "\" has version ", version,
+                                     "; this SHGI reads version ", kBatchVersion));
+    PhotonBatch batch;
+    batch.settings = read_settings(r);  // IoError for invalid settings
+    batch.pass = r.get<uint64_t>("the header");
+    batch.begin = r.get<uint64_t>("the header");
+    batch.end = r.get<uint64_t>("the header");
+    batch.emitted = r.get<uint64_t>("the header");
+    batch.bounces = r.get<uint64_t>("the header");
+    batch.seconds = r.get<double>("the header");
+    if (batch.begin >= batch.end || batch.end > batch.settings.photons ||
+        batch.emitted > batch.end - batch.begin)
+        throw IoError(format_message(kBatchKind, " \"", what, "\" holds photons [", batch.begin,
+                                     ", ", batch.end, ") (", batch.emitted, " emitted) of ",
+                                     batch.settings.photons, " (damaged?)"));
+    batch.global = r.array<Photon>("the global photons");
+    batch.caustic = r.array<Photon>("the caustic photons");
+    if (in.peek() != std::istringstream::traits_type::eof())
+        throw IoError(format_message(kBatchKind, " \"", what, "\" has data after its end"));
+    return batch;
+}
+
+PhotonBatch trace_photon_batch(const Scene& scene, const PhotonLatticeSettings& settings,
+                               uint64_t pass, uint64_t begin, uint64_t end, Progress* progress) {
+    validate_photon_lattice_settings(settings);
+    const auto start = now();
+    PhotonMaps maps = trace_photon_range(scene, tracer_settings(settings), pass, begin, end,
+                                         progress, "PhotonLatticeSettings");
+    PhotonBatch batch;
+    batch.settings = settings;
+    batch.pass = pass;
+    batch.begin = begin;
+    batch.end = end;
+    batch.global = std::move(maps.global);
+    batch.caustic = std::move(maps.caustic);
+    batch.emitted = maps.emitted;
+    batch.bounces = maps.bounces;
+    batch.seconds = seconds_since(start);
+    return batch;
+}
 
 void validate_photon_lattice_settings(const PhotonLatticeSettings& settings) {
     // The tracer's checks, naming the fields as the caller knows them (the names are the same).
@@ -276,29 +396,114 @@ void PhotonLattice::check_scene(const char* what) const {
 
 void PhotonLattice::solve(Progress* progress) {
     check_scene("solve");
-    PhotonLatticeTimings timings;
-    auto start = now();
     if (progress != nullptr) progress->begin_stage("photons", 0.0f, 0.8f);
-    const PhotonMaps maps = trace_photons(*scene_, tracer_settings(settings_), passes_, progress,
-                                          "PhotonLatticeSettings");
-    timings.emit_trace = seconds_since(start);
-    timings.photons_emitted = maps.emitted;
-    timings.photons_stored = maps.global.size() + maps.caustic.size();
-    timings.bounces = maps.bounces;
+    // The whole pass as one batch (solve_batches() merges batches into the same photon lists).
+    const PhotonBatch batch =
+        trace_photon_batch(*scene_, settings_, passes_, 0, settings_.photons, progress);
+    PhotonLatticeTimings timings;
+    timings.emit_trace = batch.seconds;
+    timings.photons_emitted = batch.emitted;
+    timings.photons_stored = batch.global.size() + batch.caustic.size();
+    timings.bounces = batch.bounces;
+    add_pass(batch.global, batch.caustic, timings, progress);
+}
 
+void PhotonLattice::solve_batches(const std::vector<PhotonBatch>& batches, Progress* progress) {
+    std::vector<const PhotonBatch*> pointers;
+    for (const PhotonBatch& batch : batches) pointers.push_back(&batch);
+    solve_batches(pointers, progress);
+}
+
+void PhotonLattice::solve_batches(const std::vector<const PhotonBatch*>& given,
+                                  Progress* progress) {
+    check_scene("solve_batches");
+    if (given.empty())
+        throw InvalidArgument("PhotonLattice::solve_batches: no batches; pass the batches that "
+                              "cover the pass's photons [0, settings.photons)");
+    const std::string wanted = settings_bytes(settings_);
+    for (size_t i = 0; i < given.size(); ++i) {
+        if (given[i] == nullptr)
+            throw InvalidArgument(format_message("PhotonLattice::solve_batches: batch ", i,
+                                                 " is None; pass PhotonBatch objects"));
+        const PhotonBatch& batch = *given[i];
+        if (settings_bytes(batch.settings) != wanted)
+            throw InvalidArgument(format_message(
+                "PhotonLattice::solve_batches: batch ", i, " (photons [", batch.begin, ", ",
+                batch.end, ")) was traced with other settings than the lattice's (",
+                settings_difference(batch.settings, settings_),
+                "); trace it with the lattice's settings"));
+        if (batch.pass != passes_)
+            throw InvalidArgument(format_message(
+                "PhotonLattice::solve_batches: batch ", i, " (photons [", batch.begin, ", ",
+                batch.end, ")) is of pass ", batch.pass, ", the lattice's next pass is ",
+                passes_, "; trace it for pass ", passes_));
+    }
+    // Photon order; then the ranges must tile [0, photons) exactly.
+    std::vector<const PhotonBatch*> batches = given;
+    std::stable_sort(
+        batches.begin(), batches.end(),
+        [](const PhotonBatch* a, const PhotonBatch* b) { return a->begin < b->begin; });
+    uint64_t covered = 0;
+    for (const PhotonBatch* batch : batches) {
+        if (batch->begin != covered || batch->end <= batch->begin)
+            throw InvalidArgument(format_message(
+                "PhotonLattice::solve_batches: the batches' photon ranges must cover [0, ",
+                settings_.photons, ") without gaps or overlaps; after [0, ", covered,
+                ") comes a batch of [", batch->begin, ", ", batch->end, ")"));
+        covered = batch->end;
+    }
+    if (covered != settings_.photons)
+        throw InvalidArgument(format_message(
+            "PhotonLattice::solve_batches: the batches cover photons [0, ", covered, ") of the "
+            "pass's ", settings_.photons, "; photons [", covered, ", ", settings_.photons,
+            ") are missing"));
+
+    if (progress != nullptr) progress->begin_stage("photons", 0.0f, 0.8f);
+    PhotonLatticeTimings timings;
+    uint64_t global_count = 0, caustic_count = 0;
+    for (const PhotonBatch* batch : batches) {
+        timings.emit_trace += batch->seconds;  // the batches' tracing time, wherever it ran
+        timings.photons_emitted += batch->emitted;
+        timings.bounces += batch->bounces;
+        global_count += batch->global.size();
+        caustic_count += batch->caustic.size();
+    }
+    timings.photons_stored = global_count + caustic_count;
+    if (batches.size() == 1) {
+        add_pass(batches[0]->global, batches[0]->caustic, timings, progress);
+        return;
+    }
+    require_memory(saturating_mul(global_count + caustic_count, sizeof(Photon)),
+                   format_message("PhotonLattice::solve_batches: the pass's ",
+                                  global_count + caustic_count, " stored photons of ",
+                                  sizeof(Photon), " bytes in one list"),
+                   "lower PhotonLatticeSettings.photons (or merge fewer at once)");
+    std::vector<Photon> global, caustic;
+    global.reserve(global_count);
+    caustic.reserve(caustic_count);
+    for (const PhotonBatch* batch : batches) {
+        append_photons(global, batch->global, progress);
+        append_photons(caustic, batch->caustic, progress);
+    }
+    add_pass(global, caustic, timings, progress);
+}
+
+void PhotonLattice::add_pass(const std::vector<Photon>& global_photons,
+                             const std::vector<Photon>& caustic_photons_of_pass,
+                             PhotonLatticeTimings timings, Progress* progress) {
     // Work on copies so that a cancel keeps the previous solution.
     if (progress != nullptr) progress->begin_stage("injection", 0.8f, 0.95f);
-    start = now();
+    auto start = now();
     ShLattice global_raw = global_raw_;
-    global_raw.inject(maps.global, 1.0f, progress);
+    global_raw.inject(global_photons, 1.0f, progress);
     ShLattice caustic_raw = caustic_raw_;
     std::vector<Photon> caustic_photons;
     uint64_t caustic_injected = caustic_photons_injected_;
     if (settings_.caustics == CausticMode::Lattice) {
-        caustic_injected += caustic_raw.inject(maps.caustic, 1.0f, progress);
+        caustic_injected += caustic_raw.inject(caustic_photons_of_pass, 1.0f, progress);
     } else if (settings_.caustics == CausticMode::PhotonMap) {
         // All passes so far (unscaled; the map may hold 10^7 photons, half a GB), then this one.
-        const uint64_t caustic_count = caustic_map_.size() + maps.caustic.size();
+        const uint64_t caustic_count = caustic_map_.size() + caustic_photons_of_pass.size();
         require_memory(saturating_mul(caustic_count, sizeof(Photon)),
                        format_message("PhotonLatticeSettings.caustics = PHOTON_MAP after ",
                                       passes_ + 1, " passes: ", caustic_count,
@@ -306,7 +511,7 @@ void PhotonLattice::solve(Progress* progress) {
                        "lower PhotonLatticeSettings.photons or use caustics = LATTICE");
         caustic_photons.reserve(caustic_count);
         append_photons(caustic_photons, caustic_map_.photons(), progress);
-        append_photons(caustic_photons, maps.caustic, progress);
+        append_photons(caustic_photons, caustic_photons_of_pass, progress);
     }
     timings.injection = seconds_since(start);
 

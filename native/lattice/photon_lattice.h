@@ -25,11 +25,21 @@
 //
 // Lattice bounds: the scene's bounds, or [bounds_min, bounds_max] with use_bounds. The density
 // estimate, blur and interpolation are those of lattice/sh_lattice.h.
+//
+// Photon batches (a solve split over machines, docs/farm.md): a pass's photons split into
+// batches of consecutive photon indices, each traced apart (trace_photon_batch, on any machine
+// with the same scene), and merged by solve_batches(). A batch returns its STORED photons in
+// photon order, not per-cell sums: the lattices' sums are floating-point and order-dependent,
+// so the merge concatenates the batches in photon order, which gives exactly the photon list
+// of the whole pass (photon/photon_tracer.h: trace_photon_range), and injects, averages and
+// blurs it as solve() does. solve() itself is one batch of the whole pass through the same
+// code, so the merged lattice equals solve()'s bit for bit for any split and thread count.
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "lattice/sh_lattice.h"
 #include "photon/photon_map.h"
@@ -88,6 +98,30 @@ struct PhotonLatticeTimings {
     uint64_t bounces = 0;           // rays traced by the last solve
 };
 
+// Photons [begin, end) of pass `pass` of a lattice with `settings`: its stored photons in photon
+// order (each photon's emission depends on its index and on settings.photons, the whole pass's
+// count). What solve_batches() merges; to_bytes()/from_bytes() carry it between processes.
+struct PhotonBatch {
+    PhotonLatticeSettings settings;  // of the lattice it was traced for
+    uint64_t pass = 0;
+    uint64_t begin = 0, end = 0;
+    std::vector<Photon> global, caustic;  // in photon order, each photon's stores by bounce
+    uint64_t emitted = 0;                 // photons emitted (end - begin; 0 without emitters)
+    uint64_t bounces = 0;                 // rays traced
+    double seconds = 0.0;                 // tracing time
+
+    // SHGI's binary (little-endian, float32 as held: exact). from_bytes throws IoError naming
+    // `what` for bytes that are not a batch (truncated, another format, invalid settings).
+    std::string to_bytes() const;
+    static PhotonBatch from_bytes(const std::string& bytes, const std::string& what = "bytes");
+};
+
+// Traces a batch (any thread count gives the same photons). InvalidArgument for invalid
+// settings, an uncommitted scene, or a range not inside [0, settings.photons]; Cancelled.
+PhotonBatch trace_photon_batch(const Scene& scene, const PhotonLatticeSettings& settings,
+                               uint64_t pass, uint64_t begin, uint64_t end,
+                               Progress* progress = nullptr);
+
 class PhotonLattice : public IndirectField, public GiSolver {
   public:
     // The scene must be committed and outlive the solver. Measures the lattices' surfaces.
@@ -99,6 +133,15 @@ class PhotonLattice : public IndirectField, public GiSolver {
     // passes). Cancel leaves the previous solution intact. InvalidArgument if the scene was
     // edited since construction or reset().
     void solve(Progress* progress = nullptr);
+    // The next pass (passes()) from batches traced apart that together cover its photons
+    // [0, settings.photons) (in any order: they are put in photon order), equal bit for bit to
+    // what solve() would have made. InvalidArgument (nothing changes) for a batch traced with
+    // other settings, of another pass, or ranges that overlap or leave photons out (or a null
+    // batch); Cancelled keeps the previous solution. The batches are not changed: a pass of
+    // several batches holds one concatenated copy of their photons while it is injected.
+    void solve_batches(const std::vector<const PhotonBatch*>& batches,
+                       Progress* progress = nullptr);
+    void solve_batches(const std::vector<PhotonBatch>& batches, Progress* progress = nullptr);
     // Forgets every pass and re-measures the scene (call after edits and commit()).
     void reset(Progress* progress = nullptr) override;
 
@@ -141,7 +184,11 @@ class PhotonLattice : public IndirectField, public GiSolver {
   private:
     PhotonLattice() = default;  // load()'s, without a scene
     void check_scene(const char* what) const;
-    void build_lattices(Progress* progress);
+    // The pass's stored photons (in photon order) injected, averaged and blurred: the end of
+    // solve() and solve_batches().
+    void add_pass(const std::vector<Photon>& global_photons,
+                  const std::vector<Photon>& caustic_photons, PhotonLatticeTimings timings,
+                  Progress* progress);
     ShRgb sample(const ShLattice& lattice, const vec3& p, const vec3& n) const;
 
     const Scene* scene_ = nullptr;

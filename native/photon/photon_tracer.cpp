@@ -414,23 +414,42 @@ void validate_photon_tracer_settings(const PhotonTracerSettings& settings,
 PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& settings, uint64_t pass,
                          Progress* progress, const char* settings_name) {
     validate_photon_tracer_settings(settings, settings_name);
+    return trace_photon_range(scene, settings, pass, 0, settings.photons, progress,
+                              settings_name);
+}
+
+PhotonMaps trace_photon_range(const Scene& scene, const PhotonTracerSettings& settings,
+                              uint64_t pass, uint64_t begin, uint64_t end, Progress* progress,
+                              const char* settings_name) {
+    validate_photon_tracer_settings(settings, settings_name);
+    if (begin >= end || end > settings.photons)
+        throw InvalidArgument(format_message(
+            "trace_photon_range: photons [", begin, ", ", end, ") of a pass of ",
+            settings.photons, " (", settings_name, ".photons); it needs begin < end <= ",
+            settings.photons));
     if (!scene.committed())
         throw InvalidArgument("trace_photons: the scene is not committed; call commit() first");
     throw_if_cancelled(progress);
     PhotonMaps maps;
     const PhotonEmitter emitter(scene);
     if (scene.empty() || emitter.empty()) return maps;
-    const uint64_t chunk_count = (settings.photons + kPhotonsPerChunk - 1) / kPhotonsPerChunk;
+    // The chunks are those of the whole pass (photon c * kPhotonsPerChunk onwards), cut to the
+    // range: a range that starts and ends on chunk boundaries traces exactly the whole pass's
+    // chunks. (A photon's path does not depend on its chunk's other photons either way: the
+    // wavefront's rays are intersected one by one, Scene::intersect's incoherent default.)
+    const uint64_t photons = end - begin;
+    const uint64_t first_chunk = begin / kPhotonsPerChunk;
+    const uint64_t chunk_count = (end + kPhotonsPerChunk - 1) / kPhotonsPerChunk - first_chunk;
     if (settings.store_first_hits) {
         // At most one per photon, reserved at once (no growth copies); before the allowance is
         // read, so an address-space limit counts it.
-        require_memory(saturating_mul(settings.photons, sizeof(PhotonFirstHit)),
+        require_memory(saturating_mul(photons, sizeof(PhotonFirstHit)),
                        format_message(settings_name, ".photons = ", settings.photons,
                                       " with store_first_hits (up to one first hit of ",
                                       sizeof(PhotonFirstHit), " bytes per photon)"),
                        format_message("lower ", settings_name, ".photons (or trace more passes "
                                       "of fewer photons)"));
-        maps.first_hits.reserve(size_t(settings.photons));
+        maps.first_hits.reserve(size_t(photons));
     }
     // The allowance is read once: it shrinks as the maps grow.
     const MemoryLimits limits = memory_limits();
@@ -443,13 +462,17 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
     ChunkTracerPool pool(scene, settings, emitter);
     std::vector<ChunkResult> chunks(std::min(chunk_count, kChunksPerBlock));
     std::atomic<uint64_t> chunks_done{0};
+    // Photons of the range before chunk c (of the range) begins.
+    const auto traced_before = [&](uint64_t c) {
+        return std::min(end, std::max(begin, (first_chunk + c) * kPhotonsPerChunk)) - begin;
+    };
     for (uint64_t block = 0; block < chunk_count;) {
-        const uint64_t traced = std::min(settings.photons, block * kPhotonsPerChunk);
+        const uint64_t traced = traced_before(block);
         const uint64_t stored = maps.global.size() + maps.caustic.size();
         const uint64_t stored_bytes = stored * sizeof(Photon);
         if (stored_bytes > budget)
             throw OutOfMemory(format_message(
-                "trace_photons: after ", traced, " of ", settings.photons,
+                "trace_photons: after ", traced, " of ", photons,
                 " photons the stored photons take ", stored_bytes, " bytes, past half of what "
                 "this process could allocate when the pass began (", format_bytes(allowed),
                 ": RLIMIT_AS / cgroup / free memory); lower ", settings_name, ".photons"));
@@ -458,15 +481,15 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
             // growth that holds old and new buffers at once: refused now, not tens of seconds
             // (and gigabytes) later.
             const double per_photon = double(stored) / double(traced);
-            const double projected = per_photon * double(settings.photons) * sizeof(Photon);
+            const double projected = per_photon * double(photons) * sizeof(Photon);
             const uint64_t need = projected >= 1.8e19 ? std::numeric_limits<uint64_t>::max()
                                                       : uint64_t(projected);
             require_memory(
                 saturating_mul(need, 2),
                 format_message(settings_name, ".photons = ", settings.photons, " (the first ",
-                               traced, " photons stored ", per_photon,
+                               traced, " photons of ", photons, " stored ", per_photon,
                                " photons each, so about ", uint64_t(per_photon *
-                               double(settings.photons)), " stored photons of ",
+                               double(photons)), " stored photons of ",
                                sizeof(Photon), " bytes, twice: stored photons may take half of the "
                                "memory, as growing a map holds its old and new buffers)"),
                 format_message("lower ", settings_name, ".photons (or trace more passes of "
@@ -482,18 +505,17 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
             std::unique_ptr<ChunkTracer> tracer = pool.acquire();
             for (uint64_t c = chunk_begin; c < chunk_end; ++c) {
                 throw_if_cancelled(progress);
-                const uint64_t begin = (block + c) * kPhotonsPerChunk;
-                const uint64_t end = std::min(begin + kPhotonsPerChunk, settings.photons);
-                chunks[c] = tracer->trace(pass, begin, end);
+                chunks[c] = tracer->trace(pass, begin + traced_before(block + c),
+                                          begin + traced_before(block + c + 1));
                 if (progress) progress->report(chunks_done.fetch_add(1) + 1, chunk_count);
             }
             pool.release(std::move(tracer));
         });
         merge(chunks, block_chunks, maps, transient_budget, settings,
-              std::min(settings.photons, (block + block_chunks) * kPhotonsPerChunk), progress);
+              traced_before(block + block_chunks), progress);
         block += block_chunks;
     }
-    maps.emitted = settings.photons;
+    maps.emitted = photons;
     maps.emitted_power = emitter.total_power();
     return maps;
 }

@@ -86,6 +86,17 @@ PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& setting
                          Progress* progress = nullptr,
                          const char* settings_name = "PhotonTracerSettings");
 
+// Photons [begin, end) of pass `pass` of a pass of settings.photons photons (each photon's
+// emission depends on its index and on the pass's total, settings.photons, not on the range), as
+// trace_photons traces them: the whole pass's maps are the maps of consecutive ranges
+// concatenated in range order, bit for bit (a farm's photon batches, lattice/photon_lattice.h).
+// emitted = end - begin; bounces counts the range's rays; emitted_power is the whole pass's.
+// InvalidArgument unless begin < end <= settings.photons; otherwise as trace_photons.
+PhotonMaps trace_photon_range(const Scene& scene, const PhotonTracerSettings& settings,
+                              uint64_t pass, uint64_t begin, uint64_t end,
+                              Progress* progress = nullptr,
+                              const char* settings_name = "PhotonTracerSettings");
+
 // The flux the surface under a photon hit scatters (its position, normal, unit direction
 // towards the source and arriving power): the surface is found again by a ray back along the
 // photon's path over 2 x `reach` m (from `reach` before the hit; a grazing photon: along the

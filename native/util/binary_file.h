@@ -1,4 +1,5 @@
-// Little-endian binary files of SHGI's own caches (probes/probe_storage, lattice/photon_lattice):
+// Little-endian binary files of SHGI's own caches (probes/probe_storage, lattice/photon_lattice),
+// and the same format in memory (a photon batch's bytes: any std::ostream / std::istream):
 // BinaryWriter puts values and arrays as they lie in memory (every supported platform is
 // little-endian); BinaryReader reads them back and turns a short read into an IoError naming the
 // file and the part it ended inside, so that a truncated file is never read as zeros.
@@ -6,6 +7,8 @@
 
 #include <cstdint>
 #include <fstream>
+#include <istream>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -15,7 +18,7 @@ namespace shgi {
 
 class BinaryWriter {
   public:
-    explicit BinaryWriter(std::ofstream& out) : out_(out) {}
+    explicit BinaryWriter(std::ostream& out) : out_(out) {}
     template <typename T>
     void put(const T& value) {
         out_.write(reinterpret_cast<const char*>(&value), sizeof(T));
@@ -31,13 +34,13 @@ class BinaryWriter {
     }
 
   private:
-    std::ofstream& out_;
+    std::ostream& out_;
 };
 
 class BinaryReader {
   public:
     // `kind` names the file in messages ("probe file", "lattice file").
-    BinaryReader(std::ifstream& in, const std::string& path, const char* kind)
+    BinaryReader(std::istream& in, const std::string& path, const char* kind)
         : in_(in), path_(path), kind_(kind) {}
     template <typename T>
     T get(const char* what) {
@@ -79,7 +82,7 @@ class BinaryReader {
     const char* kind() const { return kind_; }
 
   private:
-    std::ifstream& in_;
+    std::istream& in_;
     const std::string& path_;
     const char* kind_;
 };

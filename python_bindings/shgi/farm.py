@@ -60,8 +60,8 @@ from .denoise import import_optional
 
 __all__ = ["SHARD_ATTEMPTS", "MAX_SHARDS", "MAX_LOCAL_WORKERS", "ShardFailed", "SceneBundle",
            "scene_bundle", "import_distributed", "local_cluster", "bake_command_on_cluster",
-           "run_tasks", "solve_probe_grid", "SceneBlob", "bake_scene_on_cluster",
-           "ProcessCluster", "connect"]
+           "run_tasks", "solve_probe_grid", "solve_photon_lattice", "photon_ranges", "SceneBlob",
+           "bake_scene_on_cluster", "ProcessCluster", "connect"]
 
 # Runs of one shard before the bake fails (see the module's retry policy).
 SHARD_ATTEMPTS = 2
@@ -725,6 +725,43 @@ def bake_scene_on_cluster(client, scene: "_shgi.Scene", jobs, options: _bake.Bak
     return lightmaps
 
 
+# --- solves split into tasks (probe bricks, photon batches) -------------------------------------
+
+def _run_scene_tasks(client, scene_path: str, task, task_args: list, accept, what: str,
+                     plural: str, unit: str, share: float, progress: _bake.BakeProgress) -> None:
+    """Runs task i = task(<the scene bundle of scene_path>, *task_args[i], cancel event name) on
+    the client's cluster by run_tasks: the scene travels by content hash (scattered to every
+    worker once), accept(i, result) validates and keeps a result and returns its items, a task
+    that fails or is rejected runs once more, and progress reports "{plural} d/N, R {unit}/s"
+    over [0, share]. progress.cancel() raises shgi.Cancelled and Ctrl-C KeyboardInterrupt, after
+    setting the event the running tasks watch and cancelling every task."""
+    distributed = import_distributed()
+    count = len(task_args)
+    bundle = scene_bundle(scene_path)
+    cancel_name = f"shgi-cancel-{uuid.uuid4().hex}"
+    cancel = distributed.Event(cancel_name, client=client)
+    [bundle_future] = client.scatter([bundle], hash=True, broadcast=True)
+    run_id = uuid.uuid4().hex[:8]
+
+    def submit(i: int, attempt: int):
+        return client.submit(task, bundle_future, *task_args[i], cancel_name, pure=False,
+                             key=f"shgi-{plural}-{i}-of-{count}-{run_id}-{attempt}")
+
+    start = time.perf_counter()
+
+    def on_progress(done: int, items: int) -> None:
+        rate = items / max(time.perf_counter() - start, 1e-9)
+        _report(progress, share * done / count, f"{plural} {done}/{count}, {rate:,.1f} {unit}/s")
+
+    try:
+        run_tasks(client, submit, count, accept, on_progress, what, lambda: progress.cancelled,
+                  cancel)
+    except KeyboardInterrupt:
+        if progress.cancelled:  # cancel(), not Ctrl-C: as bake_scene_on_cluster ends
+            raise _shgi.Cancelled(f"{what} tasks cancelled") from None
+        raise
+
+
 # --- probe grids in bricks of probes --------------------------------------------------------------
 
 def solve_probe_grid(client, scene_path: str, settings: "_shgi.ProbeGridSettings", passes: int,
@@ -735,11 +772,11 @@ def solve_probe_grid(client, scene_path: str, settings: "_shgi.ProbeGridSettings
     `passes` passes (ProbeGrid.update_probes), merged with ProbeField.splice into the field a
     single machine's ProbeGrid(scene, settings) and `passes` update() calls give, bit for bit.
     Export it with ProbeField.export (the add-on's Export Volume format). Progress: "bricks
-    d/B, P probes/s"; the retry policy and cancel of the lightmap shards."""
+    d/B, P probes/s"; the retry policy and cancel of the lightmap shards (_run_scene_tasks)."""
     from . import __main__ as cli
     from .method_registry import settings_to_dict
 
-    distributed = import_distributed()
+    import_distributed()
     settings.validate()
     for name, value, low in (("passes", passes, 1), ("bricks", bricks, 1), ("threads", threads, 1)):
         if not (isinstance(value, int) and value >= low):
@@ -754,18 +791,7 @@ def solve_probe_grid(client, scene_path: str, settings: "_shgi.ProbeGridSettings
     ranges = [(count * i // bricks, count * (i + 1) // bricks - count * i // bricks)
               for i in range(bricks)]
     wanted = settings_to_dict(settings)
-    bundle = scene_bundle(scene_path)
-    cancel_name = f"shgi-cancel-{uuid.uuid4().hex}"
-    cancel = distributed.Event(cancel_name, client=client)
-    [bundle_future] = client.scatter([bundle], hash=True, broadcast=True)
-    run_id = uuid.uuid4().hex[:8]
     fields = {}
-
-    def submit(i: int, attempt: int):
-        first, size = ranges[i]
-        return client.submit(_probe_brick_task, bundle_future, wanted, passes, first, size,
-                             threads, cancel_name, pure=False,
-                             key=f"shgi-probes-{i}-of-{bricks}-{run_id}-{attempt}")
 
     def accept(i: int, result: dict) -> int:
         if result.get("settings") != wanted:
@@ -778,14 +804,9 @@ def solve_probe_grid(client, scene_path: str, settings: "_shgi.ProbeGridSettings
         fields[i] = field
         return ranges[i][1]
 
-    start = time.perf_counter()
-
-    def on_progress(done: int, solved: int) -> None:
-        rate = solved / max(time.perf_counter() - start, 1e-9)
-        _report(progress, done / bricks, f"bricks {done}/{bricks}, {rate:,.1f} probes/s")
-
-    run_tasks(client, submit, bricks, accept, on_progress, "brick", lambda: progress.cancelled,
-              cancel)
+    _run_scene_tasks(client, scene_path, _probe_brick_task,
+                     [(wanted, passes, first, size, threads) for first, size in ranges], accept,
+                     "brick", "bricks", "probes", 1.0, progress)
     merged = fields[0]
     for i in range(1, bricks):
         merged = merged.splice(fields[i], *ranges[i])
@@ -831,3 +852,110 @@ def _field_from_files(files: dict) -> "_shgi.ProbeField":
             with open(os.path.join(folder, name), "wb") as file:
                 file.write(data)
         return _shgi.ProbeField.import_exr(os.path.join(folder, "brick.json"))
+
+
+# --- photon lattices in photon batches ------------------------------------------------------------
+
+def photon_ranges(photons: int, batches: int) -> list:
+    """[(begin, end)] of `batches` runs of consecutive photons covering [0, photons), as even as
+    whole photons allow (at most `photons` batches)."""
+    batches = min(batches, photons)
+    return [(photons * i // batches, photons * (i + 1) // batches) for i in range(batches)]
+
+
+def solve_photon_lattice(client, scene_path: str, settings: "_shgi.PhotonLatticeSettings",
+                         passes: int, batches: int, threads: int = 1,
+                         progress: Optional[_bake.BakeProgress] = None) -> "_shgi.PhotonLattice":
+    """A photon lattice of the scene file `scene_path` solved on the client's cluster: each pass's
+    photons split into `batches` batches of consecutive photon indices, each a task that traces
+    its photons for every one of the `passes` passes (shgi.trace_photon_batch) and returns the
+    stored photons; here each pass's batches are merged in photon order (PhotonLattice.
+    solve_batches) into the lattice that PhotonLattice(scene, settings) and `passes` solve()
+    calls give, bit for bit. Export it with shgi.volume_export.export_lattice (the add-on's
+    Export Volume). Progress: "batches d/B, P photons/s", then the merge; the retry policy and
+    cancel of the lightmap shards (_run_scene_tasks)."""
+    from . import __main__ as cli
+    from .method_registry import settings_to_dict
+
+    import_distributed()
+    settings.validate()
+    for name, value, low in (("passes", passes, 1), ("batches", batches, 1),
+                             ("threads", threads, 1)):
+        if not (isinstance(value, int) and value >= low):
+            raise ValueError(f"{name} must be a whole number >= {low}, got {value!r}")
+    progress = progress or _bake.BakeProgress()
+    scene = cli._load(scene_path)
+    # The lattice's cells measured first, so that a scene or settings it refuses fail before any
+    # task runs (a fraction of a second: 0.07 s on the sun room).
+    lattice = _shgi.PhotonLattice(scene, settings,
+                                  progress.native(0.0, 0.0, "measuring the lattice"))
+    ranges = photon_ranges(settings.photons, batches)
+    count = len(ranges)
+    wanted = settings_to_dict(settings)
+    traced = {}
+
+    def accept(i: int, result: dict) -> int:
+        traced[i] = _accept_photon_batches(result, wanted, passes, *ranges[i], i)
+        return (ranges[i][1] - ranges[i][0]) * passes
+
+    _run_scene_tasks(client, scene_path, _photon_batch_task,
+                     [(wanted, passes, begin, end, threads) for begin, end in ranges], accept,
+                     "batch", "batches", "photons", _SHARDS_SHARE, progress)
+    share = (1.0 - _SHARDS_SHARE) / passes
+    for k in range(passes):
+        lo = _SHARDS_SHARE + k * share
+        lattice.solve_batches([traced[i][k] for i in range(count)],
+                              progress.native(lo, lo + share, f"merging pass {k + 1}/{passes}"))
+        for i in range(count):
+            traced[i][k] = None  # its photons are in the lattice now
+    return lattice
+
+
+def _accept_photon_batches(result: dict, wanted: dict, passes: int, begin: int, end: int,
+                           i: int) -> list:
+    """The PhotonBatch of each pass in batch i's result, after checking that they are this
+    lattice's: its settings, every pass, photons [begin, end) (ValueError; OSError for bytes
+    that are not a batch)."""
+    from .method_registry import settings_to_dict
+
+    if result.get("settings") != wanted:
+        raise ValueError(f"it was traced with settings {result.get('settings')}, the lattice's "
+                         f"are {wanted}")
+    data = result.get("batches")
+    if not isinstance(data, list) or len(data) != passes:
+        raise ValueError(f"it holds {len(data) if isinstance(data, list) else 'no'} passes, the "
+                         f"lattice {passes}")
+    batches = []
+    for k, bytes_ in enumerate(data):
+        batch = _shgi.PhotonBatch.from_bytes(bytes_, f"batch {i}, pass {k}")
+        if settings_to_dict(batch.settings) != wanted:
+            raise ValueError(f"its pass {k} was traced with settings "
+                             f"{settings_to_dict(batch.settings)}, the lattice's are {wanted}")
+        if (batch.pass_index, batch.begin, batch.end) != (k, begin, end):
+            raise ValueError(f"its pass {k} holds pass {batch.pass_index}, photons "
+                             f"[{batch.begin}, {batch.end}); wanted pass {k}, [{begin}, {end})")
+        batches.append(batch)
+    return batches
+
+
+def _photon_batch_task(bundle: SceneBundle, settings: dict, passes: int, begin: int, end: int,
+                       threads: int, cancel_name: str) -> dict:
+    """Photons [begin, end) of every pass of a photon lattice, on a worker: {"batches": [the
+    PhotonBatch bytes of pass 0, 1, ...], "settings", "worker", "seconds"}."""
+    from . import __main__ as cli
+    from .method_registry import settings_from_dict, settings_to_dict
+
+    scene_path = _scene_on_this_machine(bundle)
+    lattice_settings = settings_from_dict(_shgi.PhotonLatticeSettings, settings)
+    progress = _bake.BakeProgress()
+
+    def work():
+        scene = cli._load(scene_path)
+        return [_shgi.trace_photon_batch(scene, lattice_settings, k, begin, end,
+                                         progress.native(k / passes, (k + 1) / passes,
+                                                         "tracing photons")).to_bytes()
+                for k in range(passes)]
+
+    batches, worker, seconds = _run_cancellable(cancel_name, threads, work, progress)
+    return {"batches": batches, "settings": settings_to_dict(lattice_settings),
+            "worker": worker, "seconds": seconds}

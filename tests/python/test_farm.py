@@ -384,6 +384,111 @@ def test_probe_grid_solved_in_four_bricks_equals_the_single_machine_grid(local_c
         merged.splice(brick.field(), 0, 3)
 
 
+# --- photon lattices in photon batches -----------------------------------------------------------
+
+def lattice_settings(**fields):
+    """A small lattice of the sun room, with the sky's direct light in the field (the room has no
+    mirrors: the global lattice carries the light, the caustic lattice stays empty)."""
+    values = dict(photons=30000, seed=5, resolution=8, max_bounces=3, world_in_field=True)
+    values.update(fields)
+    return shgi.PhotonLatticeSettings(**values)
+
+
+def test_photon_lattice_solved_in_four_batches_exports_the_single_machine_files(
+        local_client, sun_room_file, tmp_path):
+    settings = lattice_settings()
+    passes = 2
+    stages = []
+    merged = farm.solve_photon_lattice(local_client, str(sun_room_file), settings, passes, 4,
+                                       progress=bake.BakeProgress(
+                                           lambda f, stage: stages.append(stage)))
+    scene = shgi.load_gltf(str(sun_room_file))
+    scene.commit()
+    single = shgi.PhotonLattice(scene, settings)
+    for _ in range(passes):
+        single.solve()
+    assert merged.passes == single.passes == passes
+    for name in ("global", "caustic"):
+        assert np.array_equal(merged.lattices[name]["sh"], single.lattices[name]["sh"]), name
+    assert np.abs(single.lattices["global"]["sh"]).max() > 0  # lit: the comparison means something
+    for key in ("photons_emitted", "photons_stored", "bounces"):
+        assert merged.timings[key] == single.timings[key], key
+    # Exported (the add-on's Export Volume format), every file equals the single machine's.
+    from shgi.volume_export import export_lattice
+    (tmp_path / "farm").mkdir()
+    (tmp_path / "one").mkdir()
+    export_lattice(merged, tmp_path / "farm" / "lattice.json")
+    export_lattice(single, tmp_path / "one" / "lattice.json")
+    assert written(tmp_path / "farm") == written(tmp_path / "one")
+    assert len(written(tmp_path / "one")) == 3  # the JSON, the global and caustic EXRs
+    assert any(stage.startswith("batches 4/4, ") for stage in stages)
+    assert stages[-1].startswith("merging pass 2/2")
+
+
+def test_a_photon_batch_with_other_settings_is_refused(sun_room_file):
+    """By the farm's check of a returned batch (before it is accepted, so the batch is rerun),
+    and by PhotonLattice.solve_batches itself."""
+    from shgi.method_registry import settings_to_dict
+
+    scene = shgi.load_gltf(str(sun_room_file))
+    scene.commit()
+    settings, other = lattice_settings(photons=2000), lattice_settings(photons=2000, resolution=9)
+    wanted = settings_to_dict(settings)
+    batch = shgi.trace_photon_batch(scene, other, 0, 0, 2000)
+    result = {"settings": wanted, "batches": [batch.to_bytes()]}
+    with pytest.raises(ValueError, match=r"its pass 0 was traced with settings .*'resolution': 9"):
+        farm._accept_photon_batches(result, wanted, 1, 0, 2000, 0)
+    with pytest.raises(ValueError, match=r"it was traced with settings .*'resolution': 9"):
+        farm._accept_photon_batches(dict(result, settings=settings_to_dict(other)), wanted, 1,
+                                    0, 2000, 0)
+    with pytest.raises(ValueError, match=r"holds pass 0, photons \[0, 1000\); wanted pass 0, "
+                                         r"\[0, 2000\)"):
+        part = shgi.trace_photon_batch(scene, settings, 0, 0, 1000)
+        farm._accept_photon_batches(dict(result, batches=[part.to_bytes()]), wanted, 1, 0,
+                                    2000, 0)
+    with pytest.raises(OSError, match=r"batch 0, pass 0.*not an SHGI photon batch"):
+        farm._accept_photon_batches(dict(result, batches=[b"not a batch"]), wanted, 1, 0,
+                                    2000, 0)
+    lattice = shgi.PhotonLattice(scene, settings)
+    with pytest.raises(ValueError, match="other settings than the lattice's "
+                                         r"\(resolution 9 instead of 8\)"):
+        lattice.solve_batches([batch])
+    assert lattice.passes == 0
+    # The lattice's own batches, in any order and after a pickle, make its first pass.
+    import pickle
+    halves = [shgi.trace_photon_batch(scene, settings, 0, 1000, 2000),
+              shgi.trace_photon_batch(scene, settings, 0, 0, 1000)]
+    with pytest.raises(ValueError, match="batch 1 is None"):
+        lattice.solve_batches([halves[0], None])
+    lattice.solve_batches(pickle.loads(pickle.dumps(halves)))
+    single = shgi.PhotonLattice(scene, settings)
+    single.solve()
+    assert np.array_equal(lattice.lattices["global"]["sh"], single.lattices["global"]["sh"])
+
+
+def test_a_cancelled_photon_lattice_solve_on_the_cluster_raises_cancelled(local_client,
+                                                                          sun_room_file):
+    import threading
+
+    settings = lattice_settings(photons=4_000_000)  # batches of several seconds each
+    timers = []
+
+    def on_progress(fraction, stage):
+        if not timers:  # the client is measuring the lattice; the batches start right after
+            timers.append(threading.Timer(1.0, progress.cancel))
+            timers[0].start()
+
+    progress = bake.BakeProgress(on_progress)
+    with pytest.raises(shgi.Cancelled):
+        farm.solve_photon_lattice(local_client, str(sun_room_file), settings, 2, 4,
+                                  progress=progress)
+    timers[0].join()
+    # The cancelled tasks left the workers free: a small solve runs next.
+    small = farm.solve_photon_lattice(local_client, str(sun_room_file),
+                                      lattice_settings(photons=2000), 1, 2)
+    assert small.passes == 1
+
+
 # --- a scene built in this process (the add-on's bake on Dask) ---------------------------------
 
 def in_memory_bake(scene, samples=4):

@@ -8,7 +8,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'InstantGi', 'InstantGiField', 'InstantGiFilter', 'InstantGiSettings', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'NormalMapSpace', 'PathTracer', 'PathTracerSettings', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_read_tiles', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'unocclude', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'InstantGi', 'InstantGiField', 'InstantGiFilter', 'InstantGiSettings', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'NormalMapSpace', 'PathTracer', 'PathTracerSettings', 'PhotonBatch', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_read_tiles', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'trace_photon_batch', 'unocclude', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -1725,6 +1725,72 @@ class PathTracerSettings:
     @world_sampling.setter
     def world_sampling(self, arg0: WorldSampling) -> None:
         ...
+class PhotonBatch:
+    """
+    
+    Photons [begin, end) of one pass of a PhotonLattice, traced apart (shgi.trace_photon_batch, on
+    any machine with the same scene): the stored photons in photon order. PhotonLattice.solve_batches
+    merges the batches of a pass into exactly the lattice solve() makes (shgi.farm traces them as
+    tasks of a Dask cluster). Pickles as to_bytes().
+    """
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @staticmethod
+    def from_bytes(data: bytes, what: str = 'bytes') -> PhotonBatch:
+        """
+        The batch to_bytes() made; OSError naming `what` for bytes that are not one.
+        """
+    def __getstate__(self) -> bytes:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, arg0: bytes) -> None:
+        ...
+    def to_bytes(self) -> bytes:
+        """
+        The batch as bytes (exact: float32 as held; 48 bytes per stored photon).
+        """
+    @property
+    def begin(self) -> int:
+        """
+        Its first photon index.
+        """
+    @property
+    def bounces(self) -> int:
+        """
+        Rays traced.
+        """
+    @property
+    def emitted(self) -> int:
+        """
+        Photons emitted (end - begin; 0 in a scene without emitters).
+        """
+    @property
+    def end(self) -> int:
+        """
+        One past its last photon index.
+        """
+    @property
+    def pass_index(self) -> int:
+        """
+        The pass (0, 1, ...) it belongs to.
+        """
+    @property
+    def photons_stored(self) -> int:
+        """
+        Stored photons (global and caustic).
+        """
+    @property
+    def seconds(self) -> float:
+        """
+        Tracing time.
+        """
+    @property
+    def settings(self) -> PhotonLatticeSettings:
+        """
+        The PhotonLatticeSettings it was traced with.
+        """
 class PhotonLattice(IndirectField, GiSolver):
     """
     
@@ -1765,6 +1831,10 @@ class PhotonLattice(IndirectField, GiSolver):
     def solve(self, progress: Progress = None) -> None:
         """
         The same as refine().
+        """
+    def solve_batches(self, batches: collections.abc.Sequence[PhotonBatch], progress: Progress = None) -> None:
+        """
+        The next pass from PhotonBatch objects traced apart (shgi.trace_photon_batch) that together cover its photons [0, settings.photons), in any order: the lattice then equals the one solve() makes, bit for bit (GIL released). ValueError, changing nothing, for a batch with other settings, of another pass, or ranges with gaps or overlaps; shgi.Cancelled keeps the previous solution.
         """
     @property
     def lattices(self) -> dict:
@@ -3615,6 +3685,10 @@ def srgb_from_linear(linear: typing.Annotated[numpy.typing.ArrayLike, numpy.floa
     """
     sRGB transfer function (IEC 61966-2-1): 12.92 x up to 0.0031308, 1.055 x**(1/2.4) - 0.055
     above. Input is clamped to [0, 1] (NaN -> 0). Accepts a float or an array (float32 result).
+    """
+def trace_photon_batch(scene: Scene, settings: PhotonLatticeSettings, pass_index: typing.SupportsIndex, begin: typing.SupportsIndex, end: typing.SupportsIndex, progress: Progress = None) -> PhotonBatch:
+    """
+    Photons [begin, end) of pass `pass_index` of a PhotonLattice with `settings` on the committed scene, as a PhotonBatch (GIL released; shgi.Cancelled on cancel; ValueError unless begin < end <= settings.photons). Each photon's path depends only on the seed, the pass, its index and settings.photons, so any split merges into the single solve.
     """
 def unocclude(scene: Scene, map: TexelMap, settings: UnoccludeSettings = ..., progress: Progress = None, tiles: collections.abc.Sequence[typing.SupportsIndex] = [], tile_size: typing.SupportsIndex = 16) -> dict:
     """

@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <memory>
 #include <string>
@@ -507,6 +508,137 @@ TEST(PhotonLattice, CausticModesAgreeWithoutSpecularSurfaces) {
                 << "mode " << m;
         }
     }
+}
+
+// Photon lists equal byte for byte (positions, powers, normals, directions).
+bool same_photons(const std::vector<Photon>& a, const std::vector<Photon>& b) {
+    return a.size() == b.size() &&
+           (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(Photon)) == 0);
+}
+
+// Photons [cuts[i], cuts[i + 1]) of pass `pass`, each batch traced apart and carried through its
+// bytes (as between the machines of a farm), handed over last batch first.
+std::vector<PhotonBatch> traced_batches(const Scene& scene, const PhotonLatticeSettings& settings,
+                                        uint64_t pass, const std::vector<uint64_t>& cuts) {
+    std::vector<PhotonBatch> batches;
+    for (size_t i = cuts.size() - 1; i > 0; --i)
+        batches.push_back(PhotonBatch::from_bytes(
+            trace_photon_batch(scene, settings, pass, cuts[i - 1], cuts[i]).to_bytes()));
+    return batches;
+}
+
+// A solve split over machines: each pass's photons in batches of consecutive photons, traced
+// apart and merged by solve_batches(), equal the single solve bit for bit, for splits on and off
+// the tracer's 4096-photon chunks (a batch of one photon too), with 1 and 2 threads, with a
+// caustic lattice and a caustic photon map. The batches hold the pass's photons exactly.
+TEST(PhotonLattice, AnyBatchSplitEqualsTheWholeSolve) {
+    const Scene scene = room_with_mirror_sphere();
+    const std::vector<Probe> probes = face_centre_probes();
+    for (CausticMode mode : {CausticMode::Lattice, CausticMode::PhotonMap}) {
+        PhotonLatticeSettings settings = small_settings();  // 20000 photons
+        settings.caustics = mode;
+        for (int threads : {1, 2}) {
+            tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                      size_t(threads));
+            PhotonLattice whole(scene, settings);
+            whole.solve();
+            whole.solve();
+            PhotonLattice merged(scene, settings);
+            const std::vector<PhotonBatch> first =
+                traced_batches(scene, settings, 0, {0, 1, 4096, 9001, 12288, 20000});
+            // The batches' photons, in photon order, are the whole pass's photon lists.
+            const PhotonMaps maps = trace_photons(scene, [&] {
+                PhotonTracerSettings tracer;
+                tracer.photons = settings.photons;
+                tracer.seed = settings.seed;
+                tracer.max_bounces = settings.max_bounces;
+                tracer.specular_roughness = settings.specular_roughness;
+                return tracer;
+            }(), 0);
+            std::vector<Photon> global, caustic;
+            for (auto batch = first.rbegin(); batch != first.rend(); ++batch) {
+                global.insert(global.end(), batch->global.begin(), batch->global.end());
+                caustic.insert(caustic.end(), batch->caustic.begin(), batch->caustic.end());
+            }
+            EXPECT_TRUE(same_photons(global, maps.global));
+            EXPECT_TRUE(same_photons(caustic, maps.caustic));
+            EXPECT_GT(caustic.size(), 0u);  // the mirror sphere's caustics are in the batches
+            merged.solve_batches(first);
+            merged.solve_batches(traced_batches(scene, settings, 1, {0, 7000, 20000}));
+            EXPECT_EQ(merged.passes(), 2u);
+            EXPECT_EQ(merged.timings().photons_emitted, whole.timings().photons_emitted);
+            EXPECT_EQ(merged.timings().photons_stored, whole.timings().photons_stored);
+            EXPECT_EQ(merged.timings().bounces, whole.timings().bounces);
+            EXPECT_EQ(global_coefficients(merged), global_coefficients(whole))
+                << "threads " << threads;
+            EXPECT_EQ(merged.caustic_lattice().coefficients(),
+                      whole.caustic_lattice().coefficients());
+            EXPECT_TRUE(
+                same_photons(merged.caustic_map().photons(), whole.caustic_map().photons()));
+            EXPECT_EQ(merged.caustic_map().power_scale(), whole.caustic_map().power_scale());
+            for (const Probe& probe : probes) {
+                const FieldLookup a = merged.lookup(probe.position, probe.normal);
+                const FieldLookup b = whole.lookup(probe.position, probe.normal);
+                EXPECT_EQ(a.extra_irradiance, b.extra_irradiance);
+                EXPECT_EQ(a.irradiance(probe.normal), b.irradiance(probe.normal));
+            }
+        }
+    }
+}
+
+// solve_batches() takes only the batches of its own next pass, with its settings, covering its
+// photons exactly; a refused merge changes nothing. Damaged bytes are refused by name.
+TEST(PhotonLattice, SolveBatchesRefusesBatchesThatDoNotMakeThePass) {
+    const Scene scene = room_with_mirror_sphere();
+    const PhotonLatticeSettings settings = small_settings();
+    PhotonLattice lattice(scene, settings);
+    lattice.solve();
+    const std::vector<float> before = global_coefficients(lattice);
+    PhotonLatticeSettings other = settings;
+    other.resolution = 9;  // the same photons, but not this lattice's settings
+    testing::expect_invalid_argument(
+        [&] { lattice.solve_batches(traced_batches(scene, other, 1, {0, 20000})); },
+        "other settings than the lattice's (resolution 9 instead of 8)");
+    testing::expect_invalid_argument(
+        [&] { lattice.solve_batches(traced_batches(scene, settings, 0, {0, 20000})); },
+        "is of pass 0, the lattice's next pass is 1");
+    std::vector<PhotonBatch> gap = traced_batches(scene, settings, 1, {0, 5000});
+    gap.push_back(trace_photon_batch(scene, settings, 1, 6000, 20000));
+    testing::expect_invalid_argument([&] { lattice.solve_batches(gap); },
+                                     "after [0, 5000) comes a batch of [6000, 20000)");
+    std::vector<PhotonBatch> overlap = traced_batches(scene, settings, 1, {0, 5000, 20000});
+    overlap.push_back(trace_photon_batch(scene, settings, 1, 4000, 5000));
+    testing::expect_invalid_argument([&] { lattice.solve_batches(overlap); },
+                                     "without gaps or overlaps");
+    testing::expect_invalid_argument(
+        [&] { lattice.solve_batches(traced_batches(scene, settings, 1, {0, 19999})); },
+        "photons [19999, 20000) are missing");
+    testing::expect_invalid_argument(
+        [&] { lattice.solve_batches(std::vector<PhotonBatch>{}); }, "no batches");
+    testing::expect_invalid_argument([&] { trace_photon_batch(scene, settings, 1, 5, 5); },
+                                     "it needs begin < end <= 20000");
+    testing::expect_invalid_argument([&] { trace_photon_batch(scene, settings, 1, 0, 20001); },
+                                     "it needs begin < end <= 20000");
+    EXPECT_EQ(lattice.passes(), 1u);
+    EXPECT_EQ(global_coefficients(lattice), before);
+
+    // A cancel while merging keeps the previous solution too.
+    Progress cancelled;
+    cancelled.cancel();
+    EXPECT_THROW(lattice.solve_batches(traced_batches(scene, settings, 1, {0, 20000}), &cancelled),
+                 Cancelled);
+    EXPECT_THROW(trace_photon_batch(scene, settings, 1, 0, 20000, &cancelled), Cancelled);
+    EXPECT_EQ(lattice.passes(), 1u);
+    EXPECT_EQ(global_coefficients(lattice), before);
+
+    const std::string bytes = trace_photon_batch(scene, settings, 1, 0, 100).to_bytes();
+    testing::expect_error<IoError>(
+        [&] { PhotonBatch::from_bytes(bytes.substr(0, bytes.size() - 1), "batch 3"); },
+        {"batch 3", "the caustic photons", "truncated?"});
+    testing::expect_error<IoError>([&] { PhotonBatch::from_bytes(bytes + "x", "batch 3"); },
+                                   {"batch 3", "data after its end"});
+    testing::expect_error<IoError>([&] { PhotonBatch::from_bytes("a lattice?", "batch 3"); },
+                                   {"batch 3", "not an SHGI photon batch"});
 }
 
 }  // namespace
