@@ -39,6 +39,7 @@ from __future__ import annotations
 import contextlib
 import copy
 import hashlib
+import itertools
 import json
 import logging
 import os
@@ -422,6 +423,27 @@ def connect(scheduler: Optional[str] = None, workers: int = 0, threads_per_worke
             cluster.close()
 
 
+class _Scattered:
+    """A value on every worker under its content hash (client.scatter, broadcast), scattered
+    again when every copy has been lost with the workers that held it: workers that join later
+    fetch it from a peer, but a cluster whose workers all died (and were restarted by their
+    nannies) has no peer left, and tasks that need it would be cancelled for lost dependencies."""
+
+    def __init__(self, client, value):
+        self._client, self._value = client, value
+        self._future = None
+
+    def future(self):
+        if self._future is None or self._future.status != "finished":
+            [self._future] = self._client.scatter([self._value], hash=True, broadcast=True)
+        return self._future
+
+
+# A task cancelled because its inputs were lost with their workers is submitted again without
+# counting as a failed run, at most this many times.
+LOST_INPUT_RESUBMITS = 3
+
+
 def run_tasks(client, submit: Callable[[int, int], object], count: int,
               accept: Callable[[int, dict], int], on_progress: Callable[[int, int], None],
               what: str, cancelled: Callable[[], bool] = lambda: False,
@@ -430,10 +452,14 @@ def run_tasks(client, submit: Callable[[int, int], object], count: int,
     result) validates and keeps its result (ValueError/OSError: rejected) and returns how many
     items it held (texels, probes); on_progress(done, items) after each. A task that fails
     (raises, or is rejected) is submitted again, up to SHARD_ATTEMPTS runs; then ShardFailed
-    names `what` i, the worker and the error. Raises KeyboardInterrupt (after cancelling every
-    future) when cancelled() turns true. Whatever ends it early also sets `cancel_event` (the
-    Dask Event the running tasks watch), when given."""
+    names `what` i, the worker and the error. A task cancelled for lost dependencies (its inputs
+    died with every worker holding them) is submitted again without counting as a run, up to
+    LOST_INPUT_RESUBMITS times: submit must then send the inputs again (_Scattered); it may be
+    called twice with the same (i, attempt), and its keys must differ. Raises KeyboardInterrupt
+    (after cancelling every future) when cancelled() turns true. Whatever ends it early also
+    sets `cancel_event` (the Dask Event the running tasks watch), when given."""
     futures = {submit(i, 1): (i, 1) for i in range(count)}
+    lost_inputs = dict.fromkeys(range(count), 0)
     done = items = 0
     try:
         while futures:
@@ -455,6 +481,12 @@ def run_tasks(client, submit: Callable[[int, int], object], count: int,
                         continue
                     except (ValueError, OSError) as rejected:
                         error = f"its result was rejected: {rejected}"
+                if "lost dependencies" in error and lost_inputs[i] < LOST_INPUT_RESUBMITS:
+                    # Its inputs died with their workers (submit scatters them again): not the
+                    # task's failure.
+                    lost_inputs[i] += 1
+                    futures[submit(i, attempt)] = (i, attempt)
+                    continue
                 if attempt >= SHARD_ATTEMPTS or error.startswith("KilledWorker"):
                     raise ShardFailed(f"{what} {i} of {count} failed {SHARD_ATTEMPTS} times, "
                                       f"last on worker {worker}: {error}")
@@ -553,12 +585,14 @@ def _bake_shards_on(client, distributed, task, shared, task_args: tuple, jobs, o
     cancel = distributed.Event(cancel_name, client=client)
     # Keyed by its content; on every worker, so that a lost worker loses no copy that others need
     # (workers that join later fetch it from a peer).
-    [shared_future] = client.scatter([shared], hash=True, broadcast=True)
+    scattered = _Scattered(client, shared)
     run_id = uuid.uuid4().hex[:8]
+    serial = itertools.count()
 
     def submit(i: int, attempt: int):
-        return client.submit(task, shared_future, *task_args, i, shards, threads, cancel_name,
-                             key=f"shgi-shard-{i}-of-{shards}-{run_id}-{attempt}", pure=False)
+        return client.submit(task, scattered.future(), *task_args, i, shards, threads,
+                             cancel_name, pure=False,
+                             key=f"shgi-shard-{i}-of-{shards}-{run_id}-{attempt}-{next(serial)}")
 
     def accept(i: int, result: dict) -> int:
         return _accept_shard(result, jobs, options, out_dir, i, shards)
@@ -740,12 +774,14 @@ def _run_scene_tasks(client, scene_path: str, task, task_args: list, accept, wha
     bundle = scene_bundle(scene_path)
     cancel_name = f"shgi-cancel-{uuid.uuid4().hex}"
     cancel = distributed.Event(cancel_name, client=client)
-    [bundle_future] = client.scatter([bundle], hash=True, broadcast=True)
+    scattered = _Scattered(client, bundle)
     run_id = uuid.uuid4().hex[:8]
+    serial = itertools.count()
 
     def submit(i: int, attempt: int):
-        return client.submit(task, bundle_future, *task_args[i], cancel_name, pure=False,
-                             key=f"shgi-{plural}-{i}-of-{count}-{run_id}-{attempt}")
+        return client.submit(task, scattered.future(), *task_args[i], cancel_name, pure=False,
+                             key=f"shgi-{plural}-{i}-of-{count}-{run_id}-{attempt}-"
+                                 f"{next(serial)}")
 
     start = time.perf_counter()
 

@@ -170,6 +170,33 @@ def test_a_worker_killed_while_it_holds_a_shard_still_bakes_byte_identical(
         client.wait_for_workers(2, timeout=60)  # the nanny restarted it, for the next tests
 
 
+def test_every_worker_killed_mid_bake_loses_the_scene_and_the_bake_still_completes(
+        build_python_dir, sun_room_file, single_bake, dask_cluster, tmp_path):
+    """Both workers SIGKILLed while they hold shards: every copy of the scattered scene is gone
+    with them. The restarted workers get it scattered again, and the bake completes
+    byte-identical."""
+    from distributed import Client
+
+    out = tmp_path / "farm"
+    process = cli(build_python_dir, sun_room_file, "--out", out, *SLOW_BAKE, "--scheduler",
+                  dask_cluster, "--shards", "4")
+    with Client(dask_cluster, timeout="30s") as client:
+        busy = {}
+        deadline = time.monotonic() + 120
+        while len(busy) < 2 and time.monotonic() < deadline and process.poll() is None:
+            busy = {worker: tasks for worker, tasks in client.processing().items()
+                    if any(str(task).startswith("shgi-shard-") for task in tasks)}
+            time.sleep(0.05)
+        assert len(busy) == 2, "both workers did not take a shard"
+        pids = client.run(os.getpid, workers=sorted(busy))
+        for pid in pids.values():
+            os.kill(pid, signal.SIGKILL)
+        stdout, stderr = process.communicate(timeout=240)
+        assert process.returncode == 0, stderr
+        assert written(out) == single_bake["slow"]
+        client.wait_for_workers(2, timeout=60)  # the nannies restarted them, for the next tests
+
+
 def test_ctrl_c_during_a_distributed_bake_returns_quickly_leaving_no_lightmap(
         build_python_dir, sun_room_file, tmp_path):
     out = tmp_path / "farm"
