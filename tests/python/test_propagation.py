@@ -94,6 +94,7 @@ def test_settings_mirror_cpp_defaults_and_validate():
         100000, 0, 4, 32, 8, 2)
     assert s.occlusion and s.normal_offset == pytest.approx(1.0)
     assert not s.damping and not s.occlude_first_step and not s.drop_outward_vpls
+    assert not s.travel_reinjection
     assert shgi.settings_from_dict(shgi.PropagationSettings,
                                    shgi.settings_to_dict(s)).steps == 8
     with pytest.raises(TypeError, match="no field 'step'"):
