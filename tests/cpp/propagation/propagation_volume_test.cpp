@@ -163,9 +163,14 @@ constexpr int kBoxCells = 16;
 struct InFlight {
     std::vector<double> remaining;  // flux in flight after k steps, k = 0 … (of the VPL's 1)
     double residence = 0.0;         // Σ_k remaining[k]: steps a unit of flux spends in flight
+    // With `absorbed`: the flux the floor, the ceiling and the four sides stopped.
+    double floor = 0.0, ceiling = 0.0, sides = 0.0;
 };
 
-InFlight closed_box_in_flight(int order, Reinjection reinjection, int steps) {
+// `absorbed`: also find where the light hits the walls (each step made a second time without
+// the walls: what it puts outside the box is what the walls stop).
+InFlight closed_box_in_flight(int order, Reinjection reinjection, int steps,
+                              bool absorbed = false) {
     const int n = kBoxCells + 2;
     ShVolume volume(vec3(0.0f), 1.0f, ivec3(n), order);
     const vec3 up(0.0f, 0.0f, 1.0f);
@@ -193,6 +198,16 @@ InFlight closed_box_in_flight(int order, Reinjection reinjection, int steps) {
         result.remaining.push_back(total);
         result.residence += total;
         if (k < steps) {
+            if (absorbed) {
+                step(ping, pong, nullptr);
+                for (size_t c = 0; c < pong.cell_count(); ++c) {
+                    const ivec3 cell(int(c % n), int((c / n) % n), int(c / (n * n)));
+                    if (inside(cell)) continue;
+                    const double stopped = double(cell_flux(pong.cell_data(c)).x);
+                    (cell.z == 0 ? result.floor : cell.z == n - 1 ? result.ceiling : result.sides) +=
+                        stopped;
+                }
+            }
             step(ping, pong, &walls);
             std::swap(ping, pong);
         }
@@ -200,8 +215,10 @@ InFlight closed_box_in_flight(int order, Reinjection reinjection, int steps) {
     return result;
 }
 
-// Mean distance (cells) from the floor point p to the box's walls along a cosine lobe up.
-double straight_flight(const vec3& p) {
+// Mean distance (cells) from the floor point p to the box's walls along a cosine lobe up; with
+// `ceiling`, the share of the lobe that reaches the ceiling instead (its view factor).
+double straight_flight(const vec3& p, double* ceiling = nullptr) {
+    double ceiling_share = 0.0;
     constexpr int kSide = 256;
     double sum = 0.0;
     for (int i = 0; i < kSide; ++i)
@@ -210,12 +227,17 @@ double straight_flight(const vec3& p) {
             const double r = std::sqrt((i + 0.5) / kSide), phi = 2.0 * kPiD * (j + 0.5) / kSide;
             const glm::dvec3 w(r * std::cos(phi), r * std::sin(phi), std::sqrt(1.0 - r * r));
             double t = kInfinity;
+            int hit = 0;
             for (int a = 0; a < 3; ++a) {
-                if (w[a] > 0.0) t = std::min(t, (kBoxCells + 1.0 - p[a]) / w[a]);
-                if (w[a] < 0.0) t = std::min(t, (1.0 - p[a]) / w[a]);
+                const double ta = w[a] > 0.0   ? (kBoxCells + 1.0 - p[a]) / w[a]
+                                  : w[a] < 0.0 ? (1.0 - p[a]) / w[a]
+                                               : kInfinity;
+                if (ta < t) t = ta, hit = a;
             }
             sum += t;
+            if (hit == 2) ceiling_share += 1.0;
         }
+    if (ceiling != nullptr) *ceiling = ceiling_share / (kSide * kSide);
     return sum / (kSide * kSide);
 }
 
@@ -251,6 +273,31 @@ TEST(PropagationVolume, ClosedBoxLightLeavesThroughTheWalls) {
         }
         EXPECT_LT(residence[1], (order == 1 ? 0.6 : 0.8) * residence[0]) << "order " << order;
     }
+}
+
+// Where the floor VPL's light lands, against straight flight (none on the floor, which cannot
+// light itself; the ceiling's view factor, 0.24, on the ceiling). Disabled: the target is missed
+// by far. Measured (converged, 256 steps): floor 0.736 / ceiling 0.019 (LPV), 0.531 / 0.040
+// (HOLPV); travel-direction re-injection 0.496 / 0.046 and 0.499 / 0.042. The L1 and L2 images of
+// a beam are broad (an L1 beam along ω holds 1/4 of its peak intensity at 90° from it), so at every
+// step light travelling along the floor sends part of itself down into it: this is the
+// self-lighting of §5.7 in numbers, and why the Cornell box's floor reads bright and its ceiling
+// dark whatever the steps (docs/methods.md).
+TEST(PropagationVolume, DISABLED_ClosedBoxFloorLightReachesTheCeilingNotTheFloor) {
+    const int n = kBoxCells + 2;
+    double ceiling_share = 0.0;
+    straight_flight(vec3(0.5f * n - 0.25f, 0.5f * n + 0.25f, 1.0f), &ceiling_share);
+    for (int order : {1, 2})
+        for (Reinjection reinjection : {Reinjection::FaceNormal, Reinjection::TravelDirection}) {
+            const InFlight flight = closed_box_in_flight(order, reinjection, 256, true);
+            std::printf("order %d, %s: absorbed by the floor %.3f, ceiling %.3f (straight flight "
+                        "%.3f), sides %.3f\n",
+                        order,
+                        reinjection == Reinjection::FaceNormal ? "face normal" : "travel direction",
+                        flight.floor, flight.ceiling, ceiling_share, flight.sides);
+            EXPECT_LT(flight.floor, 0.05) << "order " << order;
+            EXPECT_NEAR(flight.ceiling, ceiling_share, 0.2 * ceiling_share) << "order " << order;
+        }
 }
 
 // --- §5.2: the diagonal scene -------------------------------------------------------------
