@@ -31,7 +31,9 @@
 //      first step (§3.2.3: the VPLs' own surfaces would block them) unless occlude_first_step
 //      (then a VPL beside a thin wall, injected into the cell the wall runs through, does not
 //      send its light across). Stencil, flux factor and
-//      clamping: propagation_stencil.h (Ω_f/π instead of eq. 3.3's Ω_f/4π; clamp then rescale).
+//      clamping: propagation_stencil.h (Ω_f/π instead of eq. 3.3's Ω_f/4π; clamp then rescale);
+//      the light crossing a face is re-injected along the face's normal (the seed) or, with
+//      travel_reinjection, along its travel direction (propagation_stencil.h, "Re-injection").
 // The field (propagation/propagation_field.h) is an immutable snapshot of the accumulation
 // volume: renderers read it while the next pass runs.
 //
