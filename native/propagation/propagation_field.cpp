@@ -20,14 +20,14 @@ int neighbour_index(const ivec3& d) {
 PropagationField::PropagationField(std::shared_ptr<const ShVolume> accumulated,
                                    float normal_offset,
                                    std::shared_ptr<const NeighbourTransmittance> transmittance,
-                                   bool damping)
+                                   bool damping, Reinjection reinjection)
     : accumulated_(std::move(accumulated)),
       transmittance_(std::move(transmittance)),
       normal_offset_(normal_offset),
       damping_(damping) {
     if (!accumulated_) return;
     const float s = accumulated_->cell_size();
-    radiance_scale_ = propagation_radiance_scale(accumulated_->order()) / (s * s);
+    radiance_scale_ = propagation_radiance_scale(accumulated_->order(), reinjection) / (s * s);
 }
 
 ShRgb PropagationField::weighted_lookup(const vec3& q) const {

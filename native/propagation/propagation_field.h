@@ -26,15 +26,23 @@
 #include <memory>
 #include <vector>
 
+#include "propagation/propagation_stencil.h"
 #include "render/indirect_field.h"
 #include "sh/sh_volume.h"
 
 namespace shgi {
 
-// k by SH order of the volume (1: LPV's stencil, 2: HOLPV's), see above.
+// k by SH order of the volume (1: LPV's stencil, 2: HOLPV's) and re-injection, see above. With
+// Reinjection::TravelDirection the same fit gives 0.992 (LPV) and 0.576 (HOLPV); its near field
+// is less even (samples 0.55–1.97 and 0.53–1.63 × the fit, against 0.81–1.27 and 0.88–1.23).
 inline constexpr float kLpvRadianceScale = 1.0f / 0.786f;
 inline constexpr float kHolpvRadianceScale = 1.0f / 0.465f;
-inline float propagation_radiance_scale(int order) {
+inline constexpr float kLpvTravelRadianceScale = 1.0f / 0.992f;
+inline constexpr float kHolpvTravelRadianceScale = 1.0f / 0.576f;
+inline float propagation_radiance_scale(int order,
+                                        Reinjection reinjection = Reinjection::FaceNormal) {
+    if (reinjection == Reinjection::TravelDirection)
+        return order == 1 ? kLpvTravelRadianceScale : kHolpvTravelRadianceScale;
     return order == 1 ? kLpvRadianceScale : kHolpvRadianceScale;
 }
 
@@ -52,9 +60,10 @@ class PropagationField : public IndirectField {
     // (the light propagation keeps it out, the interpolation would let it in).
     // With `damping` the lookup is damped by the directional derivative along the normal
     // (seed 003 §3.2.4, Kaplanyan & Dachsbacher 2010): see radiance_sh.
+    // `reinjection` picks the radiance scale k of the propagation that made the volume.
     PropagationField(std::shared_ptr<const ShVolume> accumulated, float normal_offset,
                      std::shared_ptr<const NeighbourTransmittance> transmittance = nullptr,
-                     bool damping = false);
+                     bool damping = false, Reinjection reinjection = Reinjection::FaceNormal);
 
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
     bool is_zero() const override { return !accumulated_ || accumulated_->cell_count() == 0; }

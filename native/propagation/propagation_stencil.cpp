@@ -97,8 +97,10 @@ void add_cosine_lobe(float* cell, int order, const vec3& normal, const vec3& pow
 
 vec3 cell_flux(const float* cell) { return kSqrtFourPi * vec3(cell[0], cell[1], cell[2]); }
 
-PropagationStep::PropagationStep(PropagationStencil stencil, int order, LobeClamp clamp)
-    : order_(order), coefficients_(sh_num_coefficients(order)), clamp_(clamp) {
+PropagationStep::PropagationStep(PropagationStencil stencil, int order, LobeClamp clamp,
+                                 Reinjection reinjection)
+    : order_(order), coefficients_(sh_num_coefficients(order)), clamp_(clamp),
+      reinjection_(reinjection) {
     if (order < 1 || order > 2)
         throw InvalidArgument(format_message("PropagationStep: order ", order,
                                              " must be 1 (L1, LPV) or 2 (L2, HOLPV)"));
@@ -116,8 +118,13 @@ PropagationStep::PropagationStep(PropagationStencil stencil, int order, LobeClam
         face.flux_factor = float(f.solid_angle / kPiD);
         sh_eval(order, f.direction, face.basis);
         face.normal_index = normal_index(f.normal);
+        face.index = int(beams_.size());
+        std::array<float, 9> beam{};
+        std::copy(face.basis, face.basis + 9, beam.begin());
+        beams_.push_back(beam);
         offsets_.back().faces.push_back(face);
     }
+    static_assert(kMaxStencilFaces == 54, "the HOLPV's 54 outer faces");
 }
 
 vec3 PropagationStep::face_intensity(const float* cell, const Face& face) const {
@@ -171,6 +178,7 @@ void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
     std::vector<vec3> factors;
     rescale_factors(source, factors, progress);
     const bool clamp = clamp_ != LobeClamp::None;
+    const bool travel = reinjection_ == Reinjection::TravelDirection;
     const int floats = source.floats_per_cell();
     parallel_for(
         0, source.cell_count(), kCellsPerTask,
@@ -180,8 +188,10 @@ void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
                 const ivec3 cell(int(c % uint64_t(counts.x)),
                                  int((c / uint64_t(counts.x)) % uint64_t(counts.y)),
                                  int(c / (uint64_t(counts.x) * uint64_t(counts.y))));
-                // Flux re-injected along each of the 6 axis normals, then one lobe per normal.
+                // Flux re-injected along each of the 6 axis normals, then one lobe per normal
+                // (FaceNormal); or per face, then one beam per face (TravelDirection).
                 vec3 flux[6] = {};
+                std::array<vec3, kMaxStencilFaces> face_flux{};
                 for (int o = 0; o < offset_count(); ++o) {
                     const Offset& offset = offsets_[size_t(o)];
                     const ivec3 from = cell - offset.offset;
@@ -197,11 +207,27 @@ void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
                     for (const Face& face : offset.faces) {
                         vec3 intensity = face_intensity(src, face);
                         if (clamp) intensity = glm::max(intensity, vec3(0.0f)) * factors[s];
-                        flux[face.normal_index] += (face.flux_factor * kPi * t) * intensity;
+                        const vec3 crossing = (face.flux_factor * kPi * t) * intensity;
+                        if (travel)
+                            face_flux[size_t(face.index)] += crossing;
+                        else
+                            flux[face.normal_index] += crossing;
                     }
                 }
                 float* dst = destination.cell_data(c);
                 std::fill(dst, dst + floats, 0.0f);
+                if (travel) {
+                    for (size_t f = 0; f < beams_.size(); ++f) {
+                        const vec3& phi = face_flux[f];
+                        if (phi == vec3(0.0f)) continue;
+                        for (int i = 0; i < coefficients_; ++i) {
+                            dst[3 * i + 0] += beams_[f][size_t(i)] * phi.x;
+                            dst[3 * i + 1] += beams_[f][size_t(i)] * phi.y;
+                            dst[3 * i + 2] += beams_[f][size_t(i)] * phi.z;
+                        }
+                    }
+                    continue;
+                }
                 for (int n = 0; n < 6; ++n) {
                     if (flux[n] == vec3(0.0f)) continue;
                     for (int i = 0; i < coefficients_; ++i) {

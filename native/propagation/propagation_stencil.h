@@ -31,8 +31,21 @@
 //     energy (+12.5% per step for an L1 cosine lobe). LobeClamp::Rescaled clamps, then scales
 //     the source cell's clamped fluxes to its unclamped total Σ_f Ω_f I(ω_f), which equals
 //     ∫ I dω (the stencils integrate bands 0..2 exactly by their symmetry): no energy is made.
+//
+// Re-injection. The seed re-injects the light crossing face f as a cosine lobe along the face's
+// normal n_f (Reinjection::FaceNormal): every face re-emits like a Lambertian surface. Such a
+// lobe of flux Φ has first moment ∫ I ω dω = (2/3) Φ n_f, so each step keeps only part of the
+// light's momentum (one unclamped step keeps 0.37 (LPV) and 0.55 (HOLPV) of a cosine lobe's):
+// the light random-walks, a transport closer to diffusion than to straight flight. In a closed
+// box it lingers long before the walls absorb it, and the accumulation keeps growing with the
+// steps (docs/methods.md, "Why the accumulation does not converge").
+// Reinjection::TravelDirection re-injects it as the projection of a beam along its travel
+// direction ω_f, coefficients Φ_f Y_i(ω_f): one unclamped step then keeps the source's flux and
+// its first moment Σ_f Ω_f I(ω_f) ω_f = ∫ I ω dω exactly (I ω is of bands 0..3; the stencils
+// integrate the even bands up to 2 exactly and the odd ones to 0 like the sphere).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -45,6 +58,11 @@ namespace shgi {
 enum class PropagationStencil : uint8_t {
     Faces6,        // LPV: 6 face neighbours × 5 faces
     Neighbours26,  // HOLPV: 26 neighbours, the 54 outer faces of the 3×3×3 block
+};
+
+enum class Reinjection : uint8_t {
+    FaceNormal,       // a cosine lobe along the face's outward normal (the seed, §3.3)
+    TravelDirection,  // a beam along ω_f, projected (keeps the light's first moment)
 };
 
 enum class LobeClamp : uint8_t {
@@ -65,6 +83,9 @@ struct PropagationFace {
     vec3 normal{0.0f};     // the face's outward unit normal (axis-aligned)
     double solid_angle = 0.0;  // Ω_f, sr, seen from the source centre
 };
+
+// Faces of the largest stencil (Neighbours26's; Faces6 has 30).
+inline constexpr size_t kMaxStencilFaces = 54;
 
 // The faces of a stencil, grouped by offset (offsets in a fixed order).
 std::vector<PropagationFace> propagation_faces(PropagationStencil stencil);
@@ -92,7 +113,8 @@ struct PropagationTransmittance {
 // transmittance of the wrong size.
 class PropagationStep {
   public:
-    PropagationStep(PropagationStencil stencil, int order, LobeClamp clamp);
+    PropagationStep(PropagationStencil stencil, int order, LobeClamp clamp,
+                    Reinjection reinjection = Reinjection::FaceNormal);
     void operator()(const ShVolume& source, ShVolume& destination,
                     const PropagationTransmittance* transmittance = nullptr,
                     Progress* progress = nullptr) const;
@@ -103,6 +125,7 @@ class PropagationStep {
         float flux_factor = 0.0f;                   // Ω_f / π
         float basis[9] = {};                        // Y_i(ω_f), i < 9
         int normal_index = 0;                       // index into lobes_
+        int index = 0;  // among all the stencil's faces (TravelDirection's per-face flux)
     };
     struct Offset {
         ivec3 offset{0};
@@ -117,6 +140,8 @@ class PropagationStep {
     int order_ = 1;
     int coefficients_ = 4;
     LobeClamp clamp_ = LobeClamp::Rescaled;
+    Reinjection reinjection_ = Reinjection::FaceNormal;
+    std::vector<std::array<float, 9>> beams_;  // per face, Y_i(ω_f) (TravelDirection, flux 1)
     std::vector<Offset> offsets_;
     float lobes_[6][9] = {};  // cosine lobe Â_l Y_i(n)/π along ±x, ±y, ±z (flux 1)
 };

@@ -341,7 +341,10 @@ void PropagationVolume::refine(Progress* progress) {
     stages.push_back({"geometry_volume", geometry_seconds_});
 
     if (progress) progress->begin_stage("propagating", kInjectShare, 1.0f);
-    const PropagationStep step(stencil_of(settings_.order), settings_.order, LobeClamp::Rescaled);
+    const Reinjection reinjection = settings_.travel_reinjection ? Reinjection::TravelDirection
+                                                                 : Reinjection::FaceNormal;
+    const PropagationStep step(stencil_of(settings_.order), settings_.order, LobeClamp::Rescaled,
+                               reinjection);
     std::vector<double> step_seconds;
     ShVolume accumulated =
         propagate(mean, step, settings_.steps, settings_.occlusion ? &transmittance_ : nullptr,
@@ -354,7 +357,7 @@ void PropagationVolume::refine(Progress* progress) {
     injected_ = std::move(mean);
     field_ = std::make_shared<PropagationField>(
         std::make_shared<const ShVolume>(std::move(accumulated)), settings_.normal_offset,
-        lookup_transmittance_, settings_.damping);
+        lookup_transmittance_, settings_.damping, reinjection);
     last_vpl_count_ = vpls.size();
     stage_seconds_ = std::move(stages);
     ++passes_;

@@ -2796,6 +2796,14 @@ class PropagationSettings:
     def steps(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
+    def travel_reinjection(self) -> bool:
+        """
+        Re-inject the light crossing each face along its travel direction (keeps its momentum: less diffusion, converges in fewer steps) instead of as a cosine lobe along the face's normal (the seed) (False).
+        """
+    @travel_reinjection.setter
+    def travel_reinjection(self, arg0: bool) -> None:
+        ...
+    @property
     def vpl_bounces(self) -> int:
         """
         Surface hits per light path that become VPLs: 1 is the published single bounce, n gives n bounces of indirect light (4).

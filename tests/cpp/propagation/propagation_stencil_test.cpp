@@ -8,8 +8,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
+#include "sh/sh_basis.h"
 #include "util/math.h"
 
 namespace shgi {
@@ -93,11 +95,40 @@ ShVolume lobe_in_centre(int order) {
 }
 
 // Relative flux change of one step from the centre cell (no light reaches the volume's sides).
-vec3 one_step_gain(const StepCase& c, LobeClamp clamp) {
+vec3 one_step_gain(const StepCase& c, LobeClamp clamp,
+                   Reinjection reinjection = Reinjection::FaceNormal) {
     const ShVolume source = lobe_in_centre(c.order);
     ShVolume destination(source.origin(), source.cell_size(), source.counts(), c.order);
-    PropagationStep(c.stencil, c.order, clamp)(source, destination);
+    PropagationStep(c.stencil, c.order, clamp, reinjection)(source, destination);
     return volume_flux(destination) / volume_flux(source) - 1.0f;
+}
+
+// First moment ∫ I(ω) ω dω of a volume's first channel, summed over its cells: only band 1
+// contributes, Y_i(ω) = a e_i·ω, and ∫ a (e_i·ω) ω dω = (4π/3) a e_i = (4π/3) (Y_i(x̂), Y_i(ŷ), Y_i(ẑ)).
+glm::dvec3 volume_moment(const ShVolume& volume) {
+    float axes[3][9];
+    for (int j = 0; j < 3; ++j) {
+        vec3 axis(0.0f);
+        axis[j] = 1.0f;
+        sh_eval(volume.order(), axis, axes[j]);
+    }
+    glm::dvec3 moment(0.0);
+    for (size_t c = 0; c < volume.cell_count(); ++c) {
+        const float* cell = volume.cell_data(c);
+        for (int i = 1; i < 4; ++i)
+            for (int j = 0; j < 3; ++j)
+                moment[j] += 4.0 * kPiD / 3.0 * double(cell[3 * i]) * double(axes[j][i]);
+    }
+    return moment;
+}
+
+// The share of the source's first moment (along it) one unclamped step keeps.
+double one_step_momentum(const StepCase& c, Reinjection reinjection) {
+    const ShVolume source = lobe_in_centre(c.order);
+    ShVolume destination(source.origin(), source.cell_size(), source.counts(), c.order);
+    PropagationStep(c.stencil, c.order, LobeClamp::None, reinjection)(source, destination);
+    const glm::dvec3 before = volume_moment(source), after = volume_moment(destination);
+    return glm::dot(after, before) / glm::dot(before, before);
 }
 
 TEST(PropagationStep, UnclampedAndRescaledStepsConserveFlux) {
@@ -112,6 +143,34 @@ TEST(PropagationStep, UnclampedAndRescaledStepsConserveFlux) {
                     << "stencil " << int(c.stencil) << " order " << c.order << " clamp "
                     << int(clamp) << " channel " << ch;
         }
+    }
+}
+
+// Re-injected along its travel direction, the light keeps its flux like the seed's lobes do,
+// and its first moment too (the stencils integrate I(ω) ω exactly); the seed's cosine lobes along
+// the face normals keep about half of it: every face re-emits like a Lambertian surface, and the
+// light random-walks (diffusion) instead of moving on. Measured share kept by one face-normal
+// step (lobe_in_centre, first channel): printed.
+TEST(PropagationStep, TravelReinjectionKeepsFluxAndMomentum) {
+    for (const StepCase& c : {StepCase{PropagationStencil::Faces6, 1},
+                              StepCase{PropagationStencil::Faces6, 2},
+                              StepCase{PropagationStencil::Neighbours26, 1},
+                              StepCase{PropagationStencil::Neighbours26, 2}}) {
+        for (LobeClamp clamp : {LobeClamp::None, LobeClamp::Rescaled}) {
+            const vec3 gain = one_step_gain(c, clamp, Reinjection::TravelDirection);
+            for (int ch = 0; ch < 3; ++ch)
+                EXPECT_NEAR(gain[ch], 0.0, kFluxTolerance)
+                    << "stencil " << int(c.stencil) << " order " << c.order << " clamp "
+                    << int(clamp) << " channel " << ch;
+        }
+        const double travel = one_step_momentum(c, Reinjection::TravelDirection);
+        const double normal = one_step_momentum(c, Reinjection::FaceNormal);
+        std::printf("stencil %d order %d: first moment kept by one unclamped step: face normal "
+                    "%.4f, travel direction %.6f\n",
+                    int(c.stencil), c.order, normal, travel);
+        EXPECT_NEAR(travel, 1.0, kFluxTolerance) << "stencil " << int(c.stencil) << " order "
+                                                 << c.order;
+        EXPECT_LT(normal, 0.75) << "stencil " << int(c.stencil) << " order " << c.order;
     }
 }
 

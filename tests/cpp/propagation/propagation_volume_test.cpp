@@ -34,10 +34,11 @@ PropagationStencil stencil_of(int order) {
 
 // One VPL of flux Φ = 1 along `normal` whose shifted position is the centre of an empty 25³
 // volume of unit cells, propagated `steps` steps.
-ShVolume single_vpl(int order, int steps, const vec3& centre, const vec3& normal) {
+ShVolume single_vpl(int order, int steps, const vec3& centre, const vec3& normal,
+                    Reinjection reinjection = Reinjection::FaceNormal) {
     ShVolume volume(vec3(0.0f), 1.0f, ivec3(25), order);
     inject_vpls(volume, {{centre - 0.5f * normal, normal, vec3(1.0f)}});
-    const PropagationStep step(stencil_of(order), order, LobeClamp::Rescaled);
+    const PropagationStep step(stencil_of(order), order, LobeClamp::Rescaled, reinjection);
     return propagate(volume, step, steps, nullptr);
 }
 
@@ -77,6 +78,48 @@ TEST(PropagationVolume, SingleVplLightsAFacingPlane) {
     EXPECT_GT(far_ratio[2], far_ratio[1]);
 }
 
+// The travel-direction re-injection's radiance scale is the same fit (the near field's
+// geometric mean is 1). Its near field is less even than the face-normal lobes' (measured
+// extremes 0.55 and 1.97 × for the LPV, 0.53 and 1.63 × for the HOLPV: brighter along the axes
+// the stencils step on, outside kNearFieldTolerance, so that is not asserted), and the LPV's
+// light reaches farther (printed: 4 and 6 cells along the lobe).
+TEST(PropagationVolume, TravelReinjectionScaleIsTheNearFieldFit) {
+    const vec3 n(0.0f, 0.0f, 1.0f), centre(12.5f);
+    float far_ratio[3][2] = {};
+    for (int order : {1, 2}) {
+        for (Reinjection reinjection : {Reinjection::FaceNormal, Reinjection::TravelDirection}) {
+            const PropagationField field(
+                std::make_shared<const ShVolume>(single_vpl(order, 24, centre, n, reinjection)),
+                0.0f, nullptr, false, reinjection);
+            double log_sum = 0.0;
+            float lowest = kInfinity, highest = 0.0f;
+            int samples = 0;
+            for (float theta_deg : {0.0f, 30.0f, 60.0f}) {
+                const float theta = glm::radians(theta_deg);
+                const vec3 w(std::sin(theta), 0.0f, std::cos(theta));
+                for (float r : {1.5f, 2.0f, 2.5f, 3.0f}) {
+                    const float ratio =
+                        field.irradiance(centre + r * w, -w).x / (std::cos(theta) / (kPi * r * r));
+                    log_sum += std::log(double(ratio));
+                    lowest = std::min(lowest, ratio);
+                    highest = std::max(highest, ratio);
+                    ++samples;
+                }
+            }
+            const bool travel = reinjection == Reinjection::TravelDirection;
+            far_ratio[order][int(travel)] = field.irradiance(centre + 6.0f * n, -n).x * (kPi * 36.0f);
+            std::printf("order %d, %s: near field geometric mean %.4f, extremes %.3f %.3f; "
+                        "irradiance / closed form at 4 and 6 cells %.3f %.3f\n",
+                        order, travel ? "travel direction" : "face normal",
+                        std::exp(log_sum / samples), lowest, highest,
+                        field.irradiance(centre + 4.0f * n, -n).x * (kPi * 16.0f),
+                        far_ratio[order][int(travel)]);
+            EXPECT_NEAR(std::exp(log_sum / samples), 1.0, 0.01) << "order " << order;
+        }
+    }
+    EXPECT_GT(far_ratio[1][1], 2.0f * far_ratio[1][0]);
+}
+
 // §3.2.4's directional-derivative damping against a single VPL: surfaces with their back to it
 // (whose exact irradiance is 0: the L1/L2 lobes and the sideways re-injection light them) get
 // less light, surfaces facing it keep theirs. Irradiance summed over r = 1.5–3 cells, θ = 0–60°.
@@ -104,6 +147,157 @@ TEST(PropagationVolume, DampingDarkensSurfacesTurnedAwayAndKeepsFacingOnes) {
         EXPECT_GT(facing[1], 0.99 * facing[0]) << "order " << order;
         EXPECT_LT(away[1], (order == 1 ? 0.5 : 0.8) * away[0]) << "order " << order;
     }
+}
+
+// --- a closed box: how long light stays in flight -----------------------------------------
+
+// A closed box of kBoxCells³ interior cells (cells 1 … kBoxCells of a (kBoxCells + 2)³ volume):
+// every transfer between the interior and the outside is blocked (transmittance 0), so light
+// leaves the propagation only by hitting a wall. One VPL on the floor's middle faces up. The
+// flux still in flight after k steps, and the steps a unit of flux spends in flight (the sum
+// the accumulation makes), against straight flight: the mean distance from the VPL to the walls
+// over its cosine lobe, in cells (a step moves light one cell along an axis; further along
+// diagonals, so straight flight takes at most that many steps).
+constexpr int kBoxCells = 16;
+
+struct InFlight {
+    std::vector<double> remaining;  // flux in flight after k steps, k = 0 … (of the VPL's 1)
+    double residence = 0.0;         // Σ_k remaining[k]: steps a unit of flux spends in flight
+    // With `absorbed`: the flux the floor, the ceiling and the four sides stopped.
+    double floor = 0.0, ceiling = 0.0, sides = 0.0;
+};
+
+// `absorbed`: also find where the light hits the walls (each step made a second time without
+// the walls: what it puts outside the box is what the walls stop).
+InFlight closed_box_in_flight(int order, Reinjection reinjection, int steps,
+                              bool absorbed = false) {
+    const int n = kBoxCells + 2;
+    ShVolume volume(vec3(0.0f), 1.0f, ivec3(n), order);
+    const vec3 up(0.0f, 0.0f, 1.0f);
+    inject_vpls(volume, {{vec3(0.5f * n - 0.25f, 0.5f * n + 0.25f, 1.0f), up, vec3(1.0f)}});
+    const PropagationStencil stencil = stencil_of(order);
+    const std::vector<ivec3> offsets = propagation_offsets(stencil);
+    PropagationTransmittance walls;
+    walls.offsets = int(offsets.size());
+    walls.values.assign(volume.cell_count() * offsets.size(), 1.0f);
+    const auto inside = [&](const ivec3& c) {
+        return glm::all(glm::greaterThanEqual(c, ivec3(1))) &&
+               glm::all(glm::lessThanEqual(c, ivec3(kBoxCells)));
+    };
+    for (size_t c = 0; c < volume.cell_count(); ++c) {
+        const ivec3 cell(int(c % n), int((c / n) % n), int(c / (n * n)));
+        for (size_t o = 0; o < offsets.size(); ++o)
+            if (inside(cell) != inside(cell - offsets[o])) walls.values[c * offsets.size() + o] = 0.0f;
+    }
+    const PropagationStep step(stencil, order, LobeClamp::Rescaled, reinjection);
+    InFlight result;
+    ShVolume ping = volume, pong = volume;
+    for (int k = 0; k <= steps; ++k) {
+        double total = 0.0;
+        for (size_t c = 0; c < ping.cell_count(); ++c) total += double(cell_flux(ping.cell_data(c)).x);
+        result.remaining.push_back(total);
+        result.residence += total;
+        if (k < steps) {
+            if (absorbed) {
+                step(ping, pong, nullptr);
+                for (size_t c = 0; c < pong.cell_count(); ++c) {
+                    const ivec3 cell(int(c % n), int((c / n) % n), int(c / (n * n)));
+                    if (inside(cell)) continue;
+                    const double stopped = double(cell_flux(pong.cell_data(c)).x);
+                    (cell.z == 0 ? result.floor : cell.z == n - 1 ? result.ceiling : result.sides) +=
+                        stopped;
+                }
+            }
+            step(ping, pong, &walls);
+            std::swap(ping, pong);
+        }
+    }
+    return result;
+}
+
+// Mean distance (cells) from the floor point p to the box's walls along a cosine lobe up; with
+// `ceiling`, the share of the lobe that reaches the ceiling instead (its view factor).
+double straight_flight(const vec3& p, double* ceiling = nullptr) {
+    double ceiling_share = 0.0;
+    constexpr int kSide = 256;
+    double sum = 0.0;
+    for (int i = 0; i < kSide; ++i)
+        for (int j = 0; j < kSide; ++j) {
+            // Cosine-weighted directions: r = √u, φ = 2πv (midpoint rule).
+            const double r = std::sqrt((i + 0.5) / kSide), phi = 2.0 * kPiD * (j + 0.5) / kSide;
+            const glm::dvec3 w(r * std::cos(phi), r * std::sin(phi), std::sqrt(1.0 - r * r));
+            double t = kInfinity;
+            int hit = 0;
+            for (int a = 0; a < 3; ++a) {
+                const double ta = w[a] > 0.0   ? (kBoxCells + 1.0 - p[a]) / w[a]
+                                  : w[a] < 0.0 ? (1.0 - p[a]) / w[a]
+                                               : kInfinity;
+                if (ta < t) t = ta, hit = a;
+            }
+            sum += t;
+            if (hit == 2) ceiling_share += 1.0;
+        }
+    if (ceiling != nullptr) *ceiling = ceiling_share / (kSide * kSide);
+    return sum / (kSide * kSide);
+}
+
+// Why the accumulation does not converge in a closed room: with the seed's face-normal lobes
+// the light random-walks and stays in flight several times longer than straight flight would
+// keep it, so the sum of the steps keeps growing long after straight light would have reached
+// every wall; re-injected along its travel direction it leaves much sooner. Blocking removes the
+// light that reaches a wall: the flux in flight never grows.
+TEST(PropagationVolume, ClosedBoxLightLeavesThroughTheWalls) {
+    const int n = kBoxCells + 2;
+    const double straight = straight_flight(vec3(0.5f * n - 0.25f, 0.5f * n + 0.25f, 1.0f));
+    constexpr int kSteps = 256;
+    for (int order : {1, 2}) {
+        double residence[2] = {};
+        for (Reinjection reinjection : {Reinjection::FaceNormal, Reinjection::TravelDirection}) {
+            const InFlight flight = closed_box_in_flight(order, reinjection, kSteps);
+            for (size_t k = 1; k < flight.remaining.size(); ++k)
+                EXPECT_LE(flight.remaining[k], flight.remaining[k - 1] * (1.0 + 1e-5))
+                    << "order " << order << " step " << k;
+            residence[int(reinjection)] = flight.residence;
+            std::printf("order %d, %s: in flight after 8, 16, 32, 64 steps %.3f %.3f %.3f %.3f; "
+                        "steps in flight %.1f (straight flight %.1f cells)\n",
+                        order,
+                        reinjection == Reinjection::FaceNormal ? "face normal" : "travel direction",
+                        flight.remaining[8], flight.remaining[16], flight.remaining[32],
+                        flight.remaining[64], flight.residence, straight);
+            EXPECT_LT(flight.remaining[kSteps], 0.01) << "order " << order;
+        }
+        // Measured (steps in flight; straight flight 13.2 cells): LPV 33.5 face normal, 15.7
+        // travel direction; HOLPV (up to √3 cells a step) 14.6 and 10.2.
+        if (order == 1) {
+            EXPECT_GT(residence[0], 2.0 * straight);
+        }
+        EXPECT_LT(residence[1], (order == 1 ? 0.6 : 0.8) * residence[0]) << "order " << order;
+    }
+}
+
+// Where the floor VPL's light lands, against straight flight (none on the floor, which cannot
+// light itself; the ceiling's view factor, 0.24, on the ceiling). Disabled: the target is missed
+// by far. Measured (converged, 256 steps): floor 0.736 / ceiling 0.019 (LPV), 0.531 / 0.040
+// (HOLPV); travel-direction re-injection 0.496 / 0.046 and 0.499 / 0.042. The L1 and L2 images of
+// a beam are broad (an L1 beam along ω holds 1/4 of its peak intensity at 90° from it), so at every
+// step light travelling along the floor sends part of itself down into it: this is the
+// self-lighting of §5.7 in numbers, and why the Cornell box's floor reads bright and its ceiling
+// dark whatever the steps (docs/methods.md).
+TEST(PropagationVolume, DISABLED_ClosedBoxFloorLightReachesTheCeilingNotTheFloor) {
+    const int n = kBoxCells + 2;
+    double ceiling_share = 0.0;
+    straight_flight(vec3(0.5f * n - 0.25f, 0.5f * n + 0.25f, 1.0f), &ceiling_share);
+    for (int order : {1, 2})
+        for (Reinjection reinjection : {Reinjection::FaceNormal, Reinjection::TravelDirection}) {
+            const InFlight flight = closed_box_in_flight(order, reinjection, 256, true);
+            std::printf("order %d, %s: absorbed by the floor %.3f, ceiling %.3f (straight flight "
+                        "%.3f), sides %.3f\n",
+                        order,
+                        reinjection == Reinjection::FaceNormal ? "face normal" : "travel direction",
+                        flight.floor, flight.ceiling, ceiling_share, flight.sides);
+            EXPECT_LT(flight.floor, 0.05) << "order " << order;
+            EXPECT_NEAR(flight.ceiling, ceiling_share, 0.2 * ceiling_share) << "order " << order;
+        }
 }
 
 // --- §5.2: the diagonal scene -------------------------------------------------------------
@@ -180,12 +374,14 @@ void write_plot(const std::string& path, const std::vector<std::vector<float>>& 
 // occlusion; the middle row y = 0 sampled at 64 points.
 constexpr int kDiagonalCells = 32, kDiagonalSteps = 20, kRowSamples = 64;
 
-std::vector<float> propagated_row(int order, const DiagonalLight& light) {
+std::vector<float> propagated_row(int order, const DiagonalLight& light,
+                                  Reinjection reinjection = Reinjection::FaceNormal) {
     ShVolume volume(vec3(-5.0f), 10.0f / kDiagonalCells, ivec3(kDiagonalCells), order);
     inject_vpls(volume, light_vpls(light));
-    const PropagationStep step(stencil_of(order), order, LobeClamp::Rescaled);
+    const PropagationStep step(stencil_of(order), order, LobeClamp::Rescaled, reinjection);
     const PropagationField field(
-        std::make_shared<const ShVolume>(propagate(volume, step, kDiagonalSteps, nullptr)), 0.0f);
+        std::make_shared<const ShVolume>(propagate(volume, step, kDiagonalSteps, nullptr)), 0.0f,
+        nullptr, false, reinjection);
     std::vector<float> row;
     for (int i = 0; i < kRowSamples; ++i) {
         const float x = -2.5f + 5.0f * (i + 0.5f) / kRowSamples;
@@ -229,6 +425,24 @@ TEST(PropagationVolume, DISABLED_DiagonalSceneHolpvBeatsLpv) {
     write_plot(path, {reference, lpv, holpv},
                {vec3(0.0f), vec3(0.8f, 0.1f, 0.1f), vec3(0.1f, 0.2f, 0.9f)});
     std::printf("scanlines (black: reference, red: LPV, blue: HOLPV): %s\n", path.c_str());
+}
+
+// The same scene with the light re-injected along its travel direction (both volumes): the
+// HOLPV's row error is within 0.8 × the LPV's (measured RMSE 0.0481 and 0.0863 W/m², ratio 0.56).
+// Both are still of the order of the row's mean irradiance (0.0446): the grazing beam lights
+// the plane, and the HOLPV's error stays above the face-normal LPV's 0.0394.
+TEST(PropagationVolume, DiagonalSceneHolpvBeatsLpvWithTravelReinjection) {
+    const DiagonalLight light;
+    std::vector<float> reference;
+    for (int i = 0; i < kRowSamples; ++i) {
+        const float x = -2.5f + 5.0f * (i + 0.5f) / kRowSamples;
+        reference.push_back(reference_irradiance(light, vec3(x, 0.0f, 0.0f)));
+    }
+    const double lpv = rmse(propagated_row(1, light, Reinjection::TravelDirection), reference);
+    const double holpv = rmse(propagated_row(2, light, Reinjection::TravelDirection), reference);
+    std::printf("diagonal scene, travel-direction re-injection: RMSE LPV %.4f, HOLPV %.4f "
+                "(ratio %.3f)\n", lpv, holpv, holpv / lpv);
+    EXPECT_LE(holpv, 0.8 * lpv);
 }
 
 // --- the solver ----------------------------------------------------------------------------
