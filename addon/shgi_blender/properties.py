@@ -390,6 +390,11 @@ class ShgiPropagationSettings(bpy.types.PropertyGroup):
         name="Drop Outward Lights", default=LP["drop_outward_vpls"],
         description="Leave out the light of sunlit roofs and outer walls facing away from the "
                     "scene: it lights nothing, and otherwise seeps into the rooms behind them")
+    travel_reinjection: BoolProperty(
+        name="Travel Re-injection", default=LP["travel_reinjection"],
+        description="Light crossing a cell face keeps going the way it travelled instead of "
+                    "spreading like a lit wall: it reaches far walls in fewer steps (raise "
+                    "Steps to about the grid's width with it)")
     passes: IntProperty(
         name="Render Passes", default=settings.final_passes("PROPAGATION", native.module()),
         min=1, soft_max=64,

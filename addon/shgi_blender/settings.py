@@ -234,6 +234,7 @@ PROPAGATION_DEFAULTS = {
     "damping": False,
     "occlude_first_step": False,
     "drop_outward_vpls": False,
+    "travel_reinjection": False,
 }
 
 # InstantGiSettings' fields in ``scene.shgi.instant_gi`` with their native defaults. Not
@@ -434,6 +435,7 @@ PROPAGATION_LABELS = {
     "damping": "Light Propagation > Damping",
     "occlude_first_step": "Light Propagation > Occlude First Step",
     "drop_outward_vpls": "Light Propagation > Drop Outward Lights",
+    "travel_reinjection": "Light Propagation > Travel Re-injection",
 }
 INSTANT_GI_LABELS = {
     "sets_x": "Instant GI > Sets X",

@@ -296,7 +296,8 @@ class SHGI_RENDER_PT_propagation(_FieldPanel, bpy.types.Panel):
         for name in ("photons", "resolution", "steps", "order", "normal_offset"):
             column.prop(volume, name)
         column = layout.column(align=True)
-        for name in ("occlusion", "occlude_first_step", "drop_outward_vpls", "damping"):
+        for name in ("occlusion", "occlude_first_step", "drop_outward_vpls", "travel_reinjection",
+                     "damping"):
             column.prop(volume, name)
         column = layout.column(align=True)
         column.label(text="Passes")
