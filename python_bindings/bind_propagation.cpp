@@ -80,7 +80,23 @@ void bind_volume(py::module_& m) {
         m, "PropagationField",
         "An immutable light propagation volume as an IndirectField (its accumulated light).")
         .def_property_readonly(
-            "memory_bytes", &PropagationField::memory_bytes, "Bytes of its volume.");
+            "memory_bytes", &PropagationField::memory_bytes, "Bytes of its volume.")
+        .def(
+            "save",
+            [](const PropagationField& field, const std::string& path) {
+                py::gil_scoped_release release;
+                field.save(path);
+            },
+            py::arg("path"),
+            "Writes the field to an SHGI .shlpv file (atomically); load() reads it back.")
+        .def_static(
+            "load",
+            [](const std::string& path) {
+                py::gil_scoped_release release;
+                return PropagationField::load(path);
+            },
+            py::arg("path"),
+            "The field a save() wrote; OSError naming the file when it is not one.");
 
     py::class_<PropagationVolume, GiSolver> cls(m, "PropagationVolume", R"doc(
 Light propagation volumes (seed 003): VPLs from traced light paths, injected as cosine lobes

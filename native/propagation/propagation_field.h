@@ -24,6 +24,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "propagation/propagation_stencil.h"
@@ -74,6 +75,14 @@ class PropagationField : public IndirectField {
 
     // Null before the first pass.
     const std::shared_ptr<const ShVolume>& accumulated() const { return accumulated_; }
+
+    // SHGI's binary file of the field (".shlpv": the accumulated volume, the transmittance, the
+    // lookup's settings; little-endian, float32 as held), written atomically; a field loaded
+    // back looks up exactly the same values. load throws IoError naming the file for one that
+    // is not a field (magic, version, truncation, sizes that do not match, values that are not
+    // finite or out of range) and OutOfMemory before allocating past the budget.
+    void save(const std::string& path) const;
+    static std::unique_ptr<PropagationField> load(const std::string& path);
     size_t memory_bytes() const {
         return accumulated_ ? accumulated_->coefficients().size() * sizeof(float) : 0;
     }
@@ -87,6 +96,7 @@ class PropagationField : public IndirectField {
     float normal_offset_ = 1.0f;
     float radiance_scale_ = 0.0f;  // k / s²
     bool damping_ = false;
+    Reinjection reinjection_ = Reinjection::FaceNormal;
 };
 
 }  // namespace shgi

@@ -1,10 +1,11 @@
-"""A frozen Photon Lattice solution outlives its Blender: solved, rendered and saved with the
-.blend in one Blender process, the file opened in a new one renders it with F12 without solving.
+"""A frozen Photon Lattice (or Light Propagation) solution outlives its Blender: solved, rendered
+and saved with the .blend in one Blender process, the file opened in a new one renders it with
+F12 without solving.
 
 Run twice by tests/python/test_blender_engine.py, with ``-- <build python dir> <addon dir>
-<results json> <save|reload> <blend path>``:
+<results json> <save|reload> <blend path> [PHOTON_LATTICE|PROPAGATION]``:
 
-* save: the Cornell box with the Photon Lattice; Solve; F12 (its Combined written beside the
+* save: the Cornell box with the method (one pass); Solve; F12 (its Combined written beside the
   .blend as before.exr); the .blend saved. Records the files saved beside it.
 * reload: opens the .blend (the add-on's load_post reads the solution back), then F12. Records
   whether the solution came back (its method, passes, whether it is out of date), the render's
@@ -41,12 +42,18 @@ def frozen_render(scene, path):
     return image, record
 
 
-def save(blend):
+# The method group of each method this script saves.
+GROUPS = {"PHOTON_LATTICE": "photon_lattice", "PROPAGATION": "propagation"}
+
+
+def save(blend, method):
     scene = common.new_scene("cornell_box", SCALE)
-    scene.shgi.method = "PHOTON_LATTICE"
+    scene.shgi.method = method
     scene.shgi.samples = SAMPLES
     scene.shgi.seed = SEED
-    scene.shgi.photon_lattice.photons = PHOTONS
+    group = getattr(scene.shgi, GROUPS[method])
+    group.photons = PHOTONS
+    group.passes = 1
     if bpy.ops.shgi.solve() != {"FINISHED"} or solution_cache.get(scene.name_full) is None:
         raise AssertionError("Solve did not store a frozen solution")
     frozen_render(scene, os.path.join(os.path.dirname(blend), "before.exr"))
@@ -55,11 +62,11 @@ def save(blend):
     return {"saved_files": sorted(os.listdir(beside)) if os.path.isdir(beside) else []}
 
 
-def reload(blend):
+def reload(blend, method):
     common.setup.enable_addon()
     bpy.ops.wm.open_mainfile(filepath=blend)
     scene = bpy.context.scene
-    solution = solution_cache.get(scene.name_full, "PHOTON_LATTICE")
+    solution = solution_cache.get(scene.name_full, method)
     results = {"loaded": solution is not None}
     if solution is None:
         return results
@@ -76,9 +83,11 @@ def reload(blend):
 
 
 def main():
-    mode, blend = script_args()[3:5]
+    args = script_args()
+    mode, blend = args[3:5]
+    method = args[5] if len(args) > 5 else "PHOTON_LATTICE"
     shgi.set_max_threads(common.calibration.THREADS)
-    results = {"save": save, "reload": reload}[mode](blend)
+    results = {"save": save, "reload": reload}[mode](blend, method)
     with open(results_path("frozen_lattice.json"), "w") as out:
         json.dump(results, out, indent=1, default=str)
     print(json.dumps(results, indent=1, default=str))

@@ -807,21 +807,24 @@ def test_a_frozen_solution_survives_save_and_reload(blender, build_python_dir, t
     assert results["load_volume_max_difference"] == 0.0
 
 
-def test_a_frozen_photon_lattice_survives_save_and_reload_in_a_new_blender(
-        blender, build_python_dir, tmp_path):
-    """A Photon Lattice solution is saved beside the .blend; a new Blender opening the file reads
-    it back, frozen and up to date, and F12 renders it without solving: the same pixels as F12
-    before the save, bit for bit (the same float32 lattices, scene and seed)."""
-    blend = tmp_path / "frozen_lattice.blend"
+@pytest.mark.parametrize("method, field_file", [("PHOTON_LATTICE", "Scene_lattice.shlattice"),
+                                                ("PROPAGATION", "Scene_field.shlpv")])
+def test_a_frozen_field_survives_save_and_reload_in_a_new_blender(
+        blender, build_python_dir, tmp_path, method, field_file):
+    """A Photon Lattice or Light Propagation solution is saved beside the .blend; a new Blender
+    opening the file reads it back, frozen and up to date, and F12 renders it without solving:
+    the same pixels as F12 before the save, bit for bit (the same float32 field, scene and
+    seed)."""
+    blend = tmp_path / "frozen_field.blend"
     runs = {}
     for mode in ("save", "reload"):
         out = tmp_path / f"{mode}.json"
         result = run_blender(BLENDER_SCRIPTS / "frozen_lattice_reload.py", build_python_dir,
-                             ADDON_DIR, out, mode, blend, blender=blender, timeout=300)
+                             ADDON_DIR, out, mode, blend, method, blender=blender, timeout=300)
         log = result.stdout[-4000:] + result.stderr[-3000:]
         assert result.returncode == 0 and "FROZEN_LATTICE_OK" in result.stdout, log
         runs[mode] = json.loads(out.read_text())
-    assert runs["save"]["saved_files"] == ["Scene.json", "Scene_lattice.shlattice"], runs
+    assert runs["save"]["saved_files"] == ["Scene.json", field_file], runs
     after = runs["reload"]
     assert after["loaded"] and after["passes"] == 1, after
     assert after["changed_since"] is None and not after["warnings"], after

@@ -297,3 +297,56 @@ def test_outward_vpls_dropped_keep_the_outside_out(order):
     print(f"order {order}: light inside the shut sun room, x the open room's indirect light: "
           f"{inside[False]:.3f} (all VPLs), {inside[True]:.4f} (outward ones dropped)")
     assert inside[True] < 0.001
+
+
+@pytest.mark.parametrize("options", [dict(order=1), dict(order=2, damping=True,
+                                                         travel_reinjection=True),
+                                     dict(order=2, occlusion=False)])
+def test_a_saved_field_loads_back_looking_up_the_same_light(options, tmp_path):
+    """PropagationField.save / load (what the add-on writes beside a saved .blend): the loaded
+    field answers every lookup bit for bit as the solved one, with and without the geometry's
+    transmittance, damping and travel re-injection; a field before the first pass loads as no
+    light."""
+    import numpy as np
+    scene = committed(scenes.cornell_box(0.05))
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        seed=3, photons=20000, resolution=16, steps=4, **options))
+    empty_path = tmp_path / "empty.shlpv"
+    volume.current_field().save(str(empty_path))
+    assert shgi.PropagationField.load(str(empty_path)).irradiance(
+        np.zeros((1, 3), np.float32), np.array([[0, 0, 1]], np.float32)).max() == 0.0
+    volume.refine()
+    field = volume.current_field()
+    path = tmp_path / "field.shlpv"
+    field.save(str(path))
+    loaded = shgi.PropagationField.load(str(path))
+    rng = np.random.default_rng(1)
+    points = rng.uniform(-0.06, 0.06, (500, 3)).astype(np.float32)
+    normals = rng.normal(size=(500, 3)).astype(np.float32)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    expected = field.irradiance(points, normals)
+    assert expected.max() > 0.0
+    assert np.array_equal(loaded.irradiance(points, normals), expected)
+    assert loaded.memory_bytes == field.memory_bytes
+
+
+def test_a_damaged_field_file_is_refused_naming_it(tmp_path):
+    """Hostile files: not a field, truncated, a header damaged, a cell count the file does not
+    hold — an OSError naming the file, never a crash or a huge allocation."""
+    scene = committed(scenes.cornell_box(0.05))
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(photons=5000, resolution=8,
+                                                                    steps=2))
+    volume.refine()
+    path = tmp_path / "field.shlpv"
+    volume.current_field().save(str(path))
+    data = path.read_bytes()
+    cases = {"magic.shlpv": b"NOTAFIELD" + data[9:], "short.shlpv": data[: len(data) // 2],
+             "offset.shlpv": data[:12] + b"\xff\xff\xff\xff" + data[16:],
+             # counts (after magic 8, version 4, offset 4, flags 3, origin 12, cell size 4)
+             "counts.shlpv": data[:35] + b"\xff\xff\x00\x00" * 3 + data[47:],
+             "tail.shlpv": data + b"\x00"}
+    for name, content in cases.items():
+        bad = tmp_path / name
+        bad.write_bytes(content)
+        with pytest.raises(OSError, match=name):
+            shgi.PropagationField.load(str(bad))

@@ -255,6 +255,40 @@ class LoadedLattice:
         return field_spheres(self.lattice, centres, cell)
 
 
+class LoadedPropagationField:
+    """A PropagationField read from a saved solution's file (PropagationField.load) in a
+    FieldSolver's place: nothing to update (it has no scene), its passes as the solution's file
+    recorded them (saved_passes, set when read)."""
+
+    METHOD = "PROPAGATION"
+
+    def __init__(self, field, path):
+        self._field = field
+        self.path = path
+        self.saved_passes = None
+
+    @property
+    def passes(self):
+        return self.saved_passes or 0
+
+    def field(self):
+        return self._field
+
+    @property
+    def memory_bytes(self):
+        return self._field.memory_bytes
+
+    @property
+    def timings(self):
+        return {}
+
+    def figures(self):
+        return [("Refinement passes", f"{self.passes}"), ("Read from", self.path)]
+
+    def overlay(self, _snapshot, _scene):
+        return None
+
+
 def lattice_figures(lattice):
     """The (label, text) rows of a PhotonLattice: the photons of its last pass."""
     timings = lattice.timings

@@ -10,9 +10,10 @@ change its light (solution_files.py feeds it from Blender's depsgraph updates), 
 ``changed_since`` tells a solution made before the last of them (F12 warns, the panel offers
 Re-solve).
 
-Probe Grid and Photon Lattice solutions are saved beside the .blend file and read back when the
-file opens (solution_files.py): ``save_solution`` writes the field natively (FIELD_FILES: a
-ProbeField's float EXR + JSON export, a PhotonLattice's binary save) and a small JSON of the
+Probe Grid, Photon Lattice and Light Propagation solutions are saved beside the .blend file and
+read back when the file opens (solution_files.py): ``save_solution`` writes the field natively
+(FIELD_FILES: a ProbeField's float EXR + JSON export, a PhotonLattice's or PropagationField's
+binary save) and a small JSON of the
 solution's own figures; ``load_solution`` reads them into a Solution whose field came from the
 file (LoadedProbeField, LoadedLattice), which renders the same pixels as before. F12 then
 exports the scene's geometry once per render, as there is no solved scene to reuse.
@@ -131,6 +132,13 @@ def _read_probe_field(shgi, path, lookup):
     return solver, solver.field()
 
 
+def _read_propagation(shgi, path, _lookup):
+    from .field_solvers import LoadedPropagationField
+
+    solver = LoadedPropagationField(shgi.PropagationField.load(path), path)
+    return solver, solver.field()
+
+
 def _read_lattice(shgi, path, _lookup):
     from .field_solvers import LoadedLattice
 
@@ -144,6 +152,8 @@ FIELD_FILES = {
                             _read_probe_field),
     "PHOTON_LATTICE": FieldFile("_lattice.shlattice", lambda field, path: field.save(path),
                                 _read_lattice),
+    "PROPAGATION": FieldFile("_field.shlpv", lambda field, path: field.save(path),
+                             _read_propagation),
 }
 
 
@@ -201,7 +211,8 @@ def save_solution(solution, json_path):
     doc = {"format": SOLUTION_FORMAT, "version": SOLUTION_VERSION, "method": solution.method,
            "solved_at": solution.solved_at, "field": os.path.basename(field_path),
            "signature": None if solution.signature is None else list(solution.signature),
-           "timings": solution.timings, "warnings": solution.warnings}
+           "timings": solution.timings, "warnings": solution.warnings,
+           "passes": solution.solver.passes}
     with open(json_path, "w", encoding="utf-8") as out:
         json.dump(doc, out, indent=1)
 
@@ -225,6 +236,8 @@ def load_solution(shgi, json_path, lookup):
                           else tuple(tuple(pair) for pair in doc["signature"]))
     solution.timings = doc["timings"]
     solution.warnings = doc["warnings"]
+    if hasattr(solution.solver, "saved_passes"):  # a field whose file does not count them
+        solution.solver.saved_passes = doc.get("passes")
     return solution
 
 

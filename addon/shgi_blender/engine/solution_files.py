@@ -5,8 +5,9 @@
   or world; not the camera or render settings), so that F12 and the panel can say that a frozen
   solution no longer shows the scene.
 * Saving: after the .blend is written (save_post: Blender 3.4 tells its save_pre handlers no
-  path, and a first save has none before), each scene's Probe Grid or Photon Lattice solution
-  is written beside it, to ``<file>_shgi/<scene>.json`` and the field's files next to it
+  path, and a first save has none before), each scene's Probe Grid, Photon Lattice or Light
+  Propagation solution is written beside it, to ``<file>_shgi/<scene>.json`` and the field's
+  files next to it
   (solution_cache.save_solution); the file of a scene without one is removed, so that an older
   solution does not come back.
 * Loading: after a file opens (load_post), each scene's solution file beside it is read back

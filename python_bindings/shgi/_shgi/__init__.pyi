@@ -2695,6 +2695,15 @@ class PropagationField(IndirectField):
     @staticmethod
     def _pybind11_conduit_v1_(*args, **kwargs):
         ...
+    @staticmethod
+    def load(path: str) -> PropagationField:
+        """
+        The field a save() wrote; OSError naming the file when it is not one.
+        """
+    def save(self, path: str) -> None:
+        """
+        Writes the field to an SHGI .shlpv file (atomically); load() reads it back.
+        """
     @property
     def memory_bytes(self) -> int:
         """
