@@ -337,7 +337,9 @@ RadianceField::Gathered RadianceField::gather(uint64_t pass, Progress* progress)
                                 settings_.use_mips
                                     ? std::max(0.0f, 0.5f * std::log2(footprint / base_area))
                                     : 0.0f;
-                            radiance = grid_.radiance_toward(x, x + hit.t * d, d, level,
+                            // The side of the surface the ray sees (its normal towards x).
+                            const vec3 side = facing > 0.0f ? -normal : normal;
+                            radiance = grid_.radiance_toward(x, x + hit.t * d, d, side, level,
                                                              settings_.face_sigma, &lit);
                             // The unlit side of an open surface counts as a back face: a point
                             // beyond a room's single-sided wall sees the wall's outside.

@@ -141,6 +141,43 @@ TEST(RadianceField, UniformFacesGiveIrradiancePiL) {
     }
 }
 
+// A crease cell holds a floor and a single-sided wall: the wall's outside (−x) and the floor's
+// underside (−z) are faces of that cell too, and the −x face points towards a point above the
+// floor that looks down and away from the wall. A ray that hits the floor must read the floor's
+// side (+z) only, however much brighter the other sides are (the sun room's sunlit outside
+// walls made every crease read 1.5–2.5 times too bright).
+TEST(RadianceGrid, HitReadsOnlyTheFacesOfTheSideItSees) {
+    Scene scene;
+    scene.add_material(test::lambert(0.5f));
+    scene.add_instance(scene.add_mesh(test::quad(vec3(-1, -1, 0), vec3(0, 2, 0), vec3(2, 0, 0))),
+                       mat4(1.0f));  // floor, faces +z
+    scene.add_instance(scene.add_mesh(test::quad(vec3(-1, -1, 0), vec3(0, 0, 2), vec3(0, 2, 0))),
+                       mat4(1.0f));  // wall at x = −1, faces +x
+    scene.set_world(test::black_world());
+    scene.commit();
+    RadianceFieldSettings settings;
+    settings.resolution = 4;
+    settings.use_mips = false;
+    RadianceField field(scene, settings);
+    RadianceGrid& grid = field.mutable_radiance_grid();
+    const vec3 x(-0.75f, 0.25f, 0.25f);  // the centre of the crease cell
+    const ivec3 crease = grid.surfaces().cell_of(x);
+    ASSERT_GT(grid.face_area(0, crease, 1), 0.0f);  // −x: the wall's outside
+    ASSERT_GT(grid.face_area(0, crease, 4), 0.0f);  // +z: the floor
+    const float floor = 1.0f, outside = 100.0f;
+    for (int j = 0; j < kFaceCount; ++j)
+        if (grid.face_area(0, crease, j) > 0.0f)
+            grid.set_face_radiance(crease, j, vec3(j == 4 || j == 0 ? floor : outside));
+    const vec3 d = glm::normalize(vec3(0.1f, 0.0f, -0.25f));
+    const vec3 hit = x + d * (x.z / -d.z);  // on the floor, in the crease cell
+    ASSERT_EQ(grid.surface_cell(hit, -d), crease);
+    bool lit = false;
+    const vec3 read = grid.radiance_toward(x, hit, d, vec3(0, 0, 1), 0.0f, settings.face_sigma,
+                                           &lit);
+    EXPECT_TRUE(lit);
+    EXPECT_FLOAT_EQ(read.x, floor);
+}
+
 // Closed box, every wall emitting Le with albedo a: the walls reflect a Le / (1 − a) (all but
 // the emission of L = Le / (1 − a)), so the field's irradiance is π a Le / (1 − a) everywhere
 // (photon noise and the cut-off series aside: a^17 < 1e-8).
