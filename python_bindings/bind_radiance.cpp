@@ -45,6 +45,9 @@ void bind_settings(py::module_& m) {
     def_integer(cls, "seed", &S::seed, "Random seed (0).");
     def_integer(cls, "max_bounces", &S::max_bounces,
                 "Photon scatterings after emission; 4 matches Cycles' default diffuse bounces.");
+    def_integer(cls, "glossy_bounces", &S::glossy_bounces,
+                "Photons' glossy scatterings, a budget of their own beside max_bounces, 0..64; 4 "
+                "matches Cycles' default glossy bounces.");
     def_integer(cls, "resolution", &S::resolution,
                 "SH-grid cells along the bounds' longest side, 1..128 (32, the paper's).");
     def_integer(cls, "gather_rays", &S::gather_rays,

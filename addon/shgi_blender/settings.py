@@ -203,8 +203,8 @@ PROBE_GRID_DEFAULTS = {
 }
 
 # RadianceFieldSettings' fields in ``scene.shgi.radiance_field`` with their native defaults. Not
-# mirrored: ``seed`` (scene.shgi.seed), ``max_bounces`` (Light Paths > Diffuse,
-# LIGHT_PATH_VALUES) and the constants an artist has no reason to change (glossy_in_grid,
+# mirrored: ``seed`` (scene.shgi.seed), ``max_bounces`` and ``glossy_bounces`` (Light Paths >
+# Diffuse and Glossy, LIGHT_PATH_VALUES) and the constants an artist has no reason to change (glossy_in_grid,
 # face_sigma, min_footprint_cosine, backface_threshold, specular_roughness, the obscurance's
 # weight, distance and rays, the bounds), which keep the native defaults.
 RADIANCE_FIELD_DEFAULTS = {
@@ -457,6 +457,7 @@ MAX_PROBE_BOUNCES = 64               # ProbeGridSettings.bounces
 MAX_RADIANCE_RESOLUTION = 128        # RadianceFieldSettings.resolution
 MAX_GATHER_RAYS = 1 << 20            # RadianceFieldSettings.gather_rays
 MAX_MIP_LEVELS = 16                  # RadianceFieldSettings.mip_levels
+MAX_RADIANCE_GLOSSY_BOUNCES = 64     # RadianceFieldSettings.glossy_bounces
 # ProbeGridSettings.bleed_bias must stay below 1 and backface_threshold above 0: the nearest
 # values the panels' two decimals show.
 MAX_BLEED_BIAS = 0.99
@@ -501,8 +502,10 @@ LIGHT_PATH_VALUES = {
     "PhotonLatticeSettings": {
         "max_bounces": LightPathValue("diffuse_bounces", 0, MIN_PHOTON_BOUNCES),
     },
+    # The photons' glossy scatterings have a budget of their own, as a path's Glossy bounces.
     "RadianceFieldSettings": {
         "max_bounces": LightPathValue("diffuse_bounces", 0, MIN_PHOTON_BOUNCES),
+        "glossy_bounces": LightPathValue("glossy_bounces", 0, None, MAX_RADIANCE_GLOSSY_BOUNCES),
     },
     "ProbeGridSettings": {
         # Past 64 probe bounces what is left of the light (albedo^64: 6e-7 at 0.8) is invisible.

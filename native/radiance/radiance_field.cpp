@@ -48,6 +48,8 @@ PhotonTracerSettings tracer_settings(const RadianceFieldSettings& s) {
     // bounces at the shading point, as a camera path of max_bounces diffuse bounces. With
     // max_bounces = 1 only the first hits count (the tracer's stored photons are dropped).
     tracer.max_bounces = std::max(1, s.max_bounces - 1);
+    // Glossy scatterings on their own budget, as the path tracer's Glossy beside Diffuse.
+    tracer.max_glossy_bounces = s.glossy_bounces;
     tracer.specular_roughness = s.specular_roughness;
     // The first hits from the world come through first_hits: storing them in the maps as well
     // would count them twice.
@@ -107,6 +109,7 @@ Bounds3 field_bounds(const Scene& scene, const RadianceFieldSettings& settings) 
 }  // namespace
 
 void validate_radiance_field_settings(const RadianceFieldSettings& s) {
+    check_int(s.glossy_bounces, 0, kMaxBounces, "glossy_bounces");
     validate_photon_tracer_settings(tracer_settings(s), kSettings);
     check_int(s.max_bounces, 1, kMaxBounces, "max_bounces");
     check_int(s.resolution, 1, kMaxResolution, "resolution");

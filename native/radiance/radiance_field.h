@@ -78,6 +78,7 @@ struct RadianceFieldSettings {
     uint64_t photons = 200000;          // emitted per pass
     uint64_t seed = 0;
     int max_bounces = 4;                // bounces of the field's light, as Light Paths > Diffuse
+    int glossy_bounces = 4;             // photons' glossy scatterings, as Light Paths > Glossy
     float specular_roughness = 0.1f;    // lobes up to this roughness count as specular
     bool world_in_field = false;        // escaped gather rays read the world (see above)
     bool glossy_in_grid = true;         // rough glossy reflection enters the grid (see above)

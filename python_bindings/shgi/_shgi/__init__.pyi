@@ -2904,6 +2904,14 @@ class RadianceFieldSettings:
     def gather_rays(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
+    def glossy_bounces(self) -> int:
+        """
+        Photons' glossy scatterings, a budget of their own beside max_bounces, 0..64; 4 matches Cycles' default glossy bounces.
+        """
+    @glossy_bounces.setter
+    def glossy_bounces(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
     def glossy_in_grid(self) -> bool:
         """
         Rough glossy reflection enters the radiance grid as if diffuse (the paper's holds diffuse only) (True).
