@@ -217,6 +217,9 @@ RADIANCE_FIELD_DEFAULTS = {
     "side_test": True,
     "visibility_test": False,
     "occlusion_test": True,
+    "monte_carlo_gathers": False,
+    "diffuse_gather_rays": 32,
+    "glossy_gather_rays": 64,
     "obscurance": False,
     "world_in_field": False,
 }
@@ -421,6 +424,9 @@ RADIANCE_FIELD_LABELS = {
     "side_test": "Radiance Field > Side Test",
     "visibility_test": "Radiance Field > Visibility Test",
     "occlusion_test": "Radiance Field > Occlusion Test",
+    "monte_carlo_gathers": "Radiance Field > Monte Carlo Gathers",
+    "diffuse_gather_rays": "Radiance Field > Monte Carlo Gathers > Diffuse Rays",
+    "glossy_gather_rays": "Radiance Field > Monte Carlo Gathers > Glossy Rays",
     "obscurance": "Radiance Field > Obscurance",
     "world_in_field": "Radiance Field > World in Field",
 }
@@ -458,6 +464,7 @@ MAX_RADIANCE_RESOLUTION = 128        # RadianceFieldSettings.resolution
 MAX_GATHER_RAYS = 1 << 20            # RadianceFieldSettings.gather_rays
 MAX_MIP_LEVELS = 16                  # RadianceFieldSettings.mip_levels
 MAX_RADIANCE_GLOSSY_BOUNCES = 64     # RadianceFieldSettings.glossy_bounces
+MAX_SHADING_GATHER_RAYS = 1 << 16    # RadianceFieldSettings.diffuse/glossy_gather_rays
 # ProbeGridSettings.bleed_bias must stay below 1 and backface_threshold above 0: the nearest
 # values the panels' two decimals show.
 MAX_BLEED_BIAS = 0.99

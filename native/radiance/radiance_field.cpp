@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <utility>
 
 #include "photon/photon_tracer.h"
@@ -125,6 +126,8 @@ void validate_radiance_field_settings(const RadianceFieldSettings& s) {
     check_float(s.obscurance_weight, 0.0f, 1e6f, true, "obscurance_weight");
     check_float(s.obscurance_distance, 0.0f, kMaxCoordinate, false, "obscurance_distance");
     check_int(s.obscurance_rays, 1, 4096, "obscurance_rays");
+    check_int(s.diffuse_gather_rays, 1, 1 << 16, "diffuse_gather_rays");
+    check_int(s.glossy_gather_rays, 1, 1 << 16, "glossy_gather_rays");
     if (s.use_bounds && (!is_finite(s.bounds_min) || !is_finite(s.bounds_max) ||
                          glm::any(glm::greaterThanEqual(s.bounds_min, s.bounds_max))))
         throw InvalidArgument(format_message(
@@ -530,6 +533,25 @@ ShRgb RadianceField::radiance_sh(const vec3& p, const vec3& n) const {
         for (int k = 0; k < kFieldCoefficients; ++k) result[k] *= o;
     }
     return result;
+}
+
+FieldLookup RadianceField::lookup(const vec3& p, const vec3& n) const {
+    FieldLookup out{radiance_sh(p, n), vec3(0.0f)};
+    if (settings_.monte_carlo_gathers) {
+        out.diffuse_rays = uint32_t(settings_.diffuse_gather_rays);
+        out.glossy_rays = uint32_t(settings_.glossy_gather_rays);
+        // The point's bits and the seed, mixed (splitmix64's finaliser): the same point gathers
+        // the same directions in every run and on every thread.
+        uint64_t key = settings_.seed;
+        for (int a = 0; a < 3; ++a) {
+            uint32_t bits = 0;
+            std::memcpy(&bits, &p[a], sizeof bits);
+            key = (key ^ bits) * 0x9e3779b97f4a7c15ull;
+            key ^= key >> 31;
+        }
+        out.gather_key = key;
+    }
+    return out;
 }
 
 float RadianceField::obscurance(const vec3& p, const vec3& n) const {

@@ -51,7 +51,8 @@
 // wall read into the room, 10-15% too bright, and the bright room of two_rooms into the dim one.
 // When every point is dropped the tests are waived rather than return darkness.
 // Irradiance and glossy come from the interpolated SH in closed form (IndirectField: exact for
-// the SH, where the seed gathers N_d = 32 and N_g = 64 rays). obscurance multiplies the SH by the
+// the SH), or with monte_carlo_gathers as the seed computes them: N_d = 32 cosine-distributed
+// and N_g = 64 Phong-lobe directions evaluated on the SH (render/indirect_field.h). obscurance multiplies the SH by the
 // seed's obscurance O(x) = (2/N_d) Σ ρ(d̄(x, ω_i)) cos θ_i over the N_d of 2 N_d sphere directions
 // above the surface, ρ(d) = min(w_oc d / R_max, 1) (the seed prints max, which is never below 1
 // and brightens); an ambient-occlusion look, not light transport: off by default.
@@ -93,6 +94,9 @@ struct RadianceFieldSettings {
     bool side_test = true;              // §4.1: drop sample points behind the tangent plane
     bool visibility_test = false;       // drop sample points the distance SH says are hidden
     bool occlusion_test = true;         // drop sample points a surface separates from p
+    bool monte_carlo_gathers = false;   // §4.2-4.3's gathers instead of the closed forms
+    int diffuse_gather_rays = 32;       // N_d
+    int glossy_gather_rays = 64;        // N_g (a Phong lobe)
     bool obscurance = false;            // §4.4's AO multiplier (not light transport)
     float obscurance_weight = 1.0f;     // w_oc
     float obscurance_distance = 0.0f;   // R_max, m; 0 = two cells
@@ -148,6 +152,9 @@ class RadianceField : public IndirectField, public GiSolver {
 
     // IndirectField.
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
+    // With monte_carlo_gathers, the lookup asks for the seed's gathers (FieldLookup's
+    // diffuse_rays and glossy_rays), their directions keyed by p and the seed.
+    FieldLookup lookup(const vec3& p, const vec3& n) const override;
     float reuse_distance() const override;
     bool includes_world_direct() const override { return settings_.world_in_field; }
     bool is_zero() const override { return passes_ == 0; }

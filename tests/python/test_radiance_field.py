@@ -52,10 +52,13 @@ def test_settings_mirror_cpp_defaults():
     assert not (s.visibility_test or s.obscurance or s.world_in_field or s.use_bounds)
     assert s.face_sigma == pytest.approx(0.5) and s.backface_threshold == pytest.approx(0.25)
     assert s.obscurance_rays == 32 and s.obscurance_weight == pytest.approx(1.0)
+    assert not s.monte_carlo_gathers
+    assert (s.diffuse_gather_rays, s.glossy_gather_rays) == (32, 64)
 
 
 @pytest.mark.parametrize("field, value", [("resolution", 0), ("gather_rays", 0),
                                           ("glossy_bounces", -1), ("glossy_bounces", 65),
+                                          ("diffuse_gather_rays", 0), ("glossy_gather_rays", 0),
                                           ("face_sigma", float("nan")), ("mip_levels", 0),
                                           ("obscurance_distance", float("inf"))])
 def test_bad_settings_name_the_field(field, value):
