@@ -331,6 +331,39 @@ TEST(RadianceField, MonteCarloGathersAgreeWithTheClosedForms) {
     }
 }
 
+// The obscurance (§3.4.4, §4.4) with ρ(d) = min(w_oc d / R_max, 1): where every surface lies
+// beyond R_max / w_oc it is 1 (the mean of 2 cos θ over the hemisphere, to the quadrature's
+// accuracy), where they all lie far within it it is near 0, it never brightens (the seed's
+// printed max would never go below 1), and with the setting on it scales the field's SH.
+TEST(RadianceField, ObscuranceUsesTheClampedRamp) {
+    const Scene scene = lit_room();
+    RadianceFieldSettings settings;
+    settings.photons = 20000;
+    settings.resolution = 8;
+    settings.gather_rays = 128;
+    const vec3 p(0.1f, -0.2f, -0.95f), n(0.0f, 0.0f, 1.0f);
+    settings.obscurance_distance = 1e-3f;  // every surface beyond R_max
+    RadianceField open(scene, settings);
+    open.refine();
+    EXPECT_NEAR(open.obscurance(p, n), 1.0f, 0.02f);
+    settings.obscurance_distance = 1e3f;  // every surface within 2 m of a 1 km R_max
+    RadianceField near(scene, settings);
+    near.refine();
+    EXPECT_LT(near.obscurance(p, n), 0.01f);
+    settings.obscurance_distance = 1.0f;  // the room's size: in between
+    RadianceField plain(scene, settings);
+    plain.refine();
+    const float o = plain.obscurance(p, n);
+    EXPECT_GT(o, 0.05f);
+    EXPECT_LT(o, 1.0f);
+    settings.obscurance = true;
+    RadianceField darkened(scene, settings);
+    darkened.refine();
+    const vec3 e = plain.irradiance(p, n), dark = darkened.irradiance(p, n);
+    ASSERT_GT(e.y, 0.0f);
+    EXPECT_NEAR(dark.y, o * e.y, 1e-5f * e.y);
+}
+
 // RMS over the sample points of the difference of their irradiance-like DC (green) from a
 // reference field's.
 double rms_difference(const RadianceField& a, const RadianceField& reference) {
