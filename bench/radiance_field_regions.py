@@ -32,7 +32,8 @@ def rgb(passes, name):
 
 
 def indirect(passes):
-    return rgb(passes, "DiffInd") * rgb(passes, "DiffCol"), rgb(passes, "GlossInd") * rgb(passes, "GlossCol")
+    return (rgb(passes, "DiffInd") * rgb(passes, "DiffCol"),
+            rgb(passes, "GlossInd") * rgb(passes, "GlossCol"))
 
 
 def with_indirect(base, other):

@@ -204,9 +204,9 @@ PROBE_GRID_DEFAULTS = {
 
 # RadianceFieldSettings' fields in ``scene.shgi.radiance_field`` with their native defaults. Not
 # mirrored: ``seed`` (scene.shgi.seed), ``max_bounces`` and ``glossy_bounces`` (Light Paths >
-# Diffuse and Glossy, LIGHT_PATH_VALUES) and the constants an artist has no reason to change (glossy_in_grid,
-# face_sigma, min_footprint_cosine, backface_threshold, specular_roughness, the obscurance's
-# weight, distance and rays, the bounds), which keep the native defaults.
+# Diffuse and Glossy, LIGHT_PATH_VALUES) and the constants an artist has no reason to change
+# (glossy_in_grid, face_sigma, min_footprint_cosine, backface_threshold, specular_roughness,
+# the obscurance's weight, distance and rays, the bounds), which keep the native defaults.
 RADIANCE_FIELD_DEFAULTS = {
     "photons": 200000,
     "resolution": 32,

@@ -52,10 +52,11 @@
 // When every point is dropped the tests are waived rather than return darkness.
 // Irradiance and glossy come from the interpolated SH in closed form (IndirectField: exact for
 // the SH), or with monte_carlo_gathers as the seed computes them: N_d = 32 cosine-distributed
-// and N_g = 64 Phong-lobe directions evaluated on the SH (render/indirect_field.h). obscurance multiplies the SH by the
-// seed's obscurance O(x) = (2/N_d) Σ ρ(d̄(x, ω_i)) cos θ_i over the N_d of 2 N_d sphere directions
-// above the surface, ρ(d) = min(w_oc d / R_max, 1) (the seed prints max, which is never below 1
-// and brightens); an ambient-occlusion look, not light transport: off by default.
+// and N_g = 64 Phong-lobe directions evaluated on the SH (render/indirect_field.h). obscurance
+// multiplies the SH by the seed's obscurance O(x) = (2/N_d) Σ ρ(d̄(x, ω_i)) cos θ_i over the N_d
+// of 2 N_d sphere directions above the surface, ρ(d) = min(w_oc d / R_max, 1) (the seed prints
+// max, which is never below 1 and brightens); an ambient-occlusion look, not light transport:
+// off by default.
 //
 // Determinism: photon streams per pass (photon_tracer.h), per-cell sums in hit order, one gather
 // per sample point summed in ray order: bit-identical for any thread count.

@@ -32,8 +32,8 @@ struct FieldLookup {
     // Monte Carlo gathers of `radiance` in place of the closed forms (seed 001 §4.2-4.3, the
     // radiance field's monte_carlo_gathers): irradiance from diffuse_rays cosine-distributed
     // directions, π/N Σ L(ω_i); glossy from glossy_rays directions of the normalised Phong lobe
-    // of exponent 2/α² − 2 (α = roughness²) around the reflected direction, 1/N Σ L(ω_i). 0:
-    // the closed form. gather_key seeds the directions (per shading point: deterministic).
+    // of exponent (2/α² − 2)/4 (α = roughness²) about the reflected direction, 1/N Σ L(ω_i).
+    // 0: the closed form. gather_key seeds the directions (per shading point: deterministic).
     uint32_t diffuse_rays = 0;
     uint32_t glossy_rays = 0;
     uint64_t gather_key = 0;
