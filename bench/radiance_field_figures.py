@@ -49,6 +49,10 @@ row("cornell_box", 0.25, 2048, {"face_estimator": shgi.FaceEstimator.PAPER})
 row("cornell_box", 0.25, 2048, {"use_mips": False})
 row("cornell_box", 0.25, 2048, {"glossy_in_grid": False})
 row("two_rooms", 0.5, 512, {"occlusion_test": False})
+row("cornell_box", 0.25, 2048, {"monte_carlo_gathers": True})
+row("sun_room", 0.25, 2048, {"monte_carlo_gathers": True})
+row("two_rooms", 0.5, 512, {"monte_carlo_gathers": True})
+row("sun_room", 0.25, 2048, {"max_bounces": 3}, {"final_gather": True, "samples": 64})
 # Peak memory of a pass per million photons: 2M photons on the Cornell box.
 scene = path_traced_reference(scenes.cornell_box, 0.25, 2048)[0]
 field = shgi.RadianceField(scene, shgi.RadianceFieldSettings(photons=2_000_000, seed=5))

@@ -45,12 +45,19 @@ void bind_settings(py::module_& m) {
     def_integer(cls, "seed", &S::seed, "Random seed (0).");
     def_integer(cls, "max_bounces", &S::max_bounces,
                 "Photon scatterings after emission; 4 matches Cycles' default diffuse bounces.");
+    def_integer(cls, "glossy_bounces", &S::glossy_bounces,
+                "Photons' glossy scatterings, a budget of their own beside max_bounces, 0..64; 4 "
+                "matches Cycles' default glossy bounces.");
     def_integer(cls, "resolution", &S::resolution,
                 "SH-grid cells along the bounds' longest side, 1..128 (32, the paper's).");
     def_integer(cls, "gather_rays", &S::gather_rays,
                 "Gather rays per sample point and pass, N_sh (400, the paper's).");
     def_integer(cls, "mip_levels", &S::mip_levels,
                 "Levels of the radiance grid's mip chain, the finest included (4).");
+    def_integer(cls, "diffuse_gather_rays", &S::diffuse_gather_rays,
+                "Directions N_d of the diffuse Monte Carlo gather (32, the paper's).");
+    def_integer(cls, "glossy_gather_rays", &S::glossy_gather_rays,
+                "Directions N_g of the glossy (Phong-lobe) Monte Carlo gather (64, the paper's).");
     def_integer(cls, "obscurance_rays", &S::obscurance_rays,
                 "Directions N_d of the obscurance estimate (32, the paper's).");
     cls.def(py::init(&from_kwargs<S>),
@@ -82,6 +89,10 @@ void bind_settings(py::module_& m) {
         .def_readwrite("occlusion_test", &S::occlusion_test,
                        "Skip sample points a surface separates from the shading point (a shadow "
                        "ray per lookup; not in the paper) (True).")
+        .def_readwrite("monte_carlo_gathers", &S::monte_carlo_gathers,
+                       "Irradiance and glossy light by the paper's Monte Carlo gathers of the SH "
+                       "(diffuse_gather_rays, glossy_gather_rays) instead of the closed forms "
+                       "(False).")
         .def_readwrite("obscurance", &S::obscurance,
                        "Multiply the field by the paper's obscurance, an ambient-occlusion look "
                        "(False).")

@@ -151,6 +151,18 @@ class ShgiRadianceFieldSettings(bpy.types.PropertyGroup):
         name="Occlusion Test", default=R["occlusion_test"],
         description="Ignore grid points a wall separates from the shaded point (stops light "
                     "through walls; one shadow ray per shaded point)")
+    monte_carlo_gathers: BoolProperty(
+        name="Monte Carlo Gathers", default=R["monte_carlo_gathers"],
+        description="Shade with the paper's random gathers of the grid's light instead of the "
+                    "exact integrals (noisier; for comparison with the paper)")
+    diffuse_gather_rays: IntProperty(
+        name="Diffuse Rays", default=R["diffuse_gather_rays"], min=1,
+        max=settings.MAX_SHADING_GATHER_RAYS,
+        description="Directions of the diffuse gather per shaded point")
+    glossy_gather_rays: IntProperty(
+        name="Glossy Rays", default=R["glossy_gather_rays"], min=1,
+        max=settings.MAX_SHADING_GATHER_RAYS,
+        description="Directions of the glossy gather per shaded point")
     obscurance: BoolProperty(
         name="Obscurance", default=R["obscurance"],
         description="Darken indirect light in creases (an ambient-occlusion look, not "

@@ -203,10 +203,10 @@ PROBE_GRID_DEFAULTS = {
 }
 
 # RadianceFieldSettings' fields in ``scene.shgi.radiance_field`` with their native defaults. Not
-# mirrored: ``seed`` (scene.shgi.seed), ``max_bounces`` (Light Paths > Diffuse,
-# LIGHT_PATH_VALUES) and the constants an artist has no reason to change (glossy_in_grid,
-# face_sigma, min_footprint_cosine, backface_threshold, specular_roughness, the obscurance's
-# weight, distance and rays, the bounds), which keep the native defaults.
+# mirrored: ``seed`` (scene.shgi.seed), ``max_bounces`` and ``glossy_bounces`` (Light Paths >
+# Diffuse and Glossy, LIGHT_PATH_VALUES) and the constants an artist has no reason to change
+# (glossy_in_grid, face_sigma, min_footprint_cosine, backface_threshold, specular_roughness,
+# the obscurance's weight, distance and rays, the bounds), which keep the native defaults.
 RADIANCE_FIELD_DEFAULTS = {
     "photons": 200000,
     "resolution": 32,
@@ -217,6 +217,9 @@ RADIANCE_FIELD_DEFAULTS = {
     "side_test": True,
     "visibility_test": False,
     "occlusion_test": True,
+    "monte_carlo_gathers": False,
+    "diffuse_gather_rays": 32,
+    "glossy_gather_rays": 64,
     "obscurance": False,
     "world_in_field": False,
 }
@@ -422,6 +425,9 @@ RADIANCE_FIELD_LABELS = {
     "side_test": "Radiance Field > Side Test",
     "visibility_test": "Radiance Field > Visibility Test",
     "occlusion_test": "Radiance Field > Occlusion Test",
+    "monte_carlo_gathers": "Radiance Field > Monte Carlo Gathers",
+    "diffuse_gather_rays": "Radiance Field > Monte Carlo Gathers > Diffuse Rays",
+    "glossy_gather_rays": "Radiance Field > Monte Carlo Gathers > Glossy Rays",
     "obscurance": "Radiance Field > Obscurance",
     "world_in_field": "Radiance Field > World in Field",
 }
@@ -459,6 +465,8 @@ MAX_PROBE_BOUNCES = 64               # ProbeGridSettings.bounces
 MAX_RADIANCE_RESOLUTION = 128        # RadianceFieldSettings.resolution
 MAX_GATHER_RAYS = 1 << 20            # RadianceFieldSettings.gather_rays
 MAX_MIP_LEVELS = 16                  # RadianceFieldSettings.mip_levels
+MAX_RADIANCE_GLOSSY_BOUNCES = 64     # RadianceFieldSettings.glossy_bounces
+MAX_SHADING_GATHER_RAYS = 1 << 16    # RadianceFieldSettings.diffuse/glossy_gather_rays
 # ProbeGridSettings.bleed_bias must stay below 1 and backface_threshold above 0: the nearest
 # values the panels' two decimals show.
 MAX_BLEED_BIAS = 0.99
@@ -503,8 +511,10 @@ LIGHT_PATH_VALUES = {
     "PhotonLatticeSettings": {
         "max_bounces": LightPathValue("diffuse_bounces", 0, MIN_PHOTON_BOUNCES),
     },
+    # The photons' glossy scatterings have a budget of their own, as a path's Glossy bounces.
     "RadianceFieldSettings": {
         "max_bounces": LightPathValue("diffuse_bounces", 0, MIN_PHOTON_BOUNCES),
+        "glossy_bounces": LightPathValue("glossy_bounces", 0, None, MAX_RADIANCE_GLOSSY_BOUNCES),
     },
     "ProbeGridSettings": {
         # Past 64 probe bounces what is left of the light (albedo^64: 6e-7 at 0.8) is invisible.

@@ -78,7 +78,8 @@ struct PhotonState {
     Pcg32 rng;
     vec3 power{0.0f};
     uint32_t owner = 0;          // index from the chunk's start
-    int scatterings = 0;
+    int scatterings = 0;         // counted against max_bounces
+    int glossy_scatterings = 0;  // with max_glossy_bounces >= 0: glossy ones, not in the above
     bool specular_path = true;   // every scattering so far was specular
     bool from_world = false;
 };
@@ -208,11 +209,12 @@ void ChunkTracer::shade_batch(size_t begin, size_t end, size_t* alive) {
         PhotonState& photon = photons_[i];
         const Shading& shading = make_shading_in(&shadings_[i - begin], scene_, points_[i],
                                                  rays_[i].direction, PathOrigin::Light);
-        const bool direct =
-            photon.scatterings == 0 && !(photon.from_world && settings_.store_world_direct);
+        // From the light unscattered (glossy scatterings count here even on their own budget).
+        const bool first = photon.scatterings == 0 && photon.glossy_scatterings == 0;
+        const bool direct = first && !(photon.from_world && settings_.store_world_direct);
         if (!direct && shading.bsdf.has_smooth_lobes()) store(photon, shading, rays_[i]);
         // The first step's photons are in photon order (emit), so these are too.
-        if (photon.scatterings == 0 && settings_.store_first_hits)
+        if (first && settings_.store_first_hits)
             record_first_hit(photon, shading, rays_[i]);
         sampled_[i - begin] = photon.scatterings < settings_.max_bounces;
     }
@@ -284,7 +286,11 @@ bool ChunkTracer::scatter(PhotonState& photon, const Shading& shading, const Mat
     photon.specular_path = photon.specular_path && specular;
     photon.power *= bs.weight / survival_probability(shading.bsdf);
     if (!is_finite(photon.power) || !(max_component(photon.power) > 0.0f)) return false;
-    ++photon.scatterings;
+    if (settings_.max_glossy_bounces >= 0 && bs.lobe_class == LobeClass::Glossy) {
+        if (++photon.glossy_scatterings > settings_.max_glossy_bounces) return false;
+    } else {
+        ++photon.scatterings;
+    }
     ray->origin = shading.spawn_origin(wi);
     ray->direction = wi;
     ray->tmin = 0.0f;
@@ -405,6 +411,10 @@ void validate_photon_tracer_settings(const PhotonTracerSettings& settings,
     if (settings.max_bounces < 1)
         throw InvalidArgument(format_message(struct_name, ".max_bounces is ",
                                              settings.max_bounces, "; it must be >= 1"));
+    if (settings.max_glossy_bounces < -1)
+        throw InvalidArgument(format_message(struct_name, ".max_glossy_bounces is ",
+                                             settings.max_glossy_bounces,
+                                             "; it must be >= 0, or -1 (no budget of its own)"));
     if (!(settings.specular_roughness >= 0.0f && settings.specular_roughness <= 1.0f))
         throw InvalidArgument(format_message(struct_name, ".specular_roughness is ",
                                              settings.specular_roughness,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <utility>
 
 #include "photon/photon_tracer.h"
@@ -48,6 +49,8 @@ PhotonTracerSettings tracer_settings(const RadianceFieldSettings& s) {
     // bounces at the shading point, as a camera path of max_bounces diffuse bounces. With
     // max_bounces = 1 only the first hits count (the tracer's stored photons are dropped).
     tracer.max_bounces = std::max(1, s.max_bounces - 1);
+    // Glossy scatterings on their own budget, as the path tracer's Glossy beside Diffuse.
+    tracer.max_glossy_bounces = s.glossy_bounces;
     tracer.specular_roughness = s.specular_roughness;
     // The first hits from the world come through first_hits: storing them in the maps as well
     // would count them twice.
@@ -107,6 +110,7 @@ Bounds3 field_bounds(const Scene& scene, const RadianceFieldSettings& settings) 
 }  // namespace
 
 void validate_radiance_field_settings(const RadianceFieldSettings& s) {
+    check_int(s.glossy_bounces, 0, kMaxBounces, "glossy_bounces");
     validate_photon_tracer_settings(tracer_settings(s), kSettings);
     check_int(s.max_bounces, 1, kMaxBounces, "max_bounces");
     check_int(s.resolution, 1, kMaxResolution, "resolution");
@@ -122,6 +126,8 @@ void validate_radiance_field_settings(const RadianceFieldSettings& s) {
     check_float(s.obscurance_weight, 0.0f, 1e6f, true, "obscurance_weight");
     check_float(s.obscurance_distance, 0.0f, kMaxCoordinate, false, "obscurance_distance");
     check_int(s.obscurance_rays, 1, 4096, "obscurance_rays");
+    check_int(s.diffuse_gather_rays, 1, 1 << 16, "diffuse_gather_rays");
+    check_int(s.glossy_gather_rays, 1, 1 << 16, "glossy_gather_rays");
     if (s.use_bounds && (!is_finite(s.bounds_min) || !is_finite(s.bounds_max) ||
                          glm::any(glm::greaterThanEqual(s.bounds_min, s.bounds_max))))
         throw InvalidArgument(format_message(
@@ -337,7 +343,9 @@ RadianceField::Gathered RadianceField::gather(uint64_t pass, Progress* progress)
                                 settings_.use_mips
                                     ? std::max(0.0f, 0.5f * std::log2(footprint / base_area))
                                     : 0.0f;
-                            radiance = grid_.radiance_toward(x, x + hit.t * d, d, level,
+                            // The side of the surface the ray sees (its normal towards x).
+                            const vec3 side = facing > 0.0f ? -normal : normal;
+                            radiance = grid_.radiance_toward(x, x + hit.t * d, d, side, level,
                                                              settings_.face_sigma, &lit);
                             // The unlit side of an open surface counts as a back face: a point
                             // beyond a room's single-sided wall sees the wall's outside.
@@ -525,6 +533,25 @@ ShRgb RadianceField::radiance_sh(const vec3& p, const vec3& n) const {
         for (int k = 0; k < kFieldCoefficients; ++k) result[k] *= o;
     }
     return result;
+}
+
+FieldLookup RadianceField::lookup(const vec3& p, const vec3& n) const {
+    FieldLookup out{radiance_sh(p, n), vec3(0.0f)};
+    if (settings_.monte_carlo_gathers) {
+        out.diffuse_rays = uint32_t(settings_.diffuse_gather_rays);
+        out.glossy_rays = uint32_t(settings_.glossy_gather_rays);
+        // The point's bits and the seed, mixed (splitmix64's finaliser): the same point gathers
+        // the same directions in every run and on every thread.
+        uint64_t key = settings_.seed;
+        for (int a = 0; a < 3; ++a) {
+            uint32_t bits = 0;
+            std::memcpy(&bits, &p[a], sizeof bits);
+            key = (key ^ bits) * 0x9e3779b97f4a7c15ull;
+            key ^= key >> 31;
+        }
+        out.gather_key = key;
+    }
+    return out;
 }
 
 float RadianceField::obscurance(const vec3& p, const vec3& n) const {

@@ -51,10 +51,12 @@
 // wall read into the room, 10-15% too bright, and the bright room of two_rooms into the dim one.
 // When every point is dropped the tests are waived rather than return darkness.
 // Irradiance and glossy come from the interpolated SH in closed form (IndirectField: exact for
-// the SH, where the seed gathers N_d = 32 and N_g = 64 rays). obscurance multiplies the SH by the
-// seed's obscurance O(x) = (2/N_d) Σ ρ(d̄(x, ω_i)) cos θ_i over the N_d of 2 N_d sphere directions
-// above the surface, ρ(d) = min(w_oc d / R_max, 1) (the seed prints max, which is never below 1
-// and brightens); an ambient-occlusion look, not light transport: off by default.
+// the SH), or with monte_carlo_gathers as the seed computes them: N_d = 32 cosine-distributed
+// and N_g = 64 Phong-lobe directions evaluated on the SH (render/indirect_field.h). obscurance
+// multiplies the SH by the seed's obscurance O(x) = (2/N_d) Σ ρ(d̄(x, ω_i)) cos θ_i over the N_d
+// of 2 N_d sphere directions above the surface, ρ(d) = min(w_oc d / R_max, 1) (the seed prints
+// max, which is never below 1 and brightens); an ambient-occlusion look, not light transport:
+// off by default.
 //
 // Determinism: photon streams per pass (photon_tracer.h), per-cell sums in hit order, one gather
 // per sample point summed in ray order: bit-identical for any thread count.
@@ -78,6 +80,7 @@ struct RadianceFieldSettings {
     uint64_t photons = 200000;          // emitted per pass
     uint64_t seed = 0;
     int max_bounces = 4;                // bounces of the field's light, as Light Paths > Diffuse
+    int glossy_bounces = 4;             // photons' glossy scatterings, as Light Paths > Glossy
     float specular_roughness = 0.1f;    // lobes up to this roughness count as specular
     bool world_in_field = false;        // escaped gather rays read the world (see above)
     bool glossy_in_grid = true;         // rough glossy reflection enters the grid (see above)
@@ -92,6 +95,9 @@ struct RadianceFieldSettings {
     bool side_test = true;              // §4.1: drop sample points behind the tangent plane
     bool visibility_test = false;       // drop sample points the distance SH says are hidden
     bool occlusion_test = true;         // drop sample points a surface separates from p
+    bool monte_carlo_gathers = false;   // §4.2-4.3's gathers instead of the closed forms
+    int diffuse_gather_rays = 32;       // N_d
+    int glossy_gather_rays = 64;        // N_g (a Phong lobe)
     bool obscurance = false;            // §4.4's AO multiplier (not light transport)
     float obscurance_weight = 1.0f;     // w_oc
     float obscurance_distance = 0.0f;   // R_max, m; 0 = two cells
@@ -147,6 +153,9 @@ class RadianceField : public IndirectField, public GiSolver {
 
     // IndirectField.
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
+    // With monte_carlo_gathers, the lookup asks for the seed's gathers (FieldLookup's
+    // diffuse_rays and glossy_rays), their directions keyed by p and the seed.
+    FieldLookup lookup(const vec3& p, const vec3& n) const override;
     float reuse_distance() const override;
     bool includes_world_direct() const override { return settings_.world_in_field; }
     bool is_zero() const override { return passes_ == 0; }

@@ -202,7 +202,7 @@ void RadianceGrid::set_face_radiance(const ivec3& cell, int face, const vec3& ra
 }
 
 vec3 RadianceGrid::read_level(int level, const ivec3& cell0, const vec3& x, const vec3& d,
-                              float sigma, bool* lit) const {
+                              const vec3& side, float sigma, bool* lit) const {
     const Level& l = levels_[size_t(level)];
     const ivec3 cell = glm::min(cell0 / (1 << level), l.dims - 1);
     const size_t base = l.index(cell) * kFaceCount;
@@ -213,6 +213,10 @@ vec3 RadianceGrid::read_level(int level, const ivec3& cell0, const vec3& x, cons
     for (int j = 0; j < kFaceCount; ++j) {
         if (!(l.area[base + size_t(j)] > 0.0f)) continue;  // no surface faces that way
         const vec3 n = face_normal(j);
+        // Only faces the side the ray hit reflects through: a cell may also hold a side x cannot
+        // see (the sunlit outside of a wall in a floor-and-wall crease cell), whose face points
+        // towards x all the same.
+        if (glm::dot(side, n) <= 0.0f) continue;
         // β from the ray itself rather than from the face's centre: x may lie in the hit cell or
         // beside it (a sample point over a floor), where the direction to a face's centre says
         // nothing about which side of the surface x sees.
@@ -232,18 +236,18 @@ vec3 RadianceGrid::read_level(int level, const ivec3& cell0, const vec3& x, cons
     return weights > 0.0f ? sum / weights : vec3(0.0f);
 }
 
-vec3 RadianceGrid::radiance_toward(const vec3& x, const vec3& hit, const vec3& d, float level,
-                                   float sigma, bool* lit) const {
+vec3 RadianceGrid::radiance_toward(const vec3& x, const vec3& hit, const vec3& d,
+                                   const vec3& side, float level, float sigma, bool* lit) const {
     const ivec3 cell0 = surface_cell(hit, -d);
     if (lit != nullptr) *lit = false;
     if (cell0.x < 0) return vec3(0.0f);
-    if (lit != nullptr) read_level(0, cell0, x, d, sigma, lit);
+    if (lit != nullptr) read_level(0, cell0, x, d, side, sigma, lit);
     const float clamped = std::clamp(level, 0.0f, float(levels() - 1));
     const int lo = int(clamped);
     const float t = clamped - float(lo);
-    const vec3 fine = read_level(lo, cell0, x, d, sigma, nullptr);
+    const vec3 fine = read_level(lo, cell0, x, d, side, sigma, nullptr);
     if (t <= 0.0f || lo + 1 >= levels()) return fine;
-    return (1.0f - t) * fine + t * read_level(lo + 1, cell0, x, d, sigma, nullptr);
+    return (1.0f - t) * fine + t * read_level(lo + 1, cell0, x, d, side, sigma, nullptr);
 }
 
 size_t RadianceGrid::memory_bytes() const {

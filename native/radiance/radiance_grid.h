@@ -33,9 +33,12 @@
 // mean of its children's same faces weighted by their D (the radiance averaged over the surface
 // that faces that way), its D their sum: faces without surface do not dilute the mean.
 //
-// Reading (§3.4.2): radiance_toward(x, hit, d, level) is the radiance arriving at x along unit d
-// from the surface point `hit`: in the cell holding `hit` (on the side facing x), the faces
-// with surface that face x, weighted by g(α_j) cos β_j / Σ_k g(α_k) cos β_k, with α_j the angle
+// Reading (§3.4.2): radiance_toward(x, hit, d, side, level) is the radiance arriving at x along
+// unit d from the surface point `hit`, whose side seen from x has the unit normal `side`: in the
+// cell holding `hit` (on the side facing x), the faces with surface that face x and that `side`
+// reflects through (side · n_j > 0: a crease cell of floor and wall also holds the wall's
+// outside, whose face may point towards x too; read, the sun room's creases came out 1.5-2.5
+// times too bright), weighted by g(α_j) cos β_j / Σ_k g(α_k) cos β_k, with α_j the angle
 // between d and the direction from x to the face's centre, g a Gaussian of standard deviation
 // sigma, and β_j the angle between n_j and −d (the seed measures it towards x from the face's
 // centre, which points the wrong way when x lies in or beside the hit cell). (The seed
@@ -103,8 +106,8 @@ class RadianceGrid {
     // given) is false when no face of the finest cell there both holds surface that light has
     // reached and faces x: x looks at a side no light arrives on (the outside of a room's wall,
     // seen from beyond it), whose radiance is then zero.
-    vec3 radiance_toward(const vec3& x, const vec3& hit, const vec3& d, float level,
-                         float sigma, bool* lit = nullptr) const;
+    vec3 radiance_toward(const vec3& x, const vec3& hit, const vec3& d, const vec3& side,
+                         float level, float sigma, bool* lit = nullptr) const;
 
     size_t memory_bytes() const;
 
@@ -120,8 +123,8 @@ class RadianceGrid {
     };
     void update_levels(Progress* progress);  // level 0 from the sums, then the mips
     void build_mips();
-    vec3 read_level(int level, const ivec3& cell0, const vec3& x, const vec3& d, float sigma,
-                    bool* lit) const;
+    vec3 read_level(int level, const ivec3& cell0, const vec3& x, const vec3& d, const vec3& side,
+                    float sigma, bool* lit) const;
 
     ShLattice surfaces_;
     FaceEstimator estimator_ = FaceEstimator::ProjectedArea;

@@ -1,16 +1,62 @@
 #include "render/indirect_field.h"
 
+#include <algorithm>
+
 #include "sh/ggx_zh.h"
 #include "sh/sh_irradiance.h"
+#include "util/rng.h"
+#include "util/sampling.h"
 
 namespace shgi {
+namespace {
+
+// Roughness below this gathers the Phong lobe of this roughness (a mirror's lobe would need an
+// infinite exponent).
+constexpr float kMinGatherRoughness = 0.01f;
+
+// The mean of `radiance` over `rays` directions sampled around `axis` by `sample` (a local
+// direction around +Z from a uniform point of the square), stratified in the first dimension.
+template <typename Sample>
+vec3 gathered_mean(const ShRgb& radiance, const vec3& axis, uint32_t rays, uint64_t key,
+                   uint64_t stream, Sample&& sample) {
+    Pcg32 rng(key, stream);
+    const Frame frame = Frame::from_z(axis);
+    vec3 sum(0.0f);
+    for (uint32_t i = 0; i < rays; ++i) {
+        const vec2 u((float(i) + rng.next_float()) / float(rays), rng.next_float());
+        sum += sh_evaluate(radiance, frame.to_world(sample(u)));
+    }
+    return sum / float(rays);
+}
+
+}  // namespace
+
+float FieldLookup::gather_phong_exponent(float roughness) {
+    const float r = std::max(roughness, kMinGatherRoughness);
+    const float alpha = r * r;
+    // Blinn-Phong's half-vector exponent 2/α² − 2 (Walter et al. 2007), a quarter of it about
+    // the reflected direction.
+    return std::max(0.0f, 0.5f / (alpha * alpha) - 0.5f);
+}
 
 vec3 FieldLookup::irradiance(const vec3& n) const {
+    if (diffuse_rays > 0) {
+        const vec3 mean = gathered_mean(radiance, n, diffuse_rays, gather_key, 0,
+                                         [](const vec2& u) { return sample_cosine_hemisphere(u); });
+        return glm::max(kPi * mean, vec3(0.0f)) + extra_irradiance;
+    }
     return glm::max(sh_irradiance(radiance, n), vec3(0.0f)) + extra_irradiance;
 }
 
 vec3 FieldLookup::glossy(const vec3& n, const vec3& wo, float roughness) const {
     const vec3 reflected = 2.0f * glm::dot(wo, n) * n - wo;
+    if (glossy_rays > 0) {
+        const float exponent = gather_phong_exponent(roughness);
+        const vec3 mean =
+            gathered_mean(radiance, glm::normalize(reflected), glossy_rays, gather_key, 1,
+                          [exponent](const vec2& u) { return sample_power_cosine(u, exponent); });
+        return glm::max(mean, vec3(0.0f));
+    }
     return sh_specular_radiance(radiance, reflected, roughness);
 }
 

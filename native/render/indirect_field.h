@@ -29,11 +29,21 @@ class Progress;
 struct FieldLookup {
     ShRgb radiance;                  // incident radiance SH, W m^-2 sr^-1
     vec3 extra_irradiance{0.0f};     // W m^-2 not represented in `radiance`
+    // Monte Carlo gathers of `radiance` in place of the closed forms (seed 001 §4.2-4.3, the
+    // radiance field's monte_carlo_gathers): irradiance from diffuse_rays cosine-distributed
+    // directions, π/N Σ L(ω_i); glossy from glossy_rays directions of the normalised Phong lobe
+    // of exponent (2/α² − 2)/4 (α = roughness²) about the reflected direction, 1/N Σ L(ω_i).
+    // 0: the closed form. gather_key seeds the directions (per shading point: deterministic).
+    uint32_t diffuse_rays = 0;
+    uint32_t glossy_rays = 0;
+    uint64_t gather_key = 0;
 
     // E(n), >= 0.
     vec3 irradiance(const vec3& n) const;
     // Pre-filtered radiance leaving towards wo (unit, on n's side) for a GGX lobe, >= 0.
     vec3 glossy(const vec3& n, const vec3& wo, float roughness) const;
+    // The Phong exponent of glossy_rays' lobe for a roughness (finite for roughness 0).
+    static float gather_phong_exponent(float roughness);
 };
 
 class IndirectField {

@@ -208,6 +208,12 @@ class SHGI_RENDER_PT_radiance_field(_FieldPanel, bpy.types.Panel):
         sub.active = field.use_mips
         sub.prop(field, "mip_levels")
         column = layout.column(align=True)
+        column.prop(field, "monte_carlo_gathers")
+        sub = column.column(align=True)
+        sub.active = field.monte_carlo_gathers
+        sub.prop(field, "diffuse_gather_rays")
+        sub.prop(field, "glossy_gather_rays")
+        column = layout.column(align=True)
         for name in ("side_test", "visibility_test", "occlusion_test", "obscurance",
                      "world_in_field"):
             column.prop(field, name)

@@ -2967,6 +2967,14 @@ class RadianceFieldSettings:
     def bounds_min(self, arg1: typing.Any) -> None:
         ...
     @property
+    def diffuse_gather_rays(self) -> int:
+        """
+        Directions N_d of the diffuse Monte Carlo gather (32, the paper's).
+        """
+    @diffuse_gather_rays.setter
+    def diffuse_gather_rays(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
     def face_estimator(self) -> FaceEstimator:
         """
         FaceEstimator: PROJECTED_AREA (exact for lit planes) or the paper's PAPER.
@@ -2989,6 +2997,22 @@ class RadianceFieldSettings:
         """
     @gather_rays.setter
     def gather_rays(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def glossy_bounces(self) -> int:
+        """
+        Photons' glossy scatterings, a budget of their own beside max_bounces, 0..64; 4 matches Cycles' default glossy bounces.
+        """
+    @glossy_bounces.setter
+    def glossy_bounces(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def glossy_gather_rays(self) -> int:
+        """
+        Directions N_g of the glossy (Phong-lobe) Monte Carlo gather (64, the paper's).
+        """
+    @glossy_gather_rays.setter
+    def glossy_gather_rays(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def glossy_in_grid(self) -> bool:
@@ -3021,6 +3045,14 @@ class RadianceFieldSettings:
         """
     @mip_levels.setter
     def mip_levels(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def monte_carlo_gathers(self) -> bool:
+        """
+        Irradiance and glossy light by the paper's Monte Carlo gathers of the SH (diffuse_gather_rays, glossy_gather_rays) instead of the closed forms (False).
+        """
+    @monte_carlo_gathers.setter
+    def monte_carlo_gathers(self, arg0: bool) -> None:
         ...
     @property
     def obscurance(self) -> bool:
