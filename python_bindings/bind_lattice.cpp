@@ -73,6 +73,9 @@ void bind_settings(py::module_& m) {
     def_integer(cls, "max_bounces", &S::max_bounces,
                 "Photon scatterings after emission; 4 matches Cycles' default diffuse "
                 "bounces (4).");
+    def_integer(cls, "glossy_bounces", &S::glossy_bounces,
+                "Photon glossy scatterings, a budget apart from max_bounces as Cycles' Glossy "
+                "bounces (4); -1: counted against max_bounces.");
     def_integer(cls, "resolution", &S::resolution,
                 "Global lattice: cells along the bounds' longest side (16).");
     def_integer(cls, "order", &S::order, "Global lattice SH order, 1 or 2 (2).");

@@ -167,8 +167,8 @@ PROPERTY_DEFAULTS = {
 }
 
 # PhotonLatticeSettings' fields in ``scene.shgi.photon_lattice`` with their native defaults. Not
-# mirrored: ``seed`` (scene.shgi.seed seeds every solver) and ``max_bounces`` (Light Paths >
-# Diffuse, LIGHT_PATH_VALUES).
+# mirrored: ``seed`` (scene.shgi.seed seeds every solver), ``max_bounces`` and
+# ``glossy_bounces`` (Light Paths > Diffuse and Glossy, LIGHT_PATH_VALUES).
 PHOTON_LATTICE_DEFAULTS = {
     "photons": 200000,
     "resolution": 16,
@@ -466,6 +466,7 @@ MAX_RADIANCE_RESOLUTION = 128        # RadianceFieldSettings.resolution
 MAX_GATHER_RAYS = 1 << 20            # RadianceFieldSettings.gather_rays
 MAX_MIP_LEVELS = 16                  # RadianceFieldSettings.mip_levels
 MAX_RADIANCE_GLOSSY_BOUNCES = 64     # RadianceFieldSettings.glossy_bounces
+MAX_LATTICE_GLOSSY_BOUNCES = 1024    # PhotonLatticeSettings.glossy_bounces
 MAX_SHADING_GATHER_RAYS = 1 << 16    # RadianceFieldSettings.diffuse/glossy_gather_rays
 # ProbeGridSettings.bleed_bias must stay below 1 and backface_threshold above 0: the nearest
 # values the panels' two decimals show.
@@ -508,10 +509,11 @@ PROBE_PATH_FIRST_BOUNCE = 1
 # light a renderer's diffuse sample carries, in the same units; the photon lattice has no
 # per-sample clamp: its light is clamped where F12 reads it, PreviewSettings.clamp_indirect).
 LIGHT_PATH_VALUES = {
+    # The photons' glossy scatterings have a budget of their own, as a path's Glossy bounces.
     "PhotonLatticeSettings": {
         "max_bounces": LightPathValue("diffuse_bounces", 0, MIN_PHOTON_BOUNCES),
+        "glossy_bounces": LightPathValue("glossy_bounces", 0, None, MAX_LATTICE_GLOSSY_BOUNCES),
     },
-    # The photons' glossy scatterings have a budget of their own, as a path's Glossy bounces.
     "RadianceFieldSettings": {
         "max_bounces": LightPathValue("diffuse_bounces", 0, MIN_PHOTON_BOUNCES),
         "glossy_bounces": LightPathValue("glossy_bounces", 0, None, MAX_RADIANCE_GLOSSY_BOUNCES),

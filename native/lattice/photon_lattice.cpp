@@ -26,7 +26,8 @@ constexpr float kDefaultCausticRadiusFraction = 0.02f;
 //   f32 caustic_radius | u64 caustic photons injected | the timings | global ShLattice |
 //   caustic ShLattice | f32 power_scale, u64 count, Photon[count] of the caustic photon map.
 constexpr char kLatticeMagic[8] = {'S', 'H', 'G', 'I', 'L', 'A', 'T', '\0'};
-constexpr uint32_t kLatticeFileVersion = 2;  // 2: the lattices hold visibility masks
+// 2: the lattices hold visibility masks; 3: the settings hold glossy_bounces.
+constexpr uint32_t kLatticeFileVersion = 3;
 constexpr const char* kLatticeFile = "lattice file";
 
 void write_settings(BinaryWriter& out, const PhotonLatticeSettings& s) {
@@ -49,9 +50,12 @@ void write_settings(BinaryWriter& out, const PhotonLatticeSettings& s) {
     out.put(uint8_t(s.use_bounds));
     out.put(s.bounds_min);
     out.put(s.bounds_max);
+    out.put(int32_t(s.glossy_bounces));
 }
 
-PhotonLatticeSettings read_settings(BinaryReader& in) {
+// `with_glossy`: the settings hold glossy_bounces (lattice files from version 3, batches);
+// without, glossy scatterings counted against max_bounces (-1), as they did.
+PhotonLatticeSettings read_settings(BinaryReader& in, bool with_glossy) {
     const char* what = "the settings";
     PhotonLatticeSettings s;
     s.photons = in.get<uint64_t>(what);
@@ -73,6 +77,7 @@ PhotonLatticeSettings read_settings(BinaryReader& in) {
     s.use_bounds = in.get<uint8_t>(what) != 0;
     s.bounds_min = in.get<vec3>(what);
     s.bounds_max = in.get<vec3>(what);
+    s.glossy_bounces = with_glossy ? in.get<int32_t>(what) : -1;
     if (caustics > uint8_t(CausticMode::PhotonMap) ||
         interpolation > uint8_t(LatticeInterpolation::Cubic))
         throw IoError(format_message(in.kind(), " \"", in.path(), "\" holds caustics ",
@@ -93,6 +98,7 @@ PhotonTracerSettings tracer_settings(const PhotonLatticeSettings& settings) {
     tracer.photons = settings.photons;
     tracer.seed = settings.seed;
     tracer.max_bounces = settings.max_bounces;
+    tracer.max_glossy_bounces = settings.glossy_bounces;
     tracer.specular_roughness = settings.specular_roughness;
     tracer.store_world_direct = settings.world_in_field;
     return tracer;
@@ -149,6 +155,7 @@ std::string settings_difference(const PhotonLatticeSettings& got,
     SHGI_FIELD(photons)
     SHGI_FIELD(seed)
     SHGI_FIELD(max_bounces)
+    SHGI_FIELD(glossy_bounces)
     SHGI_FIELD(specular_roughness)
     SHGI_FIELD(world_in_field)
     SHGI_FIELD(resolution)
@@ -171,7 +178,7 @@ std::string settings_difference(const PhotonLatticeSettings& got,
 //   "SHGIPHB\0" | u32 version | the settings, field by field | u64 pass, begin, end, emitted,
 //   bounces | f64 seconds | global Photon array | caustic Photon array.
 constexpr char kBatchMagic[8] = {'S', 'H', 'G', 'I', 'P', 'H', 'B', '\0'};
-constexpr uint32_t kBatchVersion = 1;
+constexpr uint32_t kBatchVersion = 2;  // 2: the settings hold glossy_bounces
 constexpr const char* kBatchKind = "photon batch";
 
 const PhotonLatticeSettings& validated(const PhotonLatticeSettings& settings) {
@@ -210,7 +217,7 @@ PhotonBatch PhotonBatch::from_bytes(const std::string& bytes, const std::string&
         throw IoError(format_message(kBatchKind, " \"", what, "\" has version ", version,
                                      "; this SHGI reads version ", kBatchVersion));
     PhotonBatch batch;
-    batch.settings = read_settings(r);  // IoError for invalid settings
+    batch.settings = read_settings(r, true);  // IoError for invalid settings
     batch.pass = r.get<uint64_t>("the header");
     batch.begin = r.get<uint64_t>("the header");
     batch.end = r.get<uint64_t>("the header");
@@ -249,6 +256,7 @@ PhotonBatch trace_photon_batch(const Scene& scene, const PhotonLatticeSettings& 
 }
 
 void validate_photon_lattice_settings(const PhotonLatticeSettings& settings) {
+    check_range(settings.glossy_bounces, -1, 1024, "glossy_bounces");
     // The tracer's checks, naming the fields as the caller knows them (the names are the same).
     validate_photon_tracer_settings(tracer_settings(settings), "PhotonLatticeSettings");
     check_range(settings.resolution, 1, 1024, "resolution");
@@ -358,14 +366,15 @@ std::unique_ptr<PhotonLattice> PhotonLattice::load(const std::string& path) {
     if (std::memcmp(magic, kLatticeMagic, sizeof(kLatticeMagic)) != 0)
         throw IoError(format_message("\"", path, "\" is not an SHGI lattice file (bad magic)"));
     const uint32_t version = r.get<uint32_t>("the header");
-    // Version 1 lattices (before the visibility masks) still open, and sample as they did.
-    if (version != kLatticeFileVersion && version != 1)
+    // Versions 1 and 2 (before the visibility masks, before glossy_bounces) still open, and
+    // sample as they did.
+    if (version < 1 || version > kLatticeFileVersion)
         throw IoError(format_message("lattice file \"", path, "\" has version ", version,
                                      "; this SHGI reads versions 1 to ", kLatticeFileVersion));
     const bool with_visibility = version >= 2;
     std::unique_ptr<PhotonLattice> lattice(new PhotonLattice());
     lattice->loaded_from_ = path;
-    lattice->settings_ = read_settings(r);
+    lattice->settings_ = read_settings(r, version >= 3);
     lattice->bounds_ = r.get<Bounds3>("the header");
     lattice->passes_ = r.get<uint64_t>("the header");
     lattice->caustic_radius_ = r.get<float>("the header");

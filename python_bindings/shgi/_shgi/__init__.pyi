@@ -1954,6 +1954,14 @@ class PhotonLatticeSettings:
     def caustics(self, arg0: CausticMode) -> None:
         ...
     @property
+    def glossy_bounces(self) -> int:
+        """
+        Photon glossy scatterings, a budget apart from max_bounces as Cycles' Glossy bounces (4); -1: counted against max_bounces.
+        """
+    @glossy_bounces.setter
+    def glossy_bounces(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
     def interpolation(self) -> LatticeInterpolation:
         """
         LatticeInterpolation (CUBIC).

@@ -233,6 +233,8 @@ TEST(PhotonLattice, RejectsInvalidSettingsNamingTheField) {
         // habit 6: errors name the bad input).
         {[](PhotonLatticeSettings& s) { s.photons = 0; }, "PhotonLatticeSettings.photons"},
         {[](PhotonLatticeSettings& s) { s.max_bounces = 0; }, "PhotonLatticeSettings.max_bounces"},
+        {[](PhotonLatticeSettings& s) { s.glossy_bounces = -2; },
+         "PhotonLatticeSettings.glossy_bounces"},
         {[](PhotonLatticeSettings& s) { s.specular_roughness = 1.5f; },
          "PhotonLatticeSettings.specular_roughness"},
         {[](PhotonLatticeSettings& s) { s.specular_roughness = -0.5f; },
@@ -368,6 +370,7 @@ TEST(PhotonLattice, InteractivePassesHoldTheAverageOfAllPasses) {
     tracer.photons = settings.photons;
     tracer.seed = settings.seed;
     tracer.max_bounces = settings.max_bounces;
+    tracer.max_glossy_bounces = settings.glossy_bounces;
     tracer.specular_roughness = settings.specular_roughness;
     ShLattice expected(scene.bounds(), settings.resolution, settings.order);
     expected.measure_surfaces(scene);
@@ -552,6 +555,7 @@ TEST(PhotonLattice, AnyBatchSplitEqualsTheWholeSolve) {
                 tracer.photons = settings.photons;
                 tracer.seed = settings.seed;
                 tracer.max_bounces = settings.max_bounces;
+                tracer.max_glossy_bounces = settings.glossy_bounces;
                 tracer.specular_roughness = settings.specular_roughness;
                 return tracer;
             }(), 0);
