@@ -93,16 +93,6 @@ PhotonLatticeSettings read_settings(BinaryReader& in, bool with_glossy) {
     return s;
 }
 
-PhotonTracerSettings tracer_settings(const PhotonLatticeSettings& settings) {
-    PhotonTracerSettings tracer;
-    tracer.photons = settings.photons;
-    tracer.seed = settings.seed;
-    tracer.max_bounces = settings.max_bounces;
-    tracer.max_glossy_bounces = settings.glossy_bounces;
-    tracer.specular_roughness = settings.specular_roughness;
-    tracer.store_world_direct = settings.world_in_field;
-    return tracer;
-}
 
 Bounds3 lattice_bounds(const Scene& scene, const PhotonLatticeSettings& settings) {
     if (settings.use_bounds) {
@@ -240,8 +230,8 @@ PhotonBatch trace_photon_batch(const Scene& scene, const PhotonLatticeSettings& 
                                uint64_t pass, uint64_t begin, uint64_t end, Progress* progress) {
     validate_photon_lattice_settings(settings);
     const auto start = now();
-    PhotonMaps maps = trace_photon_range(scene, tracer_settings(settings), pass, begin, end,
-                                         progress, "PhotonLatticeSettings");
+    PhotonMaps maps = trace_photon_range(scene, photon_lattice_tracer_settings(settings), pass,
+                                         begin, end, progress, "PhotonLatticeSettings");
     PhotonBatch batch;
     batch.settings = settings;
     batch.pass = pass;
@@ -255,10 +245,22 @@ PhotonBatch trace_photon_batch(const Scene& scene, const PhotonLatticeSettings& 
     return batch;
 }
 
+PhotonTracerSettings photon_lattice_tracer_settings(const PhotonLatticeSettings& settings) {
+    PhotonTracerSettings tracer;
+    tracer.photons = settings.photons;
+    tracer.seed = settings.seed;
+    tracer.max_bounces = settings.max_bounces;
+    tracer.max_glossy_bounces = settings.glossy_bounces;
+    tracer.specular_roughness = settings.specular_roughness;
+    tracer.store_world_direct = settings.world_in_field;
+    return tracer;
+}
+
 void validate_photon_lattice_settings(const PhotonLatticeSettings& settings) {
     check_range(settings.glossy_bounces, -1, 1024, "glossy_bounces");
     // The tracer's checks, naming the fields as the caller knows them (the names are the same).
-    validate_photon_tracer_settings(tracer_settings(settings), "PhotonLatticeSettings");
+    validate_photon_tracer_settings(photon_lattice_tracer_settings(settings),
+                                    "PhotonLatticeSettings");
     check_range(settings.resolution, 1, 1024, "resolution");
     check_range(settings.order, 1, 2, "order");
     check_range(settings.blur_passes, 0, 64, "blur_passes");

@@ -94,6 +94,8 @@ struct PhotonLatticeSettings {
 };
 
 void validate_photon_lattice_settings(const PhotonLatticeSettings& settings);
+// The photon tracer's settings a lattice with `settings` traces its photons with.
+PhotonTracerSettings photon_lattice_tracer_settings(const PhotonLatticeSettings& settings);
 
 // Seconds of the last solve() (seed 000 Tables 5 and 6), and the photon counts behind them.
 struct PhotonLatticeTimings {

@@ -439,6 +439,23 @@ class _Scattered:
         return self._future
 
 
+def _submitter(client, shared, task, name: str, count: int, args_of: Callable[[int], tuple]):
+    """submit(i, attempt) for run_tasks: task(<shared>, *args_of(i)) under a key unique to the
+    run and the submission ("shgi-{name}-{i}-of-{count}-..."). `shared` is keyed by its content
+    and held by every worker, so that a lost worker loses no copy that others need (workers that
+    join later fetch it from a peer), and scattered again when every copy was lost
+    (_Scattered)."""
+    scattered = _Scattered(client, shared)
+    run_id = uuid.uuid4().hex[:8]
+    serial = itertools.count()
+
+    def submit(i: int, attempt: int):
+        return client.submit(task, scattered.future(), *args_of(i), pure=False,
+                             key=f"shgi-{name}-{i}-of-{count}-{run_id}-{attempt}-{next(serial)}")
+
+    return submit
+
+
 # A task cancelled because its inputs were lost with their workers is submitted again without
 # counting as a failed run, at most this many times.
 LOST_INPUT_RESUBMITS = 3
@@ -583,16 +600,8 @@ def _bake_shards_on(client, distributed, task, shared, task_args: tuple, jobs, o
         shards = SHARDS_PER_WORKER * max(1, len(client.scheduler_info()["workers"]))
     cancel_name = f"shgi-cancel-{uuid.uuid4().hex}"
     cancel = distributed.Event(cancel_name, client=client)
-    # Keyed by its content; on every worker, so that a lost worker loses no copy that others need
-    # (workers that join later fetch it from a peer).
-    scattered = _Scattered(client, shared)
-    run_id = uuid.uuid4().hex[:8]
-    serial = itertools.count()
-
-    def submit(i: int, attempt: int):
-        return client.submit(task, scattered.future(), *task_args, i, shards, threads,
-                             cancel_name, pure=False,
-                             key=f"shgi-shard-{i}-of-{shards}-{run_id}-{attempt}-{next(serial)}")
+    submit = _submitter(client, shared, task, "shard", shards,
+                        lambda i: (*task_args, i, shards, threads, cancel_name))
 
     def accept(i: int, result: dict) -> int:
         return _accept_shard(result, jobs, options, out_dir, i, shards)
@@ -774,14 +783,8 @@ def _run_scene_tasks(client, scene_path: str, task, task_args: list, accept, wha
     bundle = scene_bundle(scene_path)
     cancel_name = f"shgi-cancel-{uuid.uuid4().hex}"
     cancel = distributed.Event(cancel_name, client=client)
-    scattered = _Scattered(client, bundle)
-    run_id = uuid.uuid4().hex[:8]
-    serial = itertools.count()
-
-    def submit(i: int, attempt: int):
-        return client.submit(task, scattered.future(), *task_args[i], cancel_name, pure=False,
-                             key=f"shgi-{plural}-{i}-of-{count}-{run_id}-{attempt}-"
-                                 f"{next(serial)}")
+    submit = _submitter(client, bundle, task, plural, count,
+                        lambda i: (*task_args[i], cancel_name))
 
     start = time.perf_counter()
 

@@ -451,14 +451,7 @@ TEST(LightmapFilter, RemovesNoiseOnTheRoomFloor) {
 TEST(LightmapFilter, NeverCrossesUvCharts) {
     Scene scene;
     scene.add_material(test::lambert(0.8f));
-    Mesh two = test::quad(vec3(-1, -1, 0), vec3(1, 0, 0), vec3(0, 2, 0));
-    const Mesh far = test::quad(vec3(50, -1, 0), vec3(1, 0, 0), vec3(0, 2, 0));
-    for (const vec3& p : far.positions) two.positions.push_back(p);
-    two.triangles.push_back({4, 5, 6});
-    two.triangles.push_back({4, 6, 7});
-    two.uv_sets = {{"LightmapUV",
-                    {{0, 0}, {0.5f, 0}, {0.5f, 1}, {0, 1}, {0.5f, 0}, {1, 0}, {1, 1}, {0.5f, 1}}}};
-    scene.add_instance(scene.add_mesh(two), mat4(1.0f), "TwoCharts");
+    scene.add_instance(scene.add_mesh(test::two_charts()), mat4(1.0f), "TwoCharts");
     scene.add_light(test::point_light(vec3(-0.5f, 0.0f, 1.0f), 100.0f));
     scene.set_world(test::black_world());
     scene.commit();

@@ -366,12 +366,7 @@ TEST(PhotonLattice, InteractivePassesHoldTheAverageOfAllPasses) {
     EXPECT_EQ(lattice.timings().photons_emitted, settings.photons);
     EXPECT_NE(global_coefficients(lattice), one_pass);
 
-    PhotonTracerSettings tracer;
-    tracer.photons = settings.photons;
-    tracer.seed = settings.seed;
-    tracer.max_bounces = settings.max_bounces;
-    tracer.max_glossy_bounces = settings.glossy_bounces;
-    tracer.specular_roughness = settings.specular_roughness;
+    const PhotonTracerSettings tracer = photon_lattice_tracer_settings(settings);
     ShLattice expected(scene.bounds(), settings.resolution, settings.order);
     expected.measure_surfaces(scene);
     for (uint64_t pass = 0; pass < 2; ++pass)
@@ -550,15 +545,8 @@ TEST(PhotonLattice, AnyBatchSplitEqualsTheWholeSolve) {
             const std::vector<PhotonBatch> first =
                 traced_batches(scene, settings, 0, {0, 1, 4096, 9001, 12288, 20000});
             // The batches' photons, in photon order, are the whole pass's photon lists.
-            const PhotonMaps maps = trace_photons(scene, [&] {
-                PhotonTracerSettings tracer;
-                tracer.photons = settings.photons;
-                tracer.seed = settings.seed;
-                tracer.max_bounces = settings.max_bounces;
-                tracer.max_glossy_bounces = settings.glossy_bounces;
-                tracer.specular_roughness = settings.specular_roughness;
-                return tracer;
-            }(), 0);
+            const PhotonMaps maps =
+                trace_photons(scene, photon_lattice_tracer_settings(settings), 0);
             std::vector<Photon> global, caustic;
             for (auto batch = first.rbegin(); batch != first.rend(); ++batch) {
                 global.insert(global.end(), batch->global.begin(), batch->global.end());

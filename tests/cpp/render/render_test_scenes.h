@@ -70,6 +70,20 @@ inline Mesh triangle(const vec3& p0, const vec3& p1, const vec3& p2) {
 }
 
 // Square in the z = 0 plane, facing +Z.
+// Two 1 x 2 m quads facing +Z, one at x in [-1, 0] and one 50 m away, whose LightmapUV halves
+// meet at u = 0.5: two UV charts side by side in UV space, far apart in the world (what a
+// filter must not mix: their texels are neighbours only in the lightmap).
+inline Mesh two_charts() {
+    Mesh two = quad(vec3(-1, -1, 0), vec3(1, 0, 0), vec3(0, 2, 0));
+    const Mesh far = quad(vec3(50, -1, 0), vec3(1, 0, 0), vec3(0, 2, 0));
+    for (const vec3& p : far.positions) two.positions.push_back(p);
+    two.triangles.push_back({4, 5, 6});
+    two.triangles.push_back({4, 6, 7});
+    two.uv_sets = {{"LightmapUV",
+                    {{0, 0}, {0.5f, 0}, {0.5f, 1}, {0, 1}, {0.5f, 0}, {1, 0}, {1, 1}, {0.5f, 1}}}};
+    return two;
+}
+
 inline Mesh plane(float half) {
     Mesh mesh;
     mesh.name = "plane";
