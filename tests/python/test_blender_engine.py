@@ -730,6 +730,8 @@ def test_f12_matches_cycles(scene, method, blender, build_python_dir, tmp_path_f
     results = run_engine_script("engine_render_checks.py", "ENGINE_RENDER_OK", blender,
                                 build_python_dir, tmp_path_factory)
     row, cycles = results[scene][method], results[scene]["cycles"]
+    print(f"{scene}, {method}: Combined PSNR {row['psnr']:.2f} dB, mean ratio "
+          f"{row['mean_ratio']:.4f}, DiffInd x DiffCol ratio {row['diffind_ratio']:.4f}")
     assert not row["record"]["errors"] and not row["record"]["cancelled"], row["record"]
     assert row["passes"] == cycles["passes"], "SHGI's passes are not Cycles' passes"
     assert row["psnr"] >= MIN_PSNR_DB, f"Combined PSNR {row['psnr']:.2f} dB"
