@@ -123,12 +123,13 @@ class TexelBaker {
     // field up at each sample position.
     bool interleaved() const { return interleave_.interleaved() && reads_field(); }
 
-    // The filtered radiance SH of the texels of tile [x0, x1) x [y0, y1), row-major: every texel
-    // of the tile and of a halo half the pattern wide gathers its own set (x mod sets_x,
-    // y mod sets_y; the mean over its sample positions), then each texel of the tile averages
-    // the texels of its window (Interleave::tap_weight) that lie in its UV chart on its surface,
-    // set by set.
-    // A texel's value depends only on its neighbourhood, not on the tile or shard it is baked in.
+    // The filtered radiance SH of the texels of tile [x0, x1) x [y0, y1), row-major: each texel
+    // takes the mean over the sets of each set's nearest texels that lie in its UV chart on its
+    // surface (InterleaveWindow, reaching a period into neighbouring tiles), where texel (x, y)
+    // holds its own set (x mod sets_x, y mod sets_y) alone, gathered at its sample positions
+    // (their weighted mean). A set's gather is made only for the texels a window reads (within
+    // half a period, unless an edge cuts the window), once per tile. A texel's value depends only
+    // on its neighbourhood, not on the tile or shard it is baked in.
     std::vector<ShRgb> interleaved_sh(uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1,
                                       const Progress* progress) const {
         const int hx = interleave_.filter ? InterleaveWindow::reach(interleave_.sets_x) : 0;
@@ -138,25 +139,33 @@ class TexelBaker {
         const uint32_t bx = std::min(map_.width, x1 + uint32_t(hx));
         const uint32_t by = std::min(map_.height, y1 + uint32_t(hy));
         const uint32_t w = bx - ax;
-        std::vector<ShRgb> raw(size_t(w) * (by - ay), ShRgb(0));
-        std::vector<TexelGeometry> geometry(raw.size());
+        std::vector<TexelGeometry> geometry(size_t(w) * (by - ay));
         for (uint32_t y = ay; y < by; ++y)
             for (uint32_t x = ax; x < bx; ++x) {
                 const uint64_t t = map_.texel_index(x, y);
-                if (!map_.covered(t)) continue;
-                throw_if_cancelled(progress);
-                const size_t i = size_t(y - ay) * w + (x - ax);
-                geometry[i] = texel_geometry(map_, t);
-                double weight_sum = 0.0;
-                for (const TexelSample* s = map_.samples_begin(t); s != map_.samples_end(t); ++s)
-                    weight_sum += s->weight;
-                for (const TexelSample* s = map_.samples_begin(t); s != map_.samples_end(t); ++s)
-                    add_sh(raw[i],
-                           field_->set_radiance_sh(s->ray_origin, s->geometric_normal,
-                                                   int(x % uint32_t(interleave_.sets_x)),
-                                                   int(y % uint32_t(interleave_.sets_y))),
-                           float(s->weight / weight_sum));
+                if (map_.covered(t))
+                    geometry[size_t(y - ay) * w + (x - ax)] = texel_geometry(map_, t);
             }
+        std::vector<ShRgb> raw(geometry.size(), ShRgb(0));
+        std::vector<uint8_t> gathered(geometry.size(), 0);
+        // Texel (x, y)'s own set, gathered on first use.
+        const auto own_set = [&](uint32_t x, uint32_t y) -> const ShRgb& {
+            const size_t i = size_t(y - ay) * w + (x - ax);
+            if (gathered[i]) return raw[i];
+            throw_if_cancelled(progress);
+            const uint64_t t = map_.texel_index(x, y);
+            double weight_sum = 0.0;
+            for (const TexelSample* s = map_.samples_begin(t); s != map_.samples_end(t); ++s)
+                weight_sum += s->weight;
+            for (const TexelSample* s = map_.samples_begin(t); s != map_.samples_end(t); ++s)
+                add_sh(raw[i],
+                       field_->set_radiance_sh(s->ray_origin, s->geometric_normal,
+                                               int(x % uint32_t(interleave_.sets_x)),
+                                               int(y % uint32_t(interleave_.sets_y))),
+                       float(s->weight / weight_sum));
+            gathered[i] = 1;
+            return raw[i];
+        };
         std::vector<ShRgb> out(size_t(x1 - x0) * (y1 - y0), ShRgb(0));
         InterleaveWindow window(interleave_.sets_x, interleave_.sets_y);
         for (uint32_t y = y0; y < y1; ++y)
@@ -166,7 +175,7 @@ class TexelBaker {
                 const TexelGeometry& gp = geometry[size_t(y - ay) * w + (x - ax)];
                 ShRgb& sh = out[size_t(y - y0) * (x1 - x0) + (x - x0)];
                 if (!interleave_.filter) {
-                    sh = raw[size_t(y - ay) * w + (x - ax)];
+                    sh = own_set(x, y);
                     continue;
                 }
                 // The halo is the window's reach, so every tap lies in [ax, bx) x [ay, by).
@@ -182,7 +191,7 @@ class TexelBaker {
                                    kInterleavePlaneTexels * std::max(gp.texel_size, gq.texel_size);
                     },
                     [&](int u, int v, float weight) {
-                        add_sh(sh, raw[size_t(v - int(ay)) * w + size_t(u - int(ax))], weight);
+                        add_sh(sh, own_set(uint32_t(u), uint32_t(v)), weight);
                     });
             }
         return out;
