@@ -559,15 +559,15 @@ class MethodSettings:
 # the limits (F12 renders its first surface exactly and follows mirrors and glass up to
 # Specular, whatever the method).
 LIGHT_PATH_LIMITS = {
-    "PHOTON_LATTICE": "Photon Lattice: photons follow Diffuse; Total, Glossy and Transmission "
-                      "apply to path tracing only",
+    "PHOTON_LATTICE": "Photon Lattice: photons follow Diffuse and Glossy; Total and "
+                      "Transmission apply to path tracing only",
     "PROBE_GRID": f"Probe Grid: Glossy follows Diffuse (at most "
                   f"{MAX_PROBE_BOUNCES + PROBE_PATH_FIRST_BOUNCE}); Total and Transmission are "
                   f"{PROPERTY_DEFAULTS['max_bounces']} and "
                   f"{PROPERTY_DEFAULTS['transmission_bounces']}; probe paths split at "
                   f"{PROPERTY_DEFAULTS['light_splits']} lights",
-    "RADIANCE_FIELD": "Radiance Field: photons follow Diffuse; Total, Glossy and Transmission "
-                      "apply to path tracing only",
+    "RADIANCE_FIELD": "Radiance Field: photons follow Diffuse and Glossy; Total and "
+                      "Transmission apply to path tracing only",
     "PROPAGATION": "Light Propagation: light paths follow Diffuse; Total, Glossy and "
                    "Transmission apply to path tracing only",
     "INSTANT_GI": "Instant GI: light paths follow Diffuse; Total, Glossy and Transmission "
