@@ -497,7 +497,11 @@ PhotonMaps trace_photon_range(const Scene& scene, const PhotonTracerSettings& se
             require_memory(
                 saturating_mul(need, 2),
                 format_message(settings_name, ".photons = ", settings.photons, " (the first ",
-                               traced, " photons of ", photons, " stored ", per_photon,
+                               traced, " photons",
+                               photons == settings.photons
+                                   ? std::string()
+                                   : format_message(" of a batch of ", photons),
+                               " stored ", per_photon,
                                " photons each, so about ", uint64_t(per_photon *
                                double(photons)), " stored photons of ",
                                sizeof(Photon), " bytes, twice: stored photons may take half of the "
