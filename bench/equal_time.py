@@ -92,6 +92,10 @@ def parse_args():
     parser.add_argument("--resolution", default="200x150", help="WxH pixels")
     parser.add_argument("--cache", default=os.path.join(REPO_ROOT, "build", "equal_time_cache"),
                         help="folder of the cached references")
+    parser.add_argument("--cycles-filter-glossy", type=float, default=None,
+                        help="Cycles' Light Paths > Caustics > Filter Glossy (blur_glossy) for "
+                             "its renders and reference (default: Cycles' own, 1.0); SHGI has "
+                             "none. Use another --cache: references are keyed without it")
     parser.add_argument("--quick", action="store_true",
                         help=f"smoke run: limits {QUICK_LIMITS}, samples {QUICK_SAMPLES}, "
                              f"{QUICK_REFERENCE_SAMPLES}-spp references")
@@ -110,8 +114,9 @@ def parse_args():
 
 # --- scenes -----------------------------------------------------------------------------------
 
-def build_scene(name, width, height):
-    """A fresh file holding scene `name` at width x height, set up alike for Cycles and SHGI."""
+def build_scene(name, width, height, filter_glossy=None):
+    """A fresh file holding scene `name` at width x height, set up alike for Cycles and SHGI;
+    Cycles' Filter Glossy `filter_glossy` (None: its default)."""
     if name == "dense":
         scene = blender_scenes.build("cornell_box")
         builder = blender_scenes.SceneBuilder()
@@ -133,6 +138,8 @@ def build_scene(name, width, height):
     cycles.use_adaptive_sampling = False  # the spp of a row is what Cycles rendered
     cycles.seed = SEED
     cycles.denoiser = "OPENIMAGEDENOISE"
+    if filter_glossy is not None:
+        cycles.blur_glossy = filter_glossy
     for field, value in BOUNCES.items():
         setattr(cycles, field, value)
         setattr(scene.shgi, field, value)
@@ -328,7 +335,7 @@ def main():
           f"scenes {args.scenes}, SHGI methods {methods} (default {default_method})")
     exr = os.path.join(args.cache, "render.exr")
     for name in args.scenes:
-        scene = build_scene(name, args.width, args.height)
+        scene = build_scene(name, args.width, args.height, args.cycles_filter_glossy)
         limited = supports_limit(scene)
         key = f"{name}_{args.width}x{args.height}_{{}}_{args.reference_samples}spp"
         print(f"{name}:", flush=True)
