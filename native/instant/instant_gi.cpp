@@ -104,6 +104,18 @@ vec3 vpl_delta(const vec3& p, const vec3& ng, const InstantVpl& vpl, float scale
            (scale * cos_vpl * kInvPi / std::max(dist2, clamp_distance * clamp_distance));
 }
 
+// The shadow ray from `origin` (a surface point offset off it) to a VPL at `target`, stopping
+// short of it; false when the two coincide.
+bool shadow_ray(const vec3& origin, const vec3& target, Ray* ray) {
+    const vec3 d = target - origin;
+    const float dist = glm::length(d);
+    if (!(dist > 0.0f)) return false;
+    ray->origin = origin;
+    ray->direction = d / dist;
+    ray->tmax = dist * (1.0f - kShadowShorten);
+    return true;
+}
+
 void add_delta(vec3* sh, const vec3& e, const vec3& w) {
     float basis[kCoeffs];
     sh_eval(kOrder, w, basis);
@@ -142,17 +154,12 @@ void InstantGiField::gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t 
                                 float vpl_scale, const vec3& sky_weight) const {
     const vec3 origin = offset_origin(p, n);
     for (const InstantVpl& vpl : sets_[set]) {
-        ShRgb one(kOrder);
-        if (!add_vpl_sh(one, p, n, vpl, vpl_scale, settings_.clamp_distance)) continue;
+        vec3 w;
+        const vec3 e = vpl_delta(p, n, vpl, vpl_scale, settings_.clamp_distance, &w);
         Ray ray;
-        ray.origin = origin;
-        const vec3 d = vpl.position - origin;
-        const float dist = glm::length(d);
-        if (!(dist > 0.0f)) continue;
-        ray.direction = d / dist;
-        ray.tmax = dist * (1.0f - kShadowShorten);
-        if (scene_->occluded(ray)) continue;
-        for (int i = 0; i < kCoeffs; ++i) sh.coeffs[i] += one.coeffs[i];
+        if (e == vec3(0.0f) || !shadow_ray(origin, vpl.position, &ray) || scene_->occluded(ray))
+            continue;
+        add_delta(sh.coeffs.data(), e, w);
     }
     // filter_direct: the world's direct light from the set's directional VPLs.
     if (sky_sets_.empty() || sky_weight == vec3(0.0f)) return;
@@ -251,14 +258,8 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                         const vec3 e =
                             vpl_delta(pos, ng, vpl, set_scale_, settings_.clamp_distance, &w);
                         if (e == vec3(0.0f)) continue;
-                        const vec3 origin = offset_origin(pos, ng);
-                        const vec3 d = vpl.position - origin;
-                        const float dist = glm::length(d);
-                        if (!(dist > 0.0f)) continue;
                         Ray ray;
-                        ray.origin = origin;
-                        ray.direction = d / dist;
-                        ray.tmax = dist * (1.0f - kShadowShorten);
+                        if (!shadow_ray(offset_origin(pos, ng), vpl.position, &ray)) continue;
                         rays.push_back(ray);
                         ray_pixel.push_back(uint32_t(p));
                         weights.push_back(e);

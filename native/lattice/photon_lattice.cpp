@@ -181,8 +181,7 @@ const PhotonLatticeSettings& validated(const PhotonLatticeSettings& settings) {
 std::string PhotonBatch::to_bytes() const {
     std::ostringstream out(std::ios::binary);
     BinaryWriter w(out);
-    w.bytes(kBatchMagic, sizeof(kBatchMagic));
-    w.put(kBatchVersion);
+    w.header(kBatchMagic, kBatchVersion);
     write_settings(w, settings);
     w.put(pass);
     w.put(begin);
@@ -198,14 +197,7 @@ std::string PhotonBatch::to_bytes() const {
 PhotonBatch PhotonBatch::from_bytes(const std::string& bytes, const std::string& what) {
     std::istringstream in(bytes, std::ios::binary);
     BinaryReader r(in, what, kBatchKind);
-    char magic[sizeof(kBatchMagic)];
-    r.bytes(magic, sizeof(magic), "the header");
-    if (std::memcmp(magic, kBatchMagic, sizeof(kBatchMagic)) != 0)
-        throw IoError(format_message("\"", what, "\" is not an SHGI photon batch (bad magic)"));
-    const uint32_t version = r.get<uint32_t>("the header");
-    if (version != kBatchVersion)
-        throw IoError(format_message(kBatchKind, " \"", what, "\" has version ", version,
-                                     "; this SHGI reads version ", kBatchVersion));
+    r.header(kBatchMagic, kBatchVersion, kBatchVersion);
     PhotonBatch batch;
     batch.settings = read_settings(r, true);  // IoError for invalid settings
     batch.pass = r.get<uint64_t>("the header");
@@ -341,8 +333,7 @@ void PhotonLattice::save(const std::string& path) const {
     write_file_atomically(path, [&](const std::string& temp) {
         std::ofstream out(temp, std::ios::binary | std::ios::trunc);
         BinaryWriter w(out);
-        w.bytes(kLatticeMagic, sizeof(kLatticeMagic));
-        w.put(kLatticeFileVersion);
+        w.header(kLatticeMagic, kLatticeFileVersion);
         write_settings(w, settings_);
         w.put(bounds_);
         w.put(uint64_t(passes_));
@@ -363,16 +354,9 @@ std::unique_ptr<PhotonLattice> PhotonLattice::load(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(format_message("cannot open lattice file \"", path, "\""));
     BinaryReader r(in, path, kLatticeFile);
-    char magic[sizeof(kLatticeMagic)];
-    r.bytes(magic, sizeof(magic), "the header");
-    if (std::memcmp(magic, kLatticeMagic, sizeof(kLatticeMagic)) != 0)
-        throw IoError(format_message("\"", path, "\" is not an SHGI lattice file (bad magic)"));
-    const uint32_t version = r.get<uint32_t>("the header");
     // Versions 1 and 2 (before the visibility masks, before glossy_bounces) still open, and
     // sample as they did.
-    if (version < 1 || version > kLatticeFileVersion)
-        throw IoError(format_message("lattice file \"", path, "\" has version ", version,
-                                     "; this SHGI reads versions 1 to ", kLatticeFileVersion));
+    const uint32_t version = r.header(kLatticeMagic, 1, kLatticeFileVersion);
     const bool with_visibility = version >= 2;
     std::unique_ptr<PhotonLattice> lattice(new PhotonLattice());
     lattice->loaded_from_ = path;

@@ -89,8 +89,7 @@ void save_probe_grid(const std::string& path, const ProbeGridData& data) {
     write_file_atomically(path, [&](const std::string& temp) {
         std::ofstream out(temp, std::ios::binary | std::ios::trunc);
         BinaryWriter w(out);
-        w.bytes(kMagic, sizeof(kMagic));
-        w.put(kProbeFileVersion);
+        w.header(kMagic, kProbeFileVersion);
         w.put(uint32_t(data.order));
         w.put(uint32_t(data.volumes.size()));
         w.put(uint32_t(data.visibility_resolution));
@@ -120,14 +119,7 @@ ProbeGridData load_probe_grid(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(format_message("cannot open probe file \"", path, "\""));
     BinaryReader r(in, path, "probe file");
-    char magic[sizeof(kMagic)];
-    r.bytes(magic, sizeof(magic), "the header");
-    if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0)
-        throw IoError(format_message("\"", path, "\" is not an SHGI probe file (bad magic)"));
-    const uint32_t version = r.get<uint32_t>("the header");
-    if (version != kProbeFileVersion)
-        throw IoError(format_message("probe file \"", path, "\" has version ", version,
-                                     "; this SHGI reads version ", kProbeFileVersion));
+    r.header(kMagic, kProbeFileVersion, kProbeFileVersion);
     ProbeGridData data;
     data.order = int(r.get<uint32_t>("the header"));
     const uint32_t volumes = r.get<uint32_t>("the header");

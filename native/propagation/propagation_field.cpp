@@ -99,16 +99,11 @@ ShRgb PropagationField::radiance_sh(const vec3& p, const vec3& n) const {
     return sh;
 }
 
-}  // namespace shgi
-
-namespace shgi {
-
 void PropagationField::save(const std::string& path) const {
     write_file_atomically(path, [&](const std::string& temp) {
         std::ofstream out(temp, std::ios::binary | std::ios::trunc);
         BinaryWriter w(out);
-        w.bytes(kFieldMagic, sizeof(kFieldMagic));
-        w.put(kFieldFileVersion);
+        w.header(kFieldMagic, kFieldFileVersion);
         w.put(normal_offset_);
         w.put(uint8_t(damping_));
         w.put(uint8_t(reinjection_));
@@ -134,14 +129,7 @@ std::unique_ptr<PropagationField> PropagationField::load(const std::string& path
     const auto bad = [&](const auto&... what) {
         return IoError(format_message(kFieldFile, " \"", path, "\": ", what...));
     };
-    char magic[sizeof(kFieldMagic)];
-    r.bytes(magic, sizeof(magic), "the header");
-    if (std::memcmp(magic, kFieldMagic, sizeof(kFieldMagic)) != 0)
-        throw IoError(format_message("\"", path, "\" is not an SHGI ", kFieldFile,
-                                     " (bad magic)"));
-    const uint32_t version = r.get<uint32_t>("the header");
-    if (version != kFieldFileVersion)
-        throw bad("version ", version, "; this SHGI reads version ", kFieldFileVersion);
+    r.header(kFieldMagic, kFieldFileVersion, kFieldFileVersion);
     const float normal_offset = r.get<float>("the header");
     const uint8_t damping = r.get<uint8_t>("the header");
     const uint8_t reinjection = r.get<uint8_t>("the header");

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <istream>
 #include <ostream>
@@ -25,6 +26,11 @@ class BinaryWriter {
     }
     void bytes(const void* data, size_t size) {
         out_.write(static_cast<const char*>(data), std::streamsize(size));
+    }
+    // A format's header: its 8-byte magic, then its version (u32); BinaryReader::header reads it.
+    void header(const char (&magic)[8], uint32_t version) {
+        bytes(magic, sizeof(magic));
+        put(version);
     }
     // The element count (u64), then the elements.
     template <typename T>
@@ -53,6 +59,22 @@ class BinaryReader {
         if (size_t(in_.gcount()) != size)
             throw IoError(format_message("cannot read ", kind_, " \"", path_,
                                          "\": it ends inside ", what, " (truncated?)"));
+    }
+    // What BinaryWriter::header wrote: IoError naming the file when its magic is not `magic`
+    // ("is not an SHGI <kind>") or its version is outside [lowest, highest]; the version.
+    uint32_t header(const char (&magic)[8], uint32_t lowest, uint32_t highest) {
+        char read[sizeof(magic)];
+        bytes(read, sizeof(read), "the header");
+        if (std::memcmp(read, magic, sizeof(read)) != 0)
+            throw IoError(format_message("\"", path_, "\" is not an SHGI ", kind_, " (bad magic)"));
+        const uint32_t version = get<uint32_t>("the header");
+        if (version < lowest || version > highest)
+            throw IoError(format_message(kind_, " \"", path_, "\" has version ", version,
+                                         "; this SHGI reads ",
+                                         lowest == highest ? "version " : "versions ",
+                                         lowest == highest ? "" : format_message(lowest, " to "),
+                                         highest));
+        return version;
     }
     // What BinaryWriter::array wrote: checked against the bytes left in the file before
     // anything is allocated, so that a damaged count cannot ask for gigabytes.
