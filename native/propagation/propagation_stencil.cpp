@@ -112,19 +112,19 @@ PropagationStep::PropagationStep(PropagationStencil stencil, int order, LobeClam
         for (int i = 0; i < coefficients_; ++i)
             lobes_[n][i] = kCosineBand[kBandOf[i]] * basis[i] * kInvPi;
     }
+    int faces = 0;
     for (const PropagationFace& f : propagation_faces(stencil)) {
         if (offsets_.empty() || offsets_.back().offset != f.offset) offsets_.push_back({f.offset, {}});
         Face face;
         face.flux_factor = float(f.solid_angle / kPiD);
         sh_eval(order, f.direction, face.basis);
         face.normal_index = normal_index(f.normal);
-        face.index = int(beams_.size());
-        std::array<float, 9> beam{};
-        std::copy(face.basis, face.basis + 9, beam.begin());
-        beams_.push_back(beam);
+        face.index = faces++;
         offsets_.back().faces.push_back(face);
     }
-    static_assert(kMaxStencilFaces == 54, "the HOLPV's 54 outer faces");
+    // The per-face fluxes of a TravelDirection step live in kMaxStencilFaces slots.
+    if (faces > int(kMaxStencilFaces))
+        throw Internal(format_message("PropagationStep: a stencil of ", faces, " faces"));
 }
 
 vec3 PropagationStep::face_intensity(const float* cell, const Face& face) const {
@@ -217,15 +217,17 @@ void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
                 float* dst = destination.cell_data(c);
                 std::fill(dst, dst + floats, 0.0f);
                 if (travel) {
-                    for (size_t f = 0; f < beams_.size(); ++f) {
-                        const vec3& phi = face_flux[f];
-                        if (phi == vec3(0.0f)) continue;
-                        for (int i = 0; i < coefficients_; ++i) {
-                            dst[3 * i + 0] += beams_[f][size_t(i)] * phi.x;
-                            dst[3 * i + 1] += beams_[f][size_t(i)] * phi.y;
-                            dst[3 * i + 2] += beams_[f][size_t(i)] * phi.z;
+                    // Each face's flux as a beam along its direction: Y_i(ω_f) × flux.
+                    for (const Offset& offset : offsets_)
+                        for (const Face& face : offset.faces) {
+                            const vec3& phi = face_flux[size_t(face.index)];
+                            if (phi == vec3(0.0f)) continue;
+                            for (int i = 0; i < coefficients_; ++i) {
+                                dst[3 * i + 0] += face.basis[i] * phi.x;
+                                dst[3 * i + 1] += face.basis[i] * phi.y;
+                                dst[3 * i + 2] += face.basis[i] * phi.z;
+                            }
                         }
-                    }
                     continue;
                 }
                 for (int n = 0; n < 6; ++n) {

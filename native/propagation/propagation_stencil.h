@@ -141,7 +141,6 @@ class PropagationStep {
     int coefficients_ = 4;
     LobeClamp clamp_ = LobeClamp::Rescaled;
     Reinjection reinjection_ = Reinjection::FaceNormal;
-    std::vector<std::array<float, 9>> beams_;  // per face, Y_i(ω_f) (TravelDirection, flux 1)
     std::vector<Offset> offsets_;
     float lobes_[6][9] = {};  // cosine lobe Â_l Y_i(n)/π along ±x, ±y, ±z (flux 1)
 };
