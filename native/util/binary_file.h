@@ -1,5 +1,6 @@
-// Little-endian binary files of SHGI's own caches (probes/probe_storage, lattice/photon_lattice),
-// and the same format in memory (a photon batch's bytes: any std::ostream / std::istream):
+// Little-endian binary files of SHGI's own caches (probes/probe_storage, lattice/photon_lattice,
+// propagation/propagation_field), and the same format in memory (a photon batch's bytes: any
+// std::ostream / std::istream), each opening with a header (magic, version):
 // BinaryWriter puts values and arrays as they lie in memory (every supported platform is
 // little-endian); BinaryReader reads them back and turns a short read into an IoError naming the
 // file and the part it ended inside, so that a truncated file is never read as zeros.
