@@ -114,6 +114,13 @@ class ChunkTracer {
     // keeps each photon's stores in bounce order.
     std::vector<Photon> in_photon_order(const std::vector<StagedPhoton>& staged,
                                         size_t photon_count);
+    // Whether a photon may scatter again: a budget of max_bounces (or of glossy bounces, when
+    // they have their own) is left.
+    bool can_scatter(const PhotonState& photon) const {
+        return photon.scatterings < settings_.max_bounces ||
+               (settings_.max_glossy_bounces >= 0 &&
+                photon.glossy_scatterings < settings_.max_glossy_bounces);
+    }
     // Moves a photon that survived the roulette and whose BSDF sample `bs` succeeded: its power
     // and its next ray. False ends the path.
     bool scatter(PhotonState& photon, const Shading& shading, const Material& material,
@@ -216,7 +223,7 @@ void ChunkTracer::shade_batch(size_t begin, size_t end, size_t* alive) {
         // The first step's photons are in photon order (emit), so these are too.
         if (first && settings_.store_first_hits)
             record_first_hit(photon, shading, rays_[i]);
-        sampled_[i - begin] = photon.scatterings < settings_.max_bounces;
+        sampled_[i - begin] = can_scatter(photon);
     }
     // Russian roulette by albedo, then the survivors' BSDF sample towards their next direction
     // (wo = towards where the photon came from; the BSDF evaluates its non-reciprocal Principled
@@ -286,10 +293,13 @@ bool ChunkTracer::scatter(PhotonState& photon, const Shading& shading, const Mat
     photon.specular_path = photon.specular_path && specular;
     photon.power *= bs.weight / survival_probability(shading.bsdf);
     if (!is_finite(photon.power) || !(max_component(photon.power) > 0.0f)) return false;
+    // Past its budget a lobe is off, as a camera path's closures are past theirs: a photon that
+    // has used up max_bounces still reflects glossily, and one that picked the spent lobe ends
+    // (the pick's 1/probability weight keeps the others unbiased).
     if (settings_.max_glossy_bounces >= 0 && bs.lobe_class == LobeClass::Glossy) {
         if (++photon.glossy_scatterings > settings_.max_glossy_bounces) return false;
-    } else {
-        ++photon.scatterings;
+    } else if (++photon.scatterings > settings_.max_bounces) {
+        return false;
     }
     ray->origin = shading.spawn_origin(wi);
     ray->direction = wi;

@@ -48,11 +48,13 @@ struct PhotonTracerSettings {
     int max_bounces = 8;                // scatterings after emission before a path ends
     // -1: every scattering counts against max_bounces. >= 0: glossy scatterings (LobeClass::
     // Glossy) have a budget of their own, as a camera path's Light Paths > Glossy beside
-    // Diffuse, and max_bounces counts the others; a photon past either budget ends (one that
-    // has used up max_bounces does not scatter at all). A path tracer's Diffuse 4 / Glossy 4
-    // lets a path reflect diffusely 4 times however often it reflected glossily between;
-    // counting those glossy reflections against the 4 lost the radiance field 2-3% of its
-    // indirect light in white rooms (docs/methods.md, "Radiance field").
+    // Diffuse, and max_bounces counts the others. A spent budget turns its lobes off, as a
+    // path tracer's Light Paths do: a photon that has used up max_bounces still reflects
+    // glossily while glossy bounces are left, and one that picks a spent lobe ends. A path
+    // tracer's Diffuse 4 / Glossy 4 lets a path reflect diffusely 4 times however often it
+    // reflected glossily between or after; counting those glossy reflections against the 4 lost
+    // the radiance field 2-3% of its indirect light in white rooms, and stopping at the 4th
+    // diffuse one lost the photon lattice another 5% in the two-room scene (docs/methods.md).
     int max_glossy_bounces = -1;
     float specular_roughness = 0.1f;    // lobes up to this roughness count as specular (caustics)
     // Store photons from the world at their first hit too (global map): the maps then carry the

@@ -290,6 +290,32 @@ TEST(PhotonTracer, GlossyBudgetCountsGlossyScatteringsApart) {
     EXPECT_TRUE(none.caustic.empty());
 }
 
+// A spent diffuse budget turns only the diffuse lobe off, as a path tracer's Light Paths do.
+// With a floor and a mirror sphere alone, a global photon must have scattered on the floor
+// (L D S D, L S D S D): with max_bounces 1 that scattering spends the budget, so only a photon
+// that still reflects off the mirror afterwards reaches the floor again. Without a glossy budget
+// of its own the mirror counts against the 1 and no global photon is stored; with one they are,
+// each arriving from the sphere.
+TEST(PhotonTracer, SpentDiffuseBudgetStillReflectsGlossily) {
+    const Scene scene = sphere_over_floor(0.0f);
+    PhotonTracerSettings settings;
+    settings.photons = 100000;
+    settings.max_bounces = 1;
+    settings.max_glossy_bounces = -1;
+    EXPECT_TRUE(trace_photons(scene, settings, 0).global.empty());
+    settings.max_glossy_bounces = 2;
+    const PhotonMaps maps = trace_photons(scene, settings, 0);
+    ASSERT_GT(maps.global.size(), 100u);
+    for (const Photon& photon : maps.global) {
+        Ray back;
+        back.origin = photon.position + 1e-3f * photon.normal;
+        back.direction = photon.direction;
+        const Hit hit = scene.intersect(back);
+        ASSERT_TRUE(hit.valid());
+        EXPECT_EQ(hit.instance_id, kSphereInstance);
+    }
+}
+
 // The tracer keeps a whole chunk of photons in flight and stores them bounce by bounce; the maps
 // must still list each photon's stores together, in photon order. With a single point light
 // photon i follows the same path whatever the pass's photon count (its stratum picks the only
