@@ -227,9 +227,13 @@ void ChunkTracer::shade_batch(size_t begin, size_t end, size_t* alive) {
     }
     // Russian roulette by albedo, then the survivors' BSDF sample towards their next direction
     // (wo = towards where the photon came from; the BSDF evaluates its non-reciprocal Principled
-    // v2 terms toward the sampled direction). Absorbed photons skip the sample. One lobe per
-    // bounce, as seed 000 §5.1 picks one bounce type: its weight needs only that lobe, where the
-    // mixture weight of sample() evaluates every lobe.
+    // v2 terms toward the sampled direction). Absorbed photons skip the sample. The weight is
+    // the whole BSDF over the mixture pdf, and the bounce counts as the class of the lobe that
+    // drew it, as a camera path's does (PathIntegrator::scatter): the bounce budgets then cut
+    // the same light from both. With the picked lobe's weight alone (seed 000 §5.1's one bounce
+    // type) a diffuse-drawn photon carried only the diffuse lobe's light, and the lattice read
+    // the two-room scene's glossy plaster 2.3% too bright at Glossy 0 and 2.5% too dark at
+    // Glossy 4 (bench/lattice_glossy_budget.py).
     for (size_t i = begin; i < end; ++i) {
         if (!sampled_[i - begin]) continue;
         PhotonState& photon = photons_[i];
@@ -242,7 +246,7 @@ void ChunkTracer::shade_batch(size_t begin, size_t end, size_t* alive) {
         const float u_lobe = photon.rng.next_float();
         const vec2 u = photon.rng.next_vec2();
         sampled_[i - begin] =
-            shading.bsdf.sample_one_lobe(shading.wo, u_lobe, u, &samples_[i - begin]);
+            shading.bsdf.sample(shading.wo, u_lobe, u, &samples_[i - begin]);
     }
     // Next rays; survivors move to the front, in order.
     for (size_t i = begin; i < end; ++i) {

@@ -17,8 +17,9 @@
 // photon to the global map. Paths end after max_bounces scatterings, by Russian roulette
 // (survival = min(1, max component of PrincipledBsdf::albedo_estimate()), drawn before the BSDF
 // sample so that absorbed photons skip it; the survivor's power is divided by it) or when they
-// leave the scene. A survivor scatters by one lobe, chosen in proportion to the lobes' selection
-// weights (seed 000 §5.1's choice of one bounce type; PrincipledBsdf::sample_one_lobe).
+// leave the scene. A survivor scatters as a camera path does (PrincipledBsdf::sample: a lobe
+// chosen in proportion to the lobes' selection weights draws the direction, the whole BSDF
+// weighs it, and the bounce counts in the drawing lobe's class).
 //
 // Tracing is a wavefront (stream) per chunk of photons: all photons of a chunk are in flight
 // together, each step intersects all their rays with one batch query (Embree ray streams), then

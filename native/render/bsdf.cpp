@@ -658,13 +658,6 @@ bool PrincipledBsdf::sample(const vec3& wo, float u_lobe, const vec2& u, BsdfSam
     return is_finite(out->weight) && glm::any(glm::greaterThan(out->weight, vec3(0.0f)));
 }
 
-bool PrincipledBsdf::sample_one_lobe(const vec3& wo, float u_lobe, const vec2& u,
-                                     BsdfSample* out) const {
-    if (wo.z <= 0.0f) return false;
-    const Lobe* chosen = choose_lobe(u_lobe);
-    return chosen != nullptr && sample_lobe(*chosen, chosen->select_prob, wo, u, out);
-}
-
 vec3 PrincipledBsdf::class_color(LobeClass lobe_class) const {
     vec3 color(0.0f);
     for (int i = 0; i < lobe_count_; ++i) {

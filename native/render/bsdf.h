@@ -119,12 +119,6 @@ class PrincipledBsdf {
     // u_lobe picks the lobe, u the direction. False when the sample is invalid (below the
     // surface for a reflection lobe, total internal reflection, zero weight).
     bool sample(const vec3& wo, float u_lobe, const vec2& u, BsdfSample* out) const;
-    // The same lobe choice and direction as sample(), but the one-lobe estimator: weight = the
-    // chosen lobe's f |cos| / (its selection probability x its pdf), without evaluating the other
-    // lobes (pdf: that product; eval: the weight in the lobe's class). Unbiased like sample(),
-    // with somewhat more variance where lobes overlap; it is seed 000 §5.1's choice of one
-    // bounce type per photon, and what the photon tracer uses (it needs only the weight).
-    bool sample_one_lobe(const vec3& wo, float u_lobe, const vec2& u, BsdfSample* out) const;
 
     // Sum of closure weights per class: Cycles' DiffCol / GlossCol / TransCol for this hit
     // (PrincipledModel::V2: GlossCol is the specular lobes' estimated albedo toward wo, as
