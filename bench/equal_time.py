@@ -96,6 +96,10 @@ def parse_args():
                         help="Cycles' Light Paths > Caustics > Filter Glossy (blur_glossy) for "
                              "its renders and reference (default: Cycles' own, 1.0); SHGI has "
                              "none. Use another --cache: references are keyed without it")
+    parser.add_argument("--clamp-indirect", type=float, default=None,
+                        help="Light Paths > Clamp Indirect for both renderers, renders and "
+                             "references (default: each one's own: Cycles 10, SHGI 0). Use "
+                             "another --cache: references are keyed without it")
     parser.add_argument("--quick", action="store_true",
                         help=f"smoke run: limits {QUICK_LIMITS}, samples {QUICK_SAMPLES}, "
                              f"{QUICK_REFERENCE_SAMPLES}-spp references")
@@ -114,9 +118,10 @@ def parse_args():
 
 # --- scenes -----------------------------------------------------------------------------------
 
-def build_scene(name, width, height, filter_glossy=None):
+def build_scene(name, width, height, filter_glossy=None, clamp_indirect=None):
     """A fresh file holding scene `name` at width x height, set up alike for Cycles and SHGI;
-    Cycles' Filter Glossy `filter_glossy` (None: its default)."""
+    Cycles' Filter Glossy `filter_glossy` and both renderers' Clamp Indirect `clamp_indirect`
+    (None: each one's default)."""
     if name == "dense":
         scene = blender_scenes.build("cornell_box")
         builder = blender_scenes.SceneBuilder()
@@ -140,6 +145,9 @@ def build_scene(name, width, height, filter_glossy=None):
     cycles.denoiser = "OPENIMAGEDENOISE"
     if filter_glossy is not None:
         cycles.blur_glossy = filter_glossy
+    if clamp_indirect is not None:
+        cycles.sample_clamp_indirect = clamp_indirect
+        scene.shgi.clamp_indirect = clamp_indirect
     for field, value in BOUNCES.items():
         setattr(cycles, field, value)
         setattr(scene.shgi, field, value)
@@ -335,7 +343,8 @@ def main():
           f"scenes {args.scenes}, SHGI methods {methods} (default {default_method})")
     exr = os.path.join(args.cache, "render.exr")
     for name in args.scenes:
-        scene = build_scene(name, args.width, args.height, args.cycles_filter_glossy)
+        scene = build_scene(name, args.width, args.height, args.cycles_filter_glossy,
+                            args.clamp_indirect)
         limited = supports_limit(scene)
         key = f"{name}_{args.width}x{args.height}_{{}}_{args.reference_samples}spp"
         print(f"{name}:", flush=True)

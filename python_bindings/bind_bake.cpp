@@ -203,7 +203,8 @@ What and how a lightmap is baked; every field has a default. Content (Cycles' DI
         .def_readwrite("directional", &S::directional,
                        "Also bake the L1 SH of the incident radiance (False).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
-                       "Max component of an indirect sample; 0 = off (0).")
+                       "Light Paths > Clamp Indirect as Cycles': an indirect contribution whose components "
+                       "average more than this is scaled down to it; 0 = off (0).")
         .def_readwrite("final_gather", &S::final_gather,
                        "With a field: each sample traces one ray that reads the field where it "
                        "lands, with direct light there, instead of reading it at the texel: "

@@ -390,8 +390,8 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                 vec3 diffuse, glossy;
                 shade(sh_source, filtered, diffuse, glossy);
                 // Light Paths > Clamp, per lobe class and sample, as PathIntegrator::add_light.
-                diffuse = clamp_peak(diffuse, clamp_indirect);
-                glossy = clamp_peak(glossy, clamp_indirect);
+                diffuse = clamp_contribution(diffuse, clamp_indirect);
+                glossy = clamp_contribution(glossy, clamp_indirect);
                 vec3 diffuse_direct(0.0f), glossy_direct(0.0f);
                 if (sky) shade(sh_direct, filtered_direct, diffuse_direct, glossy_direct);
                 if (!is_finite(diffuse) || !is_finite(glossy) || !is_finite(diffuse_direct) ||

@@ -19,8 +19,8 @@
 // The path's radiance without emitters and world seen straight from the probe (the Emit and
 // Env passes) is the probe's indirect incident radiance: renderers add direct light exactly
 // (include_direct = true keeps it, for exports of total light). Each radiance sample is clamped
-// to `clamp` (max component; 0 = off) against fireflies (seed 002 §4.1.1) and projected onto SH
-// with weight 4 pi / N (the lattice's points stand for equal solid angles).
+// to `clamp` (as Light Paths > Clamp: clamp_contribution; 0 = off) against fireflies (seed 002
+// §4.1.1) and projected onto SH with weight 4 pi / N (the lattice's points stand for equal solid angles).
 //
 // Blending (seed 002 §4.1.1: "results from the previous pass are blended with the new ones using
 // a constant ratio"): new = (1 - a) old + a pass with a = max(1 - hysteresis, 1 / passes), i.e. an
@@ -60,7 +60,7 @@ struct ProbeGridSettings {
     uint32_t rays_per_probe = 256;      // per update pass
     uint64_t seed = 0;
     float hysteresis = 0.95f;           // in [0, 1): history weight once blending is exponential
-    float clamp = 0.0f;                 // max component of a radiance sample; 0 = off
+    float clamp = 0.0f;                 // a radiance sample's clamp_contribution limit; 0 = off
     bool include_direct = false;        // keep emitters and world seen straight from the probe
     int bounces = 3;                    // diffuse and glossy scatterings along a probe's path
     int light_splits = 4;               // as PathTracerSettings.light_splits, for probe paths

@@ -24,7 +24,7 @@ PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample, bool fi
 vec3 path_radiance(const PassValues& values, bool include_direct, float clamp) {
     vec3 radiance = values[Pass::Combined];
     if (!include_direct) radiance -= values[Pass::Emit] + values[Pass::Env];
-    radiance = clamp_peak(glm::max(radiance, vec3(0.0f)), clamp);
+    radiance = clamp_contribution(glm::max(radiance, vec3(0.0f)), clamp);
     return is_finite(radiance) ? radiance : vec3(0.0f);
 }
 
@@ -100,15 +100,23 @@ void PathIntegrator::add_emission(const vec3& radiance, float light_pdf, bool is
     add_split(contribution, vertex_ == 1);
 }
 
-// A contribution reaching the camera through the first scattering: split by the class
-// fractions of that scattering into Dir (one scattering) or Ind passes.
+// A contribution reaching the camera through the first scattering: clamped whole, as Cycles
+// clamps one contribution before it writes its passes, then split by the class fractions of
+// that scattering into Dir (one scattering) or Ind passes.
 void PathIntegrator::add_split(const vec3& contribution, bool direct) {
+    const vec3 value =
+        direct ? contribution : clamp_contribution(contribution, settings_.clamp_indirect);
     for (int c = 0; c < kLobeClassCount; ++c)
-        if (class_fraction_[c] > 0.0f) add_light(contribution * class_fraction_[c], c, direct);
+        if (class_fraction_[c] > 0.0f) add_to_passes(value * class_fraction_[c], c, direct);
 }
 
 void PathIntegrator::add_light(const vec3& contribution, int lobe_class, bool direct) {
-    const vec3 value = direct ? contribution : clamp_peak(contribution, settings_.clamp_indirect);
+    add_to_passes(
+        direct ? contribution : clamp_contribution(contribution, settings_.clamp_indirect),
+        lobe_class, direct);
+}
+
+void PathIntegrator::add_to_passes(const vec3& value, int lobe_class, bool direct) {
     if (!is_finite(value)) return;
     out_[direct ? kDirectPass[lobe_class] : kIndirectPass[lobe_class]] += value;
     out_[Pass::Combined] += value;

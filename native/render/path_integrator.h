@@ -73,7 +73,8 @@ PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample, bool fi
 // ray, for tracers whose rays leave a surface or a probe rather than a camera (probe updates,
 // lightmap texels): Combined, less what its first segment met straight from emitters (Emit,
 // Env) unless include_direct (then only light that scattered at least once is left), floored
-// at 0, its peak clamped to `clamp` (0: off); 0 when not finite.
+// at 0, clamped to `clamp` as Light Paths > Clamp (clamp_contribution; 0: off); 0 when not
+// finite.
 vec3 path_radiance(const PassValues& values, bool include_direct, float clamp);
 
 class PathIntegrator {
@@ -175,6 +176,8 @@ class PathIntegrator {
     bool scatter(const Shading& shading, Ray* ray);
     void add_light(const vec3& contribution, int lobe_class, bool direct);
     void add_split(const vec3& contribution, bool direct);
+    // An already clamped contribution into its pass and Combined (skipped when not finite).
+    void add_to_passes(const vec3& value, int lobe_class, bool direct);
 
     const Scene& scene_;
     const Camera& camera_;

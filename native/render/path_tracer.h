@@ -43,7 +43,9 @@ struct PathTracerSettings {
     int glossy_bounces = 4;
     int transmission_bounces = 12;
     int russian_roulette_depth = 3;    // surfaces before roulette may end a path
-    float clamp_indirect = 0.0f;       // max component of an indirect sample; 0 = off
+    // Light Paths > Clamp Indirect as Cycles': an indirect contribution whose components average
+    // more than this is scaled down to it (render/shading.h, clamp_contribution); 0 = off.
+    float clamp_indirect = 0.0f;
     WorldSampling world_sampling = WorldSampling::Cosine;
     // Most emitters one next-event estimate samples, [1, kMaxLightSplits]: the light tree's
     // splitting (render/light_tree.h); 1 = one emitter per shadow ray.

@@ -23,11 +23,13 @@ inline constexpr float kRayOffset = 1e-4f;
 // not occlude it.
 inline constexpr float kShadowShorten = 1e-3f;
 
-// v scaled down so that its largest component is at most `limit` (a firefly clamp; limit <= 0:
-// off, v unchanged).
-inline vec3 clamp_peak(const vec3& v, float limit) {
-    const float peak = max_component(v);
-    return limit > 0.0f && peak > limit ? v * (limit / peak) : v;
+// Light Paths > Clamp, as Cycles clamps a contribution (film_clamp_light, with the panel's
+// value times three as its scene/integrator.cpp stores it): v scaled down so that the mean of
+// its components' magnitudes is at most `limit`, one factor for all three (the hue is kept);
+// limit <= 0: off, v unchanged.
+inline vec3 clamp_contribution(const vec3& v, float limit) {
+    const float sum = std::fabs(v.x) + std::fabs(v.y) + std::fabs(v.z);
+    return limit > 0.0f && sum > 3.0f * limit ? v * (3.0f * limit / sum) : v;
 }
 
 // p moved off its surface along `normal` (the side the new ray leaves towards).

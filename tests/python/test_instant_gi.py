@@ -134,13 +134,13 @@ def test_samples_at_once_equal_samples_one_by_one():
 
 def test_light_paths_clamp_limits_the_screen_space_indirect_light():
     """Light Paths > Clamp (PreviewSettings.clamp_indirect) clamps each pixel's DiffInd and
-    GlossInd per sample, as the path tracer clamps an indirect sample; direct light is not
-    clamped."""
+    GlossInd per sample, as the path tracer clamps an indirect contribution (Cycles' clamp: the
+    mean of the three components); direct light is not clamped."""
     scene = small_cornell()
     field = solved(scene, passes=1).current_field()
 
     def light(image, lobe):  # Cycles' passes hold light / colour: the light itself
-        return (image[f"{lobe}Ind"] * image[f"{lobe}Col"])[..., :3].max(axis=-1)
+        return np.abs(image[f"{lobe}Ind"] * image[f"{lobe}Col"])[..., :3].mean(axis=-1)
 
     free = preview(scene, field, samples=1)
     limit = 0.5 * float(np.percentile(light(free, "Diff"), 90))

@@ -992,7 +992,7 @@ class LightmapSettings:
     @property
     def clamp_indirect(self) -> float:
         """
-        Max component of an indirect sample; 0 = off (0).
+        Light Paths > Clamp Indirect as Cycles': an indirect contribution whose components average more than this is scaled down to it; 0 = off (0).
         """
     @clamp_indirect.setter
     def clamp_indirect(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
@@ -1640,7 +1640,7 @@ class PathTracerSettings:
     @property
     def clamp_indirect(self) -> float:
         """
-        Max component of an indirect sample's contribution; 0 = off (0).
+        Light Paths > Clamp Indirect as Cycles': an indirect contribution whose components average more than this is scaled down to it; 0 = off (0).
         """
     @clamp_indirect.setter
     def clamp_indirect(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
@@ -2087,7 +2087,7 @@ class PreviewSettings:
     @property
     def clamp_indirect(self) -> float:
         """
-        Max component of an indirect contribution; 0 = off (0).
+        Light Paths > Clamp Indirect as Cycles': an indirect contribution whose components average more than this is scaled down to it; 0 = off (0).
         """
     @clamp_indirect.setter
     def clamp_indirect(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
@@ -2454,7 +2454,7 @@ class ProbeGridSettings:
     @property
     def clamp(self) -> float:
         """
-        Max component of a radiance sample against fireflies; 0 = off (0).
+        A radiance sample whose components average more than this is scaled down to it (Light Paths > Clamp Indirect, as Cycles clamps); 0 = off (0).
         """
     @clamp.setter
     def clamp(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:

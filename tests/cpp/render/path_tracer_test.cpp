@@ -11,6 +11,7 @@
 #include <tbb/global_control.h>
 
 #include "render/path_tracer.h"
+#include "render/shading.h"
 #include "render_test_scenes.h"
 #include "support/expect_error.h"
 #include "support/latency_clock.h"
@@ -45,6 +46,23 @@ TEST(PathTracer, WhiteFurnaceClosedBox) {
     expect_near_stats(test::pixel_stats(tracer.film(), Pass::Emit), emission, "furnace Emit");
     expect_near_stats(test::pixel_stats(tracer.film(), Pass::DiffDir), emission,
                       "furnace DiffDir (lighting / colour)");
+}
+
+// Light Paths > Clamp as Cycles' film_clamp_light: the sum of a contribution's |RGB| against three
+// times the panel's value, one factor for all three components. A saturated contribution is
+// clamped by its mean, not its peak: (12, 0, 0) passes a limit of 5, which a peak clamp would
+// cut to (5, 0, 0).
+TEST(PathTracer, ClampScalesAContributionAsCycles) {
+    EXPECT_EQ(clamp_contribution(vec3(12.0f, 0.0f, 0.0f), 5.0f), vec3(12.0f, 0.0f, 0.0f));
+    const vec3 clamped = clamp_contribution(vec3(30.0f, 3.0f, 0.0f), 10.0f);
+    EXPECT_NEAR(clamped.x, 30.0f * 30.0f / 33.0f, 1e-5f);
+    EXPECT_NEAR(clamped.y, 3.0f * 30.0f / 33.0f, 1e-6f);
+    EXPECT_EQ(clamped.z, 0.0f);
+    EXPECT_NEAR((clamped.x + clamped.y + clamped.z) / 3.0f, 10.0f, 1e-5f);
+    const vec3 white = clamp_contribution(vec3(12.0f), 10.0f);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(white[c], 10.0f, 1e-5f);
+    EXPECT_EQ(clamp_contribution(vec3(-6.0f, 0.0f, 0.0f), 1.0f), vec3(-3.0f, 0.0f, 0.0f));
+    EXPECT_EQ(clamp_contribution(vec3(1e6f, 2.0f, 3.0f), 0.0f), vec3(1e6f, 2.0f, 3.0f));  // off
 }
 
 // Bounce limits: max_bounces = 1 keeps Le (1 + a + a^2).
