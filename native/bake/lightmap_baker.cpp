@@ -107,7 +107,8 @@ class TexelBaker {
                const LightmapSettings& settings)
         : scene_(scene), map_(map), field_(field), settings_(settings),
           lights_(scene, WorldSampling::Cosine,
-                  field == nullptr || !field->includes_world_direct(), settings.light_splits),
+                  field == nullptr || !field->includes_world_direct(), settings.light_splits,
+                  field == nullptr || !field->includes_lights_direct()),
           path_settings_(continuation_settings(settings)),
           seed_(settings.seed ^ (kInstanceSeedMix * (uint64_t(map.instance_id) + 1))),
           direct_(wants_direct(settings.content)),

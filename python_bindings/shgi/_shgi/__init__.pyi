@@ -615,7 +615,7 @@ class InstantGiSettings:
     @property
     def filter_direct(self) -> bool:
         """
-        The world's (sky's) direct light through the SH filter as directional VPLs (photons_per_set per set and pass), as the paper filters direct light; lamps and suns stay next-event estimation (False).
+        Direct light through the SH filter, as the paper filters it: the world's as directional VPLs (photons_per_set per set and pass), the point, spot, area and sun lights' as samples per set (one for a delta light, photons_per_set per pass for one with extent), each with its exact shadow ray; next-event estimation then leaves them out. Emissive triangles stay next-event estimation (False).
         """
     @filter_direct.setter
     def filter_direct(self, arg0: bool) -> None:
