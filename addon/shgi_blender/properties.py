@@ -303,7 +303,14 @@ def bake_properties():
         "directional": BoolProperty(
             name="Directional", default=B["directional"],
             description="Also store the direction light arrives from at each texel (EXR "
-                        "layers SH.c0..c3), so that normal-mapped surfaces can be shaded"),
+                        "layers SH.c0..c3, or SH.c0..c8 at SH Order 2), so that normal-mapped "
+                        "surfaces can be shaded"),
+        "sh_order": IntProperty(
+            name="SH Order", default=B["sh_order"], min=1, max=2,
+            description="With Directional: 1 stores L1 spherical harmonics (4 coefficients "
+                        "per channel, SH.c0..c3); 2 stores L2 (9, SH.c0..c8), which keeps "
+                        "sharper changes of direction (a lamp's falloff over a normal map) at "
+                        "2.25 times the memory"),
         "filter": BoolProperty(
             name="Denoise", default=B["filter"],
             description="Denoise the baked texels (never across UV charts) with the Denoiser"),
