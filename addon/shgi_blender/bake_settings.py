@@ -241,7 +241,7 @@ def farm_target(bake):
 FLAMENCO_JOB_TYPE = "shgi-bake"
 # The job's settings taken from scene.shgi.bake under the same names (shgi_bake.js's keys).
 FLAMENCO_SETTINGS = ("uv_map", "create_uv", "resolution", "texel_density", "samples", "content",
-                     "source", "directional", "filter", "padding", "shard_count")
+                     "source", "directional", "sh_order", "filter", "padding", "shard_count")
 
 
 def flamenco_job(bake, objects, blendfile, output_folder, name):
