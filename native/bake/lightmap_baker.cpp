@@ -106,9 +106,15 @@ class TexelBaker {
     TexelBaker(const Scene& scene, const TexelMap& map, const IndirectField* field,
                const LightmapSettings& settings)
         : scene_(scene), map_(map), field_(field), settings_(settings),
+          // A field that carries direct light stands in for next-event estimation of it only
+          // where the bake reads the field (content with indirect light): a DIRECT bake samples
+          // every emitter.
           lights_(scene, WorldSampling::Cosine,
-                  field == nullptr || !field->includes_world_direct(), settings.light_splits,
-                  field == nullptr || !field->includes_lights_direct()),
+                  field == nullptr || !wants_indirect(settings.content) ||
+                      !field->includes_world_direct(),
+                  settings.light_splits,
+                  field == nullptr || !wants_indirect(settings.content) ||
+                      !field->includes_lights_direct()),
           path_settings_(continuation_settings(settings)),
           seed_(settings.seed ^ (kInstanceSeedMix * (uint64_t(map.instance_id) + 1))),
           direct_(wants_direct(settings.content)),
@@ -521,7 +527,14 @@ LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const Indi
     out.baked.assign(map.texel_count(), 0);
 
     const PinnedField pinned(field);  // one state of the field for the whole bake
-    const TexelBaker baker(scene, map, pinned.get(), settings);
+    // An INDIRECT bake over a field that carries direct light (INSTANT_GI's filter_direct)
+    // reads the field without it, where the field can separate the two.
+    std::shared_ptr<const IndirectField> indirect_only;
+    if (pinned.get() != nullptr && !wants_direct(settings.content) &&
+        (pinned.get()->includes_world_direct() || pinned.get()->includes_lights_direct()))
+        indirect_only = pinned.get()->without_direct();
+    const TexelBaker baker(scene, map, indirect_only ? indirect_only.get() : pinned.get(),
+                           settings);
     const uint32_t tiles_x = tiles_along(map.width, settings.tile_size);
     std::atomic<uint64_t> done{0};
     if (progress) progress->begin_stage("baking lightmap");

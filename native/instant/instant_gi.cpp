@@ -241,6 +241,13 @@ ShRgb InstantGiField::radiance_sh(const vec3& p, const vec3& n) const {
     return sh;
 }
 
+std::shared_ptr<const IndirectField> InstantGiField::without_direct() const {
+    if (!settings_.filter_direct) return nullptr;
+    InstantGiSettings indirect = settings_;
+    indirect.filter_direct = false;
+    return std::make_shared<InstantGiField>(*scene_, indirect, sets_, passes_);
+}
+
 IndirectField::Interleave InstantGiField::interleave() const {
     Interleave pattern;
     pattern.sets_x = settings_.sets_x;

@@ -138,6 +138,8 @@ class InstantGiField : public IndirectField {
     bool includes_world_direct() const override { return settings_.filter_direct; }
     // filter_direct: the lights' direct light is the field's too (their samples).
     bool includes_lights_direct() const override { return settings_.filter_direct; }
+    // filter_direct: the same sets without their sky directions and lamp samples.
+    std::shared_ptr<const IndirectField> without_direct() const override;
     void shade_first_surfaces(const GBuffer& g_buffer, const vec3& camera_position,
                               float clamp_indirect, Film& film, uint64_t first, uint64_t count,
                               Progress* progress) const override;

@@ -419,6 +419,30 @@ def test_a_bake_with_filter_direct_counts_a_lamp_once():
         np.testing.assert_allclose(mean / exact, 1.0, atol=tolerance)
 
 
+
+def test_filter_direct_bakes_of_direct_or_indirect_light_alone():
+    """Content DIRECT over a filter_direct field samples every emitter (the field, which is not
+    read, does not stand in for them): the lamp and the sky within 2% of the bake without a
+    field. Content INDIRECT reads the field without its direct light (without_direct): a lone
+    plane has no indirect light, exactly 0 (before, the field's lamp and sky showed up there and
+    a DIRECT bake came out black)."""
+    from test_bake import options, plane_job, plane_scene
+    from shgi import bake
+    light = shgi.Light(name="lamp", type=shgi.LightType.POINT, power=100.0)
+    light.world_from_light = np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1.0],
+                                       [0, 0, 0, 1]], np.float32)
+    scene = plane_scene(lights=[light])  # and the uniform world of test_bake
+    field = solved(scene, passes=1, filter_direct=True).current_field()
+    job = plane_job(16)
+    exact = bake.bake_object(scene, job, options(content="DIRECT", samples=64), None)[1]
+    direct = bake.bake_object(scene, job, options(content="DIRECT", samples=64), field)[1]
+    ratio = direct.color.reshape(-1, 3).mean(axis=0) / exact.color.reshape(-1, 3).mean(axis=0)
+    print(f"filter_direct field, DIRECT bake: {ratio} x the bake without a field")
+    np.testing.assert_allclose(ratio, 1.0, atol=0.02)
+    indirect = bake.bake_object(scene, job, options(content="INDIRECT"), field)[1]
+    assert indirect.color.max() == 0.0
+
+
 # --- the Show list: agreement with the path tracer -------------------------------------------
 
 _RENDERS = {}
