@@ -25,8 +25,9 @@
 //     weight × E(n) / π (the clamped-cosine, i.e. Lambert, convolution of sh/sh_irradiance.h) and,
 //     per glossy lobe, its albedo × the fitted GGX ZH lobe's pre-filtered radiance
 //     (FieldLookup::glossy, sh/ggx_zh.h).
-// Only indirect light goes through the SH; direct light stays the renderer's next-event
-// estimation. The filter modes (filter_mode) Irradiance and Strict (the comparisons of §4.2,
+// By default only indirect light goes through the SH; direct light stays the renderer's
+// next-event estimation (filter_direct: the world's and the lights' direct light too, in a plane
+// of their own, written to DiffDir / GlossDir). The filter modes (filter_mode) Irradiance and Strict (the comparisons of §4.2,
 // Figs. 2 and 4) filter each pixel's irradiance E(n_s) instead; Strict also stops at
 // shading-normal changes. None keeps each pixel's own set.
 //
