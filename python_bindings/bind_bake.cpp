@@ -183,6 +183,9 @@ What and how a lightmap is baked; every field has a default. Content (Cycles' DI
 'DIRECT_INDIRECT' (pass_filter {DIRECT, INDIRECT}), 'DIRECT', 'INDIRECT', or 'FULL' (also COLOR).)doc");
     def_integer(settings_cls, "seed", &S::seed, "Random seed (0).");
     def_integer(settings_cls, "samples", &S::samples, "Samples per texel (256).");
+    def_integer(settings_cls, "sh_order", &S::sh_order,
+                "SH order of the directional data: 1 (L1, 4 coefficients per channel) or 2 "
+                "(L2, 9) (1).");
     def_integer(settings_cls, "tile_size", &S::tile_size,
                 "Texels per tile side: the unit of work and of shards (16).");
     def_integer(settings_cls, "max_bounces", &S::max_bounces, "Cycles' Total bounces (12).");
@@ -201,7 +204,7 @@ What and how a lightmap is baked; every field has a default. Content (Cycles' DI
             [](S& s, const std::string& name) { s.content = lightmap_content_from_name(name); },
             "'DIRECT_INDIRECT' (default), 'DIRECT', 'INDIRECT' or 'FULL'.")
         .def_readwrite("directional", &S::directional,
-                       "Also bake the L1 SH of the incident radiance (False).")
+                       "Also bake the SH of the incident radiance, of order sh_order (False).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
                        "Light Paths > Clamp Indirect as Cycles': an indirect contribution whose components "
                        "average more than this is scaled down to it; 0 = off (0).")
@@ -214,7 +217,8 @@ What and how a lightmap is baked; every field has a default. Content (Cycles' DI
 
     py::class_<LightmapTexels>(m, "LightmapTexels", R"doc(
 A baked lightmap: arrays (height, width, ...) with row 0 at v = 0 (Blender's Image.pixels order).
-LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a shard file).)doc")
+LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a shard file); sh
+(height, width, 4, 3) is L1, (height, width, 9, 3) L2.)doc")
         .def(py::init([](const py::array& color, const py::array& variance, const py::array& baked,
                          const py::object& sh) {
                  if (color.ndim() != 3 || color.shape(2) != 3)
@@ -228,13 +232,27 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
                  copy_in(variance, "variance", n, texels->variance);
                  copy_in(baked, "baked", n, texels->baked);
                  texels->directional = !sh.is_none();
-                 if (texels->directional) copy_in(sh, "sh", kLightmapShFloats * n, texels->sh);
+                 if (texels->directional) {
+                     const auto array = py::array::ensure(sh);
+                     const size_t size = array ? size_t(array.size()) : 0;
+                     // L2 when it holds 9 coefficients per channel; otherwise L1 (copy_in names
+                     // the mismatch).
+                     texels->sh_order = n > 0 && size == size_t(3 * 9) * n ? 2 : 1;
+                     copy_in(sh, "sh", size_t(texels->sh_floats()) * n, texels->sh);
+                 }
                  return texels;
              }),
              py::arg("color"), py::arg("variance"), py::arg("baked"), py::arg("sh") = py::none())
         .def_readonly("width", &LightmapTexels::width)
         .def_readonly("height", &LightmapTexels::height)
         .def_readonly("directional", &LightmapTexels::directional)
+        .def_property_readonly(
+            "sh_order",
+            [](const LightmapTexels& t) -> py::object {
+                if (!t.directional) return py::none();
+                return py::int_(t.sh_order);
+            },
+            "SH order of the directional data (1: L1, 2: L2), or None without it.")
         .def_property_readonly(
             "color",
             [](const LightmapTexels& t) { return grid_array<float>(t.color, t.width, t.height, {3}); },
@@ -243,9 +261,11 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
             "sh",
             [](const LightmapTexels& t) -> py::object {
                 if (!t.directional) return py::none();
-                return grid_array<float>(t.sh, t.width, t.height, {kLightmapShCoefficients, 3});
+                return grid_array<float>(t.sh, t.width, t.height,
+                                         {py::ssize_t(t.sh_coefficients()), 3});
             },
-            "(H, W, 4, 3) float32 L1 SH of incident radiance (index l(l+1)+m), or None.")
+            "(H, W, 4, 3) float32 L1 SH of incident radiance (index l(l+1)+m) — (H, W, 9, 3) "
+            "at L2 — or None.")
         .def_property_readonly(
             "variance",
             [](const LightmapTexels& t) { return grid_array<float>(t.variance, t.width, t.height); },

@@ -63,9 +63,12 @@ void bind_settings(py::module_& m) {
                        "A VPL's surface scatters with its rough glossy lobes too, as if "
                        "diffuse; False: its diffuse lobe only (True).")
         .def_readwrite("filter_direct", &S::filter_direct,
-                       "The world's (sky's) direct light through the SH filter as directional "
-                       "VPLs (photons_per_set per set and pass), as the paper filters direct "
-                       "light; lamps and suns stay next-event estimation (False).");
+                       "Direct light through the SH filter, as the paper filters it: the "
+                       "world's as directional VPLs (photons_per_set per set and pass), the "
+                       "point, spot, area and sun lights' as samples per set (one for a delta "
+                       "light, photons_per_set per pass for one with extent), each with its "
+                       "exact shadow ray; next-event estimation then leaves them out. "
+                       "Emissive triangles stay next-event estimation (False).");
     cls.def("validate", &validate_instant_gi_settings,
             "Raises ValueError naming the first invalid field.");
     register_settings_type<S>("InstantGiSettings");

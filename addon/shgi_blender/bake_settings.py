@@ -6,7 +6,7 @@ and take every one a caller did not set from that group (operators/bake_lightmap
 script or a farm job overrides only what it names.
 
 Names are the native ones where a native field exists (docs/architecture.md: settings mirrored 1:1):
-``content``, ``samples``, ``directional``, ``tile_size`` are LightmapSettings fields; ``filter``
+``content``, ``samples``, ``directional``, ``sh_order``, ``tile_size`` are LightmapSettings fields; ``filter``
 and ``padding`` are BakeOptions fields. The one rename is BakeOptions ``uv_set``, shown as
 ``uv_map`` (Blender's word for it). The light-path limits and the seed are not repeated here:
 a bake uses the render settings' (``scene.shgi``: the Light Paths panel and the seed), as a
@@ -72,6 +72,7 @@ BAKE_PROPERTY_DEFAULTS = {
     "content": "DIRECT_INDIRECT",
     "source": "PATH_TRACE",
     "directional": False,
+    "sh_order": 1,
     "final_gather": False,
     "filter": False,
     "denoiser": "SHGI",
@@ -138,7 +139,7 @@ MAX_SAMPLES = 1 << 20
 
 # LightmapSettings field -> scene.shgi.bake property.
 LIGHTMAP_FIELDS = {name: name for name in (
-    "content", "samples", "directional", "final_gather", "tile_size")}
+    "content", "samples", "directional", "sh_order", "final_gather", "tile_size")}
 # LightmapSettings field -> scene.shgi property (the render settings' light paths and seed).
 LIGHT_PATH_FIELDS = {name: name for name in (
     "seed", "max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
@@ -146,6 +147,7 @@ LIGHT_PATH_FIELDS = {name: name for name in (
 # LightmapSettings field -> where the Bake and Light Paths panels show it, for refusals.
 LIGHTMAP_LABELS = {
     "content": "Bake > Content", "samples": "Bake > Samples", "directional": "Bake > Directional",
+    "sh_order": "Bake > SH Order",
     "final_gather": "Bake > Final Gather",
     "tile_size": "Bake > Farm > Tile Size",
     **{field: settings.SETTING_LABELS[prop] for field, prop in LIGHT_PATH_FIELDS.items()}}
@@ -239,7 +241,7 @@ def farm_target(bake):
 FLAMENCO_JOB_TYPE = "shgi-bake"
 # The job's settings taken from scene.shgi.bake under the same names (shgi_bake.js's keys).
 FLAMENCO_SETTINGS = ("uv_map", "create_uv", "resolution", "texel_density", "samples", "content",
-                     "source", "directional", "filter", "padding", "shard_count")
+                     "source", "directional", "sh_order", "filter", "padding", "shard_count")
 
 
 def flamenco_job(bake, objects, blendfile, output_folder, name):

@@ -303,7 +303,14 @@ def bake_properties():
         "directional": BoolProperty(
             name="Directional", default=B["directional"],
             description="Also store the direction light arrives from at each texel (EXR "
-                        "layers SH.c0..c3), so that normal-mapped surfaces can be shaded"),
+                        "layers SH.c0..c3, or SH.c0..c8 at SH Order 2), so that normal-mapped "
+                        "surfaces can be shaded"),
+        "sh_order": IntProperty(
+            name="SH Order", default=B["sh_order"], min=1, max=2,
+            description="With Directional: 1 stores L1 spherical harmonics (4 coefficients "
+                        "per channel, SH.c0..c3); 2 stores L2 (9, SH.c0..c8), which keeps "
+                        "sharper changes of direction (a lamp's falloff over a normal map) at "
+                        "2.25 times the memory"),
         "filter": BoolProperty(
             name="Denoise", default=B["filter"],
             description="Denoise the baked texels (never across UV charts) with the Denoiser"),
@@ -454,10 +461,13 @@ class ShgiInstantGiSettings(bpy.types.PropertyGroup):
         description="Neighbours whose surfaces' normals have a cosine below this are not "
                     "blended (normal maps do not count)")
     filter_direct: BoolProperty(
-        name="Filter Sky Light", default=IG["filter_direct"],
-        description="The world's direct light comes from as many sky directions per set as "
-                    "Light Paths per Set, blended like the indirect light; lamps and suns stay "
-                    "sampled directly. Off: the world is sampled directly too")
+        name="Filter Direct Light", default=IG["filter_direct"],
+        description="Direct light of the world, lamps and suns goes through the SH filter, "
+                    "blended like the indirect light (the world from as many sky directions "
+                    "per set as Light Paths per Set; lamps with size from as many samples per "
+                    "set): smoother, but L2 SH reads a lamp up to 6% brighter overhead and "
+                    "lets some of it past the horizon. Emissive surfaces stay sampled "
+                    "directly. Off: all direct light is sampled directly")
     passes: IntProperty(
         name="Render Passes", default=settings.final_passes("INSTANT_GI", native.module()),
         min=1, soft_max=64,

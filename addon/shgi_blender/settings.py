@@ -451,7 +451,7 @@ INSTANT_GI_LABELS = {
     "filter_mode": "Instant GI > Filter",
     "depth_threshold": "Instant GI > Depth Threshold",
     "normal_threshold": "Instant GI > Normal Threshold",
-    "filter_direct": "Instant GI > Filter Sky Light",
+    "filter_direct": "Instant GI > Filter Direct Light",
 }
 # The native checks' limits the property ranges follow (properties.py), so that the panels offer
 # only values the native code accepts.

@@ -63,7 +63,9 @@ const JOB_TYPE = {
           choices: ["PATH_TRACE", "PHOTON_LATTICE", "PROBE_GRID", "RADIANCE_FIELD", "PROPAGATION"],
           description: "Where the indirect light comes from (PATH_TRACE: ground truth)" },
         { key: "directional", type: "bool", default: false, visible: "submission",
-          description: "Also write the L1 SH layers SH.c0..c3 per texel" },
+          description: "Also write the SH layers per texel (SH.c0..c3; SH.c0..c8 at sh_order 2)" },
+        { key: "sh_order", type: "int32", default: 1, propargs: { min: 1, max: 2 },
+          visible: "submission", description: "With directional: 1 (L1) or 2 (L2) SH" },
         { key: "filter", type: "bool", default: false, visible: "submission",
           description: "Edge-aware denoising filter (run once, by the merge)" },
         { key: "padding", type: "int32", default: 4, propargs: { min: 0, max: 64 },
@@ -162,7 +164,7 @@ function py(value) {
 // to Flamenco or Dask would otherwise refuse, or send the shard on to a Dask cluster).
 function operatorArguments(settings) {
     const names = ["uv_map", "resolution", "texel_density", "samples", "content", "source",
-                   "directional", "filter", "padding", "output_folder"];
+                   "directional", "sh_order", "filter", "padding", "output_folder"];
     const values = names.map((name) => `${name}=${py(settings[name])}`);
     return values.concat(["create_uv=False", "farm='LOCAL'"]).join(", ");
 }
@@ -264,6 +266,7 @@ function cliArguments(settings) {
     else args.push("--density", String(settings.texel_density));
     if (settings.objects) args.push("--objects", objectNames(settings).join(","));
     if (settings.directional) args.push("--directional");
+    if (settings.directional && settings.sh_order === 2) args.push("--sh-order", "2");
     if (settings.filter) args.push("--filter");
     return args;
 }

@@ -97,7 +97,7 @@ void add_sh(ShRgb& a, const ShRgb& b, float scale) {
 // Sums of one sample position.
 struct PositionSums {
     vec3 value{0.0f};
-    ShRgb sh{1};
+    ShRgb sh{1};  // at the bake's SH order
     double luminance = 0.0, luminance2 = 0.0;
 };
 
@@ -106,8 +106,15 @@ class TexelBaker {
     TexelBaker(const Scene& scene, const TexelMap& map, const IndirectField* field,
                const LightmapSettings& settings)
         : scene_(scene), map_(map), field_(field), settings_(settings),
+          // A field that carries direct light stands in for next-event estimation of it only
+          // where the bake reads the field (content with indirect light): a DIRECT bake samples
+          // every emitter.
           lights_(scene, WorldSampling::Cosine,
-                  field == nullptr || !field->includes_world_direct(), settings.light_splits),
+                  field == nullptr || !wants_indirect(settings.content) ||
+                      !field->includes_world_direct(),
+                  settings.light_splits,
+                  field == nullptr || !wants_indirect(settings.content) ||
+                      !field->includes_lights_direct()),
           path_settings_(continuation_settings(settings)),
           seed_(settings.seed ^ (kInstanceSeedMix * (uint64_t(map.instance_id) + 1))),
           direct_(wants_direct(settings.content)),
@@ -208,7 +215,7 @@ class TexelBaker {
         double weight_sum = 0.0;
         for (uint64_t k = 0; k < positions; ++k) weight_sum += samples[k].weight;
         vec3 color(0.0f);
-        ShRgb sh(1);
+        ShRgb sh(sh_order_);
         double variance = 0.0;
         for (uint64_t k = 0; k < positions; ++k) {
             // The sample's global index in the map names its random streams.
@@ -229,8 +236,9 @@ class TexelBaker {
         for (int i = 0; i < 3; ++i) c[i] = color[i];
         out.variance[texel] = float(variance);
         if (settings_.directional) {
-            float* s = &out.sh[kLightmapShFloats * texel];
-            for (int j = 0; j < kLightmapShCoefficients; ++j)
+            const int coefficients = out.sh_coefficients();
+            float* s = &out.sh[size_t(3 * coefficients) * texel];
+            for (int j = 0; j < coefficients; ++j)
                 for (int i = 0; i < 3; ++i) s[3 * j + i] = sh[j][i];
         }
         out.baked[texel] = 1;
@@ -248,9 +256,10 @@ class TexelBaker {
         const vec3 color_scale =
             settings_.content == LightmapContent::Full ? surface.diffuse_color : vec3(1.0f);
         PositionSums sums;
+        sums.sh = ShRgb(sh_order_);
         // The field's light is the same for every sample of the position.
         vec3 field_value(0.0f);
-        ShRgb field_sh(1);
+        ShRgb field_sh(sh_order_);
         if (reads_field()) {
             FieldLookup lookup;
             if (texel_sh != nullptr)
@@ -265,10 +274,11 @@ class TexelBaker {
             field_value = irradiance * (kInvPi * response);
             if (settings_.directional) {
                 const int carried =
-                    std::min(kLightmapShCoefficients, lookup.radiance.num_coefficients());
+                    std::min(field_sh.num_coefficients(), lookup.radiance.num_coefficients());
                 for (int j = 0; j < carried; ++j) field_sh[j] = lookup.radiance[j];
                 // Irradiance the SH does not carry (caustics): as uniform radiance E / pi over the
-                // upper hemisphere, whose L1 SH is (E / pi) (2 pi Y00, pi k1 n).
+                // upper hemisphere, whose L1 SH is (E / pi) (2 pi Y00, pi k1 n) (its band 2 is
+                // zero: the integral of P2 over a hemisphere vanishes).
                 const vec3 extra = lookup.extra_irradiance * kInvPi;
                 field_sh[0] += extra * (kTwoPi * 0.28209479177387814f);
                 const float k1 = kPi * 0.4886025119029199f;
@@ -342,7 +352,7 @@ class TexelBaker {
             sums.luminance2 += y * y;
         }
         if (settings_.directional)
-            for (int j = 0; j < kLightmapShCoefficients; ++j) {
+            for (int j = 0; j < sums.sh.num_coefficients(); ++j) {
                 sums.sh[j] *= color_scale;
                 if (!is_finite(sums.sh[j])) sums.sh[j] = vec3(0.0f);
             }
@@ -375,6 +385,7 @@ class TexelBaker {
     const TexelMap& map_;
     const IndirectField* field_;
     const LightmapSettings& settings_;
+    const int sh_order_ = settings_.directional ? settings_.sh_order : 1;
     LightSampler lights_;
     PathTracerSettings path_settings_;
     uint64_t seed_;
@@ -401,6 +412,9 @@ LightmapContent lightmap_content_from_name(const std::string& name) {
 }
 
 void validate_lightmap_settings(const LightmapSettings& s) {
+    if (s.sh_order < 1 || s.sh_order > kLightmapMaxShOrder)
+        throw InvalidArgument(format_message("LightmapSettings.sh_order = ", s.sh_order,
+                                             ": use 1 (L1, 4 coefficients) or 2 (L2, 9)"));
     if (s.samples < 1 || s.samples > kMaxSamples)
         throw InvalidArgument(format_message("LightmapSettings.samples = ", s.samples,
                                              ": use 1 .. ", kMaxSamples));
@@ -494,25 +508,33 @@ LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const Indi
                                                  " x ", map.height, " lightmap has ", tile_count,
                                                  " tiles of ", settings.tile_size, " texels"));
 
+    LightmapTexels out;
+    out.width = map.width;
+    out.height = map.height;
+    out.directional = settings.directional;
+    out.sh_order = settings.directional ? settings.sh_order : 1;
     const uint64_t texel_bytes = 3 * sizeof(float) + sizeof(float) + sizeof(uint8_t) +
-                                 (settings.directional ? kLightmapShFloats * sizeof(float) : 0);
+                                 uint64_t(out.sh_floats()) * sizeof(float);
     require_memory(saturating_mul(map.texel_count(), texel_bytes),
                    format_message("bake_lightmap: a ", map.width, " x ", map.height, " lightmap",
                                   settings.directional ? " (LightmapSettings.directional)" : "",
                                   " at ", texel_bytes, " bytes per texel"),
                    "rasterize a lower resolution (TexelRasterSettings.width, height) or bake "
                    "in tiles");
-    LightmapTexels out;
-    out.width = map.width;
-    out.height = map.height;
-    out.directional = settings.directional;
     out.color.assign(3 * map.texel_count(), 0.0f);
-    if (settings.directional) out.sh.assign(kLightmapShFloats * map.texel_count(), 0.0f);
+    if (settings.directional) out.sh.assign(size_t(out.sh_floats()) * map.texel_count(), 0.0f);
     out.variance.assign(map.texel_count(), 0.0f);
     out.baked.assign(map.texel_count(), 0);
 
     const PinnedField pinned(field);  // one state of the field for the whole bake
-    const TexelBaker baker(scene, map, pinned.get(), settings);
+    // An INDIRECT bake over a field that carries direct light (INSTANT_GI's filter_direct)
+    // reads the field without it, where the field can separate the two.
+    std::shared_ptr<const IndirectField> indirect_only;
+    if (pinned.get() != nullptr && !wants_direct(settings.content) &&
+        (pinned.get()->includes_world_direct() || pinned.get()->includes_lights_direct()))
+        indirect_only = pinned.get()->without_direct();
+    const TexelBaker baker(scene, map, indirect_only ? indirect_only.get() : pinned.get(),
+                           settings);
     const uint32_t tiles_x = tiles_along(map.width, settings.tile_size);
     std::atomic<uint64_t> done{0};
     if (progress) progress->begin_stage("baking lightmap");
@@ -549,11 +571,14 @@ LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const Indi
 
 void merge_lightmap(LightmapTexels& into, const LightmapTexels& part) {
     if (into.width != part.width || into.height != part.height ||
-        into.directional != part.directional)
+        into.directional != part.directional ||
+        (into.directional && into.sh_order != part.sh_order))
         throw InvalidArgument(format_message(
             "merge_lightmap: a ", part.width, " x ", part.height,
-            part.directional ? " directional" : "", " part does not fit a ", into.width, " x ",
-            into.height, into.directional ? " directional" : "", " lightmap"));
+            part.directional ? (part.sh_order == 2 ? " L2 directional" : " directional") : "",
+            " part does not fit a ", into.width, " x ", into.height,
+            into.directional ? (into.sh_order == 2 ? " L2 directional" : " directional") : "",
+            " lightmap"));
     for (uint64_t t = 0; t < part.texel_count(); ++t) {
         if (!part.baked[t]) continue;
         if (into.baked[t])
@@ -563,9 +588,8 @@ void merge_lightmap(LightmapTexels& into, const LightmapTexels& part) {
         into.baked[t] = 1;
         std::copy_n(&part.color[3 * t], 3, &into.color[3 * t]);
         into.variance[t] = part.variance[t];
-        if (part.directional)
-            std::copy_n(&part.sh[kLightmapShFloats * t], kLightmapShFloats,
-                        &into.sh[kLightmapShFloats * t]);
+        const size_t floats = size_t(part.sh_floats());
+        if (part.directional) std::copy_n(&part.sh[floats * t], floats, &into.sh[floats * t]);
     }
 }
 

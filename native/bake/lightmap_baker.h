@@ -1,6 +1,7 @@
 // Lightmap baker (docs/baking.md, step 3): the light arriving at every texel of a TexelMap, from
 // the reference path tracer (ground truth) or from any IndirectField (a solved photon lattice or
-// probe grid), with an optional L1 SH of the incident radiance per texel (directional lightmaps).
+// probe grid), with an optional L1 or L2 SH of the incident radiance per texel (directional
+// lightmaps, LightmapSettings.sh_order).
 //
 // What a texel holds (LightmapContent), in Cycles' DIFFUSE bake units so that a user can swap
 // one baker for the other: the diffuse pass divided by its colour, i.e. for a Lambert surface
@@ -48,7 +49,8 @@
 // texel's value is the coverage-weighted mean of its positions' means. Variance: of the texel
 // mean's luminance (Rec.709), from the per-position sample variances (a confidence layer).
 //
-// Directional data: the L1 SH (real, orthonormal, shgi.sh conventions) of the incident radiance
+// Directional data: the L1 (or, with sh_order 2, L2) SH (real, orthonormal, shgi.sh
+// conventions; index l(l+1)+m) of the incident radiance
 // over the texel's upper hemisphere (W m^-2 sr^-1), direct + indirect as the content says
 // (Full: also times DiffCol). Irradiance for another normal n' (a normal map) is
 // sh_irradiance(sh, n'); the plain value above stays the exact E / pi for the texel's own normal,
@@ -77,7 +79,10 @@ struct LightmapSettings {
     LightmapContent content = LightmapContent::DirectIndirect;
     uint32_t samples = 256;   // per texel, 1 .. 2^20
     uint64_t seed = 0;
-    bool directional = false;  // also the L1 SH of the incident radiance per texel
+    bool directional = false;  // also the SH of the incident radiance per texel
+    // The directional data's SH order: 1 (L1, 4 coefficients per channel, the default) or 2
+    // (L2, 9). Read only when directional.
+    int sh_order = 1;
     // Cycles' Light Paths limits (as PathTracerSettings), counting the texel's own bounce.
     int max_bounces = 12;
     int diffuse_bounces = 4;
@@ -106,16 +111,22 @@ void validate_lightmap_settings(const LightmapSettings& settings);
 struct LightmapTexels {
     uint32_t width = 0, height = 0;
     bool directional = false;
+    int sh_order = 1;             // when directional: 1 (L1) or 2 (L2)
     std::vector<float> color;     // 3 per texel, RGB (units: see LightmapContent)
-    std::vector<float> sh;        // 12 per texel when directional: [coefficient][RGB], L1
+    std::vector<float> sh;        // sh_floats() per texel: [coefficient][RGB]
     std::vector<float> variance;  // 1 per texel: of the texel's luminance estimate
     std::vector<uint8_t> baked;   // 1 where this bake computed the texel (covered, in its tiles)
 
     uint64_t texel_count() const { return uint64_t(width) * height; }
+    // SH coefficients per channel and floats per texel of the directional data (0 without).
+    int sh_coefficients() const { return directional ? (sh_order + 1) * (sh_order + 1) : 0; }
+    int sh_floats() const { return 3 * sh_coefficients(); }
 };
 
 inline constexpr int kLightmapShCoefficients = 4;  // L1
 inline constexpr int kLightmapShFloats = 3 * kLightmapShCoefficients;
+inline constexpr int kLightmapMaxShOrder = 2;  // L2: 9 coefficients
+inline constexpr int kLightmapMaxShFloats = 3 * 9;
 
 // Number of tiles of a width x height lightmap; tile i covers texels
 // [tx * size, (tx + 1) * size) x [ty * size, ...) with tx = i % tiles_x, ty = i / tiles_x.
@@ -141,7 +152,7 @@ LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const Indi
                              const std::vector<uint32_t>& tiles = {},
                              Progress* progress = nullptr);
 
-// Copies the texels `part` baked into `into` (same size and directional flag; InvalidArgument
+// Copies the texels `part` baked into `into` (same size, directional flag and SH order; InvalidArgument
 // otherwise, or when a texel was baked by both: shards must not overlap). Merging the shards of
 // one bake gives exactly the single bake.
 void merge_lightmap(LightmapTexels& into, const LightmapTexels& part);

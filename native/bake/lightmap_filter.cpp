@@ -67,7 +67,7 @@ void filter_lightmap(const TexelMap& map, LightmapTexels& texels,
     if (settings.iterations == 0) return;
     if (progress) progress->begin_stage("filtering lightmap");
     const std::vector<TexelGeometry> geometry = texel_geometry(map);
-    const int sh_floats = texels.directional ? kLightmapShFloats : 0;
+    const int sh_floats = texels.sh_floats();
     const int w = int(texels.width), h = int(texels.height);
     for (uint32_t pass = 0; pass < settings.iterations; ++pass) {
         const int step = 1 << pass;
@@ -86,7 +86,7 @@ void filter_lightmap(const TexelMap& map, LightmapTexels& texels,
                         settings.position_sigma * std::max(gp.texel_size, 1e-6f);
                     double weight_sum = 0.0, variance = 0.0;
                     double color[3] = {0.0, 0.0, 0.0};
-                    double sh[kLightmapShFloats] = {};
+                    double sh[kLightmapMaxShFloats] = {};
                     for (int dy = -2; dy <= 2; ++dy) {
                         const int qy = y + dy * step;
                         if (qy < 0 || qy >= h) continue;
@@ -111,13 +111,13 @@ void filter_lightmap(const TexelMap& map, LightmapTexels& texels,
                             variance += double(weight) * weight * in.variance[q];
                             for (int c = 0; c < 3; ++c) color[c] += weight * in.color[3 * q + c];
                             for (int c = 0; c < sh_floats; ++c)
-                                sh[c] += weight * in.sh[kLightmapShFloats * q + c];
+                                sh[c] += weight * in.sh[size_t(sh_floats) * q + c];
                         }
                     }
                     // The centre texel always counts (weight h(0)^2 > 0).
                     for (int c = 0; c < 3; ++c) texels.color[3 * p + c] = float(color[c] / weight_sum);
                     for (int c = 0; c < sh_floats; ++c)
-                        texels.sh[kLightmapShFloats * p + c] = float(sh[c] / weight_sum);
+                        texels.sh[size_t(sh_floats) * p + c] = float(sh[c] / weight_sum);
                     texels.variance[p] = float(variance / (weight_sum * weight_sum));
                 }
         }, progress);
@@ -128,13 +128,13 @@ void filter_lightmap(const TexelMap& map, LightmapTexels& texels,
 std::vector<uint8_t> dilate_lightmap(LightmapTexels& texels, const DilationSettings& settings,
                                      Progress* progress) {
     const uint64_t n = texels.texel_count();
-    const int sh_floats = texels.directional ? kLightmapShFloats : 0;
+    const int sh_floats = texels.sh_floats();
     const uint32_t channels = 3 + sh_floats + 1;
     std::vector<float> values(n * channels);
     for (uint64_t t = 0; t < n; ++t) {
         float* v = &values[t * channels];
         for (int c = 0; c < 3; ++c) v[c] = texels.color[3 * t + c];
-        for (int c = 0; c < sh_floats; ++c) v[3 + c] = texels.sh[kLightmapShFloats * t + c];
+        for (int c = 0; c < sh_floats; ++c) v[3 + c] = texels.sh[size_t(sh_floats) * t + c];
         v[3 + sh_floats] = texels.variance[t];
     }
     std::vector<uint8_t> filled = texels.baked;
@@ -142,7 +142,7 @@ std::vector<uint8_t> dilate_lightmap(LightmapTexels& texels, const DilationSetti
     for (uint64_t t = 0; t < n; ++t) {
         const float* v = &values[t * channels];
         for (int c = 0; c < 3; ++c) texels.color[3 * t + c] = v[c];
-        for (int c = 0; c < sh_floats; ++c) texels.sh[kLightmapShFloats * t + c] = v[3 + c];
+        for (int c = 0; c < sh_floats; ++c) texels.sh[size_t(sh_floats) * t + c] = v[3 + c];
         texels.variance[t] = v[3 + sh_floats];
     }
     return filled;

@@ -138,11 +138,28 @@ bool add_vpl_sh(ShRgb& sh, const vec3& p, const vec3& ng, const InstantVpl& vpl,
 
 InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& settings,
                                std::vector<std::vector<InstantVpl>> sets, uint64_t passes,
-                               std::vector<std::vector<vec3>> sky_sets)
+                               std::vector<std::vector<vec3>> sky_sets,
+                               std::vector<std::vector<InstantLampSample>> lamp_sets)
     : scene_(&scene), settings_(settings), sets_(std::move(sets)), sky_sets_(std::move(sky_sets)),
-      passes_(passes), timings_(std::make_shared<InstantGiFrameTimings>()) {
+      lamp_sets_(std::move(lamp_sets)), passes_(passes),
+      timings_(std::make_shared<InstantGiFrameTimings>()) {
     if (!sky_sets_.empty() && sky_sets_.size() != sets_.size())
         throw Internal("InstantGiField: sky_sets and sets differ in count");
+    if (!lamp_sets_.empty()) {
+        if (lamp_sets_.size() != sets_.size())
+            throw Internal("InstantGiField: lamp_sets and sets differ in count");
+        // Every set holds as many samples of each light: count them in the first.
+        std::vector<uint32_t> per_set(scene.lights().size(), 0);
+        for (const InstantLampSample& sample : lamp_sets_[0]) {
+            if (sample.light >= per_set.size())
+                throw Internal("InstantGiField: a lamp sample of a light the scene lacks");
+            ++per_set[sample.light];
+        }
+        lamp_share_.assign(per_set.size(), 0.0f);
+        for (size_t i = 0; i < per_set.size(); ++i)
+            if (per_set[i] > 0) lamp_share_[i] = 1.0f / float(per_set[i]);
+        lamps_ = std::make_shared<const LightSampler>(scene, WorldSampling::Cosine, false, 1, false);
+    }
     for (const auto& set : sets_) vpl_count_ += set.size();
     for (const auto& set : sky_sets_) sky_count_ += set.size();
     set_scale_ = passes_ > 0 ? float(sets_.size()) / float(passes_) : 0.0f;
@@ -150,8 +167,34 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
 
 InstantGiFrameTimings InstantGiField::frame_timings() const { return *timings_; }
 
+vec3 InstantGiField::lamp_delta(const InstantLampSample& sample, const vec3& p, const vec3& ng,
+                                float lamp_scale, vec3* direction, float* distance) const {
+    LightSample ls;
+    if (!lamps_->light_emits(sample.light) || !lamps_->sample_light(sample.light, p, sample.u, &ls))
+        return vec3(0.0f);
+    if (!(ls.pdf > 0.0f) || glm::dot(ls.wi, ng) <= 0.0f) return vec3(0.0f);
+    const vec3 e = ls.radiance * (lamp_scale * lamp_share_[sample.light] / ls.pdf);
+    if (!is_finite(e)) return vec3(0.0f);
+    *direction = ls.wi;
+    *distance = ls.distance;
+    return e;
+}
+
+namespace {
+
+// The shadow ray towards a lamp sample at `distance` (kInfinity for a sun) along unit w.
+Ray lamp_shadow_ray(const vec3& origin, const vec3& w, float distance) {
+    Ray ray;
+    ray.origin = origin;
+    ray.direction = w;
+    ray.tmax = std::isinf(distance) ? kInfinity : distance * (1.0f - kShadowShorten);
+    return ray;
+}
+
+}  // namespace
+
 void InstantGiField::gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t set,
-                                float vpl_scale, const vec3& sky_weight) const {
+                                float vpl_scale, const vec3& sky_weight, float lamp_scale) const {
     const vec3 origin = offset_origin(p, n);
     for (const InstantVpl& vpl : sets_[set]) {
         vec3 w;
@@ -161,6 +204,16 @@ void InstantGiField::gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t 
             continue;
         add_delta(sh.coeffs.data(), e, w);
     }
+    // filter_direct: the lights' direct light from the set's lamp samples.
+    if (!lamp_sets_.empty())
+        for (const InstantLampSample& sample : lamp_sets_[set]) {
+            vec3 w;
+            float distance;
+            const vec3 e = lamp_delta(sample, p, n, lamp_scale, &w, &distance);
+            if (e == vec3(0.0f) || scene_->occluded(lamp_shadow_ray(origin, w, distance)))
+                continue;
+            add_delta(sh.coeffs.data(), e, w);
+        }
     // filter_direct: the world's direct light from the set's directional VPLs.
     if (sky_sets_.empty() || sky_weight == vec3(0.0f)) return;
     for (const vec3& w : sky_sets_[set]) {
@@ -182,8 +235,17 @@ ShRgb InstantGiField::radiance_sh(const vec3& p, const vec3& n) const {
     const vec3 sky = sky_count_ > 0
                          ? scene_->world().radiance() * (kFourPi / float(sky_count_))
                          : vec3(0.0f);
-    for (size_t s = 0; s < sets_.size(); ++s) gather_set(sh, p, n, s, 1.0f / float(passes_), sky);
+    const float lamp_scale = 1.0f / float(sets_.size());
+    for (size_t s = 0; s < sets_.size(); ++s)
+        gather_set(sh, p, n, s, 1.0f / float(passes_), sky, lamp_scale);
     return sh;
+}
+
+std::shared_ptr<const IndirectField> InstantGiField::without_direct() const {
+    if (!settings_.filter_direct) return nullptr;
+    InstantGiSettings indirect = settings_;
+    indirect.filter_direct = false;
+    return std::make_shared<InstantGiField>(*scene_, indirect, sets_, passes_);
 }
 
 IndirectField::Interleave InstantGiField::interleave() const {
@@ -209,7 +271,7 @@ ShRgb InstantGiField::set_radiance_sh(const vec3& p, const vec3& n, int set_x, i
     const vec3 sky = directions > 0
                          ? scene_->world().radiance() * (kFourPi / float(directions))
                          : vec3(0.0f);
-    gather_set(sh, p, n, s, set_scale_, sky);
+    gather_set(sh, p, n, s, set_scale_, sky, 1.0f);
     return sh;
 }
 
@@ -223,19 +285,23 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
     const size_t pixels = g.pixel_count();
     const int n = settings_.sets_x, m = settings_.sets_y;
     const bool sky = !sky_sets_.empty() && scene_->world().radiance() != vec3(0.0f);
+    const bool lamps = !lamp_sets_.empty();
+    const bool direct = sky || lamps;  // filter_direct's plane
     require_memory(saturating_mul(uint64_t(pixels),
-                                  uint64_t((sky ? 4 : 2) * kCoeffs * sizeof(vec3))),
+                                  uint64_t((direct ? 4 : 2) * kCoeffs * sizeof(vec3))),
                    format_message("the SH planes of ", width, " x ", height, " pixels"),
                    "lower the camera's resolution_x / resolution_y");
     // 1. gather: the pixel's set as L2 SH, visibility by exact shadow rays.
     TimePoint start = now();
     std::vector<vec3> raw(pixels * kCoeffs, vec3(0.0f));
-    // filter_direct: the sky's direct light, a plane of its own (DiffDir / GlossDir).
-    std::vector<vec3> raw_direct(sky ? pixels * kCoeffs : 0, vec3(0.0f));
+    // filter_direct: the sky's and lights' direct light, a plane of its own (DiffDir /
+    // GlossDir).
+    std::vector<vec3> raw_direct(direct ? pixels * kCoeffs : 0, vec3(0.0f));
     size_t largest_set = 1;
     for (size_t s = 0; s < sets_.size(); ++s)
-        largest_set = std::max(largest_set,
-                               sets_[s].size() + (sky ? sky_sets_[s].size() : size_t(0)));
+        largest_set = std::max(largest_set, sets_[s].size() +
+                                                (sky ? sky_sets_[s].size() : size_t(0)) +
+                                                (lamps ? lamp_sets_[s].size() : size_t(0)));
     const uint64_t rows_per_task =
         std::max<uint64_t>(1, kRaysPerBatch / (uint64_t(std::max(width, 1)) * largest_set));
     parallel_for(0, uint64_t(height), rows_per_task, [&](uint64_t y0, uint64_t y1) {
@@ -266,9 +332,27 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                         directions.push_back(w);
                         ray_direct.push_back(0);
                     }
+                const size_t s = size_t(int(y) % m) * size_t(n) + size_t(sx);
+                // The set's lamp samples: each light's incident radiance / pdf along its
+                // sample, to the sampled point.
+                if (lamps)
+                    for (const InstantLampSample& sample : lamp_sets_[s])
+                        for (int x = sx; x < width; x += n) {
+                            const size_t p = g.index(x, int(y));
+                            if (!g.has_surface(p)) continue;
+                            const vec3 pos = g.position[p], ng = g.geometric_normal[p];
+                            vec3 w;
+                            float distance;
+                            const vec3 e = lamp_delta(sample, pos, ng, 1.0f, &w, &distance);
+                            if (e == vec3(0.0f)) continue;
+                            rays.push_back(lamp_shadow_ray(offset_origin(pos, ng), w, distance));
+                            ray_pixel.push_back(uint32_t(p));
+                            weights.push_back(e);
+                            directions.push_back(w);
+                            ray_direct.push_back(1);
+                        }
                 if (!sky) continue;
                 // The set's directional VPLs: the world seen along each, to infinity.
-                const size_t s = size_t(int(y) % m) * size_t(n) + size_t(sx);
                 const auto& sky_set = sky_sets_[s];
                 if (sky_set.empty()) continue;
                 const vec3 e = scene_->world().radiance() * (kFourPi / float(sky_set.size()));
@@ -356,7 +440,7 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
     };
     std::vector<vec3> filtered, filtered_direct;
     filter_plane(raw, filtered);
-    if (sky) filter_plane(raw_direct, filtered_direct);
+    if (direct) filter_plane(raw_direct, filtered_direct);
     timings_->filter = seconds_since(start);
 
     // 3. shade: SH dot products with the pixel's shading normal, into the film.
@@ -393,7 +477,7 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                 diffuse = clamp_contribution(diffuse, clamp_indirect);
                 glossy = clamp_contribution(glossy, clamp_indirect);
                 vec3 diffuse_direct(0.0f), glossy_direct(0.0f);
-                if (sky) shade(sh_direct, filtered_direct, diffuse_direct, glossy_direct);
+                if (direct) shade(sh_direct, filtered_direct, diffuse_direct, glossy_direct);
                 if (!is_finite(diffuse) || !is_finite(glossy) || !is_finite(diffuse_direct) ||
                     !is_finite(glossy_direct))
                     continue;
@@ -402,7 +486,7 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                 values[Pass::GlossInd] = glossy * samples;
                 values[Pass::Combined] =
                     (diffuse + glossy + diffuse_direct + glossy_direct) * samples;
-                if (sky) {
+                if (direct) {
                     values[Pass::DiffDir] = diffuse_direct * samples;
                     values[Pass::GlossDir] = glossy_direct * samples;
                 }
@@ -491,17 +575,43 @@ void InstantGi::refine(Progress* progress) {
                 sky_sets[s].push_back(sample_uniform_sphere(rng.next_vec2()));
         }
     }
+    // filter_direct: samples of each emitting light per set, one for a delta light (at the
+    // first pass), photons_per_set more per pass for a light with extent (one random stream per
+    // pass and set).
+    std::vector<std::vector<InstantLampSample>> lamp_sets;
+    if (settings_.filter_direct) {
+        const LightSampler lamps(*scene_, WorldSampling::Cosine, false, 1, false);
+        lamp_sets = field_->lamp_sets();
+        lamp_sets.resize(set_count);
+        for (size_t s = 0; s < set_count; ++s) {
+            Pcg32 rng(settings_.seed ^ 0x1a3b5c7d9e2fu, passes_ * set_count + s);
+            for (uint32_t i = 0; i < scene_->lights().size(); ++i) {
+                if (!lamps.light_emits(i)) continue;
+                const Light& light = scene_->lights()[i];
+                const bool delta = light.type == LightType::Sun
+                                       ? light.angle <= 0.0f
+                                       : light.type != LightType::Area && light.radius <= 0.0f;
+                const uint64_t count = delta ? (passes_ == 0 ? 1 : 0) : settings_.photons_per_set;
+                for (uint64_t k = 0; k < count; ++k) lamp_sets[s].push_back({i, rng.next_vec2()});
+            }
+        }
+        if (std::all_of(lamp_sets.begin(), lamp_sets.end(),
+                        [](const auto& set) { return set.empty(); }))
+            lamp_sets.clear();
+    }
     const double deal_seconds = seconds_since(start);
     field_ = std::make_shared<InstantGiField>(*scene_, settings_, std::move(sets), passes_ + 1,
-                                              std::move(sky_sets));
+                                              std::move(sky_sets), std::move(lamp_sets));
     ++passes_;
     stage_seconds_ = {{"vpl_trace", trace_seconds}, {"vpl_sets", deal_seconds}};
     if (progress) progress->set_fraction(1.0f);
 }
 
 size_t InstantGi::memory_bytes() const {
+    size_t lamp_samples = 0;
+    for (const auto& set : field_->lamp_sets()) lamp_samples += set.size();
     return size_t(field_->vpl_count()) * sizeof(InstantVpl) +
-           size_t(field_->sky_count()) * sizeof(vec3);
+           size_t(field_->sky_count()) * sizeof(vec3) + lamp_samples * sizeof(InstantLampSample);
 }
 
 }  // namespace shgi

@@ -25,8 +25,9 @@
 //     weight × E(n) / π (the clamped-cosine, i.e. Lambert, convolution of sh/sh_irradiance.h) and,
 //     per glossy lobe, its albedo × the fitted GGX ZH lobe's pre-filtered radiance
 //     (FieldLookup::glossy, sh/ggx_zh.h).
-// Only indirect light goes through the SH; direct light stays the renderer's next-event
-// estimation. The filter modes (filter_mode) Irradiance and Strict (the comparisons of §4.2,
+// By default only indirect light goes through the SH; direct light stays the renderer's
+// next-event estimation (filter_direct: the world's and the lights' direct light too, in a plane
+// of their own, written to DiffDir / GlossDir). The filter modes (filter_mode) Irradiance and Strict (the comparisons of §4.2,
 // Figs. 2 and 4) filter each pixel's irradiance E(n_s) instead; Strict also stops at
 // shading-normal changes. None keeps each pixel's own set.
 //
@@ -44,6 +45,7 @@
 
 #include "render/gi_solver.h"
 #include "render/indirect_field.h"
+#include "render/light_sampler.h"
 #include "scene/scene.h"
 #include "util/progress.h"
 
@@ -66,14 +68,21 @@ struct InstantGiSettings {
     // the surface's specular layer reflects (Principled specular 0.5: the Cornell box's DiffInd
     // came out 0.89x the path tracer's, the sun room's 0.93x).
     bool glossy_vpls = true;
-    // The world's (sky's) direct light through the SH filter, as the paper filters direct light
-    // (§3.2): every pass adds photons_per_set directional VPLs to each set (uniform directions
-    // over the sphere, each weighing the world's radiance × 4π / the set's directions), gathered
-    // with a shadow ray to infinity and filtered like the VPLs; the renderer then leaves the
-    // world out of next-event estimation (includes_world_direct) and the stage writes that
-    // light to DiffDir / GlossDir. Lamps (point, spot, area) and suns stay next-event
+    // Direct light through the SH filter, as the paper filters direct light (§3.2):
+    // - the world (sky): every pass adds photons_per_set directional VPLs to each set (uniform
+    //   directions over the sphere, each weighing the world's radiance × 4π / the set's
+    //   directions), gathered with a shadow ray to infinity;
+    // - the scene's lights (point, spot, area, sun): each set holds samples of each light (one
+    //   for a delta light — point or spot of radius 0, sun of angle 0 — made at the first pass;
+    //   photons_per_set more per pass for a light with extent), each a delta of the light's
+    //   incident radiance / pdf in its direction, divided among that light's samples in the
+    //   set, with the exact shadow ray;
+    // both filtered like the VPLs in a plane of their own that the stage writes to DiffDir /
+    // GlossDir; the renderer then leaves the world and the lights out of next-event estimation
+    // (includes_world_direct, includes_lights_direct). Emissive triangles stay next-event
     // estimation. Off by default: L2 SH blurs direct light (issue 50: a point light's L2
-    // reconstruction is off by up to +6%); a uniform sky's hemisphere is exact in L2.
+    // reconstruction is off by up to +6.25% and leaks 3/32 of its normal-incidence irradiance
+    // at the horizon); a uniform sky's hemisphere is exact in L2.
     bool filter_direct = false;
     uint64_t seed = 0;
 };
@@ -93,6 +102,12 @@ struct InstantVpl {
 bool add_vpl_sh(ShRgb& sh, const vec3& p, const vec3& ng, const InstantVpl& vpl, float scale,
                 float clamp_distance);
 
+// One sample of a scene light held by a set (filter_direct): LightSampler::sample_light's u.
+struct InstantLampSample {
+    uint32_t light = 0;  // index into Scene::lights()
+    vec2 u{0.0f};
+};
+
 // Per-frame timings of the last frame-wide stage (seconds).
 struct InstantGiFrameTimings {
     double gather = 0.0;  // VPL SH and shadow rays
@@ -104,10 +119,12 @@ struct InstantGiFrameTimings {
 class InstantGiField : public IndirectField {
   public:
     // sky_sets: per set, the directions of its directional VPLs for the world (filter_direct;
-    // empty otherwise).
+    // empty otherwise). lamp_sets: per set, its samples of the scene's lights (filter_direct;
+    // empty otherwise), every set holding as many samples of each light.
     InstantGiField(const Scene& scene, const InstantGiSettings& settings,
                    std::vector<std::vector<InstantVpl>> sets, uint64_t passes,
-                   std::vector<std::vector<vec3>> sky_sets = {});
+                   std::vector<std::vector<vec3>> sky_sets = {},
+                   std::vector<std::vector<InstantLampSample>> lamp_sets = {});
 
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
     // The sets as an interleave pattern (bakes: texel (x, y) gathers one set, a filter within
@@ -115,17 +132,22 @@ class InstantGiField : public IndirectField {
     Interleave interleave() const override;
     ShRgb set_radiance_sh(const vec3& p, const vec3& n, int set_x, int set_y) const override;
     bool is_zero() const override {
-        return passes_ == 0 || (vpl_count_ == 0 && sky_sets_.empty());
+        return passes_ == 0 || (vpl_count_ == 0 && sky_sets_.empty() && lamp_sets_.empty());
     }
     bool shades_first_surfaces() const override { return true; }
     // filter_direct: the sky's direct light is the field's (its directional VPLs).
     bool includes_world_direct() const override { return settings_.filter_direct; }
+    // filter_direct: the lights' direct light is the field's too (their samples).
+    bool includes_lights_direct() const override { return settings_.filter_direct; }
+    // filter_direct: the same sets without their sky directions and lamp samples.
+    std::shared_ptr<const IndirectField> without_direct() const override;
     void shade_first_surfaces(const GBuffer& g_buffer, const vec3& camera_position,
                               float clamp_indirect, Film& film, uint64_t first, uint64_t count,
                               Progress* progress) const override;
 
     const std::vector<std::vector<InstantVpl>>& sets() const { return sets_; }
     const std::vector<std::vector<vec3>>& sky_sets() const { return sky_sets_; }
+    const std::vector<std::vector<InstantLampSample>>& lamp_sets() const { return lamp_sets_; }
     uint64_t vpl_count() const { return vpl_count_; }
     uint64_t sky_count() const { return sky_count_; }  // directions over every sky set
     // Timings of the latest shade_first_surfaces (one frame at a time per field).
@@ -133,14 +155,22 @@ class InstantGiField : public IndirectField {
 
   private:
     // Adds set `set`'s VPLs (each scaled by vpl_scale) and, with filter_direct, its sky
-    // directions (each of radiance sky_weight) seen from p as SH, with exact shadow rays.
+    // directions (each of radiance sky_weight) and its lamp samples (each scaled by lamp_scale
+    // / that light's samples per set) seen from p as SH, with exact shadow rays.
     void gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t set, float vpl_scale,
-                    const vec3& sky_weight) const;
+                    const vec3& sky_weight, float lamp_scale) const;
+    // A lamp sample's delta seen from p (geometric normal ng): its weight (zero when the light
+    // cannot reach p or lies below the surface), direction and the shadow ray's length.
+    vec3 lamp_delta(const InstantLampSample& sample, const vec3& p, const vec3& ng,
+                    float lamp_scale, vec3* direction, float* distance) const;
 
     const Scene* scene_;
     InstantGiSettings settings_;
     std::vector<std::vector<InstantVpl>> sets_;
     std::vector<std::vector<vec3>> sky_sets_;
+    std::vector<std::vector<InstantLampSample>> lamp_sets_;
+    std::vector<float> lamp_share_;  // per scene light: 1 / its samples in a set
+    std::shared_ptr<const LightSampler> lamps_;  // with lamp_sets_: sample_light
     uint64_t passes_ = 0, vpl_count_ = 0, sky_count_ = 0;
     float set_scale_ = 0.0f;  // sets / passes
     std::shared_ptr<InstantGiFrameTimings> timings_;

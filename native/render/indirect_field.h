@@ -70,6 +70,14 @@ class IndirectField {
     // True when the field also carries the world's direct light (photons from the world stored
     // at their first hit): consumers then leave the world out of next-event estimation.
     virtual bool includes_world_direct() const { return false; }
+    // True when the field also carries the direct light of the scene's lights (point, spot, area,
+    // sun; INSTANT_GI's filter_direct): consumers then leave those lights out of next-event
+    // estimation (LightSampler's sample_lights), as includes_world_direct does for the world.
+    virtual bool includes_lights_direct() const { return false; }
+    // The same field without the direct light it carries (includes_world_direct,
+    // includes_lights_direct), for consumers that want its indirect light alone (an INDIRECT
+    // bake); nullptr when it cannot separate the two (the default).
+    virtual std::shared_ptr<const IndirectField> without_direct() const { return nullptr; }
     // True when the field holds no light anywhere (no field; a solver before its first solve):
     // consumers may then skip its lookups, whose answers would all be zero.
     virtual bool is_zero() const { return false; }

@@ -137,7 +137,7 @@ LightBounds triangle_bounds(const EmissiveTriangle& tri) {
 }  // namespace
 
 LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, bool sample_world,
-                           int light_splits)
+                           int light_splits, bool sample_lights)
     : scene_(&scene), world_sampling_(world_sampling), light_splits_(light_splits) {
     if (!scene.committed())
         throw InvalidArgument("LightSampler: the scene is not committed; call commit() first");
@@ -148,6 +148,7 @@ LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, boo
     // emitters weigh by intensity (the tree divides by distance squared), distant ones by
     // irradiance, so the two compare as irradiance estimates at the shading point.
     light_emitter_.assign(scene.lights().size(), kInvalidId);
+    light_active_.assign(scene.lights().size(), 0);
     area_emission_.resize(scene.lights().size());
     for (uint32_t i = 0; i < scene.lights().size(); ++i) {
         const Light& light = scene.lights()[i];
@@ -156,11 +157,14 @@ LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, boo
         const LightBounds bounds = sun ? LightBounds{} : light_bounds(light);
         const float weight = sun ? luminance(light.color) * light.strength : bounds.energy;
         if (!(weight > 0.0f)) continue;
-        light_emitter_[i] = uint32_t(emitters_.size());
-        if (sun)
-            add_distant(Kind::Light, i, weight);
-        else
-            add_local(Kind::Light, i, bounds);
+        light_active_[i] = 1;
+        if (sample_lights) {
+            light_emitter_[i] = uint32_t(emitters_.size());
+            if (sun)
+                add_distant(Kind::Light, i, weight);
+            else
+                add_local(Kind::Light, i, bounds);
+        }
         if (light.type != LightType::Area) continue;
         AreaEmission& emission = area_emission_[i];
         emission.normal = area_emit_normal(light);
@@ -417,8 +421,8 @@ bool LightSampler::intersect_lights(const vec3& p, const vec3& wi, float t_max, 
     float best_t = t_max;
     bool found = false;
     for (uint32_t i = 0; i < scene_->lights().size(); ++i) {
-        if (light_emitter_[i] == kInvalidId) continue;
-        const Light& light = scene_->lights()[i];  // portals have no emitter: skipped above
+        if (!light_active_[i]) continue;
+        const Light& light = scene_->lights()[i];  // portals do not emit: skipped above
         if (camera_ray && !light.visible_camera) continue;
         const bool disk = (light.type == LightType::Point || light.type == LightType::Spot) &&
                           light.radius > 0.0f;
@@ -452,7 +456,9 @@ bool LightSampler::intersect_lights(const vec3& p, const vec3& wi, float t_max, 
         best_t = t;
         found = true;
         out->radiance = radiance;
-        out->light_pdf = selection_pdf(light_emitter_[i], p) * t * t / (cos_light * area);
+        out->light_pdf = light_emitter_[i] != kInvalidId
+                             ? selection_pdf(light_emitter_[i], p) * t * t / (cos_light * area)
+                             : 0.0f;
     }
     return found;
 }

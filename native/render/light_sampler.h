@@ -92,11 +92,13 @@ struct EmissionHit {
 class LightSampler {
   public:
     // The scene must be committed. Emitters with zero power are left out; so is the world when
-    // sample_world is false (escaped rays still see it, with a light pdf of 0). light_splits:
-    // the most emitters one next-event estimate samples, in [1, kMaxLightSplits] (1: one, by
-    // sample(); more: by sample_split()).
+    // sample_world is false (escaped rays still see it, with a light pdf of 0), and so are the
+    // scene's lights (point, spot, area, sun; not emissive triangles) when sample_lights is
+    // false (rays still meet them, with a light pdf of 0: a field that carries their direct
+    // light, INSTANT_GI's filter_direct). light_splits: the most emitters one next-event
+    // estimate samples, in [1, kMaxLightSplits] (1: one, by sample(); more: by sample_split()).
     LightSampler(const Scene& scene, WorldSampling world_sampling, bool sample_world = true,
-                 int light_splits = 1);
+                 int light_splits = 1, bool sample_lights = true);
 
     bool empty() const { return emitters_.empty(); }
     // Emitters NEE can choose (selection_pdf's indices run over [0, emitter_count())).
@@ -132,6 +134,12 @@ class LightSampler {
     EmissionHit triangle_emission(const vec3& p, const Hit& hit, const vec3& wi) const;
     // The probability that sample() chooses emitter `emitter` (an index of emitters_) at p.
     float selection_pdf(uint32_t emitter, const vec3& p) const;
+    // Whether scene light `light` emits (positive power or strength, not a portal), whether or
+    // not next-event estimation samples it.
+    bool light_emits(uint32_t light) const { return light_active_[light] != 0; }
+    // One sample of scene light `light` alone (no selection: pdf is per unit solid angle, or 1
+    // for a delta light) seen from p; false when it cannot reach p. The light must emit.
+    bool sample_light(uint32_t light, const vec3& p, const vec2& u, LightSample* out) const;
     // Everything a ray from p (shading normal n) along wi meets as emission up to its scene hit
     // `hit`: a point/spot disk or area light in front of the hit; else the hit triangle's own
     // emission; else, for a miss, the world and suns (for_each_escaped). Calls
@@ -153,7 +161,6 @@ class LightSampler {
     void add_local(Kind kind, uint32_t index, const LightBounds& bounds);
     void add_distant(Kind kind, uint32_t index, float irradiance);  // W/m^2
 
-    bool sample_light(uint32_t index, const vec3& p, const vec2& u, LightSample* out) const;
     bool sample_point(const Light& light, const vec3& p, const vec2& u, LightSample* out) const;
     bool sample_area(uint32_t index, const vec3& p, const vec2& u, LightSample* out) const;
     bool sample_sun(const Light& light, const vec2& u, LightSample* out) const;
@@ -173,6 +180,7 @@ class LightSampler {
     int light_splits_ = 1;
     std::vector<Emitter> emitters_;
     std::vector<uint32_t> light_emitter_;  // scene light index -> emitter index (or kInvalidId)
+    std::vector<uint8_t> light_active_;    // scene light index -> emits (sampled or not)
     // Per scene light (used for area lights): what sample_area needs that depends on the light
     // alone, computed once instead of per sample.
     struct AreaEmission {
@@ -203,14 +211,15 @@ void LightSampler::for_each_escaped(const vec3& p, const vec3& n, const vec3& wi
                                    : 0.0f});
     for (uint32_t i = 0; i < scene_->lights().size(); ++i) {
         const Light& light = scene_->lights()[i];
-        if (light_emitter_[i] == kInvalidId || light.type != LightType::Sun || light.angle <= 0.0f)
-            continue;
+        if (!light_active_[i] || light.type != LightType::Sun || light.angle <= 0.0f) continue;
         if (camera_ray && !light.visible_camera) continue;
         const float cos_max = std::cos(0.5f * light.angle);
         if (glm::dot(wi, -light.direction()) < cos_max) continue;
         const float solid_angle = kTwoPi * (1.0f - cos_max);
         add(EmissionHit{light.color * (light.strength / solid_angle),
-                        selection_pdf(light_emitter_[i], p) / solid_angle});
+                        light_emitter_[i] != kInvalidId
+                            ? selection_pdf(light_emitter_[i], p) / solid_angle
+                            : 0.0f});
     }
 }
 

@@ -343,10 +343,15 @@ void PreviewRenderer::add_frame_stage(FrameWideStage stage) {
 }
 
 const LightSampler& PreviewRenderer::lights_for(const IndirectField& field) {
-    if (!field.includes_world_direct()) return lights_;
-    if (!lights_without_world_)
-        lights_without_world_.emplace(*scene_, settings_.world_sampling, false,
-                                      path_settings_.light_splits);
+    const bool world = field.includes_world_direct(), lamps = field.includes_lights_direct();
+    if (!world && !lamps) return lights_;
+    if (!lights_without_world_ || without_world_ != world || without_lights_ != lamps) {
+        lights_without_world_.reset();
+        lights_without_world_.emplace(*scene_, settings_.world_sampling, !world,
+                                      path_settings_.light_splits, !lamps);
+        without_world_ = world;
+        without_lights_ = lamps;
+    }
     return *lights_without_world_;
 }
 

@@ -124,7 +124,10 @@ class PreviewRenderer {
     PathTracerSettings path_settings_;
     LightSampler lights_;
     // For fields that carry the world's direct light; built by the first render with such a field.
+    // The sampler of a field that carries some direct light itself (includes_world_direct,
+    // includes_lights_direct), and which of the two it leaves out.
     std::optional<LightSampler> lights_without_world_;
+    bool without_world_ = false, without_lights_ = false;
     ProgressiveFilm film_;
     GBuffer g_buffer_;
     std::vector<FrameWideStage> frame_stages_;

@@ -102,7 +102,11 @@ def _parser() -> argparse.ArgumentParser:
                            "writes one), so a bake here matches the add-on's byte for byte")
     bake.add_argument("--passes", type=_whole(0), default=None,
                       help="refinement passes of the method (default: its final_passes)")
-    bake.add_argument("--directional", action="store_true", help="also write L1 SH layers")
+    bake.add_argument("--directional", action="store_true",
+                      help="also write SH layers of the incident radiance (SH.c0 .. SH.c3, L1)")
+    bake.add_argument("--sh-order", type=int, choices=(1, 2), default=1,
+                      help="with --directional: 1 (L1: SH.c0 .. SH.c3, the default) or 2 (L2: "
+                           "SH.c0 .. SH.c8, 9 coefficients per channel)")
     bake.add_argument("--final-gather", action="store_true",
                       help="with a --method that solves a field: each sample traces one ray "
                            "that reads the field where it lands (slower; the field's blocks and "
@@ -245,7 +249,8 @@ def _prepare(args):
     density = 0.0 if args.resolution else args.density
     jobs = _bake.jobs_for_scene(scene, uv_set, args.resolution, density, names, args.uv)
     settings = _shgi.LightmapSettings(samples=args.samples, content=args.content,
-                                      directional=args.directional, seed=args.seed,
+                                      directional=args.directional, sh_order=args.sh_order,
+                                      seed=args.seed,
                                       final_gather=args.final_gather)
     options = _bake.BakeOptions(settings=settings, uv_set=uv_set, filter=args.filter,
                                 denoise=args.denoise, padding=args.padding, lightmap_uvs=args.uv)

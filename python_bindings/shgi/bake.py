@@ -22,7 +22,10 @@ Files (rows top first, as EXR and PNG store them; in memory row 0 is v = 0):
     a confidence layer; ``Coverage.V`` (float): the fraction of each texel the UV layout covers
     (0 in the padding); with ``directional``: ``SH.c0`` .. ``SH.c3`` ``.R/G/B`` (float), the L1 SH
     of the incident radiance, coefficient index l(l+1)+m (c0 = Y00, c1 = Y1-1 (y), c2 = Y10 (z),
-    c3 = Y11 (x)), real orthonormal basis without the Condon-Shortley phase (``shgi.sh``).
+    c3 = Y11 (x)), real orthonormal basis without the Condon-Shortley phase (``shgi.sh``); with
+    ``sh_order=2`` (L2) also ``SH.c4`` .. ``SH.c8`` (c4 = Y2-2 (xy), c5 = Y2-1 (yz),
+    c6 = Y20 (3z^2 - 1), c7 = Y21 (xz), c8 = Y22 (x^2 - y^2)); c0 .. c3 are then the same
+    coefficients as an L1 bake's.
 ``<name>.png``
     an 8-bit sRGB preview of ``Lightmap`` (clamped to [0, 1]).
 
@@ -77,6 +80,8 @@ __all__ = [
 ]
 
 SH_LAYERS = ("SH.c0", "SH.c1", "SH.c2", "SH.c3")
+# The layers of an L2 directional lightmap (LightmapSettings.sh_order = 2): L1's and five more.
+SH_LAYERS_L2 = SH_LAYERS + ("SH.c4", "SH.c5", "SH.c6", "SH.c7", "SH.c8")
 # Lightmap sides chosen from a texel density are clamped to this range (texels).
 MIN_RESOLUTION, MAX_RESOLUTION = 16, 4096
 # The texel density (texels per metre of surface) lightmaps are sized by when no size is given:
@@ -114,7 +119,7 @@ _SHARD_FORMAT = 2
 # The LightmapSettings fields that decide a texel's value: every shard of a bake must agree.
 _SHARD_SETTINGS = ("content", "samples", "seed", "directional", "max_bounces", "diffuse_bounces",
                    "glossy_bounces", "transmission_bounces", "clamp_indirect", "final_gather",
-                   "tile_size")
+                   "tile_size", "sh_order")
 
 
 @dataclasses.dataclass
@@ -164,7 +169,7 @@ class Lightmap:
     variance: np.ndarray  # (H, W) float32
     coverage: np.ndarray  # (H, W) float32, 0 outside the charts
     filled: np.ndarray  # (H, W) bool: baked or dilated
-    sh: Optional[np.ndarray] = None  # (H, W, 4, 3) float32 with directional
+    sh: Optional[np.ndarray] = None  # (H, W, 4, 3) float32 with directional; (H, W, 9, 3) at L2
     # The rasterizer's report and chart count ("charts"); "uv_layout": BakeJob.uv_layout when
     # xatlas laid out the UV map (chart_count, utilization, ...).
     report: dict = dataclasses.field(default_factory=dict)
@@ -323,6 +328,9 @@ def denoise_method(options: BakeOptions) -> str:
     if method == "NONE" and options.filter:
         method = "SHGI"
     if method == "OIDN":
+        if options.settings.directional and options.settings.sh_order != 1:
+            raise ValueError("denoise 'OIDN' denoises L1 directional lightmaps only; bake "
+                             "sh_order 1, or denoise 'SHGI' (which filters L2 too), or 'NONE'")
         from .denoise import import_optional
         import_optional("pyoidn", "denoising lightmaps with OpenImageDenoise")
     return method
@@ -371,7 +379,8 @@ def write_lightmap(lightmap: Lightmap, out_dir: str, options: BakeOptions) -> li
     }
     names = {"Variance": "V", "Coverage": "V"}
     if lightmap.sh is not None:
-        for c, layer in enumerate(SH_LAYERS):
+        names_sh = SH_LAYERS_L2 if lightmap.sh.shape[2] == len(SH_LAYERS_L2) else SH_LAYERS
+        for c, layer in enumerate(names_sh):
             layers[layer] = _top_row_first(lightmap.sh[:, :, c, :]).astype(np.float32)
     paths = [stem + ".exr"]
     _shgi.write_exr(paths[0], layers, channel_names=names)
@@ -625,7 +634,9 @@ def _check_padding(options: BakeOptions) -> None:
 
 def _empty_texels(job: BakeJob, options: BakeOptions) -> _shgi.LightmapTexels:
     h, w = job.height, job.width
-    sh = np.zeros((h, w, 4, 3), np.float32) if options.settings.directional else None
+    settings = options.settings
+    coefficients = (settings.sh_order + 1) ** 2
+    sh = np.zeros((h, w, coefficients, 3), np.float32) if settings.directional else None
     return _shgi.LightmapTexels(np.zeros((h, w, 3), np.float32), np.zeros((h, w), np.float32),
                                 np.zeros((h, w), bool), sh)
 
@@ -702,7 +713,8 @@ def _check_shard_meta(path: str, meta: dict, expected: dict) -> None:
     differences = [f"{key} {meta.get(key)!r} (merge: {value!r})"
                    for key, value in expected.items()
                    if key not in ("settings", "source") and meta.get(key) != value]
-    settings = meta.get("settings") or {}
+    settings = dict(meta.get("settings") or {})
+    settings.setdefault("sh_order", 1)  # shards from before L2 lightmaps are L1
     differences += [f"{key} {settings.get(key)!r} (merge: {value!r})"
                     for key, value in sorted(expected["settings"].items())
                     if settings.get(key) != value]

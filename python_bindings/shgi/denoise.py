@@ -154,6 +154,9 @@ def denoise_lightmap(texel_map, texels, method: str = "OIDN", *, oidn_filter: st
 def _check_inputs(texel_map, texels, method: str) -> None:
     if method not in METHODS:
         raise ValueError(f"method {method!r}: use one of {', '.join(METHODS)}")
+    if method == "OIDN" and texels.directional and texels.sh_order != 1:
+        raise ValueError("method 'OIDN' denoises L1 directional lightmaps only (this one is "
+                         f"L{texels.sh_order}); use method 'SHGI', which filters L2 too")
     if (texels.width, texels.height) != (texel_map.width, texel_map.height):
         raise ValueError(f"a {texels.width} x {texels.height} lightmap does not fit its "
                          f"{texel_map.width} x {texel_map.height} texel map")

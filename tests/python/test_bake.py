@@ -135,6 +135,116 @@ def test_directional_sh_of_a_uniform_world_over_the_upper_hemisphere():
             f"+- {STANDARD_ERRORS} x {standard_error}")
 
 
+# --- L2 directional lightmaps (LightmapSettings.sh_order = 2) --------------------------------
+
+SUN_STRENGTH = 3.0
+SUN_TO = (0.3, -0.5, 0.812404)  # towards the sun, unit; 35.7 degrees from the zenith
+
+
+def sun_over_a_plane(angle=0.0):
+    """The Lambert plane under a black world and one sun of strength 3 W/m^2 and angular
+    diameter `angle` shining from SUN_TO: with angle 0 the radiance arriving at every texel is
+    a delta of weight 3 in that direction, whose SH (any order) is 3 Y_lm(SUN_TO)."""
+    sun = shgi.Light(name="sun", type=shgi.LightType.SUN, strength=SUN_STRENGTH,
+                     angle=angle)
+    to_sun = np.array(SUN_TO) / np.linalg.norm(SUN_TO)
+    # A sun's light travels along its local -Z, so its local +Z points at the sun.
+    x = np.cross((0.0, 0.0, 1.0), to_sun)
+    x /= np.linalg.norm(x)
+    y = np.cross(to_sun, x)
+    place = np.eye(4, dtype=np.float32)
+    place[:3, 0], place[:3, 1], place[:3, 2] = x, y, to_sun
+    sun.world_from_light = place
+    return plane_scene(world=((0.0, 0.0, 0.0), 0.0), lights=[sun]), to_sun
+
+
+def test_l2_bake_of_a_sun_reproduces_its_sh():
+    """A known radiance field: a sun of angle 0 (a delta, S Y_lm(w) in every band) over a plane,
+    baked DIRECT at L2 by the path tracer: every texel's 9 coefficients per channel equal
+    S Y_lm(w) within float round-off, and the L1 bake's 4 equal the L2 bake's first 4 bit for
+    bit (the order changes what is stored, not how the texel is sampled)."""
+    scene, to_sun = sun_over_a_plane()
+    expected = SUN_STRENGTH * shgi.sh.eval(to_sun[None, :], 2)[0]
+    assert abs(expected[6]) > 0.1 and abs(expected[4]) > 0.05  # band 2 is not zero here
+    _, l2 = bake.bake_object(scene, plane_job(), options(content="DIRECT", directional=True,
+                                                          sh_order=2))
+    assert l2.sh_order == 2 and l2.sh.shape == (8, 8, 9, 3)
+    sh = l2.sh.reshape(-1, 9, 3)
+    np.testing.assert_allclose(sh, np.broadcast_to(expected[None, :, None], sh.shape),
+                               rtol=1e-5, atol=1e-6)
+    _, l1 = bake.bake_object(scene, plane_job(), options(content="DIRECT", directional=True))
+    assert l1.sh_order == 1 and l1.sh.shape == (8, 8, 4, 3)
+    np.testing.assert_array_equal(l1.sh, l2.sh[:, :, :4, :])
+    np.testing.assert_array_equal(l1.color, l2.color)
+
+
+def test_l2_bake_of_a_uniform_world_has_no_band_two():
+    """Radiance L over the hemisphere z > 0 at L2: c0 = L Y00 2 pi, c2 = L Y1 pi, and every
+    other coefficient 0 — band 2 too (the integral of P2 over a hemisphere vanishes) — within
+    STANDARD_ERRORS of the texels' mean, as the L1 test above."""
+    scene = plane_scene()
+    _, texels = bake.bake_object(scene, plane_job(), options(samples=256, directional=True,
+                                                             sh_order=2))
+    sh = texels.sh.reshape(-1, 9, 3) / WORLD_RADIANCE
+    expected = [Y00 * 2 * math.pi, 0.0, Y1 * math.pi] + [0.0] * 6
+    for coefficient, truth in enumerate(expected):
+        values = sh[:, coefficient, :]
+        standard_error = values.std(axis=0) / math.sqrt(len(values))
+        error = np.abs(values.mean(axis=0) - truth)
+        assert np.all(error <= STANDARD_ERRORS * standard_error + ROUND_OFF), (
+            f"SH c{coefficient}: mean {values.mean(axis=0)}, expected {truth}")
+
+
+@pytest.mark.parametrize("method", ["PHOTON_LATTICE", "INSTANT_GI"])
+def test_l2_bakes_from_fields(method):
+    """Every bake source writes L2: a field's bake of the sun over the plane (the sun's direct
+    light by next-event estimation, the field's indirect light nil on a lone plane; INSTANT_GI
+    with filter_direct carries the sun itself, as one delta per set through its interleaved
+    sets and window) reproduces the sun's 9 coefficients."""
+    scene, to_sun = sun_over_a_plane()
+    expected = SUN_STRENGTH * shgi.sh.eval(to_sun[None, :], 2)[0]
+    if method == "INSTANT_GI":
+        solver = shgi.InstantGi(scene, shgi.InstantGiSettings(seed=1, filter_direct=True))
+    else:
+        solver = shgi.make_solver(method, scene, shgi.method(method).settings_type(seed=1))
+    solver.refine()
+    _, texels = bake.bake_object(scene, plane_job(), options(content="DIRECT_INDIRECT",
+                                                             directional=True, sh_order=2),
+                                 solver.current_field())
+    sh = texels.sh.reshape(-1, 9, 3)
+    np.testing.assert_allclose(sh, np.broadcast_to(expected[None, :, None], sh.shape),
+                               rtol=1e-4, atol=1e-5)
+
+
+def test_l2_exr_layers_and_refusals(tmp_path):
+    """An L2 bake writes SH.c0 .. SH.c8 (float), the L1 layers first; sh_order outside 1..2 is
+    refused naming the field; shards of another order do not merge; OIDN refuses L2."""
+    scene, _ = sun_over_a_plane()
+    [lightmap] = bake.bake_scene(scene, [plane_job(8)],
+                                 options(directional=True, sh_order=2), str(tmp_path))
+    info = shgi.read_exr_info(tmp_path / "plane.exr")
+    assert info["channels"][5:] == [(f"SH.c{i}.{c}", "float") for i in range(9) for c in "RGB"]
+    layers = shgi.read_exr(tmp_path / "plane.exr")
+    for i in range(9):
+        np.testing.assert_array_equal(layers[f"SH.c{i}"], lightmap.sh[::-1, :, i, :])
+    for bad in (0, 3):
+        with pytest.raises(ValueError, match="sh_order"):
+            shgi.LightmapSettings(sh_order=bad).validate()
+    l1 = shgi.bake_lightmap(scene, shgi.rasterize_texels(scene, 0, shgi.TexelRasterSettings(
+        width=8, height=8, uv_set="LightmapUV")), shgi.LightmapSettings(samples=4,
+                                                                          directional=True))
+    l2 = shgi.LightmapTexels(l1.color, l1.variance, np.zeros_like(l1.baked),
+                             np.zeros((8, 8, 9, 3), np.float32))
+    assert l2.sh_order == 2
+    with pytest.raises(ValueError, match="L2 directional"):
+        shgi.merge_lightmap(l2, l1)
+    with pytest.raises(ValueError, match="sh"):
+        shgi.LightmapTexels(l1.color, l1.variance, l1.baked, np.zeros((8, 8, 5, 3)))
+    with pytest.raises(ValueError, match="L1 directional lightmaps only"):
+        bake.denoise_method(dataclasses.replace(
+            options(directional=True, sh_order=2), denoise="OIDN"))
+
+
 # --- the file layout ------------------------------------------------------------------------------
 
 def test_exr_layers_pixel_types_row_order_and_png(tmp_path):
@@ -959,6 +1069,28 @@ def test_cli_ctrl_c_cancels_the_bake(build_python_dir, room_file, tmp_path):
     assert rest.rstrip().endswith("cancelled") and "terminate" not in rest
     assert waited < CANCEL_SECONDS
     assert not (tmp_path / "Floor.exr").exists()
+
+
+def test_cli_bakes_l2_directional_lightmaps(build_python_dir, room_file, tmp_path):
+    """`--directional --sh-order 2` writes SH.c0 .. SH.c8, whose first four are the L1 bake's
+    (`--directional` alone) bit for bit; `--help` names the flag; a third order is refused."""
+    help_text = run_cli(build_python_dir, "--help").stdout
+    assert "--sh-order" in help_text and "SH.c0 .. SH.c8" in help_text
+    outs = {}
+    for order in (1, 2):
+        outs[order] = tmp_path / f"l{order}"
+        result = run_cli(build_python_dir, room_file, "--out", outs[order], *CLI_BAKE,
+                         "--directional", "--sh-order", order)
+        assert result.returncode == 0, result.stderr
+    l1, l2 = (shgi.read_exr(outs[order] / "Floor.exr") for order in (1, 2))
+    assert sorted(name for name in l2 if name.startswith("SH.")) == [f"SH.c{i}" for i in range(9)]
+    assert sorted(name for name in l1 if name.startswith("SH.")) == [f"SH.c{i}" for i in range(4)]
+    for name in ("Lightmap", "SH.c0", "SH.c1", "SH.c2", "SH.c3"):
+        np.testing.assert_array_equal(l1[name], l2[name], err_msg=name)
+    assert np.abs(l2["SH.c6"]).max() > 0.0
+    refused = run_cli(build_python_dir, room_file, "--out", tmp_path / "l3", *CLI_BAKE,
+                      "--directional", "--sh-order", "3")
+    assert refused.returncode != 0 and "--sh-order" in refused.stderr
 
 
 def test_cli_merge_without_shards_names_the_missing_file(build_python_dir, room_file, tmp_path):

@@ -143,6 +143,12 @@ def test_bake_options_follow_the_properties():
     assert (off.filter, off.denoise) == (False, "NONE")
     with pytest.raises(ValueError, match="Bake > Farm > Tile Size = 2: use 4 .. 1024"):
         bake_settings.bake_options(bake_props(tile_size=2), scene_props(), shgi)
+    # SH Order (under Directional) is LightmapSettings.sh_order; refusals name the panel.
+    l2 = bake_settings.bake_options(bake_props(directional=True, sh_order=2), scene_props(), shgi)
+    assert (l2.settings.directional, l2.settings.sh_order) == (True, 2)
+    assert bake_settings.bake_options(bake_props(), scene_props(), shgi).settings.sh_order == 1
+    with pytest.raises(ValueError, match="Bake > SH Order = 3"):
+        bake_settings.bake_options(bake_props(sh_order=3), scene_props(), shgi)
 
 
 def test_shards_and_sizes():

@@ -12,6 +12,10 @@ import re
 import subprocess
 import sys
 
+import pytest
+
+import shgi
+
 from blender_support import REPO_ROOT
 
 sys.path.insert(0, str(REPO_ROOT / "examples"))
@@ -28,8 +32,10 @@ def test_the_job_type_scripts_parse():
         assert result.returncode == 0, result.stderr
 
 
+@pytest.mark.parametrize("sh_order", [1, 2])
 def test_a_python_runner_job_bakes_its_shards_and_merges_them_into_one_bake(build_python_dir,
-                                                                             tmp_path):
+                                                                             tmp_path, sh_order):
+    """Also at sh_order 2 (L2 directional lightmaps: the job passes --sh-order 2)."""
     scene = scenes.sun_room(0.25, lightmap=True).scene
     scene_file = scene_gltf.write_gltf(scene, tmp_path / "room.gltf")
     env = {"PYTHONPATH": str(build_python_dir), "PATH": "/usr/bin:/bin"}
@@ -37,6 +43,8 @@ def test_a_python_runner_job_bakes_its_shards_and_merges_them_into_one_bake(buil
                 "output_folder": str(tmp_path / "job"), "shard_count": 3,
                 "uv_map": "UVMap", "resolution": 16, "samples": 4,
                 "objects": "floor, back, right", "directional": True}
+    if sh_order != 1:
+        settings["sh_order"] = sh_order
     run = subprocess.run(["node", str(FLAMENCO / "preview_job.js"), json.dumps(settings),
                           "--run"], capture_output=True, text=True, env=env, timeout=300)
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
@@ -45,10 +53,12 @@ def test_a_python_runner_job_bakes_its_shards_and_merges_them_into_one_bake(buil
     one = subprocess.run([sys.executable, "-m", "shgi", "bake", str(scene_file), "--out",
                           str(tmp_path / "one"), "--samples", "4", "--uv-set", "UVMap",
                           "--resolution", "16", "--objects", "floor,back,right",
-                          "--directional", "--quiet"],
+                          "--directional", "--sh-order", str(sh_order), "--quiet"],
                          capture_output=True, text=True, env=env, timeout=300)
     assert one.returncode == 0, one.stderr
     names = sorted(p.name for p in (tmp_path / "one").iterdir() if p.is_file())
     assert names == ["back.exr", "back.png", "floor.exr", "floor.png", "right.exr", "right.png"]
     for name in names:
         assert (tmp_path / "job" / name).read_bytes() == (tmp_path / "one" / name).read_bytes()
+    layers = shgi.read_exr(tmp_path / "job" / "floor.exr")
+    assert sum(name.startswith("SH.") for name in layers) == (sh_order + 1) ** 2

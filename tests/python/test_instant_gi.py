@@ -193,16 +193,157 @@ def direct_diffuse(image):
     return float((image["DiffDir"] * image["DiffCol"])[..., :3].mean())
 
 
-def test_filter_direct_defaults_off_and_leaves_a_skyless_scene_alone():
-    """Off by default; on the Cornell box (black world, one lamp: lamps stay next-event
-    estimation) turning it on changes no pixel."""
+def test_filter_direct_defaults_off_and_moves_only_direct_light():
+    """Off by default. On the Cornell box (black world, one area light) turning it on puts the
+    lamp's direct light through the SH (DiffDir changes, within 5% of next-event estimation's
+    mean: counted twice it would read 2x, left out 0x) and leaves the indirect light, another
+    plane, bit for bit."""
     assert shgi.InstantGiSettings().filter_direct is False
     scene = small_cornell()
     off = preview(scene, solved(scene, passes=1).current_field(), samples=2)
     field = solved(scene, passes=1, filter_direct=True).current_field()
     on = preview(scene, field, samples=2)
-    for name in ("Combined", "DiffDir", "DiffInd", "GlossInd"):
+    for name in ("DiffInd", "GlossInd"):
         np.testing.assert_array_equal(on[name], off[name], err_msg=name)
+    assert not np.array_equal(on["DiffDir"], off["DiffDir"])
+    ratio = direct_diffuse(on) / direct_diffuse(off)
+    print(f"Cornell box, filter_direct: DiffDir x DiffCol {ratio:.4f} x next-event estimation's")
+    assert abs(ratio - 1.0) < 0.05, ratio
+
+
+# --- filter_direct for lamps: a point light over a Lambert floor -----------------------------
+
+LAMP_HEIGHT = 0.5
+LAMP_POWER = 100.0
+LAMBERT_ALBEDO = 0.8
+
+
+def lamp_over_a_floor(height=LAMP_HEIGHT, light=None):
+    """A 4 m Lambert floor (albedo 0.8, no specular layer) under one light (by default a point
+    light of 100 W at `height` above its centre), black world, seen from 1.5 m above at a slant:
+    its pixels see the light from overhead (mu = 1) down to near the horizon."""
+    b = scenes.SceneBuilder()
+    b.materials["lambert"] = b.scene.add_material(shgi.Material(
+        name="lambert", base_color=(LAMBERT_ALBEDO,) * 3, specular=0.0,
+        diffuse_model=shgi.DiffuseModel.LAMBERT))
+    b.part("floor", scenes.quad((-2, -2, 0), (4, 0, 0), (0, 4, 0)), "lambert",
+           (LAMBERT_ALBEDO,) * 3)
+    if light is None:
+        light = shgi.Light(name="lamp", type=shgi.LightType.POINT, power=LAMP_POWER)
+        light.world_from_light = np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, height],
+                                           [0, 0, 0, 1]], np.float32)
+    b.scene.add_light(light)
+    b.scene.set_world(shgi.World(color=(0.0, 0.0, 0.0), strength=0.0))
+    b.camera(eye=(0.0, -1.0, 1.5), target=(0.0, 0.5, 0.0), lens=24.0, width=48, height=36,
+             scale=1.0)
+    b.scene.commit()
+    return b.scene
+
+
+def test_filter_direct_point_light_follows_the_l2_law():
+    """A point light through L2 SH (the issue's figures, analytically): a delta of irradiance
+    E0 = I / d^2 from the direction at cosine mu to the normal comes back from the clamped-cosine
+    convolution as E0 (3/32 + mu/2 + 15 mu^2 / 32) instead of E0 mu: +6.25% overhead (mu = 1),
+    and 3/32 of E0 at the horizon (mu = 0), where the exact light is 0. With each pixel's own set
+    (filter NONE: every set holds the same light sample) every pixel's DiffDir x DiffCol follows
+    that law within 1e-5 of the exact next-event estimation at the same G-buffer position, whose
+    own value E0 mu^3-law (albedo / pi I mu^3 / h^2) gives mu."""
+    scene = lamp_over_a_floor(height=0.2)
+    exact = preview(scene, solved(scene, passes=1).current_field(), samples=1)
+    field = solved(scene, passes=1, filter_direct=True,
+                   filter_mode=shgi.InstantGiFilter.NONE).current_field()
+    image = preview(scene, field, samples=1)
+    ex = (exact["DiffDir"] * exact["DiffCol"])[..., 0]
+    l2 = (image["DiffDir"] * image["DiffCol"])[..., 0]
+    lit = ex > 0
+    assert lit.sum() > 1000
+    intensity = LAMP_POWER / (4 * math.pi)
+    mu = np.cbrt(ex[lit] * math.pi * 0.2 ** 2 / (LAMBERT_ALBEDO * intensity))
+    e0 = LAMBERT_ALBEDO / math.pi * intensity * (mu / 0.2) ** 2  # as pixel light, I / d^2
+    law = e0 * (3 / 32 + mu / 2 + 15 * mu ** 2 / 32)
+    np.testing.assert_allclose(l2[lit], law, rtol=1e-5)
+    # The exact light is E0 mu (the next-event estimate agrees with mu from its own law).
+    np.testing.assert_allclose(ex[lit], e0 * mu, rtol=1e-5)
+    overhead = int(np.argmax(mu))
+    low = int(np.argmin(mu))
+    peak = l2[lit][overhead] / ex[lit][overhead]
+    leak = (l2[lit][low] - ex[lit][low]) / e0[low]
+    print(f"point light through L2: mu {mu.max():.4f} reads {peak:.4f} x exact; at mu "
+          f"{mu.min():.3f} the L2 light exceeds the exact by {leak:.3f} E0 (3/32 = 0.094 at "
+          f"mu = 0)")
+    # The pixel nearest overhead (mu 0.993) reads within 0.3% of the law's +6.25% at mu = 1.
+    assert mu.max() > 0.99 and 1.059 < peak <= 1.0625 + 1e-5, peak
+    assert mu.min() < 0.1 and leak > 0.05, leak
+
+
+@pytest.mark.parametrize("height", [
+    1.0, pytest.param(0.5, marks=missed("DiffDir x DiffCol 0.978 x, Combined 0.978 x"))])
+def test_filter_direct_lamp_frame_agrees_with_path_tracer(height):
+    """The point light over the floor with filter_direct and the paper's SH filter: the frame's
+    DiffDir x DiffCol and Combined means within 2% of the path tracer's (1024 spp; the tolerance
+    of the sky test above), the lamp counted once (twice would read 2x). Whether the L2 law's
+    +6% overhead and its deficit at mid angles (down to 0.92 x at mu 0.45) average out depends
+    on what the frame sees: with the lamp 1 m up they do (1.003 x); 0.5 m up, the mid angles
+    fill more of the frame and it reads 0.978 x, past the 2% (a strict xfail)."""
+    scene = lamp_over_a_floor(height=height)
+    reference = shgi.render_path_traced(scene, shgi.PathTracerSettings(samples=1024, seed=11))
+    field = solved(scene, passes=1, filter_direct=True).current_field()
+    image = preview(scene, field, samples=1)
+    direct = direct_diffuse(image) / direct_diffuse(reference)
+    combined = float(image["Combined"][..., :3].mean()) / float(
+        reference["Combined"][..., :3].mean())
+    overhead = (image["DiffDir"] / np.maximum(reference["DiffDir"], 1e-9))[..., 0].max()
+    print(f"point light {height} m over a floor, filter_direct: DiffDir x DiffCol {direct:.4f} x, "
+          f"Combined {combined:.4f} x the path tracer's; largest pixel ratio {overhead:.3f}")
+    assert abs(direct - 1.0) < 0.02, direct
+    assert abs(combined - 1.0) < 0.02, combined
+
+
+@pytest.mark.parametrize("kind", ["spot", "area", "sun", "sphere"])
+def test_filter_direct_lights_with_extent_and_suns(kind):
+    """Every light type goes through the SH with filter_direct (a spot, a 0.5 m area light, a
+    sun of 5 degrees at 30 degrees from the zenith, a point light of radius 0.1 m): the frame's
+    DiffDir x DiffCol mean within 7% of the path tracer's (1024 spp) — the L2 law's bias for a
+    light of one direction is up to +6.25% (a sun overhead) — and not the 2x of a light counted
+    twice; lights with extent are sampled per set (photons_per_set per pass)."""
+    light = shgi.Light(name=kind, type=getattr(shgi.LightType, "POINT" if kind == "sphere"
+                                               else kind.upper()))
+    place = np.eye(4, dtype=np.float32)
+    place[2, 3] = 0.8
+    if kind == "spot":
+        light.power, light.spot_size = 100.0, math.radians(100.0)
+    elif kind == "area":
+        light.power, light.size_x, light.size_y = 100.0, 0.5, 0.5
+    elif kind == "sphere":
+        light.power, light.radius = 100.0, 0.1
+    else:
+        light.strength, light.angle = 3.0, math.radians(5.0)
+        c, s = math.cos(math.radians(30.0)), math.sin(math.radians(30.0))
+        place[:3, :3] = np.array([[1, 0, 0], [0, c, -s], [0, s, c]], np.float32)
+    light.world_from_light = place
+    scene = lamp_over_a_floor(light=light)
+    reference = shgi.render_path_traced(scene, shgi.PathTracerSettings(samples=1024, seed=11))
+    field = solved(scene, passes=2, filter_direct=True).current_field()
+    image = preview(scene, field, samples=1)
+    direct = direct_diffuse(image) / direct_diffuse(reference)
+    print(f"{kind} over a floor, filter_direct: DiffDir x DiffCol {direct:.4f} x the path "
+          f"tracer's")
+    assert abs(direct - 1.0) < 0.07, direct
+
+
+def test_filter_direct_lamp_frames_do_not_depend_on_threads_or_tiles():
+    scene = lamp_over_a_floor()
+    field = solved(scene, passes=1, filter_direct=True).current_field()
+    images = []
+    try:
+        for threads, tile in ((1, 16), (2, 4)):
+            shgi.set_max_threads(threads)
+            images.append(preview(scene, field, samples=1, tile_size=tile))
+    finally:
+        shgi.set_max_threads(0)
+    assert images[0]["DiffDir"].max() > 0.0
+    for name in ("Combined", "DiffDir", "GlossDir"):
+        np.testing.assert_array_equal(images[0][name], images[1][name], err_msg=name)
 
 
 def test_filter_direct_carries_the_skys_direct_light():
@@ -257,6 +398,51 @@ def test_a_bake_with_filter_direct_counts_the_sky_once():
     np.testing.assert_allclose(mean / WORLD_RADIANCE, 1.0, atol=0.02)
 
 
+def test_a_bake_with_filter_direct_counts_a_lamp_once():
+    """A bake over a filter_direct field with a point light 1 m over a 2 m Lambert plane: the
+    baker leaves the lamp out of next-event estimation (includes_lights_direct), so the 32 x 32
+    lightmap's mean is within 2% of the bake without a field (counted twice: 2x). With each
+    texel's own set (filter NONE) the mean is the L2 law's over the plane (1.004 x); the filter
+    within the chart adds its blur (at 8 x 8 texels, a window of 1.25 m: 1.17 x)."""
+    from test_bake import options, plane_job, plane_scene
+    from shgi import bake
+    light = shgi.Light(name="lamp", type=shgi.LightType.POINT, power=100.0)
+    light.world_from_light = np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1.0],
+                                       [0, 0, 0, 1]], np.float32)
+    scene = plane_scene(world=((0.0, 0.0, 0.0), 0.0), lights=[light])
+    job, content = plane_job(32), options(content="DIRECT_INDIRECT")
+    exact = bake.bake_object(scene, job, content, None)[1].color.reshape(-1, 3).mean(axis=0)
+    for mode, tolerance in ((shgi.InstantGiFilter.SH, 0.02), (shgi.InstantGiFilter.NONE, 0.01)):
+        field = solved(scene, passes=1, filter_direct=True, filter_mode=mode).current_field()
+        mean = bake.bake_object(scene, job, content, field)[1].color.reshape(-1, 3).mean(axis=0)
+        print(f"point light over a plane, filter_direct bake ({mode.name}): {mean / exact} x")
+        np.testing.assert_allclose(mean / exact, 1.0, atol=tolerance)
+
+
+
+def test_filter_direct_bakes_of_direct_or_indirect_light_alone():
+    """Content DIRECT over a filter_direct field samples every emitter (the field, which is not
+    read, does not stand in for them): the lamp and the sky within 2% of the bake without a
+    field. Content INDIRECT reads the field without its direct light (without_direct): a lone
+    plane has no indirect light, exactly 0 (before, the field's lamp and sky showed up there and
+    a DIRECT bake came out black)."""
+    from test_bake import options, plane_job, plane_scene
+    from shgi import bake
+    light = shgi.Light(name="lamp", type=shgi.LightType.POINT, power=100.0)
+    light.world_from_light = np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1.0],
+                                       [0, 0, 0, 1]], np.float32)
+    scene = plane_scene(lights=[light])  # and the uniform world of test_bake
+    field = solved(scene, passes=1, filter_direct=True).current_field()
+    job = plane_job(16)
+    exact = bake.bake_object(scene, job, options(content="DIRECT", samples=64), None)[1]
+    direct = bake.bake_object(scene, job, options(content="DIRECT", samples=64), field)[1]
+    ratio = direct.color.reshape(-1, 3).mean(axis=0) / exact.color.reshape(-1, 3).mean(axis=0)
+    print(f"filter_direct field, DIRECT bake: {ratio} x the bake without a field")
+    np.testing.assert_allclose(ratio, 1.0, atol=0.02)
+    indirect = bake.bake_object(scene, job, options(content="INDIRECT"), field)[1]
+    assert indirect.color.max() == 0.0
+
+
 # --- the Show list: agreement with the path tracer -------------------------------------------
 
 _RENDERS = {}
@@ -287,9 +473,8 @@ def test_indirect_diffuse_agrees_with_path_tracer(name):
 
 @pytest.mark.reference
 def test_sun_room_with_filter_direct_agrees_with_path_tracer():
-    """filter_direct on the sun room (its sky enters through the window as directional VPLs;
-    the sun stays next-event estimation): Combined and DiffDir x DiffCol means within 5% of the
-    path tracer's."""
+    """filter_direct on the sun room (its sky enters through the window as directional VPLs,
+    its sun as one delta per set): the Combined mean within 5% of the path tracer's."""
     ref, image, field = rendered("sun_room", filter_direct=True)
     combined = float(image["Combined"][..., :3].mean()) / float(ref["Combined"][..., :3].mean())
     direct = direct_diffuse(image) / direct_diffuse(ref)
@@ -298,6 +483,17 @@ def test_sun_room_with_filter_direct_agrees_with_path_tracer():
           f"the path tracer's, DiffInd x DiffCol "
           f"{indirect_diffuse(image) / indirect_diffuse(ref):.3f} x, PSNR {quality:.2f} dB")
     assert abs(combined - 1.0) < 0.05, combined
+
+
+@pytest.mark.reference
+@missed("DiffDir x DiffCol 0.927 x: the sun at mu 0.51 on the floor through L2 reads "
+        "(3/32 + mu/2 + 15 mu^2/32) / mu = 0.923 x")
+def test_sun_room_with_filter_direct_direct_light_within_five_percent():
+    """The sun room's DiffDir x DiffCol mean within 5% of the path tracer's with filter_direct.
+    It held (0.994 x) while only the sky went through the SH; with the sun too, the floor's
+    sunlit patch follows the L2 law for a delta at mu = 0.51 (0.923 x)."""
+    ref, image, _ = rendered("sun_room", filter_direct=True)
+    direct = direct_diffuse(image) / direct_diffuse(ref)
     assert abs(direct - 1.0) < 0.05, direct
 
 

@@ -383,8 +383,11 @@ class SHGI_RENDER_PT_bake(ShgiPanel, bpy.types.Panel):
         sub.prop(bake, "texel_density", text="Texels per m")
         column.prop(bake, "padding")
         column = layout.column(align=True)
-        for name in ("directional", "filter"):
-            column.prop(bake, name)
+        column.prop(bake, "directional")
+        sub = column.column(align=True)
+        sub.active = bake.directional
+        sub.prop(bake, "sh_order")
+        column.prop(bake, "filter")
         sub = column.column(align=True)
         sub.active = bake.filter
         sub.prop(bake, "denoiser")

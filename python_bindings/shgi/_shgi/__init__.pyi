@@ -615,7 +615,7 @@ class InstantGiSettings:
     @property
     def filter_direct(self) -> bool:
         """
-        The world's (sky's) direct light through the SH filter as directional VPLs (photons_per_set per set and pass), as the paper filters direct light; lamps and suns stay next-event estimation (False).
+        Direct light through the SH filter, as the paper filters it: the world's as directional VPLs (photons_per_set per set and pass), the point, spot, area and sun lights' as samples per set (one for a delta light, photons_per_set per pass for one with extent), each with its exact shadow ray; next-event estimation then leaves them out. Emissive triangles stay next-event estimation (False).
         """
     @filter_direct.setter
     def filter_direct(self, arg0: bool) -> None:
@@ -1016,7 +1016,7 @@ class LightmapSettings:
     @property
     def directional(self) -> bool:
         """
-        Also bake the L1 SH of the incident radiance (False).
+        Also bake the SH of the incident radiance, of order sh_order (False).
         """
     @directional.setter
     def directional(self, arg0: bool) -> None:
@@ -1070,6 +1070,14 @@ class LightmapSettings:
     def seed(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
+    def sh_order(self) -> int:
+        """
+        SH order of the directional data: 1 (L1, 4 coefficients per channel) or 2 (L2, 9) (1).
+        """
+    @sh_order.setter
+    def sh_order(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
     def tile_size(self) -> int:
         """
         Texels per tile side: the unit of work and of shards (16).
@@ -1089,7 +1097,8 @@ class LightmapTexels:
     """
     
     A baked lightmap: arrays (height, width, ...) with row 0 at v = 0 (Blender's Image.pixels order).
-    LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a shard file).
+    LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a shard file); sh
+    (height, width, 4, 3) is L1, (height, width, 9, 3) L2.
     """
     @staticmethod
     def _pybind11_conduit_v1_(*args, **kwargs):
@@ -1115,7 +1124,12 @@ class LightmapTexels:
     @property
     def sh(self) -> typing.Any:
         """
-        (H, W, 4, 3) float32 L1 SH of incident radiance (index l(l+1)+m), or None.
+        (H, W, 4, 3) float32 L1 SH of incident radiance (index l(l+1)+m) — (H, W, 9, 3) at L2 — or None.
+        """
+    @property
+    def sh_order(self) -> typing.Any:
+        """
+        SH order of the directional data (1: L1, 2: L2), or None without it.
         """
     @property
     def variance(self) -> numpy.typing.NDArray[numpy.float32]:

@@ -266,6 +266,45 @@ TEST(LightSampler, SelectionPdfsOfLocalAndDistantEmittersSumToOne) {
     }
 }
 
+// sample_lights = false (a field carrying the lights' direct light, INSTANT_GI's filter_direct):
+// next-event estimation chooses among the emissive triangles and the world alone, while rays
+// still meet the area light and the sun's cone, with their radiance and a light pdf of 0 (so a
+// BSDF-sampled ray counts them whole); sample_light still samples any light by itself.
+TEST(LightSampler, WithoutLightsSamplesOnlyTrianglesAndWorldButRaysStillSeeLights) {
+    const Scene scene = many_light_scene();
+    const LightSampler all(scene, WorldSampling::Cosine);
+    const LightSampler without(scene, WorldSampling::Cosine, true, 1, false);
+    ASSERT_EQ(without.emitter_count(), 2u + 1u);  // the quad's two triangles, the world
+    const vec3 p(0.0f, -4.0f, 0.01f), n(0.0f, 0.0f, 1.0f);
+    double sum = 0.0;
+    for (uint32_t e = 0; e < without.emitter_count(); ++e) sum += without.selection_pdf(e, p);
+    EXPECT_NEAR(sum, 1.0, kPmfSumTolerance);
+    for (uint32_t i = 0; i < scene.lights().size(); ++i) EXPECT_TRUE(without.light_emits(i));
+    // Straight up into the area light 4 m above.
+    EmissionHit seen_all, seen_without;
+    ASSERT_TRUE(all.intersect_lights(p, n, kInfinity, false, &seen_all));
+    ASSERT_TRUE(without.intersect_lights(p, n, kInfinity, false, &seen_without));
+    EXPECT_EQ(seen_without.radiance, seen_all.radiance);
+    EXPECT_GT(seen_all.light_pdf, 0.0f);
+    EXPECT_EQ(seen_without.light_pdf, 0.0f);
+    // Escaping straight up from elsewhere: the world and the sun's cone, the sun at pdf 0.
+    const vec3 q(9.0f, 9.0f, 0.01f);
+    const std::vector<EmissionHit> escaped_all = all.escaped(q, n, n, false);
+    const std::vector<EmissionHit> escaped_without = without.escaped(q, n, n, false);
+    ASSERT_EQ(escaped_all.size(), 2u);
+    ASSERT_EQ(escaped_without.size(), 2u);
+    EXPECT_EQ(escaped_without[1].radiance, escaped_all[1].radiance);
+    EXPECT_GT(escaped_all[1].light_pdf, 0.0f);
+    EXPECT_EQ(escaped_without[1].light_pdf, 0.0f);
+    EXPECT_GT(escaped_without[0].light_pdf, 0.0f);  // the world is still sampled
+    // A light sampled by itself: the area light seen from p, with its solid-angle pdf.
+    LightSample sample;
+    ASSERT_TRUE(without.sample_light(6, p, vec2(0.5f), &sample));
+    EXPECT_NEAR(sample.wi.z, 1.0f, 1e-4f);
+    EXPECT_GT(sample.pdf, 0.0f);
+    EXPECT_FALSE(sample.delta);
+}
+
 // Twelve point lights of four powers above a small plane 5 m below, the world dark, committed;
 // *irradiance: the analytic irradiance sum I cos / d^2 they give at p on unit normal n.
 Scene twelve_point_lights(const vec3& p, const vec3& n, double* irradiance) {
