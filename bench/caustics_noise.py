@@ -8,6 +8,7 @@ and resolution).
 
     PYTHONPATH=build/python /opt/shgi/bpy-5.0.1/bin/python bench/caustics_noise.py
         [--scene caustics] [--samples 4,16,64] [--shgi-clamp-indirect 10]
+        [--cycles-clamp-indirect 0] [--cycles-filter-glossy 0]
         [--cache build/equal_time_cache]
 
 A benchmark, not a test: nothing is asserted. References are never rendered here (--cache must
@@ -45,6 +46,12 @@ def parse_args():
                         help="SHGI's Clamp Indirect for its renders (default: the add-on's, 0 = "
                              "off; Cycles' default is 10). Its reference stays unclamped: see "
                              "the seed-pair column")
+    parser.add_argument("--cycles-clamp-indirect", type=float, default=None,
+                        help="Cycles' Clamping > Indirect Light for its renders (default: its "
+                             "own, 10); its reference stays as cached: see the seed-pair column")
+    parser.add_argument("--cycles-filter-glossy", type=float, default=None,
+                        help="Cycles' Light Paths > Caustics > Filter Glossy for its renders "
+                             "(default: its own, 1.0)")
     args = parser.parse_args(argv)
     args.samples = [int(n) for n in args.samples.split(",")]
     args.width, args.height = (int(x) for x in args.resolution.lower().split("x"))
@@ -97,8 +104,11 @@ def main():
     from shgi_blender import settings
     from shgi_blender.export.scene_export import export_scene
 
-    scene = equal_time.build_scene(args.scene, args.width, args.height)
+    scene = equal_time.build_scene(args.scene, args.width, args.height,
+                                   args.cycles_filter_glossy)
     references = {name: load_reference(args, name) for name in ("shgi", "cycles")}
+    if args.cycles_clamp_indirect is not None:
+        scene.cycles.sample_clamp_indirect = args.cycles_clamp_indirect
     native = export_scene(bpy.context.evaluated_depsgraph_get(), scene).scene
     native.commit()
     exr = os.path.join(args.cache, "noise_render.exr")
