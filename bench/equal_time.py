@@ -3,7 +3,7 @@ Prints one table per scene. A benchmark, not a test: nothing is asserted.
 
     /opt/shgi/bpy-5.0.1/bin/python bench/equal_time.py [--scenes cornell_box,...]
         [--methods PATH_TRACE,...] [--limits 0.25,0.5,...] [--resolution 200x150]
-        [--cache build/equal_time_cache] [--quick]
+        [--cache build/equal_time_cache] [--first-hit-guides] [--quick]
 
 (the `bpy` venv: Blender 5.0.1 as a Python module; ``blender -b --python bench/equal_time.py --
 <options>`` runs it too.)
@@ -100,6 +100,12 @@ def parse_args():
                         help="Light Paths > Clamp Indirect for both renderers, renders and "
                              "references (default: each one's own: Cycles 10, SHGI 0). Use "
                              "another --cache: references are keyed without it")
+    parser.add_argument("--first-hit-guides", action="store_true",
+                        help="A/B of the denoiser's guides: each time-limited SHGI render is "
+                             "made twice, alternating which goes first, with the renderers' "
+                             "Denoising Albedo / Normal (which follow specular bounces, as "
+                             "Cycles') and with the first hit's (DiffCol + GlossCol + TransCol, "
+                             "Normal: SHGI's guides before them); the second gets its own column")
     parser.add_argument("--quick", action="store_true",
                         help=f"smoke run: limits {QUICK_LIMITS}, samples {QUICK_SAMPLES}, "
                              f"{QUICK_REFERENCE_SAMPLES}-spp references")
@@ -247,28 +253,69 @@ def cycles_runs(scene, ref, args, exr):
     return runs
 
 
+class FirstHitGuides:
+    """While active, shgi.frame_denoise builds its guides from the first hit's passes
+    (DiffCol + GlossCol + TransCol, Normal) instead of the renderers' Denoising Albedo /
+    Normal: the guides SHGI denoised with before the renderers wrote those (--first-hit-guides)."""
+
+    def __init__(self):
+        from shgi import frame_denoise
+
+        self.module = frame_denoise
+        self.renderer_guides = frame_denoise.guide_images
+        dropped = (frame_denoise.ALBEDO_PASS, frame_denoise.NORMAL_PASS)
+
+        def first_hit_guides(passes, guides="ALBEDO_NORMAL"):
+            return self.renderer_guides(
+                {name: value for name, value in passes.items() if name not in dropped}, guides)
+
+        self.first_hit_guides = first_hit_guides
+
+    def use(self, active):
+        self.module.guide_images = self.first_hit_guides if active else self.renderer_guides
+
+
+FIRST_HIT = " first-hit guides"
+
+
 def shgi_runs(scene, method, ref, args, exr):
+    """{column label: runs}: `method`, and with --first-hit-guides `method` + FIRST_HIT."""
     from shgi import metrics
     from shgi_blender.engine import final_render
 
     use_shgi(scene, method, 1)
     render_f12(scene, "SHGI", exr)  # untimed: first-render costs
     runs = []
+    columns = {method: runs}
     if supports_limit(scene):
         settings = [(TIME_LIMITED_SAMPLES, limit) for limit in args.limits]
     else:
         settings = ((samples, None) for samples in stepped_samples(args, runs))
-    for samples, limit in settings:
-        use_shgi(scene, method, samples, time_limit=limit, denoise=limit is not None)
-        seconds, image = render_f12(scene, "SHGI", exr)
-        record = final_render.last_render()
-        if record.get("errors"):
-            raise RuntimeError(f"SHGI {method} on {scene.name}: {record['errors']}")
-        rendered = record.get("samples") or samples
-        runs.append(Run(seconds, rendered, metrics.psnr(ref, image), limit))
-        print(f"  SHGI {method:14s} {rendered:4d} spp: {seconds:6.2f} s "
-              f"{runs[-1].psnr:6.2f} dB", flush=True)
-    return runs
+    switch = FirstHitGuides() if args.first_hit_guides and supports_limit(scene) else None
+    if switch is not None:
+        columns[method + FIRST_HIT] = []
+    for index, (samples, limit) in enumerate(settings):
+        # A/B: the two variants alternate which renders first, budget by budget.
+        variants = [False] if switch is None else [False, True][::1 if index % 2 == 0 else -1]
+        for first_hit in variants:
+            if switch is not None:
+                switch.use(first_hit)
+            use_shgi(scene, method, samples, time_limit=limit, denoise=limit is not None)
+            try:
+                seconds, image = render_f12(scene, "SHGI", exr)
+            finally:
+                if switch is not None:
+                    switch.use(False)
+            record = final_render.last_render()
+            if record.get("errors"):
+                raise RuntimeError(f"SHGI {method} on {scene.name}: {record['errors']}")
+            rendered = record.get("samples") or samples
+            label = method + (FIRST_HIT if first_hit else "")
+            column = columns[label]
+            column.append(Run(seconds, rendered, metrics.psnr(ref, image), limit))
+            print(f"  SHGI {label:14s} {rendered:4d} spp: {seconds:6.2f} s "
+                  f"{column[-1].psnr:6.2f} dB", flush=True)
+    return columns
 
 
 # --- the table --------------------------------------------------------------------------------
@@ -291,7 +338,7 @@ def cell(run):
 
 def print_table(name, args, cycles, methods, default_method, limited, reference_spp):
     columns = ["Cycles+OIDN"] + [f"SHGI {method}" for method in methods]
-    width = 26
+    width = max([26] + [len(c) for c in columns])
     print(f"\n{name} ({args.width}x{args.height}, references {reference_spp[0]} spp (Cycles) and "
           f"{reference_spp[1]} spp (SHGI); "
           f"PSNR dB, samples and F12 seconds of the render within the budget; SHGI "
@@ -353,7 +400,9 @@ def main():
         shgi_ref, shgi_spp = reference(scene, key.format("shgi"), "SHGI",
                              lambda s: use_shgi(s, "PATH_TRACE", args.reference_samples), args)
         cycles = cycles_runs(scene, cycles_ref, args, exr)
-        results = {method: shgi_runs(scene, method, shgi_ref, args, exr) for method in methods}
+        results = {}
+        for method in methods:
+            results.update(shgi_runs(scene, method, shgi_ref, args, exr))
         print_table(name, args, cycles, results, default_method, limited,
                     (cycles_spp, shgi_spp))
 

@@ -165,8 +165,9 @@ were split between render() calls.)doc")
             passes_method<PathTracer>("PathTracer"),
             py::arg("names") = py::none(),
             "{pass name: float32 array (H, W, C)}: Combined (RGBA), DiffDir, ..., Normal (XYZ), "
-            "Depth (1 channel), with Cycles' meaning; names, e.g. ['Combined'], converts only "
-            "those (a viewport needs Combined alone).")
+            "Depth (1 channel), Denoising Albedo, Denoising Normal (the denoiser's guides, "
+            "through specular surfaces as Cycles'), with Cycles' meaning; names, e.g. "
+            "['Combined'], converts only those (a viewport needs Combined alone).")
         .def_property_readonly(
             "samples_done",
             [](const PathTracer& tracer) {

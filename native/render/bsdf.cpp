@@ -668,6 +668,25 @@ vec3 PrincipledBsdf::class_color(LobeClass lobe_class) const {
     return color;
 }
 
+DenoisingFeature PrincipledBsdf::denoising_feature(float cos_nv) const {
+    DenoisingFeature feature;
+    for (int i = 0; i < lobe_count_; ++i) {
+        const Lobe& lobe = lobes_[i];
+        feature.weight += lobe.select_prob;
+        const bool specular_lobe = lobe.kind == LobeKind::Specular;
+        if (lobe.kind == LobeKind::Diffuse || lobe.alpha > kDenoisingSpecularAlpha) {
+            feature.nonspecular_weight += lobe.select_prob;
+            feature.albedo += specular_lobe && v2_.active ? glossy_albedo_ : lobe.weight;
+        } else if (specular_lobe) {
+            feature.specular_albedo +=
+                v2_.active ? glossy_albedo_ : lobe.weight * specular_color(cos_nv);
+        } else {
+            feature.specular_albedo += lobe.weight;
+        }
+    }
+    return feature;
+}
+
 bool PrincipledBsdf::has_smooth_lobes() const {
     for (int i = 0; i < lobe_count_; ++i)
         if (!lobes_[i].delta()) return true;

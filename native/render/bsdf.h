@@ -57,6 +57,23 @@ inline constexpr int kLobeClassCount = 3;
 // Alpha below which GGX becomes a perfect mirror / smooth refraction (Cycles: 1e-4).
 inline constexpr float kDeltaAlpha = 1e-4f;
 
+// GGX alpha at or below which a lobe counts as specular for the denoiser's guides: Cycles'
+// film_write_denoising_features_surface compares the closure's alpha_x alpha_y with 0.075^2.
+inline constexpr float kDenoisingSpecularAlpha = 0.075f;
+
+// What a surface gives the denoiser's guides (Cycles' film_write_denoising_features_surface):
+// the albedo of its non-specular lobes, that of its specular lobes (alpha <=
+// kDenoisingSpecularAlpha, the tint a path through them carries on to the next surface), and
+// the lobes' sampling weights, all and non-specular. The surface writes the guides when its
+// non-specular lobes hold more than a quarter of the weight, or it has no lobes.
+struct DenoisingFeature {
+    vec3 albedo{0.0f};
+    vec3 specular_albedo{0.0f};
+    float weight = 0.0f;
+    float nonspecular_weight = 0.0f;
+    bool writes_guides() const { return weight == 0.0f || nonspecular_weight * 4.0f > weight; }
+};
+
 // f * |cos(wi)| per lobe class, RGB.
 struct BsdfEval {
     std::array<vec3, kLobeClassCount> by_class{vec3(0.0f), vec3(0.0f), vec3(0.0f)};
@@ -124,6 +141,12 @@ class PrincipledBsdf {
     // (PrincipledModel::V2: GlossCol is the specular lobes' estimated albedo toward wo, as
     // Cycles 4 writes it).
     vec3 class_color(LobeClass lobe_class) const;
+    // The surface's share in the denoiser's guides (DenoisingFeature) seen from wo (wo.z =
+    // cos_nv): non-specular lobes' albedo as class_color gives it (their sum equals DiffCol +
+    // GlossCol + TransCol when no lobe is specular); a specular lobe's albedo is its closure
+    // weight, the specular lobe's times its Fresnel colour toward wo (PrincipledModel::V2: its
+    // estimated albedo, GlossCol); weights are the lobes' selection probabilities.
+    DenoisingFeature denoising_feature(float cos_nv) const;
     // True when at least one lobe is not a Dirac lobe (light sampling can help).
     bool has_smooth_lobes() const;
     // The sum of the lobes' closure weights, the specular lobe's times its colour toward wo: how

@@ -20,6 +20,7 @@ constexpr float kMissDepth = 1e10f;
 constexpr const char* kPassNames[kPassCount] = {
     "Combined", "DiffDir", "DiffInd", "DiffCol", "GlossDir", "GlossInd", "GlossCol",
     "TransDir", "TransInd", "TransCol", "Emit",    "Env",     "Normal",   "Depth",
+    "Denoising Albedo", "Denoising Normal",
 };
 
 // The colour pass a light pass is divided by, or the pass itself when it is not divided.
@@ -44,7 +45,8 @@ const char* pass_name(Pass pass) { return kPassNames[size_t(pass)]; }
 std::vector<std::string> pass_suffixes(Pass pass) {
     switch (pass) {
         case Pass::Combined: return {"R", "G", "B", "A"};
-        case Pass::Normal: return {"X", "Y", "Z"};
+        case Pass::Normal:
+        case Pass::DenoisingNormal: return {"X", "Y", "Z"};
         case Pass::Depth: return {"Z"};
         default: return {"R", "G", "B"};
     }

@@ -13,13 +13,23 @@
 // - Normal: first hit's shading normal, world space, facing the camera (sample mean, 0 on miss).
 // - Depth: distance of the first hit along the camera's view axis (Cycles' z-depth), averaged
 //   over samples with misses counting 0, and 1e10 where nothing was hit, as Cycles writes it.
-// Channel names: "Combined.R/G/B/A", "DiffDir.R/G/B", ..., "Normal.X/Y/Z", "Depth.Z".
+// - Denoising Albedo / Denoising Normal: the denoiser's guides as Cycles writes them
+//   (kernel/film/denoising_passes.h): at the first surface that is not (nearly) perfectly
+//   specular, i.e. whose non-specular lobes hold more than a quarter of its lobes' sampling
+//   weight, a lobe being specular when its GGX alpha is at most kDenoisingSpecularAlpha
+//   (render/bsdf.h). Through specular surfaces (clear glass, mirrors, polished metal) the path's
+//   own bounce is followed and the albedo is multiplied by their albedo (their tint), so the
+//   guides show what is seen through or in them. Albedo: that surface's non-specular closure
+//   weights (as DiffCol + GlossCol + TransCol); normal: its shading normal, world space, facing
+//   the ray (sample means; 0 where a path left before reaching such a surface).
+// Channel names: "Combined.R/G/B/A", "DiffDir.R/G/B", ..., "Normal.X/Y/Z", "Depth.Z",
+// "Denoising Albedo.R/G/B", "Denoising Normal.X/Y/Z".
 //
 // A film sums every pass (F12, render_preview) or only Combined (FilmPasses::CombinedOnly: what
-// the viewport shows; the sums of 14 passes are 168 bytes a pixel, ~39 MB read and written per
+// the viewport shows; the sums of 16 passes are 192 bytes a pixel, ~44 MB read and written per
 // 640 x 360 frame, where Combined alone is 12 bytes). Sums are stored pixel by pixel, each
-// pixel's passes together: a sample's 14 sums then go to three adjacent cache lines instead of
-// 14 lines in 14 planes.
+// pixel's passes together: a sample's 16 sums then go to three adjacent cache lines instead of
+// 16 lines in 16 planes.
 #pragma once
 
 #include <array>
@@ -34,9 +44,9 @@ namespace shgi {
 
 enum class Pass : uint8_t {
     Combined, DiffDir, DiffInd, DiffCol, GlossDir, GlossInd, GlossCol,
-    TransDir, TransInd, TransCol, Emit, Env, Normal, Depth,
+    TransDir, TransInd, TransCol, Emit, Env, Normal, Depth, DenoisingAlbedo, DenoisingNormal,
 };
-inline constexpr int kPassCount = 14;
+inline constexpr int kPassCount = 16;
 
 // The passes a film sums.
 enum class FilmPasses : uint8_t { All, CombinedOnly };

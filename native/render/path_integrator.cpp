@@ -55,6 +55,7 @@ bool PathIntegrator::enter_surface(const Hit& hit) {
     if (!hit.valid() || terminate_on_next_surface_) return false;
     make_shading_in(&shading_.value, scene_, scene_.surface_point(ray_, hit), ray_.direction);
     if (vertex_ == 0) record_first_hit(shading_.value, ray_, hit);
+    if (write_denoising_features_) record_denoising_features(shading_.value);
     return true;
 }
 
@@ -129,6 +130,22 @@ void PathIntegrator::record_first_hit(const Shading& shading, const Ray& ray, co
     const vec3 forward = glm::normalize(-vec3(camera_.world_from_camera[2]));
     const vec3 position = ray.origin + hit.t * ray.direction;
     out_[Pass::Depth].x += glm::dot(position - vec3(camera_.world_from_camera[3]), forward);
+}
+
+// Cycles' film_write_denoising_features_surface: a surface whose lobes are mostly specular
+// passes its tint on to the next surface the path meets (along the path's own bounce, which
+// scatter() samples as before: no random number is drawn here), the first other one writes the
+// guides.
+void PathIntegrator::record_denoising_features(const Shading& shading) {
+    const DenoisingFeature feature = shading.bsdf.denoising_feature(shading.wo.z);
+    if (!feature.writes_guides()) {
+        denoising_throughput_ *= feature.specular_albedo;
+        return;
+    }
+    const vec3 albedo = denoising_throughput_ * feature.albedo;
+    if (is_finite(albedo)) out_[Pass::DenoisingAlbedo] += albedo;
+    if (feature.weight > 0.0f) out_[Pass::DenoisingNormal] += shading.frame.z;
+    write_denoising_features_ = false;
 }
 
 // Next-event estimation at the current surface, MIS-weighted against BSDF sampling.

@@ -163,6 +163,7 @@ class PathIntegrator {
     void find_emission(const Ray& ray, const Hit& hit);
     void add_emission(const vec3& radiance, float light_pdf, bool is_world);
     void record_first_hit(const Shading& shading, const Ray& ray, const Hit& hit);
+    void record_denoising_features(const Shading& shading);
     void sample_direct();
     void add_field(const Shading& shading);
     // The field lobes of the current surface (render/bsdf.h): what field light is weighted by.
@@ -203,6 +204,10 @@ class PathIntegrator {
     Uninitialized<PendingDirect> pending_[kMaxLightSplits];
     bool terminate_on_next_surface_ = false;
     vec3 throughput_{1.0f};
+    // The denoiser's guides (render/film.h): written once, at the first surface that is not
+    // (nearly) perfectly specular; until then the product of the specular surfaces' albedos.
+    bool write_denoising_features_ = true;
+    vec3 denoising_throughput_{1.0f};
     int vertex_ = 0;                   // surfaces shaded so far
     int smooth_bounces_ = 0;           // non-Dirac scatterings so far
     int field_from_ = 0;               // smooth scatterings before the field is read

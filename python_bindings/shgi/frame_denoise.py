@@ -6,9 +6,13 @@ returns ({name: float32 (H, W, C)}, row 0 on top: ``PathTracer.passes()``,
 with the passes Cycles writes beside it: ``Noisy Image`` (Combined before denoising),
 ``Denoising Albedo`` and ``Denoising Normal`` (the guides as the network saw them).
 
-Guides, as Cycles builds them: the albedo is the first surface's closure weights,
-DiffCol + GlossCol + TransCol, clipped to [0, 1]; the normal is the Normal pass (the first hit's
-shading normal, world space). Both are sample means, so at low sample counts they carry noise of
+Guides, as Cycles builds them: the renderers' ``Denoising Albedo`` and ``Denoising Normal``
+passes (render/film.h), written at the first surface that is not (nearly) perfectly specular,
+so that through clear glass and in mirrors and polished metal they show the surface seen through
+or in them, its albedo times their tint (Cycles' film_write_denoising_features_surface); the
+albedo is clipped to [0, 1], the normal is world space. Passes without them (a renderer of an
+older SHGI, or a hand-made dict) fall back to the first hit's: DiffCol + GlossCol + TransCol and
+Normal. Both are sample means, so at low sample counts they carry noise of
 their own (antialiased edges, textures, glossy lobes): ``prefilter`` says what is done about it,
 with Cycles' choices: "ACCURATE" denoises each guide first with the RT network and then tells
 the colour filter they are clean (``cleanAux``); "FAST" passes them as they are and lets the
@@ -49,15 +53,19 @@ __all__ = ["QUALITIES", "PREFILTERS", "GUIDES", "NOISY_PASS", "ALBEDO_PASS", "NO
 QUALITIES = ("HIGH", "BALANCED", "FAST")
 PREFILTERS = ("NONE", "FAST", "ACCURATE")
 GUIDES = ("NONE", "ALBEDO", "ALBEDO_NORMAL")
-# The passes Cycles writes beside a denoised Combined.
+# The passes Cycles writes beside a denoised Combined. The renderers write the guides under the
+# same names (render/film.h: they follow specular bounces as Cycles' do); a denoise replaces them
+# by the guides as the network saw them.
 NOISY_PASS = "Noisy Image"
 ALBEDO_PASS = "Denoising Albedo"
 NORMAL_PASS = "Denoising Normal"
 # The passes a renderer must return for each choice of guides.
 GUIDE_PASSES = {"NONE": ("Combined",),
-                "ALBEDO": ("Combined", "DiffCol", "GlossCol", "TransCol", "Depth"),
-                "ALBEDO_NORMAL": ("Combined", "DiffCol", "GlossCol", "TransCol", "Normal",
-                                  "Depth")}
+                "ALBEDO": ("Combined", ALBEDO_PASS, "Depth"),
+                "ALBEDO_NORMAL": ("Combined", ALBEDO_PASS, NORMAL_PASS, "Depth")}
+# What stands in for a guide pass that is missing: the first hit's passes.
+FIRST_HIT_GUIDES = {ALBEDO_PASS: ("DiffCol", "GlossCol", "TransCol"),
+                    NORMAL_PASS: ("Normal",)}
 # What a renderer should return for the best result: the guides and the direct light.
 WANTED_PASSES = {guides: names + ("Emit", "Env") for guides, names in GUIDE_PASSES.items()}
 # The light the camera sees straight from emitters and the world: added back after the network.
@@ -94,19 +102,26 @@ def guide_images(passes: dict, guides: str = "ALBEDO_NORMAL"):
     """(albedo, normal, background) from a renderer's passes: float32 (H, W, 3) guides (None when
     not used) and the bool (H, W) mask of pixels that saw only the world."""
     _check_choice("guides", guides, GUIDES)
-    missing = [name for name in GUIDE_PASSES[guides] if name not in passes]
+    # {guide pass: the passes it is read from}: itself, else the first hit's passes.
+    sources = {name: (name,) if name in passes or name not in FIRST_HIT_GUIDES
+               else FIRST_HIT_GUIDES[name] for name in GUIDE_PASSES[guides]}
+    missing = [name for name, source in sources.items()
+               if any(part not in passes for part in source)]
     if missing:
-        raise ValueError(f"passes: {', '.join(missing)} missing; denoising with guides "
-                         f"{guides!r} needs {', '.join(GUIDE_PASSES[guides])} (render every pass, "
-                         "not PreviewSettings.combined_only)")
+        wanted = ", ".join(f"{name} (or {' + '.join(FIRST_HIT_GUIDES[name])})"
+                           if name in FIRST_HIT_GUIDES else name for name in missing)
+        raise ValueError(f"passes: {wanted} missing; denoising with guides {guides!r} needs "
+                         f"{', '.join(GUIDE_PASSES[guides])} (render every pass, not "
+                         "PreviewSettings.combined_only)")
     combined = np.asarray(passes["Combined"], np.float32)
     height, width = combined.shape[:2]
     albedo = normal = None
     if guides != "NONE":
         albedo = np.clip(sum(np.asarray(passes[name], np.float32)[..., :3]
-                             for name in ("DiffCol", "GlossCol", "TransCol")), 0.0, 1.0)
+                             for name in sources[ALBEDO_PASS]), 0.0, 1.0)
     if guides == "ALBEDO_NORMAL":
-        normal = np.ascontiguousarray(np.asarray(passes["Normal"], np.float32)[..., :3])
+        (name,) = sources[NORMAL_PASS]
+        normal = np.ascontiguousarray(np.asarray(passes[name], np.float32)[..., :3])
     if "Depth" in passes:
         depth = np.asarray(passes["Depth"], np.float32).reshape(height, width, -1)[..., 0]
         background = depth >= MISS_DEPTH

@@ -15,7 +15,8 @@ sys.path.insert(0, str(REPO_ROOT / "examples"))
 import demo  # noqa: E402  (examples/ is not a package)
 
 PASSES = {"Combined", "DiffDir", "DiffInd", "DiffCol", "GlossDir", "GlossInd", "GlossCol",
-          "TransDir", "TransInd", "TransCol", "Emit", "Env", "Normal", "Depth"}
+          "TransDir", "TransInd", "TransCol", "Emit", "Env", "Normal", "Depth",
+          "Denoising Albedo", "Denoising Normal"}
 
 
 def test_demo_writes_every_pass_and_a_png_for_both_scenes(tmp_path, capsys):

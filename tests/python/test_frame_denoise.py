@@ -84,16 +84,29 @@ def test_a_denoised_probe_grid_preview_keeps_its_light(cornell, reference):
     assert metrics.psnr(reference, out["Combined"]) > metrics.psnr(reference, passes["Combined"])
 
 
-def test_the_guides_are_the_closure_colours_and_the_normal(noisy):
+def test_the_guides_are_the_renderers_guide_passes(noisy):
     albedo, normal, background = guide_images(noisy)
+    np.testing.assert_array_equal(albedo, np.clip(noisy[ALBEDO_PASS], 0.0, 1.0))
+    np.testing.assert_array_equal(normal, noisy[NORMAL_PASS])
+    # No surface of the Cornell box is specular, so the guides are the first hit's: its closure
+    # weights and its normal (render/film.h).
     summed = noisy["DiffCol"] + noisy["GlossCol"] + noisy["TransCol"]
-    np.testing.assert_array_equal(albedo, np.clip(summed, 0.0, 1.0))
-    np.testing.assert_array_equal(normal, noisy["Normal"])
+    np.testing.assert_allclose(noisy[ALBEDO_PASS], summed, rtol=0, atol=1e-5)
+    np.testing.assert_array_equal(noisy[NORMAL_PASS], noisy["Normal"])
     # The camera sees the open box's front edge and the black world around it: those pixels,
     # and only they, hold no surface.
     assert 0 < background.sum() < background.size
     assert (albedo[background] == 0).all() and (normal[background] == 0).all()
     assert (noisy["Depth"][~background] < 1e9).all()
+
+
+def test_passes_without_the_guide_passes_give_the_first_hits_guides(noisy):
+    first_hit = {name: image for name, image in noisy.items()
+                 if name not in (ALBEDO_PASS, NORMAL_PASS)}
+    albedo, normal, _ = guide_images(first_hit)
+    summed = noisy["DiffCol"] + noisy["GlossCol"] + noisy["TransCol"]
+    np.testing.assert_array_equal(albedo, np.clip(summed, 0.0, 1.0))
+    np.testing.assert_array_equal(normal, noisy["Normal"])
 
 
 def test_the_world_seen_directly_is_left_as_it_was():

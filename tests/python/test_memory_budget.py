@@ -159,11 +159,11 @@ def test_a_film_beyond_memory_names_the_camera_resolution():
     with pytest.raises(MemoryError) as caught:
         shgi.PathTracer(scene)
     message = str(caught.value)
-    assert "the camera resolution (film) 46340 x 46340 pixels with 14 passes" in message
+    assert "the camera resolution (film) 46340 x 46340 pixels with 16 passes" in message
     assert message.endswith("lower the camera's resolution_x / resolution_y "
                             "(or Blender's resolution %)")
     needed, allowed, _ = needed_and_allowed(message)
-    assert needed == 4 * 46340 * 46340 * 14 * 12 and needed > allowed
+    assert needed == 4 * 46340 * 46340 * 16 * 12 and needed > allowed
 
 
 def test_commit_budget_is_capped_by_what_the_process_may_allocate():

@@ -21,7 +21,7 @@ from scene_support import committed  # noqa: E402
 PASS_CHANNELS = {
     "Combined": 4, "DiffDir": 3, "DiffInd": 3, "DiffCol": 3, "GlossDir": 3, "GlossInd": 3,
     "GlossCol": 3, "TransDir": 3, "TransInd": 3, "TransCol": 3, "Emit": 3, "Env": 3,
-    "Normal": 3, "Depth": 1,
+    "Normal": 3, "Depth": 1, "Denoising Albedo": 3, "Denoising Normal": 3,
 }
 # Five standard errors of the pixel mean: a false failure has probability ~6e-7.
 SIGMAS = 5.0
@@ -69,7 +69,7 @@ def test_a_film_larger_than_the_machine_can_hold_is_a_memory_error():
     scene.commit()
     for make in (lambda: shgi.PathTracer(scene), lambda: shgi.PreviewRenderer(scene)):
         with pytest.raises(MemoryError, match=r"the camera resolution \(film\) 46340 x 46340 "
-                                              r"pixels with 14 passes .* needs .*\(\d+ bytes\); "
+                                              r"pixels with 16 passes .* needs .*\(\d+ bytes\); "
                                               r"this process may use .*\(\d+ bytes\) more .*: "
                                               r"lower the camera's resolution_x"):
             make()

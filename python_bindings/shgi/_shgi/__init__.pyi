@@ -1625,7 +1625,7 @@ class PathTracer:
         """
     def passes(self, names: typing.Any = None) -> dict:
         """
-        {pass name: float32 array (H, W, C)}: Combined (RGBA), DiffDir, ..., Normal (XYZ), Depth (1 channel), with Cycles' meaning; names, e.g. ['Combined'], converts only those (a viewport needs Combined alone).
+        {pass name: float32 array (H, W, C)}: Combined (RGBA), DiffDir, ..., Normal (XYZ), Depth (1 channel), Denoising Albedo, Denoising Normal (the denoiser's guides, through specular surfaces as Cycles'), with Cycles' meaning; names, e.g. ['Combined'], converts only those (a viewport needs Combined alone).
         """
     def render(self, samples: typing.Any = None, progress: Progress = None) -> None:
         """

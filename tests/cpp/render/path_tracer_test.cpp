@@ -5,11 +5,13 @@
 // (pixels are independent samples of the same expectation in these scenes), plus a small
 // relative floor for float accumulation.
 #include <chrono>
+#include <optional>
 #include <thread>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include "render/bsdf.h"
 #include "render/path_tracer.h"
 #include "render/shading.h"
 #include "render_test_scenes.h"
@@ -385,6 +387,127 @@ TEST(PathTracer, RejectsInvalidSettings) {
     expect_message(s, "tile_size");
     Scene uncommitted;
     EXPECT_THROW(PathTracer(uncommitted, PathTracerSettings{}), InvalidArgument);
+}
+
+// --- The denoiser's guides (Denoising Albedo / Normal), as Cycles writes them ---
+
+// Lambert floor (albedo `floor_albedo`, z = 0) seen from above through an orthographic camera at
+// z = 0.5 and, when `cover` is given, through a 2 x 2 m pane of it at z = 0.25; black world.
+Scene guide_scene(float floor_albedo, const std::optional<Material>& cover, uint32_t resolution,
+                  float cover_height = 0.25f) {
+    Scene scene;
+    scene.add_material(test::lambert(floor_albedo));
+    scene.add_instance(scene.add_mesh(test::plane(5.0f)), mat4(1.0f));
+    if (cover) {
+        scene.add_material(*cover);
+        Mesh pane = test::plane(1.0f);
+        pane.material_indices.assign(pane.triangles.size(), 1);
+        scene.add_instance(scene.add_mesh(pane),
+                           glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, cover_height)));
+    }
+    scene.set_world(test::black_world());
+    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.5f), 1.0f, resolution));
+    scene.commit();
+    return scene;
+}
+
+// Where the first surface is not specular, the guides are its closure weights and its normal:
+// DiffCol + GlossCol + TransCol and the Normal pass (a rough glossy floor, alpha 0.09).
+TEST(PathTracer, DenoisingGuidesOfARoughSurfaceAreItsOwn) {
+    Material rough_glossy = test::lambert(0.6f);
+    rough_glossy.specular = 0.5f;
+    rough_glossy.roughness = 0.3f;
+    rough_glossy.diffuse_model = DiffuseModel::Principled;
+    const Scene scene = guide_scene(0.5f, rough_glossy, 8);
+    PathTracer tracer(scene, test::settings_with_samples(4));
+    tracer.render(4);
+    const Film& film = tracer.film();
+    const std::vector<float> albedo = film.pixels(Pass::DenoisingAlbedo);
+    const std::vector<float> normal = film.pixels(Pass::DenoisingNormal);
+    const std::vector<float> diff = film.pixels(Pass::DiffCol);
+    const std::vector<float> gloss = film.pixels(Pass::GlossCol);
+    const std::vector<float> trans = film.pixels(Pass::TransCol);
+    EXPECT_EQ(normal, film.pixels(Pass::Normal));
+    for (size_t i = 0; i < albedo.size(); ++i)
+        EXPECT_NEAR(albedo[i], diff[i] + gloss[i] + trans[i], 1e-5f) << i;
+    EXPECT_GT(gloss[0], 0.0f);
+}
+
+// A perfect mirror (metallic, roughness 0, reflectance 0.8) facing up under a Lambert ceiling of
+// albedo 0.6 at z = 1: every camera ray reflects straight up, so the guides are the ceiling's,
+// albedo 0.6 x 0.8 and normal -Z, in every pixel and sample, while the first-hit passes stay the
+// mirror's.
+TEST(PathTracer, DenoisingGuidesFollowAMirror) {
+    Scene scene;
+    scene.add_material(test::mirror(0.8f));
+    scene.add_material(test::lambert(0.6f));
+    scene.add_instance(scene.add_mesh(test::plane(5.0f)), mat4(1.0f));
+    Mesh ceiling = test::plane(5.0f);
+    ceiling.material_indices.assign(ceiling.triangles.size(), 1);
+    scene.add_instance(scene.add_mesh(ceiling), glm::translate(mat4(1.0f), vec3(0, 0, 1.0f)));
+    scene.set_world(test::black_world());
+    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.5f), 1.0f, 8));
+    scene.commit();
+    PathTracer tracer(scene, test::settings_with_samples(4));
+    tracer.render(4);
+    const std::vector<float> albedo = tracer.film().pixels(Pass::DenoisingAlbedo);
+    const std::vector<float> normal = tracer.film().pixels(Pass::DenoisingNormal);
+    const std::vector<float> first_normal = tracer.film().pixels(Pass::Normal);
+    const std::vector<float> gloss = tracer.film().pixels(Pass::GlossCol);
+    for (size_t i = 0; i < albedo.size(); i += 3) {
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(albedo[i + size_t(c)], 0.6f * 0.8f, 1e-5f) << i;
+        EXPECT_NEAR(normal[i + 2], -1.0f, 1e-5f) << i;
+        EXPECT_NEAR(first_normal[i + 2], 1.0f, 1e-5f) << i;
+        EXPECT_NEAR(gloss[i], 1.0f, 1e-5f) << i;  // the mirror's closure weight
+    }
+}
+
+// Clear tinted glass (roughness 0, ior 1.45, tint t) over a Lambert floor of albedo 0.5, seen at
+// normal incidence. The pane's lobes are glass reflection (weight F) and refraction (weight
+// (1 - F) t), both specular, so a sample takes the refraction with probability p = avg((1 - F) t)
+// / (F + avg((1 - F) t)) and reaches the floor, whose albedo it writes times the pane's albedo
+// F + (1 - F) t; a reflected sample escapes to the world and writes nothing (as in Cycles). So
+// the guides' means are p 0.5 (F + (1 - F) t) and a normal of p (0, 0, 1).
+TEST(PathTracer, DenoisingGuidesSeeThroughClearGlass) {
+    const vec3 tint(0.9f, 0.7f, 0.5f);
+    const float ior = 1.45f;
+    Material glass;
+    glass.base_color = tint;
+    glass.transmission = 1.0f;
+    glass.roughness = 0.0f;
+    glass.ior = ior;
+    const Scene scene = guide_scene(0.5f, glass, 16);
+    PathTracer tracer(scene, test::settings_with_samples(64));
+    tracer.render(64);
+    const float fresnel = fresnel_dielectric(1.0f, ior);
+    const vec3 refraction = (1.0f - fresnel) * tint;
+    const float refraction_mean = (refraction.x + refraction.y + refraction.z) / 3.0f;
+    const float p = refraction_mean / (fresnel + refraction_mean);
+    for (int c = 0; c < 3; ++c)
+        expect_near_stats(test::pixel_stats(tracer.film(), Pass::DenoisingAlbedo, c),
+                          p * 0.5f * (fresnel + refraction[c]), "albedo through the glass");
+    expect_near_stats(test::pixel_stats(tracer.film(), Pass::DenoisingNormal, 2), p,
+                      "normal through the glass");
+    // The first-hit passes stay the pane's: TransCol its refraction weight, Normal up.
+    expect_near_stats(test::pixel_stats(tracer.film(), Pass::TransCol, 0), refraction.x,
+                      "TransCol");
+    expect_near_stats(test::pixel_stats(tracer.film(), Pass::Normal, 2), 1.0, "Normal");
+}
+
+// A rough pane (roughness 0.5, alpha 0.25 > kDenoisingSpecularAlpha) stops the guides at itself.
+TEST(PathTracer, DenoisingGuidesStopAtRoughGlass) {
+    Material frosted;
+    frosted.transmission = 1.0f;
+    frosted.roughness = 0.5f;
+    const Scene scene = guide_scene(0.5f, frosted, 8);
+    PathTracer tracer(scene, test::settings_with_samples(4));
+    tracer.render(4);
+    EXPECT_EQ(tracer.film().pixels(Pass::DenoisingNormal), tracer.film().pixels(Pass::Normal));
+    const std::vector<float> albedo = tracer.film().pixels(Pass::DenoisingAlbedo);
+    const std::vector<float> trans = tracer.film().pixels(Pass::TransCol);
+    const std::vector<float> gloss = tracer.film().pixels(Pass::GlossCol);
+    for (size_t i = 0; i < albedo.size(); ++i)
+        EXPECT_NEAR(albedo[i], trans[i] + gloss[i], 1e-5f) << i;
 }
 
 }  // namespace

@@ -1,0 +1,156 @@
+"""Per-sample noise of SHGI's path tracer and of Cycles on one of bench/equal_time.py's scenes
+(default: caustics), undenoised, each against its own cached 4096-spp reference, and where in
+the frame the error is: the squared display error (the bench's PSNR's MSE) split by what the
+camera sees first, from SHGI's passes: the glass (TransCol > 0), the metal (GlossCol > 0.2 with
+no DiffCol), emitters and the world seen directly (Emit + Env > 0) and the rest (diffuse walls,
+floor, ceiling). The same masks are applied to both renderers' images (same geometry, camera
+and resolution).
+
+    PYTHONPATH=build/python /opt/shgi/bpy-5.0.1/bin/python bench/caustics_noise.py
+        [--scene caustics] [--samples 4,16,64] [--shgi-clamp-indirect 10]
+        [--cycles-clamp-indirect 0] [--cycles-filter-glossy 0]
+        [--cache build/equal_time_cache]
+
+A benchmark, not a test: nothing is asserted. References are never rendered here (--cache must
+hold bench/equal_time.py's). SHGI renders through shgi.PathTracer with the add-on's F12 settings
+of the scene (seed equal_time.SEED), Cycles through F12 without denoising (seed
+equal_time.SEED, as the bench). "MSE x spp" is the display-space error per sample: with 1/N
+variance it stays constant, and its ratio between the renderers is how many more samples one
+needs for the other's noise. "pair x spp" is the same without a reference: half the squared
+display difference of two renders of seeds SEED and SEED + 1, times spp (the noise alone, no
+bias against the reference; --shgi-clamp-indirect changes SHGI's renders but not its
+reference, so only this column compares clamped renders fairly).
+"""
+
+import argparse
+import os
+import sys
+
+import bpy
+
+REPO_ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path[:0] = [os.path.join(REPO_ROOT, "bench")]
+
+import equal_time  # noqa: E402  (sets sys.path for the add-on, shgi and the scenes)
+import numpy as np  # noqa: E402
+
+
+def parse_args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--scene", default="caustics")
+    parser.add_argument("--samples", default="4,16,64")
+    parser.add_argument("--resolution", default="200x150", help="WxH pixels")
+    parser.add_argument("--cache", default=os.path.join(REPO_ROOT, "build", "equal_time_cache"))
+    parser.add_argument("--shgi-clamp-indirect", type=float, default=None,
+                        help="SHGI's Clamp Indirect for its renders (default: the add-on's, 0 = "
+                             "off; Cycles' default is 10). Its reference stays unclamped: see "
+                             "the seed-pair column")
+    parser.add_argument("--cycles-clamp-indirect", type=float, default=None,
+                        help="Cycles' Clamping > Indirect Light for its renders (default: its "
+                             "own, 10); its reference stays as cached: see the seed-pair column")
+    parser.add_argument("--cycles-filter-glossy", type=float, default=None,
+                        help="Cycles' Light Paths > Caustics > Filter Glossy for its renders "
+                             "(default: its own, 1.0)")
+    args = parser.parse_args(argv)
+    args.samples = [int(n) for n in args.samples.split(",")]
+    args.width, args.height = (int(x) for x in args.resolution.lower().split("x"))
+    return args
+
+
+def squared_error(reference, image):
+    """Per-pixel squared display error (mean over RGB), as shgi.metrics.psnr computes it."""
+    from shgi import metrics
+
+    exposure = metrics.auto_exposure(reference)
+    difference = metrics.display(reference, exposure) - metrics.display(image, exposure)
+    return (difference ** 2).mean(axis=-1)
+
+
+def squared_error_pair(reference, first, second):
+    """Per-pixel squared display difference of two renders, at the reference's exposure."""
+    from shgi import metrics
+
+    exposure = metrics.auto_exposure(reference)
+    difference = metrics.display(first, exposure) - metrics.display(second, exposure)
+    return (difference ** 2).mean(axis=-1)
+
+
+def regions(passes):
+    """{name: bool (H, W) mask} of what the camera sees first, from SHGI's passes."""
+    trans = passes["TransCol"][..., :3].max(axis=-1)
+    gloss = passes["GlossCol"][..., :3].max(axis=-1)
+    diff = passes["DiffCol"][..., :3].max(axis=-1)
+    direct = (passes["Emit"][..., :3] + passes["Env"][..., :3]).max(axis=-1)
+    glass = trans > 0.0
+    metal = ~glass & (gloss > 0.2) & (diff == 0.0)
+    emitter = ~glass & ~metal & (direct > 0.0)
+    rest = ~glass & ~metal & ~emitter
+    return {"glass": glass, "metal": metal, "emitters/world": emitter, "diffuse": rest}
+
+
+def load_reference(args, renderer):
+    key = (f"{args.scene}_{args.width}x{args.height}_{renderer}_"
+           f"{equal_time.REFERENCE_SAMPLES}spp")
+    path = os.path.join(args.cache, f"{key}.npy")
+    if not os.path.exists(path):
+        raise SystemExit(f"{path}: no cached reference (run bench/equal_time.py first)")
+    return np.load(path)
+
+
+def main():
+    args = parse_args()
+    import shgi
+    from shgi_blender import settings
+    from shgi_blender.export.scene_export import export_scene
+
+    scene = equal_time.build_scene(args.scene, args.width, args.height,
+                                   args.cycles_filter_glossy)
+    references = {name: load_reference(args, name) for name in ("shgi", "cycles")}
+    if args.cycles_clamp_indirect is not None:
+        scene.cycles.sample_clamp_indirect = args.cycles_clamp_indirect
+    native = export_scene(bpy.context.evaluated_depsgraph_get(), scene).scene
+    native.commit()
+    exr = os.path.join(args.cache, "noise_render.exr")
+    masks = None
+    rows = []
+    for samples in args.samples:
+        tracer_settings = settings.path_tracer_settings(scene.shgi, shgi)
+        tracer_settings.samples = samples
+        if args.shgi_clamp_indirect is not None:
+            tracer_settings.clamp_indirect = args.shgi_clamp_indirect
+        tracer_settings.seed = equal_time.SEED
+        passes = shgi.render_path_traced(native, tracer_settings)
+        tracer_settings.seed = equal_time.SEED + 1
+        second = shgi.render_path_traced(native, tracer_settings)["Combined"]
+        if masks is None:
+            masks = regions(passes)
+            print(f"{args.scene}: pixels per region "
+                  + ", ".join(f"{k} {int(v.sum())}" for k, v in masks.items()))
+        equal_time.use_cycles(scene, samples, False)
+        cycles = []
+        for seed in (equal_time.SEED, equal_time.SEED + 1):
+            scene.cycles.seed = seed
+            cycles.append(equal_time.render_f12(scene, "CYCLES", exr)[1])
+        scene.cycles.seed = equal_time.SEED
+        for name, image, other in (("shgi", passes["Combined"], second),
+                                   ("cycles", cycles[0], cycles[1])):
+            error = squared_error(references[name], image)
+            total = float(error.mean())
+            parts = {k: float(error[m].sum()) / error.size for k, m in masks.items()}
+            # Reference-free: two independent renders differ by twice the per-render variance
+            # (display space, scaled by the reference's exposure).
+            pair = float(squared_error_pair(references[name], image, other).mean()) / 2.0
+            rows.append((samples, name, 10.0 * np.log10(1.0 / total), total * samples,
+                         pair * samples, parts))
+    print(f"{'spp':>5s} {'renderer':8s} {'PSNR dB':>8s} {'MSE x spp':>10s} {'pair x spp':>10s}  "
+          + "  ".join(f"{k + ' share':>20s}" for k in masks))
+    for samples, name, psnr, per_sample, pair, parts in rows:
+        total = sum(parts.values())
+        print(f"{samples:5d} {name:8s} {psnr:8.2f} {per_sample:10.4f} {pair:10.4f}  "
+              + "  ".join(f"{parts[k] * samples:9.4f} ({100 * parts[k] / total:4.1f}%)"
+                          for k in masks))
+
+
+if __name__ == "__main__":
+    main()
