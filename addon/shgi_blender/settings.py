@@ -225,8 +225,8 @@ RADIANCE_FIELD_DEFAULTS = {
 }
 
 # PropagationSettings' fields in ``scene.shgi.propagation`` with their native defaults. Not
-# mirrored: ``seed`` (scene.shgi.seed) and ``vpl_bounces`` (Light Paths > Diffuse,
-# LIGHT_PATH_VALUES).
+# mirrored: ``seed`` (scene.shgi.seed), ``vpl_bounces`` (Light Paths > Diffuse,
+# LIGHT_PATH_VALUES) and ``cascade_center`` (the scene camera's position, cascade_center()).
 PROPAGATION_DEFAULTS = {
     "photons": 100000,
     "resolution": 32,
@@ -238,6 +238,7 @@ PROPAGATION_DEFAULTS = {
     "occlude_first_step": False,
     "drop_outward_vpls": False,
     "travel_reinjection": False,
+    "cascades": 1,
 }
 
 # InstantGiSettings' fields in ``scene.shgi.instant_gi`` with their native defaults. Not
@@ -442,6 +443,7 @@ PROPAGATION_LABELS = {
     "occlude_first_step": "Light Propagation > Occlude First Step",
     "drop_outward_vpls": "Light Propagation > Drop Outward Lights",
     "travel_reinjection": "Light Propagation > Travel Re-injection",
+    "cascades": "Light Propagation > Cascades",
 }
 INSTANT_GI_LABELS = {
     "sets_x": "Instant GI > Sets X",
@@ -477,6 +479,8 @@ MAX_PROPAGATION_STEPS = 1024        # PropagationSettings.steps
 MAX_PROPAGATION_NORMAL_OFFSET = 2.0  # PropagationSettings.normal_offset, cells
 MAX_LIGHT_SPLITS = 8                # kMaxLightSplits (render/light_tree.h)
 MAX_VPL_BOUNCES = 64                # PropagationSettings.vpl_bounces
+MAX_PROPAGATION_CASCADES = 8        # PropagationSettings.cascades
+MIN_CASCADE_RESOLUTION = 16         # PropagationSettings.resolution with cascades > 1
 MAX_INSTANT_SETS = 16               # InstantGiSettings.sets_x, sets_y
 MAX_INSTANT_PHOTONS_PER_SET = 1 << 24  # InstantGiSettings.photons_per_set
 MAX_INSTANT_VPL_BOUNCES = 16        # InstantGiSettings.vpl_bounces
@@ -755,8 +759,19 @@ def radiance_field_settings(props, shgi, gather=None):
 def propagation_settings(props, shgi, gather=None):
     """shgi.PropagationSettings of scene.shgi: its propagation group, Light Paths and the seed
     (ValueError naming a refused setting)."""
-    return validated(shgi.PropagationSettings(
-        **method_native_fields(props, METHOD_SETTINGS["PROPAGATION"], shgi, gather)))
+    values = method_native_fields(props, METHOD_SETTINGS["PROPAGATION"], shgi, gather)
+    if values.get("cascades", 1) > 1:
+        values["cascade_center"] = cascade_center(props)
+    return validated(shgi.PropagationSettings(**values))
+
+
+def cascade_center(props):
+    """Where the propagation cascades' finer levels are centred: the scene camera's position
+    (props.id_data is the scene of a scene.shgi group), else the world origin."""
+    camera = getattr(getattr(props, "id_data", None), "camera", None)
+    if camera is None:
+        return (0.0, 0.0, 0.0)
+    return tuple(float(v) for v in camera.matrix_world.translation)
 
 
 def instant_gi_settings(props, shgi, gather=None):
