@@ -353,7 +353,7 @@ def test_a_damaged_field_file_is_refused_naming_it(tmp_path):
             shgi.PropagationField.load(str(bad))
 
 
-# Cascades: a hall of 32 x 8 x 4 m (four lamps along it, three blocks), larger than a 32-cell
+# Cascades: examples/scenes.py's hall of 32 x 8 x 4 m (four lamps along it, three blocks), larger than a 32-cell
 # volume resolves (1 m cells). Two levels at resolution 32: the coarsest over the hall, a finer
 # one of 0.5 m cells spanning 16 m around the camera at x = -4 (the hall's whole width and
 # height). Steps 8: light moves at most 8 cells, so at least 8 + 2 cells (the lookup's reach)
@@ -363,22 +363,7 @@ CASCADE_CENTER = (-4.0, 0.0, 1.5)
 
 
 def hall():
-    import numpy as np
-    b = scenes.SceneBuilder()
-    b.part("floor", scenes.quad((-16, -4, 0), (32, 0, 0), (0, 8, 0)), "white", scenes.WHITE)
-    b.part("ceiling", scenes.quad((-16, -4, 4), (0, 8, 0), (32, 0, 0)), "white", scenes.WHITE)
-    b.part("north", scenes.quad((-16, 4, 0), (0, 0, 4), (32, 0, 0)), "red", scenes.RED)
-    b.part("south", scenes.quad((-16, -4, 0), (32, 0, 0), (0, 0, 4)), "green", scenes.GREEN)
-    for i, (x, y) in enumerate([(-6, 1), (2, -1.5), (10, 2)]):
-        b.part(f"block{i}", scenes.box((x, y, 0), 1.0, 1.0, 1.5, 0.3), "white", scenes.WHITE)
-    for i, x in enumerate([-12, -4, 4, 12]):
-        light = shgi.Light(name=f"lamp{i}", type=shgi.LightType.AREA, power=200.0,
-                           shape=shgi.AreaShape.SQUARE, size_x=1.0, size_y=1.0)
-        light.world_from_light = np.array([[1, 0, 0, x], [0, 1, 0, 0], [0, 0, 1, 3.99],
-                                           [0, 0, 0, 1]], np.float32)  # emits down
-        b.scene.add_light(light)
-    b.scene.set_world(shgi.World(color=(0.0, 0.0, 0.0), strength=0.0))
-    return committed(b)
+    return committed(scenes.hall())
 
 
 def hall_field(scene, order, **settings):
