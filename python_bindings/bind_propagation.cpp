@@ -62,7 +62,11 @@ void bind_settings(py::module_& m) {
         .def_readwrite("travel_reinjection", &S::travel_reinjection,
                        "Re-inject the light crossing each face along its travel direction "
                        "(keeps its momentum: less diffusion, converges in fewer steps) instead "
-                       "of as a cosine lobe along the face's normal (the seed) (False).");
+                       "of as a cosine lobe along the face's normal (the seed) (False).")
+        .def_readwrite("unclamped_transfer", &S::unclamped_transfer,
+                       "Propagate the lobes unclamped (a linear transfer per neighbour offset) "
+                       "instead of clamping each source lobe at zero and rescaling it to its "
+                       "flux (False).");
     def_integer(cls, "cascades", &S::cascades,
                 "Nested volumes around cascade_center, each finer level with half the cells' "
                 "size and `resolution` cells per axis; 1: one volume over the scene (1).");

@@ -238,6 +238,7 @@ PROPAGATION_DEFAULTS = {
     "occlude_first_step": False,
     "drop_outward_vpls": False,
     "travel_reinjection": False,
+    "unclamped_transfer": False,
     "cascades": 1,
 }
 
@@ -443,6 +444,7 @@ PROPAGATION_LABELS = {
     "occlude_first_step": "Light Propagation > Occlude First Step",
     "drop_outward_vpls": "Light Propagation > Drop Outward Lights",
     "travel_reinjection": "Light Propagation > Travel Re-injection",
+    "unclamped_transfer": "Light Propagation > Unclamped Transfer",
     "cascades": "Light Propagation > Cascades",
 }
 INSTANT_GI_LABELS = {

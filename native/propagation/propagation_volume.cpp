@@ -409,7 +409,9 @@ void PropagationVolume::refine(Progress* progress) {
 
     const Reinjection reinjection = settings_.travel_reinjection ? Reinjection::TravelDirection
                                                                  : Reinjection::FaceNormal;
-    const PropagationStep step(stencil_of(settings_.order), settings_.order, LobeClamp::Rescaled,
+    const PropagationStep step(stencil_of(settings_.order), settings_.order,
+                               settings_.unclamped_transfer ? LobeClamp::None
+                                                            : LobeClamp::Rescaled,
                                reinjection);
     const size_t n = levels_.size();
     std::vector<ShVolume> sums(n), means(n);

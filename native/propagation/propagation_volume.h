@@ -31,7 +31,8 @@
 //      first step (§3.2.3: the VPLs' own surfaces would block them) unless occlude_first_step
 //      (then a VPL beside a thin wall, injected into the cell the wall runs through, does not
 //      send its light across). Stencil, flux factor and
-//      clamping: propagation_stencil.h (Ω_f/π instead of eq. 3.3's Ω_f/4π; clamp then rescale);
+//      clamping: propagation_stencil.h (Ω_f/π instead of eq. 3.3's Ω_f/4π; clamp then rescale,
+//      or with unclamped_transfer no clamp);
 //      the light crossing a face is re-injected along the face's normal (the seed) or, with
 //      travel_reinjection, along its travel direction (propagation_stencil.h, "Re-injection").
 // The field (propagation/propagation_field.h) is an immutable snapshot of the accumulation
@@ -99,6 +100,14 @@ struct PropagationSettings {
     // on (docs/methods.md). Off by default: it needs more steps, does not reach the agreement
     // targets at any one step count either, and its near field is less even.
     bool travel_reinjection = false;
+    // Propagate the light's lobes unclamped (LobeClamp::None: each step a linear map, one
+    // transfer per neighbour offset, the alternative issue 51 names to clamping then rescaling
+    // the source lobe, LobeClamp::Rescaled). Flux is kept either way; unclamped, an L1/L2 lobe's
+    // negative back half travels too. With travel_reinjection, damping, both leak corrections
+    // and 24 steps the HOLPV is within 10% of the path tracer on the Cornell box, the sun room
+    // and the two rooms (1.038, 0.990, 1.096), the LPV not (0.882, 0.776, 1.266: its negative
+    // L1 halves cross the two rooms' wall) (docs/methods.md). Off by default.
+    bool unclamped_transfer = false;
     // Cascades (Kaplanyan & Dachsbacher 2010; seed 000 §4.4), for scenes larger than one volume
     // can resolve: 1 is a single volume over the scene (`resolution` cells along its longest
     // side). With n > 1 that volume is the coarsest of n nested levels; each finer level halves

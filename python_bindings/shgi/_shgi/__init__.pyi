@@ -2846,6 +2846,14 @@ class PropagationSettings:
     def travel_reinjection(self, arg0: bool) -> None:
         ...
     @property
+    def unclamped_transfer(self) -> bool:
+        """
+        Propagate the lobes unclamped (a linear transfer per neighbour offset) instead of clamping each source lobe at zero and rescaling it to its flux (False).
+        """
+    @unclamped_transfer.setter
+    def unclamped_transfer(self, arg0: bool) -> None:
+        ...
+    @property
     def vpl_bounces(self) -> int:
         """
         Surface hits per light path that become VPLs: 1 is the published single bounce, n gives n bounces of indirect light (4).
