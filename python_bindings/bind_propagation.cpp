@@ -97,8 +97,9 @@ void bind_volume(py::module_& m) {
             "Cascade levels (1 without cascades; 0 before the first pass), the finest first.")
         .def(
             "level_field",
-            [](const PropagationField& field, int level) {
-                if (level < 0 || size_t(level) >= field.levels().size())
+            [](const PropagationField& field, const IndexInt& index) {
+                const int64_t level = int_arg<int64_t>(index, "level");
+                if (level < 0 || uint64_t(level) >= field.levels().size())
                     throw py::index_error(format_message(
                         "PropagationField.level_field: level ", level, " of ",
                         field.levels().size(), " levels; it must be in [0, ",

@@ -285,6 +285,28 @@ size_t PropagationVolume::estimate_memory_bytes(const Scene& scene,
     return size_t(std::min<uint64_t>(bytes, std::numeric_limits<size_t>::max()));
 }
 
+PropagationVolume::Level PropagationVolume::make_level(ShLattice geometry, uint8_t blend_faces,
+                                                       Progress* progress) const {
+    geometry.measure_surfaces(*scene_, progress);
+    const float s = geometry.cell_size();
+    ShVolume volume(geometry.origin() - 0.5f * s, s, geometry.dims() + 1, settings_.order);
+    Level level;
+    if (settings_.occlusion) {
+        PropagationTransmittance all = geometry_transmittance(
+            geometry, scene_->bounds(), volume, PropagationStencil::Neighbours26, progress);
+        level.transmittance = settings_.order == 2
+                                  ? all
+                                  : geometry_transmittance(geometry, scene_->bounds(), volume,
+                                                           PropagationStencil::Faces6, progress);
+        level.lookup_transmittance =
+            std::make_shared<const NeighbourTransmittance>(std::move(all.values));
+    }
+    level.injected_sum = volume;
+    level.injected = std::move(volume);
+    level.blend_faces = blend_faces;
+    return level;
+}
+
 void PropagationVolume::reset(Progress* progress) {
     if (!scene_->committed())
         throw InvalidArgument("PropagationVolume: the scene is not committed; call commit() first");
@@ -317,26 +339,11 @@ void PropagationVolume::reset(Progress* progress) {
             progress->begin_stage(n > 1 ? format_message("geometry volume, level ", level)
                                         : std::string("geometry volume"),
                                   float(n - 1 - level) / float(n), float(n - level) / float(n));
-        ShLattice geometry = level + 1 == n ? std::move(coarsest)
-                                            : ShLattice(grid.origin, grid.cell_size, grid.dims, 1);
-        geometry.measure_surfaces(*scene_, progress);
-        const float s = geometry.cell_size();
-        ShVolume volume(geometry.origin() - 0.5f * s, s, geometry.dims() + 1, settings_.order);
-        Level& out = levels[size_t(level)];
-        if (settings_.occlusion) {
-            PropagationTransmittance all = geometry_transmittance(
-                geometry, scene_->bounds(), volume, PropagationStencil::Neighbours26, progress);
-            out.transmittance = settings_.order == 2
-                                    ? all
-                                    : geometry_transmittance(geometry, scene_->bounds(), volume,
-                                                             PropagationStencil::Faces6, progress);
-            out.lookup_transmittance =
-                std::make_shared<const NeighbourTransmittance>(std::move(all.values));
-        }
-        out.injected_sum = volume;
-        out.injected = std::move(volume);
-        out.blend_faces = grid.blend_faces;
-        out.geometry_seconds = seconds_since(start);
+        levels[size_t(level)] =
+            make_level(level + 1 == n ? std::move(coarsest)
+                                      : ShLattice(grid.origin, grid.cell_size, grid.dims, 1),
+                       grid.blend_faces, progress);
+        levels[size_t(level)].geometry_seconds = seconds_since(start);
     }
     levels_ = std::move(levels);
     field_ = std::make_shared<PropagationField>();
@@ -397,6 +404,59 @@ std::vector<VirtualPointLight> PropagationVolume::trace_vpls(Progress* progress,
     return vpls;
 }
 
+PropagationLevel PropagationVolume::pass_level(size_t level,
+                                              const std::vector<VirtualPointLight>& vpls,
+                                              const PropagationStep& step, Progress* progress,
+                                              std::vector<StageSeconds>& stages, ShVolume& sum,
+                                              ShVolume& mean) const {
+    const Level& l = levels_[level];
+    const size_t n = levels_.size();
+    // This level's share of the progress after tracing; its stage names' prefix with cascades.
+    const float lo = kTraceShare + (1.0f - kTraceShare) * float(level) / float(n);
+    const float span = (1.0f - kTraceShare) / float(n);
+    const float inject_end = lo + span * (kInjectShare - kTraceShare) / (1.0f - kTraceShare);
+    const std::string prefix = n > 1 ? format_message("level_", level, "_") : std::string();
+    const auto start = now();
+    if (progress)
+        progress->begin_stage(n > 1 ? format_message("injecting VPLs, level ", level)
+                                    : std::string("injecting VPLs"),
+                              lo, inject_end);
+    ShVolume pass(l.injected.origin(), l.injected.cell_size(), l.injected.counts(),
+                  settings_.order);
+    inject_vpls(pass, vpls, progress);
+    throw_if_cancelled(progress);
+    sum = l.injected_sum;
+    throw_if_cancelled(progress);
+    mean = l.injected;
+    throw_if_cancelled(progress);
+    const float inv_passes = 1.0f / float(passes_ + 1);
+    float* sum_data = sum.cell_data(0);
+    float* mean_data = mean.cell_data(0);
+    const float* pass_data = pass.cell_data(0);
+    for_each_slice(sum.coefficients().size(), uint64_t(1) << 22, progress,
+                   [&](uint64_t begin, uint64_t end) {
+                       for (uint64_t i = begin; i < end; ++i) {
+                           sum_data[i] += pass_data[i];
+                           mean_data[i] = sum_data[i] * inv_passes;
+                       }
+                   });
+    stages.push_back({prefix + "injection", seconds_since(start)});
+    stages.push_back({prefix + "geometry_volume", l.geometry_seconds});
+
+    if (progress)
+        progress->begin_stage(n > 1 ? format_message("propagating, level ", level)
+                                    : std::string("propagating"),
+                              inject_end, lo + span);
+    std::vector<double> step_seconds;
+    ShVolume accumulated =
+        propagate(mean, step, settings_.steps, settings_.occlusion ? &l.transmittance : nullptr,
+                  progress, &step_seconds, settings_.occlude_first_step);
+    for (size_t k = 0; k < step_seconds.size(); ++k)
+        stages.push_back({format_message(prefix, "propagation_step_", k + 1), step_seconds[k]});
+    return {std::make_shared<const ShVolume>(std::move(accumulated)), l.lookup_transmittance,
+            l.blend_faces};
+}
+
 void PropagationVolume::refine(Progress* progress) {
     check_scene("refine");
     std::vector<StageSeconds> stages;  // the solver's once the pass is committed
@@ -416,57 +476,9 @@ void PropagationVolume::refine(Progress* progress) {
     const size_t n = levels_.size();
     std::vector<ShVolume> sums(n), means(n);
     std::vector<PropagationLevel> field_levels(n);
-    for (size_t level = 0; level < n; ++level) {
-        const Level& l = levels_[level];
-        // Per level: its share of the progress after tracing, a stage name prefix with cascades.
-        const float lo = kTraceShare + (1.0f - kTraceShare) * float(level) / float(n);
-        const float span = (1.0f - kTraceShare) / float(n);
-        const float inject_end = lo + span * (kInjectShare - kTraceShare) / (1.0f - kTraceShare);
-        const std::string prefix = n > 1 ? format_message("level_", level, "_") : std::string();
-        start = now();
-        if (progress)
-            progress->begin_stage(n > 1 ? format_message("injecting VPLs, level ", level)
-                                        : std::string("injecting VPLs"),
-                                  lo, inject_end);
-        ShVolume pass(l.injected.origin(), l.injected.cell_size(), l.injected.counts(),
-                      settings_.order);
-        inject_vpls(pass, vpls, progress);
-        throw_if_cancelled(progress);
-        ShVolume sum = l.injected_sum;
-        throw_if_cancelled(progress);
-        ShVolume mean = l.injected;
-        throw_if_cancelled(progress);
-        const float inv_passes = 1.0f / float(passes_ + 1);
-        float* sum_data = sum.cell_data(0);
-        float* mean_data = mean.cell_data(0);
-        const float* pass_data = pass.cell_data(0);
-        for_each_slice(sum.coefficients().size(), uint64_t(1) << 22, progress,
-                       [&](uint64_t begin, uint64_t end) {
-                           for (uint64_t i = begin; i < end; ++i) {
-                               sum_data[i] += pass_data[i];
-                               mean_data[i] = sum_data[i] * inv_passes;
-                           }
-                       });
-        stages.push_back({prefix + "injection", seconds_since(start)});
-        stages.push_back({prefix + "geometry_volume", l.geometry_seconds});
-
-        if (progress)
-            progress->begin_stage(n > 1 ? format_message("propagating, level ", level)
-                                        : std::string("propagating"),
-                                  inject_end, lo + span);
-        std::vector<double> step_seconds;
-        ShVolume accumulated =
-            propagate(mean, step, settings_.steps,
-                      settings_.occlusion ? &l.transmittance : nullptr, progress, &step_seconds,
-                      settings_.occlude_first_step);
-        for (size_t k = 0; k < step_seconds.size(); ++k)
-            stages.push_back(
-                {format_message(prefix, "propagation_step_", k + 1), step_seconds[k]});
-        field_levels[level] = {std::make_shared<const ShVolume>(std::move(accumulated)),
-                               l.lookup_transmittance, l.blend_faces};
-        sums[level] = std::move(sum);
-        means[level] = std::move(mean);
-    }
+    for (size_t level = 0; level < n; ++level)
+        field_levels[level] =
+            pass_level(level, vpls, step, progress, stages, sums[level], means[level]);
 
     // Nothing above changed the solver: commit the pass.
     for (size_t level = 0; level < n; ++level) {

@@ -165,10 +165,6 @@ class PropagationVolume : public GiSolver {
     uint64_t last_vpl_count() const { return last_vpl_count_; }
 
   private:
-    void check_scene(const char* what) const;
-    // This pass's VPLs; the seconds spent finding later hits' albedo go to reflect_seconds.
-    std::vector<VirtualPointLight> trace_vpls(Progress* progress, double* reflect_seconds);
-
     // One volume of the cascade (the only one without cascades).
     struct Level {
         ShVolume injected_sum;   // Σ over passes of each pass's injection
@@ -179,6 +175,20 @@ class PropagationVolume : public GiSolver {
         uint8_t blend_faces = 0;  // PropagationLevel::blend_faces
         double geometry_seconds = 0.0;
     };
+
+    void check_scene(const char* what) const;
+    // This pass's VPLs; the seconds spent finding later hits' albedo go to reflect_seconds.
+    std::vector<VirtualPointLight> trace_vpls(Progress* progress, double* reflect_seconds);
+    // A level of the geometry lattice `geometry` (its surfaces measured here): its volumes of
+    // one more cell per axis, offset by half a cell, and with occlusion its transmittances.
+    Level make_level(ShLattice geometry, uint8_t blend_faces, Progress* progress) const;
+    // One level's part of a pass: injects `vpls` (the new injection sum and mean into `sum` and
+    // `mean`, the solver unchanged), propagates, appends the level's stage timings.
+    PropagationLevel pass_level(size_t level, const std::vector<VirtualPointLight>& vpls,
+                                const PropagationStep& step, Progress* progress,
+                                std::vector<StageSeconds>& stages, ShVolume& sum,
+                                ShVolume& mean) const;
+
 
     const Scene* scene_;
     PropagationSettings settings_;

@@ -2708,7 +2708,7 @@ class PropagationField(IndirectField):
         """
         The field a save() wrote; OSError naming the file when it is not one.
         """
-    def level_field(self, level: typing.SupportsInt | typing.SupportsIndex) -> PropagationField:
+    def level_field(self, level: typing.SupportsIndex) -> PropagationField:
         """
         Cascade level `level` alone (0 the finest) as a field of its own, unblended.
         """
