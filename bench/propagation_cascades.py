@@ -65,7 +65,7 @@ def main():
               f"{'near err':>9} {'far err':>8} {'seam':>6}  per level: inject/geometry/steps s")
         for resolution, cascades in ((32, 1), (64, 1), (128, 1), (32, 2), (32, 3)):
             settings = dict(common, order=order, resolution=resolution, cascades=cascades,
-                            cascade_center=CENTER)
+                            cascade_center=CENTER, cascade_follow_camera=False)
             volume, seconds = solve(scene, **settings)
             field = volume.current_field()
             finest = resolution * 2 ** (cascades - 1)

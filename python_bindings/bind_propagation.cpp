@@ -71,8 +71,12 @@ void bind_settings(py::module_& m) {
                 "Nested volumes around cascade_center, each finer level with half the cells' "
                 "size and `resolution` cells per axis; 1: one volume over the scene (1).");
     def_vec3(cls, "cascade_center", &S::cascade_center,
-             "The point the finer cascade levels are centred on: the camera, or a point of "
-             "interest for a bake ((0, 0, 0)).");
+             "The point the finer cascade levels are centred on without the camera "
+             "(cascade_follow_camera off, or a scene without one): a point of interest for a "
+             "bake ((0, 0, 0)).");
+    cls.def_readwrite("cascade_follow_camera", &S::cascade_follow_camera,
+                      "Centre the finer cascade levels on the scene's camera (its position when "
+                      "the volume is reset) when the scene has one (True).");
     cls.def("validate", &validate_propagation_settings,
             "Raises ValueError naming the first invalid field.");
     register_settings_type<S>("PropagationSettings");

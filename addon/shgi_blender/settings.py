@@ -226,7 +226,8 @@ RADIANCE_FIELD_DEFAULTS = {
 
 # PropagationSettings' fields in ``scene.shgi.propagation`` with their native defaults. Not
 # mirrored: ``seed`` (scene.shgi.seed), ``vpl_bounces`` (Light Paths > Diffuse,
-# LIGHT_PATH_VALUES) and ``cascade_center`` (the scene camera's position, cascade_center()).
+# LIGHT_PATH_VALUES), ``cascade_follow_camera`` and ``cascade_center`` (the cascades follow the
+# camera the exported scene renders from, the native default).
 PROPAGATION_DEFAULTS = {
     "photons": 100000,
     "resolution": 32,
@@ -761,19 +762,8 @@ def radiance_field_settings(props, shgi, gather=None):
 def propagation_settings(props, shgi, gather=None):
     """shgi.PropagationSettings of scene.shgi: its propagation group, Light Paths and the seed
     (ValueError naming a refused setting)."""
-    values = method_native_fields(props, METHOD_SETTINGS["PROPAGATION"], shgi, gather)
-    if values.get("cascades", 1) > 1:
-        values["cascade_center"] = cascade_center(props)
-    return validated(shgi.PropagationSettings(**values))
-
-
-def cascade_center(props):
-    """Where the propagation cascades' finer levels are centred: the scene camera's position
-    (props.id_data is the scene of a scene.shgi group), else the world origin."""
-    camera = getattr(getattr(props, "id_data", None), "camera", None)
-    if camera is None:
-        return (0.0, 0.0, 0.0)
-    return tuple(float(v) for v in camera.matrix_world.translation)
+    return validated(shgi.PropagationSettings(
+        **method_native_fields(props, METHOD_SETTINGS["PROPAGATION"], shgi, gather)))
 
 
 def instant_gi_settings(props, shgi, gather=None):

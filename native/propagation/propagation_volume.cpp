@@ -42,7 +42,7 @@ struct LevelGrid {
 // same grid subdivided, and at most `resolution` of them per axis around the centre, kept inside
 // the subdivided D.
 std::vector<LevelGrid> level_grids(const vec3& origin, float cell_size, const ivec3& dims,
-                                   const PropagationSettings& settings) {
+                                   const PropagationSettings& settings, const vec3& center) {
     const int n = settings.cascades;
     std::vector<LevelGrid> grids(static_cast<size_t>(n));
     for (int level = 0; level < n; ++level) {
@@ -52,7 +52,7 @@ std::vector<LevelGrid> level_grids(const vec3& origin, float cell_size, const iv
         const ivec3 full = dims * factor;
         grid.dims = level + 1 == n ? dims : glm::min(ivec3(settings.resolution), full);
         // The cell holding the centre (clamped far outside first: the cast must not overflow).
-        const vec3 at = glm::clamp(glm::floor((settings.cascade_center - origin) / grid.cell_size),
+        const vec3 at = glm::clamp(glm::floor((center - origin) / grid.cell_size),
                                    vec3(-1.0f), vec3(full));
         const ivec3 start = glm::clamp(ivec3(at) - grid.dims / 2, ivec3(0), full - grid.dims);
         grid.origin = origin + vec3(start) * grid.cell_size;
@@ -280,7 +280,8 @@ size_t PropagationVolume::estimate_memory_bytes(const Scene& scene,
     const ivec3 dims = glm::max(ivec3(glm::ceil(extent / longest * float(settings.resolution))),
                                 ivec3(1));
     uint64_t bytes = 0;
-    for (const LevelGrid& grid : level_grids(vec3(0.0f), 1.0f, dims, settings))
+    // The centre moves the finer levels, not their sizes.
+    for (const LevelGrid& grid : level_grids(vec3(0.0f), 1.0f, dims, settings, vec3(0.0f)))
         bytes = saturating_add(bytes, level_bytes(grid.dims, settings.order));
     return size_t(std::min<uint64_t>(bytes, std::numeric_limits<size_t>::max()));
 }
@@ -317,8 +318,11 @@ void PropagationVolume::reset(Progress* progress) {
     // The geometry lattice decides the cell size; the propagation cells are offset by half a
     // cell from it, one more per axis, so the lattice's centres are their corners.
     ShLattice coarsest(scene_->bounds(), settings_.resolution, 1);
-    const std::vector<LevelGrid> grids =
-        level_grids(coarsest.origin(), coarsest.cell_size(), coarsest.dims(), settings_);
+    const vec3 center = settings_.cascade_follow_camera && scene_->has_camera()
+                            ? vec3(scene_->camera().world_from_camera[3])
+                            : settings_.cascade_center;
+    const std::vector<LevelGrid> grids = level_grids(coarsest.origin(), coarsest.cell_size(),
+                                                     coarsest.dims(), settings_, center);
     uint64_t bytes = 0;
     for (const LevelGrid& grid : grids)
         bytes = saturating_add(bytes, level_bytes(grid.dims, settings_.order));

@@ -112,12 +112,15 @@ struct PropagationSettings {
     // can resolve: 1 is a single volume over the scene (`resolution` cells along its longest
     // side). With n > 1 that volume is the coarsest of n nested levels; each finer level halves
     // the cell size and spans `resolution` cells per axis (fewer where the scene is smaller)
-    // around cascade_center, kept inside the scene. Every level injects the VPLs it holds and
+    // around the camera (cascade_follow_camera) or cascade_center, kept inside the scene. Every level injects the VPLs it holds and
     // propagates on its own; a lookup reads the finest level that covers it, blended into the
     // next coarser one over a band at the level's border (propagation_field.h).
     int cascades = 1;
-    // The point the finer levels are centred on (world space): the camera's position, or a
-    // point of interest for a bake. Used only with cascades > 1.
+    // Centre the finer levels on the scene's camera (its position at reset()) when the scene
+    // has one; else, or with this off, on cascade_center. Used only with cascades > 1.
+    bool cascade_follow_camera = true;
+    // The point the finer levels are centred on (world space) without the camera: a point of
+    // interest for a bake.
     vec3 cascade_center{0.0f};
 };
 

@@ -98,8 +98,8 @@ NOT_MIRRORED = {
     # light_splits: probe paths split at the native default (4) whatever Light Paths says, so
     # that probe solutions frozen before splitting keep comparing (LIGHT_PATH_LIMITS says so).
     "ProbeGridSettings": {"volumes", "include_direct", "light_splits"},
-    # The add-on centres the cascades on the scene camera (settings.cascade_center).
-    "PropagationSettings": {"cascade_center"},
+    # The cascades follow the camera the exported scene renders from (the native default).
+    "PropagationSettings": {"cascade_follow_camera", "cascade_center"},
     # As the radiance field's glossy_in_grid: no reason for an artist to change it.
     "InstantGiSettings": {"glossy_vpls"},
     "PhotonLatticeSettings": {"use_bounds", "bounds_min", "bounds_max", "caustic_order",
@@ -145,18 +145,12 @@ def test_method_groups_mirror_their_native_settings(solver):
     assert native_fields == mirrored  # a new native field needs a property (or a reason)
 
 
-def test_propagation_cascades_centre_on_the_scene_camera():
-    """Light Propagation > Cascades above 1 centres the finer levels on the scene camera (the
-    group's scene, props.id_data); one level, or no camera, leaves the native default."""
+def test_propagation_cascades_are_validated_with_their_label():
+    """Light Propagation > Cascades above 1 needs Resolution 16 or more: the refusal names the
+    panel's setting."""
     props = default_props(propagation={"cascades": 3})
-    assert settings.propagation_settings(props, shgi).cascade_center == (0.0, 0.0, 0.0)
-    camera = SimpleNamespace(matrix_world=SimpleNamespace(translation=(1.5, -2.0, 3.0)))
-    props.id_data = SimpleNamespace(camera=camera)
     built = settings.propagation_settings(props, shgi)
-    assert built.cascades == 3 and built.cascade_center == (1.5, -2.0, 3.0)
-    props.propagation.cascades = 1
-    assert settings.propagation_settings(props, shgi).cascade_center == (0.0, 0.0, 0.0)
-    props.propagation.cascades = 2
+    assert built.cascades == 3 and built.cascade_follow_camera
     props.propagation.resolution = 8
     with pytest.raises(ValueError, match=r"Light Propagation > Resolution \(with cascades\) "
                                          r"is 8; it must be in \[16, 256\]"):

@@ -190,7 +190,7 @@ def test_settings_mirror_cpp_defaults_and_validate():
     assert s.occlusion and s.normal_offset == pytest.approx(1.0)
     assert not s.damping and not s.occlude_first_step and not s.drop_outward_vpls
     assert not s.travel_reinjection and not s.unclamped_transfer
-    assert s.cascades == 1 and s.cascade_center == (0.0, 0.0, 0.0)
+    assert s.cascades == 1 and s.cascade_center == (0.0, 0.0, 0.0) and s.cascade_follow_camera
     assert shgi.settings_from_dict(shgi.PropagationSettings,
                                    shgi.settings_to_dict(s)).steps == 8
     with pytest.raises(TypeError, match="no field 'step'"):
@@ -422,6 +422,9 @@ def hall():
 
 
 def hall_field(scene, order, **settings):
+    """A pass over the hall; a cascade_center given is used instead of the camera's position."""
+    if "cascade_center" in settings:
+        settings.setdefault("cascade_follow_camera", False)
     volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
         seed=3, photons=100000, steps=8, order=order, **settings))
     volume.refine()
@@ -529,6 +532,24 @@ def test_cascades_are_deterministic_and_report_each_level():
     assert volume.memory_bytes <= estimate
     assert shgi.PropagationVolume.estimate_memory_bytes(
         scene, shgi.PropagationSettings(order=2, steps=8, resolution=16)) < estimate
+
+
+def test_cascades_follow_the_scene_camera_by_default():
+    """cascade_follow_camera (on by default) centres the finer levels on the scene camera's
+    position, as cascade_center there would; off, cascade_center decides."""
+    import numpy as np
+    scene = hall()
+    eye = (-4.0, -3.5, 1.5)  # examples/scenes.py's hall camera
+    xs, points, normals = floor_line()
+    followed = hall_field(scene, 1, resolution=16, cascades=2, cascade_follow_camera=True,
+                          cascade_center=(9.0, 0.0, 1.0)).current_field()
+    placed = hall_field(scene, 1, resolution=16, cascades=2, cascade_center=eye).current_field()
+    elsewhere = hall_field(scene, 1, resolution=16, cascades=2,
+                           cascade_center=(9.0, 0.0, 1.0)).current_field()
+    np.testing.assert_array_equal(line_irradiance(followed, points, normals),
+                                  line_irradiance(placed, points, normals))
+    assert not np.array_equal(line_irradiance(followed, points, normals),
+                              line_irradiance(elsewhere, points, normals))
 
 
 def test_a_saved_cascaded_field_loads_back(tmp_path):

@@ -2744,10 +2744,18 @@ class PropagationSettings:
     @property
     def cascade_center(self) -> tuple:
         """
-        The point the finer cascade levels are centred on: the camera, or a point of interest for a bake ((0, 0, 0)).
+        The point the finer cascade levels are centred on without the camera (cascade_follow_camera off, or a scene without one): a point of interest for a bake ((0, 0, 0)).
         """
     @cascade_center.setter
     def cascade_center(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def cascade_follow_camera(self) -> bool:
+        """
+        Centre the finer cascade levels on the scene's camera (its position when the volume is reset) when the scene has one (True).
+        """
+    @cascade_follow_camera.setter
+    def cascade_follow_camera(self, arg0: bool) -> None:
         ...
     @property
     def cascades(self) -> int:
