@@ -182,3 +182,27 @@ def two_rooms(scale=1.0, bright_power=2000.0, dim_power=20.0):
     b.camera(eye=(2.9, 0.2, 1.4), target=(0.0, 2.2, 1.0), lens=18.0, width=128, height=96,
              scale=scale)
     return b
+
+
+def hall(scale=1.0):
+    """A hall 32 x 8 x 4 m (x in [-16, 16]), open at both ends, white floor and ceiling, red and
+    green long walls, three white blocks, four 1 m area lamps under the ceiling along it; the
+    camera stands at x = -4 looking across. Larger than one 32-cell light propagation volume
+    resolves (1 m cells): the cascades' test and bench scene. 96 x 64 px x scale."""
+    b = SceneBuilder()
+    b.part("floor", quad((-16, -4, 0), (32, 0, 0), (0, 8, 0)), "white", WHITE)
+    b.part("ceiling", quad((-16, -4, 4), (0, 8, 0), (32, 0, 0)), "white", WHITE)
+    b.part("north", quad((-16, 4, 0), (0, 0, 4), (32, 0, 0)), "red", RED)
+    b.part("south", quad((-16, -4, 0), (32, 0, 0), (0, 0, 4)), "green", GREEN)
+    for i, (x, y) in enumerate([(-6, 1), (2, -1.5), (10, 2)]):
+        b.part(f"block{i}", box((x, y, 0), 1.0, 1.0, 1.5, 0.3), "white", WHITE)
+    for i, x in enumerate([-12, -4, 4, 12]):
+        lamp = shgi.Light(name=f"lamp{i}", type=shgi.LightType.AREA, power=200.0,
+                          shape=shgi.AreaShape.SQUARE, size_x=1.0, size_y=1.0)
+        lamp.world_from_light = np.array([[1, 0, 0, x], [0, 1, 0, 0], [0, 0, 1, 3.99],
+                                          [0, 0, 0, 1]], np.float32)  # emits down its -Z
+        b.scene.add_light(lamp)
+    b.scene.set_world(shgi.World(color=(0.0, 0.0, 0.0), strength=0.0))
+    b.camera(eye=(-4, -3.5, 1.5), target=(-4, 2.0, 1.0), lens=18.0, width=96, height=64,
+             scale=scale)
+    return b

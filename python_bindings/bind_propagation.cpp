@@ -15,6 +15,7 @@
 #include "propagation/propagation_volume.h"
 #include "scene_use.h"
 #include "struct_fields.h"
+#include "util/error.h"
 #include "util/progress.h"
 
 namespace py = pybind11;
@@ -61,7 +62,21 @@ void bind_settings(py::module_& m) {
         .def_readwrite("travel_reinjection", &S::travel_reinjection,
                        "Re-inject the light crossing each face along its travel direction "
                        "(keeps its momentum: less diffusion, converges in fewer steps) instead "
-                       "of as a cosine lobe along the face's normal (the seed) (False).");
+                       "of as a cosine lobe along the face's normal (the seed) (False).")
+        .def_readwrite("unclamped_transfer", &S::unclamped_transfer,
+                       "Propagate the lobes unclamped (a linear transfer per neighbour offset) "
+                       "instead of clamping each source lobe at zero and rescaling it to its "
+                       "flux (False).");
+    def_integer(cls, "cascades", &S::cascades,
+                "Nested volumes around cascade_center, each finer level with half the cells' "
+                "size and `resolution` cells per axis; 1: one volume over the scene (1).");
+    def_vec3(cls, "cascade_center", &S::cascade_center,
+             "The point the finer cascade levels are centred on without the camera "
+             "(cascade_follow_camera off, or a scene without one): a point of interest for a "
+             "bake ((0, 0, 0)).");
+    cls.def_readwrite("cascade_follow_camera", &S::cascade_follow_camera,
+                      "Centre the finer cascade levels on the scene's camera (its position when "
+                      "the volume is reset) when the scene has one (True).");
     cls.def("validate", &validate_propagation_settings,
             "Raises ValueError naming the first invalid field.");
     register_settings_type<S>("PropagationSettings");
@@ -80,7 +95,23 @@ void bind_volume(py::module_& m) {
         m, "PropagationField",
         "An immutable light propagation volume as an IndirectField (its accumulated light).")
         .def_property_readonly(
-            "memory_bytes", &PropagationField::memory_bytes, "Bytes of its volume.")
+            "memory_bytes", &PropagationField::memory_bytes, "Bytes of its volumes.")
+        .def_property_readonly(
+            "level_count", [](const PropagationField& field) { return field.levels().size(); },
+            "Cascade levels (1 without cascades; 0 before the first pass), the finest first.")
+        .def(
+            "level_field",
+            [](const PropagationField& field, const IndexInt& index) {
+                const int64_t level = int_arg<int64_t>(index, "level");
+                if (level < 0 || uint64_t(level) >= field.levels().size())
+                    throw py::index_error(format_message(
+                        "PropagationField.level_field: level ", level, " of ",
+                        field.levels().size(), " levels; it must be in [0, ",
+                        field.levels().size(), ")"));
+                return std::make_unique<PropagationField>(field.level_field(size_t(level)));
+            },
+            py::arg("level"),
+            "Cascade level `level` alone (0 the finest) as a field of its own, unblended.")
         .def(
             "save",
             [](const PropagationField& field, const std::string& path) {
@@ -155,7 +186,8 @@ reset().)doc");
                 return stage_list(v.stage_seconds());
             },
             "[(stage, seconds)] of the last pass: vpl_trace, vpl_reflect, injection, "
-            "geometry_volume (of the last reset), propagation_step_1 ... N.")
+            "geometry_volume (of the last reset), propagation_step_1 ... N; with cascades, the "
+            "last four per level prefixed level_<l>_ (0 the finest).")
         .def_property_readonly(
             "memory_bytes",
             [](const PropagationVolume& v) {
@@ -171,7 +203,16 @@ reset().)doc");
             },
             "VPLs injected by the last pass.")
         .def_property_readonly("settings", &PropagationVolume::settings,
-                               "A copy of the settings.");
+                               "A copy of the settings.")
+        .def_static(
+            "estimate_memory_bytes",
+            [](const Scene& scene, const PropagationSettings& settings) {
+                SceneUse use(scene, SceneUse::Kind::Query, "PropagationVolume");
+                return PropagationVolume::estimate_memory_bytes(scene, settings);
+            },
+            py::arg("scene"), py::arg("settings"),
+            "Bytes the volumes and transmittances of these settings take for the scene (all "
+            "cascade levels), before anything is allocated; ValueError for bad settings.");
 }
 
 }  // namespace

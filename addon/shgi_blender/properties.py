@@ -409,6 +409,17 @@ class ShgiPropagationSettings(bpy.types.PropertyGroup):
         name="Drop Outward Lights", default=LP["drop_outward_vpls"],
         description="Leave out the light of sunlit roofs and outer walls facing away from the "
                     "scene: it lights nothing, and otherwise seeps into the rooms behind them")
+    unclamped_transfer: BoolProperty(
+        name="Unclamped Transfer", default=LP["unclamped_transfer"],
+        description="Spread light between cells without cutting off the negative back of its "
+                    "directions: with Order 2, Travel Re-injection, Damping and about 24 Steps "
+                    "the closest to path-traced light; with Order 1 light crosses thin walls")
+    cascades: IntProperty(
+        name="Cascades", default=LP["cascades"], min=1, max=settings.MAX_PROPAGATION_CASCADES,
+        description="Nested grids around the camera for large scenes, each finer one with "
+                    "cells half the size and Resolution cells across: detail near the camera, "
+                    "light everywhere (1: one grid over the scene; more needs Resolution of "
+                    f"at least {settings.MIN_CASCADE_RESOLUTION})")
     travel_reinjection: BoolProperty(
         name="Travel Re-injection", default=LP["travel_reinjection"],
         description="Light crossing a cell face keeps going the way it travelled instead of "

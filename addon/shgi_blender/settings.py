@@ -225,8 +225,9 @@ RADIANCE_FIELD_DEFAULTS = {
 }
 
 # PropagationSettings' fields in ``scene.shgi.propagation`` with their native defaults. Not
-# mirrored: ``seed`` (scene.shgi.seed) and ``vpl_bounces`` (Light Paths > Diffuse,
-# LIGHT_PATH_VALUES).
+# mirrored: ``seed`` (scene.shgi.seed), ``vpl_bounces`` (Light Paths > Diffuse,
+# LIGHT_PATH_VALUES), ``cascade_follow_camera`` and ``cascade_center`` (the cascades follow the
+# camera the exported scene renders from, the native default).
 PROPAGATION_DEFAULTS = {
     "photons": 100000,
     "resolution": 32,
@@ -238,6 +239,8 @@ PROPAGATION_DEFAULTS = {
     "occlude_first_step": False,
     "drop_outward_vpls": False,
     "travel_reinjection": False,
+    "unclamped_transfer": False,
+    "cascades": 1,
 }
 
 # InstantGiSettings' fields in ``scene.shgi.instant_gi`` with their native defaults. Not
@@ -442,6 +445,8 @@ PROPAGATION_LABELS = {
     "occlude_first_step": "Light Propagation > Occlude First Step",
     "drop_outward_vpls": "Light Propagation > Drop Outward Lights",
     "travel_reinjection": "Light Propagation > Travel Re-injection",
+    "unclamped_transfer": "Light Propagation > Unclamped Transfer",
+    "cascades": "Light Propagation > Cascades",
 }
 INSTANT_GI_LABELS = {
     "sets_x": "Instant GI > Sets X",
@@ -477,6 +482,8 @@ MAX_PROPAGATION_STEPS = 1024        # PropagationSettings.steps
 MAX_PROPAGATION_NORMAL_OFFSET = 2.0  # PropagationSettings.normal_offset, cells
 MAX_LIGHT_SPLITS = 8                # kMaxLightSplits (render/light_tree.h)
 MAX_VPL_BOUNCES = 64                # PropagationSettings.vpl_bounces
+MAX_PROPAGATION_CASCADES = 8        # PropagationSettings.cascades
+MIN_CASCADE_RESOLUTION = 16         # PropagationSettings.resolution with cascades > 1
 MAX_INSTANT_SETS = 16               # InstantGiSettings.sets_x, sets_y
 MAX_INSTANT_PHOTONS_PER_SET = 1 << 24  # InstantGiSettings.photons_per_set
 MAX_INSTANT_VPL_BOUNCES = 16        # InstantGiSettings.vpl_bounces

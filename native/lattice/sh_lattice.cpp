@@ -465,12 +465,35 @@ ShLattice::ShLattice(const Bounds3& bounds, int resolution, int order) : order_(
             kClassName, ": resolution = ", resolution, " over bounds of extent ",
             glm::to_string(extent), " gives ", dims_.x, " x ", dims_.y, " x ", dims_.z, " = ",
             cells, " cells, more than ", kMaxCells, "; lower the resolution"));
+    allocate(format_message(kClassName, ": resolution = ", resolution, " gives"));
+}
+
+ShLattice::ShLattice(const vec3& origin, float cell_size, const ivec3& dims, int order)
+    : order_(order), dims_(dims), origin_(origin), cell_size_(cell_size) {
+    if (order < 1 || order > 2)
+        throw InvalidArgument(format_message(kClassName, ": order = ", order,
+                                             " must be 1 (L1, 4 coefficients) or 2 (L2, 9)"));
+    if (!is_finite(origin) || !std::isfinite(cell_size) || !(cell_size > 0.0f))
+        throw InvalidArgument(format_message(kClassName, ": origin ", glm::to_string(origin),
+                                             " and cell size ", cell_size,
+                                             " must be finite, the cell size positive"));
+    if (dims.x < 1 || dims.y < 1 || dims.z < 1)
+        throw InvalidArgument(format_message(kClassName, ": dims ", glm::to_string(dims),
+                                             " must be at least 1 per axis"));
+    const uint64_t cells = uint64_t(dims.x) * uint64_t(dims.y) * uint64_t(dims.z);
+    if (cells > kMaxCells)
+        throw InvalidArgument(format_message(kClassName, ": dims ", glm::to_string(dims),
+                                             " give ", cells, " cells, more than ", kMaxCells));
+    allocate(format_message(kClassName, ": a grid of"));
+}
+
+void ShLattice::allocate(const std::string& what) {
+    const uint64_t cells = uint64_t(cell_count());
     const uint64_t cell_bytes = uint64_t(num_coefficients()) * 3 * sizeof(float) +
                                 sizeof(uint32_t) * 2 + sizeof(uint8_t);
     require_memory(saturating_mul(cells, cell_bytes),
-                   format_message(kClassName, ": resolution = ", resolution, " gives ", dims_.x,
-                                  " x ", dims_.y, " x ", dims_.z, " = ", cells, " cells of ",
-                                  cell_bytes, " bytes (order ", order, ")"),
+                   format_message(what, " ", dims_.x, " x ", dims_.y, " x ", dims_.z, " = ",
+                                  cells, " cells of ", cell_bytes, " bytes (order ", order_, ")"),
                    "lower the resolution");
     coeffs_.assign(cells * size_t(num_coefficients()) * 3, 0.0f);
     surface_index_.assign(cells, kNoSurface);

@@ -87,6 +87,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "photon/photon.h"
@@ -108,6 +109,11 @@ class ShLattice {
     // Throws InvalidArgument for empty or non-finite bounds, resolution outside [1, 1024], order
     // outside [1, 2], or more than 2^27 cells.
     ShLattice(const Bounds3& bounds, int resolution, int order);
+    // A lattice of the given grid (cells of side cell_size from origin, dims per axis), e.g. a
+    // part of a finer subdivision of another lattice's grid (the propagation volume's cascades).
+    // Throws InvalidArgument for a non-finite origin, a cell size that is not finite and
+    // positive, a count below 1, order outside [1, 2] or more than 2^27 cells.
+    ShLattice(const vec3& origin, float cell_size, const ivec3& dims, int order);
 
     int order() const { return order_; }
     int num_coefficients() const { return (order_ + 1) * (order_ + 1); }
@@ -172,6 +178,8 @@ class ShLattice {
     static ShLattice read(BinaryReader& in, bool with_visibility = true);
 
   private:
+    // Checks the memory (`what` begins the message) and sizes the per-cell arrays.
+    void allocate(const std::string& what);
     // The surface of a cell that has one: A_c and, per orientation bin, A_b n̄_b (the bin's area
     // times the unit mean of its normals folded to +axis), so that D_c(ω) costs a dot product
     // per bin that holds surface (most cells hold one wall: one bin); and the bin sides photons

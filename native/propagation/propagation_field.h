@@ -23,6 +23,7 @@
 // cells, 0.34 at 6 after 24 steps), the HOLPV much less (0.93 and 0.84).
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -52,6 +53,26 @@ inline float propagation_radiance_scale(int order,
 // the cell (propagation/propagation_stencil.h's PropagationTransmittance, 26 offsets).
 using NeighbourTransmittance = std::vector<float>;
 
+// Cascades (propagation_volume.h, PropagationSettings::cascades): a lookup reads the finest level
+// whose box of cells holds the lookup point at least kCascadeMarginCells (its cells) inside the
+// faces it shares with the next coarser level (the trilinear footprint, and damping's half-cell
+// reach), blended into the coarser one over the next kCascadeBlendCells: weight
+// w = clamp((d − margin) / band, 0, 1), d the distance in cells to the nearest such face.
+inline constexpr float kCascadeMarginCells = 1.0f;
+inline constexpr float kCascadeBlendCells = 4.0f;
+// Levels a field may have (PropagationSettings::cascades' limit).
+inline constexpr int kMaxPropagationLevels = 8;
+
+// One level of a field: its accumulated volume, the lookup transmittance (may be null), and the
+// faces of its box it blends across into the next coarser level (bit a: the lower face on axis
+// a, bit 3 + a: the upper; 0 for the coarsest level and a single volume). The level's box is its
+// geometry lattice's: the volume without its outer half cells.
+struct PropagationLevel {
+    std::shared_ptr<const ShVolume> accumulated;
+    std::shared_ptr<const NeighbourTransmittance> transmittance;
+    uint8_t blend_faces = 0;
+};
+
 class PropagationField : public IndirectField {
   public:
     PropagationField() = default;  // no light
@@ -65,16 +86,35 @@ class PropagationField : public IndirectField {
     PropagationField(std::shared_ptr<const ShVolume> accumulated, float normal_offset,
                      std::shared_ptr<const NeighbourTransmittance> transmittance = nullptr,
                      bool damping = false, Reinjection reinjection = Reinjection::FaceNormal);
+    // A cascaded field: `levels` finest first, the last (the coarsest, covering the scene) with
+    // no blend faces; every level of the same SH order. Throws InvalidArgument otherwise.
+    PropagationField(std::vector<PropagationLevel> levels, float normal_offset, bool damping,
+                     Reinjection reinjection);
 
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
-    bool is_zero() const override { return !accumulated_ || accumulated_->cell_count() == 0; }
-    // A quarter cell: the trilinear lookup changes little over it.
+    bool is_zero() const override {
+        return levels_.empty() || !levels_.back().accumulated ||
+               levels_.back().accumulated->cell_count() == 0;
+    }
+    // A quarter of the finest cell: the trilinear lookup changes little over it.
     float reuse_distance() const override {
-        return accumulated_ ? 0.25f * accumulated_->cell_size() : 0.0f;
+        return is_zero() ? 0.0f : 0.25f * levels_.front().accumulated->cell_size();
     }
 
-    // Null before the first pass.
-    const std::shared_ptr<const ShVolume>& accumulated() const { return accumulated_; }
+    // The coarsest level's volume (the only one without cascades); null before the first pass.
+    const std::shared_ptr<const ShVolume>& accumulated() const;
+    const std::vector<PropagationLevel>& levels() const { return levels_; }
+    // The weight of `level` (not the coarsest) at lookup point q (see kCascadeBlendCells).
+    float level_weight(size_t level, const vec3& q) const;
+    // One level as a field of its own (as if it covered the scene: no blending).
+    PropagationField level_field(size_t level) const {
+        const PropagationLevel& l = levels_.at(level);
+        return PropagationField(l.accumulated, normal_offset_, l.transmittance, damping_,
+                                reinjection_);
+    }
+    // The lookup of one level alone (its radiance SH at p, n: offset, damping), as if it covered
+    // the scene; radiance_sh blends these.
+    ShRgb level_radiance_sh(size_t level, const vec3& p, const vec3& n) const;
 
     // SHGI's binary file of the field (".shlpv": the accumulated volume, the transmittance, the
     // lookup's settings; little-endian, float32 as held), written atomically; a field loaded
@@ -83,18 +123,22 @@ class PropagationField : public IndirectField {
     // finite or out of range) and OutOfMemory before allocating past the budget.
     void save(const std::string& path) const;
     static std::unique_ptr<PropagationField> load(const std::string& path);
+    // Bytes of the levels' volumes.
     size_t memory_bytes() const {
-        return accumulated_ ? accumulated_->coefficients().size() * sizeof(float) : 0;
+        size_t bytes = 0;
+        for (const PropagationLevel& level : levels_)
+            bytes += (level.accumulated ? level.accumulated->coefficients().size() : 0) *
+                     sizeof(float);
+        return bytes;
     }
 
   private:
-    // The radiance SH at q: the transmittance-weighted trilinear lookup, scaled to radiance.
-    ShRgb weighted_lookup(const vec3& q) const;
+    // The radiance SH at q from one level: the transmittance-weighted trilinear lookup, scaled
+    // to radiance.
+    ShRgb weighted_lookup(const PropagationLevel& level, const vec3& q) const;
 
-    std::shared_ptr<const ShVolume> accumulated_;
-    std::shared_ptr<const NeighbourTransmittance> transmittance_;
+    std::vector<PropagationLevel> levels_;  // finest first; empty: no light
     float normal_offset_ = 1.0f;
-    float radiance_scale_ = 0.0f;  // k / s²
     bool damping_ = false;
     Reinjection reinjection_ = Reinjection::FaceNormal;
 };

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
+
+#include <glm/gtx/string_cast.hpp>
 
 #include "photon/photon_tracer.h"
 #include "render/shading.h"
@@ -22,6 +25,54 @@ constexpr uint64_t kVplsPerTask = 4096;
 constexpr uint64_t kCellsPerTask = 4096;
 // Progress shares of a pass's stages (tracing dominates at the default settings).
 constexpr float kTraceShare = 0.6f, kInjectShare = 0.7f;
+// The smallest resolution with cascades (see validate_propagation_settings).
+constexpr int kMinCascadeResolution = 16;
+
+// Where a cascade level's geometry lattice lies: its grid (the propagation volume is offset by
+// half a cell and has one more cell per axis) and the faces it blends into the next coarser level.
+struct LevelGrid {
+    vec3 origin{0.0f};
+    float cell_size = 1.0f;
+    ivec3 dims{1};
+    uint8_t blend_faces = 0;
+};
+
+// The levels' grids, finest first, from the coarsest level's (the scene's lattice at
+// `resolution`: origin, cell size S, dims D): level l (of n) has cells of S / 2^(n−1−l), on the
+// same grid subdivided, and at most `resolution` of them per axis around the centre, kept inside
+// the subdivided D.
+std::vector<LevelGrid> level_grids(const vec3& origin, float cell_size, const ivec3& dims,
+                                   const PropagationSettings& settings, const vec3& center) {
+    const int n = settings.cascades;
+    std::vector<LevelGrid> grids(static_cast<size_t>(n));
+    for (int level = 0; level < n; ++level) {
+        const int factor = 1 << (n - 1 - level);
+        LevelGrid& grid = grids[size_t(level)];
+        grid.cell_size = cell_size / float(factor);
+        const ivec3 full = dims * factor;
+        grid.dims = level + 1 == n ? dims : glm::min(ivec3(settings.resolution), full);
+        // The cell holding the centre (clamped far outside first: the cast must not overflow).
+        const vec3 at = glm::clamp(glm::floor((center - origin) / grid.cell_size),
+                                   vec3(-1.0f), vec3(full));
+        const ivec3 start = glm::clamp(ivec3(at) - grid.dims / 2, ivec3(0), full - grid.dims);
+        grid.origin = origin + vec3(start) * grid.cell_size;
+        for (int a = 0; a < 3; ++a) {
+            if (start[a] > 0) grid.blend_faces |= uint8_t(1u << a);
+            if (start[a] + grid.dims[a] < full[a]) grid.blend_faces |= uint8_t(8u << a);
+        }
+    }
+    return grids;
+}
+
+// Bytes a level of `dims` lattice cells holds: five volumes (the injection's sum and mean, ping,
+// pong, accumulation) of one more cell per axis, and the transmittances (26 neighbours, and the
+// LPV's 6 beside them).
+uint64_t level_bytes(const ivec3& dims, int order) {
+    const uint64_t cells = uint64_t(dims.x + 1) * uint64_t(dims.y + 1) * uint64_t(dims.z + 1);
+    const uint64_t floats = uint64_t(3 * sh_num_coefficients(order));
+    return saturating_add(saturating_mul(cells, floats * sizeof(float) * 5),
+                          saturating_mul(cells, (26 + 6) * sizeof(float)));
+}
 
 void check_range(int value, int lo, int hi, const char* name) {
     if (value < lo || value > hi)
@@ -138,6 +189,14 @@ void validate_propagation_settings(const PropagationSettings& settings) {
     check_range(settings.resolution, 2, 256, "resolution");
     check_range(settings.steps, 0, 1024, "steps");
     check_range(settings.order, 1, 2, "order");
+    check_range(settings.cascades, 1, kMaxPropagationLevels, "cascades");
+    // A finer level needs cells inside its blend band: at 16 cells, 6 per axis read it alone.
+    if (settings.cascades > 1) check_range(settings.resolution, kMinCascadeResolution, 256,
+                                           "resolution (with cascades)");
+    if (!is_finite(settings.cascade_center))
+        throw InvalidArgument(format_message(kSettings, ".cascade_center is ",
+                                             glm::to_string(settings.cascade_center),
+                                             "; it must be a finite point"));
     if (!std::isfinite(settings.normal_offset) || settings.normal_offset < 0.0f ||
         settings.normal_offset > 2.0f)
         throw InvalidArgument(format_message(kSettings, ".normal_offset is ",
@@ -211,49 +270,91 @@ void PropagationVolume::check_scene(const char* what) const {
                                              "commit() it and call reset() first"));
 }
 
+size_t PropagationVolume::estimate_memory_bytes(const Scene& scene,
+                                                const PropagationSettings& settings) {
+    validate_propagation_settings(settings);
+    // The coarsest level's cells per axis as the lattice's rule gives them (within its margin).
+    const vec3 extent = scene.bounds().extent();
+    const float longest = max_component(extent);
+    if (!(longest > 0.0f) || !std::isfinite(longest)) return 0;
+    const ivec3 dims = glm::max(ivec3(glm::ceil(extent / longest * float(settings.resolution))),
+                                ivec3(1));
+    uint64_t bytes = 0;
+    // The centre moves the finer levels, not their sizes.
+    for (const LevelGrid& grid : level_grids(vec3(0.0f), 1.0f, dims, settings, vec3(0.0f)))
+        bytes = saturating_add(bytes, level_bytes(grid.dims, settings.order));
+    return size_t(std::min<uint64_t>(bytes, std::numeric_limits<size_t>::max()));
+}
+
+PropagationVolume::Level PropagationVolume::make_level(ShLattice geometry, uint8_t blend_faces,
+                                                       Progress* progress) const {
+    geometry.measure_surfaces(*scene_, progress);
+    const float s = geometry.cell_size();
+    ShVolume volume(geometry.origin() - 0.5f * s, s, geometry.dims() + 1, settings_.order);
+    Level level;
+    if (settings_.occlusion) {
+        PropagationTransmittance all = geometry_transmittance(
+            geometry, scene_->bounds(), volume, PropagationStencil::Neighbours26, progress);
+        level.transmittance = settings_.order == 2
+                                  ? all
+                                  : geometry_transmittance(geometry, scene_->bounds(), volume,
+                                                           PropagationStencil::Faces6, progress);
+        level.lookup_transmittance =
+            std::make_shared<const NeighbourTransmittance>(std::move(all.values));
+    }
+    level.injected_sum = volume;
+    level.injected = std::move(volume);
+    level.blend_faces = blend_faces;
+    return level;
+}
+
 void PropagationVolume::reset(Progress* progress) {
     if (!scene_->committed())
         throw InvalidArgument("PropagationVolume: the scene is not committed; call commit() first");
     if (scene_->empty())
         throw InvalidArgument("PropagationVolume: the scene has no geometry; add meshes and "
                               "instances before solving");
-    const auto start = now();
-    if (progress) progress->begin_stage("geometry volume");
+    const int n = settings_.cascades;
     // The geometry lattice decides the cell size; the propagation cells are offset by half a
     // cell from it, one more per axis, so the lattice's centres are their corners.
-    ShLattice geometry(scene_->bounds(), settings_.resolution, 1);
-    geometry.measure_surfaces(*scene_, progress);
-    const float s = geometry.cell_size();
-    ShVolume volume(geometry.origin() - 0.5f * s, s, geometry.dims() + 1, settings_.order);
-    // Five volumes (the injection's sum and mean, ping, pong, accumulation) and the
-    // transmittances (26 neighbours, and the LPV's 6 beside them).
-    require_memory(saturating_add(saturating_mul(volume.coefficients().size() * sizeof(float), 5),
-                                  saturating_mul(volume.cell_count(), (26 + 6) * sizeof(float))),
+    ShLattice coarsest(scene_->bounds(), settings_.resolution, 1);
+    const vec3 center = settings_.cascade_follow_camera && scene_->has_camera()
+                            ? vec3(scene_->camera().world_from_camera[3])
+                            : settings_.cascade_center;
+    const std::vector<LevelGrid> grids = level_grids(coarsest.origin(), coarsest.cell_size(),
+                                                     coarsest.dims(), settings_, center);
+    uint64_t bytes = 0;
+    for (const LevelGrid& grid : grids)
+        bytes = saturating_add(bytes, level_bytes(grid.dims, settings_.order));
+    require_memory(bytes,
                    format_message("PropagationVolume: resolution ", settings_.resolution,
-                                  " gives ", volume.counts().x, " x ", volume.counts().y, " x ",
-                                  volume.counts().z, " cells, 5 volumes of them"),
-                   "lower the resolution");
-    PropagationTransmittance transmittance;
-    std::shared_ptr<const NeighbourTransmittance> lookup;
-    if (settings_.occlusion) {
-        PropagationTransmittance all = geometry_transmittance(
-            geometry, scene_->bounds(), volume, PropagationStencil::Neighbours26, progress);
-        transmittance = settings_.order == 2
-                            ? all
-                            : geometry_transmittance(geometry, scene_->bounds(), volume,
-                                                     PropagationStencil::Faces6, progress);
-        lookup = std::make_shared<const NeighbourTransmittance>(std::move(all.values));
+                                  " gives ", coarsest.dims().x + 1, " x ",
+                                  coarsest.dims().y + 1, " x ", coarsest.dims().z + 1,
+                                  " cells", n > 1 ? format_message(" and ", n - 1,
+                                                                   " finer cascade levels")
+                                                  : std::string(),
+                                  ", 5 volumes of each level"),
+                   n > 1 ? "lower the resolution or the cascades" : "lower the resolution");
+    std::vector<Level> levels(grids.size());
+    for (int level = n - 1; level >= 0; --level) {
+        const auto start = now();
+        const LevelGrid& grid = grids[size_t(level)];
+        if (progress)
+            progress->begin_stage(n > 1 ? format_message("geometry volume, level ", level)
+                                        : std::string("geometry volume"),
+                                  float(n - 1 - level) / float(n), float(n - level) / float(n));
+        levels[size_t(level)] =
+            make_level(level + 1 == n ? std::move(coarsest)
+                                      : ShLattice(grid.origin, grid.cell_size, grid.dims, 1),
+                       grid.blend_faces, progress);
+        levels[size_t(level)].geometry_seconds = seconds_since(start);
     }
-    injected_sum_ = volume;
-    injected_ = volume;
-    transmittance_ = std::move(transmittance);
-    lookup_transmittance_ = std::move(lookup);
+    levels_ = std::move(levels);
     field_ = std::make_shared<PropagationField>();
     passes_ = 0;
     last_vpl_count_ = 0;
     stage_seconds_.clear();
     scene_revision_ = scene_->revision();
-    geometry_seconds_ = seconds_since(start);
     if (progress) progress->set_fraction(1.0f);
 }
 
@@ -307,24 +408,30 @@ std::vector<VirtualPointLight> PropagationVolume::trace_vpls(Progress* progress,
     return vpls;
 }
 
-void PropagationVolume::refine(Progress* progress) {
-    check_scene("refine");
-    std::vector<StageSeconds> stages;  // the solver's once the pass is committed
-    auto start = now();
-    if (progress) progress->begin_stage("tracing VPLs", 0.0f, kTraceShare);
-    double reflect_seconds = 0.0;
-    const std::vector<VirtualPointLight> vpls = trace_vpls(progress, &reflect_seconds);
-    stages.push_back({"vpl_trace", seconds_since(start) - reflect_seconds});
-    if (settings_.vpl_bounces > 1) stages.push_back({"vpl_reflect", reflect_seconds});
-
-    start = now();
-    if (progress) progress->begin_stage("injecting VPLs", kTraceShare, kInjectShare);
-    ShVolume pass(injected_.origin(), injected_.cell_size(), injected_.counts(), settings_.order);
+PropagationLevel PropagationVolume::pass_level(size_t level,
+                                              const std::vector<VirtualPointLight>& vpls,
+                                              const PropagationStep& step, Progress* progress,
+                                              std::vector<StageSeconds>& stages, ShVolume& sum,
+                                              ShVolume& mean) const {
+    const Level& l = levels_[level];
+    const size_t n = levels_.size();
+    // This level's share of the progress after tracing; its stage names' prefix with cascades.
+    const float lo = kTraceShare + (1.0f - kTraceShare) * float(level) / float(n);
+    const float span = (1.0f - kTraceShare) / float(n);
+    const float inject_end = lo + span * (kInjectShare - kTraceShare) / (1.0f - kTraceShare);
+    const std::string prefix = n > 1 ? format_message("level_", level, "_") : std::string();
+    const auto start = now();
+    if (progress)
+        progress->begin_stage(n > 1 ? format_message("injecting VPLs, level ", level)
+                                    : std::string("injecting VPLs"),
+                              lo, inject_end);
+    ShVolume pass(l.injected.origin(), l.injected.cell_size(), l.injected.counts(),
+                  settings_.order);
     inject_vpls(pass, vpls, progress);
     throw_if_cancelled(progress);
-    ShVolume sum = injected_sum_;
+    sum = l.injected_sum;
     throw_if_cancelled(progress);
-    ShVolume mean = injected_;
+    mean = l.injected;
     throw_if_cancelled(progress);
     const float inv_passes = 1.0f / float(passes_ + 1);
     float* sum_data = sum.cell_data(0);
@@ -337,27 +444,54 @@ void PropagationVolume::refine(Progress* progress) {
                            mean_data[i] = sum_data[i] * inv_passes;
                        }
                    });
-    stages.push_back({"injection", seconds_since(start)});
-    stages.push_back({"geometry_volume", geometry_seconds_});
+    stages.push_back({prefix + "injection", seconds_since(start)});
+    stages.push_back({prefix + "geometry_volume", l.geometry_seconds});
 
-    if (progress) progress->begin_stage("propagating", kInjectShare, 1.0f);
-    const Reinjection reinjection = settings_.travel_reinjection ? Reinjection::TravelDirection
-                                                                 : Reinjection::FaceNormal;
-    const PropagationStep step(stencil_of(settings_.order), settings_.order, LobeClamp::Rescaled,
-                               reinjection);
+    if (progress)
+        progress->begin_stage(n > 1 ? format_message("propagating, level ", level)
+                                    : std::string("propagating"),
+                              inject_end, lo + span);
     std::vector<double> step_seconds;
     ShVolume accumulated =
-        propagate(mean, step, settings_.steps, settings_.occlusion ? &transmittance_ : nullptr,
+        propagate(mean, step, settings_.steps, settings_.occlusion ? &l.transmittance : nullptr,
                   progress, &step_seconds, settings_.occlude_first_step);
     for (size_t k = 0; k < step_seconds.size(); ++k)
-        stages.push_back({format_message("propagation_step_", k + 1), step_seconds[k]});
+        stages.push_back({format_message(prefix, "propagation_step_", k + 1), step_seconds[k]});
+    return {std::make_shared<const ShVolume>(std::move(accumulated)), l.lookup_transmittance,
+            l.blend_faces};
+}
+
+void PropagationVolume::refine(Progress* progress) {
+    check_scene("refine");
+    std::vector<StageSeconds> stages;  // the solver's once the pass is committed
+    auto start = now();
+    if (progress) progress->begin_stage("tracing VPLs", 0.0f, kTraceShare);
+    double reflect_seconds = 0.0;
+    const std::vector<VirtualPointLight> vpls = trace_vpls(progress, &reflect_seconds);
+    stages.push_back({"vpl_trace", seconds_since(start) - reflect_seconds});
+    if (settings_.vpl_bounces > 1) stages.push_back({"vpl_reflect", reflect_seconds});
+
+    const Reinjection reinjection = settings_.travel_reinjection ? Reinjection::TravelDirection
+                                                                 : Reinjection::FaceNormal;
+    const PropagationStep step(stencil_of(settings_.order), settings_.order,
+                               settings_.unclamped_transfer ? LobeClamp::None
+                                                            : LobeClamp::Rescaled,
+                               reinjection);
+    const size_t n = levels_.size();
+    std::vector<ShVolume> sums(n), means(n);
+    std::vector<PropagationLevel> field_levels(n);
+    for (size_t level = 0; level < n; ++level)
+        field_levels[level] =
+            pass_level(level, vpls, step, progress, stages, sums[level], means[level]);
 
     // Nothing above changed the solver: commit the pass.
-    injected_sum_ = std::move(sum);
-    injected_ = std::move(mean);
-    field_ = std::make_shared<PropagationField>(
-        std::make_shared<const ShVolume>(std::move(accumulated)), settings_.normal_offset,
-        lookup_transmittance_, settings_.damping, reinjection);
+    for (size_t level = 0; level < n; ++level) {
+        levels_[level].injected_sum = std::move(sums[level]);
+        levels_[level].injected = std::move(means[level]);
+    }
+    field_ = std::make_shared<PropagationField>(std::move(field_levels),
+                                                settings_.normal_offset, settings_.damping,
+                                                reinjection);
     last_vpl_count_ = vpls.size();
     stage_seconds_ = std::move(stages);
     ++passes_;
@@ -365,11 +499,13 @@ void PropagationVolume::refine(Progress* progress) {
 }
 
 size_t PropagationVolume::memory_bytes() const {
-    return (injected_sum_.coefficients().size() + injected_.coefficients().size()) *
-               sizeof(float) +
-           transmittance_.values.size() * sizeof(float) +
-           (lookup_transmittance_ ? lookup_transmittance_->size() * sizeof(float) : 0) +
-           (field_ ? field_->memory_bytes() : 0);
+    size_t bytes = field_ ? field_->memory_bytes() : 0;
+    for (const Level& l : levels_)
+        bytes += (l.injected_sum.coefficients().size() + l.injected.coefficients().size()) *
+                     sizeof(float) +
+                 l.transmittance.values.size() * sizeof(float) +
+                 (l.lookup_transmittance ? l.lookup_transmittance->size() * sizeof(float) : 0);
+    return bytes;
 }
 
 }  // namespace shgi

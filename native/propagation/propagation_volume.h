@@ -31,7 +31,8 @@
 //      first step (§3.2.3: the VPLs' own surfaces would block them) unless occlude_first_step
 //      (then a VPL beside a thin wall, injected into the cell the wall runs through, does not
 //      send its light across). Stencil, flux factor and
-//      clamping: propagation_stencil.h (Ω_f/π instead of eq. 3.3's Ω_f/4π; clamp then rescale);
+//      clamping: propagation_stencil.h (Ω_f/π instead of eq. 3.3's Ω_f/4π; clamp then rescale,
+//      or with unclamped_transfer no clamp);
 //      the light crossing a face is re-injected along the face's normal (the seed) or, with
 //      travel_reinjection, along its travel direction (propagation_stencil.h, "Re-injection").
 // The field (propagation/propagation_field.h) is an immutable snapshot of the accumulation
@@ -99,6 +100,28 @@ struct PropagationSettings {
     // on (docs/methods.md). Off by default: it needs more steps, does not reach the agreement
     // targets at any one step count either, and its near field is less even.
     bool travel_reinjection = false;
+    // Propagate the light's lobes unclamped (LobeClamp::None: each step a linear map, one
+    // transfer per neighbour offset, the alternative issue 51 names to clamping then rescaling
+    // the source lobe, LobeClamp::Rescaled). Flux is kept either way; unclamped, an L1/L2 lobe's
+    // negative back half travels too. With travel_reinjection, damping, both leak corrections
+    // and 24 steps the HOLPV is within 10% of the path tracer on the Cornell box, the sun room
+    // and the two rooms (1.038, 0.990, 1.096), the LPV not (0.882, 0.776, 1.266: its negative
+    // L1 halves cross the two rooms' wall) (docs/methods.md). Off by default.
+    bool unclamped_transfer = false;
+    // Cascades (Kaplanyan & Dachsbacher 2010; seed 000 §4.4), for scenes larger than one volume
+    // can resolve: 1 is a single volume over the scene (`resolution` cells along its longest
+    // side). With n > 1 that volume is the coarsest of n nested levels; each finer level halves
+    // the cell size and spans `resolution` cells per axis (fewer where the scene is smaller)
+    // around the camera (cascade_follow_camera) or cascade_center, kept inside the scene. Every level injects the VPLs it holds and
+    // propagates on its own; a lookup reads the finest level that covers it, blended into the
+    // next coarser one over a band at the level's border (propagation_field.h).
+    int cascades = 1;
+    // Centre the finer levels on the scene's camera (its position at reset()) when the scene
+    // has one; else, or with this off, on cascade_center. Used only with cascades > 1.
+    bool cascade_follow_camera = true;
+    // The point the finer levels are centred on (world space) without the camera: a point of
+    // interest for a bake.
+    vec3 cascade_center{0.0f};
 };
 
 // Throws InvalidArgument naming the field and its allowed range.
@@ -126,33 +149,56 @@ class PropagationVolume : public GiSolver {
     uint64_t passes() const override { return passes_; }
     std::shared_ptr<const IndirectField> current_field() const override { return field_; }
     // vpl_trace, vpl_reflect (vpl_bounces > 1), injection, geometry_volume (of the last reset),
-    // propagation_step_1 … propagation_step_N.
+    // propagation_step_1 … propagation_step_N; with cascades, the last four per level, prefixed
+    // level_<l>_ (0 the finest): level_0_injection, level_0_geometry_volume, …
     std::vector<StageSeconds> stage_seconds() const override { return stage_seconds_; }
     size_t memory_bytes() const override;
+    // Bytes a solver of these settings holds for the scene (its volumes and transmittances; the
+    // geometry lattices and a pass's VPLs come on top), from the cell counts alone.
+    static size_t estimate_memory_bytes(const Scene& scene, const PropagationSettings& settings);
 
     const PropagationSettings& settings() const { return settings_; }
-    // The volumes' layout: origin, cell size, counts (the field's).
-    const ShVolume& injected() const { return injected_; }
+    // The volumes' layout: origin, cell size, counts (the field's; the coarsest level's).
+    const ShVolume& injected() const { return levels_.back().injected; }
+    // Cascade levels (1 without cascades), the finest first; level l's injected volume.
+    size_t level_count() const { return levels_.size(); }
+    const ShVolume& level_injected(size_t level) const { return levels_.at(level).injected; }
     const std::shared_ptr<const PropagationField>& field() const { return field_; }
     // VPLs of the last pass (kept for tests and inspection).
     uint64_t last_vpl_count() const { return last_vpl_count_; }
 
   private:
+    // One volume of the cascade (the only one without cascades).
+    struct Level {
+        ShVolume injected_sum;   // Σ over passes of each pass's injection
+        ShVolume injected;       // the mean: what the last propagation started from
+        PropagationTransmittance transmittance;  // of the stencil (propagation)
+        // Of all 26 neighbours (the field's lookup); null without occlusion.
+        std::shared_ptr<const NeighbourTransmittance> lookup_transmittance;
+        uint8_t blend_faces = 0;  // PropagationLevel::blend_faces
+        double geometry_seconds = 0.0;
+    };
+
     void check_scene(const char* what) const;
     // This pass's VPLs; the seconds spent finding later hits' albedo go to reflect_seconds.
     std::vector<VirtualPointLight> trace_vpls(Progress* progress, double* reflect_seconds);
+    // A level of the geometry lattice `geometry` (its surfaces measured here): its volumes of
+    // one more cell per axis, offset by half a cell, and with occlusion its transmittances.
+    Level make_level(ShLattice geometry, uint8_t blend_faces, Progress* progress) const;
+    // One level's part of a pass: injects `vpls` (the new injection sum and mean into `sum` and
+    // `mean`, the solver unchanged), propagates, appends the level's stage timings.
+    PropagationLevel pass_level(size_t level, const std::vector<VirtualPointLight>& vpls,
+                                const PropagationStep& step, Progress* progress,
+                                std::vector<StageSeconds>& stages, ShVolume& sum,
+                                ShVolume& mean) const;
+
 
     const Scene* scene_;
     PropagationSettings settings_;
     uint64_t scene_revision_ = 0;
     uint64_t passes_ = 0;
     uint64_t last_vpl_count_ = 0;
-    ShVolume injected_sum_;   // Σ over passes of each pass's injection
-    ShVolume injected_;       // the mean: what the last propagation started from
-    PropagationTransmittance transmittance_;  // of the stencil (propagation)
-    // Of all 26 neighbours (the field's lookup); null without occlusion.
-    std::shared_ptr<const NeighbourTransmittance> lookup_transmittance_;
-    double geometry_seconds_ = 0.0;
+    std::vector<Level> levels_;  // finest first
     std::shared_ptr<const PropagationField> field_;
     std::vector<StageSeconds> stage_seconds_;
 };

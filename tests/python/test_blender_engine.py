@@ -98,7 +98,8 @@ NOT_MIRRORED = {
     # light_splits: probe paths split at the native default (4) whatever Light Paths says, so
     # that probe solutions frozen before splitting keep comparing (LIGHT_PATH_LIMITS says so).
     "ProbeGridSettings": {"volumes", "include_direct", "light_splits"},
-    "PropagationSettings": set(),
+    # The cascades follow the camera the exported scene renders from (the native default).
+    "PropagationSettings": {"cascade_follow_camera", "cascade_center"},
     # As the radiance field's glossy_in_grid: no reason for an artist to change it.
     "InstantGiSettings": {"glossy_vpls"},
     "PhotonLatticeSettings": {"use_bounds", "bounds_min", "bounds_max", "caustic_order",
@@ -142,6 +143,18 @@ def test_method_groups_mirror_their_native_settings(solver):
     native_fields = {name for name in dir(native_defaults)
                      if not name.startswith("_") and name != "validate"}
     assert native_fields == mirrored  # a new native field needs a property (or a reason)
+
+
+def test_propagation_cascades_are_validated_with_their_label():
+    """Light Propagation > Cascades above 1 needs Resolution 16 or more: the refusal names the
+    panel's setting."""
+    props = default_props(propagation={"cascades": 3})
+    built = settings.propagation_settings(props, shgi)
+    assert built.cascades == 3 and built.cascade_follow_camera
+    props.propagation.resolution = 8
+    with pytest.raises(ValueError, match=r"Light Propagation > Resolution \(with cascades\) "
+                                         r"is 8; it must be in \[16, 256\]"):
+        settings.propagation_settings(props, shgi)
 
 
 def test_probe_grid_follows_light_paths():

@@ -129,13 +129,68 @@ def test_travel_reinjection_with_the_corrections_agrees_with_path_tracer(name, o
     assert abs(ratio - 1.0) < 0.10, ratio
 
 
+# With the lobes propagated unclamped (a linear transfer per neighbour offset) and damping on
+# top of the travel re-injection and both corrections, 24 steps.
+UNCLAMPED = dict(TRAVEL, unclamped_transfer=True, damping=True)
+_UNCLAMPED_RENDERS = {}
+
+
+def rendered_unclamped(name, order):
+    key = (name, order)
+    if key not in _UNCLAMPED_RENDERS:
+        scale, samples = REFERENCES[name]
+        scene, ref = path_traced_reference(getattr(scenes, name), scale, samples)
+        volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(seed=5, order=order,
+                                                                        **UNCLAMPED))
+        volume.refine()
+        preview, _ = shgi.render_preview(scene, volume.current_field(),
+                                         shgi.PreviewSettings(seed=5))
+        _UNCLAMPED_RENDERS[key] = ref, preview
+    return _UNCLAMPED_RENDERS[key]
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name, order", [
+    pytest.param("cornell_box", 1, marks=missed("DiffInd 0.882x")),
+    ("cornell_box", 2),
+    pytest.param("sun_room", 1, marks=missed("DiffInd 0.776x")),
+    ("sun_room", 2),
+    pytest.param("two_rooms", 1, marks=missed("DiffInd 1.266x: L1 negative halves cross walls")),
+    ("two_rooms", 2),
+])
+def test_unclamped_transfer_with_damping_agrees_with_path_tracer(name, order):
+    """The agreement target with unclamped_transfer and damping added to the travel
+    re-injection and both corrections (24 steps): the HOLPV meets it on all three scenes
+    (measured 1.038, 0.990, 1.096), the LPV on none."""
+    ref, preview = rendered_unclamped(name, order)
+    ratio = indirect_diffuse(preview) / indirect_diffuse(ref)
+    print(f"{name} order {order}, unclamped + damping + travel + corrections, 24 steps: "
+          f"DiffInd x DiffCol {ratio:.3f} x the path tracer's, Combined PSNR "
+          f"{psnr(ref['Combined'], preview['Combined']):.2f} dB")
+    assert abs(ratio - 1.0) < 0.10, ratio
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name", ["cornell_box", "sun_room", "two_rooms"])
+def test_unclamped_holpv_is_closer_than_lpv(name):
+    """Under the same unclamped settings the HOLPV's Combined PSNR is above the LPV's on all
+    three scenes (measured 28.5 / 24.9, 21.7 / 21.1, 26.3 / 24.2 dB)."""
+    ref, lpv = rendered_unclamped(name, 1)
+    _, holpv = rendered_unclamped(name, 2)
+    lpv_psnr, holpv_psnr = psnr(ref["Combined"], lpv["Combined"]), psnr(ref["Combined"],
+                                                                         holpv["Combined"])
+    print(f"{name}, unclamped: Combined PSNR LPV {lpv_psnr:.2f} dB, HOLPV {holpv_psnr:.2f} dB")
+    assert holpv_psnr > lpv_psnr
+
+
 def test_settings_mirror_cpp_defaults_and_validate():
     s = shgi.PropagationSettings()
     assert (s.photons, s.seed, s.vpl_bounces, s.resolution, s.steps, s.order) == (
         100000, 0, 4, 32, 8, 2)
     assert s.occlusion and s.normal_offset == pytest.approx(1.0)
     assert not s.damping and not s.occlude_first_step and not s.drop_outward_vpls
-    assert not s.travel_reinjection
+    assert not s.travel_reinjection and not s.unclamped_transfer
+    assert s.cascades == 1 and s.cascade_center == (0.0, 0.0, 0.0) and s.cascade_follow_camera
     assert shgi.settings_from_dict(shgi.PropagationSettings,
                                    shgi.settings_to_dict(s)).steps == 8
     with pytest.raises(TypeError, match="no field 'step'"):
@@ -342,11 +397,202 @@ def test_a_damaged_field_file_is_refused_naming_it(tmp_path):
     data = path.read_bytes()
     cases = {"magic.shlpv": b"NOTAFIELD" + data[9:], "short.shlpv": data[: len(data) // 2],
              "offset.shlpv": data[:12] + b"\xff\xff\xff\xff" + data[16:],
-             # counts (after magic 8, version 4, offset 4, flags 3, origin 12, cell size 4)
-             "counts.shlpv": data[:35] + b"\xff\xff\x00\x00" * 3 + data[47:],
+             # counts (after magic 8, version 4, offset 4, flags 2, level count 4, the
+             # level's blend faces 1, origin 12, cell size 4)
+             "counts.shlpv": data[:39] + b"\xff\xff\x00\x00" * 3 + data[51:],
              "tail.shlpv": data + b"\x00"}
     for name, content in cases.items():
         bad = tmp_path / name
         bad.write_bytes(content)
         with pytest.raises(OSError, match=name):
             shgi.PropagationField.load(str(bad))
+
+
+# Cascades: examples/scenes.py's hall of 32 x 8 x 4 m (four lamps along it, three blocks),
+# larger than a 32-cell volume resolves (1 m cells). Two levels at resolution 32: the coarsest over the hall, a finer
+# one of 0.5 m cells spanning 16 m around the camera at x = -4 (the hall's whole width and
+# height). Steps 8: light moves at most 8 cells, so at least 8 + 2 cells (the lookup's reach)
+# inside the finer level's box nothing outside it reaches, and the finer level there holds
+# what one 0.5 m volume over the whole hall (resolution 64) holds.
+CASCADE_CENTER = (-4.0, 0.0, 1.5)
+
+
+def hall():
+    return committed(scenes.hall())
+
+
+def hall_field(scene, order, **settings):
+    """A pass over the hall; a cascade_center given is used instead of the camera's position."""
+    if "cascade_center" in settings:
+        settings.setdefault("cascade_follow_camera", False)
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        seed=3, photons=100000, steps=8, order=order, **settings))
+    volume.refine()
+    return volume
+
+
+def floor_line():
+    """Points along the hall's floor (y = 0.3) every 0.05 m, facing up."""
+    import numpy as np
+    xs = np.arange(-15.5, 15.5, 0.05)
+    points = np.stack([xs, np.full_like(xs, 0.3), np.zeros_like(xs)], 1).astype(np.float32)
+    return xs, points, np.tile(np.float32([0, 0, 1]), (len(xs), 1))
+
+
+def line_irradiance(field, points, normals):
+    return field.irradiance(points, normals)[:, :3].mean(axis=1)
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_cascades_give_the_fine_answer_near_the_camera_and_light_far_away(order):
+    """Near the camera the cascaded field is what one volume of the finest level's cells over
+    the whole hall gives (measured within 1.5e-6); beyond the finer level it is the coarsest
+    level's, which alone is the single 32-cell volume (bit for bit), and still lit."""
+    import numpy as np
+    scene = hall()
+    cascaded = hall_field(scene, order, resolution=32, cascades=2,
+                          cascade_center=CASCADE_CENTER)
+    field = cascaded.current_field()
+    assert field.level_count == 2 and cascaded.current_field().level_field(0).level_count == 1
+    fine = hall_field(scene, order, resolution=64).current_field()
+    coarse = hall_field(scene, order, resolution=32).current_field()
+    xs, points, normals = floor_line()
+    e_cascaded, e_fine, e_coarse = (line_irradiance(f, points, normals)
+                                    for f in (field, fine, coarse))
+    near = np.abs(xs - CASCADE_CENTER[0]) < 2.5
+    far = np.abs(xs - CASCADE_CENTER[0]) > 9.0
+    assert near.sum() > 50 and far.sum() > 100
+    near_error = float(np.max(np.abs(e_cascaded[near] / e_fine[near] - 1.0)))
+    print(f"order {order}: near the camera, cascades vs one fine volume: {near_error:.2e}")
+    assert near_error < 1e-4
+    # The 0.5 m answer differs from the 1 m one there (the finer cells are worth having).
+    assert np.max(np.abs(e_coarse[near] / e_fine[near] - 1.0)) > 0.1
+    np.testing.assert_array_equal(e_cascaded[far], e_coarse[far])
+    assert e_cascaded[far].min() > 0.25 * e_cascaded.max()
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_cascade_borders_show_no_seam(order):
+    """Across the finer level's borders (its x faces; the blend band is 4 of its cells inside
+    a margin of 1) the field stays continuous: the steepest change per tenth of a fine cell in
+    the bands is measured 1.6% (LPV) and 1.5% (HOLPV), below 2%, and below the steepest change
+    the fine level shows alone anywhere along the line (11%, a block's edge)."""
+    import numpy as np
+    scene = hall()
+    field = hall_field(scene, order, resolution=32, cascades=2,
+                       cascade_center=CASCADE_CENTER).current_field()
+    fine_alone = field.level_field(0)
+    xs, points, normals = floor_line()
+    e = line_irradiance(field, points, normals)
+    weights_known = line_irradiance(fine_alone, points, normals)
+    steps = np.abs(np.diff(e)) / (0.5 * (e[1:] + e[:-1]))
+    # The bands: where the cascaded field is neither level alone (the weight is inside (0, 1)).
+    coarse_alone = field.level_field(1)
+    e_coarse = line_irradiance(coarse_alone, points, normals)
+    blended = (e != weights_known) & (e != e_coarse)
+    band = blended[1:] | blended[:-1]
+    assert 20 < band.sum() < 200
+    seam = float(steps[band].max())
+    inside = np.abs(xs - CASCADE_CENTER[0]) < 7.0
+    fine_steps = np.abs(np.diff(weights_known[inside])) / (
+        0.5 * (weights_known[inside][1:] + weights_known[inside][:-1]))
+    print(f"order {order}: steepest change per 0.05 m in the blend bands {seam:.4f}, "
+          f"the fine level's steepest inside its box {fine_steps.max():.4f}")
+    assert seam < 0.02
+    assert seam < fine_steps.max()
+
+
+def test_cascades_are_deterministic_and_report_each_level():
+    """The same seed gives the same field whatever the thread count; stages per level; the
+    memory estimate (before anything is allocated) covers what the solver holds; a saved
+    cascaded field loads back answering the same."""
+    import numpy as np
+    scene = hall()
+    settings = dict(resolution=16, cascades=3, cascade_center=CASCADE_CENTER)
+    xs, points, normals = floor_line()
+    fields = []
+    try:
+        for threads in (1, 2):
+            shgi.set_max_threads(threads)
+            volume = hall_field(scene, 2, **settings)
+            fields.append(volume.current_field())
+    finally:
+        shgi.set_max_threads(0)
+    assert fields[0].level_count == 3
+    np.testing.assert_array_equal(line_irradiance(fields[0], points, normals),
+                                  line_irradiance(fields[1], points, normals))
+    stages = [name for name, _ in volume.stage_seconds]
+    expected = ["vpl_trace", "vpl_reflect"]
+    for level in range(3):
+        expected += [f"level_{level}_injection", f"level_{level}_geometry_volume"] + [
+            f"level_{level}_propagation_step_{k}" for k in range(1, 9)]
+    assert stages == expected
+    estimate = shgi.PropagationVolume.estimate_memory_bytes(
+        scene, shgi.PropagationSettings(order=2, steps=8, **settings))
+    assert volume.memory_bytes <= estimate
+    assert shgi.PropagationVolume.estimate_memory_bytes(
+        scene, shgi.PropagationSettings(order=2, steps=8, resolution=16)) < estimate
+
+
+def test_cascades_follow_the_scene_camera_by_default():
+    """cascade_follow_camera (on by default) centres the finer levels on the scene camera's
+    position, as cascade_center there would; off, cascade_center decides."""
+    import numpy as np
+    scene = hall()
+    eye = (-4.0, -3.5, 1.5)  # examples/scenes.py's hall camera
+    xs, points, normals = floor_line()
+    followed = hall_field(scene, 1, resolution=16, cascades=2, cascade_follow_camera=True,
+                          cascade_center=(9.0, 0.0, 1.0)).current_field()
+    placed = hall_field(scene, 1, resolution=16, cascades=2, cascade_center=eye).current_field()
+    elsewhere = hall_field(scene, 1, resolution=16, cascades=2,
+                           cascade_center=(9.0, 0.0, 1.0)).current_field()
+    np.testing.assert_array_equal(line_irradiance(followed, points, normals),
+                                  line_irradiance(placed, points, normals))
+    assert not np.array_equal(line_irradiance(followed, points, normals),
+                              line_irradiance(elsewhere, points, normals))
+
+
+def test_a_saved_cascaded_field_loads_back(tmp_path):
+    import numpy as np
+    scene = hall()
+    field = hall_field(scene, 1, resolution=16, cascades=2, cascade_center=(5.0, 1.0, 1.0),
+                       damping=True).current_field()
+    path = tmp_path / "cascaded.shlpv"
+    field.save(str(path))
+    loaded = shgi.PropagationField.load(str(path))
+    xs, points, normals = floor_line()
+    assert loaded.level_count == 2
+    np.testing.assert_array_equal(loaded.irradiance(points, normals),
+                                  field.irradiance(points, normals))
+
+
+def test_cascade_settings_are_validated_before_allocating():
+    scene = hall()
+    for fields, match in [(dict(cascades=0), "cascades is 0"),
+                          (dict(cascades=9), "cascades is 9"),
+                          (dict(cascades=2, resolution=8), r"resolution \(with cascades\) is 8")]:
+        with pytest.raises(ValueError, match=f"PropagationSettings.{match}"):
+            shgi.PropagationVolume(scene, shgi.PropagationSettings(**fields))
+    with pytest.raises(ValueError, match="cascade_center: element .* is nan"):
+        shgi.PropagationSettings(cascade_center=(float("nan"), 0, 0))
+    huge = shgi.PropagationSettings(resolution=256, cascades=8, order=2)
+    assert shgi.PropagationVolume.estimate_memory_bytes(scene, huge) > 10 ** 10
+    with pytest.raises(MemoryError, match="cascade levels"):
+        shgi.PropagationVolume(scene, huge)
+
+
+def test_cancel_with_cascades_keeps_the_previous_field():
+    """A cancel in any level's injection or propagation keeps the last field."""
+    import numpy as np
+    scene = hall()
+    volume = hall_field(scene, 1, resolution=16, cascades=3, cascade_center=CASCADE_CENTER)
+    xs, points, normals = floor_line()
+    before = line_irradiance(volume.current_field(), points, normals)
+    for stage_to_cancel in ("injecting VPLs, level 1", "propagating, level 2"):
+        progress = shgi.Progress(
+            lambda fraction, stage: progress.cancel() if stage == stage_to_cancel else None)
+        with pytest.raises(shgi.Cancelled):
+            volume.refine(progress)
+        assert volume.passes == 1
+        np.testing.assert_array_equal(line_irradiance(volume.current_field(), points, normals),
+                                      before)

@@ -299,11 +299,11 @@ class SHGI_RENDER_PT_propagation(_FieldPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         column = layout.column(align=True)
-        for name in ("photons", "resolution", "steps", "order", "normal_offset"):
+        for name in ("photons", "resolution", "steps", "order", "normal_offset", "cascades"):
             column.prop(volume, name)
         column = layout.column(align=True)
         for name in ("occlusion", "occlude_first_step", "drop_outward_vpls", "travel_reinjection",
-                     "damping"):
+                     "unclamped_transfer", "damping"):
             column.prop(volume, name)
         column = layout.column(align=True)
         column.label(text="Passes")

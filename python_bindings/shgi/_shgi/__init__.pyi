@@ -2722,14 +2722,23 @@ class PropagationField(IndirectField):
         """
         The field a save() wrote; OSError naming the file when it is not one.
         """
+    def level_field(self, level: typing.SupportsIndex) -> PropagationField:
+        """
+        Cascade level `level` alone (0 the finest) as a field of its own, unblended.
+        """
     def save(self, path: str) -> None:
         """
         Writes the field to an SHGI .shlpv file (atomically); load() reads it back.
         """
     @property
+    def level_count(self) -> int:
+        """
+        Cascade levels (1 without cascades; 0 before the first pass), the finest first.
+        """
+    @property
     def memory_bytes(self) -> int:
         """
-        Bytes of its volume.
+        Bytes of its volumes.
         """
 class PropagationSettings:
     """
@@ -2746,6 +2755,30 @@ class PropagationSettings:
         """
         Raises ValueError naming the first invalid field.
         """
+    @property
+    def cascade_center(self) -> tuple:
+        """
+        The point the finer cascade levels are centred on without the camera (cascade_follow_camera off, or a scene without one): a point of interest for a bake ((0, 0, 0)).
+        """
+    @cascade_center.setter
+    def cascade_center(self, arg1: typing.Any) -> None:
+        ...
+    @property
+    def cascade_follow_camera(self) -> bool:
+        """
+        Centre the finer cascade levels on the scene's camera (its position when the volume is reset) when the scene has one (True).
+        """
+    @cascade_follow_camera.setter
+    def cascade_follow_camera(self, arg0: bool) -> None:
+        ...
+    @property
+    def cascades(self) -> int:
+        """
+        Nested volumes around cascade_center, each finer level with half the cells' size and `resolution` cells per axis; 1: one volume over the scene (1).
+        """
+    @cascades.setter
+    def cascades(self, arg1: typing.SupportsIndex) -> None:
+        ...
     @property
     def damping(self) -> bool:
         """
@@ -2835,6 +2868,14 @@ class PropagationSettings:
     def travel_reinjection(self, arg0: bool) -> None:
         ...
     @property
+    def unclamped_transfer(self) -> bool:
+        """
+        Propagate the lobes unclamped (a linear transfer per neighbour offset) instead of clamping each source lobe at zero and rescaling it to its flux (False).
+        """
+    @unclamped_transfer.setter
+    def unclamped_transfer(self, arg0: bool) -> None:
+        ...
+    @property
     def vpl_bounces(self) -> int:
         """
         Surface hits per light path that become VPLs: 1 is the published single bounce, n gives n bounces of indirect light (4).
@@ -2855,6 +2896,11 @@ class PropagationVolume(GiSolver):
     @staticmethod
     def _pybind11_conduit_v1_(*args, **kwargs):
         ...
+    @staticmethod
+    def estimate_memory_bytes(scene: Scene, settings: PropagationSettings) -> int:
+        """
+        Bytes the volumes and transmittances of these settings take for the scene (all cascade levels), before anything is allocated; ValueError for bad settings.
+        """
     def __init__(self, scene: Scene, settings: PropagationSettings = ..., progress: Progress = None) -> None:
         """
         Builds the geometry volume (the scene must be committed).
@@ -2889,7 +2935,7 @@ class PropagationVolume(GiSolver):
     @property
     def stage_seconds(self) -> list:
         """
-        [(stage, seconds)] of the last pass: vpl_trace, vpl_reflect, injection, geometry_volume (of the last reset), propagation_step_1 ... N.
+        [(stage, seconds)] of the last pass: vpl_trace, vpl_reflect, injection, geometry_volume (of the last reset), propagation_step_1 ... N; with cascades, the last four per level prefixed level_<l>_ (0 the finest).
         """
     @property
     def vpl_count(self) -> int:

@@ -100,6 +100,26 @@ TEST(ShLattice, BadArgumentsThrowNamingThem) {
     testing::expect_invalid_argument([&] { lattice.set_cell_radiance(8, ShRgb(1)); }, "cell = 8");
 }
 
+// An explicit grid (the propagation cascades' levels): the layout given, bad grids named.
+TEST(ShLattice, ExplicitGridKeepsItsLayoutAndRefusesBadOnes) {
+    const ShLattice lattice(vec3(-1.0f, 2.0f, 0.5f), 0.25f, ivec3(3, 4, 5), 2);
+    EXPECT_EQ(lattice.origin(), vec3(-1.0f, 2.0f, 0.5f));
+    EXPECT_EQ(lattice.cell_size(), 0.25f);
+    EXPECT_EQ(lattice.dims(), ivec3(3, 4, 5));
+    EXPECT_EQ(lattice.order(), 2);
+    EXPECT_EQ(lattice.cell_of(vec3(-0.9f, 2.3f, 1.6f)), ivec3(0, 1, 4));
+    testing::expect_invalid_argument(
+        [&] { ShLattice(vec3(0.0f), 0.0f, ivec3(2), 1); }, "cell size 0");
+    testing::expect_invalid_argument(
+        [&] { ShLattice(vec3(NAN, 0.0f, 0.0f), 1.0f, ivec3(2), 1); }, "must be finite");
+    testing::expect_invalid_argument([&] { ShLattice(vec3(0.0f), 1.0f, ivec3(2, 0, 2), 1); },
+                                     "at least 1 per axis");
+    testing::expect_invalid_argument([&] { ShLattice(vec3(0.0f), 1.0f, ivec3(2), 3); },
+                                     "order = 3");
+    testing::expect_invalid_argument([&] { ShLattice(vec3(0.0f), 1.0f, ivec3(1024), 1); },
+                                     "cells, more than");
+}
+
 // ----- measure_surfaces ---------------------------------------------------------------------
 
 // A horizontal rectangle split across cells: each cell gets the overlap of the rectangle with

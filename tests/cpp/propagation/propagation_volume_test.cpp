@@ -447,6 +447,24 @@ TEST(PropagationVolume, DiagonalSceneHolpvBeatsLpvWithTravelReinjection) {
 
 // --- the solver ----------------------------------------------------------------------------
 
+TEST(PropagationVolume, CascadeSettingsNameTheField) {
+    const Scene scene = test::emissive_furnace(0.5f, vec3(1.0f), 1.0f);
+    PropagationSettings s;
+    s.cascades = 9;
+    expect_error<InvalidArgument>([&] { PropagationVolume volume(scene, s); },
+                                  {"PropagationSettings.cascades is 9", "[1, 8]"});
+    s = {};
+    s.cascades = 2;
+    s.resolution = 8;
+    expect_error<InvalidArgument>([&] { PropagationVolume volume(scene, s); },
+                                  {"PropagationSettings.resolution (with cascades) is 8"});
+    s = {};
+    s.cascades = 2;
+    s.cascade_center = vec3(std::nanf(""), 0.0f, 0.0f);
+    expect_error<InvalidArgument>([&] { PropagationVolume volume(scene, s); },
+                                  {"PropagationSettings.cascade_center"});
+}
+
 TEST(PropagationVolume, BadSettingsNameTheField) {
     const Scene scene = test::emissive_furnace(0.5f, vec3(1.0f), 1.0f);
     const auto refused = [&](PropagationSettings s, const char* field) {
