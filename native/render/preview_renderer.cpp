@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <optional>
 #include <vector>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "render/frame_pipeline.h"
 #include "render/lookup_sharing.h"
@@ -23,6 +26,22 @@ constexpr size_t kWavePixels = 256;
 // Pixels per parallel work unit (a run of whole tiles): a 640 x 360 frame gives a few hundred
 // units, plenty to balance the threads, and the per-unit setup stays negligible.
 constexpr uint64_t kChunkPixels = 1024;
+
+// Sets every pass of `values` to 0, as `values = PassValues{}` does. GCC's generic x86-64
+// tuning clears the 168 bytes with `rep stosq`, whose start-up cost made that one line ~1% of
+// a preview frame (once per pixel and sample); ten 16-byte stores and one 8-byte store do the
+// same work in a few cycles.
+void clear_pass_values(PassValues& values) {
+#if defined(__SSE2__)
+    static_assert(sizeof(PassValues) == 168, "clear_pass_values stores 10 x 16 + 8 bytes");
+    auto* bytes = reinterpret_cast<char*>(&values);
+    const __m128i zero = _mm_setzero_si128();
+    for (int k = 0; k < 10; ++k) _mm_storeu_si128(reinterpret_cast<__m128i*>(bytes + 16 * k), zero);
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(bytes + 160), zero);
+#else
+    values = PassValues{};
+#endif
+}
 
 // Seconds one work unit spent in each stage.
 struct StageSeconds {
@@ -217,7 +236,7 @@ class FrameWork {
         }
         scene_.intersect(wave.rays, wave.hits, nullptr, RayCoherence::Coherent);
         for (size_t i = 0; i < wave.count; ++i) {
-            wave.values[i] = PassValues{};
+            clear_pass_values(wave.values[i]);
             PathIntegrator& path = wave.paths[i].emplace(scene_, camera_, lights_, settings_,
                                                          &field_, wave.rngs[i], wave.values[i],
                                                          &clock);
