@@ -28,16 +28,20 @@ constexpr size_t kWavePixels = 256;
 constexpr uint64_t kChunkPixels = 1024;
 
 // Sets every pass of `values` to 0, as `values = PassValues{}` does. GCC's generic x86-64
-// tuning clears the 168 bytes with `rep stosq`, whose start-up cost made that one line ~1% of
-// a preview frame (once per pixel and sample); ten 16-byte stores and one 8-byte store do the
-// same work in a few cycles.
+// tuning clears the passes (16 x 12 bytes) with `rep stosq`, whose start-up cost made that one
+// line ~1% of a preview frame (once per pixel and sample); 16-byte stores (and an 8-byte one
+// for a remainder) do the same work in a few cycles.
 void clear_pass_values(PassValues& values) {
 #if defined(__SSE2__)
-    static_assert(sizeof(PassValues) == 168, "clear_pass_values stores 10 x 16 + 8 bytes");
+    constexpr size_t kWide = sizeof(PassValues) / 16;
+    static_assert(sizeof(PassValues) % 16 == 0 || sizeof(PassValues) % 16 == 8,
+                  "clear_pass_values stores 16-byte words and at most one 8-byte one");
     auto* bytes = reinterpret_cast<char*>(&values);
     const __m128i zero = _mm_setzero_si128();
-    for (int k = 0; k < 10; ++k) _mm_storeu_si128(reinterpret_cast<__m128i*>(bytes + 16 * k), zero);
-    _mm_storel_epi64(reinterpret_cast<__m128i*>(bytes + 160), zero);
+    for (size_t k = 0; k < kWide; ++k)
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(bytes + 16 * k), zero);
+    if constexpr (sizeof(PassValues) % 16 == 8)
+        _mm_storel_epi64(reinterpret_cast<__m128i*>(bytes + 16 * kWide), zero);
 #else
     values = PassValues{};
 #endif
