@@ -98,8 +98,8 @@ def parse_args():
                              "none. Use another --cache: references are keyed without it")
     parser.add_argument("--clamp-indirect", type=float, default=None,
                         help="Light Paths > Clamp Indirect for both renderers, renders and "
-                             "references (default: each one's own: Cycles 10, SHGI 0). Use "
-                             "another --cache: references are keyed without it")
+                             "references (default: each one's own, 10 in both; SHGI's was 0 "
+                             "before settings layout 4). References are keyed by it")
     parser.add_argument("--first-hit-guides", action="store_true",
                         help="A/B of the denoiser's guides: each time-limited SHGI render is "
                              "made twice, alternating which goes first, with the renderers' "
@@ -393,12 +393,17 @@ def main():
         scene = build_scene(name, args.width, args.height, args.cycles_filter_glossy,
                             args.clamp_indirect)
         limited = supports_limit(scene)
-        key = f"{name}_{args.width}x{args.height}_{{}}_{args.reference_samples}spp"
+        # References are keyed by each renderer's Clamp Indirect: a biased estimate is scored
+        # against a reference with the same bias.
+        key = (f"{name}_{args.width}x{args.height}_{{}}_clamp{{:g}}_"
+               f"{args.reference_samples}spp")
         print(f"{name}:", flush=True)
-        cycles_ref, cycles_spp = reference(scene, key.format("cycles"), "CYCLES",
-                               lambda s: use_cycles(s, args.reference_samples, False), args)
-        shgi_ref, shgi_spp = reference(scene, key.format("shgi"), "SHGI",
-                             lambda s: use_shgi(s, "PATH_TRACE", args.reference_samples), args)
+        cycles_ref, cycles_spp = reference(
+            scene, key.format("cycles", scene.cycles.sample_clamp_indirect), "CYCLES",
+            lambda s: use_cycles(s, args.reference_samples, False), args)
+        shgi_ref, shgi_spp = reference(
+            scene, key.format("shgi", scene.shgi.clamp_indirect), "SHGI",
+            lambda s: use_shgi(s, "PATH_TRACE", args.reference_samples), args)
         cycles = cycles_runs(scene, cycles_ref, args, exr)
         results = {}
         for method in methods:

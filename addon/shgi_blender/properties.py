@@ -529,8 +529,9 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
         description="Transmission bounce limit")
     clamp_indirect: FloatProperty(
         name="Clamp Indirect", default=D["clamp_indirect"], min=0.0, soft_max=100.0,
-        description="Largest colour component of an indirect light sample, against "
-                    "fireflies (also of the Probe Grid's probe samples); 0 disables clamping")
+        description="Brightest indirect light sample (the mean of its colour), against "
+                    "fireflies, as Cycles' Clamping > Indirect Light and with its default "
+                    "(also the Probe Grid's probe samples); 0 disables clamping")
     world_sampling: EnumProperty(
         name="World Sampling", items=WORLD_SAMPLING_ITEMS, default=D["world_sampling"],
         description="How direct light from the world is sampled")

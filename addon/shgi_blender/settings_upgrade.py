@@ -12,6 +12,8 @@ its default in the new place while its old value lies unused under the old name.
 3. Each method group's ``final_gather``, on for a new scene (settings.FINAL_GATHER_DEFAULTS). A
    scene saved before it read its field at the first surface: it keeps doing so (off), so that
    it renders, and its frozen solutions compare, as they did.
+4. Light Paths > Clamp Indirect defaults to Cycles' 10 (settings.CYCLES_DEFAULTS), where it was
+   0 (off). A scene saved before that left it at 0 unless someone set it: it keeps 0.
 
 ``upgrade`` takes what a scene stored (its ID properties as a dict: only values someone set are
 stored, a default is not) and says what to write where, so that the scene renders with the
@@ -22,7 +24,7 @@ from dataclasses import dataclass, field
 
 from . import settings
 
-SETTINGS_VERSION = 3
+SETTINGS_VERSION = 4
 
 # The method groups that version 2 had: a scene saved then could render only with these, so
 # only they keep reading their field directly (groups added later start with their defaults).
@@ -42,13 +44,16 @@ DEFAULTS_OF_1 = {"probe_passes": 6}
 # their version 1 defaults: dropped, with a note when the value differs from what Light Paths
 # now gives the probe grid.
 DROPPED_FROM_1 = {"bounces": 3, "clamp": 0.0}
+# Defaults of scene.shgi's own properties before version 4 that have changed since: a scene that
+# left one at its default stored nothing, and rendered with this value.
+DEFAULTS_BEFORE_4 = {"clamp_indirect": 0.0}
 
 
 @dataclass
 class Upgrade:
     """What to do to one scene's settings."""
 
-    values: dict = field(default_factory=dict)    # {(group, property): stored value}
+    values: dict = field(default_factory=dict)    # {(group or "", property): stored value}
     removed: list = field(default_factory=list)   # [(group or "", name)] of stale ID properties
     notes: list = field(default_factory=list)     # what could not be kept, for the console
 
@@ -71,6 +76,10 @@ def upgrade(stored):
         for prop in GROUPS_BEFORE_3:
             if "final_gather" not in stored.get(prop, {}):
                 result.values[(prop, "final_gather")] = False
+    if version < 4:
+        for name, old_default in DEFAULTS_BEFORE_4.items():
+            if name not in stored:
+                result.values[("", name)] = old_default
     return result
 
 
@@ -83,8 +92,8 @@ def _upgrade_from_1(stored, result):
         elif old in DEFAULTS_OF_1:
             result.values[target] = DEFAULTS_OF_1[old]
     grid = stored.get("probe_grid", {})
-    light_paths = settings.default_properties(**{
-        name: stored[name] for name in ("diffuse_bounces", "clamp_indirect") if name in stored})
+    light_paths = settings.default_properties(**dict(DEFAULTS_BEFORE_4, **{
+        name: stored[name] for name in ("diffuse_bounces", "clamp_indirect") if name in stored}))
     follows = settings.light_path_fields(light_paths, settings.METHOD_SETTINGS["PROBE_GRID"],
                                          check=False, gather=False)
     for name, old_default in DROPPED_FROM_1.items():

@@ -41,7 +41,7 @@ def upgrade_scene(scene):
         return []
     upgrade = settings_upgrade.upgrade(_stored(props))
     for (group, name), value in upgrade.values.items():
-        _set(getattr(props, group), name, value)
+        _set(getattr(props, group) if group else props, name, value)
     for group, name in upgrade.removed:
         del (getattr(props, group) if group else props)[name]
     if props.get("settings_version") != settings_upgrade.SETTINGS_VERSION:

@@ -113,6 +113,27 @@ def check_new_scene(results, folder):
                                  "settings_version": scene.shgi.get("settings_version")}
 
 
+def check_third_layout_clamp(results):
+    """A scene stamped with layout 3 that left Clamp Indirect at that layout's default (0, off)
+    keeps 0 after versioning, though a new scene clamps at Cycles' 10; one that set it keeps
+    its value."""
+    from shgi_blender import versioning
+
+    results["new_scene_clamp"] = bpy.context.scene.shgi.clamp_indirect
+    read = {}
+    for name, stored in (("left", None), ("set", 7.5)):
+        scene = bpy.data.scenes.new(f"layout_3_{name}")
+        scene.shgi["settings_version"] = 3
+        scene.shgi.samples = 21  # something stored
+        if stored is not None:
+            scene.shgi.clamp_indirect = stored
+        versioning.upgrade_scene(scene)
+        read[name] = {"clamp_indirect": scene.shgi.clamp_indirect,
+                      "settings_version": scene.shgi.get("settings_version")}
+        bpy.data.scenes.remove(scene)
+    results["layout_3_clamp"] = read
+
+
 def main():
     setup.enable_addon()
     from shgi_blender import versioning
@@ -123,6 +144,7 @@ def main():
     results = {"blender": bpy.app.version_string, "fixture_blender": saved["blender"]}
     with tempfile.TemporaryDirectory() as folder:
         check_new_scene(results, folder)
+        check_third_layout_clamp(results)
 
         bpy.ops.wm.open_mainfile(filepath=FIXTURE)
         scene = bpy.context.scene

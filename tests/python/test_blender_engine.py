@@ -77,6 +77,8 @@ def test_property_defaults_are_the_native_defaults(struct, fields):
         expected = getattr(native_defaults, native_name)
         if (struct, native_name) == (shgi.PreviewSettings, "samples"):
             expected = settings.PROPERTY_DEFAULTS["samples"]  # one samples for every method
+        if prop_name in settings.CYCLES_DEFAULTS:  # Cycles' default, not the native one
+            expected = settings.CYCLES_DEFAULTS[prop_name]
         assert getattr(built, native_name) == expected, (struct.__name__, native_name, prop_name)
 
 
@@ -135,8 +137,9 @@ def test_method_groups_mirror_their_native_settings(solver):
             value = getattr(getattr(shgi, settings.ENUM_FIELDS[name]), value)
         assert expected == pytest.approx(value) if isinstance(value, float) else expected == value
         assert getattr(built, name) == getattr(native_defaults, name), name
-    for name in group.light_paths:
-        assert getattr(built, name) == pytest.approx(getattr(native_defaults, name)), name
+    for name, value in group.light_paths.items():
+        expected = settings.CYCLES_DEFAULTS.get(value.prop, getattr(native_defaults, name))
+        assert getattr(built, name) == pytest.approx(expected), name
     assert built.seed == 4
     mirrored = (set(group.defaults) | set(group.light_paths) | {"seed"}
                 | NOT_MIRRORED[group.native_type])

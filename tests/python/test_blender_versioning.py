@@ -29,7 +29,9 @@ def test_first_layout_values_move_into_the_method_groups():
         # left at the first layout's default, 6, which the scene rendered with
         ("probe_grid", "passes"): 6,
         # the field read at the first surface, as before Final Gather existed
-        ("photon_lattice", "final_gather"): False, ("probe_grid", "final_gather"): False}
+        ("photon_lattice", "final_gather"): False, ("probe_grid", "final_gather"): False,
+        # Clamp Indirect left at that layout's default, 0 (off), not today's Cycles default
+        ("", "clamp_indirect"): 0.0}
     assert sorted(upgrade.removed) == [("", "caustics"), ("", "photons"),
                                        ("", "viewport_photon_passes"),
                                        ("", "viewport_probe_passes")]
@@ -52,11 +54,21 @@ def test_probe_grid_values_light_paths_took_over_are_dropped_with_a_note():
 def test_a_second_layout_scene_keeps_reading_its_field_directly():
     upgrade = settings_upgrade.upgrade({"settings_version": 2, "probe_grid": {"order": 1}})
     assert upgrade.values == {("photon_lattice", "final_gather"): False,
-                              ("probe_grid", "final_gather"): False}
+                              ("probe_grid", "final_gather"): False, ("", "clamp_indirect"): 0.0}
     assert (upgrade.removed, upgrade.notes) == ([], [])
     # One set by hand in that file (it cannot be, but a script may have) is kept.
-    stored = {"settings_version": 2, "probe_grid": {"final_gather": True}}
+    stored = {"settings_version": 2, "probe_grid": {"final_gather": True}, "clamp_indirect": 3.0}
     assert settings_upgrade.upgrade(stored).values == {("photon_lattice", "final_gather"): False}
+
+
+def test_a_third_layout_scene_keeps_clamp_indirect_off():
+    """Layout 4 gave Clamp Indirect Cycles' default, 10; a scene saved before, which left it at
+    0, keeps 0 (it stored nothing); one that set it keeps its own value (nothing to write)."""
+    assert settings.PROPERTY_DEFAULTS["clamp_indirect"] == 10.0
+    assert shgi.PathTracerSettings().clamp_indirect == 0.0  # scripts keep the native 0
+    assert settings_upgrade.upgrade({"settings_version": 3, "samples": 5}).values == {
+        ("", "clamp_indirect"): 0.0}
+    assert settings_upgrade.upgrade({"settings_version": 3, "clamp_indirect": 4.0}).values == {}
 
 
 def test_settings_of_today_layout_are_left_alone():
@@ -114,6 +126,11 @@ def test_a_new_scene_solves_as_many_probe_passes_as_the_cli(blender, build_pytho
     assert results["new_scene_passes"] == results["bake_probe_grid_passes"] == \
         shgi.bake.PROBE_GRID_PASSES
     # Saved with today's layout: the default is kept, not read as the first layout's 6.
+    # Layout 3 left Clamp Indirect at 0: it stays 0; a new scene clamps at Cycles' 10.
+    assert results["new_scene_clamp"] == 10.0
+    assert results["layout_3_clamp"] == {
+        "left": {"clamp_indirect": 0.0, "settings_version": settings_upgrade.SETTINGS_VERSION},
+        "set": {"clamp_indirect": 7.5, "settings_version": settings_upgrade.SETTINGS_VERSION}}
     assert results["today_reopened"] == {"samples": 33,
                                          "probe_grid.passes": shgi.bake.PROBE_GRID_PASSES,
                                          "settings_version": settings_upgrade.SETTINGS_VERSION}
