@@ -331,21 +331,6 @@ def test_filter_direct_lights_with_extent_and_suns(kind):
     assert abs(direct - 1.0) < 0.07, direct
 
 
-def test_filter_direct_lamp_frames_do_not_depend_on_threads_or_tiles():
-    scene = lamp_over_a_floor()
-    field = solved(scene, passes=1, filter_direct=True).current_field()
-    images = []
-    try:
-        for threads, tile in ((1, 16), (2, 4)):
-            shgi.set_max_threads(threads)
-            images.append(preview(scene, field, samples=1, tile_size=tile))
-    finally:
-        shgi.set_max_threads(0)
-    assert images[0]["DiffDir"].max() > 0.0
-    for name in ("Combined", "DiffDir", "GlossDir"):
-        np.testing.assert_array_equal(images[0][name], images[1][name], err_msg=name)
-
-
 def test_filter_direct_carries_the_skys_direct_light():
     """With filter_direct the sky's direct light on the floor comes from the directional VPLs
     through the SH filter (the renderer's next-event estimation leaves the world out: counted
@@ -368,8 +353,9 @@ def test_filter_direct_carries_the_skys_direct_light():
     np.testing.assert_allclose(ratio, 1.0, atol=0.02)
 
 
-def test_filter_direct_frames_do_not_depend_on_threads_or_tiles():
-    scene = sky_over_a_floor()
+@pytest.mark.parametrize("make_scene", [sky_over_a_floor, lamp_over_a_floor])
+def test_filter_direct_frames_do_not_depend_on_threads_or_tiles(make_scene):
+    scene = make_scene()
     field = solved(scene, passes=1, filter_direct=True).current_field()
     images = []
     try:

@@ -92,21 +92,27 @@ def test_holpv_is_closer_than_lpv(name):
 # its travel direction, whose propagation leaves a closed room in about as many steps as the
 # room is wide: 24 steps (docs/methods.md, "Why the accumulation does not converge").
 TRAVEL = dict(occlude_first_step=True, drop_outward_vpls=True, travel_reinjection=True, steps=24)
-_TRAVEL_RENDERS = {}
+_VARIANT_RENDERS = {}
 
 
-def rendered_travel(name, order):
-    key = (name, order)
-    if key not in _TRAVEL_RENDERS:
+def rendered_with(settings, name, order):
+    """(reference, preview) of scene `name` through a volume of `order` with `settings` (a dict
+    of PropagationSettings fields), once per session."""
+    key = (tuple(sorted(settings.items())), name, order)
+    if key not in _VARIANT_RENDERS:
         scale, samples = REFERENCES[name]
         scene, ref = path_traced_reference(getattr(scenes, name), scale, samples)
         volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(seed=5, order=order,
-                                                                        **TRAVEL))
+                                                                        **settings))
         volume.refine()
         preview, _ = shgi.render_preview(scene, volume.current_field(),
                                          shgi.PreviewSettings(seed=5))
-        _TRAVEL_RENDERS[key] = ref, preview
-    return _TRAVEL_RENDERS[key]
+        _VARIANT_RENDERS[key] = ref, preview
+    return _VARIANT_RENDERS[key]
+
+
+def rendered_travel(name, order):
+    return rendered_with(TRAVEL, name, order)
 
 
 @pytest.mark.reference
@@ -132,21 +138,10 @@ def test_travel_reinjection_with_the_corrections_agrees_with_path_tracer(name, o
 # With the lobes propagated unclamped (a linear transfer per neighbour offset) and damping on
 # top of the travel re-injection and both corrections, 24 steps.
 UNCLAMPED = dict(TRAVEL, unclamped_transfer=True, damping=True)
-_UNCLAMPED_RENDERS = {}
 
 
 def rendered_unclamped(name, order):
-    key = (name, order)
-    if key not in _UNCLAMPED_RENDERS:
-        scale, samples = REFERENCES[name]
-        scene, ref = path_traced_reference(getattr(scenes, name), scale, samples)
-        volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(seed=5, order=order,
-                                                                        **UNCLAMPED))
-        volume.refine()
-        preview, _ = shgi.render_preview(scene, volume.current_field(),
-                                         shgi.PreviewSettings(seed=5))
-        _UNCLAMPED_RENDERS[key] = ref, preview
-    return _UNCLAMPED_RENDERS[key]
+    return rendered_with(UNCLAMPED, name, order)
 
 
 @pytest.mark.reference
