@@ -307,8 +307,8 @@ def bake_properties():
                         "surfaces can be shaded"),
         "sh_order": IntProperty(
             name="SH Order", default=B["sh_order"], min=1, max=2,
-            description="With Directional: 1 stores L1 spherical harmonics (4 coefficients "
-                        "per channel, SH.c0..c3); 2 stores L2 (9, SH.c0..c8), which keeps "
+            description="With Directional: 1 stores 4 direction coefficients per channel "
+                        "(SH.c0..c3); 2 stores 9 (SH.c0..c8), which keeps "
                         "sharper changes of direction (a lamp's falloff over a normal map) at "
                         "2.25 times the memory"),
         "filter": BoolProperty(

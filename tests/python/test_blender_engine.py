@@ -265,7 +265,8 @@ FIRST_LAYOUT_SIGNATURE = (
 
 def test_a_saved_solution_s_signature_still_compares():
     # As versioning opens that file: the field read at the first surface (settings_upgrade).
-    props = default_props(method="PROBE_GRID", probe_grid={
+    # And Clamp Indirect at that layout's default, 0 (settings_upgrade.DEFAULTS_BEFORE_4).
+    props = default_props(method="PROBE_GRID", clamp_indirect=0.0, probe_grid={
         "hysteresis": 0.949999988079071, "max_offset": 0.44999998807907104,
         "visibility_blur": 0.15000000596046448,  # as Blender's 32-bit floats read back
         "final_gather": False})
