@@ -153,8 +153,8 @@ ENUM_ITEMS = {
 # Light Paths whose add-on default is Cycles' own rather than the native one: an artist's scene
 # then clamps alike in both engines, and the preview shows what Cycles will render. Cycles'
 # Clamping > Indirect Light is 10 by default (clamped as SHGI clamps, render/shading.h); with
-# it off SHGI's caustics scene read 6% brighter than Cycles' default render and its 4096-spp
-# references differed by as much (docs/equal-time.md). Scripts and `python -m shgi` keep the
+# it off SHGI's 4096-spp reference of the caustics scene read 5.3% brighter than Cycles'
+# default one, with it on 0.55% (docs/equal-time.md). Scripts and `python -m shgi` keep the
 # native 0: the unbiased answer the tests compare with closed forms.
 CYCLES_DEFAULTS = {"clamp_indirect": 10.0}
 
