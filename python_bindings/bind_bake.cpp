@@ -206,8 +206,7 @@ What and how a lightmap is baked; every field has a default. Content (Cycles' DI
         .def_readwrite("directional", &S::directional,
                        "Also bake the SH of the incident radiance, of order sh_order (False).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
-                       "Light Paths > Clamp Indirect as Cycles': an indirect contribution whose components "
-                       "average more than this is scaled down to it; 0 = off (0).")
+                       kClampIndirectDoc)
         .def_readwrite("final_gather", &S::final_gather,
                        "With a field: each sample traces one ray that reads the field where it "
                        "lands, with direct light there, instead of reading it at the texel: "
@@ -237,7 +236,7 @@ LightmapTexels(color, variance, baked, sh=None) rebuilds one from its arrays (a 
                      const size_t size = array ? size_t(array.size()) : 0;
                      // L2 when it holds 9 coefficients per channel; otherwise L1 (copy_in names
                      // the mismatch).
-                     texels->sh_order = n > 0 && size == size_t(3 * 9) * n ? 2 : 1;
+                     texels->sh_order = n > 0 && size == size_t(kLightmapMaxShFloats) * n ? 2 : 1;
                      copy_in(sh, "sh", size_t(texels->sh_floats()) * n, texels->sh);
                  }
                  return texels;

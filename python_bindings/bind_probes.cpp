@@ -170,8 +170,8 @@ object), with resolution probes along each local axis at the cell centres.)doc")
         .def_readwrite("hysteresis", &S::hysteresis,
                        "History weight of the exponential blend, in [0, 1) (0.95).")
         .def_readwrite("clamp", &S::clamp,
-                       "A radiance sample whose components average more than this is scaled down to it "
-                       "(Light Paths > Clamp Indirect, as Cycles clamps); 0 = off (0).")
+                       "A radiance sample whose components average more than this is scaled "
+                       "down to it (Light Paths > Clamp Indirect, as Cycles clamps); 0 = off (0).")
         .def_readwrite("include_direct", &S::include_direct,
                        "Keep emitters and world seen straight from the probes (False).")
         .def_readwrite("visibility", &S::visibility, "Leak prevention weights (True).")

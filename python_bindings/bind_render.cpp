@@ -116,8 +116,7 @@ void bind_settings(py::module_& m) {
     cls.def(py::init(&from_kwargs<S>),
             "PathTracerSettings(**fields), e.g. PathTracerSettings(samples=16, seed=3).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
-                       "Light Paths > Clamp Indirect as Cycles': an indirect contribution whose components "
-                       "average more than this is scaled down to it; 0 = off (0).")
+                       kClampIndirectDoc)
         .def_readwrite("world_sampling", &S::world_sampling, "WorldSampling (COSINE).")
         .def("validate", &validate_path_tracer_settings,
              "Raises ValueError naming the first invalid field.");
@@ -301,8 +300,7 @@ void bind_preview(py::module_& m) {
     cls.def(py::init(&from_kwargs<S>),
             "PreviewSettings(**fields), e.g. PreviewSettings(samples=4, seed=1).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
-                       "Light Paths > Clamp Indirect as Cycles': an indirect contribution whose components "
-                       "average more than this is scaled down to it; 0 = off (0).")
+                       kClampIndirectDoc)
         .def_readwrite("world_sampling", &S::world_sampling, "WorldSampling (COSINE).")
         .def_readwrite("combined_only", &S::combined_only,
                        "Sum only the Combined pass (False): what a viewport shows, without the "

@@ -41,6 +41,12 @@ void named_values_only(pybind11::enum_<Enum> cls) {
             pybind11::arg("value"));
 }
 
+// The clamp_indirect field of every settings struct that has one (render/shading.h,
+// clamp_contribution).
+inline constexpr const char* kClampIndirectDoc =
+    "Light Paths > Clamp Indirect as Cycles': an indirect contribution whose components average "
+    "more than this is scaled down to it; 0 = off (0).";
+
 inline pybind11::tuple to_tuple(const vec3& v) { return pybind11::make_tuple(v.x, v.y, v.z); }
 
 // A vec3 field exposed as a 3-tuple; assignment accepts any length-3 sequence of finite numbers.

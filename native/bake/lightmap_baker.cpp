@@ -312,12 +312,8 @@ class TexelBaker {
                     if (!(glm::dot(ls.wi, surface.geometric_normal) > 0.0f)) continue;
                     const float cos_theta = glm::dot(ls.wi, n);
                     if (!(cos_theta > 0.0f)) continue;
-                    Ray shadow;
-                    shadow.origin = sample.ray_origin;
-                    shadow.direction = ls.wi;
-                    shadow.tmax = std::isinf(ls.distance) ? kInfinity
-                                                          : ls.distance * (1.0f - kShadowShorten);
-                    if (scene_.occluded(shadow)) continue;
+                    if (scene_.occluded(light_shadow_ray(sample.ray_origin, ls.wi, ls.distance)))
+                        continue;
                     const float mis = ls.delta || !trace_hemisphere
                                           ? 1.0f
                                           : power_heuristic(ls.pdf, hemisphere_pdf(cos_theta));

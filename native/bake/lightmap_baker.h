@@ -126,7 +126,8 @@ struct LightmapTexels {
 inline constexpr int kLightmapShCoefficients = 4;  // L1
 inline constexpr int kLightmapShFloats = 3 * kLightmapShCoefficients;
 inline constexpr int kLightmapMaxShOrder = 2;  // L2: 9 coefficients
-inline constexpr int kLightmapMaxShFloats = 3 * 9;
+inline constexpr int kLightmapMaxShFloats =
+    3 * (kLightmapMaxShOrder + 1) * (kLightmapMaxShOrder + 1);
 
 // Number of tiles of a width x height lightmap; tile i covers texels
 // [tx * size, (tx + 1) * size) x [ty * size, ...) with tx = i % tiles_x, ty = i / tiles_x.
@@ -152,8 +153,8 @@ LightmapTexels bake_lightmap(const Scene& scene, const TexelMap& map, const Indi
                              const std::vector<uint32_t>& tiles = {},
                              Progress* progress = nullptr);
 
-// Copies the texels `part` baked into `into` (same size, directional flag and SH order; InvalidArgument
-// otherwise, or when a texel was baked by both: shards must not overlap). Merging the shards of
+// Copies the texels `part` baked into `into` (same size, directional flag and SH order;
+// InvalidArgument otherwise, or when a texel was baked by both: shards must not overlap). Merging the shards of
 // one bake gives exactly the single bake.
 void merge_lightmap(LightmapTexels& into, const LightmapTexels& part);
 

@@ -139,15 +139,17 @@ bool add_vpl_sh(ShRgb& sh, const vec3& p, const vec3& ng, const InstantVpl& vpl,
 InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& settings,
                                std::vector<std::vector<InstantVpl>> sets, uint64_t passes,
                                std::vector<std::vector<vec3>> sky_sets,
-                               std::vector<std::vector<InstantLampSample>> lamp_sets)
+                               std::vector<std::vector<InstantLampSample>> lamp_sets,
+                               std::shared_ptr<const LightSampler> lamps)
     : scene_(&scene), settings_(settings), sets_(std::move(sets)), sky_sets_(std::move(sky_sets)),
-      lamp_sets_(std::move(lamp_sets)), passes_(passes),
+      lamp_sets_(std::move(lamp_sets)), lamps_(std::move(lamps)), passes_(passes),
       timings_(std::make_shared<InstantGiFrameTimings>()) {
     if (!sky_sets_.empty() && sky_sets_.size() != sets_.size())
         throw Internal("InstantGiField: sky_sets and sets differ in count");
     if (!lamp_sets_.empty()) {
         if (lamp_sets_.size() != sets_.size())
             throw Internal("InstantGiField: lamp_sets and sets differ in count");
+        if (!lamps_) throw Internal("InstantGiField: lamp_sets without a LightSampler");
         // Every set holds as many samples of each light: count them in the first.
         std::vector<uint32_t> per_set(scene.lights().size(), 0);
         for (const InstantLampSample& sample : lamp_sets_[0]) {
@@ -158,10 +160,10 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
         lamp_share_.assign(per_set.size(), 0.0f);
         for (size_t i = 0; i < per_set.size(); ++i)
             if (per_set[i] > 0) lamp_share_[i] = 1.0f / float(per_set[i]);
-        lamps_ = std::make_shared<const LightSampler>(scene, WorldSampling::Cosine, false, 1, false);
     }
     for (const auto& set : sets_) vpl_count_ += set.size();
     for (const auto& set : sky_sets_) sky_count_ += set.size();
+    for (const auto& set : lamp_sets_) lamp_count_ += set.size();
     set_scale_ = passes_ > 0 ? float(sets_.size()) / float(passes_) : 0.0f;
 }
 
@@ -180,19 +182,6 @@ vec3 InstantGiField::lamp_delta(const InstantLampSample& sample, const vec3& p, 
     return e;
 }
 
-namespace {
-
-// The shadow ray towards a lamp sample at `distance` (kInfinity for a sun) along unit w.
-Ray lamp_shadow_ray(const vec3& origin, const vec3& w, float distance) {
-    Ray ray;
-    ray.origin = origin;
-    ray.direction = w;
-    ray.tmax = std::isinf(distance) ? kInfinity : distance * (1.0f - kShadowShorten);
-    return ray;
-}
-
-}  // namespace
-
 void InstantGiField::gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t set,
                                 float vpl_scale, const vec3& sky_weight, float lamp_scale) const {
     const vec3 origin = offset_origin(p, n);
@@ -210,7 +199,7 @@ void InstantGiField::gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t 
             vec3 w;
             float distance;
             const vec3 e = lamp_delta(sample, p, n, lamp_scale, &w, &distance);
-            if (e == vec3(0.0f) || scene_->occluded(lamp_shadow_ray(origin, w, distance)))
+            if (e == vec3(0.0f) || scene_->occluded(light_shadow_ray(origin, w, distance)))
                 continue;
             add_delta(sh.coeffs.data(), e, w);
         }
@@ -345,7 +334,7 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                             float distance;
                             const vec3 e = lamp_delta(sample, pos, ng, 1.0f, &w, &distance);
                             if (e == vec3(0.0f)) continue;
-                            rays.push_back(lamp_shadow_ray(offset_origin(pos, ng), w, distance));
+                            rays.push_back(light_shadow_ray(offset_origin(pos, ng), w, distance));
                             ray_pixel.push_back(uint32_t(p));
                             weights.push_back(e);
                             directions.push_back(w);
@@ -518,6 +507,9 @@ void InstantGi::reset(Progress* progress) {
     scene_revision_ = scene_->revision();
     passes_ = 0;
     stage_seconds_.clear();
+    lamps_ = settings_.filter_direct ? std::make_shared<const LightSampler>(
+                                           *scene_, WorldSampling::Cosine, false, 1, false)
+                                     : nullptr;
     field_ = std::make_shared<InstantGiField>(
         *scene_, settings_,
         std::vector<std::vector<InstantVpl>>(size_t(settings_.sets_x) * size_t(settings_.sets_y)),
@@ -580,13 +572,12 @@ void InstantGi::refine(Progress* progress) {
     // pass and set).
     std::vector<std::vector<InstantLampSample>> lamp_sets;
     if (settings_.filter_direct) {
-        const LightSampler lamps(*scene_, WorldSampling::Cosine, false, 1, false);
         lamp_sets = field_->lamp_sets();
         lamp_sets.resize(set_count);
         for (size_t s = 0; s < set_count; ++s) {
             Pcg32 rng(settings_.seed ^ 0x1a3b5c7d9e2fu, passes_ * set_count + s);
             for (uint32_t i = 0; i < scene_->lights().size(); ++i) {
-                if (!lamps.light_emits(i)) continue;
+                if (!lamps_->light_emits(i)) continue;
                 const Light& light = scene_->lights()[i];
                 const bool delta = light.type == LightType::Sun
                                        ? light.angle <= 0.0f
@@ -601,17 +592,16 @@ void InstantGi::refine(Progress* progress) {
     }
     const double deal_seconds = seconds_since(start);
     field_ = std::make_shared<InstantGiField>(*scene_, settings_, std::move(sets), passes_ + 1,
-                                              std::move(sky_sets), std::move(lamp_sets));
+                                              std::move(sky_sets), std::move(lamp_sets), lamps_);
     ++passes_;
     stage_seconds_ = {{"vpl_trace", trace_seconds}, {"vpl_sets", deal_seconds}};
     if (progress) progress->set_fraction(1.0f);
 }
 
 size_t InstantGi::memory_bytes() const {
-    size_t lamp_samples = 0;
-    for (const auto& set : field_->lamp_sets()) lamp_samples += set.size();
     return size_t(field_->vpl_count()) * sizeof(InstantVpl) +
-           size_t(field_->sky_count()) * sizeof(vec3) + lamp_samples * sizeof(InstantLampSample);
+           size_t(field_->sky_count()) * sizeof(vec3) +
+           size_t(field_->lamp_count()) * sizeof(InstantLampSample);
 }
 
 }  // namespace shgi

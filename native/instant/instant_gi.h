@@ -27,9 +27,9 @@
 //     (FieldLookup::glossy, sh/ggx_zh.h).
 // By default only indirect light goes through the SH; direct light stays the renderer's
 // next-event estimation (filter_direct: the world's and the lights' direct light too, in a plane
-// of their own, written to DiffDir / GlossDir). The filter modes (filter_mode) Irradiance and Strict (the comparisons of §4.2,
-// Figs. 2 and 4) filter each pixel's irradiance E(n_s) instead; Strict also stops at
-// shading-normal changes. None keeps each pixel's own set.
+// of their own, written to DiffDir / GlossDir). The filter modes (filter_mode) Irradiance and
+// Strict (the comparisons of §4.2, Figs. 2 and 4) filter each pixel's irradiance E(n_s)
+// instead; Strict also stops at shading-normal changes. None keeps each pixel's own set.
 //
 // Elsewhere (specular chains), lookup(p, n) gathers every VPL of every set the same way (no
 // filter). Bakes interleave the sets over the lightmap's texels and filter them within UV charts
@@ -120,11 +120,13 @@ class InstantGiField : public IndirectField {
   public:
     // sky_sets: per set, the directions of its directional VPLs for the world (filter_direct;
     // empty otherwise). lamp_sets: per set, its samples of the scene's lights (filter_direct;
-    // empty otherwise), every set holding as many samples of each light.
+    // empty otherwise), every set holding as many samples of each light, drawn through `lamps`
+    // (a LightSampler of the scene, required with lamp_sets; the solver's, shared by its fields).
     InstantGiField(const Scene& scene, const InstantGiSettings& settings,
                    std::vector<std::vector<InstantVpl>> sets, uint64_t passes,
                    std::vector<std::vector<vec3>> sky_sets = {},
-                   std::vector<std::vector<InstantLampSample>> lamp_sets = {});
+                   std::vector<std::vector<InstantLampSample>> lamp_sets = {},
+                   std::shared_ptr<const LightSampler> lamps = nullptr);
 
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
     // The sets as an interleave pattern (bakes: texel (x, y) gathers one set, a filter within
@@ -150,6 +152,7 @@ class InstantGiField : public IndirectField {
     const std::vector<std::vector<InstantLampSample>>& lamp_sets() const { return lamp_sets_; }
     uint64_t vpl_count() const { return vpl_count_; }
     uint64_t sky_count() const { return sky_count_; }  // directions over every sky set
+    uint64_t lamp_count() const { return lamp_count_; }  // samples over every lamp set
     // Timings of the latest shade_first_surfaces (one frame at a time per field).
     InstantGiFrameTimings frame_timings() const;
 
@@ -171,7 +174,7 @@ class InstantGiField : public IndirectField {
     std::vector<std::vector<InstantLampSample>> lamp_sets_;
     std::vector<float> lamp_share_;  // per scene light: 1 / its samples in a set
     std::shared_ptr<const LightSampler> lamps_;  // with lamp_sets_: sample_light
-    uint64_t passes_ = 0, vpl_count_ = 0, sky_count_ = 0;
+    uint64_t passes_ = 0, vpl_count_ = 0, sky_count_ = 0, lamp_count_ = 0;
     float set_scale_ = 0.0f;  // sets / passes
     std::shared_ptr<InstantGiFrameTimings> timings_;
 };
@@ -198,6 +201,9 @@ class InstantGi : public GiSolver {
     uint64_t scene_revision_ = 0;
     uint64_t passes_ = 0;
     std::shared_ptr<const InstantGiField> field_;
+    // filter_direct: the scene's lights for the lamp samples (made at reset; every field shares
+    // it). Null otherwise.
+    std::shared_ptr<const LightSampler> lamps_;
     std::vector<StageSeconds> stage_seconds_;
 };
 

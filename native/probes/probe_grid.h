@@ -20,7 +20,8 @@
 // Env passes) is the probe's indirect incident radiance: renderers add direct light exactly
 // (include_direct = true keeps it, for exports of total light). Each radiance sample is clamped
 // to `clamp` (as Light Paths > Clamp: clamp_contribution; 0 = off) against fireflies (seed 002
-// §4.1.1) and projected onto SH with weight 4 pi / N (the lattice's points stand for equal solid angles).
+// §4.1.1) and projected onto SH with weight 4 pi / N (the lattice's points stand for equal
+// solid angles).
 //
 // Blending (seed 002 §4.1.1: "results from the previous pass are blended with the new ones using
 // a constant ratio"): new = (1 - a) old + a pass with a = max(1 - hysteresis, 1 / passes), i.e. an

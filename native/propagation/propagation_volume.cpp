@@ -74,6 +74,13 @@ uint64_t level_bytes(const ivec3& dims, int order) {
                           saturating_mul(cells, (26 + 6) * sizeof(float)));
 }
 
+// Bytes the levels of `grids` hold together (level_bytes).
+uint64_t levels_bytes(const std::vector<LevelGrid>& grids, int order) {
+    uint64_t bytes = 0;
+    for (const LevelGrid& grid : grids) bytes = saturating_add(bytes, level_bytes(grid.dims, order));
+    return bytes;
+}
+
 void check_range(int value, int lo, int hi, const char* name) {
     if (value < lo || value > hi)
         throw InvalidArgument(format_message(kSettings, ".", name, " is ", value,
@@ -279,10 +286,9 @@ size_t PropagationVolume::estimate_memory_bytes(const Scene& scene,
     if (!(longest > 0.0f) || !std::isfinite(longest)) return 0;
     const ivec3 dims = glm::max(ivec3(glm::ceil(extent / longest * float(settings.resolution))),
                                 ivec3(1));
-    uint64_t bytes = 0;
     // The centre moves the finer levels, not their sizes.
-    for (const LevelGrid& grid : level_grids(vec3(0.0f), 1.0f, dims, settings, vec3(0.0f)))
-        bytes = saturating_add(bytes, level_bytes(grid.dims, settings.order));
+    const uint64_t bytes = levels_bytes(
+        level_grids(vec3(0.0f), 1.0f, dims, settings, vec3(0.0f)), settings.order);
     return size_t(std::min<uint64_t>(bytes, std::numeric_limits<size_t>::max()));
 }
 
@@ -323,10 +329,7 @@ void PropagationVolume::reset(Progress* progress) {
                             : settings_.cascade_center;
     const std::vector<LevelGrid> grids = level_grids(coarsest.origin(), coarsest.cell_size(),
                                                      coarsest.dims(), settings_, center);
-    uint64_t bytes = 0;
-    for (const LevelGrid& grid : grids)
-        bytes = saturating_add(bytes, level_bytes(grid.dims, settings_.order));
-    require_memory(bytes,
+    require_memory(levels_bytes(grids, settings_.order),
                    format_message("PropagationVolume: resolution ", settings_.resolution,
                                   " gives ", coarsest.dims().x + 1, " x ",
                                   coarsest.dims().y + 1, " x ", coarsest.dims().z + 1,

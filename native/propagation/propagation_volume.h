@@ -112,8 +112,8 @@ struct PropagationSettings {
     // can resolve: 1 is a single volume over the scene (`resolution` cells along its longest
     // side). With n > 1 that volume is the coarsest of n nested levels; each finer level halves
     // the cell size and spans `resolution` cells per axis (fewer where the scene is smaller)
-    // around the camera (cascade_follow_camera) or cascade_center, kept inside the scene. Every level injects the VPLs it holds and
-    // propagates on its own; a lookup reads the finest level that covers it, blended into the
+    // around the camera (cascade_follow_camera) or cascade_center, kept inside the scene. Every
+    // level injects the VPLs it holds and propagates on its own; a lookup reads the finest level that covers it, blended into the
     // next coarser one over a band at the level's border (propagation_field.h).
     int cascades = 1;
     // Centre the finer levels on the scene's camera (its position at reset()) when the scene

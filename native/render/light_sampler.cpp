@@ -456,9 +456,7 @@ bool LightSampler::intersect_lights(const vec3& p, const vec3& wi, float t_max, 
         best_t = t;
         found = true;
         out->radiance = radiance;
-        out->light_pdf = light_emitter_[i] != kInvalidId
-                             ? selection_pdf(light_emitter_[i], p) * t * t / (cos_light * area)
-                             : 0.0f;
+        out->light_pdf = light_selection_pdf(i, p) * t * t / (cos_light * area);
     }
     return found;
 }

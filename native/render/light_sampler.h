@@ -161,6 +161,12 @@ class LightSampler {
     void add_local(Kind kind, uint32_t index, const LightBounds& bounds);
     void add_distant(Kind kind, uint32_t index, float irradiance);  // W/m^2
 
+    // selection_pdf of scene light `light`'s emitter; 0 when next-event estimation leaves it
+    // out (sample_lights false).
+    float light_selection_pdf(uint32_t light, const vec3& p) const {
+        return light_emitter_[light] != kInvalidId ? selection_pdf(light_emitter_[light], p)
+                                                   : 0.0f;
+    }
     bool sample_point(const Light& light, const vec3& p, const vec2& u, LightSample* out) const;
     bool sample_area(uint32_t index, const vec3& p, const vec2& u, LightSample* out) const;
     bool sample_sun(const Light& light, const vec2& u, LightSample* out) const;
@@ -217,9 +223,7 @@ void LightSampler::for_each_escaped(const vec3& p, const vec3& n, const vec3& wi
         if (glm::dot(wi, -light.direction()) < cos_max) continue;
         const float solid_angle = kTwoPi * (1.0f - cos_max);
         add(EmissionHit{light.color * (light.strength / solid_angle),
-                        light_emitter_[i] != kInvalidId
-                            ? selection_pdf(light_emitter_[i], p) / solid_angle
-                            : 0.0f});
+                        light_selection_pdf(i, p) / solid_angle});
     }
 }
 

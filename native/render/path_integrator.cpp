@@ -180,11 +180,7 @@ int PathIntegrator::prepare_direct(Ray* shadows) {
         const BsdfEval eval = vertex_field() != nullptr ? shading.bsdf.eval_field(shading.wo, wi)
                                                         : shading.bsdf.eval(shading.wo, wi);
         if (max_component(eval.total()) <= 0.0f) continue;
-        Ray& shadow = shadows[count];
-        shadow.origin = shading.spawn_origin(ls.wi);
-        shadow.direction = ls.wi;
-        shadow.tmin = 0.0f;
-        shadow.tmax = std::isinf(ls.distance) ? kInfinity : ls.distance * (1.0f - kShadowShorten);
+        shadows[count] = light_shadow_ray(shading.spawn_origin(ls.wi), ls.wi, ls.distance);
         ::new (&pending_[count].value) PendingDirect{ls, wi, eval};
         ++count;
     }

@@ -368,14 +368,13 @@ void PreviewRenderer::add_frame_stage(FrameWideStage stage) {
 const LightSampler& PreviewRenderer::lights_for(const IndirectField& field) {
     const bool world = field.includes_world_direct(), lamps = field.includes_lights_direct();
     if (!world && !lamps) return lights_;
-    if (!lights_without_world_ || without_world_ != world || without_lights_ != lamps) {
-        lights_without_world_.reset();
-        lights_without_world_.emplace(*scene_, settings_.world_sampling, !world,
-                                      path_settings_.light_splits, !lamps);
+    if (!field_lights_ || without_world_ != world || without_lights_ != lamps) {
+        field_lights_.emplace(*scene_, settings_.world_sampling, !world,
+                              path_settings_.light_splits, !lamps);
         without_world_ = world;
         without_lights_ = lamps;
     }
-    return *lights_without_world_;
+    return *field_lights_;
 }
 
 void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progress* progress) {

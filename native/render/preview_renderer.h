@@ -123,10 +123,10 @@ class PreviewRenderer {
     PreviewSettings settings_;
     PathTracerSettings path_settings_;
     LightSampler lights_;
-    // For fields that carry the world's direct light; built by the first render with such a field.
-    // The sampler of a field that carries some direct light itself (includes_world_direct,
-    // includes_lights_direct), and which of the two it leaves out.
-    std::optional<LightSampler> lights_without_world_;
+    // The sampler for a field that carries some direct light itself (includes_world_direct,
+    // includes_lights_direct), built by the first render with such a field, and which of the two
+    // it leaves out.
+    std::optional<LightSampler> field_lights_;
     bool without_world_ = false, without_lights_ = false;
     ProgressiveFilm film_;
     GBuffer g_buffer_;

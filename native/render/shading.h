@@ -23,6 +23,16 @@ inline constexpr float kRayOffset = 1e-4f;
 // not occlude it.
 inline constexpr float kShadowShorten = 1e-3f;
 
+// The shadow ray from `origin` along unit `wi` to a light sample `distance` away (kInfinity for
+// the world or a sun), stopping kShadowShorten short of it.
+inline Ray light_shadow_ray(const vec3& origin, const vec3& wi, float distance) {
+    Ray ray;
+    ray.origin = origin;
+    ray.direction = wi;
+    ray.tmax = std::isinf(distance) ? kInfinity : distance * (1.0f - kShadowShorten);
+    return ray;
+}
+
 // Light Paths > Clamp, as Cycles clamps a contribution (film_clamp_light, with the panel's
 // value times three as its scene/integrator.cpp stores it): v scaled down so that the mean of
 // its components' magnitudes is at most `limit`, one factor for all three (the hue is kept);
