@@ -160,6 +160,18 @@ class PropagationVolume : public GiSolver {
     const PropagationSettings& settings() const { return settings_; }
     // The volumes' layout: origin, cell size, counts (the field's; the coarsest level's).
     const ShVolume& injected() const { return levels_.back().injected; }
+    // Cascades that follow a moving camera (the viewport's view, which is not the scene's
+    // camera): every finer level whose inner region (the middle half of its box along each axis)
+    // no longer holds `point` is moved to be centred on it, snapped to its own cells and kept
+    // inside the scene as reset() places the levels, and only those levels are rebuilt: their
+    // geometry volume, the injection of every pass so far (each pass's VPLs traced again with
+    // its own seed) and their propagation. The result is what a volume reset with the levels
+    // centred on `point` gives after as many passes, bit for bit; the other levels are kept as
+    // they are. Returns the levels moved, finest first (none without cascades, or when `point`
+    // is still inside every inner region, or a level cannot move: it is against the scene's
+    // bounds). Cancel keeps the solver and its field as they were. Throws InvalidArgument for a
+    // point that is not finite, or after a scene edit without reset().
+    std::vector<int> recenter(const vec3& point, Progress* progress = nullptr);
     // Cascade levels (1 without cascades), the finest first; level l's injected volume.
     size_t level_count() const { return levels_.size(); }
     const ShVolume& level_injected(size_t level) const { return levels_.at(level).injected; }
@@ -177,11 +189,14 @@ class PropagationVolume : public GiSolver {
         std::shared_ptr<const NeighbourTransmittance> lookup_transmittance;
         uint8_t blend_faces = 0;  // PropagationLevel::blend_faces
         double geometry_seconds = 0.0;
+        // The level's first lattice cell on its own grid over the scene (recenter's snap).
+        ivec3 start{0};
     };
 
     void check_scene(const char* what) const;
-    // This pass's VPLs; the seconds spent finding later hits' albedo go to reflect_seconds.
-    std::vector<VirtualPointLight> trace_vpls(Progress* progress, double* reflect_seconds);
+    // Pass `pass`'s VPLs (its seed); the seconds finding later hits' albedo go to reflect_seconds.
+    std::vector<VirtualPointLight> trace_vpls(uint64_t pass, Progress* progress,
+                                              double* reflect_seconds) const;
     // A level of the geometry lattice `geometry` (its surfaces measured here): its volumes of
     // one more cell per axis, offset by half a cell, and with occlusion its transmittances.
     Level make_level(ShLattice geometry, uint8_t blend_faces, Progress* progress) const;
@@ -199,6 +214,10 @@ class PropagationVolume : public GiSolver {
     uint64_t passes_ = 0;
     uint64_t last_vpl_count_ = 0;
     std::vector<Level> levels_;  // finest first
+    // The coarsest level's lattice (the scene's at `resolution`): the finer levels' grids.
+    vec3 coarse_origin_{0.0f};
+    float coarse_cell_size_ = 1.0f;
+    ivec3 coarse_dims_{1};
     std::shared_ptr<const PropagationField> field_;
     std::vector<StageSeconds> stage_seconds_;
 };

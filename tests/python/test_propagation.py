@@ -591,3 +591,117 @@ def test_cancel_with_cascades_keeps_the_previous_field():
         assert volume.passes == 1
         np.testing.assert_array_equal(line_irradiance(volume.current_field(), points, normals),
                                       before)
+
+
+# Cascades that follow a moving camera (PropagationVolume.recenter; the viewport's navigation).
+# The hall at resolution 16 with 3 levels: cells of 2, 1 and 0.5 m; the finer boxes 16 m and
+# 8 m along x around the centre (the hall's whole width and height).
+
+
+def level_lines(field, points, normals):
+    return [line_irradiance(field.level_field(level), points, normals)
+            for level in range(field.level_count)]
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_recentred_cascades_are_a_volume_reset_there(order):
+    """recenter() moves only the levels whose inner region (the middle half of their box) the
+    camera left, snapped to their own cells, and rebuilds those alone: the field is bit for bit
+    what a volume whose levels were centred there from the start gives after as many passes,
+    and the levels that did not move are kept as they were."""
+    import numpy as np
+    scene = hall()
+    settings = dict(resolution=16, cascades=3, order=order, steps=8, seed=3, photons=30000,
+                    cascade_follow_camera=False)
+    start, far = (-4.0, 0.0, 1.5), (8.3, 0.7, 1.2)
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        cascade_center=start, **settings))
+    for _ in range(2):
+        volume.refine()
+    xs, points, normals = floor_line()
+    before = volume.current_field()
+    before_levels = level_lines(before, points, normals)
+    # 1.5 m: inside the middle half of the finest box (8 m) and of the next (16 m).
+    assert volume.recenter((-2.5, 0.0, 1.5)) == []
+    np.testing.assert_array_equal(line_irradiance(volume.current_field(), points, normals),
+                                  line_irradiance(before, points, normals))
+    # 12.3 m away both finer levels move; the coarsest (the whole hall) never does.
+    assert volume.recenter(far) == [0, 1]
+    assert volume.passes == 2
+    moved = volume.current_field()
+    fresh = shgi.PropagationVolume(scene, shgi.PropagationSettings(cascade_center=far, **settings))
+    for _ in range(2):
+        fresh.refine()
+    np.testing.assert_array_equal(line_irradiance(moved, points, normals),
+                                  line_irradiance(fresh.current_field(), points, normals))
+    for a, b in zip(level_lines(moved, points, normals),
+                    level_lines(fresh.current_field(), points, normals)):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(level_lines(moved, points, normals)[2], before_levels[2])
+    assert not np.array_equal(level_lines(moved, points, normals)[0], before_levels[0])
+    # Refining goes on from there as the fresh volume does.
+    volume.refine()
+    fresh.refine()
+    np.testing.assert_array_equal(line_irradiance(volume.current_field(), points, normals),
+                                  line_irradiance(fresh.current_field(), points, normals))
+
+
+def test_a_level_held_by_the_hall_end_stays_and_only_the_finest_moves():
+    """Near the hall's end the 16 m level is already against its bounds and cannot move (it is
+    not rebuilt); the finest level still follows."""
+    scene = hall()
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        resolution=16, cascades=3, steps=4, photons=20000, cascade_follow_camera=False,
+        cascade_center=(11.0, 0.0, 1.5)))
+    volume.refine()
+    # Level 1 (16 m) spans x in [0, 16] either way; level 0 (8 m) moves from [7, 15] to [8, 16].
+    assert volume.recenter((15.5, 0.0, 1.5)) == [0]
+    assert volume.recenter((15.5, 0.0, 1.5)) == []
+
+
+def test_recenter_without_cascades_or_with_a_bad_point():
+    import numpy as np
+    scene = hall()
+    single = shgi.PropagationVolume(scene, shgi.PropagationSettings(resolution=16, steps=2,
+                                                                    photons=5000))
+    single.refine()
+    assert single.recenter((10.0, 0.0, 1.0)) == []
+    cascaded = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        resolution=16, cascades=2, steps=2, photons=5000))
+    with pytest.raises(ValueError, match=r"point: element .* is nan"):
+        cascaded.recenter((float("nan"), 0.0, 0.0))
+    with pytest.raises(ValueError, match="point"):
+        cascaded.recenter((1.0, 2.0))
+    # Before the first pass the levels move and the field stays empty.
+    assert cascaded.recenter((12.0, 0.0, 1.0)) == [0]
+    assert cascaded.current_field().level_count == 0
+    cascaded.refine()
+    xs, points, normals = floor_line()
+    assert np.all(np.isfinite(line_irradiance(cascaded.current_field(), points, normals)))
+    scene.set_world(shgi.World(color=(0.1, 0.1, 0.1), strength=1.0))
+    scene.commit()
+    with pytest.raises(ValueError, match="recenter: the scene was edited"):
+        cascaded.recenter((-12.0, 0.0, 1.0))
+
+
+def test_a_cancelled_recenter_keeps_the_volume():
+    """A cancel while the moved levels are rebuilt keeps the solver and its field as they were;
+    the next recenter moves them from there."""
+    import numpy as np
+    scene = hall()
+    settings = shgi.PropagationSettings(resolution=16, cascades=3, steps=4, photons=20000,
+                                        cascade_follow_camera=False, cascade_center=CASCADE_CENTER)
+    volume = shgi.PropagationVolume(scene, settings)
+    volume.refine()
+    volume.refine()
+    xs, points, normals = floor_line()
+    before = line_irradiance(volume.current_field(), points, normals)
+    for stage_to_cancel in ("geometry volume, level 1", "re-injecting VPLs, pass 2",
+                            "propagating, level 0"):
+        progress = shgi.Progress(
+            lambda fraction, stage: progress.cancel() if stage == stage_to_cancel else None)
+        with pytest.raises(shgi.Cancelled):
+            volume.recenter((9.0, 0.0, 1.5), progress)
+        np.testing.assert_array_equal(line_irradiance(volume.current_field(), points, normals),
+                                      before)
+    assert volume.recenter((9.0, 0.0, 1.5)) == [0, 1]

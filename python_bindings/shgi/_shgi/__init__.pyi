@@ -2909,6 +2909,10 @@ class PropagationVolume(GiSolver):
         """
         The PropagationField of the last pass (safe to render while refine() runs).
         """
+    def recenter(self, point: typing.Any, progress: Progress = None) -> list[int]:
+        """
+        Cascades that follow a moving camera: moves every finer level whose inner region (the middle half of its box per axis) no longer holds `point` to be centred on it (snapped to its cells, inside the scene) and rebuilds those levels alone: geometry, every pass's VPLs traced again, propagation (GIL released) - the field a volume reset there gives after as many passes. Returns the levels moved, finest first ([] without cascades). Raises shgi.Cancelled on cancel, keeping the volume as it was; ValueError for a point that is not finite.
+        """
     def refine(self, progress: Progress = None) -> None:
         """
         One pass: traces VPLs, injects, propagates (GIL released). Raises shgi.Cancelled on cancel, keeping the previous field.
