@@ -105,8 +105,8 @@ struct PropagationSettings {
     // the source lobe, LobeClamp::Rescaled). Flux is kept either way; unclamped, an L1/L2 lobe's
     // negative back half travels too. With travel_reinjection, damping, both leak corrections
     // and 24 steps the HOLPV is within 10% of the path tracer on the Cornell box, the sun room
-    // and the two rooms (1.038, 0.990, 1.096), the LPV not (0.882, 0.776, 1.266: its negative
-    // L1 halves cross the two rooms' wall) (docs/methods.md). Off by default.
+    // and the two rooms (1.038, 0.990, 1.096), the LPV not (0.882, 0.776, 1.266: the last is
+    // the dim room's own light, 0.008 crosses the wall) (docs/methods.md). Off by default.
     bool unclamped_transfer = false;
     // Cascades (Kaplanyan & Dachsbacher 2010; seed 000 §4.4), for scenes larger than one volume
     // can resolve: 1 is a single volume over the scene (`resolution` cells along its longest

@@ -150,7 +150,9 @@ def rendered_unclamped(name, order):
     ("cornell_box", 2),
     pytest.param("sun_room", 1, marks=missed("DiffInd 0.776x")),
     ("sun_room", 2),
-    pytest.param("two_rooms", 1, marks=missed("DiffInd 1.266x: L1 negative halves cross walls")),
+    # Not light through the wall (0.008 of the dim room's own light,
+    # test_unclamped_transfer_keeps_the_bright_room_out): the room's own light reads 1.27x.
+    pytest.param("two_rooms", 1, marks=missed("DiffInd 1.266x")),
     ("two_rooms", 2),
 ])
 def test_unclamped_transfer_with_damping_agrees_with_path_tracer(name, order):
@@ -163,6 +165,49 @@ def test_unclamped_transfer_with_damping_agrees_with_path_tracer(name, order):
           f"DiffInd x DiffCol {ratio:.3f} x the path tracer's, Combined PSNR "
           f"{psnr(ref['Combined'], preview['Combined']):.2f} dB")
     assert abs(ratio - 1.0) < 0.10, ratio
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("order", [pytest.param(1, marks=missed("Combined 1.095x")), 2])
+def test_dim_room_through_a_final_gather_with_the_unclamped_settings(order):
+    """The two rooms' dim room through a final gather (one VPL bounce less, as the add-on
+    solves for it) under the settings where the HOLPV meets the 10% agreement on all three
+    scenes (UNCLAMPED): its Combined mean within 5% of the path tracer's (measured 1.021; the
+    defaults give 1.089). The LPV reads 1.095 there."""
+    scale, samples = REFERENCES["two_rooms"]
+    scene, ref = path_traced_reference(scenes.two_rooms, scale, samples)
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        seed=5, order=order, vpl_bounces=3, **UNCLAMPED))
+    volume.refine()
+    preview, _ = shgi.render_preview(scene, volume.current_field(),
+                                     shgi.PreviewSettings(seed=5, samples=64, final_gather=True))
+    ratio = float(preview["Combined"][..., :3].mean() / ref["Combined"][..., :3].mean())
+    print(f"order {order}, unclamped settings: dim room through a final gather {ratio:.3f} x "
+          "the path tracer's")
+    assert abs(ratio - 1.0) < 0.05
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("order", [1, 2])
+def test_unclamped_transfer_keeps_the_bright_room_out(order):
+    """Under the unclamped settings the LPV reads the two rooms 1.27x: not light through the
+    wall (with only the bright lamp on, whose exact light in the dim room is 0, the volume puts
+    there 0.008 (LPV) and 0.018 (HOLPV) x the dim room's own indirect light) but the dim room's
+    own light, with only its lamp on 1.273 (LPV) and 1.111 (HOLPV) x the path tracer's."""
+    dim_scene = committed(scenes.two_rooms(0.5, bright_power=0.0))
+    dim = shgi.render_path_traced(dim_scene, shgi.PathTracerSettings(samples=128, seed=11))
+    bright_scene = committed(scenes.two_rooms(0.5, dim_power=0.0))
+    ratios = {}
+    for name, scene in (("through the wall", bright_scene), ("own", dim_scene)):
+        volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+            seed=5, order=order, **UNCLAMPED))
+        volume.refine()
+        preview, _ = shgi.render_preview(scene, volume.current_field(),
+                                         shgi.PreviewSettings(seed=5))
+        ratios[name] = indirect_diffuse(preview) / indirect_diffuse(dim)
+    print(f"order {order}, unclamped: x the dim room's own indirect light: "
+          f"{ratios['through the wall']:.3f} through the wall, {ratios['own']:.3f} its own")
+    assert ratios["through the wall"] < 0.05
 
 
 @pytest.mark.reference
