@@ -6,7 +6,7 @@ PSNR (16-spp preview). The references are test_propagation.py's (the Cornell box
 at scale 0.25, 2048 spp; the two rooms at 0.5, 512 spp), cached in --cache between runs.
 
     PYTHONPATH=build/python python3 bench/propagation_lpv_sweep.py [--orders 1 2]
-        [--configs NAME ...]
+        [--configs NAME ...]   (default: all of CONFIGS)
 """
 
 import argparse
@@ -25,7 +25,13 @@ SCENES = {"cornell_box": (0.25, 2048), "sun_room": (0.25, 2048), "two_rooms": (0
 CORRECTIONS = dict(occlude_first_step=True, drop_outward_vpls=True)
 TRAVEL = dict(CORRECTIONS, travel_reinjection=True, damping=True)
 UNCLAMPED = dict(TRAVEL, unclamped_transfer=True)
+AT_SURFACES = dict(UNCLAMPED, clamp_at_surfaces=True)
 CONFIGS = {
+    "at_surfaces_r32_s24": dict(AT_SURFACES, resolution=32, steps=24),
+    "at_surfaces_r32_s28": dict(AT_SURFACES, resolution=32, steps=28),
+    "at_surfaces_r32_s32": dict(AT_SURFACES, resolution=32, steps=32),
+    "at_surfaces_r32_s36": dict(AT_SURFACES, resolution=32, steps=36),
+    "at_surfaces_r32_s40": dict(AT_SURFACES, resolution=32, steps=40),
     "unclamped_r32_s24": dict(UNCLAMPED, resolution=32, steps=24),
     "unclamped_r24_s18": dict(UNCLAMPED, resolution=24, steps=18),
     "unclamped_r16_s12": dict(UNCLAMPED, resolution=16, steps=12),

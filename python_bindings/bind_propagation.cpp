@@ -68,7 +68,11 @@ void bind_settings(py::module_& m) {
         .def_readwrite("unclamped_transfer", &S::unclamped_transfer,
                        "Propagate the lobes unclamped (a linear transfer per neighbour offset) "
                        "instead of clamping each source lobe at zero and rescaling it to its "
-                       "flux (False).");
+                       "flux (False).")
+        .def_readwrite("clamp_at_surfaces", &S::clamp_at_surfaces,
+                       "With unclamped_transfer: clamp and rescale the lobes of the cells whose "
+                       "light a wall stops in part (a wall stopping a lobe's negative half makes "
+                       "light), linear elsewhere; no effect without unclamped_transfer (False).");
     def_integer(cls, "cascades", &S::cascades,
                 "Nested volumes around cascade_center, each finer level with half the cells' "
                 "size and `resolution` cells per axis; 1: one volume over the scene (1).");

@@ -110,7 +110,9 @@ Reinjection reinjection_of(const PropagationSettings& settings) {
 
 PropagationStep step_of(const PropagationSettings& settings) {
     return PropagationStep(stencil_of(settings.order), settings.order,
-                           settings.unclamped_transfer ? LobeClamp::None : LobeClamp::Rescaled,
+                           !settings.unclamped_transfer ? LobeClamp::Rescaled
+                           : settings.clamp_at_surfaces ? LobeClamp::AtSurfaces
+                                                        : LobeClamp::None,
                            reinjection_of(settings));
 }
 

@@ -167,6 +167,31 @@ def test_unclamped_transfer_with_damping_agrees_with_path_tracer(name, order):
     assert abs(ratio - 1.0) < 0.10, ratio
 
 
+# The unclamped settings with the lobes clamped and rescaled where walls stop light
+# (clamp_at_surfaces: a wall stopping a lobe's negative half makes light) and 32 steps.
+AT_SURFACES = dict(UNCLAMPED, clamp_at_surfaces=True, steps=32)
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name, order", [
+    ("cornell_box", 1),
+    pytest.param("cornell_box", 2, marks=missed("DiffInd 1.157x")),
+    ("sun_room", 1),
+    ("sun_room", 2),
+    ("two_rooms", 1),
+    pytest.param("two_rooms", 2, marks=missed("DiffInd 1.171x")),
+])
+def test_clamped_at_surfaces_lpv_agrees_with_path_tracer(name, order):
+    """The agreement target with clamp_at_surfaces added to the unclamped settings, 32 steps:
+    the LPV meets it on all three scenes (measured 0.944, 0.935, 1.062; 36 steps 1.003, 1.061,
+    1.048), the HOLPV on the sun room only (1.157, 1.094, 1.171)."""
+    ref, preview = rendered_with(AT_SURFACES, name, order)
+    ratio = indirect_diffuse(preview) / indirect_diffuse(ref)
+    print(f"{name} order {order}, clamped at surfaces, 32 steps: DiffInd x DiffCol {ratio:.3f} x "
+          f"the path tracer's, Combined PSNR {psnr(ref['Combined'], preview['Combined']):.2f} dB")
+    assert abs(ratio - 1.0) < 0.10, ratio
+
+
 @pytest.mark.reference
 @pytest.mark.parametrize("order", [pytest.param(1, marks=missed("Combined 1.095x")), 2])
 def test_dim_room_through_a_final_gather_with_the_unclamped_settings(order):
@@ -229,7 +254,7 @@ def test_settings_mirror_cpp_defaults_and_validate():
         100000, 0, 4, 32, 8, 2)
     assert s.occlusion and s.normal_offset == pytest.approx(1.0)
     assert not s.damping and not s.occlude_first_step and not s.drop_outward_vpls
-    assert not s.travel_reinjection and not s.unclamped_transfer
+    assert not s.travel_reinjection and not s.unclamped_transfer and not s.clamp_at_surfaces
     assert s.cascades == 1 and s.cascade_center == (0.0, 0.0, 0.0) and s.cascade_follow_camera
     assert shgi.settings_from_dict(shgi.PropagationSettings,
                                    shgi.settings_to_dict(s)).steps == 8

@@ -2780,6 +2780,14 @@ class PropagationSettings:
     def cascades(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
+    def clamp_at_surfaces(self) -> bool:
+        """
+        With unclamped_transfer: clamp and rescale the lobes of the cells whose light a wall stops in part (a wall stopping a lobe's negative half makes light), linear elsewhere; no effect without unclamped_transfer (False).
+        """
+    @clamp_at_surfaces.setter
+    def clamp_at_surfaces(self, arg0: bool) -> None:
+        ...
+    @property
     def damping(self) -> bool:
         """
         Damp the lookup where the light arriving against the normal is stronger half a cell behind the lookup point than in front of it (seed 003 §3.2.4's directional derivative, against self-lighting and bleeding) (False).
