@@ -33,6 +33,8 @@ CONFIGS = {
     "at_surfaces_r32_s36": dict(AT_SURFACES, resolution=32, steps=36),
     "at_surfaces_r32_s40": dict(AT_SURFACES, resolution=32, steps=40),
     "unclamped_r32_s24": dict(UNCLAMPED, resolution=32, steps=24),
+    "unclamped_r32_s28": dict(UNCLAMPED, resolution=32, steps=28),
+    "unclamped_r32_s32": dict(UNCLAMPED, resolution=32, steps=32),
     "unclamped_r24_s18": dict(UNCLAMPED, resolution=24, steps=18),
     "unclamped_r16_s12": dict(UNCLAMPED, resolution=16, steps=12),
     "travel_r32_s32": dict(TRAVEL, resolution=32, steps=32),
