@@ -15,42 +15,71 @@ import shgi
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "examples"))
 import scenes  # noqa: E402  (examples/scenes.py)
-# Irradiance at random points of the dim room's surfaces (x > 0.05), from the field's radiance SH
-# unclamped and clamped at zero: how much the lookup's clamp adds.
-Ahat = np.array([np.pi] + [2 * np.pi / 3] * 3 + [np.pi / 4] * 5)
+# Â_l, the clamped cosine's band factors, per coefficient of bands 0..2.
+COSINE_BANDS = np.array([np.pi] + [2 * np.pi / 3] * 3 + [np.pi / 4] * 5)
+SETTINGS = dict(occlude_first_step=True, drop_outward_vpls=True, travel_reinjection=True,
+                damping=True, steps=24)
+
+
 def sh9(n):
+    """Real SH basis of bands 0..2 at unit n (SHGI's order: y, z, x in band 1)."""
     x, y, z = n
-    return np.array([0.282095, 0.488603 * y, 0.488603 * z, 0.488603 * x, 1.092548 * x * y, 1.092548 * y * z,
-                     0.315392 * (3 * z * z - 1), 1.092548 * x * z, 0.546274 * (x * x - y * y)])
-sc = scenes.two_rooms(0.5, bright_power=0.0).scene; sc.commit()
-rng = np.random.default_rng(3)
-tris = []
-for inst in sc.instances:
-    m = sc.meshes[inst.mesh_id]; M = np.asarray(inst.world_from_object)
-    P = np.asarray(m.positions) @ M[:3, :3].T + M[:3, 3]
-    for t in np.asarray(m.triangles): tris.append(P[t])
-tris = np.array(tris)
-area = 0.5 * np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]), axis=1)
-pts, nrm = [], []
-while len(pts) < 3000:
-    t = tris[rng.choice(len(tris), p=area / area.sum())]
-    u, v = rng.random(2)
-    if u + v > 1: u, v = 1 - u, 1 - v
-    p = t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0])
-    n = np.cross(t[1] - t[0], t[2] - t[0]); n /= np.linalg.norm(n)
-    if p[0] < 0.06: continue
-    # face into the dim room: flip towards the room's centre
-    if np.dot(n, np.array([1.5, 1.5, 1.25]) - p) < 0: n = -n
-    pts.append(p); nrm.append(n)
-C = dict(occlude_first_step=True, drop_outward_vpls=True, travel_reinjection=True, damping=True, steps=24)
-for name, cfg in (("unclamped", dict(C, unclamped_transfer=True)), ("rescaled", C)):
-    for order in (1, 2):
-        v = shgi.PropagationVolume(sc, shgi.PropagationSettings(seed=5, order=order, **cfg)); v.refine(); f = v.current_field()
-        raw = []
-        for p, n in zip(pts, nrm):
-            L = np.asarray(f.radiance_sh(tuple(p), tuple(n)))  # (9 or 4, 3)
-            k = L.shape[0]
-            raw.append(((Ahat[:k] * sh9(n)[:k])[:, None] * L).sum(0).mean())
-        raw = np.array(raw)
-        print(f"{name} order {order}: mean E unclamped {raw.mean():.4f}, clamped {np.maximum(raw, 0).mean():.4f} "
-              f"(+{np.maximum(raw, 0).mean() / raw.mean() - 1:.1%}), share < 0 {float((raw < 0).mean()):.3f}", flush=True)
+    return np.array([0.282095, 0.488603 * y, 0.488603 * z, 0.488603 * x, 1.092548 * x * y,
+                     1.092548 * y * z, 0.315392 * (3 * z * z - 1), 1.092548 * x * z,
+                     0.546274 * (x * x - y * y)])
+
+
+def dim_room_points(scene, count, rng):
+    """Area-uniform random points of the dim room's surfaces (x > 0.06), normals into it."""
+    triangles = []
+    for instance in scene.instances:
+        mesh = scene.meshes[instance.mesh_id]
+        matrix = np.asarray(instance.world_from_object)
+        positions = np.asarray(mesh.positions) @ matrix[:3, :3].T + matrix[:3, 3]
+        triangles += [positions[t] for t in np.asarray(mesh.triangles)]
+    triangles = np.array(triangles)
+    edges = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    area = 0.5 * np.linalg.norm(edges, axis=1)
+    points, normals = [], []
+    while len(points) < count:
+        t = triangles[rng.choice(len(triangles), p=area / area.sum())]
+        u, v = rng.random(2)
+        if u + v > 1:
+            u, v = 1 - u, 1 - v
+        p = t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0])
+        if p[0] < 0.06:
+            continue
+        n = np.cross(t[1] - t[0], t[2] - t[0])
+        n /= np.linalg.norm(n)
+        if np.dot(n, np.array([1.5, 1.5, 1.25]) - p) < 0:  # face the room's middle
+            n = -n
+        points.append(p)
+        normals.append(n)
+    return points, normals
+
+
+def main():
+    scene = scenes.two_rooms(0.5, bright_power=0.0).scene
+    scene.commit()
+    points, normals = dim_room_points(scene, 3000, np.random.default_rng(3))
+    for name, settings in (("unclamped", dict(SETTINGS, unclamped_transfer=True)),
+                           ("rescaled", SETTINGS)):
+        for order in (1, 2):
+            volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+                seed=5, order=order, **settings))
+            volume.refine()
+            field = volume.current_field()
+            raw = []
+            for p, n in zip(points, normals):
+                radiance = np.asarray(field.radiance_sh(tuple(p), tuple(n)))
+                k = radiance.shape[0]
+                raw.append(((COSINE_BANDS[:k] * sh9(n)[:k])[:, None] * radiance).sum(0).mean())
+            raw = np.array(raw)
+            clamped = np.maximum(raw, 0.0).mean()
+            print(f"{name} order {order}: mean irradiance {raw.mean():.4f}, clamped at zero "
+                  f"{clamped:.4f} ({clamped / raw.mean() - 1:+.1%}), below zero at "
+                  f"{float((raw < 0).mean()):.3f} of the points", flush=True)
+
+
+if __name__ == "__main__":
+    main()
