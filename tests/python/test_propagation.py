@@ -286,6 +286,37 @@ def test_settings_mirror_cpp_defaults_and_validate():
             shgi.PropagationVolume(scene, shgi.PropagationSettings(**{field: value}))
 
 
+def test_clamp_at_surfaces_is_deterministic_and_needs_the_unclamped_transfer():
+    """clamp_at_surfaces gives the same field for 1 and 2 threads; without unclamped_transfer
+    it changes nothing (the transfer is clamped and rescaled everywhere then)."""
+    import numpy as np
+    scene = committed(scenes.cornell_box(0.05))
+    rng = np.random.default_rng(7)
+    lower, upper = (np.array(corner) for corner in scene.bounds())
+    points = rng.uniform(lower, upper, (400, 3)).astype(np.float32)
+    normals = rng.normal(size=(400, 3)).astype(np.float32)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+
+    def irradiance(**fields):
+        volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+            seed=2, photons=20000, resolution=16, steps=6, **fields))
+        volume.refine()
+        return volume.current_field().irradiance(points, normals)
+
+    at_walls = dict(unclamped_transfer=True, clamp_at_surfaces=True, order=1)
+    try:
+        shgi.set_max_threads(1)
+        one = irradiance(**at_walls)
+        shgi.set_max_threads(2)
+        two = irradiance(**at_walls)
+    finally:
+        shgi.set_max_threads(0)
+    np.testing.assert_array_equal(one, two)
+    assert not np.array_equal(one, irradiance(unclamped_transfer=True, order=1))
+    np.testing.assert_array_equal(irradiance(clamp_at_surfaces=True, order=1),
+                                  irradiance(order=1))
+
+
 def test_an_empty_or_uncommitted_scene_is_refused():
     with pytest.raises(ValueError, match="not committed"):
         shgi.PropagationVolume(scenes.cornell_box(0.05).scene)
