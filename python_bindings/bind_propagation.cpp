@@ -6,12 +6,14 @@
 // progress. Its field is an immutable snapshot: renders may read one while the next refine()
 // runs.
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
 
 #include <memory>
 #include <string>
 
 #include "bind_methods.h"
 #include "interruptible.h"
+#include "numpy_convert.h"
 #include "propagation/propagation_volume.h"
 #include "scene_use.h"
 #include "struct_fields.h"
@@ -66,7 +68,11 @@ void bind_settings(py::module_& m) {
         .def_readwrite("unclamped_transfer", &S::unclamped_transfer,
                        "Propagate the lobes unclamped (a linear transfer per neighbour offset) "
                        "instead of clamping each source lobe at zero and rescaling it to its "
-                       "flux (False).");
+                       "flux (False).")
+        .def_readwrite("clamp_at_surfaces", &S::clamp_at_surfaces,
+                       "With unclamped_transfer: clamp and rescale the lobes of the cells whose "
+                       "light a wall stops in part (a wall stopping a lobe's negative half makes "
+                       "light), linear elsewhere; no effect without unclamped_transfer (False).");
     def_integer(cls, "cascades", &S::cascades,
                 "Nested volumes around cascade_center, each finer level with half the cells' "
                 "size and `resolution` cells per axis; 1: one volume over the scene (1).");
@@ -164,6 +170,22 @@ reset().)doc");
             },
             py::arg("progress") = py::none(),
             "Forgets every pass and rebuilds the geometry volume of the (re-committed) scene.")
+        .def(
+            "recenter",
+            [](PropagationVolume& volume, const py::handle& point, Progress* progress) {
+                const vec3 p = to_vec3(point, "point");
+                const ObjectUse writes = volume_use(volume, ObjectUse::Kind::Write, "recenter");
+                return run_interruptible(progress,
+                                         [&](Progress* used) { return volume.recenter(p, used); });
+            },
+            py::arg("point"), py::arg("progress") = py::none(),
+            "Cascades that follow a moving camera: moves every finer level whose inner region "
+            "(the middle half of its box per axis) no longer holds `point` to be centred on it "
+            "(snapped to its cells, inside the scene) and rebuilds those levels alone: geometry, "
+            "every pass's VPLs traced again, propagation (GIL released) - the field a volume "
+            "reset there gives after as many passes. Returns the levels moved, finest first "
+            "([] without cascades). Raises shgi.Cancelled on cancel, keeping the volume as it "
+            "was; ValueError for a point that is not finite.")
         .def(
             "current_field",
             [](const PropagationVolume& volume) {

@@ -413,7 +413,14 @@ class ShgiPropagationSettings(bpy.types.PropertyGroup):
         name="Unclamped Transfer", default=LP["unclamped_transfer"],
         description="Spread light between cells without cutting off the negative back of its "
                     "directions: with Order 2, Travel Re-injection, Damping and about 24 Steps "
-                    "the closest to path-traced light; with Order 1 light crosses thin walls")
+                    "the closest to path-traced light; with Order 1 closed rooms read bright "
+                    "(see Clamp At Walls)")
+    clamp_at_surfaces: BoolProperty(
+        name="Clamp At Walls", default=LP["clamp_at_surfaces"],
+        description="With Unclamped Transfer, cut off the negative back of the light's "
+                    "directions where walls stop part of it, which otherwise adds light: with "
+                    "Order 1, Travel Re-injection, Damping and 32 to 36 Steps the closest to "
+                    "path-traced light")
     cascades: IntProperty(
         name="Cascades", default=LP["cascades"], min=1, max=settings.MAX_PROPAGATION_CASCADES,
         description="Nested grids around the camera for large scenes, each finer one with "

@@ -250,6 +250,7 @@ PROPAGATION_DEFAULTS = {
     "drop_outward_vpls": False,
     "travel_reinjection": False,
     "unclamped_transfer": False,
+    "clamp_at_surfaces": False,
     "cascades": 1,
 }
 
@@ -456,6 +457,7 @@ PROPAGATION_LABELS = {
     "drop_outward_vpls": "Light Propagation > Drop Outward Lights",
     "travel_reinjection": "Light Propagation > Travel Re-injection",
     "unclamped_transfer": "Light Propagation > Unclamped Transfer",
+    "clamp_at_surfaces": "Light Propagation > Clamp At Walls",
     "cascades": "Light Propagation > Cascades",
 }
 INSTANT_GI_LABELS = {

@@ -134,15 +134,46 @@ vec3 PropagationStep::face_intensity(const float* cell, const Face& face) const 
     return intensity;
 }
 
-void PropagationStep::rescale_factors(const ShVolume& source, std::vector<vec3>& factors,
-                                      Progress* progress) const {
-    factors.assign(source.cell_count(), vec3(1.0f));
-    if (clamp_ != LobeClamp::Rescaled) return;
+void PropagationStep::blocked_sources(const ShVolume& source,
+                                      const PropagationTransmittance* transmittance,
+                                      std::vector<uint8_t>& blocked, Progress* progress) const {
+    blocked.assign(source.cell_count(), 0);
+    if (transmittance == nullptr) return;
+    const ivec3 counts = source.counts();
     parallel_for(
         0, source.cell_count(), kCellsPerTask,
         [&](uint64_t begin, uint64_t end) {
             throw_if_cancelled(progress);
             for (uint64_t c = begin; c < end; ++c) {
+                const ivec3 cell(int(c % uint64_t(counts.x)),
+                                 int((c / uint64_t(counts.x)) % uint64_t(counts.y)),
+                                 int(c / (uint64_t(counts.x) * uint64_t(counts.y))));
+                for (int o = 0; o < offset_count(); ++o) {
+                    const ivec3 to = cell + offsets_[size_t(o)].offset;
+                    if (glm::any(glm::lessThan(to, ivec3(0))) ||
+                        glm::any(glm::greaterThanEqual(to, counts)))
+                        continue;
+                    if (transmittance->values[source.cell_index(to) * size_t(offset_count()) +
+                                              size_t(o)] < 1.0f) {
+                        blocked[c] = 1;
+                        break;
+                    }
+                }
+            }
+        });
+}
+
+void PropagationStep::rescale_factors(const ShVolume& source, std::vector<vec3>& factors,
+                                      const std::vector<uint8_t>* only,
+                                      Progress* progress) const {
+    factors.assign(source.cell_count(), vec3(1.0f));
+    if (clamp_ != LobeClamp::Rescaled && clamp_ != LobeClamp::AtSurfaces) return;
+    parallel_for(
+        0, source.cell_count(), kCellsPerTask,
+        [&](uint64_t begin, uint64_t end) {
+            throw_if_cancelled(progress);
+            for (uint64_t c = begin; c < end; ++c) {
+                if (only != nullptr && (*only)[c] == 0) continue;
                 const float* cell = source.cell_data(c);
                 vec3 total(0.0f), clamped(0.0f);
                 for (const Offset& offset : offsets_)
@@ -175,9 +206,12 @@ void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
             "PropagationStep: transmittance has ", transmittance->values.size(), " values for ",
             transmittance->offsets, " offsets; expected ", source.cell_count(), " cells × ",
             offset_count(), " offsets"));
+    const bool at_surfaces = clamp_ == LobeClamp::AtSurfaces;
+    std::vector<uint8_t> blocked;
+    if (at_surfaces) blocked_sources(source, transmittance, blocked, progress);
     std::vector<vec3> factors;
-    rescale_factors(source, factors, progress);
-    const bool clamp = clamp_ != LobeClamp::None;
+    rescale_factors(source, factors, at_surfaces ? &blocked : nullptr, progress);
+    const bool clamp_all = clamp_ == LobeClamp::Rescaled || clamp_ == LobeClamp::Clamped;
     const bool travel = reinjection_ == Reinjection::TravelDirection;
     const int floats = source.floats_per_cell();
     parallel_for(
@@ -206,7 +240,8 @@ void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
                     const float* src = source.cell_data(s);
                     for (const Face& face : offset.faces) {
                         vec3 intensity = face_intensity(src, face);
-                        if (clamp) intensity = glm::max(intensity, vec3(0.0f)) * factors[s];
+                        if (clamp_all || (at_surfaces && blocked[s] != 0))
+                            intensity = glm::max(intensity, vec3(0.0f)) * factors[s];
                         const vec3 crossing = (face.flux_factor * kPi * t) * intensity;
                         if (travel)
                             face_flux[size_t(face.index)] += crossing;

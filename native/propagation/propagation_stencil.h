@@ -69,6 +69,10 @@ enum class LobeClamp : uint8_t {
     Rescaled,  // clamp negative samples, then rescale to the unclamped total (conserves flux)
     Clamped,   // clamp only (the published method: gains energy each step)
     None,      // no clamp (linear; conserves flux; may carry negative intensity)
+    // Linear in free space, Rescaled where a wall stops part of a source cell's light (any of
+    // its transfers has transmittance < 1): unclamped, a wall stops a lobe's negative half like
+    // its positive light, and stopping negative flux makes light.
+    AtSurfaces,
 };
 
 // Solid angle (sr) of the rectangle [x0, x1] × [y0, y1] in the plane at `distance` > 0 from the
@@ -132,9 +136,12 @@ class PropagationStep {
         std::vector<Face> faces;
     };
     // Per source cell and channel, the factor that takes its clamped face fluxes to the
-    // unclamped total (Rescaled), else 1.
+    // unclamped total (Rescaled; AtSurfaces where `only` is set), else 1.
     void rescale_factors(const ShVolume& source, std::vector<vec3>& factors,
-                         Progress* progress) const;
+                         const std::vector<uint8_t>* only, Progress* progress) const;
+    // AtSurfaces: per source cell, 1 where a transfer out of it is blocked in part.
+    void blocked_sources(const ShVolume& source, const PropagationTransmittance* transmittance,
+                         std::vector<uint8_t>& blocked, Progress* progress) const;
     vec3 face_intensity(const float* cell, const Face& face) const;
 
     int order_ = 1;

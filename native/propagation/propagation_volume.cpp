@@ -34,6 +34,7 @@ struct LevelGrid {
     vec3 origin{0.0f};
     float cell_size = 1.0f;
     ivec3 dims{1};
+    ivec3 start{0};  // its first cell on its own grid over the scene
     uint8_t blend_faces = 0;
 };
 
@@ -56,6 +57,7 @@ std::vector<LevelGrid> level_grids(const vec3& origin, float cell_size, const iv
                                    vec3(-1.0f), vec3(full));
         const ivec3 start = glm::clamp(ivec3(at) - grid.dims / 2, ivec3(0), full - grid.dims);
         grid.origin = origin + vec3(start) * grid.cell_size;
+        grid.start = start;
         for (int a = 0; a < 3; ++a) {
             if (start[a] > 0) grid.blend_faces |= uint8_t(1u << a);
             if (start[a] + grid.dims[a] < full[a]) grid.blend_faces |= uint8_t(8u << a);
@@ -100,6 +102,18 @@ PhotonTracerSettings tracer_settings(const PropagationSettings& settings) {
 
 PropagationStencil stencil_of(int order) {
     return order == 1 ? PropagationStencil::Faces6 : PropagationStencil::Neighbours26;
+}
+
+Reinjection reinjection_of(const PropagationSettings& settings) {
+    return settings.travel_reinjection ? Reinjection::TravelDirection : Reinjection::FaceNormal;
+}
+
+PropagationStep step_of(const PropagationSettings& settings) {
+    return PropagationStep(stencil_of(settings.order), settings.order,
+                           !settings.unclamped_transfer ? LobeClamp::Rescaled
+                           : settings.clamp_at_surfaces ? LobeClamp::AtSurfaces
+                                                        : LobeClamp::None,
+                           reinjection_of(settings));
 }
 
 const PropagationSettings& validated(const PropagationSettings& settings) {
@@ -351,8 +365,12 @@ void PropagationVolume::reset(Progress* progress) {
                                       : ShLattice(grid.origin, grid.cell_size, grid.dims, 1),
                        grid.blend_faces, progress);
         levels[size_t(level)].geometry_seconds = seconds_since(start);
+        levels[size_t(level)].start = grid.start;
     }
     levels_ = std::move(levels);
+    coarse_origin_ = grids.back().origin;
+    coarse_cell_size_ = grids.back().cell_size;
+    coarse_dims_ = grids.back().dims;
     field_ = std::make_shared<PropagationField>();
     passes_ = 0;
     last_vpl_count_ = 0;
@@ -361,9 +379,9 @@ void PropagationVolume::reset(Progress* progress) {
     if (progress) progress->set_fraction(1.0f);
 }
 
-std::vector<VirtualPointLight> PropagationVolume::trace_vpls(Progress* progress,
-                                                             double* reflect_seconds) {
-    PhotonMaps maps = trace_photons(*scene_, tracer_settings(settings_), passes_, progress,
+std::vector<VirtualPointLight> PropagationVolume::trace_vpls(uint64_t pass, Progress* progress,
+                                                             double* reflect_seconds) const {
+    PhotonMaps maps = trace_photons(*scene_, tracer_settings(settings_), pass, progress,
                                     kSettings);
     // With drop_outward_vpls, a VPL whose lit half-space holds nothing of the scene's bounds (a
     // surface on the bounds facing out: a sunlit roof or outer wall) is dropped: it can light no
@@ -470,16 +488,12 @@ void PropagationVolume::refine(Progress* progress) {
     auto start = now();
     if (progress) progress->begin_stage("tracing VPLs", 0.0f, kTraceShare);
     double reflect_seconds = 0.0;
-    const std::vector<VirtualPointLight> vpls = trace_vpls(progress, &reflect_seconds);
+    const std::vector<VirtualPointLight> vpls = trace_vpls(passes_, progress, &reflect_seconds);
     stages.push_back({"vpl_trace", seconds_since(start) - reflect_seconds});
     if (settings_.vpl_bounces > 1) stages.push_back({"vpl_reflect", reflect_seconds});
 
-    const Reinjection reinjection = settings_.travel_reinjection ? Reinjection::TravelDirection
-                                                                 : Reinjection::FaceNormal;
-    const PropagationStep step(stencil_of(settings_.order), settings_.order,
-                               settings_.unclamped_transfer ? LobeClamp::None
-                                                            : LobeClamp::Rescaled,
-                               reinjection);
+    const Reinjection reinjection = reinjection_of(settings_);
+    const PropagationStep step = step_of(settings_);
     const size_t n = levels_.size();
     std::vector<ShVolume> sums(n), means(n);
     std::vector<PropagationLevel> field_levels(n);
@@ -499,6 +513,104 @@ void PropagationVolume::refine(Progress* progress) {
     stage_seconds_ = std::move(stages);
     ++passes_;
     if (progress) progress->set_fraction(1.0f);
+}
+
+std::vector<int> PropagationVolume::recenter(const vec3& point, Progress* progress) {
+    if (!is_finite(point))
+        throw InvalidArgument(format_message("PropagationVolume.recenter: the point ",
+                                             glm::to_string(point), " must be finite"));
+    check_scene("recenter");
+    const size_t n = levels_.size();
+    if (n < 2) return {};
+    const std::vector<LevelGrid> grids =
+        level_grids(coarse_origin_, coarse_cell_size_, coarse_dims_, settings_, point);
+    std::vector<int> moved;
+    for (size_t level = 0; level + 1 < n; ++level) {
+        const Level& l = levels_[level];
+        const LevelGrid& grid = grids[level];
+        if (grid.start == l.start) continue;  // already there, or held against the bounds
+        // The inner region: the middle half of the level's box along each axis.
+        const vec3 lower = l.injected.origin() + 0.5f * l.injected.cell_size();
+        const vec3 extent = vec3(l.injected.counts() - 1) * l.injected.cell_size();
+        const vec3 from = (point - lower) / extent;
+        if (glm::all(glm::greaterThanEqual(from, vec3(0.25f))) &&
+            glm::all(glm::lessThanEqual(from, vec3(0.75f))))
+            continue;
+        moved.push_back(int(level));
+    }
+    if (moved.empty()) return moved;
+
+    // Everything below is built aside and committed at the end: a cancel keeps the solver.
+    std::vector<Level> rebuilt;
+    for (size_t k = 0; k < moved.size(); ++k) {
+        const LevelGrid& grid = grids[size_t(moved[k])];
+        if (progress)
+            progress->begin_stage(format_message("geometry volume, level ", moved[k]),
+                                  0.5f * float(k) / float(moved.size()),
+                                  0.5f * float(k + 1) / float(moved.size()));
+        const auto start = now();
+        rebuilt.push_back(make_level(ShLattice(grid.origin, grid.cell_size, grid.dims, 1),
+                                     grid.blend_faces, progress));
+        rebuilt.back().geometry_seconds = seconds_since(start);
+        rebuilt.back().start = grid.start;
+    }
+    std::vector<PropagationLevel> field_levels = field_->levels();
+    if (passes_ > 0) {
+        // Every pass's VPLs again (each pass's own seed), summed in pass order as refine()
+        // summed them, then the mean and the propagation of the last pass.
+        for (uint64_t pass = 0; pass < passes_; ++pass) {
+            if (progress)
+                progress->begin_stage(format_message("re-injecting VPLs, pass ", pass + 1),
+                                      0.5f + 0.4f * float(pass) / float(passes_),
+                                      0.5f + 0.4f * float(pass + 1) / float(passes_));
+            double reflect_seconds = 0.0;
+            const std::vector<VirtualPointLight> vpls =
+                trace_vpls(pass, progress, &reflect_seconds);
+            for (Level& l : rebuilt) {
+                ShVolume injection(l.injected.origin(), l.injected.cell_size(),
+                                   l.injected.counts(), settings_.order);
+                inject_vpls(injection, vpls, progress);
+                float* sum_data = l.injected_sum.cell_data(0);
+                const float* pass_data = injection.cell_data(0);
+                for_each_slice(l.injected_sum.coefficients().size(), uint64_t(1) << 22, progress,
+                               [&](uint64_t begin, uint64_t end) {
+                                   for (uint64_t i = begin; i < end; ++i)
+                                       sum_data[i] += pass_data[i];
+                               });
+            }
+        }
+        const float inv_passes = 1.0f / float(passes_);
+        const PropagationStep step = step_of(settings_);
+        for (size_t k = 0; k < moved.size(); ++k) {
+            Level& l = rebuilt[k];
+            const float* sum_data = l.injected_sum.cell_data(0);
+            float* mean_data = l.injected.cell_data(0);
+            for_each_slice(l.injected.coefficients().size(), uint64_t(1) << 22, progress,
+                           [&](uint64_t begin, uint64_t end) {
+                               for (uint64_t i = begin; i < end; ++i)
+                                   mean_data[i] = sum_data[i] * inv_passes;
+                           });
+            if (progress)
+                progress->begin_stage(format_message("propagating, level ", moved[k]),
+                                      0.9f + 0.1f * float(k) / float(moved.size()),
+                                      0.9f + 0.1f * float(k + 1) / float(moved.size()));
+            ShVolume accumulated = propagate(
+                l.injected, step, settings_.steps, settings_.occlusion ? &l.transmittance : nullptr,
+                progress, nullptr, settings_.occlude_first_step);
+            field_levels.at(size_t(moved[k])) = {
+                std::make_shared<const ShVolume>(std::move(accumulated)), l.lookup_transmittance,
+                l.blend_faces};
+        }
+    }
+
+    // Nothing above changed the solver: commit the moved levels.
+    for (size_t k = 0; k < moved.size(); ++k) levels_[size_t(moved[k])] = std::move(rebuilt[k]);
+    if (passes_ > 0)
+        field_ = std::make_shared<PropagationField>(std::move(field_levels),
+                                                    settings_.normal_offset, settings_.damping,
+                                                    reinjection_of(settings_));
+    if (progress) progress->set_fraction(1.0f);
+    return moved;
 }
 
 size_t PropagationVolume::memory_bytes() const {

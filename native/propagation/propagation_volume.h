@@ -32,7 +32,8 @@
 //      (then a VPL beside a thin wall, injected into the cell the wall runs through, does not
 //      send its light across). Stencil, flux factor and
 //      clamping: propagation_stencil.h (Ω_f/π instead of eq. 3.3's Ω_f/4π; clamp then rescale,
-//      or with unclamped_transfer no clamp);
+//      or with unclamped_transfer no clamp, clamp_at_surfaces keeping the clamp where walls
+//      stop light);
 //      the light crossing a face is re-injected along the face's normal (the seed) or, with
 //      travel_reinjection, along its travel direction (propagation_stencil.h, "Re-injection").
 // The field (propagation/propagation_field.h) is an immutable snapshot of the accumulation
@@ -105,9 +106,18 @@ struct PropagationSettings {
     // the source lobe, LobeClamp::Rescaled). Flux is kept either way; unclamped, an L1/L2 lobe's
     // negative back half travels too. With travel_reinjection, damping, both leak corrections
     // and 24 steps the HOLPV is within 10% of the path tracer on the Cornell box, the sun room
-    // and the two rooms (1.038, 0.990, 1.096), the LPV not (0.882, 0.776, 1.266: its negative
-    // L1 halves cross the two rooms' wall) (docs/methods.md). Off by default.
+    // and the two rooms (1.038, 0.990, 1.096), the LPV not (0.882, 0.776, 1.266: the last is
+    // the dim room's own light, 0.008 crosses the wall) (docs/methods.md). Off by default.
     bool unclamped_transfer = false;
+    // With unclamped_transfer: clamp and rescale the lobes of the cells whose light a wall stops
+    // in part, linear elsewhere (LobeClamp::AtSurfaces). Unclamped, a wall stops a lobe's
+    // negative half like its positive light, and stopping negative flux makes light (in a closed
+    // box 1.138x the VPL's flux in flight for L1, 1.026x for L2). With it, travel_reinjection,
+    // damping, both leak corrections and 32-36 steps the LPV is within 10% of the path tracer on
+    // the Cornell box, the sun room and the two rooms (32: 0.944, 0.935, 1.062); the HOLPV's two
+    // rooms then read 1.17 (docs/methods.md). Off by default; no effect without
+    // unclamped_transfer.
+    bool clamp_at_surfaces = false;
     // Cascades (Kaplanyan & Dachsbacher 2010; seed 000 §4.4), for scenes larger than one volume
     // can resolve: 1 is a single volume over the scene (`resolution` cells along its longest
     // side). With n > 1 that volume is the coarsest of n nested levels; each finer level halves
@@ -160,6 +170,18 @@ class PropagationVolume : public GiSolver {
     const PropagationSettings& settings() const { return settings_; }
     // The volumes' layout: origin, cell size, counts (the field's; the coarsest level's).
     const ShVolume& injected() const { return levels_.back().injected; }
+    // Cascades that follow a moving camera (the viewport's view, which is not the scene's
+    // camera): every finer level whose inner region (the middle half of its box along each axis)
+    // no longer holds `point` is moved to be centred on it, snapped to its own cells and kept
+    // inside the scene as reset() places the levels, and only those levels are rebuilt: their
+    // geometry volume, the injection of every pass so far (each pass's VPLs traced again with
+    // its own seed) and their propagation. The result is what a volume reset with the levels
+    // centred on `point` gives after as many passes, bit for bit; the other levels are kept as
+    // they are. Returns the levels moved, finest first (none without cascades, or when `point`
+    // is still inside every inner region, or a level cannot move: it is against the scene's
+    // bounds). Cancel keeps the solver and its field as they were. Throws InvalidArgument for a
+    // point that is not finite, or after a scene edit without reset().
+    std::vector<int> recenter(const vec3& point, Progress* progress = nullptr);
     // Cascade levels (1 without cascades), the finest first; level l's injected volume.
     size_t level_count() const { return levels_.size(); }
     const ShVolume& level_injected(size_t level) const { return levels_.at(level).injected; }
@@ -177,11 +199,14 @@ class PropagationVolume : public GiSolver {
         std::shared_ptr<const NeighbourTransmittance> lookup_transmittance;
         uint8_t blend_faces = 0;  // PropagationLevel::blend_faces
         double geometry_seconds = 0.0;
+        // The level's first lattice cell on its own grid over the scene (recenter's snap).
+        ivec3 start{0};
     };
 
     void check_scene(const char* what) const;
-    // This pass's VPLs; the seconds spent finding later hits' albedo go to reflect_seconds.
-    std::vector<VirtualPointLight> trace_vpls(Progress* progress, double* reflect_seconds);
+    // Pass `pass`'s VPLs (its seed); the seconds finding later hits' albedo go to reflect_seconds.
+    std::vector<VirtualPointLight> trace_vpls(uint64_t pass, Progress* progress,
+                                              double* reflect_seconds) const;
     // A level of the geometry lattice `geometry` (its surfaces measured here): its volumes of
     // one more cell per axis, offset by half a cell, and with occlusion its transmittances.
     Level make_level(ShLattice geometry, uint8_t blend_faces, Progress* progress) const;
@@ -199,6 +224,10 @@ class PropagationVolume : public GiSolver {
     uint64_t passes_ = 0;
     uint64_t last_vpl_count_ = 0;
     std::vector<Level> levels_;  // finest first
+    // The coarsest level's lattice (the scene's at `resolution`): the finer levels' grids.
+    vec3 coarse_origin_{0.0f};
+    float coarse_cell_size_ = 1.0f;
+    ivec3 coarse_dims_{1};
     std::shared_ptr<const PropagationField> field_;
     std::vector<StageSeconds> stage_seconds_;
 };

@@ -459,6 +459,41 @@ def test_probe_grid_refines_in_the_background_and_restarts_when_its_volume_moves
     assert not np.array_equal(first.pixels, second.pixels)
 
 
+def test_propagation_cascades_follow_the_view_without_a_new_solve():
+    """With cascades the light propagation volume's finer level follows the view as the artist
+    navigates: a view 14 m along the hall moves that level (PropagationVolume.recenter) without
+    a new solve, and the frame is the one of a volume built around that view from the start."""
+    scene = scenes.hall(0.25).scene
+    view, snapshot = view_of(scene, 24, 16), snapshot_of(scene)
+    props = settings.default_properties(shgi, method="PROPAGATION", use_viewport_denoising=False,
+                                        viewport_samples=2)
+    for name, value in (("cascades", 2), ("resolution", 16), ("photons", 20000), ("steps", 4)):
+        setattr(props.propagation, name, value)
+    props = settings.render_property_values(props)
+    worker = ViewportWorker(shgi)
+    try:
+        worker.request(snapshot, view, props)
+        first = final_frame(worker, 2)
+        assert worker.counters["recentres"] == 0
+        along = dict(view, world_from_camera=scenes.look_at((10.0, -3.5, 1.5), (10.0, 4.0, 1.0)))
+        assert worker.request(snapshot, along, props)
+        second = final_frame(worker, 2, after=first.frame_id)
+        counters = dict(worker.counters)
+    finally:
+        worker.stop()
+    assert counters["solves"] == 1 and counters["recentres"] == 1
+    assert counters["scene_builds"] == 1
+    built, _ = snapshot.build()
+    built.set_camera(viewport_camera.shgi_camera(shgi, along))
+    built.commit()
+    values = settings.properties_from_values(props)
+    volume = shgi.PropagationVolume(built, settings.propagation_settings(values, shgi))
+    volume.refine()
+    expected, _ = shgi.render_preview(built, volume.current_field(), settings.preview_settings(
+        SimpleNamespace(**dict(values.__dict__, samples=2)), shgi))
+    np.testing.assert_array_equal(second.pixels, expected["Combined"][::-1])
+
+
 def test_a_view_change_keeps_the_photon_pass_and_a_scene_change_cancels_it():
     scene = scenes.cornell_box(0.25).scene
     view, snapshot = view_of(scene, 24, 24), snapshot_of(scene)

@@ -150,7 +150,9 @@ def rendered_unclamped(name, order):
     ("cornell_box", 2),
     pytest.param("sun_room", 1, marks=missed("DiffInd 0.776x")),
     ("sun_room", 2),
-    pytest.param("two_rooms", 1, marks=missed("DiffInd 1.266x: L1 negative halves cross walls")),
+    # Not light through the wall (0.008 of the dim room's own light,
+    # test_unclamped_transfer_keeps_the_bright_room_out): the room's own light reads 1.27x.
+    pytest.param("two_rooms", 1, marks=missed("DiffInd 1.266x")),
     ("two_rooms", 2),
 ])
 def test_unclamped_transfer_with_damping_agrees_with_path_tracer(name, order):
@@ -163,6 +165,91 @@ def test_unclamped_transfer_with_damping_agrees_with_path_tracer(name, order):
           f"DiffInd x DiffCol {ratio:.3f} x the path tracer's, Combined PSNR "
           f"{psnr(ref['Combined'], preview['Combined']):.2f} dB")
     assert abs(ratio - 1.0) < 0.10, ratio
+
+
+# The unclamped settings with the lobes clamped and rescaled where walls stop light
+# (clamp_at_surfaces: a wall stopping a lobe's negative half makes light) and 32 steps.
+AT_SURFACES = dict(UNCLAMPED, clamp_at_surfaces=True, steps=32)
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name, order", [
+    ("cornell_box", 1),
+    pytest.param("cornell_box", 2, marks=missed("DiffInd 1.157x")),
+    ("sun_room", 1),
+    ("sun_room", 2),
+    ("two_rooms", 1),
+    pytest.param("two_rooms", 2, marks=missed("DiffInd 1.171x")),
+])
+def test_clamped_at_surfaces_lpv_agrees_with_path_tracer(name, order):
+    """The agreement target with clamp_at_surfaces added to the unclamped settings, 32 steps:
+    the LPV meets it on all three scenes (measured 0.944, 0.935, 1.062; 36 steps 1.003, 1.061,
+    1.048), the HOLPV on the sun room only (1.157, 1.094, 1.171)."""
+    ref, preview = rendered_with(AT_SURFACES, name, order)
+    ratio = indirect_diffuse(preview) / indirect_diffuse(ref)
+    print(f"{name} order {order}, clamped at surfaces, 32 steps: DiffInd x DiffCol {ratio:.3f} x "
+          f"the path tracer's, Combined PSNR {psnr(ref['Combined'], preview['Combined']):.2f} dB")
+    assert abs(ratio - 1.0) < 0.10, ratio
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("order", [pytest.param(1, marks=missed("Combined 1.095x")), 2])
+def test_dim_room_through_a_final_gather_with_the_unclamped_settings(order):
+    """The two rooms' dim room through a final gather (one VPL bounce less, as the add-on
+    solves for it) under the settings where the HOLPV meets the 10% agreement on all three
+    scenes (UNCLAMPED): its Combined mean within 5% of the path tracer's (measured 1.021; the
+    defaults give 1.089). The LPV reads 1.095 there."""
+    scale, samples = REFERENCES["two_rooms"]
+    scene, ref = path_traced_reference(scenes.two_rooms, scale, samples)
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        seed=5, order=order, vpl_bounces=3, **UNCLAMPED))
+    volume.refine()
+    preview, _ = shgi.render_preview(scene, volume.current_field(),
+                                     shgi.PreviewSettings(seed=5, samples=64, final_gather=True))
+    ratio = float(preview["Combined"][..., :3].mean() / ref["Combined"][..., :3].mean())
+    print(f"order {order}, unclamped settings: dim room through a final gather {ratio:.3f} x "
+          "the path tracer's")
+    assert abs(ratio - 1.0) < 0.05
+
+
+@pytest.mark.reference
+def test_lpv_dim_room_through_a_final_gather_clamped_at_surfaces():
+    """The LPV's dim room through a final gather under the settings where it meets the 10%
+    agreement on all three scenes (AT_SURFACES, 32 steps): within 5% (measured 1.019)."""
+    scale, samples = REFERENCES["two_rooms"]
+    scene, ref = path_traced_reference(scenes.two_rooms, scale, samples)
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        seed=5, order=1, vpl_bounces=3, **AT_SURFACES))
+    volume.refine()
+    preview, _ = shgi.render_preview(scene, volume.current_field(),
+                                     shgi.PreviewSettings(seed=5, samples=64, final_gather=True))
+    ratio = float(preview["Combined"][..., :3].mean() / ref["Combined"][..., :3].mean())
+    print(f"LPV clamped at surfaces: dim room through a final gather {ratio:.3f} x the path "
+          "tracer's")
+    assert abs(ratio - 1.0) < 0.05
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("order", [1, 2])
+def test_unclamped_transfer_keeps_the_bright_room_out(order):
+    """Under the unclamped settings the LPV reads the two rooms 1.27x: not light through the
+    wall (with only the bright lamp on, whose exact light in the dim room is 0, the volume puts
+    there 0.008 (LPV) and 0.018 (HOLPV) x the dim room's own indirect light) but the dim room's
+    own light, with only its lamp on 1.273 (LPV) and 1.111 (HOLPV) x the path tracer's."""
+    dim_scene = committed(scenes.two_rooms(0.5, bright_power=0.0))
+    dim = shgi.render_path_traced(dim_scene, shgi.PathTracerSettings(samples=128, seed=11))
+    bright_scene = committed(scenes.two_rooms(0.5, dim_power=0.0))
+    ratios = {}
+    for name, scene in (("through the wall", bright_scene), ("own", dim_scene)):
+        volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+            seed=5, order=order, **UNCLAMPED))
+        volume.refine()
+        preview, _ = shgi.render_preview(scene, volume.current_field(),
+                                         shgi.PreviewSettings(seed=5))
+        ratios[name] = indirect_diffuse(preview) / indirect_diffuse(dim)
+    print(f"order {order}, unclamped: x the dim room's own indirect light: "
+          f"{ratios['through the wall']:.3f} through the wall, {ratios['own']:.3f} its own")
+    assert ratios["through the wall"] < 0.05
 
 
 @pytest.mark.reference
@@ -184,7 +271,7 @@ def test_settings_mirror_cpp_defaults_and_validate():
         100000, 0, 4, 32, 8, 2)
     assert s.occlusion and s.normal_offset == pytest.approx(1.0)
     assert not s.damping and not s.occlude_first_step and not s.drop_outward_vpls
-    assert not s.travel_reinjection and not s.unclamped_transfer
+    assert not s.travel_reinjection and not s.unclamped_transfer and not s.clamp_at_surfaces
     assert s.cascades == 1 and s.cascade_center == (0.0, 0.0, 0.0) and s.cascade_follow_camera
     assert shgi.settings_from_dict(shgi.PropagationSettings,
                                    shgi.settings_to_dict(s)).steps == 8
@@ -197,6 +284,37 @@ def test_settings_mirror_cpp_defaults_and_validate():
                          ("normal_offset", float("nan"))]:
         with pytest.raises(ValueError, match=f"PropagationSettings.{field} is"):
             shgi.PropagationVolume(scene, shgi.PropagationSettings(**{field: value}))
+
+
+def test_clamp_at_surfaces_is_deterministic_and_needs_the_unclamped_transfer():
+    """clamp_at_surfaces gives the same field for 1 and 2 threads; without unclamped_transfer
+    it changes nothing (the transfer is clamped and rescaled everywhere then)."""
+    import numpy as np
+    scene = committed(scenes.cornell_box(0.05))
+    rng = np.random.default_rng(7)
+    lower, upper = (np.array(corner) for corner in scene.bounds())
+    points = rng.uniform(lower, upper, (400, 3)).astype(np.float32)
+    normals = rng.normal(size=(400, 3)).astype(np.float32)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+
+    def irradiance(**fields):
+        volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+            seed=2, photons=20000, resolution=16, steps=6, **fields))
+        volume.refine()
+        return volume.current_field().irradiance(points, normals)
+
+    at_walls = dict(unclamped_transfer=True, clamp_at_surfaces=True, order=1)
+    try:
+        shgi.set_max_threads(1)
+        one = irradiance(**at_walls)
+        shgi.set_max_threads(2)
+        two = irradiance(**at_walls)
+    finally:
+        shgi.set_max_threads(0)
+    np.testing.assert_array_equal(one, two)
+    assert not np.array_equal(one, irradiance(unclamped_transfer=True, order=1))
+    np.testing.assert_array_equal(irradiance(clamp_at_surfaces=True, order=1),
+                                  irradiance(order=1))
 
 
 def test_an_empty_or_uncommitted_scene_is_refused():
@@ -591,3 +709,117 @@ def test_cancel_with_cascades_keeps_the_previous_field():
         assert volume.passes == 1
         np.testing.assert_array_equal(line_irradiance(volume.current_field(), points, normals),
                                       before)
+
+
+# Cascades that follow a moving camera (PropagationVolume.recenter; the viewport's navigation).
+# The hall at resolution 16 with 3 levels: cells of 2, 1 and 0.5 m; the finer boxes 16 m and
+# 8 m along x around the centre (the hall's whole width and height).
+
+
+def level_lines(field, points, normals):
+    return [line_irradiance(field.level_field(level), points, normals)
+            for level in range(field.level_count)]
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_recentred_cascades_are_a_volume_reset_there(order):
+    """recenter() moves only the levels whose inner region (the middle half of their box) the
+    camera left, snapped to their own cells, and rebuilds those alone: the field is bit for bit
+    what a volume whose levels were centred there from the start gives after as many passes,
+    and the levels that did not move are kept as they were."""
+    import numpy as np
+    scene = hall()
+    settings = dict(resolution=16, cascades=3, order=order, steps=8, seed=3, photons=30000,
+                    cascade_follow_camera=False)
+    start, far = (-4.0, 0.0, 1.5), (8.3, 0.7, 1.2)
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        cascade_center=start, **settings))
+    for _ in range(2):
+        volume.refine()
+    xs, points, normals = floor_line()
+    before = volume.current_field()
+    before_levels = level_lines(before, points, normals)
+    # 1.5 m: inside the middle half of the finest box (8 m) and of the next (16 m).
+    assert volume.recenter((-2.5, 0.0, 1.5)) == []
+    np.testing.assert_array_equal(line_irradiance(volume.current_field(), points, normals),
+                                  line_irradiance(before, points, normals))
+    # 12.3 m away both finer levels move; the coarsest (the whole hall) never does.
+    assert volume.recenter(far) == [0, 1]
+    assert volume.passes == 2
+    moved = volume.current_field()
+    fresh = shgi.PropagationVolume(scene, shgi.PropagationSettings(cascade_center=far, **settings))
+    for _ in range(2):
+        fresh.refine()
+    np.testing.assert_array_equal(line_irradiance(moved, points, normals),
+                                  line_irradiance(fresh.current_field(), points, normals))
+    for a, b in zip(level_lines(moved, points, normals),
+                    level_lines(fresh.current_field(), points, normals)):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(level_lines(moved, points, normals)[2], before_levels[2])
+    assert not np.array_equal(level_lines(moved, points, normals)[0], before_levels[0])
+    # Refining goes on from there as the fresh volume does.
+    volume.refine()
+    fresh.refine()
+    np.testing.assert_array_equal(line_irradiance(volume.current_field(), points, normals),
+                                  line_irradiance(fresh.current_field(), points, normals))
+
+
+def test_a_level_held_by_the_hall_end_stays_and_only_the_finest_moves():
+    """Near the hall's end the 16 m level is already against its bounds and cannot move (it is
+    not rebuilt); the finest level still follows."""
+    scene = hall()
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        resolution=16, cascades=3, steps=4, photons=20000, cascade_follow_camera=False,
+        cascade_center=(11.0, 0.0, 1.5)))
+    volume.refine()
+    # Level 1 (16 m) spans x in [0, 16] either way; level 0 (8 m) moves from [7, 15] to [8, 16].
+    assert volume.recenter((15.5, 0.0, 1.5)) == [0]
+    assert volume.recenter((15.5, 0.0, 1.5)) == []
+
+
+def test_recenter_without_cascades_or_with_a_bad_point():
+    import numpy as np
+    scene = hall()
+    single = shgi.PropagationVolume(scene, shgi.PropagationSettings(resolution=16, steps=2,
+                                                                    photons=5000))
+    single.refine()
+    assert single.recenter((10.0, 0.0, 1.0)) == []
+    cascaded = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        resolution=16, cascades=2, steps=2, photons=5000))
+    with pytest.raises(ValueError, match=r"point: element .* is nan"):
+        cascaded.recenter((float("nan"), 0.0, 0.0))
+    with pytest.raises(ValueError, match="point"):
+        cascaded.recenter((1.0, 2.0))
+    # Before the first pass the levels move and the field stays empty.
+    assert cascaded.recenter((12.0, 0.0, 1.0)) == [0]
+    assert cascaded.current_field().level_count == 0
+    cascaded.refine()
+    xs, points, normals = floor_line()
+    assert np.all(np.isfinite(line_irradiance(cascaded.current_field(), points, normals)))
+    scene.set_world(shgi.World(color=(0.1, 0.1, 0.1), strength=1.0))
+    scene.commit()
+    with pytest.raises(ValueError, match="recenter: the scene was edited"):
+        cascaded.recenter((-12.0, 0.0, 1.0))
+
+
+def test_a_cancelled_recenter_keeps_the_volume():
+    """A cancel while the moved levels are rebuilt keeps the solver and its field as they were;
+    the next recenter moves them from there."""
+    import numpy as np
+    scene = hall()
+    settings = shgi.PropagationSettings(resolution=16, cascades=3, steps=4, photons=20000,
+                                        cascade_follow_camera=False, cascade_center=CASCADE_CENTER)
+    volume = shgi.PropagationVolume(scene, settings)
+    volume.refine()
+    volume.refine()
+    xs, points, normals = floor_line()
+    before = line_irradiance(volume.current_field(), points, normals)
+    for stage_to_cancel in ("geometry volume, level 1", "re-injecting VPLs, pass 2",
+                            "propagating, level 0"):
+        progress = shgi.Progress(
+            lambda fraction, stage: progress.cancel() if stage == stage_to_cancel else None)
+        with pytest.raises(shgi.Cancelled):
+            volume.recenter((9.0, 0.0, 1.5), progress)
+        np.testing.assert_array_equal(line_irradiance(volume.current_field(), points, normals),
+                                      before)
+    assert volume.recenter((9.0, 0.0, 1.5)) == [0, 1]

@@ -73,6 +73,28 @@ class FieldSolver:
     def overlay(self, _snapshot, _scene):
         return None
 
+    def follow_view(self, _camera, _progress=None):
+        """Moves what follows the camera to the viewport's view (shgi.Camera); returns what
+        moved (nothing here)."""
+        return []
+
+
+class PropagationSolver(FieldSolver):
+    """A PropagationVolume (seed 003) as a FieldSolver: its cascade levels follow the viewport's
+    view while the artist navigates (PropagationVolume.recenter), not only the view it was
+    built with."""
+
+    METHOD = "PROPAGATION"
+
+    def follow_view(self, camera, progress=None):
+        """Re-centres the cascade levels whose inner region the view's eye left and rebuilds
+        those alone; the levels moved. Nothing without cascades or with Follow Camera off."""
+        native = self.solver.settings
+        if native.cascades < 2 or not native.cascade_follow_camera:
+            return []
+        eye = np.asarray(camera.world_from_camera, dtype=np.float64)[:3, 3]
+        return self.solver.recenter(eye, progress)
+
 
 class InstantGiSolver(FieldSolver):
     """An InstantGi (seed 004) as a FieldSolver: its figures add the VPL sets and the last
@@ -365,7 +387,7 @@ def solver_recipe(props, shgi, volumes=(), viewport=False, gather=None):
         recipe_solver = ProbeGridSolver
     elif solver == "PROPAGATION":
         native_settings = settings.propagation_settings(props, shgi, gather)
-        recipe_solver = FieldSolver.of(solver)
+        recipe_solver = PropagationSolver
     elif solver == InstantGiSolver.METHOD:
         native_settings = settings.instant_gi_settings(props, shgi, gather)
         recipe_solver = InstantGiSolver

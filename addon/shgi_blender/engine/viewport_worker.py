@@ -19,6 +19,9 @@ redone:
   Irradiance Volumes) starts afresh after any scene change, solver setting change or, for a
   probe grid, moved or resized volume; never for a view change (the preview renderer takes
   the view as a camera), so its passes carry on from where they were;
+* a light propagation volume's cascade levels follow the view: before each frame the levels
+  whose inner region the view's eye left are moved and rebuilt alone (field_solvers.py,
+  PropagationSolver.follow_view), the other levels and the passes kept;
 * frames follow frame_schedule(): direct light at 1/4 resolution while the first pass runs,
   then 1/4 and 1/2 resolution frames with indirect light, each further pass followed by a new
   1/2 resolution frame of the refined field (the probe grid's background refinement: up to
@@ -135,7 +138,8 @@ class ViewportWorker:
         self._denoiser = None
         self.denoise_error = None
         self.error = None
-        self.counters = {"scene_builds": 0, "in_place_updates": 0, "solves": 0, "frames": 0}
+        self.counters = {"scene_builds": 0, "in_place_updates": 0, "solves": 0, "frames": 0,
+                         "recentres": 0}
         self._thread = threading.Thread(target=self._loop, name="shgi-viewport", daemon=True)
         self._thread.start()
 
@@ -264,7 +268,10 @@ class ViewportWorker:
             self._check(progress)
             if step.kind == "solve":
                 self._solve(context.recipe, progress.scene)
-            elif step.kind == "samples":
+                continue
+            if uses_field and self._solver is not None and step.kind != "direct":
+                self._follow_view(request.view, progress.frames)
+            if step.kind == "samples":
                 self._accumulate(context, step)
             else:
                 self._set_status(f"Rendering 1/{step.divisor} resolution")
@@ -302,6 +309,14 @@ class ViewportWorker:
         self._solver.update(progress)
         self.counters["solves"] += 1
         self._update_overlay()
+
+    def _follow_view(self, view, progress):
+        """Moves the solver's camera-following parts (propagation cascades) to the view: a view
+        change cancels it with the frames, and the next request moves them from where they were."""
+        moved = self._solver.follow_view(viewport_camera.shgi_camera(self._shgi, view), progress)
+        if moved:
+            self.counters["recentres"] += 1
+            self._set_status(f"Moved cascade levels {', '.join(map(str, moved))} to the view")
 
     def _accumulate(self, context, step):
         renderer = self._renderer(context, step.divisor, use_field=True)

@@ -303,7 +303,7 @@ class SHGI_RENDER_PT_propagation(_FieldPanel, bpy.types.Panel):
             column.prop(volume, name)
         column = layout.column(align=True)
         for name in ("occlusion", "occlude_first_step", "drop_outward_vpls", "travel_reinjection",
-                     "unclamped_transfer", "damping"):
+                     "unclamped_transfer", "clamp_at_surfaces", "damping"):
             column.prop(volume, name)
         column = layout.column(align=True)
         column.label(text="Passes")

@@ -2780,6 +2780,14 @@ class PropagationSettings:
     def cascades(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
+    def clamp_at_surfaces(self) -> bool:
+        """
+        With unclamped_transfer: clamp and rescale the lobes of the cells whose light a wall stops in part (a wall stopping a lobe's negative half makes light), linear elsewhere; no effect without unclamped_transfer (False).
+        """
+    @clamp_at_surfaces.setter
+    def clamp_at_surfaces(self, arg0: bool) -> None:
+        ...
+    @property
     def damping(self) -> bool:
         """
         Damp the lookup where the light arriving against the normal is stronger half a cell behind the lookup point than in front of it (seed 003 §3.2.4's directional derivative, against self-lighting and bleeding) (False).
@@ -2908,6 +2916,10 @@ class PropagationVolume(GiSolver):
     def current_field(self) -> PropagationField:
         """
         The PropagationField of the last pass (safe to render while refine() runs).
+        """
+    def recenter(self, point: typing.Any, progress: Progress = None) -> list[int]:
+        """
+        Cascades that follow a moving camera: moves every finer level whose inner region (the middle half of its box per axis) no longer holds `point` to be centred on it (snapped to its cells, inside the scene) and rebuilds those levels alone: geometry, every pass's VPLs traced again, propagation (GIL released) - the field a volume reset there gives after as many passes. Returns the levels moved, finest first ([] without cascades). Raises shgi.Cancelled on cancel, keeping the volume as it was; ValueError for a point that is not finite.
         """
     def refine(self, progress: Progress = None) -> None:
         """

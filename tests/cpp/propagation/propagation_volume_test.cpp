@@ -170,7 +170,7 @@ struct InFlight {
 // `absorbed`: also find where the light hits the walls (each step made a second time without
 // the walls: what it puts outside the box is what the walls stop).
 InFlight closed_box_in_flight(int order, Reinjection reinjection, int steps,
-                              bool absorbed = false) {
+                              bool absorbed = false, LobeClamp clamp = LobeClamp::Rescaled) {
     const int n = kBoxCells + 2;
     ShVolume volume(vec3(0.0f), 1.0f, ivec3(n), order);
     const vec3 up(0.0f, 0.0f, 1.0f);
@@ -189,7 +189,7 @@ InFlight closed_box_in_flight(int order, Reinjection reinjection, int steps,
         for (size_t o = 0; o < offsets.size(); ++o)
             if (inside(cell) != inside(cell - offsets[o])) walls.values[c * offsets.size() + o] = 0.0f;
     }
-    const PropagationStep step(stencil, order, LobeClamp::Rescaled, reinjection);
+    const PropagationStep step(stencil, order, clamp, reinjection);
     InFlight result;
     ShVolume ping = volume, pong = volume;
     for (int k = 0; k <= steps; ++k) {
@@ -273,6 +273,68 @@ TEST(PropagationVolume, ClosedBoxLightLeavesThroughTheWalls) {
         }
         EXPECT_LT(residence[1], (order == 1 ? 0.6 : 0.8) * residence[0]) << "order " << order;
     }
+}
+
+// Unclamped (LobeClamp::None) the walls make light: an L1/L2 lobe's negative half is part of
+// the transfer, and a wall stops it like the positive light, so the light left in flight gains
+// what the negative half held (an L1 beam's back half holds −1/3 of its flux, a cosine lobe's
+// −1/8). In the closed box the flux in flight rises above the VPL's: why the unclamped LPV reads
+// the two rooms' dim room 1.27 x the path tracer's with almost no light through the wall
+// (docs/methods.md, "Why the LPV misses"). Rescaled it never rises (the test above).
+TEST(PropagationVolume, UnclampedLightGainsEnergyWhereWallsStopItsNegativeHalf) {
+    for (int order : {1, 2})
+        for (Reinjection reinjection : {Reinjection::FaceNormal, Reinjection::TravelDirection}) {
+            const InFlight flight = closed_box_in_flight(order, reinjection, 64, false,
+                                                         LobeClamp::None);
+            const double peak = *std::max_element(flight.remaining.begin(), flight.remaining.end());
+            std::printf("order %d, %s, unclamped: most flux in flight %.3f of the VPL's (after "
+                        "8 steps %.3f, 32 %.3f); steps in flight %.1f\n",
+                        order,
+                        reinjection == Reinjection::FaceNormal ? "face normal" : "travel direction",
+                        peak, flight.remaining[8], flight.remaining[32], flight.residence);
+            EXPECT_GT(peak, 1.01) << "order " << order;
+        }
+}
+
+// LobeClamp::AtSurfaces clamps and rescales the lobes of the cells a wall stops part of the light
+// of, and is linear elsewhere: in the same closed box the L1 flux in flight never exceeds the
+// VPL's (unclamped 1.138); in free space (no transmittance) a step is the unclamped one bit for
+// bit. It is not monotone: negative light of the linear cells that reaches a clamped cell whose
+// total is not positive is dropped there, which adds a little.
+TEST(PropagationVolume, ClampedAtSurfacesTheWallsMakeNoL1Light) {
+    for (int order : {1, 2})
+        for (Reinjection reinjection : {Reinjection::FaceNormal, Reinjection::TravelDirection}) {
+            const InFlight flight = closed_box_in_flight(order, reinjection, 64, false,
+                                                         LobeClamp::AtSurfaces);
+            const double peak = *std::max_element(flight.remaining.begin() + 1,
+                                                  flight.remaining.end());
+            std::printf("order %d, %s, clamped at surfaces: most flux in flight %.3f of the "
+                        "VPL's (after 8 steps %.3f, 32 %.3f); steps in flight %.1f\n",
+                        order,
+                        reinjection == Reinjection::FaceNormal ? "face normal" : "travel direction",
+                        peak, flight.remaining[8], flight.remaining[32], flight.residence);
+            // Measured: 1.000 (L1, both re-injections; unclamped 1.138), 0.992 and 1.031 (L2
+            // face normal and travel; unclamped 1.026): it takes away the L1 lobes' gain, which
+            // is what the LPV needs; the L2 lobes' smaller one it does not.
+            if (order == 1) {
+                EXPECT_LE(peak, 1.0 + 1e-5);
+            }
+
+            const int n = 9;
+            ShVolume source(vec3(0.0f), 1.0f, ivec3(n), order);
+            inject_vpls(source, {{vec3(4.3f, 4.6f, 4.5f), glm::normalize(vec3(1.0f, 2.0f, 3.0f)),
+                                  vec3(1.0f, 2.0f, 3.0f)}});
+            ShVolume once = source, linear = source, at_surfaces = source;
+            const PropagationStencil stencil = stencil_of(order);
+            PropagationStep(stencil, order, LobeClamp::None, reinjection)(source, once);
+            for (int k = 0; k < 3; ++k) {
+                PropagationStep(stencil, order, LobeClamp::None, reinjection)(once, linear);
+                PropagationStep(stencil, order, LobeClamp::AtSurfaces, reinjection)(once,
+                                                                                    at_surfaces);
+                once = linear;
+            }
+            EXPECT_EQ(linear.coefficients(), at_surfaces.coefficients()) << "order " << order;
+        }
 }
 
 // Where the floor VPL's light lands, against straight flight (none on the floor, which cannot

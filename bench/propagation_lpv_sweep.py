@@ -1,0 +1,87 @@
+#!/usr/bin/env python3
+"""The light propagation volume against the path tracer for named settings (issue 51's
+agreement target: DiffInd x DiffCol mean within 10% of the path tracer's on the Cornell box, the
+sun room and the two rooms). Per configuration, order and scene: that ratio and the Combined
+PSNR (16-spp preview). The references are test_propagation.py's (the Cornell box and the sun room
+at scale 0.25, 2048 spp; the two rooms at 0.5, 512 spp), cached in --cache between runs.
+
+    PYTHONPATH=build/python python3 bench/propagation_lpv_sweep.py [--orders 1 2]
+        [--configs NAME ...]   (default: all of CONFIGS)
+"""
+
+import argparse
+import pathlib
+import sys
+
+import numpy as np
+
+import shgi
+from shgi.metrics import psnr
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "examples"))
+import scenes  # noqa: E402  (examples/scenes.py)
+
+SCENES = {"cornell_box": (0.25, 2048), "sun_room": (0.25, 2048), "two_rooms": (0.5, 512)}
+CORRECTIONS = dict(occlude_first_step=True, drop_outward_vpls=True)
+TRAVEL = dict(CORRECTIONS, travel_reinjection=True, damping=True)
+UNCLAMPED = dict(TRAVEL, unclamped_transfer=True)
+AT_SURFACES = dict(UNCLAMPED, clamp_at_surfaces=True)
+CONFIGS = {
+    "at_surfaces_r32_s24": dict(AT_SURFACES, resolution=32, steps=24),
+    "at_surfaces_r32_s28": dict(AT_SURFACES, resolution=32, steps=28),
+    "at_surfaces_r32_s32": dict(AT_SURFACES, resolution=32, steps=32),
+    "at_surfaces_r32_s36": dict(AT_SURFACES, resolution=32, steps=36),
+    "at_surfaces_r32_s40": dict(AT_SURFACES, resolution=32, steps=40),
+    "unclamped_r32_s24": dict(UNCLAMPED, resolution=32, steps=24),
+    "unclamped_r32_s28": dict(UNCLAMPED, resolution=32, steps=28),
+    "unclamped_r32_s32": dict(UNCLAMPED, resolution=32, steps=32),
+    "unclamped_r24_s18": dict(UNCLAMPED, resolution=24, steps=18),
+    "unclamped_r16_s12": dict(UNCLAMPED, resolution=16, steps=12),
+    "travel_r32_s32": dict(TRAVEL, resolution=32, steps=32),
+    "travel_r24_s24": dict(TRAVEL, resolution=24, steps=24),
+    "travel_r16_s16": dict(TRAVEL, resolution=16, steps=16),
+    "travel_r16_s12": dict(TRAVEL, resolution=16, steps=12),
+}
+
+
+def indirect(passes):
+    return float((np.asarray(passes["DiffInd"]) * np.asarray(passes["DiffCol"])).mean())
+
+
+def reference(name, cache):
+    scale, spp = SCENES[name]
+    scene = getattr(scenes, name)(scale).scene
+    scene.commit()
+    path = cache / f"{name}_{scale}_{spp}.npz"
+    if path.exists():
+        return scene, dict(np.load(path))
+    ref = shgi.render_path_traced(scene, shgi.PathTracerSettings(samples=spp, seed=11))
+    passes = {key: np.asarray(ref[key]) for key in ("Combined", "DiffInd", "DiffCol")}
+    cache.mkdir(parents=True, exist_ok=True)
+    np.savez(path, **passes)
+    return scene, passes
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--orders", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--configs", nargs="+", default=list(CONFIGS))
+    parser.add_argument("--cache", type=pathlib.Path, default=pathlib.Path("/tmp/shgi_lpv_refs"))
+    args = parser.parse_args()
+    refs = {name: reference(name, args.cache) for name in SCENES}
+    for config in args.configs:
+        for order in args.orders:
+            row = f"{config:<20} order {order}:"
+            for name, (scene, ref) in refs.items():
+                volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+                    seed=5, order=order, **CONFIGS[config]))
+                volume.refine()
+                preview, _ = shgi.render_preview(scene, volume.current_field(),
+                                                 shgi.PreviewSettings(seed=5))
+                row += (f"  {name} {indirect(preview) / indirect(ref):.3f}"
+                        f" {psnr(ref['Combined'], preview['Combined']):5.2f} dB")
+            print(row, flush=True)
+
+
+if __name__ == "__main__":
+    main()
