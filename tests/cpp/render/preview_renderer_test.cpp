@@ -641,6 +641,11 @@ TEST(PreviewRenderer, RejectsInvalidSettingsNamingTheField) {
     s = {};
     s.clamp_indirect = std::nanf("");
     expect_message(s, "PreviewSettings.clamp_indirect");
+    for (const float bad : {-1.0f, std::nanf(""), kInfinity}) {
+        s = {};
+        s.filter_glossy = bad;
+        expect_message(s, "PreviewSettings.filter_glossy");
+    }
     s = {};
     s.tile_size = 0;
     expect_message(s, "PreviewSettings.tile_size is 0");
