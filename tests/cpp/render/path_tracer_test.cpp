@@ -463,7 +463,8 @@ TEST(PathTracer, FilterGlossyLetsLightSamplesReachAMirrorAfterADiffuseBounce) {
     const PixelStats unfiltered = test::pixel_stats(off.film(), Pass::GlossInd);
     const PixelStats filtered = test::pixel_stats(on.film(), Pass::GlossInd);
     EXPECT_GT(filtered.mean - unfiltered.mean,
-              5.0 * std::hypot(filtered.standard_error, unfiltered.standard_error));
+              5.0 * std::hypot(filtered.standard_error, unfiltered.standard_error))
+        << "GlossInd " << unfiltered.mean << " unfiltered, " << filtered.mean << " filtered";
     EXPECT_EQ(on.film().pixels(Pass::GlossDir), off.film().pixels(Pass::GlossDir));
 }
 
