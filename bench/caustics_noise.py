@@ -12,16 +12,16 @@ and resolution).
         [--cache build/equal_time_cache]
 
 A benchmark, not a test: nothing is asserted. References are never rendered here (--cache holds
-bench/equal_time.py's; without them the PSNR, MSE and region columns read "-" and the pair
-column takes the exposure of an SHGI render at the most samples, for every row). SHGI renders
+bench/equal_time.py's, keyed as it keys them; a row without its reference reads "-" in the
+PSNR, MSE and region columns). SHGI renders
 through shgi.PathTracer with the add-on's F12 settings of the scene (seed equal_time.SEED), once
 per --shgi-filter-glossy value (default: the add-on's, Cycles' 1), Cycles through F12 without
 denoising (seed equal_time.SEED, as the bench). "MSE x spp" is the display-space error per
 sample: with 1/N variance it stays constant, and its ratio between the renderers is how many
 more samples one needs for the other's noise. "pair x spp" is the same without a reference:
 half the squared display difference of two renders of seeds SEED and SEED + 1, times spp (the
-noise alone, no bias against the reference; --shgi-clamp-indirect and --shgi-filter-glossy
-change SHGI's renders but not its reference, so only this column compares them fairly).
+noise alone, no bias against the reference), every row at one exposure: the first SHGI row's
+reference's, or an SHGI render's at the most samples without it.
 "mean" is the mean of Combined over the frame and both seeds, relative to the first SHGI row of
 the same spp (the bias a filter adds, at the spp's noise); "CPU ms/spp" is SHGI's process CPU
 time for the two renders per sample (every thread's: it holds on a loaded machine, up to the
@@ -100,13 +100,16 @@ def regions(passes):
     return {"glass": glass, "metal": metal, "emitters/world": emitter, "diffuse": rest}
 
 
-def load_reference(args, renderer):
-    key = (f"{args.scene}_{args.width}x{args.height}_{renderer}_"
+def load_reference(args, renderer, clamp, filter_glossy=None):
+    """bench/equal_time.py's cached reference of `renderer` with Clamp Indirect `clamp` (and
+    SHGI's Filter Glossy `filter_glossy`), or None."""
+    fg = "" if filter_glossy is None else f"_fg{filter_glossy:g}"
+    key = (f"{args.scene}_{args.width}x{args.height}_{renderer}_clamp{clamp:g}{fg}_"
            f"{equal_time.REFERENCE_SAMPLES}spp")
     path = os.path.join(args.cache, f"{key}.npy")
     if not os.path.exists(path):
-        print(f"{path}: no cached reference (bench/equal_time.py renders it): PSNR, MSE and "
-              "regions left out")
+        print(f"{path}: no cached reference (bench/equal_time.py renders it): its PSNR, MSE "
+              "and regions left out")
         return None
     return np.load(path)
 
@@ -121,18 +124,26 @@ def main():
 
     scene = equal_time.build_scene(args.scene, args.width, args.height,
                                    args.cycles_filter_glossy)
-    references = {name: load_reference(args, name) for name in ("shgi", "cycles")}
     if args.cycles_clamp_indirect is not None:
         scene.cycles.sample_clamp_indirect = args.cycles_clamp_indirect
+    # Each row's own reference: Cycles' by its clamp (as cached: --cycles-filter-glossy is not
+    # in its key), SHGI's by its clamp and Filter Glossy.
+    shgi_clamp = (scene.shgi.clamp_indirect if args.shgi_clamp_indirect is None
+                  else args.shgi_clamp_indirect)
+    filters = [scene.shgi.filter_glossy if value is None else value
+               for value in args.shgi_filter_glossy]
+    references = {f"shgi fg{value:g}": load_reference(args, "shgi", shgi_clamp, value)
+                  for value in filters}
+    references["cycles"] = load_reference(args, "cycles", scene.cycles.sample_clamp_indirect)
     native = export_scene(bpy.context.evaluated_depsgraph_get(), scene).scene
     native.commit()
     exr = os.path.join(args.cache, "noise_render.exr")
     masks = None
     rows = []
-    # Without a reference, one exposure for every row: that of an SHGI render at the most
-    # samples (seed SEED + 2, the first --shgi-filter-glossy value).
-    fixed_exposure = None
-    if any(reference is None for reference in references.values()):
+    # The pair column's one exposure for every row: the first SHGI row's reference, or without
+    # it an SHGI render at the most samples (seed SEED + 2, the first --shgi-filter-glossy).
+    fixed_exposure = references[f"shgi fg{filters[0]:g}"]
+    if fixed_exposure is None:
         exposure_settings = settings.path_tracer_settings(scene.shgi, shgi)
         exposure_settings.samples = max(args.samples)
         exposure_settings.seed = equal_time.SEED + 2
@@ -171,8 +182,7 @@ def main():
         renders.append(("cycles", cycles[0], cycles[1], None))
         base_mean = float((renders[0][1][..., :3] + renders[0][2][..., :3]).mean())
         for name, image, other, cpu in renders:
-            reference = references["cycles" if name == "cycles" else "shgi"]
-            exposed = reference if reference is not None else fixed_exposure
+            reference = references[name]
             psnr = per_sample = parts = None
             if reference is not None:
                 error = squared_error(reference, image)
@@ -181,7 +191,7 @@ def main():
                 psnr, per_sample = 10.0 * np.log10(1.0 / total), total * samples
             # Reference-free: two independent renders differ by twice the per-render variance
             # (display space, scaled by the reference's exposure).
-            pair = float(squared_error_pair(exposed, image, other).mean()) / 2.0
+            pair = float(squared_error_pair(fixed_exposure, image, other).mean()) / 2.0
             mean = float((image[..., :3] + other[..., :3]).mean()) / base_mean
             rows.append((samples, name, psnr, per_sample, pair * samples, parts, mean,
                          None if cpu is None else 1e3 * cpu / (2 * samples)))

@@ -110,6 +110,9 @@ def parse_args():
                              "Denoising Albedo / Normal (which follow specular bounces, as "
                              "Cycles') and with the first hit's (DiffCol + GlossCol + TransCol, "
                              "Normal: SHGI's guides before them); the second gets its own column")
+    parser.add_argument("--references-only", action="store_true",
+                        help="render (or find cached) each scene's two references and stop: "
+                             "no timed renders")
     parser.add_argument("--quick", action="store_true",
                         help=f"smoke run: limits {QUICK_LIMITS}, samples {QUICK_SAMPLES}, "
                              f"{QUICK_REFERENCE_SAMPLES}-spp references")
@@ -412,6 +415,8 @@ def main():
             scene, key.format("shgi", scene.shgi.clamp_indirect,
                               f"_fg{scene.shgi.filter_glossy:g}"), "SHGI",
             lambda s: use_shgi(s, "PATH_TRACE", args.reference_samples), args)
+        if args.references_only:
+            continue
         cycles = cycles_runs(scene, cycles_ref, args, exr)
         results = {}
         for method in methods:
