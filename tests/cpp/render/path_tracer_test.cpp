@@ -436,11 +436,12 @@ TEST(PathTracer, FilterGlossyIsDeterministicAcrossThreadsAndTiles) {
 }
 
 // A mirror floor under a Lambert ceiling, lit by a point light between them 2 m to the side (the
-// half-metre view's light changes little across it), seen in the mirror. A path tracer cannot carry the light's caustic (light -> mirror -> ceiling): no BSDF ray
-// meets a point light and no light sample finds a Dirac mirror. After the ceiling's diffuse
-// bounce (pdf <= 1/pi) Filter Glossy 1 widens the mirror to alpha >= sqrt(1 - 1/pi) / 2 = 0.41,
-// whose light samples do reach the light: the ceiling, seen in the mirror, brightens (GlossInd,
-// light that scattered more than once), and only light after the ceiling's bounce changes.
+// half-metre view's light changes little across it), seen in the mirror. A path tracer cannot
+// carry the light's caustic (light -> mirror -> ceiling): no BSDF ray meets a point light and no
+// light sample finds a Dirac mirror. After the ceiling's diffuse bounce (pdf <= 1/pi) Filter
+// Glossy 1 widens the mirror to alpha >= sqrt(1 - 1/pi) / 2 = 0.41, whose light samples do reach
+// the light: the ceiling, seen in the mirror, brightens (GlossInd, light that scattered more than
+// once), and only light after the ceiling's bounce changes.
 TEST(PathTracer, FilterGlossyLetsLightSamplesReachAMirrorAfterADiffuseBounce) {
     Scene scene;
     scene.add_material(test::mirror(0.8f));
