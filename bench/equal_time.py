@@ -94,8 +94,12 @@ def parse_args():
                         help="folder of the cached references")
     parser.add_argument("--cycles-filter-glossy", type=float, default=None,
                         help="Cycles' Light Paths > Caustics > Filter Glossy (blur_glossy) for "
-                             "its renders and reference (default: Cycles' own, 1.0); SHGI has "
-                             "none. Use another --cache: references are keyed without it")
+                             "its renders and reference (default: Cycles' own, 1.0). Use another "
+                             "--cache: Cycles' references are keyed without it")
+    parser.add_argument("--shgi-filter-glossy", type=float, default=None,
+                        help="SHGI's Light Paths > Filter Glossy for its renders and reference "
+                             "(default: the add-on's, Cycles' 1.0; 0 before settings layout 5). "
+                             "SHGI's references are keyed by it")
     parser.add_argument("--clamp-indirect", type=float, default=None,
                         help="Light Paths > Clamp Indirect for both renderers, renders and "
                              "references (default: each one's own, 10 in both; SHGI's was 0 "
@@ -106,6 +110,9 @@ def parse_args():
                              "Denoising Albedo / Normal (which follow specular bounces, as "
                              "Cycles') and with the first hit's (DiffCol + GlossCol + TransCol, "
                              "Normal: SHGI's guides before them); the second gets its own column")
+    parser.add_argument("--references-only", action="store_true",
+                        help="render (or find cached) each scene's two references and stop: "
+                             "no timed renders")
     parser.add_argument("--quick", action="store_true",
                         help=f"smoke run: limits {QUICK_LIMITS}, samples {QUICK_SAMPLES}, "
                              f"{QUICK_REFERENCE_SAMPLES}-spp references")
@@ -124,10 +131,11 @@ def parse_args():
 
 # --- scenes -----------------------------------------------------------------------------------
 
-def build_scene(name, width, height, filter_glossy=None, clamp_indirect=None):
+def build_scene(name, width, height, filter_glossy=None, clamp_indirect=None,
+                shgi_filter_glossy=None):
     """A fresh file holding scene `name` at width x height, set up alike for Cycles and SHGI;
-    Cycles' Filter Glossy `filter_glossy` and both renderers' Clamp Indirect `clamp_indirect`
-    (None: each one's default)."""
+    Cycles' Filter Glossy `filter_glossy`, SHGI's `shgi_filter_glossy` and both renderers' Clamp
+    Indirect `clamp_indirect` (None: each one's default)."""
     if name == "dense":
         scene = blender_scenes.build("cornell_box")
         builder = blender_scenes.SceneBuilder()
@@ -154,6 +162,8 @@ def build_scene(name, width, height, filter_glossy=None, clamp_indirect=None):
     if clamp_indirect is not None:
         cycles.sample_clamp_indirect = clamp_indirect
         scene.shgi.clamp_indirect = clamp_indirect
+    if shgi_filter_glossy is not None:
+        scene.shgi.filter_glossy = shgi_filter_glossy
     for field, value in BOUNCES.items():
         setattr(cycles, field, value)
         setattr(scene.shgi, field, value)
@@ -391,19 +401,22 @@ def main():
     exr = os.path.join(args.cache, "render.exr")
     for name in args.scenes:
         scene = build_scene(name, args.width, args.height, args.cycles_filter_glossy,
-                            args.clamp_indirect)
+                            args.clamp_indirect, args.shgi_filter_glossy)
         limited = supports_limit(scene)
-        # References are keyed by each renderer's Clamp Indirect: a biased estimate is scored
-        # against a reference with the same bias.
-        key = (f"{name}_{args.width}x{args.height}_{{}}_clamp{{:g}}_"
+        # References are keyed by each renderer's Clamp Indirect and SHGI's by its Filter Glossy
+        # too: a biased estimate is scored against a reference with the same bias.
+        key = (f"{name}_{args.width}x{args.height}_{{}}_clamp{{:g}}{{}}_"
                f"{args.reference_samples}spp")
         print(f"{name}:", flush=True)
         cycles_ref, cycles_spp = reference(
-            scene, key.format("cycles", scene.cycles.sample_clamp_indirect), "CYCLES",
+            scene, key.format("cycles", scene.cycles.sample_clamp_indirect, ""), "CYCLES",
             lambda s: use_cycles(s, args.reference_samples, False), args)
         shgi_ref, shgi_spp = reference(
-            scene, key.format("shgi", scene.shgi.clamp_indirect), "SHGI",
+            scene, key.format("shgi", scene.shgi.clamp_indirect,
+                              f"_fg{scene.shgi.filter_glossy:g}"), "SHGI",
             lambda s: use_shgi(s, "PATH_TRACE", args.reference_samples), args)
+        if args.references_only:
+            continue
         cycles = cycles_runs(scene, cycles_ref, args, exr)
         results = {}
         for method in methods:

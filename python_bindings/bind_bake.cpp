@@ -207,6 +207,7 @@ What and how a lightmap is baked; every field has a default. Content (Cycles' DI
                        "Also bake the SH of the incident radiance, of order sh_order (False).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
                        kClampIndirectDoc)
+        .def_readwrite("filter_glossy", &S::filter_glossy, kFilterGlossyDoc)
         .def_readwrite("final_gather", &S::final_gather,
                        "With a field: each sample traces one ray that reads the field where it "
                        "lands, with direct light there, instead of reading it at the texel: "

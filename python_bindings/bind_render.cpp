@@ -117,6 +117,7 @@ void bind_settings(py::module_& m) {
             "PathTracerSettings(**fields), e.g. PathTracerSettings(samples=16, seed=3).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
                        kClampIndirectDoc)
+        .def_readwrite("filter_glossy", &S::filter_glossy, kFilterGlossyDoc)
         .def_readwrite("world_sampling", &S::world_sampling, "WorldSampling (COSINE).")
         .def("validate", &validate_path_tracer_settings,
              "Raises ValueError naming the first invalid field.");
@@ -301,6 +302,7 @@ void bind_preview(py::module_& m) {
             "PreviewSettings(**fields), e.g. PreviewSettings(samples=4, seed=1).")
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
                        kClampIndirectDoc)
+        .def_readwrite("filter_glossy", &S::filter_glossy, kFilterGlossyDoc)
         .def_readwrite("world_sampling", &S::world_sampling, "WorldSampling (COSINE).")
         .def_readwrite("combined_only", &S::combined_only,
                        "Sum only the Combined pass (False): what a viewport shows, without the "

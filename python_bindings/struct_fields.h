@@ -47,6 +47,12 @@ inline constexpr const char* kClampIndirectDoc =
     "Light Paths > Clamp Indirect as Cycles': an indirect contribution whose components average "
     "more than this is scaled down to it; 0 = off (0).";
 
+// The filter_glossy field of every settings struct that has one (PrincipledBsdf::blur).
+inline constexpr const char* kFilterGlossyDoc =
+    "Light Paths > Filter Glossy as Cycles': after a bounce whose BSDF pdf was below this value, "
+    "glossy and glass lobes widen to GGX alpha sqrt(1 - pdf / value) / 2, against the caustic "
+    "fireflies of mirrors seen through diffuse bounces; 0 = off (0).";
+
 inline pybind11::tuple to_tuple(const vec3& v) { return pybind11::make_tuple(v.x, v.y, v.z); }
 
 // A vec3 field exposed as a 3-tuple; assignment accepts any length-3 sequence of finite numbers.

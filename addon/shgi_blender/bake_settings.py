@@ -143,7 +143,7 @@ LIGHTMAP_FIELDS = {name: name for name in (
 # LightmapSettings field -> scene.shgi property (the render settings' light paths and seed).
 LIGHT_PATH_FIELDS = {name: name for name in (
     "seed", "max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
-    "clamp_indirect", "light_splits")}
+    "clamp_indirect", "filter_glossy", "light_splits")}
 # LightmapSettings field -> where the Bake and Light Paths panels show it, for refusals.
 LIGHTMAP_LABELS = {
     "content": "Bake > Content", "samples": "Bake > Samples", "directional": "Bake > Directional",

@@ -539,6 +539,11 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
         description="Brightest indirect light sample (the mean of its colour), against "
                     "fireflies, as Cycles' Clamping > Indirect Light and with its default "
                     "(also the Probe Grid's probe samples); 0 disables clamping")
+    filter_glossy: FloatProperty(
+        name="Filter Glossy", default=D["filter_glossy"], min=0.0, soft_max=10.0,
+        description="Adaptively blur glossy and glass surfaces after blurry bounces, to reduce "
+                    "noise at the cost of accuracy, as Cycles' Caustics > Filter Glossy and with "
+                    "its default; 0 disables the blur")
     world_sampling: EnumProperty(
         name="World Sampling", items=WORLD_SAMPLING_ITEMS, default=D["world_sampling"],
         description="How direct light from the world is sampled")

@@ -155,13 +155,16 @@ ENUM_ITEMS = {
 # Clamping > Indirect Light is 10 by default (clamped as SHGI clamps, render/shading.h); with
 # it off SHGI's 4096-spp reference of the caustics scene read 5.3% brighter than Cycles'
 # default one, with it on 0.55% (docs/equal-time.md). Scripts and `python -m shgi` keep the
-# native 0: the unbiased answer the tests compare with closed forms.
-CYCLES_DEFAULTS = {"clamp_indirect": 10.0}
+# native 0: the unbiased answer the tests compare with closed forms. Cycles' Light Paths > Caustics
+# > Filter Glossy is 1 by default (PrincipledBsdf::blur): it takes the caustic fireflies of
+# mirrors and sharp glass seen through a diffuse bounce (docs/equal-time.md).
+CYCLES_DEFAULTS = {"clamp_indirect": 10.0, "filter_glossy": 1.0}
 
 # scene.shgi's own properties with their native defaults (checked against the native structs by
 # tests/python/test_blender_engine.py): the samples, the seed and Light Paths, which every method
-# shares. samples is the path tracer's default; the preview's is 16. One departs, as
-# CYCLES_DEFAULTS says: Clamp Indirect is Cycles' 10, where the native structs keep 0 (off).
+# shares. samples is the path tracer's default; the preview's is 16. Two depart, as
+# CYCLES_DEFAULTS says: Clamp Indirect is Cycles' 10 and Filter Glossy Cycles' 1, where the
+# native structs keep 0 (off).
 PROPERTY_DEFAULTS = {
     "samples": 64,
     "seed": 0,
@@ -170,6 +173,7 @@ PROPERTY_DEFAULTS = {
     "glossy_bounces": 4,
     "transmission_bounces": 12,
     "clamp_indirect": CYCLES_DEFAULTS["clamp_indirect"],
+    "filter_glossy": CYCLES_DEFAULTS["filter_glossy"],
     "world_sampling": "COSINE",
     "light_splits": 4,
     "max_specular_bounces": 8,
@@ -399,6 +403,7 @@ SETTING_LABELS = {
     "glossy_bounces": "Light Paths > Glossy",
     "transmission_bounces": "Light Paths > Transmission",
     "clamp_indirect": "Light Paths > Clamp",
+    "filter_glossy": "Light Paths > Filter Glossy",
     "world_sampling": "Light Paths > World",
     "light_splits": "Light Paths > Light Splits",
     "max_specular_bounces": "Light Paths > Max Bounces > Specular",
@@ -629,10 +634,11 @@ VIEWPORT_RENDER_PROPERTIES = ("method", *PROPERTY_DEFAULTS, "viewport_samples",
 # Native struct -> {native field: scene.shgi property}.
 PATH_TRACER_FIELDS = {name: name for name in (
     "samples", "seed", "max_bounces", "diffuse_bounces", "glossy_bounces",
-    "transmission_bounces", "clamp_indirect", "world_sampling", "light_splits")}
-PREVIEW_FIELDS = {name: name for name in (
-    "samples", "seed", "clamp_indirect", "max_specular_bounces", "world_sampling",
+    "transmission_bounces", "clamp_indirect", "filter_glossy", "world_sampling",
     "light_splits")}
+PREVIEW_FIELDS = {name: name for name in (
+    "samples", "seed", "clamp_indirect", "filter_glossy", "max_specular_bounces",
+    "world_sampling", "light_splits")}
 
 
 def _native_labels(group):

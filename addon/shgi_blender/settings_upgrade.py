@@ -14,6 +14,8 @@ its default in the new place while its old value lies unused under the old name.
    it renders, and its frozen solutions compare, as they did.
 4. Light Paths > Clamp Indirect defaults to Cycles' 10 (settings.CYCLES_DEFAULTS), where it was
    0 (off). A scene saved before that left it at 0 unless someone set it: it keeps 0.
+5. Light Paths > Filter Glossy, with Cycles' default 1 (settings.CYCLES_DEFAULTS). A scene saved
+   before it rendered without the blur: it keeps 0 (off).
 
 ``upgrade`` takes what a scene stored (its ID properties as a dict: only values someone set are
 stored, a default is not) and says what to write where, so that the scene renders with the
@@ -24,7 +26,7 @@ from dataclasses import dataclass, field
 
 from . import settings
 
-SETTINGS_VERSION = 4
+SETTINGS_VERSION = 5
 
 # The method groups that version 2 had: a scene saved then could render only with these, so
 # only they keep reading their field directly (groups added later start with their defaults).
@@ -47,6 +49,9 @@ DROPPED_FROM_1 = {"bounces": 3, "clamp": 0.0}
 # Defaults of scene.shgi's own properties before version 4 that have changed since: a scene that
 # left one at its default stored nothing, and rendered with this value.
 DEFAULTS_BEFORE_4 = {"clamp_indirect": 0.0}
+# Properties added in version 5 with a default other than what a scene saved before rendered
+# with (Filter Glossy: no blur).
+DEFAULTS_BEFORE_5 = {"filter_glossy": 0.0}
 
 
 @dataclass
@@ -78,6 +83,10 @@ def upgrade(stored):
                 result.values[(prop, "final_gather")] = False
     if version < 4:
         for name, old_default in DEFAULTS_BEFORE_4.items():
+            if name not in stored:
+                result.values[("", name)] = old_default
+    if version < 5:
+        for name, old_default in DEFAULTS_BEFORE_5.items():
             if name not in stored:
                 result.values[("", name)] = old_default
     return result

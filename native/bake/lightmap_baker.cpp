@@ -45,6 +45,7 @@ PathTracerSettings continuation_settings(const LightmapSettings& settings) {
     path.glossy_bounces = settings.glossy_bounces;
     path.transmission_bounces = settings.transmission_bounces;
     path.russian_roulette_depth = std::max(0, path.russian_roulette_depth - 1);
+    path.filter_glossy = settings.filter_glossy;
     return path;  // clamp_indirect applies to the whole continuation (path_radiance), not inside
 }
 
@@ -334,7 +335,7 @@ class TexelBaker {
                     const Hit hit = scene_.intersect(ray);
                     vec3 radiance(0.0f);
                     if (direct_) radiance += emission(ray, hit, n, pdf);
-                    if (indirect_) radiance += continuation(ray, hit, camera, rng);
+                    if (indirect_) radiance += continuation(ray, hit, pdf, camera, rng);
                     const vec3 incident = radiance / pdf;
                     value += incident * surface.diffuse_response(wi);
                     if (sh) sh_add_sample(*sh, wi, incident);
@@ -367,13 +368,15 @@ class TexelBaker {
 
     // Light that scattered at least once and arrives along the ray: the reference path from
     // its first hit (with final gather, a field vertex there), less what that path's first
-    // segment sees directly.
-    vec3 continuation(const Ray& ray, const Hit& hit, const Camera& camera, Pcg32& rng) const {
+    // segment sees directly. `pdf`: the hemisphere ray's, the path's first bounce (Filter Glossy).
+    vec3 continuation(const Ray& ray, const Hit& hit, float pdf, const Camera& camera,
+                      Pcg32& rng) const {
         if (!hit.valid()) return vec3(0.0f);
         PassValues values;
-        PathIntegrator(scene_, camera, lights_, path_settings_, gather_ ? field_ : nullptr, rng,
-                       values)
-            .trace(ray, hit);
+        PathIntegrator path(scene_, camera, lights_, path_settings_, gather_ ? field_ : nullptr,
+                            rng, values);
+        path.set_first_ray_pdf(pdf);
+        path.trace(ray, hit);
         return path_radiance(values, false, settings_.clamp_indirect);
     }
 
@@ -428,6 +431,9 @@ void validate_lightmap_settings(const LightmapSettings& s) {
     if (!(s.clamp_indirect >= 0.0f) || !std::isfinite(s.clamp_indirect))
         throw InvalidArgument(format_message("LightmapSettings.clamp_indirect = ",
                                              s.clamp_indirect, ": use 0 (off) or a positive value"));
+    if (!(s.filter_glossy >= 0.0f) || !std::isfinite(s.filter_glossy))
+        throw InvalidArgument(format_message("LightmapSettings.filter_glossy = ",
+                                             s.filter_glossy, ": use 0 (off) or a positive value"));
     if (size_t(s.content) >= std::size(kContentNames))
         throw InvalidArgument("LightmapSettings.content is not a LightmapContent");
     if (s.light_splits < 1 || s.light_splits > kMaxLightSplits)

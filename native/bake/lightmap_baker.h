@@ -89,6 +89,9 @@ struct LightmapSettings {
     int glossy_bounces = 4;
     int transmission_bounces = 12;
     float clamp_indirect = 0.0f;  // max component of an indirect sample's radiance; 0 = off
+    // As PathTracerSettings.filter_glossy: the texel's own bounce is the first one (its
+    // hemisphere sample's pdf starts the path's lowest pdf); 0 = off.
+    float filter_glossy = 0.0f;
     // Most emitters one next-event estimate samples, as PathTracerSettings.light_splits (the
     // light tree's splitting; 1 = one emitter per shadow ray), 1 .. kMaxLightSplits.
     int light_splits = 4;

@@ -350,6 +350,7 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const MaterialTerms& te
                                const vec3& base_color, bool back_face, float cos_nv,
                                PathOrigin origin)
     : roughness_(material.roughness),
+      glossy_roughness_(material.roughness),
       diffuse_model_(material.diffuse_model),
       height_correlated_(material.principled_model == PrincipledModel::V2) {
     const float metallic = terms.metallic;
@@ -693,6 +694,15 @@ bool PrincipledBsdf::has_smooth_lobes() const {
     return false;
 }
 
+void PrincipledBsdf::blur(float alpha) {
+    for (int i = 0; i < lobe_count_; ++i) {
+        Lobe& lobe = lobes_[i];
+        if (lobe.kind == LobeKind::Diffuse || !(alpha > lobe.alpha)) continue;
+        lobe.alpha = alpha;
+        glossy_roughness_ = std::sqrt(alpha);  // every GGX lobe shares one alpha
+    }
+}
+
 bool PrincipledBsdf::sample_traced(const vec3& wo, float u_lobe, const vec2& u,
                                    BsdfSample* out) const {
     if (wo.z <= 0.0f) return false;
@@ -752,12 +762,12 @@ int PrincipledBsdf::field_glossy_lobes(const vec3& wo, GlossyLobe out[2]) const 
     for (int i = 0; i < lobe_count_ && count < 2; ++i) {
         const Lobe& lobe = lobes_[i];
         if (lobe.traced() || lobe.kind == LobeKind::Diffuse) continue;
-        const vec2 albedo = ggx_albedo(wo.z, roughness_);  // (colour 1, colour fh)
+        const vec2 albedo = ggx_albedo(wo.z, glossy_roughness_);  // (colour 1, colour fh)
         // Specular colour = cspec0 (1 - fh) + fh, so its albedo is cspec0 (a - a_fh) + a_fh.
         const vec3 color = lobe.kind == LobeKind::Specular
                                ? cspec0_ * (albedo.x - albedo.y) + vec3(albedo.y)
                                : vec3(albedo.x);
-        out[count++] = GlossyLobe{lobe.weight * color, roughness_};
+        out[count++] = GlossyLobe{lobe.weight * color, glossy_roughness_};
     }
     return count;
 }

@@ -149,6 +149,14 @@ class PrincipledBsdf {
     DenoisingFeature denoising_feature(float cos_nv) const;
     // True when at least one lobe is not a Dirac lobe (light sampling can help).
     bool has_smooth_lobes() const;
+    // Light Paths > Filter Glossy (Cycles' bsdf_blur): every microfacet lobe (specular, glass
+    // reflection, refraction) widens to a GGX alpha of at least `alpha`, so a mirror seen through
+    // a diffuse bounce is a rough reflection that light sampling reaches. Only the lobes' alpha
+    // changes, as in Cycles: their weights, selection probabilities, Multiscatter GGX energy
+    // scale and Blender 4 layering stay those of the material's roughness ("TODO: Recompute
+    // energy preservation after blur?" in Cycles). A lobe left below kDeltaAlpha stays a Dirac
+    // lobe. The field lobes' glossy roughness follows the widened alpha (field_glossy_lobes).
+    void blur(float alpha);
     // The sum of the lobes' closure weights, the specular lobe's times its colour toward wo: how
     // much of the light arriving from wo the surface scatters, roughly (it leaves out the
     // lobes' directional albedos and, on light paths of PrincipledModel::V2, the layer's
@@ -239,6 +247,8 @@ class PrincipledBsdf {
     float inv_one_minus_f0_ = 1.0f;  // 1 / (1 - specular_f0_), for specular_color
     float eta_ = 1.45f;          // relative ior across the surface (inverted on back faces)
     float roughness_ = 0.5f;
+    // The microfacet lobes' roughness (sqrt of their alpha): roughness_ until blur() widens them.
+    float glossy_roughness_ = 0.5f;
     DiffuseModel diffuse_model_ = DiffuseModel::Principled;
     bool height_correlated_ = false;  // PrincipledModel::V2's Smith G2
     // PrincipledModel::V2 terms, which depend on the camera-side direction: folded into the lobe

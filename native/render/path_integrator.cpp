@@ -54,9 +54,18 @@ bool PathIntegrator::enter_surface(const Hit& hit) {
     find_emission(ray_, hit);
     if (!hit.valid() || terminate_on_next_surface_) return false;
     make_shading_in(&shading_.value, scene_, scene_.surface_point(ray_, hit), ray_.direction);
+    blur_glossy(&shading_.value);
     if (vertex_ == 0) record_first_hit(shading_.value, ray_, hit);
     if (write_denoising_features_) record_denoising_features(shading_.value);
     return true;
+}
+
+// Cycles' Filter Glossy (surface_shader_prepare_closures): after a bounce of pdf below
+// filter_glossy, the surface's microfacet lobes widen to alpha sqrt(1 - pdf / filter_glossy) / 2.
+void PathIntegrator::blur_glossy(Shading* shading) const {
+    if (!(settings_.filter_glossy > 0.0f)) return;
+    const float blur_pdf = (1.0f / settings_.filter_glossy) * min_ray_pdf_;  // Cycles' order
+    if (blur_pdf < 1.0f) shading->bsdf.blur(std::sqrt(1.0f - blur_pdf) * 0.5f);
 }
 
 // Each vertex: direct light (already done for the current surface when this is called), field
@@ -268,7 +277,14 @@ bool PathIntegrator::scatter(const Shading& shading, Ray* ray) {
     ++bounces_[int(bs.lobe_class)];
     throughput_ *= bs.weight;
     last_delta_ = bs.delta || field_vertex;  // a field vertex's NEE skips traced lobes
-    if (!bs.delta) ++smooth_bounces_;
+    if (!bs.delta) {
+        ++smooth_bounces_;
+        // Cycles' min_ray_pdf takes the whole BSDF's pdf, which a field vertex's sample (of
+        // the traced lobes alone) does not give.
+        if (settings_.filter_glossy > 0.0f)
+            min_ray_pdf_ = std::min(
+                min_ray_pdf_, field_vertex ? shading.bsdf.pdf(shading.wo, bs.wi) : bs.pdf);
+    }
     last_pdf_ = bs.pdf;
     last_normal_ = shading.frame.z;
     ++vertex_;

@@ -110,6 +110,11 @@ class PathIntegrator {
     // 1: final gather). Call before begin().
     void set_final_gather(int smooth_bounces) { field_from_ = smooth_bounces; }
 
+    // For paths whose ray leaves a surface the caller sampled (a lightmap texel's hemisphere
+    // ray): the pdf of that bounce (sr^-1), the path's lowest so far for Filter Glossy
+    // (PathTracerSettings.filter_glossy). Call before begin().
+    void set_first_ray_pdf(float pdf) { min_ray_pdf_ = pdf; }
+
     // Stratified numbers for next-event estimation at the first surface (light selection and
     // the light's 2D sample), e.g. one pixel's Owen-scrambled Sobol' points: they replace the
     // path's random numbers there (which are still drawn, so the rest of the path is unchanged).
@@ -160,6 +165,7 @@ class PathIntegrator {
         return smooth_bounces_ >= field_from_ ? field_ : nullptr;
     }
     bool enter_surface(const Hit& hit);
+    void blur_glossy(Shading* shading) const;
     void find_emission(const Ray& ray, const Hit& hit);
     void add_emission(const vec3& radiance, float light_pdf, bool is_world);
     void record_first_hit(const Shading& shading, const Ray& ray, const Hit& hit);
@@ -214,6 +220,9 @@ class PathIntegrator {
     int bounces_[kLobeClassCount] = {0, 0, 0};
     bool last_delta_ = true;           // camera rays and Dirac lobes take no MIS weight
     float last_pdf_ = 0.0f;
+    // Filter Glossy: the lowest pdf of the path's non-Dirac bounces (Cycles' min_ray_pdf; a Dirac
+    // bounce, whose pdf Cycles takes as 1e6, leaves it).
+    float min_ray_pdf_ = kInfinity;
     vec3 last_normal_{0.0f, 0.0f, 1.0f};
     float class_fraction_[kLobeClassCount] = {0.0f, 0.0f, 0.0f};  // of the first scattering
 };

@@ -37,6 +37,10 @@ void validate_path_tracer_settings(const PathTracerSettings& settings) {
         throw InvalidArgument(format_message("PathTracerSettings.clamp_indirect is ",
                                              settings.clamp_indirect,
                                              "; it must be finite and >= 0 (0 = off)"));
+    if (!std::isfinite(settings.filter_glossy) || settings.filter_glossy < 0.0f)
+        throw InvalidArgument(format_message("PathTracerSettings.filter_glossy is ",
+                                             settings.filter_glossy,
+                                             "; it must be finite and >= 0 (0 = off)"));
     if (settings.light_splits < 1 || settings.light_splits > kMaxLightSplits)
         throw InvalidArgument(format_message("PathTracerSettings.light_splits is ",
                                              settings.light_splits, "; it must be in [1, ",

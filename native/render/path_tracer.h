@@ -46,6 +46,14 @@ struct PathTracerSettings {
     // Light Paths > Clamp Indirect as Cycles': an indirect contribution whose components average
     // more than this is scaled down to it (render/shading.h, clamp_contribution); 0 = off.
     float clamp_indirect = 0.0f;
+    // Light Paths > Filter Glossy as Cycles' (blur_glossy): a surface a path reaches after a
+    // bounce whose BSDF pdf was below this value (the lowest of the path's non-Dirac bounces, per
+    // steradian) has its glossy and glass lobes widened to a GGX alpha of
+    // sqrt(1 - min_pdf / filter_glossy) / 2 (PrincipledBsdf::blur): a mirror or sharp glass seen
+    // through a diffuse or rough bounce scatters light sampling can reach, trading the caustic
+    // fireflies of such paths for a little blur. The camera's first surface is never widened.
+    // 0 = off.
+    float filter_glossy = 0.0f;
     WorldSampling world_sampling = WorldSampling::Cosine;
     // Most emitters one next-event estimate samples, [1, kMaxLightSplits]: the light tree's
     // splitting (render/light_tree.h); 1 = one emitter per shadow ray.

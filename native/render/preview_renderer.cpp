@@ -304,6 +304,7 @@ PathTracerSettings path_settings_for(const PreviewSettings& settings) {
     path.transmission_bounces = settings.max_specular_bounces;
     path.russian_roulette_depth = settings.max_specular_bounces + 1;  // chains are short
     path.clamp_indirect = settings.clamp_indirect;
+    path.filter_glossy = settings.filter_glossy;
     path.world_sampling = settings.world_sampling;
     path.light_splits = settings.light_splits;
     return path;
@@ -331,6 +332,10 @@ void validate_preview_settings(const PreviewSettings& settings) {
     if (!std::isfinite(settings.clamp_indirect) || settings.clamp_indirect < 0.0f)
         throw InvalidArgument(format_message("PreviewSettings.clamp_indirect is ",
                                              settings.clamp_indirect,
+                                             "; it must be finite and >= 0 (0 = off)"));
+    if (!std::isfinite(settings.filter_glossy) || settings.filter_glossy < 0.0f)
+        throw InvalidArgument(format_message("PreviewSettings.filter_glossy is ",
+                                             settings.filter_glossy,
                                              "; it must be finite and >= 0 (0 = off)"));
     if (settings.tile_size < 1)
         throw InvalidArgument(format_message("PreviewSettings.tile_size is ", settings.tile_size,

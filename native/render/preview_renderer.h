@@ -64,6 +64,9 @@ struct PreviewSettings {
     uint64_t seed = 0;
     int max_specular_bounces = 8;       // Dirac and refraction bounces followed per path
     float clamp_indirect = 0.0f;        // as PathTracerSettings.clamp_indirect; 0 = off
+    // As PathTracerSettings.filter_glossy, for the surfaces a path meets after a smooth bounce
+    // (with final gather, the gather ray's; a refraction's); 0 = off.
+    float filter_glossy = 0.0f;
     WorldSampling world_sampling = WorldSampling::Cosine;
     int light_splits = 4;               // as PathTracerSettings.light_splits (1..kMaxLightSplits)
     int tile_size = 16;                 // rounded up to an even number (whole 2 x 2 quads)

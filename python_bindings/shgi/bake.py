@@ -119,7 +119,7 @@ _SHARD_FORMAT = 2
 # The LightmapSettings fields that decide a texel's value: every shard of a bake must agree.
 _SHARD_SETTINGS = ("content", "samples", "seed", "directional", "max_bounces", "diffuse_bounces",
                    "glossy_bounces", "transmission_bounces", "clamp_indirect", "final_gather",
-                   "tile_size", "sh_order")
+                   "tile_size", "sh_order", "filter_glossy")
 
 
 @dataclasses.dataclass
@@ -715,6 +715,7 @@ def _check_shard_meta(path: str, meta: dict, expected: dict) -> None:
                    if key not in ("settings", "source") and meta.get(key) != value]
     settings = dict(meta.get("settings") or {})
     settings.setdefault("sh_order", 1)  # shards from before L2 lightmaps are L1
+    settings.setdefault("filter_glossy", 0.0)  # and from before Filter Glossy unfiltered
     differences += [f"{key} {settings.get(key)!r} (merge: {value!r})"
                     for key, value in sorted(expected["settings"].items())
                     if settings.get(key) != value]

@@ -197,7 +197,7 @@ def set_up_cycles(scene):
     cycles.use_adaptive_sampling = False
     cycles.sample_clamp_direct = cycles.sample_clamp_indirect = 0.0
     scene.shgi.clamp_indirect = 0.0  # SHGI's bakes unclamped too
-    cycles.blur_glossy = 0.0
+    cycles.blur_glossy = scene.shgi.filter_glossy = 0.0  # and unfiltered, both
     cycles.light_sampling_threshold = 0.0
     cycles.seed = SEED
 

@@ -37,6 +37,7 @@ def new_scene(name, scale, lightmap=False):
     for field, value in calibration.BOUNCES.items():  # the same limits for both engines
         setattr(scene.shgi, field, value)
     scene.shgi.clamp_indirect = scene.cycles.sample_clamp_indirect  # and the same clamp (0)
+    scene.shgi.filter_glossy = scene.cycles.blur_glossy  # and the same Filter Glossy (0)
     # Compared with Cycles undenoised (reset_scene), as references are: the denoiser has its
     # own tests (engine_denoise_checks.py).
     scene.shgi.use_denoising = scene.shgi.use_viewport_denoising = False

@@ -113,25 +113,35 @@ def check_new_scene(results, folder):
                                  "settings_version": scene.shgi.get("settings_version")}
 
 
+def versioned_light_paths(layout, prop, value):
+    """Clamp Indirect and Filter Glossy of a scene stamped with `layout` after versioning,
+    `prop` set to `value` first (None: left at its default, nothing stored)."""
+    from shgi_blender import versioning
+
+    scene = bpy.data.scenes.new(f"layout_{layout}_{prop}_{value}")
+    scene.shgi["settings_version"] = layout
+    scene.shgi.samples = 21  # something stored
+    if value is not None:
+        setattr(scene.shgi, prop, value)
+    versioning.upgrade_scene(scene)
+    read = {"clamp_indirect": scene.shgi.clamp_indirect,
+            "filter_glossy": scene.shgi.filter_glossy,
+            "settings_version": scene.shgi.get("settings_version")}
+    bpy.data.scenes.remove(scene)
+    return read
+
+
 def check_third_layout_clamp(results):
     """A scene stamped with layout 3 that left Clamp Indirect at that layout's default (0, off)
     keeps 0 after versioning, though a new scene clamps at Cycles' 10; one that set it keeps
-    its value."""
-    from shgi_blender import versioning
-
+    its value. A scene stamped with layout 4, before Filter Glossy, keeps it off (0), though a
+    new scene filters at Cycles' 1; one that set it keeps its value."""
     results["new_scene_clamp"] = bpy.context.scene.shgi.clamp_indirect
-    read = {}
-    for name, stored in (("left", None), ("set", 7.5)):
-        scene = bpy.data.scenes.new(f"layout_3_{name}")
-        scene.shgi["settings_version"] = 3
-        scene.shgi.samples = 21  # something stored
-        if stored is not None:
-            scene.shgi.clamp_indirect = stored
-        versioning.upgrade_scene(scene)
-        read[name] = {"clamp_indirect": scene.shgi.clamp_indirect,
-                      "settings_version": scene.shgi.get("settings_version")}
-        bpy.data.scenes.remove(scene)
-    results["layout_3_clamp"] = read
+    results["new_scene_filter_glossy"] = bpy.context.scene.shgi.filter_glossy
+    results["layout_3_clamp"] = {name: versioned_light_paths(3, "clamp_indirect", value)
+                                 for name, value in (("left", None), ("set", 7.5))}
+    results["layout_4_filter_glossy"] = {name: versioned_light_paths(4, "filter_glossy", value)
+                                         for name, value in (("left", None), ("set", 0.5))}
 
 
 def main():

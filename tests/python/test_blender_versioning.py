@@ -30,8 +30,9 @@ def test_first_layout_values_move_into_the_method_groups():
         ("probe_grid", "passes"): 6,
         # the field read at the first surface, as before Final Gather existed
         ("photon_lattice", "final_gather"): False, ("probe_grid", "final_gather"): False,
-        # Clamp Indirect left at that layout's default, 0 (off), not today's Cycles default
-        ("", "clamp_indirect"): 0.0}
+        # Clamp Indirect left at that layout's default, 0 (off), not today's Cycles default;
+        # Filter Glossy, which it did not have, off as it rendered
+        ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0}
     assert sorted(upgrade.removed) == [("", "caustics"), ("", "photons"),
                                        ("", "viewport_photon_passes"),
                                        ("", "viewport_probe_passes")]
@@ -54,10 +55,12 @@ def test_probe_grid_values_light_paths_took_over_are_dropped_with_a_note():
 def test_a_second_layout_scene_keeps_reading_its_field_directly():
     upgrade = settings_upgrade.upgrade({"settings_version": 2, "probe_grid": {"order": 1}})
     assert upgrade.values == {("photon_lattice", "final_gather"): False,
-                              ("probe_grid", "final_gather"): False, ("", "clamp_indirect"): 0.0}
+                              ("probe_grid", "final_gather"): False, ("", "clamp_indirect"): 0.0,
+                              ("", "filter_glossy"): 0.0}
     assert (upgrade.removed, upgrade.notes) == ([], [])
     # One set by hand in that file (it cannot be, but a script may have) is kept.
-    stored = {"settings_version": 2, "probe_grid": {"final_gather": True}, "clamp_indirect": 3.0}
+    stored = {"settings_version": 2, "probe_grid": {"final_gather": True}, "clamp_indirect": 3.0,
+              "filter_glossy": 0.5}
     assert settings_upgrade.upgrade(stored).values == {("photon_lattice", "final_gather"): False}
 
 
@@ -67,8 +70,22 @@ def test_a_third_layout_scene_keeps_clamp_indirect_off():
     assert settings.PROPERTY_DEFAULTS["clamp_indirect"] == 10.0
     assert shgi.PathTracerSettings().clamp_indirect == 0.0  # scripts keep the native 0
     assert settings_upgrade.upgrade({"settings_version": 3, "samples": 5}).values == {
-        ("", "clamp_indirect"): 0.0}
-    assert settings_upgrade.upgrade({"settings_version": 3, "clamp_indirect": 4.0}).values == {}
+        ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0}
+    assert settings_upgrade.upgrade({"settings_version": 3, "clamp_indirect": 4.0}).values == {
+        ("", "filter_glossy"): 0.0}
+
+
+def test_a_fourth_layout_scene_keeps_filter_glossy_off():
+    """Layout 5 added Filter Glossy with Cycles' default, 1; a scene saved before rendered
+    without the blur and keeps 0 (it stored nothing); one that set it (a script may have) keeps
+    its own value. Its Clamp Indirect, layout 4's, is left alone."""
+    assert settings.PROPERTY_DEFAULTS["filter_glossy"] == 1.0
+    assert shgi.PathTracerSettings().filter_glossy == 0.0  # scripts keep the native 0
+    assert shgi.PreviewSettings().filter_glossy == 0.0
+    assert shgi.LightmapSettings().filter_glossy == 0.0
+    assert settings_upgrade.upgrade({"settings_version": 4, "samples": 5}).values == {
+        ("", "filter_glossy"): 0.0}
+    assert settings_upgrade.upgrade({"settings_version": 4, "filter_glossy": 0.25}).values == {}
 
 
 def test_settings_of_today_layout_are_left_alone():
@@ -128,9 +145,15 @@ def test_a_new_scene_solves_as_many_probe_passes_as_the_cli(blender, build_pytho
     # Saved with today's layout: the default is kept, not read as the first layout's 6.
     # Layout 3 left Clamp Indirect at 0: it stays 0; a new scene clamps at Cycles' 10.
     assert results["new_scene_clamp"] == 10.0
+    version = settings_upgrade.SETTINGS_VERSION
     assert results["layout_3_clamp"] == {
-        "left": {"clamp_indirect": 0.0, "settings_version": settings_upgrade.SETTINGS_VERSION},
-        "set": {"clamp_indirect": 7.5, "settings_version": settings_upgrade.SETTINGS_VERSION}}
+        "left": {"clamp_indirect": 0.0, "filter_glossy": 0.0, "settings_version": version},
+        "set": {"clamp_indirect": 7.5, "filter_glossy": 0.0, "settings_version": version}}
+    # Layout 4 had no Filter Glossy: it stays off; a new scene filters at Cycles' 1.
+    assert results["new_scene_filter_glossy"] == 1.0
+    assert results["layout_4_filter_glossy"] == {
+        "left": {"clamp_indirect": 10.0, "filter_glossy": 0.0, "settings_version": version},
+        "set": {"clamp_indirect": 10.0, "filter_glossy": 0.5, "settings_version": version}}
     assert results["today_reopened"] == {"samples": 33,
                                          "probe_grid.passes": shgi.bake.PROBE_GRID_PASSES,
                                          "settings_version": settings_upgrade.SETTINGS_VERSION}

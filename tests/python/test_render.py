@@ -56,6 +56,7 @@ def test_settings_defaults_mirror_cpp():
     assert (settings.max_bounces, settings.diffuse_bounces, settings.glossy_bounces,
             settings.transmission_bounces) == (12, 4, 4, 12)
     assert settings.clamp_indirect == 0.0
+    assert settings.filter_glossy == 0.0
     assert settings.world_sampling == shgi.WorldSampling.COSINE
     assert settings.light_splits == 4
     assert shgi.PathTracerSettings(samples=5, seed=9).seed == 9
@@ -103,12 +104,28 @@ def test_progressive_matches_one_shot():
 
 
 @pytest.mark.parametrize("field, value", [("max_bounces", -1), ("clamp_indirect", -1.0),
-                                          ("tile_size", 0), ("diffuse_bounces", -2)])
+                                          ("tile_size", 0), ("diffuse_bounces", -2),
+                                          ("filter_glossy", -1.0),
+                                          ("filter_glossy", float("nan")),
+                                          ("filter_glossy", float("inf"))])
 def test_bad_settings_raise_value_error_naming_the_field(field, value):
     scene = inward_box_scene(0.5, 1.0, resolution=4)
     settings = shgi.PathTracerSettings(**{field: value})
     with pytest.raises(ValueError, match=field):
         shgi.render_path_traced(scene, settings)
+
+
+@pytest.mark.parametrize("value", [-0.5, float("nan"), float("inf")])
+def test_filter_glossy_is_refused_by_every_front_end_naming_it(value):
+    """Light Paths > Filter Glossy reaches the path tracer, the preview and the bake: each
+    refuses a negative or non-finite value with a ValueError naming its settings' field."""
+    scene = inward_box_scene(0.5, 1.0, resolution=4)
+    with pytest.raises(ValueError, match=r"PathTracerSettings\.filter_glossy"):
+        shgi.PathTracer(scene, shgi.PathTracerSettings(filter_glossy=value))
+    with pytest.raises(ValueError, match=r"PreviewSettings\.filter_glossy"):
+        shgi.PreviewRenderer(scene, shgi.PreviewSettings(filter_glossy=value))
+    with pytest.raises(ValueError, match=r"LightmapSettings\.filter_glossy"):
+        shgi.LightmapSettings(filter_glossy=value).validate()
 
 
 def test_bad_arguments():

@@ -85,6 +85,7 @@ class SHGI_RENDER_PT_light_paths(ShgiPanel, bpy.types.Panel):
         props = context.scene.shgi
         column = layout.column(align=True)
         column.prop(props, "clamp_indirect", text="Clamp")
+        column.prop(props, "filter_glossy", text="Filter Glossy")
         column.prop(props, "world_sampling", text="World")
         column.prop(props, "light_splits", text="Light Splits")
 

@@ -1022,6 +1022,14 @@ class LightmapSettings:
     def directional(self, arg0: bool) -> None:
         ...
     @property
+    def filter_glossy(self) -> float:
+        """
+        Light Paths > Filter Glossy as Cycles': after a bounce whose BSDF pdf was below this value, glossy and glass lobes widen to GGX alpha sqrt(1 - pdf / value) / 2, against the caustic fireflies of mirrors seen through diffuse bounces; 0 = off (0).
+        """
+    @filter_glossy.setter
+    def filter_glossy(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
     def final_gather(self) -> bool:
         """
         With a field: each sample traces one ray that reads the field where it lands, with direct light there, instead of reading it at the texel: the field's blocks and leaks are one bounce further away (False).
@@ -1668,6 +1676,14 @@ class PathTracerSettings:
     def diffuse_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
+    def filter_glossy(self) -> float:
+        """
+        Light Paths > Filter Glossy as Cycles': after a bounce whose BSDF pdf was below this value, glossy and glass lobes widen to GGX alpha sqrt(1 - pdf / value) / 2, against the caustic fireflies of mirrors seen through diffuse bounces; 0 = off (0).
+        """
+    @filter_glossy.setter
+    def filter_glossy(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
     def glossy_bounces(self) -> int:
         """
         Glossy bounce limit (4).
@@ -2113,6 +2129,14 @@ class PreviewSettings:
         """
     @combined_only.setter
     def combined_only(self, arg0: bool) -> None:
+        ...
+    @property
+    def filter_glossy(self) -> float:
+        """
+        Light Paths > Filter Glossy as Cycles': after a bounce whose BSDF pdf was below this value, glossy and glass lobes widen to GGX alpha sqrt(1 - pdf / value) / 2, against the caustic fireflies of mirrors seen through diffuse bounces; 0 = off (0).
+        """
+    @filter_glossy.setter
+    def filter_glossy(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def final_gather(self) -> bool:

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cmath>
+#include <limits>
 #include <thread>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -389,6 +390,51 @@ TEST(LightmapBaker, TexelUnderAWallEdgeIsNotBlackAfterUnocclude) {
     EXPECT_GT(after.color[3 * texel], 0.5f * neighbour);
 }
 
+// Filter Glossy in a bake: the texel's own (diffuse) bounce is the path's first, so the surface
+// its hemisphere ray meets is widened. A floor under a mirror ceiling lit by a point light beside
+// them: the light's caustic through the mirror (light -> mirror -> floor) no path of an
+// unfiltered bake carries (a hemisphere ray never meets a point light, a light sample never
+// finds a Dirac mirror); with Filter Glossy 1 the mirror is a rough one whose light samples do,
+// so the floor's indirect light grows, texel by texel. Direct light, which no path past the texel
+// carries, is bit for bit the same.
+TEST(LightmapBaker, FilterGlossyWidensTheSurfaceTheTexelsRayMeets) {
+    Scene scene;
+    scene.add_material(test::lambert(0.5f));
+    scene.add_material(test::mirror(0.8f));
+    scene.add_instance(scene.add_mesh(floor_mesh()), mat4(1.0f), "Floor");
+    Mesh ceiling = test::plane(5.0f);
+    ceiling.material_indices.assign(ceiling.triangles.size(), 1);
+    scene.add_instance(scene.add_mesh(ceiling), glm::translate(mat4(1.0f), vec3(0, 0, 1.0f)),
+                       "Mirror");
+    scene.add_light(test::point_light(vec3(2.0f, 0.0f, 0.5f), 200.0f));
+    scene.set_world(test::black_world());
+    scene.commit();
+    const TexelMap map = rasterize(scene, 0, 8);
+    LightmapSettings settings;
+    settings.samples = 64;
+    settings.content = LightmapContent::Indirect;
+    const LightmapTexels off = bake_lightmap(scene, map, nullptr, settings);
+    settings.filter_glossy = 1.0f;
+    const LightmapTexels on = bake_lightmap(scene, map, nullptr, settings);
+    double sum = 0.0, sum2 = 0.0;
+    uint64_t n = 0;
+    for (uint64_t t = 0; t < map.texel_count(); ++t) {
+        if (!off.baked[t]) continue;
+        const double gain = double(on.color[3 * t]) - double(off.color[3 * t]);
+        sum += gain;
+        sum2 += gain * gain;
+        ++n;
+    }
+    ASSERT_GT(n, 1u);
+    const double mean = sum / double(n);
+    const double error = std::sqrt(std::max(0.0, sum2 / double(n) - mean * mean) / double(n - 1));
+    EXPECT_GT(mean, 5.0 * error) << "indirect light gained " << mean << " +- " << error;
+    settings.content = LightmapContent::Direct;
+    const LightmapTexels direct_on = bake_lightmap(scene, map, nullptr, settings);
+    settings.filter_glossy = 0.0f;
+    EXPECT_EQ(direct_on.color, bake_lightmap(scene, map, nullptr, settings).color);
+}
+
 TEST(LightmapBaker, RejectsBadInput) {
     const Scene scene = sky_scene(1.0f);
     const TexelMap map = rasterize(scene, 0, 8);
@@ -413,6 +459,12 @@ TEST(LightmapBaker, RejectsBadInput) {
     expect_error<InvalidArgument>([] { lightmap_tile_count(0, 8, 4); }, {"lightmap width = 0"});
     EXPECT_EQ(lightmap_tile_count(16384, 16384, 1), 16384u * 16384u);
     expect_error<InvalidArgument>([] { lightmap_content_from_name("COLOR"); }, {"DIRECT_INDIRECT"});
+    for (const float bad : {-1.0f, std::nanf(""), std::numeric_limits<float>::infinity()}) {
+        settings = {};
+        settings.filter_glossy = bad;
+        expect_error<InvalidArgument>([&] { bake_lightmap(scene, map, nullptr, settings); },
+                                      {"LightmapSettings.filter_glossy"});
+    }
 }
 
 double rms_difference(const LightmapTexels& a, const LightmapTexels& b) {

@@ -237,6 +237,60 @@ TEST(Bsdf, SampleAgreesWithEvalAndPdf) {
     }
 }
 
+// Filter Glossy (Cycles' bsdf_blur): blur(a) gives every microfacet lobe alpha max(alpha, a) and
+// changes nothing else, so a smooth mirror or glass blurred to a is, lobe for lobe, the same
+// material at roughness sqrt(a) (3.4's model with a Lambert diffuse: no term reads the roughness
+// besides the lobes' alpha), and a blur below the lobes' alpha changes nothing, bit for bit.
+TEST(Bsdf, BlurWidensMicrofacetLobesToTheGivenAlpha) {
+    const float alpha = 0.2f;
+    for (const Case& c : {Case{"mirror", 1.0f, 0.0f, 0.0f}, Case{"plastic", 0.0f, 0.0f, 0.05f},
+                          Case{"glass", 0.0f, 1.0f, 0.0f}}) {
+        const Material sharp = make_material(c.metallic, c.transmission, c.roughness);
+        const Material rough = make_material(c.metallic, c.transmission, std::sqrt(alpha));
+        const vec3 wo = direction_from_angle(0.6f);
+        const vec3 base(0.5f, 0.7f, 0.9f);
+        PrincipledBsdf blurred(sharp, base, false, wo.z);
+        if (c.metallic == 1.0f) {
+            EXPECT_FALSE(blurred.has_smooth_lobes()) << "a Dirac mirror";
+        }
+        blurred.blur(alpha);
+        const PrincipledBsdf expected(rough, base, false, wo.z);
+        EXPECT_TRUE(blurred.has_smooth_lobes()) << c.name;
+        Pcg32 rng(3, 4);
+        for (int i = 0; i < 200; ++i) {
+            const vec3 wi = sample_uniform_sphere(rng.next_vec2());
+            const vec3 f = blurred.eval(wo, wi).total(), g = expected.eval(wo, wi).total();
+            for (int k = 0; k < 3; ++k) EXPECT_NEAR(f[k], g[k], 1e-5f * (1.0f + g[k])) << c.name;
+            EXPECT_NEAR(blurred.pdf(wo, wi), expected.pdf(wo, wi),
+                        1e-5f * (1.0f + expected.pdf(wo, wi))) << c.name;
+        }
+        const PrincipledBsdf unblurred(sharp, base, false, wo.z);
+        for (const LobeClass lobe :
+             {LobeClass::Diffuse, LobeClass::Glossy, LobeClass::Transmission})
+            EXPECT_EQ(blurred.class_color(lobe), unblurred.class_color(lobe)) << c.name;
+        PrincipledBsdf::GlossyLobe lobes[2];
+        if (blurred.field_glossy_lobes(wo, lobes) > 0) {
+            EXPECT_FLOAT_EQ(lobes[0].roughness, std::sqrt(alpha)) << c.name;
+        }
+        // A blur below the lobes' alpha leaves them exactly as they were.
+        PrincipledBsdf untouched(rough, base, false, wo.z);
+        untouched.blur(0.5f * alpha);
+        for (int i = 0; i < 50; ++i) {
+            const vec3 wi = sample_uniform_sphere(rng.next_vec2());
+            EXPECT_EQ(untouched.eval(wo, wi).total(), expected.eval(wo, wi).total()) << c.name;
+            EXPECT_EQ(untouched.pdf(wo, wi), expected.pdf(wo, wi)) << c.name;
+        }
+    }
+    // The diffuse lobe has no alpha to widen.
+    Material matte = make_material(0.0f, 0.0f, 0.0f);
+    matte.specular = 0.0f;  // no specular closure
+    PrincipledBsdf diffuse(matte, vec3(0.8f), false, 0.7f);
+    diffuse.blur(0.5f);
+    const vec3 wo = direction_from_angle(0.8f), wi = direction_from_angle(-0.3f);
+    EXPECT_EQ(diffuse.eval(wo, wi).total(),
+              PrincipledBsdf(matte, vec3(0.8f), false, 0.7f).eval(wo, wi).total());
+}
+
 TEST(Bsdf, DefaultConstructedIsBlack) {
     const PrincipledBsdf bsdf{};
     const vec3 wo(0.0f, 0.0f, 1.0f), wi = direction_from_angle(0.3f);
