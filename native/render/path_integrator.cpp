@@ -54,7 +54,7 @@ bool PathIntegrator::enter_surface(const Hit& hit) {
     find_emission(ray_, hit);
     if (!hit.valid() || terminate_on_next_surface_) return false;
     make_shading_in(&shading_.value, scene_, scene_.surface_point(ray_, hit), ray_.direction);
-    if (vertex_ == 0) record_first_hit(shading_.value, ray_, hit);
+    if (vertex_ == 0 && !combined_only_) record_first_hit(shading_.value, ray_, hit);
     if (write_denoising_features_) record_denoising_features(shading_.value);
     return true;
 }

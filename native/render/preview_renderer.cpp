@@ -124,7 +124,8 @@ class FrameWork {
     FrameWork(const Scene& scene, const Camera& camera, const CameraRayGenerator& camera_rays,
               const LightSampler& lights, const PathTracerSettings& settings,
               const IndirectField& field, const TileGrid& grid, uint64_t first, uint64_t count,
-              GBuffer& g_buffer, Progress* progress, bool reuse_lookups, bool final_gather)
+              GBuffer& g_buffer, Progress* progress, bool reuse_lookups, bool final_gather,
+              bool combined_only)
         : scene_(scene), camera_(camera), camera_rays_(camera_rays), lights_(lights),
           settings_(settings), field_(field), grid_(grid), first_(first), count_(count),
           g_buffer_(&g_buffer), progress_(progress),
@@ -134,6 +135,7 @@ class FrameWork {
                      : 0.0f),
           // A screen-space field lights the first surfaces itself: no gather ray before it.
           final_gather_(final_gather && !screen_space_ ? 1 : 0),
+          combined_only_(combined_only),
           camera_position_(camera.world_from_camera[3]),
           forward_(glm::normalize(-vec3(camera.world_from_camera[2]))) {}
 
@@ -246,6 +248,7 @@ class FrameWork {
                                                          &clock);
             path.set_first_light_sample(wave.samples[i].u_select, wave.samples[i].u_light);
             path.set_final_gather(final_gather_);
+            if (combined_only_) path.set_combined_only();
             wave.live[i] = path.begin(wave.rays[i], wave.hits[i]);
             if (wave.live[i])
                 g_buffer_->set_surface(wave.pixel[i], scene_, path.first_surface(), wave.hits[i],
@@ -290,6 +293,7 @@ class FrameWork {
     const FieldLookup no_light_{ShRgb(2), vec3(0.0f)};  // first surfaces' lookup then
     float reuse_;  // the field's reuse distance; 0: every pixel makes its own lookup
     int final_gather_;  // smooth bounces before a path reads the field (PreviewSettings)
+    bool combined_only_;  // the film sums only Combined: the paths write no other pass
     vec3 camera_position_, forward_;  // the camera's, for the G-buffer's depth
 };
 
@@ -442,7 +446,7 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
                         even_tile_side(settings_.tile_size));
     const FrameWork work(*scene_, camera_, camera_rays_, lights, path_settings_, *field, grid,
                          first, samples, g_buffer_, progress, settings_.reuse_field_lookups,
-                         settings_.final_gather);
+                         settings_.final_gather, settings_.combined_only);
     const uint64_t tile_pixels = uint64_t(grid.tile) * uint64_t(grid.tile);
     const uint64_t tiles_per_unit = std::max<uint64_t>(1, kChunkPixels / tile_pixels);
     std::vector<StageSeconds> busy(grid.count());  // per work unit, at its first tile
