@@ -162,7 +162,9 @@ void PathIntegrator::sample_direct() {
 int PathIntegrator::prepare_direct(Ray* shadows) {
     const Shading& shading = shading_.value;
     if (!shading.bsdf.has_smooth_lobes()) return 0;  // a Dirac lobe never meets a light sample
-    LightSample samples[kMaxLightSplits];
+    // Left unset: sample_split() writes every sample it returns (zeroing all kMaxLightSplits
+    // of them cost more than the one a one-lamp room uses).
+    Uninitialized<LightSample[kMaxLightSplits]> samples;
     float u_select = rng_.next_float();
     vec2 u = rng_.next_vec2();
     if (vertex_ == 0 && first_light_sample_) {
@@ -170,10 +172,10 @@ int PathIntegrator::prepare_direct(Ray* shadows) {
         u = first_light_sample_->u;
     }
     const int sampled = lights_.sample_split(shading.position, shading.frame.z, u_select, u,
-                                             samples);
+                                             samples.value);
     int count = 0;
     for (int i = 0; i < sampled; ++i) {
-        const LightSample& ls = samples[i];
+        const LightSample& ls = samples.value[i];
         const vec3 wi = shading.frame.to_local(ls.wi);
         const bool geometric_above = glm::dot(ls.wi, shading.geometric_normal) > 0.0f;
         if (geometric_above != (wi.z > 0.0f)) continue;  // shading and geometric normals disagree
