@@ -262,10 +262,10 @@ class FrameWork {
     // G-buffer.
     void trace_primary(Wave& wave, uint64_t s, IntegratorClock& clock) const {
         wave.rays.resize(wave.count);
+        pixel_samples(settings_.seed, wave.pixel.data(), wave.count, s, wave.samples.data());
         for (size_t i = 0; i < wave.count; ++i) {
             const uint64_t pixel = wave.pixel[i];
             wave.rngs[i] = Pcg32(settings_.seed, stream_id(s, pixel));
-            wave.samples[i] = pixel_sample(settings_.seed, pixel, s);
             wave.rays[i] = camera_rays_.generate_ray(vec2(float(wave.x[i]), float(wave.y[i])) +
                                                      wave.samples[i].jitter);
         }
