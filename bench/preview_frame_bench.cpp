@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <vector>
@@ -35,7 +36,8 @@ using namespace shgi;
 namespace {
 
 constexpr uint32_t kWidth = 640, kHeight = 360;
-constexpr int kFrames = 20;
+constexpr int kFrames = 20;  // frames of each kind, unless a third argument says otherwise
+int g_frames = kFrames;
 constexpr int kTile = 16;     // the renderer's default tile side
 constexpr int kPacket = 16;   // rays per rtcIntersect16 / rtcOccluded16 call
 
@@ -170,7 +172,7 @@ void compare(const char* room, const char* field_name, const Scene& scene,
     const CameraRayGenerator rays(scene.camera());
     double best_frame = 1e30, best_floor = 1e30, best_frame_cpu = 1e30, best_floor_cpu = 1e30;
     PreviewTimings best_timings, best_cpu_timings;
-    for (int frame = 0; frame < kFrames; ++frame) {
+    for (int frame = 0; frame < g_frames; ++frame) {
         const double cpu_start = process_cpu_seconds();
         preview.render(&field, 1);
         const double frame_cpu = process_cpu_seconds() - cpu_start;
@@ -226,14 +228,16 @@ void run(const char* room, Scene& scene) {
 
 }  // namespace
 
-// Arguments (optional, for profiling one case): a room ("cornell" or "dense") and a field
-// ("lattice" or "probe"); e.g. `preview_frame_bench cornell lattice`.
+// Arguments (optional, for profiling one case): a room ("cornell" or "dense"), a field
+// ("lattice" or "probe") and a frame count (20 by default; 2 keeps a callgrind run short), e.g.
+// `preview_frame_bench cornell lattice 2`.
 int main(int argc, char** argv) {
     const char* room_filter = argc > 1 ? argv[1] : nullptr;
     g_field_filter = argc > 2 ? argv[2] : nullptr;
+    if (argc > 3) g_frames = std::max(1, std::atoi(argv[3]));
     std::printf("preview %ux%u, progressive 1-spp Combined-only frames, best of %d; floor: "
                 "flattened Embree scene, rtcIntersect16 + rtcOccluded16\n",
-                kWidth, kHeight, kFrames);
+                kWidth, kHeight, g_frames);
     if (room_filter == nullptr || std::strcmp(room_filter, "cornell") == 0) {
         Scene cornell = bench::cornell_box(kWidth, kHeight);
         run("cornell box", cornell);

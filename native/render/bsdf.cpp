@@ -669,6 +669,17 @@ vec3 PrincipledBsdf::class_color(LobeClass lobe_class) const {
     return color;
 }
 
+vec3 PrincipledBsdf::class_color_sum() const {
+    vec3 color[kLobeClassCount] = {vec3(0.0f), vec3(0.0f), vec3(0.0f)};
+    for (int i = 0; i < lobe_count_; ++i) {
+        const Lobe& lobe = lobes_[i];
+        color[int(lobe.lobe_class())] +=
+            lobe.kind == LobeKind::Specular && v2_.active ? glossy_albedo_ : lobe.weight;
+    }
+    return color[int(LobeClass::Diffuse)] + color[int(LobeClass::Glossy)] +
+           color[int(LobeClass::Transmission)];
+}
+
 DenoisingFeature PrincipledBsdf::denoising_feature(float cos_nv) const {
     DenoisingFeature feature;
     for (int i = 0; i < lobe_count_; ++i) {

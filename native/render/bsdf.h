@@ -141,6 +141,10 @@ class PrincipledBsdf {
     // (PrincipledModel::V2: GlossCol is the specular lobes' estimated albedo toward wo, as
     // Cycles 4 writes it).
     vec3 class_color(LobeClass lobe_class) const;
+    // DiffCol + GlossCol + TransCol, summed as class_color(Diffuse) + class_color(Glossy) +
+    // class_color(Transmission) are (the same value, bit for bit) in one pass over the lobes:
+    // the G-buffer's albedo of every preview pixel.
+    vec3 class_color_sum() const;
     // The surface's share in the denoiser's guides (DenoisingFeature) seen from wo (wo.z =
     // cos_nv): non-specular lobes' albedo as class_color gives it (their sum equals DiffCol +
     // GlossCol + TransCol when no lobe is specular); a specular lobe's albedo is its closure

@@ -34,9 +34,7 @@ void GBuffer::set_surface(size_t pixel, const Scene& scene, const Shading& shadi
     position[pixel] = shading.position;
     shading_normal[pixel] = shading.frame.z;
     geometric_normal[pixel] = shading.geometric_normal;
-    albedo[pixel] = shading.bsdf.class_color(LobeClass::Diffuse) +
-                    shading.bsdf.class_color(LobeClass::Glossy) +
-                    shading.bsdf.class_color(LobeClass::Transmission);
+    albedo[pixel] = shading.bsdf.class_color_sum();
     roughness[pixel] = scene.materials()[material].roughness;
     depth[pixel] = glm::dot(shading.position - camera_position, forward);
     object_id[pixel] = hit.instance_id;

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "util/owen_sobol.h"
 #include "util/sampling.h"
@@ -21,6 +24,101 @@ PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample, bool fi
     }
     return out;
 }
+namespace {
+
+#if defined(__SSE2__)
+// The 32-bit steps of util/owen_sobol.h on four lanes: SSE2 has no 32-bit multiply (pmulld is
+// SSE4.1) nor byte shuffle, so both are built from what it has; the results are the same
+// integers.
+struct OwenSobol4 {
+    // a * b mod 2^32 per lane.
+    static __m128i mul(__m128i a, __m128i b) {
+        const __m128i even = _mm_mul_epu32(a, b);
+        const __m128i odd = _mm_mul_epu32(_mm_srli_epi64(a, 32), _mm_srli_epi64(b, 32));
+        return _mm_unpacklo_epi32(_mm_shuffle_epi32(even, _MM_SHUFFLE(0, 0, 2, 0)),
+                                  _mm_shuffle_epi32(odd, _MM_SHUFFLE(0, 0, 2, 0)));
+    }
+    static __m128i swap_bits(__m128i x, int shift, uint32_t mask) {
+        const __m128i m = _mm_set1_epi32(int(mask));
+        return _mm_or_si128(_mm_and_si128(_mm_srli_epi32(x, shift), m),
+                            _mm_slli_epi32(_mm_and_si128(x, m), shift));
+    }
+    static __m128i reverse_bits(__m128i x) {
+        x = _mm_or_si128(_mm_slli_epi32(x, 16), _mm_srli_epi32(x, 16));  // halves
+        x = _mm_or_si128(_mm_slli_epi16(x, 8), _mm_srli_epi16(x, 8));    // bytes
+        x = swap_bits(x, 4, 0x0F0F0F0Fu);
+        x = swap_bits(x, 2, 0x33333333u);
+        return swap_bits(x, 1, 0x55555555u);
+    }
+    static __m128i laine_karras(__m128i x, __m128i seed) {
+        x = _mm_add_epi32(x, seed);
+        for (const uint32_t k : {0x6c50b47cu, 0xb82f1e52u, 0xc7afe638u, 0x8d22f6e6u})
+            x = _mm_xor_si128(x, mul(x, _mm_set1_epi32(int(k))));
+        return x;
+    }
+    // to_unit_float: the top 24 bits are below 2^31, so the signed conversion is exact.
+    static __m128 to_unit_float(__m128i x) {
+        return _mm_mul_ps(_mm_cvtepi32_ps(_mm_srli_epi32(x, 8)), _mm_set1_ps(0x1p-24f));
+    }
+    static __m128i load(const uint32_t (&v)[4]) {
+        return _mm_loadu_si128(reinterpret_cast<const __m128i*>(v));
+    }
+    // owen_sobol_1d (y null) or owen_sobol_2d of one index (reversed: reverse_bits(index)) for
+    // four sequence seeds.
+    static void point(uint32_t reversed_index, const uint32_t (&seeds)[4], __m128* x,
+                      __m128* y) {
+        uint32_t h1[4], h2[4];
+        for (int j = 0; j < 4; ++j) {
+            h1[j] = hash_seed(seeds[j], 1);
+            if (y != nullptr) h2[j] = hash_seed(seeds[j], 2);
+        }
+        const __m128i shuffled = reverse_bits(
+            laine_karras(_mm_set1_epi32(int(reversed_index)), load(seeds)));
+        *x = to_unit_float(reverse_bits(laine_karras(shuffled, load(h1))));
+        if (y == nullptr) return;
+        alignas(16) uint32_t lanes[4];
+        _mm_store_si128(reinterpret_cast<__m128i*>(lanes), shuffled);
+        for (uint32_t& lane : lanes) lane = owen_sobol_detail::sobol_dimension1(lane);
+        const __m128i dimension1 = _mm_load_si128(reinterpret_cast<const __m128i*>(lanes));
+        *y = to_unit_float(
+            reverse_bits(laine_karras(reverse_bits(dimension1), load(h2))));
+    }
+};
+#endif
+
+}  // namespace
+
+void pixel_samples(uint64_t seed, const uint32_t* pixels, size_t count, uint64_t sample,
+                   PixelSample* out) {
+    size_t i = 0;
+#if defined(__SSE2__)
+    using owen_sobol_detail::reverse_bits;
+    const uint32_t index = uint32_t(sample);
+    const uint32_t reversed = reverse_bits(index);
+    for (; i + 4 <= count; i += 4) {
+        uint32_t seeds[3][4];
+        for (int j = 0; j < 4; ++j) {
+            const uint32_t base = hash_seed(seed, pixels[i + size_t(j)]);
+            for (int d = 0; d < 3; ++d) seeds[d][j] = hash_seed(base, uint64_t(d));
+        }
+        alignas(16) float jitter_x[4], jitter_y[4], select[4], light_x[4], light_y[4];
+        __m128 x, y;
+        OwenSobol4::point(reversed, seeds[0], &x, &y);
+        _mm_store_ps(jitter_x, x);
+        _mm_store_ps(jitter_y, y);
+        OwenSobol4::point(reversed, seeds[1], &x, nullptr);
+        _mm_store_ps(select, x);
+        OwenSobol4::point(reversed, seeds[2], &x, &y);
+        _mm_store_ps(light_x, x);
+        _mm_store_ps(light_y, y);
+        for (int j = 0; j < 4; ++j)
+            out[i + size_t(j)] = PixelSample{vec2(jitter_x[j], jitter_y[j]), select[j],
+                                             vec2(light_x[j], light_y[j])};
+    }
+#endif
+    for (; i < count; ++i) out[i] = pixel_sample(seed, pixels[i], sample);
+}
+
 vec3 path_radiance(const PassValues& values, bool include_direct, float clamp) {
     vec3 radiance = values[Pass::Combined];
     if (!include_direct) radiance -= values[Pass::Emit] + values[Pass::Env];
@@ -55,7 +153,7 @@ bool PathIntegrator::enter_surface(const Hit& hit) {
     if (!hit.valid() || terminate_on_next_surface_) return false;
     make_shading_in(&shading_.value, scene_, scene_.surface_point(ray_, hit), ray_.direction);
     blur_glossy(&shading_.value);
-    if (vertex_ == 0) record_first_hit(shading_.value, ray_, hit);
+    if (vertex_ == 0 && !combined_only_) record_first_hit(shading_.value, ray_, hit);
     if (write_denoising_features_) record_denoising_features(shading_.value);
     return true;
 }
@@ -171,7 +269,9 @@ void PathIntegrator::sample_direct() {
 int PathIntegrator::prepare_direct(Ray* shadows) {
     const Shading& shading = shading_.value;
     if (!shading.bsdf.has_smooth_lobes()) return 0;  // a Dirac lobe never meets a light sample
-    LightSample samples[kMaxLightSplits];
+    // Left unset: sample_split() writes every sample it returns (zeroing all kMaxLightSplits
+    // of them cost more than the one a one-lamp room uses).
+    Uninitialized<LightSample[kMaxLightSplits]> samples;
     float u_select = rng_.next_float();
     vec2 u = rng_.next_vec2();
     if (vertex_ == 0 && first_light_sample_) {
@@ -179,10 +279,10 @@ int PathIntegrator::prepare_direct(Ray* shadows) {
         u = first_light_sample_->u;
     }
     const int sampled = lights_.sample_split(shading.position, shading.frame.z, u_select, u,
-                                             samples);
+                                             samples.value);
     int count = 0;
     for (int i = 0; i < sampled; ++i) {
-        const LightSample& ls = samples[i];
+        const LightSample& ls = samples.value[i];
         const vec3 wi = shading.frame.to_local(ls.wi);
         const bool geometric_above = glm::dot(ls.wi, shading.geometric_normal) > 0.0f;
         if (geometric_above != (wi.z > 0.0f)) continue;  // shading and geometric normals disagree

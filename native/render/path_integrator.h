@@ -68,6 +68,11 @@ struct PixelSample {
 // 0: the preview and the bake do not use them, and two more scrambled points a pixel were ~2% of
 // a preview frame.
 PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample, bool first_bsdf = false);
+// pixel_sample(seed, pixels[i], sample) for i in [0, count) into out[i] (without first_bsdf),
+// bit for bit, four pixels at a time in SSE2 (the preview's wave: the scrambles are 32-bit
+// integer work the same for every pixel).
+void pixel_samples(uint64_t seed, const uint32_t* pixels, size_t count, uint64_t sample,
+                   PixelSample* out);
 
 // The radiance a path started with PathIntegrator::trace(ray, first_hit) brought back along its
 // ray, for tracers whose rays leave a surface or a probe rather than a camera (probe updates,
@@ -114,6 +119,15 @@ class PathIntegrator {
     // ray): the pdf of that bounce (sr^-1), the path's lowest so far for Filter Glossy
     // (PathTracerSettings.filter_glossy). Call before begin().
     void set_first_ray_pdf(float pdf) { min_ray_pdf_ = pdf; }
+
+    // Only the Combined pass is read (a FilmPasses::CombinedOnly film, the viewport's): the
+    // first surface's colour, normal and depth passes and the denoising guides, which Combined
+    // does not depend on, are not written (they were ~4% of a preview frame). Call before
+    // begin().
+    void set_combined_only() {
+        combined_only_ = true;
+        write_denoising_features_ = false;
+    }
 
     // Stratified numbers for next-event estimation at the first surface (light selection and
     // the light's 2D sample), e.g. one pixel's Owen-scrambled Sobol' points: they replace the
@@ -213,6 +227,7 @@ class PathIntegrator {
     // The denoiser's guides (render/film.h): written once, at the first surface that is not
     // (nearly) perfectly specular; until then the product of the specular surfaces' albedos.
     bool write_denoising_features_ = true;
+    bool combined_only_ = false;       // set_combined_only()
     vec3 denoising_throughput_{1.0f};
     int vertex_ = 0;                   // surfaces shaded so far
     int smooth_bounces_ = 0;           // non-Dirac scatterings so far

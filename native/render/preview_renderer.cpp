@@ -1,6 +1,7 @@
 #include "render/preview_renderer.h"
 
 #include <algorithm>
+#include <memory>
 #include <optional>
 #include <vector>
 #if defined(__SSE2__)
@@ -78,8 +79,9 @@ PreviewTimings split_wall_time(double wall, const std::vector<StageSeconds>& bus
     return timings;
 }
 
-// A wave's buffers, sized once per work unit: each PathIntegrator refers to its rng and values
-// entries, so these vectors never reallocate while paths are in flight.
+// A wave's buffers, sized once (each thread keeps its wave: WaveLease): each PathIntegrator
+// refers to its rng and values entries, so these vectors never reallocate while paths are in
+// flight.
 struct Wave {
     explicit Wave(size_t capacity)
         : x(capacity), y(capacity), pixel(capacity), rngs(capacity), samples(capacity),
@@ -116,6 +118,32 @@ struct Wave {
     std::vector<uint8_t> occluded;
 };
 
+// The calling thread's wave, at `capacity` pixels, empty. Each thread keeps one between work
+// units and frames: a work unit of four tiles built its own (~0.35 MB, 256 paths of ~1.2 KB and
+// their pass values, allocated and zeroed: ~80 MB of stores a 640 x 360 frame). The wave is
+// taken out of the thread's slot while in use and put back by WaveLease's destructor, so a
+// nested call on the same thread (a task stolen while this one waits) builds its own; every
+// entry is written before a wave reads it, so frames are the same as with new waves.
+class WaveLease {
+  public:
+    explicit WaveLease(size_t capacity) : wave_(std::move(slot())) {
+        if (!wave_ || wave_->capacity() != capacity) wave_ = std::make_unique<Wave>(capacity);
+        wave_->count = 0;
+        wave_->quads.clear();
+    }
+    ~WaveLease() { slot() = std::move(wave_); }
+    WaveLease(const WaveLease&) = delete;
+    WaveLease& operator=(const WaveLease&) = delete;
+    Wave& wave() { return *wave_; }
+
+  private:
+    static std::unique_ptr<Wave>& slot() {
+        thread_local std::unique_ptr<Wave> kept;
+        return kept;
+    }
+    std::unique_ptr<Wave> wave_;
+};
+
 // One render() call: samples [first, first + count) of every pixel, summed onto the film's base
 // into its target (which may be the base). Threads share it read-only; a work unit writes only
 // its own pixels of the target and of the G-buffer.
@@ -124,7 +152,8 @@ class FrameWork {
     FrameWork(const Scene& scene, const Camera& camera, const CameraRayGenerator& camera_rays,
               const LightSampler& lights, const PathTracerSettings& settings,
               const IndirectField& field, const TileGrid& grid, uint64_t first, uint64_t count,
-              GBuffer& g_buffer, Progress* progress, bool reuse_lookups, bool final_gather)
+              GBuffer& g_buffer, Progress* progress, bool reuse_lookups, bool final_gather,
+              bool combined_only)
         : scene_(scene), camera_(camera), camera_rays_(camera_rays), lights_(lights),
           settings_(settings), field_(field), grid_(grid), first_(first), count_(count),
           g_buffer_(&g_buffer), progress_(progress),
@@ -134,6 +163,7 @@ class FrameWork {
                      : 0.0f),
           // A screen-space field lights the first surfaces itself: no gather ray before it.
           final_gather_(final_gather && !screen_space_ ? 1 : 0),
+          combined_only_(combined_only),
           camera_position_(camera.world_from_camera[3]),
           forward_(glm::normalize(-vec3(camera.world_from_camera[2]))) {}
 
@@ -142,7 +172,8 @@ class FrameWork {
     void render_tiles(uint64_t begin, uint64_t end, Film& target, const Film& base,
                       StageSeconds* seconds) const {
         const uint64_t tile_pixels = uint64_t(grid_.tile) * uint64_t(grid_.tile);
-        Wave wave(size_t(std::min<uint64_t>(kWavePixels, (end - begin) * tile_pixels)));
+        WaveLease lease(size_t(std::min<uint64_t>(kWavePixels, (end - begin) * tile_pixels)));
+        Wave& wave = lease.wave();
         IntegratorClock clock;
         for (uint64_t t = begin; t < end; ++t) {
             int x0, x1, y0, y1;
@@ -207,7 +238,7 @@ class FrameWork {
         }
         if (!(reuse_ > 0.0f)) return;
         // Grown to the most quads a wave has held (64 for full 16 x 16 tiles), not to the
-        // wave's capacity: the work unit's wave is new, and each lookup is ~0.3 KB to clear.
+        // wave's capacity: each lookup is ~0.3 KB to clear.
         if (wave.lookups.size() < wave.quads.size()) wave.lookups.resize(wave.quads.size());
         for (size_t q = 0; q < wave.quads.size(); ++q) {
             const uint32_t first = wave.quads[q];
@@ -231,10 +262,10 @@ class FrameWork {
     // G-buffer.
     void trace_primary(Wave& wave, uint64_t s, IntegratorClock& clock) const {
         wave.rays.resize(wave.count);
+        pixel_samples(settings_.seed, wave.pixel.data(), wave.count, s, wave.samples.data());
         for (size_t i = 0; i < wave.count; ++i) {
             const uint64_t pixel = wave.pixel[i];
             wave.rngs[i] = Pcg32(settings_.seed, stream_id(s, pixel));
-            wave.samples[i] = pixel_sample(settings_.seed, pixel, s);
             wave.rays[i] = camera_rays_.generate_ray(vec2(float(wave.x[i]), float(wave.y[i])) +
                                                      wave.samples[i].jitter);
         }
@@ -246,6 +277,7 @@ class FrameWork {
                                                          &clock);
             path.set_first_light_sample(wave.samples[i].u_select, wave.samples[i].u_light);
             path.set_final_gather(final_gather_);
+            if (combined_only_) path.set_combined_only();
             wave.live[i] = path.begin(wave.rays[i], wave.hits[i]);
             if (wave.live[i])
                 g_buffer_->set_surface(wave.pixel[i], scene_, path.first_surface(), wave.hits[i],
@@ -290,6 +322,7 @@ class FrameWork {
     const FieldLookup no_light_{ShRgb(2), vec3(0.0f)};  // first surfaces' lookup then
     float reuse_;  // the field's reuse distance; 0: every pixel makes its own lookup
     int final_gather_;  // smooth bounces before a path reads the field (PreviewSettings)
+    bool combined_only_;  // the film sums only Combined: the paths write no other pass
     vec3 camera_position_, forward_;  // the camera's, for the G-buffer's depth
 };
 
@@ -447,7 +480,7 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
                         even_tile_side(settings_.tile_size));
     const FrameWork work(*scene_, camera_, camera_rays_, lights, path_settings_, *field, grid,
                          first, samples, g_buffer_, progress, settings_.reuse_field_lookups,
-                         settings_.final_gather);
+                         settings_.final_gather, settings_.combined_only);
     const uint64_t tile_pixels = uint64_t(grid.tile) * uint64_t(grid.tile);
     const uint64_t tiles_per_unit = std::max<uint64_t>(1, kChunkPixels / tile_pixels);
     std::vector<StageSeconds> busy(grid.count());  // per work unit, at its first tile

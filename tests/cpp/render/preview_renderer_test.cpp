@@ -10,6 +10,7 @@
 // of intensity I at distance d and incidence angle theta, DiffDir = E / pi with E = I cos(theta)
 // / d^2, and under a uniform incident radiance L (SH field) DiffInd = (rho E / pi) / rho = L.
 #include "render/preview_renderer.h"
+#include "render/path_integrator.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -17,6 +18,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <string>
@@ -705,4 +707,36 @@ TEST(PreviewRenderer, RejectsInvalidSettingsNamingTheField) {
 }
 
 }  // namespace
+// The wave's Owen-scrambled Sobol' numbers (four pixels at a time in SSE2, the rest one by one)
+// are pixel_sample's, bit for bit: for wave sizes with and without a remainder, scattered and
+// large pixel indices, early and late sample indices (all 32 index bits) and several seeds.
+TEST(PreviewRenderer, PixelSamplesOfAWaveArePixelSampleBitForBit) {
+    std::vector<uint32_t> pixels;
+    uint32_t x = 12345u;
+    for (int i = 0; i < 263; ++i) {
+        x = x * 1664525u + 1013904223u;  // any spread of indices, including large ones
+        pixels.push_back(i < 8 ? uint32_t(i) : x);
+    }
+    for (const uint64_t seed : {uint64_t(0), uint64_t(7), uint64_t(0xFFFFFFFFFFFFull)})
+        for (const uint64_t sample : {uint64_t(0), uint64_t(1), uint64_t(5), uint64_t(1023),
+                                      uint64_t(0xFFFFFFFFu)})
+            for (const size_t count : {size_t(0), size_t(3), size_t(4), size_t(263)}) {
+                std::vector<PixelSample> wave(count);
+                pixel_samples(seed, pixels.data(), count, sample, wave.data());
+                for (size_t i = 0; i < count; ++i) {
+                    const PixelSample one = pixel_sample(seed, pixels[i], sample);
+                    const auto same = [](float a, float b) {
+                        return std::memcmp(&a, &b, sizeof(float)) == 0;
+                    };
+                    ASSERT_TRUE(same(wave[i].jitter.x, one.jitter.x) &&
+                                same(wave[i].jitter.y, one.jitter.y) &&
+                                same(wave[i].u_select, one.u_select) &&
+                                same(wave[i].u_light.x, one.u_light.x) &&
+                                same(wave[i].u_light.y, one.u_light.y) &&
+                                wave[i].u_lobe == 0.0f && wave[i].u_bsdf == vec2(0.0f))
+                        << "seed " << seed << ", sample " << sample << ", pixel " << pixels[i];
+                }
+            }
+}
+
 }  // namespace shgi
