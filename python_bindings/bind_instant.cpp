@@ -43,6 +43,9 @@ void bind_settings(py::module_& m) {
                 "vpl_bounces hits (16).", 1);
     def_integer(cls, "vpl_bounces", &S::vpl_bounces,
                 "Hits of a light path that leave a VPL: 1 is one bounce of indirect light (4).");
+    def_integer(cls, "glossy_bounces", &S::glossy_bounces,
+                "Glossy scatterings of a light path, a budget of their own beside vpl_bounces, "
+                "0..64; 4 matches Cycles' default glossy bounces.");
     def_integer(cls, "seed", &S::seed, "Random seed (0).");
     cls.def(py::init(&from_kwargs<S>),
             "InstantGiSettings(**fields), e.g. InstantGiSettings(sets_x=3, sets_y=3).")

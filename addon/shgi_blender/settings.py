@@ -259,8 +259,8 @@ PROPAGATION_DEFAULTS = {
 }
 
 # InstantGiSettings' fields in ``scene.shgi.instant_gi`` with their native defaults. Not
-# mirrored: ``seed`` (scene.shgi.seed) and ``vpl_bounces`` (Light Paths > Diffuse,
-# LIGHT_PATH_VALUES).
+# mirrored: ``seed`` (scene.shgi.seed), ``vpl_bounces`` and ``glossy_bounces`` (Light Paths >
+# Diffuse and Glossy, LIGHT_PATH_VALUES).
 INSTANT_GI_DEFAULTS = {
     "sets_x": 4,
     "sets_y": 4,
@@ -504,6 +504,7 @@ MIN_CASCADE_RESOLUTION = 16         # PropagationSettings.resolution with cascad
 MAX_INSTANT_SETS = 16               # InstantGiSettings.sets_x, sets_y
 MAX_INSTANT_PHOTONS_PER_SET = 1 << 24  # InstantGiSettings.photons_per_set
 MAX_INSTANT_VPL_BOUNCES = 16        # InstantGiSettings.vpl_bounces
+MAX_INSTANT_GLOSSY_BOUNCES = 64     # InstantGiSettings.glossy_bounces
 # A photon is stored after at least one scattering (PhotonLatticeSettings.max_bounces >= 1):
 # Diffuse 0, direct light only, has no photon lattice.
 MIN_PHOTON_BOUNCES = 1
@@ -553,9 +554,11 @@ LIGHT_PATH_VALUES = {
     "PropagationSettings": {
         "vpl_bounces": LightPathValue("diffuse_bounces", 0, 1, MAX_VPL_BOUNCES),
     },
-    # A VPL is a surface hit of a light path, as the propagation volume's.
+    # A VPL is a surface hit of a light path, as the propagation volume's; the light paths'
+    # glossy scatterings have a budget of their own, as the photon lattice's.
     "InstantGiSettings": {
         "vpl_bounces": LightPathValue("diffuse_bounces", 0, 1, MAX_INSTANT_VPL_BOUNCES),
+        "glossy_bounces": LightPathValue("glossy_bounces", 0, None, MAX_INSTANT_GLOSSY_BOUNCES),
     },
 }
 

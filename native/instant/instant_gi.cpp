@@ -48,6 +48,7 @@ PhotonTracerSettings tracer_settings(const InstantGiSettings& s) {
     // First hits are recorded before any scattering; a photon stored after k scatterings is the
     // (k + 1)-th hit of its path.
     tracer.max_bounces = std::max(1, s.vpl_bounces - 1);
+    tracer.max_glossy_bounces = s.glossy_bounces;
     tracer.store_first_hits = true;
     return tracer;
 }
@@ -64,6 +65,9 @@ bool joins(const GBuffer& g, size_t p, size_t q, const InstantGiSettings& s, boo
     return true;
 }
 
+// InstantGiSettings.glossy_bounces' limit (the radiance field's).
+constexpr int kMaxGlossyBounces = 64;
+
 // Lobes up to this roughness are mirror-like: their light is not spread as if diffuse.
 constexpr float kSpecularRoughness = 0.1f;
 
@@ -79,6 +83,7 @@ void validate_instant_gi_settings(const InstantGiSettings& s) {
         throw InvalidArgument(format_message(kSettings, ".photons_per_set is ", s.photons_per_set,
                                              "; it must be in [1, 2^24]"));
     check_int(s.vpl_bounces, 1, 16, "vpl_bounces");
+    check_int(s.glossy_bounces, 0, kMaxGlossyBounces, "glossy_bounces");
     check_float(s.clamp_distance, 0.0f, 1e6f, "clamp_distance");
     const int filter = int(s.filter_mode);
     if (filter < 0 || filter > int(InstantGiFilter::None))

@@ -42,8 +42,8 @@ def indirect_diffuse(passes):
     return float((passes["DiffInd"] * passes["DiffCol"]).mean())
 
 
-def solved(scene, passes=PASSES, **fields):
-    solver = shgi.InstantGi(scene, shgi.InstantGiSettings(seed=5, **fields))
+def solved(scene, passes=PASSES, seed=5, **fields):
+    solver = shgi.InstantGi(scene, shgi.InstantGiSettings(seed=seed, **fields))
     for _ in range(passes):
         solver.refine()
     return solver
@@ -66,10 +66,12 @@ def small_cornell():
 def test_settings_defaults_and_refusals():
     s = shgi.InstantGiSettings()
     assert (s.sets_x, s.sets_y, s.photons_per_set, s.vpl_bounces) == (4, 4, 16, 4)
+    assert s.glossy_bounces == 4  # Cycles' Light Paths > Glossy
     assert s.filter_mode == shgi.InstantGiFilter.SH
     assert s.clamp_distance == pytest.approx(0.05)
     s.validate()
     for field, value in (("sets_x", 0), ("sets_y", 17), ("vpl_bounces", 0),
+                         ("glossy_bounces", -1), ("glossy_bounces", 65),
                          ("clamp_distance", -1.0), ("depth_threshold", float("nan")),
                          ("normal_threshold", 1.5)):
         bad = shgi.InstantGiSettings(**{field: value})
@@ -277,7 +279,8 @@ def test_filter_direct_point_light_follows_the_l2_law():
 
 
 @pytest.mark.parametrize("height", [
-    1.0, pytest.param(0.5, marks=missed("DiffDir x DiffCol 0.978 x, Combined 0.978 x"))])
+    1.0, pytest.param(0.5, marks=missed("DiffDir x DiffCol 0.978 x, Combined 0.978 x: the L2 "
+                                        "law over the frame gives 0.976 x"))])
 def test_filter_direct_lamp_frame_agrees_with_path_tracer(height):
     """The point light over the floor with filter_direct and the paper's SH filter: the frame's
     DiffDir x DiffCol and Combined means within 2% of the path tracer's (1024 spp; the tolerance
@@ -297,6 +300,37 @@ def test_filter_direct_lamp_frame_agrees_with_path_tracer(height):
           f"Combined {combined:.4f} x the path tracer's; largest pixel ratio {overhead:.3f}")
     assert abs(direct - 1.0) < 0.02, direct
     assert abs(combined - 1.0) < 0.02, combined
+
+
+def test_filter_direct_lamp_half_a_metre_up_reads_the_l2_law():
+    """The 0.5 m lamp's frame mean (0.978 x, the strict xfail above) is the L2 law itself, not
+    the filter or the sampling: the law E0 (3/32 + mu/2 + 15 mu^2/32) summed over the frame's
+    lit pixels (each mu from the exact next-event estimate, as in the law test) gives 0.976 x
+    the exact sum, as each pixel's own set (filter NONE) does to 1e-4, and the SH filter's
+    frame reads within 0.5% of it. With the lamp 1 m up the same sum gives 1.001 x: the law's
+    +6% overhead and its deficit at mid angles (0.92 x at mu 0.45) average out over that
+    frame's angles and not over this one's. No filter can take it back: L2 SH holds only the
+    clamped-cosine convolution's first three bands."""
+    scene = lamp_over_a_floor(height=LAMP_HEIGHT)
+    exact = preview(scene, solved(scene, passes=1).current_field(), samples=1)
+    ex = (exact["DiffDir"] * exact["DiffCol"])[..., 0]
+    lit = ex > 0
+    intensity = LAMP_POWER / (4 * math.pi)
+    mu = np.cbrt(ex[lit] * math.pi * LAMP_HEIGHT ** 2 / (LAMBERT_ALBEDO * intensity))
+    e0 = LAMBERT_ALBEDO / math.pi * intensity * (mu / LAMP_HEIGHT) ** 2
+    law = float((e0 * (3 / 32 + mu / 2 + 15 * mu ** 2 / 32)).sum() / ex[lit].sum())
+    own = direct_diffuse(preview(scene, solved(
+        scene, passes=1, filter_direct=True,
+        filter_mode=shgi.InstantGiFilter.NONE).current_field(), samples=1))
+    filtered = direct_diffuse(preview(scene, solved(scene, passes=1, filter_direct=True)
+                                      .current_field(), samples=1))
+    own /= direct_diffuse(exact)
+    filtered /= direct_diffuse(exact)
+    print(f"lamp {LAMP_HEIGHT} m: the L2 law over the frame {law:.4f} x, each pixel's own set "
+          f"{own:.4f} x, the SH filter {filtered:.4f} x the exact direct light")
+    assert abs(law - 1.0) > 0.02  # the law alone misses the 2%
+    assert own == pytest.approx(law, abs=1e-4)
+    assert filtered == pytest.approx(law, abs=0.005)
 
 
 @pytest.mark.parametrize("kind", ["spot", "area", "sun", "sphere"])
@@ -434,27 +468,55 @@ def test_filter_direct_bakes_of_direct_or_indirect_light_alone():
 _RENDERS = {}
 
 
-def rendered(name, **fields):
-    key = (name, tuple(sorted(fields.items())))
+def rendered(name, seed=5, **fields):
+    key = (name, seed, tuple(sorted(fields.items())))
     if key not in _RENDERS:
         scale, samples = REFERENCES[name]
         scene, ref = path_traced_reference(getattr(scenes, name), scale, samples)
-        solver = solved(scene, **fields)
+        solver = solved(scene, seed=seed, **fields)
         field = solver.current_field()
         _RENDERS[key] = ref, preview(scene, field), field
     return _RENDERS[key]
 
 
+# Seeds of the DiffInd agreement: one solve's DiffInd mean with the default 4 passes (~2000
+# VPLs) scatters from seed to seed by 2.2% (sun room) and 4.5% (Cornell box) (one standard
+# deviation over seeds 5..12), so the test holds the mean over four solves to the 5%.
+AGREEMENT_SEEDS = (5, 6, 7, 8)
+
+
 @pytest.mark.reference
 @pytest.mark.parametrize("name", ["cornell_box", "sun_room"])
 def test_indirect_diffuse_agrees_with_path_tracer(name):
-    ref, image, field = rendered(name)
-    assert field.vpl_count >= 1024
-    ratio = indirect_diffuse(image) / indirect_diffuse(ref)
-    quality = psnr(ref["Combined"], image["Combined"])
-    print(f"{name}: {field.vpl_count} VPLs, DiffInd x DiffCol {ratio:.3f} x the path tracer's, "
-          f"Combined PSNR {quality:.2f} dB")
+    """DiffInd x DiffCol within 5% of the path tracer's with >= 1024 VPLs per solve: the mean
+    over AGREEMENT_SEEDS' solves (one solve reads the VPLs' noise as much as the method's
+    bias)."""
+    ratios = []
+    for seed in AGREEMENT_SEEDS:
+        ref, image, field = rendered(name, seed=seed)
+        assert field.vpl_count >= 1024
+        ratios.append(indirect_diffuse(image) / indirect_diffuse(ref))
+    ratio = float(np.mean(ratios))
+    print(f"{name}: DiffInd x DiffCol {ratio:.3f} x the path tracer's over seeds "
+          f"{AGREEMENT_SEEDS} (each: {', '.join(f'{r:.3f}' for r in ratios)})")
     assert abs(ratio - 1.0) < 0.05, ratio
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name", ["cornell_box", "sun_room"])
+def test_indirect_diffuse_converges_to_the_path_tracers(name):
+    """With 16 x more VPLs (256 light paths per set, ~37000 VPLs) the noise is gone and what
+    is left is the method's bias: DiffInd x DiffCol within 2% of the path tracer's. The light
+    paths' glossy scatterings have a budget of their own (glossy_bounces, Light Paths >
+    Glossy) as the path tracer's: counted against vpl_bounces they cut the paths that bounce
+    off the plaster's specular layer short, and the sun room converged to 0.962 x (Cornell box
+    0.993 x); now 1.005 x (1.009 x)."""
+    scale, samples = REFERENCES[name]
+    scene, ref = path_traced_reference(getattr(scenes, name), scale, samples)
+    field = solved(scene, photons_per_set=256).current_field()
+    ratio = indirect_diffuse(preview(scene, field, samples=4)) / indirect_diffuse(ref)
+    print(f"{name}: {field.vpl_count} VPLs, DiffInd x DiffCol {ratio:.4f} x the path tracer's")
+    assert abs(ratio - 1.0) < 0.02, ratio
 
 
 @pytest.mark.reference
@@ -486,7 +548,7 @@ def test_sun_room_with_filter_direct_direct_light_within_five_percent():
 @pytest.mark.reference
 @pytest.mark.parametrize("name", [
     "cornell_box",
-    pytest.param("sun_room", marks=missed("PSNR 31.1 dB")),
+    pytest.param("sun_room", marks=missed("PSNR 30.85 dB (seeds 5..12: 29.65 to 31.22)")),
 ])
 def test_psnr_against_path_tracer(name):
     ref, image, field = rendered(name)
@@ -500,14 +562,20 @@ def test_dim_room_is_within_five_percent():
     """The two rooms' dim room: every VPL reaches a pixel only through an exact shadow ray, so
     the bright room's light does not come through the wall. The dim lamp has 1% of the power,
     so 1% of the light paths: 128 per set (8x the default; with 16 per set, seeds 5 and 6 read
-    Combined 1.20x and 0.84x: too few VPLs in the dim room, not leaks)."""
-    ref, image, _ = rendered("two_rooms", photons_per_set=128)
-    combined = float(image["Combined"][..., :3].mean() / ref["Combined"][..., :3].mean())
-    indirect = indirect_diffuse(image) / indirect_diffuse(ref)
-    print(f"dim room: Combined {combined:.3f}, DiffInd x DiffCol {indirect:.3f} x the path "
-          f"tracer's")
-    assert abs(combined - 1.0) < 0.05
-    assert abs(indirect - 1.0) < 0.05
+    Combined 1.20x and 0.84x: too few VPLs in the dim room, not leaks). Even at 128 one solve
+    scatters by ~5% from seed to seed (seeds 5..8: DiffInd 1.058, 0.923, 0.949, 0.978 x), so
+    the means over AGREEMENT_SEEDS' solves are held to the 5%."""
+    combined, indirect = [], []
+    for seed in AGREEMENT_SEEDS:
+        ref, image, _ = rendered("two_rooms", seed=seed, photons_per_set=128)
+        combined.append(float(image["Combined"][..., :3].mean() /
+                              ref["Combined"][..., :3].mean()))
+        indirect.append(indirect_diffuse(image) / indirect_diffuse(ref))
+    print(f"dim room over seeds {AGREEMENT_SEEDS}: Combined {np.mean(combined):.3f}, DiffInd x "
+          f"DiffCol {np.mean(indirect):.3f} x the path tracer's (each: "
+          f"{', '.join(f'{r:.3f}' for r in indirect)})")
+    assert abs(np.mean(combined) - 1.0) < 0.05
+    assert abs(np.mean(indirect) - 1.0) < 0.05
 
 
 @pytest.mark.reference

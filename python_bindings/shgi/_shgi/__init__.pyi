@@ -629,6 +629,14 @@ class InstantGiSettings:
     def filter_mode(self, arg0: InstantGiFilter) -> None:
         ...
     @property
+    def glossy_bounces(self) -> int:
+        """
+        Glossy scatterings of a light path, a budget of their own beside vpl_bounces, 0..64; 4 matches Cycles' default glossy bounces.
+        """
+    @glossy_bounces.setter
+    def glossy_bounces(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
     def glossy_vpls(self) -> bool:
         """
         A VPL's surface scatters with its rough glossy lobes too, as if diffuse; False: its diffuse lobe only (True).

@@ -76,6 +76,8 @@ TEST(InstantGi, SettingsRefusalsNameTheField) {
     refused([](InstantGiSettings& s) { s.sets_y = 17; }, "sets_y");
     refused([](InstantGiSettings& s) { s.photons_per_set = 0; }, "photons_per_set");
     refused([](InstantGiSettings& s) { s.vpl_bounces = 0; }, "vpl_bounces");
+    refused([](InstantGiSettings& s) { s.glossy_bounces = -1; }, "glossy_bounces");
+    refused([](InstantGiSettings& s) { s.glossy_bounces = 65; }, "glossy_bounces");
     refused([](InstantGiSettings& s) { s.clamp_distance = NAN; }, "clamp_distance");
     refused([](InstantGiSettings& s) { s.depth_threshold = -1.0f; }, "depth_threshold");
     refused([](InstantGiSettings& s) { s.normal_threshold = 2.0f; }, "normal_threshold");
