@@ -145,9 +145,7 @@ void PropagationStep::blocked_sources(const ShVolume& source,
         [&](uint64_t begin, uint64_t end) {
             throw_if_cancelled(progress);
             for (uint64_t c = begin; c < end; ++c) {
-                const ivec3 cell(int(c % uint64_t(counts.x)),
-                                 int((c / uint64_t(counts.x)) % uint64_t(counts.y)),
-                                 int(c / (uint64_t(counts.x) * uint64_t(counts.y))));
+                const ivec3 cell = source.cell_at(c);
                 for (int o = 0; o < offset_count(); ++o) {
                     const ivec3 to = cell + offsets_[size_t(o)].offset;
                     if (glm::any(glm::lessThan(to, ivec3(0))) ||
@@ -219,9 +217,7 @@ void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
         [&](uint64_t begin, uint64_t end) {
             throw_if_cancelled(progress);
             for (uint64_t c = begin; c < end; ++c) {
-                const ivec3 cell(int(c % uint64_t(counts.x)),
-                                 int((c / uint64_t(counts.x)) % uint64_t(counts.y)),
-                                 int(c / (uint64_t(counts.x) * uint64_t(counts.y))));
+                const ivec3 cell = source.cell_at(c);
                 // Flux re-injected along each of the 6 axis normals, then one lobe per normal
                 // (FaceNormal); or per face, then one beam per face (TravelDirection).
                 vec3 flux[6] = {};

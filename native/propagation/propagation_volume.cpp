@@ -141,7 +141,7 @@ PropagationTransmittance geometry_transmittance(const ShLattice& geometry, const
     PropagationTransmittance transmittance;
     transmittance.offsets = int(offsets.size());
     transmittance.values.assign(volume.cell_count() * offsets.size(), 1.0f);
-    const ivec3 dims = geometry.dims(), counts = volume.counts();
+    const ivec3 dims = geometry.dims();
     const float s = geometry.cell_size();
     // The cross-section a wall can have in lattice cell g, perpendicular to `axis`: the cell
     // clipped to the scene's bounds (the lattice overhangs them: the two rooms' floor and
@@ -156,9 +156,7 @@ PropagationTransmittance geometry_transmittance(const ShLattice& geometry, const
     parallel_for(0, volume.cell_count(), kCellsPerTask, [&](uint64_t begin, uint64_t end) {
         throw_if_cancelled(progress);
         for (uint64_t c = begin; c < end; ++c) {
-            const ivec3 cell(int(c % uint64_t(counts.x)),
-                             int((c / uint64_t(counts.x)) % uint64_t(counts.y)),
-                             int(c / (uint64_t(counts.x) * uint64_t(counts.y))));
+            const ivec3 cell = volume.cell_at(c);
             for (size_t o = 0; o < offsets.size(); ++o) {
                 // The midpoint of this cell's centre and its source's, in lattice coordinates
                 // (lattice cell centres at integers; this cell's centre is at cell − ½).

@@ -71,6 +71,11 @@ class ShVolume {
         return size_t(cell.x) +
                size_t(counts_.x) * (size_t(cell.y) + size_t(counts_.y) * size_t(cell.z));
     }
+    // The cell at cell_index `index` (its inverse).
+    ivec3 cell_at(size_t index) const {
+        const size_t x = size_t(counts_.x), y = size_t(counts_.y);
+        return ivec3(int(index % x), int((index / x) % y), int(index / (x * y)));
+    }
     vec3 cell_centre(const ivec3& cell) const {
         return origin_ + (vec3(cell) + 0.5f) * cell_size_;
     }

@@ -444,14 +444,8 @@ TEST(PathTracer, FilterGlossyIsDeterministicAcrossThreadsAndTiles) {
 // once), and only light after the ceiling's bounce changes.
 TEST(PathTracer, FilterGlossyLetsLightSamplesReachAMirrorAfterADiffuseBounce) {
     Scene scene;
-    scene.add_material(test::mirror(0.8f));
-    scene.add_material(test::lambert(0.6f));
-    scene.add_instance(scene.add_mesh(test::plane(5.0f)), mat4(1.0f));
-    Mesh ceiling = test::plane(5.0f);
-    ceiling.material_indices.assign(ceiling.triangles.size(), 1);
-    scene.add_instance(scene.add_mesh(ceiling), glm::translate(mat4(1.0f), vec3(0, 0, 1.0f)));
+    test::add_mirror_under_ceiling(&scene);
     scene.add_light(test::point_light(vec3(2.0f, 0.0f, 0.5f), 200.0f));
-    scene.set_world(test::black_world());
     scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.5f), 0.5f, 8));
     scene.commit();
     PathTracerSettings settings = test::settings_with_samples(64);
@@ -519,13 +513,7 @@ TEST(PathTracer, DenoisingGuidesOfARoughSurfaceAreItsOwn) {
 // mirror's.
 TEST(PathTracer, DenoisingGuidesFollowAMirror) {
     Scene scene;
-    scene.add_material(test::mirror(0.8f));
-    scene.add_material(test::lambert(0.6f));
-    scene.add_instance(scene.add_mesh(test::plane(5.0f)), mat4(1.0f));
-    Mesh ceiling = test::plane(5.0f);
-    ceiling.material_indices.assign(ceiling.triangles.size(), 1);
-    scene.add_instance(scene.add_mesh(ceiling), glm::translate(mat4(1.0f), vec3(0, 0, 1.0f)));
-    scene.set_world(test::black_world());
+    test::add_mirror_under_ceiling(&scene);
     scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.5f), 1.0f, 8));
     scene.commit();
     PathTracer tracer(scene, test::settings_with_samples(4));

@@ -138,6 +138,18 @@ inline World black_world() {
     return world;
 }
 
+// A metal mirror of reflectance 0.8 facing up at z = 0 (material 0) under a Lambert ceiling of
+// albedo 0.6 at z = 1 (material 1), both 5 m planes; a black world. No light or camera.
+inline void add_mirror_under_ceiling(Scene* scene) {
+    scene->add_material(mirror(0.8f));
+    scene->add_material(lambert(0.6f));
+    scene->add_instance(scene->add_mesh(plane(5.0f)), mat4(1.0f));
+    Mesh ceiling = plane(5.0f);
+    ceiling.material_indices.assign(ceiling.triangles.size(), 1);
+    scene->add_instance(scene->add_mesh(ceiling), glm::translate(mat4(1.0f), vec3(0, 0, 1.0f)));
+    scene->set_world(black_world());
+}
+
 // Closed box [-1, 1]^3 seen from inside, every inner face emitting emission_color x
 // emission_strength with Lambert albedo `albedo`, black world, `camera` if given; committed.
 inline Scene emissive_furnace(float albedo, const vec3& emission_color, float emission_strength,
