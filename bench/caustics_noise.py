@@ -58,6 +58,11 @@ def parse_args():
     parser.add_argument("--cycles-clamp-indirect", type=float, default=None,
                         help="Cycles' Clamping > Indirect Light for its renders (default: its "
                              "own, 10); its reference stays as cached: see the seed-pair column")
+    parser.add_argument("--cycles-filter-size", type=float, default=None,
+                        help="Cycles' Film > Pixel Filter width in pixels (cycles.filter_width; Cycles' "
+                             "default 1.5 px Blackman-Harris; SHGI has a 1 px box): whether the "
+                             "pixel filter changes the noise per sample (pair x spp). Its PSNR "
+                             "column is against the reference cached with the default")
     parser.add_argument("--cycles-filter-glossy", type=float, default=None,
                         help="Cycles' Light Paths > Caustics > Filter Glossy for its renders "
                              "(default: its own, 1.0)")
@@ -126,6 +131,8 @@ def main():
                                    args.cycles_filter_glossy)
     if args.cycles_clamp_indirect is not None:
         scene.cycles.sample_clamp_indirect = args.cycles_clamp_indirect
+    if args.cycles_filter_size is not None:
+        scene.cycles.filter_width = args.cycles_filter_size
     # Each row's own reference: Cycles' by its clamp (as cached: --cycles-filter-glossy is not
     # in its key), SHGI's by its clamp and Filter Glossy.
     shgi_clamp = (scene.shgi.clamp_indirect if args.shgi_clamp_indirect is None
