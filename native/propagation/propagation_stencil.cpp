@@ -139,7 +139,6 @@ void PropagationStep::blocked_sources(const ShVolume& source,
                                       std::vector<uint8_t>& blocked, Progress* progress) const {
     blocked.assign(source.cell_count(), 0);
     if (transmittance == nullptr) return;
-    const ivec3 counts = source.counts();
     parallel_for(
         0, source.cell_count(), kCellsPerTask,
         [&](uint64_t begin, uint64_t end) {
@@ -148,9 +147,7 @@ void PropagationStep::blocked_sources(const ShVolume& source,
                 const ivec3 cell = source.cell_at(c);
                 for (int o = 0; o < offset_count(); ++o) {
                     const ivec3 to = cell + offsets_[size_t(o)].offset;
-                    if (glm::any(glm::lessThan(to, ivec3(0))) ||
-                        glm::any(glm::greaterThanEqual(to, counts)))
-                        continue;
+                    if (!source.contains(to)) continue;
                     if (transmittance->values[source.cell_index(to) * size_t(offset_count()) +
                                               size_t(o)] < 1.0f) {
                         blocked[c] = 1;
@@ -196,7 +193,6 @@ void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
         throw InvalidArgument(format_message(
             "PropagationStep: source and destination volumes must both be order ", order_,
             " with the same counts (orders ", source.order(), ", ", destination.order(), ")"));
-    const ivec3 counts = source.counts();
     if (transmittance != nullptr &&
         (transmittance->offsets != offset_count() ||
          transmittance->values.size() != source.cell_count() * size_t(offset_count())))
@@ -225,9 +221,7 @@ void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
                 for (int o = 0; o < offset_count(); ++o) {
                     const Offset& offset = offsets_[size_t(o)];
                     const ivec3 from = cell - offset.offset;
-                    if (glm::any(glm::lessThan(from, ivec3(0))) ||
-                        glm::any(glm::greaterThanEqual(from, counts)))
-                        continue;
+                    if (!source.contains(from)) continue;
                     const float t = transmittance != nullptr
                                         ? transmittance->values[c * size_t(offset_count()) + size_t(o)]
                                         : 1.0f;

@@ -126,9 +126,7 @@ uint32_t cell_of(const ShVolume& volume, const vec3& p) {
     const vec3 q = (p - volume.origin()) / volume.cell_size();
     if (!is_finite(q)) return kNoCell;
     const ivec3 cell(glm::floor(q));
-    if (glm::any(glm::lessThan(cell, ivec3(0))) ||
-        glm::any(glm::greaterThanEqual(cell, volume.counts())))
-        return kNoCell;
+    if (!volume.contains(cell)) return kNoCell;
     return uint32_t(volume.cell_index(cell));
 }
 

@@ -80,7 +80,7 @@ ShVolume::ShVolume(const vec3& origin, float cell_size, const ivec3& counts, int
 }
 
 void ShVolume::check_cell(const ivec3& cell, const char* what) const {
-    if (glm::any(glm::lessThan(cell, ivec3(0))) || glm::any(glm::greaterThanEqual(cell, counts_)))
+    if (!contains(cell))
         throw InvalidArgument(format_message(kClassName, "::", what, ": cell = ",
                                              format_vec(cell), " is outside counts = ",
                                              format_vec(counts_)));

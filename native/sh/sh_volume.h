@@ -71,6 +71,11 @@ class ShVolume {
         return size_t(cell.x) +
                size_t(counts_.x) * (size_t(cell.y) + size_t(counts_.y) * size_t(cell.z));
     }
+    // Whether `cell` lies inside the volume (0 <= cell < counts() on every axis).
+    bool contains(const ivec3& cell) const {
+        return !glm::any(glm::lessThan(cell, ivec3(0))) &&
+               !glm::any(glm::greaterThanEqual(cell, counts_));
+    }
     // The cell at cell_index `index` (its inverse).
     ivec3 cell_at(size_t index) const {
         const size_t x = size_t(counts_.x), y = size_t(counts_.y);
