@@ -46,6 +46,11 @@ void bind_settings(py::module_& m) {
     def_integer(cls, "glossy_bounces", &S::glossy_bounces,
                 "Glossy scatterings of a light path, a budget of their own beside vpl_bounces, "
                 "0..64; 4 matches Cycles' default glossy bounces.");
+    def_integer(cls, "passes_per_sample", &S::passes_per_sample,
+                "Passes of VPLs a preview sample gathers, 1..65536: sample i gathers the k "
+                "passes after sample i - 1's (around the solve's passes), so a frame's samples "
+                "average more passes than one gathers; with no more passes than this, every "
+                "sample gathers them all (4).");
     def_integer(cls, "seed", &S::seed, "Random seed (0).");
     cls.def(py::init(&from_kwargs<S>),
             "InstantGiSettings(**fields), e.g. InstantGiSettings(sets_x=3, sets_y=3).")
@@ -101,6 +106,9 @@ void bind_solver(py::module_& m) {
         "by the interleaved sets and the screen-space filter; lookups elsewhere gather every "
         "VPL.")
         .def_property_readonly("vpl_count", &InstantGiField::vpl_count, "VPLs in all sets.")
+        .def_property_readonly("passes", &InstantGiField::passes, "Passes of VPLs it holds.")
+        .def("sample_passes", &InstantGiField::sample_passes, py::arg("sample"),
+             "The passes preview sample `sample` gathers (passes_per_sample), in order.")
         .def_property_readonly(
             "set_sizes",
             [](const InstantGiField& f) {

@@ -68,6 +68,9 @@ bool joins(const GBuffer& g, size_t p, size_t q, const InstantGiSettings& s, boo
 // InstantGiSettings.glossy_bounces' limit (the radiance field's).
 constexpr int kMaxGlossyBounces = 64;
 
+// InstantGiSettings.passes_per_sample's limit: far beyond any solve's passes.
+constexpr int kMaxPassesPerSample = 1 << 16;
+
 // Lobes up to this roughness are mirror-like: their light is not spread as if diffuse.
 constexpr float kSpecularRoughness = 0.1f;
 
@@ -91,6 +94,7 @@ void validate_instant_gi_settings(const InstantGiSettings& s) {
                                              "; it must be Sh, Irradiance, Strict or None"));
     check_float(s.depth_threshold, 0.0f, 1e6f, "depth_threshold");
     check_float(s.normal_threshold, -1.0f, 1.0f, "normal_threshold");
+    check_int(s.passes_per_sample, 1, kMaxPassesPerSample, "passes_per_sample");
 }
 
 namespace {
@@ -145,10 +149,21 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
                                std::vector<std::vector<InstantVpl>> sets, uint64_t passes,
                                std::vector<std::vector<vec3>> sky_sets,
                                std::vector<std::vector<InstantLampSample>> lamp_sets,
-                               std::shared_ptr<const LightSampler> lamps)
+                               std::shared_ptr<const LightSampler> lamps,
+                               std::vector<std::vector<uint64_t>> pass_ends)
     : scene_(&scene), settings_(settings), sets_(std::move(sets)), sky_sets_(std::move(sky_sets)),
-      lamp_sets_(std::move(lamp_sets)), lamps_(std::move(lamps)), passes_(passes),
+      lamp_sets_(std::move(lamp_sets)), pass_ends_(std::move(pass_ends)),
+      lamps_(std::move(lamps)), passes_(passes),
       timings_(std::make_shared<InstantGiFrameTimings>()) {
+    if (!pass_ends_.empty()) {
+        if (pass_ends_.size() != sets_.size())
+            throw Internal("InstantGiField: pass_ends and sets differ in count");
+        for (size_t s = 0; s < sets_.size(); ++s)
+            if (pass_ends_[s].size() != passes_ ||
+                (passes_ > 0 && pass_ends_[s].back() != sets_[s].size()) ||
+                !std::is_sorted(pass_ends_[s].begin(), pass_ends_[s].end()))
+                throw Internal("InstantGiField: a set's pass_ends do not split its VPLs");
+    }
     if (!sky_sets_.empty() && sky_sets_.size() != sets_.size())
         throw Internal("InstantGiField: sky_sets and sets differ in count");
     if (!lamp_sets_.empty()) {
@@ -173,6 +188,20 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
 }
 
 InstantGiFrameTimings InstantGiField::frame_timings() const { return *timings_; }
+
+std::vector<uint64_t> InstantGiField::sample_passes(uint64_t sample) const {
+    const uint64_t k = uint64_t(settings_.passes_per_sample);
+    std::vector<uint64_t> passes;
+    if (pass_ends_.empty() || passes_ <= k) {
+        for (uint64_t i = 0; i < passes_; ++i) passes.push_back(i);
+        return passes;
+    }
+    // Sample i's k passes follow sample i - 1's, around the field's passes: over
+    // passes / gcd(passes, k) samples every pass is gathered equally often.
+    const uint64_t first = (sample % passes_) * k % passes_;
+    for (uint64_t j = 0; j < k; ++j) passes.push_back((first + j) % passes_);
+    return passes;
+}
 
 vec3 InstantGiField::lamp_delta(const InstantLampSample& sample, const vec3& p, const vec3& ng,
                                 float lamp_scale, vec3* direction, float* distance) const {
@@ -239,7 +268,10 @@ std::shared_ptr<const IndirectField> InstantGiField::without_direct() const {
     if (!settings_.filter_direct) return nullptr;
     InstantGiSettings indirect = settings_;
     indirect.filter_direct = false;
-    return std::make_shared<InstantGiField>(*scene_, indirect, sets_, passes_);
+    return std::make_shared<InstantGiField>(*scene_, indirect, sets_, passes_,
+                                            std::vector<std::vector<vec3>>{},
+                                            std::vector<std::vector<InstantLampSample>>{},
+                                            nullptr, pass_ends_);
 }
 
 IndirectField::Interleave InstantGiField::interleave() const {
@@ -272,7 +304,6 @@ ShRgb InstantGiField::set_radiance_sh(const vec3& p, const vec3& n, int set_x, i
 void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_position,
                                           float clamp_indirect, Film& film, uint64_t first,
                                           uint64_t count, Progress* progress) const {
-    static_cast<void>(first);
     *timings_ = InstantGiFrameTimings{};
     if (is_zero() || count == 0) return;
     const int width = g.width(), height = g.height();
@@ -291,11 +322,27 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
     // filter_direct: the sky's and lights' direct light, a plane of its own (DiffDir /
     // GlossDir).
     std::vector<vec3> raw_direct(direct ? pixels * kCoeffs : 0, vec3(0.0f));
+    // The sample's passes (passes_per_sample) as ranges of each set's VPLs, each pass's VPLs
+    // scaled by the sets over the passes gathered.
+    const std::vector<uint64_t> sample_pass = sample_passes(first);
+    const float vpl_scale = float(sets_.size()) / float(std::max<size_t>(sample_pass.size(), 1));
+    std::vector<std::vector<std::pair<uint64_t, uint64_t>>> ranges(sets_.size());
+    for (size_t s = 0; s < sets_.size(); ++s) {
+        if (sample_pass.size() == passes_) {  // every pass, in the sets' order
+            ranges[s].emplace_back(0, uint64_t(sets_[s].size()));
+            continue;
+        }
+        for (const uint64_t k : sample_pass)
+            ranges[s].emplace_back(k == 0 ? 0 : pass_ends_[s][k - 1], pass_ends_[s][k]);
+    }
     size_t largest_set = 1;
-    for (size_t s = 0; s < sets_.size(); ++s)
-        largest_set = std::max(largest_set, sets_[s].size() +
+    for (size_t s = 0; s < sets_.size(); ++s) {
+        size_t vpls = 0;
+        for (const auto& [begin, end] : ranges[s]) vpls += end - begin;
+        largest_set = std::max(largest_set, vpls +
                                                 (sky ? sky_sets_[s].size() : size_t(0)) +
                                                 (lamps ? lamp_sets_[s].size() : size_t(0)));
+    }
     const uint64_t rows_per_task =
         std::max<uint64_t>(1, kRaysPerBatch / (uint64_t(std::max(width, 1)) * largest_set));
     parallel_for(0, uint64_t(height), rows_per_task, [&](uint64_t y0, uint64_t y1) {
@@ -308,25 +355,27 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
         // sending rays to one VPL after another are neighbours, a coherent stream.
         for (uint64_t y = y0; y < y1; ++y)
             for (int sx = 0; sx < std::min(n, width); ++sx) {
-                const auto& set = sets_[size_t(int(y) % m) * size_t(n) + size_t(sx)];
-                for (const InstantVpl& vpl : set)
-                    for (int x = sx; x < width; x += n) {
-                        const size_t p = g.index(x, int(y));
-                        if (!g.has_surface(p)) continue;
-                        const vec3 pos = g.position[p], ng = g.geometric_normal[p];
-                        vec3 w;
-                        const vec3 e =
-                            vpl_delta(pos, ng, vpl, set_scale_, settings_.clamp_distance, &w);
-                        if (e == vec3(0.0f)) continue;
-                        Ray ray;
-                        if (!shadow_ray(offset_origin(pos, ng), vpl.position, &ray)) continue;
-                        rays.push_back(ray);
-                        ray_pixel.push_back(uint32_t(p));
-                        weights.push_back(e);
-                        directions.push_back(w);
-                        ray_direct.push_back(0);
-                    }
                 const size_t s = size_t(int(y) % m) * size_t(n) + size_t(sx);
+                for (const auto& [begin, end] : ranges[s])
+                    for (uint64_t v = begin; v < end; ++v) {
+                        const InstantVpl& vpl = sets_[s][v];
+                        for (int x = sx; x < width; x += n) {
+                            const size_t p = g.index(x, int(y));
+                            if (!g.has_surface(p)) continue;
+                            const vec3 pos = g.position[p], ng = g.geometric_normal[p];
+                            vec3 w;
+                            const vec3 e =
+                                vpl_delta(pos, ng, vpl, vpl_scale, settings_.clamp_distance, &w);
+                            if (e == vec3(0.0f)) continue;
+                            Ray ray;
+                            if (!shadow_ray(offset_origin(pos, ng), vpl.position, &ray)) continue;
+                            rays.push_back(ray);
+                            ray_pixel.push_back(uint32_t(p));
+                            weights.push_back(e);
+                            directions.push_back(w);
+                            ray_direct.push_back(0);
+                        }
+                    }
                 // The set's lamp samples: each light's incident radiance / pdf along its
                 // sample, to the sampled point.
                 if (lamps)
@@ -560,6 +609,9 @@ void InstantGi::refine(Progress* progress) {
     std::vector<std::vector<InstantVpl>> sets = field_->sets();
     const size_t set_count = sets.size();
     for (size_t i = 0; i < vpls.size(); ++i) sets[i % set_count].push_back(vpls[i]);
+    std::vector<std::vector<uint64_t>> pass_ends = field_->pass_ends();
+    pass_ends.resize(set_count);
+    for (size_t s = 0; s < set_count; ++s) pass_ends[s].push_back(uint64_t(sets[s].size()));
     // filter_direct: photons_per_set directional VPLs for the world per set and pass, uniform
     // over the sphere (one random stream per pass and set: the same for any thread count).
     std::vector<std::vector<vec3>> sky_sets;
@@ -597,7 +649,8 @@ void InstantGi::refine(Progress* progress) {
     }
     const double deal_seconds = seconds_since(start);
     field_ = std::make_shared<InstantGiField>(*scene_, settings_, std::move(sets), passes_ + 1,
-                                              std::move(sky_sets), std::move(lamp_sets), lamps_);
+                                              std::move(sky_sets), std::move(lamp_sets), lamps_,
+                                              std::move(pass_ends));
     ++passes_;
     stage_seconds_ = {{"vpl_trace", trace_seconds}, {"vpl_sets", deal_seconds}};
     if (progress) progress->set_fraction(1.0f);

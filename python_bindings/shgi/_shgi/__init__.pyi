@@ -510,10 +510,19 @@ class InstantGiField(IndirectField):
     @staticmethod
     def _pybind11_conduit_v1_(*args, **kwargs):
         ...
+    def sample_passes(self, sample: typing.SupportsInt | typing.SupportsIndex) -> list[int]:
+        """
+        The passes preview sample `sample` gathers (passes_per_sample), in order.
+        """
     @property
     def frame_timings(self) -> dict:
         """
         {gather, filter, shade}: seconds of the latest frame this field lit.
+        """
+    @property
+    def passes(self) -> int:
+        """
+        Passes of VPLs it holds.
         """
     @property
     def set_sizes(self) -> list[int]:
@@ -651,6 +660,14 @@ class InstantGiSettings:
         """
     @normal_threshold.setter
     def normal_threshold(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def passes_per_sample(self) -> int:
+        """
+        Passes of VPLs a preview sample gathers, 1..65536: sample i gathers the k passes after sample i - 1's (around the solve's passes), so a frame's samples average more passes than one gathers; with no more passes than this, every sample gathers them all (4).
+        """
+    @passes_per_sample.setter
+    def passes_per_sample(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
     def photons_per_set(self) -> int:
