@@ -494,6 +494,13 @@ class ShgiInstantGiSettings(bpy.types.PropertyGroup):
     viewport_passes: IntProperty(
         name="Viewport Passes", default=VP["INSTANT_GI"], min=1, soft_max=64,
         description="Passes the Rendered viewport solves")
+    passes_per_sample: IntProperty(
+        name="Passes per Sample", default=IG["passes_per_sample"], min=1,
+        max=settings.MAX_INSTANT_PASSES_PER_SAMPLE, soft_max=64,
+        description="Passes of little lights each sample sees, the next ones after the "
+                    "previous sample's: with more Render Passes than this, a render's samples "
+                    "see different little lights and average them, for smoother light at the "
+                    "same cost per sample")
     final_gather: BoolProperty(
         name="Final Gather", default=settings.FINAL_GATHER_DEFAULTS["INSTANT_GI"],
         description="Unused by Instant GI, which lights what the camera sees in screen space")

@@ -270,6 +270,7 @@ INSTANT_GI_DEFAULTS = {
     "depth_threshold": 0.1,
     "normal_threshold": 0.9,
     "filter_direct": False,
+    "passes_per_sample": 4,
 }
 
 # Refinement passes of a final solve (F12, Solve, a bake) when ``shgi`` cannot be imported as the
@@ -474,6 +475,7 @@ INSTANT_GI_LABELS = {
     "depth_threshold": "Instant GI > Depth Threshold",
     "normal_threshold": "Instant GI > Normal Threshold",
     "filter_direct": "Instant GI > Filter Direct Light",
+    "passes_per_sample": "Instant GI > Passes per Sample",
 }
 # The native checks' limits the property ranges follow (properties.py), so that the panels offer
 # only values the native code accepts.
@@ -505,6 +507,7 @@ MAX_INSTANT_SETS = 16               # InstantGiSettings.sets_x, sets_y
 MAX_INSTANT_PHOTONS_PER_SET = 1 << 24  # InstantGiSettings.photons_per_set
 MAX_INSTANT_VPL_BOUNCES = 16        # InstantGiSettings.vpl_bounces
 MAX_INSTANT_GLOSSY_BOUNCES = 64     # InstantGiSettings.glossy_bounces
+MAX_INSTANT_PASSES_PER_SAMPLE = 1 << 16  # InstantGiSettings.passes_per_sample
 # A photon is stored after at least one scattering (PhotonLatticeSettings.max_bounces >= 1):
 # Diffuse 0, direct light only, has no photon lattice.
 MIN_PHOTON_BOUNCES = 1
