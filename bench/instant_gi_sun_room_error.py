@@ -1,14 +1,15 @@
 #!/usr/bin/env python3
 """Where the sun room's Instant GI error is (issue 50's PSNR >= 32 dB): the test's setting (the
 sun room at scale 0.25, 64 x 48 px; the path tracer at 2048 spp, seed 11; Instant GI with the
-default settings, 4 passes, preview 16 spp), solved with `--seeds`. Per row: the Combined PSNR,
+default settings, 4 passes, preview 16 spp), solved with `--seeds`; `--passes` and
+`--passes-per-sample` solve more passes than one sample gathers (each sample new VPLs). Per row: the Combined PSNR,
 then per light pass (DiffDir, DiffInd, GlossDir, GlossInd, each the pass x its colour) its mean
 against the path tracer's and the PSNR of the image with that pass replaced by the path
 tracer's: the gain is that pass's share of the error. A second path-traced image (seed 12)
 gives the reference's own noise. A plain script printing a table: not a test.
 
     PYTHONPATH=build/python python3 bench/instant_gi_sun_room_error.py [--seeds 5 6 7 8]
-        [--samples 16] [--photons-per-set 16]
+        [--samples 16] [--photons-per-set 16] [--passes 4] [--passes-per-sample 4]
 """
 
 import argparse
@@ -45,6 +46,8 @@ def main():
     parser.add_argument("--seeds", type=int, nargs="+", default=[5, 6, 7, 8])
     parser.add_argument("--samples", type=int, default=16)
     parser.add_argument("--photons-per-set", type=int, default=16)
+    parser.add_argument("--passes", type=int, default=4)
+    parser.add_argument("--passes-per-sample", type=int, default=4)
     args = parser.parse_args()
     builder = scenes.sun_room(0.25)
     builder.scene.commit()
@@ -55,8 +58,9 @@ def main():
               shgi.render_path_traced(scene, shgi.PathTracerSettings(samples=2048, seed=12))))
     for seed in args.seeds:
         solver = shgi.InstantGi(scene, shgi.InstantGiSettings(
-            seed=seed, photons_per_set=args.photons_per_set))
-        for _ in range(4):
+            seed=seed, photons_per_set=args.photons_per_set,
+            passes_per_sample=args.passes_per_sample))
+        for _ in range(args.passes):
             solver.refine()
         image, _ = shgi.render_preview(scene, solver.current_field(),
                                        shgi.PreviewSettings(seed=5, samples=args.samples))
