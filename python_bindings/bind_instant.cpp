@@ -74,9 +74,10 @@ void bind_settings(py::module_& m) {
                        "Direct light through the SH filter, as the paper filters it: the "
                        "world's as directional VPLs (photons_per_set per set and pass), the "
                        "point, spot, area and sun lights' as samples per set (one for a delta "
-                       "light, photons_per_set per pass for one with extent), each with its "
-                       "exact shadow ray; next-event estimation then leaves them out. "
-                       "Emissive triangles stay next-event estimation (False).");
+                       "light, photons_per_set per pass for one with extent) and the emissive "
+                       "triangles' as photons_per_set samples per set and pass (each triangle "
+                       "by its power), each with its exact shadow ray; next-event estimation "
+                       "then leaves them out (False).");
     cls.def("validate", &validate_instant_gi_settings,
             "Raises ValueError naming the first invalid field.");
     register_settings_type<S>("InstantGiSettings");

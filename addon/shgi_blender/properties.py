@@ -484,8 +484,8 @@ class ShgiInstantGiSettings(bpy.types.PropertyGroup):
                     "blended like the indirect light (the world from as many sky directions "
                     "per set as Light Paths per Set; lamps with size from as many samples per "
                     "set): smoother, but L2 SH reads a lamp up to 6% brighter overhead and "
-                    "lets some of it past the horizon. Emissive surfaces stay sampled "
-                    "directly. Off: all direct light is sampled directly")
+                    "lets some of it past the horizon. Emissive surfaces too, from as many "
+                    "samples per set. Off: all direct light is sampled directly")
     passes: IntProperty(
         name="Render Passes", default=settings.final_passes("INSTANT_GI", native.module()),
         min=1, soft_max=64,

@@ -172,11 +172,17 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
         if (!lamps_) throw Internal("InstantGiField: lamp_sets without a LightSampler");
         // Every set holds as many samples of each light: count them in the first.
         std::vector<uint32_t> per_set(scene.lights().size(), 0);
+        uint32_t triangles = 0;
         for (const InstantLampSample& sample : lamp_sets_[0]) {
-            if (sample.light >= per_set.size())
+            if (sample.light >= (sample.triangle ? scene.emissive_triangles().size()
+                                                 : per_set.size()))
                 throw Internal("InstantGiField: a lamp sample of a light the scene lacks");
-            ++per_set[sample.light];
+            if (sample.triangle)
+                ++triangles;
+            else
+                ++per_set[sample.light];
         }
+        if (triangles > 0) triangle_share_ = 1.0f / float(triangles);
         lamp_share_.assign(per_set.size(), 0.0f);
         for (size_t i = 0; i < per_set.size(); ++i)
             if (per_set[i] > 0) lamp_share_[i] = 1.0f / float(per_set[i]);
@@ -206,10 +212,18 @@ std::vector<uint64_t> InstantGiField::sample_passes(uint64_t sample) const {
 vec3 InstantGiField::lamp_delta(const InstantLampSample& sample, const vec3& p, const vec3& ng,
                                 float lamp_scale, vec3* direction, float* distance) const {
     LightSample ls;
-    if (!lamps_->light_emits(sample.light) || !lamps_->sample_light(sample.light, p, sample.u, &ls))
-        return vec3(0.0f);
+    float share;
+    if (sample.triangle) {
+        if (!lamps_->sample_emissive_triangle(sample.light, p, sample.u, &ls)) return vec3(0.0f);
+        share = triangle_share_ / sample.selection;
+    } else {
+        if (!lamps_->light_emits(sample.light) ||
+            !lamps_->sample_light(sample.light, p, sample.u, &ls))
+            return vec3(0.0f);
+        share = lamp_share_[sample.light];
+    }
     if (!(ls.pdf > 0.0f) || glm::dot(ls.wi, ng) <= 0.0f) return vec3(0.0f);
-    const vec3 e = ls.radiance * (lamp_scale * lamp_share_[sample.light] / ls.pdf);
+    const vec3 e = ls.radiance * (lamp_scale * share / ls.pdf);
     if (!is_finite(e)) return vec3(0.0f);
     *direction = ls.wi;
     *distance = ls.distance;
@@ -564,6 +578,13 @@ void InstantGi::reset(Progress* progress) {
     lamps_ = settings_.filter_direct ? std::make_shared<const LightSampler>(
                                            *scene_, WorldSampling::Cosine, false, 1, false)
                                      : nullptr;
+    triangle_power_ = DiscreteDistribution();
+    if (settings_.filter_direct && !scene_->emissive_triangles().empty()) {
+        std::vector<float> power;  // W / pi: area x luminance, two-sided
+        for (const EmissiveTriangle& tri : scene_->emissive_triangles())
+            power.push_back(std::max(0.0f, tri.area * luminance(tri.radiance)));
+        triangle_power_ = DiscreteDistribution(power);
+    }
     field_ = std::make_shared<InstantGiField>(
         *scene_, settings_,
         std::vector<std::vector<InstantVpl>>(size_t(settings_.sets_x) * size_t(settings_.sets_y)),
@@ -641,6 +662,12 @@ void InstantGi::refine(Progress* progress) {
                                        : light.type != LightType::Area && light.radius <= 0.0f;
                 const uint64_t count = delta ? (passes_ == 0 ? 1 : 0) : settings_.photons_per_set;
                 for (uint64_t k = 0; k < count; ++k) lamp_sets[s].push_back({i, rng.next_vec2()});
+            }
+            // The emissive triangles: photons_per_set samples, each triangle by its power.
+            if (triangle_power_.empty()) continue;
+            for (uint64_t k = 0; k < settings_.photons_per_set; ++k) {
+                const uint32_t t = triangle_power_.sample(rng.next_float());
+                lamp_sets[s].push_back({t, rng.next_vec2(), true, triangle_power_.pdf(t)});
             }
         }
         if (std::all_of(lamp_sets.begin(), lamp_sets.end(),

@@ -50,6 +50,7 @@
 #include "render/light_sampler.h"
 #include "scene/scene.h"
 #include "util/progress.h"
+#include "util/sampling.h"
 
 namespace shgi {
 
@@ -85,10 +86,12 @@ struct InstantGiSettings {
     //   photons_per_set more per pass for a light with extent), each a delta of the light's
     //   incident radiance / pdf in its direction, divided among that light's samples in the
     //   set, with the exact shadow ray;
-    // both filtered like the VPLs in a plane of their own that the stage writes to DiffDir /
-    // GlossDir; the renderer then leaves the world and the lights out of next-event estimation
-    // (includes_world_direct, includes_lights_direct). Emissive triangles stay next-event
-    // estimation. Off by default: L2 SH blurs direct light (issue 50: a point light's L2
+    // - emissive triangles: photons_per_set samples per set and pass, each a triangle chosen by
+    //   its power and a uniform point on it (LightSampler::sample_emissive_triangle), weighed
+    //   as a lamp sample / the choice's probability / the set's triangle samples;
+    // all filtered like the VPLs in a plane of their own that the stage writes to DiffDir /
+    // GlossDir; the renderer then leaves the world, the lights and the emissive triangles out
+    // of next-event estimation (includes_world_direct, includes_lights_direct). Off by default: L2 SH blurs direct light (issue 50: a point light's L2
     // reconstruction is off by up to +6.25% and leaks 3/32 of its normal-incidence irradiance
     // at the horizon); a uniform sky's hemisphere is exact in L2.
     bool filter_direct = false;
@@ -118,10 +121,13 @@ struct InstantVpl {
 bool add_vpl_sh(ShRgb& sh, const vec3& p, const vec3& ng, const InstantVpl& vpl, float scale,
                 float clamp_distance);
 
-// One sample of a scene light held by a set (filter_direct): LightSampler::sample_light's u.
+// One sample of a scene light or of the emissive triangles held by a set (filter_direct):
+// LightSampler::sample_light's (or sample_emissive_triangle's) u.
 struct InstantLampSample {
-    uint32_t light = 0;  // index into Scene::lights()
+    uint32_t light = 0;  // index into Scene::lights(), or Scene::emissive_triangles() (triangle)
     vec2 u{0.0f};
+    bool triangle = false;   // an emissive triangle's sample
+    float selection = 1.0f;  // a triangle's: the probability it was chosen among them
 };
 
 // Per-frame timings of the last frame-wide stage (seconds).
@@ -197,6 +203,7 @@ class InstantGiField : public IndirectField {
     std::vector<std::vector<InstantLampSample>> lamp_sets_;
     std::vector<std::vector<uint64_t>> pass_ends_;  // per set: each pass's end
     std::vector<float> lamp_share_;  // per scene light: 1 / its samples in a set
+    float triangle_share_ = 0.0f;    // 1 / a set's emissive-triangle samples
     std::shared_ptr<const LightSampler> lamps_;  // with lamp_sets_: sample_light
     uint64_t passes_ = 0, vpl_count_ = 0, sky_count_ = 0, lamp_count_ = 0;
     float set_scale_ = 0.0f;  // sets / passes
@@ -228,6 +235,8 @@ class InstantGi : public GiSolver {
     // filter_direct: the scene's lights for the lamp samples (made at reset; every field shares
     // it). Null otherwise.
     std::shared_ptr<const LightSampler> lamps_;
+    // filter_direct: the emissive triangles by power (the lamp samples' choice). Empty otherwise.
+    DiscreteDistribution triangle_power_;
     std::vector<StageSeconds> stage_seconds_;
 };
 

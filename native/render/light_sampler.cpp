@@ -172,11 +172,13 @@ LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, boo
         emission.radiance = light.color * area_radiance_from_power(light.power, emission.area);
     }
     const auto& triangles = scene.emissive_triangles();
+    triangle_emitter_.assign(triangles.size(), kInvalidId);
     for (uint32_t i = 0; i < triangles.size(); ++i) {
         const LightBounds bounds = triangle_bounds(triangles[i]);
         if (!(bounds.energy > 0.0f)) continue;
-        triangle_emitter_[triangle_key(triangles[i].instance_id, triangles[i].triangle_id)] =
-            uint32_t(emitters_.size());
+        emissive_index_[triangle_key(triangles[i].instance_id, triangles[i].triangle_id)] = i;
+        if (!sample_lights) continue;
+        triangle_emitter_[i] = uint32_t(emitters_.size());
         add_local(Kind::Triangle, i, bounds);
     }
     // The world's irradiance on a surface open to it.
@@ -469,14 +471,15 @@ std::vector<EmissionHit> LightSampler::escaped(const vec3& p, const vec3& n, con
 }
 
 EmissionHit LightSampler::triangle_emission(const vec3& p, const Hit& hit, const vec3& wi) const {
-    if (triangle_emitter_.empty()) return {};  // spares a hash lookup per hit in most scenes
-    const auto found = triangle_emitter_.find(triangle_key(hit.instance_id, hit.triangle_id));
-    if (found == triangle_emitter_.end()) return {};
-    const EmissiveTriangle& tri = scene_->emissive_triangles()[emitters_[found->second].index];
+    if (emissive_index_.empty()) return {};  // spares a hash lookup per hit in most scenes
+    const auto found = emissive_index_.find(triangle_key(hit.instance_id, hit.triangle_id));
+    if (found == emissive_index_.end()) return {};
+    const EmissiveTriangle& tri = scene_->emissive_triangles()[found->second];
     const float cos_light = std::fabs(glm::dot(wi, glm::normalize(hit.geometric_normal)));
     if (cos_light <= 0.0f) return {};
-    return {tri.radiance,
-            selection_pdf(found->second, p) * hit.t * hit.t / (cos_light * tri.area)};
+    const uint32_t emitter = triangle_emitter_[found->second];
+    if (emitter == kInvalidId) return {tri.radiance, 0.0f};  // not sampled (sample_lights)
+    return {tri.radiance, selection_pdf(emitter, p) * hit.t * hit.t / (cos_light * tri.area)};
 }
 
 }  // namespace shgi

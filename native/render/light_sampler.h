@@ -93,7 +93,7 @@ class LightSampler {
   public:
     // The scene must be committed. Emitters with zero power are left out; so is the world when
     // sample_world is false (escaped rays still see it, with a light pdf of 0), and so are the
-    // scene's lights (point, spot, area, sun; not emissive triangles) when sample_lights is
+    // scene's lights (point, spot, area, sun) and emissive triangles when sample_lights is
     // false (rays still meet them, with a light pdf of 0: a field that carries their direct
     // light, INSTANT_GI's filter_direct). light_splits: the most emitters one next-event
     // estimate samples, in [1, kMaxLightSplits] (1: one, by sample(); more: by sample_split()).
@@ -140,6 +140,13 @@ class LightSampler {
     // One sample of scene light `light` alone (no selection: pdf is per unit solid angle, or 1
     // for a delta light) seen from p; false when it cannot reach p. The light must emit.
     bool sample_light(uint32_t light, const vec3& p, const vec2& u, LightSample* out) const;
+    // One sample of emissive triangle `triangle` (an index of Scene::emissive_triangles()) alone,
+    // a uniform point on it (pdf per unit solid angle, no selection) seen from p; false when it
+    // cannot reach p.
+    bool sample_emissive_triangle(uint32_t triangle, const vec3& p, const vec2& u,
+                                  LightSample* out) const {
+        return sample_triangle(scene_->emissive_triangles()[triangle], p, u, out);
+    }
     // Everything a ray from p (shading normal n) along wi meets as emission up to its scene hit
     // `hit`: a point/spot disk or area light in front of the hit; else the hit triangle's own
     // emission; else, for a miss, the world and suns (for_each_escaped). Calls
@@ -195,7 +202,11 @@ class LightSampler {
         vec3 radiance{0.0f};  // W m^-2 sr^-1
     };
     std::vector<AreaEmission> area_emission_;
-    std::unordered_map<uint64_t, uint32_t> triangle_emitter_;  // (instance << 32 | tri) -> emitter
+    // (instance << 32 | tri) -> index of Scene::emissive_triangles(), for triangles that emit.
+    std::unordered_map<uint64_t, uint32_t> emissive_index_;
+    // Per emissive triangle: its emitter, or kInvalidId when next-event estimation leaves it out
+    // (no power, or sample_lights false).
+    std::vector<uint32_t> triangle_emitter_;
     uint32_t world_emitter_ = kInvalidId;
     std::vector<Portal> portals_;
     LightTree tree_;                          // local emitters

@@ -266,15 +266,16 @@ TEST(LightSampler, SelectionPdfsOfLocalAndDistantEmittersSumToOne) {
     }
 }
 
-// sample_lights = false (a field carrying the lights' direct light, INSTANT_GI's filter_direct):
-// next-event estimation chooses among the emissive triangles and the world alone, while rays
-// still meet the area light and the sun's cone, with their radiance and a light pdf of 0 (so a
-// BSDF-sampled ray counts them whole); sample_light still samples any light by itself.
-TEST(LightSampler, WithoutLightsSamplesOnlyTrianglesAndWorldButRaysStillSeeLights) {
+// sample_lights = false (a field carrying the lights' and emissive triangles' direct light,
+// INSTANT_GI's filter_direct): next-event estimation chooses the world alone, while rays still
+// meet the area light, the sun's cone and the emissive quad, with their radiance and a light pdf
+// of 0 (so a BSDF-sampled ray counts them whole); sample_light and sample_emissive_triangle
+// still sample any light or triangle by itself.
+TEST(LightSampler, WithoutLightsSamplesOnlyTheWorldButRaysStillSeeLightsAndTriangles) {
     const Scene scene = many_light_scene();
     const LightSampler all(scene, WorldSampling::Cosine);
     const LightSampler without(scene, WorldSampling::Cosine, true, 1, false);
-    ASSERT_EQ(without.emitter_count(), 2u + 1u);  // the quad's two triangles, the world
+    ASSERT_EQ(without.emitter_count(), 1u);  // the world
     const vec3 p(0.0f, -4.0f, 0.01f), n(0.0f, 0.0f, 1.0f);
     double sum = 0.0;
     for (uint32_t e = 0; e < without.emitter_count(); ++e) sum += without.selection_pdf(e, p);
@@ -303,6 +304,29 @@ TEST(LightSampler, WithoutLightsSamplesOnlyTrianglesAndWorldButRaysStillSeeLight
     EXPECT_NEAR(sample.wi.z, 1.0f, 1e-4f);
     EXPECT_GT(sample.pdf, 0.0f);
     EXPECT_FALSE(sample.delta);
+    // Straight up into the emissive quad (x 4..5, y -1..0, 3 m up): its radiance, pdf 0.
+    Ray up;
+    up.origin = vec3(4.5f, -0.5f, 0.01f);
+    up.direction = n;
+    const Hit hit = scene.intersect(up);
+    ASSERT_TRUE(hit.valid());
+    const EmissionHit quad_all = all.triangle_emission(up.origin, hit, n);
+    const EmissionHit quad_without = without.triangle_emission(up.origin, hit, n);
+    EXPECT_EQ(quad_all.radiance, vec3(3.0f, 1.5f, 0.6f));
+    EXPECT_EQ(quad_without.radiance, quad_all.radiance);
+    EXPECT_GT(quad_all.light_pdf, 0.0f);
+    EXPECT_EQ(quad_without.light_pdf, 0.0f);
+    // A triangle sampled by itself: straight up, its solid-angle pdf d^2 / (cos area).
+    ASSERT_EQ(scene.emissive_triangles().size(), 2u);
+    LightSample on_quad;
+    ASSERT_TRUE(without.sample_emissive_triangle(0, up.origin, vec2(0.3f, 0.4f), &on_quad));
+    EXPECT_EQ(on_quad.radiance, quad_all.radiance);
+    const float cos_light = std::fabs(on_quad.wi.z);
+    EXPECT_NEAR(on_quad.pdf,
+                on_quad.distance * on_quad.distance /
+                    (cos_light * scene.emissive_triangles()[0].area),
+                1e-4f * on_quad.pdf);
+    EXPECT_FALSE(on_quad.delta);
 }
 
 // Twelve point lights of four powers above a small plane 5 m below, the world dark, committed;
