@@ -490,7 +490,8 @@ class ShgiInstantGiSettings(bpy.types.PropertyGroup):
         name="Render Passes", default=settings.final_passes("INSTANT_GI", native.module()),
         min=1, soft_max=64,
         description="Passes of an F12 render, a Solve or a bake, each adding Light Paths per "
-                    "Set to every set: more give smoother light and cost more per pixel")
+                    "Set to every set: more give smoother light. A sample sees Per Sample of "
+                    "them, so passes beyond that cost no more per sample; a bake sees them all")
     viewport_passes: IntProperty(
         name="Viewport Passes", default=VP["INSTANT_GI"], min=1, soft_max=64,
         description="Passes the Rendered viewport solves")

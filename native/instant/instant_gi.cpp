@@ -685,6 +685,7 @@ void InstantGi::refine(Progress* progress) {
 
 size_t InstantGi::memory_bytes() const {
     return size_t(field_->vpl_count()) * sizeof(InstantVpl) +
+           size_t(field_->sets().size()) * size_t(field_->passes()) * sizeof(uint64_t) +
            size_t(field_->sky_count()) * sizeof(vec3) +
            size_t(field_->lamp_count()) * sizeof(InstantLampSample);
 }
