@@ -209,6 +209,22 @@ std::vector<uint64_t> InstantGiField::sample_passes(uint64_t sample) const {
     return passes;
 }
 
+std::vector<std::vector<InstantGiField::VplRange>> InstantGiField::sample_ranges(
+    uint64_t sample, float* vpl_scale) const {
+    const std::vector<uint64_t> passes = sample_passes(sample);
+    *vpl_scale = float(sets_.size()) / float(std::max<size_t>(passes.size(), 1));
+    std::vector<std::vector<VplRange>> ranges(sets_.size());
+    for (size_t s = 0; s < sets_.size(); ++s) {
+        if (passes.size() == passes_) {  // every pass, in the sets' order
+            ranges[s].push_back({0, uint64_t(sets_[s].size())});
+            continue;
+        }
+        for (const uint64_t k : passes)
+            ranges[s].push_back({k == 0 ? 0 : pass_ends_[s][k - 1], pass_ends_[s][k]});
+    }
+    return ranges;
+}
+
 vec3 InstantGiField::lamp_delta(const InstantLampSample& sample, const vec3& p, const vec3& ng,
                                 float lamp_scale, vec3* direction, float* distance) const {
     LightSample ls;
@@ -336,23 +352,12 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
     // filter_direct: the sky's and lights' direct light, a plane of its own (DiffDir /
     // GlossDir).
     std::vector<vec3> raw_direct(direct ? pixels * kCoeffs : 0, vec3(0.0f));
-    // The sample's passes (passes_per_sample) as ranges of each set's VPLs, each pass's VPLs
-    // scaled by the sets over the passes gathered.
-    const std::vector<uint64_t> sample_pass = sample_passes(first);
-    const float vpl_scale = float(sets_.size()) / float(std::max<size_t>(sample_pass.size(), 1));
-    std::vector<std::vector<std::pair<uint64_t, uint64_t>>> ranges(sets_.size());
-    for (size_t s = 0; s < sets_.size(); ++s) {
-        if (sample_pass.size() == passes_) {  // every pass, in the sets' order
-            ranges[s].emplace_back(0, uint64_t(sets_[s].size()));
-            continue;
-        }
-        for (const uint64_t k : sample_pass)
-            ranges[s].emplace_back(k == 0 ? 0 : pass_ends_[s][k - 1], pass_ends_[s][k]);
-    }
+    float vpl_scale;
+    const std::vector<std::vector<VplRange>> ranges = sample_ranges(first, &vpl_scale);
     size_t largest_set = 1;
     for (size_t s = 0; s < sets_.size(); ++s) {
         size_t vpls = 0;
-        for (const auto& [begin, end] : ranges[s]) vpls += end - begin;
+        for (const VplRange& range : ranges[s]) vpls += range.end - range.begin;
         largest_set = std::max(largest_set, vpls +
                                                 (sky ? sky_sets_[s].size() : size_t(0)) +
                                                 (lamps ? lamp_sets_[s].size() : size_t(0)));
@@ -370,8 +375,8 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
         for (uint64_t y = y0; y < y1; ++y)
             for (int sx = 0; sx < std::min(n, width); ++sx) {
                 const size_t s = size_t(int(y) % m) * size_t(n) + size_t(sx);
-                for (const auto& [begin, end] : ranges[s])
-                    for (uint64_t v = begin; v < end; ++v) {
+                for (const VplRange& range : ranges[s])
+                    for (uint64_t v = range.begin; v < range.end; ++v) {
                         const InstantVpl& vpl = sets_[s][v];
                         for (int x = sx; x < width; x += n) {
                             const size_t p = g.index(x, int(y));

@@ -186,6 +186,12 @@ class InstantGiField : public IndirectField {
     InstantGiFrameTimings frame_timings() const;
 
   private:
+    struct VplRange {
+        uint64_t begin, end;  // VPL indices [begin, end) of a set
+    };
+    // Preview sample `sample`'s VPLs of each set (its sample_passes), and in *vpl_scale the
+    // scale of each: the sets over the passes gathered.
+    std::vector<std::vector<VplRange>> sample_ranges(uint64_t sample, float* vpl_scale) const;
     // Adds set `set`'s VPLs (each scaled by vpl_scale) and, with filter_direct, its sky
     // directions (each of radiance sky_weight) and its lamp samples (each scaled by lamp_scale
     // / that light's samples per set) seen from p as SH, with exact shadow rays.
