@@ -730,7 +730,7 @@ def test_psnr_against_path_tracer(name, passes):
     gathers them all and shares their noise (the sun room misses: a strict xfail); with 64
     passes, 4 per sample, each sample gathers new ones at the same cost per sample (seeds
     5..12: sun room 32.57 to 32.84 dB)."""
-    ref, image, field = rendered(name, passes=passes)
+    ref, image, field = rendered(name) if passes == PASSES else rendered(name, passes=passes)
     quality = psnr(ref["Combined"], image["Combined"])
     print(f"{name}, {passes} passes: Combined PSNR {quality:.2f} dB with {field.vpl_count} "
           f"VPLs, {len(field.sample_passes(0))} passes per sample")
