@@ -27,6 +27,12 @@ TRAVEL = dict(CORRECTIONS, travel_reinjection=True, damping=True)
 UNCLAMPED = dict(TRAVEL, unclamped_transfer=True)
 AT_SURFACES = dict(UNCLAMPED, clamp_at_surfaces=True)
 CONFIGS = {
+    # PropagationSettings' defaults.
+    "defaults": {},
+    # Clamped at walls, the steps from a distance in cells (distance / the stencil's cells per
+    # step: 30 cells are 33 LPV and 21 HOLPV steps).
+    **{f"at_surfaces_d{d}": dict(AT_SURFACES, resolution=32, steps=0, distance=float(d))
+       for d in (24, 26, 28, 30, 32, 34, 36)},
     "at_surfaces_r32_s24": dict(AT_SURFACES, resolution=32, steps=24),
     "at_surfaces_r32_s28": dict(AT_SURFACES, resolution=32, steps=28),
     "at_surfaces_r32_s32": dict(AT_SURFACES, resolution=32, steps=32),

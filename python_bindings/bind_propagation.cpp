@@ -38,11 +38,16 @@ void bind_settings(py::module_& m) {
                 "bounce, n gives n bounces of indirect light (4).");
     def_integer(cls, "resolution", &S::resolution,
                 "Cells along the longest side of the scene (32).");
-    def_integer(cls, "steps", &S::steps, "Propagation steps (8).");
+    def_integer(cls, "steps", &S::steps,
+                "Propagation steps; 0 takes them from distance (8).");
     def_integer(cls, "order", &S::order,
                 "1: LPV (L1 SH, 6 directions); 2: HOLPV (L2 SH, 26 directions) (2).");
     cls.def(py::init(&from_kwargs<S>),
             "PropagationSettings(**fields), e.g. PropagationSettings(order=1, steps=16).")
+        .def_readwrite("distance", &S::distance,
+                       "How far the light travels, in cells, when steps is 0: each order takes "
+                       "the steps its stencil needs to carry light this far (the LPV's steps "
+                       "move light 0.915 cells, the HOLPV's 1.415) (30.0).")
         .def_readwrite("occlusion", &S::occlusion,
                        "Geometry volume blocking from the second step on, or the first with "
                        "occlude_first_step (True).")
@@ -85,6 +90,16 @@ void bind_settings(py::module_& m) {
                       "the volume is reset) when the scene has one (True).");
     cls.def("validate", &validate_propagation_settings,
             "Raises ValueError naming the first invalid field.");
+    m.def(
+        "propagation_steps",
+        [](const S& settings) {
+            validate_propagation_settings(settings);
+            return propagation_steps(settings);
+        },
+        py::arg("settings"),
+        "The steps a PropagationVolume of these settings propagates: settings.steps, or with "
+        "steps 0 settings.distance over the order's cells per step (LPV 0.915, HOLPV 1.415), "
+        "rounded. Raises ValueError for invalid settings.");
     register_settings_type<S>("PropagationSettings");
 }
 

@@ -383,8 +383,14 @@ class ShgiPropagationSettings(bpy.types.PropertyGroup):
     steps: IntProperty(
         name="Steps", default=LP["steps"], min=0, max=settings.MAX_PROPAGATION_STEPS,
         soft_max=64,
-        description="How many cells light spreads from where it lands: more reach farther "
-                    "and brighten closed rooms")
+        description="How many times light spreads to the next cells from where it lands: more "
+                    "reach farther and brighten closed rooms (0: as many as Distance needs)")
+    distance: FloatProperty(
+        name="Distance", default=LP["distance"], min=0.0,
+        max=settings.MAX_PROPAGATION_DISTANCE, soft_max=128.0,
+        description="With Steps 0, how many cells light spreads from where it lands: each "
+                    "Order takes the steps that carry it this far (Order 2 reaches farther "
+                    "per step)")
     order: IntProperty(
         name="Order", default=LP["order"], min=1, max=2,
         description="1: light spreads to the 6 face neighbours with broad directions (faster); "

@@ -246,6 +246,7 @@ PROPAGATION_DEFAULTS = {
     "photons": 100000,
     "resolution": 32,
     "steps": 8,
+    "distance": 30.0,
     "order": 2,
     "occlusion": True,
     "normal_offset": 1.0,
@@ -454,6 +455,7 @@ PROPAGATION_LABELS = {
     "photons": "Light Propagation > Light Paths",
     "resolution": "Light Propagation > Resolution",
     "steps": "Light Propagation > Steps",
+    "distance": "Light Propagation > Distance",
     "order": "Light Propagation > Order",
     "occlusion": "Light Propagation > Occlusion",
     "normal_offset": "Light Propagation > Normal Offset",
@@ -496,6 +498,7 @@ MAX_BLEED_BIAS = 0.99
 MIN_BACKFACE_THRESHOLD = 0.01
 MAX_PROPAGATION_RESOLUTION = 256    # PropagationSettings.resolution (min 2)
 MAX_PROPAGATION_STEPS = 1024        # PropagationSettings.steps
+MAX_PROPAGATION_DISTANCE = 512.0    # PropagationSettings.distance, cells
 MAX_PROPAGATION_NORMAL_OFFSET = 2.0  # PropagationSettings.normal_offset, cells
 MAX_LIGHT_SPLITS = 8                # kMaxLightSplits (render/light_tree.h)
 MAX_VPL_BOUNCES = 64                # PropagationSettings.vpl_bounces

@@ -69,7 +69,12 @@ struct PropagationSettings {
     // hits); n also makes VPLs of the next n − 1 hits (n bounces of indirect light).
     int vpl_bounces = 4;
     int resolution = 32;         // cells along the longest side of the scene
-    int steps = 8;               // propagation steps (§3.3)
+    // Propagation steps (§3.3); 0 takes them from `distance`.
+    int steps = 8;
+    // How far the light travels, in cells, when `steps` is 0: each order takes the steps its
+    // stencil needs to carry light this far (distance / propagation_speed, rounded: the LPV's
+    // steps move light 0.915 cells, the HOLPV's 1.415), so that both orders reach as far.
+    float distance = 30.0f;
     int order = 2;               // 1: LPV (L1, 6 directions); 2: HOLPV (L2, 26 directions)
     bool occlusion = true;       // geometry volume blocking (§3.2.2), from the second step
     // Cells along the shading normal the lookup moves before sampling, against self-lighting
@@ -136,6 +141,10 @@ struct PropagationSettings {
 
 // Throws InvalidArgument naming the field and its allowed range.
 void validate_propagation_settings(const PropagationSettings& settings);
+
+// The steps a volume of these settings propagates: `steps`, or with steps 0 the distance over
+// the order's stencil speed, rounded to the nearest step.
+int propagation_steps(const PropagationSettings& settings);
 
 // A VPL: a clamped-cosine emitter of `power` (W, the flux it scatters) along unit `normal`.
 struct VirtualPointLight {

@@ -286,6 +286,27 @@ def test_settings_mirror_cpp_defaults_and_validate():
             shgi.PropagationVolume(scene, shgi.PropagationSettings(**{field: value}))
 
 
+def test_distance_gives_each_order_the_steps_that_carry_light_as_far():
+    """With steps 0 the steps come from distance (cells of travel) over the stencil's cells per
+    step (LPV 0.9146, HOLPV 1.4154: tests/cpp/propagation, LightMovesTheStencilsSpeedPerStep);
+    steps above 0 win; the volume propagates that many steps (its stage timings)."""
+    assert shgi.propagation_steps(shgi.PropagationSettings(order=1, steps=0, distance=30.0)) == 33
+    assert shgi.propagation_steps(shgi.PropagationSettings(order=2, steps=0, distance=30.0)) == 21
+    assert shgi.propagation_steps(shgi.PropagationSettings(order=2, steps=0, distance=0.0)) == 0
+    assert shgi.propagation_steps(shgi.PropagationSettings(order=1, steps=5, distance=30.0)) == 5
+    scene = committed(scenes.cornell_box(0.05))
+    for order, steps in ((1, 7), (2, 4)):
+        volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+            order=order, steps=0, distance=6.0, photons=2000, resolution=8))
+        volume.refine()
+        names = [name for name, _ in volume.stage_seconds]
+        assert f"propagation_step_{steps}" in names and f"propagation_step_{steps + 1}" not in names
+    for value in (-1.0, float("nan"), 513.0):
+        with pytest.raises(ValueError, match=r"PropagationSettings.distance is .*; it must be in "
+                                             r"\[0, 512\] cells"):
+            shgi.propagation_steps(shgi.PropagationSettings(steps=0, distance=value))
+
+
 def test_clamp_at_surfaces_is_deterministic_and_needs_the_unclamped_transfer():
     """clamp_at_surfaces gives the same field for 1 and 2 threads; without unclamped_transfer
     it changes nothing (the transfer is clamped and rescaled everywhere then)."""
