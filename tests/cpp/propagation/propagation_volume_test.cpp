@@ -610,6 +610,12 @@ TEST(PropagationVolume, BadSettingsNameTheField) {
     s.steps = -1;
     refused(s, "steps");
     s = {};
+    s.distance = std::nanf("");
+    refused(s, "distance");
+    s = {};
+    s.distance = 1e6f;
+    refused(s, "distance");
+    s = {};
     s.resolution = 100000;
     refused(s, "resolution");
     s = {};
