@@ -22,11 +22,23 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "examples")
 import scenes  # noqa: E402  (examples/scenes.py)
 
 SCENES = {"cornell_box": (0.25, 2048), "sun_room": (0.25, 2048), "two_rooms": (0.5, 512)}
-CORRECTIONS = dict(occlude_first_step=True, drop_outward_vpls=True)
+# PropagationSettings' defaults before settings layout 6 (the seed's method: rescaled lobes along
+# the face normals, 8 steps, no leak correction); the configurations below start from them. The
+# other propagation benches import it to measure what their tables say.
+SEED = dict(steps=8, damping=False, occlude_first_step=False, drop_outward_vpls=False,
+            travel_reinjection=False, unclamped_transfer=False, clamp_at_surfaces=False)
+CORRECTIONS = dict(SEED, occlude_first_step=True, drop_outward_vpls=True)
 TRAVEL = dict(CORRECTIONS, travel_reinjection=True, damping=True)
 UNCLAMPED = dict(TRAVEL, unclamped_transfer=True)
 AT_SURFACES = dict(UNCLAMPED, clamp_at_surfaces=True)
 CONFIGS = {
+    # PropagationSettings' defaults, and those before settings layout 6.
+    "defaults": {},
+    "seed": SEED,
+    # Clamped at walls, the steps from a distance in cells (distance / the stencil's cells per
+    # step: 30 cells are 33 LPV and 21 HOLPV steps).
+    **{f"at_surfaces_d{d}": dict(AT_SURFACES, resolution=32, steps=0, distance=float(d))
+       for d in (24, 26, 28, 30, 32, 34, 36)},
     "at_surfaces_r32_s24": dict(AT_SURFACES, resolution=32, steps=24),
     "at_surfaces_r32_s28": dict(AT_SURFACES, resolution=32, steps=28),
     "at_surfaces_r32_s32": dict(AT_SURFACES, resolution=32, steps=32),

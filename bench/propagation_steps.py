@@ -19,6 +19,9 @@ import shgi
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "examples"))
 import scenes  # noqa: E402  (examples/scenes.py)
+# The defaults before settings layout 6, which this bench's figures in docs/methods.md were
+# measured with.
+from propagation_lpv_sweep import SEED  # noqa: E402
 
 
 def main():
@@ -36,8 +39,9 @@ def main():
           f"{'inject':>7} {'geometry':>8}")
     for resolution in (32, 64):
         for order, name in ((1, "LPV"), (2, "HOLPV")):
-            volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
-                order=order, resolution=resolution, steps=args.steps, photons=args.photons))
+            volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(**dict(
+                SEED, order=order, resolution=resolution, steps=args.steps,
+                photons=args.photons)))
             volume.refine()
             stages = dict(volume.stage_seconds)
             steps = [stages[f"propagation_step_{k}"] for k in range(1, args.steps + 1)]

@@ -45,10 +45,10 @@ def main():
     method = settings.METHODS[0].identifier  # the add-on's default method
     scene = equal_time.build_scene("cornell_box", width, height)
     key = f"cornell_box_{width}x{height}_{{}}_{args.reference_samples}spp"
-    cycles_ref = equal_time.reference(
+    cycles_ref, _ = equal_time.reference(
         scene, key.format("cycles"), "CYCLES",
         lambda s: equal_time.use_cycles(s, args.reference_samples, False), refs)
-    shgi_ref = equal_time.reference(
+    shgi_ref, _ = equal_time.reference(
         scene, key.format("shgi"), "SHGI",
         lambda s: equal_time.use_shgi(s, "PATH_TRACE", args.reference_samples), refs)
     exr = os.path.join(args.cache, "render.exr")

@@ -38,11 +38,16 @@ void bind_settings(py::module_& m) {
                 "bounce, n gives n bounces of indirect light (4).");
     def_integer(cls, "resolution", &S::resolution,
                 "Cells along the longest side of the scene (32).");
-    def_integer(cls, "steps", &S::steps, "Propagation steps (8).");
+    def_integer(cls, "steps", &S::steps,
+                "Propagation steps; 0 takes them from distance (0).");
     def_integer(cls, "order", &S::order,
                 "1: LPV (L1 SH, 6 directions); 2: HOLPV (L2 SH, 26 directions) (2).");
     cls.def(py::init(&from_kwargs<S>),
             "PropagationSettings(**fields), e.g. PropagationSettings(order=1, steps=16).")
+        .def_readwrite("distance", &S::distance,
+                       "How far the light travels, in cells, when steps is 0: each order takes "
+                       "the steps its stencil needs to carry light this far (the LPV's steps "
+                       "move light 0.915 cells, the HOLPV's 1.415) (32.0).")
         .def_readwrite("occlusion", &S::occlusion,
                        "Geometry volume blocking from the second step on, or the first with "
                        "occlude_first_step (True).")
@@ -53,26 +58,27 @@ void bind_settings(py::module_& m) {
                        "Damp the lookup where the light arriving against the normal is stronger "
                        "half a cell behind the lookup point than in front of it (seed 003 "
                        "§3.2.4's directional derivative, against self-lighting and bleeding) "
-                       "(False).")
+                       "(True).")
         .def_readwrite("occlude_first_step", &S::occlude_first_step,
                        "Geometry volume blocking on the first step too (the seed skips it): "
-                       "keeps the light of VPLs next to a thin wall from crossing it (False).")
+                       "keeps the light of VPLs next to a thin wall from crossing it (True).")
         .def_readwrite("drop_outward_vpls", &S::drop_outward_vpls,
                        "Drop the VPLs that light nothing: on the scene's bounds facing out (a "
                        "sunlit roof or outer wall), whose light otherwise reaches the interior "
-                       "through the cells their surface runs through (False).")
+                       "through the cells their surface runs through (True).")
         .def_readwrite("travel_reinjection", &S::travel_reinjection,
                        "Re-inject the light crossing each face along its travel direction "
                        "(keeps its momentum: less diffusion, converges in fewer steps) instead "
-                       "of as a cosine lobe along the face's normal (the seed) (False).")
+                       "of as a cosine lobe along the face's normal (the seed) (True).")
         .def_readwrite("unclamped_transfer", &S::unclamped_transfer,
                        "Propagate the lobes unclamped (a linear transfer per neighbour offset) "
                        "instead of clamping each source lobe at zero and rescaling it to its "
-                       "flux (False).")
+                       "flux (True).")
         .def_readwrite("clamp_at_surfaces", &S::clamp_at_surfaces,
-                       "With unclamped_transfer: clamp and rescale the lobes of the cells whose "
-                       "light a wall stops in part (a wall stopping a lobe's negative half makes "
-                       "light), linear elsewhere; no effect without unclamped_transfer (False).");
+                       "With unclamped_transfer: clamp the lobes of the cells whose light a wall "
+                       "stops in part, linear elsewhere, so that walls neither make light nor "
+                       "return what goes into them; no effect without unclamped_transfer "
+                       "(True).");
     def_integer(cls, "cascades", &S::cascades,
                 "Nested volumes around cascade_center, each finer level with half the cells' "
                 "size and `resolution` cells per axis; 1: one volume over the scene (1).");
@@ -85,6 +91,16 @@ void bind_settings(py::module_& m) {
                       "the volume is reset) when the scene has one (True).");
     cls.def("validate", &validate_propagation_settings,
             "Raises ValueError naming the first invalid field.");
+    m.def(
+        "propagation_steps",
+        [](const S& settings) {
+            validate_propagation_settings(settings);
+            return propagation_steps(settings);
+        },
+        py::arg("settings"),
+        "The steps a PropagationVolume of these settings propagates: settings.steps, or with "
+        "steps 0 settings.distance over the order's cells per step (LPV 0.915, HOLPV 1.415), "
+        "rounded. Raises ValueError for invalid settings.");
     register_settings_type<S>("PropagationSettings");
 }
 

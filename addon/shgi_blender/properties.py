@@ -383,8 +383,14 @@ class ShgiPropagationSettings(bpy.types.PropertyGroup):
     steps: IntProperty(
         name="Steps", default=LP["steps"], min=0, max=settings.MAX_PROPAGATION_STEPS,
         soft_max=64,
-        description="How many cells light spreads from where it lands: more reach farther "
-                    "and brighten closed rooms")
+        description="How many times light spreads to the next cells from where it lands: more "
+                    "reach farther and brighten closed rooms (0: as many as Distance needs)")
+    distance: FloatProperty(
+        name="Distance", default=LP["distance"], min=0.0,
+        max=settings.MAX_PROPAGATION_DISTANCE, soft_max=128.0,
+        description="With Steps 0, how many cells light spreads from where it lands: each "
+                    "Order takes the steps that carry it this far (Order 2 reaches farther "
+                    "per step)")
     order: IntProperty(
         name="Order", default=LP["order"], min=1, max=2,
         description="1: light spreads to the 6 face neighbours with broad directions (faster); "
@@ -412,15 +418,13 @@ class ShgiPropagationSettings(bpy.types.PropertyGroup):
     unclamped_transfer: BoolProperty(
         name="Unclamped Transfer", default=LP["unclamped_transfer"],
         description="Spread light between cells without cutting off the negative back of its "
-                    "directions: with Order 2, Travel Re-injection, Damping and about 24 Steps "
-                    "the closest to path-traced light; with Order 1 closed rooms read bright "
-                    "(see Clamp At Walls)")
+                    "directions: light crosses open rooms without spreading out (with Clamp At "
+                    "Walls, the closest to path-traced light for both orders)")
     clamp_at_surfaces: BoolProperty(
         name="Clamp At Walls", default=LP["clamp_at_surfaces"],
         description="With Unclamped Transfer, cut off the negative back of the light's "
-                    "directions where walls stop part of it, which otherwise adds light: with "
-                    "Order 1, Travel Re-injection, Damping and 32 to 36 Steps the closest to "
-                    "path-traced light")
+                    "directions where walls stop part of it: walls then neither add light nor "
+                    "send back light that reaches them")
     cascades: IntProperty(
         name="Cascades", default=LP["cascades"], min=1, max=settings.MAX_PROPAGATION_CASCADES,
         description="Nested grids around the camera for large scenes, each finer one with "
@@ -430,8 +434,7 @@ class ShgiPropagationSettings(bpy.types.PropertyGroup):
     travel_reinjection: BoolProperty(
         name="Travel Re-injection", default=LP["travel_reinjection"],
         description="Light crossing a cell face keeps going the way it travelled instead of "
-                    "spreading like a lit wall: it reaches far walls in fewer steps (raise "
-                    "Steps to about the grid's width with it)")
+                    "spreading like a lit wall: it reaches far walls in fewer steps")
     passes: IntProperty(
         name="Render Passes", default=settings.final_passes("PROPAGATION", native.module()),
         min=1, soft_max=64,

@@ -245,16 +245,17 @@ RADIANCE_FIELD_DEFAULTS = {
 PROPAGATION_DEFAULTS = {
     "photons": 100000,
     "resolution": 32,
-    "steps": 8,
+    "steps": 0,
+    "distance": 32.0,
     "order": 2,
     "occlusion": True,
     "normal_offset": 1.0,
-    "damping": False,
-    "occlude_first_step": False,
-    "drop_outward_vpls": False,
-    "travel_reinjection": False,
-    "unclamped_transfer": False,
-    "clamp_at_surfaces": False,
+    "damping": True,
+    "occlude_first_step": True,
+    "drop_outward_vpls": True,
+    "travel_reinjection": True,
+    "unclamped_transfer": True,
+    "clamp_at_surfaces": True,
     "cascades": 1,
 }
 
@@ -455,6 +456,7 @@ PROPAGATION_LABELS = {
     "photons": "Light Propagation > Light Paths",
     "resolution": "Light Propagation > Resolution",
     "steps": "Light Propagation > Steps",
+    "distance": "Light Propagation > Distance",
     "order": "Light Propagation > Order",
     "occlusion": "Light Propagation > Occlusion",
     "normal_offset": "Light Propagation > Normal Offset",
@@ -498,6 +500,7 @@ MAX_BLEED_BIAS = 0.99
 MIN_BACKFACE_THRESHOLD = 0.01
 MAX_PROPAGATION_RESOLUTION = 256    # PropagationSettings.resolution (min 2)
 MAX_PROPAGATION_STEPS = 1024        # PropagationSettings.steps
+MAX_PROPAGATION_DISTANCE = 512.0    # PropagationSettings.distance, cells
 MAX_PROPAGATION_NORMAL_OFFSET = 2.0  # PropagationSettings.normal_offset, cells
 MAX_LIGHT_SPLITS = 8                # kMaxLightSplits (render/light_tree.h)
 MAX_VPL_BOUNCES = 64                # PropagationSettings.vpl_bounces

@@ -16,6 +16,9 @@ its default in the new place while its old value lies unused under the old name.
    0 (off). A scene saved before that left it at 0 unless someone set it: it keeps 0.
 5. Light Paths > Filter Glossy, with Cycles' default 1 (settings.CYCLES_DEFAULTS). A scene saved
    before it rendered without the blur: it keeps 0 (off).
+6. Light Propagation's defaults: Steps 0 (from the new Distance, 32 cells), Damping, Occlude
+   First Step, Drop Outward Lights, Travel Re-injection, Unclamped Transfer and Clamp At Walls
+   on. A scene saved with the group before kept 8 steps and those off: it keeps them.
 
 ``upgrade`` takes what a scene stored (its ID properties as a dict: only values someone set are
 stored, a default is not) and says what to write where, so that the scene renders with the
@@ -26,7 +29,7 @@ from dataclasses import dataclass, field
 
 from . import settings
 
-SETTINGS_VERSION = 5
+SETTINGS_VERSION = 6
 
 # The method groups that version 2 had: a scene saved then could render only with these, so
 # only they keep reading their field directly (groups added later start with their defaults).
@@ -52,6 +55,11 @@ DEFAULTS_BEFORE_4 = {"clamp_indirect": 0.0}
 # Properties added in version 5 with a default other than what a scene saved before rendered
 # with (Filter Glossy: no blur).
 DEFAULTS_BEFORE_5 = {"filter_glossy": 0.0}
+# The Light Propagation group's defaults before version 6 that have changed since. The group came
+# in version 3's time: a scene of layout 1 or 2 never had it, and takes today's defaults.
+PROPAGATION_DEFAULTS_BEFORE_6 = {"steps": 8, "damping": False, "occlude_first_step": False,
+                                 "drop_outward_vpls": False, "travel_reinjection": False,
+                                 "unclamped_transfer": False, "clamp_at_surfaces": False}
 
 
 @dataclass
@@ -89,6 +97,11 @@ def upgrade(stored):
         for name, old_default in DEFAULTS_BEFORE_5.items():
             if name not in stored:
                 result.values[("", name)] = old_default
+    if 3 <= version < 6:
+        group = stored.get("propagation", {})
+        for name, old_default in PROPAGATION_DEFAULTS_BEFORE_6.items():
+            if name not in group:
+                result.values[("propagation", name)] = old_default
     return result
 
 

@@ -83,6 +83,13 @@ std::vector<ivec3> propagation_offsets(PropagationStencil stencil) {
     return offsets;
 }
 
+double propagation_speed(PropagationStencil stencil) {
+    double sum = 0.0;
+    for (const PropagationFace& face : propagation_faces(stencil))
+        sum += face.solid_angle * double(face.direction.x) * double(face.offset.x);
+    return 3.0 / (4.0 * kPiD) * sum;
+}
+
 void add_cosine_lobe(float* cell, int order, const vec3& normal, const vec3& power) {
     float basis[9];
     sh_eval(order, normal, basis);
@@ -134,54 +141,64 @@ vec3 PropagationStep::face_intensity(const float* cell, const Face& face) const 
     return intensity;
 }
 
-void PropagationStep::blocked_sources(const ShVolume& source,
+void PropagationStep::rescale_factors(const ShVolume& source,
                                       const PropagationTransmittance* transmittance,
-                                      std::vector<uint8_t>& blocked, Progress* progress) const {
-    blocked.assign(source.cell_count(), 0);
-    if (transmittance == nullptr) return;
-    parallel_for(
-        0, source.cell_count(), kCellsPerTask,
-        [&](uint64_t begin, uint64_t end) {
-            throw_if_cancelled(progress);
-            for (uint64_t c = begin; c < end; ++c) {
-                const ivec3 cell = source.cell_at(c);
-                for (int o = 0; o < offset_count(); ++o) {
-                    const ivec3 to = cell + offsets_[size_t(o)].offset;
-                    if (!source.contains(to)) continue;
-                    if (transmittance->values[source.cell_index(to) * size_t(offset_count()) +
-                                              size_t(o)] < 1.0f) {
-                        blocked[c] = 1;
-                        break;
-                    }
-                }
-            }
-        });
-}
-
-void PropagationStep::rescale_factors(const ShVolume& source, std::vector<vec3>& factors,
-                                      const std::vector<uint8_t>* only,
+                                      std::vector<vec3>& factors, std::vector<uint8_t>& blocked,
                                       Progress* progress) const {
     factors.assign(source.cell_count(), vec3(1.0f));
-    if (clamp_ != LobeClamp::Rescaled && clamp_ != LobeClamp::AtSurfaces) return;
+    blocked.assign(source.cell_count(), 0);
+    const bool at_surfaces =
+        clamp_ == LobeClamp::AtSurfaces || clamp_ == LobeClamp::AtSurfacesToTotal;
+    if (clamp_ != LobeClamp::Rescaled && !at_surfaces) return;
+    if (at_surfaces && transmittance == nullptr) return;  // no wall: linear everywhere
     parallel_for(
         0, source.cell_count(), kCellsPerTask,
         [&](uint64_t begin, uint64_t end) {
             throw_if_cancelled(progress);
+            std::vector<float> t(offsets_.size(), 1.0f);
             for (uint64_t c = begin; c < end; ++c) {
-                if (only != nullptr && (*only)[c] == 0) continue;
+                if (at_surfaces) {
+                    // The transmittance of each transfer out of the cell (light leaving the
+                    // volume is not stopped by a wall: 1).
+                    const ivec3 cell = source.cell_at(c);
+                    bool any = false;
+                    for (size_t o = 0; o < offsets_.size(); ++o) {
+                        const ivec3 to = cell + offsets_[o].offset;
+                        t[o] = source.contains(to)
+                                   ? transmittance->values[source.cell_index(to) *
+                                                               offsets_.size() + o]
+                                   : 1.0f;
+                        any = any || t[o] < 1.0f;
+                    }
+                    if (!any) continue;
+                    blocked[c] = 1;
+                }
                 const float* cell = source.cell_data(c);
-                vec3 total(0.0f), clamped(0.0f);
-                for (const Offset& offset : offsets_)
-                    for (const Face& face : offset.faces) {
-                        const vec3 intensity = face_intensity(cell, face);
-                        total += face.flux_factor * intensity;
-                        clamped += face.flux_factor * glm::max(intensity, vec3(0.0f));
+                // Over the faces: the unclamped and clamped fluxes, and what of each passes the
+                // walls.
+                vec3 total(0.0f), clamped(0.0f), passed(0.0f), clamped_passed(0.0f);
+                for (size_t o = 0; o < offsets_.size(); ++o)
+                    for (const Face& face : offsets_[o].faces) {
+                        const vec3 flux = face.flux_factor * face_intensity(cell, face);
+                        const vec3 positive = glm::max(flux, vec3(0.0f));
+                        total += flux;
+                        clamped += positive;
+                        passed += t[o] * flux;
+                        clamped_passed += t[o] * positive;
                     }
                 // A cell whose unclamped total is not positive sends nothing (its clamped
-                // samples are noise of the truncation).
-                for (int ch = 0; ch < 3; ++ch)
-                    factors[c][ch] =
-                        total[ch] > 0.0f && clamped[ch] > 0.0f ? total[ch] / clamped[ch] : 0.0f;
+                // samples are noise of the truncation). AtSurfaces: of the rescaled lobe's
+                // light past the walls, no more than the linear step's (which the light going
+                // into a wall does not reach past it), and not below 0.
+                for (int ch = 0; ch < 3; ++ch) {
+                    float k = total[ch] > 0.0f && clamped[ch] > 0.0f ? total[ch] / clamped[ch]
+                                                                      : 0.0f;
+                    if (clamp_ == LobeClamp::AtSurfaces)
+                        k = clamped_passed[ch] > 0.0f
+                                ? std::max(0.0f, std::min(k, passed[ch] / clamped_passed[ch]))
+                                : 0.0f;
+                    factors[c][ch] = k;
+                }
             }
         });
 }
@@ -200,11 +217,11 @@ void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
             "PropagationStep: transmittance has ", transmittance->values.size(), " values for ",
             transmittance->offsets, " offsets; expected ", source.cell_count(), " cells × ",
             offset_count(), " offsets"));
-    const bool at_surfaces = clamp_ == LobeClamp::AtSurfaces;
+    const bool at_surfaces =
+        clamp_ == LobeClamp::AtSurfaces || clamp_ == LobeClamp::AtSurfacesToTotal;
     std::vector<uint8_t> blocked;
-    if (at_surfaces) blocked_sources(source, transmittance, blocked, progress);
     std::vector<vec3> factors;
-    rescale_factors(source, factors, at_surfaces ? &blocked : nullptr, progress);
+    rescale_factors(source, transmittance, factors, blocked, progress);
     const bool clamp_all = clamp_ == LobeClamp::Rescaled || clamp_ == LobeClamp::Clamped;
     const bool travel = reinjection_ == Reinjection::TravelDirection;
     const int floats = source.floats_per_cell();

@@ -69,10 +69,18 @@ enum class LobeClamp : uint8_t {
     Rescaled,  // clamp negative samples, then rescale to the unclamped total (conserves flux)
     Clamped,   // clamp only (the published method: gains energy each step)
     None,      // no clamp (linear; conserves flux; may carry negative intensity)
-    // Linear in free space, Rescaled where a wall stops part of a source cell's light (any of
-    // its transfers has transmittance < 1): unclamped, a wall stops a lobe's negative half like
-    // its positive light, and stopping negative flux makes light.
+    // Linear in free space; where a wall stops part of a source cell's light (any of its
+    // transfers has transmittance < 1) clamped, and scaled so that the flux the cell's transfers
+    // carry past the walls is the smaller of the linear step's and the Rescaled step's (at least
+    // 0): unclamped, a wall stops a lobe's negative half like its positive light, and stopping
+    // negative flux makes light; rescaled to the cell's total, the truncated lobe's back part
+    // (an L2 beam's positive back lobe) walks away from a wall the light went into, so walls
+    // return light (a beam into a wall: 0.135 of it at L2, 0.0625 at L1) that they should absorb
+    // (the VPLs' later bounces carry what surfaces reflect).
     AtSurfaces,
+    // AtSurfaces' first form, kept to measure against: Rescaled (to the cell's total) where a
+    // wall stops part of the light. Walls make no light but return the back lobes' share.
+    AtSurfacesToTotal,
 };
 
 // Solid angle (sr) of the rectangle [x0, x1] × [y0, y1] in the plane at `distance` > 0 from the
@@ -95,6 +103,14 @@ inline constexpr size_t kMaxStencilFaces = 54;
 std::vector<PropagationFace> propagation_faces(PropagationStencil stencil);
 // The distinct offsets of a stencil, in the order of propagation_faces.
 std::vector<ivec3> propagation_offsets(PropagationStencil stencil);
+
+// How far one step carries light, in cells: the distance a beam's flux moves along it in one
+// unclamped step, (3/4π) Σ_f Ω_f (ω_f·x̂)(d_f·x̂) (the same along every direction by the stencils'
+// symmetry, and for L1 and L2: the band-2 part of a beam moves no flux on average). With the
+// travel re-injection, which keeps the light's first moment, the flux-weighted centre of any
+// light moves this times its first moment over its flux every step. Faces6 (LPV) 0.9146,
+// Neighbours26 (HOLPV) 1.4154: the HOLPV's diagonal steps carry light farther.
+double propagation_speed(PropagationStencil stencil);
 
 // Adds to `cell` (floats_per_cell of an order-`order` volume, [coeff][rgb]) a clamped-cosine lobe
 // along unit `normal` holding flux `power` (W per channel).
@@ -135,13 +151,13 @@ class PropagationStep {
         ivec3 offset{0};
         std::vector<Face> faces;
     };
-    // Per source cell and channel, the factor that takes its clamped face fluxes to the
-    // unclamped total (Rescaled; AtSurfaces where `only` is set), else 1.
-    void rescale_factors(const ShVolume& source, std::vector<vec3>& factors,
-                         const std::vector<uint8_t>* only, Progress* progress) const;
-    // AtSurfaces: per source cell, 1 where a transfer out of it is blocked in part.
-    void blocked_sources(const ShVolume& source, const PropagationTransmittance* transmittance,
-                         std::vector<uint8_t>& blocked, Progress* progress) const;
+    // Per source cell and channel, the factor its clamped face intensities are scaled by
+    // (Rescaled: to the unclamped total; AtSurfaces and AtSurfacesToTotal: see LobeClamp, only
+    // for the cells `blocked` marks, which this fills: 1 where a transfer out of the cell is
+    // blocked in part), else 1.
+    void rescale_factors(const ShVolume& source, const PropagationTransmittance* transmittance,
+                         std::vector<vec3>& factors, std::vector<uint8_t>& blocked,
+                         Progress* progress) const;
     vec3 face_intensity(const float* cell, const Face& face) const;
 
     int order_ = 1;

@@ -27,6 +27,8 @@ constexpr uint64_t kCellsPerTask = 4096;
 constexpr float kTraceShare = 0.6f, kInjectShare = 0.7f;
 // The smallest resolution with cascades (see validate_propagation_settings).
 constexpr int kMinCascadeResolution = 16;
+// The longest propagation distance, cells (at most 560 LPV steps).
+constexpr float kMaxDistanceCells = 512.0f;
 
 // Where a cascade level's geometry lattice lies: its grid (the propagation volume is offset by
 // half a cell and has one more cell per axis) and the faces it blends into the next coarser level.
@@ -205,6 +207,11 @@ void validate_propagation_settings(const PropagationSettings& settings) {
     check_range(settings.vpl_bounces, 1, 64, "vpl_bounces");
     check_range(settings.resolution, 2, 256, "resolution");
     check_range(settings.steps, 0, 1024, "steps");
+    if (!std::isfinite(settings.distance) || settings.distance < 0.0f ||
+        settings.distance > kMaxDistanceCells)
+        throw InvalidArgument(format_message(kSettings, ".distance is ", settings.distance,
+                                             "; it must be in [0, ", kMaxDistanceCells,
+                                             "] cells"));
     check_range(settings.order, 1, 2, "order");
     check_range(settings.cascades, 1, kMaxPropagationLevels, "cascades");
     // A finer level needs cells inside its blend band: at 16 cells, 6 per axis read it alone.
@@ -219,6 +226,12 @@ void validate_propagation_settings(const PropagationSettings& settings) {
         throw InvalidArgument(format_message(kSettings, ".normal_offset is ",
                                              settings.normal_offset,
                                              "; it must be in [0, 2] cells"));
+}
+
+int propagation_steps(const PropagationSettings& settings) {
+    if (settings.steps > 0) return settings.steps;
+    return int(std::lround(double(settings.distance) /
+                           propagation_speed(stencil_of(settings.order))));
 }
 
 void inject_vpls(ShVolume& volume, const std::vector<VirtualPointLight>& vpls,
@@ -470,8 +483,9 @@ PropagationLevel PropagationVolume::pass_level(size_t level,
                               inject_end, lo + span);
     std::vector<double> step_seconds;
     ShVolume accumulated =
-        propagate(mean, step, settings_.steps, settings_.occlusion ? &l.transmittance : nullptr,
-                  progress, &step_seconds, settings_.occlude_first_step);
+        propagate(mean, step, propagation_steps(settings_),
+                  settings_.occlusion ? &l.transmittance : nullptr, progress, &step_seconds,
+                  settings_.occlude_first_step);
     for (size_t k = 0; k < step_seconds.size(); ++k)
         stages.push_back({format_message(prefix, "propagation_step_", k + 1), step_seconds[k]});
     return {std::make_shared<const ShVolume>(std::move(accumulated)), l.lookup_transmittance,
@@ -591,8 +605,9 @@ std::vector<int> PropagationVolume::recenter(const vec3& point, Progress* progre
                                       0.9f + 0.1f * float(k) / float(moved.size()),
                                       0.9f + 0.1f * float(k + 1) / float(moved.size()));
             ShVolume accumulated = propagate(
-                l.injected, step, settings_.steps, settings_.occlusion ? &l.transmittance : nullptr,
-                progress, nullptr, settings_.occlude_first_step);
+                l.injected, step, propagation_steps(settings_),
+                settings_.occlusion ? &l.transmittance : nullptr, progress, nullptr,
+                settings_.occlude_first_step);
             field_levels.at(size_t(moved[k])) = {
                 std::make_shared<const ShVolume>(std::move(accumulated)), l.lookup_transmittance,
                 l.blend_faces};

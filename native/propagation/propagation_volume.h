@@ -69,7 +69,15 @@ struct PropagationSettings {
     // hits); n also makes VPLs of the next n − 1 hits (n bounces of indirect light).
     int vpl_bounces = 4;
     int resolution = 32;         // cells along the longest side of the scene
-    int steps = 8;               // propagation steps (§3.3)
+    // Propagation steps (§3.3); 0 (the default) takes them from `distance`.
+    int steps = 0;
+    // How far the light travels, in cells, when `steps` is 0: each order takes the steps its
+    // stencil needs to carry light this far (distance / propagation_speed, rounded: the LPV's
+    // steps move light 0.915 cells, the HOLPV's 1.415), so that both orders reach as far. The
+    // default, 32 cells (35 LPV steps, 23 HOLPV), with the defaults below puts both orders within
+    // 10% of the path tracer on the Cornell box, the sun room and the two rooms
+    // (docs/methods.md, "One default for both orders").
+    float distance = 32.0f;
     int order = 2;               // 1: LPV (L1, 6 directions); 2: HOLPV (L2, 26 directions)
     bool occlusion = true;       // geometry volume blocking (§3.2.2), from the second step
     // Cells along the shading normal the lookup moves before sampling, against self-lighting
@@ -81,43 +89,39 @@ struct PropagationSettings {
     // Seed 003 §3.2.4 (Kaplanyan & Dachsbacher 2010): damp the lookup where the light arriving
     // along −n is stronger half a cell behind the lookup point than half a cell in front of it
     // (the surface's own light or light from behind a wall), by front / back.
-    bool damping = false;
+    bool damping = true;
     // Occlusion on the first step too (the seed skips it, §3.2.3). A VPL within half a cell of
     // a thin wall is injected into the cell the wall runs through, and with the first step
     // unoccluded its light crosses the wall: in the two rooms that was +20% (LPV) and +36%
     // (HOLPV) of the dim room's indirect light, 2% with this on (docs/methods.md).
-    bool occlude_first_step = false;
+    bool occlude_first_step = true;
     // Drop the VPLs that can light nothing: those on the scene's bounds facing out (a sunlit
-    // roof or outer wall), whose lit half-space holds none of the scene. Exact, but off by
-    // default for now: their light reached the interior (the sun room's outside put 0.31 of its
-    // indirect light inside) and hid the closed rooms' shortfall there (docs/methods.md).
-    bool drop_outward_vpls = false;
+    // roof or outer wall), whose lit half-space holds none of the scene. Exact: their light
+    // reached the interior (the sun room's outside put 0.31 of its indirect light inside) and
+    // hid the closed rooms' shortfall there (docs/methods.md).
+    bool drop_outward_vpls = true;
     // Re-inject the light crossing each face along its travel direction (a projected beam,
     // Reinjection::TravelDirection: keeps the light's first moment) instead of as a cosine lobe
     // along the face's normal (the seed). The seed's lobes keep 0.37 (LPV) and 0.55 (HOLPV) of
     // the light's momentum per step, so the light random-walks and lingers: in the Cornell box
     // (occluded from the first step) 27% (LPV) and 14% (HOLPV) of the flux is still in flight
     // after 32 steps and 15% and 3.3% after 64, against 17% and 5.3%, 1.5% and 0.3% with this
-    // on (docs/methods.md). Off by default: it needs more steps, does not reach the agreement
-    // targets at any one step count either, and its near field is less even.
-    bool travel_reinjection = false;
+    // on (docs/methods.md). It needs more steps than the seed's lobes, and its near field is
+    // less even.
+    bool travel_reinjection = true;
     // Propagate the light's lobes unclamped (LobeClamp::None: each step a linear map, one
     // transfer per neighbour offset, the alternative issue 51 names to clamping then rescaling
     // the source lobe, LobeClamp::Rescaled). Flux is kept either way; unclamped, an L1/L2 lobe's
-    // negative back half travels too. With travel_reinjection, damping, both leak corrections
-    // and 24 steps the HOLPV is within 10% of the path tracer on the Cornell box, the sun room
-    // and the two rooms (1.038, 0.990, 1.096), the LPV not (0.882, 0.776, 1.266: the last is
-    // the dim room's own light, 0.008 crosses the wall) (docs/methods.md). Off by default.
-    bool unclamped_transfer = false;
-    // With unclamped_transfer: clamp and rescale the lobes of the cells whose light a wall stops
-    // in part, linear elsewhere (LobeClamp::AtSurfaces). Unclamped, a wall stops a lobe's
-    // negative half like its positive light, and stopping negative flux makes light (in a closed
-    // box 1.138x the VPL's flux in flight for L1, 1.026x for L2). With it, travel_reinjection,
-    // damping, both leak corrections and 32-36 steps the LPV is within 10% of the path tracer on
-    // the Cornell box, the sun room and the two rooms (32: 0.944, 0.935, 1.062); the HOLPV's two
-    // rooms then read 1.17 (docs/methods.md). Off by default; no effect without
-    // unclamped_transfer.
-    bool clamp_at_surfaces = false;
+    // negative back half travels too (with clamp_at_surfaces, not into walls). Rescaled in free
+    // space the LPV's L1 light diffuses and its sun room stays 0.67-0.91x the path tracer's
+    // whatever the steps (docs/methods.md).
+    bool unclamped_transfer = true;
+    // With unclamped_transfer: clamp the lobes of the cells whose light a wall stops in part,
+    // linear elsewhere, so that walls neither make light nor return what goes into them
+    // (LobeClamp::AtSurfaces). Unclamped, a wall stops a lobe's negative half like its positive
+    // light, and stopping negative flux makes light (in a closed box 1.138x the VPL's flux in
+    // flight for L1, 1.026x for L2). No effect without unclamped_transfer.
+    bool clamp_at_surfaces = true;
     // Cascades (Kaplanyan & Dachsbacher 2010; seed 000 §4.4), for scenes larger than one volume
     // can resolve: 1 is a single volume over the scene (`resolution` cells along its longest
     // side). With n > 1 that volume is the coarsest of n nested levels; each finer level halves
@@ -136,6 +140,10 @@ struct PropagationSettings {
 
 // Throws InvalidArgument naming the field and its allowed range.
 void validate_propagation_settings(const PropagationSettings& settings);
+
+// The steps a volume of these settings propagates: `steps`, or with steps 0 the distance over
+// the order's stencil speed, rounded to the nearest step.
+int propagation_steps(const PropagationSettings& settings);
 
 // A VPL: a clamped-cosine emitter of `power` (W, the flux it scatters) along unit `normal`.
 struct VirtualPointLight {

@@ -131,17 +131,45 @@ def versioned_light_paths(layout, prop, value):
     return read
 
 
+def versioned_propagation(layout, steps):
+    """Light Propagation's Steps, Distance and switches of a scene stamped with `layout` after
+    versioning, its Steps set to `steps` first (None: the group left at its defaults)."""
+    from shgi_blender import versioning
+
+    scene = bpy.data.scenes.new(f"layout_{layout}_propagation_{steps}")
+    scene.shgi["settings_version"] = layout
+    scene.shgi.samples = 21  # something stored
+    if steps is not None:
+        scene.shgi.propagation.steps = steps
+    versioning.upgrade_scene(scene)
+    group = scene.shgi.propagation
+    read = {name: getattr(group, name) for name in (
+        "steps", "distance", "damping", "occlude_first_step", "drop_outward_vpls",
+        "travel_reinjection", "unclamped_transfer", "clamp_at_surfaces")}
+    bpy.data.scenes.remove(scene)
+    return read
+
+
 def check_third_layout_clamp(results):
     """A scene stamped with layout 3 that left Clamp Indirect at that layout's default (0, off)
     keeps 0 after versioning, though a new scene clamps at Cycles' 10; one that set it keeps
     its value. A scene stamped with layout 4, before Filter Glossy, keeps it off (0), though a
-    new scene filters at Cycles' 1; one that set it keeps its value."""
+    new scene filters at Cycles' 1; one that set it keeps its value. Light Propagation's
+    layout-5 defaults likewise."""
+    from shgi_blender import settings_upgrade
+
     results["new_scene_clamp"] = bpy.context.scene.shgi.clamp_indirect
     results["new_scene_filter_glossy"] = bpy.context.scene.shgi.filter_glossy
     results["layout_3_clamp"] = {name: versioned_light_paths(3, "clamp_indirect", value)
                                  for name, value in (("left", None), ("set", 7.5))}
     results["layout_4_filter_glossy"] = {name: versioned_light_paths(4, "filter_glossy", value)
                                          for name, value in (("left", None), ("set", 0.5))}
+    # A scene stamped with layout 5 keeps Light Propagation's defaults of then (8 steps, the
+    # corrections off), whether it left the group alone or set its Steps; a new scene has today's.
+    results["new_scene_propagation"] = versioned_propagation(
+        settings_upgrade.SETTINGS_VERSION, None)
+    results["layout_5_propagation"] = {name: versioned_propagation(5, steps)
+                                       for name, steps in (("left", None), ("set", 16))}
 
 
 def main():

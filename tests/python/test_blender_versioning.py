@@ -70,9 +70,9 @@ def test_a_third_layout_scene_keeps_clamp_indirect_off():
     assert settings.PROPERTY_DEFAULTS["clamp_indirect"] == 10.0
     assert shgi.PathTracerSettings().clamp_indirect == 0.0  # scripts keep the native 0
     assert settings_upgrade.upgrade({"settings_version": 3, "samples": 5}).values == {
-        ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0}
+        ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6}
     assert settings_upgrade.upgrade({"settings_version": 3, "clamp_indirect": 4.0}).values == {
-        ("", "filter_glossy"): 0.0}
+        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6}
 
 
 def test_a_fourth_layout_scene_keeps_filter_glossy_off():
@@ -84,8 +84,34 @@ def test_a_fourth_layout_scene_keeps_filter_glossy_off():
     assert shgi.PreviewSettings().filter_glossy == 0.0
     assert shgi.LightmapSettings().filter_glossy == 0.0
     assert settings_upgrade.upgrade({"settings_version": 4, "samples": 5}).values == {
-        ("", "filter_glossy"): 0.0}
-    assert settings_upgrade.upgrade({"settings_version": 4, "filter_glossy": 0.25}).values == {}
+        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6}
+    assert settings_upgrade.upgrade({"settings_version": 4, "filter_glossy": 0.25}).values == (
+        PROPAGATION_BEFORE_6)
+
+
+# Light Propagation's defaults before layout 6, as an upgrade writes them into the group.
+PROPAGATION_BEFORE_6 = {("propagation", "steps"): 8, ("propagation", "damping"): False,
+                        ("propagation", "occlude_first_step"): False,
+                        ("propagation", "drop_outward_vpls"): False,
+                        ("propagation", "travel_reinjection"): False,
+                        ("propagation", "unclamped_transfer"): False,
+                        ("propagation", "clamp_at_surfaces"): False}
+
+
+def test_a_fifth_layout_scene_keeps_the_light_propagation_defaults_of_then():
+    """Layout 6 turned the light propagation volume's corrections on and takes its steps from
+    Distance (Steps 0); a scene saved before keeps 8 steps and the corrections off, except what
+    it set (kept as stored). Layouts 1 and 2 had no Light Propagation group: today's defaults."""
+    assert (settings.PROPAGATION_DEFAULTS["steps"], settings.PROPAGATION_DEFAULTS["distance"]) == (
+        0, 32.0)
+    assert settings_upgrade.upgrade({"settings_version": 5, "samples": 5}).values == (
+        PROPAGATION_BEFORE_6)
+    stored = {"settings_version": 5, "propagation": {"steps": 16, "unclamped_transfer": True}}
+    assert settings_upgrade.upgrade(stored).values == {
+        key: value for key, value in PROPAGATION_BEFORE_6.items()
+        if key[1] not in ("steps", "unclamped_transfer")}
+    assert not any(group == "propagation" for group, _ in settings_upgrade.upgrade(
+        {"settings_version": 2, "samples": 5}).values)
 
 
 def test_settings_of_today_layout_are_left_alone():
@@ -154,6 +180,17 @@ def test_a_new_scene_solves_as_many_probe_passes_as_the_cli(blender, build_pytho
     assert results["layout_4_filter_glossy"] == {
         "left": {"clamp_indirect": 10.0, "filter_glossy": 0.0, "settings_version": version},
         "set": {"clamp_indirect": 10.0, "filter_glossy": 0.5, "settings_version": version}}
+    # Layout 5's Light Propagation: 8 steps and the corrections off, left or set; a new scene
+    # takes its steps from Distance with them on.
+    old = {"distance": 32.0, "damping": False, "occlude_first_step": False,
+           "drop_outward_vpls": False, "travel_reinjection": False, "unclamped_transfer": False,
+           "clamp_at_surfaces": False}
+    assert results["layout_5_propagation"] == {"left": dict(old, steps=8),
+                                               "set": dict(old, steps=16)}
+    assert results["new_scene_propagation"] == {
+        "steps": 0, "distance": 32.0, "damping": True, "occlude_first_step": True,
+        "drop_outward_vpls": True, "travel_reinjection": True, "unclamped_transfer": True,
+        "clamp_at_surfaces": True}
     assert results["today_reopened"] == {"samples": 33,
                                          "probe_grid.passes": shgi.bake.PROBE_GRID_PASSES,
                                          "settings_version": settings_upgrade.SETTINGS_VERSION}

@@ -300,7 +300,12 @@ class SHGI_RENDER_PT_propagation(_FieldPanel, bpy.types.Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         column = layout.column(align=True)
-        for name in ("photons", "resolution", "steps", "order", "normal_offset", "cascades"):
+        for name in ("photons", "resolution", "steps"):
+            column.prop(volume, name)
+        sub = column.column(align=True)
+        sub.active = volume.steps == 0  # Distance counts only with Steps 0
+        sub.prop(volume, "distance")
+        for name in ("order", "normal_offset", "cascades"):
             column.prop(volume, name)
         column = layout.column(align=True)
         for name in ("occlusion", "occlude_first_step", "drop_outward_vpls", "travel_reinjection",

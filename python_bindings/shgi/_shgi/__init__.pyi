@@ -8,7 +8,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'InstantGi', 'InstantGiField', 'InstantGiFilter', 'InstantGiSettings', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'NormalMapSpace', 'PathTracer', 'PathTracerSettings', 'PhotonBatch', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_read_tiles', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'trace_photon_batch', 'unocclude', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'InstantGi', 'InstantGiField', 'InstantGiFilter', 'InstantGiSettings', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'NormalMapSpace', 'PathTracer', 'PathTracerSettings', 'PhotonBatch', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_read_tiles', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'propagation_steps', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'trace_photon_batch', 'unocclude', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -2831,7 +2831,7 @@ class PropagationSettings:
     @property
     def clamp_at_surfaces(self) -> bool:
         """
-        With unclamped_transfer: clamp and rescale the lobes of the cells whose light a wall stops in part (a wall stopping a lobe's negative half makes light), linear elsewhere; no effect without unclamped_transfer (False).
+        With unclamped_transfer: clamp the lobes of the cells whose light a wall stops in part, linear elsewhere, so that walls neither make light nor return what goes into them; no effect without unclamped_transfer (True).
         """
     @clamp_at_surfaces.setter
     def clamp_at_surfaces(self, arg0: bool) -> None:
@@ -2839,15 +2839,23 @@ class PropagationSettings:
     @property
     def damping(self) -> bool:
         """
-        Damp the lookup where the light arriving against the normal is stronger half a cell behind the lookup point than in front of it (seed 003 §3.2.4's directional derivative, against self-lighting and bleeding) (False).
+        Damp the lookup where the light arriving against the normal is stronger half a cell behind the lookup point than in front of it (seed 003 §3.2.4's directional derivative, against self-lighting and bleeding) (True).
         """
     @damping.setter
     def damping(self, arg0: bool) -> None:
         ...
     @property
+    def distance(self) -> float:
+        """
+        How far the light travels, in cells, when steps is 0: each order takes the steps its stencil needs to carry light this far (the LPV's steps move light 0.915 cells, the HOLPV's 1.415) (32.0).
+        """
+    @distance.setter
+    def distance(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
     def drop_outward_vpls(self) -> bool:
         """
-        Drop the VPLs that light nothing: on the scene's bounds facing out (a sunlit roof or outer wall), whose light otherwise reaches the interior through the cells their surface runs through (False).
+        Drop the VPLs that light nothing: on the scene's bounds facing out (a sunlit roof or outer wall), whose light otherwise reaches the interior through the cells their surface runs through (True).
         """
     @drop_outward_vpls.setter
     def drop_outward_vpls(self, arg0: bool) -> None:
@@ -2863,7 +2871,7 @@ class PropagationSettings:
     @property
     def occlude_first_step(self) -> bool:
         """
-        Geometry volume blocking on the first step too (the seed skips it): keeps the light of VPLs next to a thin wall from crossing it (False).
+        Geometry volume blocking on the first step too (the seed skips it): keeps the light of VPLs next to a thin wall from crossing it (True).
         """
     @occlude_first_step.setter
     def occlude_first_step(self, arg0: bool) -> None:
@@ -2911,7 +2919,7 @@ class PropagationSettings:
     @property
     def steps(self) -> int:
         """
-        Propagation steps (8).
+        Propagation steps; 0 takes them from distance (0).
         """
     @steps.setter
     def steps(self, arg1: typing.SupportsIndex) -> None:
@@ -2919,7 +2927,7 @@ class PropagationSettings:
     @property
     def travel_reinjection(self) -> bool:
         """
-        Re-inject the light crossing each face along its travel direction (keeps its momentum: less diffusion, converges in fewer steps) instead of as a cosine lobe along the face's normal (the seed) (False).
+        Re-inject the light crossing each face along its travel direction (keeps its momentum: less diffusion, converges in fewer steps) instead of as a cosine lobe along the face's normal (the seed) (True).
         """
     @travel_reinjection.setter
     def travel_reinjection(self, arg0: bool) -> None:
@@ -2927,7 +2935,7 @@ class PropagationSettings:
     @property
     def unclamped_transfer(self) -> bool:
         """
-        Propagate the lobes unclamped (a linear transfer per neighbour offset) instead of clamping each source lobe at zero and rescaling it to its flux (False).
+        Propagate the lobes unclamped (a linear transfer per neighbour offset) instead of clamping each source lobe at zero and rescaling it to its flux (True).
         """
     @unclamped_transfer.setter
     def unclamped_transfer(self, arg0: bool) -> None:
@@ -3812,6 +3820,10 @@ def merge_lightmap(into: LightmapTexels, part: LightmapTexels) -> None:
 def native_methods() -> list[NativeMethod]:
     """
     The native registry's rows, in menu order (shgi.methods() adds Python ones).
+    """
+def propagation_steps(settings: PropagationSettings) -> int:
+    """
+    The steps a PropagationVolume of these settings propagates: settings.steps, or with steps 0 settings.distance over the order's cells per step (LPV 0.915, HOLPV 1.415), rounded. Raises ValueError for invalid settings.
     """
 def rasterize_texels(scene: Scene, instance: typing.SupportsIndex, settings: TexelRasterSettings = ..., progress: Progress = None) -> TexelMap:
     """

@@ -202,5 +202,63 @@ TEST(PropagationStep, CosineLobeHoldsItsFlux) {
     }
 }
 
+// How far a step carries light (propagation_speed, what PropagationSettings.distance counts
+// in): a beam propagated unclamped in empty space with the travel re-injection, which keeps its
+// first moment, has its flux-weighted centre move propagation_speed cells along it every step,
+// along an axis and a slant alike, at L1 and L2. Face-normal re-injection keeps only part of the
+// moment, so its light slows step by step (printed).
+TEST(PropagationStep, LightMovesTheStencilsSpeedPerStep) {
+    EXPECT_NEAR(propagation_speed(PropagationStencil::Faces6), 0.9146, 1e-4);
+    EXPECT_NEAR(propagation_speed(PropagationStencil::Neighbours26), 1.4154, 1e-4);
+    constexpr int kSide = 25, kSteps = 8;
+    for (const StepCase& c : {StepCase{PropagationStencil::Faces6, 1},
+                              StepCase{PropagationStencil::Faces6, 2},
+                              StepCase{PropagationStencil::Neighbours26, 1},
+                              StepCase{PropagationStencil::Neighbours26, 2}}) {
+        const double speed = propagation_speed(c.stencil);
+        for (const vec3& direction : {vec3(1.0f, 0.0f, 0.0f),
+                                      glm::normalize(vec3(1.0f, -2.0f, 3.0f))}) {
+            for (Reinjection reinjection :
+                 {Reinjection::TravelDirection, Reinjection::FaceNormal}) {
+                ShVolume ping(vec3(0.0f), 1.0f, ivec3(kSide), c.order);
+                float basis[9];
+                sh_eval(c.order, direction, basis);
+                float* centre = ping.cell_data(ping.cell_index(ivec3(kSide / 2)));
+                for (int i = 0; i < sh_num_coefficients(c.order); ++i) centre[3 * i] = basis[i];
+                ShVolume pong = ping;
+                const PropagationStep step(c.stencil, c.order, LobeClamp::None, reinjection);
+                const auto centroid = [](const ShVolume& volume) {
+                    glm::dvec3 sum(0.0);
+                    double flux = 0.0;
+                    for (size_t k = 0; k < volume.cell_count(); ++k) {
+                        const double f = double(cell_flux(volume.cell_data(k)).x);
+                        sum += f * glm::dvec3(volume.cell_at(k));
+                        flux += f;
+                    }
+                    return sum / flux;
+                };
+                const glm::dvec3 start = centroid(ping);
+                double moved = 0.0;
+                for (int k = 1; k <= kSteps; ++k) {
+                    step(ping, pong);
+                    std::swap(ping, pong);
+                    moved = glm::dot(centroid(ping) - start, glm::dvec3(direction));
+                    if (reinjection == Reinjection::TravelDirection) {
+                        EXPECT_NEAR(moved, k * speed, 1e-3 * k)
+                            << "stencil " << int(c.stencil) << " order " << c.order << " step "
+                            << k;
+                        EXPECT_NEAR(glm::length(centroid(ping) - start), k * speed, 1e-3 * k);
+                    }
+                }
+                std::printf("stencil %d, order %d, %s: after %d steps the light moved %.3f cells "
+                            "(%.4f a step)\n",
+                            int(c.stencil), c.order,
+                            reinjection == Reinjection::TravelDirection ? "travel" : "face normal",
+                            kSteps, moved, moved / kSteps);
+            }
+        }
+    }
+}
+
 }  // namespace
 }  // namespace shgi

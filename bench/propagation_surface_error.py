@@ -1,0 +1,55 @@
+#!/usr/bin/env python3
+"""Where the light propagation volume's error lies: per surface class of the sun room and the two
+rooms (the floor, split on the sun room into its sunlit patch, more than half the floor's
+brightest direct light, and the rest; the ceiling; the walls), for each order at the defaults, the
+mean of DiffInd x DiffCol over the path tracer's, its RMSE over the path tracer's mean there, and
+the class's share of the image's squared error of that product. The references are
+propagation_lpv_sweep.py's (cached in --cache); the masks come from the preview's Normal and
+DiffDir (exact direct light).
+
+    PYTHONPATH=build/python python3 bench/propagation_surface_error.py
+"""
+
+import argparse
+import pathlib
+
+import numpy as np
+
+import shgi
+from propagation_lpv_sweep import reference
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cache", type=pathlib.Path, default=pathlib.Path("/tmp/shgi_lpv_refs"))
+    args = parser.parse_args()
+    for name in ("sun_room", "two_rooms"):
+        scene, ref = reference(name, args.cache)
+        exact = np.asarray(ref["DiffInd"]) * np.asarray(ref["DiffCol"])
+        for order in (1, 2):
+            volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(seed=5, order=order))
+            volume.refine()
+            preview, _ = shgi.render_preview(scene, volume.current_field(),
+                                             shgi.PreviewSettings(seed=5))
+            indirect = np.asarray(preview["DiffInd"]) * np.asarray(preview["DiffCol"])
+            up = np.asarray(preview["Normal"])[..., 2]
+            direct = np.asarray(preview["DiffDir"])[..., :3].mean(-1)
+            floor = up > 0.9
+            classes = {"ceiling": up < -0.9, "walls": np.abs(up) < 0.1}
+            if name == "sun_room":
+                lit = floor & (direct > 0.5 * direct[floor].max())
+                classes.update({"sunlit floor": lit, "shaded floor": floor & ~lit})
+            else:
+                classes["floor"] = floor
+            squared = ((indirect - exact) ** 2).sum()
+            row = f"{name} order {order}:"
+            for label, mask in classes.items():
+                mean = exact[mask].mean()
+                row += (f"  {label} {indirect[mask].mean() / mean:.3f}"
+                        f" (RMSE {np.sqrt(((indirect[mask] - exact[mask]) ** 2).mean()) / mean:.2f},"
+                        f" {((indirect[mask] - exact[mask]) ** 2).sum() / squared:.2f})")
+            print(row, flush=True)
+
+
+if __name__ == "__main__":
+    main()
