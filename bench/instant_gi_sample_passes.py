@@ -1,0 +1,84 @@
+#!/usr/bin/env python3
+"""Instant GI's new VPLs per sample (InstantGiSettings.passes_per_sample): for each
+(passes, passes per sample) the sun room's Combined PSNR and DiffInd x DiffCol mean against the
+path tracer's (the test's setting: scale 0.25, 2048 spp reference, seed 11; preview 16 spp) per
+solve seed, and the CPU time of the 16-sample frame (getrusage of this process around
+render_preview, median of `--repeats`, seed 5's field), as a ratio to the first configuration's.
+A plain script printing a table: not a test.
+
+    PYTHONPATH=build/python python3 bench/instant_gi_sample_passes.py [--scene sun_room]
+        [--seeds 5 6 7 8 9 10 11 12] [--configs 4:4 64:4 16:1] [--repeats 5]
+"""
+
+import argparse
+import pathlib
+import resource
+import statistics
+import sys
+
+import numpy as np
+
+import shgi
+from shgi.metrics import psnr
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "examples"))
+import scenes  # noqa: E402  (examples/scenes.py)
+
+
+def cpu_seconds():
+    usage = resource.getrusage(resource.RUSAGE_SELF)  # every thread of the process
+    return usage.ru_utime + usage.ru_stime
+
+
+def solve(scene, seed, passes, per_sample):
+    solver = shgi.InstantGi(scene, shgi.InstantGiSettings(seed=seed,
+                                                          passes_per_sample=per_sample))
+    for _ in range(passes):
+        solver.refine()
+    return solver.current_field()
+
+
+def frame(scene, field):
+    image, _ = shgi.render_preview(scene, field, shgi.PreviewSettings(seed=5, samples=16))
+    return image
+
+
+def indirect_diffuse(passes):
+    return float((passes["DiffInd"] * passes["DiffCol"]).mean())
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scene", default="sun_room")
+    parser.add_argument("--seeds", type=int, nargs="+", default=[5, 6, 7, 8, 9, 10, 11, 12])
+    parser.add_argument("--configs", nargs="+", default=["4:4", "64:4", "16:1"],
+                        help="passes:passes_per_sample")
+    parser.add_argument("--repeats", type=int, default=5)
+    args = parser.parse_args()
+    builder = getattr(scenes, args.scene)(0.25)
+    builder.scene.commit()
+    scene = builder.scene
+    reference = shgi.render_path_traced(scene, shgi.PathTracerSettings(samples=2048, seed=11))
+    configs = [tuple(int(v) for v in c.split(":")) for c in args.configs]
+    base = None
+    for passes, per_sample in configs:
+        qualities, ratios = [], []
+        for seed in args.seeds:
+            image = frame(scene, solve(scene, seed, passes, per_sample))
+            qualities.append(psnr(reference["Combined"], image["Combined"]))
+            ratios.append(indirect_diffuse(image) / indirect_diffuse(reference))
+        field = solve(scene, args.seeds[0], passes, per_sample)
+        times = []
+        for _ in range(args.repeats):
+            start = cpu_seconds()
+            frame(scene, field)
+            times.append(cpu_seconds() - start)
+        seconds = statistics.median(times)
+        base = base or seconds
+        print(f"{passes:3d} passes, {per_sample} per sample: PSNR {np.mean(qualities):.2f} dB "
+              f"({min(qualities):.2f} to {max(qualities):.2f}), DiffInd {np.mean(ratios):.3f} x, "
+              f"{field.vpl_count} VPLs, frame CPU {seconds:.3f} s ({seconds / base:.2f} x)")
+
+
+if __name__ == "__main__":
+    main()
