@@ -4,10 +4,14 @@
 path tracer's (the test's setting: scale 0.25, 2048 spp reference, seed 11; preview 16 spp) per
 solve seed, and the CPU time of the 16-sample frame (getrusage of this process around
 render_preview, median of `--repeats`, seed 5's field), as a ratio to the first configuration's.
-A plain script printing a table: not a test.
+A configuration passes:per_sample[:light paths per set] (16 by default). A plain script
+printing a table: not a test. The two rooms' dim room as test_instant_gi.py's dim room test
+reads it (128 light paths per set):
 
     PYTHONPATH=build/python python3 bench/instant_gi_sample_passes.py [--scene sun_room]
         [--seeds 5 6 7 8 9 10 11 12] [--configs 4:4 64:4 16:1] [--repeats 5]
+    PYTHONPATH=build/python python3 bench/instant_gi_sample_passes.py --scene two_rooms \
+        --scale 0.5 --reference-samples 512 --seeds 5 6 7 8 --configs 4:4:128 64:4:128 64:4:32
 """
 
 import argparse
@@ -30,9 +34,9 @@ def cpu_seconds():
     return usage.ru_utime + usage.ru_stime
 
 
-def solve(scene, seed, passes, per_sample):
-    solver = shgi.InstantGi(scene, shgi.InstantGiSettings(seed=seed,
-                                                          passes_per_sample=per_sample))
+def solve(scene, seed, passes, per_sample, paths=16):
+    solver = shgi.InstantGi(scene, shgi.InstantGiSettings(
+        seed=seed, passes_per_sample=per_sample, photons_per_set=paths))
     for _ in range(passes):
         solver.refine()
     return solver.current_field()
@@ -54,20 +58,24 @@ def main():
     parser.add_argument("--configs", nargs="+", default=["4:4", "64:4", "16:1"],
                         help="passes:passes_per_sample")
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--scale", type=float, default=0.25)
+    parser.add_argument("--reference-samples", type=int, default=2048)
     args = parser.parse_args()
-    builder = getattr(scenes, args.scene)(0.25)
+    builder = getattr(scenes, args.scene)(args.scale)
     builder.scene.commit()
     scene = builder.scene
-    reference = shgi.render_path_traced(scene, shgi.PathTracerSettings(samples=2048, seed=11))
+    reference = shgi.render_path_traced(scene, shgi.PathTracerSettings(samples=args.reference_samples,
+                                                                 seed=11))
     configs = [tuple(int(v) for v in c.split(":")) for c in args.configs]
     base = None
-    for passes, per_sample in configs:
+    for passes, per_sample, *paths in configs:
+        paths = paths[0] if paths else 16
         qualities, ratios = [], []
         for seed in args.seeds:
-            image = frame(scene, solve(scene, seed, passes, per_sample))
+            image = frame(scene, solve(scene, seed, passes, per_sample, paths))
             qualities.append(psnr(reference["Combined"], image["Combined"]))
             ratios.append(indirect_diffuse(image) / indirect_diffuse(reference))
-        field = solve(scene, args.seeds[0], passes, per_sample)
+        field = solve(scene, args.seeds[0], passes, per_sample, paths)
         times = []
         for _ in range(args.repeats):
             start = cpu_seconds()
@@ -75,7 +83,7 @@ def main():
             times.append(cpu_seconds() - start)
         seconds = statistics.median(times)
         base = base or seconds
-        print(f"{passes:3d} passes, {per_sample} per sample: PSNR {np.mean(qualities):.2f} dB "
+        print(f"{passes:3d} passes, {per_sample} per sample, {paths} paths per set: PSNR {np.mean(qualities):.2f} dB "
               f"({min(qualities):.2f} to {max(qualities):.2f}), DiffInd {np.mean(ratios):.3f} x, "
               f"{field.vpl_count} VPLs, frame CPU {seconds:.3f} s ({seconds / base:.2f} x)")
 
