@@ -64,8 +64,8 @@ def main():
     builder = getattr(scenes, args.scene)(args.scale)
     builder.scene.commit()
     scene = builder.scene
-    reference = shgi.render_path_traced(scene, shgi.PathTracerSettings(samples=args.reference_samples,
-                                                                 seed=11))
+    reference = shgi.render_path_traced(
+        scene, shgi.PathTracerSettings(samples=args.reference_samples, seed=11))
     configs = [tuple(int(v) for v in c.split(":")) for c in args.configs]
     base = None
     for passes, per_sample, *paths in configs:
@@ -83,9 +83,10 @@ def main():
             times.append(cpu_seconds() - start)
         seconds = statistics.median(times)
         base = base or seconds
-        print(f"{passes:3d} passes, {per_sample} per sample, {paths} paths per set: PSNR {np.mean(qualities):.2f} dB "
-              f"({min(qualities):.2f} to {max(qualities):.2f}), DiffInd {np.mean(ratios):.3f} x, "
-              f"{field.vpl_count} VPLs, frame CPU {seconds:.3f} s ({seconds / base:.2f} x)")
+        print(f"{passes:3d} passes, {per_sample} per sample, {paths} paths per set: PSNR "
+              f"{np.mean(qualities):.2f} dB ({min(qualities):.2f} to {max(qualities):.2f}), "
+              f"DiffInd {np.mean(ratios):.3f} x, {field.vpl_count} VPLs, frame CPU "
+              f"{seconds:.3f} s ({seconds / base:.2f} x)")
 
 
 if __name__ == "__main__":

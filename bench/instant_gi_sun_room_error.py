@@ -2,10 +2,10 @@
 """Where the sun room's Instant GI error is (issue 50's PSNR >= 32 dB): the test's setting (the
 sun room at scale 0.25, 64 x 48 px; the path tracer at 2048 spp, seed 11; Instant GI with the
 default settings, 4 passes, preview 16 spp), solved with `--seeds`; `--passes` and
-`--passes-per-sample` solve more passes than one sample gathers (each sample new VPLs). Per row: the Combined PSNR,
-then per light pass (DiffDir, DiffInd, GlossDir, GlossInd, each the pass x its colour) its mean
-against the path tracer's and the PSNR of the image with that pass replaced by the path
-tracer's: the gain is that pass's share of the error. A second path-traced image (seed 12)
+`--passes-per-sample` solve more passes than one sample gathers (each sample new VPLs). Per row:
+the Combined PSNR, then per light pass (DiffDir, DiffInd, GlossDir, GlossInd, each the pass x
+its colour) its mean against the path tracer's and the PSNR of the image with that pass
+replaced by the path tracer's: the gain is that pass's share of the error. A second path-traced image (seed 12)
 gives the reference's own noise. A plain script printing a table: not a test.
 
     PYTHONPATH=build/python python3 bench/instant_gi_sun_room_error.py [--seeds 5 6 7 8]
