@@ -5,8 +5,9 @@ default settings, 4 passes, preview 16 spp), solved with `--seeds`; `--passes` a
 `--passes-per-sample` solve more passes than one sample gathers (each sample new VPLs). Per row:
 the Combined PSNR, then per light pass (DiffDir, DiffInd, GlossDir, GlossInd, each the pass x
 its colour) its mean against the path tracer's and the PSNR of the image with that pass
-replaced by the path tracer's: the gain is that pass's share of the error. A second path-traced image (seed 12)
-gives the reference's own noise. A plain script printing a table: not a test.
+replaced by the path tracer's: the gain is that pass's share of the error. A second
+path-traced image (seed 12) gives the reference's own noise. A plain script printing a table:
+not a test.
 
     PYTHONPATH=build/python python3 bench/instant_gi_sun_room_error.py [--seeds 5 6 7 8]
         [--samples 16] [--photons-per-set 16] [--passes 4] [--passes-per-sample 4]
