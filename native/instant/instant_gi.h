@@ -91,13 +91,14 @@ struct InstantGiSettings {
     //   as a lamp sample / the choice's probability / the set's triangle samples;
     // all filtered like the VPLs in a plane of their own that the stage writes to DiffDir /
     // GlossDir; the renderer then leaves the world, the lights and the emissive triangles out
-    // of next-event estimation (includes_world_direct, includes_lights_direct). Off by default: L2 SH blurs direct light (issue 50: a point light's L2
-    // reconstruction is off by up to +6.25% and leaks 3/32 of its normal-incidence irradiance
-    // at the horizon); a uniform sky's hemisphere is exact in L2.
+    // of next-event estimation (includes_world_direct, includes_lights_direct). Off by
+    // default: L2 SH blurs direct light (a point light's L2 reconstruction is off by up to
+    // +6.25% and leaks 3/32 of its normal-incidence irradiance at the horizon); a uniform sky's
+    // hemisphere is exact in L2.
     bool filter_direct = false;
     // Passes of VPLs a preview sample gathers: sample i gathers passes i k .. i k + k - 1
-    // (mod the field's passes), k = passes_per_sample, scaled by their share of the passes; with
-    // no more passes than k every sample gathers them all (as before this setting). The samples
+    // (mod the field's passes), k = passes_per_sample, each set scaled by sets / k; with no
+    // more passes than k every sample gathers them all (as before this setting). The samples
     // of a frame then average more passes than one gathers, at the cost of k per sample: each
     // VPL's error is no longer shared by every sample (the sun room, 16 samples: 64 passes at
     // k = 4 read 32.7 dB, 4 passes 30.9 dB, at the same shadow rays per sample). Lookups
