@@ -178,7 +178,11 @@ void PathIntegrator::finish() {
                                      bounces_[1] > settings_.glossy_bounces ||
                                      bounces_[2] > settings_.transmission_bounces;
         if (vertex_ >= settings_.russian_roulette_depth && !terminate_on_next_surface_) {
-            const float survive = std::min(1.0f, max_component(throughput_));
+            const float largest = max_component(throughput_);
+            const float survive = std::min(
+                1.0f, settings_.roulette_survival == RouletteSurvival::SqrtThroughput
+                          ? std::sqrt(largest)
+                          : largest);
             if (rng_.next_float() >= survive) return;
             throughput_ /= survive;
         }
