@@ -14,6 +14,7 @@
 #include <tbb/global_control.h>
 
 #include "render/bsdf.h"
+#include "render/path_integrator.h"
 #include "render/path_tracer.h"
 #include "render/shading.h"
 #include "render_test_scenes.h"
@@ -290,6 +291,23 @@ std::vector<float> render_combined(const Scene& scene, int threads, uint32_t sam
     settings.seed = 7;
     settings.tile_size = threads == 1 ? 16 : 5;  // a different tile split must not matter
     return render_path_traced(scene, settings).layer_pixels("Combined");
+}
+
+// The first bounce's lobe choice and direction are one 3-D stratified point: among a pixel's
+// first 64 samples those whose u_lobe picks the first half of the lobes still cover the
+// direction square evenly (two in each of its 16 quarter-by-quarter cells), so a lobe's
+// directions stay stratified. With an independent u_lobe the chosen half is a random subset.
+TEST(PathTracer, FirstBsdfSampleKeepsEachLobeStratified) {
+    for (uint64_t pixel : {0u, 17u, 4095u}) {
+        int cells[16] = {};
+        for (uint32_t s = 0; s < 64; ++s) {
+            const PixelSample sample = pixel_sample(5, pixel, s, true);
+            if (sample.u_lobe >= 0.5f) continue;
+            ++cells[int(sample.u_bsdf.x * 4.0f) * 4 + int(sample.u_bsdf.y * 4.0f)];
+        }
+        for (int cell = 0; cell < 16; ++cell)
+            EXPECT_EQ(cells[cell], 2) << "pixel " << pixel << " cell " << cell;
+    }
 }
 
 TEST(PathTracer, DeterministicAcrossThreadsAndTiles) {
