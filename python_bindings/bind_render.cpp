@@ -93,6 +93,12 @@ void bind_settings(py::module_& m) {
                                                "How next-event estimation samples the world.")
         .value("COSINE", WorldSampling::Cosine)
         .value("UNIFORM", WorldSampling::Uniform));
+    named_values_only(py::enum_<RouletteSurvival>(m, "RouletteSurvival",
+                                                  "Russian roulette's survival probability "
+                                                  "for a path of throughput T (largest "
+                                                  "component).")
+        .value("SQRT_THROUGHPUT", RouletteSurvival::SqrtThroughput)
+        .value("THROUGHPUT", RouletteSurvival::Throughput));
     using S = PathTracerSettings;
     py::class_<S> cls(m, "PathTracerSettings",
                       "Settings of the reference path tracer; every field has a default.");
@@ -119,6 +125,9 @@ void bind_settings(py::module_& m) {
                        kClampIndirectDoc)
         .def_readwrite("filter_glossy", &S::filter_glossy, kFilterGlossyDoc)
         .def_readwrite("world_sampling", &S::world_sampling, "WorldSampling (COSINE).")
+        .def_readwrite("roulette_survival", &S::roulette_survival,
+                       "RouletteSurvival (SQRT_THROUGHPUT: min(1, sqrt(T)), Cycles'; THROUGHPUT: "
+                       "min(1, T)).")
         .def("validate", &validate_path_tracer_settings,
              "Raises ValueError naming the first invalid field.");
 }

@@ -45,6 +45,7 @@ PathTracerSettings continuation_settings(const LightmapSettings& settings) {
     path.glossy_bounces = settings.glossy_bounces;
     path.transmission_bounces = settings.transmission_bounces;
     path.russian_roulette_depth = std::max(0, path.russian_roulette_depth - 1);
+    path.roulette_survival = RouletteSurvival::Throughput;  // min(1, T), as before
     path.filter_glossy = settings.filter_glossy;
     return path;  // clamp_indirect applies to the whole continuation (path_radiance), not inside
 }

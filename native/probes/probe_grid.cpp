@@ -82,6 +82,7 @@ PathTracerSettings probe_path_settings(const ProbeGridSettings& settings) {
     path.diffuse_bounces = settings.bounces;
     path.glossy_bounces = settings.bounces;
     path.russian_roulette_depth -= 1;
+    path.roulette_survival = RouletteSurvival::Throughput;  // min(1, T), as before
     return path;
 }
 

@@ -64,9 +64,10 @@ struct PixelSample {
     float u_lobe = 0.0f;  // the first surface's BSDF sample (lobe choice and direction)
     vec2 u_bsdf{0.0f};
 };
-// With `first_bsdf`, also u_lobe and u_bsdf (the path tracer's first bounce); without, they stay
-// 0: the preview and the bake do not use them, and two more scrambled points a pixel were ~2% of
-// a preview frame.
+// With `first_bsdf`, also u_lobe and u_bsdf (the path tracer's first bounce), one 3-D point
+// (owen_sobol_3d: u_bsdf its x and y, u_lobe its z) so that each lobe's directions are
+// stratified; without, they stay 0: the preview and the bake do not use them, and two more
+// scrambled points a pixel were ~2% of a preview frame.
 PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample, bool first_bsdf = false);
 // pixel_sample(seed, pixels[i], sample) for i in [0, count) into out[i] (without first_bsdf),
 // bit for bit, four pixels at a time in SSE2 (the preview's wave: the scrambles are 32-bit

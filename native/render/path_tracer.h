@@ -7,7 +7,11 @@
 // is sampled to continue; emitters found by BSDF rays (emissive triangles, point/spot disks,
 // area lights, sun cones, the world) are weighted against NEE by the power heuristic (beta = 2).
 // Russian roulette starts after `russian_roulette_depth` surfaces with survival probability
-// min(1, max throughput component).
+// min(1, sqrt(T)), T the path throughput's largest component, as Cycles'
+// (path_state_continuation_probability): the square root follows the display's response, so a
+// dim path lives longer than with min(1, T). In a closed, light-coloured room, where light
+// bounces many times, min(1, T) ended paths that still carried a visible share of the pixel
+// (docs/equal-time.md, "Where the sun room's noise is").
 //
 // Bounce limits mean what Cycles' Light Paths panel means: max_bounces = 0 is direct light only
 // (emitters reached after one scattering, by NEE or by the BSDF ray); each scattering counts as
@@ -35,6 +39,13 @@
 
 namespace shgi {
 
+// How Russian roulette's survival probability follows the path throughput T (its largest RGB
+// component).
+enum class RouletteSurvival : uint8_t {
+    SqrtThroughput,  // min(1, sqrt(T)), Cycles'
+    Throughput,      // min(1, T): ends dim paths sooner (the probe, bake and preview paths)
+};
+
 struct PathTracerSettings {
     uint32_t samples = 64;             // per pixel, used by render_path_traced
     uint64_t seed = 0;
@@ -43,6 +54,7 @@ struct PathTracerSettings {
     int glossy_bounces = 4;
     int transmission_bounces = 12;
     int russian_roulette_depth = 3;    // surfaces before roulette may end a path
+    RouletteSurvival roulette_survival = RouletteSurvival::SqrtThroughput;
     // Light Paths > Clamp Indirect as Cycles': an indirect contribution whose components average
     // more than this is scaled down to it (render/shading.h, clamp_contribution); 0 = off.
     float clamp_indirect = 0.0f;

@@ -336,6 +336,7 @@ PathTracerSettings path_settings_for(const PreviewSettings& settings) {
     path.glossy_bounces = settings.max_specular_bounces;
     path.transmission_bounces = settings.max_specular_bounces;
     path.russian_roulette_depth = settings.max_specular_bounces + 1;  // chains are short
+    path.roulette_survival = RouletteSurvival::Throughput;  // min(1, T), as before
     path.clamp_indirect = settings.clamp_indirect;
     path.filter_glossy = settings.filter_glossy;
     path.world_sampling = settings.world_sampling;

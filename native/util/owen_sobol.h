@@ -70,6 +70,30 @@ inline uint32_t sobol_dimension1(uint32_t index) {
            tables.byte[2][(index >> 16) & 0xFFu] ^ tables.byte[3][index >> 24];
 }
 
+// The third Sobol' dimension (Joe and Kuo's: primitive polynomial x^2 + x + 1, m = 1, 3), by
+// the same per-byte tables: direction numbers v_0 = 2^31, v_1 = 3 * 2^30 and
+// v_(i+2) = v_(i+1) ^ v_i ^ (v_i >> 2).
+struct SobolDimension2Tables {
+    uint32_t byte[4][256];
+
+    SobolDimension2Tables() : byte{} {
+        uint32_t v[32];
+        v[0] = 1u << 31;
+        v[1] = 3u << 30;
+        for (int i = 2; i < 32; ++i) v[i] = v[i - 1] ^ v[i - 2] ^ (v[i - 2] >> 2);
+        for (int k = 0; k < 4; ++k)
+            for (uint32_t b = 0; b < 256; ++b)
+                for (int j = 0; j < 8; ++j)
+                    if (b & (1u << j)) byte[k][b] ^= v[8 * k + j];
+    }
+};
+
+inline uint32_t sobol_dimension2(uint32_t index) {
+    static const SobolDimension2Tables tables;
+    return tables.byte[0][index & 0xFFu] ^ tables.byte[1][(index >> 8) & 0xFFu] ^
+           tables.byte[2][(index >> 16) & 0xFFu] ^ tables.byte[3][index >> 24];
+}
+
 // Dimension 0 is the bit reversal of the index, so its scramble reverse(LK(reverse(reverse(i))))
 // is reverse(LK(i)): two reversals fewer on the renderers' per-sample path.
 inline uint32_t scrambled_dimension0(uint32_t shuffled, uint32_t seed) {
@@ -101,6 +125,21 @@ inline vec2 owen_sobol_2d(uint32_t index, uint32_t seed) {
     return vec2(
         to_unit_float(scrambled_dimension0(shuffled, hash_seed(seed, 1))),
         to_unit_float(nested_uniform_scramble(sobol_dimension1(shuffled), hash_seed(seed, 2))));
+}
+
+// Point `index` of a 3-D sequence: x and y are owen_sobol_2d(index, seed)'s, z the third
+// Sobol' dimension of the same shuffled index with its own scramble. The three are stratified
+// together (Sobol's first three dimensions are a (1, 3)-sequence: in every aligned block of 2^m
+// indices each elementary box of volume 2^(1-m) holds two points), so the points that a range of
+// z selects (a BSDF lobe chosen by z) keep their (x, y) stratified, which two separate
+// sequences do not.
+inline vec3 owen_sobol_3d(uint32_t index, uint32_t seed) {
+    using namespace owen_sobol_detail;
+    const uint32_t shuffled = nested_uniform_scramble(index, seed);
+    return vec3(
+        to_unit_float(scrambled_dimension0(shuffled, hash_seed(seed, 1))),
+        to_unit_float(nested_uniform_scramble(sobol_dimension1(shuffled), hash_seed(seed, 2))),
+        to_unit_float(nested_uniform_scramble(sobol_dimension2(shuffled), hash_seed(seed, 3))));
 }
 
 }  // namespace shgi

@@ -59,7 +59,11 @@ def test_settings_defaults_mirror_cpp():
     assert settings.filter_glossy == 0.0
     assert settings.world_sampling == shgi.WorldSampling.COSINE
     assert settings.light_splits == 4
+    assert settings.russian_roulette_depth == 3
+    assert settings.roulette_survival == shgi.RouletteSurvival.SQRT_THROUGHPUT  # Cycles'
     assert shgi.PathTracerSettings(samples=5, seed=9).seed == 9
+    assert (shgi.PathTracerSettings(roulette_survival=shgi.RouletteSurvival.THROUGHPUT)
+            .roulette_survival == shgi.RouletteSurvival.THROUGHPUT)
 
 
 def test_a_film_larger_than_the_machine_can_hold_is_a_memory_error():

@@ -8,7 +8,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'InstantGi', 'InstantGiField', 'InstantGiFilter', 'InstantGiSettings', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'NormalMapSpace', 'PathTracer', 'PathTracerSettings', 'PhotonBatch', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_read_tiles', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'propagation_steps', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'trace_photon_batch', 'unocclude', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'InstantGi', 'InstantGiField', 'InstantGiFilter', 'InstantGiSettings', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'NormalMapSpace', 'PathTracer', 'PathTracerSettings', 'PhotonBatch', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'RouletteSurvival', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_read_tiles', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'propagation_steps', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'trace_photon_batch', 'unocclude', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -1733,6 +1733,14 @@ class PathTracerSettings:
     def max_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
+    def roulette_survival(self) -> RouletteSurvival:
+        """
+        RouletteSurvival (SQRT_THROUGHPUT: min(1, sqrt(T)), Cycles'; THROUGHPUT: min(1, T)).
+        """
+    @roulette_survival.setter
+    def roulette_survival(self, arg0: RouletteSurvival) -> None:
+        ...
+    @property
     def russian_roulette_depth(self) -> int:
         """
         Surfaces before Russian roulette may end a path (3).
@@ -3302,6 +3310,56 @@ class RadianceFieldSettings:
         """
     @world_in_field.setter
     def world_in_field(self, arg0: bool) -> None:
+        ...
+class RouletteSurvival:
+    """
+    Russian roulette's survival probability for a path of throughput T (largest component).
+    
+    Members:
+    
+      SQRT_THROUGHPUT
+    
+      THROUGHPUT
+    """
+    SQRT_THROUGHPUT: typing.ClassVar[RouletteSurvival]  # value = <RouletteSurvival.SQRT_THROUGHPUT: 0>
+    THROUGHPUT: typing.ClassVar[RouletteSurvival]  # value = <RouletteSurvival.THROUGHPUT: 1>
+    __members__: typing.ClassVar[dict[str, RouletteSurvival]]  # value = {'SQRT_THROUGHPUT': <RouletteSurvival.SQRT_THROUGHPUT: 0>, 'THROUGHPUT': <RouletteSurvival.THROUGHPUT: 1>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: RouletteSurvival) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: RouletteSurvival) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
         ...
 class Scene:
     """
