@@ -42,9 +42,11 @@ constexpr int kTile = 16;     // the renderer's default tile side
 constexpr int kPacket = 16;   // rays per rtcIntersect16 / rtcOccluded16 call
 
 // One RTCScene holding every instance's triangles in world space (no instancing level).
+// `robust`: with RTC_SCENE_FLAG_ROBUST, as Scene builds its own BVH (scene/embree_scene.cpp),
+// so that the floor's Embree does the same traversal work as the renderer's.
 class FlatEmbreeScene {
   public:
-    explicit FlatEmbreeScene(const Scene& scene) {
+    FlatEmbreeScene(const Scene& scene, bool robust) {
         device_ = rtcNewDevice(nullptr);
         scene_ = rtcNewScene(device_);
         for (const Instance& instance : scene.instances()) {
@@ -68,6 +70,7 @@ class FlatEmbreeScene {
             rtcAttachGeometry(scene_, geometry);
             rtcReleaseGeometry(geometry);
         }
+        if (robust) rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
         rtcCommitScene(scene_);
     }
     ~FlatEmbreeScene() {
@@ -206,6 +209,8 @@ void compare(const char* room, const char* field_name, const Scene& scene,
 
 // Which fields to run: both, or only the one named on the command line ("lattice", "probe").
 const char* g_field_filter = nullptr;
+// The floor's scene built robust, as Scene's (fourth argument "robust").
+bool g_robust_floor = false;
 
 bool wanted(const char* filter, const char* name) {
     return filter == nullptr || std::strstr(name, filter) != nullptr;
@@ -213,7 +218,7 @@ bool wanted(const char* filter, const char* name) {
 
 void run(const char* room, Scene& scene) {
     scene.commit();
-    const FlatEmbreeScene flat(scene);
+    const FlatEmbreeScene flat(scene, g_robust_floor);
     if (wanted(g_field_filter, "lattice")) {
         PhotonLattice lattice(scene, PhotonLatticeSettings{});
         lattice.solve();
@@ -229,15 +234,17 @@ void run(const char* room, Scene& scene) {
 }  // namespace
 
 // Arguments (optional, for profiling one case): a room ("cornell" or "dense"), a field
-// ("lattice" or "probe") and a frame count (20 by default; 2 keeps a callgrind run short), e.g.
-// `preview_frame_bench cornell lattice 2`.
+// ("lattice" or "probe"), a frame count (20 by default; 2 keeps a callgrind run short) and
+// "robust" for a floor scene built with RTC_SCENE_FLAG_ROBUST as Scene's BVH is (without it the
+// floor is Embree's default, faster traversal), e.g. `preview_frame_bench cornell lattice 2`.
 int main(int argc, char** argv) {
     const char* room_filter = argc > 1 ? argv[1] : nullptr;
     g_field_filter = argc > 2 ? argv[2] : nullptr;
     if (argc > 3) g_frames = std::max(1, std::atoi(argv[3]));
+    g_robust_floor = argc > 4 && std::strcmp(argv[4], "robust") == 0;
     std::printf("preview %ux%u, progressive 1-spp Combined-only frames, best of %d; floor: "
-                "flattened Embree scene, rtcIntersect16 + rtcOccluded16\n",
-                kWidth, kHeight, g_frames);
+                "flattened Embree scene%s, rtcIntersect16 + rtcOccluded16\n",
+                kWidth, kHeight, g_frames, g_robust_floor ? " (robust, as Scene's)" : "");
     if (room_filter == nullptr || std::strcmp(room_filter, "cornell") == 0) {
         Scene cornell = bench::cornell_box(kWidth, kHeight);
         run("cornell box", cornell);
