@@ -213,7 +213,8 @@ const char* g_field_filter = nullptr;
 bool g_robust_floor = false;
 
 bool wanted(const char* filter, const char* name) {
-    return filter == nullptr || std::strstr(name, filter) != nullptr;
+    return filter == nullptr || std::strcmp(filter, "all") == 0 ||
+           std::strstr(name, filter) != nullptr;
 }
 
 void run(const char* room, Scene& scene) {
@@ -234,11 +235,12 @@ void run(const char* room, Scene& scene) {
 }  // namespace
 
 // Arguments (optional, for profiling one case): a room ("cornell" or "dense"), a field
-// ("lattice" or "probe"), a frame count (20 by default; 2 keeps a callgrind run short) and
-// "robust" for a floor scene built with RTC_SCENE_FLAG_ROBUST as Scene's BVH is (without it the
-// floor is Embree's default, faster traversal), e.g. `preview_frame_bench cornell lattice 2`.
+// ("lattice" or "probe"; "all" for every room or field), a frame count (20 by default; 2 keeps
+// a callgrind run short) and "robust" for a floor scene built with RTC_SCENE_FLAG_ROBUST as
+// Scene's BVH is (without it the floor is Embree's default, faster traversal), e.g.
+// `preview_frame_bench cornell lattice 2` or `preview_frame_bench all all 20 robust`.
 int main(int argc, char** argv) {
-    const char* room_filter = argc > 1 ? argv[1] : nullptr;
+    const char* room_filter = argc > 1 && std::strcmp(argv[1], "all") != 0 ? argv[1] : nullptr;
     g_field_filter = argc > 2 ? argv[2] : nullptr;
     if (argc > 3) g_frames = std::max(1, std::atoi(argv[3]));
     g_robust_floor = argc > 4 && std::strcmp(argv[4], "robust") == 0;
