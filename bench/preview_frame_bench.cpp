@@ -4,10 +4,12 @@
 //
 // The floor is what no renderer built on Embree can beat for the same first-hit work: a
 // flattened one-level Embree scene (every instance's triangles transformed into world space, one
-// RTCScene), the frame's camera rays (the same CameraRayGenerator, one jittered ray per pixel)
-// traced as 16-wide packets with rtcIntersect16, and one shadow ray per first hit towards a point
-// of the room's area light traced with rtcOccluded16, over the same 16 x 16 tiles and threads
-// the renderer uses. No shading, no field, no film.
+// RTCScene), the frame's camera rays (the same CameraRayGenerator, one ray through each pixel's
+// centre, where the renderer's are jittered) traced as 16-wide packets of a row with
+// rtcIntersect16, and one shadow ray per first hit towards a point of the room's area light
+// traced with rtcOccluded16, over the same 16 x 16 tiles and threads the renderer uses. No
+// shading, no field, no film. Its scene has Embree's default traversal unless asked for the
+// robust one that Scene's BVH uses (RTC_SCENE_FLAG_ROBUST: 1.43-1.47x Embree's work on these rays).
 //
 // Prints, best of kFrames: the frame's wall time, its stages' times, the floor's time and their
 // ratio; then the same in CPU time (all threads' together), the figures to compare on a loaded
@@ -42,9 +44,11 @@ constexpr int kTile = 16;     // the renderer's default tile side
 constexpr int kPacket = 16;   // rays per rtcIntersect16 / rtcOccluded16 call
 
 // One RTCScene holding every instance's triangles in world space (no instancing level).
+// `robust`: with RTC_SCENE_FLAG_ROBUST, as Scene builds its own BVH (scene/embree_scene.cpp),
+// so that the floor's Embree does the same traversal work as the renderer's.
 class FlatEmbreeScene {
   public:
-    explicit FlatEmbreeScene(const Scene& scene) {
+    FlatEmbreeScene(const Scene& scene, bool robust) {
         device_ = rtcNewDevice(nullptr);
         scene_ = rtcNewScene(device_);
         for (const Instance& instance : scene.instances()) {
@@ -68,6 +72,7 @@ class FlatEmbreeScene {
             rtcAttachGeometry(scene_, geometry);
             rtcReleaseGeometry(geometry);
         }
+        if (robust) rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
         rtcCommitScene(scene_);
     }
     ~FlatEmbreeScene() {
@@ -206,14 +211,17 @@ void compare(const char* room, const char* field_name, const Scene& scene,
 
 // Which fields to run: both, or only the one named on the command line ("lattice", "probe").
 const char* g_field_filter = nullptr;
+// The floor's scene built robust, as Scene's (fourth argument "robust").
+bool g_robust_floor = false;
 
 bool wanted(const char* filter, const char* name) {
-    return filter == nullptr || std::strstr(name, filter) != nullptr;
+    return filter == nullptr || std::strcmp(filter, "all") == 0 ||
+           std::strstr(name, filter) != nullptr;
 }
 
 void run(const char* room, Scene& scene) {
     scene.commit();
-    const FlatEmbreeScene flat(scene);
+    const FlatEmbreeScene flat(scene, g_robust_floor);
     if (wanted(g_field_filter, "lattice")) {
         PhotonLattice lattice(scene, PhotonLatticeSettings{});
         lattice.solve();
@@ -229,15 +237,18 @@ void run(const char* room, Scene& scene) {
 }  // namespace
 
 // Arguments (optional, for profiling one case): a room ("cornell" or "dense"), a field
-// ("lattice" or "probe") and a frame count (20 by default; 2 keeps a callgrind run short), e.g.
-// `preview_frame_bench cornell lattice 2`.
+// ("lattice" or "probe"; "all" for every room or field), a frame count (20 by default; 2 keeps
+// a callgrind run short) and "robust" for a floor scene built with RTC_SCENE_FLAG_ROBUST as
+// Scene's BVH is (without it the floor is Embree's default, faster traversal), e.g.
+// `preview_frame_bench cornell lattice 2` or `preview_frame_bench all all 20 robust`.
 int main(int argc, char** argv) {
-    const char* room_filter = argc > 1 ? argv[1] : nullptr;
+    const char* room_filter = argc > 1 && std::strcmp(argv[1], "all") != 0 ? argv[1] : nullptr;
     g_field_filter = argc > 2 ? argv[2] : nullptr;
     if (argc > 3) g_frames = std::max(1, std::atoi(argv[3]));
+    g_robust_floor = argc > 4 && std::strcmp(argv[4], "robust") == 0;
     std::printf("preview %ux%u, progressive 1-spp Combined-only frames, best of %d; floor: "
-                "flattened Embree scene, rtcIntersect16 + rtcOccluded16\n",
-                kWidth, kHeight, g_frames);
+                "flattened Embree scene%s, rtcIntersect16 + rtcOccluded16\n",
+                kWidth, kHeight, g_frames, g_robust_floor ? " (robust, as Scene's)" : "");
     if (room_filter == nullptr || std::strcmp(room_filter, "cornell") == 0) {
         Scene cornell = bench::cornell_box(kWidth, kHeight);
         run("cornell box", cornell);

@@ -328,7 +328,7 @@ void PathIntegrator::add_field(const Shading& shading) {
     if (max_component(lobes.diffuse) <= 0.0f && lobes.glossy_count == 0) return;
     const vec3 wo = shading.frame.to_world(shading.wo);
     if (vertex_ == 0 && shared_lookup_ != nullptr) {
-        add_field_light(*shared_lookup_, lobes, shading.frame.z, wo);
+        add_field_light(*shared_lookup_, lobes, shading.frame.z, wo, shared_irradiance_);
         return;
     }
     // The lookup's result binds to the parameter directly: no copy of its SH.
@@ -337,8 +337,9 @@ void PathIntegrator::add_field(const Shading& shading) {
 }
 
 void PathIntegrator::add_field_light(const FieldLookup& field, const FieldLobes& lobes,
-                                     const vec3& n, const vec3& wo) {
-    vec3 by_class[2] = {lobes.diffuse * field.irradiance(n) * kInvPi, vec3(0.0f)};
+                                     const vec3& n, const vec3& wo, IrradianceMemo* irradiance) {
+    const vec3 e = irradiance != nullptr ? irradiance->irradiance(field, n) : field.irradiance(n);
+    vec3 by_class[2] = {lobes.diffuse * e * kInvPi, vec3(0.0f)};
     for (int i = 0; i < lobes.glossy_count; ++i)
         by_class[1] += lobes.glossy[i].albedo * field.glossy(n, wo, lobes.glossy[i].roughness);
     if (vertex_ == 0) {

@@ -28,6 +28,7 @@
 // Not thread-safe: one integrator per path, on one thread.
 #pragma once
 
+#include <cstring>
 #include <optional>
 #include <type_traits>
 
@@ -74,6 +75,29 @@ PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample, bool fi
 // integer work the same for every pixel).
 void pixel_samples(uint64_t seed, const uint32_t* pixels, size_t count, uint64_t sample,
                    PixelSample* out);
+
+// FieldLookup::irradiance of one lookup, kept for the last normal it was asked for. The pixels
+// that share a lookup (render/lookup_sharing.h) on one flat surface have bit-identical normals,
+// so their irradiance is evaluated once; it is a function of the lookup and the normal alone,
+// so the value is the one a new evaluation would give, bit for bit. Call reset() whenever the
+// lookup it serves changes.
+class IrradianceMemo {
+  public:
+    vec3 irradiance(const FieldLookup& lookup, const vec3& n) {
+        // Bits, not ==: -0 and +0 compare equal but need not give the same irradiance.
+        if (!valid_ || std::memcmp(&n, &normal_, sizeof(vec3)) != 0) {
+            normal_ = n;
+            irradiance_ = lookup.irradiance(n);
+            valid_ = true;
+        }
+        return irradiance_;
+    }
+    void reset() { valid_ = false; }
+
+  private:
+    bool valid_ = false;
+    vec3 normal_{0.0f}, irradiance_{0.0f};
+};
 
 // The radiance a path started with PathIntegrator::trace(ray, first_hit) brought back along its
 // ray, for tracers whose rays leave a surface or a probe rather than a camera (probe updates,
@@ -151,14 +175,19 @@ class PathIntegrator {
     bool first_field_query(vec3* position, vec3* normal, vec3* wo) const;
     // A lookup made for another path's first surface (screen-space reuse, see
     // render/preview_renderer.h) for finish() to use at this path's first surface instead of
-    // its own; it must outlive finish().
-    void share_first_field_lookup(const FieldLookup* lookup) { shared_lookup_ = lookup; }
+    // its own; it must outlive finish(). `irradiance` (optional, reset by the caller when the
+    // lookup changes): the irradiance memo of the paths that share it.
+    void share_first_field_lookup(const FieldLookup* lookup, IrradianceMemo* irradiance = nullptr) {
+        shared_lookup_ = lookup;
+        shared_irradiance_ = irradiance;
+    }
     // The first surface as begin() shaded it (position, shading frame, BSDF), for the G-buffer
     // (render/g_buffer.h); valid after begin() returned true and before finish().
     const Shading& first_surface() const { return shading_.value; }
 
   private:
     const FieldLookup* shared_lookup_ = nullptr;
+    IrradianceMemo* shared_irradiance_ = nullptr;
     struct FirstLightSample {
         float u_select;
         vec2 u;
@@ -193,8 +222,9 @@ class PathIntegrator {
         PrincipledBsdf::GlossyLobe glossy[2];
         int glossy_count = 0;
     };
+    // `irradiance`: field.irradiance(n), or null to evaluate it here.
     void add_field_light(const FieldLookup& field, const FieldLobes& lobes, const vec3& n,
-                         const vec3& wo);
+                         const vec3& wo, IrradianceMemo* irradiance = nullptr);
     bool scatter(const Shading& shading, Ray* ray);
     void add_light(const vec3& contribution, int lobe_class, bool direct);
     void add_split(const vec3& contribution, bool direct);

@@ -110,6 +110,7 @@ struct Wave {
     // [quads[q], quads[q + 1]) (the last one ends at count), and lookups[q] its shared lookup.
     std::vector<uint32_t> quads;
     std::vector<FieldLookup> lookups;
+    std::vector<IrradianceMemo> irradiance;  // per quad: its lookup's irradiance, by normal
     std::vector<Ray> rays;
     std::vector<Hit> hits;
     std::vector<Ray> shadow_rays;
@@ -239,7 +240,10 @@ class FrameWork {
         if (!(reuse_ > 0.0f)) return;
         // Grown to the most quads a wave has held (64 for full 16 x 16 tiles), not to the
         // wave's capacity: each lookup is ~0.3 KB to clear.
-        if (wave.lookups.size() < wave.quads.size()) wave.lookups.resize(wave.quads.size());
+        if (wave.lookups.size() < wave.quads.size()) {
+            wave.lookups.resize(wave.quads.size());
+            wave.irradiance.resize(wave.quads.size());
+        }
         for (size_t q = 0; q < wave.quads.size(); ++q) {
             const uint32_t first = wave.quads[q];
             const uint32_t size =
@@ -251,10 +255,12 @@ class FrameWork {
             vec3 p, n, wo;
             if (!lead.first_field_query(&p, &n, &wo)) continue;
             wave.lookups[q] = field_.view_lookup(p, n, wo);
-            lead.share_first_field_lookup(&wave.lookups[q]);
+            wave.irradiance[q].reset();
+            lead.share_first_field_lookup(&wave.lookups[q], &wave.irradiance[q]);
             for (uint32_t k = 0; k < size; ++k)
                 if (sharing.followers & (1u << k))
-                    wave.paths[first + k]->share_first_field_lookup(&wave.lookups[q]);
+                    wave.paths[first + k]->share_first_field_lookup(&wave.lookups[q],
+                                                                    &wave.irradiance[q]);
         }
     }
 

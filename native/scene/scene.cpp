@@ -64,9 +64,12 @@ void check_ray(const Ray& ray, const char* name, const RayLimits& limits,
 // the chunking.
 void check_rays(const std::vector<Ray>& rays, const RayLimits& limits,
                 const std::string& limit_reason) {
-    for (size_t i = 0; i < rays.size(); ++i)
-        if (!is_valid_ray(rays[i], limits))
-            check_ray(rays[i], format_message("rays[", i, "]").c_str(), limits, limit_reason);
+    // The first invalid ray, found by a loop without calls (so the limits stay in registers);
+    // check_ray then names its problem.
+    size_t i = 0;
+    while (i < rays.size() && is_valid_ray(rays[i], limits)) ++i;
+    if (i < rays.size())
+        check_ray(rays[i], format_message("rays[", i, "]").c_str(), limits, limit_reason);
 }
 
 // Embree's float triangle test (the Pluecker test of RTC_SCENE_FLAG_ROBUST) in a mesh's own

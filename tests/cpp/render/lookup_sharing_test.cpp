@@ -6,6 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+
+#include "render/path_integrator.h"
 
 namespace shgi {
 namespace {
@@ -58,6 +61,31 @@ TEST(LookupSharing, FarOrTurnedPixelsMakeTheirOwnLookup) {
     const QuadLookupSharing border = share_quad_lookup(g, pair, 2, 1, kReuse);
     EXPECT_EQ(border.lead, 1u);
     EXPECT_EQ(border.followers, 0u);  // pixel 2's normal is turned away from pixel 3's
+}
+
+// The irradiance the paths of a quad share (IrradianceMemo) is the one the lookup gives, bit for
+// bit: for a repeated normal, for a new one, for a normal that differs only in the sign of a zero,
+// and, after reset(), for another lookup at the same normal.
+TEST(LookupSharing, IrradianceMemoGivesTheLookupsOwnIrradiance) {
+    FieldLookup lookup{ShRgb(2), vec3(0.0f)};
+    for (int i = 0; i < 9; ++i)
+        lookup.radiance[i] = vec3(0.3f + 0.1f * float(i), -0.05f * float(i), 0.2f);
+    const auto same_bits = [](const vec3& a, const vec3& b) {
+        return std::memcmp(&a, &b, sizeof(vec3)) == 0;
+    };
+    const vec3 up(0.0f, 0.0f, 1.0f), minus_zero(-0.0f, 0.0f, 1.0f);
+    const vec3 tilted = glm::normalize(vec3(1.0f, 0.0f, 1.0f));
+    IrradianceMemo memo;
+    EXPECT_TRUE(same_bits(memo.irradiance(lookup, up), lookup.irradiance(up)));
+    EXPECT_TRUE(same_bits(memo.irradiance(lookup, up), lookup.irradiance(up)));
+    EXPECT_TRUE(same_bits(memo.irradiance(lookup, tilted), lookup.irradiance(tilted)));
+    EXPECT_TRUE(same_bits(memo.irradiance(lookup, minus_zero), lookup.irradiance(minus_zero)));
+    EXPECT_TRUE(same_bits(memo.irradiance(lookup, tilted), lookup.irradiance(tilted)));
+    FieldLookup brighter = lookup;
+    brighter.radiance[0] *= 2.0f;
+    ASSERT_FALSE(same_bits(brighter.irradiance(tilted), lookup.irradiance(tilted)));
+    memo.reset();
+    EXPECT_TRUE(same_bits(memo.irradiance(brighter, tilted), brighter.irradiance(tilted)));
 }
 
 }  // namespace
