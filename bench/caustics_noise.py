@@ -111,7 +111,7 @@ def load_reference(args, renderer, clamp, filter_glossy=None):
     fg = "" if filter_glossy is None else f"_fg{filter_glossy:g}"
     key = (f"{args.scene}_{args.width}x{args.height}_{renderer}_clamp{clamp:g}{fg}_"
            f"{equal_time.REFERENCE_SAMPLES}spp")
-    path = os.path.join(args.cache, f"{key}.npy")
+    path = equal_time.reference_path(args.cache, key)
     if not os.path.exists(path):
         print(f"{path}: no cached reference (bench/equal_time.py renders it): its PSNR, MSE "
               "and regions left out")

@@ -78,6 +78,10 @@ BOUNCES = {"max_bounces": 8, "diffuse_bounces": 4, "glossy_bounces": 4,
 # The samples of a time-limited SHGI render: the limit, not the samples, ends it.
 TIME_LIMITED_SAMPLES = 1 << 16
 SEED = 1
+# The references' seed, apart from every render they score: with the renders' own seed a
+# reference's first samples are the render's samples, which flatters whichever renderer scores
+# more samples (the sun room's 8-s SHGI render is 230 of its reference's 4096).
+REFERENCE_SEED = 1000
 
 
 def parse_args():
@@ -202,29 +206,42 @@ def supports_limit(scene):
     return hasattr(scene.shgi, "time_limit") and hasattr(scene.shgi, "use_denoising")
 
 
+def reference_path(cache, key):
+    """The cache file of reference `key` (`<scene>_<W>x<H>_<renderer>..._<spp>spp`), tagged with
+    REFERENCE_SEED so that no reference of another seed is read."""
+    stem, spp = key.rsplit("_", 1)
+    return os.path.join(cache, f"{stem}_seed{REFERENCE_SEED}_{spp}.npy")
+
+
 def reference(scene, key, engine, configure, args):
     """The reference `key` (`<scene>_<W>x<H>_<renderer>_<spp>spp`) and its samples: the cached
     one of the most samples, at least key's, for that scene, size and renderer (a --quick run
     after a full one scores against the 4096-spp reference: the sun room's 256-spp references
     are only 30.6 dB (SHGI) and 32.1 dB (Cycles) from their 4096-spp ones, which capped every
-    --quick figure there); rendered with `engine` after configure(scene) when none is cached."""
+    --quick figure there); rendered with `engine` after configure(scene), with REFERENCE_SEED,
+    when none is cached."""
     os.makedirs(args.cache, exist_ok=True)
     stem, spp = key.rsplit("_", 1)
     wanted = int(spp[:-len("spp")])
+    head_wanted = os.path.basename(reference_path(args.cache, key)).rsplit("_", 1)[0]
     cached = []
     for file in os.listdir(args.cache):
         head, _, tail = file.rpartition("_")
-        if head == stem and tail.endswith("spp.npy") and tail[:-len("spp.npy")].isdigit():
+        if head == head_wanted and tail.endswith("spp.npy") and tail[:-len("spp.npy")].isdigit():
             cached.append(int(tail[:-len("spp.npy")]))
     best = max((n for n in cached if n >= wanted), default=None)
     if best is not None:
         if best != wanted:
             print(f"  reference {key}: using the cached {best}-spp one", flush=True)
-        return np.load(os.path.join(args.cache, f"{stem}_{best}spp.npy")), best
+        return np.load(reference_path(args.cache, f"{stem}_{best}spp")), best
     configure(scene)
-    seconds, image = render_f12(scene, engine, os.path.join(args.cache, "render.exr"))
-    print(f"  reference {key}: {seconds:.1f} s", flush=True)
-    np.save(os.path.join(args.cache, f"{key}.npy"), image)
+    scene.cycles.seed = scene.shgi.seed = REFERENCE_SEED
+    try:
+        seconds, image = render_f12(scene, engine, os.path.join(args.cache, "render.exr"))
+    finally:
+        scene.cycles.seed = scene.shgi.seed = SEED
+    print(f"  reference {key} (seed {REFERENCE_SEED}): {seconds:.1f} s", flush=True)
+    np.save(reference_path(args.cache, key), image)
     return image, wanted
 
 

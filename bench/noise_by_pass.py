@@ -178,7 +178,7 @@ def main():
     native.commit()
     key = (f"{args.scene}_{args.width}x{args.height}_shgi_clamp{scene.shgi.clamp_indirect:g}_"
            f"fg{scene.shgi.filter_glossy:g}_{equal_time.REFERENCE_SAMPLES}spp")
-    path = os.path.join(args.cache, f"{key}.npy")
+    path = equal_time.reference_path(args.cache, key)
     reference = np.load(path) if os.path.exists(path) else None
     print(f"{args.scene} {args.width}x{args.height}, {args.samples} spp, lights {args.lights}, "
           "SHGI settings "
