@@ -25,10 +25,12 @@ def main():
     args = parser.parse_args()
     found = collections.defaultdict(dict)
     for file in os.listdir(args.cache):
-        match = re.fullmatch(r"(.+)_(cycles|shgi)_(\d+)spp\.npy", file)
+        # <scene>_<W>x<H>_<renderer>[_clamp<c>][_fg<f>][_seed<s>]_<spp>spp.npy: grouped by all
+        # but the samples.
+        match = re.fullmatch(r"(.+)_(cycles|shgi)((?:_[a-z]+[0-9.]+)*)_(\d+)spp\.npy", file)
         if match:
-            found[match[1], match[2]][int(match[3])] = os.path.join(args.cache, file)
-    print(f"{'scene':24s} {'renderer':8s} {'spp':>5s} {'vs spp':>6s} {'PSNR dB':>8s} "
+            found[match[1], match[2] + match[3]][int(match[4])] = os.path.join(args.cache, file)
+    print(f"{'scene':24s} {'renderer':30s} {'spp':>5s} {'vs spp':>6s} {'PSNR dB':>8s} "
           f"{'MSE x spp':>10s} {'mean ratio':>10s}")
     for (scene, renderer), files in sorted(found.items()):
         best = max(files)
@@ -42,7 +44,7 @@ def main():
                                  - metrics.display(image, exposure)) ** 2))
             mean_ratio = float((image[..., :3] @ metrics.LUMINANCE).mean()
                                / (reference[..., :3] @ metrics.LUMINANCE).mean())
-            print(f"{scene:24s} {renderer:8s} {spp:5d} {best:6d} "
+            print(f"{scene:24s} {renderer:30s} {spp:5d} {best:6d} "
                   f"{metrics.psnr(reference, image):8.2f} {mse * spp:10.4f} {mean_ratio:10.4f}")
 
 
