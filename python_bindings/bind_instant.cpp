@@ -108,7 +108,12 @@ void bind_solver(py::module_& m) {
         "VPL.")
         .def_property_readonly("vpl_count", &InstantGiField::vpl_count, "VPLs in all sets.")
         .def_property_readonly("passes", &InstantGiField::passes, "Passes of VPLs it holds.")
-        .def("sample_passes", &InstantGiField::sample_passes, py::arg("sample"),
+        .def(
+            "sample_passes",
+            [](const InstantGiField& f, const IndexInt& sample) {
+                return f.sample_passes(int_arg<uint64_t>(sample, "sample"));
+            },
+            py::arg("sample"),
              "The passes preview sample `sample` gathers (passes_per_sample), in order.")
         .def_property_readonly(
             "set_sizes",

@@ -510,7 +510,7 @@ class InstantGiField(IndirectField):
     @staticmethod
     def _pybind11_conduit_v1_(*args, **kwargs):
         ...
-    def sample_passes(self, sample: typing.SupportsInt | typing.SupportsIndex) -> list[int]:
+    def sample_passes(self, sample: typing.SupportsIndex) -> list[int]:
         """
         The passes preview sample `sample` gathers (passes_per_sample), in order.
         """
