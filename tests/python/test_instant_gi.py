@@ -106,18 +106,24 @@ def test_sets_grow_by_a_pass_each_and_hold_every_vpl():
     assert solver.memory_bytes > 0
 
 
+def frames_by_threads_and_tiles(scene, field, samples, runs=((1, 16), (2, 4))):
+    """The preview of `field` rendered once per (threads, tile size) of `runs`."""
+    images = []
+    try:
+        for threads, tile in runs:
+            shgi.set_max_threads(threads)
+            images.append(preview(scene, field, samples=samples, tile_size=tile))
+    finally:
+        shgi.set_max_threads(0)
+    return images
+
+
 def test_frames_do_not_depend_on_threads_or_tiles():
     """The gather, the filter and the shading are frame-wide over the G-buffer: no tile seams,
     the same bits for 1 and 2 threads and for tile sizes 2 and 16."""
     scene = small_cornell()
     field = solved(scene, passes=1).current_field()
-    images = []
-    try:
-        for threads, tile in ((1, 16), (2, 16), (2, 2)):
-            shgi.set_max_threads(threads)
-            images.append(preview(scene, field, samples=2, tile_size=tile))
-    finally:
-        shgi.set_max_threads(0)
+    images = frames_by_threads_and_tiles(scene, field, 2, runs=((1, 16), (2, 16), (2, 2)))
     assert images[0]["DiffInd"].max() > 0.0
     for other in images[1:]:
         for name in ("Combined", "DiffInd", "GlossInd"):
@@ -165,13 +171,7 @@ def test_a_sample_of_one_pass_equals_that_pass_alone():
 def test_frames_of_passes_per_sample_do_not_depend_on_threads_or_tiles():
     scene = small_cornell()
     field = solved(scene, passes=3, passes_per_sample=1).current_field()
-    images = []
-    try:
-        for threads, tile in ((1, 16), (2, 4)):
-            shgi.set_max_threads(threads)
-            images.append(preview(scene, field, samples=3, tile_size=tile))
-    finally:
-        shgi.set_max_threads(0)
+    images = frames_by_threads_and_tiles(scene, field, 3)
     assert images[0]["DiffInd"].max() > 0.0
     for name in ("Combined", "DiffInd", "GlossInd"):
         np.testing.assert_array_equal(images[0][name], images[1][name], err_msg=name)
@@ -501,13 +501,7 @@ def test_filter_direct_carries_the_skys_direct_light():
 def test_filter_direct_frames_do_not_depend_on_threads_or_tiles(make_scene):
     scene = make_scene()
     field = solved(scene, passes=1, filter_direct=True).current_field()
-    images = []
-    try:
-        for threads, tile in ((1, 16), (2, 4)):
-            shgi.set_max_threads(threads)
-            images.append(preview(scene, field, samples=1, tile_size=tile))
-    finally:
-        shgi.set_max_threads(0)
+    images = frames_by_threads_and_tiles(scene, field, 1)
     assert images[0]["DiffDir"].max() > 0.0
     for name in ("Combined", "DiffDir", "GlossDir", "DiffInd"):
         np.testing.assert_array_equal(images[0][name], images[1][name], err_msg=name)
