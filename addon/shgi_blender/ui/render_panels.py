@@ -161,6 +161,16 @@ class _FieldPanel(ShgiPanel):
                 and settings.METHODS_BY_ID[context.scene.shgi.method].solver == cls.SOLVER)
 
 
+def draw_passes_and_final_gather(layout, group, label="Passes"):
+    """A field method's refinement passes for F12 and the viewport, and its Final Gather: every
+    field settings group has the three properties by these names."""
+    column = layout.column(align=True)
+    column.label(text=label)
+    column.prop(group, "passes", text="Render")
+    column.prop(group, "viewport_passes", text="Viewport")
+    layout.prop(group, "final_gather")
+
+
 class SHGI_RENDER_PT_photon_lattice(_FieldPanel, bpy.types.Panel):
     bl_label = "Photon Lattice"
     SOLVER = "PHOTON_LATTICE"
@@ -181,11 +191,7 @@ class SHGI_RENDER_PT_photon_lattice(_FieldPanel, bpy.types.Panel):
         sub.active = lattice.caustics != "OFF"
         sub.prop(lattice, "caustic_resolution", text="Resolution")
         layout.prop(lattice, "world_in_field")
-        column = layout.column(align=True)
-        column.label(text="Photon Passes")
-        column.prop(lattice, "passes", text="Render")
-        column.prop(lattice, "viewport_passes", text="Viewport")
-        layout.prop(lattice, "final_gather")
+        draw_passes_and_final_gather(layout, lattice, "Photon Passes")
         field_overlay.draw_overlay_settings(layout, props, "show_lattice_samples")
 
 
@@ -218,11 +224,7 @@ class SHGI_RENDER_PT_radiance_field(_FieldPanel, bpy.types.Panel):
         for name in ("side_test", "visibility_test", "occlusion_test", "obscurance",
                      "world_in_field"):
             column.prop(field, name)
-        column = layout.column(align=True)
-        column.label(text="Passes")
-        column.prop(field, "passes", text="Render")
-        column.prop(field, "viewport_passes", text="Viewport")
-        layout.prop(field, "final_gather")
+        draw_passes_and_final_gather(layout, field)
 
 
 class SHGI_RENDER_PT_probe_grid(_FieldPanel, bpy.types.Panel):
@@ -251,11 +253,7 @@ class SHGI_RENDER_PT_probe_grid(_FieldPanel, bpy.types.Panel):
         column.prop(grid, "hysteresis")
         # The probes' bounce limit and clamp are Light Paths' (settings.LIGHT_PATH_VALUES).
         draw_wrapped(layout, "Bounces and Clamp follow Light Paths", icon="INFO")
-        column = layout.column(align=True)
-        column.label(text="Update Passes")
-        column.prop(grid, "passes", text="Render")
-        column.prop(grid, "viewport_passes", text="Viewport")
-        layout.prop(grid, "final_gather")
+        draw_passes_and_final_gather(layout, grid, "Update Passes")
         column = layout.column(align=True, heading="Relocation")
         column.prop(grid, "relocate", text="Move Out of Geometry")
         sub = column.column(align=True)
@@ -311,11 +309,7 @@ class SHGI_RENDER_PT_propagation(_FieldPanel, bpy.types.Panel):
         for name in ("occlusion", "occlude_first_step", "drop_outward_vpls", "travel_reinjection",
                      "unclamped_transfer", "clamp_at_surfaces", "damping"):
             column.prop(volume, name)
-        column = layout.column(align=True)
-        column.label(text="Passes")
-        column.prop(volume, "passes", text="Render")
-        column.prop(volume, "viewport_passes", text="Viewport")
-        layout.prop(volume, "final_gather")
+        draw_passes_and_final_gather(layout, volume)
 
 
 class SHGI_RENDER_PT_instant_gi(_FieldPanel, bpy.types.Panel):
