@@ -381,7 +381,40 @@ def check_tiny_scale_instancer():
         raise AssertionError("a copy shrunk by 1e17 was committed")
 
 
+def check_triangle_arrays():
+    """The triangles' vertices and material indices read from Blender's stored arrays (4.x/5.x)
+    equal the loop triangles' own, on quads, an n-gon and triangles with mixed material slots,
+    and on a mesh that never had a material index set (no material_index attribute)."""
+    from shgi_blender.export import mesh as mesh_export
+
+    mixed = bpy.data.meshes.new("MixedFaces")
+    mixed.from_pydata([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (2, 0, 0), (2, 1, 0),
+                       (3, 0.5, 0), (2.5, 2, 0), (1.5, 2.5, 0)],
+                      [], [(0, 1, 2, 3), (1, 4, 5, 2), (4, 6, 5), (2, 5, 7, 8, 3)])
+    mixed.polygons.foreach_set("material_index", np.array([2, 0, 1, 2], dtype=np.int32))
+    plain = plane_mesh("NoMaterialIndex")
+    for mesh in (mixed, plain):
+        mesh.calc_loop_triangles()
+        triangles = mesh.loop_triangles
+        loops = np.empty(len(triangles) * 3, np.int32)
+        triangles.foreach_get("loops", loops)
+        vertices, materials = mesh_export._triangle_vertices_and_materials(mesh, loops)
+        expected_vertices = np.empty(len(triangles) * 3, np.int32)
+        triangles.foreach_get("vertices", expected_vertices)
+        expected_materials = np.empty(len(triangles), np.int32)
+        triangles.foreach_get("material_index", expected_materials)
+        if (vertices.dtype != np.int32 or materials.dtype != np.int32
+                or not np.array_equal(vertices, expected_vertices)
+                or not np.array_equal(materials, expected_materials)):
+            raise AssertionError(f"{mesh.name}: vertices {vertices.tolist()} materials "
+                                 f"{materials.tolist()}; the loop triangles' "
+                                 f"{expected_vertices.tolist()} {expected_materials.tolist()}")
+        if mesh is mixed and sorted(set(materials.tolist())) != [0, 1, 2]:
+            raise AssertionError(f"MixedFaces: slots {materials.tolist()}, expected 0, 1 and 2")
+
+
 def main():
+    check_triangle_arrays()
     image = build_scene()
     result = export_with_render_depsgraph()
     check_geometry(result)
