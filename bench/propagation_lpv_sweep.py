@@ -35,6 +35,8 @@ CONFIGS = {
     # PropagationSettings' defaults, and those before settings layout 6.
     "defaults": {},
     "seed": SEED,
+    # The HOLPV's re-injected beams with band 2 windowed (x 4/5; the LPV is unchanged).
+    "windowed": dict(windowed_reinjection=True),
     # Clamped at walls, the steps from a distance in cells (distance / the stencil's cells per
     # step: 30 cells are 33 LPV and 21 HOLPV steps).
     **{f"at_surfaces_d{d}": dict(AT_SURFACES, resolution=32, steps=0, distance=float(d))

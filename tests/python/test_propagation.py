@@ -503,21 +503,26 @@ def test_cornell_floor_holpv_closer_than_lpv_and_self_lighting_reported():
 
 
 @pytest.mark.reference
-@pytest.mark.parametrize("order", [1, 2])
-def test_dim_room_through_a_final_gather_is_within_five_percent(order):
+@pytest.mark.parametrize("order, windowed", [
+    (1, False), (2, False),
+    pytest.param(2, True, marks=missed("1.061x (the windowed beams' near-field scale)")),
+])
+def test_dim_room_through_a_final_gather_is_within_five_percent(order, windowed):
     """The two rooms' dim room read through a final gather, with one VPL bounce less (the
     add-on's accounting: Light Paths > Diffuse 4 gives 3 behind the gather): its Combined mean
     within 5% of the path tracer's, the leak target the probe grid meets too (measured 0.998
-    LPV, 1.011 HOLPV; the seed's settings 0.978, 1.089)."""
+    LPV, 1.011 HOLPV; the seed's settings 0.978, 1.089). The HOLPV's windowed re-injection
+    misses it (1.061)."""
     scale, samples = REFERENCES["two_rooms"]
     scene, ref = path_traced_reference(scenes.two_rooms, scale, samples)
-    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(seed=5, order=order,
-                                                                    vpl_bounces=3))
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        seed=5, order=order, vpl_bounces=3, windowed_reinjection=windowed))
     volume.refine()
     preview, _ = shgi.render_preview(scene, volume.current_field(),
                                      shgi.PreviewSettings(seed=5, samples=64, final_gather=True))
     ratio = float(preview["Combined"][..., :3].mean() / ref["Combined"][..., :3].mean())
-    print(f"order {order}: dim room through a final gather {ratio:.3f} x the path tracer's")
+    print(f"order {order}{' windowed' if windowed else ''}: dim room through a final gather "
+          f"{ratio:.3f} x the path tracer's")
     assert abs(ratio - 1.0) < 0.05
 
 
