@@ -49,12 +49,14 @@
 // the light back the way it came; its irradiance on a surface the beam leaves (facing along ω)
 // is 1/17 of what a surface facing the beam receives ((1 − 2 + 5/4)/(1 + 2 + 5/4), the clamped
 // cosine's bands π, 2π/3, π/4). Scaled by w, band 2 gives that surface (1 − 2 + 5w/4): 0 at
-// w = 4/5, the window: the re-injected light lights nothing behind it. Bands 0 and 1, so the
-// flux and the first moment, are kept (the window trades the beam's peak for it: 1 + 3 + 4
-// against 9, the back 1 against 3). A band-2 weight of 2/5 would zero the intensity straight
-// behind instead, which leaves a negative irradiance there (−1/2 of a unit's). Hanning or Lanczos
-// windows (Sloan, "Stupid Spherical Harmonics Tricks") also lower band 1, so the light's momentum
-// decays each step (docs/methods.md, "The HOLPV's self-lighting").
+// w = 4/5, the window: the re-injected light lights nothing behind it (its intensity straight
+// behind, 1 − 3 + 4 = 2 against a peak of 8, is offset by the negative ring around it). Bands 0
+// and 1, so the flux and the first moment, are kept. The price: light passing a surface
+// edge-on lights it with 1/8 of a facing surface's irradiance, against 1/11.3 unwindowed. A
+// band-2 weight of 2/5 would zero the intensity straight behind instead, leaving a negative
+// irradiance there (−1/7 of the facing one). Hanning or Lanczos windows (Sloan, "Stupid
+// Spherical Harmonics Tricks") lower band 1 too, so the light's momentum decays each step
+// (docs/methods.md, "The HOLPV's self-lighting").
 #pragma once
 
 #include <array>

@@ -188,8 +188,8 @@ TEST(PropagationStep, TravelReinjectionKeepsFluxAndMomentum) {
 // along ω with intensity I lights a surface of normal n with E(n) = ∫ I(ω) max(0, −n·ω) dω =
 // Σ_i Â_l c_i Y_i(−n) (the clamped cosine's bands π, 2π/3, π/4). The plain L2 beam lights the
 // surface behind with 1/17 of the facing surface's irradiance (its back lobe); windowed (band 2
-// × 4/5) with none, its flux and first moment (bands 0 and 1) unchanged; at L1 the window does
-// nothing (no band 2).
+// × 4/5) with none, its flux and first moment (bands 0 and 1) unchanged, and a surface the light
+// passes edge-on gets more; at L1 the window does nothing (no band 2).
 TEST(PropagationStep, WindowedBeamLightsNothingBehindIt) {
     constexpr double kBand[3] = {kPiD, 2.0 * kPiD / 3.0, kPiD / 4.0};
     constexpr int kBandOf[9] = {0, 1, 1, 1, 2, 2, 2, 2, 2};
@@ -209,6 +209,12 @@ TEST(PropagationStep, WindowedBeamLightsNothingBehindIt) {
         EXPECT_NEAR(irradiance(plain, 2, d) / front, 1.0 / 17.0, 1e-6);
         EXPECT_NEAR(irradiance(windowed, 2, d) / front, 0.0, 1e-6);
         EXPECT_NEAR(irradiance(windowed, 2, -d) / front, 4.0 / 4.25, 1e-6);
+        // The price: a surface the light passes edge-on gets 1/8 of the facing irradiance
+        // (exactly 0), against 1/11.3 (0.375 / 4.25) unwindowed.
+        const vec3 edge_on = glm::normalize(glm::cross(d, vec3(1.0f, 0.0f, 0.0f)));
+        EXPECT_NEAR(irradiance(plain, 2, edge_on) / front, 0.375 / 4.25, 1e-6);
+        EXPECT_NEAR(irradiance(windowed, 2, edge_on) / irradiance(windowed, 2, -d), 1.0 / 8.0,
+                    1e-6);
         for (int i = 0; i < 4; ++i) EXPECT_EQ(windowed[i], plain[i]) << "coefficient " << i;
         for (int i = 4; i < 9; ++i)
             EXPECT_FLOAT_EQ(windowed[i], kBeamBand2Window * plain[i]) << "coefficient " << i;
