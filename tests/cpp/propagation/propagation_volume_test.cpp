@@ -121,7 +121,8 @@ TEST(PropagationVolume, TravelReinjectionScaleIsTheNearFieldFit) {
             double plane_flux = 0.0;
             for (float x = -10.0f; x <= 10.0f; x += 0.25f)
                 for (float y = -10.0f; y <= 10.0f; y += 0.25f)
-                    plane_flux += 0.0625 * double(field.irradiance(centre + vec3(x, y, 3.0f), -n).x);
+                    plane_flux +=
+                        0.0625 * double(field.irradiance(centre + vec3(x, y, 3.0f), -n).x);
             std::printf("order %d, %s: flux onto a plane 3 cells in front %.4f\n", order,
                         windowed ? "windowed travel direction"
                         : travel ? "travel direction"
