@@ -38,7 +38,7 @@ namespace shgi {
 // Reinjection::TravelDirection the same fit gives 0.992 (LPV) and 0.576 (HOLPV); its near field
 // is less even (samples 0.55–1.97 and 0.53–1.63 × the fit, against 0.81–1.27 and 0.88–1.23).
 // Reinjection::WindowedTravelDirection (band 2 of the HOLPV's beams × 4/5, which lowers their
-// peak) gives 0.514 for the HOLPV (samples 0.46–1.47 × the old fit's); the LPV's beams have no
+// peak) gives 0.514 for the HOLPV (samples 0.515–1.645 × that fit); the LPV's beams have no
 // band 2 (its travel scale).
 inline constexpr float kLpvRadianceScale = 1.0f / 0.786f;
 inline constexpr float kHolpvRadianceScale = 1.0f / 0.465f;
