@@ -35,6 +35,12 @@ CONFIGS = {
     # PropagationSettings' defaults, and those before settings layout 6.
     "defaults": {},
     "seed": SEED,
+    # The HOLPV's re-injected beams with band 2 windowed (x 4/5; the LPV is unchanged).
+    "windowed": dict(windowed_reinjection=True),
+    # Finer volumes, light carried as many cells (the same distance in metres), plain and windowed.
+    **{f"r{r}": dict(resolution=r, distance=float(r)) for r in (48, 64)},
+    **{f"windowed_r{r}": dict(windowed_reinjection=True, resolution=r, distance=float(r))
+       for r in (48, 64)},
     # Clamped at walls, the steps from a distance in cells (distance / the stencil's cells per
     # step: 30 cells are 33 LPV and 21 HOLPV steps).
     **{f"at_surfaces_d{d}": dict(AT_SURFACES, resolution=32, steps=0, distance=float(d))

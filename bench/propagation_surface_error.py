@@ -7,7 +7,9 @@ the class's share of the image's squared error of that product. The references a
 propagation_lpv_sweep.py's (cached in --cache); the masks come from the preview's Normal and
 DiffDir (exact direct light).
 
-    PYTHONPATH=build/python python3 bench/propagation_surface_error.py
+    PYTHONPATH=build/python python3 bench/propagation_surface_error.py [--windowed]
+
+With --windowed the HOLPV's re-injected beams have band 2 windowed (windowed_reinjection).
 """
 
 import argparse
@@ -22,12 +24,14 @@ from propagation_lpv_sweep import reference
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cache", type=pathlib.Path, default=pathlib.Path("/tmp/shgi_lpv_refs"))
+    parser.add_argument("--windowed", action="store_true")
     args = parser.parse_args()
     for name in ("sun_room", "two_rooms"):
         scene, ref = reference(name, args.cache)
         exact = np.asarray(ref["DiffInd"]) * np.asarray(ref["DiffCol"])
         for order in (1, 2):
-            volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(seed=5, order=order))
+            volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+                seed=5, order=order, windowed_reinjection=args.windowed))
             volume.refine()
             preview, _ = shgi.render_preview(scene, volume.current_field(),
                                              shgi.PreviewSettings(seed=5))

@@ -203,7 +203,7 @@ std::unique_ptr<PropagationField> PropagationField::load(const std::string& path
     const uint32_t count = version == 1 ? uint32_t(r.get<uint8_t>("the header"))
                                         : r.get<uint32_t>("the header");
     if (!std::isfinite(normal_offset) || normal_offset < 0.0f || damping > 1 ||
-        reinjection > uint8_t(Reinjection::TravelDirection) ||
+        reinjection > uint8_t(Reinjection::WindowedTravelDirection) ||
         count > (version == 1 ? 1u : uint32_t(kMaxPropagationLevels)))
         throw bad("its header is damaged (normal offset ", normal_offset, ", flags ",
                   int(damping), ", ", int(reinjection), ", ", count, " levels)");

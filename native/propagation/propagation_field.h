@@ -37,12 +37,18 @@ namespace shgi {
 // k by SH order of the volume (1: LPV's stencil, 2: HOLPV's) and re-injection, see above. With
 // Reinjection::TravelDirection the same fit gives 0.992 (LPV) and 0.576 (HOLPV); its near field
 // is less even (samples 0.55–1.97 and 0.53–1.63 × the fit, against 0.81–1.27 and 0.88–1.23).
+// Reinjection::WindowedTravelDirection (band 2 of the HOLPV's beams × 4/5, which lowers their
+// peak) gives 0.514 for the HOLPV (samples 0.515–1.645 × that fit); the LPV's beams have no
+// band 2 (its travel scale).
 inline constexpr float kLpvRadianceScale = 1.0f / 0.786f;
 inline constexpr float kHolpvRadianceScale = 1.0f / 0.465f;
 inline constexpr float kLpvTravelRadianceScale = 1.0f / 0.992f;
 inline constexpr float kHolpvTravelRadianceScale = 1.0f / 0.576f;
+inline constexpr float kHolpvWindowedTravelRadianceScale = 1.0f / 0.514f;
 inline float propagation_radiance_scale(int order,
                                         Reinjection reinjection = Reinjection::FaceNormal) {
+    if (reinjection == Reinjection::WindowedTravelDirection)
+        return order == 1 ? kLpvTravelRadianceScale : kHolpvWindowedTravelRadianceScale;
     if (reinjection == Reinjection::TravelDirection)
         return order == 1 ? kLpvTravelRadianceScale : kHolpvTravelRadianceScale;
     return order == 1 ? kLpvRadianceScale : kHolpvRadianceScale;

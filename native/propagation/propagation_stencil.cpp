@@ -102,6 +102,15 @@ void add_cosine_lobe(float* cell, int order, const vec3& normal, const vec3& pow
     }
 }
 
+void reinjected_beam(int order, Reinjection reinjection, const vec3& direction, float* out) {
+    if (reinjection == Reinjection::FaceNormal)
+        throw InvalidArgument("reinjected_beam: the face-normal re-injection is a cosine lobe, "
+                              "not a beam");
+    sh_eval(order, direction, out);
+    if (reinjection == Reinjection::WindowedTravelDirection)
+        for (int i = 4; i < sh_num_coefficients(order); ++i) out[i] *= kBeamBand2Window;
+}
+
 vec3 cell_flux(const float* cell) { return kSqrtFourPi * vec3(cell[0], cell[1], cell[2]); }
 
 PropagationStep::PropagationStep(PropagationStencil stencil, int order, LobeClamp clamp,
@@ -126,6 +135,8 @@ PropagationStep::PropagationStep(PropagationStencil stencil, int order, LobeClam
         face.flux_factor = float(f.solid_angle / kPiD);
         sh_eval(order, f.direction, face.basis);
         face.normal_index = normal_index(f.normal);
+        if (reinjection != Reinjection::FaceNormal)
+            reinjected_beam(order, reinjection, f.direction, face.beam);
         face.index = faces++;
         offsets_.back().faces.push_back(face);
     }
@@ -223,7 +234,7 @@ void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
     std::vector<vec3> factors;
     rescale_factors(source, transmittance, factors, blocked, progress);
     const bool clamp_all = clamp_ == LobeClamp::Rescaled || clamp_ == LobeClamp::Clamped;
-    const bool travel = reinjection_ == Reinjection::TravelDirection;
+    const bool travel = reinjection_ != Reinjection::FaceNormal;
     const int floats = source.floats_per_cell();
     parallel_for(
         0, source.cell_count(), kCellsPerTask,
@@ -259,15 +270,16 @@ void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
                 float* dst = destination.cell_data(c);
                 std::fill(dst, dst + floats, 0.0f);
                 if (travel) {
-                    // Each face's flux as a beam along its direction: Y_i(ω_f) × flux.
+                    // Each face's flux as a beam along its direction: Y_i(ω_f) × flux (band 2
+                    // windowed with WindowedTravelDirection).
                     for (const Offset& offset : offsets_)
                         for (const Face& face : offset.faces) {
                             const vec3& phi = face_flux[size_t(face.index)];
                             if (phi == vec3(0.0f)) continue;
                             for (int i = 0; i < coefficients_; ++i) {
-                                dst[3 * i + 0] += face.basis[i] * phi.x;
-                                dst[3 * i + 1] += face.basis[i] * phi.y;
-                                dst[3 * i + 2] += face.basis[i] * phi.z;
+                                dst[3 * i + 0] += face.beam[i] * phi.x;
+                                dst[3 * i + 1] += face.beam[i] * phi.y;
+                                dst[3 * i + 2] += face.beam[i] * phi.z;
                             }
                         }
                     continue;

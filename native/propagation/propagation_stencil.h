@@ -43,6 +43,20 @@
 // direction ω_f, coefficients Φ_f Y_i(ω_f): one unclamped step then keeps the source's flux and
 // its first moment Σ_f Ω_f I(ω_f) ω_f = ∫ I ω dω exactly (I ω is of bands 0..3; the stencils
 // integrate the even bands up to 2 exactly and the odd ones to 0 like the sphere).
+// Reinjection::WindowedTravelDirection scales that beam's band 2 by kBeamBand2Window = 4/5 (L2
+// only; at L1 it is TravelDirection). The L2 projection of a beam along ω is positive straight
+// behind it, 1/3 of its peak ((1 − 3 + 5)/(1 + 3 + 5)), a back lobe that each step sends part of
+// the light back the way it came; its irradiance on a surface the beam leaves (facing along ω)
+// is 1/17 of what a surface facing the beam receives ((1 − 2 + 5/4)/(1 + 2 + 5/4), the clamped
+// cosine's bands π, 2π/3, π/4). Scaled by w, band 2 gives that surface (1 − 2 + 5w/4): 0 at
+// w = 4/5, the window: the re-injected light lights nothing behind it (its intensity straight
+// behind, 1 − 3 + 4 = 2 against a peak of 8, is offset by the negative ring around it). Bands 0
+// and 1, so the flux and the first moment, are kept. The price: light passing a surface
+// edge-on lights it with 1/8 of a facing surface's irradiance, against 1/11.3 unwindowed. A
+// band-2 weight of 2/5 would zero the intensity straight behind instead, leaving a negative
+// irradiance there (−1/7 of the facing one). Hanning or Lanczos windows (Sloan, "Stupid
+// Spherical Harmonics Tricks") lower band 1 too, so the light's momentum decays each step
+// (docs/methods.md, "The HOLPV's self-lighting").
 #pragma once
 
 #include <array>
@@ -63,7 +77,18 @@ enum class PropagationStencil : uint8_t {
 enum class Reinjection : uint8_t {
     FaceNormal,       // a cosine lobe along the face's outward normal (the seed, §3.3)
     TravelDirection,  // a beam along ω_f, projected (keeps the light's first moment)
+    // As TravelDirection with the beam's band 2 scaled by kBeamBand2Window (lights nothing
+    // behind it; keeps flux and first moment).
+    WindowedTravelDirection,
 };
+
+// The band-2 weight of Reinjection::WindowedTravelDirection's beams (see above).
+inline constexpr float kBeamBand2Window = 0.8f;
+
+// The coefficients (i < 9) of a beam of flux 1 along unit `direction` as `reinjection` re-injects
+// it: Y_i(direction), band 2 scaled by kBeamBand2Window when windowed. FaceNormal: not a beam,
+// throws InvalidArgument.
+void reinjected_beam(int order, Reinjection reinjection, const vec3& direction, float* out);
 
 enum class LobeClamp : uint8_t {
     Rescaled,  // clamp negative samples, then rescale to the unclamped total (conserves flux)
@@ -144,6 +169,7 @@ class PropagationStep {
     struct Face {
         float flux_factor = 0.0f;                   // Ω_f / π
         float basis[9] = {};                        // Y_i(ω_f), i < 9
+        float beam[9] = {};  // the re-injected beam of flux 1 (reinjected_beam), travel only
         int normal_index = 0;                       // index into lobes_
         int index = 0;  // among all the stencil's faces (TravelDirection's per-face flux)
     };

@@ -107,7 +107,9 @@ PropagationStencil stencil_of(int order) {
 }
 
 Reinjection reinjection_of(const PropagationSettings& settings) {
-    return settings.travel_reinjection ? Reinjection::TravelDirection : Reinjection::FaceNormal;
+    if (!settings.travel_reinjection) return Reinjection::FaceNormal;
+    return settings.windowed_reinjection ? Reinjection::WindowedTravelDirection
+                                         : Reinjection::TravelDirection;
 }
 
 PropagationStep step_of(const PropagationSettings& settings) {

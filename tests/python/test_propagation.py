@@ -90,6 +90,59 @@ def test_holpv_is_closer_than_lpv(name):
     assert holpv_psnr > lpv_psnr
 
 
+def sunlit_patch_indirect(preview, ref):
+    """The sun room's sunlit floor patch (more than half the floor's brightest direct light):
+    DiffInd x DiffCol there over the path tracer's (bench/propagation_surface_error.py's mask)."""
+    import numpy as np
+    exact = ref["DiffInd"] * ref["DiffCol"]
+    up = preview["Normal"][..., 2]
+    direct = preview["DiffDir"][..., :3].mean(-1)
+    floor = up > 0.9
+    lit = floor & (direct > 0.5 * direct[floor].max())
+    return float((preview["DiffInd"] * preview["DiffCol"])[lit].mean() / exact[lit].mean())
+
+
+@pytest.mark.reference
+def test_windowed_reinjection_takes_the_sunlit_patch_s_own_light_off_it():
+    """The HOLPV's L2 beams, positive straight behind, send part of the light back onto the
+    surface it left: the sun room's sunlit patch reads 2.95x the path tracer's indirect light.
+    With their band 2 windowed (x 4/5: a beam lights nothing behind it; the radiance scale
+    refitted) it reads 1.28x; the LPV (no band 2) is unchanged, bit for bit."""
+    import numpy as np
+    ref, plain = rendered("sun_room", 2)
+    _, windowed = rendered_with(dict(windowed_reinjection=True), "sun_room", 2)
+    plain_ratio, windowed_ratio = (sunlit_patch_indirect(plain, ref),
+                                   sunlit_patch_indirect(windowed, ref))
+    print(f"sun room, HOLPV: sunlit patch {plain_ratio:.3f}x the path tracer's indirect light, "
+          f"windowed {windowed_ratio:.3f}x")
+    assert abs(np.log(windowed_ratio)) < 0.5 * abs(np.log(plain_ratio))
+    _, lpv = rendered("sun_room", 1)
+    _, lpv_windowed = rendered_with(dict(windowed_reinjection=True), "sun_room", 1)
+    assert np.array_equal(lpv["Combined"], lpv_windowed["Combined"])
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name", [
+    "cornell_box",
+    # The window lowers the near field's peak, which the single-VPL fit makes up for by 1.12x;
+    # the rooms then read too bright (docs/methods.md, "The HOLPV's self-lighting").
+    pytest.param("sun_room", marks=missed("DiffInd 1.110x, PSNR 24.18 dB against the LPV's "
+                                          "24.33 dB")),
+    pytest.param("two_rooms", marks=missed("DiffInd 1.198x, PSNR 24.54 dB against the LPV's "
+                                           "26.92 dB")),
+])
+def test_windowed_holpv_agrees_and_is_closer_than_lpv(name):
+    ref, lpv = rendered(name, 1)
+    _, holpv = rendered_with(dict(windowed_reinjection=True), name, 2)
+    ratio = indirect_diffuse(holpv) / indirect_diffuse(ref)
+    lpv_psnr, holpv_psnr = psnr(ref["Combined"], lpv["Combined"]), psnr(ref["Combined"],
+                                                                         holpv["Combined"])
+    print(f"{name}: windowed HOLPV DiffInd x DiffCol {ratio:.3f}x, Combined PSNR "
+          f"{holpv_psnr:.2f} dB (LPV {lpv_psnr:.2f} dB)")
+    assert abs(ratio - 1.0) < 0.10, ratio
+    assert holpv_psnr > lpv_psnr
+
+
 # The leak corrections on (occlude_first_step, drop_outward_vpls) and the light re-injected along
 # its travel direction, whose propagation leaves a closed room in about as many steps as the
 # room is wide: 24 steps (docs/methods.md, "Why the accumulation does not converge").
@@ -298,6 +351,7 @@ def test_settings_mirror_cpp_defaults_and_validate():
     assert s.occlusion and s.normal_offset == pytest.approx(1.0)
     assert s.damping and s.occlude_first_step and s.drop_outward_vpls
     assert s.travel_reinjection and s.unclamped_transfer and s.clamp_at_surfaces
+    assert not s.windowed_reinjection
     assert s.cascades == 1 and s.cascade_center == (0.0, 0.0, 0.0) and s.cascade_follow_camera
     assert shgi.settings_from_dict(shgi.PropagationSettings,
                                    shgi.settings_to_dict(s)).distance == pytest.approx(32.0)
@@ -449,21 +503,26 @@ def test_cornell_floor_holpv_closer_than_lpv_and_self_lighting_reported():
 
 
 @pytest.mark.reference
-@pytest.mark.parametrize("order", [1, 2])
-def test_dim_room_through_a_final_gather_is_within_five_percent(order):
+@pytest.mark.parametrize("order, windowed", [
+    (1, False), (2, False),
+    pytest.param(2, True, marks=missed("1.061x (the windowed beams' near-field scale)")),
+])
+def test_dim_room_through_a_final_gather_is_within_five_percent(order, windowed):
     """The two rooms' dim room read through a final gather, with one VPL bounce less (the
     add-on's accounting: Light Paths > Diffuse 4 gives 3 behind the gather): its Combined mean
     within 5% of the path tracer's, the leak target the probe grid meets too (measured 0.998
-    LPV, 1.011 HOLPV; the seed's settings 0.978, 1.089)."""
+    LPV, 1.011 HOLPV; the seed's settings 0.978, 1.089). The HOLPV's windowed re-injection
+    misses it (1.061)."""
     scale, samples = REFERENCES["two_rooms"]
     scene, ref = path_traced_reference(scenes.two_rooms, scale, samples)
-    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(seed=5, order=order,
-                                                                    vpl_bounces=3))
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        seed=5, order=order, vpl_bounces=3, windowed_reinjection=windowed))
     volume.refine()
     preview, _ = shgi.render_preview(scene, volume.current_field(),
                                      shgi.PreviewSettings(seed=5, samples=64, final_gather=True))
     ratio = float(preview["Combined"][..., :3].mean() / ref["Combined"][..., :3].mean())
-    print(f"order {order}: dim room through a final gather {ratio:.3f} x the path tracer's")
+    print(f"order {order}{' windowed' if windowed else ''}: dim room through a final gather "
+          f"{ratio:.3f} x the path tracer's")
     assert abs(ratio - 1.0) < 0.05
 
 
@@ -519,7 +578,8 @@ def test_outward_vpls_dropped_keep_the_outside_out(order):
 
 @pytest.mark.parametrize("options", [dict(order=1), dict(order=2, damping=True,
                                                          travel_reinjection=True),
-                                     dict(order=2, occlusion=False)])
+                                     dict(order=2, occlusion=False),
+                                     dict(order=2, windowed_reinjection=True)])
 def test_a_saved_field_loads_back_looking_up_the_same_light(options, tmp_path):
     """PropagationField.save / load (what the add-on writes beside a saved .blend): the loaded
     field answers every lookup bit for bit as the solved one, with and without the geometry's

@@ -2956,6 +2956,14 @@ class PropagationSettings:
     @vpl_bounces.setter
     def vpl_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
+    @property
+    def windowed_reinjection(self) -> bool:
+        """
+        With travel_reinjection and order 2: scale the re-injected beam's band 2 by 4/5 so that its light does not come back onto the surface it left (the HOLPV's self-lighting at bright surfaces); not the default: with the radiance scale refitted the sun room reads 1.11x and the two rooms 1.20x the path tracer (docs/methods.md) (False).
+        """
+    @windowed_reinjection.setter
+    def windowed_reinjection(self, arg0: bool) -> None:
+        ...
 class PropagationVolume(GiSolver):
     """
     

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "sh/sh_basis.h"
+#include "util/error.h"
 #include "util/math.h"
 
 namespace shgi {
@@ -156,12 +157,20 @@ TEST(PropagationStep, TravelReinjectionKeepsFluxAndMomentum) {
                               StepCase{PropagationStencil::Faces6, 2},
                               StepCase{PropagationStencil::Neighbours26, 1},
                               StepCase{PropagationStencil::Neighbours26, 2}}) {
-        for (LobeClamp clamp : {LobeClamp::None, LobeClamp::Rescaled}) {
-            const vec3 gain = one_step_gain(c, clamp, Reinjection::TravelDirection);
-            for (int ch = 0; ch < 3; ++ch)
-                EXPECT_NEAR(gain[ch], 0.0, kFluxTolerance)
-                    << "stencil " << int(c.stencil) << " order " << c.order << " clamp "
-                    << int(clamp) << " channel " << ch;
+        for (Reinjection reinjection :
+             {Reinjection::TravelDirection, Reinjection::WindowedTravelDirection}) {
+            for (LobeClamp clamp : {LobeClamp::None, LobeClamp::Rescaled}) {
+                const vec3 gain = one_step_gain(c, clamp, reinjection);
+                for (int ch = 0; ch < 3; ++ch)
+                    EXPECT_NEAR(gain[ch], 0.0, kFluxTolerance)
+                        << "stencil " << int(c.stencil) << " order " << c.order << " clamp "
+                        << int(clamp) << " channel " << ch << " re-injection "
+                        << int(reinjection);
+            }
+            // The window leaves band 1, so the first moment, as it is.
+            EXPECT_NEAR(one_step_momentum(c, reinjection), 1.0, kFluxTolerance)
+                << "stencil " << int(c.stencil) << " order " << c.order << " re-injection "
+                << int(reinjection);
         }
         const double travel = one_step_momentum(c, Reinjection::TravelDirection);
         const double normal = one_step_momentum(c, Reinjection::FaceNormal);
@@ -172,6 +181,50 @@ TEST(PropagationStep, TravelReinjectionKeepsFluxAndMomentum) {
                                                  << c.order;
         EXPECT_LT(normal, 0.75) << "stencil " << int(c.stencil) << " order " << c.order;
     }
+}
+
+// The re-injected beam's light on two surfaces: one ahead of it facing it, one behind it facing
+// along it (the surface the light left, whose exact irradiance from it is 0). Light travelling
+// along ω with intensity I lights a surface of normal n with E(n) = ∫ I(ω) max(0, −n·ω) dω =
+// Σ_i Â_l c_i Y_i(−n) (the clamped cosine's bands π, 2π/3, π/4). The plain L2 beam lights the
+// surface behind with 1/17 of the facing surface's irradiance (its back lobe); windowed (band 2
+// × 4/5) with none, its flux and first moment (bands 0 and 1) unchanged, and a surface the light
+// passes edge-on gets more; at L1 the window does nothing (no band 2).
+TEST(PropagationStep, WindowedBeamLightsNothingBehindIt) {
+    constexpr double kBand[3] = {kPiD, 2.0 * kPiD / 3.0, kPiD / 4.0};
+    constexpr int kBandOf[9] = {0, 1, 1, 1, 2, 2, 2, 2, 2};
+    const auto irradiance = [&](const float* beam, int order, const vec3& normal) {
+        float y[9];
+        sh_eval(order, -normal, y);
+        double e = 0.0;
+        for (int i = 0; i < sh_num_coefficients(order); ++i)
+            e += kBand[kBandOf[i]] * double(beam[i]) * double(y[i]);
+        return e;
+    };
+    for (const vec3& d : {vec3(0.0f, 0.0f, 1.0f), glm::normalize(vec3(1.0f, -2.0f, 2.0f))}) {
+        float plain[9], windowed[9], plain1[9], windowed1[9];
+        reinjected_beam(2, Reinjection::TravelDirection, d, plain);
+        reinjected_beam(2, Reinjection::WindowedTravelDirection, d, windowed);
+        const double front = irradiance(plain, 2, -d);
+        EXPECT_NEAR(irradiance(plain, 2, d) / front, 1.0 / 17.0, 1e-6);
+        EXPECT_NEAR(irradiance(windowed, 2, d) / front, 0.0, 1e-6);
+        EXPECT_NEAR(irradiance(windowed, 2, -d) / front, 4.0 / 4.25, 1e-6);
+        // The price: a surface the light passes edge-on gets 1/8 of the facing irradiance
+        // (exactly 0), against 1/11.3 (0.375 / 4.25) unwindowed.
+        const vec3 edge_on = glm::normalize(glm::cross(d, vec3(1.0f, 0.0f, 0.0f)));
+        EXPECT_NEAR(irradiance(plain, 2, edge_on) / front, 0.375 / 4.25, 1e-6);
+        EXPECT_NEAR(irradiance(windowed, 2, edge_on) / irradiance(windowed, 2, -d), 1.0 / 8.0,
+                    1e-6);
+        for (int i = 0; i < 4; ++i) EXPECT_EQ(windowed[i], plain[i]) << "coefficient " << i;
+        for (int i = 4; i < 9; ++i)
+            EXPECT_FLOAT_EQ(windowed[i], kBeamBand2Window * plain[i]) << "coefficient " << i;
+        reinjected_beam(1, Reinjection::TravelDirection, d, plain1);
+        reinjected_beam(1, Reinjection::WindowedTravelDirection, d, windowed1);
+        for (int i = 0; i < 4; ++i) EXPECT_EQ(windowed1[i], plain1[i]) << "coefficient " << i;
+    }
+    float beam[9];
+    EXPECT_THROW(reinjected_beam(2, Reinjection::FaceNormal, vec3(0.0f, 0.0f, 1.0f), beam),
+                 InvalidArgument);
 }
 
 // Clamping alone makes energy: the L1 lobe's negative back (−π/8 of its π) sampled at zero.

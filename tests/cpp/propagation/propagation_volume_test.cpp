@@ -83,12 +83,14 @@ TEST(PropagationVolume, SingleVplLightsAFacingPlane) {
 // geometric mean is 1). Its near field is less even than the face-normal lobes' (measured
 // extremes 0.55 and 1.97 × for the LPV, 0.53 and 1.63 × for the HOLPV: brighter along the axes
 // the stencils step on, outside kNearFieldTolerance, so that is not asserted), and the LPV's
-// light reaches farther (printed: 4 and 6 cells along the lobe).
+// light reaches farther (printed: 4 and 6 cells along the lobe). The windowed beams' too (the
+// HOLPV's own scale, extremes 0.515 and 1.645 × of it; the LPV's is its travel scale).
 TEST(PropagationVolume, TravelReinjectionScaleIsTheNearFieldFit) {
     const vec3 n(0.0f, 0.0f, 1.0f), centre(12.5f);
     float far_ratio[3][2] = {};
     for (int order : {1, 2}) {
-        for (Reinjection reinjection : {Reinjection::FaceNormal, Reinjection::TravelDirection}) {
+        for (Reinjection reinjection : {Reinjection::FaceNormal, Reinjection::TravelDirection,
+                                        Reinjection::WindowedTravelDirection}) {
             const PropagationField field(
                 std::make_shared<const ShVolume>(single_vpl(order, 24, centre, n, reinjection)),
                 0.0f, nullptr, false, reinjection);
@@ -107,11 +109,31 @@ TEST(PropagationVolume, TravelReinjectionScaleIsTheNearFieldFit) {
                     ++samples;
                 }
             }
-            const bool travel = reinjection == Reinjection::TravelDirection;
-            far_ratio[order][int(travel)] = field.irradiance(centre + 6.0f * n, -n).x * (kPi * 36.0f);
+            const bool travel = reinjection != Reinjection::FaceNormal;
+            const bool windowed = reinjection == Reinjection::WindowedTravelDirection;
+            if (!windowed)
+                far_ratio[order][int(travel)] =
+                    field.irradiance(centre + 6.0f * n, -n).x * (kPi * 36.0f);
+            // Printed: the flux the field delivers onto a 20 × 20-cell plane 3 cells in front of
+            // the VPL (a Lambertian emitter sends it about 0.92 of its light), which unlike the
+            // near field's geometric mean does not depend on the lobes' shape: the windowed
+            // beams' scale, fitted to the near field, delivers 1.06 × the plain beams' flux.
+            double plane_flux = 0.0;
+            for (float x = -10.0f; x <= 10.0f; x += 0.25f)
+                for (float y = -10.0f; y <= 10.0f; y += 0.25f)
+                    plane_flux +=
+                        0.0625 * double(field.irradiance(centre + vec3(x, y, 3.0f), -n).x);
+            std::printf("order %d, %s: flux onto a plane 3 cells in front %.4f\n", order,
+                        windowed ? "windowed travel direction"
+                        : travel ? "travel direction"
+                                 : "face normal",
+                        plane_flux);
             std::printf("order %d, %s: near field geometric mean %.4f, extremes %.3f %.3f; "
                         "irradiance / closed form at 4 and 6 cells %.3f %.3f\n",
-                        order, travel ? "travel direction" : "face normal",
+                        order,
+                        windowed ? "windowed travel direction"
+                        : travel ? "travel direction"
+                                 : "face normal",
                         std::exp(log_sum / samples), lowest, highest,
                         field.irradiance(centre + 4.0f * n, -n).x * (kPi * 16.0f),
                         far_ratio[order][int(travel)]);
