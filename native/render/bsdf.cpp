@@ -59,34 +59,40 @@ vec2 stratified_mean(Integrand integrand) {
     return vec2(sum / double(kStrata * kStrata));
 }
 
-// A table of T over [0, 1]^3 (x fastest), nx x ny x nz nodes, read with linear interpolation.
-template <typename T>
+// A table of T over [0, 1]^3 (x fastest), kX x kY x kZ nodes, read with linear interpolation.
+// The node counts are template arguments: a shading point reads two of these tables (the field
+// lobes' albedos), and with constant counts the index arithmetic folds away (the same float
+// operations as with counts read at run time, so the same values).
+template <typename T, int kX, int kY, int kZ>
 class LinearTable {
   public:
+    static_assert(kX >= 1 && kY >= 1 && kZ >= 1, "a table has at least one node per axis");
     // value(x, y, z) at the nodes' coordinates in [0, 1].
     template <typename Value>
-    LinearTable(int nx, int ny, int nz, Value value)
-        : n_{nx, ny, nz}, entries_(size_t(nx) * size_t(ny) * size_t(nz)) {
-        for (int k = 0; k < nz; ++k)
-            for (int j = 0; j < ny; ++j)
-                for (int i = 0; i < nx; ++i)
-                    entries_[index(i, j, k)] = value(node(i, nx), node(j, ny), node(k, nz));
+    explicit LinearTable(Value value) : entries_(size_t(kX) * size_t(kY) * size_t(kZ)) {
+        for (int k = 0; k < kZ; ++k)
+            for (int j = 0; j < kY; ++j)
+                for (int i = 0; i < kX; ++i)
+                    entries_[index(i, j, k)] = value(node(i, kX), node(j, kY), node(k, kZ));
     }
 
     T lookup(float x, float y = 0.0f, float z = 0.0f) const {
         int i0, j0, k0;
         float tx, ty, tz;
-        split(x, n_[0], &i0, &tx);
-        split(y, n_[1], &j0, &ty);
-        const int i1 = std::min(i0 + 1, n_[0] - 1), j1 = std::min(j0 + 1, n_[1] - 1);
+        split(x, kX, &i0, &tx);
+        split(y, kY, &j0, &ty);
+        const int i1 = std::min(i0 + 1, kX - 1), j1 = std::min(j0 + 1, kY - 1);
         auto plane = [&](int k) {
             const T bottom = glm::mix(entries_[index(i0, j0, k)], entries_[index(i1, j0, k)], tx);
             const T top = glm::mix(entries_[index(i0, j1, k)], entries_[index(i1, j1, k)], tx);
             return glm::mix(bottom, top, ty);
         };
-        if (n_[2] == 1) return plane(0);
-        split(z, n_[2], &k0, &tz);
-        return glm::mix(plane(k0), plane(k0 + 1), tz);
+        if constexpr (kZ == 1) {
+            return plane(0);
+        } else {
+            split(z, kZ, &k0, &tz);
+            return glm::mix(plane(k0), plane(k0 + 1), tz);
+        }
     }
 
   private:
@@ -96,10 +102,9 @@ class LinearTable {
         *i0 = std::min(int(f), std::max(n - 2, 0));
         *t = n > 1 ? f - float(*i0) : 0.0f;
     }
-    size_t index(int i, int j, int k) const {
-        return (size_t(k) * size_t(n_[1]) + size_t(j)) * size_t(n_[0]) + size_t(i);
+    static size_t index(int i, int j, int k) {
+        return (size_t(k) * size_t(kY) + size_t(j)) * size_t(kX) + size_t(i);
     }
-    int n_[3];
     std::vector<T> entries_;
 };
 
@@ -111,9 +116,11 @@ vec3 view_at(float cos_nv) {
 // --- Directional albedos of 3.4's lobes, over cos(N.V) x roughness (32 x 32; cos >= 1e-3) ---
 constexpr int kAlbedoTableSize = 32;
 
+using AlbedoTable = LinearTable<vec2, kAlbedoTableSize, kAlbedoTableSize, 1>;
+
 template <typename Integrand>  // integrand(wo, roughness, u) -> vec2
-LinearTable<vec2> albedo_table(Integrand integrand) {
-    return LinearTable<vec2>(kAlbedoTableSize, kAlbedoTableSize, 1, [&](float x, float y, float) {
+AlbedoTable albedo_table(Integrand integrand) {
+    return AlbedoTable([&](float x, float y, float) {
         const vec3 wo = view_at(std::max(x, 1e-3f));
         return stratified_mean([&](const vec2& u) { return integrand(wo, y, u); });
     });
@@ -123,7 +130,7 @@ LinearTable<vec2> albedo_table(Integrand integrand) {
 // interpolate_fresnel_color (for Specular 0.5: ior 1.5, F0 0.04), by visible-normal sampling
 // (f cos / pdf = G1(wi) for separable Smith GGX).
 vec2 ggx_albedo(float cos_nv, float roughness) {
-    static const LinearTable<vec2> table = albedo_table([](const vec3& wo, float r, const vec2& u) {
+    static const AlbedoTable table = albedo_table([](const vec3& wo, float r, const vec2& u) {
         const float f0 = kSpecularF0Scale * 0.5f;
         const float ior = 2.0f / (1.0f - std::sqrt(f0)) - 1.0f;
         const float alpha = std::max(r * r, kDeltaAlpha);
@@ -140,7 +147,7 @@ vec2 ggx_albedo(float cos_nv, float roughness) {
 // Directional albedo of Cycles' principled diffuse (Burley, with retro-reflection), by cosine
 // sampling; Lambert's is 1.
 float burley_albedo(float cos_nv, float roughness) {
-    static const LinearTable<vec2> table = albedo_table([](const vec3& wo, float r, const vec2& u) {
+    static const AlbedoTable table = albedo_table([](const vec3& wo, float r, const vec2& u) {
         const vec3 wi = sample_cosine_hemisphere(u);
         const float fl = schlick_weight(wi.z), fv = schlick_weight(wo.z);
         const float cos_lh = glm::dot(wi, glm::normalize(wo + wi));
@@ -193,7 +200,7 @@ vec2 ggx_moments(float roughness, float cos_nv, Blend blend) {
 // S for the dielectric curve s = (F(cos_ih, eta) - F0(eta)) / (1 - F0(eta)) (Cycles' generalized
 // Schlick with a negative exponent), over fresnel_table_z (clamped to [1e-4, 0.99]).
 float dielectric_fresnel_blend(float roughness, float cos_nv, float eta) {
-    static const LinearTable<float> table(16, 16, 16, [](float x, float y, float z) {
+    static const LinearTable<float, 16, 16, 16> table([](float x, float y, float z) {
         const float zc = std::clamp(z, kTableMin, 0.99f);
         const float f0 = zc * zc * zc * zc;
         const float eta_z = node_eta(zc);
@@ -209,7 +216,7 @@ float dielectric_fresnel_blend(float roughness, float cos_nv, float eta) {
 // exponent table (z = 1 / (0.2 exponent + 1), 16 nodes) at z = 0.5, halfway between the nodes of
 // exponents 40/7 and 35/8, so those two curves are tabulated and averaged here.
 float schlick_fresnel_blend(float roughness, float cos_nv) {
-    static const LinearTable<float> table(16, 16, 2, [](float x, float y, float z) {
+    static const LinearTable<float, 16, 16, 2> table([](float x, float y, float z) {
         const float exponent = z == 0.0f ? 40.0f / 7.0f : 35.0f / 8.0f;
         return ggx_moments(clamp_node(x), clamp_node(y), [&](float cos_ih) {
                    return std::pow(std::clamp(1.0f - cos_ih, 0.0f, 1.0f), exponent);
@@ -223,7 +230,7 @@ float no_blend(float) { return 0.0f; }
 // Single-scattering GGX albedo E(roughness, cos_nv) and its cosine-weighted mean E_avg(roughness)
 // = 2 ∫ E(mu) mu dmu (32 midpoints in mu).
 float ggx_single_albedo(float roughness, float cos_nv) {
-    static const LinearTable<float> table(32, 32, 1, [](float x, float y, float) {
+    static const LinearTable<float, 32, 32, 1> table([](float x, float y, float) {
         return ggx_moments(clamp_node(x), clamp_node(y), no_blend).x;
     });
     return table.lookup(roughness, cos_nv);
@@ -241,7 +248,7 @@ float hemispherical_mean(int steps, F f) {
 }
 
 float ggx_average_albedo(float roughness) {
-    static const LinearTable<float> table(32, 1, 1, [](float x, float, float) {
+    static const LinearTable<float, 32, 1, 1> table([](float x, float, float) {
         return hemispherical_mean(32, [&](float mu) {
             return ggx_moments(clamp_node(x), mu, no_blend).x;
         });
@@ -252,7 +259,7 @@ float ggx_average_albedo(float roughness) {
 // The hemispherical mean of the dielectric Fresnel (256 midpoints), over fresnel_table_z (64
 // nodes) so that shading a hit costs one lookup.
 float dielectric_average_fresnel(float eta) {
-    static const LinearTable<float> table(64, 1, 1, [](float z, float, float) {
+    static const LinearTable<float, 64, 1, 1> table([](float z, float, float) {
         const float eta_z = node_eta(z);
         return hemispherical_mean(256, [&](float mu) { return fresnel_dielectric(mu, eta_z); });
     });

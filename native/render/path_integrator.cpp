@@ -5,7 +5,12 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
+#include "util/cpu_features.h"
+#include "util/error.h"
 #include "util/owen_sobol.h"
 #include "util/sampling.h"
 #include "util/timer.h"
@@ -89,11 +94,142 @@ struct OwenSobol4 {
 };
 #endif
 
+#if defined(__x86_64__)
+#define SHGI_AVX2 __attribute__((target("avx2")))
+// The same integer steps on eight lanes (AVX2: 32-bit multiplies, byte shuffles and gathers),
+// and hash_seed on four 64-bit lanes per register (AVX2 has no 64-bit multiply: it is built from
+// 32-bit ones, the low 64 bits of the product, as the scalar multiply keeps).
+struct OwenSobol8 {
+    // hash_seed's 64-bit product a * k mod 2^64 (k a constant given as its two halves).
+    SHGI_AVX2 static __m256i mul64(__m256i a, uint64_t k) {
+        const __m256i k_lo = _mm256_set1_epi64x(int64_t(k & 0xFFFFFFFFu));
+        const __m256i k_hi = _mm256_set1_epi64x(int64_t(k >> 32));
+        const __m256i cross = _mm256_add_epi64(_mm256_mul_epu32(_mm256_srli_epi64(a, 32), k_lo),
+                                               _mm256_mul_epu32(a, k_hi));
+        return _mm256_add_epi64(_mm256_mul_epu32(a, k_lo), _mm256_slli_epi64(cross, 32));
+    }
+    // The SplitMix64 finaliser of hash_seed from z, the high 32 bits left in each 64-bit lane.
+    SHGI_AVX2 static __m256i finalise(__m256i z) {
+        z = mul64(_mm256_xor_si256(z, _mm256_srli_epi64(z, 30)), 0xBF58476D1CE4E5B9ull);
+        z = mul64(_mm256_xor_si256(z, _mm256_srli_epi64(z, 27)), 0x94D049BB133111EBull);
+        return _mm256_xor_si256(z, _mm256_srli_epi64(z, 31));
+    }
+    // The high halves of two registers of four 64-bit lanes as eight 32-bit lanes, in order.
+    SHGI_AVX2 static __m256i high_halves(__m256i low4, __m256i high4) {
+        const __m256 mixed = _mm256_shuffle_ps(_mm256_castsi256_ps(low4),
+                                               _mm256_castsi256_ps(high4), _MM_SHUFFLE(3, 1, 3, 1));
+        return _mm256_permute4x64_epi64(_mm256_castps_si256(mixed), _MM_SHUFFLE(3, 1, 2, 0));
+    }
+    // hash_seed(a[j], b) for four 32-bit a (zero-extended to 64 bits), the sum b + c given.
+    SHGI_AVX2 static __m256i hash4(__m128i a, __m256i b_plus_c) {
+        return finalise(
+            _mm256_add_epi64(mul64(_mm256_cvtepu32_epi64(a), 0x9E3779B97F4A7C15ull), b_plus_c));
+    }
+    // hash_seed(a[j], b) for eight 32-bit a.
+    SHGI_AVX2 static __m256i hash(__m256i a, uint64_t b) {
+        const __m256i b_plus_c = _mm256_set1_epi64x(int64_t(b + 0x632BE59BD9B4E019ull));
+        return high_halves(hash4(_mm256_castsi256_si128(a), b_plus_c),
+                           hash4(_mm256_extracti128_si256(a, 1), b_plus_c));
+    }
+    // hash_seed(a, b[j]) for one 64-bit a and eight 32-bit b: a's product is the same in every
+    // lane, and (a k + b) + c = (a k + c) + b modulo 2^64.
+    SHGI_AVX2 static __m256i hash(uint64_t a, __m256i b) {
+        const __m256i ak_plus_c =
+            _mm256_set1_epi64x(int64_t(a * 0x9E3779B97F4A7C15ull + 0x632BE59BD9B4E019ull));
+        const __m256i low = _mm256_cvtepu32_epi64(_mm256_castsi256_si128(b));
+        const __m256i high = _mm256_cvtepu32_epi64(_mm256_extracti128_si256(b, 1));
+        return high_halves(finalise(_mm256_add_epi64(low, ak_plus_c)),
+                           finalise(_mm256_add_epi64(high, ak_plus_c)));
+    }
+    // reverse_bits: the bytes of each lane reversed by one shuffle, then each byte's bits by two
+    // lookups of its reversed nibbles.
+    SHGI_AVX2 static __m256i reverse_bits(__m256i x) {
+        const __m256i bytes = _mm256_setr_epi8(3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12,
+                                               3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12);
+        const __m256i nibbles = _mm256_setr_epi8(0x0, 0x8, 0x4, 0xC, 0x2, 0xA, 0x6, 0xE, 0x1, 0x9,
+                                                 0x5, 0xD, 0x3, 0xB, 0x7, 0xF, 0x0, 0x8, 0x4, 0xC,
+                                                 0x2, 0xA, 0x6, 0xE, 0x1, 0x9, 0x5, 0xD, 0x3, 0xB,
+                                                 0x7, 0xF);
+        const __m256i low_nibble = _mm256_set1_epi8(0x0F);
+        x = _mm256_shuffle_epi8(x, bytes);
+        const __m256i low = _mm256_shuffle_epi8(nibbles, _mm256_and_si256(x, low_nibble));
+        const __m256i high =
+            _mm256_shuffle_epi8(nibbles, _mm256_and_si256(_mm256_srli_epi16(x, 4), low_nibble));
+        // A reversed low nibble (< 16) moves up within its byte: the 16-bit shift carries nothing
+        // into the next byte.
+        return _mm256_or_si256(_mm256_slli_epi16(low, 4), high);
+    }
+    SHGI_AVX2 static __m256i laine_karras(__m256i x, __m256i seed) {
+        x = _mm256_add_epi32(x, seed);
+        for (const uint32_t k : {0x6c50b47cu, 0xb82f1e52u, 0xc7afe638u, 0x8d22f6e6u})
+            x = _mm256_xor_si256(x, _mm256_mullo_epi32(x, _mm256_set1_epi32(int(k))));
+        return x;
+    }
+    SHGI_AVX2 static __m256 to_unit_float(__m256i x) {
+        return _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_srli_epi32(x, 8)), _mm256_set1_ps(0x1p-24f));
+    }
+    // sobol_dimension1: its four byte tables read with gathers.
+    SHGI_AVX2 static __m256i sobol_dimension1(__m256i index) {
+        const owen_sobol_detail::SobolDimension1Tables& tables =
+            owen_sobol_detail::sobol_dimension1_tables();
+        const __m256i byte = _mm256_set1_epi32(0xFF);
+        __m256i result = _mm256_setzero_si256();
+        for (int k = 0; k < 4; ++k) {
+            const __m256i at = _mm256_and_si256(_mm256_srli_epi32(index, 8 * k), byte);
+            result = _mm256_xor_si256(
+                result, _mm256_i32gather_epi32(reinterpret_cast<const int*>(tables.byte[k]), at, 4));
+        }
+        return result;
+    }
+    // OwenSobol4::point on eight sequence seeds.
+    SHGI_AVX2 static void point(uint32_t reversed_index, __m256i seeds, __m256* x, __m256* y) {
+        const __m256i shuffled =
+            reverse_bits(laine_karras(_mm256_set1_epi32(int(reversed_index)), seeds));
+        *x = to_unit_float(reverse_bits(laine_karras(shuffled, hash(seeds, 1))));
+        if (y == nullptr) return;
+        *y = to_unit_float(reverse_bits(
+            laine_karras(reverse_bits(sobol_dimension1(shuffled)), hash(seeds, 2))));
+    }
+};
+
+// pixel_samples' loop over whole groups of eight pixels; returns how many pixels it did.
+SHGI_AVX2 size_t pixel_samples_avx2(uint64_t seed, const uint32_t* pixels, size_t count,
+                                    uint64_t sample, PixelSample* out) {
+    const uint32_t reversed = owen_sobol_detail::reverse_bits(uint32_t(sample));
+    size_t i = 0;
+    for (; i + 8 <= count; i += 8) {
+        const __m256i base = OwenSobol8::hash(
+            seed, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(pixels + i)));
+        alignas(32) float jitter_x[8], jitter_y[8], select[8], light_x[8], light_y[8];
+        __m256 x, y;
+        OwenSobol8::point(reversed, OwenSobol8::hash(base, 0), &x, &y);
+        _mm256_store_ps(jitter_x, x);
+        _mm256_store_ps(jitter_y, y);
+        OwenSobol8::point(reversed, OwenSobol8::hash(base, 1), &x, nullptr);
+        _mm256_store_ps(select, x);
+        OwenSobol8::point(reversed, OwenSobol8::hash(base, 2), &x, &y);
+        _mm256_store_ps(light_x, x);
+        _mm256_store_ps(light_y, y);
+        for (int j = 0; j < 8; ++j)
+            out[i + size_t(j)] = PixelSample{vec2(jitter_x[j], jitter_y[j]), select[j],
+                                             vec2(light_x[j], light_y[j])};
+    }
+    return i;
+}
+#undef SHGI_AVX2
+#endif
+
 }  // namespace
 
 void pixel_samples(uint64_t seed, const uint32_t* pixels, size_t count, uint64_t sample,
-                   PixelSample* out) {
+                   PixelSample* out, PixelSamplesIsa isa) {
     size_t i = 0;
+    if (isa == PixelSamplesIsa::Avx2 && !cpu_has_avx2())
+        throw InvalidArgument("pixel_samples: AVX2 was asked for on a CPU without it");
+#if defined(__x86_64__)
+    if (isa == PixelSamplesIsa::Avx2 || (isa == PixelSamplesIsa::Auto && cpu_has_avx2()))
+        i = pixel_samples_avx2(seed, pixels, count, sample, out);
+#endif
 #if defined(__SSE2__)
     using owen_sobol_detail::reverse_bits;
     const uint32_t index = uint32_t(sample);

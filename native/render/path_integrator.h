@@ -70,11 +70,15 @@ struct PixelSample {
 // stratified; without, they stay 0: the preview and the bake do not use them, and two more
 // scrambled points a pixel were ~2% of a preview frame.
 PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample, bool first_bsdf = false);
+// The instruction set pixel_samples runs on: Auto takes AVX2 (eight pixels at a time) when the
+// CPU has it (util/cpu_features.h), else SSE2 (four); tests name each to check it. All give the
+// same bits (integer work, and the same float conversions).
+enum class PixelSamplesIsa : uint8_t { Auto, Sse2, Avx2 };
 // pixel_sample(seed, pixels[i], sample) for i in [0, count) into out[i] (without first_bsdf),
-// bit for bit, four pixels at a time in SSE2 (the preview's wave: the scrambles are 32-bit
-// integer work the same for every pixel).
+// bit for bit, several pixels at a time (the preview's wave: the seed hashes and scrambles are
+// integer work the same for every pixel). Avx2 on a CPU without it is an InvalidArgument.
 void pixel_samples(uint64_t seed, const uint32_t* pixels, size_t count, uint64_t sample,
-                   PixelSample* out);
+                   PixelSample* out, PixelSamplesIsa isa = PixelSamplesIsa::Auto);
 
 // FieldLookup::irradiance of one lookup, kept for the last normal it was asked for. The pixels
 // that share a lookup (render/lookup_sharing.h) on one flat surface have bit-identical normals,

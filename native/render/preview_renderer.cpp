@@ -85,7 +85,7 @@ PreviewTimings split_wall_time(double wall, const std::vector<StageSeconds>& bus
 struct Wave {
     explicit Wave(size_t capacity)
         : x(capacity), y(capacity), pixel(capacity), rngs(capacity), samples(capacity),
-          values(capacity), paths(capacity), live(capacity) {
+          film(capacity), values(capacity), paths(capacity), live(capacity) {
         quads.reserve(capacity);
         rays.reserve(capacity);
         hits.reserve(capacity);
@@ -103,6 +103,7 @@ struct Wave {
     std::vector<uint32_t> pixel;
     std::vector<Pcg32> rngs;
     std::vector<PixelSample> samples;  // stratified jitter and first light sample
+    std::vector<vec2> film;            // the camera ray's film point: pixel + jitter
     std::vector<PassValues> values;
     std::vector<std::optional<PathIntegrator>> paths;
     std::vector<uint8_t> live;  // the path has a first surface to shade
@@ -272,9 +273,9 @@ class FrameWork {
         for (size_t i = 0; i < wave.count; ++i) {
             const uint64_t pixel = wave.pixel[i];
             wave.rngs[i] = Pcg32(settings_.seed, stream_id(s, pixel));
-            wave.rays[i] = camera_rays_.generate_ray(vec2(float(wave.x[i]), float(wave.y[i])) +
-                                                     wave.samples[i].jitter);
+            wave.film[i] = vec2(float(wave.x[i]), float(wave.y[i])) + wave.samples[i].jitter;
         }
+        camera_rays_.generate_rays(wave.film.data(), wave.count, wave.rays.data());
         scene_.intersect(wave.rays, wave.hits, nullptr, RayCoherence::Coherent);
         for (size_t i = 0; i < wave.count; ++i) {
             clear_pass_values(wave.values[i]);

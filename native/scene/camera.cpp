@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
 
 #include "scene/validation.h"
 #include "util/error.h"
@@ -100,6 +103,61 @@ Ray CameraRayGenerator::generate_ray(const vec2& film) const {
     ray.tmin = clip_start_ * axis_to_ray;
     ray.tmax = clip_end_ * axis_to_ray;
     return ray;
+}
+
+void CameraRayGenerator::generate_rays(const vec2* film, size_t count, Ray* out) const {
+    size_t i = 0;
+#if defined(__SSE2__)
+    if (type_ == CameraType::Perspective) {
+        static_assert(sizeof(Ray) == 8 * sizeof(float), "a ray is two rows of four floats");
+        // generate_ray's arithmetic on four rays, operation for operation: glm's mat4 x vec4 is
+        // (m0 x + m1 y) + (m2 z + m3 w), its dot product (x x + y y) + z z, normalize multiplies
+        // by 1 / sqrt(dot), and without FMA in the build every product is rounded before its sum.
+        const __m128 width = _mm_set1_ps(width_), height = _mm_set1_ps(height_);
+        const __m128 xmin = _mm_set1_ps(xmin_), ymax = _mm_set1_ps(ymax_);
+        const __m128 xspan = _mm_set1_ps(xmax_ - xmin_), yspan = _mm_set1_ps(ymax_ - ymin_);
+        const __m128 one = _mm_set1_ps(1.0f), minus_one = _mm_set1_ps(-1.0f);
+        const __m128 zero = _mm_setzero_ps();
+        const __m128 clip_start = _mm_set1_ps(clip_start_), clip_end = _mm_set1_ps(clip_end_);
+        __m128 column[4][3];
+        for (int c = 0; c < 4; ++c)
+            for (int r = 0; r < 3; ++r) column[c][r] = _mm_set1_ps(frame_[c][r]);
+        const vec3 origin(frame_[3]);
+        for (; i + 4 <= count; i += 4) {
+            const __m128 u =
+                _mm_div_ps(_mm_setr_ps(film[i].x, film[i + 1].x, film[i + 2].x, film[i + 3].x),
+                           width);
+            const __m128 v =
+                _mm_div_ps(_mm_setr_ps(film[i].y, film[i + 1].y, film[i + 2].y, film[i + 3].y),
+                           height);
+            const __m128 x = _mm_add_ps(xmin, _mm_mul_ps(u, xspan));
+            const __m128 y = _mm_sub_ps(ymax, _mm_mul_ps(v, yspan));
+            const __m128 axis_to_ray = _mm_sqrt_ps(_mm_add_ps(
+                _mm_add_ps(_mm_mul_ps(x, x), _mm_mul_ps(y, y)), _mm_mul_ps(minus_one, minus_one)));
+            __m128 d[3];
+            for (int r = 0; r < 3; ++r)
+                d[r] = _mm_add_ps(
+                    _mm_add_ps(_mm_mul_ps(column[0][r], x), _mm_mul_ps(column[1][r], y)),
+                    _mm_add_ps(_mm_mul_ps(column[2][r], minus_one), _mm_mul_ps(column[3][r], zero)));
+            const __m128 length2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(d[0], d[0]), _mm_mul_ps(d[1], d[1])),
+                                              _mm_mul_ps(d[2], d[2]));
+            const __m128 inv_length = _mm_div_ps(one, _mm_sqrt_ps(length2));
+            // Rows (origin x, y, z, direction x) and (direction y, z, tmin, tmax) per ray.
+            __m128 first0 = _mm_set1_ps(origin.x), first1 = _mm_set1_ps(origin.y);
+            __m128 first2 = _mm_set1_ps(origin.z), first3 = _mm_mul_ps(d[0], inv_length);
+            __m128 second0 = _mm_mul_ps(d[1], inv_length), second1 = _mm_mul_ps(d[2], inv_length);
+            __m128 second2 = _mm_mul_ps(clip_start, axis_to_ray);
+            __m128 second3 = _mm_mul_ps(clip_end, axis_to_ray);
+            _MM_TRANSPOSE4_PS(first0, first1, first2, first3);
+            _MM_TRANSPOSE4_PS(second0, second1, second2, second3);
+            float* ray = reinterpret_cast<float*>(out + i);
+            const __m128 rows[8] = {first0, second0, first1, second1,
+                                    first2, second2, first3, second3};
+            for (int k = 0; k < 8; ++k) _mm_storeu_ps(ray + 4 * k, rows[k]);
+        }
+    }
+#endif
+    for (; i < count; ++i) out[i] = generate_ray(film[i]);
 }
 
 bool Camera::project(const vec3& p, vec2* film) const {

@@ -64,8 +64,14 @@ struct SobolDimension1Tables {
     }
 };
 
-inline uint32_t sobol_dimension1(uint32_t index) {
+// The tables, built on first use (the preview's AVX2 wave reads them with gathers).
+inline const SobolDimension1Tables& sobol_dimension1_tables() {
     static const SobolDimension1Tables tables;
+    return tables;
+}
+
+inline uint32_t sobol_dimension1(uint32_t index) {
+    const SobolDimension1Tables& tables = sobol_dimension1_tables();
     return tables.byte[0][index & 0xFFu] ^ tables.byte[1][(index >> 8) & 0xFFu] ^
            tables.byte[2][(index >> 16) & 0xFFu] ^ tables.byte[3][index >> 24];
 }

@@ -31,6 +31,7 @@
 #include "render_test_scenes.h"
 #include "support/expect_error.h"
 #include "support/noise_stats.h"
+#include "util/cpu_features.h"
 #include "util/error.h"
 
 namespace shgi {
@@ -701,10 +702,17 @@ TEST(PreviewRenderer, RejectsInvalidSettingsNamingTheField) {
 }
 
 }  // namespace
-// The wave's Owen-scrambled Sobol' numbers (four pixels at a time in SSE2, the rest one by one)
-// are pixel_sample's, bit for bit: for wave sizes with and without a remainder, scattered and
-// large pixel indices, early and late sample indices (all 32 index bits) and several seeds.
+// The wave's Owen-scrambled Sobol' numbers (eight pixels at a time in AVX2 where the CPU has it,
+// four in SSE2, the rest one by one) are pixel_sample's, bit for bit, on every instruction set
+// this CPU runs: for wave sizes with and without a remainder, scattered and large pixel indices,
+// early and late sample indices (all 32 index bits) and several seeds.
 TEST(PreviewRenderer, PixelSamplesOfAWaveArePixelSampleBitForBit) {
+    std::vector<PixelSamplesIsa> isas = {PixelSamplesIsa::Auto, PixelSamplesIsa::Sse2};
+    if (cpu_has_avx2())
+        isas.push_back(PixelSamplesIsa::Avx2);
+    else
+        EXPECT_THROW(pixel_samples(0, nullptr, 0, 0, nullptr, PixelSamplesIsa::Avx2),
+                     InvalidArgument);
     std::vector<uint32_t> pixels;
     uint32_t x = 12345u;
     for (int i = 0; i < 263; ++i) {
@@ -714,23 +722,25 @@ TEST(PreviewRenderer, PixelSamplesOfAWaveArePixelSampleBitForBit) {
     for (const uint64_t seed : {uint64_t(0), uint64_t(7), uint64_t(0xFFFFFFFFFFFFull)})
         for (const uint64_t sample : {uint64_t(0), uint64_t(1), uint64_t(5), uint64_t(1023),
                                       uint64_t(0xFFFFFFFFu)})
-            for (const size_t count : {size_t(0), size_t(3), size_t(4), size_t(263)}) {
-                std::vector<PixelSample> wave(count);
-                pixel_samples(seed, pixels.data(), count, sample, wave.data());
-                for (size_t i = 0; i < count; ++i) {
-                    const PixelSample one = pixel_sample(seed, pixels[i], sample);
-                    const auto same = [](float a, float b) {
-                        return std::memcmp(&a, &b, sizeof(float)) == 0;
-                    };
-                    ASSERT_TRUE(same(wave[i].jitter.x, one.jitter.x) &&
-                                same(wave[i].jitter.y, one.jitter.y) &&
-                                same(wave[i].u_select, one.u_select) &&
-                                same(wave[i].u_light.x, one.u_light.x) &&
-                                same(wave[i].u_light.y, one.u_light.y) &&
-                                wave[i].u_lobe == 0.0f && wave[i].u_bsdf == vec2(0.0f))
-                        << "seed " << seed << ", sample " << sample << ", pixel " << pixels[i];
+            for (const size_t count : {size_t(0), size_t(3), size_t(4), size_t(13), size_t(263)})
+                for (const PixelSamplesIsa isa : isas) {
+                    std::vector<PixelSample> wave(count);
+                    pixel_samples(seed, pixels.data(), count, sample, wave.data(), isa);
+                    for (size_t i = 0; i < count; ++i) {
+                        const PixelSample one = pixel_sample(seed, pixels[i], sample);
+                        const auto same = [](float a, float b) {
+                            return std::memcmp(&a, &b, sizeof(float)) == 0;
+                        };
+                        ASSERT_TRUE(same(wave[i].jitter.x, one.jitter.x) &&
+                                    same(wave[i].jitter.y, one.jitter.y) &&
+                                    same(wave[i].u_select, one.u_select) &&
+                                    same(wave[i].u_light.x, one.u_light.x) &&
+                                    same(wave[i].u_light.y, one.u_light.y) &&
+                                    wave[i].u_lobe == 0.0f && wave[i].u_bsdf == vec2(0.0f))
+                            << "seed " << seed << ", sample " << sample << ", pixel " << pixels[i]
+                            << ", instruction set " << int(isa);
+                    }
                 }
-            }
 }
 
 }  // namespace shgi

@@ -1,0 +1,12 @@
+// What the CPU running SHGI can do beyond the build's baseline (x86-64: SSE2), for the few hot
+// loops that have a wider clone compiled with __attribute__((target(...))) and choose it at run
+// time. Each answer is found once (cpuid) and kept.
+#pragma once
+
+namespace shgi {
+
+// True when the CPU and the operating system support AVX2 (256-bit integer SIMD); false on
+// other architectures.
+bool cpu_has_avx2();
+
+}  // namespace shgi
