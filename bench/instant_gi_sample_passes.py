@@ -1,15 +1,15 @@
 #!/usr/bin/env python3
 """Instant GI's new VPLs per sample (InstantGiSettings.passes_per_sample): for each
 (passes, passes per sample) the sun room's Combined PSNR and DiffInd x DiffCol mean against the
-path tracer's (the test's setting: scale 0.25, 2048 spp reference, seed 11; preview 16 spp) per
-solve seed, and the CPU times (getrusage of this process, median of `--repeats`, seed 5's
-field) of the 16-sample frame (render_preview), of the solve (every pass's refine, as the Solve
-operator runs it) and of a first frame (that solve and a 1-sample frame: F12's time to its first
-image when it solved every pass first; it now solves only the first sample's passes first), each
-as a ratio to the first configuration's. A configuration passes:per_sample[:light paths per set]
-(16 by default); `--filter-direct` solves with filter_direct. A plain script printing a table:
-not a test. The two rooms' dim room as test_instant_gi.py's dim room test
-reads it (128 light paths per set):
+path tracer's (the test's setting: scale 0.25, 2048 spp reference, seed 11; preview `--samples`,
+16 by default) per solve seed, and the CPU times (getrusage of this process, median of
+`--repeats`, seed 5's field) of the frame (render_preview), of the solve (every pass's refine,
+as the Solve operator runs it) and of a first frame (that solve and a 1-sample frame: F12's
+time to its first image when it solved every pass first; it now solves only the first sample's
+passes first), each as a ratio to the first configuration's. A configuration
+passes:per_sample[:light paths per set] (16 by default); `--filter-direct` solves with
+filter_direct. A plain script printing a table: not a test. The two rooms' dim room as
+test_instant_gi.py's dim room test reads it (128 light paths per set):
 
     PYTHONPATH=build/python python3 bench/instant_gi_sample_passes.py [--scene sun_room]
         [--seeds 5 6 7 8 9 10 11 12] [--configs 4:4 64:4 16:1] [--repeats 5]
@@ -46,8 +46,8 @@ def solve(scene, seed, passes, per_sample, paths=16, filter_direct=False):
     return solver.current_field()
 
 
-def frame(scene, field):
-    image, _ = shgi.render_preview(scene, field, shgi.PreviewSettings(seed=5, samples=16))
+def frame(scene, field, samples=16):
+    image, _ = shgi.render_preview(scene, field, shgi.PreviewSettings(seed=5, samples=samples))
     return image
 
 
@@ -64,6 +64,7 @@ def main():
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--scale", type=float, default=0.25)
     parser.add_argument("--reference-samples", type=int, default=2048)
+    parser.add_argument("--samples", type=int, default=16, help="the frame's samples")
     parser.add_argument("--filter-direct", action="store_true",
                         help="InstantGiSettings.filter_direct on")
     args = parser.parse_args()
@@ -78,14 +79,15 @@ def main():
         paths = paths[0] if paths else 16
         qualities, ratios = [], []
         for seed in args.seeds:
-            image = frame(scene, solve(scene, seed, passes, per_sample, paths, args.filter_direct))
+            image = frame(scene, solve(scene, seed, passes, per_sample, paths, args.filter_direct),
+                          args.samples)
             qualities.append(psnr(reference["Combined"], image["Combined"]))
             ratios.append(indirect_diffuse(image) / indirect_diffuse(reference))
         field = solve(scene, args.seeds[0], passes, per_sample, paths, args.filter_direct)
         times, solves, firsts = [], [], []
         for _ in range(args.repeats):
             start = cpu_seconds()
-            frame(scene, field)
+            frame(scene, field, args.samples)
             times.append(cpu_seconds() - start)
             start = cpu_seconds()
             first = solve(scene, args.seeds[0], passes, per_sample, paths, args.filter_direct)
