@@ -564,6 +564,15 @@ def test_filter_direct_samples_gather_the_sky_and_lamps_of_their_passes():
     np.testing.assert_array_equal(split["DiffDir"], every["DiffDir"])
 
 
+def test_filter_direct_frames_of_passes_per_sample_do_not_depend_on_threads_or_tiles():
+    scene = sky_and_lamps_over_a_floor()
+    field = solved(scene, passes=8, passes_per_sample=2, filter_direct=True).current_field()
+    images = frames_by_threads_and_tiles(scene, field, 3)
+    assert images[0]["DiffDir"].max() > 0.0
+    for name in ("Combined", "DiffDir", "GlossDir", "DiffInd"):
+        np.testing.assert_array_equal(images[0][name], images[1][name], err_msg=name)
+
+
 def test_a_bake_with_filter_direct_counts_the_sky_once():
     """A bake over a filter_direct field: the field includes the world's direct light, so the
     baker's next-event estimation leaves the world out. A Lambert plane under a uniform world
