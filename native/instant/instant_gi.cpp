@@ -74,6 +74,44 @@ constexpr int kMaxPassesPerSample = 1 << 16;
 // Lobes up to this roughness are mirror-like: their light is not spread as if diffuse.
 constexpr float kSpecularRoughness = 0.1f;
 
+// glossy_from_vpls: lobes at least this rough read the VPLs directly (narrower lobes would see
+// each VPL as a spike).
+constexpr float kGlossyVplRoughness = 0.3f;
+
+// The prefiltering GGX lobe of ggx_zh.h, D_GGX(cos(θ/2); α = roughness²) max(cos θ, 0), at the
+// cosine between a direction and the reflected view direction.
+float glossy_lobe(float cos_theta, float alpha) {
+    if (cos_theta <= 0.0f) return 0.0f;
+    const float c2 = 0.5f * (1.0f + cos_theta);  // cos²(θ/2)
+    const float a2 = alpha * alpha;
+    const float d = c2 * (a2 - 1.0f) + 1.0f;
+    return a2 / (kPi * d * d) * cos_theta;
+}
+
+// 1 / the lobe's integral over the sphere, tabulated over roughness [kGlossyVplRoughness, 1]
+// (midpoint rule in θ; the table's steps are far finer than the lobe changes).
+float glossy_lobe_norm(float roughness) {
+    constexpr int kEntries = 64, kSteps = 2048;
+    static const std::vector<float> table = [] {
+        std::vector<float> t(kEntries + 1);
+        for (int i = 0; i <= kEntries; ++i) {
+            const float r = kGlossyVplRoughness + (1.0f - kGlossyVplRoughness) * float(i) /
+                                                      float(kEntries);
+            double sum = 0.0;
+            for (int k = 0; k < kSteps; ++k) {
+                const double theta = (k + 0.5) * (0.5 * kPi) / kSteps;
+                sum += glossy_lobe(float(std::cos(theta)), r * r) * std::sin(theta);
+            }
+            t[size_t(i)] = float(1.0 / (2.0 * kPi * sum * (0.5 * kPi) / kSteps));
+        }
+        return t;
+    }();
+    const float x = std::clamp((roughness - kGlossyVplRoughness) / (1.0f - kGlossyVplRoughness),
+                               0.0f, 1.0f) * float(kEntries);
+    const int i = std::min(int(x), kEntries - 1);
+    return table[size_t(i)] + (x - float(i)) * (table[size_t(i) + 1] - table[size_t(i)]);
+}
+
 // The reach of the ray back along a photon's path that finds its surface (scattered_flux).
 constexpr float kReach = 1e-3f;
 
@@ -392,6 +430,30 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
     // filter_direct: the sky's and lights' direct light, a plane of its own (DiffDir /
     // GlossDir).
     std::vector<vec3> raw_direct(direct ? pixels * kCoeffs : 0, vec3(0.0f));
+    // glossy_from_vpls: per pixel, the reflected view direction and each lobe's GGX alpha and
+    // 1 / its lobe's integral (alpha 0: the lobe reads the SH); a plane per lobe.
+    const bool lobes_from_vpls = settings_.glossy_from_vpls && g.has_field_lobes();
+    std::vector<vec3> reflected, raw_glossy[2];
+    std::vector<vec2> glossy_lobes[2];  // (alpha, 1 / integral)
+    if (lobes_from_vpls) {
+        reflected.assign(pixels, vec3(0.0f));
+        for (int k = 0; k < 2; ++k) {
+            raw_glossy[k].assign(pixels, vec3(0.0f));
+            glossy_lobes[k].assign(pixels, vec2(0.0f));
+        }
+        parallel_for(0, uint64_t(pixels), 4096, [&](uint64_t b, uint64_t e) {
+            for (uint64_t p = b; p < e; ++p) {
+                if (!g.has_surface(p)) continue;
+                const vec3 wo = glm::normalize(camera_position - g.position[p]);
+                reflected[p] = glm::reflect(-wo, g.shading_normal[p]);
+                for (int k = 0; k < 2; ++k) {
+                    const float r = g.glossy_roughness[k][p];
+                    if (max_component(g.glossy_albedo[k][p]) > 0.0f && r >= kGlossyVplRoughness)
+                        glossy_lobes[k][p] = vec2(r * r, glossy_lobe_norm(r));
+                }
+            }
+        });
+    }
     const SampleGather gather = sample_gather(first);
     const float vpl_scale = gather.vpl_scale;
     const auto gathered = [](const std::vector<VplRange>& ranges) {
@@ -491,7 +553,15 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
         for (size_t r = 0; r < rays.size(); ++r) {  // in ray order: a fixed sum per pixel
             if (occluded[r]) continue;
             std::vector<vec3>& plane = ray_direct[r] ? raw_direct : raw;
-            add_delta(&plane[size_t(ray_pixel[r]) * kCoeffs], weights[r], directions[r]);
+            const size_t p = ray_pixel[r];
+            add_delta(&plane[p * kCoeffs], weights[r], directions[r]);
+            if (!lobes_from_vpls || ray_direct[r]) continue;
+            const float cos_theta = glm::dot(directions[r], reflected[p]);
+            for (int k = 0; k < 2; ++k) {
+                const vec2 lobe = glossy_lobes[k][p];
+                if (lobe.x > 0.0f)
+                    raw_glossy[k][p] += weights[r] * (glossy_lobe(cos_theta, lobe.x) * lobe.y);
+            }
         }
     }, progress);
     timings_->gather = seconds_since(start);
@@ -503,6 +573,37 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
     const bool filter_irradiance =
         mode == InstantGiFilter::Irradiance || mode == InstantGiFilter::Strict;
     const int half_x = Interleave::half_width(n), half_y = Interleave::half_width(m);
+    // The interleave-wide window over `source` (stride vec3 per pixel) into `out_plane`.
+    const auto filter_window = [&](const std::vector<vec3>& source, int stride, bool strict,
+                                   std::vector<vec3>& out_plane) {
+        out_plane.assign(pixels * size_t(stride), vec3(0.0f));
+        parallel_for(0, uint64_t(height), 8, [&](uint64_t y0, uint64_t y1) {
+            throw_if_cancelled(progress);
+            for (uint64_t y = y0; y < y1; ++y)
+                for (int x = 0; x < width; ++x) {
+                    const size_t p = g.index(x, int(y));
+                    if (!g.has_surface(p)) continue;
+                    vec3* out = &out_plane[p * size_t(stride)];
+                    float total = 0.0f;
+                    for (int dy = -half_y; dy <= half_y; ++dy) {
+                        const int qy = int(y) + dy;
+                        if (qy < 0 || qy >= height) continue;
+                        for (int dx = -half_x; dx <= half_x; ++dx) {
+                            const int qx = x + dx;
+                            if (qx < 0 || qx >= width) continue;
+                            const size_t q = g.index(qx, qy);
+                            if (q != p && !joins(g, p, q, settings_, strict)) continue;
+                            const float w =
+                                Interleave::tap_weight(n, dx) * Interleave::tap_weight(m, dy);
+                            const vec3* in = &source[q * size_t(stride)];
+                            for (int i = 0; i < stride; ++i) out[i] += w * in[i];
+                            total += w;
+                        }
+                    }
+                    for (int i = 0; i < stride; ++i) out[i] /= total;
+                }
+        }, progress);
+    };
     // One plane (indirect, or filter_direct's sky) through the filter: SH (mode Sh) or E
     // (Irradiance, Strict) into `out_plane`.
     const auto filter_plane = [&](const std::vector<vec3>& plane, std::vector<vec3>& out_plane) {
@@ -518,42 +619,23 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                 }
             });
         }
-        if (filter_sh || filter_irradiance) {
-            const int stride = filter_sh ? kCoeffs : 1;
-            const std::vector<vec3>& source = filter_sh ? plane : irradiance;
-            out_plane.assign(pixels * size_t(stride), vec3(0.0f));
-            const bool strict = mode == InstantGiFilter::Strict;
-            parallel_for(0, uint64_t(height), 8, [&](uint64_t y0, uint64_t y1) {
-                throw_if_cancelled(progress);
-                for (uint64_t y = y0; y < y1; ++y)
-                    for (int x = 0; x < width; ++x) {
-                        const size_t p = g.index(x, int(y));
-                        if (!g.has_surface(p)) continue;
-                        vec3* out = &out_plane[p * size_t(stride)];
-                        float total = 0.0f;
-                        for (int dy = -half_y; dy <= half_y; ++dy) {
-                            const int qy = int(y) + dy;
-                            if (qy < 0 || qy >= height) continue;
-                            for (int dx = -half_x; dx <= half_x; ++dx) {
-                                const int qx = x + dx;
-                                if (qx < 0 || qx >= width) continue;
-                                const size_t q = g.index(qx, qy);
-                                if (q != p && !joins(g, p, q, settings_, strict)) continue;
-                                const float w = Interleave::tap_weight(n, dx) *
-                                                Interleave::tap_weight(m, dy);
-                                const vec3* in = &source[q * size_t(stride)];
-                                for (int i = 0; i < stride; ++i) out[i] += w * in[i];
-                                total += w;
-                            }
-                        }
-                        for (int i = 0; i < stride; ++i) out[i] /= total;
-                    }
-            }, progress);
-        }
+        if (filter_sh || filter_irradiance)
+            filter_window(filter_sh ? plane : irradiance, filter_sh ? kCoeffs : 1,
+                          mode == InstantGiFilter::Strict, out_plane);
     };
     std::vector<vec3> filtered, filtered_direct;
     filter_plane(raw, filtered);
     if (direct) filter_plane(raw_direct, filtered_direct);
+    // glossy_from_vpls: each lobe's plane through the window too (unless filter_mode None).
+    std::vector<vec3> filtered_glossy[2];
+    for (int k = 0; k < 2; ++k)
+        if (!raw_glossy[k].empty()) {
+            if (mode == InstantGiFilter::None)
+                filtered_glossy[k] = raw_glossy[k];
+            else
+                filter_window(raw_glossy[k], 1, mode == InstantGiFilter::Strict,
+                              filtered_glossy[k]);
+        }
     timings_->filter = seconds_since(start);
 
     // 3. shade: SH dot products with the pixel's shading normal, into the film.
@@ -569,6 +651,10 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                 if (!g.has_surface(p) || !lobes) continue;
                 const vec3 ns = g.shading_normal[p];
                 const vec3 wo = glm::normalize(camera_position - g.position[p]);
+                // Whether lobe k of the indirect plane reads the VPLs directly.
+                const auto direct_lobe = [&](int k, bool indirect) {
+                    return indirect && lobes_from_vpls && glossy_lobes[k][p].x > 0.0f;
+                };
                 // The pixel's diffuse and glossy light from one plane's SH (or filtered E).
                 const auto shade = [&](const std::vector<vec3>& sh,
                                        const std::vector<vec3>& e_plane, vec3& diffuse,
@@ -582,7 +668,9 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                     for (int k = 0; k < 2; ++k)
                         if (max_component(g.glossy_albedo[k][p]) > 0.0f)
                             glossy += g.glossy_albedo[k][p] *
-                                      lookup.glossy(ns, wo, g.glossy_roughness[k][p]);
+                                      (direct_lobe(k, &sh == &sh_source)
+                                           ? filtered_glossy[k][p]
+                                           : lookup.glossy(ns, wo, g.glossy_roughness[k][p]));
                 };
                 vec3 diffuse, glossy;
                 shade(sh_source, filtered, diffuse, glossy);

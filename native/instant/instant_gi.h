@@ -96,6 +96,13 @@ struct InstantGiSettings {
     // +6.25% and leaks 3/32 of its normal-incidence irradiance at the horizon); a uniform sky's
     // hemisphere is exact in L2.
     bool filter_direct = false;
+    // Glossy lobes at least 0.3 rough read the VPLs directly instead of the L2 SH: each
+    // VPL's delta weighed by the lobe (the prefiltering GGX lobe the SH's fitted ZH lobe
+    // approximates, around the reflected view direction, normalised to unit integral), the
+    // pixel's sum then filtered over the same window as the SH. Sharper glossy light at the
+    // same mean (the sun room, 64 passes: 33.14 dB against 32.95 dB, GlossInd 0.841 x the
+    // path tracer's against 0.845 x: L2 is not what it lacks); off by default.
+    bool glossy_from_vpls = false;
     // Passes of VPLs a preview sample gathers: sample i gathers passes i k .. i k + k - 1
     // (mod the field's passes), k = passes_per_sample, each set scaled by sets / k; with no
     // more passes than k every sample gathers them all (as before this setting). The samples

@@ -103,7 +103,9 @@ NOT_MIRRORED = {
     # The cascades follow the camera the exported scene renders from (the native default).
     "PropagationSettings": {"cascade_follow_camera", "cascade_center"},
     # As the radiance field's glossy_in_grid: no reason for an artist to change it.
-    "InstantGiSettings": {"glossy_vpls"},
+    # glossy_from_vpls: a measured option (+0.2 dB on the sun room, docs/methods.md), scripts
+    # only for now.
+    "InstantGiSettings": {"glossy_vpls", "glossy_from_vpls"},
     "PhotonLatticeSettings": {"use_bounds", "bounds_min", "bounds_max", "caustic_order",
                               "caustic_blur_passes", "caustic_neighbours", "caustic_radius",
                               "specular_roughness", "normal_offset"},
