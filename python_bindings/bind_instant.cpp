@@ -77,7 +77,11 @@ void bind_settings(py::module_& m) {
                        "light, photons_per_set per pass for one with extent) and the emissive "
                        "triangles' as photons_per_set samples per set and pass (each triangle "
                        "by its power), each with its exact shadow ray; next-event estimation "
-                       "then leaves them out (False).");
+                       "then leaves them out (False).")
+        .def_readwrite("glossy_from_vpls", &S::glossy_from_vpls,
+                       "Glossy lobes of roughness 0.3 and above weigh each VPL by the lobe "
+                       "itself instead of reading the L2 SH: sharper glossy light, the same "
+                       "mean (False).");
     cls.def("validate", &validate_instant_gi_settings,
             "Raises ValueError naming the first invalid field.");
     register_settings_type<S>("InstantGiSettings");

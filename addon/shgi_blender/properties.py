@@ -490,11 +490,16 @@ class ShgiInstantGiSettings(bpy.types.PropertyGroup):
                     "lets some of it past the horizon. Emissive surfaces too, from as many "
                     "samples per set. Off: all direct light is sampled directly")
     passes: IntProperty(
-        name="Render Passes", default=settings.final_passes("INSTANT_GI", native.module()),
+        name="Render Passes", default=settings.render_passes("INSTANT_GI", native.module()),
+        min=1, soft_max=256,
+        description="Passes of an F12 render or a Solve, each adding Light Paths per Set to "
+                    "every set: more give smoother light. A sample sees Per Sample of them, so "
+                    "passes beyond that cost no more per sample")
+    bake_passes: IntProperty(
+        name="Bake Passes", default=settings.final_passes("INSTANT_GI", native.module()),
         min=1, soft_max=64,
-        description="Passes of an F12 render, a Solve or a bake, each adding Light Paths per "
-                    "Set to every set: more give smoother light. A sample sees Per Sample of "
-                    "them, so passes beyond that cost no more per sample; a bake sees them all")
+        description="Passes of a bake, each adding Light Paths per Set to every set: every "
+                    "texel sees all of them, so each pass adds to the bake's time")
     viewport_passes: IntProperty(
         name="Viewport Passes", default=VP["INSTANT_GI"], min=1, soft_max=64,
         description="Passes the Rendered viewport solves")

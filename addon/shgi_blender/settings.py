@@ -310,6 +310,22 @@ def final_passes(solver, shgi=None):
         return FINAL_PASSES_FALLBACK[solver]
 
 
+# Render Passes of the methods whose F12 solves more passes than a bake: {solver: default}.
+# Their groups hold Bake Passes too, with the final passes as default. Instant GI: a sample
+# gathers Per Sample (passes_per_sample) of the passes, the next ones after the previous
+# sample's, so 64 passes cost a sample no more than 4 and a frame's samples average 16 times the
+# VPLs (the sun room at 16 samples, seeds 5..8: 32.95 dB against 31.15 dB;
+# bench/instant_gi_sample_passes.py, docs/methods.md "Instant GI"), while a bake gathers every
+# pass at each texel: 64 passes would cost it 16 times as much.
+RENDER_PASSES_DEFAULTS = {"INSTANT_GI": 64}
+
+
+def render_passes(solver, shgi=None):
+    """Render Passes' default of `solver` (F12, Solve): RENDER_PASSES_DEFAULTS, else the final
+    passes (final_passes)."""
+    return RENDER_PASSES_DEFAULTS.get(solver) or final_passes(solver, shgi)
+
+
 # Properties of the live viewport only (no native struct has them): samples per pixel a viewport
 # accumulates before it stops, and whether the overlays draw the lattice's sample spheres or the
 # probes.
@@ -572,8 +588,9 @@ LIGHT_PATH_VALUES = {
 @dataclass(frozen=True)
 class MethodSettings:
     """A field method's settings group: ``scene.shgi.<prop>``, mirroring shgi.<native_type> by
-    name, with the method's pass counts: ``passes`` (a final solve: F12, Solve, a bake) and
-    ``viewport_passes`` (the Rendered viewport)."""
+    name, with the method's pass counts: ``passes`` (a final solve: F12, Solve, a bake),
+    ``viewport_passes`` (the Rendered viewport) and, for the methods of RENDER_PASSES_DEFAULTS,
+    ``bake_passes`` (a bake's, where ``passes`` is F12's and Solve's)."""
 
     solver: str          # Method.solver: "PHOTON_LATTICE", "PROBE_GRID"
     label: str           # as the panels name the method
@@ -871,9 +888,11 @@ def default_properties(shgi=None, **overrides):
     values = dict(PROPERTY_DEFAULTS, **VIEWPORT_PROPERTY_DEFAULTS, **DENOISING_DEFAULTS,
                   **TIME_LIMIT_DEFAULTS, method=METHODS[0].identifier)
     for solver, group in METHOD_SETTINGS.items():
+        bake = ({"bake_passes": final_passes(solver, shgi)}
+                if solver in RENDER_PASSES_DEFAULTS else {})
         values[group.prop] = SimpleNamespace(
-            **group.defaults, passes=final_passes(solver, shgi),
+            **group.defaults, passes=render_passes(solver, shgi),
             viewport_passes=VIEWPORT_PASSES_DEFAULTS[solver],
-            final_gather=FINAL_GATHER_DEFAULTS[solver])
+            final_gather=FINAL_GATHER_DEFAULTS[solver], **bake)
     values.update(overrides)
     return SimpleNamespace(**values)

@@ -19,6 +19,9 @@ its default in the new place while its old value lies unused under the old name.
 6. Light Propagation's defaults: Steps 0 (from the new Distance, 32 cells), Damping, Occlude
    First Step, Drop Outward Lights, Travel Re-injection, Unclamped Transfer and Clamp At Walls
    on. A scene saved with the group before kept 8 steps and those off: it keeps them.
+7. Instant GI's Render Passes default to 64 (settings.RENDER_PASSES_DEFAULTS), where they were
+   4, and its bakes take Bake Passes (``instant_gi.bake_passes``) instead. A scene saved before
+   keeps 4 Render Passes unless it set them, and bakes with the passes it rendered with.
 
 ``upgrade`` takes what a scene stored (its ID properties as a dict: only values someone set are
 stored, a default is not) and says what to write where, so that the scene renders with the
@@ -29,7 +32,7 @@ from dataclasses import dataclass, field
 
 from . import settings
 
-SETTINGS_VERSION = 6
+SETTINGS_VERSION = 7
 
 # The method groups that version 2 had: a scene saved then could render only with these, so
 # only they keep reading their field directly (groups added later start with their defaults).
@@ -60,6 +63,9 @@ DEFAULTS_BEFORE_5 = {"filter_glossy": 0.0}
 PROPAGATION_DEFAULTS_BEFORE_6 = {"steps": 8, "damping": False, "occlude_first_step": False,
                                  "drop_outward_vpls": False, "travel_reinjection": False,
                                  "unclamped_transfer": False, "clamp_at_surfaces": False}
+# The Instant GI group's defaults before version 7 that have changed since. The group came in
+# version 3's time, as Light Propagation's.
+INSTANT_GI_DEFAULTS_BEFORE_7 = {"passes": 4}
 
 
 @dataclass
@@ -102,6 +108,14 @@ def upgrade(stored):
         for name, old_default in PROPAGATION_DEFAULTS_BEFORE_6.items():
             if name not in group:
                 result.values[("propagation", name)] = old_default
+    if 3 <= version < 7:
+        group = stored.get("instant_gi", {})
+        for name, old_default in INSTANT_GI_DEFAULTS_BEFORE_7.items():
+            if name not in group:
+                result.values[("instant_gi", name)] = old_default
+        # Its bakes solved the Render Passes: Bake Passes keep a count the scene set.
+        if "passes" in group:
+            result.values[("instant_gi", "bake_passes")] = group["passes"]
     return result
 
 

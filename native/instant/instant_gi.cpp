@@ -74,6 +74,44 @@ constexpr int kMaxPassesPerSample = 1 << 16;
 // Lobes up to this roughness are mirror-like: their light is not spread as if diffuse.
 constexpr float kSpecularRoughness = 0.1f;
 
+// glossy_from_vpls: lobes at least this rough read the VPLs directly (narrower lobes would see
+// each VPL as a spike).
+constexpr float kGlossyVplRoughness = 0.3f;
+
+// The prefiltering GGX lobe of ggx_zh.h, D_GGX(cos(θ/2); α = roughness²) max(cos θ, 0), at the
+// cosine between a direction and the reflected view direction.
+float glossy_lobe(float cos_theta, float alpha) {
+    if (cos_theta <= 0.0f) return 0.0f;
+    const float c2 = 0.5f * (1.0f + cos_theta);  // cos²(θ/2)
+    const float a2 = alpha * alpha;
+    const float d = c2 * (a2 - 1.0f) + 1.0f;
+    return a2 / (kPi * d * d) * cos_theta;
+}
+
+// 1 / the lobe's integral over the sphere, tabulated over roughness [kGlossyVplRoughness, 1]
+// (midpoint rule in θ; the table's steps are far finer than the lobe changes).
+float glossy_lobe_norm(float roughness) {
+    constexpr int kEntries = 64, kSteps = 2048;
+    static const std::vector<float> table = [] {
+        std::vector<float> t(kEntries + 1);
+        for (int i = 0; i <= kEntries; ++i) {
+            const float r = kGlossyVplRoughness + (1.0f - kGlossyVplRoughness) * float(i) /
+                                                      float(kEntries);
+            double sum = 0.0;
+            for (int k = 0; k < kSteps; ++k) {
+                const double theta = (k + 0.5) * (0.5 * kPi) / kSteps;
+                sum += glossy_lobe(float(std::cos(theta)), r * r) * std::sin(theta);
+            }
+            t[size_t(i)] = float(1.0 / (2.0 * kPi * sum * (0.5 * kPi) / kSteps));
+        }
+        return t;
+    }();
+    const float x = std::clamp((roughness - kGlossyVplRoughness) / (1.0f - kGlossyVplRoughness),
+                               0.0f, 1.0f) * float(kEntries);
+    const int i = std::min(int(x), kEntries - 1);
+    return table[size_t(i)] + (x - float(i)) * (table[size_t(i) + 1] - table[size_t(i)]);
+}
+
 // The reach of the ray back along a photon's path that finds its surface (scattered_flux).
 constexpr float kReach = 1e-3f;
 
@@ -150,10 +188,11 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
                                std::vector<std::vector<vec3>> sky_sets,
                                std::vector<std::vector<InstantLampSample>> lamp_sets,
                                std::shared_ptr<const LightSampler> lamps,
-                               std::vector<std::vector<uint64_t>> pass_ends)
+                               std::vector<std::vector<uint64_t>> pass_ends,
+                               std::vector<std::vector<uint64_t>> lamp_pass_ends)
     : scene_(&scene), settings_(settings), sets_(std::move(sets)), sky_sets_(std::move(sky_sets)),
       lamp_sets_(std::move(lamp_sets)), pass_ends_(std::move(pass_ends)),
-      lamps_(std::move(lamps)), passes_(passes),
+      lamp_pass_ends_(std::move(lamp_pass_ends)), lamps_(std::move(lamps)), passes_(passes),
       timings_(std::make_shared<InstantGiFrameTimings>()) {
     if (!pass_ends_.empty()) {
         if (pass_ends_.size() != sets_.size())
@@ -164,8 +203,24 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
                 !std::is_sorted(pass_ends_[s].begin(), pass_ends_[s].end()))
                 throw Internal("InstantGiField: a set's pass_ends do not split its VPLs");
     }
-    if (!sky_sets_.empty() && sky_sets_.size() != sets_.size())
-        throw Internal("InstantGiField: sky_sets and sets differ in count");
+    if (!sky_sets_.empty()) {
+        if (sky_sets_.size() != sets_.size())
+            throw Internal("InstantGiField: sky_sets and sets differ in count");
+        for (const auto& set : sky_sets_)
+            if (passes_ == 0 || set.size() % passes_ != 0)
+                throw Internal("InstantGiField: a sky set's directions are not so many per pass");
+    }
+    if (!lamp_sets_.empty() && !pass_ends_.empty() && lamp_pass_ends_.empty())
+        throw Internal("InstantGiField: lamp_sets and pass_ends without lamp_pass_ends");
+    if (!lamp_pass_ends_.empty()) {
+        if (pass_ends_.empty() || lamp_pass_ends_.size() != lamp_sets_.size())
+            throw Internal("InstantGiField: lamp_pass_ends without pass_ends or lamp_sets");
+        for (size_t s = 0; s < lamp_sets_.size(); ++s)
+            if (lamp_pass_ends_[s].size() != passes_ ||
+                lamp_pass_ends_[s].back() != lamp_sets_[s].size() ||
+                !std::is_sorted(lamp_pass_ends_[s].begin(), lamp_pass_ends_[s].end()))
+                throw Internal("InstantGiField: a set's lamp_pass_ends do not split its samples");
+    }
     if (!lamp_sets_.empty()) {
         if (lamp_sets_.size() != sets_.size())
             throw Internal("InstantGiField: lamp_sets and sets differ in count");
@@ -182,10 +237,8 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
             else
                 ++per_set[sample.light];
         }
-        if (triangles > 0) triangle_share_ = 1.0f / float(triangles);
-        lamp_share_.assign(per_set.size(), 0.0f);
-        for (size_t i = 0; i < per_set.size(); ++i)
-            if (per_set[i] > 0) lamp_share_[i] = 1.0f / float(per_set[i]);
+        triangle_samples_ = triangles;
+        lamp_samples_ = std::move(per_set);
     }
     for (const auto& set : sets_) vpl_count_ += set.size();
     for (const auto& set : sky_sets_) sky_count_ += set.size();
@@ -209,34 +262,59 @@ std::vector<uint64_t> InstantGiField::sample_passes(uint64_t sample) const {
     return passes;
 }
 
-std::vector<std::vector<InstantGiField::VplRange>> InstantGiField::sample_ranges(
-    uint64_t sample, float* vpl_scale) const {
+InstantGiField::SampleGather InstantGiField::sample_gather(uint64_t sample) const {
     const std::vector<uint64_t> passes = sample_passes(sample);
-    *vpl_scale = float(sets_.size()) / float(std::max<size_t>(passes.size(), 1));
-    std::vector<std::vector<VplRange>> ranges(sets_.size());
-    for (size_t s = 0; s < sets_.size(); ++s) {
-        if (passes.size() == passes_) {  // every pass, in the sets' order
-            ranges[s].push_back({0, uint64_t(sets_[s].size())});
-            continue;
-        }
-        for (const uint64_t k : passes)
-            ranges[s].push_back({k == 0 ? 0 : pass_ends_[s][k - 1], pass_ends_[s][k]});
+    SampleGather gather;
+    gather.passes = passes.size();
+    gather.vpl_scale = float(sets_.size()) / float(std::max<size_t>(passes.size(), 1));
+    gather.vpls.resize(sets_.size());
+    gather.sky.resize(sky_sets_.size());
+    gather.lamps.resize(lamp_sets_.size());
+    if (passes.size() == passes_) {  // every pass, in the sets' order
+        for (size_t s = 0; s < sets_.size(); ++s) gather.vpls[s].push_back({0, sets_[s].size()});
+        for (size_t s = 0; s < sky_sets_.size(); ++s)
+            gather.sky[s].push_back({0, sky_sets_[s].size()});
+        for (size_t s = 0; s < lamp_sets_.size(); ++s)
+            gather.lamps[s].push_back({0, lamp_sets_[s].size()});
+        return gather;
     }
-    return ranges;
+    const bool first_pass = std::find(passes.begin(), passes.end(), 0) != passes.end();
+    const auto range = [](const std::vector<uint64_t>& ends, uint64_t k) {
+        return VplRange{k == 0 ? 0 : ends[k - 1], ends[k]};
+    };
+    for (size_t s = 0; s < sets_.size(); ++s) {
+        // Every pass adds as many sky directions to a set.
+        const uint64_t directions = sky_sets_.empty() ? 0 : sky_sets_[s].size() / passes_;
+        for (const uint64_t k : passes) {
+            gather.vpls[s].push_back(range(pass_ends_[s], k));
+            if (!sky_sets_.empty()) gather.sky[s].push_back({k * directions, (k + 1) * directions});
+            if (!lamp_sets_.empty()) gather.lamps[s].push_back(range(lamp_pass_ends_[s], k));
+        }
+        // The delta lights' samples, made at the first pass, in every sample.
+        if (!lamp_sets_.empty() && !first_pass)
+            gather.lamps[s].push_back({0, lamp_pass_ends_[s][0], true});
+    }
+    return gather;
 }
 
 vec3 InstantGiField::lamp_delta(const InstantLampSample& sample, const vec3& p, const vec3& ng,
-                                float lamp_scale, vec3* direction, float* distance) const {
+                                float lamp_scale, uint64_t passes, vec3* direction,
+                                float* distance) const {
     LightSample ls;
+    // The sample's share of its light: 1 / that light's samples among the passes gathered
+    // (as many in every pass; a delta light's one sample is always gathered).
+    const auto share_of = [&](uint64_t samples) {
+        return 1.0f / float(sample.delta ? samples : samples / passes_ * passes);
+    };
     float share;
     if (sample.triangle) {
         if (!lamps_->sample_emissive_triangle(sample.light, p, sample.u, &ls)) return vec3(0.0f);
-        share = triangle_share_ / sample.selection;
+        share = share_of(triangle_samples_) / sample.selection;
     } else {
         if (!lamps_->light_emits(sample.light) ||
             !lamps_->sample_light(sample.light, p, sample.u, &ls))
             return vec3(0.0f);
-        share = lamp_share_[sample.light];
+        share = share_of(lamp_samples_[sample.light]);
     }
     if (!(ls.pdf > 0.0f) || glm::dot(ls.wi, ng) <= 0.0f) return vec3(0.0f);
     const vec3 e = ls.radiance * (lamp_scale * share / ls.pdf);
@@ -262,7 +340,7 @@ void InstantGiField::gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t 
         for (const InstantLampSample& sample : lamp_sets_[set]) {
             vec3 w;
             float distance;
-            const vec3 e = lamp_delta(sample, p, n, lamp_scale, &w, &distance);
+            const vec3 e = lamp_delta(sample, p, n, lamp_scale, passes_, &w, &distance);
             if (e == vec3(0.0f) || scene_->occluded(light_shadow_ray(origin, w, distance)))
                 continue;
             add_delta(sh.coeffs.data(), e, w);
@@ -352,16 +430,42 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
     // filter_direct: the sky's and lights' direct light, a plane of its own (DiffDir /
     // GlossDir).
     std::vector<vec3> raw_direct(direct ? pixels * kCoeffs : 0, vec3(0.0f));
-    float vpl_scale;
-    const std::vector<std::vector<VplRange>> ranges = sample_ranges(first, &vpl_scale);
-    size_t largest_set = 1;
-    for (size_t s = 0; s < sets_.size(); ++s) {
-        size_t vpls = 0;
-        for (const VplRange& range : ranges[s]) vpls += range.end - range.begin;
-        largest_set = std::max(largest_set, vpls +
-                                                (sky ? sky_sets_[s].size() : size_t(0)) +
-                                                (lamps ? lamp_sets_[s].size() : size_t(0)));
+    // glossy_from_vpls: per pixel, the reflected view direction and each lobe's GGX alpha and
+    // 1 / its lobe's integral (alpha 0: the lobe reads the SH); a plane per lobe.
+    const bool lobes_from_vpls = settings_.glossy_from_vpls && g.has_field_lobes();
+    std::vector<vec3> reflected, raw_glossy[2];
+    std::vector<vec2> glossy_lobes[2];  // (alpha, 1 / integral)
+    if (lobes_from_vpls) {
+        reflected.assign(pixels, vec3(0.0f));
+        for (int k = 0; k < 2; ++k) {
+            raw_glossy[k].assign(pixels, vec3(0.0f));
+            glossy_lobes[k].assign(pixels, vec2(0.0f));
+        }
+        parallel_for(0, uint64_t(pixels), 4096, [&](uint64_t b, uint64_t e) {
+            for (uint64_t p = b; p < e; ++p) {
+                if (!g.has_surface(p)) continue;
+                const vec3 wo = glm::normalize(camera_position - g.position[p]);
+                reflected[p] = glm::reflect(-wo, g.shading_normal[p]);
+                for (int k = 0; k < 2; ++k) {
+                    const float r = g.glossy_roughness[k][p];
+                    if (max_component(g.glossy_albedo[k][p]) > 0.0f && r >= kGlossyVplRoughness)
+                        glossy_lobes[k][p] = vec2(r * r, glossy_lobe_norm(r));
+                }
+            }
+        });
     }
+    const SampleGather gather = sample_gather(first);
+    const float vpl_scale = gather.vpl_scale;
+    const auto gathered = [](const std::vector<VplRange>& ranges) {
+        uint64_t total = 0;
+        for (const VplRange& range : ranges) total += range.end - range.begin;
+        return total;
+    };
+    size_t largest_set = 1;
+    for (size_t s = 0; s < sets_.size(); ++s)
+        largest_set = std::max(largest_set, size_t(gathered(gather.vpls[s]) +
+                                                   (sky ? gathered(gather.sky[s]) : 0) +
+                                                   (lamps ? gathered(gather.lamps[s]) : 0)));
     const uint64_t rows_per_task =
         std::max<uint64_t>(1, kRaysPerBatch / (uint64_t(std::max(width, 1)) * largest_set));
     parallel_for(0, uint64_t(height), rows_per_task, [&](uint64_t y0, uint64_t y1) {
@@ -375,7 +479,7 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
         for (uint64_t y = y0; y < y1; ++y)
             for (int sx = 0; sx < std::min(n, width); ++sx) {
                 const size_t s = size_t(int(y) % m) * size_t(n) + size_t(sx);
-                for (const VplRange& range : ranges[s])
+                for (const VplRange& range : gather.vpls[s])
                     for (uint64_t v = range.begin; v < range.end; ++v) {
                         const InstantVpl& vpl = sets_[s][v];
                         for (int x = sx; x < width; x += n) {
@@ -398,41 +502,50 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                 // The set's lamp samples: each light's incident radiance / pdf along its
                 // sample, to the sampled point.
                 if (lamps)
-                    for (const InstantLampSample& sample : lamp_sets_[s])
+                    for (const VplRange& range : gather.lamps[s])
+                        for (uint64_t i = range.begin; i < range.end; ++i) {
+                            const InstantLampSample& sample = lamp_sets_[s][i];
+                            if (range.deltas_only && !sample.delta) continue;
+                            for (int x = sx; x < width; x += n) {
+                                const size_t p = g.index(x, int(y));
+                                if (!g.has_surface(p)) continue;
+                                const vec3 pos = g.position[p], ng = g.geometric_normal[p];
+                                vec3 w;
+                                float distance;
+                                const vec3 e = lamp_delta(sample, pos, ng, 1.0f, gather.passes,
+                                                          &w, &distance);
+                                if (e == vec3(0.0f)) continue;
+                                rays.push_back(
+                                    light_shadow_ray(offset_origin(pos, ng), w, distance));
+                                ray_pixel.push_back(uint32_t(p));
+                                weights.push_back(e);
+                                directions.push_back(w);
+                                ray_direct.push_back(1);
+                            }
+                        }
+                if (!sky) continue;
+                // The set's directional VPLs: the world seen along each, to infinity.
+                const uint64_t sky_directions = gathered(gather.sky[s]);
+                if (sky_directions == 0) continue;
+                const vec3 e = scene_->world().radiance() * (kFourPi / float(sky_directions));
+                for (const VplRange& range : gather.sky[s])
+                    for (uint64_t i = range.begin; i < range.end; ++i) {
+                        const vec3 w = sky_sets_[s][i];
                         for (int x = sx; x < width; x += n) {
                             const size_t p = g.index(x, int(y));
                             if (!g.has_surface(p)) continue;
-                            const vec3 pos = g.position[p], ng = g.geometric_normal[p];
-                            vec3 w;
-                            float distance;
-                            const vec3 e = lamp_delta(sample, pos, ng, 1.0f, &w, &distance);
-                            if (e == vec3(0.0f)) continue;
-                            rays.push_back(light_shadow_ray(offset_origin(pos, ng), w, distance));
+                            const vec3 ng = g.geometric_normal[p];
+                            if (glm::dot(w, ng) <= 0.0f) continue;
+                            Ray ray;
+                            ray.origin = offset_origin(g.position[p], ng);
+                            ray.direction = w;
+                            ray.tmax = kInfinity;
+                            rays.push_back(ray);
                             ray_pixel.push_back(uint32_t(p));
                             weights.push_back(e);
                             directions.push_back(w);
                             ray_direct.push_back(1);
                         }
-                if (!sky) continue;
-                // The set's directional VPLs: the world seen along each, to infinity.
-                const auto& sky_set = sky_sets_[s];
-                if (sky_set.empty()) continue;
-                const vec3 e = scene_->world().radiance() * (kFourPi / float(sky_set.size()));
-                for (const vec3& w : sky_set)
-                    for (int x = sx; x < width; x += n) {
-                        const size_t p = g.index(x, int(y));
-                        if (!g.has_surface(p)) continue;
-                        const vec3 ng = g.geometric_normal[p];
-                        if (glm::dot(w, ng) <= 0.0f) continue;
-                        Ray ray;
-                        ray.origin = offset_origin(g.position[p], ng);
-                        ray.direction = w;
-                        ray.tmax = kInfinity;
-                        rays.push_back(ray);
-                        ray_pixel.push_back(uint32_t(p));
-                        weights.push_back(e);
-                        directions.push_back(w);
-                        ray_direct.push_back(1);
                     }
             }
         if (rays.empty()) return;
@@ -440,7 +553,15 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
         for (size_t r = 0; r < rays.size(); ++r) {  // in ray order: a fixed sum per pixel
             if (occluded[r]) continue;
             std::vector<vec3>& plane = ray_direct[r] ? raw_direct : raw;
-            add_delta(&plane[size_t(ray_pixel[r]) * kCoeffs], weights[r], directions[r]);
+            const size_t p = ray_pixel[r];
+            add_delta(&plane[p * kCoeffs], weights[r], directions[r]);
+            if (!lobes_from_vpls || ray_direct[r]) continue;
+            const float cos_theta = glm::dot(directions[r], reflected[p]);
+            for (int k = 0; k < 2; ++k) {
+                const vec2 lobe = glossy_lobes[k][p];
+                if (lobe.x > 0.0f)
+                    raw_glossy[k][p] += weights[r] * (glossy_lobe(cos_theta, lobe.x) * lobe.y);
+            }
         }
     }, progress);
     timings_->gather = seconds_since(start);
@@ -452,6 +573,37 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
     const bool filter_irradiance =
         mode == InstantGiFilter::Irradiance || mode == InstantGiFilter::Strict;
     const int half_x = Interleave::half_width(n), half_y = Interleave::half_width(m);
+    // The interleave-wide window over `source` (stride vec3 per pixel) into `out_plane`.
+    const auto filter_window = [&](const std::vector<vec3>& source, int stride, bool strict,
+                                   std::vector<vec3>& out_plane) {
+        out_plane.assign(pixels * size_t(stride), vec3(0.0f));
+        parallel_for(0, uint64_t(height), 8, [&](uint64_t y0, uint64_t y1) {
+            throw_if_cancelled(progress);
+            for (uint64_t y = y0; y < y1; ++y)
+                for (int x = 0; x < width; ++x) {
+                    const size_t p = g.index(x, int(y));
+                    if (!g.has_surface(p)) continue;
+                    vec3* out = &out_plane[p * size_t(stride)];
+                    float total = 0.0f;
+                    for (int dy = -half_y; dy <= half_y; ++dy) {
+                        const int qy = int(y) + dy;
+                        if (qy < 0 || qy >= height) continue;
+                        for (int dx = -half_x; dx <= half_x; ++dx) {
+                            const int qx = x + dx;
+                            if (qx < 0 || qx >= width) continue;
+                            const size_t q = g.index(qx, qy);
+                            if (q != p && !joins(g, p, q, settings_, strict)) continue;
+                            const float w =
+                                Interleave::tap_weight(n, dx) * Interleave::tap_weight(m, dy);
+                            const vec3* in = &source[q * size_t(stride)];
+                            for (int i = 0; i < stride; ++i) out[i] += w * in[i];
+                            total += w;
+                        }
+                    }
+                    for (int i = 0; i < stride; ++i) out[i] /= total;
+                }
+        }, progress);
+    };
     // One plane (indirect, or filter_direct's sky) through the filter: SH (mode Sh) or E
     // (Irradiance, Strict) into `out_plane`.
     const auto filter_plane = [&](const std::vector<vec3>& plane, std::vector<vec3>& out_plane) {
@@ -467,42 +619,23 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                 }
             });
         }
-        if (filter_sh || filter_irradiance) {
-            const int stride = filter_sh ? kCoeffs : 1;
-            const std::vector<vec3>& source = filter_sh ? plane : irradiance;
-            out_plane.assign(pixels * size_t(stride), vec3(0.0f));
-            const bool strict = mode == InstantGiFilter::Strict;
-            parallel_for(0, uint64_t(height), 8, [&](uint64_t y0, uint64_t y1) {
-                throw_if_cancelled(progress);
-                for (uint64_t y = y0; y < y1; ++y)
-                    for (int x = 0; x < width; ++x) {
-                        const size_t p = g.index(x, int(y));
-                        if (!g.has_surface(p)) continue;
-                        vec3* out = &out_plane[p * size_t(stride)];
-                        float total = 0.0f;
-                        for (int dy = -half_y; dy <= half_y; ++dy) {
-                            const int qy = int(y) + dy;
-                            if (qy < 0 || qy >= height) continue;
-                            for (int dx = -half_x; dx <= half_x; ++dx) {
-                                const int qx = x + dx;
-                                if (qx < 0 || qx >= width) continue;
-                                const size_t q = g.index(qx, qy);
-                                if (q != p && !joins(g, p, q, settings_, strict)) continue;
-                                const float w = Interleave::tap_weight(n, dx) *
-                                                Interleave::tap_weight(m, dy);
-                                const vec3* in = &source[q * size_t(stride)];
-                                for (int i = 0; i < stride; ++i) out[i] += w * in[i];
-                                total += w;
-                            }
-                        }
-                        for (int i = 0; i < stride; ++i) out[i] /= total;
-                    }
-            }, progress);
-        }
+        if (filter_sh || filter_irradiance)
+            filter_window(filter_sh ? plane : irradiance, filter_sh ? kCoeffs : 1,
+                          mode == InstantGiFilter::Strict, out_plane);
     };
     std::vector<vec3> filtered, filtered_direct;
     filter_plane(raw, filtered);
     if (direct) filter_plane(raw_direct, filtered_direct);
+    // glossy_from_vpls: each lobe's plane through the window too (unless filter_mode None).
+    std::vector<vec3> filtered_glossy[2];
+    for (int k = 0; k < 2; ++k)
+        if (!raw_glossy[k].empty()) {
+            if (mode == InstantGiFilter::None)
+                filtered_glossy[k] = raw_glossy[k];
+            else
+                filter_window(raw_glossy[k], 1, mode == InstantGiFilter::Strict,
+                              filtered_glossy[k]);
+        }
     timings_->filter = seconds_since(start);
 
     // 3. shade: SH dot products with the pixel's shading normal, into the film.
@@ -518,6 +651,10 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                 if (!g.has_surface(p) || !lobes) continue;
                 const vec3 ns = g.shading_normal[p];
                 const vec3 wo = glm::normalize(camera_position - g.position[p]);
+                // Whether lobe k of the indirect plane reads the VPLs directly.
+                const auto direct_lobe = [&](int k, bool indirect) {
+                    return indirect && lobes_from_vpls && glossy_lobes[k][p].x > 0.0f;
+                };
                 // The pixel's diffuse and glossy light from one plane's SH (or filtered E).
                 const auto shade = [&](const std::vector<vec3>& sh,
                                        const std::vector<vec3>& e_plane, vec3& diffuse,
@@ -531,7 +668,9 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                     for (int k = 0; k < 2; ++k)
                         if (max_component(g.glossy_albedo[k][p]) > 0.0f)
                             glossy += g.glossy_albedo[k][p] *
-                                      lookup.glossy(ns, wo, g.glossy_roughness[k][p]);
+                                      (direct_lobe(k, &sh == &sh_source)
+                                           ? filtered_glossy[k][p]
+                                           : lookup.glossy(ns, wo, g.glossy_roughness[k][p]));
                 };
                 vec3 diffuse, glossy;
                 shade(sh_source, filtered, diffuse, glossy);
@@ -666,7 +805,8 @@ void InstantGi::refine(Progress* progress) {
                                        ? light.angle <= 0.0f
                                        : light.type != LightType::Area && light.radius <= 0.0f;
                 const uint64_t count = delta ? (passes_ == 0 ? 1 : 0) : settings_.photons_per_set;
-                for (uint64_t k = 0; k < count; ++k) lamp_sets[s].push_back({i, rng.next_vec2()});
+                for (uint64_t k = 0; k < count; ++k)
+                    lamp_sets[s].push_back({i, rng.next_vec2(), false, 1.0f, delta});
             }
             // The emissive triangles: photons_per_set samples, each triangle by its power.
             if (triangle_power_.empty()) continue;
@@ -679,10 +819,18 @@ void InstantGi::refine(Progress* progress) {
                         [](const auto& set) { return set.empty(); }))
             lamp_sets.clear();
     }
+    // The end of the pass's lamp samples in each set: a preview sample gathers its passes'.
+    std::vector<std::vector<uint64_t>> lamp_pass_ends;
+    if (!lamp_sets.empty()) {
+        lamp_pass_ends = field_->lamp_pass_ends();
+        lamp_pass_ends.resize(set_count);
+        for (size_t s = 0; s < set_count; ++s)
+            lamp_pass_ends[s].push_back(uint64_t(lamp_sets[s].size()));
+    }
     const double deal_seconds = seconds_since(start);
     field_ = std::make_shared<InstantGiField>(*scene_, settings_, std::move(sets), passes_ + 1,
                                               std::move(sky_sets), std::move(lamp_sets), lamps_,
-                                              std::move(pass_ends));
+                                              std::move(pass_ends), std::move(lamp_pass_ends));
     ++passes_;
     stage_seconds_ = {{"vpl_trace", trace_seconds}, {"vpl_sets", deal_seconds}};
     if (progress) progress->set_fraction(1.0f);
@@ -690,7 +838,8 @@ void InstantGi::refine(Progress* progress) {
 
 size_t InstantGi::memory_bytes() const {
     return size_t(field_->vpl_count()) * sizeof(InstantVpl) +
-           size_t(field_->sets().size()) * size_t(field_->passes()) * sizeof(uint64_t) +
+           size_t(field_->sets().size() + field_->lamp_pass_ends().size()) *
+               size_t(field_->passes()) * sizeof(uint64_t) +
            size_t(field_->sky_count()) * sizeof(vec3) +
            size_t(field_->lamp_count()) * sizeof(InstantLampSample);
 }

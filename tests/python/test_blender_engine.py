@@ -105,7 +105,9 @@ NOT_MIRRORED = {
     # targets, docs/methods.md); the add-on keeps the native default.
     "PropagationSettings": {"cascade_follow_camera", "cascade_center", "windowed_reinjection"},
     # As the radiance field's glossy_in_grid: no reason for an artist to change it.
-    "InstantGiSettings": {"glossy_vpls"},
+    # glossy_from_vpls: a measured option (+0.2 dB on the sun room, docs/methods.md), scripts
+    # only for now.
+    "InstantGiSettings": {"glossy_vpls", "glossy_from_vpls"},
     "PhotonLatticeSettings": {"use_bounds", "bounds_min", "bounds_max", "caustic_order",
                               "caustic_blur_passes", "caustic_neighbours", "caustic_radius",
                               "specular_roughness", "normal_offset"},
@@ -253,6 +255,23 @@ def test_pass_counts_live_in_their_method_group():
     assert settings.render_property_values(props) == before
     props.probe_grid.viewport_passes = 8
     assert settings.render_property_values(props) != before
+
+
+def test_instant_gi_bakes_solve_their_own_passes():
+    """Instant GI's F12 samples gather Per Sample of its Render Passes each, a bake every pass at
+    each texel: a bake solves Bake Passes (the registry's final passes, what ``python -m shgi
+    bake`` runs), F12 and Solve 64; the other methods bake their Render Passes."""
+    props = default_props(method="INSTANT_GI")
+    assert (props.instant_gi.passes, props.instant_gi.bake_passes) == (
+        64, shgi.method("INSTANT_GI").final_passes)
+    props.instant_gi.passes, props.instant_gi.bake_passes = 32, 3
+    assert field_solvers.solver_recipe(props, shgi).passes == 32
+    assert field_solvers.solver_recipe(props, shgi, bake=True).passes == 3
+    assert field_solvers.solver_recipe(props, shgi, viewport=True, bake=True).passes == (
+        props.instant_gi.viewport_passes)
+    props.method = "PROBE_GRID"
+    assert not hasattr(props.probe_grid, "bake_passes")
+    assert field_solvers.solver_recipe(props, shgi, bake=True).passes == props.probe_grid.passes
 
 
 # The signature a probe grid solution saved by the add-on before the method groups holds
@@ -506,6 +525,31 @@ def test_instant_gi_job_renders_the_sets_of_its_settings():
     solver = shgi.InstantGi(scene, recipe.settings)
     solver.refine()
     solver.refine()
+    expected, _ = shgi.render_preview(scene, solver.current_field(),
+                                      shgi.PreviewSettings(samples=3, seed=2))
+    assert expected["DiffInd"].max() > 0.0
+    for name, pixels in expected.items():
+        np.testing.assert_array_equal(job.last_snapshot().passes[name], pixels, err_msg=name)
+
+
+def test_instant_gi_job_solves_passes_as_its_samples_need_them():
+    """Instant GI's sample i reads passes i k .. i k + k - 1 (k: Per Sample): F12 solves the
+    first round's passes before sampling and the others as the rounds need them (never those
+    no sample reads), for the image of solving every pass first, bit for bit."""
+    scene = committed(scenes.cornell_box(0.06))
+    props = default_props(method="INSTANT_GI",
+                          instant_gi={"photons_per_set": 8, "passes": 8, "passes_per_sample": 2})
+    recipe = field_solvers.solver_recipe(props, shgi)
+    assert [field_solvers.InstantGiSolver.passes_for_samples(recipe.settings, n, 8)
+            for n in (1, 2, 3, 4, 5)] == [2, 4, 6, 8, 8]
+    assert field_solvers.FieldSolver.passes_for_samples(recipe.settings, 1, 8) == 8
+    job = RenderJob(shgi, scene, 3, preview_settings=shgi.PreviewSettings(seed=2),
+                    solver_recipe=recipe).start()
+    assert job.wait(60) and job.error is None, job.error
+    assert job.solution.solver.passes == 6 and job.solution.field.passes == 6
+    solver = shgi.InstantGi(scene, recipe.settings)
+    for _ in range(8):
+        solver.refine()
     expected, _ = shgi.render_preview(scene, solver.current_field(),
                                       shgi.PreviewSettings(samples=3, seed=2))
     assert expected["DiffInd"].max() > 0.0

@@ -70,9 +70,10 @@ def test_a_third_layout_scene_keeps_clamp_indirect_off():
     assert settings.PROPERTY_DEFAULTS["clamp_indirect"] == 10.0
     assert shgi.PathTracerSettings().clamp_indirect == 0.0  # scripts keep the native 0
     assert settings_upgrade.upgrade({"settings_version": 3, "samples": 5}).values == {
-        ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6}
+        ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6,
+        **INSTANT_GI_BEFORE_7}
     assert settings_upgrade.upgrade({"settings_version": 3, "clamp_indirect": 4.0}).values == {
-        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6}
+        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7}
 
 
 def test_a_fourth_layout_scene_keeps_filter_glossy_off():
@@ -84,9 +85,9 @@ def test_a_fourth_layout_scene_keeps_filter_glossy_off():
     assert shgi.PreviewSettings().filter_glossy == 0.0
     assert shgi.LightmapSettings().filter_glossy == 0.0
     assert settings_upgrade.upgrade({"settings_version": 4, "samples": 5}).values == {
-        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6}
-    assert settings_upgrade.upgrade({"settings_version": 4, "filter_glossy": 0.25}).values == (
-        PROPAGATION_BEFORE_6)
+        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7}
+    assert settings_upgrade.upgrade({"settings_version": 4, "filter_glossy": 0.25}).values == {
+        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7}
 
 
 # Light Propagation's defaults before layout 6, as an upgrade writes them into the group.
@@ -104,13 +105,33 @@ def test_a_fifth_layout_scene_keeps_the_light_propagation_defaults_of_then():
     it set (kept as stored). Layouts 1 and 2 had no Light Propagation group: today's defaults."""
     assert (settings.PROPAGATION_DEFAULTS["steps"], settings.PROPAGATION_DEFAULTS["distance"]) == (
         0, 32.0)
-    assert settings_upgrade.upgrade({"settings_version": 5, "samples": 5}).values == (
-        PROPAGATION_BEFORE_6)
+    assert settings_upgrade.upgrade({"settings_version": 5, "samples": 5}).values == {
+        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7}
     stored = {"settings_version": 5, "propagation": {"steps": 16, "unclamped_transfer": True}}
     assert settings_upgrade.upgrade(stored).values == {
-        key: value for key, value in PROPAGATION_BEFORE_6.items()
-        if key[1] not in ("steps", "unclamped_transfer")}
+        **{key: value for key, value in PROPAGATION_BEFORE_6.items()
+           if key[1] not in ("steps", "unclamped_transfer")}, **INSTANT_GI_BEFORE_7}
     assert not any(group == "propagation" for group, _ in settings_upgrade.upgrade(
+        {"settings_version": 2, "samples": 5}).values)
+
+
+# Instant GI's Render Passes before layout 7, as an upgrade writes them into the group.
+INSTANT_GI_BEFORE_7 = {("instant_gi", "passes"): 4}
+
+
+def test_a_sixth_layout_scene_keeps_instant_gi_passes_for_renders_and_bakes():
+    """Layout 7 gave Instant GI 64 Render Passes and bakes their own Bake Passes (4): a scene
+    saved before keeps 4 Render Passes unless it set them, and bakes with the passes it set
+    (it baked with its Render Passes). Layouts 1 and 2 had no Instant GI group: today's
+    defaults."""
+    assert settings.RENDER_PASSES_DEFAULTS["INSTANT_GI"] == 64
+    defaults = settings.default_properties(shgi).instant_gi
+    assert (defaults.passes, defaults.bake_passes) == (64, shgi.method("INSTANT_GI").final_passes)
+    assert settings_upgrade.upgrade({"settings_version": 6, "samples": 5}).values == (
+        INSTANT_GI_BEFORE_7)
+    stored = {"settings_version": 6, "instant_gi": {"passes": 12, "sets_x": 2}}
+    assert settings_upgrade.upgrade(stored).values == {("instant_gi", "bake_passes"): 12}
+    assert not any(group == "instant_gi" for group, _ in settings_upgrade.upgrade(
         {"settings_version": 2, "samples": 5}).values)
 
 

@@ -47,6 +47,13 @@ class FieldSolver:
     def pass_stage(number):
         return f"Refining, pass {number}"
 
+    @staticmethod
+    def passes_for_samples(_native_settings, _samples, passes):
+        """How many of a solve's `passes` must be solved before a preview renders its first
+        `samples` samples as it would over all of them: all of them (every sample reads every
+        pass). F12 solves the others while it samples (render_job.RenderJob)."""
+        return passes
+
     @property
     def passes(self):
         return self.solver.passes
@@ -105,6 +112,13 @@ class InstantGiSolver(FieldSolver):
     @staticmethod
     def pass_stage(number):
         return f"Tracing VPLs, pass {number}"
+
+    @staticmethod
+    def passes_for_samples(native_settings, samples, passes):
+        """Sample i gathers passes i k .. i k + k - 1 (k: passes_per_sample) while the field
+        has them: the first `samples` samples need samples x k passes, and render over those
+        bit for bit as over all `passes` (tests/python/test_instant_gi.py)."""
+        return min(passes, samples * native_settings.passes_per_sample)
 
     def figures(self):
         field = self.solver.current_field()
@@ -364,11 +378,13 @@ class SolverRecipe:
         return self.solver(shgi, scene, self.settings, progress)
 
 
-def solver_recipe(props, shgi, volumes=(), viewport=False, gather=None):
+def solver_recipe(props, shgi, volumes=(), viewport=False, gather=None, bake=False):
     """The SolverRecipe of scene.shgi's method (props: scene.shgi or its values as a namespace).
 
     volumes: the scene's irradiance volumes (export/light_probe.ProbeVolumeRecord).
     viewport: the method group's viewport_passes; else its passes (F12, Solve, a bake).
+    bake: a bake's solve: the group's bake_passes where it has them (settings.
+        RENDER_PASSES_DEFAULTS: a bake gathers every pass, F12's samples some each).
     gather: whether the field will be read through a final gather (one bounce less in the field;
         settings.light_path_fields); None: as the group's Final Gather says (F12, the viewport,
         Solve), False for a bake, which reads its field at the texels.
@@ -400,5 +416,10 @@ def solver_recipe(props, shgi, volumes=(), viewport=False, gather=None):
     else:
         raise ValueError(f"method {props.method!r} solves no field")
     group = getattr(props, settings.METHOD_SETTINGS[solver].prop)
-    return SolverRecipe(recipe_solver, native_settings,
-                        group.viewport_passes if viewport else group.passes)
+    if viewport:
+        passes = group.viewport_passes
+    elif bake and solver in settings.RENDER_PASSES_DEFAULTS:
+        passes = group.bake_passes
+    else:
+        passes = group.passes
+    return SolverRecipe(recipe_solver, native_settings, passes)

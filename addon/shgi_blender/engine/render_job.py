@@ -12,6 +12,10 @@ every sample finished before Esc.
 Sampling runs in rounds (``sample_rounds``): the first round is one sample per pixel so that an
 image appears at once; rounds then double, up to an eighth of the total. Both renderers give the
 same image however the samples are split between calls, so rounds cost only their snapshots.
+A field whose samples each read passes of their own (Instant GI's passes_per_sample:
+FieldSolver.passes_for_samples) is solved as the rounds need its passes, the first round's
+before sampling and more before each round: the same image as solving every pass first, with
+the first image sooner.
 ``make_renderer`` builds either one as a Renderer (add samples, read passes); the viewport
 worker renders through it too.
 
@@ -81,13 +85,15 @@ def make_renderer(shgi, scene, progress, *, path_tracer_settings=None, preview_s
 
     path_tracer_settings: renders with the reference path tracer (from the scene's camera).
     preview_settings: else renders with the preview renderer over `field` (None: direct light
-        only) from `camera` (None: the scene's).
+        only; a callable: the field it returns, read by each add, as a render job solves it
+        while it samples) from `camera` (None: the scene's).
     """
     if path_tracer_settings is not None:
         tracer = shgi.PathTracer(scene, path_tracer_settings)
         return Renderer(lambda count: tracer.render(count, progress=progress), tracer.passes)
     preview = shgi.PreviewRenderer(scene, preview_settings, camera=camera)
-    return Renderer(lambda count: preview.render(field, count, progress=progress),
+    return Renderer(lambda count: preview.render(field() if callable(field) else field, count,
+                                                 progress=progress),
                     preview.passes)
 
 
@@ -133,6 +139,7 @@ class RenderJob(NativeTask):
         self.denoise_error = None  # why a render that should be denoised is not
         self.timings = {}       # seconds per stage: commit, solve, render, denoise
         self.solution = None    # the solution_cache.Solution the job solved, if any (not cached)
+        self._solve_stopped = False  # a Time Limit cut the solve short: no passes after it
 
     # --- main thread ---------------------------------------------------------------------------
 
@@ -201,10 +208,33 @@ class RenderJob(NativeTask):
         deadline = None
         if self._deadline is not None:
             deadline = self._deadline - (1.0 - SOLVE_TIME_SHARE) * self.time_limit
-        self.solution = solution_cache.solve(self._shgi, self.scene, self._solver_recipe,
-                                             signature=None, progress=self.progress,
-                                             on_stage=on_stage, deadline=deadline)
+        recipe = self._solver_recipe
+        self.solution = solution_cache.solve(self._shgi, self.scene, recipe, signature=None,
+                                             progress=self.progress, on_stage=on_stage,
+                                             deadline=deadline,
+                                             passes=self._passes_for(sample_rounds(
+                                                 self.samples)[0]))
         self.field = self.solution.field
+
+    def _passes_for(self, samples):
+        """The passes of the job's recipe its first `samples` samples need solved."""
+        recipe = self._solver_recipe
+        return recipe.solver.passes_for_samples(recipe.settings, samples, recipe.passes)
+
+    def _missing_passes(self, samples):
+        """The passes the first `samples` samples need when the solution lacks some (a field
+        whose samples read passes of their own, solved as the rounds need them), else None."""
+        if self.solution is None or self._solve_stopped:
+            return None
+        passes = self._passes_for(samples)
+        return passes if self.solution.solver.passes < passes else None
+
+    def _refine(self, passes):
+        """Solves up to `passes` passes (fewer when the Time Limit comes first: then no more)."""
+        solution_cache.refine(self.solution, passes, self._solver_recipe.passes, self.progress,
+                              deadline=self._deadline)
+        self.field = self.solution.field
+        self._solve_stopped = self.solution.solver.passes < passes
 
     def _make_denoiser(self):
         """The FrameDenoiser of the job's Denoising (None when off or unavailable)."""
@@ -217,10 +247,13 @@ class RenderJob(NativeTask):
         return None
 
     def _sample(self, render_start, denoiser):
+        # A Time Limit that cut the first solve short keeps its passes.
+        self._solve_stopped = (self.solution is not None and self.solution.solver.passes <
+                               self._passes_for(sample_rounds(self.samples)[0]))
         renderer = make_renderer(self._shgi, self.scene, self.progress,
                                  path_tracer_settings=self._path_tracer_settings,
-                                 preview_settings=self._preview_settings, field=self.field,
-                                 camera=self._camera)
+                                 preview_settings=self._preview_settings,
+                                 field=lambda: self.field, camera=self._camera)
         name = "Path tracing" if self._path_tracer_settings is not None else "Rendering"
         sampling_start = time.perf_counter()
         for count in sample_rounds(self.samples):
@@ -231,6 +264,11 @@ class RenderJob(NativeTask):
             hi = render_start + (1.0 - render_start) * (self.samples_done + count) / self.samples
             stage = f"{name}, sample {self.samples_done + count}/{self.samples}"
             try:
+                passes = self._missing_passes(self.samples_done + count)
+                if passes is not None:
+                    self._timed("solve", f"{self._solver_recipe.solver.pass_stage(passes)}/"
+                                f"{self._solver_recipe.passes}", (lo, lo),
+                                lambda: self._refine(passes))
                 self._timed("render", stage, (lo, hi), lambda: renderer.add(count))
             except self._shgi.Cancelled:
                 self._keep(renderer, None)  # every pass of the rounds done before Esc

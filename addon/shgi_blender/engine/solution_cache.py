@@ -71,8 +71,9 @@ class Solution:
 
 
 def solve(shgi, scene, recipe, signature, progress=None, timings=None, warnings=(),
-          on_stage=None, deadline=None):
-    """Commits `scene` (if needed), builds the recipe's solver and runs its passes; a Solution.
+          on_stage=None, deadline=None, passes=None):
+    """Commits `scene` (if needed), builds the recipe's solver and runs its passes (or the first
+    `passes` of them: refine runs the others); a Solution.
 
     Runs on any thread (no bpy); raises shgi.Cancelled when `progress` is cancelled.
     recipe: a field_solvers.SolverRecipe.
@@ -93,19 +94,34 @@ def solve(shgi, scene, recipe, signature, progress=None, timings=None, warnings=
     start = time.perf_counter()
     solver = recipe.build(shgi, scene, progress)
     timings[recipe.solver.BUILD_TIMING] = time.perf_counter() - start
-    for index in range(recipe.passes):
-        share = (1.0 - BUILD_SHARE) / recipe.passes
-        on_stage(f"{solver.pass_stage(index + 1)}/{recipe.passes}",
-                 BUILD_SHARE + index * share, BUILD_SHARE + (index + 1) * share)
+    solution = Solution(method=recipe.solver.METHOD, scene=scene, solver=solver, field=None,
+                        signature=signature, timings=timings, memory_bytes=0,
+                        warnings=list(warnings))
+    refine(solution, recipe.passes if passes is None else passes, recipe.passes, progress,
+           on_stage, deadline)
+    return solution
+
+
+def refine(solution, passes, total, progress=None, on_stage=None, deadline=None):
+    """Runs the passes of `solution`'s solver up to `passes` of `total` (none when it has them)
+    and makes its field, memory and timings the solver's.
+
+    on_stage, deadline: as solve's (stages named pass/total, shares of the passes run here).
+    """
+    on_stage = on_stage or (lambda _stage, _lo, _hi: None)
+    solver = solution.solver
+    first = solver.passes
+    for index in range(first, passes):
+        share = (1.0 - BUILD_SHARE) / (passes - first)
+        lo = BUILD_SHARE + (index - first) * share
+        on_stage(f"{solver.pass_stage(index + 1)}/{total}", lo, lo + share)
         pass_start = time.perf_counter()
         solver.update(progress)
         now = time.perf_counter()
         if deadline is not None and now + (now - pass_start) > deadline:  # the next would pass it
             break
-    timings.update(solver.timings)
-    return Solution(method=recipe.solver.METHOD, scene=scene, solver=solver,
-                    field=solver.field(), signature=signature, timings=timings,
-                    memory_bytes=solver.memory_bytes, warnings=list(warnings))
+    solution.timings.update(solver.timings)
+    solution.field, solution.memory_bytes = solver.field(), solver.memory_bytes
 
 
 _solutions = {}

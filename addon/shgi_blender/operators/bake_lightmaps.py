@@ -269,9 +269,10 @@ def prepare_bake(context, values, report, merge=False, created=None):
         recipe = None
         if bake_settings.uses_field(values):
             # Read through a final gather (Bake > Final Gather), the field is solved one
-            # bounce shallower, as F12's (settings.light_path_fields).
+            # bounce shallower, as F12's (settings.light_path_fields); with the method's Bake
+            # Passes where it has them.
             recipe = solver_recipe(_MethodOf(scene.shgi, values.source), shgi,
-                                   export.probe_volumes, gather=values.final_gather)
+                                   export.probe_volumes, gather=values.final_gather, bake=True)
         farm = bake_settings.farm_target(values)
         if farm is not None:  # the farm splits the bake itself: no shard of it here
             return BakeRequest(export.scene, jobs, options, out_dir, recipe, farm=farm)

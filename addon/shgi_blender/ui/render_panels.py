@@ -332,6 +332,7 @@ class SHGI_RENDER_PT_instant_gi(_FieldPanel, bpy.types.Panel):
         column.label(text="Passes")
         column.prop(instant, "passes", text="Render")
         column.prop(instant, "viewport_passes", text="Viewport")
+        column.prop(instant, "bake_passes", text="Bake")
         column.prop(instant, "passes_per_sample", text="Per Sample")
 
 

@@ -646,6 +646,14 @@ class InstantGiSettings:
     def glossy_bounces(self, arg1: typing.SupportsIndex) -> None:
         ...
     @property
+    def glossy_from_vpls(self) -> bool:
+        """
+        Glossy lobes of roughness 0.3 and above weigh each VPL by the lobe itself instead of reading the L2 SH: sharper glossy light, the same mean (False).
+        """
+    @glossy_from_vpls.setter
+    def glossy_from_vpls(self, arg0: bool) -> None:
+        ...
+    @property
     def glossy_vpls(self) -> bool:
         """
         A VPL's surface scatters with its rough glossy lobes too, as if diffuse; False: its diffuse lobe only (True).
