@@ -263,7 +263,13 @@ def sky_over_a_floor():
     direct light is the sky's, whose hemisphere L2 SH reproduces exactly in irradiance."""
     b = scenes.SceneBuilder()
     b.part("floor", scenes.quad((-2, -2, 0), (4, 0, 0), (0, 4, 0)), "plaster", scenes.WHITE)
-    b.scene.set_world(shgi.World(color=(0.35, 0.5, 0.8), strength=1.0))
+    return seen_from_above(b, shgi.World(color=(0.35, 0.5, 0.8), strength=1.0))
+
+
+def seen_from_above(b, world):
+    """Commits builder `b`'s scene under `world`, with the floor scenes' camera (1.5 m above,
+    looking down at a slant, 48 x 36 px)."""
+    b.scene.set_world(world)
     b.camera(eye=(0.0, -1.0, 1.5), target=(0.0, 0.5, 0.0), lens=24.0, width=48, height=36,
              scale=1.0)
     b.scene.commit()
@@ -299,26 +305,29 @@ LAMP_POWER = 100.0
 LAMBERT_ALBEDO = 0.8
 
 
-def lamp_over_a_floor(height=LAMP_HEIGHT, light=None):
-    """A 4 m Lambert floor (albedo 0.8, no specular layer) under one light (by default a point
-    light of 100 W at `height` above its centre), black world, seen from 1.5 m above at a slant:
-    its pixels see the light from overhead (mu = 1) down to near the horizon."""
+def lambert_floor():
+    """A SceneBuilder holding a 4 m floor of the "lambert" material (albedo LAMBERT_ALBEDO, no
+    specular layer)."""
     b = scenes.SceneBuilder()
     b.materials["lambert"] = b.scene.add_material(shgi.Material(
         name="lambert", base_color=(LAMBERT_ALBEDO,) * 3, specular=0.0,
         diffuse_model=shgi.DiffuseModel.LAMBERT))
     b.part("floor", scenes.quad((-2, -2, 0), (4, 0, 0), (0, 4, 0)), "lambert",
            (LAMBERT_ALBEDO,) * 3)
+    return b
+
+
+def lamp_over_a_floor(height=LAMP_HEIGHT, light=None):
+    """A 4 m Lambert floor (albedo 0.8, no specular layer) under one light (by default a point
+    light of 100 W at `height` above its centre), black world, seen from 1.5 m above at a slant:
+    its pixels see the light from overhead (mu = 1) down to near the horizon."""
+    b = lambert_floor()
     if light is None:
         light = shgi.Light(name="lamp", type=shgi.LightType.POINT, power=LAMP_POWER)
         light.world_from_light = np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, height],
                                            [0, 0, 0, 1]], np.float32)
     b.scene.add_light(light)
-    b.scene.set_world(shgi.World(color=(0.0, 0.0, 0.0), strength=0.0))
-    b.camera(eye=(0.0, -1.0, 1.5), target=(0.0, 0.5, 0.0), lens=24.0, width=48, height=36,
-             scale=1.0)
-    b.scene.commit()
-    return b.scene
+    return seen_from_above(b, shgi.World(color=(0.0, 0.0, 0.0), strength=0.0))
 
 
 def test_filter_direct_point_light_follows_the_l2_law():
@@ -447,22 +456,13 @@ def test_filter_direct_lights_with_extent_and_suns(kind):
 def glowing_panel_over_a_floor(strength=20.0):
     """The 4 m Lambert floor of lamp_over_a_floor under a 0.6 m emissive panel (two emissive
     triangles, no scene lights) 0.8 m up and off to one side, black world."""
-    b = scenes.SceneBuilder()
-    b.materials["lambert"] = b.scene.add_material(shgi.Material(
-        name="lambert", base_color=(LAMBERT_ALBEDO,) * 3, specular=0.0,
-        diffuse_model=shgi.DiffuseModel.LAMBERT))
+    b = lambert_floor()
     b.materials["glow"] = b.scene.add_material(shgi.Material(
         name="glow", base_color=(0.0, 0.0, 0.0), specular=0.0, emission_color=(1.0, 0.9, 0.7),
         emission_strength=strength))
-    b.part("floor", scenes.quad((-2, -2, 0), (4, 0, 0), (0, 4, 0)), "lambert",
-           (LAMBERT_ALBEDO,) * 3)
     b.part("panel", scenes.quad((0.2, 0.2, 0.8), (0, 0.6, 0), (0.6, 0, 0)), "glow",
            (0.0, 0.0, 0.0))
-    b.scene.set_world(shgi.World(color=(0.0, 0.0, 0.0), strength=0.0))
-    b.camera(eye=(0.0, -1.0, 1.5), target=(0.0, 0.5, 0.0), lens=24.0, width=48, height=36,
-             scale=1.0)
-    b.scene.commit()
-    return b.scene
+    return seen_from_above(b, shgi.World(color=(0.0, 0.0, 0.0), strength=0.0))
 
 
 def test_filter_direct_carries_emissive_triangles_direct_light():

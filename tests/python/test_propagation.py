@@ -307,6 +307,20 @@ def test_unclamped_transfer_keeps_the_bright_room_out(order):
     assert ratios["through the wall"] < 0.05
 
 
+def indirect_light_off_and_on(scene, reference, order, settings, flag):
+    """{False, True}: the indirect diffuse light of a one-pass, seed-5 propagation preview of
+    `scene` with `settings` and PropagationSettings `flag` off / on, x `reference`'s."""
+    light = {}
+    for value in (False, True):
+        volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+            seed=5, order=order, **dict(settings, **{flag: value})))
+        volume.refine()
+        preview, _ = shgi.render_preview(scene, volume.current_field(),
+                                         shgi.PreviewSettings(seed=5))
+        light[value] = indirect_diffuse(preview) / indirect_diffuse(reference)
+    return light
+
+
 @pytest.mark.reference
 @pytest.mark.parametrize("order", [1, 2])
 def test_clamp_at_walls_does_not_brighten_the_closed_room(order):
@@ -317,14 +331,7 @@ def test_clamp_at_walls_does_not_brighten_the_closed_room(order):
     the HOLPV read 1.187 (docs/methods.md, "Walls absorb what goes into them")."""
     dim_scene = committed(scenes.two_rooms(0.5, bright_power=0.0))
     dim = shgi.render_path_traced(dim_scene, shgi.PathTracerSettings(samples=128, seed=11))
-    own = {}
-    for clamp in (False, True):
-        volume = shgi.PropagationVolume(dim_scene, shgi.PropagationSettings(
-            seed=5, order=order, **dict(UNCLAMPED, clamp_at_surfaces=clamp)))
-        volume.refine()
-        preview, _ = shgi.render_preview(dim_scene, volume.current_field(),
-                                         shgi.PreviewSettings(seed=5))
-        own[clamp] = indirect_diffuse(preview) / indirect_diffuse(dim)
+    own = indirect_light_off_and_on(dim_scene, dim, order, UNCLAMPED, "clamp_at_surfaces")
     print(f"order {order}: the dim room's own light, x the path tracer's: {own[True]:.3f} "
           f"clamped at walls, {own[False]:.3f} unclamped")
     assert own[True] < 1.03 * own[False]
@@ -539,14 +546,7 @@ def test_first_step_occlusion_keeps_the_bright_room_out(order):
     dim_scene = committed(scenes.two_rooms(0.5, bright_power=0.0))
     dim = shgi.render_path_traced(dim_scene, shgi.PathTracerSettings(samples=128, seed=11))
     bright_scene = committed(scenes.two_rooms(0.5, dim_power=0.0))
-    leaks = {}
-    for occlude in (False, True):
-        volume = shgi.PropagationVolume(bright_scene, shgi.PropagationSettings(
-            seed=5, order=order, **dict(SEED, occlude_first_step=occlude)))
-        volume.refine()
-        preview, _ = shgi.render_preview(bright_scene, volume.current_field(),
-                                         shgi.PreviewSettings(seed=5))
-        leaks[occlude] = indirect_diffuse(preview) / indirect_diffuse(dim)
+    leaks = indirect_light_off_and_on(bright_scene, dim, order, SEED, "occlude_first_step")
     print(f"order {order}: light through the wall, x the dim room's own indirect light: "
           f"{leaks[False]:.3f} (first step unoccluded), {leaks[True]:.3f} (occluded)")
     assert leaks[True] < 0.05
@@ -563,14 +563,7 @@ def test_outward_vpls_dropped_keep_the_outside_out(order):
     scene's bounds, facing out): nothing is left inside."""
     _, open_reference = path_traced_reference(scenes.sun_room, *REFERENCES["sun_room"])
     shut = committed(scenes.sun_room(SCALE, window_shut=True))
-    inside = {}
-    for drop in (False, True):
-        volume = shgi.PropagationVolume(shut, shgi.PropagationSettings(
-            seed=5, order=order, **dict(SEED, drop_outward_vpls=drop)))
-        volume.refine()
-        preview, _ = shgi.render_preview(shut, volume.current_field(),
-                                         shgi.PreviewSettings(seed=5))
-        inside[drop] = indirect_diffuse(preview) / indirect_diffuse(open_reference)
+    inside = indirect_light_off_and_on(shut, open_reference, order, SEED, "drop_outward_vpls")
     print(f"order {order}: light inside the shut sun room, x the open room's indirect light: "
           f"{inside[False]:.3f} (all VPLs), {inside[True]:.4f} (outward ones dropped)")
     assert inside[True] < 0.001
