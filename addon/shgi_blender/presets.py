@@ -5,8 +5,10 @@ rays per probe and update passes) and the F12 denoiser's effort, never the metho
 limits, so it means the same quality step for every method. Photons grow with the lattice's cell
 count (about 25-35 photons per cell of the global lattice per solve) so that a finer lattice is
 not a noisier one; probe rays and passes double from step to step (the probes' noise halves
-every two steps, as the samples' does every step); from High on the denoiser prefilters its
-guides (Accurate), whose 0.5 dB costs more time than a preview can give (docs/addon.md).
+every two steps, as the samples' does every step); Preview's denoiser lets the network allow for
+noisy guides (Fast, with the Balanced network), Medium's calls them clean once they are
+(Automatic: its 64 samples make them so, and the High network is worth 0.6-0.9 dB over Fast,
+docs/equal-time.md), and from High on it prefilters them (Accurate, as Cycles does).
 
 DEFAULT holds the values of a new scene (the native defaults, settings.PROPERTY_DEFAULTS,
 PHOTON_LATTICE_DEFAULTS, PROBE_GRID_DEFAULTS, the final passes and DENOISING_DEFAULTS), so that
@@ -37,7 +39,7 @@ def _values(samples, photons, resolution, caustic_resolution, rays, passes, pref
 QUALITY_PRESETS = {
     "DEFAULT": {field: _DEFAULTS[field] for field in PRESET_FIELDS},
     "PREVIEW": _values(16, 100_000, 16, 32, 128, 4, "FAST", "BALANCED"),
-    "MEDIUM": _values(64, 400_000, 24, 64, 256, 8, "FAST", "HIGH"),
+    "MEDIUM": _values(64, 400_000, 24, 64, 256, 8, "AUTO", "HIGH"),
     "HIGH": _values(256, 1_000_000, 32, 96, 512, 16, "ACCURATE", "HIGH"),
     "PRODUCTION": _values(1024, 4_000_000, 48, 128, 1024, 32, "ACCURATE", "HIGH"),
 }

@@ -339,13 +339,14 @@ VIEWPORT_PROPERTY_DEFAULTS = {
 # Denoising of F12 and of the Rendered viewport with OpenImageDenoise (shgi.frame_denoise), with
 # Cycles' controls and Cycles' defaults but one: F12 denoises once at the end with both guides at
 # full quality; the viewport denoises every frame from `viewport_denoising_start_sample` on, with
-# the albedo guide, at Cycles' viewport quality. F12's prefilter is "FAST" where Cycles' is
-# "ACCURATE": on the 256 x 256 Cornell box Accurate took 0.6 s against Fast's 0.09 s for 0.5-0.6
-# dB more at 4 and 16 samples (docs/addon.md), so at equal time Fast gives the better image.
+# the albedo guide, at Cycles' viewport quality. F12's prefilter is "AUTO" where Cycles' is
+# "ACCURATE": Fast while the guides are noisy, None once they are clean enough (8 samples), where
+# None gives Accurate's image (its guides then need no denoising) at a third of its time
+# (docs/equal-time.md, "The denoiser's prefilter"; a scene of settings layout 7 keeps "FAST").
 DENOISING_DEFAULTS = {
     "use_denoising": True,
     "denoising_guides": "ALBEDO_NORMAL",
-    "denoising_prefilter": "FAST",
+    "denoising_prefilter": "AUTO",
     "denoising_quality": "HIGH",
     "use_viewport_denoising": True,
     "viewport_denoising_guides": "ALBEDO",
@@ -365,6 +366,9 @@ DENOISING_ITEMS = {
         ("NONE", "None", "The guides are taken as noise-free (fastest)"),
         ("FAST", "Fast", "The denoiser allows for noise in the guides"),
         ("ACCURATE", "Accurate", "Denoise the guides first (keeps the most detail, slowest)"),
+        ("AUTO", "Automatic",
+         "Fast while the guides are noisy (under 8 samples), then None: the guides are then "
+         "clean enough for the denoiser's best network"),
     ),
     "quality": (
         ("HIGH", "High", "Best quality"),

@@ -22,6 +22,8 @@ its default in the new place while its old value lies unused under the old name.
 7. Instant GI's Render Passes default to 64 (settings.RENDER_PASSES_DEFAULTS), where they were
    4, and its bakes take Bake Passes (``instant_gi.bake_passes``) instead. A scene saved before
    keeps 4 Render Passes unless it set them, and bakes with the passes it rendered with.
+8. F12's denoising Prefilter defaults to Automatic (settings.DENOISING_DEFAULTS), where it was
+   Fast. A scene saved before keeps Fast unless it set the prefilter.
 
 ``upgrade`` takes what a scene stored (its ID properties as a dict: only values someone set are
 stored, a default is not) and says what to write where, so that the scene renders with the
@@ -32,7 +34,7 @@ from dataclasses import dataclass, field
 
 from . import settings
 
-SETTINGS_VERSION = 7
+SETTINGS_VERSION = 8
 
 # The method groups that version 2 had: a scene saved then could render only with these, so
 # only they keep reading their field directly (groups added later start with their defaults).
@@ -66,6 +68,9 @@ PROPAGATION_DEFAULTS_BEFORE_6 = {"steps": 8, "damping": False, "occlude_first_st
 # The Instant GI group's defaults before version 7 that have changed since. The group came in
 # version 3's time, as Light Propagation's.
 INSTANT_GI_DEFAULTS_BEFORE_7 = {"passes": 4}
+# scene.shgi's own defaults before version 8 that have changed since (every earlier layout
+# rendered F12 with these, the denoising settings having come in with their defaults).
+DEFAULTS_BEFORE_8 = {"denoising_prefilter": "FAST"}
 
 
 @dataclass
@@ -116,6 +121,10 @@ def upgrade(stored):
         # Its bakes solved the Render Passes: Bake Passes keep a count the scene set.
         if "passes" in group:
             result.values[("instant_gi", "bake_passes")] = group["passes"]
+    if version < 8:
+        for name, old_default in DEFAULTS_BEFORE_8.items():
+            if name not in stored:
+                result.values[("", name)] = old_default
     return result
 
 

@@ -17,7 +17,12 @@ their own (antialiased edges, textures, glossy lobes): ``prefilter`` says what i
 with Cycles' choices: "ACCURATE" denoises each guide first with the RT network and then tells
 the colour filter they are clean (``cleanAux``); "FAST" passes them as they are and lets the
 colour filter allow for their noise; "NONE" passes them as they are and calls them clean (for
-noise-free guides). ``guides`` chooses the inputs as Cycles' "Passes" does: "NONE" (colour
+noise-free guides); and one of SHGI's, "AUTO": "FAST" below CLEAN_GUIDE_SAMPLES samples a pixel,
+"NONE" from there on (``denoise``'s ``samples``). OIDN has its High-quality network only for clean
+guides: with "FAST" the quality High runs the Balanced network (the same output, measured), so
+once the guides are clean enough to call clean, "NONE" is worth 0.6-0.9 dB over "FAST" for about
+twice its time, and "ACCURATE" gives what "NONE" gives at three times the cost
+(docs/equal-time.md, "The denoiser's prefilter"). ``guides`` chooses the inputs as Cycles' "Passes" does: "NONE" (colour
 only), "ALBEDO", "ALBEDO_NORMAL".
 
 The light the camera sees straight from emitters and the world (the Emit and Env passes, when
@@ -47,11 +52,18 @@ import numpy as np
 from . import _shgi
 from .denoise import cpu_device, import_optional
 
-__all__ = ["QUALITIES", "PREFILTERS", "GUIDES", "NOISY_PASS", "ALBEDO_PASS", "NORMAL_PASS",
-           "FrameDenoiser", "available", "denoise_frame", "guide_images"]
+__all__ = ["QUALITIES", "PREFILTERS", "CLEAN_GUIDE_SAMPLES", "GUIDES", "NOISY_PASS",
+           "ALBEDO_PASS", "NORMAL_PASS", "FrameDenoiser", "available", "denoise_frame",
+           "guide_images", "prefilter_for"]
 
 QUALITIES = ("HIGH", "BALANCED", "FAST")
-PREFILTERS = ("NONE", "FAST", "ACCURATE")
+PREFILTERS = ("NONE", "FAST", "ACCURATE", "AUTO")
+# From this many samples a pixel "AUTO" calls the guides clean ("NONE"), below it lets the network
+# allow for their noise ("FAST"). Measured at 200 x 150 (docs/equal-time.md): on a Cornell box with
+# a 256 x 256 colour grid on two walls "NONE" lost 1.4 dB to "FAST" at 1 sample and 0.3 dB at 2,
+# gained 0.2 dB at 4 and 0.75 dB at 8 (where it matched "ACCURATE"); in the sun room it gained
+# 0.4-0.9 dB from 4 samples on.
+CLEAN_GUIDE_SAMPLES = 8
 GUIDES = ("NONE", "ALBEDO", "ALBEDO_NORMAL")
 # The passes Cycles writes beside a denoised Combined. The renderers write the guides under the
 # same names (render/film.h: they follow specular bounces as Cycles' do); a denoise replaces them
@@ -72,7 +84,7 @@ WANTED_PASSES = {guides: names + ("Emit", "Env") for guides, names in GUIDE_PASS
 DIRECT_PASSES = ("Emit", "Env")
 # Depth of a pixel where every sample missed (the films' kMissDepth, as Cycles writes it).
 MISS_DEPTH = 1e10
-# Seconds per pixel of a denoise, {(prefilter, quality): s}, measured on a 256 x 256 Cornell box
+# Seconds per pixel of a denoise, {(prefilter, quality): s} ("AUTO" as the one it becomes), measured on a 256 x 256 Cornell box
 # on this project's 2-core machine (ALBEDO_NORMAL guides), for a render that must fit a Time
 # Limit before anything was denoised in this process; then each denoise records its own size and
 # time (MEASURED).
@@ -83,7 +95,8 @@ ESTIMATED_RATES = {
 }
 # Setting the networks up, once per FrameDenoiser.
 SETUP_SECONDS = 0.1
-# {(quality, prefilter, guides): (pixels, seconds) of the last denoise in this process}.
+# {(quality, prefilter, guides): (pixels, seconds) of the last denoise in this process}, under the
+# prefilter that ran ("AUTO" becomes "FAST" or "NONE").
 MEASURED = {}
 # How often a Ctrl-C in the main thread is noticed while the network runs.
 _SIGNAL_POLL_SECONDS = 0.05
@@ -96,6 +109,16 @@ def available() -> bool:
     except ImportError:
         return False
     return True
+
+
+def prefilter_for(prefilter: str, samples=None) -> str:
+    """The prefilter that runs for a frame of `samples` samples a pixel: `prefilter` itself, but
+    "AUTO" becomes "FAST" below CLEAN_GUIDE_SAMPLES (or when `samples` is None) and "NONE" from
+    there on."""
+    _check_choice("prefilter", prefilter, PREFILTERS)
+    if prefilter != "AUTO":
+        return prefilter
+    return "NONE" if samples is not None and samples >= CLEAN_GUIDE_SAMPLES else "FAST"
 
 
 def guide_images(passes: dict, guides: str = "ALBEDO_NORMAL"):
@@ -161,27 +184,39 @@ class FrameDenoiser:
             self._device.release()
             self._device = None
 
-    def estimate_seconds(self, width: int, height: int) -> float:
-        """Seconds a denoise of a width x height frame is expected to take: the last denoise
-        of these choices in this process scaled up to this size (never down: its time holds
-        fixed costs), else ESTIMATED_RATES and SETUP_SECONDS."""
+    def estimate_seconds(self, width: int, height: int, samples=None) -> float:
+        """Seconds a denoise of a width x height frame of `samples` samples a pixel is expected
+        to take: the last denoise of these choices in this process scaled up to this size
+        (never down: its time holds fixed costs), else ESTIMATED_RATES and SETUP_SECONDS. With
+        "AUTO" and no `samples` (a render that does not know yet where it stops), the longer of
+        the two prefilters it can become."""
         pixels = width * height
-        last = MEASURED.get((self.quality, self.prefilter, self.guides))
-        if last is None:
-            return pixels * ESTIMATED_RATES[(self.prefilter, self.quality)] + SETUP_SECONDS
-        last_pixels, seconds = last
-        return seconds * max(1.0, pixels / max(1, last_pixels))
+        if self.prefilter == "AUTO" and samples is None:
+            candidates = ("FAST", "NONE")
+        else:
+            candidates = (prefilter_for(self.prefilter, samples),)
+        estimates = []
+        for prefilter in candidates:
+            last = MEASURED.get((self.quality, prefilter, self.guides))
+            if last is None:
+                estimates.append(_first_estimate(prefilter, self.quality, pixels))
+            else:
+                last_pixels, seconds = last
+                estimates.append(seconds * max(1.0, pixels / max(1, last_pixels)))
+        return max(estimates)
 
-    def denoise(self, passes: dict, progress=None) -> dict:
+    def denoise(self, passes: dict, progress=None, samples=None) -> dict:
         """{"Combined": denoised (H, W, 4), NOISY_PASS: the input Combined, ALBEDO_PASS,
         NORMAL_PASS: the guides used (when used)}; `progress`: a shgi.Progress whose cancel()
-        makes this raise shgi.Cancelled."""
+        makes this raise shgi.Cancelled; `samples`: the frame's samples a pixel, which the
+        prefilter "AUTO" goes by (None: taken as too few to call the guides clean)."""
         if self._device is None:
             raise ValueError("FrameDenoiser: closed")
         noisy = np.asarray(passes["Combined"], np.float32)
         if noisy.ndim != 3 or noisy.shape[2] not in (3, 4):
             raise ValueError(f"passes['Combined']: shape {noisy.shape} is not (H, W, 3 or 4)")
         start = time.perf_counter()
+        prefilter = prefilter_for(self.prefilter, samples)
         albedo, normal, background = guide_images(passes, self.guides)
         color = _finite(noisy[..., :3])
         # Emitters and the world seen directly (Emit, Env) go around the network: their light
@@ -190,16 +225,16 @@ class FrameDenoiser:
         direct = sum(_finite(passes[name][..., :3]) for name in DIRECT_PASSES if name in passes)
         images = {"color": np.ascontiguousarray(np.maximum(color - direct, 0.0))}
         if albedo is not None:
-            images["albedo"] = self._guide("albedo", albedo, progress)
+            images["albedo"] = self._guide("albedo", albedo, prefilter, progress)
         if normal is not None:
-            images["normal"] = self._guide("normal", normal, progress)
-        clean = self.prefilter != "FAST"
+            images["normal"] = self._guide("normal", normal, prefilter, progress)
+        clean = prefilter != "FAST"
         rgb = self._execute(self._filter("color", clean), images, progress, "the frame")
         rgb += direct
         rgb[background] = color[background]
         out = noisy.copy()
         out[..., :3] = rgb
-        MEASURED[(self.quality, self.prefilter, self.guides)] = (
+        MEASURED[(self.quality, prefilter, self.guides)] = (
             noisy.shape[0] * noisy.shape[1], time.perf_counter() - start)
         result = {"Combined": out, NOISY_PASS: noisy}
         if albedo is not None:
@@ -210,9 +245,9 @@ class FrameDenoiser:
 
     # --- OIDN ------------------------------------------------------------------------------------
 
-    def _guide(self, name: str, image: np.ndarray, progress) -> np.ndarray:
+    def _guide(self, name: str, image: np.ndarray, prefilter: str, progress) -> np.ndarray:
         image = np.ascontiguousarray(image, np.float32)
-        if self.prefilter != "ACCURATE":
+        if prefilter != "ACCURATE":
             return image
         return self._execute(self._filter(name, False), {name: image}, progress,
                              f"the {name} guide")
@@ -270,11 +305,25 @@ class FrameDenoiser:
             raise RuntimeError(f"OpenImageDenoise failed {operation}: {error}")
 
 
+def _first_estimate(prefilter: str, quality: str, pixels: int) -> float:
+    """Seconds of a denoise of choices not yet run in this process: ESTIMATED_RATES and
+    SETUP_SECONDS, or, when longer, the last denoise of other choices scaled by the two choices'
+    rates and the sizes (a machine busy with other work is slower for every choice: after a
+    Fast denoise on a loaded machine the table alone planned Automatic's first None 0.08 s
+    short on a 128 x 128 frame)."""
+    rate = ESTIMATED_RATES[(prefilter, quality)]
+    estimates = [pixels * rate + SETUP_SECONDS]
+    for (other_quality, other_prefilter, _), (other_pixels, seconds) in MEASURED.items():
+        estimates.append(seconds * rate / ESTIMATED_RATES[(other_prefilter, other_quality)]
+                         * max(1.0, pixels / max(1, other_pixels)))
+    return max(estimates)
+
+
 def denoise_frame(passes: dict, quality: str = "HIGH", prefilter: str = "ACCURATE",
-                  guides: str = "ALBEDO_NORMAL", progress=None) -> dict:
+                  guides: str = "ALBEDO_NORMAL", progress=None, samples=None) -> dict:
     """One frame's FrameDenoiser.denoise with a denoiser made for it."""
     with FrameDenoiser(quality, prefilter, guides) as denoiser:
-        return denoiser.denoise(passes, progress)
+        return denoiser.denoise(passes, progress, samples)
 
 
 class _ProgressMonitor:

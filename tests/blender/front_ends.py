@@ -69,10 +69,11 @@ def script_render(scene):
     solver = shgi.make_solver(props.method, native, recipe.settings)
     for _ in range(recipe.passes):
         solver.refine()
-    passes, _ = shgi.render_preview(native, solver.current_field(),
-                                    settings.preview_settings(props, shgi))
+    preview = settings.preview_settings(props, shgi)
+    passes, _ = shgi.render_preview(native, solver.current_field(), preview)
     denoising = settings.denoising(props)
-    passes = denoise_frame(passes, denoising.quality, denoising.prefilter, denoising.guides)
+    passes = denoise_frame(passes, denoising.quality, denoising.prefilter, denoising.guides,
+                           samples=preview.samples)
     return passes["Combined"]
 
 

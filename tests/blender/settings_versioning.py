@@ -114,8 +114,9 @@ def check_new_scene(results, folder):
 
 
 def versioned_light_paths(layout, prop, value):
-    """Clamp Indirect and Filter Glossy of a scene stamped with `layout` after versioning,
-    `prop` set to `value` first (None: left at its default, nothing stored)."""
+    """Clamp Indirect, Filter Glossy and F12's denoising Prefilter of a scene stamped with
+    `layout` after versioning, `prop` set to `value` first (None: left at its default, nothing
+    stored)."""
     from shgi_blender import versioning
 
     scene = bpy.data.scenes.new(f"layout_{layout}_{prop}_{value}")
@@ -126,6 +127,7 @@ def versioned_light_paths(layout, prop, value):
     versioning.upgrade_scene(scene)
     read = {"clamp_indirect": scene.shgi.clamp_indirect,
             "filter_glossy": scene.shgi.filter_glossy,
+            "denoising_prefilter": scene.shgi.denoising_prefilter,
             "settings_version": scene.shgi.get("settings_version")}
     bpy.data.scenes.remove(scene)
     return read
@@ -164,6 +166,11 @@ def check_third_layout_clamp(results):
                                  for name, value in (("left", None), ("set", 7.5))}
     results["layout_4_filter_glossy"] = {name: versioned_light_paths(4, "filter_glossy", value)
                                          for name, value in (("left", None), ("set", 0.5))}
+    # Layout 7's F12 denoiser prefiltered Fast: a scene that left it keeps Fast.
+    results["new_scene_prefilter"] = bpy.context.scene.shgi.denoising_prefilter
+    results["layout_7_prefilter"] = {
+        name: versioned_light_paths(7, "denoising_prefilter", value)["denoising_prefilter"]
+        for name, value in (("left", None), ("set", "NONE"))}
     # A scene stamped with layout 5 keeps Light Propagation's defaults of then (8 steps, the
     # corrections off), whether it left the group alone or set its Steps; a new scene has today's.
     results["new_scene_propagation"] = versioned_propagation(

@@ -32,7 +32,7 @@ def test_first_layout_values_move_into_the_method_groups():
         ("photon_lattice", "final_gather"): False, ("probe_grid", "final_gather"): False,
         # Clamp Indirect left at that layout's default, 0 (off), not today's Cycles default;
         # Filter Glossy, which it did not have, off as it rendered
-        ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0}
+        ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **PREFILTER_BEFORE_8}
     assert sorted(upgrade.removed) == [("", "caustics"), ("", "photons"),
                                        ("", "viewport_photon_passes"),
                                        ("", "viewport_probe_passes")]
@@ -56,11 +56,11 @@ def test_a_second_layout_scene_keeps_reading_its_field_directly():
     upgrade = settings_upgrade.upgrade({"settings_version": 2, "probe_grid": {"order": 1}})
     assert upgrade.values == {("photon_lattice", "final_gather"): False,
                               ("probe_grid", "final_gather"): False, ("", "clamp_indirect"): 0.0,
-                              ("", "filter_glossy"): 0.0}
+                              ("", "filter_glossy"): 0.0, **PREFILTER_BEFORE_8}
     assert (upgrade.removed, upgrade.notes) == ([], [])
     # One set by hand in that file (it cannot be, but a script may have) is kept.
     stored = {"settings_version": 2, "probe_grid": {"final_gather": True}, "clamp_indirect": 3.0,
-              "filter_glossy": 0.5}
+              "filter_glossy": 0.5, "denoising_prefilter": 2}
     assert settings_upgrade.upgrade(stored).values == {("photon_lattice", "final_gather"): False}
 
 
@@ -71,9 +71,9 @@ def test_a_third_layout_scene_keeps_clamp_indirect_off():
     assert shgi.PathTracerSettings().clamp_indirect == 0.0  # scripts keep the native 0
     assert settings_upgrade.upgrade({"settings_version": 3, "samples": 5}).values == {
         ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6,
-        **INSTANT_GI_BEFORE_7}
+        **INSTANT_GI_BEFORE_7, **PREFILTER_BEFORE_8}
     assert settings_upgrade.upgrade({"settings_version": 3, "clamp_indirect": 4.0}).values == {
-        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7}
+        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **PREFILTER_BEFORE_8}
 
 
 def test_a_fourth_layout_scene_keeps_filter_glossy_off():
@@ -85,9 +85,9 @@ def test_a_fourth_layout_scene_keeps_filter_glossy_off():
     assert shgi.PreviewSettings().filter_glossy == 0.0
     assert shgi.LightmapSettings().filter_glossy == 0.0
     assert settings_upgrade.upgrade({"settings_version": 4, "samples": 5}).values == {
-        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7}
+        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **PREFILTER_BEFORE_8}
     assert settings_upgrade.upgrade({"settings_version": 4, "filter_glossy": 0.25}).values == {
-        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7}
+        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **PREFILTER_BEFORE_8}
 
 
 # Light Propagation's defaults before layout 6, as an upgrade writes them into the group.
@@ -106,11 +106,11 @@ def test_a_fifth_layout_scene_keeps_the_light_propagation_defaults_of_then():
     assert (settings.PROPAGATION_DEFAULTS["steps"], settings.PROPAGATION_DEFAULTS["distance"]) == (
         0, 32.0)
     assert settings_upgrade.upgrade({"settings_version": 5, "samples": 5}).values == {
-        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7}
+        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **PREFILTER_BEFORE_8}
     stored = {"settings_version": 5, "propagation": {"steps": 16, "unclamped_transfer": True}}
     assert settings_upgrade.upgrade(stored).values == {
         **{key: value for key, value in PROPAGATION_BEFORE_6.items()
-           if key[1] not in ("steps", "unclamped_transfer")}, **INSTANT_GI_BEFORE_7}
+           if key[1] not in ("steps", "unclamped_transfer")}, **INSTANT_GI_BEFORE_7, **PREFILTER_BEFORE_8}
     assert not any(group == "propagation" for group, _ in settings_upgrade.upgrade(
         {"settings_version": 2, "samples": 5}).values)
 
@@ -127,12 +127,26 @@ def test_a_sixth_layout_scene_keeps_instant_gi_passes_for_renders_and_bakes():
     assert settings.RENDER_PASSES_DEFAULTS["INSTANT_GI"] == 64
     defaults = settings.default_properties(shgi).instant_gi
     assert (defaults.passes, defaults.bake_passes) == (64, shgi.method("INSTANT_GI").final_passes)
-    assert settings_upgrade.upgrade({"settings_version": 6, "samples": 5}).values == (
-        INSTANT_GI_BEFORE_7)
+    assert settings_upgrade.upgrade({"settings_version": 6, "samples": 5}).values == {
+        **INSTANT_GI_BEFORE_7, **PREFILTER_BEFORE_8}
     stored = {"settings_version": 6, "instant_gi": {"passes": 12, "sets_x": 2}}
-    assert settings_upgrade.upgrade(stored).values == {("instant_gi", "bake_passes"): 12}
+    assert settings_upgrade.upgrade(stored).values == {("instant_gi", "bake_passes"): 12,
+                                                       **PREFILTER_BEFORE_8}
     assert not any(group == "instant_gi" for group, _ in settings_upgrade.upgrade(
         {"settings_version": 2, "samples": 5}).values)
+
+
+# F12's denoising prefilter before layout 8, as an upgrade writes it.
+PREFILTER_BEFORE_8 = {("", "denoising_prefilter"): "FAST"}
+
+
+def test_a_seventh_layout_scene_keeps_the_fast_prefilter():
+    """Layout 8 gave F12's denoiser the Automatic prefilter: a scene saved before, which left
+    Fast, keeps Fast; one that chose a prefilter keeps it (nothing to write)."""
+    assert settings.DENOISING_DEFAULTS["denoising_prefilter"] == "AUTO"
+    assert settings_upgrade.upgrade({"settings_version": 7, "samples": 5}).values == (
+        PREFILTER_BEFORE_8)
+    assert settings_upgrade.upgrade({"settings_version": 7, "denoising_prefilter": 2}).values == {}
 
 
 def test_settings_of_today_layout_are_left_alone():
@@ -193,14 +207,18 @@ def test_a_new_scene_solves_as_many_probe_passes_as_the_cli(blender, build_pytho
     # Layout 3 left Clamp Indirect at 0: it stays 0; a new scene clamps at Cycles' 10.
     assert results["new_scene_clamp"] == 10.0
     version = settings_upgrade.SETTINGS_VERSION
+    kept = {"settings_version": version, "denoising_prefilter": "FAST"}
     assert results["layout_3_clamp"] == {
-        "left": {"clamp_indirect": 0.0, "filter_glossy": 0.0, "settings_version": version},
-        "set": {"clamp_indirect": 7.5, "filter_glossy": 0.0, "settings_version": version}}
+        "left": {"clamp_indirect": 0.0, "filter_glossy": 0.0, **kept},
+        "set": {"clamp_indirect": 7.5, "filter_glossy": 0.0, **kept}}
     # Layout 4 had no Filter Glossy: it stays off; a new scene filters at Cycles' 1.
     assert results["new_scene_filter_glossy"] == 1.0
     assert results["layout_4_filter_glossy"] == {
-        "left": {"clamp_indirect": 10.0, "filter_glossy": 0.0, "settings_version": version},
-        "set": {"clamp_indirect": 10.0, "filter_glossy": 0.5, "settings_version": version}}
+        "left": {"clamp_indirect": 10.0, "filter_glossy": 0.0, **kept},
+        "set": {"clamp_indirect": 10.0, "filter_glossy": 0.5, **kept}}
+    # Layout 7 denoised F12 with the Fast prefilter: kept when left; a new scene has Automatic.
+    assert results["new_scene_prefilter"] == "AUTO"
+    assert results["layout_7_prefilter"] == {"left": "FAST", "set": "NONE"}
     # Layout 5's Light Propagation: 8 steps and the corrections off, left or set; a new scene
     # takes its steps from Distance with them on.
     old = {"distance": 32.0, "damping": False, "occlude_first_step": False,

@@ -19,8 +19,9 @@ import shgi
 from conftest import BUILD_PYTHON, REPO_ROOT
 from scene_support import committed
 from shgi import metrics
-from shgi.frame_denoise import (ALBEDO_PASS, NOISY_PASS, NORMAL_PASS, PREFILTERS, FrameDenoiser,
-                                denoise_frame, guide_images)
+from shgi.frame_denoise import (ALBEDO_PASS, CLEAN_GUIDE_SAMPLES, NOISY_PASS, NORMAL_PASS,
+                                PREFILTERS, FrameDenoiser, denoise_frame, guide_images,
+                                prefilter_for)
 
 sys.path.insert(0, str(REPO_ROOT / "examples"))
 import scenes  # noqa: E402  (examples/scenes.py)
@@ -161,6 +162,41 @@ def test_a_cancelled_progress_stops_the_network(noisy):
         denoiser.denoise(noisy, progress)
 
 
+def test_automatic_prefilter_is_fast_for_noisy_guides_and_none_for_clean_ones(noisy):
+    assert [prefilter_for("AUTO", samples) for samples in (None, 1, CLEAN_GUIDE_SAMPLES - 1,
+                                                           CLEAN_GUIDE_SAMPLES, 4096)] == [
+        "FAST", "FAST", "FAST", "NONE", "NONE"]
+    assert all(prefilter_for(name, 1) == name for name in PREFILTERS if name != "AUTO")
+    with FrameDenoiser("BALANCED", "AUTO") as auto:
+        for samples, same_as in ((None, "FAST"), (NOISY_SAMPLES, "FAST"),
+                                 (CLEAN_GUIDE_SAMPLES, "NONE")):
+            np.testing.assert_array_equal(
+                auto.denoise(noisy, samples=samples)["Combined"],
+                denoise_frame(noisy, "BALANCED", same_as)["Combined"])
+        # Before it knows where a render stops, a time limit plans for the longer of the two.
+        assert auto.estimate_seconds(640, 360) == max(
+            FrameDenoiser("BALANCED", name).estimate_seconds(640, 360) for name in ("FAST", "NONE"))
+
+
+# Clean enough guides (16 samples of the Cornell box) let the High network run: measured 40.04 dB
+# (Automatic, i.e. None) against Fast's 39.53 and Accurate's 40.05 (4, 8, 32 samples: the same
+# order, Accurate above the others only at 4).
+CLEAN_GUIDES_SAMPLES_TESTED = 16
+MIN_HIGH_NETWORK_GAIN_DB = 0.25
+ACCURATE_TOLERANCE_DB = 0.1
+
+
+def test_automatic_prefilter_with_clean_guides_matches_accurate_and_beats_fast(cornell,
+                                                                               reference):
+    frame = shgi.render_path_traced(cornell, shgi.PathTracerSettings(
+        samples=CLEAN_GUIDES_SAMPLES_TESTED, seed=1))
+    score = {name: metrics.psnr(reference, denoise_frame(
+        frame, prefilter=name, samples=CLEAN_GUIDES_SAMPLES_TESTED)["Combined"])
+        for name in ("FAST", "AUTO", "ACCURATE")}
+    assert score["AUTO"] > score["FAST"] + MIN_HIGH_NETWORK_GAIN_DB, score
+    assert score["AUTO"] > score["ACCURATE"] - ACCURATE_TOLERANCE_DB, score
+
+
 def test_the_time_estimate_follows_the_last_denoise(noisy):
     with FrameDenoiser("FAST", "NONE", "ALBEDO") as denoiser:
         guess = denoiser.estimate_seconds(640, 360)
@@ -171,6 +207,30 @@ def test_the_time_estimate_follows_the_last_denoise(noisy):
         # A frame four times larger is estimated four times longer, a smaller one no shorter.
         assert denoiser.estimate_seconds(2 * width, 2 * height) == pytest.approx(4 * measured)
         assert denoiser.estimate_seconds(width // 2, height // 2) == measured
+
+
+def test_choices_not_run_yet_are_estimated_from_the_last_denoise_of_others(monkeypatch):
+    """A render's first denoise with new choices (Automatic's None after its Fast ones) is
+    planned from the table, or from the denoises this process ran, scaled by the table's rates,
+    when that is longer (a loaded machine)."""
+    from shgi import frame_denoise
+
+    pixels = 128 * 128
+    rates = {prefilter: frame_denoise.ESTIMATED_RATES[(prefilter, "HIGH")]
+             for prefilter in ("FAST", "NONE")}
+    table = pixels * rates["NONE"] + frame_denoise.SETUP_SECONDS
+    monkeypatch.setattr(frame_denoise, "MEASURED", {})
+    with FrameDenoiser("HIGH", "NONE") as denoiser:
+        assert denoiser.estimate_seconds(128, 128) == pytest.approx(table)
+        for fast_seconds in (0.05, 1.0):
+            frame_denoise.MEASURED[("HIGH", "FAST", "ALBEDO_NORMAL")] = (pixels, fast_seconds)
+            # A frame twice as wide is planned twice as long from the same measurement.
+            for width in (128, 256):
+                scaled = fast_seconds * rates["NONE"] / rates["FAST"] * width / 128
+                assert denoiser.estimate_seconds(width, 128) == pytest.approx(
+                    max(width / 128 * pixels * rates["NONE"] + frame_denoise.SETUP_SECONDS,
+                        scaled))
+        assert denoiser.estimate_seconds(128, 128) > table  # 1 s of Fast: a slow machine
 
 
 def test_ctrl_c_stops_a_large_denoise_in_a_plain_script():

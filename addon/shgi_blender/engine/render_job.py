@@ -306,7 +306,7 @@ class RenderJob(NativeTask):
         if snapshot is None:
             return
         try:
-            denoised = denoiser.denoise(snapshot.passes, self.progress)
+            denoised = denoiser.denoise(snapshot.passes, self.progress, snapshot.samples)
         except (RuntimeError, ValueError) as error:
             self.denoise_error = f"the render is not denoised: {error}"
             return

@@ -353,14 +353,14 @@ class ViewportWorker:
 
     def _publish(self, context, passes, samples, target_samples, divisor):
         if context.denoising is not None and samples >= context.denoising.start_sample:
-            passes = self._denoised(context, passes)
+            passes = self._denoised(context, passes, samples)
         pixels = np.ascontiguousarray(passes["Combined"][::-1], dtype=np.float32)
         with self._condition:
             self._frame_id += 1
             self._frame = Frame(pixels, samples, target_samples, divisor, self._frame_id)
         self.counters["frames"] += 1
 
-    def _denoised(self, context, passes):
+    def _denoised(self, context, passes, samples):
         """`passes` with Combined denoised by the kept FrameDenoiser of context.denoising (the
         noisy passes when pyoidn is missing or OIDN fails: denoise_error says why)."""
         if self._denoiser is None or self._denoiser[0] != context.denoising:
@@ -371,7 +371,7 @@ class ViewportWorker:
                 self.denoise_error = f"not denoised: {error}"
                 return passes
         try:
-            passes = self._denoiser[1].denoise(passes, context.progress.frames)
+            passes = self._denoiser[1].denoise(passes, context.progress.frames, samples)
         except RuntimeError as error:
             self.denoise_error = f"not denoised: {error}"
             return passes
