@@ -105,10 +105,10 @@ def regions(passes):
     return {"glass": glass, "metal": metal, "emitters/world": emitter, "diffuse": rest}
 
 
-def load_reference(args, renderer, clamp, filter_glossy=None):
+def load_reference(args, renderer, clamp, filter_glossy=None, pixel_tag=""):
     """bench/equal_time.py's cached reference of `renderer` with Clamp Indirect `clamp` (and
-    SHGI's Filter Glossy `filter_glossy`), or None."""
-    fg = "" if filter_glossy is None else f"_fg{filter_glossy:g}"
+    SHGI's Filter Glossy `filter_glossy` and pixel filter, `pixel_tag`), or None."""
+    fg = "" if filter_glossy is None else f"_fg{filter_glossy:g}{pixel_tag}"
     key = (f"{args.scene}_{args.width}x{args.height}_{renderer}_clamp{clamp:g}{fg}_"
            f"{equal_time.REFERENCE_SAMPLES}spp")
     path = equal_time.reference_path(args.cache, key)
@@ -139,7 +139,8 @@ def main():
                   else args.shgi_clamp_indirect)
     filters = [scene.shgi.filter_glossy if value is None else value
                for value in args.shgi_filter_glossy]
-    references = {f"shgi fg{value:g}": load_reference(args, "shgi", shgi_clamp, value)
+    references = {f"shgi fg{value:g}": load_reference(args, "shgi", shgi_clamp, value,
+                                                      equal_time.pixel_filter_tag(scene.shgi))
                   for value in filters}
     references["cycles"] = load_reference(args, "cycles", scene.cycles.sample_clamp_indirect)
     native = export_scene(bpy.context.evaluated_depsgraph_get(), scene).scene

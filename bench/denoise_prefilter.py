@@ -107,7 +107,7 @@ def reference(name, scene, renderer, args):
     if name != TEXTURED:
         key = f"{name}_{args.width}x{args.height}_{renderer}_{equal_time.REFERENCE_SAMPLES}spp"
         if renderer == "shgi":
-            key = key.replace("_shgi_", "_shgi_clamp10_fg1_")
+            key = key.replace("_shgi_", f"_shgi_clamp10{equal_time.shgi_reference_tag(scene.shgi)}_")
         else:
             key = key.replace("_cycles_", "_cycles_clamp10_")
         return equal_time.reference(scene, key, None, None, args)[0]

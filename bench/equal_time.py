@@ -215,6 +215,23 @@ def supports_limit(scene):
     return hasattr(scene.shgi, "time_limit") and hasattr(scene.shgi, "use_denoising")
 
 
+def shgi_reference_tag(props):
+    """What SHGI's reference keys hold beyond the clamp: `_fg<Filter Glossy>` and
+    pixel_filter_tag."""
+    return f"_fg{props.filter_glossy:g}{pixel_filter_tag(props)}"
+
+
+def pixel_filter_tag(props):
+    """The pixel filter of scene.shgi `props` in a reference key when it is not the box of one
+    pixel every reference had before settings layout 8 (`_blackmanharris1.5`), else "": a
+    reference is scored only by renders of the same filter."""
+    pixel_filter = getattr(props, "pixel_filter", "BOX")
+    width = getattr(props, "filter_width", 1.0)
+    if (pixel_filter, width) == ("BOX", 1.0):
+        return ""
+    return f"_{pixel_filter.lower().replace('_', '')}{width:g}"
+
+
 def reference_path(cache, key):
     """The cache file of reference `key` (`<scene>_<W>x<H>_<renderer>..._<spp>spp`), tagged with
     REFERENCE_SEED so that no reference of another seed is read."""
@@ -430,7 +447,8 @@ def main():
                             args.clamp_indirect, args.shgi_filter_glossy)
         limited = supports_limit(scene)
         # References are keyed by each renderer's Clamp Indirect and SHGI's by its Filter Glossy
-        # too: a biased estimate is scored against a reference with the same bias.
+        # and pixel filter too: a biased estimate is scored against a reference with the same
+        # bias. (Cycles' pixel filter is its default, Blackman-Harris 1.5, in every key.)
         key = (f"{name}_{args.width}x{args.height}_{{}}_clamp{{:g}}{{}}_"
                f"{args.reference_samples}spp")
         print(f"{name}:", flush=True)
@@ -439,7 +457,7 @@ def main():
             lambda s: use_cycles(s, args.reference_samples, False), args)
         shgi_ref, shgi_spp = reference(
             scene, key.format("shgi", scene.shgi.clamp_indirect,
-                              f"_fg{scene.shgi.filter_glossy:g}"), "SHGI",
+                              shgi_reference_tag(scene.shgi)), "SHGI",
             lambda s: use_shgi(s, "PATH_TRACE", args.reference_samples), args)
         if args.references_only:
             continue

@@ -176,8 +176,8 @@ def main():
         setattr(bpy.context.view_layer, flag, True)
     native = export_scene(bpy.context.evaluated_depsgraph_get(), scene).scene
     native.commit()
-    key = (f"{args.scene}_{args.width}x{args.height}_shgi_clamp{scene.shgi.clamp_indirect:g}_"
-           f"fg{scene.shgi.filter_glossy:g}_{equal_time.REFERENCE_SAMPLES}spp")
+    key = (f"{args.scene}_{args.width}x{args.height}_shgi_clamp{scene.shgi.clamp_indirect:g}"
+           f"{equal_time.shgi_reference_tag(scene.shgi)}_{equal_time.REFERENCE_SAMPLES}spp")
     path = equal_time.reference_path(args.cache, key)
     reference = np.load(path) if os.path.exists(path) else None
     print(f"{args.scene} {args.width}x{args.height}, {args.samples} spp, lights {args.lights}, "

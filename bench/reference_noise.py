@@ -25,7 +25,7 @@ def main():
     args = parser.parse_args()
     found = collections.defaultdict(dict)
     for file in os.listdir(args.cache):
-        # <scene>_<W>x<H>_<renderer>[_clamp<c>][_fg<f>][_seed<s>]_<spp>spp.npy: grouped by all
+        # <scene>_<W>x<H>_<renderer>[_clamp<c>][_fg<f>][_<filter><w>][_seed<s>]_<spp>spp.npy: by all
         # but the samples.
         match = re.fullmatch(r"(.+)_(cycles|shgi)((?:_[a-z]+[0-9.]+)*)_(\d+)spp\.npy", file)
         if match:

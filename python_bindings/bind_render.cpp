@@ -99,6 +99,11 @@ void bind_settings(py::module_& m) {
                                                   "component).")
         .value("SQRT_THROUGHPUT", RouletteSurvival::SqrtThroughput)
         .value("THROUGHPUT", RouletteSurvival::Throughput));
+    named_values_only(py::enum_<PixelFilterType>(m, "PixelFilter",
+                                                 "Film > Pixel Filter as Cycles' (its Type).")
+        .value("BOX", PixelFilterType::Box)
+        .value("GAUSSIAN", PixelFilterType::Gaussian)
+        .value("BLACKMAN_HARRIS", PixelFilterType::BlackmanHarris));
     using S = PathTracerSettings;
     py::class_<S> cls(m, "PathTracerSettings",
                       "Settings of the reference path tracer; every field has a default.");
@@ -124,6 +129,8 @@ void bind_settings(py::module_& m) {
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
                        kClampIndirectDoc)
         .def_readwrite("filter_glossy", &S::filter_glossy, kFilterGlossyDoc)
+        .def_readwrite("pixel_filter", &S::pixel_filter, kPixelFilterDoc)
+        .def_readwrite("filter_width", &S::filter_width, kFilterWidthDoc)
         .def_readwrite("world_sampling", &S::world_sampling, "WorldSampling (COSINE).")
         .def_readwrite("roulette_survival", &S::roulette_survival,
                        "RouletteSurvival (SQRT_THROUGHPUT: min(1, sqrt(T)), Cycles'; THROUGHPUT: "
@@ -312,6 +319,8 @@ void bind_preview(py::module_& m) {
         .def_readwrite("clamp_indirect", &S::clamp_indirect,
                        kClampIndirectDoc)
         .def_readwrite("filter_glossy", &S::filter_glossy, kFilterGlossyDoc)
+        .def_readwrite("pixel_filter", &S::pixel_filter, kPixelFilterDoc)
+        .def_readwrite("filter_width", &S::filter_width, kFilterWidthDoc)
         .def_readwrite("world_sampling", &S::world_sampling, "WorldSampling (COSINE).")
         .def_readwrite("combined_only", &S::combined_only,
                        "Sum only the Combined pass (False): what a viewport shows, without the "

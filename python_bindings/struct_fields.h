@@ -53,6 +53,15 @@ inline constexpr const char* kFilterGlossyDoc =
     "glossy and glass lobes widen to GGX alpha sqrt(1 - pdf / value) / 2, against the caustic "
     "fireflies of mirrors seen through diffuse bounces; 0 = off (0).";
 
+// The pixel_filter and filter_width fields of the renderers' settings (render/pixel_filter.h).
+inline constexpr const char* kPixelFilterDoc =
+    "Film > Pixel Filter as Cycles': PixelFilter BOX, GAUSSIAN or BLACKMAN_HARRIS, drawn per "
+    "sample around its pixel (BOX; Cycles' default is BLACKMAN_HARRIS).";
+inline constexpr const char* kFilterWidthDoc =
+    "Film > Pixel Filter's width in pixels as Cycles' Filter Size, [0.01, 10] (1.0; Cycles' "
+    "default 1.5): a box of width w spans w pixels, a Gaussian of width w has sigma w / 4, a "
+    "Blackman-Harris of width w spans 2 w.";
+
 inline pybind11::tuple to_tuple(const vec3& v) { return pybind11::make_tuple(v.x, v.y, v.z); }
 
 // A vec3 field exposed as a 3-tuple; assignment accepts any length-3 sequence of finite numbers.

@@ -31,6 +31,7 @@ T = settings.TIME_LIMIT_DEFAULTS
 
 METHOD_ITEMS = [(m.identifier, m.label, m.description, m.number) for m in settings.METHODS]
 WORLD_SAMPLING_ITEMS = list(settings.ENUM_ITEMS["world_sampling"])
+PIXEL_FILTER_ITEMS = list(settings.ENUM_ITEMS["pixel_filter"])
 CAUSTICS_ITEMS = list(settings.ENUM_ITEMS["caustics"])
 INTERPOLATION_ITEMS = list(settings.ENUM_ITEMS["interpolation"])
 FACE_ESTIMATOR_ITEMS = list(settings.ENUM_ITEMS["face_estimator"])
@@ -561,6 +562,15 @@ class ShgiSceneSettings(bpy.types.PropertyGroup):
         description="Adaptively blur glossy and glass surfaces after blurry bounces, to reduce "
                     "noise at the cost of accuracy, as Cycles' Caustics > Filter Glossy and with "
                     "its default; 0 disables the blur")
+    pixel_filter: EnumProperty(
+        name="Pixel Filter", items=PIXEL_FILTER_ITEMS, default=D["pixel_filter"],
+        description="How each sample spreads over its pixel and its neighbours, as Cycles' Film "
+                    "> Pixel Filter and with its default")
+    filter_width: FloatProperty(
+        name="Width", default=D["filter_width"], min=0.01, max=10.0, soft_max=3.0,
+        subtype="PIXEL",
+        description="Pixel filter width, as Cycles' (a Blackman-Harris filter of width 1.5 "
+                    "spreads a sample over three pixels)")
     world_sampling: EnumProperty(
         name="World Sampling", items=WORLD_SAMPLING_ITEMS, default=D["world_sampling"],
         description="How direct light from the world is sampled")

@@ -41,6 +41,7 @@ void validate_path_tracer_settings(const PathTracerSettings& settings) {
         throw InvalidArgument(format_message("PathTracerSettings.filter_glossy is ",
                                              settings.filter_glossy,
                                              "; it must be finite and >= 0 (0 = off)"));
+    validate_filter_width(settings.filter_width, "PathTracerSettings");
     if (settings.light_splits < 1 || settings.light_splits > kMaxLightSplits)
         throw InvalidArgument(format_message("PathTracerSettings.light_splits is ",
                                              settings.light_splits, "; it must be in [1, ",
@@ -54,7 +55,8 @@ PathTracer::PathTracer(const Scene& scene, const PathTracerSettings& settings)
     : scene_(&scene),
       scene_revision_(scene.revision()),
       settings_(validated(settings)),
-      lights_(scene, settings.world_sampling, true, settings.light_splits) {
+      lights_(scene, settings.world_sampling, true, settings.light_splits),
+      pixel_filter_(settings.pixel_filter, settings.filter_width) {
     const Camera& camera = scene.camera();
     film_ = ProgressiveFilm(int(camera.resolution_x), int(camera.resolution_y));
 }
@@ -93,8 +95,9 @@ void PathTracer::render(uint32_t samples, Progress* progress) {
                         integrator.set_first_light_sample(stratified.u_select,
                                                           stratified.u_light);
                         integrator.set_first_bsdf_sample(stratified.u_lobe, stratified.u_bsdf);
-                        integrator.trace(camera_rays.generate_ray(vec2(float(x), float(y)) +
-                                                                  stratified.jitter));
+                        integrator.trace(camera_rays.generate_ray(
+                            vec2(float(x), float(y)) +
+                            pixel_filter_.film_offset(stratified.jitter)));
                         if (s == first)
                             target.accumulate(x, y, base, values);
                         else

@@ -23,8 +23,9 @@
 // of the pixel's Owen-scrambled Sobol' sequences for its jitter, first light sample and first
 // BSDF sample (pixel_sample in render/path_integrator.h), so the image is bit-identical for any
 // thread count, any tile split and any split of the samples into progressive render() calls.
-// Pixel filter: a box of one pixel (stratified jitter), where
-// Cycles defaults to a 1.5 px Blackman-Harris; set Cycles' Filter Size to 0.01 to compare.
+// Pixel filter: PathTracerSettings.pixel_filter and filter_width (render/pixel_filter.h), by
+// default a box of one pixel (the stratified jitter), where Cycles (and the add-on) default to
+// a Blackman-Harris of Filter Size 1.5.
 // Passes: see render/film.h. Units and emitters: see render/light_sampler.h.
 #pragma once
 
@@ -34,6 +35,7 @@
 #include "render/bsdf.h"
 #include "render/film.h"
 #include "render/light_sampler.h"
+#include "render/pixel_filter.h"
 #include "scene/scene.h"
 #include "util/progress.h"
 
@@ -70,6 +72,10 @@ struct PathTracerSettings {
     // Most emitters one next-event estimate samples, [1, kMaxLightSplits]: the light tree's
     // splitting (render/light_tree.h); 1 = one emitter per shadow ray.
     int light_splits = 4;
+    // Film > Pixel Filter as Cycles' (render/pixel_filter.h): its type and Filter Size in pixels,
+    // [kMinFilterWidth, kMaxFilterWidth]. The default, a box of one pixel, is Cycles' Box 1.
+    PixelFilterType pixel_filter = PixelFilterType::Box;
+    float filter_width = 1.0f;
     int tile_size = 16;                // pixels per tile side (work unit of the thread pool)
 };
 
@@ -100,6 +106,7 @@ class PathTracer {
     uint64_t scene_revision_;  // Scene::revision() the light tables and film were built for
     PathTracerSettings settings_;
     LightSampler lights_;
+    PixelFilter pixel_filter_;
     ProgressiveFilm film_;  // a failed render leaves it as it was, without copying it
 };
 

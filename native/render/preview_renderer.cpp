@@ -166,6 +166,7 @@ class FrameWork {
           // A screen-space field lights the first surfaces itself: no gather ray before it.
           final_gather_(final_gather && !screen_space_ ? 1 : 0),
           combined_only_(combined_only),
+          pixel_filter_(settings.pixel_filter, settings.filter_width),
           camera_position_(camera.world_from_camera[3]),
           forward_(glm::normalize(-vec3(camera.world_from_camera[2]))) {}
 
@@ -273,7 +274,8 @@ class FrameWork {
         for (size_t i = 0; i < wave.count; ++i) {
             const uint64_t pixel = wave.pixel[i];
             wave.rngs[i] = Pcg32(settings_.seed, stream_id(s, pixel));
-            wave.film[i] = vec2(float(wave.x[i]), float(wave.y[i])) + wave.samples[i].jitter;
+            wave.film[i] = vec2(float(wave.x[i]), float(wave.y[i])) +
+                           pixel_filter_.film_offset(wave.samples[i].jitter);
         }
         camera_rays_.generate_rays(wave.film.data(), wave.count, wave.rays.data());
         scene_.intersect(wave.rays, wave.hits, nullptr, RayCoherence::Coherent);
@@ -330,6 +332,7 @@ class FrameWork {
     float reuse_;  // the field's reuse distance; 0: every pixel makes its own lookup
     int final_gather_;  // smooth bounces before a path reads the field (PreviewSettings)
     bool combined_only_;  // the film sums only Combined: the paths write no other pass
+    PixelFilter pixel_filter_;  // PreviewSettings.pixel_filter and filter_width
     vec3 camera_position_, forward_;  // the camera's, for the G-buffer's depth
 };
 
@@ -348,6 +351,8 @@ PathTracerSettings path_settings_for(const PreviewSettings& settings) {
     path.filter_glossy = settings.filter_glossy;
     path.world_sampling = settings.world_sampling;
     path.light_splits = settings.light_splits;
+    path.pixel_filter = settings.pixel_filter;
+    path.filter_width = settings.filter_width;
     return path;
 }
 
@@ -378,6 +383,7 @@ void validate_preview_settings(const PreviewSettings& settings) {
         throw InvalidArgument(format_message("PreviewSettings.filter_glossy is ",
                                              settings.filter_glossy,
                                              "; it must be finite and >= 0 (0 = off)"));
+    validate_filter_width(settings.filter_width, "PreviewSettings");
     if (settings.tile_size < 1)
         throw InvalidArgument(format_message("PreviewSettings.tile_size is ", settings.tile_size,
                                              "; it must be >= 1"));

@@ -69,6 +69,9 @@ struct PreviewSettings {
     float filter_glossy = 0.0f;
     WorldSampling world_sampling = WorldSampling::Cosine;
     int light_splits = 4;               // as PathTracerSettings.light_splits (1..kMaxLightSplits)
+    // As PathTracerSettings.pixel_filter and filter_width (render/pixel_filter.h).
+    PixelFilterType pixel_filter = PixelFilterType::Box;
+    float filter_width = 1.0f;
     int tile_size = 16;                 // rounded up to an even number (whole 2 x 2 quads)
     bool combined_only = false;         // sum only the Combined pass (the viewport's)
     // Screen-space reuse of the field's lookups within 2 x 2 pixel quads (see above); false: one

@@ -38,6 +38,9 @@ def new_scene(name, scale, lightmap=False):
         setattr(scene.shgi, field, value)
     scene.shgi.clamp_indirect = scene.cycles.sample_clamp_indirect  # and the same clamp (0)
     scene.shgi.filter_glossy = scene.cycles.blur_glossy  # and the same Filter Glossy (0)
+    # and the same pixel filter (Cycles' Box of width 1, reset_scene)
+    scene.shgi.pixel_filter = scene.cycles.pixel_filter_type
+    scene.shgi.filter_width = scene.cycles.filter_width
     # Compared with Cycles undenoised (reset_scene), as references are: the denoiser has its
     # own tests (engine_denoise_checks.py).
     scene.shgi.use_denoising = scene.shgi.use_viewport_denoising = False

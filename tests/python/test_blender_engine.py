@@ -77,9 +77,12 @@ def test_property_defaults_are_the_native_defaults(struct, fields):
         expected = getattr(native_defaults, native_name)
         if (struct, native_name) == (shgi.PreviewSettings, "samples"):
             expected = settings.PROPERTY_DEFAULTS["samples"]  # one samples for every method
+        value = getattr(built, native_name)
         if prop_name in settings.CYCLES_DEFAULTS:  # Cycles' default, not the native one
             expected = settings.CYCLES_DEFAULTS[prop_name]
-        assert getattr(built, native_name) == expected, (struct.__name__, native_name, prop_name)
+            if isinstance(expected, str):  # an enum member's name
+                value = value.name
+        assert value == expected, (struct.__name__, native_name, prop_name)
 
 
 def test_light_tree_splits_reach_the_native_limit_and_no_further():

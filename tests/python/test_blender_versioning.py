@@ -32,7 +32,7 @@ def test_first_layout_values_move_into_the_method_groups():
         ("photon_lattice", "final_gather"): False, ("probe_grid", "final_gather"): False,
         # Clamp Indirect left at that layout's default, 0 (off), not today's Cycles default;
         # Filter Glossy, which it did not have, off as it rendered
-        ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **PREFILTER_BEFORE_8}
+        ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **BEFORE_8}
     assert sorted(upgrade.removed) == [("", "caustics"), ("", "photons"),
                                        ("", "viewport_photon_passes"),
                                        ("", "viewport_probe_passes")]
@@ -56,11 +56,12 @@ def test_a_second_layout_scene_keeps_reading_its_field_directly():
     upgrade = settings_upgrade.upgrade({"settings_version": 2, "probe_grid": {"order": 1}})
     assert upgrade.values == {("photon_lattice", "final_gather"): False,
                               ("probe_grid", "final_gather"): False, ("", "clamp_indirect"): 0.0,
-                              ("", "filter_glossy"): 0.0, **PREFILTER_BEFORE_8}
+                              ("", "filter_glossy"): 0.0, **BEFORE_8}
     assert (upgrade.removed, upgrade.notes) == ([], [])
     # One set by hand in that file (it cannot be, but a script may have) is kept.
     stored = {"settings_version": 2, "probe_grid": {"final_gather": True}, "clamp_indirect": 3.0,
-              "filter_glossy": 0.5, "denoising_prefilter": 2}
+              "filter_glossy": 0.5, "denoising_prefilter": 2, "pixel_filter": 1,
+              "filter_width": 1.5}
     assert settings_upgrade.upgrade(stored).values == {("photon_lattice", "final_gather"): False}
 
 
@@ -71,9 +72,9 @@ def test_a_third_layout_scene_keeps_clamp_indirect_off():
     assert shgi.PathTracerSettings().clamp_indirect == 0.0  # scripts keep the native 0
     assert settings_upgrade.upgrade({"settings_version": 3, "samples": 5}).values == {
         ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6,
-        **INSTANT_GI_BEFORE_7, **PREFILTER_BEFORE_8}
+        **INSTANT_GI_BEFORE_7, **BEFORE_8}
     assert settings_upgrade.upgrade({"settings_version": 3, "clamp_indirect": 4.0}).values == {
-        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **PREFILTER_BEFORE_8}
+        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_8}
 
 
 def test_a_fourth_layout_scene_keeps_filter_glossy_off():
@@ -85,9 +86,9 @@ def test_a_fourth_layout_scene_keeps_filter_glossy_off():
     assert shgi.PreviewSettings().filter_glossy == 0.0
     assert shgi.LightmapSettings().filter_glossy == 0.0
     assert settings_upgrade.upgrade({"settings_version": 4, "samples": 5}).values == {
-        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **PREFILTER_BEFORE_8}
+        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_8}
     assert settings_upgrade.upgrade({"settings_version": 4, "filter_glossy": 0.25}).values == {
-        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **PREFILTER_BEFORE_8}
+        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_8}
 
 
 # Light Propagation's defaults before layout 6, as an upgrade writes them into the group.
@@ -106,11 +107,11 @@ def test_a_fifth_layout_scene_keeps_the_light_propagation_defaults_of_then():
     assert (settings.PROPAGATION_DEFAULTS["steps"], settings.PROPAGATION_DEFAULTS["distance"]) == (
         0, 32.0)
     assert settings_upgrade.upgrade({"settings_version": 5, "samples": 5}).values == {
-        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **PREFILTER_BEFORE_8}
+        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_8}
     stored = {"settings_version": 5, "propagation": {"steps": 16, "unclamped_transfer": True}}
     assert settings_upgrade.upgrade(stored).values == {
         **{key: value for key, value in PROPAGATION_BEFORE_6.items()
-           if key[1] not in ("steps", "unclamped_transfer")}, **INSTANT_GI_BEFORE_7, **PREFILTER_BEFORE_8}
+           if key[1] not in ("steps", "unclamped_transfer")}, **INSTANT_GI_BEFORE_7, **BEFORE_8}
     assert not any(group == "propagation" for group, _ in settings_upgrade.upgrade(
         {"settings_version": 2, "samples": 5}).values)
 
@@ -128,25 +129,31 @@ def test_a_sixth_layout_scene_keeps_instant_gi_passes_for_renders_and_bakes():
     defaults = settings.default_properties(shgi).instant_gi
     assert (defaults.passes, defaults.bake_passes) == (64, shgi.method("INSTANT_GI").final_passes)
     assert settings_upgrade.upgrade({"settings_version": 6, "samples": 5}).values == {
-        **INSTANT_GI_BEFORE_7, **PREFILTER_BEFORE_8}
+        **INSTANT_GI_BEFORE_7, **BEFORE_8}
     stored = {"settings_version": 6, "instant_gi": {"passes": 12, "sets_x": 2}}
     assert settings_upgrade.upgrade(stored).values == {("instant_gi", "bake_passes"): 12,
-                                                       **PREFILTER_BEFORE_8}
+                                                       **BEFORE_8}
     assert not any(group == "instant_gi" for group, _ in settings_upgrade.upgrade(
         {"settings_version": 2, "samples": 5}).values)
 
 
-# F12's denoising prefilter before layout 8, as an upgrade writes it.
-PREFILTER_BEFORE_8 = {("", "denoising_prefilter"): "FAST"}
+# F12's denoising prefilter and the pixel filter before layout 8, as an upgrade writes them.
+BEFORE_8 = {("", "denoising_prefilter"): "FAST", ("", "pixel_filter"): "BOX",
+            ("", "filter_width"): 1.0}
 
 
-def test_a_seventh_layout_scene_keeps_the_fast_prefilter():
-    """Layout 8 gave F12's denoiser the Automatic prefilter: a scene saved before, which left
-    Fast, keeps Fast; one that chose a prefilter keeps it (nothing to write)."""
+def test_a_seventh_layout_scene_keeps_the_fast_prefilter_and_the_box_pixel_filter():
+    """Layout 8 gave F12's denoiser the Automatic prefilter and the film Cycles' Blackman-Harris
+    1.5: a scene saved before, which left Fast and had no pixel filter (a box of one pixel),
+    keeps both; one that chose a prefilter keeps it (nothing to write)."""
     assert settings.DENOISING_DEFAULTS["denoising_prefilter"] == "AUTO"
-    assert settings_upgrade.upgrade({"settings_version": 7, "samples": 5}).values == (
-        PREFILTER_BEFORE_8)
-    assert settings_upgrade.upgrade({"settings_version": 7, "denoising_prefilter": 2}).values == {}
+    assert (settings.PROPERTY_DEFAULTS["pixel_filter"],
+            settings.PROPERTY_DEFAULTS["filter_width"]) == ("BLACKMAN_HARRIS", 1.5)
+    assert (shgi.PathTracerSettings().pixel_filter, shgi.PathTracerSettings().filter_width) == (
+        shgi.PixelFilter.BOX, 1.0)  # scripts keep the native box
+    assert settings_upgrade.upgrade({"settings_version": 7, "samples": 5}).values == BEFORE_8
+    stored = {"settings_version": 7, "denoising_prefilter": 2, "filter_width": 2.0}
+    assert settings_upgrade.upgrade(stored).values == {("", "pixel_filter"): "BOX"}
 
 
 def test_settings_of_today_layout_are_left_alone():

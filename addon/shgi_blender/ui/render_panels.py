@@ -73,6 +73,23 @@ class SHGI_RENDER_PT_denoise(ShgiPanel, bpy.types.Panel):
             sub.prop(props, f"{prefix}denoising_quality", text="Quality")
 
 
+class SHGI_RENDER_PT_film(ShgiPanel, bpy.types.Panel):
+    """Cycles' Film > Pixel Filter: its type and width."""
+
+    bl_label = "Film"
+    bl_context = "render"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        props = context.scene.shgi
+        column = layout.column(align=True)
+        column.prop(props, "pixel_filter", text="Pixel Filter")
+        column.prop(props, "filter_width", text="Width")
+
+
 class SHGI_RENDER_PT_light_paths(ShgiPanel, bpy.types.Panel):
     bl_label = "Light Paths"
     bl_context = "render"
@@ -463,7 +480,8 @@ class SHGI_RENDER_PT_last_render(ShgiPanel, bpy.types.Panel):
 
 
 # Parents before their sub-panels.
-CLASSES = (SHGI_RENDER_PT_method, SHGI_RENDER_PT_denoise, SHGI_RENDER_PT_light_paths,
+CLASSES = (SHGI_RENDER_PT_method, SHGI_RENDER_PT_denoise, SHGI_RENDER_PT_film,
+           SHGI_RENDER_PT_light_paths,
            SHGI_RENDER_PT_light_paths_max_bounces, SHGI_RENDER_PT_photon_lattice,
            SHGI_RENDER_PT_radiance_field,
            SHGI_RENDER_PT_probe_grid, SHGI_RENDER_PT_probe_grid_visibility,

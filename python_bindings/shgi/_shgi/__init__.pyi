@@ -8,7 +8,7 @@ import numpy.typing
 from shgi import Cancelled
 import typing
 from . import sh
-__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'InstantGi', 'InstantGiField', 'InstantGiFilter', 'InstantGiSettings', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'NormalMapSpace', 'PathTracer', 'PathTracerSettings', 'PhotonBatch', 'PhotonLattice', 'PhotonLatticeSettings', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'RouletteSurvival', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_read_tiles', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'propagation_steps', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'trace_photon_batch', 'unocclude', 'version', 'write_exr', 'write_png']
+__all__ = ['AreaShape', 'Camera', 'CameraType', 'Cancelled', 'CausticMode', 'DiffuseModel', 'FaceEstimator', 'GiSolver', 'IndirectField', 'Instance', 'InstantGi', 'InstantGiField', 'InstantGiFilter', 'InstantGiSettings', 'LatticeInterpolation', 'Light', 'LightType', 'LightmapFilterSettings', 'LightmapSettings', 'LightmapTexels', 'LogLevel', 'MAX_COORDINATE', 'MAX_LIGHTMAP_RESOLUTION', 'Material', 'Mesh', 'MicrofacetDistribution', 'NativeMethod', 'NormalMapSpace', 'PathTracer', 'PathTracerSettings', 'PhotonBatch', 'PhotonLattice', 'PhotonLatticeSettings', 'PixelFilter', 'PreviewRenderer', 'PreviewSettings', 'PrincipledModel', 'ProbeField', 'ProbeGrid', 'ProbeGridSettings', 'ProbeLookupSettings', 'ProbeVolume', 'Progress', 'PropagationField', 'PropagationSettings', 'PropagationVolume', 'RadianceField', 'RadianceFieldSettings', 'RouletteSurvival', 'Scene', 'SensorFit', 'TexelMap', 'TexelRasterSettings', 'Texture', 'UnoccludeSettings', 'World', 'WorldSampling', 'bake_lightmap', 'dilate_lightmap', 'filter_lightmap', 'lightmap_read_tiles', 'lightmap_shard_tiles', 'lightmap_tile_count', 'linear_from_srgb', 'load_gltf', 'load_obj', 'log_level', 'make_native_solver', 'max_threads', 'memory_limits', 'merge_lightmap', 'native_methods', 'propagation_steps', 'rasterize_texels', 'read_exr', 'read_exr_info', 'render_path_traced', 'render_preview', 'reserved_method_numbers', 'set_log_level', 'set_log_sink', 'set_max_threads', 'sh', 'srgb_from_linear', 'trace_photon_batch', 'unocclude', 'version', 'write_exr', 'write_png']
 class AreaShape:
     """
     Blender's area light shapes.
@@ -1717,6 +1717,14 @@ class PathTracerSettings:
     def filter_glossy(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
+    def filter_width(self) -> float:
+        """
+        Film > Pixel Filter's width in pixels as Cycles' Filter Size, [0.01, 10] (1.0; Cycles' default 1.5): a box of width w spans w pixels, a Gaussian of width w has sigma w / 4, a Blackman-Harris of width w spans 2 w.
+        """
+    @filter_width.setter
+    def filter_width(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
     def glossy_bounces(self) -> int:
         """
         Glossy bounce limit (4).
@@ -1739,6 +1747,14 @@ class PathTracerSettings:
         """
     @max_bounces.setter
     def max_bounces(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def pixel_filter(self) -> PixelFilter:
+        """
+        Film > Pixel Filter as Cycles': PixelFilter BOX, GAUSSIAN or BLACKMAN_HARRIS, drawn per sample around its pixel (BOX; Cycles' default is BLACKMAN_HARRIS).
+        """
+    @pixel_filter.setter
+    def pixel_filter(self, arg0: PixelFilter) -> None:
         ...
     @property
     def roulette_survival(self) -> RouletteSurvival:
@@ -2112,6 +2128,59 @@ class PhotonLatticeSettings:
     @world_in_field.setter
     def world_in_field(self, arg0: bool) -> None:
         ...
+class PixelFilter:
+    """
+    Film > Pixel Filter as Cycles' (its Type).
+    
+    Members:
+    
+      BOX
+    
+      GAUSSIAN
+    
+      BLACKMAN_HARRIS
+    """
+    BLACKMAN_HARRIS: typing.ClassVar[PixelFilter]  # value = <PixelFilter.BLACKMAN_HARRIS: 2>
+    BOX: typing.ClassVar[PixelFilter]  # value = <PixelFilter.BOX: 0>
+    GAUSSIAN: typing.ClassVar[PixelFilter]  # value = <PixelFilter.GAUSSIAN: 1>
+    __members__: typing.ClassVar[dict[str, PixelFilter]]  # value = {'BOX': <PixelFilter.BOX: 0>, 'GAUSSIAN': <PixelFilter.GAUSSIAN: 1>, 'BLACKMAN_HARRIS': <PixelFilter.BLACKMAN_HARRIS: 2>}
+    @staticmethod
+    def _pybind11_conduit_v1_(*args, **kwargs):
+        ...
+    @typing.overload
+    def __eq__(self, other: PixelFilter) -> bool:
+        ...
+    @typing.overload
+    def __eq__(self, other: typing.Any) -> bool:
+        ...
+    def __getstate__(self) -> int:
+        ...
+    def __hash__(self) -> int:
+        ...
+    def __index__(self) -> int:
+        ...
+    def __init__(self, value: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __int__(self) -> int:
+        ...
+    @typing.overload
+    def __ne__(self, other: PixelFilter) -> bool:
+        ...
+    @typing.overload
+    def __ne__(self, other: typing.Any) -> bool:
+        ...
+    def __repr__(self) -> str:
+        ...
+    def __setstate__(self, state: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    def __str__(self) -> str:
+        ...
+    @property
+    def name(self) -> str:
+        ...
+    @property
+    def value(self) -> int:
+        ...
 class PreviewRenderer:
     """
     
@@ -2180,6 +2249,14 @@ class PreviewSettings:
     def filter_glossy(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
+    def filter_width(self) -> float:
+        """
+        Film > Pixel Filter's width in pixels as Cycles' Filter Size, [0.01, 10] (1.0; Cycles' default 1.5): a box of width w spans w pixels, a Gaussian of width w has sigma w / 4, a Blackman-Harris of width w spans 2 w.
+        """
+    @filter_width.setter
+    def filter_width(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
     def final_gather(self) -> bool:
         """
         Final gather (False): the first surface sends one BSDF-sampled ray per sample and the field is read where it lands, so the field's blocks and leaks reach the picture only through one more bounce.
@@ -2202,6 +2279,14 @@ class PreviewSettings:
         """
     @max_specular_bounces.setter
     def max_specular_bounces(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def pixel_filter(self) -> PixelFilter:
+        """
+        Film > Pixel Filter as Cycles': PixelFilter BOX, GAUSSIAN or BLACKMAN_HARRIS, drawn per sample around its pixel (BOX; Cycles' default is BLACKMAN_HARRIS).
+        """
+    @pixel_filter.setter
+    def pixel_filter(self, arg0: PixelFilter) -> None:
         ...
     @property
     def reuse_field_lookups(self) -> bool:
