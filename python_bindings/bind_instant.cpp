@@ -129,7 +129,20 @@ void bind_solver(py::module_& m) {
             "VPLs per set, set (i, j) at index j * sets_x + i.")
         .def_property_readonly(
             "frame_timings", &frame_timings,
-            "{gather, filter, shade}: seconds of the latest frame this field lit.");
+            "{gather, filter, shade}: seconds of the latest frame this field lit.")
+        .def_property_readonly(
+            "lookup_counts",
+            [](const InstantGiField& f) {
+                const InstantGiLookupCounts c = f.lookup_counts();
+                py::dict out;
+                out["lookups"] = c.lookups;
+                out["vpls"] = c.vpls;
+                return out;
+            },
+            "{lookups, vpls}: the field's lookups beyond the first surfaces (through glass and "
+            "mirrors; bakes' too) and the VPLs, sky directions and lamp samples they read (a "
+            "shadow ray each at most), since the preview renderer's latest frame with it began "
+            "(or since the field was made).");
 
     py::class_<InstantGi, GiSolver> cls(m, "InstantGi", R"doc(
 Instant GI with a discontinuity-aware screen-space SH filter (seed 004): VPLs from traced light

@@ -193,7 +193,8 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
     : scene_(&scene), settings_(settings), sets_(std::move(sets)), sky_sets_(std::move(sky_sets)),
       lamp_sets_(std::move(lamp_sets)), pass_ends_(std::move(pass_ends)),
       lamp_pass_ends_(std::move(lamp_pass_ends)), lamps_(std::move(lamps)), passes_(passes),
-      timings_(std::make_shared<InstantGiFrameTimings>()) {
+      timings_(std::make_shared<InstantGiFrameTimings>()),
+      lookup_counter_(std::make_shared<LookupCounter>()) {
     if (!pass_ends_.empty()) {
         if (pass_ends_.size() != sets_.size())
             throw Internal("InstantGiField: pass_ends and sets differ in count");
@@ -247,6 +248,11 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
 }
 
 InstantGiFrameTimings InstantGiField::frame_timings() const { return *timings_; }
+
+InstantGiLookupCounts InstantGiField::lookup_counts() const {
+    return {lookup_counter_->lookups.load(std::memory_order_relaxed),
+            lookup_counter_->vpls.load(std::memory_order_relaxed)};
+}
 
 std::vector<uint64_t> InstantGiField::sample_passes(uint64_t sample) const {
     const uint64_t k = uint64_t(settings_.passes_per_sample);
@@ -325,37 +331,67 @@ vec3 InstantGiField::lamp_delta(const InstantLampSample& sample, const vec3& p, 
 }
 
 void InstantGiField::gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t set,
-                                float vpl_scale, const vec3& sky_weight, float lamp_scale) const {
+                                const SampleGather* gather, float vpl_scale,
+                                const vec3& sky_weight, float lamp_scale) const {
     const vec3 origin = offset_origin(p, n);
-    for (const InstantVpl& vpl : sets_[set]) {
+    uint64_t read = 0;
+    // visit(i) for every index of `ranges` (every one of [0, size) when there are none) and,
+    // within a deltas_only range, the delta lights' samples alone (`is_delta`).
+    const auto each = [&read](const std::vector<VplRange>* ranges, uint64_t size,
+                              const auto& is_delta, const auto& visit) {
+        if (ranges == nullptr) {
+            read += size;
+            for (uint64_t i = 0; i < size; ++i) visit(i);
+            return;
+        }
+        for (const VplRange& range : *ranges)
+            for (uint64_t i = range.begin; i < range.end; ++i)
+                if (!range.deltas_only || is_delta(i)) {
+                    ++read;
+                    visit(i);
+                }
+    };
+    const auto no_delta = [](uint64_t) { return false; };
+    const std::vector<InstantVpl>& vpls = sets_[set];
+    each(gather ? &gather->vpls[set] : nullptr, vpls.size(), no_delta, [&](uint64_t i) {
+        const InstantVpl& vpl = vpls[i];
         vec3 w;
         const vec3 e = vpl_delta(p, n, vpl, vpl_scale, settings_.clamp_distance, &w);
         Ray ray;
         if (e == vec3(0.0f) || !shadow_ray(origin, vpl.position, &ray) || scene_->occluded(ray))
-            continue;
+            return;
         add_delta(sh.coeffs.data(), e, w);
-    }
+    });
     // filter_direct: the lights' direct light from the set's lamp samples.
-    if (!lamp_sets_.empty())
-        for (const InstantLampSample& sample : lamp_sets_[set]) {
-            vec3 w;
-            float distance;
-            const vec3 e = lamp_delta(sample, p, n, lamp_scale, passes_, &w, &distance);
-            if (e == vec3(0.0f) || scene_->occluded(light_shadow_ray(origin, w, distance)))
-                continue;
-            add_delta(sh.coeffs.data(), e, w);
-        }
-    // filter_direct: the world's direct light from the set's directional VPLs.
-    if (sky_sets_.empty() || sky_weight == vec3(0.0f)) return;
-    for (const vec3& w : sky_sets_[set]) {
-        if (glm::dot(w, n) <= 0.0f) continue;
-        Ray ray;
-        ray.origin = origin;
-        ray.direction = w;
-        ray.tmax = kInfinity;
-        if (scene_->occluded(ray)) continue;
-        add_delta(sh.coeffs.data(), sky_weight, w);
+    if (!lamp_sets_.empty()) {
+        const std::vector<InstantLampSample>& lamps = lamp_sets_[set];
+        const uint64_t passes = gather ? gather->passes : passes_;
+        each(gather ? &gather->lamps[set] : nullptr, lamps.size(),
+             [&](uint64_t i) { return lamps[i].delta; }, [&](uint64_t i) {
+                 vec3 w;
+                 float distance;
+                 const vec3 e = lamp_delta(lamps[i], p, n, lamp_scale, passes, &w, &distance);
+                 if (e == vec3(0.0f) ||
+                     scene_->occluded(light_shadow_ray(origin, w, distance)))
+                     return;
+                 add_delta(sh.coeffs.data(), e, w);
+             });
     }
+    // filter_direct: the world's direct light from the set's directional VPLs.
+    if (!sky_sets_.empty() && sky_weight != vec3(0.0f)) {
+        const std::vector<vec3>& sky = sky_sets_[set];
+        each(gather ? &gather->sky[set] : nullptr, sky.size(), no_delta, [&](uint64_t i) {
+            const vec3& w = sky[i];
+            if (glm::dot(w, n) <= 0.0f) return;
+            Ray ray;
+            ray.origin = origin;
+            ray.direction = w;
+            ray.tmax = kInfinity;
+            if (scene_->occluded(ray)) return;
+            add_delta(sh.coeffs.data(), sky_weight, w);
+        });
+    }
+    lookup_counter_->vpls.fetch_add(read, std::memory_order_relaxed);
 }
 
 ShRgb InstantGiField::radiance_sh(const vec3& p, const vec3& n) const {
@@ -367,9 +403,68 @@ ShRgb InstantGiField::radiance_sh(const vec3& p, const vec3& n) const {
                          ? scene_->world().radiance() * (kFourPi / float(sky_count_))
                          : vec3(0.0f);
     const float lamp_scale = 1.0f / float(sets_.size());
+    lookup_counter_->lookups.fetch_add(1, std::memory_order_relaxed);
     for (size_t s = 0; s < sets_.size(); ++s)
-        gather_set(sh, p, n, s, 1.0f / float(passes_), sky, lamp_scale);
+        gather_set(sh, p, n, s, nullptr, 1.0f / float(passes_), sky, lamp_scale);
     return sh;
+}
+
+// A preview sample's view (sample_view): lookups gather the sample's passes of every set.
+class InstantGiField::SampleView : public IndirectField {
+  public:
+    SampleView(const InstantGiField& field, uint64_t sample)
+        : field_(field), gather_(field.sample_gather(sample)) {
+        // As radiance_sh, over the passes gathered: each VPL 1 / those passes, the sky's
+        // directions gathered sharing 4 pi, each lamp sample 1 / (sets x its light's samples
+        // among those passes).
+        vpl_scale_ = 1.0f / float(std::max<uint64_t>(gather_.passes, 1));
+        uint64_t directions = 0;
+        for (const auto& ranges : gather_.sky)
+            for (const VplRange& range : ranges) directions += range.end - range.begin;
+        if (directions > 0)
+            sky_ = field.scene_->world().radiance() * (kFourPi / float(directions));
+        lamp_scale_ = 1.0f / float(std::max<size_t>(field.sets_.size(), 1));
+    }
+
+    ShRgb radiance_sh(const vec3& p, const vec3& n) const override {
+        ShRgb sh(kOrder);
+        if (field_.is_zero()) return sh;
+        field_.lookup_counter_->lookups.fetch_add(1, std::memory_order_relaxed);
+        for (size_t s = 0; s < field_.sets_.size(); ++s)
+            field_.gather_set(sh, p, n, s, &gather_, vpl_scale_, sky_, lamp_scale_);
+        return sh;
+    }
+    // The rest is the field's.
+    float reuse_distance() const override { return field_.reuse_distance(); }
+    bool includes_world_direct() const override { return field_.includes_world_direct(); }
+    bool includes_lights_direct() const override { return field_.includes_lights_direct(); }
+    std::shared_ptr<const IndirectField> without_direct() const override {
+        return field_.without_direct();
+    }
+    bool is_zero() const override { return field_.is_zero(); }
+    bool shades_first_surfaces() const override { return field_.shades_first_surfaces(); }
+    void shade_first_surfaces(const GBuffer& g_buffer, const vec3& camera_position,
+                              float clamp_indirect, Film& film, uint64_t first, uint64_t count,
+                              Progress* progress) const override {
+        field_.shade_first_surfaces(g_buffer, camera_position, clamp_indirect, film, first,
+                                    count, progress);
+    }
+    Interleave interleave() const override { return field_.interleave(); }
+    ShRgb set_radiance_sh(const vec3& p, const vec3& n, int set_x, int set_y) const override {
+        return field_.set_radiance_sh(p, n, set_x, set_y);
+    }
+
+  private:
+    const InstantGiField& field_;
+    SampleGather gather_;
+    float vpl_scale_ = 0.0f, lamp_scale_ = 0.0f;
+    vec3 sky_{0.0f};
+};
+
+std::unique_ptr<const IndirectField> InstantGiField::sample_view(uint64_t sample) const {
+    lookup_counter_->lookups.store(0, std::memory_order_relaxed);
+    lookup_counter_->vpls.store(0, std::memory_order_relaxed);
+    return std::make_unique<SampleView>(*this, sample);
 }
 
 std::shared_ptr<const IndirectField> InstantGiField::without_direct() const {
@@ -405,7 +500,8 @@ ShRgb InstantGiField::set_radiance_sh(const vec3& p, const vec3& n, int set_x, i
     const vec3 sky = directions > 0
                          ? scene_->world().radiance() * (kFourPi / float(directions))
                          : vec3(0.0f);
-    gather_set(sh, p, n, s, set_scale_, sky, 1.0f);
+    lookup_counter_->lookups.fetch_add(1, std::memory_order_relaxed);
+    gather_set(sh, p, n, s, nullptr, set_scale_, sky, 1.0f);
     return sh;
 }
 

@@ -256,6 +256,59 @@ def test_field_lookups_elsewhere_gather_every_set():
     assert up.min() > 0.0
 
 
+def mirrored_cornell():
+    """The small Cornell box with a mirror on its left wall: every sample's paths reflected
+    there look the field up beyond the first surfaces."""
+    builder = scenes.cornell_box(0.1)
+    builder.material("mirror", (0.9, 0.9, 0.9), metallic=1.0, roughness=0.0)
+    builder.part("mirror", scenes.quad((-0.98, 0.2, 0.2), (0, 1.6, 0), (0, 0, 1.6)), "mirror",
+                 (0.9, 0.9, 0.9))
+    builder.scene.commit()
+    return builder.scene
+
+
+def test_lookups_through_a_mirror_read_the_sample_s_passes_alone():
+    """A preview sample's lookups beyond the first surfaces (the mirror's reflections) gather
+    every set's VPLs of that sample's passes, as its first surfaces do: a sample reads as many
+    VPLs at 16 passes as at 4 (it read every pass at each lookup: 4x as many, and the caustics
+    scene's sample took 10x the CPU at 64 passes). Lookups elsewhere (bakes, radiance_sh)
+    still read every pass."""
+    scene = mirrored_cornell()
+    solver = shgi.InstantGi(scene, shgi.InstantGiSettings(seed=5, passes_per_sample=4))
+    totals = [0]  # VPLs after each pass: pass k holds totals[k + 1] - totals[k]
+    read = {}
+    for passes in (4, 16):
+        while solver.passes < passes:
+            solver.refine()
+            totals.append(solver.current_field().vpl_count)
+        field = solver.current_field()
+        renderer = shgi.PreviewRenderer(scene, shgi.PreviewSettings(seed=5, samples=2))
+        for sample in range(2):
+            renderer.render(field, 1)
+            counts = field.lookup_counts
+            per_lookup = sum(totals[k + 1] - totals[k] for k in field.sample_passes(sample))
+            assert counts["lookups"] > 0
+            assert counts["vpls"] == counts["lookups"] * per_lookup, (passes, sample)
+            read[passes, sample] = counts
+        field.radiance_sh((0.0, 1.0, 0.01), (0.0, 0.0, 1.0))
+        assert field.lookup_counts["vpls"] == counts["vpls"] + field.vpl_count
+    for sample in range(2):
+        # The same paths whatever the field: the same lookups, and about as many VPLs each.
+        assert read[16, sample]["lookups"] == read[4, sample]["lookups"]
+        ratio = read[16, sample]["vpls"] / read[4, sample]["vpls"]
+        print(f"sample {sample}: {read[4, sample]} at 4 passes, {read[16, sample]} at 16")
+        assert 0.75 < ratio < 1.33, ratio
+
+
+def test_mirror_frames_of_many_passes_do_not_depend_on_threads_or_tiles():
+    scene = mirrored_cornell()
+    field = solved(scene, passes=12, passes_per_sample=4).current_field()
+    images = frames_by_threads_and_tiles(scene, field, 3)
+    assert images[0]["DiffInd"].max() > 0.0
+    for name in ("Combined", "DiffInd", "GlossInd"):
+        np.testing.assert_array_equal(images[0][name], images[1][name], err_msg=name)
+
+
 # --- filter_direct: the sky's direct light through the SH filter ------------------------------
 
 def sky_over_a_floor():

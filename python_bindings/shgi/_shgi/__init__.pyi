@@ -520,6 +520,11 @@ class InstantGiField(IndirectField):
         {gather, filter, shade}: seconds of the latest frame this field lit.
         """
     @property
+    def lookup_counts(self) -> dict:
+        """
+        {lookups, vpls}: the field's lookups beyond the first surfaces (through glass and mirrors; bakes' too) and the VPLs, sky directions and lamp samples they read (a shadow ray each at most), since the preview renderer's latest frame with it began (or since the field was made).
+        """
+    @property
     def passes(self) -> int:
         """
         Passes of VPLs it holds.
