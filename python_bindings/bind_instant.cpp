@@ -81,7 +81,11 @@ void bind_settings(py::module_& m) {
         .def_readwrite("glossy_from_vpls", &S::glossy_from_vpls,
                        "Glossy lobes of roughness 0.3 and above weigh each VPL by the lobe "
                        "itself instead of reading the L2 SH: sharper glossy light, the same "
-                       "mean (False).");
+                       "mean (False).")
+        .def_readwrite("gather_cut_windows", &S::gather_cut_windows,
+                       "Pixels whose filter window an edge cuts gather every set themselves "
+                       "and skip the filter: no blur of light across the edge's side, at "
+                       "sets_x x sets_y times those pixels' shadow rays (False).");
     cls.def("validate", &validate_instant_gi_settings,
             "Raises ValueError naming the first invalid field.");
     register_settings_type<S>("InstantGiSettings");

@@ -564,27 +564,76 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                                                    (lamps ? gathered(gather.lamps[s]) : 0)));
     const uint64_t rows_per_task =
         std::max<uint64_t>(1, kRaysPerBatch / (uint64_t(std::max(width, 1)) * largest_set));
+    // gather_cut_windows: the pixels whose filter window an edge cuts (a neighbour in it does
+    // not join) gather every set themselves, each scaled by 1 / the sets, and skip the filter.
+    const InstantGiFilter mode = settings_.filter_mode;
+    const bool strict_joins = mode == InstantGiFilter::Strict;
+    const int half_x = Interleave::half_width(n), half_y = Interleave::half_width(m);
+    std::vector<uint8_t> cut;
+    if (settings_.gather_cut_windows && mode != InstantGiFilter::None) {
+        cut.assign(pixels, 0);
+        parallel_for(0, uint64_t(height), 8, [&](uint64_t y0, uint64_t y1) {
+            for (uint64_t y = y0; y < y1; ++y)
+                for (int x = 0; x < width; ++x) {
+                    const size_t p = g.index(x, int(y));
+                    if (!g.has_surface(p)) continue;
+                    for (int dy = -half_y; dy <= half_y && !cut[p]; ++dy) {
+                        const int qy = int(y) + dy;
+                        if (qy < 0 || qy >= height) continue;
+                        for (int dx = -half_x; dx <= half_x; ++dx) {
+                            const int qx = x + dx;
+                            if (qx < 0 || qx >= width) continue;
+                            const size_t q = g.index(qx, qy);
+                            if (q != p && !joins(g, p, q, settings_, strict_joins)) {
+                                cut[p] = 1;
+                                break;
+                            }
+                        }
+                    }
+                }
+        });
+    }
+    const float all_sets = 1.0f / float(sets_.size());
     parallel_for(0, uint64_t(height), rows_per_task, [&](uint64_t y0, uint64_t y1) {
         throw_if_cancelled(progress);
         std::vector<Ray> rays;
         std::vector<uint32_t> ray_pixel;
         std::vector<vec3> weights, directions;
         std::vector<uint8_t> occluded, ray_direct;
+        // The row's pixels that gather set s, each with its scale: the set's own pixels
+        // (x = sx mod n in a row of the set's row phase) at 1, the cut ones at 1 / the sets.
+        std::vector<std::pair<int, float>> row_pixels;
+        std::vector<int> cut_pixels;
         // Rays set by set, VPL by VPL, pixel by pixel along the row: the pixels of one set
         // sending rays to one VPL after another are neighbours, a coherent stream.
-        for (uint64_t y = y0; y < y1; ++y)
-            for (int sx = 0; sx < std::min(n, width); ++sx) {
-                const size_t s = size_t(int(y) % m) * size_t(n) + size_t(sx);
+        for (uint64_t y = y0; y < y1; ++y) {
+            cut_pixels.clear();
+            if (!cut.empty())
+                for (int x = 0; x < width; ++x)
+                    if (cut[g.index(x, int(y))]) cut_pixels.push_back(x);
+            // The row's own sets first (sx = 0 .. n - 1), then, for its cut pixels, the others.
+            const size_t row_sets = size_t(int(y) % m) * size_t(n);
+            for (size_t k = 0; k < sets_.size(); ++k) {
+                const size_t s = (row_sets + k) % sets_.size();
+                const int sx = k < size_t(n) ? int(s % size_t(n)) : -1;  // -1: not the row's
+                if (sx >= width) continue;
+                row_pixels.clear();
+                if (sx >= 0)
+                    for (int x = sx; x < width; x += n)
+                        if (cut.empty() || !cut[g.index(x, int(y))])
+                            row_pixels.push_back({x, 1.0f});
+                for (const int x : cut_pixels) row_pixels.push_back({x, all_sets});
+                if (row_pixels.empty()) continue;
                 for (const VplRange& range : gather.vpls[s])
                     for (uint64_t v = range.begin; v < range.end; ++v) {
                         const InstantVpl& vpl = sets_[s][v];
-                        for (int x = sx; x < width; x += n) {
+                        for (const auto& [x, scale] : row_pixels) {
                             const size_t p = g.index(x, int(y));
                             if (!g.has_surface(p)) continue;
                             const vec3 pos = g.position[p], ng = g.geometric_normal[p];
                             vec3 w;
-                            const vec3 e =
-                                vpl_delta(pos, ng, vpl, vpl_scale, settings_.clamp_distance, &w);
+                            const vec3 e = vpl_delta(pos, ng, vpl, vpl_scale * scale,
+                                                     settings_.clamp_distance, &w);
                             if (e == vec3(0.0f)) continue;
                             Ray ray;
                             if (!shadow_ray(offset_origin(pos, ng), vpl.position, &ray)) continue;
@@ -602,13 +651,13 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                         for (uint64_t i = range.begin; i < range.end; ++i) {
                             const InstantLampSample& sample = lamp_sets_[s][i];
                             if (range.deltas_only && !sample.delta) continue;
-                            for (int x = sx; x < width; x += n) {
+                            for (const auto& [x, scale] : row_pixels) {
                                 const size_t p = g.index(x, int(y));
                                 if (!g.has_surface(p)) continue;
                                 const vec3 pos = g.position[p], ng = g.geometric_normal[p];
                                 vec3 w;
                                 float distance;
-                                const vec3 e = lamp_delta(sample, pos, ng, 1.0f, gather.passes,
+                                const vec3 e = lamp_delta(sample, pos, ng, scale, gather.passes,
                                                           &w, &distance);
                                 if (e == vec3(0.0f)) continue;
                                 rays.push_back(
@@ -627,7 +676,7 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                 for (const VplRange& range : gather.sky[s])
                     for (uint64_t i = range.begin; i < range.end; ++i) {
                         const vec3 w = sky_sets_[s][i];
-                        for (int x = sx; x < width; x += n) {
+                        for (const auto& [x, scale] : row_pixels) {
                             const size_t p = g.index(x, int(y));
                             if (!g.has_surface(p)) continue;
                             const vec3 ng = g.geometric_normal[p];
@@ -638,12 +687,13 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                             ray.tmax = kInfinity;
                             rays.push_back(ray);
                             ray_pixel.push_back(uint32_t(p));
-                            weights.push_back(e);
+                            weights.push_back(e * scale);
                             directions.push_back(w);
                             ray_direct.push_back(1);
                         }
                     }
             }
+        }
         if (rays.empty()) return;
         scene_->occluded(rays, occluded, nullptr, RayCoherence::Coherent);
         for (size_t r = 0; r < rays.size(); ++r) {  // in ray order: a fixed sum per pixel
@@ -664,11 +714,9 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
 
     // 2. filter.
     start = now();
-    const InstantGiFilter mode = settings_.filter_mode;
     const bool filter_sh = mode == InstantGiFilter::Sh;
     const bool filter_irradiance =
         mode == InstantGiFilter::Irradiance || mode == InstantGiFilter::Strict;
-    const int half_x = Interleave::half_width(n), half_y = Interleave::half_width(m);
     // The interleave-wide window over `source` (stride vec3 per pixel) into `out_plane`.
     const auto filter_window = [&](const std::vector<vec3>& source, int stride, bool strict,
                                    std::vector<vec3>& out_plane) {
@@ -680,6 +728,10 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                     const size_t p = g.index(x, int(y));
                     if (!g.has_surface(p)) continue;
                     vec3* out = &out_plane[p * size_t(stride)];
+                    if (!cut.empty() && cut[p]) {  // gathered every set: kept as it is
+                        std::copy_n(&source[p * size_t(stride)], stride, out);
+                        continue;
+                    }
                     float total = 0.0f;
                     for (int dy = -half_y; dy <= half_y; ++dy) {
                         const int qy = int(y) + dy;

@@ -106,6 +106,13 @@ struct InstantGiSettings {
     // same mean (the sun room, 64 passes: 33.14 dB against 32.95 dB, GlossInd 0.841 x the
     // path tracer's against 0.845 x: L2 is not what it lacks); off by default.
     bool glossy_from_vpls = false;
+    // Pixels whose filter window an edge cuts (a neighbour in it fails the depth, normal or
+    // object test, so the window no longer averages every set evenly around the pixel) gather
+    // every set themselves, each scaled by 1 / the sets, and keep that instead of the window's
+    // average: the filter blurs light towards the side of an edge it can still read (the
+    // normal-mapped floor's wall foot read 1.5x brute force), a full gather does not. Costs
+    // those pixels sets_x × sets_y times the shadow rays; off by default.
+    bool gather_cut_windows = false;
     // Passes of VPLs a preview sample gathers: sample i gathers passes i k .. i k + k - 1
     // (mod the field's passes), k = passes_per_sample, each set scaled by sets / k; with no
     // more passes than k every sample gathers them all (as before this setting). The samples

@@ -643,6 +643,14 @@ class InstantGiSettings:
     def filter_mode(self, arg0: InstantGiFilter) -> None:
         ...
     @property
+    def gather_cut_windows(self) -> bool:
+        """
+        Pixels whose filter window an edge cuts gather every set themselves and skip the filter: no blur of light across the edge's side, at sets_x x sets_y times those pixels' shadow rays (False).
+        """
+    @gather_cut_windows.setter
+    def gather_cut_windows(self, arg0: bool) -> None:
+        ...
+    @property
     def glossy_bounces(self) -> int:
         """
         Glossy scatterings of a light path, a budget of their own beside vpl_bounces, 0..64; 4 matches Cycles' default glossy bounces.
