@@ -65,6 +65,36 @@ bool joins(const GBuffer& g, size_t p, size_t q, const InstantGiSettings& s, boo
     return true;
 }
 
+// Per pixel, 1 where a neighbour within the filter window (half_x, half_y taps each side,
+// inside the image) does not join the pixel: an edge cuts its window (gather_cut_windows).
+std::vector<uint8_t> cut_window_pixels(const GBuffer& g, const InstantGiSettings& s, int half_x,
+                                       int half_y) {
+    const int width = g.width(), height = g.height();
+    const bool strict = s.filter_mode == InstantGiFilter::Strict;
+    std::vector<uint8_t> cut(g.pixel_count(), 0);
+    parallel_for(0, uint64_t(height), 8, [&](uint64_t y0, uint64_t y1) {
+        for (uint64_t y = y0; y < y1; ++y)
+            for (int x = 0; x < width; ++x) {
+                const size_t p = g.index(x, int(y));
+                if (!g.has_surface(p)) continue;
+                for (int dy = -half_y; dy <= half_y && !cut[p]; ++dy) {
+                    const int qy = int(y) + dy;
+                    if (qy < 0 || qy >= height) continue;
+                    for (int dx = -half_x; dx <= half_x; ++dx) {
+                        const int qx = x + dx;
+                        if (qx < 0 || qx >= width) continue;
+                        const size_t q = g.index(qx, qy);
+                        if (q != p && !joins(g, p, q, s, strict)) {
+                            cut[p] = 1;
+                            break;
+                        }
+                    }
+                }
+            }
+    });
+    return cut;
+}
+
 // InstantGiSettings.glossy_bounces' limit (the radiance field's).
 constexpr int kMaxGlossyBounces = 64;
 
@@ -564,35 +594,14 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                                                    (lamps ? gathered(gather.lamps[s]) : 0)));
     const uint64_t rows_per_task =
         std::max<uint64_t>(1, kRaysPerBatch / (uint64_t(std::max(width, 1)) * largest_set));
-    // gather_cut_windows: the pixels whose filter window an edge cuts (a neighbour in it does
-    // not join) gather every set themselves, each scaled by 1 / the sets, and skip the filter.
+    // gather_cut_windows: the pixels whose filter window an edge cuts gather every set
+    // themselves, each scaled by 1 / the sets, and skip the filter.
     const InstantGiFilter mode = settings_.filter_mode;
-    const bool strict_joins = mode == InstantGiFilter::Strict;
     const int half_x = Interleave::half_width(n), half_y = Interleave::half_width(m);
-    std::vector<uint8_t> cut;
-    if (settings_.gather_cut_windows && mode != InstantGiFilter::None) {
-        cut.assign(pixels, 0);
-        parallel_for(0, uint64_t(height), 8, [&](uint64_t y0, uint64_t y1) {
-            for (uint64_t y = y0; y < y1; ++y)
-                for (int x = 0; x < width; ++x) {
-                    const size_t p = g.index(x, int(y));
-                    if (!g.has_surface(p)) continue;
-                    for (int dy = -half_y; dy <= half_y && !cut[p]; ++dy) {
-                        const int qy = int(y) + dy;
-                        if (qy < 0 || qy >= height) continue;
-                        for (int dx = -half_x; dx <= half_x; ++dx) {
-                            const int qx = x + dx;
-                            if (qx < 0 || qx >= width) continue;
-                            const size_t q = g.index(qx, qy);
-                            if (q != p && !joins(g, p, q, settings_, strict_joins)) {
-                                cut[p] = 1;
-                                break;
-                            }
-                        }
-                    }
-                }
-        });
-    }
+    const std::vector<uint8_t> cut =
+        settings_.gather_cut_windows && mode != InstantGiFilter::None
+            ? cut_window_pixels(g, settings_, half_x, half_y)
+            : std::vector<uint8_t>{};
     const float all_sets = 1.0f / float(sets_.size());
     parallel_for(0, uint64_t(height), rows_per_task, [&](uint64_t y0, uint64_t y1) {
         throw_if_cancelled(progress);
