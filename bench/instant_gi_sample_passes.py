@@ -7,8 +7,9 @@ path tracer's (the test's setting: scale 0.25, 2048 spp reference, seed 11; prev
 as the Solve operator runs it) and of a first frame (that solve and a 1-sample frame: F12's
 time to its first image when it solved every pass first; it now solves only the first sample's
 passes first), each as a ratio to the first configuration's. A configuration
-passes:per_sample[:light paths per set] (16 by default); `--filter-direct` and
-`--glossy-from-vpls` solve with those settings on. A plain script printing a table: not a test.
+passes:per_sample[:light paths per set] (16 by default); `--filter-direct`,
+`--glossy-from-vpls` and `--gather-cut-windows` solve with those settings on. A plain script
+printing a table: not a test.
 The two rooms' dim room as test_instant_gi.py's dim room test reads it (128 light paths per
 set):
 
@@ -73,6 +74,8 @@ def main():
                         help="InstantGiSettings.filter_direct on")
     parser.add_argument("--glossy-from-vpls", action="store_true",
                         help="InstantGiSettings.glossy_from_vpls on")
+    parser.add_argument("--gather-cut-windows", action="store_true",
+                        help="InstantGiSettings.gather_cut_windows on")
     args = parser.parse_args()
     builder = getattr(scenes, args.scene)(args.scale)
     builder.scene.commit()
@@ -80,7 +83,8 @@ def main():
     reference = shgi.render_path_traced(
         scene, shgi.PathTracerSettings(samples=args.reference_samples, seed=11))
     configs = [tuple(int(v) for v in c.split(":")) for c in args.configs]
-    fields = {"filter_direct": args.filter_direct, "glossy_from_vpls": args.glossy_from_vpls}
+    fields = {"filter_direct": args.filter_direct, "glossy_from_vpls": args.glossy_from_vpls,
+              "gather_cut_windows": args.gather_cut_windows}
     base = None
     for passes, per_sample, *paths in configs:
         paths = paths[0] if paths else 16

@@ -81,7 +81,11 @@ void bind_settings(py::module_& m) {
         .def_readwrite("glossy_from_vpls", &S::glossy_from_vpls,
                        "Glossy lobes of roughness 0.3 and above weigh each VPL by the lobe "
                        "itself instead of reading the L2 SH: sharper glossy light, the same "
-                       "mean (False).");
+                       "mean (False).")
+        .def_readwrite("gather_cut_windows", &S::gather_cut_windows,
+                       "Pixels whose filter window an edge cuts gather every set themselves "
+                       "and skip the filter: no blur of light across the edge's side, at "
+                       "sets_x x sets_y times those pixels' shadow rays (False).");
     cls.def("validate", &validate_instant_gi_settings,
             "Raises ValueError naming the first invalid field.");
     register_settings_type<S>("InstantGiSettings");
@@ -129,7 +133,20 @@ void bind_solver(py::module_& m) {
             "VPLs per set, set (i, j) at index j * sets_x + i.")
         .def_property_readonly(
             "frame_timings", &frame_timings,
-            "{gather, filter, shade}: seconds of the latest frame this field lit.");
+            "{gather, filter, shade}: seconds of the latest frame this field lit.")
+        .def_property_readonly(
+            "lookup_counts",
+            [](const InstantGiField& f) {
+                const InstantGiLookupCounts c = f.lookup_counts();
+                py::dict out;
+                out["lookups"] = c.lookups;
+                out["vpls"] = c.vpls;
+                return out;
+            },
+            "{lookups, vpls}: the field's lookups beyond the first surfaces (through glass and "
+            "mirrors; bakes' too) and the VPLs, sky directions and lamp samples they read (a "
+            "shadow ray each at most), since the preview renderer's latest frame with it began "
+            "(or since the field was made).");
 
     py::class_<InstantGi, GiSolver> cls(m, "InstantGi", R"doc(
 Instant GI with a discontinuity-aware screen-space SH filter (seed 004): VPLs from traced light

@@ -494,9 +494,8 @@ class ShgiInstantGiSettings(bpy.types.PropertyGroup):
         name="Render Passes", default=settings.render_passes("INSTANT_GI", native.module()),
         min=1, soft_max=256,
         description="Passes of an F12 render or a Solve, each adding Light Paths per Set to "
-                    "every set: more give smoother light. A sample sees Per Sample of them on "
-                    "surfaces the camera sees directly, so there passes beyond that cost no "
-                    "more per sample; surfaces seen in mirrors or through glass read every pass")
+                    "every set: more give smoother light. A sample sees Per Sample of them, so "
+                    "passes beyond that cost no more per sample")
     bake_passes: IntProperty(
         name="Bake Passes", default=settings.final_passes("INSTANT_GI", native.module()),
         min=1, soft_max=64,

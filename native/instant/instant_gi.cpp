@@ -65,6 +65,36 @@ bool joins(const GBuffer& g, size_t p, size_t q, const InstantGiSettings& s, boo
     return true;
 }
 
+// Per pixel, 1 where a neighbour within the filter window (half_x, half_y taps each side,
+// inside the image) does not join the pixel: an edge cuts its window (gather_cut_windows).
+std::vector<uint8_t> cut_window_pixels(const GBuffer& g, const InstantGiSettings& s, int half_x,
+                                       int half_y) {
+    const int width = g.width(), height = g.height();
+    const bool strict = s.filter_mode == InstantGiFilter::Strict;
+    std::vector<uint8_t> cut(g.pixel_count(), 0);
+    parallel_for(0, uint64_t(height), 8, [&](uint64_t y0, uint64_t y1) {
+        for (uint64_t y = y0; y < y1; ++y)
+            for (int x = 0; x < width; ++x) {
+                const size_t p = g.index(x, int(y));
+                if (!g.has_surface(p)) continue;
+                for (int dy = -half_y; dy <= half_y && !cut[p]; ++dy) {
+                    const int qy = int(y) + dy;
+                    if (qy < 0 || qy >= height) continue;
+                    for (int dx = -half_x; dx <= half_x; ++dx) {
+                        const int qx = x + dx;
+                        if (qx < 0 || qx >= width) continue;
+                        const size_t q = g.index(qx, qy);
+                        if (q != p && !joins(g, p, q, s, strict)) {
+                            cut[p] = 1;
+                            break;
+                        }
+                    }
+                }
+            }
+    });
+    return cut;
+}
+
 // InstantGiSettings.glossy_bounces' limit (the radiance field's).
 constexpr int kMaxGlossyBounces = 64;
 
@@ -193,7 +223,8 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
     : scene_(&scene), settings_(settings), sets_(std::move(sets)), sky_sets_(std::move(sky_sets)),
       lamp_sets_(std::move(lamp_sets)), pass_ends_(std::move(pass_ends)),
       lamp_pass_ends_(std::move(lamp_pass_ends)), lamps_(std::move(lamps)), passes_(passes),
-      timings_(std::make_shared<InstantGiFrameTimings>()) {
+      timings_(std::make_shared<InstantGiFrameTimings>()),
+      lookup_counter_(std::make_shared<LookupCounter>()) {
     if (!pass_ends_.empty()) {
         if (pass_ends_.size() != sets_.size())
             throw Internal("InstantGiField: pass_ends and sets differ in count");
@@ -247,6 +278,11 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
 }
 
 InstantGiFrameTimings InstantGiField::frame_timings() const { return *timings_; }
+
+InstantGiLookupCounts InstantGiField::lookup_counts() const {
+    return {lookup_counter_->lookups.load(std::memory_order_relaxed),
+            lookup_counter_->vpls.load(std::memory_order_relaxed)};
+}
 
 std::vector<uint64_t> InstantGiField::sample_passes(uint64_t sample) const {
     const uint64_t k = uint64_t(settings_.passes_per_sample);
@@ -325,37 +361,67 @@ vec3 InstantGiField::lamp_delta(const InstantLampSample& sample, const vec3& p, 
 }
 
 void InstantGiField::gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t set,
-                                float vpl_scale, const vec3& sky_weight, float lamp_scale) const {
+                                const SampleGather* gather, float vpl_scale,
+                                const vec3& sky_weight, float lamp_scale) const {
     const vec3 origin = offset_origin(p, n);
-    for (const InstantVpl& vpl : sets_[set]) {
+    uint64_t read = 0;
+    // visit(i) for every index of `ranges` (every one of [0, size) when there are none) and,
+    // within a deltas_only range, the delta lights' samples alone (`is_delta`).
+    const auto each = [&read](const std::vector<VplRange>* ranges, uint64_t size,
+                              const auto& is_delta, const auto& visit) {
+        if (ranges == nullptr) {
+            read += size;
+            for (uint64_t i = 0; i < size; ++i) visit(i);
+            return;
+        }
+        for (const VplRange& range : *ranges)
+            for (uint64_t i = range.begin; i < range.end; ++i)
+                if (!range.deltas_only || is_delta(i)) {
+                    ++read;
+                    visit(i);
+                }
+    };
+    const auto no_delta = [](uint64_t) { return false; };
+    const std::vector<InstantVpl>& vpls = sets_[set];
+    each(gather ? &gather->vpls[set] : nullptr, vpls.size(), no_delta, [&](uint64_t i) {
+        const InstantVpl& vpl = vpls[i];
         vec3 w;
         const vec3 e = vpl_delta(p, n, vpl, vpl_scale, settings_.clamp_distance, &w);
         Ray ray;
         if (e == vec3(0.0f) || !shadow_ray(origin, vpl.position, &ray) || scene_->occluded(ray))
-            continue;
+            return;
         add_delta(sh.coeffs.data(), e, w);
-    }
+    });
     // filter_direct: the lights' direct light from the set's lamp samples.
-    if (!lamp_sets_.empty())
-        for (const InstantLampSample& sample : lamp_sets_[set]) {
-            vec3 w;
-            float distance;
-            const vec3 e = lamp_delta(sample, p, n, lamp_scale, passes_, &w, &distance);
-            if (e == vec3(0.0f) || scene_->occluded(light_shadow_ray(origin, w, distance)))
-                continue;
-            add_delta(sh.coeffs.data(), e, w);
-        }
-    // filter_direct: the world's direct light from the set's directional VPLs.
-    if (sky_sets_.empty() || sky_weight == vec3(0.0f)) return;
-    for (const vec3& w : sky_sets_[set]) {
-        if (glm::dot(w, n) <= 0.0f) continue;
-        Ray ray;
-        ray.origin = origin;
-        ray.direction = w;
-        ray.tmax = kInfinity;
-        if (scene_->occluded(ray)) continue;
-        add_delta(sh.coeffs.data(), sky_weight, w);
+    if (!lamp_sets_.empty()) {
+        const std::vector<InstantLampSample>& lamps = lamp_sets_[set];
+        const uint64_t passes = gather ? gather->passes : passes_;
+        each(gather ? &gather->lamps[set] : nullptr, lamps.size(),
+             [&](uint64_t i) { return lamps[i].delta; }, [&](uint64_t i) {
+                 vec3 w;
+                 float distance;
+                 const vec3 e = lamp_delta(lamps[i], p, n, lamp_scale, passes, &w, &distance);
+                 if (e == vec3(0.0f) ||
+                     scene_->occluded(light_shadow_ray(origin, w, distance)))
+                     return;
+                 add_delta(sh.coeffs.data(), e, w);
+             });
     }
+    // filter_direct: the world's direct light from the set's directional VPLs.
+    if (!sky_sets_.empty() && sky_weight != vec3(0.0f)) {
+        const std::vector<vec3>& sky = sky_sets_[set];
+        each(gather ? &gather->sky[set] : nullptr, sky.size(), no_delta, [&](uint64_t i) {
+            const vec3& w = sky[i];
+            if (glm::dot(w, n) <= 0.0f) return;
+            Ray ray;
+            ray.origin = origin;
+            ray.direction = w;
+            ray.tmax = kInfinity;
+            if (scene_->occluded(ray)) return;
+            add_delta(sh.coeffs.data(), sky_weight, w);
+        });
+    }
+    lookup_counter_->vpls.fetch_add(read, std::memory_order_relaxed);
 }
 
 ShRgb InstantGiField::radiance_sh(const vec3& p, const vec3& n) const {
@@ -367,9 +433,68 @@ ShRgb InstantGiField::radiance_sh(const vec3& p, const vec3& n) const {
                          ? scene_->world().radiance() * (kFourPi / float(sky_count_))
                          : vec3(0.0f);
     const float lamp_scale = 1.0f / float(sets_.size());
+    lookup_counter_->lookups.fetch_add(1, std::memory_order_relaxed);
     for (size_t s = 0; s < sets_.size(); ++s)
-        gather_set(sh, p, n, s, 1.0f / float(passes_), sky, lamp_scale);
+        gather_set(sh, p, n, s, nullptr, 1.0f / float(passes_), sky, lamp_scale);
     return sh;
+}
+
+// A preview sample's view (sample_view): lookups gather the sample's passes of every set.
+class InstantGiField::SampleView : public IndirectField {
+  public:
+    SampleView(const InstantGiField& field, uint64_t sample)
+        : field_(field), gather_(field.sample_gather(sample)) {
+        // As radiance_sh, over the passes gathered: each VPL 1 / those passes, the sky's
+        // directions gathered sharing 4 pi, each lamp sample 1 / (sets x its light's samples
+        // among those passes).
+        vpl_scale_ = 1.0f / float(std::max<uint64_t>(gather_.passes, 1));
+        uint64_t directions = 0;
+        for (const auto& ranges : gather_.sky)
+            for (const VplRange& range : ranges) directions += range.end - range.begin;
+        if (directions > 0)
+            sky_ = field.scene_->world().radiance() * (kFourPi / float(directions));
+        lamp_scale_ = 1.0f / float(std::max<size_t>(field.sets_.size(), 1));
+    }
+
+    ShRgb radiance_sh(const vec3& p, const vec3& n) const override {
+        ShRgb sh(kOrder);
+        if (field_.is_zero()) return sh;
+        field_.lookup_counter_->lookups.fetch_add(1, std::memory_order_relaxed);
+        for (size_t s = 0; s < field_.sets_.size(); ++s)
+            field_.gather_set(sh, p, n, s, &gather_, vpl_scale_, sky_, lamp_scale_);
+        return sh;
+    }
+    // The rest is the field's.
+    float reuse_distance() const override { return field_.reuse_distance(); }
+    bool includes_world_direct() const override { return field_.includes_world_direct(); }
+    bool includes_lights_direct() const override { return field_.includes_lights_direct(); }
+    std::shared_ptr<const IndirectField> without_direct() const override {
+        return field_.without_direct();
+    }
+    bool is_zero() const override { return field_.is_zero(); }
+    bool shades_first_surfaces() const override { return field_.shades_first_surfaces(); }
+    void shade_first_surfaces(const GBuffer& g_buffer, const vec3& camera_position,
+                              float clamp_indirect, Film& film, uint64_t first, uint64_t count,
+                              Progress* progress) const override {
+        field_.shade_first_surfaces(g_buffer, camera_position, clamp_indirect, film, first,
+                                    count, progress);
+    }
+    Interleave interleave() const override { return field_.interleave(); }
+    ShRgb set_radiance_sh(const vec3& p, const vec3& n, int set_x, int set_y) const override {
+        return field_.set_radiance_sh(p, n, set_x, set_y);
+    }
+
+  private:
+    const InstantGiField& field_;
+    SampleGather gather_;
+    float vpl_scale_ = 0.0f, lamp_scale_ = 0.0f;
+    vec3 sky_{0.0f};
+};
+
+std::unique_ptr<const IndirectField> InstantGiField::sample_view(uint64_t sample) const {
+    lookup_counter_->lookups.store(0, std::memory_order_relaxed);
+    lookup_counter_->vpls.store(0, std::memory_order_relaxed);
+    return std::make_unique<SampleView>(*this, sample);
 }
 
 std::shared_ptr<const IndirectField> InstantGiField::without_direct() const {
@@ -405,7 +530,8 @@ ShRgb InstantGiField::set_radiance_sh(const vec3& p, const vec3& n, int set_x, i
     const vec3 sky = directions > 0
                          ? scene_->world().radiance() * (kFourPi / float(directions))
                          : vec3(0.0f);
-    gather_set(sh, p, n, s, set_scale_, sky, 1.0f);
+    lookup_counter_->lookups.fetch_add(1, std::memory_order_relaxed);
+    gather_set(sh, p, n, s, nullptr, set_scale_, sky, 1.0f);
     return sh;
 }
 
@@ -468,27 +594,55 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                                                    (lamps ? gathered(gather.lamps[s]) : 0)));
     const uint64_t rows_per_task =
         std::max<uint64_t>(1, kRaysPerBatch / (uint64_t(std::max(width, 1)) * largest_set));
+    // gather_cut_windows: the pixels whose filter window an edge cuts gather every set
+    // themselves, each scaled by 1 / the sets, and skip the filter.
+    const InstantGiFilter mode = settings_.filter_mode;
+    const int half_x = Interleave::half_width(n), half_y = Interleave::half_width(m);
+    const std::vector<uint8_t> cut =
+        settings_.gather_cut_windows && mode != InstantGiFilter::None
+            ? cut_window_pixels(g, settings_, half_x, half_y)
+            : std::vector<uint8_t>{};
+    const float all_sets = 1.0f / float(sets_.size());
     parallel_for(0, uint64_t(height), rows_per_task, [&](uint64_t y0, uint64_t y1) {
         throw_if_cancelled(progress);
         std::vector<Ray> rays;
         std::vector<uint32_t> ray_pixel;
         std::vector<vec3> weights, directions;
         std::vector<uint8_t> occluded, ray_direct;
+        // The row's pixels that gather set s, each with its scale: the set's own pixels
+        // (x = sx mod n in a row of the set's row phase) at 1, the cut ones at 1 / the sets.
+        std::vector<std::pair<int, float>> row_pixels;
+        std::vector<int> cut_pixels;
         // Rays set by set, VPL by VPL, pixel by pixel along the row: the pixels of one set
         // sending rays to one VPL after another are neighbours, a coherent stream.
-        for (uint64_t y = y0; y < y1; ++y)
-            for (int sx = 0; sx < std::min(n, width); ++sx) {
-                const size_t s = size_t(int(y) % m) * size_t(n) + size_t(sx);
+        for (uint64_t y = y0; y < y1; ++y) {
+            cut_pixels.clear();
+            if (!cut.empty())
+                for (int x = 0; x < width; ++x)
+                    if (cut[g.index(x, int(y))]) cut_pixels.push_back(x);
+            // The row's own sets first (sx = 0 .. n - 1), then, for its cut pixels, the others.
+            const size_t row_sets = size_t(int(y) % m) * size_t(n);
+            for (size_t k = 0; k < sets_.size(); ++k) {
+                const size_t s = (row_sets + k) % sets_.size();
+                const int sx = k < size_t(n) ? int(s % size_t(n)) : -1;  // -1: not the row's
+                if (sx >= width) continue;
+                row_pixels.clear();
+                if (sx >= 0)
+                    for (int x = sx; x < width; x += n)
+                        if (cut.empty() || !cut[g.index(x, int(y))])
+                            row_pixels.push_back({x, 1.0f});
+                for (const int x : cut_pixels) row_pixels.push_back({x, all_sets});
+                if (row_pixels.empty()) continue;
                 for (const VplRange& range : gather.vpls[s])
                     for (uint64_t v = range.begin; v < range.end; ++v) {
                         const InstantVpl& vpl = sets_[s][v];
-                        for (int x = sx; x < width; x += n) {
+                        for (const auto& [x, scale] : row_pixels) {
                             const size_t p = g.index(x, int(y));
                             if (!g.has_surface(p)) continue;
                             const vec3 pos = g.position[p], ng = g.geometric_normal[p];
                             vec3 w;
-                            const vec3 e =
-                                vpl_delta(pos, ng, vpl, vpl_scale, settings_.clamp_distance, &w);
+                            const vec3 e = vpl_delta(pos, ng, vpl, vpl_scale * scale,
+                                                     settings_.clamp_distance, &w);
                             if (e == vec3(0.0f)) continue;
                             Ray ray;
                             if (!shadow_ray(offset_origin(pos, ng), vpl.position, &ray)) continue;
@@ -506,13 +660,13 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                         for (uint64_t i = range.begin; i < range.end; ++i) {
                             const InstantLampSample& sample = lamp_sets_[s][i];
                             if (range.deltas_only && !sample.delta) continue;
-                            for (int x = sx; x < width; x += n) {
+                            for (const auto& [x, scale] : row_pixels) {
                                 const size_t p = g.index(x, int(y));
                                 if (!g.has_surface(p)) continue;
                                 const vec3 pos = g.position[p], ng = g.geometric_normal[p];
                                 vec3 w;
                                 float distance;
-                                const vec3 e = lamp_delta(sample, pos, ng, 1.0f, gather.passes,
+                                const vec3 e = lamp_delta(sample, pos, ng, scale, gather.passes,
                                                           &w, &distance);
                                 if (e == vec3(0.0f)) continue;
                                 rays.push_back(
@@ -531,7 +685,7 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                 for (const VplRange& range : gather.sky[s])
                     for (uint64_t i = range.begin; i < range.end; ++i) {
                         const vec3 w = sky_sets_[s][i];
-                        for (int x = sx; x < width; x += n) {
+                        for (const auto& [x, scale] : row_pixels) {
                             const size_t p = g.index(x, int(y));
                             if (!g.has_surface(p)) continue;
                             const vec3 ng = g.geometric_normal[p];
@@ -542,12 +696,13 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                             ray.tmax = kInfinity;
                             rays.push_back(ray);
                             ray_pixel.push_back(uint32_t(p));
-                            weights.push_back(e);
+                            weights.push_back(e * scale);
                             directions.push_back(w);
                             ray_direct.push_back(1);
                         }
                     }
             }
+        }
         if (rays.empty()) return;
         scene_->occluded(rays, occluded, nullptr, RayCoherence::Coherent);
         for (size_t r = 0; r < rays.size(); ++r) {  // in ray order: a fixed sum per pixel
@@ -568,11 +723,9 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
 
     // 2. filter.
     start = now();
-    const InstantGiFilter mode = settings_.filter_mode;
     const bool filter_sh = mode == InstantGiFilter::Sh;
     const bool filter_irradiance =
         mode == InstantGiFilter::Irradiance || mode == InstantGiFilter::Strict;
-    const int half_x = Interleave::half_width(n), half_y = Interleave::half_width(m);
     // The interleave-wide window over `source` (stride vec3 per pixel) into `out_plane`.
     const auto filter_window = [&](const std::vector<vec3>& source, int stride, bool strict,
                                    std::vector<vec3>& out_plane) {
@@ -584,6 +737,10 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                     const size_t p = g.index(x, int(y));
                     if (!g.has_surface(p)) continue;
                     vec3* out = &out_plane[p * size_t(stride)];
+                    if (!cut.empty() && cut[p]) {  // gathered every set: kept as it is
+                        std::copy_n(&source[p * size_t(stride)], stride, out);
+                        continue;
+                    }
                     float total = 0.0f;
                     for (int dy = -half_y; dy <= half_y; ++dy) {
                         const int qy = int(y) + dy;

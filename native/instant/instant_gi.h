@@ -34,13 +34,16 @@
 // instead; Strict also stops at shading-normal changes. None keeps each pixel's own set.
 //
 // Elsewhere (specular chains), lookup(p, n) gathers every VPL of every set the same way (no
-// filter). Bakes interleave the sets over the lightmap's texels and filter them within UV charts
+// filter); a preview sample reads the field through its sample_view, whose lookups gather every
+// set's VPLs of that sample's passes alone (as its first surfaces do), so a sample costs the
+// same however many passes are solved. Bakes interleave the sets over the lightmap's texels and filter them within UV charts
 // (interleave(), set_radiance_sh; bake/lightmap_baker.h).
 //
 // Determinism: photons as the tracer's (seed, pass); each pixel's gather and filter depend only
 // on the G-buffer, so frames are identical for any thread count and tile size.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -103,6 +106,13 @@ struct InstantGiSettings {
     // same mean (the sun room, 64 passes: 33.14 dB against 32.95 dB, GlossInd 0.841 x the
     // path tracer's against 0.845 x: L2 is not what it lacks); off by default.
     bool glossy_from_vpls = false;
+    // Pixels whose filter window an edge cuts (a neighbour in it fails the depth, normal or
+    // object test, so the window no longer averages every set evenly around the pixel) gather
+    // every set themselves, each scaled by 1 / the sets, and keep that instead of the window's
+    // average: the filter blurs light towards the side of an edge it can still read (the
+    // normal-mapped floor's wall foot read 1.5x brute force), a full gather does not. Costs
+    // those pixels sets_x × sets_y times the shadow rays; off by default.
+    bool gather_cut_windows = false;
     // Passes of VPLs a preview sample gathers: sample i gathers passes i k .. i k + k - 1
     // (mod the field's passes), k = passes_per_sample, each set scaled by sets / k; with no
     // more passes than k every sample gathers them all (as before this setting). The samples
@@ -150,6 +160,13 @@ struct InstantGiFrameTimings {
     double shade = 0.0;   // SH dot products and film
 };
 
+// Lookups of a field beyond the first surfaces (radiance_sh, set_radiance_sh and its sample
+// views' lookups; bakes' too) since its latest sample_view() was made, or since it was made.
+struct InstantGiLookupCounts {
+    uint64_t lookups = 0;
+    uint64_t vpls = 0;  // VPLs, sky directions and lamp samples they read: a shadow ray each at most
+};
+
 // The solved VPL sets: an immutable snapshot, the field the renderers read.
 class InstantGiField : public IndirectField {
   public:
@@ -184,6 +201,11 @@ class InstantGiField : public IndirectField {
     bool includes_lights_direct() const override { return settings_.filter_direct; }
     // filter_direct: the same sets without their sky directions and lamp samples.
     std::shared_ptr<const IndirectField> without_direct() const override;
+    // The field as preview sample `sample` reads it: lookups gather every set's VPLs, sky
+    // directions and lamp samples of sample_passes(sample) alone (each VPL scaled by
+    // 1 / those passes), an estimate of the whole field as the sample's first surfaces' one is;
+    // the rest as this field. Resets lookup_counts().
+    std::unique_ptr<const IndirectField> sample_view(uint64_t sample) const override;
     void shade_first_surfaces(const GBuffer& g_buffer, const vec3& camera_position,
                               float clamp_indirect, Film& film, uint64_t first, uint64_t count,
                               Progress* progress) const override;
@@ -201,8 +223,10 @@ class InstantGiField : public IndirectField {
     std::vector<uint64_t> sample_passes(uint64_t sample) const;
     // Timings of the latest shade_first_surfaces (one frame at a time per field).
     InstantGiFrameTimings frame_timings() const;
+    InstantGiLookupCounts lookup_counts() const;
 
   private:
+    class SampleView;
     struct VplRange {
         uint64_t begin, end;  // indices [begin, end) into a set's VPLs, sky directions or lamps
         bool deltas_only = false;  // lamps: only the delta lights' samples of the range
@@ -217,9 +241,11 @@ class InstantGiField : public IndirectField {
     SampleGather sample_gather(uint64_t sample) const;
     // Adds set `set`'s VPLs (each scaled by vpl_scale) and, with filter_direct, its sky
     // directions (each of radiance sky_weight) and its lamp samples (each scaled by lamp_scale
-    // / that light's samples per set) seen from p as SH, with exact shadow rays.
-    void gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t set, float vpl_scale,
-                    const vec3& sky_weight, float lamp_scale) const;
+    // / that light's samples among the passes gathered) seen from p as SH, with exact shadow
+    // rays: those of `gather`'s ranges, or every one (nullptr). Counted in lookup_counts().
+    void gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t set,
+                    const SampleGather* gather, float vpl_scale, const vec3& sky_weight,
+                    float lamp_scale) const;
     // A lamp sample's delta seen from p (geometric normal ng), among `passes` passes'
     // samples gathered: its weight (zero when the light cannot reach p or lies below the
     // surface), direction and the shadow ray's length.
@@ -239,6 +265,10 @@ class InstantGiField : public IndirectField {
     uint64_t passes_ = 0, vpl_count_ = 0, sky_count_ = 0, lamp_count_ = 0;
     float set_scale_ = 0.0f;  // sets / passes
     std::shared_ptr<InstantGiFrameTimings> timings_;
+    struct LookupCounter {
+        std::atomic<uint64_t> lookups{0}, vpls{0};
+    };
+    std::shared_ptr<LookupCounter> lookup_counter_;
 };
 
 class InstantGi : public GiSolver {

@@ -87,6 +87,16 @@ class IndirectField {
     // PinnedField, rather than have each lookup pin the state again.
     virtual std::shared_ptr<const IndirectField> snapshot() const { return nullptr; }
 
+    // Fields whose preview samples each read light of their own (INSTANT_GI's passes_per_sample):
+    // the field as preview sample `sample` reads it at every lookup() (the points specular chains
+    // reach), for a renderer that renders one sample index at a time, as the preview renderer
+    // does for a field that shades_first_surfaces. It refers to this field, which must outlive
+    // it. nullptr (the default): every sample reads the field itself. Bakes do not use it.
+    virtual std::unique_ptr<const IndirectField> sample_view(uint64_t sample) const {
+        static_cast<void>(sample);
+        return nullptr;
+    }
+
     // Screen-space fields (seed 004, INSTANT_GI): true when the field lights the camera's first
     // surfaces itself, over the whole frame. The preview renderer then gives first surfaces no
     // lookup (no final gather either), records their field lobes in the G-buffer, and calls

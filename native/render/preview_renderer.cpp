@@ -460,6 +460,11 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
         timings_ = sum;
         return;
     }
+    // A field whose samples each read light of their own: sample `first`'s view of it, for
+    // the lookups of every path (one sample index per call here).
+    const std::unique_ptr<const IndirectField> view =
+        samples == 1 ? field->sample_view(first) : nullptr;
+    if (view) field = view.get();
     const TimePoint frame_start = now();
     const LightSampler& lights = lights_for(*field);
     const bool screen_space = field->shades_first_surfaces();

@@ -36,7 +36,8 @@ import scenes  # noqa: E402
 from shgi_blender import native, presets, settings  # noqa: E402
 from shgi_blender.engine import (field_solvers, field_spheres, passes, render_region,  # noqa: E402
                                  scene_checks, solution_cache)
-from shgi_blender.engine.render_job import RenderJob, sample_rounds  # noqa: E402
+from shgi_blender.engine import render_job  # noqa: E402
+from shgi_blender.engine.render_job import RenderJob, sample_rounds, samples_in_time  # noqa: E402
 from shgi_blender.ui import figure_rows  # noqa: E402
 from shgi_blender.export.light_probe import ProbeVolumeRecord, native_volumes  # noqa: E402
 
@@ -109,8 +110,8 @@ NOT_MIRRORED = {
     "PropagationSettings": {"cascade_follow_camera", "cascade_center", "windowed_reinjection"},
     # As the radiance field's glossy_in_grid: no reason for an artist to change it.
     # glossy_from_vpls: a measured option (+0.2 dB on the sun room, docs/methods.md), scripts
-    # only for now.
-    "InstantGiSettings": {"glossy_vpls", "glossy_from_vpls"},
+    # only for now; so is gather_cut_windows (14.5x the sun room's frame CPU for +0.05 dB).
+    "InstantGiSettings": {"glossy_vpls", "glossy_from_vpls", "gather_cut_windows"},
     "PhotonLatticeSettings": {"use_bounds", "bounds_min", "bounds_max", "caustic_order",
                               "caustic_blur_passes", "caustic_neighbours", "caustic_radius",
                               "specular_roughness", "normal_offset"},
@@ -544,6 +545,55 @@ def test_instant_gi_job_solves_passes_as_its_samples_need_them():
     assert job.wait(60) and job.error is None, job.error
     assert job.solution.solver.passes == 6 and job.solution.field.passes == 6
     assert_job_renders_as_refined_solver(job, scene, recipe.settings, passes=8)
+
+
+def test_time_limit_judges_a_round_by_the_last_one():
+    """A Time Limit cuts a round to the samples the last round's time per sample fits in the
+    time left. Samples whose cost grows (Instant GI's through glass read every solved pass:
+    1.84 s at a 1 s limit) were judged by the mean over every sample so far, too low."""
+    # Rounds of 1, 2 and 4 samples at 0.1, 0.2 and 0.4 s a sample; 2 s left.
+    rounds = [(0.1, 1), (0.4, 2), (1.6, 4)]
+    assert samples_in_time(8, 2.0, *rounds[-1]) == 5  # 2.0 s at 0.4 s a sample
+    mean = sum(s for s, _ in rounds) / sum(n for _, n in rounds)  # 0.3 s: 6 samples, 2.4 s
+    assert int(2.0 / mean) == 6
+    assert samples_in_time(8, 10.0, *rounds[-1]) == 8  # never more than the round
+    assert samples_in_time(8, -0.5, *rounds[-1]) == 0  # past the deadline
+    assert samples_in_time(8, 1.0, 0.0, 4) == 8  # no time measured: the round as planned
+
+
+def test_time_limited_instant_gi_job_plans_each_round_by_the_last(monkeypatch):
+    """F12 of Instant GI with a Time Limit in a glass-and-mirror scene (its samples read the
+    field beyond the first surfaces): every round after the first is cut by the round before
+    it, as measured, and the samples rendered are those the planner allowed."""
+    decisions = []
+
+    def planner(count, seconds_left, round_seconds, round_samples):
+        allowed = samples_in_time(count, seconds_left, round_seconds, round_samples)
+        decisions.append((count, round_seconds, round_samples, allowed))
+        return allowed
+
+    monkeypatch.setattr(render_job, "samples_in_time", planner)
+    builder = scenes.cornell_box(0.1)
+    builder.material("glass", (1.0, 1.0, 1.0), transmission=1.0, roughness=0.0, ior=1.5)
+    builder.part("glass_block", scenes.box((0.35, 0.7, 0.6), 0.4, 0.4, 0.4, 0.3), "glass",
+                 (1.0, 1.0, 1.0))
+    builder.material("mirror", (0.9, 0.9, 0.9), metallic=1.0, roughness=0.0)
+    builder.part("mirror", scenes.quad((-0.98, 0.2, 0.2), (0, 1.6, 0), (0, 0, 1.6)), "mirror",
+                 (0.9, 0.9, 0.9))
+    scene = committed(builder)
+    props = default_props(method="INSTANT_GI", instant_gi={"photons_per_set": 8, "passes": 64})
+    recipe = field_solvers.solver_recipe(props, shgi)
+    job = RenderJob(shgi, scene, 1_000_000, preview_settings=shgi.PreviewSettings(seed=2),
+                    solver_recipe=recipe, time_limit=1.0).start()
+    assert job.wait(60) and job.error is None, job.error
+    print(f"{job.samples_done} samples in rounds (seconds, samples) {job.rounds}")
+    assert 0 < job.samples_done < job.samples
+    assert sum(n for _, n in job.rounds) == job.samples_done
+    assert len(decisions) == len(job.rounds)  # the round that did not fit ends the render
+    for (_, seconds, samples, allowed), previous, done in zip(
+            decisions, job.rounds, job.rounds[1:] + [(None, 0)]):
+        assert (seconds, samples) == previous
+        assert done[1] == allowed
 
 
 def assert_job_renders_as_refined_solver(job, scene, settings, passes):

@@ -21,8 +21,10 @@ worker renders through it too.
 
 Time Limit (``time_limit`` seconds from the job's start, after the export): a field method's
 solve may take SOLVE_TIME_SHARE of it (at least one pass); a sampling round is cut to the
-samples that fit the time left, judged by the time per sample so far, keeping room for the
-denoiser (its estimate); at least one sample is rendered. Denoising (``denoising``, a
+samples that fit the time left, judged by the last round's time per sample (``samples_in_time``:
+a sample's cost may change as a render goes on, so the mean over every sample so far would judge
+late rounds by early ones), keeping room for the denoiser (its estimate); at least one sample is
+rendered. Denoising (``denoising``, a
 settings.Denoising) runs once, on the job's thread, after the last round: the last snapshot then
 holds the denoised Combined and Cycles' ``Noisy Image``, ``Denoising Albedo`` and ``Denoising
 Normal`` passes. Without pyoidn, or after a denoiser failure, the image stays noisy and
@@ -61,6 +63,20 @@ def sample_rounds(total):
         done += step
         size *= 2
     return rounds
+
+
+def samples_in_time(count, seconds_left, round_seconds, round_samples):
+    """How many of a round's `count` samples fit in `seconds_left`, judged by the last round's
+    time per sample: `round_seconds` for its `round_samples` samples (with any solve it needed
+    before them, as the next round may need one too). The time per sample is not assumed
+    constant over the render: a field solved as its samples need it, or a scene whose samples
+    cost more as the render goes on, makes the mean over every sample so far judge too low."""
+    if round_samples < 1:
+        return count
+    per_sample = round_seconds / round_samples
+    if not per_sample > 0.0:
+        return count
+    return max(0, min(count, int(seconds_left / per_sample)))
 
 
 @dataclass
@@ -140,6 +156,7 @@ class RenderJob(NativeTask):
         self.timings = {}       # seconds per stage: commit, solve, render, denoise
         self.solution = None    # the solution_cache.Solution the job solved, if any (not cached)
         self._solve_stopped = False  # a Time Limit cut the solve short: no passes after it
+        self.rounds = []  # (seconds, samples) of each sampling round, its solve included
 
     # --- main thread ---------------------------------------------------------------------------
 
@@ -255,11 +272,11 @@ class RenderJob(NativeTask):
                                  preview_settings=self._preview_settings,
                                  field=lambda: self.field, camera=self._camera)
         name = "Path tracing" if self._path_tracer_settings is not None else "Rendering"
-        sampling_start = time.perf_counter()
         for count in sample_rounds(self.samples):
-            count = self._samples_in_time(count, sampling_start, denoiser)
+            count = self._samples_in_time(count, denoiser)
             if count == 0:
                 break
+            round_start = time.perf_counter()
             lo = render_start + (1.0 - render_start) * self.samples_done / self.samples
             hi = render_start + (1.0 - render_start) * (self.samples_done + count) / self.samples
             stage = f"{name}, sample {self.samples_done + count}/{self.samples}"
@@ -274,6 +291,7 @@ class RenderJob(NativeTask):
                 self._keep(renderer, None)  # every pass of the rounds done before Esc
                 raise
             self.samples_done += count
+            self.rounds.append((time.perf_counter() - round_start, count))
             self._keep(renderer, SHOWN_PASSES)
         self._keep(renderer, None)
 
@@ -286,18 +304,16 @@ class RenderJob(NativeTask):
         with self._lock:
             self._snapshot, self._snapshot_taken = snapshot, False
 
-    def _samples_in_time(self, count, sampling_start, denoiser):
+    def _samples_in_time(self, count, denoiser):
         """How many of a round's `count` samples fit before the deadline (all without one; at
-        least one for the first round), judged by the time per sample so far."""
-        if self._deadline is None or self.samples_done == 0:
+        least one for the first round), judged by the last round (samples_in_time)."""
+        if self._deadline is None or not self.rounds:
             return count
-        now = time.perf_counter()
-        per_sample = (now - sampling_start) / self.samples_done
-        left = self._deadline - now
+        left = self._deadline - time.perf_counter()
         if denoiser is not None:
             height, width = self._snapshot.passes["Combined"].shape[:2]
             left -= denoiser.estimate_seconds(width, height)
-        return max(0, min(count, int(left / per_sample))) if per_sample > 0.0 else count
+        return samples_in_time(count, left, *self.rounds[-1])
 
     def _denoise(self, denoiser):
         """Replaces the last snapshot by its denoised passes (a failure is kept as

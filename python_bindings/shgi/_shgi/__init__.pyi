@@ -520,6 +520,11 @@ class InstantGiField(IndirectField):
         {gather, filter, shade}: seconds of the latest frame this field lit.
         """
     @property
+    def lookup_counts(self) -> dict:
+        """
+        {lookups, vpls}: the field's lookups beyond the first surfaces (through glass and mirrors; bakes' too) and the VPLs, sky directions and lamp samples they read (a shadow ray each at most), since the preview renderer's latest frame with it began (or since the field was made).
+        """
+    @property
     def passes(self) -> int:
         """
         Passes of VPLs it holds.
@@ -636,6 +641,14 @@ class InstantGiSettings:
         """
     @filter_mode.setter
     def filter_mode(self, arg0: InstantGiFilter) -> None:
+        ...
+    @property
+    def gather_cut_windows(self) -> bool:
+        """
+        Pixels whose filter window an edge cuts gather every set themselves and skip the filter: no blur of light across the edge's side, at sets_x x sets_y times those pixels' shadow rays (False).
+        """
+    @gather_cut_windows.setter
+    def gather_cut_windows(self, arg0: bool) -> None:
         ...
     @property
     def glossy_bounces(self) -> int:

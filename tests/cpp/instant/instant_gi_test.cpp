@@ -1,10 +1,12 @@
-// InstantGi (seed 004): one VPL's L2 SH against the analytic kernel, the settings' refusals.
+// InstantGi (seed 004): one VPL's L2 SH against the analytic kernel, the settings' refusals, a
+// preview sample's view of the field.
 #include "instant/instant_gi.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
+#include "render/render_test_scenes.h"
 #include "sh/sh_irradiance.h"
 #include "util/error.h"
 
@@ -58,6 +60,42 @@ TEST(InstantGi, ClampAndFacing) {
     vpl.normal = -vpl.normal;
     EXPECT_FALSE(add_vpl_sh(none, vec3(0.0f), ng, vpl, 1.0f, 0.0f));   // faces away
     EXPECT_EQ(none[0], vec3(0.0f));
+}
+
+// A preview sample's view (sample_view) reads that sample's passes alone: over a field of 8
+// passes at 4 per sample, sample 0's lookups are those of the field of the first 4 passes (the
+// same VPLs, the same scale, summed in the same order: the same bits), and sample 1's read the
+// other 4; the view reads a quarter of the VPLs a lookup of the whole field reads.
+TEST(InstantGi, SampleViewLooksUpTheSamplesPassesAlone) {
+    Scene scene;
+    scene.add_material(test::lambert(0.7f));
+    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
+    scene.add_light(test::point_light(vec3(0.3f, 0.2f, 0.5f), 100.0f));
+    scene.set_world(test::black_world());
+    scene.commit();
+    InstantGiSettings settings;
+    settings.seed = 7;
+    settings.passes_per_sample = 4;
+    InstantGi solver(scene, settings);
+    for (int i = 0; i < 4; ++i) solver.refine();
+    const std::shared_ptr<const InstantGiField> four = solver.field();
+    for (int i = 0; i < 4; ++i) solver.refine();
+    const std::shared_ptr<const InstantGiField> eight = solver.field();
+    ASSERT_EQ(eight->sample_passes(1), (std::vector<uint64_t>{4, 5, 6, 7}));
+    const vec3 p(0.1f, -0.2f, -0.99f), n(0.0f, 0.0f, 1.0f);  // on the floor, facing the room
+    const std::unique_ptr<const IndirectField> first = eight->sample_view(0);
+    ASSERT_NE(first, nullptr);
+    EXPECT_TRUE(first->shades_first_surfaces());
+    const ShRgb view = first->radiance_sh(p, n), expected = four->radiance_sh(p, n);
+    ASSERT_GT(expected[0].x, 0.0f);
+    for (int i = 0; i < 9; ++i) EXPECT_EQ(view[i], expected[i]) << "coefficient " << i;
+    const InstantGiLookupCounts counts = eight->lookup_counts();
+    EXPECT_EQ(counts.lookups, 1u);  // the view's; four's are its own
+    EXPECT_EQ(counts.vpls, four->vpl_count());
+    const ShRgb second = eight->sample_view(1)->radiance_sh(p, n);
+    EXPECT_NE(second[0], view[0]);  // other VPLs ...
+    EXPECT_NEAR(second[0].x / view[0].x, 1.0f, 0.5f);  // ... of the same light
+    EXPECT_EQ(eight->lookup_counts().vpls, eight->vpl_count() - four->vpl_count());
 }
 
 TEST(InstantGi, SettingsRefusalsNameTheField) {
