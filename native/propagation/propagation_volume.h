@@ -112,8 +112,8 @@ struct PropagationSettings {
     // With travel_reinjection: window the re-injected beam's band 2 (× 4/5,
     // Reinjection::WindowedTravelDirection) so that it lights nothing behind it. The L2 beam's
     // back lobe sends light back onto the surfaces it left: the sun room's sunlit floor patch
-    // reads 2.95x the path tracer's indirect light, windowed 1.28x (the radiance scale refitted).
-    // Not the default: with the refitted scale the two rooms read 1.20x and the sun room 1.11x
+    // reads 2.95x the path tracer's indirect light, windowed 1.21x (the radiance scale 17/16 the
+    // plain beams', propagation_field.h). Not the default: the two rooms read 1.14x
     // (docs/methods.md, "The HOLPV's self-lighting"). No effect on the LPV (no band 2).
     bool windowed_reinjection = false;
     // Propagate the light's lobes unclamped (LobeClamp::None: each step a linear map, one
