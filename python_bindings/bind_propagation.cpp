@@ -75,6 +75,11 @@ void bind_settings(py::module_& m) {
                        "by 4/5 so that its light does not come back onto the surface it left "
                        "(the HOLPV's self-lighting at bright surfaces); not the default: the "
                        "two rooms read 1.14x the path tracer (docs/methods.md) (False).")
+        .def_readwrite("extend_to_bounds", &S::extend_to_bounds,
+                       "Give the cells whose centres lie outside the scene's bounds the light of "
+                       "the inside cell next to them, against a dark strip along the edges of "
+                       "rooms whose walls are the bounds; not the default: the HOLPV's two rooms "
+                       "then read 1.12x the path tracer (docs/methods.md) (False).")
         .def_readwrite("unclamped_transfer", &S::unclamped_transfer,
                        "Propagate the lobes unclamped (a linear transfer per neighbour offset) "
                        "instead of clamping each source lobe at zero and rescaling it to its "

@@ -143,6 +143,50 @@ def test_windowed_holpv_agrees_and_is_closer_than_lpv(name):
     assert holpv_psnr > lpv_psnr
 
 
+@pytest.mark.parametrize("order", [1, 2])
+def test_extend_to_bounds_lights_the_strip_along_a_wall(order):
+    """The two rooms' floor 0.05 m from the dim room's back wall, a wall at the scene's bounds:
+    the lookup (a cell above the floor) reads the cells the wall runs through, which hold no
+    light (measured 0.016 (LPV) and 0.003 (HOLPV) of the floor's irradiance 0.3 m from the
+    wall); extend_to_bounds gives them the light of the inside cells next to them (1.10 and
+    0.89)."""
+    import numpy as np
+    scene = committed(scenes.two_rooms(0.5))
+    points = np.float32([[1.5, 3.0 - 0.05, 0.0], [1.5, 3.0 - 0.3, 0.0]])
+    normals = np.float32([[0.0, 0.0, 1.0]] * 2)
+    ratios = {}
+    for extend in (False, True):
+        volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+            seed=5, order=order, extend_to_bounds=extend))
+        volume.refine()
+        strip, beyond = volume.current_field().irradiance(points, normals)[:, 0]
+        ratios[extend] = strip / beyond
+    print(f"order {order}: floor 0.05 m from the wall over 0.3 m from it {ratios[False]:.3f}, "
+          f"extended to the bounds {ratios[True]:.3f}")
+    assert ratios[False] < 0.05
+    assert 0.5 < ratios[True] < 2.0
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name, order", [
+    ("cornell_box", 1), ("cornell_box", 2), ("sun_room", 1), ("sun_room", 2), ("two_rooms", 1),
+    ("two_rooms", 2),
+])
+def test_extend_to_bounds_brings_the_image_closer(name, order):
+    """Without the dark strips along the rooms' edges both orders come closer to the path tracer
+    on every scene (measured: Cornell box +0.75 / +1.9 dB (LPV / HOLPV), sun room +1.9 / +1.1,
+    two rooms +3.5 / +2.2); the HOLPV's two rooms then read 1.118x, out of the 10% (not asserted
+    here: docs/methods.md, "Dark edges")."""
+    ref, default = rendered(name, order)
+    _, extended = rendered_with(dict(extend_to_bounds=True), name, order)
+    default_psnr = psnr(ref["Combined"], default["Combined"])
+    extended_psnr = psnr(ref["Combined"], extended["Combined"])
+    ratio = indirect_diffuse(extended) / indirect_diffuse(ref)
+    print(f"{name} order {order}: Combined PSNR {default_psnr:.2f} dB, extended to the bounds "
+          f"{extended_psnr:.2f} dB (DiffInd x DiffCol {ratio:.3f}x)")
+    assert extended_psnr > default_psnr
+
+
 # The leak corrections on (occlude_first_step, drop_outward_vpls) and the light re-injected along
 # its travel direction, whose propagation leaves a closed room in about as many steps as the
 # room is wide: 24 steps (docs/methods.md, "Why the accumulation does not converge").

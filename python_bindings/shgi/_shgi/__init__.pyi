@@ -2877,6 +2877,14 @@ class PropagationSettings:
     def drop_outward_vpls(self, arg0: bool) -> None:
         ...
     @property
+    def extend_to_bounds(self) -> bool:
+        """
+        Give the cells whose centres lie outside the scene's bounds the light of the inside cell next to them, against a dark strip along the edges of rooms whose walls are the bounds; not the default: the HOLPV's two rooms then read 1.12x the path tracer (docs/methods.md) (False).
+        """
+    @extend_to_bounds.setter
+    def extend_to_bounds(self, arg0: bool) -> None:
+        ...
+    @property
     def normal_offset(self) -> float:
         """
         Cells along the shading normal before the lookup, against self-lighting and leaks through walls (1.0).

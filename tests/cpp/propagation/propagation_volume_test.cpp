@@ -616,6 +616,23 @@ TEST(PropagationVolume, DiagonalSceneHolpvBeatsLpvWithTravelReinjection) {
 
 // --- the solver ----------------------------------------------------------------------------
 
+// extend_to_bounds: the cells whose centres are not strictly inside the bounds take the light of
+// the nearest inside cell, axis by axis; the inside cells keep theirs; a flat axis is left alone.
+TEST(PropagationVolume, ExtendToBoundsFillsTheOutsideCellsFromTheInside) {
+    ShVolume volume(vec3(0.0f), 1.0f, ivec3(4), 1);  // centres at 0.5, 1.5, 2.5, 3.5
+    const auto mark = [](const ivec3& c) { return float(100 * c.x + 10 * c.y + c.z); };
+    for (size_t c = 0; c < volume.cell_count(); ++c)
+        volume.cell_data(c)[0] = mark(volume.cell_at(c));
+    // x: inside cells 1–2 (3.5 is on the bound: not inside); y: 1–3; z flat (no centre inside).
+    extend_to_bounds(volume, Bounds3{vec3(1.0f, 0.6f, 2.0f), vec3(3.5f, 4.0f, 2.0f)});
+    for (size_t c = 0; c < volume.cell_count(); ++c) {
+        const ivec3 cell = volume.cell_at(c);
+        const ivec3 from(std::clamp(cell.x, 1, 2), std::clamp(cell.y, 1, 3), cell.z);
+        EXPECT_EQ(volume.cell_data(c)[0], mark(from))
+            << "cell " << cell.x << " " << cell.y << " " << cell.z;
+    }
+}
+
 TEST(PropagationVolume, CascadeSettingsNameTheField) {
     const Scene scene = test::emissive_furnace(0.5f, vec3(1.0f), 1.0f);
     PropagationSettings s;
