@@ -37,6 +37,9 @@ CONFIGS = {
     "seed": SEED,
     # The HOLPV's re-injected beams with band 2 windowed (x 4/5; the LPV is unchanged).
     "windowed": dict(windowed_reinjection=True),
+    # The cells outside the scene's bounds given the light of the inside cells next to them.
+    "extended": dict(extend_to_bounds=True),
+    "windowed_extended": dict(windowed_reinjection=True, extend_to_bounds=True),
     # Finer volumes, light carried as many cells (the same distance in metres), plain and windowed.
     **{f"r{r}": dict(resolution=r, distance=float(r)) for r in (48, 64)},
     **{f"windowed_r{r}": dict(windowed_reinjection=True, resolution=r, distance=float(r))

@@ -73,9 +73,13 @@ void bind_settings(py::module_& m) {
         .def_readwrite("windowed_reinjection", &S::windowed_reinjection,
                        "With travel_reinjection and order 2: scale the re-injected beam's band 2 "
                        "by 4/5 so that its light does not come back onto the surface it left "
-                       "(the HOLPV's self-lighting at bright surfaces); not the default: with "
-                       "the radiance scale refitted the sun room reads 1.11x and the two rooms "
-                       "1.20x the path tracer (docs/methods.md) (False).")
+                       "(the HOLPV's self-lighting at bright surfaces); not the default: the "
+                       "two rooms read 1.14x the path tracer (docs/methods.md) (False).")
+        .def_readwrite("extend_to_bounds", &S::extend_to_bounds,
+                       "Give the cells whose centres lie outside the scene's bounds the light of "
+                       "the inside cell next to them, against a dark strip along the edges of "
+                       "rooms whose walls are the bounds; not the default: the HOLPV's two rooms "
+                       "then read 1.12x the path tracer (docs/methods.md) (False).")
         .def_readwrite("unclamped_transfer", &S::unclamped_transfer,
                        "Propagate the lobes unclamped (a linear transfer per neighbour offset) "
                        "instead of clamping each source lobe at zero and rescaling it to its "

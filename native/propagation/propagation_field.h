@@ -37,14 +37,28 @@ namespace shgi {
 // k by SH order of the volume (1: LPV's stencil, 2: HOLPV's) and re-injection, see above. With
 // Reinjection::TravelDirection the same fit gives 0.992 (LPV) and 0.576 (HOLPV); its near field
 // is less even (samples 0.55–1.97 and 0.53–1.63 × the fit, against 0.81–1.27 and 0.88–1.23).
-// Reinjection::WindowedTravelDirection (band 2 of the HOLPV's beams × 4/5, which lowers their
-// peak) gives 0.514 for the HOLPV (samples 0.515–1.645 × that fit); the LPV's beams have no
-// band 2 (its travel scale).
+//
+// Reinjection::WindowedTravelDirection (band 2 of the HOLPV's beams × w = 4/5) is not fitted to
+// the near field, whose geometric mean answers the beams' shape (the window lowers their peak:
+// the fit gave 0.514, and with it the rooms read 1.11–1.20x the path tracer's indirect light)
+// rather than the light they deliver. Its k is the plain beams' times the ratio of the light a
+// beam delivers onto a surface facing it: bands 0, 1 and 2 of a beam of flux 1 give that
+// surface (1 + 2 + 5w/4) / 4 (k = 1, unit cells; the clamped cosine's bands π, 2π/3, π/4),
+// 17/16 as much unwindowed as at w = 4/5. Both beams carry the same flux and first moment, so
+// the same net flux through any plane (a surface's irradiance from the front less that from
+// behind: bands 0–1 only); the plain beam's band 2 adds 1/16 of the windowed beam's in front
+// and as much behind, onto the surface the light left. With this k a single VPL's windowed field
+// delivers the plain field's flux onto a plane 3 cells in front of it within 0.5%
+// (tests/cpp/propagation/propagation_volume_test.cpp).
 inline constexpr float kLpvRadianceScale = 1.0f / 0.786f;
 inline constexpr float kHolpvRadianceScale = 1.0f / 0.465f;
 inline constexpr float kLpvTravelRadianceScale = 1.0f / 0.992f;
 inline constexpr float kHolpvTravelRadianceScale = 1.0f / 0.576f;
-inline constexpr float kHolpvWindowedTravelRadianceScale = 1.0f / 0.514f;
+// Four times the irradiance a beam of flux 1 and band-2 weight w gives a surface facing it.
+constexpr float beam_facing_irradiance(float band2_weight) { return 3.0f + 1.25f * band2_weight; }
+inline constexpr float kHolpvWindowedTravelRadianceScale =
+    kHolpvTravelRadianceScale * beam_facing_irradiance(1.0f) /
+    beam_facing_irradiance(kBeamBand2Window);
 inline float propagation_radiance_scale(int order,
                                         Reinjection reinjection = Reinjection::FaceNormal) {
     if (reinjection == Reinjection::WindowedTravelDirection)

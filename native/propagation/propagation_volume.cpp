@@ -29,6 +29,9 @@ constexpr float kTraceShare = 0.6f, kInjectShare = 0.7f;
 constexpr int kMinCascadeResolution = 16;
 // The longest propagation distance, cells (at most 560 LPV steps).
 constexpr float kMaxDistanceCells = 512.0f;
+// A cell centre this close to the scene's bounds (in cells) is not inside them
+// (extend_to_bounds): the walls at the bounds run through such cells.
+constexpr float kBoundsToleranceCells = 1e-4f;
 
 // Where a cascade level's geometry lattice lies: its grid (the propagation volume is offset by
 // half a cell and has one more cell per axis) and the faces it blends into the next coarser level.
@@ -287,6 +290,33 @@ ShVolume propagate(const ShVolume& injected, const PropagationStep& step, int st
     return accumulated;
 }
 
+void extend_to_bounds(ShVolume& volume, const Bounds3& bounds) {
+    // The inside cells' index range per axis: centres origin + (i + ½) s strictly inside.
+    const ivec3 counts = volume.counts();
+    const float s = volume.cell_size();
+    const float tolerance = kBoundsToleranceCells * s;
+    ivec3 first(0), last(-1);
+    for (int a = 0; a < 3; ++a) {
+        first[a] = counts[a];
+        for (int i = 0; i < counts[a]; ++i) {
+            const float centre = volume.origin()[a] + (float(i) + 0.5f) * s;
+            if (centre <= bounds.lower[a] + tolerance || centre >= bounds.upper[a] - tolerance)
+                continue;
+            first[a] = std::min(first[a], i);
+            last[a] = std::max(last[a], i);
+        }
+        if (last[a] < first[a]) first[a] = 0, last[a] = counts[a] - 1;  // flat: leave the axis
+    }
+    const int floats = volume.floats_per_cell();
+    for (size_t c = 0; c < volume.cell_count(); ++c) {
+        const ivec3 cell = volume.cell_at(c);
+        const ivec3 from = glm::clamp(cell, first, last);
+        if (from == cell) continue;
+        const float* src = volume.cell_data(volume.cell_index(from));
+        std::copy(src, src + floats, volume.cell_data(c));
+    }
+}
+
 PropagationVolume::PropagationVolume(const Scene& scene, const PropagationSettings& settings,
                                      Progress* progress)
     : scene_(&scene), settings_(validated(settings)) {
@@ -488,6 +518,7 @@ PropagationLevel PropagationVolume::pass_level(size_t level,
         propagate(mean, step, propagation_steps(settings_),
                   settings_.occlusion ? &l.transmittance : nullptr, progress, &step_seconds,
                   settings_.occlude_first_step);
+    if (settings_.extend_to_bounds) extend_to_bounds(accumulated, scene_->bounds());
     for (size_t k = 0; k < step_seconds.size(); ++k)
         stages.push_back({format_message(prefix, "propagation_step_", k + 1), step_seconds[k]});
     return {std::make_shared<const ShVolume>(std::move(accumulated)), l.lookup_transmittance,
@@ -610,6 +641,7 @@ std::vector<int> PropagationVolume::recenter(const vec3& point, Progress* progre
                 l.injected, step, propagation_steps(settings_),
                 settings_.occlusion ? &l.transmittance : nullptr, progress, nullptr,
                 settings_.occlude_first_step);
+            if (settings_.extend_to_bounds) extend_to_bounds(accumulated, scene_->bounds());
             field_levels.at(size_t(moved[k])) = {
                 std::make_shared<const ShVolume>(std::move(accumulated)), l.lookup_transmittance,
                 l.blend_faces};

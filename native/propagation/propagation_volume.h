@@ -112,8 +112,8 @@ struct PropagationSettings {
     // With travel_reinjection: window the re-injected beam's band 2 (× 4/5,
     // Reinjection::WindowedTravelDirection) so that it lights nothing behind it. The L2 beam's
     // back lobe sends light back onto the surfaces it left: the sun room's sunlit floor patch
-    // reads 2.95x the path tracer's indirect light, windowed 1.28x (the radiance scale refitted).
-    // Not the default: with the refitted scale the two rooms read 1.20x and the sun room 1.11x
+    // reads 2.95x the path tracer's indirect light, windowed 1.21x (the radiance scale 17/16 the
+    // plain beams', propagation_field.h). Not the default: the two rooms read 1.14x
     // (docs/methods.md, "The HOLPV's self-lighting"). No effect on the LPV (no band 2).
     bool windowed_reinjection = false;
     // Propagate the light's lobes unclamped (LobeClamp::None: each step a linear map, one
@@ -129,6 +129,14 @@ struct PropagationSettings {
     // light, and stopping negative flux makes light (in a closed box 1.138x the VPL's flux in
     // flight for L1, 1.026x for L2). No effect without unclamped_transfer.
     bool clamp_at_surfaces = true;
+    // Give the cells whose centres lie outside the scene's bounds (or on them) the light of the
+    // inside cell next to them (extend_to_bounds) once propagated. Walls at the bounds run
+    // through those cells: the geometry volume blocks their exchange with the inside, so they
+    // hold no light, and the lookups within half a cell of such a wall read them: a dark strip
+    // along every edge of a room (the two rooms' floor reads 0.004–0.019 W/m² within 0.09 m of
+    // a wall, 1.1–1.3 beyond). Off: with it the HOLPV's two rooms read 1.118x the path tracer's
+    // indirect light, out of the 10% (docs/methods.md, "Dark edges").
+    bool extend_to_bounds = false;
     // Cascades (Kaplanyan & Dachsbacher 2010; seed 000 §4.4), for scenes larger than one volume
     // can resolve: 1 is a single volume over the scene (`resolution` cells along its longest
     // side). With n > 1 that volume is the coarsest of n nested levels; each finer level halves
@@ -260,5 +268,11 @@ ShVolume propagate(const ShVolume& injected, const PropagationStep& step, int st
                    const PropagationTransmittance* transmittance, Progress* progress = nullptr,
                    std::vector<double>* step_seconds = nullptr,
                    bool occlude_first_step = false);
+
+// Gives every cell of `volume` whose centre is not strictly inside `bounds` (within 1e-4 cells)
+// the light of the nearest cell that is: its index clamped, axis by axis, to the inside cells
+// (PropagationSettings::extend_to_bounds). Axes along which no centre is inside (flat bounds)
+// are left as they are.
+void extend_to_bounds(ShVolume& volume, const Bounds3& bounds);
 
 }  // namespace shgi

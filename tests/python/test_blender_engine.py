@@ -105,9 +105,10 @@ NOT_MIRRORED = {
     # that probe solutions frozen before splitting keep comparing (LIGHT_PATH_LIMITS says so).
     "ProbeGridSettings": {"volumes", "include_direct", "light_splits"},
     # The cascades follow the camera the exported scene renders from (the native default).
-    # windowed_reinjection: a measured alternative, not the default (it misses the agreement
-    # targets, docs/methods.md); the add-on keeps the native default.
-    "PropagationSettings": {"cascade_follow_camera", "cascade_center", "windowed_reinjection"},
+    # windowed_reinjection, extend_to_bounds: measured alternatives, not the default (they miss
+    # the agreement targets, docs/methods.md); the add-on keeps the native default.
+    "PropagationSettings": {"cascade_follow_camera", "cascade_center", "windowed_reinjection",
+                            "extend_to_bounds"},
     # As the radiance field's glossy_in_grid: no reason for an artist to change it.
     # glossy_from_vpls: a measured option (+0.2 dB on the sun room, docs/methods.md), scripts
     # only for now; so is gather_cut_windows (14.5x the sun room's frame CPU for +0.05 dB).

@@ -107,7 +107,8 @@ def test_windowed_reinjection_takes_the_sunlit_patch_s_own_light_off_it():
     """The HOLPV's L2 beams, positive straight behind, send part of the light back onto the
     surface it left: the sun room's sunlit patch reads 2.95x the path tracer's indirect light.
     With their band 2 windowed (x 4/5: a beam lights nothing behind it; the radiance scale
-    refitted) it reads 1.28x; the LPV (no band 2) is unchanged, bit for bit."""
+    17/16 the plain beams', what a beam delivers onto a surface facing it) it reads 1.21x; the
+    LPV (no band 2) is unchanged, bit for bit."""
     import numpy as np
     ref, plain = rendered("sun_room", 2)
     _, windowed = rendered_with(dict(windowed_reinjection=True), "sun_room", 2)
@@ -124,11 +125,10 @@ def test_windowed_reinjection_takes_the_sunlit_patch_s_own_light_off_it():
 @pytest.mark.reference
 @pytest.mark.parametrize("name", [
     "cornell_box",
-    # The window lowers the near field's peak, which the single-VPL fit makes up for by 1.12x;
-    # the rooms then read too bright (docs/methods.md, "The HOLPV's self-lighting").
-    pytest.param("sun_room", marks=missed("DiffInd 1.110x, PSNR 24.18 dB against the LPV's "
-                                          "24.33 dB")),
-    pytest.param("two_rooms", marks=missed("DiffInd 1.198x, PSNR 24.54 dB against the LPV's "
+    "sun_room",
+    # The HOLPV reads the dim room's surfaces away from their edges too bright, windowed or not
+    # (docs/methods.md, "The HOLPV's self-lighting").
+    pytest.param("two_rooms", marks=missed("DiffInd 1.136x, PSNR 25.22 dB against the LPV's "
                                            "26.92 dB")),
 ])
 def test_windowed_holpv_agrees_and_is_closer_than_lpv(name):
@@ -141,6 +141,50 @@ def test_windowed_holpv_agrees_and_is_closer_than_lpv(name):
           f"{holpv_psnr:.2f} dB (LPV {lpv_psnr:.2f} dB)")
     assert abs(ratio - 1.0) < 0.10, ratio
     assert holpv_psnr > lpv_psnr
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_extend_to_bounds_lights_the_strip_along_a_wall(order):
+    """The two rooms' floor 0.05 m from the dim room's back wall, a wall at the scene's bounds:
+    the lookup (a cell above the floor) reads the cells the wall runs through, which hold no
+    light (measured 0.016 (LPV) and 0.003 (HOLPV) of the floor's irradiance 0.3 m from the
+    wall); extend_to_bounds gives them the light of the inside cells next to them (1.10 and
+    0.89)."""
+    import numpy as np
+    scene = committed(scenes.two_rooms(0.5))
+    points = np.float32([[1.5, 3.0 - 0.05, 0.0], [1.5, 3.0 - 0.3, 0.0]])
+    normals = np.float32([[0.0, 0.0, 1.0]] * 2)
+    ratios = {}
+    for extend in (False, True):
+        volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+            seed=5, order=order, extend_to_bounds=extend))
+        volume.refine()
+        strip, beyond = volume.current_field().irradiance(points, normals)[:, 0]
+        ratios[extend] = strip / beyond
+    print(f"order {order}: floor 0.05 m from the wall over 0.3 m from it {ratios[False]:.3f}, "
+          f"extended to the bounds {ratios[True]:.3f}")
+    assert ratios[False] < 0.05
+    assert 0.5 < ratios[True] < 2.0
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name, order", [
+    ("cornell_box", 1), ("cornell_box", 2), ("sun_room", 1), ("sun_room", 2), ("two_rooms", 1),
+    ("two_rooms", 2),
+])
+def test_extend_to_bounds_brings_the_image_closer(name, order):
+    """Without the dark strips along the rooms' edges both orders come closer to the path tracer
+    on every scene (measured: Cornell box +0.75 / +1.9 dB (LPV / HOLPV), sun room +1.9 / +1.1,
+    two rooms +3.5 / +2.2); the HOLPV's two rooms then read 1.118x, out of the 10% (not asserted
+    here: docs/methods.md, "Dark edges")."""
+    ref, default = rendered(name, order)
+    _, extended = rendered_with(dict(extend_to_bounds=True), name, order)
+    default_psnr = psnr(ref["Combined"], default["Combined"])
+    extended_psnr = psnr(ref["Combined"], extended["Combined"])
+    ratio = indirect_diffuse(extended) / indirect_diffuse(ref)
+    print(f"{name} order {order}: Combined PSNR {default_psnr:.2f} dB, extended to the bounds "
+          f"{extended_psnr:.2f} dB (DiffInd x DiffCol {ratio:.3f}x)")
+    assert extended_psnr > default_psnr
 
 
 # The leak corrections on (occlude_first_step, drop_outward_vpls) and the light re-injected along
@@ -511,15 +555,14 @@ def test_cornell_floor_holpv_closer_than_lpv_and_self_lighting_reported():
 
 @pytest.mark.reference
 @pytest.mark.parametrize("order, windowed", [
-    (1, False), (2, False),
-    pytest.param(2, True, marks=missed("1.061x (the windowed beams' near-field scale)")),
+    (1, False), (2, False), (2, True),
 ])
 def test_dim_room_through_a_final_gather_is_within_five_percent(order, windowed):
     """The two rooms' dim room read through a final gather, with one VPL bounce less (the
     add-on's accounting: Light Paths > Diffuse 4 gives 3 behind the gather): its Combined mean
     within 5% of the path tracer's, the leak target the probe grid meets too (measured 0.998
-    LPV, 1.011 HOLPV; the seed's settings 0.978, 1.089). The HOLPV's windowed re-injection
-    misses it (1.061)."""
+    LPV, 1.011 HOLPV, 1.034 HOLPV with windowed re-injection; the seed's settings 0.978,
+    1.089)."""
     scale, samples = REFERENCES["two_rooms"]
     scene, ref = path_traced_reference(scenes.two_rooms, scale, samples)
     volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
