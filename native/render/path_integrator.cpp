@@ -477,7 +477,8 @@ void PathIntegrator::add_field_light(const FieldLookup& field, const FieldLobes&
     const vec3 e = irradiance != nullptr ? irradiance->irradiance(field, n) : field.irradiance(n);
     vec3 by_class[2] = {lobes.diffuse * e * kInvPi, vec3(0.0f)};
     for (int i = 0; i < lobes.glossy_count; ++i)
-        by_class[1] += lobes.glossy[i].albedo * field.glossy(n, wo, lobes.glossy[i].roughness);
+        by_class[1] +=
+            lobes.glossy[i].albedo * field.glossy(n, wo, lobes.glossy[i].roughness, glossy_memo_);
     if (vertex_ == 0) {
         for (int c = 0; c < 2; ++c) add_light(throughput_ * by_class[c], c, false);
         return;
