@@ -151,9 +151,10 @@ class PathIntegrator {
     void set_first_ray_pdf(float pdf) { min_ray_pdf_ = pdf; }
 
     // Only the Combined pass is read (a FilmPasses::CombinedOnly film, the viewport's): the
-    // first surface's colour, normal and depth passes and the denoising guides, which Combined
-    // does not depend on, are not written (they were ~4% of a preview frame). Call before
-    // begin().
+    // first surface's colour, normal and depth passes, the denoising guides and the light
+    // passes (Emit, Env, Dir and Ind), which Combined does not depend on, are not written (the
+    // first surface's passes alone were ~4% of a preview frame); Combined gets the same
+    // additions in the same order. Call before begin().
     void set_combined_only() {
         combined_only_ = true;
         write_denoising_features_ = false;
