@@ -48,7 +48,7 @@ vec3 FieldLookup::irradiance(const vec3& n) const {
     return glm::max(sh_irradiance(radiance, n), vec3(0.0f)) + extra_irradiance;
 }
 
-vec3 FieldLookup::glossy(const vec3& n, const vec3& wo, float roughness) const {
+vec3 FieldLookup::glossy(const vec3& n, const vec3& wo, float roughness, GgxZhMemo* zh) const {
     const vec3 reflected = 2.0f * glm::dot(wo, n) * n - wo;
     if (glossy_rays > 0) {
         const float exponent = gather_phong_exponent(roughness);
@@ -57,6 +57,7 @@ vec3 FieldLookup::glossy(const vec3& n, const vec3& wo, float roughness) const {
                           [exponent](const vec2& u) { return sample_power_cosine(u, exponent); });
         return glm::max(mean, vec3(0.0f));
     }
+    if (zh != nullptr) return sh_specular_radiance(radiance, reflected, zh->factors(roughness));
     return sh_specular_radiance(radiance, reflected, roughness);
 }
 

@@ -24,6 +24,7 @@ namespace shgi {
 
 class Film;
 class GBuffer;
+class GgxZhMemo;  // sh/ggx_zh.h
 class Progress;
 
 struct FieldLookup {
@@ -41,7 +42,8 @@ struct FieldLookup {
     // E(n), >= 0.
     vec3 irradiance(const vec3& n) const;
     // Pre-filtered radiance leaving towards wo (unit, on n's side) for a GGX lobe, >= 0.
-    vec3 glossy(const vec3& n, const vec3& wo, float roughness) const;
+    // `zh` (optional): the caller's memo of the lobe's band factors, the same values.
+    vec3 glossy(const vec3& n, const vec3& wo, float roughness, GgxZhMemo* zh = nullptr) const;
     // The Phong exponent of glossy_rays' lobe for a roughness (finite for roughness 0).
     static float gather_phong_exponent(float roughness);
 };

@@ -344,7 +344,7 @@ void PathIntegrator::add_emission(const vec3& radiance, float light_pdf, bool is
     const float weight = last_delta_ ? 1.0f : power_heuristic(last_pdf_, light_pdf);
     const vec3 contribution = throughput_ * radiance * weight;
     if (vertex_ == 0) {
-        out_[is_world ? Pass::Env : Pass::Emit] += contribution;
+        if (!combined_only_) out_[is_world ? Pass::Env : Pass::Emit] += contribution;
         out_[Pass::Combined] += contribution;
         return;
     }
@@ -369,7 +369,8 @@ void PathIntegrator::add_light(const vec3& contribution, int lobe_class, bool di
 
 void PathIntegrator::add_to_passes(const vec3& value, int lobe_class, bool direct) {
     if (!is_finite(value)) return;
-    out_[direct ? kDirectPass[lobe_class] : kIndirectPass[lobe_class]] += value;
+    if (!combined_only_)
+        out_[direct ? kDirectPass[lobe_class] : kIndirectPass[lobe_class]] += value;
     out_[Pass::Combined] += value;
 }
 
@@ -477,7 +478,8 @@ void PathIntegrator::add_field_light(const FieldLookup& field, const FieldLobes&
     const vec3 e = irradiance != nullptr ? irradiance->irradiance(field, n) : field.irradiance(n);
     vec3 by_class[2] = {lobes.diffuse * e * kInvPi, vec3(0.0f)};
     for (int i = 0; i < lobes.glossy_count; ++i)
-        by_class[1] += lobes.glossy[i].albedo * field.glossy(n, wo, lobes.glossy[i].roughness);
+        by_class[1] +=
+            lobes.glossy[i].albedo * field.glossy(n, wo, lobes.glossy[i].roughness, glossy_memo_);
     if (vertex_ == 0) {
         for (int c = 0; c < 2; ++c) add_light(throughput_ * by_class[c], c, false);
         return;

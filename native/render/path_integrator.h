@@ -38,6 +38,7 @@
 #include "render/light_sampler.h"
 #include "render/path_tracer.h"
 #include "render/shading.h"
+#include "sh/ggx_zh.h"
 #include "scene/camera.h"
 #include "scene/scene.h"
 #include "util/rng.h"
@@ -150,9 +151,10 @@ class PathIntegrator {
     void set_first_ray_pdf(float pdf) { min_ray_pdf_ = pdf; }
 
     // Only the Combined pass is read (a FilmPasses::CombinedOnly film, the viewport's): the
-    // first surface's colour, normal and depth passes and the denoising guides, which Combined
-    // does not depend on, are not written (they were ~4% of a preview frame). Call before
-    // begin().
+    // first surface's colour, normal and depth passes, the denoising guides and the light
+    // passes (Emit, Env, Dir and Ind), which Combined does not depend on, are not written (the
+    // first surface's passes alone were ~4% of a preview frame); Combined gets the same
+    // additions in the same order. Call before begin().
     void set_combined_only() {
         combined_only_ = true;
         write_denoising_features_ = false;
@@ -185,12 +187,17 @@ class PathIntegrator {
         shared_lookup_ = lookup;
         shared_irradiance_ = irradiance;
     }
+    // A memo of the glossy lobes' band factors (sh/ggx_zh.h) for this path's field light to
+    // use, kept by the caller across paths (one per thread); it must outlive finish(). Without
+    // one each glossy lookup computes them itself (the same values).
+    void set_glossy_memo(GgxZhMemo* memo) { glossy_memo_ = memo; }
     // The first surface as begin() shaded it (position, shading frame, BSDF), for the G-buffer
     // (render/g_buffer.h); valid after begin() returned true and before finish().
     const Shading& first_surface() const { return shading_.value; }
 
   private:
     const FieldLookup* shared_lookup_ = nullptr;
+    GgxZhMemo* glossy_memo_ = nullptr;
     IrradianceMemo* shared_irradiance_ = nullptr;
     struct FirstLightSample {
         float u_select;

@@ -112,6 +112,7 @@ struct Wave {
     std::vector<uint32_t> quads;
     std::vector<FieldLookup> lookups;
     std::vector<IrradianceMemo> irradiance;  // per quad: its lookup's irradiance, by normal
+    GgxZhMemo glossy_zh;  // every path's glossy band factors, by roughness (kept across waves)
     std::vector<Ray> rays;
     std::vector<Hit> hits;
     std::vector<Ray> shadow_rays;
@@ -286,6 +287,7 @@ class FrameWork {
                                                          &clock);
             path.set_first_light_sample(wave.samples[i].u_select, wave.samples[i].u_light);
             path.set_final_gather(final_gather_);
+            path.set_glossy_memo(&wave.glossy_zh);
             if (combined_only_) path.set_combined_only();
             wave.live[i] = path.begin(wave.rays[i], wave.hits[i]);
             if (wave.live[i])

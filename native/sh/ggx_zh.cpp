@@ -111,10 +111,13 @@ BandFactors ggx_specular_zh_tabulated(float roughness) {
 }
 
 vec3 sh_specular_radiance(const ShRgb& radiance, const vec3& reflected, float roughness) {
+    return sh_specular_radiance(radiance, reflected, ggx_specular_zh_tabulated(roughness));
+}
+
+vec3 sh_specular_radiance(const ShRgb& radiance, const vec3& reflected,
+                          const BandFactors& factors) {
     // Ringing (negative k_4, fitted overshoot) can push the sum below zero: clamp at use.
-    return glm::max(
-        sh_evaluate_scaled(radiance, ggx_specular_zh_tabulated(roughness), reflected),
-        vec3(0.0f));
+    return glm::max(sh_evaluate_scaled(radiance, factors, reflected), vec3(0.0f));
 }
 
 }  // namespace shgi

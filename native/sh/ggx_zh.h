@@ -26,6 +26,8 @@
 // that of evaluating the fit in float (~2e-5), a fifth of the fit's own error.
 #pragma once
 
+#include <cstring>
+
 #include "sh/zonal_harmonics.h"
 
 namespace shgi {
@@ -51,5 +53,29 @@ BandFactors ggx_specular_zh_tabulated(float roughness);
 // max(0, Σ k_l(roughness) L_lm Y_lm(reflected)) per channel: pre-filtered specular radiance
 // (W·m⁻²·sr⁻¹) in the unit direction `reflected`, with k_l from ggx_specular_zh_tabulated.
 vec3 sh_specular_radiance(const ShRgb& radiance, const vec3& reflected, float roughness);
+// The same with the factors given (ggx_specular_zh_tabulated's, e.g. from a GgxZhMemo).
+vec3 sh_specular_radiance(const ShRgb& radiance, const vec3& reflected, const BandFactors& factors);
+
+// ggx_specular_zh_tabulated of the last roughness asked for. The factors are a function of the
+// roughness alone, and a preview frame asks for the few roughnesses of its materials over and
+// over (once per glossy pixel, ~1% of a frame), so a caller that keeps one memo per thread gets
+// the bits a new call would give without the call. Not thread-safe.
+class GgxZhMemo {
+  public:
+    const BandFactors& factors(float roughness) {
+        // Bits, not ==: a NaN must reach ggx_specular_zh_tabulated's check every time.
+        if (!valid_ || std::memcmp(&roughness, &roughness_, sizeof(float)) != 0) {
+            factors_ = ggx_specular_zh_tabulated(roughness);
+            roughness_ = roughness;
+            valid_ = true;
+        }
+        return factors_;
+    }
+
+  private:
+    bool valid_ = false;
+    float roughness_ = 0.0f;
+    BandFactors factors_{};
+};
 
 }  // namespace shgi

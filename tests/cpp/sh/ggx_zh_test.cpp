@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
 #include "sh/lobe_zh.h"
 #include "sh/sh_irradiance.h"
@@ -126,6 +127,23 @@ TEST(GgxZh, SpecularRadianceIsTheFilteredFieldInTheReflectedDirection) {
         EXPECT_EQ(sh_specular_radiance(radiance, reflected, roughness), expected)
             << "roughness " << roughness;
     }
+}
+
+// The memo gives ggx_specular_zh_tabulated's bits for any sequence of roughnesses (repeated,
+// alternating, -0 after +0) and checks every roughness it has not just seen, NaN included.
+TEST(GgxZh, MemoIsTheTabulatedFactorsBitForBit) {
+    GgxZhMemo memo;
+    for (float roughness : {0.5f, 0.5f, 0.25f, 0.5f, 0.0f, -0.0f, 1.0f, 1.0f, 0.123f, 0.25f}) {
+        const BandFactors expected = ggx_specular_zh_tabulated(roughness);
+        const BandFactors& memoised = memo.factors(roughness);
+        EXPECT_EQ(std::memcmp(memoised.data(), expected.data(), sizeof(BandFactors)), 0)
+            << "roughness " << roughness;
+    }
+    EXPECT_THROW(memo.factors(NAN), InvalidArgument);
+    EXPECT_THROW(memo.factors(NAN), InvalidArgument);
+    EXPECT_THROW(memo.factors(1.5f), InvalidArgument);
+    const BandFactors expected = ggx_specular_zh_tabulated(0.25f);
+    EXPECT_EQ(std::memcmp(memo.factors(0.25f).data(), expected.data(), sizeof(BandFactors)), 0);
 }
 
 TEST(GgxZh, RejectsRoughnessOutsideUnitInterval) {
