@@ -48,8 +48,8 @@ def main():
     cycles_ref, _ = equal_time.reference(
         scene, key.format("cycles"), "CYCLES",
         lambda s: equal_time.use_cycles(s, args.reference_samples, False), refs)
-    shgi_ref, _ = equal_time.reference(
-        scene, key.format("shgi"), "SHGI",
+    shgi_ref, _ = equal_time.reference(  # keyed by SHGI's pixel filter (Cycles' is its default)
+        scene, key.format("shgi" + equal_time.pixel_filter_tag(scene.shgi)), "SHGI",
         lambda s: equal_time.use_shgi(s, "PATH_TRACE", args.reference_samples), refs)
     exr = os.path.join(args.cache, "render.exr")
     equal_time.use_cycles(scene, args.cycles_samples, True)
