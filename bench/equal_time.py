@@ -39,6 +39,7 @@ samples and seconds beside it, "-" when even one sample took longer.
 """
 
 import argparse
+import math
 import os
 import sys
 import time
@@ -419,9 +420,28 @@ def summary(name, args, cycles, shgi, method):
             at_or_above.append(label)
         else:
             below.append(label)
+    leads = []
+    for budget in (b for b in args.limits if b >= SUMMARY_FROM_SECONDS):
+        ours = run_within(shgi, budget)
+        theirs = None if ours is None else cycles_at(cycles, ours.seconds)
+        if theirs is not None:
+            leads.append(f"{ours.seconds:.2f} s {ours.psnr - theirs:+.2f} dB")
     return (f"summary {name}: SHGI {method} (the default method) at/above Cycles+OIDN at "
             f"{', '.join(at_or_above) or 'no budget'}; below at {', '.join(below) or 'none'}"
-            + (f"; neither renders within {', '.join(neither)}" if neither else ""))
+            + (f"; neither renders within {', '.join(neither)}" if neither else "")
+            + f"\n  at equal seconds (Cycles' PSNR interpolated in log time to SHGI's): "
+            + (", ".join(leads) or "no budget within Cycles' renders"))
+
+
+def cycles_at(cycles, seconds):
+    """Cycles' PSNR at F12 time `seconds`, interpolated in log time between its two renders
+    either side (sorted by time); None outside them."""
+    runs = sorted(cycles, key=lambda run: run.seconds)
+    for low, high in zip(runs, runs[1:]):
+        if low.seconds <= seconds <= high.seconds and high.seconds > low.seconds:
+            t = math.log(seconds / low.seconds) / math.log(high.seconds / low.seconds)
+            return low.psnr + t * (high.psnr - low.psnr)
+    return None
 
 
 # --- main -------------------------------------------------------------------------------------

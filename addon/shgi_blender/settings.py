@@ -166,18 +166,17 @@ ENUM_ITEMS = {
 # default one, with it on 0.55% (docs/equal-time.md). Scripts and `python -m shgi` keep the
 # native 0: the unbiased answer the tests compare with closed forms. Cycles' Light Paths > Caustics
 # > Filter Glossy is 1 by default (PrincipledBsdf::blur): it takes the caustic fireflies of
-# mirrors and sharp glass seen through a diffuse bounce (docs/equal-time.md). Cycles' Film > Pixel
-# Filter is a Blackman-Harris of width 1.5 (render/pixel_filter.h): the same edges as Cycles', and
-# a picture the denoiser reads 1.3-1.6 dB better than the native box of one pixel
-# (docs/equal-time.md, "The pixel filter").
-CYCLES_DEFAULTS = {"clamp_indirect": 10.0, "filter_glossy": 1.0,
-                   "pixel_filter": "BLACKMAN_HARRIS", "filter_width": 1.5}
+# mirrors and sharp glass seen through a diffuse bounce (docs/equal-time.md). Not Cycles' Film >
+# Pixel Filter (a Blackman-Harris of width 1.5): the add-on keeps the native box of one pixel,
+# which the denoiser reads 1-2.4 dB better on the Cornell box and the caustics scene (and 0.5-0.9
+# dB worse in the sun room; docs/equal-time.md, "The pixel filter").
+CYCLES_DEFAULTS = {"clamp_indirect": 10.0, "filter_glossy": 1.0}
 
 # scene.shgi's own properties with their native defaults (checked against the native structs by
 # tests/python/test_blender_engine.py): the samples, the seed and Light Paths, which every method
 # shares. samples is the path tracer's default; the preview's is 16. Two depart, as
-# CYCLES_DEFAULTS says: Clamp Indirect is Cycles' 10, Filter Glossy Cycles' 1 and the Pixel Filter
-# Cycles' Blackman-Harris 1.5, where the native structs keep 0 (off) and a box of one pixel.
+# CYCLES_DEFAULTS says: Clamp Indirect is Cycles' 10 and Filter Glossy Cycles' 1, where the
+# native structs keep 0 (off).
 PROPERTY_DEFAULTS = {
     "samples": 64,
     "seed": 0,
@@ -187,8 +186,8 @@ PROPERTY_DEFAULTS = {
     "transmission_bounces": 12,
     "clamp_indirect": CYCLES_DEFAULTS["clamp_indirect"],
     "filter_glossy": CYCLES_DEFAULTS["filter_glossy"],
-    "pixel_filter": CYCLES_DEFAULTS["pixel_filter"],
-    "filter_width": CYCLES_DEFAULTS["filter_width"],
+    "pixel_filter": "BOX",
+    "filter_width": 1.0,
     "world_sampling": "COSINE",
     "light_splits": 4,
     "max_specular_bounces": 8,

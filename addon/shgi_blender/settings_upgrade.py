@@ -23,9 +23,8 @@ its default in the new place while its old value lies unused under the old name.
    4, and its bakes take Bake Passes (``instant_gi.bake_passes``) instead. A scene saved before
    keeps 4 Render Passes unless it set them, and bakes with the passes it rendered with.
 8. F12's denoising Prefilter defaults to Automatic (settings.DENOISING_DEFAULTS), where it was
-   Fast, and Film > Pixel Filter (new) to Cycles' Blackman-Harris of width 1.5
-   (settings.CYCLES_DEFAULTS). A scene saved before keeps Fast unless it set the prefilter, and
-   the box of one pixel it rendered with.
+   Fast (and Film > Pixel Filter came, with the box of one pixel every earlier layout rendered
+   with). A scene saved before keeps Fast unless it set the prefilter.
 
 ``upgrade`` takes what a scene stored (its ID properties as a dict: only values someone set are
 stored, a default is not) and says what to write where, so that the scene renders with the
@@ -72,7 +71,7 @@ PROPAGATION_DEFAULTS_BEFORE_6 = {"steps": 8, "damping": False, "occlude_first_st
 INSTANT_GI_DEFAULTS_BEFORE_7 = {"passes": 4}
 # scene.shgi's own defaults before version 8 that have changed since (every earlier layout
 # rendered F12 with these, the denoising settings having come in with their defaults).
-DEFAULTS_BEFORE_8 = {"denoising_prefilter": "FAST", "pixel_filter": "BOX", "filter_width": 1.0}
+DEFAULTS_BEFORE_8 = {"denoising_prefilter": "FAST"}
 
 
 @dataclass

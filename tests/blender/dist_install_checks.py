@@ -97,7 +97,8 @@ def main():
     scene.cycles.samples = SAMPLES
     scene.cycles.use_denoising = False
     scene.cycles.use_adaptive_sampling = False
-    # Both keep their default pixel filter, Cycles' Blackman-Harris 1.5.
+    scene.cycles.pixel_filter_type = "BOX"  # SHGI's default pixel filter
+    scene.cycles.filter_width = 1.0
     for limit in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces"):
         setattr(scene.cycles, limit, getattr(scene.shgi, limit))
     scene.shgi.method = "PATH_TRACE"

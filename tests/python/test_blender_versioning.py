@@ -60,8 +60,7 @@ def test_a_second_layout_scene_keeps_reading_its_field_directly():
     assert (upgrade.removed, upgrade.notes) == ([], [])
     # One set by hand in that file (it cannot be, but a script may have) is kept.
     stored = {"settings_version": 2, "probe_grid": {"final_gather": True}, "clamp_indirect": 3.0,
-              "filter_glossy": 0.5, "denoising_prefilter": 2, "pixel_filter": 1,
-              "filter_width": 1.5}
+              "filter_glossy": 0.5, "denoising_prefilter": 2}
     assert settings_upgrade.upgrade(stored).values == {("photon_lattice", "final_gather"): False}
 
 
@@ -138,22 +137,18 @@ def test_a_sixth_layout_scene_keeps_instant_gi_passes_for_renders_and_bakes():
 
 
 # F12's denoising prefilter and the pixel filter before layout 8, as an upgrade writes them.
-BEFORE_8 = {("", "denoising_prefilter"): "FAST", ("", "pixel_filter"): "BOX",
-            ("", "filter_width"): 1.0}
+BEFORE_8 = {("", "denoising_prefilter"): "FAST"}
 
 
-def test_a_seventh_layout_scene_keeps_the_fast_prefilter_and_the_box_pixel_filter():
-    """Layout 8 gave F12's denoiser the Automatic prefilter and the film Cycles' Blackman-Harris
-    1.5: a scene saved before, which left Fast and had no pixel filter (a box of one pixel),
-    keeps both; one that chose a prefilter keeps it (nothing to write)."""
+def test_a_seventh_layout_scene_keeps_the_fast_prefilter():
+    """Layout 8 gave F12's denoiser the Automatic prefilter: a scene saved before, which left
+    Fast, keeps Fast; one that chose a prefilter keeps it (nothing to write). Film > Pixel
+    Filter came then too, with the box of one pixel every scene had rendered with."""
     assert settings.DENOISING_DEFAULTS["denoising_prefilter"] == "AUTO"
     assert (settings.PROPERTY_DEFAULTS["pixel_filter"],
-            settings.PROPERTY_DEFAULTS["filter_width"]) == ("BLACKMAN_HARRIS", 1.5)
-    assert (shgi.PathTracerSettings().pixel_filter, shgi.PathTracerSettings().filter_width) == (
-        shgi.PixelFilter.BOX, 1.0)  # scripts keep the native box
+            settings.PROPERTY_DEFAULTS["filter_width"]) == ("BOX", 1.0)
     assert settings_upgrade.upgrade({"settings_version": 7, "samples": 5}).values == BEFORE_8
-    stored = {"settings_version": 7, "denoising_prefilter": 2, "filter_width": 2.0}
-    assert settings_upgrade.upgrade(stored).values == {("", "pixel_filter"): "BOX"}
+    assert settings_upgrade.upgrade({"settings_version": 7, "denoising_prefilter": 2}).values == {}
 
 
 def test_settings_of_today_layout_are_left_alone():
