@@ -81,13 +81,8 @@ class SHGI_RENDER_PT_film(ShgiPanel, bpy.types.Panel):
     bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
-        props = context.scene.shgi
-        column = layout.column(align=True)
-        column.prop(props, "pixel_filter", text="Pixel Filter")
-        column.prop(props, "filter_width", text="Width")
+        draw_props_column(self.layout, context.scene.shgi,
+                          (("pixel_filter", "Pixel Filter"), ("filter_width", "Width")))
 
 
 class SHGI_RENDER_PT_light_paths(ShgiPanel, bpy.types.Panel):
@@ -96,15 +91,9 @@ class SHGI_RENDER_PT_light_paths(ShgiPanel, bpy.types.Panel):
     bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
-        props = context.scene.shgi
-        column = layout.column(align=True)
-        column.prop(props, "clamp_indirect", text="Clamp")
-        column.prop(props, "filter_glossy", text="Filter Glossy")
-        column.prop(props, "world_sampling", text="World")
-        column.prop(props, "light_splits", text="Light Splits")
+        draw_props_column(self.layout, context.scene.shgi,
+                          (("clamp_indirect", "Clamp"), ("filter_glossy", "Filter Glossy"),
+                           ("world_sampling", "World"), ("light_splits", "Light Splits")))
 
 
 class SHGI_RENDER_PT_light_paths_max_bounces(ShgiPanel, bpy.types.Panel):
@@ -126,6 +115,17 @@ class SHGI_RENDER_PT_light_paths_max_bounces(ShgiPanel, bpy.types.Panel):
         if solver:
             column.prop(props, "max_specular_bounces", text="Specular")
             draw_wrapped(layout, settings.light_path_limits(solver), icon="INFO")
+
+
+def draw_props_column(layout, props, fields):
+    """`fields` ((property, label), ...) of `props` in one aligned column, labels split off as
+    Cycles' panels draw them."""
+    layout.use_property_split = True
+    layout.use_property_decorate = False
+    column = layout.column(align=True)
+    for name, text in fields:
+        column.prop(props, name, text=text)
+    return column
 
 
 def draw_frozen_solution(layout, context):
