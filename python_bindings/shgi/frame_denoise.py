@@ -22,8 +22,8 @@ noise-free guides); and one of SHGI's, "AUTO": "FAST" below CLEAN_GUIDE_SAMPLES 
 guides: with "FAST" the quality High runs the Balanced network (the same output, measured), so
 once the guides are clean enough to call clean, "NONE" is worth 0.6-0.9 dB over "FAST" for about
 twice its time, and "ACCURATE" gives what "NONE" gives at three times the cost
-(docs/equal-time.md, "The denoiser's prefilter"). ``guides`` chooses the inputs as Cycles' "Passes" does: "NONE" (colour
-only), "ALBEDO", "ALBEDO_NORMAL".
+(docs/equal-time.md, "The denoiser's prefilter"). ``guides`` chooses the inputs as Cycles'
+"Passes" does: "NONE" (colour only), "ALBEDO", "ALBEDO_NORMAL".
 
 The light the camera sees straight from emitters and the world (the Emit and Env passes, when
 given) is taken out of Combined before the network and added back after it: it is exact, and a
@@ -62,7 +62,8 @@ PREFILTERS = ("NONE", "FAST", "ACCURATE", "AUTO")
 # allow for their noise ("FAST"). Measured at 200 x 150 (docs/equal-time.md): on a Cornell box with
 # a 256 x 256 colour grid on two walls "NONE" lost 1.4 dB to "FAST" at 1 sample and 0.3 dB at 2,
 # gained 0.2 dB at 4 and 0.75 dB at 8 (where it matched "ACCURATE"); in the sun room it gained
-# 0.4-0.9 dB from 4 samples on.
+# 0.4-0.9 dB from 4 samples on. Guides seen through glass stay noisy longer: in the caustics scene
+# "NONE" was 0.9 dB below "FAST" at 8 samples, level near 16 and 0.3-0.6 dB above from 32 on.
 CLEAN_GUIDE_SAMPLES = 8
 GUIDES = ("NONE", "ALBEDO", "ALBEDO_NORMAL")
 # The passes Cycles writes beside a denoised Combined. The renderers write the guides under the
@@ -84,10 +85,10 @@ WANTED_PASSES = {guides: names + ("Emit", "Env") for guides, names in GUIDE_PASS
 DIRECT_PASSES = ("Emit", "Env")
 # Depth of a pixel where every sample missed (the films' kMissDepth, as Cycles writes it).
 MISS_DEPTH = 1e10
-# Seconds per pixel of a denoise, {(prefilter, quality): s} ("AUTO" as the one it becomes), measured on a 256 x 256 Cornell box
-# on this project's 2-core machine (ALBEDO_NORMAL guides), for a render that must fit a Time
-# Limit before anything was denoised in this process; then each denoise records its own size and
-# time (MEASURED).
+# Seconds per pixel of a denoise, {(prefilter, quality): s} ("AUTO" as the one it becomes),
+# measured on a 256 x 256 Cornell box on this project's 2-core machine (ALBEDO_NORMAL guides),
+# for a render that must fit a Time Limit before anything was denoised in this process; then
+# each denoise records its own size and time (MEASURED).
 ESTIMATED_RATES = {
     ("NONE", "HIGH"): 3.0e-6, ("NONE", "BALANCED"): 1.3e-6, ("NONE", "FAST"): 0.7e-6,
     ("FAST", "HIGH"): 1.3e-6, ("FAST", "BALANCED"): 1.3e-6, ("FAST", "FAST"): 0.7e-6,
