@@ -63,7 +63,7 @@ PREFILTERS = ("NONE", "FAST", "ACCURATE", "AUTO")
 # a 256 x 256 colour grid on two walls "NONE" lost 1.4 dB to "FAST" at 1 sample and 0.3 dB at 2,
 # gained 0.2 dB at 4 and 0.75 dB at 8 (where it matched "ACCURATE"); in the sun room it gained
 # 0.4-0.9 dB from 4 samples on. Guides seen through glass stay noisy longer: in the caustics scene
-# "NONE" was 0.9 dB below "FAST" at 8 samples, level near 16 and 0.3-0.6 dB above from 32 on.
+# "NONE" was 0.8-0.9 dB below "FAST" at 8 samples, 0.3-0.4 dB above at 32, 0.6-0.7 at 128.
 CLEAN_GUIDE_SAMPLES = 8
 GUIDES = ("NONE", "ALBEDO", "ALBEDO_NORMAL")
 # The passes Cycles writes beside a denoised Combined. The renderers write the guides under the
