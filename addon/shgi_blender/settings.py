@@ -116,8 +116,8 @@ ENUM_FIELDS = {
 # Their items (identifier = the shgi member name, label, description), for the EnumProperties.
 ENUM_ITEMS = {
     "pixel_filter": (
-        ("BOX", "Box", "Each sample counts only in its own pixel, evenly over it: the sharpest "
-         "image, and the hardest for the denoiser"),
+        ("BOX", "Box", "Each sample counts in its own pixel, evenly over it (of width 1): the "
+         "sharpest image"),
         ("GAUSSIAN", "Gaussian", "Samples spread over neighbouring pixels with a Gaussian "
          "weight (sigma a quarter of the width)"),
         ("BLACKMAN_HARRIS", "Blackman-Harris", "Samples spread over neighbouring pixels with a "
@@ -377,7 +377,7 @@ DENOISING_ITEMS = {
          "Guide the denoiser with the surfaces' colours and normals (keeps the most detail)"),
     ),
     "prefilter": (
-        ("NONE", "None", "The guides are taken as noise-free (fastest)"),
+        ("NONE", "None", "The guides are taken as noise-free (for renders of many samples)"),
         ("FAST", "Fast", "The denoiser allows for noise in the guides"),
         ("ACCURATE", "Accurate", "Denoise the guides first (keeps the most detail, slowest)"),
         ("AUTO", "Automatic",
