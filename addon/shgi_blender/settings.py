@@ -168,7 +168,7 @@ ENUM_ITEMS = {
 # > Filter Glossy is 1 by default (PrincipledBsdf::blur): it takes the caustic fireflies of
 # mirrors and sharp glass seen through a diffuse bounce (docs/equal-time.md). Not Cycles' Film >
 # Pixel Filter (a Blackman-Harris of width 1.5): the add-on keeps the native box of one pixel,
-# which the denoiser reads 1-2.4 dB better on the Cornell box and the caustics scene (and 0.5-0.9
+# which the denoiser reads 0.7-2.4 dB better on the Cornell box and the caustics scene (and 0.5-0.9
 # dB worse in the sun room; docs/equal-time.md, "The pixel filter").
 CYCLES_DEFAULTS = {"clamp_indirect": 10.0, "filter_glossy": 1.0}
 
