@@ -22,9 +22,9 @@ its default in the new place while its old value lies unused under the old name.
 7. Instant GI's Render Passes default to 64 (settings.RENDER_PASSES_DEFAULTS), where they were
    4, and its bakes take Bake Passes (``instant_gi.bake_passes``) instead. A scene saved before
    keeps 4 Render Passes unless it set them, and bakes with the passes it rendered with.
-8. F12's denoising Prefilter defaults to Automatic (settings.DENOISING_DEFAULTS), where it was
-   Fast (and Film > Pixel Filter came, with the box of one pixel every earlier layout rendered
-   with). A scene saved before keeps Fast unless it set the prefilter.
+8. F12's denoising Prefilter gained Automatic (its default stays Fast: settings.DENOISING_DEFAULTS)
+   and Film > Pixel Filter came, with the box of one pixel every earlier layout rendered with. A
+   scene saved before keeps Fast unless it set the prefilter.
 
 ``upgrade`` takes what a scene stored (its ID properties as a dict: only values someone set are
 stored, a default is not) and says what to write where, so that the scene renders with the

@@ -141,10 +141,11 @@ BEFORE_8 = {("", "denoising_prefilter"): "FAST"}
 
 
 def test_a_seventh_layout_scene_keeps_the_fast_prefilter():
-    """Layout 8 gave F12's denoiser the Automatic prefilter: a scene saved before, which left
-    Fast, keeps Fast; one that chose a prefilter keeps it (nothing to write). Film > Pixel
-    Filter came then too, with the box of one pixel every scene had rendered with."""
-    assert settings.DENOISING_DEFAULTS["denoising_prefilter"] == "AUTO"
+    """Layout 8 gave F12's denoiser the Automatic prefilter (Fast stays the default): a scene
+    saved before, which left Fast, keeps Fast; one that chose a prefilter keeps it (nothing to
+    write). Film > Pixel Filter came then too, with the box of one pixel every scene had rendered
+    with."""
+    assert settings.DENOISING_DEFAULTS["denoising_prefilter"] == "FAST"
     assert (settings.PROPERTY_DEFAULTS["pixel_filter"],
             settings.PROPERTY_DEFAULTS["filter_width"]) == ("BOX", 1.0)
     assert settings_upgrade.upgrade({"settings_version": 7, "samples": 5}).values == BEFORE_8
@@ -218,8 +219,8 @@ def test_a_new_scene_solves_as_many_probe_passes_as_the_cli(blender, build_pytho
     assert results["layout_4_filter_glossy"] == {
         "left": {"clamp_indirect": 10.0, "filter_glossy": 0.0, **kept},
         "set": {"clamp_indirect": 10.0, "filter_glossy": 0.5, **kept}}
-    # Layout 7 denoised F12 with the Fast prefilter: kept when left; a new scene has Automatic.
-    assert results["new_scene_prefilter"] == "AUTO"
+    # Layout 7 denoised F12 with the Fast prefilter: kept when left; a new scene has Fast too.
+    assert results["new_scene_prefilter"] == "FAST"
     assert results["layout_7_prefilter"] == {"left": "FAST", "set": "NONE"}
     # Layout 5's Light Propagation: 8 steps and the corrections off, left or set; a new scene
     # takes its steps from Distance with them on.
