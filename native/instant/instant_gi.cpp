@@ -65,31 +65,44 @@ bool joins(const GBuffer& g, size_t p, size_t q, const InstantGiSettings& s, boo
     return true;
 }
 
-// Per pixel, 1 where a neighbour within the filter window (half_x, half_y taps each side,
-// inside the image) does not join the pixel: an edge cuts its window (gather_cut_windows).
+// visit(q, dx, dy), row by row, for each pixel q of pixel (x, y)'s filter window (half_x,
+// half_y taps each side) that lies inside the image and joins it (itself included); returns how
+// many of the window's taps lie inside the image.
+template <class Visit>
+int visit_window(const GBuffer& g, int x, int y, int half_x, int half_y,
+                 const InstantGiSettings& s, bool strict, const Visit& visit) {
+    const size_t p = g.index(x, y);
+    int taps = 0;
+    for (int dy = -half_y; dy <= half_y; ++dy) {
+        const int qy = y + dy;
+        if (qy < 0 || qy >= g.height()) continue;
+        for (int dx = -half_x; dx <= half_x; ++dx) {
+            const int qx = x + dx;
+            if (qx < 0 || qx >= g.width()) continue;
+            ++taps;
+            const size_t q = g.index(qx, qy);
+            if (q != p && !joins(g, p, q, s, strict)) continue;
+            visit(q, dx, dy);
+        }
+    }
+    return taps;
+}
+
+// Per pixel, 1 where a tap of its filter window inside the image does not join it: an edge
+// cuts its window (gather_cut_windows).
 std::vector<uint8_t> cut_window_pixels(const GBuffer& g, const InstantGiSettings& s, int half_x,
                                        int half_y) {
-    const int width = g.width(), height = g.height();
     const bool strict = s.filter_mode == InstantGiFilter::Strict;
     std::vector<uint8_t> cut(g.pixel_count(), 0);
-    parallel_for(0, uint64_t(height), 8, [&](uint64_t y0, uint64_t y1) {
+    parallel_for(0, uint64_t(g.height()), 8, [&](uint64_t y0, uint64_t y1) {
         for (uint64_t y = y0; y < y1; ++y)
-            for (int x = 0; x < width; ++x) {
+            for (int x = 0; x < g.width(); ++x) {
                 const size_t p = g.index(x, int(y));
                 if (!g.has_surface(p)) continue;
-                for (int dy = -half_y; dy <= half_y && !cut[p]; ++dy) {
-                    const int qy = int(y) + dy;
-                    if (qy < 0 || qy >= height) continue;
-                    for (int dx = -half_x; dx <= half_x; ++dx) {
-                        const int qx = x + dx;
-                        if (qx < 0 || qx >= width) continue;
-                        const size_t q = g.index(qx, qy);
-                        if (q != p && !joins(g, p, q, s, strict)) {
-                            cut[p] = 1;
-                            break;
-                        }
-                    }
-                }
+                int joined = 0;
+                const int taps = visit_window(g, x, int(y), half_x, half_y, s, strict,
+                                              [&joined](size_t, int, int) { ++joined; });
+                cut[p] = joined < taps ? 1 : 0;
             }
     });
     return cut;
@@ -279,6 +292,12 @@ InstantGiField::InstantGiField(const Scene& scene, const InstantGiSettings& sett
 
 InstantGiFrameTimings InstantGiField::frame_timings() const { return *timings_; }
 
+uint64_t InstantGiField::range_count(const std::vector<VplRange>& ranges) {
+    uint64_t total = 0;
+    for (const VplRange& range : ranges) total += range.end - range.begin;
+    return total;
+}
+
 InstantGiLookupCounts InstantGiField::lookup_counts() const {
     return {lookup_counter_->lookups.load(std::memory_order_relaxed),
             lookup_counter_->vpls.load(std::memory_order_relaxed)};
@@ -449,8 +468,7 @@ class InstantGiField::SampleView : public IndirectField {
         // among those passes).
         vpl_scale_ = 1.0f / float(std::max<uint64_t>(gather_.passes, 1));
         uint64_t directions = 0;
-        for (const auto& ranges : gather_.sky)
-            for (const VplRange& range : ranges) directions += range.end - range.begin;
+        for (const auto& ranges : gather_.sky) directions += range_count(ranges);
         if (directions > 0)
             sky_ = field.scene_->world().radiance() * (kFourPi / float(directions));
         lamp_scale_ = 1.0f / float(std::max<size_t>(field.sets_.size(), 1));
@@ -582,16 +600,11 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
     }
     const SampleGather gather = sample_gather(first);
     const float vpl_scale = gather.vpl_scale;
-    const auto gathered = [](const std::vector<VplRange>& ranges) {
-        uint64_t total = 0;
-        for (const VplRange& range : ranges) total += range.end - range.begin;
-        return total;
-    };
     size_t largest_set = 1;
     for (size_t s = 0; s < sets_.size(); ++s)
-        largest_set = std::max(largest_set, size_t(gathered(gather.vpls[s]) +
-                                                   (sky ? gathered(gather.sky[s]) : 0) +
-                                                   (lamps ? gathered(gather.lamps[s]) : 0)));
+        largest_set = std::max(largest_set, size_t(range_count(gather.vpls[s]) +
+                                                   (sky ? range_count(gather.sky[s]) : 0) +
+                                                   (lamps ? range_count(gather.lamps[s]) : 0)));
     const uint64_t rows_per_task =
         std::max<uint64_t>(1, kRaysPerBatch / (uint64_t(std::max(width, 1)) * largest_set));
     // gather_cut_windows: the pixels whose filter window an edge cuts gather every set
@@ -679,7 +692,7 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                         }
                 if (!sky) continue;
                 // The set's directional VPLs: the world seen along each, to infinity.
-                const uint64_t sky_directions = gathered(gather.sky[s]);
+                const uint64_t sky_directions = range_count(gather.sky[s]);
                 if (sky_directions == 0) continue;
                 const vec3 e = scene_->world().radiance() * (kFourPi / float(sky_directions));
                 for (const VplRange& range : gather.sky[s])
@@ -742,21 +755,14 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                         continue;
                     }
                     float total = 0.0f;
-                    for (int dy = -half_y; dy <= half_y; ++dy) {
-                        const int qy = int(y) + dy;
-                        if (qy < 0 || qy >= height) continue;
-                        for (int dx = -half_x; dx <= half_x; ++dx) {
-                            const int qx = x + dx;
-                            if (qx < 0 || qx >= width) continue;
-                            const size_t q = g.index(qx, qy);
-                            if (q != p && !joins(g, p, q, settings_, strict)) continue;
-                            const float w =
-                                Interleave::tap_weight(n, dx) * Interleave::tap_weight(m, dy);
-                            const vec3* in = &source[q * size_t(stride)];
-                            for (int i = 0; i < stride; ++i) out[i] += w * in[i];
-                            total += w;
-                        }
-                    }
+                    visit_window(g, x, int(y), half_x, half_y, settings_, strict,
+                                 [&](size_t q, int dx, int dy) {
+                                     const float w = Interleave::tap_weight(n, dx) *
+                                                     Interleave::tap_weight(m, dy);
+                                     const vec3* in = &source[q * size_t(stride)];
+                                     for (int i = 0; i < stride; ++i) out[i] += w * in[i];
+                                     total += w;
+                                 });
                     for (int i = 0; i < stride; ++i) out[i] /= total;
                 }
         }, progress);

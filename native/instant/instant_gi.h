@@ -231,6 +231,8 @@ class InstantGiField : public IndirectField {
         uint64_t begin, end;  // indices [begin, end) into a set's VPLs, sky directions or lamps
         bool deltas_only = false;  // lamps: only the delta lights' samples of the range
     };
+    // The indices `ranges` hold.
+    static uint64_t range_count(const std::vector<VplRange>& ranges);
     // What preview sample `sample` gathers of each set: the VPLs, sky directions and lamp
     // samples of its sample_passes (and the delta lights' samples, made at the first pass).
     struct SampleGather {

@@ -55,17 +55,15 @@ PixelFilter::PixelFilter(PixelFilterType type, float width)
       half_span_(half_span_of(type, width)) {
     validate_filter_width(width, "PixelFilter");
     if (type == PixelFilterType::Box) return;  // uniform: offset() needs no table
-    cdf_.resize(size_t(kPixelFilterTableSize) + 1);
+    // Running sums of the bins' weights (each the filter at the bin's centre), then normalised.
+    std::vector<double> sums(size_t(kPixelFilterTableSize) + 1, 0.0);
     const double bin = 2.0 * double(half_span_) / kPixelFilterTableSize;
-    double sum = 0.0;
-    cdf_[0] = 0.0f;
-    std::vector<double> sums(cdf_.size(), 0.0);
     for (int i = 0; i < kPixelFilterTableSize; ++i) {
         const double centre = -double(half_span_) + (i + 0.5) * bin;
-        sum += std::max(0.0, weight(type, centre, half_span_));
-        sums[size_t(i) + 1] = sum;
+        sums[size_t(i) + 1] = sums[size_t(i)] + std::max(0.0, weight(type, centre, half_span_));
     }
-    for (size_t i = 0; i < cdf_.size(); ++i) cdf_[i] = float(sums[i] / sum);
+    cdf_.resize(sums.size());
+    for (size_t i = 0; i < cdf_.size(); ++i) cdf_[i] = float(sums[i] / sums.back());
     cdf_.back() = 1.0f;
 }
 

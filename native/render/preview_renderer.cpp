@@ -153,11 +153,12 @@ class WaveLease {
 class FrameWork {
   public:
     FrameWork(const Scene& scene, const Camera& camera, const CameraRayGenerator& camera_rays,
-              const LightSampler& lights, const PathTracerSettings& settings,
+              const PixelFilter& pixel_filter, const LightSampler& lights, const PathTracerSettings& settings,
               const IndirectField& field, const TileGrid& grid, uint64_t first, uint64_t count,
               GBuffer& g_buffer, Progress* progress, bool reuse_lookups, bool final_gather,
               bool combined_only)
-        : scene_(scene), camera_(camera), camera_rays_(camera_rays), lights_(lights),
+        : scene_(scene), camera_(camera), camera_rays_(camera_rays),
+          pixel_filter_(pixel_filter), lights_(lights),
           settings_(settings), field_(field), grid_(grid), first_(first), count_(count),
           g_buffer_(&g_buffer), progress_(progress),
           screen_space_(field.shades_first_surfaces()),
@@ -167,7 +168,6 @@ class FrameWork {
           // A screen-space field lights the first surfaces itself: no gather ray before it.
           final_gather_(final_gather && !screen_space_ ? 1 : 0),
           combined_only_(combined_only),
-          pixel_filter_(settings.pixel_filter, settings.filter_width),
           camera_position_(camera.world_from_camera[3]),
           forward_(glm::normalize(-vec3(camera.world_from_camera[2]))) {}
 
@@ -322,6 +322,7 @@ class FrameWork {
     const Scene& scene_;
     const Camera& camera_;
     const CameraRayGenerator& camera_rays_;
+    const PixelFilter& pixel_filter_;  // PreviewSettings.pixel_filter and filter_width
     const LightSampler& lights_;
     const PathTracerSettings& settings_;
     const IndirectField& field_;
@@ -334,7 +335,6 @@ class FrameWork {
     float reuse_;  // the field's reuse distance; 0: every pixel makes its own lookup
     int final_gather_;  // smooth bounces before a path reads the field (PreviewSettings)
     bool combined_only_;  // the film sums only Combined: the paths write no other pass
-    PixelFilter pixel_filter_;  // PreviewSettings.pixel_filter and filter_width
     vec3 camera_position_, forward_;  // the camera's, for the G-buffer's depth
 };
 
@@ -353,8 +353,6 @@ PathTracerSettings path_settings_for(const PreviewSettings& settings) {
     path.filter_glossy = settings.filter_glossy;
     path.world_sampling = settings.world_sampling;
     path.light_splits = settings.light_splits;
-    path.pixel_filter = settings.pixel_filter;
-    path.filter_width = settings.filter_width;
     return path;
 }
 
@@ -405,6 +403,7 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const Camera& camera,
       camera_(validated(camera)),
       camera_rays_(camera),
       settings_(validated(settings)),
+      pixel_filter_(settings.pixel_filter, settings.filter_width),
       path_settings_(path_settings_for(settings)),
       lights_(scene, settings.world_sampling, true, path_settings_.light_splits) {
     film_ = ProgressiveFilm(int(camera_.resolution_x), int(camera_.resolution_y),
@@ -499,9 +498,10 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
         };
     const TileGrid grid(film_.film().width(), film_.film().height(),
                         even_tile_side(settings_.tile_size));
-    const FrameWork work(*scene_, camera_, camera_rays_, lights, path_settings_, *field, grid,
-                         first, samples, g_buffer_, progress, settings_.reuse_field_lookups,
-                         settings_.final_gather, settings_.combined_only);
+    const FrameWork work(*scene_, camera_, camera_rays_, pixel_filter_, lights, path_settings_,
+                         *field, grid, first, samples, g_buffer_, progress,
+                         settings_.reuse_field_lookups, settings_.final_gather,
+                         settings_.combined_only);
     const uint64_t tile_pixels = uint64_t(grid.tile) * uint64_t(grid.tile);
     const uint64_t tiles_per_unit = std::max<uint64_t>(1, kChunkPixels / tile_pixels);
     std::vector<StageSeconds> busy(grid.count());  // per work unit, at its first tile

@@ -53,6 +53,7 @@
 #include "render/indirect_field.h"
 #include "render/light_sampler.h"
 #include "render/path_tracer.h"
+#include "render/pixel_filter.h"
 #include "scene/camera.h"
 #include "scene/scene.h"
 #include "util/progress.h"
@@ -127,6 +128,7 @@ class PreviewRenderer {
     Camera camera_;
     CameraRayGenerator camera_rays_;  // camera_'s, made once
     PreviewSettings settings_;
+    PixelFilter pixel_filter_;  // settings_'s pixel_filter and filter_width, tabulated once
     PathTracerSettings path_settings_;
     LightSampler lights_;
     // The sampler for a field that carries some direct light itself (includes_world_direct,

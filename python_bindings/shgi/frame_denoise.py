@@ -185,17 +185,13 @@ class FrameDenoiser:
             self._device.release()
             self._device = None
 
-    def estimate_seconds(self, width: int, height: int, samples=None) -> float:
-        """Seconds a denoise of a width x height frame of `samples` samples a pixel is expected
-        to take: the last denoise of these choices in this process scaled up to this size
-        (never down: its time holds fixed costs), else ESTIMATED_RATES and SETUP_SECONDS. With
-        "AUTO" and no `samples` (a render that does not know yet where it stops), the longer of
-        the two prefilters it can become."""
+    def estimate_seconds(self, width: int, height: int) -> float:
+        """Seconds a denoise of a width x height frame is expected to take: the last denoise of
+        these choices in this process scaled up to this size (never down: its time holds fixed
+        costs), else _first_estimate. With "AUTO", whose prefilter follows the samples a render
+        has not reached yet, the longer of the two it can become."""
         pixels = width * height
-        if self.prefilter == "AUTO" and samples is None:
-            candidates = ("FAST", "NONE")
-        else:
-            candidates = (prefilter_for(self.prefilter, samples),)
+        candidates = ("FAST", "NONE") if self.prefilter == "AUTO" else (self.prefilter,)
         estimates = []
         for prefilter in candidates:
             last = MEASURED.get((self.quality, prefilter, self.guides))
