@@ -353,16 +353,15 @@ VIEWPORT_PROPERTY_DEFAULTS = {
 # Denoising of F12 and of the Rendered viewport with OpenImageDenoise (shgi.frame_denoise), with
 # Cycles' controls and Cycles' defaults but one: F12 denoises once at the end with both guides at
 # full quality; the viewport denoises every frame from `viewport_denoising_start_sample` on, with
-# the albedo guide, at Cycles' viewport quality. F12's prefilter is "FAST" where Cycles' is
-# "ACCURATE". "AUTO" (Fast while the guides are noisy, None once they are clean enough, 8 samples)
+# the albedo guide, at Cycles' viewport quality. F12's prefilter is "AUTO" where Cycles' is
+# "ACCURATE": Fast while the guides are noisy, None once they are clean enough (8 samples), which
 # gives Accurate's image at a third of its time and led the equal-time table by 0.4-1.0 dB more
-# (docs/equal-time.md, "The denoiser's prefilter"), but its first None of a process once took
-# 1.19 s on a 128 x 128 frame inside Blender 3.4 (a 1-s Time Limit overran to 2.1 s), so it waits
-# for a denoiser set up before the render's clock starts.
+# than Fast (docs/equal-time.md, "The denoiser's prefilter"). A render with a Time Limit sets
+# both networks up before it samples (FrameDenoiser.prepare), and runs None only where it fits.
 DENOISING_DEFAULTS = {
     "use_denoising": True,
     "denoising_guides": "ALBEDO_NORMAL",
-    "denoising_prefilter": "FAST",
+    "denoising_prefilter": "AUTO",
     "denoising_quality": "HIGH",
     "use_viewport_denoising": True,
     "viewport_denoising_guides": "ALBEDO",

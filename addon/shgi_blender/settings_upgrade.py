@@ -25,6 +25,9 @@ its default in the new place while its old value lies unused under the old name.
 8. F12's denoising Prefilter gained Automatic (its default stays Fast: settings.DENOISING_DEFAULTS)
    and Film > Pixel Filter came, with the box of one pixel every earlier layout rendered with. A
    scene saved before keeps Fast unless it set the prefilter.
+9. F12's denoising Prefilter defaults to Automatic (settings.DENOISING_DEFAULTS), now that a
+   render with a Time Limit sets the denoiser's networks up before it samples. A scene saved
+   before keeps Fast unless it set the prefilter.
 
 ``upgrade`` takes what a scene stored (its ID properties as a dict: only values someone set are
 stored, a default is not) and says what to write where, so that the scene renders with the
@@ -35,7 +38,7 @@ from dataclasses import dataclass, field
 
 from . import settings
 
-SETTINGS_VERSION = 8
+SETTINGS_VERSION = 9
 
 # The method groups that version 2 had: a scene saved then could render only with these, so
 # only they keep reading their field directly (groups added later start with their defaults).
@@ -69,9 +72,9 @@ PROPAGATION_DEFAULTS_BEFORE_6 = {"steps": 8, "damping": False, "occlude_first_st
 # The Instant GI group's defaults before version 7 that have changed since. The group came in
 # version 3's time, as Light Propagation's.
 INSTANT_GI_DEFAULTS_BEFORE_7 = {"passes": 4}
-# scene.shgi's own defaults before version 8 that have changed since (every earlier layout
+# scene.shgi's own defaults before version 9 that have changed since (every earlier layout
 # rendered F12 with these, the denoising settings having come in with their defaults).
-DEFAULTS_BEFORE_8 = {"denoising_prefilter": "FAST"}
+DEFAULTS_BEFORE_9 = {"denoising_prefilter": "FAST"}
 
 
 @dataclass
@@ -122,8 +125,8 @@ def upgrade(stored):
         # Its bakes solved the Render Passes: Bake Passes keep a count the scene set.
         if "passes" in group:
             result.values[("instant_gi", "bake_passes")] = group["passes"]
-    if version < 8:
-        for name, old_default in DEFAULTS_BEFORE_8.items():
+    if version < 9:
+        for name, old_default in DEFAULTS_BEFORE_9.items():
             if name not in stored:
                 result.values[("", name)] = old_default
     return result

@@ -33,7 +33,8 @@ frame's mean within 0.3%). Pixels that see only the world (Depth is the miss val
 in the pixel) keep their noisy value, so the geometry's light never bleeds into the background.
 
 The network's weights are loaded once per filter; keep one FrameDenoiser for a sequence of
-frames (the viewport does). ``denoise`` polls ``progress`` (a ``shgi.Progress``) from OIDN's
+frames (the viewport does). ``prepare(width, height)`` sets up every network a denoise of that
+size may run before the first frame arrives (a render with a Time Limit does, before it samples). ``denoise`` polls ``progress`` (a ``shgi.Progress``) from OIDN's
 progress monitor and raises ``shgi.Cancelled`` within one slice of the network (~1/27 of its
 work, 60 ms on a 1920 x 1080 frame on 2 cores); called from Python's main thread it runs the
 network on a helper thread so that Ctrl-C raises KeyboardInterrupt within 0.05 s. ``pyoidn``
@@ -99,6 +100,8 @@ SETUP_SECONDS = 0.1
 # {(quality, prefilter, guides): (pixels, seconds) of the last denoise in this process}, under the
 # prefilter that ran ("AUTO" becomes "FAST" or "NONE").
 MEASURED = {}
+# The largest side of a frame prepare() sets a network up for (Blender's resolution limit).
+MAX_SIDE = 65536
 # How often a Ctrl-C in the main thread is noticed while the network runs.
 _SIGNAL_POLL_SECONDS = 0.05
 
@@ -168,6 +171,7 @@ class FrameDenoiser:
         self._device = cpu_device(self._pyoidn)
         self._filters = {}
         self._buffers = {}  # {id(filter): ((shape, slots), {slot: its shared buffer})}
+        self._prepared = set()  # {(prefilter, pixels)} whose networks prepare() set up
         self._monitor = _ProgressMonitor(self._pyoidn)
 
     def __enter__(self) -> "FrameDenoiser":
@@ -185,28 +189,45 @@ class FrameDenoiser:
             self._device.release()
             self._device = None
 
+    def prepare(self, width: int, height: int) -> None:
+        """Sets up every network this denoiser may run on a width x height frame (with "AUTO"
+        both the Fast and the None one), so that a denoise of that size starts at once: a render
+        with a Time Limit calls this before it samples, as the setup of a network not run yet in
+        this process is the part of a denoise hardest to foresee."""
+        shape = (_check_size("height", height), _check_size("width", width), 3)
+        for prefilter in self._candidates():
+            if prefilter == "ACCURATE":
+                for name in self._color_slots()[1:]:
+                    self._setup(self._filter(name, False), shape, (name,))
+            self._setup(self._filter("color", prefilter != "FAST"), shape, self._color_slots())
+            self._prepared.add((prefilter, width * height))
+
     def estimate_seconds(self, width: int, height: int) -> float:
         """Seconds a denoise of a width x height frame is expected to take: the last denoise of
         these choices in this process scaled up to this size (never down: its time holds fixed
         costs), else _first_estimate. With "AUTO", whose prefilter follows the samples a render
         has not reached yet, the longer of the two it can become."""
-        pixels = width * height
-        candidates = ("FAST", "NONE") if self.prefilter == "AUTO" else (self.prefilter,)
-        estimates = []
-        for prefilter in candidates:
-            last = MEASURED.get((self.quality, prefilter, self.guides))
-            if last is None:
-                estimates.append(_first_estimate(prefilter, self.quality, pixels))
-            else:
-                last_pixels, seconds = last
-                estimates.append(seconds * max(1.0, pixels / max(1, last_pixels)))
-        return max(estimates)
+        return max(self._estimate(prefilter, width * height) for prefilter in self._candidates())
 
-    def denoise(self, passes: dict, progress=None, samples=None) -> dict:
+    def _candidates(self):
+        """The prefilters a denoise with this denoiser's choice can run."""
+        return ("FAST", "NONE") if self.prefilter == "AUTO" else (self.prefilter,)
+
+    def _estimate(self, prefilter: str, pixels: int) -> float:
+        last = MEASURED.get((self.quality, prefilter, self.guides))
+        if last is None:
+            setup = 0.0 if (prefilter, pixels) in self._prepared else SETUP_SECONDS
+            return _first_estimate(prefilter, self.quality, pixels, setup)
+        last_pixels, seconds = last
+        return seconds * max(1.0, pixels / max(1, last_pixels))
+
+    def denoise(self, passes: dict, progress=None, samples=None, seconds=None) -> dict:
         """{"Combined": denoised (H, W, 4), NOISY_PASS: the input Combined, ALBEDO_PASS,
         NORMAL_PASS: the guides used (when used)}; `progress`: a shgi.Progress whose cancel()
         makes this raise shgi.Cancelled; `samples`: the frame's samples a pixel, which the
-        prefilter "AUTO" goes by (None: taken as too few to call the guides clean)."""
+        prefilter "AUTO" goes by (None: taken as too few to call the guides clean); `seconds`:
+        the time left for the denoise (None: no limit), in which "AUTO" runs None only where its
+        estimate fits, else Fast (half its time)."""
         if self._device is None:
             raise ValueError("FrameDenoiser: closed")
         noisy = np.asarray(passes["Combined"], np.float32)
@@ -214,6 +235,9 @@ class FrameDenoiser:
             raise ValueError(f"passes['Combined']: shape {noisy.shape} is not (H, W, 3 or 4)")
         start = time.perf_counter()
         prefilter = prefilter_for(self.prefilter, samples)
+        if (self.prefilter == "AUTO" and prefilter == "NONE" and seconds is not None
+                and self._estimate("NONE", noisy.shape[0] * noisy.shape[1]) > seconds):
+            prefilter = "FAST"
         albedo, normal, background = guide_images(passes, self.guides)
         color = _finite(noisy[..., :3])
         # Emitters and the world seen directly (Emit, Env) go around the network: their light
@@ -265,36 +289,43 @@ class FrameDenoiser:
             self._filters[key] = flt
         return self._filters[key]
 
+    def _color_slots(self):
+        """The colour filter's inputs for this denoiser's guides."""
+        return ("color", *{"NONE": (), "ALBEDO": ("albedo",),
+                           "ALBEDO_NORMAL": ("albedo", "normal")}[self.guides])
+
+    def _setup(self, flt, shape, slots):
+        """The shared input and output buffers of filter `flt` for (H, W, 3) images in `slots`,
+        committing the filter when its size or slots change (a commit sets the network up again:
+        0.1 s per filter, more than the denoise of a small frame)."""
+        buffers = self._buffers.get(id(flt))
+        if buffers is not None and buffers[0] == (shape, tuple(slots)):
+            return buffers[1]
+        for name in ("color", "albedo", "normal"):
+            flt.unset_image(name)
+        owned = {name: np.zeros(shape, np.float32) for name in (*slots, "output")}
+        for name, image in owned.items():
+            flt.set_image(name, image, self._pyoidn.OIDN_FORMAT_FLOAT3)
+        self._buffers[id(flt)] = ((shape, tuple(slots)), owned)
+        flt.commit()
+        self._check(f"setting up the {'/'.join(slots)} filter")
+        return owned
+
     def _execute(self, flt, images: dict, progress, label: str) -> np.ndarray:
         """Runs filter `flt` over `images` ({slot: (H, W, 3) float32}); returns a new output.
-
-        A filter keeps its shared input and output buffers: while the frame size and slots
-        stay, the inputs are copied into them and the filter runs without a new commit (a
-        commit sets the network up again: 0.1 s per filter, more than the denoise of a small
-        frame)."""
+        While the frame size and slots stay, the inputs are copied into the filter's buffers
+        and it runs without a new commit."""
         shape = next(iter(images.values())).shape
-        buffers = self._buffers.get(id(flt))
-        if buffers is None or buffers[0] != (shape, tuple(images)):
-            for name in ("color", "albedo", "normal"):
-                flt.unset_image(name)
-            owned = {name: np.empty(shape, np.float32) for name in (*images, "output")}
-            for name, image in owned.items():
-                flt.set_image(name, image, self._pyoidn.OIDN_FORMAT_FLOAT3)
-            buffers = self._buffers[id(flt)] = ((shape, tuple(images)), owned)
-            for name, image in images.items():
-                np.copyto(owned[name], image)
-            flt.commit()
-            self._check(f"setting up {label}")
-        else:
-            for name, image in images.items():
-                np.copyto(buffers[1][name], image)
+        owned = self._setup(flt, shape, tuple(images))
+        for name, image in images.items():
+            np.copyto(owned[name], image)
         self._monitor.run(flt.execute, progress)
         error = self._device.get_error()
         if self._monitor.cancelled:
             raise _shgi.Cancelled(f"denoising {label} was cancelled")
         if error is not None:
             raise RuntimeError(f"OpenImageDenoise failed denoising {label}: {error}")
-        return buffers[1]["output"].copy()
+        return owned["output"].copy()
 
     def _check(self, operation: str) -> None:
         error = self._device.get_error()
@@ -302,14 +333,15 @@ class FrameDenoiser:
             raise RuntimeError(f"OpenImageDenoise failed {operation}: {error}")
 
 
-def _first_estimate(prefilter: str, quality: str, pixels: int) -> float:
-    """Seconds of a denoise of choices not yet run in this process: ESTIMATED_RATES and
-    SETUP_SECONDS, or, when longer, the last denoise of other choices scaled by the two choices'
-    rates and the sizes (a machine busy with other work is slower for every choice: after a
-    Fast denoise on a loaded machine the table alone planned Automatic's first None 0.08 s
-    short on a 128 x 128 frame)."""
+def _first_estimate(prefilter: str, quality: str, pixels: int,
+                    setup: float = SETUP_SECONDS) -> float:
+    """Seconds of a denoise of choices not yet run in this process: ESTIMATED_RATES and `setup`
+    (the networks' setup: none once prepared), or, when longer, the last denoise of other
+    choices scaled by the two choices' rates and the sizes (a machine busy with other work is
+    slower for every choice: after a Fast denoise on a loaded machine the table alone planned
+    Automatic's first None 0.08 s short on a 128 x 128 frame)."""
     rate = ESTIMATED_RATES[(prefilter, quality)]
-    estimates = [pixels * rate + SETUP_SECONDS]
+    estimates = [pixels * rate + setup]
     for (other_quality, other_prefilter, _), (other_pixels, seconds) in MEASURED.items():
         estimates.append(seconds * rate / ESTIMATED_RATES[(other_prefilter, other_quality)]
                          * max(1.0, pixels / max(1, other_pixels)))
@@ -383,6 +415,12 @@ class _ProgressMonitor:
 def _finite(image) -> np.ndarray:
     """float32 `image` with NaN and infinities as 0 (the network turns one into a blotch)."""
     return np.nan_to_num(np.asarray(image, np.float32), nan=0.0, posinf=0.0, neginf=0.0)
+
+
+def _check_size(name: str, value) -> int:
+    if not isinstance(value, (int, np.integer)) or not 0 < value <= MAX_SIDE:
+        raise ValueError(f"{name} {value!r}: give a whole number of pixels in 1..{MAX_SIDE}")
+    return int(value)
 
 
 def _check_choice(name: str, value: str, choices) -> None:

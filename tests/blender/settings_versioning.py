@@ -166,10 +166,10 @@ def check_third_layout_clamp(results):
                                  for name, value in (("left", None), ("set", 7.5))}
     results["layout_4_filter_glossy"] = {name: versioned_light_paths(4, "filter_glossy", value)
                                          for name, value in (("left", None), ("set", 0.5))}
-    # Layout 7's F12 denoiser prefiltered Fast: a scene that left it keeps Fast.
+    # Layout 8's F12 denoiser prefiltered Fast: a scene that left it keeps Fast.
     results["new_scene_prefilter"] = bpy.context.scene.shgi.denoising_prefilter
-    results["layout_7_prefilter"] = {
-        name: versioned_light_paths(7, "denoising_prefilter", value)["denoising_prefilter"]
+    results["layout_8_prefilter"] = {
+        name: versioned_light_paths(8, "denoising_prefilter", value)["denoising_prefilter"]
         for name, value in (("left", None), ("set", "NONE"))}
     # A scene stamped with layout 5 keeps Light Propagation's defaults of then (8 steps, the
     # corrections off), whether it left the group alone or set its Steps; a new scene has today's.

@@ -32,7 +32,7 @@ def test_first_layout_values_move_into_the_method_groups():
         ("photon_lattice", "final_gather"): False, ("probe_grid", "final_gather"): False,
         # Clamp Indirect left at that layout's default, 0 (off), not today's Cycles default;
         # Filter Glossy, which it did not have, off as it rendered
-        ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **BEFORE_8}
+        ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **BEFORE_9}
     assert sorted(upgrade.removed) == [("", "caustics"), ("", "photons"),
                                        ("", "viewport_photon_passes"),
                                        ("", "viewport_probe_passes")]
@@ -56,7 +56,7 @@ def test_a_second_layout_scene_keeps_reading_its_field_directly():
     upgrade = settings_upgrade.upgrade({"settings_version": 2, "probe_grid": {"order": 1}})
     assert upgrade.values == {("photon_lattice", "final_gather"): False,
                               ("probe_grid", "final_gather"): False, ("", "clamp_indirect"): 0.0,
-                              ("", "filter_glossy"): 0.0, **BEFORE_8}
+                              ("", "filter_glossy"): 0.0, **BEFORE_9}
     assert (upgrade.removed, upgrade.notes) == ([], [])
     # One set by hand in that file (it cannot be, but a script may have) is kept.
     stored = {"settings_version": 2, "probe_grid": {"final_gather": True}, "clamp_indirect": 3.0,
@@ -71,9 +71,9 @@ def test_a_third_layout_scene_keeps_clamp_indirect_off():
     assert shgi.PathTracerSettings().clamp_indirect == 0.0  # scripts keep the native 0
     assert settings_upgrade.upgrade({"settings_version": 3, "samples": 5}).values == {
         ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6,
-        **INSTANT_GI_BEFORE_7, **BEFORE_8}
+        **INSTANT_GI_BEFORE_7, **BEFORE_9}
     assert settings_upgrade.upgrade({"settings_version": 3, "clamp_indirect": 4.0}).values == {
-        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_8}
+        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9}
 
 
 def test_a_fourth_layout_scene_keeps_filter_glossy_off():
@@ -85,9 +85,9 @@ def test_a_fourth_layout_scene_keeps_filter_glossy_off():
     assert shgi.PreviewSettings().filter_glossy == 0.0
     assert shgi.LightmapSettings().filter_glossy == 0.0
     assert settings_upgrade.upgrade({"settings_version": 4, "samples": 5}).values == {
-        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_8}
+        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9}
     assert settings_upgrade.upgrade({"settings_version": 4, "filter_glossy": 0.25}).values == {
-        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_8}
+        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9}
 
 
 # Light Propagation's defaults before layout 6, as an upgrade writes them into the group.
@@ -106,11 +106,11 @@ def test_a_fifth_layout_scene_keeps_the_light_propagation_defaults_of_then():
     assert (settings.PROPAGATION_DEFAULTS["steps"], settings.PROPAGATION_DEFAULTS["distance"]) == (
         0, 32.0)
     assert settings_upgrade.upgrade({"settings_version": 5, "samples": 5}).values == {
-        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_8}
+        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9}
     stored = {"settings_version": 5, "propagation": {"steps": 16, "unclamped_transfer": True}}
     assert settings_upgrade.upgrade(stored).values == {
         **{key: value for key, value in PROPAGATION_BEFORE_6.items()
-           if key[1] not in ("steps", "unclamped_transfer")}, **INSTANT_GI_BEFORE_7, **BEFORE_8}
+           if key[1] not in ("steps", "unclamped_transfer")}, **INSTANT_GI_BEFORE_7, **BEFORE_9}
     assert not any(group == "propagation" for group, _ in settings_upgrade.upgrade(
         {"settings_version": 2, "samples": 5}).values)
 
@@ -128,28 +128,31 @@ def test_a_sixth_layout_scene_keeps_instant_gi_passes_for_renders_and_bakes():
     defaults = settings.default_properties(shgi).instant_gi
     assert (defaults.passes, defaults.bake_passes) == (64, shgi.method("INSTANT_GI").final_passes)
     assert settings_upgrade.upgrade({"settings_version": 6, "samples": 5}).values == {
-        **INSTANT_GI_BEFORE_7, **BEFORE_8}
+        **INSTANT_GI_BEFORE_7, **BEFORE_9}
     stored = {"settings_version": 6, "instant_gi": {"passes": 12, "sets_x": 2}}
     assert settings_upgrade.upgrade(stored).values == {("instant_gi", "bake_passes"): 12,
-                                                       **BEFORE_8}
+                                                       **BEFORE_9}
     assert not any(group == "instant_gi" for group, _ in settings_upgrade.upgrade(
         {"settings_version": 2, "samples": 5}).values)
 
 
-# F12's denoising prefilter and the pixel filter before layout 8, as an upgrade writes them.
-BEFORE_8 = {("", "denoising_prefilter"): "FAST"}
+# F12's denoising prefilter before layout 9, as an upgrade writes it.
+BEFORE_9 = {("", "denoising_prefilter"): "FAST"}
 
 
-def test_a_seventh_layout_scene_keeps_the_fast_prefilter():
-    """Layout 8 gave F12's denoiser the Automatic prefilter (Fast stays the default): a scene
-    saved before, which left Fast, keeps Fast; one that chose a prefilter keeps it (nothing to
-    write). Film > Pixel Filter came then too, with the box of one pixel every scene had rendered
-    with."""
-    assert settings.DENOISING_DEFAULTS["denoising_prefilter"] == "FAST"
+def test_an_eighth_layout_scene_keeps_the_fast_prefilter():
+    """Layout 8 gave F12's denoiser the Automatic prefilter and layout 9 made it the default: a
+    scene saved before, which left Fast, keeps Fast; one that chose a prefilter keeps it
+    (nothing to write). Film > Pixel Filter came with layout 8, with the box of one pixel every
+    scene had rendered with (still the default: nothing to write)."""
+    assert settings.DENOISING_DEFAULTS["denoising_prefilter"] == "AUTO"
     assert (settings.PROPERTY_DEFAULTS["pixel_filter"],
             settings.PROPERTY_DEFAULTS["filter_width"]) == ("BOX", 1.0)
-    assert settings_upgrade.upgrade({"settings_version": 7, "samples": 5}).values == BEFORE_8
-    assert settings_upgrade.upgrade({"settings_version": 7, "denoising_prefilter": 2}).values == {}
+    for layout in (7, 8):
+        assert settings_upgrade.upgrade({"settings_version": layout, "samples": 5}).values == \
+            BEFORE_9
+        assert settings_upgrade.upgrade({"settings_version": layout,
+                                         "denoising_prefilter": 2}).values == {}
 
 
 def test_settings_of_today_layout_are_left_alone():
@@ -219,9 +222,9 @@ def test_a_new_scene_solves_as_many_probe_passes_as_the_cli(blender, build_pytho
     assert results["layout_4_filter_glossy"] == {
         "left": {"clamp_indirect": 10.0, "filter_glossy": 0.0, **kept},
         "set": {"clamp_indirect": 10.0, "filter_glossy": 0.5, **kept}}
-    # Layout 7 denoised F12 with the Fast prefilter: kept when left; a new scene has Fast too.
-    assert results["new_scene_prefilter"] == "FAST"
-    assert results["layout_7_prefilter"] == {"left": "FAST", "set": "NONE"}
+    # Layout 8 denoised F12 with the Fast prefilter: kept when left; a new scene has Automatic.
+    assert results["new_scene_prefilter"] == "AUTO"
+    assert results["layout_8_prefilter"] == {"left": "FAST", "set": "NONE"}
     # Layout 5's Light Propagation: 8 steps and the corrections off, left or set; a new scene
     # takes its steps from Distance with them on.
     old = {"distance": 32.0, "damping": False, "occlude_first_step": False,

@@ -233,6 +233,52 @@ def test_choices_not_run_yet_are_estimated_from_the_last_denoise_of_others(monke
         assert denoiser.estimate_seconds(128, 128) > table  # 1 s of Fast: a slow machine
 
 
+def test_prepare_sets_up_every_network_a_denoise_may_run(noisy, monkeypatch):
+    """A render with a Time Limit prepares its denoiser before it samples: with Automatic both
+    networks (Fast and None) are then set up for the frame's size, the denoise that follows
+    sets nothing up again and gives the same bits, and the plan no longer counts a setup."""
+    from shgi import frame_denoise
+
+    monkeypatch.setattr(frame_denoise, "MEASURED", {})
+    height, width = noisy["Combined"].shape[:2]
+    with FrameDenoiser("HIGH", "AUTO") as denoiser:
+        unprepared = denoiser.estimate_seconds(width, height)
+        denoiser.prepare(width, height)
+        assert denoiser.estimate_seconds(width, height) == pytest.approx(
+            unprepared - frame_denoise.SETUP_SECONDS)
+        set_up = denoiser._setup
+
+        def no_new_setup(flt, shape, slots):
+            assert denoiser._buffers[id(flt)][0] == (shape, tuple(slots)), slots
+            return set_up(flt, shape, slots)
+
+        monkeypatch.setattr(denoiser, "_setup", no_new_setup)
+        for samples in (NOISY_SAMPLES, CLEAN_GUIDE_SAMPLES):
+            out = denoiser.denoise(noisy, samples=samples)["Combined"]
+            np.testing.assert_array_equal(out, denoise_frame(
+                noisy, "HIGH", prefilter_for("AUTO", samples))["Combined"])
+    with FrameDenoiser() as denoiser:
+        for size in ((0, 10), (10, -1), (10.5, 10), (10, 10 ** 6)):
+            with pytest.raises(ValueError, match="whole number of pixels"):
+                denoiser.prepare(*size)
+
+
+def test_automatic_prefilter_runs_none_only_where_it_fits_the_time_left(noisy, monkeypatch):
+    """At the end of a time-limited render Automatic runs None only when the time left covers
+    its estimate; else Fast, which takes half as long."""
+    from shgi import frame_denoise
+
+    monkeypatch.setattr(frame_denoise, "MEASURED", {})
+    height, width = noisy["Combined"].shape[:2]
+    with FrameDenoiser("HIGH", "AUTO") as auto:
+        none_seconds = auto._estimate("NONE", width * height)
+        for seconds, runs in ((None, "NONE"), (2 * none_seconds, "NONE"),
+                              (0.5 * none_seconds, "FAST")):
+            np.testing.assert_array_equal(
+                auto.denoise(noisy, samples=CLEAN_GUIDE_SAMPLES, seconds=seconds)["Combined"],
+                denoise_frame(noisy, "HIGH", runs)["Combined"])
+
+
 def test_ctrl_c_stops_a_large_denoise_in_a_plain_script():
     code = textwrap.dedent(f"""
         import os, signal, sys, threading, time

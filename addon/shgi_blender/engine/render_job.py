@@ -190,6 +190,14 @@ class RenderJob(NativeTask):
     def _work(self):
         if self.time_limit > 0.0:
             self._deadline = time.perf_counter() + self.time_limit
+        denoiser = self._make_denoiser()
+        try:
+            self._render(denoiser)
+        finally:
+            if denoiser is not None:
+                denoiser.close()
+
+    def _render(self, denoiser):
         render_start = COMMIT_SHARE
         if not self.scene.committed:
             self._timed("commit", "Building BVH", (0.0, COMMIT_SHARE),
@@ -198,14 +206,9 @@ class RenderJob(NativeTask):
             render_start = COMMIT_SHARE + SOLVE_SHARE
             self._timed("solve", self._solver_recipe.solver.BUILD_STAGE,
                         (COMMIT_SHARE, render_start), self._solve_field)
-        denoiser = self._make_denoiser()
-        try:
-            self._sample(render_start, denoiser)
-            if denoiser is not None:
-                self._timed("denoise", "Denoising", (1.0, 1.0), lambda: self._denoise(denoiser))
-        finally:
-            if denoiser is not None:
-                denoiser.close()
+        self._sample(render_start, denoiser)
+        if denoiser is not None:
+            self._timed("denoise", "Denoising", (1.0, 1.0), lambda: self._denoise(denoiser))
 
     def _timed(self, name, stage, span, work):
         with self._lock:
@@ -254,13 +257,23 @@ class RenderJob(NativeTask):
         self._solve_stopped = self.solution.solver.passes < passes
 
     def _make_denoiser(self):
-        """The FrameDenoiser of the job's Denoising (None when off or unavailable)."""
+        """The FrameDenoiser of the job's Denoising (None when off or unavailable), its networks
+        set up for the frame's size when the job has a Time Limit (so that the denoise the
+        rounds leave time for does not begin with the setup of a network not run before)."""
         if self._denoising is None:
             return None
+        denoiser = None
         try:
-            return self._denoising.make()
+            denoiser = self._denoising.make()
+            if self._deadline is not None:
+                camera = self._camera if self._camera is not None else self.scene.camera
+                self._timed("denoise", "Preparing the denoiser", (0.0, 0.0),
+                            lambda: denoiser.prepare(camera.resolution_x, camera.resolution_y))
+            return denoiser
         except (ImportError, RuntimeError, ValueError) as error:  # no pyoidn, an OIDN failure
             self.denoise_error = f"the render is not denoised: {error}"
+        if denoiser is not None:
+            denoiser.close()
         return None
 
     def _sample(self, render_start, denoiser):
@@ -322,7 +335,8 @@ class RenderJob(NativeTask):
         if snapshot is None:
             return
         try:
-            denoised = denoiser.denoise(snapshot.passes, self.progress, snapshot.samples)
+            left = None if self._deadline is None else self._deadline - time.perf_counter()
+            denoised = denoiser.denoise(snapshot.passes, self.progress, snapshot.samples, left)
         except (RuntimeError, ValueError) as error:
             self.denoise_error = f"the render is not denoised: {error}"
             return
