@@ -34,8 +34,9 @@ in the pixel) keep their noisy value, so the geometry's light never bleeds into 
 
 The network's weights are loaded once per filter; keep one FrameDenoiser for a sequence of
 frames (the viewport does). ``prepare(width, height)`` sets up every network a denoise of that
-size may run before the first frame arrives (a render with a Time Limit does, before it samples). ``denoise`` polls ``progress`` (a ``shgi.Progress``) from OIDN's
-progress monitor and raises ``shgi.Cancelled`` within one slice of the network (~1/27 of its
+size may run before the first frame arrives (a render with a Time Limit does, before it
+samples). ``denoise`` polls ``progress`` (a ``shgi.Progress``) from OIDN's progress monitor and
+raises ``shgi.Cancelled`` within one slice of the network (~1/27 of its
 work, 60 ms on a 1920 x 1080 frame on 2 cores); called from Python's main thread it runs the
 network on a helper thread so that Ctrl-C raises KeyboardInterrupt within 0.05 s. ``pyoidn``
 is optional: ``import shgi`` works without it, and ``FrameDenoiser`` then raises ImportError

@@ -366,16 +366,27 @@ def test_methods_implemented_and_reserved():
 
 
 def test_quality_presets_grow_and_are_recognised():
+    """From Preview to Production each preset takes more samples, and for every field method
+    no fewer of any of its counts and more of at least one (Instant GI's Light Paths per Set
+    stay: its Render Passes grow with the samples, four a sample)."""
+    groups = {group.prop for group in settings.METHOD_SETTINGS.values()}
+    counted = {group: [field for field in presets.PRESET_FIELDS
+                       if field.startswith(f"{group}.")] for group in groups}
+    assert all(counted.values()), counted  # every method's counts are in the presets
     previous = None
     for name in ("PREVIEW", "MEDIUM", "HIGH", "PRODUCTION"):
         props = default_props()
         presets.apply_preset(props, name)
         assert presets.matching_preset(props) == name
-        counts = tuple(value for value in presets.QUALITY_PRESETS[name].values()
-                       if isinstance(value, int))
-        assert len(counts) == 6  # samples, three lattice counts, probe rays and passes
-        assert previous is None or all(a > b for a, b in zip(counts, previous))
-        previous = counts
+        values = presets.QUALITY_PRESETS[name]
+        if previous is not None:
+            assert values["samples"] > previous["samples"]
+            for fields in counted.values():
+                assert all(values[field] >= previous[field] for field in fields), fields
+                assert any(values[field] > previous[field] for field in fields), fields
+        assert values["instant_gi.passes"] == (settings.INSTANT_GI_DEFAULTS["passes_per_sample"]
+                                               * values["samples"])
+        previous = values
     props = default_props()
     presets.apply_preset(props, "HIGH")
     assert (props.samples, props.photon_lattice.photons, props.photon_lattice.resolution) == (

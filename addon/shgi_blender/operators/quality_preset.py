@@ -5,15 +5,13 @@ from bpy.props import EnumProperty
 
 from .. import presets
 
-PRESET_ITEMS = [(name, presets.PRESET_LABELS[name],
-                 ", ".join(f"{presets.field_label(field)} {presets.value_text(value)}"
-                           for field, value in values.items()))
-                for name, values in presets.QUALITY_PRESETS.items()]
+PRESET_ITEMS = [(name, presets.PRESET_LABELS[name], presets.preset_description(name))
+                for name in presets.QUALITY_PRESETS]
 
 
 class SHGI_OT_quality_preset(bpy.types.Operator):
-    """Set samples, photons, lattice resolutions, probe rays and passes and the denoiser's effort
-    for a level of quality"""
+    """Set samples, each method's counts (photons, resolutions, rays and passes) and the
+    denoiser's effort for a level of quality"""
 
     bl_idname = "shgi.quality_preset"
     bl_label = "SHGI Quality Preset"
@@ -23,10 +21,7 @@ class SHGI_OT_quality_preset(bpy.types.Operator):
 
     @classmethod
     def description(cls, _context, properties):
-        values = presets.QUALITY_PRESETS[properties.preset]
-        return f"{presets.PRESET_LABELS[properties.preset]}: " + ", ".join(
-            f"{presets.field_label(field)} {presets.value_text(value)}"
-            for field, value in values.items())
+        return presets.preset_description(properties.preset)
 
     def execute(self, context):
         presets.apply_preset(context.scene.shgi, self.preset)
