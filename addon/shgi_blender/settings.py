@@ -311,6 +311,11 @@ VIEWPORT_PASSES_DEFAULTS = {"PHOTON_LATTICE": 1, "PROBE_GRID": 32, "RADIANCE_FIE
 # it whatever the setting says (render/indirect_field.h, shades_first_surfaces).
 FINAL_GATHER_DEFAULTS = {"PHOTON_LATTICE": True, "PROBE_GRID": True, "RADIANCE_FIELD": True,
                          "PROPAGATION": False, "INSTANT_GI": False}
+# The methods F12 and the viewport never read through a final gather, whatever their Final
+# Gather says (reads_through_gather): their fields keep the full depth. Solved one bounce
+# shallower for a gather the renderer does not make, Instant GI's dim room of the two rooms read
+# 0.87x the path tracer's (docs/methods.md, "Instant GI").
+UNGATHERED_METHODS = frozenset({"INSTANT_GI"})
 # The diffuse bounces a final gather traces before the field is read (light_path_fields).
 GATHER_BOUNCES = 1
 
@@ -743,6 +748,13 @@ def native_fields(props, fields, shgi):
     return values
 
 
+def reads_through_gather(props, group):
+    """Whether F12 and the viewport read method `group`'s field through a final gather: its
+    group's Final Gather, unless the renderer makes none for the method (UNGATHERED_METHODS)."""
+    return (group.solver not in UNGATHERED_METHODS
+            and getattr(getattr(props, group.prop, None), "final_gather", False))
+
+
 def light_path_fields(props, group, check=True, gather=None):
     """{native field: value} that Light Paths (scene.shgi `props`) gives method `group`. With
     `check`, ValueError naming the Light Paths setting when it leaves the method nothing to
@@ -754,9 +766,10 @@ def light_path_fields(props, group, check=True, gather=None):
     read 7-13% too bright in closed white rooms (docs/methods.md, "Final gather"). Where the
     setting leaves the field less than its minimum (Diffuse 1 through a gather) the minimum is
     kept: one bounce too many at that extreme. `gather`: whether the field is read through a
-    gather (None: as the group's Final Gather says; a bake reads its field directly: False)."""
+    gather (None: as F12 and the viewport read it, reads_through_gather; a bake reads its field
+    directly: False)."""
     if gather is None:
-        gather = getattr(getattr(props, group.prop, None), "final_gather", False)
+        gather = reads_through_gather(props, group)
     values = {}
     for field, value in group.light_paths.items():
         setting = getattr(props, value.prop)
@@ -791,11 +804,12 @@ def path_tracer_settings(props, shgi):
 
 def preview_settings(props, shgi):
     """shgi.PreviewSettings of scene.shgi (the F12 renderer of the field methods; ValueError
-    naming a refused setting), with the final gather of the method's group."""
+    naming a refused setting), with the final gather of the method's group where the renderer
+    makes one (reads_through_gather)."""
     values = native_fields(props, PREVIEW_FIELDS, shgi)
     group = METHOD_SETTINGS.get(METHODS_BY_ID[props.method].solver)
     if group is not None:  # a plugin method without a group reads its field directly
-        values["final_gather"] = getattr(props, group.prop).final_gather
+        values["final_gather"] = reads_through_gather(props, group)
     return validated(shgi.PreviewSettings(**values))
 
 

@@ -386,8 +386,9 @@ def solver_recipe(props, shgi, volumes=(), viewport=False, gather=None, bake=Fal
     bake: a bake's solve: the group's bake_passes where it has them (settings.
         RENDER_PASSES_DEFAULTS: a bake gathers every pass, F12's samples some each).
     gather: whether the field will be read through a final gather (one bounce less in the field;
-        settings.light_path_fields); None: as the group's Final Gather says (F12, the viewport,
-        Solve), False for a bake, which reads its field at the texels.
+        settings.light_path_fields); None: as F12, the viewport and Solve read it (the group's
+        Final Gather, never for Instant GI: settings.reads_through_gather), False for a bake,
+        which reads its field at the texels.
     ValueError for a method that solves no field, or a bad volume.
     """
     solver = settings.METHODS_BY_ID[props.method].solver
