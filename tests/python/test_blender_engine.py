@@ -590,9 +590,9 @@ def test_instant_gi_job_solves_passes_as_its_samples_need_them():
 def test_instant_gi_f12_with_final_gather_on_agrees_with_the_path_tracer(name):
     """F12 of Instant GI as the add-on renders it (default settings, 16 samples, Final Gather
     on): the Cornell box and the two rooms' dim room within 5% of the path tracer's (512
-    samples), Combined and DiffInd x DiffCol, the issue's leak target (issue 48 item 4). With the
+    samples), Combined and DiffInd x DiffCol, the leak target of every method. With the
     field solved one bounce shallower for a gather the renderer does not make they read 0.968
-    and 0.936 (Cornell box), 0.868 and 0.821 (dim room)."""
+    and 0.936 (Cornell box), 0.868 and 0.821 (dim room; bench/instant_gi_final_gather.py)."""
     scene, reference = path_traced_reference(getattr(scenes, name), 0.5, 512)
     props = default_props(method="INSTANT_GI", samples=16, instant_gi={"final_gather": True})
     job = RenderJob(shgi, scene, 16, preview_settings=settings.preview_settings(props, shgi),
