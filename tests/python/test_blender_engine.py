@@ -690,7 +690,8 @@ def test_time_limited_job_prepares_its_denoiser_before_it_samples(monkeypatch):
         if limit:
             assert events[0] == ("prepare", camera.resolution_x, camera.resolution_y)
             assert events[1] == ("sample",) and events[-1][0] == "denoise"
-            assert 0.0 < events[-1][1] < limit
+            # The time left (below 0 where the last round overran on a loaded machine).
+            assert isinstance(events[-1][1], float) and events[-1][1] < limit
         else:
             assert events == [("sample",), ("denoise", None)]
 
