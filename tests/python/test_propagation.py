@@ -612,6 +612,112 @@ def test_outward_vpls_dropped_keep_the_outside_out(order):
     assert inside[True] < 0.001
 
 
+# --- closed rooms with an exact answer ---------------------------------------------------------
+
+# The furnace (scenes.closed_room(): every wall emits radiance 1 and reflects half, Lambert): the
+# indirect light the VPLs carry gives every wall point the same irradiance, pi (a + ... + a^n).
+FURNACE_ALBEDO = 0.5
+# Cells of the furnace's longest side: the two rooms' dim room at their default resolution.
+FURNACE_RESOLUTION = 16
+# How even a method's furnace light must be: the light within 0.5-1 cell of a wall's nearest
+# edge against the light 4 or more cells from it (1 exactly).
+FURNACE_EVENNESS = 0.10
+
+
+def furnace_light(order, **settings):
+    """The field's irradiance over the furnace's exact, area-weighted over all six walls: within
+    0.5-1 cell of a wall's nearest edge, 4 or more cells from it, and over the walls less the
+    half cell along their edges (the dark strip of docs/methods.md, "Dark edges")."""
+    import numpy as np
+    scene = committed(scenes.closed_room())
+    points, normals, areas, edges = scenes.room_wall_points()
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        seed=5, order=order, resolution=FURNACE_RESOLUTION, photons=200000, **settings))
+    volume.refine()
+    bounces = volume.settings.vpl_bounces
+    exact = np.pi * sum(FURNACE_ALBEDO ** k for k in range(1, bounces + 1))
+    ratio = volume.current_field().irradiance(points, normals).mean(-1) / exact
+    lower, upper = scene.bounds()
+    cells = edges / (max(np.subtract(upper, lower)) / FURNACE_RESOLUTION)
+
+    def mean(mask):
+        return float((ratio * areas)[mask].sum() / areas[mask].sum())
+
+    return mean((cells >= 0.5) & (cells < 1.0)), mean(cells >= 4.0), mean(cells >= 0.5)
+
+
+@pytest.mark.parametrize("order, settings", [
+    (1, {}),
+    # Clamped where walls stop light, the HOLPV's light falls towards every edge of the room:
+    # the clamp sends light from the cells along the walls into the room (docs/methods.md,
+    # "Closed rooms: the furnace").
+    pytest.param(2, {}, marks=missed("0.5-1 cell from an edge 1.10x, 4+ cells 1.35x the exact")),
+    (2, {"clamp_at_surfaces": False}),
+])
+def test_furnace_light_is_even_from_the_edges_in(order, settings):
+    """In the furnace every wall point's exact indirect light is the same: the field's light
+    near the edges of the walls over its light in their middle must be 1 within
+    FURNACE_EVENNESS (measured 1.27 / 1.25 LPV; HOLPV 1.10 / 1.35, linear 1.26 / 1.28)."""
+    near, far, _ = furnace_light(order, **settings)
+    print(f"order {order} {settings}: furnace light 0.5-1 cell from an edge {near:.3f}x the "
+          f"exact, 4+ cells {far:.3f}x")
+    assert abs(near / far - 1.0) < FURNACE_EVENNESS
+
+
+@pytest.mark.parametrize("order, settings", [
+    # The light carried until it settles (96 cells: the defaults' 32 settle this 16-cell room
+    # too, within 2%), the strip along the bounds filled, each order with the transfer whose
+    # furnace light is even (above).
+    pytest.param(1, {"distance": 96.0, "extend_to_bounds": True},
+                 marks=missed("1.285x the exact (the radiance scale)")),
+    pytest.param(2, {"distance": 96.0, "extend_to_bounds": True, "clamp_at_surfaces": False},
+                 marks=missed("1.285x the exact (the radiance scale)")),
+])
+def test_furnace_closed_room_reads_the_closed_form(order, settings):
+    """A closed room's light once it has settled, against the closed form: within 10%. Both
+    orders read 1.285x: the radiance scales, fitted to a single VPL's near field, are too large
+    for a room whose light has settled; the test scenes' means hide it (docs/methods.md,
+    "Closed rooms: the furnace")."""
+    _, _, mean = furnace_light(order, **settings)
+    print(f"order {order} {settings}: furnace light {mean:.3f}x the exact")
+    assert abs(mean - 1.0) < 0.10
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("order", [
+    pytest.param(1, marks=missed("Specular 0.5 adds 22% to the path tracer's, 7% to the LPV's")),
+    pytest.param(2, marks=missed("Specular 0.5 adds 22% to the path tracer's, 7% to the HOLPV's")),
+])
+def test_light_reflected_by_a_glossy_layer_reaches_the_volume(order):
+    """The dim room alone (scenes.closed_room() lit by a lamp 0.5 m under its ceiling), walls
+    Lambert 0.73 with and without the Principled BSDF's default Specular 0.5 on top: the glossy
+    layer reflects more light onto the other walls, and the volume's indirect light must grow
+    with it as the path tracer's does (within 5%). Its VPLs carry only what surfaces reflect
+    diffusely: the light a wall reflects glossily lights the others in the path tracer, not in
+    the volume."""
+    growth = {}
+    for specular in (0.0, 0.5):
+        builder = scenes.closed_room(
+            material=shgi.Material(name="walls", base_color=(0.73, 0.73, 0.73),
+                                   diffuse_model=shgi.DiffuseModel.LAMBERT, specular=specular),
+            lamp_at=(1.5, 1.5, 2.0))
+        builder.camera(eye=(2.9, 0.2, 1.4), target=(0.0, 2.2, 1.0), lens=18.0, width=128,
+                       height=96, scale=0.5)
+        scene = committed(builder)
+        ref = shgi.render_path_traced(scene, shgi.PathTracerSettings(samples=256, seed=11))
+        volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+            seed=5, order=order, resolution=FURNACE_RESOLUTION))
+        volume.refine()
+        preview, _ = shgi.render_preview(scene, volume.current_field(),
+                                         shgi.PreviewSettings(seed=5))
+        growth[specular] = (indirect_diffuse(ref), indirect_diffuse(preview))
+    exact = growth[0.5][0] / growth[0.0][0]
+    volume_growth = growth[0.5][1] / growth[0.0][1]
+    print(f"order {order}: Specular 0.5 multiplies the path tracer's indirect light by "
+          f"{exact:.3f}, the volume's by {volume_growth:.3f}")
+    assert abs(volume_growth / exact - 1.0) < 0.05
+
+
 @pytest.mark.parametrize("options", [dict(order=1), dict(order=2, damping=True,
                                                          travel_reinjection=True),
                                      dict(order=2, occlusion=False),
