@@ -34,12 +34,13 @@ from scenes import closed_room, room_wall_points  # noqa: E402  (examples/scenes
 # Configurations on top of PropagationSettings' defaults.
 CONFIGS = {
     "defaults": {},
+    # The HOLPV's beams unwindowed (the default until 2026-11-29; the LPV is unchanged).
+    "plain": {"windowed_reinjection": False},
     # Light carried far enough for the accumulation to settle in the default room (16 cells).
     "distance_96": {"distance": 96.0},
     # Linear everywhere: walls stop negative light too (no clamp where they stop light).
     "linear": {"clamp_at_surfaces": False},
-    "windowed": {"windowed_reinjection": True},
-    "windowed_linear": {"windowed_reinjection": True, "clamp_at_surfaces": False},
+    "plain_linear": {"windowed_reinjection": False, "clamp_at_surfaces": False},
     "extended": {"extend_to_bounds": True},
     "no_damping": {"damping": False},
 }
