@@ -26,7 +26,8 @@ SCENES = {"cornell_box": (0.25, 2048), "sun_room": (0.25, 2048), "two_rooms": (0
 # the face normals, 8 steps, no leak correction); the configurations below start from them. The
 # other propagation benches import it to measure what their tables say.
 SEED = dict(steps=8, damping=False, occlude_first_step=False, drop_outward_vpls=False,
-            travel_reinjection=False, unclamped_transfer=False, clamp_at_surfaces=False)
+            travel_reinjection=False, unclamped_transfer=False, clamp_at_surfaces=False,
+            windowed_reinjection=False)
 CORRECTIONS = dict(SEED, occlude_first_step=True, drop_outward_vpls=True)
 TRAVEL = dict(CORRECTIONS, travel_reinjection=True, damping=True)
 UNCLAMPED = dict(TRAVEL, unclamped_transfer=True)
@@ -35,13 +36,17 @@ CONFIGS = {
     # PropagationSettings' defaults, and those before settings layout 6.
     "defaults": {},
     "seed": SEED,
-    # The HOLPV's re-injected beams with band 2 windowed (x 4/5; the LPV is unchanged).
+    # The HOLPV's re-injected beams with band 2 windowed (x 4/5; the LPV is unchanged): the
+    # default; "plain" without the window (the default until 2026-11-29).
     "windowed": dict(windowed_reinjection=True),
+    "plain": dict(windowed_reinjection=False),
+    "plain_extended": dict(windowed_reinjection=False, extend_to_bounds=True),
     # The cells outside the scene's bounds given the light of the inside cells next to them.
     "extended": dict(extend_to_bounds=True),
     "windowed_extended": dict(windowed_reinjection=True, extend_to_bounds=True),
     # Finer volumes, light carried as many cells (the same distance in metres), plain and windowed.
-    **{f"r{r}": dict(resolution=r, distance=float(r)) for r in (48, 64)},
+    **{f"r{r}": dict(windowed_reinjection=False, resolution=r, distance=float(r))
+       for r in (48, 64)},
     **{f"windowed_r{r}": dict(windowed_reinjection=True, resolution=r, distance=float(r))
        for r in (48, 64)},
     # Clamped at walls, the steps from a distance in cells (distance / the stencil's cells per

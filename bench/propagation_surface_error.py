@@ -7,11 +7,12 @@ the class's share of the image's squared error of that product. The references a
 propagation_lpv_sweep.py's (cached in --cache); the masks come from the preview's Normal and
 DiffDir (exact direct light).
 
-    PYTHONPATH=build/python python3 bench/propagation_surface_error.py [--windowed] [--extended]
+    PYTHONPATH=build/python python3 bench/propagation_surface_error.py [--plain] [--extended]
         [--edges]
 
-With --windowed the HOLPV's re-injected beams have band 2 windowed (windowed_reinjection), with
---extended the cells outside the scene's bounds take the inside cells' light (extend_to_bounds).
+The HOLPV's re-injected beams have band 2 windowed (windowed_reinjection, the default; --windowed
+is accepted and changes nothing), with --plain not; with --extended the cells outside the scene's
+bounds take the inside cells' light (extend_to_bounds).
 With --edges the classes are instead the pixels by their distance to the nearest edge of the
 image's surfaces (where the facing, the Normal pass's largest axis and its sign, changes): 1-2,
 3-4 and 5 or more pixels.
@@ -51,6 +52,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cache", type=pathlib.Path, default=pathlib.Path("/tmp/shgi_lpv_refs"))
     parser.add_argument("--windowed", action="store_true")
+    parser.add_argument("--plain", action="store_true")
     parser.add_argument("--extended", action="store_true")
     parser.add_argument("--edges", action="store_true")
     args = parser.parse_args()
@@ -59,7 +61,7 @@ def main():
         exact = np.asarray(ref["DiffInd"]) * np.asarray(ref["DiffCol"])
         for order in (1, 2):
             volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
-                seed=5, order=order, windowed_reinjection=args.windowed,
+                seed=5, order=order, windowed_reinjection=not args.plain,
                 extend_to_bounds=args.extended))
             volume.refine()
             preview, _ = shgi.render_preview(scene, volume.current_field(),

@@ -6,6 +6,8 @@ Blender's frame: Z up, metres. Both scenes face the camera along +Y.
   light just under the ceiling, front open towards the camera, black world.
 * sun_room(): a closed 4 x 4 x 2.6 m room whose left wall has a 1.4 x 1.2 m window; the sun
   shines through it onto the floor, a blue sky fills the window; the camera stands inside.
+* closed_room(): a closed box of one material (by default the furnace: every wall emits and
+  reflects, so its exact light is the same everywhere), and room_wall_points() to sample it.
 """
 
 import numpy as np
@@ -206,3 +208,58 @@ def hall(scale=1.0):
     b.camera(eye=(-4, -3.5, 1.5), target=(-4, 2.0, 1.0), lens=18.0, width=96, height=64,
              scale=scale)
     return b
+
+
+def closed_room(size=(3.0, 3.0, 2.5), material=None, lamp_at=None):
+    """A closed box [0, size] seen from inside, all six walls of one shgi.Material (default: the
+    furnace's, Lambert albedo 0.5 emitting radiance 1, so every wall point's irradiance is pi and
+    the indirect part pi (a + ... + a^n) after n bounces), black world; with `lamp_at` a 100 W
+    point lamp there. Without a camera: sample its walls with room_wall_points(). The default
+    size is the two rooms' dim room alone (16 cells of a 32-cell volume of the two rooms)."""
+    if material is None:
+        material = shgi.Material(name="walls", base_color=(0.5, 0.5, 0.5),
+                                 diffuse_model=shgi.DiffuseModel.LAMBERT, specular=0.0,
+                                 emission_color=(1.0, 1.0, 1.0), emission_strength=1.0)
+    sx, sy, sz = size
+    b = SceneBuilder()
+    b.materials[material.name] = b.scene.add_material(material)
+    for name, corner, u, v in [
+            ("floor", (0, 0, 0), (0, sy, 0), (sx, 0, 0)),
+            ("ceiling", (0, 0, sz), (sx, 0, 0), (0, sy, 0)),
+            ("front", (0, 0, 0), (sx, 0, 0), (0, 0, sz)),
+            ("back", (0, sy, 0), (0, 0, sz), (sx, 0, 0)),
+            ("left", (0, 0, 0), (0, 0, sz), (0, sy, 0)),
+            ("right", (sx, 0, 0), (0, sy, 0), (0, 0, sz))]:
+        b.part(name, quad(corner, u, v), material.name, material.base_color)
+    if lamp_at is not None:
+        lamp = shgi.Light(name="lamp", type=shgi.LightType.POINT, power=100.0, radius=0.05)
+        lamp.world_from_light = np.array([[1, 0, 0, lamp_at[0]], [0, 1, 0, lamp_at[1]],
+                                          [0, 0, 1, lamp_at[2]], [0, 0, 0, 1]], np.float32)
+        b.scene.add_light(lamp)
+    b.scene.set_world(shgi.World(color=(0.0, 0.0, 0.0), strength=0.0))
+    return b
+
+
+def room_wall_points(size=(3.0, 3.0, 2.5), per_metre=16):
+    """A grid over the six inner walls of closed_room(size): points (N, 3) and normals (N, 3)
+    into the room (float32), each point's area (m^2) and its distance (m) to the nearest edge
+    of its wall."""
+    size = np.asarray(size, np.float64)
+    points, normals, areas, edges = [], [], [], []
+    for axis in range(3):
+        u, v = [a for a in range(3) if a != axis]
+        nu, nv = (max(2, int(round(size[a] * per_metre))) for a in (u, v))
+        gu, gv = np.meshgrid((np.arange(nu) + 0.5) / nu * size[u],
+                             (np.arange(nv) + 0.5) / nv * size[v], indexing="ij")
+        edge = np.minimum(np.minimum(gu, size[u] - gu), np.minimum(gv, size[v] - gv)).ravel()
+        for side in (0, 1):
+            p = np.zeros((gu.size, 3))
+            p[:, u], p[:, v], p[:, axis] = gu.ravel(), gv.ravel(), side * size[axis]
+            n = np.zeros((gu.size, 3))
+            n[:, axis] = 1.0 if side == 0 else -1.0
+            points.append(p)
+            normals.append(n)
+            areas.append(np.full(gu.size, size[u] * size[v] / gu.size))
+            edges.append(edge)
+    return (np.concatenate(points).astype(np.float32), np.concatenate(normals).astype(np.float32),
+            np.concatenate(areas), np.concatenate(edges))

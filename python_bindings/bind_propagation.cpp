@@ -73,8 +73,7 @@ void bind_settings(py::module_& m) {
         .def_readwrite("windowed_reinjection", &S::windowed_reinjection,
                        "With travel_reinjection and order 2: scale the re-injected beam's band 2 "
                        "by 4/5 so that its light does not come back onto the surface it left "
-                       "(the HOLPV's self-lighting at bright surfaces); not the default: the "
-                       "two rooms read 1.14x the path tracer (docs/methods.md) (False).")
+                       "(the HOLPV's self-lighting at bright surfaces; docs/methods.md) (True).")
         .def_readwrite("extend_to_bounds", &S::extend_to_bounds,
                        "Give the cells whose centres lie outside the scene's bounds the light of "
                        "the inside cell next to them, against a dark strip along the edges of "

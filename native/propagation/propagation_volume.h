@@ -112,10 +112,11 @@ struct PropagationSettings {
     // With travel_reinjection: window the re-injected beam's band 2 (× 4/5,
     // Reinjection::WindowedTravelDirection) so that it lights nothing behind it. The L2 beam's
     // back lobe sends light back onto the surfaces it left: the sun room's sunlit floor patch
-    // reads 2.95x the path tracer's indirect light, windowed 1.21x (the radiance scale 17/16 the
-    // plain beams', propagation_field.h). Not the default: the two rooms read 1.14x
-    // (docs/methods.md, "The HOLPV's self-lighting"). No effect on the LPV (no band 2).
-    bool windowed_reinjection = false;
+    // reads 2.95x the path tracer's indirect light, windowed 1.14x (the plain beams' radiance
+    // scale, propagation_field.h), and the HOLPV's image comes closer to the path tracer's on
+    // all three test scenes (docs/methods.md, "The HOLPV's self-lighting"). No effect on the LPV
+    // (no band 2).
+    bool windowed_reinjection = true;
     // Propagate the light's lobes unclamped (LobeClamp::None: each step a linear map, one
     // transfer per neighbour offset, the alternative issue 51 names to clamping then rescaling
     // the source lobe, LobeClamp::Rescaled). Flux is kept either way; unclamped, an L1/L2 lobe's

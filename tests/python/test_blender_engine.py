@@ -106,8 +106,8 @@ NOT_MIRRORED = {
     # that probe solutions frozen before splitting keep comparing (LIGHT_PATH_LIMITS says so).
     "ProbeGridSettings": {"volumes", "include_direct", "light_splits"},
     # The cascades follow the camera the exported scene renders from (the native default).
-    # windowed_reinjection, extend_to_bounds: measured alternatives, not the default (they miss
-    # the agreement targets, docs/methods.md); the add-on keeps the native default.
+    # windowed_reinjection (on), extend_to_bounds (off, it misses the agreement targets): the
+    # add-on keeps the native default (docs/methods.md).
     "PropagationSettings": {"cascade_follow_camera", "cascade_center", "windowed_reinjection",
                             "extend_to_bounds"},
     # As the radiance field's glossy_in_grid: no reason for an artist to change it.

@@ -3073,7 +3073,7 @@ class PropagationSettings:
     @property
     def windowed_reinjection(self) -> bool:
         """
-        With travel_reinjection and order 2: scale the re-injected beam's band 2 by 4/5 so that its light does not come back onto the surface it left (the HOLPV's self-lighting at bright surfaces); not the default: the two rooms read 1.14x the path tracer (docs/methods.md) (False).
+        With travel_reinjection and order 2: scale the re-injected beam's band 2 by 4/5 so that its light does not come back onto the surface it left (the HOLPV's self-lighting at bright surfaces; docs/methods.md) (True).
         """
     @windowed_reinjection.setter
     def windowed_reinjection(self, arg0: bool) -> None:
