@@ -417,12 +417,20 @@ int PathIntegrator::prepare_direct(Ray* shadows) {
     // Left unset: sample_split() writes every sample it returns (zeroing all kMaxLightSplits
     // of them cost more than the one a one-lamp room uses).
     Uninitialized<LightSample[kMaxLightSplits]> samples;
-    float u_select = rng_.next_float();
-    vec2 u = rng_.next_vec2();
+    float u_select, u_x, u_y;
     if (vertex_ == 0 && first_light_sample_) {
+        // The three numbers the stratified ones replace are skipped, not drawn: the same state
+        // for the rest of the path (PCG's advance by a constant folds to one multiply-add).
+        rng_.advance(3);
         u_select = first_light_sample_->u_select;
-        u = first_light_sample_->u;
+        u_x = first_light_sample_->u.x;
+        u_y = first_light_sample_->u.y;
+    } else {
+        u_select = rng_.next_float();
+        u_x = rng_.next_float();
+        u_y = rng_.next_float();
     }
+    const vec2 u(u_x, u_y);
     const int sampled = lights_.sample_split(shading.position, shading.frame.z, u_select, u,
                                              samples.value);
     int count = 0;
