@@ -751,6 +751,12 @@ bool PrincipledBsdf::has_smooth_lobes() const {
     return false;
 }
 
+bool PrincipledBsdf::has_traced_lobes() const {
+    for (int i = 0; i < lobe_count_; ++i)
+        if (lobes_[i].traced()) return true;
+    return false;
+}
+
 void PrincipledBsdf::blur(float alpha) {
     for (int i = 0; i < lobe_count_; ++i) {
         Lobe& lobe = lobes_[i];

@@ -168,6 +168,9 @@ class PrincipledBsdf {
     DenoisingFeature denoising_feature(float cos_nv) const;
     // True when at least one lobe is not a Dirac lobe (light sampling can help).
     bool has_smooth_lobes() const;
+    // True when at least one lobe is traced (see sample_traced below): without one,
+    // sample_traced fails whatever its numbers.
+    bool has_traced_lobes() const;
     // Light Paths > Filter Glossy (Cycles' bsdf_blur): every microfacet lobe (specular, glass
     // reflection, refraction) widens to a GGX alpha of at least `alpha`, so a mirror seen through
     // a diffuse bounce is a rough reflection that light sampling reaches. Only the lobes' alpha

@@ -506,6 +506,14 @@ bool PathIntegrator::first_field_query(vec3* position, vec3* normal, vec3* wo) c
 
 // Samples the BSDF, updates throughput, bounce counts and MIS state; false ends the path.
 bool PathIntegrator::scatter(const Shading& shading, Ray* ray) {
+    const bool field_vertex = vertex_field() != nullptr;
+    if (field_vertex && !shading.bsdf.has_traced_lobes()) {
+        // sample_traced would fail (the path ends at a preview's matte and glossy surfaces):
+        // its three numbers are skipped rather than drawn, for callers that go on with the
+        // same generator.
+        rng_.advance(3);
+        return false;
+    }
     BsdfSample bs;
     float u_lobe = rng_.next_float();
     vec2 u = rng_.next_vec2();
@@ -513,7 +521,6 @@ bool PathIntegrator::scatter(const Shading& shading, Ray* ray) {
         u_lobe = first_bsdf_sample_->u_select;
         u = first_bsdf_sample_->u;
     }
-    const bool field_vertex = vertex_field() != nullptr;
     const bool sampled = field_vertex ? shading.bsdf.sample_traced(shading.wo, u_lobe, u, &bs)
                                       : shading.bsdf.sample(shading.wo, u_lobe, u, &bs);
     if (!sampled) return false;
