@@ -294,7 +294,7 @@ class FrameWork {
             wave.live[i] = path.begin(wave.rays[i], wave.hits[i]);
             if (wave.live[i])
                 g_buffer_->set_surface(wave.pixel[i], scene_, path.first_surface(), wave.hits[i],
-                                       camera_position_, forward_);
+                                       camera_position_, forward_, &material_lobes_);
             else
                 g_buffer_->set_miss(wave.pixel[i]);
         }

@@ -39,11 +39,13 @@ MaterialLobeTable::MaterialLobeTable(const Scene& scene) {
     const std::vector<Material>& materials = scene.materials();
     const size_t count = std::min(materials.size(), scene.material_terms().size());
     lobes_.resize(count);
+    albedo_.assign(count, vec3(0.0f));
     has_lobes_.assign(count, 0);
     for (size_t m = 0; m < count; ++m) {
         const MaterialTerms& terms = scene.material_terms()[m];
         if (!PrincipledBsdf::lobes_depend_on_hit_only_by_view(materials[m], terms)) continue;
         lobes_[m] = PrincipledBsdf::material_lobes(materials[m], terms);
+        albedo_[m] = lobes_[m].class_color_sum();
         has_lobes_[m] = 1;
     }
 }

@@ -73,9 +73,16 @@ class MaterialLobeTable {
         return material_id < has_lobes_.size() && has_lobes_[material_id] ? &lobes_[material_id]
                                                                           : nullptr;
     }
+    // Their class_color_sum() (the G-buffer's albedo), which every hit's BSDF finished from
+    // them shares (its lobes' weights are the material's), or null as find().
+    const vec3* albedo(uint32_t material_id) const {
+        return material_id < has_lobes_.size() && has_lobes_[material_id] ? &albedo_[material_id]
+                                                                          : nullptr;
+    }
 
   private:
     std::vector<PrincipledBsdf> lobes_;
+    std::vector<vec3> albedo_;
     std::vector<uint8_t> has_lobes_;
 };
 
