@@ -372,7 +372,8 @@ bool PrincipledBsdf::lobes_depend_on_hit_only_by_view(const Material& material,
            !(material.principled_model == PrincipledModel::V2 && terms.specular);
 }
 
-PrincipledBsdf PrincipledBsdf::material_lobes(const Material& material, const MaterialTerms& terms) {
+PrincipledBsdf PrincipledBsdf::material_lobes(const Material& material,
+                                              const MaterialTerms& terms) {
     PrincipledBsdf lobes;
     lobes.roughness_ = material.roughness;
     lobes.glossy_roughness_ = material.roughness;

@@ -35,7 +35,8 @@ void GBuffer::set_surface(size_t pixel, const Scene& scene, const Shading& shadi
     position[pixel] = shading.position;
     shading_normal[pixel] = shading.frame.z;
     geometric_normal[pixel] = shading.geometric_normal;
-    const vec3* material_albedo = material_lobes != nullptr ? material_lobes->albedo(material) : nullptr;
+    const vec3* material_albedo =
+        material_lobes != nullptr ? material_lobes->albedo(material) : nullptr;
     albedo[pixel] = material_albedo != nullptr ? *material_albedo : shading.bsdf.class_color_sum();
     roughness[pixel] = scene.materials()[material].roughness;
     depth[pixel] = glm::dot(shading.position - camera_position, forward);
