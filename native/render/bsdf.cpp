@@ -360,6 +360,43 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const MaterialTerms& te
       glossy_roughness_(material.roughness),
       diffuse_model_(material.diffuse_model),
       height_correlated_(material.principled_model == PrincipledModel::V2) {
+    add_material_lobes(material, terms, base_color, back_face, cos_nv, origin);
+    select_lobes(cos_nv);
+}
+
+bool PrincipledBsdf::lobes_depend_on_hit_only_by_view(const Material& material,
+                                                      const MaterialTerms& terms) {
+    // A base colour texture changes the weights per hit; Blender 4's specular layer and the
+    // glass lobes' Fresnel weigh the lobes by the view angle.
+    return material.base_color_texture == kNoTexture && terms.transmission <= 0.0f &&
+           !(material.principled_model == PrincipledModel::V2 && terms.specular);
+}
+
+PrincipledBsdf PrincipledBsdf::material_lobes(const Material& material,
+                                              const MaterialTerms& terms) {
+    PrincipledBsdf lobes;
+    lobes.roughness_ = material.roughness;
+    lobes.glossy_roughness_ = material.roughness;
+    lobes.diffuse_model_ = material.diffuse_model;
+    lobes.height_correlated_ = material.principled_model == PrincipledModel::V2;
+    // cos_nv and origin are not read for such a material (no V2 layer, no glass lobes).
+    lobes.add_material_lobes(material, terms, material.base_color, false, 1.0f,
+                             PathOrigin::Camera);
+    return lobes;
+}
+
+PrincipledBsdf::PrincipledBsdf(const PrincipledBsdf& material_lobes, const Material& material,
+                               const MaterialTerms& terms, bool back_face, float cos_nv)
+    : PrincipledBsdf(material_lobes) {
+    eta_ = back_face ? terms.inv_ior : material.ior;
+    select_lobes(cos_nv);
+}
+
+// The closure weights of the lobes (Cycles' principled closure set-up), before their selection
+// probabilities.
+void PrincipledBsdf::add_material_lobes(const Material& material, const MaterialTerms& terms,
+                                        const vec3& base_color, bool back_face, float cos_nv,
+                                        PathOrigin origin) {
     const float metallic = terms.metallic;
     const float transmission = terms.transmission;
     const float alpha = terms.alpha;
@@ -410,7 +447,10 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const MaterialTerms& te
         add_lobe(LobeKind::GlassReflection, vec3(transmission * fresnel), alpha);
         add_lobe(LobeKind::Refraction, transmission * (1.0f - fresnel) * base_color, alpha);
     }
+}
 
+// Lobe selection probabilities and the albedo estimate toward wo (wo.z = cos_nv).
+void PrincipledBsdf::select_lobes(float cos_nv) {
     // Lobe selection by average closure weight as Cycles, except that the specular lobe is
     // weighted by its colour at normal view so a 4% dielectric coat does not take half the samples.
     float total = 0.0f;
@@ -709,6 +749,12 @@ DenoisingFeature PrincipledBsdf::denoising_feature(float cos_nv) const {
 bool PrincipledBsdf::has_smooth_lobes() const {
     for (int i = 0; i < lobe_count_; ++i)
         if (!lobes_[i].delta()) return true;
+    return false;
+}
+
+bool PrincipledBsdf::has_traced_lobes() const {
+    for (int i = 0; i < lobe_count_; ++i)
+        if (lobes_[i].traced()) return true;
     return false;
 }
 

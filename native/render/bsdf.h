@@ -121,6 +121,21 @@ class PrincipledBsdf {
     // No lobes (black: eval 0, sample fails); a placeholder in arrays of Shading to assign later.
     PrincipledBsdf() = default;
 
+    // Whether the material's lobes and closure weights are the same at every hit (no base
+    // colour texture, no glass lobes, no Blender 4 specular layer), so that only the lobe
+    // selection, which weighs the specular lobe by its colour toward wo, and the ior's side
+    // change from hit to hit.
+    static bool lobes_depend_on_hit_only_by_view(const Material& material,
+                                                 const MaterialTerms& terms);
+    // For such a material: its lobes before their selection, to be finished per hit by the
+    // constructor below (kept per scene by MaterialLobeTable, render/shading.h).
+    static PrincipledBsdf material_lobes(const Material& material, const MaterialTerms& terms);
+    // The BSDF the full constructor builds for the same material (material.base_color), side
+    // and view, from material_lobes(material, terms): the same operations on the same values
+    // for the parts that depend on the hit, so the same bits.
+    PrincipledBsdf(const PrincipledBsdf& material_lobes, const Material& material,
+                   const MaterialTerms& terms, bool back_face, float cos_nv);
+
     // The interpolated normal, in the local frame, when the frame's normal was bent by a normal
     // map: the diffuse lobe is then scaled by bump_shadowing_term (render/normal_map.h), as
     // Cycles scales a diffuse closure whose normal differs from the interpolated one.
@@ -153,6 +168,9 @@ class PrincipledBsdf {
     DenoisingFeature denoising_feature(float cos_nv) const;
     // True when at least one lobe is not a Dirac lobe (light sampling can help).
     bool has_smooth_lobes() const;
+    // True when at least one lobe is traced (see sample_traced below): without one,
+    // sample_traced fails whatever its numbers.
+    bool has_traced_lobes() const;
     // Light Paths > Filter Glossy (Cycles' bsdf_blur): every microfacet lobe (specular, glass
     // reflection, refraction) widens to a GGX alpha of at least `alpha`, so a mirror seen through
     // a diffuse bounce is a rough reflection that light sampling reaches. Only the lobes' alpha
@@ -210,6 +228,10 @@ class PrincipledBsdf {
                      BsdfSample* out) const;
 
     void add_lobe(LobeKind kind, const vec3& weight, float alpha);
+    void add_material_lobes(const Material& material, const MaterialTerms& terms,
+                            const vec3& base_color, bool back_face, float cos_nv,
+                            PathOrigin origin);
+    void select_lobes(float cos_nv);
     // f |cos| and pdf share their half vector and GGX terms: eval(), pdf() and sample() all go
     // through eval_pdf, which computes both in one pass over the lobes (field_only: skip the
     // traced lobes, for eval_field).

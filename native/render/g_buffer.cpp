@@ -26,7 +26,8 @@ GBuffer::GBuffer(int width, int height) : width_(width), height_(height) {
 }
 
 void GBuffer::set_surface(size_t pixel, const Scene& scene, const Shading& shading, const Hit& hit,
-                          const vec3& camera_position, const vec3& forward) {
+                          const vec3& camera_position, const vec3& forward,
+                          const MaterialLobeTable* material_lobes) {
     const Mesh& mesh = scene.meshes()[scene.instances()[hit.instance_id].mesh_id];
     // Meshes without per-triangle materials use material 0 (scene/mesh.h).
     const uint32_t material =
@@ -34,7 +35,9 @@ void GBuffer::set_surface(size_t pixel, const Scene& scene, const Shading& shadi
     position[pixel] = shading.position;
     shading_normal[pixel] = shading.frame.z;
     geometric_normal[pixel] = shading.geometric_normal;
-    albedo[pixel] = shading.bsdf.class_color_sum();
+    const vec3* material_albedo =
+        material_lobes != nullptr ? material_lobes->albedo(material) : nullptr;
+    albedo[pixel] = material_albedo != nullptr ? *material_albedo : shading.bsdf.class_color_sum();
     roughness[pixel] = scene.materials()[material].roughness;
     depth[pixel] = glm::dot(shading.position - camera_position, forward);
     object_id[pixel] = hit.instance_id;

@@ -42,9 +42,12 @@ class GBuffer {
     bool has_surface(size_t pixel) const { return object_id[pixel] != kNoSurface; }
 
     // Pixel `pixel` sees `shading`, the shaded first hit `hit` of a ray from the camera whose
-    // position and unit view axis are `camera_position` and `forward`.
+    // position and unit view axis are `camera_position` and `forward`. `material_lobes`
+    // (optional): the scene's MaterialLobeTable, whose albedo of a material it holds is the
+    // shading's.
     void set_surface(size_t pixel, const Scene& scene, const Shading& shading, const Hit& hit,
-                     const vec3& camera_position, const vec3& forward);
+                     const vec3& camera_position, const vec3& forward,
+                     const MaterialLobeTable* material_lobes = nullptr);
     // Pixel `pixel` sees no surface.
     void set_miss(size_t pixel);
 

@@ -290,7 +290,8 @@ bool PathIntegrator::begin(const Ray& camera_ray, const Hit& first_hit) {
 bool PathIntegrator::enter_surface(const Hit& hit) {
     find_emission(ray_, hit);
     if (!hit.valid() || terminate_on_next_surface_) return false;
-    make_shading_in(&shading_.value, scene_, scene_.surface_point(ray_, hit), ray_.direction);
+    make_shading_in(&shading_.value, scene_, scene_.surface_point(ray_, hit), ray_.direction,
+                    PathOrigin::Camera, material_lobes_);
     blur_glossy(&shading_.value);
     if (vertex_ == 0 && !combined_only_) record_first_hit(shading_.value, ray_, hit);
     if (write_denoising_features_) record_denoising_features(shading_.value);
@@ -416,12 +417,20 @@ int PathIntegrator::prepare_direct(Ray* shadows) {
     // Left unset: sample_split() writes every sample it returns (zeroing all kMaxLightSplits
     // of them cost more than the one a one-lamp room uses).
     Uninitialized<LightSample[kMaxLightSplits]> samples;
-    float u_select = rng_.next_float();
-    vec2 u = rng_.next_vec2();
+    float u_select, u_x, u_y;
     if (vertex_ == 0 && first_light_sample_) {
+        // The three numbers the stratified ones replace are skipped, not drawn: the same state
+        // for the rest of the path (PCG's advance by a constant folds to one multiply-add).
+        rng_.advance(3);
         u_select = first_light_sample_->u_select;
-        u = first_light_sample_->u;
+        u_x = first_light_sample_->u.x;
+        u_y = first_light_sample_->u.y;
+    } else {
+        u_select = rng_.next_float();
+        u_x = rng_.next_float();
+        u_y = rng_.next_float();
     }
+    const vec2 u(u_x, u_y);
     const int sampled = lights_.sample_split(shading.position, shading.frame.z, u_select, u,
                                              samples.value);
     int count = 0;
@@ -497,6 +506,14 @@ bool PathIntegrator::first_field_query(vec3* position, vec3* normal, vec3* wo) c
 
 // Samples the BSDF, updates throughput, bounce counts and MIS state; false ends the path.
 bool PathIntegrator::scatter(const Shading& shading, Ray* ray) {
+    const bool field_vertex = vertex_field() != nullptr;
+    if (field_vertex && !shading.bsdf.has_traced_lobes()) {
+        // sample_traced would fail (the path ends at a preview's matte and glossy surfaces):
+        // its three numbers are skipped rather than drawn, for callers that go on with the
+        // same generator.
+        rng_.advance(3);
+        return false;
+    }
     BsdfSample bs;
     float u_lobe = rng_.next_float();
     vec2 u = rng_.next_vec2();
@@ -504,7 +521,6 @@ bool PathIntegrator::scatter(const Shading& shading, Ray* ray) {
         u_lobe = first_bsdf_sample_->u_select;
         u = first_bsdf_sample_->u;
     }
-    const bool field_vertex = vertex_field() != nullptr;
     const bool sampled = field_vertex ? shading.bsdf.sample_traced(shading.wo, u_lobe, u, &bs)
                                       : shading.bsdf.sample(shading.wo, u_lobe, u, &bs);
     if (!sampled) return false;

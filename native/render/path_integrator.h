@@ -191,6 +191,10 @@ class PathIntegrator {
     // use, kept by the caller across paths (one per thread); it must outlive finish(). Without
     // one each glossy lookup computes them itself (the same values).
     void set_glossy_memo(GgxZhMemo* memo) { glossy_memo_ = memo; }
+    // The scene's MaterialLobeTable (render/shading.h) for every surface this path shades, kept
+    // by the caller; it must outlive the path. Without one each surface sets its lobes up
+    // itself (the same values).
+    void set_material_lobes(const MaterialLobeTable* lobes) { material_lobes_ = lobes; }
     // The first surface as begin() shaded it (position, shading frame, BSDF), for the G-buffer
     // (render/g_buffer.h); valid after begin() returned true and before finish().
     const Shading& first_surface() const { return shading_.value; }
@@ -198,6 +202,7 @@ class PathIntegrator {
   private:
     const FieldLookup* shared_lookup_ = nullptr;
     GgxZhMemo* glossy_memo_ = nullptr;
+    const MaterialLobeTable* material_lobes_ = nullptr;
     IrradianceMemo* shared_irradiance_ = nullptr;
     struct FirstLightSample {
         float u_select;

@@ -153,12 +153,13 @@ class WaveLease {
 class FrameWork {
   public:
     FrameWork(const Scene& scene, const Camera& camera, const CameraRayGenerator& camera_rays,
-              const PixelFilter& pixel_filter, const LightSampler& lights, const PathTracerSettings& settings,
+              const PixelFilter& pixel_filter, const LightSampler& lights,
+              const MaterialLobeTable& material_lobes, const PathTracerSettings& settings,
               const IndirectField& field, const TileGrid& grid, uint64_t first, uint64_t count,
               GBuffer& g_buffer, Progress* progress, bool reuse_lookups, bool final_gather,
               bool combined_only)
         : scene_(scene), camera_(camera), camera_rays_(camera_rays),
-          pixel_filter_(pixel_filter), lights_(lights),
+          pixel_filter_(pixel_filter), lights_(lights), material_lobes_(material_lobes),
           settings_(settings), field_(field), grid_(grid), first_(first), count_(count),
           g_buffer_(&g_buffer), progress_(progress),
           screen_space_(field.shades_first_surfaces()),
@@ -288,11 +289,12 @@ class FrameWork {
             path.set_first_light_sample(wave.samples[i].u_select, wave.samples[i].u_light);
             path.set_final_gather(final_gather_);
             path.set_glossy_memo(&wave.glossy_zh);
+            path.set_material_lobes(&material_lobes_);
             if (combined_only_) path.set_combined_only();
             wave.live[i] = path.begin(wave.rays[i], wave.hits[i]);
             if (wave.live[i])
                 g_buffer_->set_surface(wave.pixel[i], scene_, path.first_surface(), wave.hits[i],
-                                       camera_position_, forward_);
+                                       camera_position_, forward_, &material_lobes_);
             else
                 g_buffer_->set_miss(wave.pixel[i]);
         }
@@ -324,6 +326,7 @@ class FrameWork {
     const CameraRayGenerator& camera_rays_;
     const PixelFilter& pixel_filter_;  // PreviewSettings.pixel_filter and filter_width
     const LightSampler& lights_;
+    const MaterialLobeTable& material_lobes_;
     const PathTracerSettings& settings_;
     const IndirectField& field_;
     const TileGrid& grid_;
@@ -405,6 +408,7 @@ PreviewRenderer::PreviewRenderer(const Scene& scene, const Camera& camera,
       settings_(validated(settings)),
       pixel_filter_(settings.pixel_filter, settings.filter_width),
       path_settings_(path_settings_for(settings)),
+      material_lobes_(scene),
       lights_(scene, settings.world_sampling, true, path_settings_.light_splits) {
     film_ = ProgressiveFilm(int(camera_.resolution_x), int(camera_.resolution_y),
                             settings.combined_only ? FilmPasses::CombinedOnly : FilmPasses::All);
@@ -498,8 +502,8 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
         };
     const TileGrid grid(film_.film().width(), film_.film().height(),
                         even_tile_side(settings_.tile_size));
-    const FrameWork work(*scene_, camera_, camera_rays_, pixel_filter_, lights, path_settings_,
-                         *field, grid, first, samples, g_buffer_, progress,
+    const FrameWork work(*scene_, camera_, camera_rays_, pixel_filter_, lights, material_lobes_,
+                         path_settings_, *field, grid, first, samples, g_buffer_, progress,
                          settings_.reuse_field_lookups, settings_.final_gather,
                          settings_.combined_only);
     const uint64_t tile_pixels = uint64_t(grid.tile) * uint64_t(grid.tile);

@@ -54,6 +54,7 @@
 #include "render/light_sampler.h"
 #include "render/path_tracer.h"
 #include "render/pixel_filter.h"
+#include "render/shading.h"
 #include "scene/camera.h"
 #include "scene/scene.h"
 #include "util/progress.h"
@@ -130,6 +131,7 @@ class PreviewRenderer {
     PreviewSettings settings_;
     PixelFilter pixel_filter_;  // settings_'s pixel_filter and filter_width, tabulated once
     PathTracerSettings path_settings_;
+    MaterialLobeTable material_lobes_;  // the scene's, built once
     LightSampler lights_;
     // The sampler for a field that carries some direct light itself (includes_world_direct,
     // includes_lights_direct), built by the first render with such a field, and which of the two

@@ -1,5 +1,6 @@
 #include "render/shading.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "render/normal_map.h"
@@ -33,8 +34,24 @@ vec3 texture_bilinear(const Texture& texture, const vec2& uv) {
     return glm::mix(bottom, top, ty);
 }
 
+MaterialLobeTable::MaterialLobeTable(const Scene& scene) {
+    // The terms are the committed scene's (none before its first commit: then no entry).
+    const std::vector<Material>& materials = scene.materials();
+    const size_t count = std::min(materials.size(), scene.material_terms().size());
+    lobes_.resize(count);
+    albedo_.assign(count, vec3(0.0f));
+    has_lobes_.assign(count, 0);
+    for (size_t m = 0; m < count; ++m) {
+        const MaterialTerms& terms = scene.material_terms()[m];
+        if (!PrincipledBsdf::lobes_depend_on_hit_only_by_view(materials[m], terms)) continue;
+        lobes_[m] = PrincipledBsdf::material_lobes(materials[m], terms);
+        albedo_[m] = lobes_[m].class_color_sum();
+        has_lobes_[m] = 1;
+    }
+}
+
 Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray_direction,
-                     PathOrigin origin) {
+                     PathOrigin origin, const MaterialLobeTable* lobes) {
     vec3 ng = sp.geometric_normal, ns = sp.shading_normal;
     const bool back_face = glm::dot(ray_direction, ng) > 0.0f;
     if (back_face) {
@@ -74,8 +91,11 @@ Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray
     vec3 base_color = material.base_color;
     if (material.base_color_texture != kNoTexture)
         base_color *= texture_bilinear(scene.textures()[size_t(material.base_color_texture)], sp.uv);
+    const PrincipledBsdf* material_lobes = lobes != nullptr ? lobes->find(sp.material_id) : nullptr;
     Shading shading{sp.position, ng, frame, wo,
-                    PrincipledBsdf(material, terms, base_color, back_face, wo.z, origin)};
+                    material_lobes != nullptr
+                        ? PrincipledBsdf(*material_lobes, material, terms, back_face, wo.z)
+                        : PrincipledBsdf(material, terms, base_color, back_face, wo.z, origin)};
     // Cycles fades a diffuse closure whose normal differs from the interpolated one; a normal
     // that fell back to the geometric one above is not such a closure.
     if (bent && ns != ng)

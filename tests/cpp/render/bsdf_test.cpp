@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <vector>
 
 #include "render/bsdf.h"
 #include "util/rng.h"
@@ -438,6 +440,75 @@ TEST(BsdfV2, LightPathsUseTheAdjointBsdf) {
         largest_asymmetry = std::max(largest_asymmetry, std::fabs(f_ab.y - f_camera.y));
     }
     EXPECT_GT(largest_asymmetry, 1e-3f);  // the swap matters
+}
+
+
+// A material whose lobes are the same at every hit: its BSDF finished from material_lobes is the
+// full constructor's for every side and view, bit for bit (eval, pdf, samples, colours, field
+// lobes, albedo estimate), so tracers that keep the lobes per material render the same image.
+TEST(Bsdf, MaterialLobesFinishToTheFullConstructorBitForBit) {
+    auto same = [](const vec3& a, const vec3& b) { return std::memcmp(&a, &b, sizeof(vec3)) == 0; };
+    std::vector<Material> materials;
+    for (float metallic : {0.0f, 0.4f, 1.0f})
+        for (float specular : {0.0f, 0.5f, 1.0f})
+            for (float roughness : {0.0f, 0.3f, 0.8f}) {
+                Material material = make_material(metallic, 0.0f, roughness);
+                material.base_color = vec3(0.7f, 0.2f, 0.05f);
+                material.specular = specular;
+                material.diffuse_model =
+                    roughness > 0.5f ? DiffuseModel::Principled : DiffuseModel::Lambert;
+                materials.push_back(material);
+            }
+    Material matte_v2 = make_material(0.0f, 0.0f, 0.5f);
+    matte_v2.principled_model = PrincipledModel::V2;
+    matte_v2.specular = 0.0f;
+    materials.push_back(matte_v2);
+    int checked = 0;
+    for (const Material& material : materials) {
+        const MaterialTerms terms = material_terms(material);
+        ASSERT_TRUE(PrincipledBsdf::lobes_depend_on_hit_only_by_view(material, terms));
+        const PrincipledBsdf lobes = PrincipledBsdf::material_lobes(material, terms);
+        for (bool back_face : {false, true})
+            for (float angle : {0.0f, 0.4f, 1.1f, 1.5f}) {
+                const vec3 wo = direction_from_angle(angle);
+                const PrincipledBsdf full(material, terms, material.base_color, back_face, wo.z);
+                const PrincipledBsdf finished(lobes, material, terms, back_face, wo.z);
+                ASSERT_TRUE(same(full.albedo_estimate(), finished.albedo_estimate()));
+                ASSERT_TRUE(same(full.class_color_sum(), finished.class_color_sum()));
+                ASSERT_TRUE(same(full.field_diffuse(wo), finished.field_diffuse(wo)));
+                PrincipledBsdf::GlossyLobe full_glossy[2], finished_glossy[2];
+                const int glossy = full.field_glossy_lobes(wo, full_glossy);
+                ASSERT_EQ(glossy, finished.field_glossy_lobes(wo, finished_glossy));
+                for (int i = 0; i < glossy; ++i)
+                    ASSERT_TRUE(same(full_glossy[i].albedo, finished_glossy[i].albedo));
+                Pcg32 rng(7, uint64_t(checked));
+                for (int k = 0; k < 16; ++k) {
+                    const vec3 wi = sample_uniform_sphere(rng.next_vec2());
+                    ASSERT_TRUE(same(full.eval(wo, wi).total(), finished.eval(wo, wi).total()));
+                    ASSERT_EQ(full.pdf(wo, wi), finished.pdf(wo, wi));
+                    const float u_lobe = rng.next_float();
+                    const vec2 u = rng.next_vec2();
+                    BsdfSample a, b;
+                    ASSERT_EQ(full.sample(wo, u_lobe, u, &a), finished.sample(wo, u_lobe, u, &b));
+                    ASSERT_TRUE(same(a.wi, b.wi) && same(a.weight, b.weight));
+                    ASSERT_EQ(a.pdf, b.pdf);
+                }
+                ++checked;
+            }
+    }
+    EXPECT_EQ(checked, 28 * 8);
+
+    // Lobes that change from hit to hit are not kept per material.
+    Material textured = make_material(0.0f, 0.0f, 0.5f);
+    textured.base_color_texture = 0;
+    EXPECT_FALSE(PrincipledBsdf::lobes_depend_on_hit_only_by_view(textured,
+                                                                  material_terms(textured)));
+    const Material glass = make_material(0.0f, 1.0f, 0.0f);
+    EXPECT_FALSE(PrincipledBsdf::lobes_depend_on_hit_only_by_view(glass, material_terms(glass)));
+    Material layered = make_material(0.0f, 0.0f, 0.5f);
+    layered.principled_model = PrincipledModel::V2;
+    EXPECT_FALSE(PrincipledBsdf::lobes_depend_on_hit_only_by_view(layered,
+                                                                  material_terms(layered)));
 }
 
 }  // namespace

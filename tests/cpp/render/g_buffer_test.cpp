@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "render/preview_renderer.h"
@@ -90,6 +92,45 @@ TEST(GBuffer, PixelsBeyondThePlaneAreMisses) {
                 EXPECT_EQ(g.albedo[i], vec3(0.0f));
             }
         }
+}
+
+
+// The albedo the preview writes from its MaterialLobeTable is the bits every hit's own BSDF
+// would give (class_color_sum), on either side and at any view; materials whose lobes change
+// from hit to hit (a glass) have no entry and are summed per hit.
+TEST(GBuffer, MaterialTableAlbedoIsEveryHitsClassColorSum) {
+    Scene scene = plane_under_camera(50.0f);
+    Material plastic = test::lambert(0.3f);
+    plastic.diffuse_model = DiffuseModel::Principled;
+    plastic.specular = 0.5f;
+    plastic.roughness = 0.4f;
+    plastic.base_color = vec3(0.9f, 0.3f, 0.1f);
+    plastic.name = "plastic";
+    Material metal = plastic;
+    metal.name = "metal";
+    metal.metallic = 0.7f;
+    Material glass = plastic;
+    glass.name = "glass";
+    glass.transmission = 1.0f;
+    for (const Material& m : {plastic, metal, glass}) scene.add_material(m);
+    scene.commit();
+    const MaterialLobeTable table(scene);
+    int with_entry = 0;
+    for (uint32_t m = 0; m < scene.materials().size(); ++m) {
+        const vec3* albedo = table.albedo(m);
+        if (albedo == nullptr) continue;
+        ++with_entry;
+        const Material& material = scene.materials()[m];
+        for (bool back_face : {false, true})
+            for (float cos_nv : {1.0f, 0.5f, 0.05f}) {
+                const vec3 sum = PrincipledBsdf(material, scene.material_terms()[m],
+                                                material.base_color, back_face, cos_nv)
+                                     .class_color_sum();
+                EXPECT_EQ(std::memcmp(albedo, &sum, sizeof(vec3)), 0) << m;
+            }
+    }
+    EXPECT_EQ(with_entry, 3);  // all but the glass
+    EXPECT_EQ(table.albedo(3), nullptr);
 }
 
 }  // namespace
