@@ -22,7 +22,8 @@
 //     (sets_x or sets_x + 1 taps across — for even n, n + 1 taps with half weight on both ends so
 //     each set counts once — and likewise down), skipping neighbours across depth, geometric-normal
 //     and object edges but not across shading-normal changes; the G-buffer is frame-wide, so there
-//     are no tile seams;
+//     are no tile seams. The near field (near_field_reach) stays out of it: every set's VPLs
+//     within a few window widths of the pixel, gathered by the pixel itself;
 //  3. shade (§3.1, §3.3): the filtered SH through the pixel's own shading normal: diffuse closure
 //     weight × E(n) / π (the clamped-cosine, i.e. Lambert, convolution of sh/sh_irradiance.h) and,
 //     per glossy lobe, its albedo × the fitted GGX ZH lobe's pre-filtered radiance
