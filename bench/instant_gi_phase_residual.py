@@ -11,6 +11,7 @@ seed-averaged images' ratio per image row. A plain script printing a table: not 
 
     PYTHONPATH=build/python python3 bench/instant_gi_phase_residual.py [--seeds 20 21 ... 35]
         [--mode SH|IRRADIANCE|STRICT|NONE] [--rows 16] [--gather-cut-windows]
+        [--near-field-reach K]
 
 Besides the largest residual per phase it prints its two parts: the mean over the 16 phases
 (a bias of the whole image) and the largest departure of a phase from that mean (a pattern of
@@ -47,13 +48,17 @@ def main():
     parser.add_argument("--rows", type=int, default=16, help="image rows to print ratios of")
     parser.add_argument("--gather-cut-windows", action="store_true",
                         help="InstantGiSettings.gather_cut_windows on")
+    parser.add_argument("--near-field-reach", type=float,
+                        default=shgi.InstantGiSettings().near_field_reach,
+                        help="InstantGiSettings.near_field_reach (default: the setting's)")
     args = parser.parse_args()
     scene = floor_test.normal_mapped_floor()
     images, brutes = [], []
     for seed in args.seeds:
         image = diffind(scene, seed, photons_per_set=32,
                         filter_mode=getattr(shgi.InstantGiFilter, args.mode),
-                        gather_cut_windows=args.gather_cut_windows)
+                        gather_cut_windows=args.gather_cut_windows,
+                        near_field_reach=args.near_field_reach)
         brute = diffind(scene, seed, photons_per_set=16 * 32, sets_x=1, sets_y=1,
                         filter_mode=shgi.InstantGiFilter.NONE)
         residuals = phase_residuals(image, brute)

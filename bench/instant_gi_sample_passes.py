@@ -8,7 +8,8 @@ as the Solve operator runs it) and of a first frame (that solve and a 1-sample f
 time to its first image when it solved every pass first; it now solves only the first sample's
 passes first), each as a ratio to the first configuration's. A configuration
 passes:per_sample[:light paths per set] (16 by default); `--filter-direct`,
-`--glossy-from-vpls` and `--gather-cut-windows` solve with those settings on. A plain script
+`--glossy-from-vpls` and `--gather-cut-windows` solve with those settings on, and
+`--near-field-reach K` with that reach. A plain script
 printing a table: not a test.
 The two rooms' dim room as test_instant_gi.py's dim room test reads it (128 light paths per
 set):
@@ -76,6 +77,8 @@ def main():
                         help="InstantGiSettings.glossy_from_vpls on")
     parser.add_argument("--gather-cut-windows", action="store_true",
                         help="InstantGiSettings.gather_cut_windows on")
+    parser.add_argument("--near-field-reach", type=float, default=None,
+                        help="InstantGiSettings.near_field_reach (default: the setting's)")
     args = parser.parse_args()
     builder = getattr(scenes, args.scene)(args.scale)
     builder.scene.commit()
@@ -85,6 +88,8 @@ def main():
     configs = [tuple(int(v) for v in c.split(":")) for c in args.configs]
     fields = {"filter_direct": args.filter_direct, "glossy_from_vpls": args.glossy_from_vpls,
               "gather_cut_windows": args.gather_cut_windows}
+    if args.near_field_reach is not None:
+        fields["near_field_reach"] = args.near_field_reach
     base = None
     for passes, per_sample, *paths in configs:
         paths = paths[0] if paths else 16

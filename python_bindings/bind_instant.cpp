@@ -85,7 +85,11 @@ void bind_settings(py::module_& m) {
         .def_readwrite("gather_cut_windows", &S::gather_cut_windows,
                        "Pixels whose filter window an edge cuts gather every set themselves "
                        "and skip the filter: no blur of light across the edge's side, at "
-                       "sets_x x sets_y times those pixels' shadow rays (False).");
+                       "sets_x x sets_y times those pixels' shadow rays (False).")
+        .def_readwrite("near_field_reach", &S::near_field_reach,
+                       "VPLs nearer to a pixel than this many times its filter window's reach "
+                       "(the farthest neighbour it blends) are gathered from every set and kept "
+                       "out of the filter, whose blur they would bias; 0..64, 0 = off (4).");
     cls.def("validate", &validate_instant_gi_settings,
             "Raises ValueError naming the first invalid field.");
     register_settings_type<S>("InstantGiSettings");

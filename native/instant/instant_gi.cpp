@@ -10,6 +10,7 @@
 #include "render/shading.h"
 #include "sh/sh_basis.h"
 #include "sh/sh_irradiance.h"
+#include "util/cell_sort.h"
 #include "util/error.h"
 #include "util/memory.h"
 #include "util/parallel.h"
@@ -108,6 +109,91 @@ std::vector<uint8_t> cut_window_pixels(const GBuffer& g, const InstantGiSettings
     return cut;
 }
 
+float distance2(const vec3& a, const vec3& b) {
+    const vec3 d = a - b;
+    return glm::dot(d, d);
+}
+
+// near_field_reach: pixels along a row whose near fields are found together (one pass over
+// the VPLs per run: a box test per VPL and run instead of a distance per VPL and pixel).
+constexpr int kNearRun = 8;
+
+// near_field_reach's limit: a reach of 64 windows is brute force's cost at any resolution.
+constexpr float kMaxNearFieldReach = 64.0f;
+
+// Per pixel, the squared radius of its near field (near_field_reach): near_field_reach × the
+// distance to the farthest pixel of its filter window that joins it; 0 without a surface.
+std::vector<float> near_field_radii(const GBuffer& g, const InstantGiSettings& s, int half_x,
+                                    int half_y) {
+    const bool strict = s.filter_mode == InstantGiFilter::Strict;
+    const float reach2 = s.near_field_reach * s.near_field_reach;
+    std::vector<float> radius2(g.pixel_count(), 0.0f);
+    parallel_for(0, uint64_t(g.height()), 8, [&](uint64_t y0, uint64_t y1) {
+        for (uint64_t y = y0; y < y1; ++y)
+            for (int x = 0; x < g.width(); ++x) {
+                const size_t p = g.index(x, int(y));
+                if (!g.has_surface(p)) continue;
+                float farthest2 = 0.0f;
+                visit_window(g, x, int(y), half_x, half_y, s, strict, [&](size_t q, int, int) {
+                    farthest2 = std::max(farthest2, distance2(g.position[q], g.position[p]));
+                });
+                radius2[p] = reach2 * farthest2;
+            }
+    });
+    return radius2;
+}
+
+// near_field_reach: a uniform grid over the VPLs a frame gathers, so a pixel's near field
+// visits the cells around it instead of every VPL. Cells at least as wide as the median near
+// radius, at most kMaxNearGridCells across.
+constexpr int kMaxNearGridCells = 64;
+class NearVplGrid {
+  public:
+    // refs: (set, VPL) of every VPL gathered, positions[i] refs[i]'s position.
+    NearVplGrid(std::vector<std::pair<uint32_t, uint32_t>> refs,
+                const std::vector<vec3>& positions, float cell_width)
+        : refs_(std::move(refs)) {
+        vec3 hi(-kInfinity);
+        lo_ = vec3(kInfinity);
+        for (const vec3& q : positions) lo_ = glm::min(lo_, q), hi = glm::max(hi, q);
+        if (refs_.empty()) return;
+        const float extent = max_component(hi - lo_);
+        cell_ = std::max({cell_width, extent / float(kMaxNearGridCells), 1e-6f});
+        dims_ = glm::min(ivec3((hi - lo_) / cell_) + 1, ivec3(kMaxNearGridCells));
+        std::vector<uint32_t> item_cell(refs_.size());
+        for (size_t i = 0; i < refs_.size(); ++i)
+            item_cell[i] = uint32_t(linear(cell_of(positions[i])));
+        cells_ = sort_by_cell(item_cell, size_t(dims_.x) * size_t(dims_.y) * size_t(dims_.z));
+    }
+    // visit(set, vpl) for the VPLs in the cells the box [lo, hi] overlaps, cell by cell.
+    template <class Visit>
+    void visit_box(const vec3& lo, const vec3& hi, const Visit& visit) const {
+        if (refs_.empty()) return;
+        const ivec3 a = cell_of(lo), b = cell_of(hi);
+        for (int z = a.z; z <= b.z; ++z)
+            for (int y = a.y; y <= b.y; ++y)
+                for (int x = a.x; x <= b.x; ++x) {
+                    const size_t cell = linear(ivec3(x, y, z));
+                    const uint32_t* items = cells_.items(cell);
+                    for (uint32_t i = 0; i < cells_.count(cell); ++i)
+                        visit(refs_[items[i]].first, refs_[items[i]].second);
+                }
+    }
+
+  private:
+    ivec3 cell_of(const vec3& q) const {
+        return glm::clamp(ivec3(glm::floor((q - lo_) / cell_)), ivec3(0), dims_ - 1);
+    }
+    size_t linear(const ivec3& c) const {
+        return (size_t(c.z) * size_t(dims_.y) + size_t(c.y)) * size_t(dims_.x) + size_t(c.x);
+    }
+    std::vector<std::pair<uint32_t, uint32_t>> refs_;
+    vec3 lo_{0.0f};
+    float cell_ = 1.0f;
+    ivec3 dims_{1};
+    ItemsByCell cells_;
+};
+
 // InstantGiSettings.glossy_bounces' limit (the radiance field's).
 constexpr int kMaxGlossyBounces = 64;
 
@@ -176,6 +262,7 @@ void validate_instant_gi_settings(const InstantGiSettings& s) {
     check_float(s.depth_threshold, 0.0f, 1e6f, "depth_threshold");
     check_float(s.normal_threshold, -1.0f, 1.0f, "normal_threshold");
     check_int(s.passes_per_sample, 1, kMaxPassesPerSample, "passes_per_sample");
+    check_float(s.near_field_reach, 0.0f, kMaxNearFieldReach, "near_field_reach");
 }
 
 namespace {
@@ -564,8 +651,11 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
     const bool sky = !sky_sets_.empty() && scene_->world().radiance() != vec3(0.0f);
     const bool lamps = !lamp_sets_.empty();
     const bool direct = sky || lamps;  // filter_direct's plane
-    require_memory(saturating_mul(uint64_t(pixels),
-                                  uint64_t((direct ? 4 : 2) * kCoeffs * sizeof(vec3))),
+    // near_field_reach: a plane more, the near fields'.
+    const bool near_planes =
+        settings_.near_field_reach > 0.0f && settings_.filter_mode != InstantGiFilter::None;
+    require_memory(saturating_mul(uint64_t(pixels), uint64_t(((direct ? 4 : 2) + near_planes) *
+                                                             kCoeffs * sizeof(vec3))),
                    format_message("the SH planes of ", width, " x ", height, " pixels"),
                    "lower the camera's resolution_x / resolution_y");
     // 1. gather: the pixel's set as L2 SH, visibility by exact shadow rays.
@@ -616,12 +706,88 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
             ? cut_window_pixels(g, settings_, half_x, half_y)
             : std::vector<uint8_t>{};
     const float all_sets = 1.0f / float(sets_.size());
+    // near_field_reach: per pixel, the squared radius within which it gathers every set's
+    // VPLs into a plane of their own that the filter leaves alone (0: none). The cut pixels of
+    // gather_cut_windows split theirs too, so that the windows that read them read no near
+    // field twice.
+    const std::vector<float> near_radius2 =
+        near_planes ? near_field_radii(g, settings_, half_x, half_y) : std::vector<float>{};
+    const bool near = !near_radius2.empty();
+    std::unique_ptr<NearVplGrid> near_grid;
+    if (near) {
+        std::vector<float> radii;
+        for (const float r2 : near_radius2)
+            if (r2 > 0.0f) radii.push_back(std::sqrt(r2));
+        std::nth_element(radii.begin(), radii.begin() + ptrdiff_t(radii.size() / 2), radii.end());
+        std::vector<std::pair<uint32_t, uint32_t>> refs;
+        std::vector<vec3> positions;
+        for (size_t s = 0; s < sets_.size(); ++s)
+            for (const VplRange& range : gather.vpls[s])
+                for (uint64_t v = range.begin; v < range.end; ++v) {
+                    refs.push_back({uint32_t(s), uint32_t(v)});
+                    positions.push_back(sets_[s][v].position);
+                }
+        near_grid = std::make_unique<NearVplGrid>(
+            std::move(refs), positions, radii.empty() ? 0.0f : radii[radii.size() / 2]);
+    }
+    std::vector<vec3> raw_near(near ? pixels * kCoeffs : 0, vec3(0.0f));
+    std::vector<vec3> raw_glossy_near[2];
+    for (int k = 0; k < 2 && near; ++k)
+        raw_glossy_near[k].assign(raw_glossy[k].size(), vec3(0.0f));
+    // The plane a ray's light goes to: the indirect light to filter, filter_direct's, the near
+    // field.
+    enum RayPlane : uint8_t { kIndirect, kDirect, kNear };
     parallel_for(0, uint64_t(height), rows_per_task, [&](uint64_t y0, uint64_t y1) {
         throw_if_cancelled(progress);
         std::vector<Ray> rays;
         std::vector<uint32_t> ray_pixel;
         std::vector<vec3> weights, directions;
-        std::vector<uint8_t> occluded, ray_direct;
+        std::vector<uint8_t> occluded, ray_plane;
+        // A VPL's shadow ray from pixel p, its weight scaled by `scale`, into `plane`.
+        const auto add_vpl_ray = [&](size_t p, const InstantVpl& vpl, float scale,
+                                     RayPlane plane) {
+            const vec3 pos = g.position[p], ng = g.geometric_normal[p];
+            vec3 w;
+            const vec3 e =
+                vpl_delta(pos, ng, vpl, vpl_scale * scale, settings_.clamp_distance, &w);
+            if (e == vec3(0.0f)) return;
+            Ray ray;
+            if (!shadow_ray(offset_origin(pos, ng), vpl.position, &ray)) return;
+            rays.push_back(ray);
+            ray_pixel.push_back(uint32_t(p));
+            weights.push_back(e);
+            directions.push_back(w);
+            ray_plane.push_back(plane);
+        };
+        // near_field_reach: the near fields of row y's pixels x0 .. x0 + kNearRun - 1: every
+        // set's VPLs (of the passes gathered) inside the box around those pixels grown by
+        // their largest near radius, then those within each pixel's own radius.
+        std::vector<std::pair<uint32_t, uint32_t>> near_vpls;  // (set, VPL)
+        const auto gather_near_fields = [&](int y, int x0) {
+            const int x1 = std::min(width, x0 + kNearRun);
+            vec3 lo(kInfinity), hi(-kInfinity);
+            float radius2 = 0.0f;
+            for (int x = x0; x < x1; ++x) {
+                const size_t p = g.index(x, y);
+                if (near_radius2[p] <= 0.0f) continue;
+                lo = glm::min(lo, g.position[p]), hi = glm::max(hi, g.position[p]);
+                radius2 = std::max(radius2, near_radius2[p]);
+            }
+            if (radius2 <= 0.0f) return;
+            lo -= vec3(std::sqrt(radius2)), hi += vec3(std::sqrt(radius2));
+            near_vpls.clear();
+            near_grid->visit_box(lo, hi, [&](uint32_t s, uint32_t v) {
+                const vec3& q = sets_[s][v].position;
+                if (glm::all(glm::greaterThanEqual(q, lo)) && glm::all(glm::lessThanEqual(q, hi)))
+                    near_vpls.push_back({s, v});
+            });
+            for (const auto& [s, v] : near_vpls)
+                for (int x = x0; x < x1; ++x) {
+                    const size_t p = g.index(x, y);
+                    if (distance2(g.position[p], sets_[s][v].position) < near_radius2[p])
+                        add_vpl_ray(p, sets_[s][v], all_sets, kNear);
+                }
+        };
         // The row's pixels that gather set s, each with its scale: the set's own pixels
         // (x = sx mod n in a row of the set's row phase) at 1, the cut ones at 1 / the sets.
         std::vector<std::pair<int, float>> row_pixels;
@@ -652,18 +818,10 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                         for (const auto& [x, scale] : row_pixels) {
                             const size_t p = g.index(x, int(y));
                             if (!g.has_surface(p)) continue;
-                            const vec3 pos = g.position[p], ng = g.geometric_normal[p];
-                            vec3 w;
-                            const vec3 e = vpl_delta(pos, ng, vpl, vpl_scale * scale,
-                                                     settings_.clamp_distance, &w);
-                            if (e == vec3(0.0f)) continue;
-                            Ray ray;
-                            if (!shadow_ray(offset_origin(pos, ng), vpl.position, &ray)) continue;
-                            rays.push_back(ray);
-                            ray_pixel.push_back(uint32_t(p));
-                            weights.push_back(e);
-                            directions.push_back(w);
-                            ray_direct.push_back(0);
+                            // In the pixel's near field: gathered from every set below.
+                            if (near && distance2(g.position[p], vpl.position) < near_radius2[p])
+                                continue;
+                            add_vpl_ray(p, vpl, scale, kIndirect);
                         }
                     }
                 // The set's lamp samples: each light's incident radiance / pdf along its
@@ -687,7 +845,7 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                                 ray_pixel.push_back(uint32_t(p));
                                 weights.push_back(e);
                                 directions.push_back(w);
-                                ray_direct.push_back(1);
+                                ray_plane.push_back(kDirect);
                             }
                         }
                 if (!sky) continue;
@@ -711,24 +869,29 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                             ray_pixel.push_back(uint32_t(p));
                             weights.push_back(e * scale);
                             directions.push_back(w);
-                            ray_direct.push_back(1);
+                            ray_plane.push_back(kDirect);
                         }
                     }
             }
+            // The row's near fields, a run of pixels at a time.
+            for (int x0 = 0; x0 < width && near; x0 += kNearRun) gather_near_fields(int(y), x0);
         }
         if (rays.empty()) return;
         scene_->occluded(rays, occluded, nullptr, RayCoherence::Coherent);
         for (size_t r = 0; r < rays.size(); ++r) {  // in ray order: a fixed sum per pixel
             if (occluded[r]) continue;
-            std::vector<vec3>& plane = ray_direct[r] ? raw_direct : raw;
+            const RayPlane kind = RayPlane(ray_plane[r]);
+            std::vector<vec3>& plane =
+                kind == kNear ? raw_near : kind == kDirect ? raw_direct : raw;
             const size_t p = ray_pixel[r];
             add_delta(&plane[p * kCoeffs], weights[r], directions[r]);
-            if (!lobes_from_vpls || ray_direct[r]) continue;
+            if (!lobes_from_vpls || kind == kDirect) continue;
             const float cos_theta = glm::dot(directions[r], reflected[p]);
             for (int k = 0; k < 2; ++k) {
                 const vec2 lobe = glossy_lobes[k][p];
+                std::vector<vec3>& glossy = kind == kNear ? raw_glossy_near[k] : raw_glossy[k];
                 if (lobe.x > 0.0f)
-                    raw_glossy[k][p] += weights[r] * (glossy_lobe(cos_theta, lobe.x) * lobe.y);
+                    glossy[p] += weights[r] * (glossy_lobe(cos_theta, lobe.x) * lobe.y);
             }
         }
     }, progress);
@@ -788,6 +951,22 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
     };
     std::vector<vec3> filtered, filtered_direct;
     filter_plane(raw, filtered);
+    // near_field_reach: the near fields join the filtered light (SH), or the filtered
+    // irradiance and the pixel's own SH its glossy lobes read (Irradiance, Strict).
+    if (near) {
+        std::vector<vec3>& sh = filter_sh ? filtered : raw;
+        for (size_t i = 0; i < raw_near.size(); ++i) sh[i] += raw_near[i];
+        if (filter_irradiance)
+            parallel_for(0, uint64_t(pixels), 4096, [&](uint64_t b, uint64_t e) {
+                for (uint64_t p = b; p < e; ++p) {
+                    if (!g.has_surface(p)) continue;
+                    ShRgb near_sh(kOrder);
+                    std::copy_n(&raw_near[p * kCoeffs], kCoeffs, near_sh.coeffs.begin());
+                    filtered[p] +=
+                        glm::max(sh_irradiance(near_sh, g.shading_normal[p]), vec3(0.0f));
+                }
+            });
+    }
     if (direct) filter_plane(raw_direct, filtered_direct);
     // glossy_from_vpls: each lobe's plane through the window too (unless filter_mode None).
     std::vector<vec3> filtered_glossy[2];
@@ -798,6 +977,8 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
             else
                 filter_window(raw_glossy[k], 1, mode == InstantGiFilter::Strict,
                               filtered_glossy[k]);
+            for (size_t p = 0; p < raw_glossy_near[k].size(); ++p)
+                filtered_glossy[k][p] += raw_glossy_near[k][p];
         }
     timings_->filter = seconds_since(start);
 

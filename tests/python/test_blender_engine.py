@@ -113,7 +113,9 @@ NOT_MIRRORED = {
     # As the radiance field's glossy_in_grid: no reason for an artist to change it.
     # glossy_from_vpls: a measured option (+0.2 dB on the sun room, docs/methods.md), scripts
     # only for now; so is gather_cut_windows (14.5x the sun room's frame CPU for +0.05 dB).
-    "InstantGiSettings": {"glossy_vpls", "glossy_from_vpls", "gather_cut_windows"},
+    # near_field_reach: the filter's near field, on at the native default (4) in the add-on.
+    "InstantGiSettings": {"glossy_vpls", "glossy_from_vpls", "gather_cut_windows",
+                          "near_field_reach"},
     "PhotonLatticeSettings": {"use_bounds", "bounds_min", "bounds_max", "caustic_order",
                               "caustic_blur_passes", "caustic_neighbours", "caustic_radius",
                               "specular_roughness", "normal_offset"},

@@ -675,6 +675,14 @@ class InstantGiSettings:
     def glossy_vpls(self, arg0: bool) -> None:
         ...
     @property
+    def near_field_reach(self) -> float:
+        """
+        VPLs nearer to a pixel than this many times its filter window's reach (the farthest neighbour it blends) are gathered from every set and kept out of the filter, whose blur they would bias; 0..64, 0 = off (4).
+        """
+    @near_field_reach.setter
+    def near_field_reach(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
     def normal_threshold(self) -> float:
         """
         Neighbours whose geometric normals' cosine is below this are not blended (0.9).

@@ -119,6 +119,8 @@ TEST(InstantGi, SettingsRefusalsNameTheField) {
     refused([](InstantGiSettings& s) { s.clamp_distance = NAN; }, "clamp_distance");
     refused([](InstantGiSettings& s) { s.depth_threshold = -1.0f; }, "depth_threshold");
     refused([](InstantGiSettings& s) { s.normal_threshold = 2.0f; }, "normal_threshold");
+    refused([](InstantGiSettings& s) { s.near_field_reach = NAN; }, "near_field_reach");
+    refused([](InstantGiSettings& s) { s.near_field_reach = 65.0f; }, "near_field_reach");
 }
 
 }  // namespace
