@@ -91,20 +91,27 @@ int visit_window(const GBuffer& g, int x, int y, int half_x, int half_y,
 
 // Per pixel, 1 where a tap of its filter window inside the image does not join it: an edge
 // cuts its window (gather_cut_windows).
-std::vector<uint8_t> cut_window_pixels(const GBuffer& g, const InstantGiSettings& s, int half_x,
-                                       int half_y) {
-    const bool strict = s.filter_mode == InstantGiFilter::Strict;
-    std::vector<uint8_t> cut(g.pixel_count(), 0);
+// Calls fn(x, y, p) for every pixel p = (x, y) with a surface, rows in parallel.
+template <class Fn>
+void for_each_surface_pixel(const GBuffer& g, Fn&& fn) {
     parallel_for(0, uint64_t(g.height()), 8, [&](uint64_t y0, uint64_t y1) {
         for (uint64_t y = y0; y < y1; ++y)
             for (int x = 0; x < g.width(); ++x) {
                 const size_t p = g.index(x, int(y));
-                if (!g.has_surface(p)) continue;
-                int joined = 0;
-                const int taps = visit_window(g, x, int(y), half_x, half_y, s, strict,
-                                              [&joined](size_t, int, int) { ++joined; });
-                cut[p] = joined < taps ? 1 : 0;
+                if (g.has_surface(p)) fn(x, int(y), p);
             }
+    });
+}
+
+std::vector<uint8_t> cut_window_pixels(const GBuffer& g, const InstantGiSettings& s, int half_x,
+                                       int half_y) {
+    const bool strict = s.filter_mode == InstantGiFilter::Strict;
+    std::vector<uint8_t> cut(g.pixel_count(), 0);
+    for_each_surface_pixel(g, [&](int x, int y, size_t p) {
+        int joined = 0;
+        const int taps = visit_window(g, x, y, half_x, half_y, s, strict,
+                                      [&joined](size_t, int, int) { ++joined; });
+        cut[p] = joined < taps ? 1 : 0;
     });
     return cut;
 }
@@ -128,17 +135,12 @@ std::vector<float> near_field_radii(const GBuffer& g, const InstantGiSettings& s
     const bool strict = s.filter_mode == InstantGiFilter::Strict;
     const float reach2 = s.near_field_reach * s.near_field_reach;
     std::vector<float> radius2(g.pixel_count(), 0.0f);
-    parallel_for(0, uint64_t(g.height()), 8, [&](uint64_t y0, uint64_t y1) {
-        for (uint64_t y = y0; y < y1; ++y)
-            for (int x = 0; x < g.width(); ++x) {
-                const size_t p = g.index(x, int(y));
-                if (!g.has_surface(p)) continue;
-                float farthest2 = 0.0f;
-                visit_window(g, x, int(y), half_x, half_y, s, strict, [&](size_t q, int, int) {
-                    farthest2 = std::max(farthest2, distance2(g.position[q], g.position[p]));
-                });
-                radius2[p] = reach2 * farthest2;
-            }
+    for_each_surface_pixel(g, [&](int x, int y, size_t p) {
+        float farthest2 = 0.0f;
+        visit_window(g, x, y, half_x, half_y, s, strict, [&](size_t q, int, int) {
+            farthest2 = std::max(farthest2, distance2(g.position[q], g.position[p]));
+        });
+        radius2[p] = reach2 * farthest2;
     });
     return radius2;
 }
