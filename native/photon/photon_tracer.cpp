@@ -281,7 +281,10 @@ void ChunkTracer::record_first_hit(const PhotonState& photon, const Shading& sha
     hit.power = photon.power;
     // The diffuse lobe's directional albedo toward the light (reciprocity: the share of the
     // arriving flux it scatters).
+    // At a shading normal, times the adjoint's correction (render/shading.h).
     hit.reflected_power = shading.bsdf.field_diffuse(shading.wo) * photon.power;
+    if (shading.frame.z != shading.geometric_normal)
+        hit.reflected_power *= particle_diffuse_arrival(shading, hit.direction);
     first_hits_.push_back(hit);
 }
 
@@ -295,7 +298,9 @@ bool ChunkTracer::scatter(PhotonState& photon, const Shading& shading, const Mat
     const bool specular = bs.delta || (bs.lobe_class != LobeClass::Diffuse &&
                                        material.roughness <= settings_.specular_roughness);
     photon.specular_path = photon.specular_path && specular;
-    photon.power *= bs.weight / survival_probability(shading.bsdf);
+    // The adjoint BSDF's weight at a shading normal (render/shading.h): bs.weight elsewhere.
+    photon.power *= particle_scatter_weight(shading, -ray->direction, bs, wi) /
+                    survival_probability(shading.bsdf);
     if (!is_finite(photon.power) || !(max_component(photon.power) > 0.0f)) return false;
     // Past its budget a lobe is off, as a camera path's closures are past theirs: a photon that
     // has used up max_bounces still reflects glossily, and one that picked the spent lobe ends
@@ -564,12 +569,17 @@ vec3 scattered_flux(const Scene& scene, const vec3& position, const vec3& normal
     }
     const Shading shading =
         make_shading(scene, scene.surface_point(ray, hit), ray.direction, PathOrigin::Light);
+    // At a shading normal, the albedos take the adjoint's correction (render/shading.h).
+    const bool bent = shading.frame.z != shading.geometric_normal;
     vec3 albedo = shading.bsdf.field_diffuse(shading.wo);
+    if (bent) albedo *= particle_diffuse_arrival(shading, -ray.direction);
     if (glossy_min_roughness >= 0.0f) {
         PrincipledBsdf::GlossyLobe lobes[2];
         const int count = shading.bsdf.field_glossy_lobes(shading.wo, lobes);
+        const float ratio = bent ? particle_arrival_ratio(shading, -ray.direction) : 1.0f;
         for (int i = 0; i < count; ++i)
-            if (lobes[i].roughness > glossy_min_roughness) albedo += lobes[i].albedo;
+            if (lobes[i].roughness > glossy_min_roughness)
+                albedo += bent ? lobes[i].albedo * ratio : lobes[i].albedo;
     }
     return albedo * power;
 }

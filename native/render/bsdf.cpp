@@ -593,11 +593,7 @@ void PrincipledBsdf::lobe_eval_pdf(const Lobe& lobe, const vec3& wo, const vec3&
     if (lobe.kind == LobeKind::Diffuse) {
         float cos_factor = diffuse_brdf(wo, wi, terms->cos_ih) * wi.z;
         if (v2_.from_light) cos_factor *= light_path_side(wi, terms).layer_transmittance;
-        if (bent_) {
-            const vec3 bent(0.0f, 0.0f, 1.0f);
-            cos_factor *= microfacet_bump_ ? bump_shadowing_microfacet(smooth_normal_, bent, wi)
-                                           : bump_shadowing_term(smooth_normal_, bent, wi);
-        }
+        if (bent_) cos_factor *= diffuse_bump_shadowing(wi);
         *f = lobe.weight * cos_factor;
         *pdf = wi.z * kInvPi;
         return;
@@ -806,6 +802,13 @@ bool PrincipledBsdf::sample_lobe(const Lobe& lobe, float choice_prob, const vec3
     }
     out->eval.by_class[int(out->lobe_class)] = out->weight;
     return is_finite(out->weight) && glm::any(glm::greaterThan(out->weight, vec3(0.0f)));
+}
+
+float PrincipledBsdf::diffuse_bump_shadowing(const vec3& wi) const {
+    if (!bent_) return 1.0f;
+    const vec3 bent(0.0f, 0.0f, 1.0f);
+    return microfacet_bump_ ? bump_shadowing_microfacet(smooth_normal_, bent, wi)
+                            : bump_shadowing_term(smooth_normal_, bent, wi);
 }
 
 vec3 PrincipledBsdf::field_diffuse(const vec3& wo) const {

@@ -145,6 +145,9 @@ class PrincipledBsdf {
         bent_ = true;
         microfacet_bump_ = microfacet;
     }
+    // The factor the diffuse lobe takes for light from local direction `wi` (the camera path's
+    // light side): the bump shadowing term above, 1 unless set_smooth_normal was called.
+    float diffuse_bump_shadowing(const vec3& wi) const;
 
     BsdfEval eval(const vec3& wo, const vec3& wi) const;
     float pdf(const vec3& wo, const vec3& wi) const;

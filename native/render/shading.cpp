@@ -80,7 +80,11 @@ Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray
         bent = true;
         const bool lambert_only = material.diffuse_model == DiffuseModel::Lambert &&
                                   !terms.specular && terms.transmission <= 0.0f;
-        keep_bent = material.principled_model == PrincipledModel::V2 && lambert_only;
+        // A particle's arrival is a camera path's light side, where Cycles keeps the bent
+        // normal (the guard above is for the view): a particle from below it brings nothing
+        // (particle_arrival_ratio), as a camera path rejects such light.
+        keep_bent = (material.principled_model == PrincipledModel::V2 && lambert_only) ||
+                    origin == PathOrigin::Light;
         if (!keep_bent) ns = ensure_valid_reflection(ng, -ray_direction, ns);
     }
     // An interpolated normal facing away from the viewer would make wo.z <= 0: fall back.
@@ -102,6 +106,38 @@ Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray
         shading.bsdf.set_smooth_normal(frame.to_local(smooth),
                                        material.principled_model == PrincipledModel::V2);
     return shading;
+}
+
+float particle_arrival_ratio(const Shading& shading, const vec3& wl) {
+    if (shading.frame.z == shading.geometric_normal) return 1.0f;
+    const float cos_geometric = glm::dot(wl, shading.geometric_normal);
+    if (!(cos_geometric > 0.0f)) return 0.0f;
+    return std::max(glm::dot(wl, shading.frame.z), 0.0f) / cos_geometric;
+}
+
+float particle_diffuse_arrival(const Shading& shading, const vec3& wl) {
+    if (shading.frame.z == shading.geometric_normal) return 1.0f;
+    return particle_arrival_ratio(shading, wl) *
+           shading.bsdf.diffuse_bump_shadowing(shading.frame.to_local(wl));
+}
+
+vec3 particle_scatter_weight(const Shading& shading, const vec3& wl, const BsdfSample& bs,
+                             const vec3& wi) {
+    if (shading.frame.z == shading.geometric_normal) return bs.weight;
+    const float cos_shading = std::fabs(bs.wi.z);
+    if (!(cos_shading > 0.0f)) return vec3(0.0f);
+    vec3 weight = bs.weight;
+    // The diffuse lobe's share of the weight was shadowed toward wi; the camera path shadows it
+    // toward the light, wl. (A Dirac lobe has no diffuse share.)
+    const float shadowed_toward_wi = shading.bsdf.diffuse_bump_shadowing(bs.wi);
+    if (!bs.delta && shadowed_toward_wi > 0.0f) {
+        const float swap =
+            shading.bsdf.diffuse_bump_shadowing(shading.frame.to_local(wl)) / shadowed_toward_wi;
+        if (swap != 1.0f)
+            weight += bs.eval.by_class[int(LobeClass::Diffuse)] * ((swap - 1.0f) / bs.pdf);
+    }
+    return weight * (particle_arrival_ratio(shading, wl) *
+                     std::fabs(glm::dot(wi, shading.geometric_normal)) / cos_shading);
 }
 
 vec3 Shading::spawn_origin(const vec3& wi) const {

@@ -60,6 +60,28 @@ struct Shading {
     vec3 spawn_origin(const vec3& wi) const;
 };
 
+// --- Particles (photons, VPLs) at a shading normal: the adjoint BSDF (Veach 1997, §5.3) ---
+// A camera path weighs light arriving from wl by its cosine to the shading normal ns (the BSDF's
+// |cos| in the shading frame, times the diffuse lobe's bump shadowing toward wl), while the
+// particles arriving along wl are spread over the surface by their cosine to the geometric
+// normal ng. A particle's flux then reaches the BSDF times cos(wl, ns)+ / cos(wl, ng), and a
+// photon scattered towards wi leaves through the geometric surface, |wi.ng| (eq. 5.17 with
+// Cycles' convention that only the light side's cosine is the shading normal's). Both helpers
+// take wl in world space, unit, towards the particle's source, on the side of the Shading's ray.
+// Where the frame's normal is the geometric one they return their input unchanged, bit for bit.
+
+// The factor on a particle's power for the diffuse lobe it lights (reflected_power, the VPLs'
+// scattered_flux): cos(wl, ns)+ / cos(wl, ng) times the lobe's bump shadowing toward wl.
+float particle_arrival_ratio(const Shading& shading, const vec3& wl);
+float particle_diffuse_arrival(const Shading& shading, const vec3& wl);
+
+// A photon's weight for its BSDF sample `bs` (drawn with the photon's arrival as wo) towards
+// world direction `wi`: bs.weight (f |bs.wi.z| / pdf, with the diffuse lobe's bump shadowing
+// toward wi) made the adjoint's, f cos(wl, ns)+ |wi.ng| / (cos(wl, ng) pdf) with the shadowing
+// toward wl.
+vec3 particle_scatter_weight(const Shading& shading, const vec3& wl, const BsdfSample& bs,
+                             const vec3& wi);
+
 // Each material's PrincipledBsdf lobes where they are the same at every hit
 // (PrincipledBsdf::material_lobes), built once per scene revision by tracers that shade many
 // hits: make_shading then finishes a copy per hit instead of setting the lobes up again (~40% of

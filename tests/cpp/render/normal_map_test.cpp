@@ -7,6 +7,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
+#include "photon/photon_tracer.h"
 #include "render/normal_map.h"
 #include "render/path_tracer.h"
 #include "render/shading.h"
@@ -273,6 +274,107 @@ TEST(NormalMap, SunOverNormalMappedPlane) {
                                  "normal-mapped sun");
     EXPECT_NEAR(test::pixel_stats(tracer.film(), Pass::Normal, 0).mean, std::sin(tilt), 1e-5);
     EXPECT_NEAR(test::pixel_stats(tracer.film(), Pass::Normal, 2).mean, std::cos(tilt), 1e-5);
+}
+
+// Photons onto a normal-mapped Lambert plane under a sun at angle `sun_angle` from the zenith
+// (towards +x) against the path tracer looking straight down: a first hit's reflected_power is
+// the flux the surface scatters, which for a Lambert surface is pi x the radiance the camera
+// path reads, per arriving photon power spread by the geometric cosine (Veach 1997 §5.3):
+// reflected / arriving = pi L / (E cos(ng, wl)). Tilted normals (tilt towards +x): light from
+// the far side (cosine to the bent normal 0.62 against 0.92 to the geometric one), from the
+// tilt's side low enough for the bump shadowing term (S ~ 0.67), and from below the bent
+// normal's horizon (nothing, as the camera path rejects it).
+void expect_first_hits_match_the_path_tracer(float sun_angle) {
+    constexpr double kFloatRounding = 1e-4;  // relative: float cosines, BSDF and film sums
+    const float albedo = 0.5f, strength = 3.0f, tilt = 0.5f;
+    Scene scene;
+    Material material = test::lambert(albedo);
+    material.normal_texture =
+        int32_t(scene.add_texture(normal_texel(vec3(std::sin(tilt), 0.0f, std::cos(tilt)))));
+    scene.add_material(material);
+    Mesh mesh = mapped_plane(1.0f);
+    for (vec3& p : mesh.positions) p *= 50.0f;
+    scene.add_instance(scene.add_mesh(mesh), mat4(1.0f));
+    scene.set_world(test::black_world());
+    scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.5f), 0.01f, 4));
+    Light sun;
+    sun.type = LightType::Sun;
+    sun.strength = strength;
+    sun.world_from_light = glm::rotate(mat4(1.0f), sun_angle, vec3(0.0f, 1.0f, 0.0f));
+    scene.add_light(sun);
+    scene.commit();
+
+    PathTracer tracer(scene, test::settings_with_samples(4));
+    tracer.render(4);
+    const test::PixelStats camera = test::pixel_stats(tracer.film(), Pass::Combined);
+
+    PhotonTracerSettings settings;
+    settings.photons = 256;
+    settings.seed = 3;
+    settings.store_first_hits = true;
+    const PhotonMaps maps = trace_photons(scene, settings, 0);
+    ASSERT_GT(maps.first_hits.size(), 0u);
+    for (const PhotonFirstHit& hit : maps.first_hits) {
+        const float cos_geometric = glm::dot(hit.normal, hit.direction);
+        ASSERT_GT(cos_geometric, 0.0f);
+        const double ratio = double(hit.reflected_power.x) / double(hit.power.x);
+        const double expected = kPi * camera.mean / (strength * cos_geometric);
+        const double error = kPi * camera.standard_error / (strength * cos_geometric);
+        testing::expect_within_noise(ratio, error, expected, kFloatRounding * expected,
+                                     "first hit on the normal-mapped plane");
+    }
+}
+
+TEST(NormalMap, PhotonFirstHitsScatterWhatTheCameraPathReads) {
+    expect_first_hits_match_the_path_tracer(-0.4f);  // beyond the tilt: cos ratio 0.68
+    expect_first_hits_match_the_path_tracer(1.2f);   // on the tilt's side: bump shadowing
+    expect_first_hits_match_the_path_tracer(-1.2f);  // below the bent normal's horizon: zero
+}
+
+// A photon scattered off the normal-mapped plane carries the adjoint BSDF's weight: for each
+// sampled direction wi, weight x pdf / |wi.ng| is what the camera path looking back along wi
+// reads from light at wl, f cos(wl, ns) S(wl), over cos(wl, ng) (Veach 1997 §5.3), whatever the
+// photon's own shading evaluated towards wi. Pairs where the camera's view bends the normal
+// back (Cycles' correction, which the view decides) are skipped; most are not.
+TEST(NormalMap, PhotonScatterWeightIsTheCameraPathsAdjoint) {
+    constexpr float kTilt = 0.5f;
+    constexpr float kRelativeRounding = 1e-4f;  // float cosines and BSDF terms
+    const MappedPlane plane =
+        plane_with_map(vec3(std::sin(kTilt), 0.0f, std::cos(kTilt)), test::lambert(0.5f));
+    const vec3 origin(0.1f, 0.2f, 0.0f);
+    const auto shade_from = [&](const vec3& toward, PathOrigin path_origin) {
+        Ray ray;
+        ray.direction = -toward;
+        ray.origin = origin + 2.0f * toward;
+        ray.tmax = kInfinity;
+        const Hit hit = plane.scene.intersect(ray);
+        EXPECT_TRUE(hit.valid());
+        return make_shading(plane.scene, plane.scene.surface_point(ray, hit), ray.direction,
+                            path_origin);
+    };
+    int checked = 0, pairs = 0;
+    for (const float light_angle : {-0.4f, 1.2f}) {  // beyond the tilt; bump shadowing
+        const vec3 wl(std::sin(light_angle), 0.0f, std::cos(light_angle));
+        const Shading photon = shade_from(wl, PathOrigin::Light);
+        for (int j = 0; j < 4; ++j)
+            for (int i = 0; i < 4; ++i) {
+                BsdfSample bs;
+                const vec2 u((float(i) + 0.5f) / 4.0f, (float(j) + 0.5f) / 4.0f);
+                if (!photon.bsdf.sample(photon.wo, 0.5f, u, &bs)) continue;
+                const vec3 wi = glm::normalize(photon.frame.to_world(bs.wi));
+                if (wi.z <= 0.0f) continue;  // below the geometric surface: the tracer drops it
+                ++pairs;
+                const Shading camera = shade_from(wi, PathOrigin::Camera);
+                if (glm::distance(camera.frame.z, photon.frame.z) > kUnitTolerance) continue;
+                const vec3 weight = particle_scatter_weight(photon, wl, bs, wi);
+                const vec3 f_cos = camera.bsdf.eval(camera.wo, camera.frame.to_local(wl)).total();
+                const float expected = f_cos.x * wi.z / (wl.z * bs.pdf);
+                EXPECT_NEAR(weight.x, expected, kRelativeRounding * expected)
+                    << "light angle " << light_angle << ", u " << u.x << " " << u.y;
+                ++checked;
+            }
+    }
+    EXPECT_GT(checked, pairs / 2);
 }
 
 // --- hostile input: the map is skipped where it cannot apply, with a warning, never a crash.
