@@ -282,9 +282,8 @@ void ChunkTracer::record_first_hit(const PhotonState& photon, const Shading& sha
     // The diffuse lobe's directional albedo toward the light (reciprocity: the share of the
     // arriving flux it scatters).
     // At a shading normal, times the adjoint's correction (render/shading.h).
-    hit.reflected_power = shading.bsdf.field_diffuse(shading.wo) * photon.power;
-    if (shading.frame.z != shading.geometric_normal)
-        hit.reflected_power *= particle_diffuse_arrival(shading, hit.direction);
+    hit.reflected_power = shading.bsdf.field_diffuse(shading.wo) * photon.power *
+                          particle_diffuse_arrival(shading, hit.direction);
     first_hits_.push_back(hit);
 }
 
@@ -570,16 +569,14 @@ vec3 scattered_flux(const Scene& scene, const vec3& position, const vec3& normal
     const Shading shading =
         make_shading(scene, scene.surface_point(ray, hit), ray.direction, PathOrigin::Light);
     // At a shading normal, the albedos take the adjoint's correction (render/shading.h).
-    const bool bent = shading.frame.z != shading.geometric_normal;
-    vec3 albedo = shading.bsdf.field_diffuse(shading.wo);
-    if (bent) albedo *= particle_diffuse_arrival(shading, -ray.direction);
+    vec3 albedo =
+        shading.bsdf.field_diffuse(shading.wo) * particle_diffuse_arrival(shading, -ray.direction);
     if (glossy_min_roughness >= 0.0f) {
         PrincipledBsdf::GlossyLobe lobes[2];
         const int count = shading.bsdf.field_glossy_lobes(shading.wo, lobes);
-        const float ratio = bent ? particle_arrival_ratio(shading, -ray.direction) : 1.0f;
+        const float ratio = particle_arrival_ratio(shading, -ray.direction);
         for (int i = 0; i < count; ++i)
-            if (lobes[i].roughness > glossy_min_roughness)
-                albedo += bent ? lobes[i].albedo * ratio : lobes[i].albedo;
+            if (lobes[i].roughness > glossy_min_roughness) albedo += lobes[i].albedo * ratio;
     }
     return albedo * power;
 }

@@ -53,12 +53,10 @@ inline constexpr float kLpvRadianceScale = 1.0f / 0.786f;
 inline constexpr float kHolpvRadianceScale = 1.0f / 0.465f;
 inline constexpr float kLpvTravelRadianceScale = 1.0f / 0.992f;
 inline constexpr float kHolpvTravelRadianceScale = 1.0f / 0.576f;
-inline constexpr float kHolpvWindowedTravelRadianceScale = kHolpvTravelRadianceScale;
 inline float propagation_radiance_scale(int order,
                                         Reinjection reinjection = Reinjection::FaceNormal) {
-    if (reinjection == Reinjection::WindowedTravelDirection)
-        return order == 1 ? kLpvTravelRadianceScale : kHolpvWindowedTravelRadianceScale;
-    if (reinjection == Reinjection::TravelDirection)
+    if (reinjection == Reinjection::TravelDirection ||
+        reinjection == Reinjection::WindowedTravelDirection)
         return order == 1 ? kLpvTravelRadianceScale : kHolpvTravelRadianceScale;
     return order == 1 ? kLpvRadianceScale : kHolpvRadianceScale;
 }

@@ -460,10 +460,9 @@ std::vector<VirtualPointLight> PropagationVolume::trace_vpls(uint64_t pass, Prog
             if (!hit.valid()) continue;
             const Shading shading = make_shading(*scene_, scene_->surface_point(ray, hit),
                                                  ray.direction, PathOrigin::Light);
-            reflected[i] = shading.bsdf.field_diffuse(shading.wo) * photon.power;
             // At a shading normal, times the adjoint's correction (render/shading.h).
-            if (shading.frame.z != shading.geometric_normal)
-                reflected[i] *= particle_diffuse_arrival(shading, photon.direction);
+            reflected[i] = shading.bsdf.field_diffuse(shading.wo) * photon.power *
+                           particle_diffuse_arrival(shading, photon.direction);
         }
     });
     for (size_t i = 0; i < later.size(); ++i)

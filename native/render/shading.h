@@ -66,7 +66,7 @@ struct Shading {
 // particles arriving along wl are spread over the surface by their cosine to the geometric
 // normal ng. A particle's flux then reaches the BSDF times cos(wl, ns)+ / cos(wl, ng), and a
 // photon scattered towards wi leaves through the geometric surface, |wi.ng| (eq. 5.17 with
-// Cycles' convention that only the light side's cosine is the shading normal's). Both helpers
+// Cycles' convention that only the light side's cosine is the shading normal's). The helpers
 // take wl in world space, unit, towards the particle's source, on the side of the Shading's ray.
 // Where the frame's normal is the geometric one they return their input unchanged, bit for bit.
 
@@ -92,17 +92,18 @@ class MaterialLobeTable {
     explicit MaterialLobeTable(const Scene& scene);
     // The material's lobes, or null when they depend on the hit (or the id is out of range).
     const PrincipledBsdf* find(uint32_t material_id) const {
-        return material_id < has_lobes_.size() && has_lobes_[material_id] ? &lobes_[material_id]
-                                                                          : nullptr;
+        return has(material_id) ? &lobes_[material_id] : nullptr;
     }
     // Their class_color_sum() (the G-buffer's albedo), which every hit's BSDF finished from
     // them shares (its lobes' weights are the material's), or null as find().
     const vec3* albedo(uint32_t material_id) const {
-        return material_id < has_lobes_.size() && has_lobes_[material_id] ? &albedo_[material_id]
-                                                                          : nullptr;
+        return has(material_id) ? &albedo_[material_id] : nullptr;
     }
 
   private:
+    bool has(uint32_t material_id) const {
+        return material_id < has_lobes_.size() && has_lobes_[material_id];
+    }
     std::vector<PrincipledBsdf> lobes_;
     std::vector<vec3> albedo_;
     std::vector<uint8_t> has_lobes_;

@@ -252,12 +252,9 @@ TEST(NormalMap, BlenderFourKeepsTheBentNormalOfALambertMaterial) {
         << "V1 corrects it";
 }
 
-// A sun straight above a Lambert plane whose normal map tilts every normal by `tilt`:
-// L = rho / pi x S cos(tilt) (no correction: the view's reflection stays well above the surface;
-// no bump shadowing: the light is above both horizons). The Normal pass holds the tilted normal.
-TEST(NormalMap, SunOverNormalMappedPlane) {
-    const float albedo = 0.5f, strength = 3.0f, tilt = 0.5f;
-    Scene scene;
+// A 100 m Lambert plane of `albedo` at z = 0 whose normal map tilts every normal by `tilt`
+// towards +x.
+void add_tilted_lambert_plane(Scene& scene, float albedo, float tilt) {
     Material material = test::lambert(albedo);
     material.normal_texture =
         int32_t(scene.add_texture(normal_texel(vec3(std::sin(tilt), 0.0f, std::cos(tilt)))));
@@ -265,6 +262,15 @@ TEST(NormalMap, SunOverNormalMappedPlane) {
     Mesh mesh = mapped_plane(1.0f);
     for (vec3& p : mesh.positions) p *= 50.0f;
     scene.add_instance(scene.add_mesh(mesh), mat4(1.0f));
+}
+
+// A sun straight above a Lambert plane whose normal map tilts every normal by `tilt`:
+// L = rho / pi x S cos(tilt) (no correction: the view's reflection stays well above the surface;
+// no bump shadowing: the light is above both horizons). The Normal pass holds the tilted normal.
+TEST(NormalMap, SunOverNormalMappedPlane) {
+    const float albedo = 0.5f, strength = 3.0f, tilt = 0.5f;
+    Scene scene;
+    add_tilted_lambert_plane(scene, albedo, tilt);
     light_from_above(scene, strength);
     PathTracer tracer(scene, test::settings_with_samples(4));
     tracer.render(4);
@@ -288,13 +294,7 @@ void expect_first_hits_match_the_path_tracer(float sun_angle) {
     constexpr double kFloatRounding = 1e-4;  // relative: float cosines, BSDF and film sums
     const float albedo = 0.5f, strength = 3.0f, tilt = 0.5f;
     Scene scene;
-    Material material = test::lambert(albedo);
-    material.normal_texture =
-        int32_t(scene.add_texture(normal_texel(vec3(std::sin(tilt), 0.0f, std::cos(tilt)))));
-    scene.add_material(material);
-    Mesh mesh = mapped_plane(1.0f);
-    for (vec3& p : mesh.positions) p *= 50.0f;
-    scene.add_instance(scene.add_mesh(mesh), mat4(1.0f));
+    add_tilted_lambert_plane(scene, albedo, tilt);
     scene.set_world(test::black_world());
     scene.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.5f), 0.01f, 4));
     Light sun;
