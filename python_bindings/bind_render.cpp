@@ -331,7 +331,8 @@ void bind_preview(py::module_& m) {
                        "(True); False: one lookup per pixel.")
         .def_readwrite("final_gather", &S::final_gather,
                        "Final gather (False): the first surface sends one BSDF-sampled ray per "
-                       "sample and the field is read where it lands, so the field's blocks and "
+                       "sample and the field is read where it lands after a diffuse bounce (a "
+                       "glossy one goes on as a reference path), so the field's blocks and "
                        "leaks reach the picture only through one more bounce.")
         .def("validate", &validate_preview_settings,
              "Raises ValueError naming the first invalid field.");

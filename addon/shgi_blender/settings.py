@@ -220,7 +220,7 @@ PROBE_GRID_DEFAULTS = {
     "hysteresis": 0.95,
     "visibility": True,
     "visibility_resolution": 8,
-    "visibility_blur": 0.15,
+    "visibility_blur": 0.10,
     "normal_bias": 0.25,
     "view_bias": 0.0,
     "bleed_bias": 0.0,

@@ -28,6 +28,9 @@ its default in the new place while its old value lies unused under the old name.
 9. F12's denoising Prefilter defaults to Automatic (settings.DENOISING_DEFAULTS), now that a
    render with a Time Limit sets the denoiser's networks up before it samples. A scene saved
    before keeps Fast unless it set the prefilter.
+10. The probe grid's Visibility > Blur defaults to 0.10 rad, where it was 0.15: the narrower
+    distance filter lets half as much of a bright room's light through a 10 cm wall
+    (docs/methods.md, probe grid). A scene saved before keeps 0.15 unless it set the blur.
 
 ``upgrade`` takes what a scene stored (its ID properties as a dict: only values someone set are
 stored, a default is not) and says what to write where, so that the scene renders with the
@@ -38,7 +41,7 @@ from dataclasses import dataclass, field
 
 from . import settings
 
-SETTINGS_VERSION = 9
+SETTINGS_VERSION = 10
 
 # The method groups that version 2 had: a scene saved then could render only with these, so
 # only they keep reading their field directly (groups added later start with their defaults).
@@ -75,6 +78,9 @@ INSTANT_GI_DEFAULTS_BEFORE_7 = {"passes": 4}
 # scene.shgi's own defaults before version 9 that have changed since (every earlier layout
 # rendered F12 with these, the denoising settings having come in with their defaults).
 DEFAULTS_BEFORE_9 = {"denoising_prefilter": "FAST"}
+# The Probe Grid group's defaults before version 10 that have changed since (the group is as
+# old as the add-on).
+PROBE_GRID_DEFAULTS_BEFORE_10 = {"visibility_blur": 0.15}
 
 
 @dataclass
@@ -129,6 +135,11 @@ def upgrade(stored):
         for name, old_default in DEFAULTS_BEFORE_9.items():
             if name not in stored:
                 result.values[("", name)] = old_default
+    if version < 10:
+        group = stored.get("probe_grid", {})
+        for name, old_default in PROBE_GRID_DEFAULTS_BEFORE_10.items():
+            if name not in group:
+                result.values[("probe_grid", name)] = old_default
     return result
 
 

@@ -68,7 +68,7 @@ struct ProbeGridSettings {
     // Leak prevention (probes/probe_visibility.h; EEVEE's Bias, Bleed Bias, Blur).
     bool visibility = true;
     int visibility_resolution = 8;      // octahedral texels per side, per probe
-    float visibility_blur = 0.15f;      // ~ angular radius (rad) of the distance filter
+    float visibility_blur = 0.10f;      // ~ angular radius (rad) of the distance filter
     float normal_bias = 0.25f;          // probe spacings along the shading normal
     float view_bias = 0.0f;             // probe spacings towards the viewer
     float bleed_bias = 0.0f;

@@ -540,7 +540,6 @@ bool PathIntegrator::scatter(const Shading& shading, Ray* ray) {
     throughput_ *= bs.weight;
     last_delta_ = bs.delta || field_vertex;  // a field vertex's NEE skips traced lobes
     if (!bs.delta) {
-        ++smooth_bounces_;
         // Cycles' min_ray_pdf takes the whole BSDF's pdf, which a field vertex's sample (of
         // the traced lobes alone) does not give.
         if (settings_.filter_glossy > 0.0f)

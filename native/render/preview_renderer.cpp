@@ -336,7 +336,7 @@ class FrameWork {
     bool screen_space_;  // the field shades_first_surfaces()
     const FieldLookup no_light_{ShRgb(2), vec3(0.0f)};  // first surfaces' lookup then
     float reuse_;  // the field's reuse distance; 0: every pixel makes its own lookup
-    int final_gather_;  // smooth bounces before a path reads the field (PreviewSettings)
+    int final_gather_;  // diffuse bounces before a path reads the field (PreviewSettings)
     bool combined_only_;  // the film sums only Combined: the paths write no other pass
     vec3 camera_position_, forward_;  // the camera's, for the G-buffer's depth
 };

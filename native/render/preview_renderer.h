@@ -80,8 +80,9 @@ struct PreviewSettings {
     // lookup per pixel, as the reference would make.
     bool reuse_field_lookups = true;
     // Final gather (render/path_integrator.h): the first surface sends one BSDF-sampled ray per
-    // sample and the field is read where it lands, not at the first surface. Slower per sample,
-    // but the field's blocks and leaks reach the picture only through one more bounce.
+    // sample and the field is read where it lands after a diffuse bounce (a glossy one goes on
+    // as a reference path), not at the first surface. Slower per sample, but the field's blocks
+    // and leaks reach the picture only through one more bounce.
     bool final_gather = false;
 };
 

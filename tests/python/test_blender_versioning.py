@@ -32,7 +32,7 @@ def test_first_layout_values_move_into_the_method_groups():
         ("photon_lattice", "final_gather"): False, ("probe_grid", "final_gather"): False,
         # Clamp Indirect left at that layout's default, 0 (off), not today's Cycles default;
         # Filter Glossy, which it did not have, off as it rendered
-        ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **BEFORE_9}
+        ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **BEFORE_9, **BEFORE_10}
     assert sorted(upgrade.removed) == [("", "caustics"), ("", "photons"),
                                        ("", "viewport_photon_passes"),
                                        ("", "viewport_probe_passes")]
@@ -56,12 +56,13 @@ def test_a_second_layout_scene_keeps_reading_its_field_directly():
     upgrade = settings_upgrade.upgrade({"settings_version": 2, "probe_grid": {"order": 1}})
     assert upgrade.values == {("photon_lattice", "final_gather"): False,
                               ("probe_grid", "final_gather"): False, ("", "clamp_indirect"): 0.0,
-                              ("", "filter_glossy"): 0.0, **BEFORE_9}
+                              ("", "filter_glossy"): 0.0, **BEFORE_9, **BEFORE_10}
     assert (upgrade.removed, upgrade.notes) == ([], [])
     # One set by hand in that file (it cannot be, but a script may have) is kept.
     stored = {"settings_version": 2, "probe_grid": {"final_gather": True}, "clamp_indirect": 3.0,
               "filter_glossy": 0.5, "denoising_prefilter": 2}
-    assert settings_upgrade.upgrade(stored).values == {("photon_lattice", "final_gather"): False}
+    assert settings_upgrade.upgrade(stored).values == {("photon_lattice", "final_gather"): False,
+                                                       **BEFORE_10}
 
 
 def test_a_third_layout_scene_keeps_clamp_indirect_off():
@@ -71,9 +72,10 @@ def test_a_third_layout_scene_keeps_clamp_indirect_off():
     assert shgi.PathTracerSettings().clamp_indirect == 0.0  # scripts keep the native 0
     assert settings_upgrade.upgrade({"settings_version": 3, "samples": 5}).values == {
         ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6,
-        **INSTANT_GI_BEFORE_7, **BEFORE_9}
+        **INSTANT_GI_BEFORE_7, **BEFORE_9, **BEFORE_10}
     assert settings_upgrade.upgrade({"settings_version": 3, "clamp_indirect": 4.0}).values == {
-        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9}
+        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9,
+        **BEFORE_10}
 
 
 def test_a_fourth_layout_scene_keeps_filter_glossy_off():
@@ -85,9 +87,10 @@ def test_a_fourth_layout_scene_keeps_filter_glossy_off():
     assert shgi.PreviewSettings().filter_glossy == 0.0
     assert shgi.LightmapSettings().filter_glossy == 0.0
     assert settings_upgrade.upgrade({"settings_version": 4, "samples": 5}).values == {
-        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9}
+        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9,
+        **BEFORE_10}
     assert settings_upgrade.upgrade({"settings_version": 4, "filter_glossy": 0.25}).values == {
-        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9}
+        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9, **BEFORE_10}
 
 
 # Light Propagation's defaults before layout 6, as an upgrade writes them into the group.
@@ -106,11 +109,12 @@ def test_a_fifth_layout_scene_keeps_the_light_propagation_defaults_of_then():
     assert (settings.PROPAGATION_DEFAULTS["steps"], settings.PROPAGATION_DEFAULTS["distance"]) == (
         0, 32.0)
     assert settings_upgrade.upgrade({"settings_version": 5, "samples": 5}).values == {
-        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9}
+        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9, **BEFORE_10}
     stored = {"settings_version": 5, "propagation": {"steps": 16, "unclamped_transfer": True}}
     assert settings_upgrade.upgrade(stored).values == {
         **{key: value for key, value in PROPAGATION_BEFORE_6.items()
-           if key[1] not in ("steps", "unclamped_transfer")}, **INSTANT_GI_BEFORE_7, **BEFORE_9}
+           if key[1] not in ("steps", "unclamped_transfer")}, **INSTANT_GI_BEFORE_7, **BEFORE_9,
+        **BEFORE_10}
     assert not any(group == "propagation" for group, _ in settings_upgrade.upgrade(
         {"settings_version": 2, "samples": 5}).values)
 
@@ -128,10 +132,10 @@ def test_a_sixth_layout_scene_keeps_instant_gi_passes_for_renders_and_bakes():
     defaults = settings.default_properties(shgi).instant_gi
     assert (defaults.passes, defaults.bake_passes) == (64, shgi.method("INSTANT_GI").final_passes)
     assert settings_upgrade.upgrade({"settings_version": 6, "samples": 5}).values == {
-        **INSTANT_GI_BEFORE_7, **BEFORE_9}
+        **INSTANT_GI_BEFORE_7, **BEFORE_9, **BEFORE_10}
     stored = {"settings_version": 6, "instant_gi": {"passes": 12, "sets_x": 2}}
     assert settings_upgrade.upgrade(stored).values == {("instant_gi", "bake_passes"): 12,
-                                                       **BEFORE_9}
+                                                       **BEFORE_9, **BEFORE_10}
     assert not any(group == "instant_gi" for group, _ in settings_upgrade.upgrade(
         {"settings_version": 2, "samples": 5}).values)
 
@@ -149,10 +153,25 @@ def test_an_eighth_layout_scene_keeps_the_fast_prefilter():
     assert (settings.PROPERTY_DEFAULTS["pixel_filter"],
             settings.PROPERTY_DEFAULTS["filter_width"]) == ("BOX", 1.0)
     for layout in (7, 8):
-        assert settings_upgrade.upgrade({"settings_version": layout, "samples": 5}).values == \
-            BEFORE_9
+        assert settings_upgrade.upgrade({"settings_version": layout, "samples": 5}).values == {
+            **BEFORE_9, **BEFORE_10}
         assert settings_upgrade.upgrade({"settings_version": layout,
-                                         "denoising_prefilter": 2}).values == {}
+                                         "denoising_prefilter": 2}).values == BEFORE_10
+
+
+# The probe grid's Visibility > Blur before layout 10, as an upgrade writes it into the group.
+BEFORE_10 = {("probe_grid", "visibility_blur"): 0.15}
+
+
+def test_a_ninth_layout_scene_keeps_the_probe_grids_wider_visibility_blur():
+    """Layout 10 narrowed the probe grid's distance filter (Visibility > Blur 0.15 -> 0.10 rad):
+    a scene saved before, which left 0.15, keeps it; one that set a blur keeps its own. Native
+    scripts get the new default as well."""
+    assert settings.PROBE_GRID_DEFAULTS["visibility_blur"] == pytest.approx(
+        shgi.ProbeGridSettings().visibility_blur) == pytest.approx(0.10)
+    assert settings_upgrade.upgrade({"settings_version": 9, "samples": 5}).values == BEFORE_10
+    assert settings_upgrade.upgrade({"settings_version": 9,
+                                     "probe_grid": {"visibility_blur": 0.4}}).values == {}
 
 
 def test_settings_of_today_layout_are_left_alone():

@@ -2280,7 +2280,7 @@ class PreviewSettings:
     @property
     def final_gather(self) -> bool:
         """
-        Final gather (False): the first surface sends one BSDF-sampled ray per sample and the field is read where it lands, so the field's blocks and leaks reach the picture only through one more bounce.
+        Final gather (False): the first surface sends one BSDF-sampled ray per sample and the field is read where it lands after a diffuse bounce (a glossy one goes on as a reference path), so the field's blocks and leaks reach the picture only through one more bounce.
         """
     @final_gather.setter
     def final_gather(self, arg0: bool) -> None:
