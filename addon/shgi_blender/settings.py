@@ -387,8 +387,9 @@ DENOISING_ITEMS = {
         ("FAST", "Fast", "The denoiser allows for noise in the guides"),
         ("ACCURATE", "Accurate", "Denoise the guides first (keeps the most detail, slowest)"),
         ("AUTO", "Automatic",
-         "Fast while the guides are noisy (under 8 samples), then None: the guides are then "
-         "clean enough for the denoiser's best network"),
+         "Fast while the guides are noisy (under 8 samples; under 32 where much of the image "
+         "is seen through glass or in mirrors), then None: the guides are then clean enough "
+         "for the denoiser's best network"),
     ),
     "quality": (
         ("HIGH", "High", "Best quality"),

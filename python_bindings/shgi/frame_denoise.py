@@ -18,7 +18,9 @@ with Cycles' choices: "ACCURATE" denoises each guide first with the RT network a
 the colour filter they are clean (``cleanAux``); "FAST" passes them as they are and lets the
 colour filter allow for their noise; "NONE" passes them as they are and calls them clean (for
 noise-free guides); and one of SHGI's, "AUTO": "FAST" below CLEAN_GUIDE_SAMPLES samples a pixel,
-"NONE" from there on (``denoise``'s ``samples``). OIDN has its High-quality network only for clean
+"NONE" from there on (``denoise``'s ``samples``), and from SPECULAR_CLEAN_GUIDE_SAMPLES when more
+than SPECULAR_GUIDE_SHARE of the frame sees its guides through or in specular surfaces
+(``specular_guide_share``). OIDN has its High-quality network only for clean
 guides: with "FAST" the quality High runs the Balanced network (the same output, measured), so
 once the guides are clean enough to call clean, "NONE" is worth 0.6-0.9 dB over "FAST" for about
 twice its time, and "ACCURATE" gives what "NONE" gives at three times the cost
@@ -64,7 +66,8 @@ from .denoise import cpu_device, import_optional
 
 __all__ = ["QUALITIES", "PREFILTERS", "CLEAN_GUIDE_SAMPLES", "GUIDES", "NOISY_PASS",
            "ALBEDO_PASS", "NORMAL_PASS", "PIXEL_FILTERS", "FrameDenoiser", "available",
-           "denoise_frame", "direct_share", "guide_images", "prefilter_for"]
+           "denoise_frame", "direct_share", "guide_images", "prefilter_for",
+           "specular_guide_share"]
 
 QUALITIES = ("HIGH", "BALANCED", "FAST")
 PREFILTERS = ("NONE", "FAST", "ACCURATE", "AUTO")
@@ -75,6 +78,17 @@ PREFILTERS = ("NONE", "FAST", "ACCURATE", "AUTO")
 # 0.4-0.9 dB from 4 samples on. Guides seen through glass stay noisy longer: in the caustics scene
 # "NONE" was 0.8-0.9 dB below "FAST" at 8 samples, 0.3-0.4 dB above at 32, 0.6-0.7 at 128.
 CLEAN_GUIDE_SAMPLES = 8
+# Guides seen through clear glass or in a mirror (the film follows specular bounces for them)
+# change with each sample's jitter wherever the glass is curved, so they need more samples: in the
+# caustics scene (17% of its covered pixels) "NONE" was 0.79 dB below "FAST" at 8 spp, 0.13 at 16
+# and 0.42 above at 32. "AUTO" runs "NONE" from SPECULAR_CLEAN_GUIDE_SAMPLES where more than
+# SPECULAR_GUIDE_SHARE of the covered pixels see theirs so (docs/equal-time.md); the other bench
+# scenes have none.
+SPECULAR_CLEAN_GUIDE_SAMPLES = 32
+SPECULAR_GUIDE_SHARE = 0.05
+# How far a guide may differ from the first hit's (albedo, normal component) and still count as
+# the first hit's: the passes agree to 1e-5 where the first surface is not specular.
+SPECULAR_GUIDE_DIFFERENCE = 0.05
 GUIDES = ("NONE", "ALBEDO", "ALBEDO_NORMAL")
 # The passes Cycles writes beside a denoised Combined. The renderers write the guides under the
 # same names (render/film.h: they follow specular bounces as Cycles' do); a denoise replaces them
@@ -140,14 +154,37 @@ def available() -> bool:
     return True
 
 
-def prefilter_for(prefilter: str, samples=None) -> str:
-    """The prefilter that runs for a frame of `samples` samples a pixel: `prefilter` itself, but
-    "AUTO" becomes "FAST" below CLEAN_GUIDE_SAMPLES (or when `samples` is None) and "NONE" from
+def prefilter_for(prefilter: str, samples=None, specular_share: float = 0.0) -> str:
+    """The prefilter that runs for a frame of `samples` samples a pixel, `specular_share` of
+    whose covered pixels see their guides through or in specular surfaces: `prefilter` itself,
+    but "AUTO" becomes "FAST" below CLEAN_GUIDE_SAMPLES (SPECULAR_CLEAN_GUIDE_SAMPLES when
+    `specular_share` exceeds SPECULAR_GUIDE_SHARE; always when `samples` is None) and "NONE" from
     there on."""
     _check_choice("prefilter", prefilter, PREFILTERS)
     if prefilter != "AUTO":
         return prefilter
-    return "NONE" if samples is not None and samples >= CLEAN_GUIDE_SAMPLES else "FAST"
+    clean = (SPECULAR_CLEAN_GUIDE_SAMPLES if specular_share > SPECULAR_GUIDE_SHARE
+             else CLEAN_GUIDE_SAMPLES)
+    return "NONE" if samples is not None and samples >= clean else "FAST"
+
+
+def specular_guide_share(passes: dict) -> float:
+    """The share of the pixels that see a surface whose guides (ALBEDO_PASS, NORMAL_PASS) are not
+    the first hit's (FIRST_HIT_GUIDES), i.e. were followed through or into specular surfaces; 0
+    when the passes lack either (the viewport's, which hold only what the denoiser needs)."""
+    needed = (ALBEDO_PASS, NORMAL_PASS, "Depth", *FIRST_HIT_GUIDES[ALBEDO_PASS],
+              *FIRST_HIT_GUIDES[NORMAL_PASS])
+    if any(name not in passes for name in needed):
+        return 0.0
+    albedo, normal, background = guide_images(passes, "ALBEDO_NORMAL")
+    first_albedo = np.clip(sum(_finite(passes[name][..., :3])
+                               for name in FIRST_HIT_GUIDES[ALBEDO_PASS]), 0.0, 1.0)
+    (first_normal,) = (_finite(passes[name][..., :3]) for name in FIRST_HIT_GUIDES[NORMAL_PASS])
+    followed = ((np.abs(_finite(albedo) - first_albedo).max(axis=-1) > SPECULAR_GUIDE_DIFFERENCE)
+                | (np.abs(_finite(normal) - first_normal).max(axis=-1)
+                   > SPECULAR_GUIDE_DIFFERENCE))
+    covered = ~background
+    return float(followed[covered].mean()) if covered.any() else 0.0
 
 
 def direct_share(samples=None, pixel_filter: str = "BOX", filter_width: float = 1.0) -> float:
@@ -279,7 +316,8 @@ class FrameDenoiser:
         if noisy.ndim != 3 or noisy.shape[2] not in (3, 4):
             raise ValueError(f"passes['Combined']: shape {noisy.shape} is not (H, W, 3 or 4)")
         start = time.perf_counter()
-        prefilter = prefilter_for(self.prefilter, samples)
+        prefilter = prefilter_for(self.prefilter, samples, specular_guide_share(passes)
+                                  if self.prefilter == "AUTO" else 0.0)
         if (self.prefilter == "AUTO" and prefilter == "NONE" and seconds is not None
                 and self._estimate("NONE", noisy.shape[0] * noisy.shape[1]) > seconds):
             prefilter = "FAST"

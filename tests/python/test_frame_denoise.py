@@ -21,8 +21,9 @@ from scene_support import committed
 from shgi import metrics
 from shgi import frame_denoise
 from shgi.frame_denoise import (ALBEDO_PASS, CLEAN_GUIDE_SAMPLES, NOISY_PASS, NORMAL_PASS,
-                                PREFILTERS, FrameDenoiser, denoise_frame, direct_share,
-                                guide_images, prefilter_for)
+                                PREFILTERS, SPECULAR_CLEAN_GUIDE_SAMPLES, SPECULAR_GUIDE_SHARE,
+                                FrameDenoiser, denoise_frame, direct_share, guide_images,
+                                prefilter_for, specular_guide_share)
 
 sys.path.insert(0, str(REPO_ROOT / "examples"))
 import scenes  # noqa: E402  (examples/scenes.py)
@@ -241,6 +242,33 @@ def test_automatic_prefilter_is_fast_for_noisy_guides_and_none_for_clean_ones(no
         # Before it knows where a render stops, a time limit plans for the longer of the two.
         assert auto.estimate_seconds(640, 360) == max(
             FrameDenoiser("BALANCED", name).estimate_seconds(640, 360) for name in ("FAST", "NONE"))
+
+
+def test_automatic_prefilter_waits_longer_for_guides_seen_through_glass(noisy):
+    """Guides followed through clear glass stay noisy longer (docs/equal-time.md): a frame of
+    which more than SPECULAR_GUIDE_SHARE sees its guides so runs Fast up to
+    SPECULAR_CLEAN_GUIDE_SAMPLES."""
+    builder = scenes.cornell_box(scale=0.25)
+    builder.material("glass", (1.0, 1.0, 1.0), transmission=1.0, roughness=0.0, ior=1.45)
+    builder.part("glass_block", scenes.box((-0.45, 0.1, 0.0), 0.5, 0.3, 0.9, np.radians(25)),
+                 "glass", (1.0, 1.0, 1.0))
+    frame = shgi.render_path_traced(committed(builder),
+                                    shgi.PathTracerSettings(samples=2, seed=1))
+    share = specular_guide_share(frame)
+    assert SPECULAR_GUIDE_SHARE < share < 0.5, share  # measured 0.13
+    assert specular_guide_share(noisy) == 0.0  # no specular surface in the plain box
+    # Without the first hit's passes (the viewport's) nothing is known: the plain threshold.
+    assert specular_guide_share({name: image for name, image in frame.items()
+                                 if name != "DiffCol"}) == 0.0
+    assert [prefilter_for("AUTO", samples, share) for samples in (
+        CLEAN_GUIDE_SAMPLES, SPECULAR_CLEAN_GUIDE_SAMPLES - 1, SPECULAR_CLEAN_GUIDE_SAMPLES)] == [
+        "FAST", "FAST", "NONE"]
+    with FrameDenoiser("BALANCED", "AUTO") as auto:
+        for samples, same_as in ((CLEAN_GUIDE_SAMPLES, "FAST"),
+                                 (SPECULAR_CLEAN_GUIDE_SAMPLES, "NONE")):
+            np.testing.assert_array_equal(
+                auto.denoise(frame, samples=samples)["Combined"],
+                denoise_frame(frame, "BALANCED", same_as, samples=samples)["Combined"])
 
 
 # Clean enough guides (16 samples of the Cornell box) let the High network run: measured 40.04 dB
