@@ -3,7 +3,13 @@ every choice of shgi.frame_denoise, scored against the renderer's own reference.
 
     PYTHONPATH=build/python /opt/shgi/bpy-5.0.1/bin/python bench/denoise_prefilter.py
         [--scenes sun_room,textured] [--samples 1,2,4,8,16,64] [--cycles]
-        [--cache build/equal_time_cache]
+        [--cache build/equal_time_cache] [--pixel-filter BLACKMAN_HARRIS --filter-width 1.5]
+        [--split]
+
+With --split, each frame is instead denoised with the Automatic prefilter and three shares of
+the direct light (Emit + Env) taken around the network: all of it (the rule before the share
+followed the pixel filter), none of it, and frame_denoise.direct_share's for the frame's
+samples and pixel filter (what F12 does).
 
 A benchmark, not a test: nothing is asserted. Scenes are bench/equal_time.py's (same
 resolution, Light Paths and seed), plus "textured": the Cornell box with a 256 x 256 colour grid
@@ -49,6 +55,12 @@ def parse_args():
     parser.add_argument("--resolution", default="200x150", help="WxH pixels")
     parser.add_argument("--cycles", action="store_true", help="Cycles' frames too")
     parser.add_argument("--cache", default=os.path.join(REPO_ROOT, "build", "equal_time_cache"))
+    parser.add_argument("--pixel-filter", default=None,
+                        help="SHGI's Film > Pixel Filter (BOX, GAUSSIAN, BLACKMAN_HARRIS); "
+                             "default the add-on's")
+    parser.add_argument("--filter-width", type=float, default=None)
+    parser.add_argument("--split", action="store_true",
+                        help="compare shares of the direct light taken around the network")
     args = parser.parse_args(argv)
     args.scenes = args.scenes.split(",")
     args.samples = [int(n) for n in args.samples.split(",")]
@@ -76,6 +88,10 @@ def build(name, args):
             for loop in mesh.loops:  # the quad's corners onto the unit square
                 layer.data[loop.index].uv = ((0, 0), (1, 0), (1, 1), (0, 1))[loop.vertex_index]
             mesh.materials[0] = material
+    if args.pixel_filter is not None:
+        scene.shgi.pixel_filter = args.pixel_filter
+    if args.filter_width is not None:
+        scene.shgi.filter_width = args.filter_width
     layer = scene.view_layers[0]
     layer.cycles.denoising_store_passes = True
     for name_of_pass in PASSES_USED:
@@ -111,7 +127,8 @@ def reference(name, scene, renderer, args):
         else:
             key = key.replace("_cycles_", "_cycles_clamp10_")
         return equal_time.reference(scene, key, None, None, args)[0]
-    path = os.path.join(args.cache, f"{TEXTURED}_{args.width}x{args.height}_shgi_seed"
+    path = os.path.join(args.cache, f"{TEXTURED}_{args.width}x{args.height}_shgi"
+                                    f"{equal_time.pixel_filter_tag(scene.shgi)}_seed"
                                     f"{equal_time.REFERENCE_SEED}_{TEXTURED_REFERENCE_SAMPLES}spp.npy")
     if not os.path.exists(path):
         frame = render(scene, "SHGI", TEXTURED_REFERENCE_SAMPLES,
@@ -121,18 +138,56 @@ def reference(name, scene, renderer, args):
     return np.load(path)
 
 
+def split_study(args):
+    """PSNR of each frame denoised (Automatic prefilter) with all, none and direct_share's share
+    of the direct light around the network."""
+    from shgi import frame_denoise, metrics
+
+    rule = frame_denoise.direct_share
+    exr = os.path.join(args.cache, "prefilter.exr")
+    for name in args.scenes:
+        scene = build(name, args)
+        props = scene.shgi
+        ref = reference(name, scene, "shgi", args)
+        print(f"\n{name}, SHGI, {props.pixel_filter} {props.filter_width:g}: PSNR dB of the "
+              "frame denoised with a share of the direct light around the network")
+        print(f"{'spp':>5s} {'noisy':>6s} {'all':>6s} {'none':>6s} {'rule':>6s} {'share':>6s}")
+        for samples in args.samples:
+            frame = render(scene, "SHGI", samples, exr)
+            noisy = dict(frame, Combined=frame["Noisy Image"])
+            cells = []
+            for share in (lambda *_: 1.0, lambda *_: 0.0, rule):
+                frame_denoise.direct_share = share
+                try:
+                    with frame_denoise.FrameDenoiser("HIGH", "AUTO", "ALBEDO_NORMAL",
+                                                     props.pixel_filter,
+                                                     props.filter_width) as denoiser:
+                        out = denoiser.denoise(noisy, samples=samples)["Combined"]
+                finally:
+                    frame_denoise.direct_share = rule
+                cells.append(f"{metrics.psnr(ref, out):6.2f}")
+            share = rule(samples, props.pixel_filter, props.filter_width)
+            print(f"{samples:5d} {metrics.psnr(ref, frame['Noisy Image']):6.2f} "
+                  + " ".join(cells) + f" {share:6.3f}", flush=True)
+
+
 def main():
     args = parse_args()
+    if args.split:
+        split_study(args)
+        return
     from shgi import frame_denoise, metrics
 
     choices = [(prefilter, quality) for prefilter in ("FAST", "NONE", "ACCURATE")
                for quality in ("HIGH", "BALANCED")]
-    denoisers = {choice: frame_denoise.FrameDenoiser(choice[1], choice[0], "ALBEDO_NORMAL")
-                 for choice in choices}
     exr = os.path.join(args.cache, "prefilter.exr")
     header = " ".join(f"{p[:4] + '/' + q[:4]:>12s}" for p, q in choices)
     for name in args.scenes:
         scene = build(name, args)
+        # The share of the direct light around the network follows the scene's pixel filter.
+        denoisers = {choice: frame_denoise.FrameDenoiser(
+            choice[1], choice[0], "ALBEDO_NORMAL", scene.shgi.pixel_filter,
+            scene.shgi.filter_width) for choice in choices}
         renderers = ["SHGI"] + (["CYCLES"] if args.cycles and name != TEXTURED else [])
         for engine in renderers:
             ref = reference(name, scene, "shgi" if engine == "SHGI" else "cycles", args)
@@ -143,15 +198,15 @@ def main():
                 noisy = dict(frame, Combined=frame["Noisy Image"])
                 cells = []
                 for choice, denoiser in denoisers.items():
-                    denoiser.denoise(noisy)  # the first run sets the network up
+                    denoiser.denoise(noisy, samples=samples)  # the first run sets it up
                     start = time.process_time()
-                    out = denoiser.denoise(noisy)["Combined"]
+                    out = denoiser.denoise(noisy, samples=samples)["Combined"]
                     seconds = time.process_time() - start
                     cells.append(f"{metrics.psnr(ref, out):5.2f} ({seconds:.2f})")
                 print(f"{samples:5d} {metrics.psnr(ref, frame['Noisy Image']):6.2f} "
                       + " ".join(cells), flush=True)
-    for denoiser in denoisers.values():
-        denoiser.close()
+        for denoiser in denoisers.values():
+            denoiser.close()
 
 
 if __name__ == "__main__":

@@ -387,8 +387,9 @@ DENOISING_ITEMS = {
         ("FAST", "Fast", "The denoiser allows for noise in the guides"),
         ("ACCURATE", "Accurate", "Denoise the guides first (keeps the most detail, slowest)"),
         ("AUTO", "Automatic",
-         "Fast while the guides are noisy (under 8 samples), then None: the guides are then "
-         "clean enough for the denoiser's best network"),
+         "Fast while the guides are noisy (under 8 samples; under 32 where much of the image "
+         "is seen through glass or in mirrors), then None: the guides are then clean enough "
+         "for the denoiser's best network"),
     ),
     "quality": (
         ("HIGH", "High", "Best quality"),
@@ -410,6 +411,10 @@ class Denoising:
     prefilter: str
     guides: str
     start_sample: int = 1
+    # The film's pixel filter: how much of the directly seen light goes around the network
+    # follows it (shgi.frame_denoise.direct_share).
+    pixel_filter: str = "BOX"
+    filter_width: float = 1.0
 
     def passes(self):
         """The passes a renderer must return for these guides."""
@@ -421,7 +426,8 @@ class Denoising:
         """A shgi.frame_denoise.FrameDenoiser with these choices (ImportError without pyoidn)."""
         from shgi.frame_denoise import FrameDenoiser
 
-        return FrameDenoiser(self.quality, self.prefilter, self.guides)
+        return FrameDenoiser(self.quality, self.prefilter, self.guides, self.pixel_filter,
+                             self.filter_width)
 
 
 def denoising(props, viewport=False):
@@ -432,7 +438,8 @@ def denoising(props, viewport=False):
     return Denoising(getattr(props, f"{prefix}denoising_quality"),
                      getattr(props, f"{prefix}denoising_prefilter"),
                      getattr(props, f"{prefix}denoising_guides"),
-                     props.viewport_denoising_start_sample if viewport else 1)
+                     props.viewport_denoising_start_sample if viewport else 1,
+                     props.pixel_filter, props.filter_width)
 
 
 # Where each property is drawn in Properties > Render ("panel > label"), for messages that name a

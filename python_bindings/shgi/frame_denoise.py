@@ -18,19 +18,29 @@ with Cycles' choices: "ACCURATE" denoises each guide first with the RT network a
 the colour filter they are clean (``cleanAux``); "FAST" passes them as they are and lets the
 colour filter allow for their noise; "NONE" passes them as they are and calls them clean (for
 noise-free guides); and one of SHGI's, "AUTO": "FAST" below CLEAN_GUIDE_SAMPLES samples a pixel,
-"NONE" from there on (``denoise``'s ``samples``). OIDN has its High-quality network only for clean
+"NONE" from there on (``denoise``'s ``samples``), and from SPECULAR_CLEAN_GUIDE_SAMPLES when more
+than SPECULAR_GUIDE_SHARE of the frame sees its guides through or in specular surfaces
+(``specular_guide_share``). OIDN has its High-quality network only for clean
 guides: with "FAST" the quality High runs the Balanced network (the same output, measured), so
 once the guides are clean enough to call clean, "NONE" is worth 0.6-0.9 dB over "FAST" for about
 twice its time, and "ACCURATE" gives what "NONE" gives at three times the cost
 (docs/equal-time.md, "The denoiser's prefilter"). ``guides`` chooses the inputs as Cycles'
 "Passes" does: "NONE" (colour only), "ALBEDO", "ALBEDO_NORMAL".
 
-The light the camera sees straight from emitters and the world (the Emit and Env passes, when
-given) is taken out of Combined before the network and added back after it: it is exact, and a
-network shown a lamp 60 times brighter than the walls spreads it into a halo (on the Cornell box
-at 4 spp that added 1-3% to the frame's light; without it the denoised frame keeps the noisy
-frame's mean within 0.3%). Pixels that see only the world (Depth is the miss value everywhere
-in the pixel) keep their noisy value, so the geometry's light never bleeds into the background.
+A share of the light the camera sees straight from emitters and the world (the Emit and Env
+passes, when given) is taken out of Combined before the network and added back after it
+(``direct_share``): a network shown a lamp 60 times brighter than the walls spreads it into a
+halo (on the Cornell box at 1 spp, unsplit, it added 3-4% to the frame's light), but what goes
+around the network keeps its noise, and the emitter's edge is noisy (each sample there sees the
+lamp or not). How much goes around follows the pixel filter (``pixel_filter``,
+``filter_width``: the film's) and the samples: with a filter that keeps each sample in its own
+pixel (the box of width 1) the edge's noise falls as the samples add up, so N / (N + 1/4) of it
+goes around at N samples a pixel; with a filter that spreads a sample over its neighbours
+(Cycles' Blackman-Harris 1.5) the emitter's image has a soft fringe, some pixels wide, that few
+samples reach and the network rebuilds better than they do, so only 4 / (N + 4) goes around,
+enough to keep the frame's mean within 1% at few samples (docs/equal-time.md, "The direct
+light's split"). Pixels that see only the world (Depth is the miss value everywhere in the
+pixel) keep their noisy value, so the geometry's light never bleeds into the background.
 
 The network's weights are loaded once per filter; keep one FrameDenoiser for a sequence of
 frames (the viewport does). ``prepare(width, height)`` sets up every network a denoise of that
@@ -55,8 +65,9 @@ from . import _shgi
 from .denoise import cpu_device, import_optional
 
 __all__ = ["QUALITIES", "PREFILTERS", "CLEAN_GUIDE_SAMPLES", "GUIDES", "NOISY_PASS",
-           "ALBEDO_PASS", "NORMAL_PASS", "FrameDenoiser", "available", "denoise_frame",
-           "guide_images", "prefilter_for"]
+           "ALBEDO_PASS", "NORMAL_PASS", "PIXEL_FILTERS", "FrameDenoiser", "available",
+           "denoise_frame", "direct_share", "guide_images", "prefilter_for",
+           "specular_guide_share"]
 
 QUALITIES = ("HIGH", "BALANCED", "FAST")
 PREFILTERS = ("NONE", "FAST", "ACCURATE", "AUTO")
@@ -67,6 +78,17 @@ PREFILTERS = ("NONE", "FAST", "ACCURATE", "AUTO")
 # 0.4-0.9 dB from 4 samples on. Guides seen through glass stay noisy longer: in the caustics scene
 # "NONE" was 0.8-0.9 dB below "FAST" at 8 samples, 0.3-0.4 dB above at 32, 0.6-0.7 at 128.
 CLEAN_GUIDE_SAMPLES = 8
+# Guides seen through clear glass or in a mirror (the film follows specular bounces for them)
+# change with each sample's jitter wherever the glass is curved, so they need more samples: in the
+# caustics scene (17% of its covered pixels) "NONE" was 0.79 dB below "FAST" at 8 spp, 0.13 at 16
+# and 0.42 above at 32. "AUTO" runs "NONE" from SPECULAR_CLEAN_GUIDE_SAMPLES where more than
+# SPECULAR_GUIDE_SHARE of the covered pixels see theirs so (docs/equal-time.md); the other bench
+# scenes have none.
+SPECULAR_CLEAN_GUIDE_SAMPLES = 32
+SPECULAR_GUIDE_SHARE = 0.05
+# How far a guide may differ from the first hit's (albedo, normal component) and still count as
+# the first hit's: the passes agree to 1e-5 where the first surface is not specular.
+SPECULAR_GUIDE_DIFFERENCE = 0.05
 GUIDES = ("NONE", "ALBEDO", "ALBEDO_NORMAL")
 # The passes Cycles writes beside a denoised Combined. The renderers write the guides under the
 # same names (render/film.h: they follow specular bounces as Cycles' do); a denoise replaces them
@@ -83,8 +105,24 @@ FIRST_HIT_GUIDES = {ALBEDO_PASS: ("DiffCol", "GlossCol", "TransCol"),
                     NORMAL_PASS: ("Normal",)}
 # What a renderer should return for the best result: the guides and the direct light.
 WANTED_PASSES = {guides: names + ("Emit", "Env") for guides, names in GUIDE_PASSES.items()}
-# The light the camera sees straight from emitters and the world: added back after the network.
+# The light the camera sees straight from emitters and the world: a share of it (direct_share)
+# goes around the network.
 DIRECT_PASSES = ("Emit", "Env")
+# The films' pixel filters (render/pixel_filter.h, shgi.PixelFilter) and how far from its pixel's
+# centre each puts a sample, as a multiple of its width (Box of width w spans [-w/2, w/2],
+# Gaussian is cut at +-1.5 w, Blackman-Harris spans [-w, w]).
+PIXEL_FILTERS = {"BOX": 0.5, "GAUSSIAN": 1.5, "BLACKMAN_HARRIS": 1.0}
+# Filter Size's range (render/pixel_filter.h kMinFilterWidth, kMaxFilterWidth).
+FILTER_WIDTH_RANGE = (0.01, 10.0)
+# The share of the direct light that goes around the network at N samples a pixel: N / (N +
+# DIRECT_SPLIT_SAMPLES) with a filter that keeps a sample in its pixel, SPREAD_SPLIT_SAMPLES /
+# (N + SPREAD_SPLIT_SAMPLES) with one that spreads it. The network's halo is what bounds both
+# from below at few samples: on the 128 x 128 Cornell box of tests/python/test_frame_denoise.py
+# at 1 spp a share w left the denoised frame (1 - w) x 2.3-3.1% brighter than the noisy one (at
+# 4 spp 1.0-1.5%, at 16 spp 0.1-0.5%), and the issue allows 1% (docs/equal-time.md, "The direct
+# light's split").
+DIRECT_SPLIT_SAMPLES = 0.25
+SPREAD_SPLIT_SAMPLES = 4.0
 # Depth of a pixel where every sample missed (the films' kMissDepth, as Cycles writes it).
 MISS_DEPTH = 1e10
 # Seconds per pixel of a denoise, {(prefilter, quality): s} ("AUTO" as the one it becomes),
@@ -116,14 +154,53 @@ def available() -> bool:
     return True
 
 
-def prefilter_for(prefilter: str, samples=None) -> str:
-    """The prefilter that runs for a frame of `samples` samples a pixel: `prefilter` itself, but
-    "AUTO" becomes "FAST" below CLEAN_GUIDE_SAMPLES (or when `samples` is None) and "NONE" from
+def prefilter_for(prefilter: str, samples=None, specular_share: float = 0.0) -> str:
+    """The prefilter that runs for a frame of `samples` samples a pixel, `specular_share` of
+    whose covered pixels see their guides through or in specular surfaces: `prefilter` itself,
+    but "AUTO" becomes "FAST" below CLEAN_GUIDE_SAMPLES (SPECULAR_CLEAN_GUIDE_SAMPLES when
+    `specular_share` exceeds SPECULAR_GUIDE_SHARE; always when `samples` is None) and "NONE" from
     there on."""
     _check_choice("prefilter", prefilter, PREFILTERS)
     if prefilter != "AUTO":
         return prefilter
-    return "NONE" if samples is not None and samples >= CLEAN_GUIDE_SAMPLES else "FAST"
+    clean = (SPECULAR_CLEAN_GUIDE_SAMPLES if specular_share > SPECULAR_GUIDE_SHARE
+             else CLEAN_GUIDE_SAMPLES)
+    return "NONE" if samples is not None and samples >= clean else "FAST"
+
+
+def specular_guide_share(passes: dict) -> float:
+    """The share of the pixels that see a surface whose guides (ALBEDO_PASS, NORMAL_PASS) are not
+    the first hit's (FIRST_HIT_GUIDES), i.e. were followed through or into specular surfaces; 0
+    when the passes lack either (the viewport's, which hold only what the denoiser needs)."""
+    needed = (ALBEDO_PASS, NORMAL_PASS, "Depth", *FIRST_HIT_GUIDES[ALBEDO_PASS],
+              *FIRST_HIT_GUIDES[NORMAL_PASS])
+    if any(name not in passes for name in needed):
+        return 0.0
+    albedo, normal, background = guide_images(passes, "ALBEDO_NORMAL")
+    first_albedo = np.clip(sum(_finite(passes[name][..., :3])
+                               for name in FIRST_HIT_GUIDES[ALBEDO_PASS]), 0.0, 1.0)
+    (first_normal,) = (_finite(passes[name][..., :3]) for name in FIRST_HIT_GUIDES[NORMAL_PASS])
+    followed = ((np.abs(_finite(albedo) - first_albedo).max(axis=-1) > SPECULAR_GUIDE_DIFFERENCE)
+                | (np.abs(_finite(normal) - first_normal).max(axis=-1)
+                   > SPECULAR_GUIDE_DIFFERENCE))
+    covered = ~background
+    return float(followed[covered].mean()) if covered.any() else 0.0
+
+
+def direct_share(samples=None, pixel_filter: str = "BOX", filter_width: float = 1.0) -> float:
+    """The share of the direct light (Emit + Env) that goes around the network for a frame of
+    `samples` samples a pixel (None: taken as 1, the fewest) filtered by `pixel_filter` of width
+    `filter_width`: N / (N + DIRECT_SPLIT_SAMPLES) when the filter keeps each sample in its own
+    pixel, SPREAD_SPLIT_SAMPLES / (N + SPREAD_SPLIT_SAMPLES) when it spreads samples over their
+    neighbours."""
+    _check_filter(pixel_filter, filter_width)
+    if samples is not None and (not isinstance(samples, (int, np.integer)) or samples < 1):
+        raise ValueError(f"samples {samples!r}: give the frame's samples a pixel (1 or more), "
+                         "or None when unknown")
+    count = 1.0 if samples is None else float(samples)
+    if PIXEL_FILTERS[pixel_filter] * filter_width <= 0.5:
+        return count / (count + DIRECT_SPLIT_SAMPLES)
+    return SPREAD_SPLIT_SAMPLES / (count + SPREAD_SPLIT_SAMPLES)
 
 
 def guide_images(passes: dict, guides: str = "ALBEDO_NORMAL"):
@@ -163,11 +240,15 @@ class FrameDenoiser:
     releases them). Not thread-safe: one thread denoises at a time."""
 
     def __init__(self, quality: str = "HIGH", prefilter: str = "ACCURATE",
-                 guides: str = "ALBEDO_NORMAL"):
+                 guides: str = "ALBEDO_NORMAL", pixel_filter: str = "BOX",
+                 filter_width: float = 1.0):
         _check_choice("quality", quality, QUALITIES)
         _check_choice("prefilter", prefilter, PREFILTERS)
         _check_choice("guides", guides, GUIDES)
+        _check_filter(pixel_filter, filter_width)
         self.quality, self.prefilter, self.guides = quality, prefilter, guides
+        # The film's pixel filter, which direct_share follows.
+        self.pixel_filter, self.filter_width = pixel_filter, float(filter_width)
         self._pyoidn = import_optional("pyoidn", "denoising frames")
         self._device = cpu_device(self._pyoidn)
         self._filters = {}
@@ -235,16 +316,19 @@ class FrameDenoiser:
         if noisy.ndim != 3 or noisy.shape[2] not in (3, 4):
             raise ValueError(f"passes['Combined']: shape {noisy.shape} is not (H, W, 3 or 4)")
         start = time.perf_counter()
-        prefilter = prefilter_for(self.prefilter, samples)
+        prefilter = prefilter_for(self.prefilter, samples, specular_guide_share(passes)
+                                  if self.prefilter == "AUTO" else 0.0)
         if (self.prefilter == "AUTO" and prefilter == "NONE" and seconds is not None
                 and self._estimate("NONE", noisy.shape[0] * noisy.shape[1]) > seconds):
             prefilter = "FAST"
+        share = direct_share(samples, self.pixel_filter, self.filter_width)
         albedo, normal, background = guide_images(passes, self.guides)
         color = _finite(noisy[..., :3])
-        # Emitters and the world seen directly (Emit, Env) go around the network: their light
-        # is exact, and a network given a 60x brighter lamp spreads it over its neighbours (on
-        # the Cornell box at 4 spp that added 1-3% to the frame's light).
-        direct = sum(_finite(passes[name][..., :3]) for name in DIRECT_PASSES if name in passes)
+        # A share of the emitters and the world seen directly (Emit, Env) goes around the
+        # network: a network given a 60x brighter lamp spreads it over its neighbours, but what
+        # goes around keeps the noise of the emitter's edge (direct_share).
+        direct = np.float32(share) * sum(_finite(passes[name][..., :3])
+                                         for name in DIRECT_PASSES if name in passes)
         images = {"color": np.ascontiguousarray(np.maximum(color - direct, 0.0))}
         if albedo is not None:
             images["albedo"] = self._guide("albedo", albedo, prefilter, progress)
@@ -350,9 +434,10 @@ def _first_estimate(prefilter: str, quality: str, pixels: int,
 
 
 def denoise_frame(passes: dict, quality: str = "HIGH", prefilter: str = "ACCURATE",
-                  guides: str = "ALBEDO_NORMAL", progress=None, samples=None) -> dict:
+                  guides: str = "ALBEDO_NORMAL", progress=None, samples=None,
+                  pixel_filter: str = "BOX", filter_width: float = 1.0) -> dict:
     """One frame's FrameDenoiser.denoise with a denoiser made for it."""
-    with FrameDenoiser(quality, prefilter, guides) as denoiser:
+    with FrameDenoiser(quality, prefilter, guides, pixel_filter, filter_width) as denoiser:
         return denoiser.denoise(passes, progress, samples)
 
 
@@ -422,6 +507,15 @@ def _check_size(name: str, value) -> int:
     if not isinstance(value, (int, np.integer)) or not 0 < value <= MAX_SIDE:
         raise ValueError(f"{name} {value!r}: give a whole number of pixels in 1..{MAX_SIDE}")
     return int(value)
+
+
+def _check_filter(pixel_filter: str, filter_width) -> None:
+    _check_choice("pixel_filter", pixel_filter, PIXEL_FILTERS)
+    low, high = FILTER_WIDTH_RANGE
+    if (isinstance(filter_width, bool) or not isinstance(filter_width, (int, float, np.number))
+            or not low <= filter_width <= high):
+        raise ValueError(f"filter_width {filter_width!r}: give the pixel filter's width in "
+                         f"pixels, {low:g} to {high:g}")
 
 
 def _check_choice(name: str, value: str, choices) -> None:

@@ -73,7 +73,8 @@ def script_render(scene):
     passes, _ = shgi.render_preview(native, solver.current_field(), preview)
     denoising = settings.denoising(props)
     passes = denoise_frame(passes, denoising.quality, denoising.prefilter, denoising.guides,
-                           samples=preview.samples)
+                           samples=preview.samples, pixel_filter=denoising.pixel_filter,
+                           filter_width=denoising.filter_width)
     return passes["Combined"]
 
 

@@ -347,7 +347,9 @@ def test_worker_denoises_its_frames_as_a_script_would(method):
         worker.stop()
     assert "not denoised" not in status
     noisy = script_frame(scene, view, props, 6)
-    expected = denoise_frame(noisy, denoising.quality, denoising.prefilter, denoising.guides)
+    expected = denoise_frame(noisy, denoising.quality, denoising.prefilter, denoising.guides,
+                             samples=6, pixel_filter=denoising.pixel_filter,
+                             filter_width=denoising.filter_width)
     assert not np.array_equal(expected["Combined"], noisy["Combined"])
     np.testing.assert_array_equal(frame.pixels, expected["Combined"][::-1])
 
