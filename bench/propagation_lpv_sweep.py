@@ -50,7 +50,7 @@ CONFIGS = {
        for r in (48, 64)},
     **{f"windowed_r{r}": dict(windowed_reinjection=True, resolution=r, distance=float(r))
        for r in (48, 64)},
-    # Issue 51's three changes for closed rooms (docs/methods.md, "The furnace's scale"), alone
+    # The three changes for closed rooms (docs/methods.md, "The furnace's scale"), alone
     # and together: the furnace's radiance scale, propagation until the light settles (at most
     # 96 cells, stopping once 1% of the light is in flight), glossy VPLs (with their own glossy
     # budget); "fix" is all three with the strip along the bounds filled.
@@ -58,8 +58,6 @@ CONFIGS = {
     "settled": dict(distance=96.0, settle_fraction=0.01),
     "glossy": dict(glossy_vpls=True, glossy_bounces=4),
     "glossy_shared": dict(glossy_vpls=True),
-    "furnace_glossy": dict(furnace_scale=True, glossy_vpls=True, glossy_bounces=4),
-    "furnace_settled": dict(furnace_scale=True, distance=96.0, settle_fraction=0.01),
     "fix": dict(furnace_scale=True, distance=96.0, settle_fraction=0.01, glossy_vpls=True,
                 glossy_bounces=4, extend_to_bounds=True),
     "fix_unextended": dict(furnace_scale=True, distance=96.0, settle_fraction=0.01,

@@ -62,7 +62,8 @@ void bind_settings(py::module_& m) {
         .def_readwrite("furnace_scale", &S::furnace_scale,
                        "Scale the light to what a closed room reads once its light has settled "
                        "(the furnace, an exact answer) instead of a single VPL's near field: "
-                       "x 1/1.285 (False).")
+                       "divided by the furnace's reading of the transfer, 1.22-1.37; needs "
+                       "travel_reinjection (False).")
         .def_readwrite("occlusion", &S::occlusion,
                        "Geometry volume blocking from the second step on, or the first with "
                        "occlude_first_step (True).")

@@ -8,6 +8,7 @@
 //      Cycles' units whatever the light type). With vpl_bounces = n > 1 the photons' later hits,
 //      up to the n-th, are VPLs too (the surface's diffuse albedo, found by a short ray back onto
 //      it, times the arriving power), so the volume carries n bounces instead of the seed's one.
+//      With glossy_vpls every VPL carries its surface's rough glossy lobes' light too.
 //   2. Injection (eqs. 3.1–3.2): each VPL is a clamped-cosine lobe of its flux along its normal
 //      (propagation/propagation_stencil.h), added to the cell that holds its position moved half
 //      a cell along the normal (Kaplanyan & Dachsbacher's shift against self-lighting). Passes
@@ -36,6 +37,8 @@
 //      stop light);
 //      the light crossing a face is re-injected along the face's normal (the seed) or, with
 //      travel_reinjection, along its travel direction (propagation_stencil.h, "Re-injection").
+//      With settle_fraction the steps stop once the light has settled; with furnace_scale the
+//      accumulation is scaled to what a settled closed room needs (settled_room_excess).
 // The field (propagation/propagation_field.h) is an immutable snapshot of the accumulation
 // volume: renderers read it while the next pass runs.
 //

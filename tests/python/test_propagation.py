@@ -737,7 +737,7 @@ def test_light_reflected_by_a_glossy_layer_reaches_the_volume(order, glossy_vpls
     assert abs(volume_growth / exact - 1.0) < 0.05
 
 
-# --- issue 51's three changes for closed rooms together (docs/methods.md, "The furnace's scale")
+# --- three changes for closed rooms together (docs/methods.md, "The furnace's scale") ---------
 # The furnace's radiance scale, propagation until the light settles (at most 96 cells, stopping
 # once 1% of the light is in flight), glossy VPLs with their own glossy budget, and the strip
 # along the bounds filled. Not the defaults: the HOLPV is then below the LPV on the sun room and
