@@ -211,6 +211,37 @@ PropagationTransmittance geometry_transmittance(const ShLattice& geometry, const
     return transmittance;
 }
 
+// With glossy_vpls: a VPL at every hit of `maps` (its first hits, and with vpl_bounces > 1 the
+// later ones) of the flux its surface scatters with its diffuse and rough glossy lobes, found by
+// a short ray back onto it (photon_tracer.h's scattered_flux, as Instant GI's VPLs); hits that
+// scatter nothing are left out. Deterministic: one flux per hit, in hit order.
+std::vector<VirtualPointLight> scattering_vpls(const Scene& scene, const PhotonMaps& maps,
+                                               const PropagationSettings& settings,
+                                               Progress* progress) {
+    std::vector<Photon> hits;
+    hits.reserve(maps.first_hits.size() + maps.global.size() + maps.caustic.size());
+    for (const PhotonFirstHit& h : maps.first_hits)
+        hits.push_back({h.position, h.power, h.normal, h.direction});
+    if (settings.vpl_bounces > 1) {
+        hits.insert(hits.end(), maps.global.begin(), maps.global.end());
+        hits.insert(hits.end(), maps.caustic.begin(), maps.caustic.end());
+    }
+    std::vector<vec3> scattered(hits.size(), vec3(0.0f));
+    const float rough = tracer_settings(settings).specular_roughness;
+    parallel_for(0, hits.size(), kVplsPerTask, [&](uint64_t begin, uint64_t end) {
+        throw_if_cancelled(progress);
+        for (uint64_t i = begin; i < end; ++i)
+            scattered[i] = scattered_flux(scene, hits[i].position, hits[i].normal,
+                                          hits[i].direction, hits[i].power, kGlossyReach, rough);
+    });
+    std::vector<VirtualPointLight> vpls;
+    vpls.reserve(hits.size());
+    for (size_t i = 0; i < hits.size(); ++i)
+        if (scattered[i] != vec3(0.0f) && is_finite(scattered[i]))
+            vpls.push_back({hits[i].position, hits[i].normal, scattered[i]});
+    return vpls;
+}
+
 }  // namespace
 
 void validate_propagation_settings(const PropagationSettings& settings) {
@@ -488,30 +519,9 @@ std::vector<VirtualPointLight> PropagationVolume::trace_vpls(uint64_t pass, Prog
     vpls.reserve(maps.first_hits.size() +
                  (settings_.vpl_bounces > 1 ? maps.global.size() + maps.caustic.size() : 0));
     if (settings_.glossy_vpls) {
-        // Every hit's scattered flux, its rough glossy lobes' with its diffuse lobe's, found
-        // by a short ray back onto the surface (Instant GI's VPLs).
-        std::vector<Photon> hits;
-        hits.reserve(vpls.capacity());
-        for (const PhotonFirstHit& h : maps.first_hits)
-            hits.push_back({h.position, h.power, h.normal, h.direction});
-        if (settings_.vpl_bounces > 1) {
-            hits.insert(hits.end(), maps.global.begin(), maps.global.end());
-            hits.insert(hits.end(), maps.caustic.begin(), maps.caustic.end());
-        }
-        std::vector<vec3> scattered(hits.size(), vec3(0.0f));
-        const float rough = tracer_settings(settings_).specular_roughness;
         const auto start = now();
-        parallel_for(0, hits.size(), kVplsPerTask, [&](uint64_t begin, uint64_t end) {
-            throw_if_cancelled(progress);
-            for (uint64_t i = begin; i < end; ++i)
-                scattered[i] = scattered_flux(*scene_, hits[i].position, hits[i].normal,
-                                              hits[i].direction, hits[i].power, kGlossyReach,
-                                              rough);
-        });
-        for (size_t i = 0; i < hits.size(); ++i)
-            if (scattered[i] != vec3(0.0f) && is_finite(scattered[i]) &&
-                lights_the_scene(hits[i].position, hits[i].normal))
-                vpls.push_back({hits[i].position, hits[i].normal, scattered[i]});
+        for (VirtualPointLight& vpl : scattering_vpls(*scene_, maps, settings_, progress))
+            if (lights_the_scene(vpl.position, vpl.normal)) vpls.push_back(vpl);
         *reflect_seconds = seconds_since(start);
         return vpls;
     }
