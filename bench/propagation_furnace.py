@@ -16,7 +16,11 @@ rooms: the furnace").
   their ratios.
 
     PYTHONPATH=build/python python3 bench/propagation_furnace.py [--dims 3 3 2.5]
-        [--resolution 16] [--configs NAME ...] [--materials]
+        [--resolution 16] [--configs NAME ...] [--materials] [--set JSON]
+
+settled_room_excess()'s table (propagation_volume.h): --set '{"distance": 96,
+"extend_to_bounds": true}' --configs defaults plain linear plain_linear, and with
+"unclamped_transfer": false for the clamped-then-rescaled rows.
 """
 
 import argparse
@@ -109,6 +113,8 @@ def main():
     parser.add_argument("--albedo", type=float, default=0.5)
     parser.add_argument("--configs", nargs="+", default=list(CONFIGS))
     parser.add_argument("--materials", action="store_true")
+    parser.add_argument("--set", default="{}",
+                        help="PropagationSettings fields on top of every configuration, as JSON")
     args = parser.parse_args()
     if args.materials:
         materials_table(args.resolution)
@@ -116,7 +122,8 @@ def main():
     print("bands (cells from the nearest edge): "
           + ", ".join(f"{lo:g}-{hi:g}" for lo, hi in BANDS))
     for name in args.configs:
-        rows = furnace_profile(args.dims, args.resolution, args.albedo, CONFIGS[name])
+        rows = furnace_profile(args.dims, args.resolution, args.albedo,
+                               dict(CONFIGS[name], **json.loads(args.set)))
         for order, (mean, bands) in rows.items():
             print(f"{name:<16} order {order}: mean {mean:.3f}  by band "
                   + " ".join(f"{b:.2f}" for b in bands), flush=True)

@@ -6,12 +6,13 @@ PSNR (16-spp preview). The references are test_propagation.py's (the Cornell box
 at scale 0.25, 2048 spp; the two rooms at 0.5, 512 spp), cached in --cache between runs.
 
     PYTHONPATH=build/python python3 bench/propagation_lpv_sweep.py [--orders 1 2]
-        [--configs NAME ...]   (default: all of CONFIGS)
+        [--configs NAME ...]   (default: all of CONFIGS) [--cost]
 """
 
 import argparse
 import pathlib
 import sys
+import time
 
 import numpy as np
 
@@ -49,6 +50,29 @@ CONFIGS = {
        for r in (48, 64)},
     **{f"windowed_r{r}": dict(windowed_reinjection=True, resolution=r, distance=float(r))
        for r in (48, 64)},
+    # The three changes for closed rooms (docs/methods.md, "The furnace's scale"), alone
+    # and together: the furnace's radiance scale, propagation until the light settles (at most
+    # 96 cells, stopping once 1% of the light is in flight), glossy VPLs (with their own glossy
+    # budget); "fix" is all three with the strip along the bounds filled.
+    "furnace": dict(furnace_scale=True),
+    "settled": dict(distance=96.0, settle_fraction=0.01),
+    "glossy": dict(glossy_vpls=True, glossy_bounces=4),
+    "glossy_shared": dict(glossy_vpls=True),
+    "fix": dict(furnace_scale=True, distance=96.0, settle_fraction=0.01, glossy_vpls=True,
+                glossy_bounces=4, extend_to_bounds=True),
+    "fix_unextended": dict(furnace_scale=True, distance=96.0, settle_fraction=0.01,
+                           glossy_vpls=True, glossy_bounces=4),
+    "fix_linear": dict(furnace_scale=True, distance=96.0, settle_fraction=0.01,
+                       glossy_vpls=True, glossy_bounces=4, extend_to_bounds=True,
+                       clamp_at_surfaces=False),
+    "fix_linear_plain": dict(furnace_scale=True, distance=96.0, settle_fraction=0.01,
+                             glossy_vpls=True, glossy_bounces=4, extend_to_bounds=True,
+                             clamp_at_surfaces=False, windowed_reinjection=False),
+    "fix_settle_0.001": dict(furnace_scale=True, distance=192.0, settle_fraction=0.001,
+                             glossy_vpls=True, glossy_bounces=4, extend_to_bounds=True),
+    "fix_linear_settle_0.001": dict(furnace_scale=True, distance=192.0, settle_fraction=0.001,
+                                    glossy_vpls=True, glossy_bounces=4, extend_to_bounds=True,
+                                    clamp_at_surfaces=False),
     # Clamped at walls, the steps from a distance in cells (distance / the stencil's cells per
     # step: 30 cells are 33 LPV and 21 HOLPV steps).
     **{f"at_surfaces_d{d}": dict(AT_SURFACES, resolution=32, steps=0, distance=float(d))
@@ -92,6 +116,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--orders", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--configs", nargs="+", default=list(CONFIGS))
+    parser.add_argument("--cost", action="store_true",
+                        help="also the steps taken and the pass's CPU seconds (all threads)")
     parser.add_argument("--cache", type=pathlib.Path, default=pathlib.Path("/tmp/shgi_lpv_refs"))
     args = parser.parse_args()
     refs = {name: reference(name, args.cache) for name in SCENES}
@@ -101,11 +127,18 @@ def main():
             for name, (scene, ref) in refs.items():
                 volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
                     seed=5, order=order, **CONFIGS[config]))
+                cpu = time.process_time()
                 volume.refine()
+                cpu = time.process_time() - cpu
+                steps = sum(stage.startswith("propagation_step_")
+                            for stage, _ in volume.stage_seconds)
                 preview, _ = shgi.render_preview(scene, volume.current_field(),
                                                  shgi.PreviewSettings(seed=5))
                 row += (f"  {name} {indirect(preview) / indirect(ref):.3f}"
                         f" {psnr(ref['Combined'], preview['Combined']):5.2f} dB")
+                if args.cost:
+                    row += f" ({steps} steps, {cpu:.1f} s CPU)"
+
             print(row, flush=True)
 
 

@@ -36,6 +36,9 @@ void bind_settings(py::module_& m) {
     def_integer(cls, "vpl_bounces", &S::vpl_bounces,
                 "Surface hits per light path that become VPLs: 1 is the published single "
                 "bounce, n gives n bounces of indirect light (4).");
+    def_integer(cls, "glossy_bounces", &S::glossy_bounces,
+                "Glossy scatterings of a light path, a budget of their own beside vpl_bounces, "
+                "-1..64; -1: they count against vpl_bounces (-1).");
     def_integer(cls, "resolution", &S::resolution,
                 "Cells along the longest side of the scene (32).");
     def_integer(cls, "steps", &S::steps,
@@ -48,6 +51,19 @@ void bind_settings(py::module_& m) {
                        "How far the light travels, in cells, when steps is 0: each order takes "
                        "the steps its stencil needs to carry light this far (the LPV's steps "
                        "move light 0.915 cells, the HOLPV's 1.415) (32.0).")
+        .def_readwrite("settle_fraction", &S::settle_fraction,
+                       "Stop propagating once the light in flight is at most this fraction of "
+                       "the injected light (the accumulation has settled); steps or distance "
+                       "are then the most it takes; 0: off (0.0).")
+        .def_readwrite("glossy_vpls", &S::glossy_vpls,
+                       "A VPL's surface scatters with its rough glossy lobes too, as if "
+                       "diffuse; False: its diffuse lobe only, and the volume misses the light "
+                       "a glossy layer reflects onto other surfaces (False).")
+        .def_readwrite("furnace_scale", &S::furnace_scale,
+                       "Scale the light to what a closed room reads once its light has settled "
+                       "(the furnace, an exact answer) instead of a single VPL's near field: "
+                       "divided by the furnace's reading of the transfer, 1.22-1.37; needs "
+                       "travel_reinjection (False).")
         .def_readwrite("occlusion", &S::occlusion,
                        "Geometry volume blocking from the second step on, or the first with "
                        "occlude_first_step (True).")

@@ -21,6 +21,8 @@ namespace {
 constexpr const char* kSettings = "PropagationSettings";
 // VPLs whose albedo is found per parallel task (one short ray each).
 constexpr uint64_t kVplsPerTask = 4096;
+// How far before a hit the ray back onto its surface starts with glossy_vpls, m (Instant GI's).
+constexpr float kGlossyReach = 1e-3f;
 // Propagation cells per parallel task of the transmittance.
 constexpr uint64_t kCellsPerTask = 4096;
 // Progress shares of a pass's stages (tracing dominates at the default settings).
@@ -101,6 +103,7 @@ PhotonTracerSettings tracer_settings(const PropagationSettings& settings) {
     // First hits are recorded before any scattering; a photon stored after m scatterings is
     // the (m + 1)-th hit of its path.
     tracer.max_bounces = std::max(1, settings.vpl_bounces - 1);
+    tracer.max_glossy_bounces = settings.glossy_bounces;
     tracer.store_first_hits = true;
     return tracer;
 }
@@ -115,11 +118,14 @@ Reinjection reinjection_of(const PropagationSettings& settings) {
                                          : Reinjection::TravelDirection;
 }
 
+LobeClamp clamp_of(const PropagationSettings& settings) {
+    return !settings.unclamped_transfer ? LobeClamp::Rescaled
+           : settings.clamp_at_surfaces ? LobeClamp::AtSurfaces
+                                        : LobeClamp::None;
+}
+
 PropagationStep step_of(const PropagationSettings& settings) {
-    return PropagationStep(stencil_of(settings.order), settings.order,
-                           !settings.unclamped_transfer ? LobeClamp::Rescaled
-                           : settings.clamp_at_surfaces ? LobeClamp::AtSurfaces
-                                                        : LobeClamp::None,
+    return PropagationStep(stencil_of(settings.order), settings.order, clamp_of(settings),
                            reinjection_of(settings));
 }
 
@@ -205,9 +211,42 @@ PropagationTransmittance geometry_transmittance(const ShLattice& geometry, const
     return transmittance;
 }
 
+// With glossy_vpls: a VPL at every hit of `maps` (its first hits, and with vpl_bounces > 1 the
+// later ones) of the flux its surface scatters with its diffuse and rough glossy lobes, found by
+// a short ray back onto it (photon_tracer.h's scattered_flux, as Instant GI's VPLs); hits that
+// scatter nothing are left out. Deterministic: one flux per hit, in hit order.
+std::vector<VirtualPointLight> scattering_vpls(const Scene& scene, const PhotonMaps& maps,
+                                               const PropagationSettings& settings,
+                                               Progress* progress) {
+    std::vector<Photon> hits;
+    hits.reserve(maps.first_hits.size() + maps.global.size() + maps.caustic.size());
+    for (const PhotonFirstHit& h : maps.first_hits)
+        hits.push_back({h.position, h.power, h.normal, h.direction});
+    if (settings.vpl_bounces > 1) {
+        hits.insert(hits.end(), maps.global.begin(), maps.global.end());
+        hits.insert(hits.end(), maps.caustic.begin(), maps.caustic.end());
+    }
+    std::vector<vec3> scattered(hits.size(), vec3(0.0f));
+    const float rough = tracer_settings(settings).specular_roughness;
+    parallel_for(0, hits.size(), kVplsPerTask, [&](uint64_t begin, uint64_t end) {
+        throw_if_cancelled(progress);
+        for (uint64_t i = begin; i < end; ++i)
+            scattered[i] = scattered_flux(scene, hits[i].position, hits[i].normal,
+                                          hits[i].direction, hits[i].power, kGlossyReach, rough);
+    });
+    std::vector<VirtualPointLight> vpls;
+    vpls.reserve(hits.size());
+    for (size_t i = 0; i < hits.size(); ++i)
+        if (scattered[i] != vec3(0.0f) && is_finite(scattered[i]))
+            vpls.push_back({hits[i].position, hits[i].normal, scattered[i]});
+    return vpls;
+}
+
 }  // namespace
 
 void validate_propagation_settings(const PropagationSettings& settings) {
+    // Before the tracer's, which names it max_glossy_bounces.
+    check_range(settings.glossy_bounces, -1, 64, "glossy_bounces");
     validate_photon_tracer_settings(tracer_settings(settings), kSettings);
     check_range(settings.vpl_bounces, 1, 64, "vpl_bounces");
     check_range(settings.resolution, 2, 256, "resolution");
@@ -217,7 +256,15 @@ void validate_propagation_settings(const PropagationSettings& settings) {
         throw InvalidArgument(format_message(kSettings, ".distance is ", settings.distance,
                                              "; it must be in [0, ", kMaxDistanceCells,
                                              "] cells"));
+    if (!(settings.settle_fraction >= 0.0f && settings.settle_fraction < 1.0f))
+        throw InvalidArgument(format_message(kSettings, ".settle_fraction is ",
+                                             settings.settle_fraction,
+                                             "; it must be in [0, 1) (0: off)"));
     check_range(settings.order, 1, 2, "order");
+    if (settings.furnace_scale && !settings.travel_reinjection)
+        throw InvalidArgument(format_message(kSettings, ".furnace_scale needs travel_reinjection "
+                                             "(the scale is measured for the travel "
+                                             "re-injection only); turn one of them off"));
     check_range(settings.cascades, 1, kMaxPropagationLevels, "cascades");
     // A finer level needs cells inside its blend band: at 16 cells, 6 per axis read it alone.
     if (settings.cascades > 1) check_range(settings.resolution, kMinCascadeResolution, 256,
@@ -231,6 +278,23 @@ void validate_propagation_settings(const PropagationSettings& settings) {
         throw InvalidArgument(format_message(kSettings, ".normal_offset is ",
                                              settings.normal_offset,
                                              "; it must be in [0, 2] cells"));
+}
+
+float settled_room_excess(int order, LobeClamp clamp, Reinjection reinjection) {
+    if (reinjection == Reinjection::FaceNormal || (order != 1 && order != 2) ||
+        (clamp != LobeClamp::Rescaled && clamp != LobeClamp::None &&
+         clamp != LobeClamp::AtSurfaces))
+        throw InvalidArgument(format_message(
+            "settled_room_excess: measured for the travel re-injections and the flux-keeping "
+            "transfers of orders 1 and 2 only (order ", order, ")"));
+    const int c = clamp == LobeClamp::Rescaled ? 0 : clamp == LobeClamp::None ? 1 : 2;
+    // [transfer: LPV, HOLPV plain beams, HOLPV windowed beams][Rescaled, None, AtSurfaces]
+    // (the LPV's beams have no band 2: windowed is plain).
+    static constexpr float kExcess[3][3] = {{1.2250f, 1.3707f, 1.2850f},
+                                            {1.3164f, 1.2850f, 1.2535f},
+                                            {1.2777f, 1.2650f, 1.2210f}};
+    const int t = order == 1 ? 0 : reinjection == Reinjection::WindowedTravelDirection ? 2 : 1;
+    return kExcess[t][c];
 }
 
 int propagation_steps(const PropagationSettings& settings) {
@@ -264,7 +328,8 @@ void inject_vpls(ShVolume& volume, const std::vector<VirtualPointLight>& vpls,
 
 ShVolume propagate(const ShVolume& injected, const PropagationStep& step, int steps,
                    const PropagationTransmittance* transmittance, Progress* progress,
-                   std::vector<double>* step_seconds, bool occlude_first_step) {
+                   std::vector<double>* step_seconds, bool occlude_first_step,
+                   float settle_fraction) {
     // Copies of a large volume take a while (~0.1 s at 97³ L2): a cancel poll after each.
     ShVolume accumulated = injected;
     throw_if_cancelled(progress);
@@ -274,6 +339,18 @@ ShVolume propagate(const ShVolume& injected, const PropagationStep& step, int st
     throw_if_cancelled(progress);
     float* acc = accumulated.cell_data(0);
     const size_t floats = accumulated.coefficients().size();
+    // The light in a volume, Σ |band 0| over cells and channels (in cell order: the same sum for
+    // any thread count).
+    const auto light_of = [](const ShVolume& volume) {
+        double sum = 0.0;
+        for (size_t c = 0; c < volume.cell_count(); ++c) {
+            const float* data = volume.cell_data(c);
+            sum += double(std::fabs(data[0])) + double(std::fabs(data[1])) +
+                   double(std::fabs(data[2]));
+        }
+        return sum;
+    };
+    const double settled = settle_fraction > 0.0f ? settle_fraction * light_of(injected) : 0.0;
     for (int k = 0; k < steps; ++k) {
         const auto start = now();
         // §3.2.3: no occlusion on the first step, whose light leaves the VPLs' own surfaces
@@ -284,8 +361,10 @@ ShVolume propagate(const ShVolume& injected, const PropagationStep& step, int st
             for (uint64_t i = begin; i < end; ++i) acc[i] += next[i];
         });
         std::swap(ping, pong);
+        const bool done = settled > 0.0 && light_of(ping) <= settled;
         if (step_seconds != nullptr) step_seconds->push_back(seconds_since(start));
         if (progress) progress->report(uint64_t(k + 1), uint64_t(steps));
+        if (done) break;
     }
     return accumulated;
 }
@@ -439,6 +518,13 @@ std::vector<VirtualPointLight> PropagationVolume::trace_vpls(uint64_t pass, Prog
     std::vector<VirtualPointLight> vpls;
     vpls.reserve(maps.first_hits.size() +
                  (settings_.vpl_bounces > 1 ? maps.global.size() + maps.caustic.size() : 0));
+    if (settings_.glossy_vpls) {
+        const auto start = now();
+        for (VirtualPointLight& vpl : scattering_vpls(*scene_, maps, settings_, progress))
+            if (lights_the_scene(vpl.position, vpl.normal)) vpls.push_back(vpl);
+        *reflect_seconds = seconds_since(start);
+        return vpls;
+    }
     for (const PhotonFirstHit& hit : maps.first_hits)
         if (hit.reflected_power != vec3(0.0f) && lights_the_scene(hit.position, hit.normal))
             vpls.push_back({hit.position, hit.normal, hit.reflected_power});
@@ -470,6 +556,18 @@ std::vector<VirtualPointLight> PropagationVolume::trace_vpls(uint64_t pass, Prog
             vpls.push_back({later[i].position, later[i].normal, reflected[i]});
     *reflect_seconds = seconds_since(start);
     return vpls;
+}
+
+void PropagationVolume::finish_accumulation(ShVolume& accumulated) const {
+    if (settings_.extend_to_bounds) extend_to_bounds(accumulated, scene_->bounds());
+    if (!settings_.furnace_scale) return;
+    float* data = accumulated.cell_data(0);
+    const float scale = 1.0f / settled_room_excess(settings_.order, clamp_of(settings_),
+                                                   reinjection_of(settings_));
+    for_each_slice(accumulated.coefficients().size(), uint64_t(1) << 22, nullptr,
+                   [&](uint64_t begin, uint64_t end) {
+                       for (uint64_t i = begin; i < end; ++i) data[i] *= scale;
+                   });
 }
 
 PropagationLevel PropagationVolume::pass_level(size_t level,
@@ -519,8 +617,8 @@ PropagationLevel PropagationVolume::pass_level(size_t level,
     ShVolume accumulated =
         propagate(mean, step, propagation_steps(settings_),
                   settings_.occlusion ? &l.transmittance : nullptr, progress, &step_seconds,
-                  settings_.occlude_first_step);
-    if (settings_.extend_to_bounds) extend_to_bounds(accumulated, scene_->bounds());
+                  settings_.occlude_first_step, settings_.settle_fraction);
+    finish_accumulation(accumulated);
     for (size_t k = 0; k < step_seconds.size(); ++k)
         stages.push_back({format_message(prefix, "propagation_step_", k + 1), step_seconds[k]});
     return {std::make_shared<const ShVolume>(std::move(accumulated)), l.lookup_transmittance,
@@ -642,8 +740,8 @@ std::vector<int> PropagationVolume::recenter(const vec3& point, Progress* progre
             ShVolume accumulated = propagate(
                 l.injected, step, propagation_steps(settings_),
                 settings_.occlusion ? &l.transmittance : nullptr, progress, nullptr,
-                settings_.occlude_first_step);
-            if (settings_.extend_to_bounds) extend_to_bounds(accumulated, scene_->bounds());
+                settings_.occlude_first_step, settings_.settle_fraction);
+            finish_accumulation(accumulated);
             field_levels.at(size_t(moved[k])) = {
                 std::make_shared<const ShVolume>(std::move(accumulated)), l.lookup_transmittance,
                 l.blend_faces};

@@ -8,6 +8,7 @@
 //      Cycles' units whatever the light type). With vpl_bounces = n > 1 the photons' later hits,
 //      up to the n-th, are VPLs too (the surface's diffuse albedo, found by a short ray back onto
 //      it, times the arriving power), so the volume carries n bounces instead of the seed's one.
+//      With glossy_vpls every VPL carries its surface's rough glossy lobes' light too.
 //   2. Injection (eqs. 3.1–3.2): each VPL is a clamped-cosine lobe of its flux along its normal
 //      (propagation/propagation_stencil.h), added to the cell that holds its position moved half
 //      a cell along the normal (Kaplanyan & Dachsbacher's shift against self-lighting). Passes
@@ -36,6 +37,8 @@
 //      stop light);
 //      the light crossing a face is re-injected along the face's normal (the seed) or, with
 //      travel_reinjection, along its travel direction (propagation_stencil.h, "Re-injection").
+//      With settle_fraction the steps stop once the light has settled; with furnace_scale the
+//      accumulation is scaled to what a settled closed room needs (settled_room_excess).
 // The field (propagation/propagation_field.h) is an immutable snapshot of the accumulation
 // volume: renderers read it while the next pass runs.
 //
@@ -68,6 +71,23 @@ struct PropagationSettings {
     // Surface hits per light path that become VPLs: 1 is the seed's single bounce (the first
     // hits); n also makes VPLs of the next n − 1 hits (n bounces of indirect light).
     int vpl_bounces = 4;
+    // A VPL's surface scatters with its rough glossy lobes too (roughness above 0.1, spread as
+    // if diffuse: Instant GI's glossy_vpls, the radiance field's glossy_in_grid), not with its
+    // diffuse lobe alone. Off, the volume misses the light a glossy layer reflects onto other
+    // surfaces: the Principled BSDF's default Specular 0.5 adds 22% to a closed room's indirect
+    // light in the path tracer and 7% in the volume (docs/methods.md, "Closed rooms: the
+    // furnace").
+    bool glossy_vpls = false;
+    // Glossy scatterings of a light path before a VPL, a budget of their own beside vpl_bounces
+    // (as a camera path's Light Paths > Glossy beside Diffuse; Instant GI's glossy_bounces);
+    // -1: they count against vpl_bounces.
+    int glossy_bounces = -1;
+    // Scale the accumulated light to what a closed room reads once its light has settled (the
+    // furnace: a closed room of known albedo under uniform emission has an exact answer)
+    // instead of the single VPL's near field the radiance scales were fitted to
+    // (propagation_field.h): × 1 / settled_room_excess() of the transfer (1.22-1.37). Needs
+    // travel_reinjection.
+    bool furnace_scale = false;
     int resolution = 32;         // cells along the longest side of the scene
     // Propagation steps (§3.3); 0 (the default) takes them from `distance`.
     int steps = 0;
@@ -78,6 +98,10 @@ struct PropagationSettings {
     // 10% of the path tracer on the Cornell box, the sun room and the two rooms
     // (docs/methods.md, "One default for both orders").
     float distance = 32.0f;
+    // Stop propagating once the light still in flight (Σ |band 0| over the volume) is at most
+    // this fraction of the injected light: the accumulation has settled. The steps above (or
+    // the distance's) are then the most it takes. 0: off, every step is taken.
+    float settle_fraction = 0.0f;
     int order = 2;               // 1: LPV (L1, 6 directions); 2: HOLPV (L2, 26 directions)
     bool occlusion = true;       // geometry volume blocking (§3.2.2), from the second step
     // Cells along the shading normal the lookup moves before sampling, against self-lighting
@@ -154,6 +178,15 @@ struct PropagationSettings {
     vec3 cascade_center{0.0f};
 };
 
+// What a closed room whose light has settled reads at the field's radiance scales (fitted to a
+// single VPL's near field, propagation_field.h) over its exact light, per transfer: the furnace
+// (scenes.closed_room(): 3 × 3 × 2.5 m, every wall emitting radiance 1 and reflecting half,
+// Lambert; 16 cells, light carried 96 cells, extend_to_bounds; the area mean over all six walls;
+// bench/propagation_furnace.py). PropagationSettings::furnace_scale divides the accumulation by
+// it. Measured for the travel re-injections only (the face normals' lobes random-walk and do
+// not settle within the distance's limit): InvalidArgument otherwise.
+float settled_room_excess(int order, LobeClamp clamp, Reinjection reinjection);
+
 // Throws InvalidArgument naming the field and its allowed range.
 void validate_propagation_settings(const PropagationSettings& settings);
 
@@ -228,6 +261,8 @@ class PropagationVolume : public GiSolver {
     };
 
     void check_scene(const char* what) const;
+    // A propagated level's accumulation made the field's: extend_to_bounds, furnace_scale.
+    void finish_accumulation(ShVolume& accumulated) const;
     // Pass `pass`'s VPLs (its seed); the seconds finding later hits' albedo go to reflect_seconds.
     std::vector<VirtualPointLight> trace_vpls(uint64_t pass, Progress* progress,
                                               double* reflect_seconds) const;
@@ -262,13 +297,15 @@ class PropagationVolume : public GiSolver {
 void inject_vpls(ShVolume& volume, const std::vector<VirtualPointLight>& vpls,
                  Progress* progress = nullptr);
 
-// `steps` steps from `injected` (see above), the accumulation returned; `transmittance` (may be
+// `steps` steps from `injected` (see above), fewer with settle_fraction > 0 (stops after the
+// first step that leaves at most that fraction of the injected light in flight: see
+// PropagationSettings::settle_fraction), the accumulation returned; `transmittance` (may be
 // null) applies from the second step, or from the first with occlude_first_step. Seconds of
 // each step are appended to `step_seconds` when it is not null; progress is reported per step.
 ShVolume propagate(const ShVolume& injected, const PropagationStep& step, int steps,
                    const PropagationTransmittance* transmittance, Progress* progress = nullptr,
                    std::vector<double>* step_seconds = nullptr,
-                   bool occlude_first_step = false);
+                   bool occlude_first_step = false, float settle_fraction = 0.0f);
 
 // Gives every cell of `volume` whose centre is not strictly inside `bounds` (within 1e-4 cells)
 // the light of the nearest cell that is: its index clamped, axis by axis, to the inside cells

@@ -678,29 +678,41 @@ def test_furnace_light_is_even_from_the_edges_in(order, settings):
     pytest.param(2, {"distance": 96.0, "extend_to_bounds": True, "clamp_at_surfaces": False,
                      "windowed_reinjection": False},
                  marks=missed("1.285x the exact (the radiance scale)")),
+    # furnace_scale: the accumulation over settled_room_excess() of its transfer, the furnace's
+    # own reading, so this is its calibration (other resolutions: docs/methods.md, "The
+    # furnace's scale"); the HOLPV with its default transfer (windowed, clamped at walls) too.
+    (1, {"distance": 96.0, "extend_to_bounds": True, "furnace_scale": True}),
+    (2, {"distance": 96.0, "extend_to_bounds": True, "furnace_scale": True}),
+    (2, {"distance": 96.0, "extend_to_bounds": True, "furnace_scale": True,
+         "clamp_at_surfaces": False}),
 ])
 def test_furnace_closed_room_reads_the_closed_form(order, settings):
-    """A closed room's light once it has settled, against the closed form: within 10%. Both
-    orders read 1.285x: the radiance scales, fitted to a single VPL's near field, are too large
-    for a room whose light has settled; the test scenes' means hide it (docs/methods.md,
-    "Closed rooms: the furnace")."""
+    """A closed room's light once it has settled, against the closed form: within 10%. At the
+    radiance scales fitted to a single VPL's near field both orders read 1.285x: too large for a
+    room whose light has settled; the test scenes' means hide it (docs/methods.md, "Closed
+    rooms: the furnace"). furnace_scale takes that excess off."""
     _, _, mean = furnace_light(order, **settings)
     print(f"order {order} {settings}: furnace light {mean:.3f}x the exact")
     assert abs(mean - 1.0) < 0.10
 
 
 @pytest.mark.reference
-@pytest.mark.parametrize("order", [
-    pytest.param(1, marks=missed("Specular 0.5 adds 22% to the path tracer's, 7% to the LPV's")),
-    pytest.param(2, marks=missed("Specular 0.5 adds 22% to the path tracer's, 7% to the HOLPV's")),
+@pytest.mark.parametrize("order, glossy_vpls", [
+    pytest.param(1, False,
+                 marks=missed("Specular 0.5 adds 22% to the path tracer's, 7% to the LPV's")),
+    pytest.param(2, False,
+                 marks=missed("Specular 0.5 adds 22% to the path tracer's, 7% to the HOLPV's")),
+    (1, True),
+    (2, True),
 ])
-def test_light_reflected_by_a_glossy_layer_reaches_the_volume(order):
+def test_light_reflected_by_a_glossy_layer_reaches_the_volume(order, glossy_vpls):
     """The dim room alone (scenes.closed_room() lit by a lamp 0.5 m under its ceiling), walls
     Lambert 0.73 with and without the Principled BSDF's default Specular 0.5 on top: the glossy
     layer reflects more light onto the other walls, and the volume's indirect light must grow
     with it as the path tracer's does (within 5%). Its VPLs carry only what surfaces reflect
     diffusely: the light a wall reflects glossily lights the others in the path tracer, not in
-    the volume."""
+    the volume. glossy_vpls (with their own glossy budget) adds the rough glossy lobes' light to
+    the VPLs (measured: the path tracer's x 1.222, the volume's x 1.203 for both orders)."""
     growth = {}
     for specular in (0.0, 0.5):
         builder = scenes.closed_room(
@@ -711,17 +723,127 @@ def test_light_reflected_by_a_glossy_layer_reaches_the_volume(order):
                        height=96, scale=0.5)
         scene = committed(builder)
         ref = shgi.render_path_traced(scene, shgi.PathTracerSettings(samples=256, seed=11))
+        glossy = dict(glossy_vpls=True, glossy_bounces=4) if glossy_vpls else {}
         volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
-            seed=5, order=order, resolution=FURNACE_RESOLUTION))
+            seed=5, order=order, resolution=FURNACE_RESOLUTION, **glossy))
         volume.refine()
         preview, _ = shgi.render_preview(scene, volume.current_field(),
                                          shgi.PreviewSettings(seed=5))
         growth[specular] = (indirect_diffuse(ref), indirect_diffuse(preview))
     exact = growth[0.5][0] / growth[0.0][0]
     volume_growth = growth[0.5][1] / growth[0.0][1]
-    print(f"order {order}: Specular 0.5 multiplies the path tracer's indirect light by "
-          f"{exact:.3f}, the volume's by {volume_growth:.3f}")
+    print(f"order {order}, glossy_vpls {glossy_vpls}: Specular 0.5 multiplies the path "
+          f"tracer's indirect light by {exact:.3f}, the volume's by {volume_growth:.3f}")
     assert abs(volume_growth / exact - 1.0) < 0.05
+
+
+# --- three changes for closed rooms together (docs/methods.md, "The furnace's scale") ---------
+# The furnace's radiance scale, propagation until the light settles (at most 96 cells, stopping
+# once 1% of the light is in flight), glossy VPLs with their own glossy budget, and the strip
+# along the bounds filled. Not the defaults: the HOLPV is then below the LPV on the sun room and
+# the two rooms.
+CLOSED_ROOMS = dict(furnace_scale=True, distance=96.0, settle_fraction=0.01, glossy_vpls=True,
+                    glossy_bounces=4, extend_to_bounds=True)
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name, order", [
+    ("cornell_box", 1), ("cornell_box", 2), ("sun_room", 1), ("sun_room", 2), ("two_rooms", 1),
+    ("two_rooms", 2),
+])
+def test_closed_room_settings_agree_with_path_tracer(name, order):
+    """With the three changes together no error is left to offset another: the means within
+    10% (measured LPV 1.003 / 1.032 / 0.952, HOLPV 0.982 / 0.980 / 1.010: Cornell box / sun
+    room / two rooms)."""
+    ref, preview = rendered_with(CLOSED_ROOMS, name, order)
+    ratio = indirect_diffuse(preview) / indirect_diffuse(ref)
+    print(f"{name} order {order}: DiffInd x DiffCol {ratio:.3f}x the path tracer's, Combined "
+          f"PSNR {psnr(ref['Combined'], preview['Combined']):.2f} dB")
+    assert abs(ratio - 1.0) < 0.10, ratio
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name", [
+    "cornell_box",
+    # The LPV gains more from the changes than the HOLPV, whose clamp at walls still moves light
+    # off the rooms' edges (docs/methods.md, "The furnace's scale").
+    pytest.param("sun_room", marks=missed("PSNR HOLPV 26.49 dB, LPV 27.40 dB")),
+    pytest.param("two_rooms", marks=missed("PSNR HOLPV 29.77 dB, LPV 32.09 dB")),
+])
+def test_closed_room_settings_holpv_is_closer_than_lpv(name):
+    ref, lpv = rendered_with(CLOSED_ROOMS, name, 1)
+    _, holpv = rendered_with(CLOSED_ROOMS, name, 2)
+    lpv_psnr, holpv_psnr = psnr(ref["Combined"], lpv["Combined"]), psnr(ref["Combined"],
+                                                                         holpv["Combined"])
+    print(f"{name}: Combined PSNR LPV {lpv_psnr:.2f} dB, HOLPV {holpv_psnr:.2f} dB")
+    assert holpv_psnr > lpv_psnr
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("order", [1, 2])
+def test_dim_room_through_a_final_gather_with_the_closed_room_settings(order):
+    """The leak target (test_dim_room_through_a_final_gather_is_within_five_percent) with the
+    three changes: the dim room's Combined mean through a final gather within 5% (measured
+    0.972 LPV, 0.986 HOLPV)."""
+    scale, samples = REFERENCES["two_rooms"]
+    scene, ref = path_traced_reference(scenes.two_rooms, scale, samples)
+    volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+        seed=5, order=order, **dict(CLOSED_ROOMS, vpl_bounces=3)))
+    volume.refine()
+    preview, _ = shgi.render_preview(scene, volume.current_field(),
+                                     shgi.PreviewSettings(seed=5, samples=64, final_gather=True))
+    ratio = float(preview["Combined"][..., :3].mean() / ref["Combined"][..., :3].mean())
+    print(f"order {order}: dim room through a final gather {ratio:.3f} x the path tracer's")
+    assert abs(ratio - 1.0) < 0.05
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_settle_fraction_stops_once_the_light_has_settled(order):
+    """With settle_fraction the propagation stops once that fraction of the injected light is
+    left in flight: fewer steps than the distance's, the same light within 2% where the full
+    distance's steps are taken (at 1%); the same field whatever the thread count (the light in
+    flight is summed in cell order, the glossy VPLs' flux per VPL)."""
+    import numpy as np
+    scene = committed(scenes.two_rooms(0.5))
+    points, normals = np.float32([[1.5, 1.5, 0.0], [1.5, 2.9, 1.2], [4.5, 1.5, 2.9]]), \
+        np.float32([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]])
+    light, steps = {}, {}
+    for settle in (0.0, 0.01):
+        volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+            seed=5, order=order, distance=96.0, settle_fraction=settle))
+        volume.refine()
+        steps[settle] = sum(name.startswith("propagation_step_")
+                            for name, _ in volume.stage_seconds)
+        light[settle] = volume.current_field().irradiance(points, normals)
+    print(f"order {order}: {steps[0.0]} steps, settled after {steps[0.01]}; light "
+          f"{(light[0.01] / light[0.0]).mean(-1)}x the full run's")
+    assert steps[0.01] < steps[0.0] == shgi.propagation_steps(
+        shgi.PropagationSettings(order=order, distance=96.0))
+    assert np.allclose(light[0.01], light[0.0], rtol=0.02)
+    # With the other closed-room settings too (glossy VPLs, the furnace's scale), 1 and 2 threads.
+    fields = []
+    try:
+        for threads in (1, 2):
+            shgi.set_max_threads(threads)
+            volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
+                seed=5, order=order, **CLOSED_ROOMS))
+            volume.refine()
+            fields.append(volume.current_field().irradiance(points, normals))
+    finally:
+        shgi.set_max_threads(0)
+    np.testing.assert_array_equal(fields[0], fields[1])
+
+
+def test_closed_room_settings_are_validated():
+    scene = committed(scenes.cornell_box(0.05))
+    for settle in (-0.1, 1.0, float("nan")):
+        with pytest.raises(ValueError, match="PropagationSettings.settle_fraction is"):
+            shgi.PropagationVolume(scene, shgi.PropagationSettings(settle_fraction=settle))
+    with pytest.raises(ValueError, match="PropagationSettings.glossy_bounces is"):
+        shgi.PropagationVolume(scene, shgi.PropagationSettings(glossy_bounces=-2))
+    with pytest.raises(ValueError, match="furnace_scale needs travel_reinjection"):
+        shgi.PropagationVolume(scene, shgi.PropagationSettings(furnace_scale=True,
+                                                               travel_reinjection=False))
 
 
 @pytest.mark.parametrize("options", [dict(order=1), dict(order=2, damping=True,

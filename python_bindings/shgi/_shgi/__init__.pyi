@@ -2991,6 +2991,30 @@ class PropagationSettings:
     def extend_to_bounds(self, arg0: bool) -> None:
         ...
     @property
+    def furnace_scale(self) -> bool:
+        """
+        Scale the light to what a closed room reads once its light has settled (the furnace, an exact answer) instead of a single VPL's near field: divided by the furnace's reading of the transfer, 1.22-1.37; needs travel_reinjection (False).
+        """
+    @furnace_scale.setter
+    def furnace_scale(self, arg0: bool) -> None:
+        ...
+    @property
+    def glossy_bounces(self) -> int:
+        """
+        Glossy scatterings of a light path, a budget of their own beside vpl_bounces, -1..64; -1: they count against vpl_bounces (-1).
+        """
+    @glossy_bounces.setter
+    def glossy_bounces(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def glossy_vpls(self) -> bool:
+        """
+        A VPL's surface scatters with its rough glossy lobes too, as if diffuse; False: its diffuse lobe only, and the volume misses the light a glossy layer reflects onto other surfaces (False).
+        """
+    @glossy_vpls.setter
+    def glossy_vpls(self, arg0: bool) -> None:
+        ...
+    @property
     def normal_offset(self) -> float:
         """
         Cells along the shading normal before the lookup, against self-lighting and leaks through walls (1.0).
@@ -3045,6 +3069,14 @@ class PropagationSettings:
         """
     @seed.setter
     def seed(self, arg1: typing.SupportsIndex) -> None:
+        ...
+    @property
+    def settle_fraction(self) -> float:
+        """
+        Stop propagating once the light in flight is at most this fraction of the injected light (the accumulation has settled); steps or distance are then the most it takes; 0: off (0.0).
+        """
+    @settle_fraction.setter
+    def settle_fraction(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def steps(self) -> int:
