@@ -28,6 +28,10 @@ its default in the new place while its old value lies unused under the old name.
 9. F12's denoising Prefilter defaults to Automatic (settings.DENOISING_DEFAULTS), now that a
    render with a Time Limit sets the denoiser's networks up before it samples. A scene saved
    before keeps Fast unless it set the prefilter.
+10. Instant GI's Final Gather is made by the renderer (before, it lit the first surfaces in
+   screen space whatever the setting said) and is on for a new scene
+   (settings.FINAL_GATHER_DEFAULTS). A scene saved before rendered without a gather, whatever
+   it stored: its Final Gather is turned off.
 
 ``upgrade`` takes what a scene stored (its ID properties as a dict: only values someone set are
 stored, a default is not) and says what to write where, so that the scene renders with the
@@ -38,7 +42,7 @@ from dataclasses import dataclass, field
 
 from . import settings
 
-SETTINGS_VERSION = 9
+SETTINGS_VERSION = 10
 
 # The method groups that version 2 had: a scene saved then could render only with these, so
 # only they keep reading their field directly (groups added later start with their defaults).
@@ -75,6 +79,9 @@ INSTANT_GI_DEFAULTS_BEFORE_7 = {"passes": 4}
 # scene.shgi's own defaults before version 9 that have changed since (every earlier layout
 # rendered F12 with these, the denoising settings having come in with their defaults).
 DEFAULTS_BEFORE_9 = {"denoising_prefilter": "FAST"}
+# The Instant GI group's values before version 10 that a scene rendered with, whatever it stored
+# (its Final Gather was never made). The group came in version 3's time.
+INSTANT_GI_RENDERED_BEFORE_10 = {"final_gather": False}
 
 
 @dataclass
@@ -129,6 +136,11 @@ def upgrade(stored):
         for name, old_default in DEFAULTS_BEFORE_9.items():
             if name not in stored:
                 result.values[("", name)] = old_default
+    if 3 <= version < 10:
+        group = stored.get("instant_gi", {})
+        for name, rendered in INSTANT_GI_RENDERED_BEFORE_10.items():
+            if name not in group or group[name] != rendered:
+                result.values[("instant_gi", name)] = rendered
     return result
 
 

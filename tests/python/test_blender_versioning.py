@@ -71,9 +71,10 @@ def test_a_third_layout_scene_keeps_clamp_indirect_off():
     assert shgi.PathTracerSettings().clamp_indirect == 0.0  # scripts keep the native 0
     assert settings_upgrade.upgrade({"settings_version": 3, "samples": 5}).values == {
         ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6,
-        **INSTANT_GI_BEFORE_7, **BEFORE_9}
+        **INSTANT_GI_BEFORE_7, **BEFORE_9, **INSTANT_GI_BEFORE_10}
     assert settings_upgrade.upgrade({"settings_version": 3, "clamp_indirect": 4.0}).values == {
-        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9}
+        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9,
+        **INSTANT_GI_BEFORE_10}
 
 
 def test_a_fourth_layout_scene_keeps_filter_glossy_off():
@@ -85,9 +86,10 @@ def test_a_fourth_layout_scene_keeps_filter_glossy_off():
     assert shgi.PreviewSettings().filter_glossy == 0.0
     assert shgi.LightmapSettings().filter_glossy == 0.0
     assert settings_upgrade.upgrade({"settings_version": 4, "samples": 5}).values == {
-        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9}
+        ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9,
+        **INSTANT_GI_BEFORE_10}
     assert settings_upgrade.upgrade({"settings_version": 4, "filter_glossy": 0.25}).values == {
-        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9}
+        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9, **INSTANT_GI_BEFORE_10}
 
 
 # Light Propagation's defaults before layout 6, as an upgrade writes them into the group.
@@ -106,11 +108,12 @@ def test_a_fifth_layout_scene_keeps_the_light_propagation_defaults_of_then():
     assert (settings.PROPAGATION_DEFAULTS["steps"], settings.PROPAGATION_DEFAULTS["distance"]) == (
         0, 32.0)
     assert settings_upgrade.upgrade({"settings_version": 5, "samples": 5}).values == {
-        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9}
+        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9, **INSTANT_GI_BEFORE_10}
     stored = {"settings_version": 5, "propagation": {"steps": 16, "unclamped_transfer": True}}
     assert settings_upgrade.upgrade(stored).values == {
         **{key: value for key, value in PROPAGATION_BEFORE_6.items()
-           if key[1] not in ("steps", "unclamped_transfer")}, **INSTANT_GI_BEFORE_7, **BEFORE_9}
+           if key[1] not in ("steps", "unclamped_transfer")}, **INSTANT_GI_BEFORE_7, **BEFORE_9,
+        **INSTANT_GI_BEFORE_10}
     assert not any(group == "propagation" for group, _ in settings_upgrade.upgrade(
         {"settings_version": 2, "samples": 5}).values)
 
@@ -128,10 +131,10 @@ def test_a_sixth_layout_scene_keeps_instant_gi_passes_for_renders_and_bakes():
     defaults = settings.default_properties(shgi).instant_gi
     assert (defaults.passes, defaults.bake_passes) == (64, shgi.method("INSTANT_GI").final_passes)
     assert settings_upgrade.upgrade({"settings_version": 6, "samples": 5}).values == {
-        **INSTANT_GI_BEFORE_7, **BEFORE_9}
+        **INSTANT_GI_BEFORE_7, **BEFORE_9, **INSTANT_GI_BEFORE_10}
     stored = {"settings_version": 6, "instant_gi": {"passes": 12, "sets_x": 2}}
     assert settings_upgrade.upgrade(stored).values == {("instant_gi", "bake_passes"): 12,
-                                                       **BEFORE_9}
+                                                       **BEFORE_9, **INSTANT_GI_BEFORE_10}
     assert not any(group == "instant_gi" for group, _ in settings_upgrade.upgrade(
         {"settings_version": 2, "samples": 5}).values)
 
@@ -149,10 +152,30 @@ def test_an_eighth_layout_scene_keeps_the_fast_prefilter():
     assert (settings.PROPERTY_DEFAULTS["pixel_filter"],
             settings.PROPERTY_DEFAULTS["filter_width"]) == ("BOX", 1.0)
     for layout in (7, 8):
-        assert settings_upgrade.upgrade({"settings_version": layout, "samples": 5}).values == \
-            BEFORE_9
+        assert settings_upgrade.upgrade({"settings_version": layout, "samples": 5}).values == {
+            **BEFORE_9, **INSTANT_GI_BEFORE_10}
         assert settings_upgrade.upgrade({"settings_version": layout,
-                                         "denoising_prefilter": 2}).values == {}
+                                         "denoising_prefilter": 2}).values == INSTANT_GI_BEFORE_10
+
+
+# Instant GI's Final Gather before layout 10 (never made), as an upgrade writes it.
+INSTANT_GI_BEFORE_10 = {("instant_gi", "final_gather"): False}
+
+
+def test_a_ninth_layout_scene_keeps_instant_gi_without_a_final_gather():
+    """Layout 10's renderer makes Instant GI's Final Gather, on for a new scene; before, it lit
+    the first surfaces in screen space whatever Final Gather said. A scene saved before renders
+    as it did, without a gather, whether it stored the setting or not; layouts 1 and 2 had no
+    Instant GI group: today's defaults."""
+    assert settings.FINAL_GATHER_DEFAULTS["INSTANT_GI"]
+    assert settings.default_properties(shgi).instant_gi.final_gather
+    for instant_gi in ({}, {"final_gather": True}, {"final_gather": 1}):
+        stored = {"settings_version": 9, "instant_gi": instant_gi}
+        assert settings_upgrade.upgrade(stored).values == INSTANT_GI_BEFORE_10
+    stored = {"settings_version": 9, "instant_gi": {"final_gather": 0}}
+    assert settings_upgrade.upgrade(stored).values == {}
+    assert not any(group == "instant_gi" for group, _ in settings_upgrade.upgrade(
+        {"settings_version": 2, "samples": 5}).values)
 
 
 def test_settings_of_today_layout_are_left_alone():
