@@ -288,7 +288,6 @@ class FrameWork {
         camera_rays_.generate_rays(wave.film.data(), wave.count, wave.rays.data());
         scene_.intersect(wave.rays, wave.hits, nullptr, RayCoherence::Coherent);
         for (size_t i = 0; i < wave.count; ++i) {
-            const uint64_t pixel_index = wave.pixel[i];
             clear_pass_values(wave.values[i]);
             PathIntegrator& path = wave.paths[i].emplace(scene_, camera_, lights_, settings_,
                                                          &field_, wave.rngs[i], wave.values[i],
@@ -296,7 +295,7 @@ class FrameWork {
             path.set_first_light_sample(wave.samples[i].u_select, wave.samples[i].u_light);
             path.set_final_gather(final_gather_);
             if (final_gather_ > 0)
-                path.set_gather_number(gather_number(settings_.seed, pixel_index, s));
+                path.set_gather_number(gather_number(settings_.seed, wave.pixel[i], s));
             path.set_glossy_memo(&wave.glossy_zh);
             path.set_material_lobes(&material_lobes_);
             if (combined_only_) path.set_combined_only();
