@@ -37,14 +37,14 @@
 // Elsewhere (specular chains), lookup(p, n) gathers every VPL of every set the same way (no
 // filter); a preview sample reads the field through its sample_view, whose lookups gather every
 // set's VPLs of that sample's passes alone (as its first surfaces do), so a sample costs the
-// same however many passes are solved.
+// same however many passes are solved. Bakes interleave the sets over the lightmap's texels and filter them within UV charts
+// (interleave(), set_radiance_sh; bake/lightmap_baker.h).
 //
 // Final gather (render/path_integrator.h): the preview then shades the first surfaces as any
 // field's (next-event estimation and one BSDF-sampled gather ray, no frame-wide stage, so no
 // filter), and each gather ray's hit reads one set of the sample's passes (gather_lookup, the
 // set picked by the ray's number, which the preview stratifies over a pixel's samples), scaled
-// by the sets: unbiased, at 1 / sets of the shadow rays of a lookup of every set. Bakes interleave the sets over the lightmap's texels and filter them within UV charts
-// (interleave(), set_radiance_sh; bake/lightmap_baker.h).
+// by the sets: unbiased, at 1 / sets of the shadow rays of a lookup of every set.
 //
 // Determinism: photons as the tracer's (seed, pass); each pixel's gather and filter depend only
 // on the G-buffer, so frames are identical for any thread count and tile size.
