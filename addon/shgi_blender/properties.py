@@ -513,7 +513,9 @@ class ShgiInstantGiSettings(bpy.types.PropertyGroup):
                     "same cost per sample")
     final_gather: BoolProperty(
         name="Final Gather", default=settings.FINAL_GATHER_DEFAULTS["INSTANT_GI"],
-        description="Unused by Instant GI, which lights what the camera sees in screen space")
+        description="Read the little lights one bounce away from what the camera sees (a ray "
+                    "per sample, each reading one set) instead of filtering them on screen: "
+                    "exact direct light where the rays land. Bakes filter as before")
 
 
 class ShgiBakeSettings(bpy.types.PropertyGroup):

@@ -31,6 +31,10 @@ its default in the new place while its old value lies unused under the old name.
 10. The probe grid's Visibility > Blur defaults to 0.10 rad, where it was 0.15: the narrower
     distance filter lets half as much of a bright room's light through a 10 cm wall
     (docs/methods.md, probe grid). A scene saved before keeps 0.15 unless it set the blur.
+11. Instant GI's Final Gather is made by the renderer (before, it lit the first surfaces in
+   screen space whatever the setting said) and is on for a new scene
+   (settings.FINAL_GATHER_DEFAULTS). A scene saved before rendered without a gather, whatever
+   it stored: its Final Gather is turned off.
 
 ``upgrade`` takes what a scene stored (its ID properties as a dict: only values someone set are
 stored, a default is not) and says what to write where, so that the scene renders with the
@@ -41,7 +45,7 @@ from dataclasses import dataclass, field
 
 from . import settings
 
-SETTINGS_VERSION = 10
+SETTINGS_VERSION = 11
 
 # The method groups that version 2 had: a scene saved then could render only with these, so
 # only they keep reading their field directly (groups added later start with their defaults).
@@ -81,6 +85,9 @@ DEFAULTS_BEFORE_9 = {"denoising_prefilter": "FAST"}
 # The Probe Grid group's defaults before version 10 that have changed since (the group is as
 # old as the add-on).
 PROBE_GRID_DEFAULTS_BEFORE_10 = {"visibility_blur": 0.15}
+# The Instant GI group's values before version 11 that a scene rendered with, whatever it stored
+# (its Final Gather was never made). The group came in version 3's time.
+INSTANT_GI_RENDERED_BEFORE_11 = {"final_gather": False}
 
 
 @dataclass
@@ -140,6 +147,11 @@ def upgrade(stored):
         for name, old_default in PROBE_GRID_DEFAULTS_BEFORE_10.items():
             if name not in group:
                 result.values[("probe_grid", name)] = old_default
+    if 3 <= version < 11:
+        group = stored.get("instant_gi", {})
+        for name, rendered in INSTANT_GI_RENDERED_BEFORE_11.items():
+            if name not in group or group[name] != rendered:
+                result.values[("instant_gi", name)] = rendered
     return result
 
 

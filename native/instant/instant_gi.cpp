@@ -571,6 +571,22 @@ class InstantGiField::SampleView : public IndirectField {
             field_.gather_set(sh, p, n, s, &gather_, vpl_scale_, sky_, lamp_scale_);
         return sh;
     }
+    // One set of the sample's passes, scaled by the sets (each VPL sets / passes gathered), its
+    // sky directions gathered sharing 4 pi, each lamp sample whole among its light's in the set.
+    FieldLookup gather_lookup(const vec3& p, const vec3& n, const vec3& wo,
+                              float u) const override {
+        static_cast<void>(wo);
+        FieldLookup out{ShRgb(kOrder), vec3(0.0f)};
+        if (field_.is_zero()) return out;
+        const size_t s = field_.gather_set_index(u);
+        const uint64_t directions = gather_.sky.empty() ? 0 : range_count(gather_.sky[s]);
+        const vec3 sky = directions > 0
+                             ? field_.scene_->world().radiance() * (kFourPi / float(directions))
+                             : vec3(0.0f);
+        field_.lookup_counter_->lookups.fetch_add(1, std::memory_order_relaxed);
+        field_.gather_set(out.radiance, p, n, s, &gather_, gather_.vpl_scale, sky, 1.0f);
+        return out;
+    }
     // The rest is the field's.
     float reuse_distance() const override { return field_.reuse_distance(); }
     bool includes_world_direct() const override { return field_.includes_world_direct(); }
@@ -640,6 +656,20 @@ ShRgb InstantGiField::set_radiance_sh(const vec3& p, const vec3& n, int set_x, i
     lookup_counter_->lookups.fetch_add(1, std::memory_order_relaxed);
     gather_set(sh, p, n, s, nullptr, set_scale_, sky, 1.0f);
     return sh;
+}
+
+size_t InstantGiField::gather_set_index(float u) const {
+    const float scaled = u > 0.0f ? u * float(sets_.size()) : 0.0f;  // NaN: the first set
+    return std::min(size_t(scaled), sets_.size() - 1);
+}
+
+FieldLookup InstantGiField::gather_lookup(const vec3& p, const vec3& n, const vec3& wo,
+                                          float u) const {
+    static_cast<void>(wo);
+    if (is_zero()) return FieldLookup{ShRgb(kOrder), vec3(0.0f)};
+    const int s = int(gather_set_index(u));
+    return FieldLookup{set_radiance_sh(p, n, s % settings_.sets_x, s / settings_.sets_x),
+                       vec3(0.0f)};
 }
 
 void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_position,

@@ -40,6 +40,12 @@
 // same however many passes are solved. Bakes interleave the sets over the lightmap's texels and filter them within UV charts
 // (interleave(), set_radiance_sh; bake/lightmap_baker.h).
 //
+// Final gather (render/path_integrator.h): the preview then shades the first surfaces as any
+// field's (next-event estimation and one BSDF-sampled gather ray, no frame-wide stage, so no
+// filter), and each gather ray's hit reads one set of the sample's passes (gather_lookup, the
+// set picked by the ray's number, which the preview stratifies over a pixel's samples), scaled
+// by the sets: unbiased, at 1 / sets of the shadow rays of a lookup of every set.
+//
 // Determinism: photons as the tracer's (seed, pass); each pixel's gather and filter depend only
 // on the G-buffer, so frames are identical for any thread count and tile size.
 #pragma once
@@ -203,6 +209,10 @@ class InstantGiField : public IndirectField {
     // the UV chart restores the whole; filter_mode None keeps each texel's own set).
     Interleave interleave() const override;
     ShRgb set_radiance_sh(const vec3& p, const vec3& n, int set_x, int set_y) const override;
+    // Where a final gather ray lands: the set u picks (u × the sets, rounded down) alone,
+    // scaled as set_radiance_sh scales it; an unbiased estimate of radiance_sh for u uniform.
+    FieldLookup gather_lookup(const vec3& p, const vec3& n, const vec3& wo,
+                              float u) const override;
     bool is_zero() const override {
         return passes_ == 0 || (vpl_count_ == 0 && sky_sets_.empty() && lamp_sets_.empty());
     }
@@ -253,6 +263,8 @@ class InstantGiField : public IndirectField {
         float vpl_scale = 0.0f;  // each VPL's: the sets over the passes gathered
     };
     SampleGather sample_gather(uint64_t sample) const;
+    // gather_lookup's set for u in [0, 1).
+    size_t gather_set_index(float u) const;
     // Adds set `set`'s VPLs (each scaled by vpl_scale) and, with filter_direct, its sky
     // directions (each of radiance sky_weight) and its lamp samples (each scaled by lamp_scale
     // / that light's samples among the passes gathered) seen from p as SH, with exact shadow

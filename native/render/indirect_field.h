@@ -64,6 +64,17 @@ class IndirectField {
         static_cast<void>(wo);
         return lookup(p, n);
     }
+    // The lookup where a final gather ray lands (PathIntegrator::set_final_gather): there any
+    // unbiased estimate of the field serves, since the gather's samples average it. `u` in
+    // [0, 1) is the caller's number for this ray (the preview stratifies it over a pixel's
+    // samples). Interleaved fields (INSTANT_GI) read the one set u picks, scaled by the sets
+    // (seed 004 §2.2: each set estimates all the light), for 1 / sets of the shadow rays.
+    // By default view_lookup: the same answer whatever u.
+    virtual FieldLookup gather_lookup(const vec3& p, const vec3& n, const vec3& wo,
+                                      float u) const {
+        static_cast<void>(u);
+        return view_lookup(p, n, wo);
+    }
 
     // Screen-space reuse (render/preview_renderer.h): how far apart (m) two shading points of
     // neighbouring pixels may lie, their normals agreeing, for one view_lookup() to serve both,

@@ -32,6 +32,12 @@ PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample, bool fi
     }
     return out;
 }
+
+float gather_number(uint64_t seed, uint64_t pixel, uint64_t sample) {
+    // Dimension 5: pixel_sample's take 0, 1, 2 and 4.
+    return owen_sobol_1d(uint32_t(sample), hash_seed(hash_seed(seed, pixel), 5));
+}
+
 namespace {
 
 #if defined(__SSE2__)
@@ -477,9 +483,12 @@ void PathIntegrator::add_field(const Shading& shading) {
         add_field_light(*shared_lookup_, lobes, shading.frame.z, wo, shared_irradiance_);
         return;
     }
-    // The lookup's result binds to the parameter directly: no copy of its SH.
-    add_field_light(field_->view_lookup(shading.position, shading.frame.z, wo), lobes,
-                    shading.frame.z, wo);
+    // The lookup's result binds to the parameter directly: no copy of its SH. Behind a final
+    // gather's bounces, one estimate of the field serves (gather_lookup).
+    add_field_light(field_from_ > 0
+                        ? field_->gather_lookup(shading.position, shading.frame.z, wo, gather_u_)
+                        : field_->view_lookup(shading.position, shading.frame.z, wo),
+                    lobes, shading.frame.z, wo);
 }
 
 void PathIntegrator::add_field_light(const FieldLookup& field, const FieldLobes& lobes,

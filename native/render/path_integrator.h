@@ -20,7 +20,9 @@
 // shallower (Light Paths > Diffuse, as the add-on's settings.light_path_fields gives it), so a
 // path that reached it by a glossy bounce would miss its last diffuse bounce (the two-room
 // scene's dim room read 0.9% darker, a closed room's glossy indirect light 5% darker); it goes
-// on as a reference path until it scatters diffusely.
+// on as a reference path until it scatters diffusely. Those lookups go through
+// IndirectField::gather_lookup with set_gather_number's u: a field may answer one unbiased
+// estimate of itself there (INSTANT_GI: one VPL set).
 //
 // Steps: trace() runs a whole path. A renderer that traces many paths at once can instead run
 // each path's steps itself: begin() (what the camera ray meets, the first surface's shading),
@@ -76,6 +78,11 @@ struct PixelSample {
 // stratified; without, they stay 0: the preview and the bake do not use them, and two more
 // scrambled points a pixel were ~2% of a preview frame.
 PixelSample pixel_sample(uint64_t seed, uint64_t pixel, uint64_t sample, bool first_bsdf = false);
+// The number sample s of a pixel passes to PathIntegrator::set_gather_number: a dimension of the
+// pixel's own Owen-scrambled Sobol' sequence, so that every power-of-two count of its samples
+// spreads over [0, 1) evenly (16 samples: one in each sixteenth, i.e. each of INSTANT_GI's
+// default 4 x 4 sets once).
+float gather_number(uint64_t seed, uint64_t pixel, uint64_t sample);
 // The instruction set pixel_samples runs on: Auto takes AVX2 (eight pixels at a time) when the
 // CPU has it (util/cpu_features.h), else SSE2 (four); tests name each to check it. All give the
 // same bits (integer work, and the same float conversions).
@@ -149,6 +156,10 @@ class PathIntegrator {
     // Diffuse scatterings the path makes before it reads the field (0: at the first surface;
     // 1: final gather). Call before begin().
     void set_final_gather(int diffuse_bounces) { field_from_ = diffuse_bounces; }
+    // The number in [0, 1) this path's field lookups behind its final-gather bounces pass to
+    // IndirectField::gather_lookup (which estimate of the field they read: INSTANT_GI's set),
+    // e.g. stratified over a pixel's samples; 0 unless set. Call before begin().
+    void set_gather_number(float u) { gather_u_ = u; }
 
     // For paths whose ray leaves a surface the caller sampled (a lightmap texel's hemisphere
     // ray): the pdf of that bounce (sr^-1), the path's lowest so far for Filter Glossy
@@ -283,6 +294,7 @@ class PathIntegrator {
     vec3 denoising_throughput_{1.0f};
     int vertex_ = 0;                   // surfaces shaded so far
     int field_from_ = 0;               // diffuse scatterings before the field is read
+    float gather_u_ = 0.0f;            // set_gather_number()
     int bounces_[kLobeClassCount] = {0, 0, 0};  // scatterings so far by class
     bool last_delta_ = true;           // camera rays and Dirac lobes take no MIS weight
     float last_pdf_ = 0.0f;

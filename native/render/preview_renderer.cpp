@@ -147,6 +147,13 @@ class WaveLease {
     std::unique_ptr<Wave> wave_;
 };
 
+// Whether `field` lights the first surfaces itself in a frame-wide stage: a screen-space field
+// (shades_first_surfaces) read without a final gather. Through one, the first surfaces are
+// reference vertices and the field is read where their gather rays land, as any field's.
+bool lights_first_surfaces(const IndirectField& field, bool final_gather) {
+    return field.shades_first_surfaces() && !final_gather;
+}
+
 // One render() call: samples [first, first + count) of every pixel, summed onto the film's base
 // into its target (which may be the base). Threads share it read-only; a work unit writes only
 // its own pixels of the target and of the G-buffer.
@@ -162,12 +169,11 @@ class FrameWork {
           pixel_filter_(pixel_filter), lights_(lights), material_lobes_(material_lobes),
           settings_(settings), field_(field), grid_(grid), first_(first), count_(count),
           g_buffer_(&g_buffer), progress_(progress),
-          screen_space_(field.shades_first_surfaces()),
+          screen_space_(lights_first_surfaces(field, final_gather)),
           reuse_(reuse_lookups && !final_gather && !field.is_zero() && !screen_space_
                      ? field.reuse_distance()
                      : 0.0f),
-          // A screen-space field lights the first surfaces itself: no gather ray before it.
-          final_gather_(final_gather && !screen_space_ ? 1 : 0),
+          final_gather_(final_gather ? 1 : 0),
           combined_only_(combined_only),
           camera_position_(camera.world_from_camera[3]),
           forward_(glm::normalize(-vec3(camera.world_from_camera[2]))) {}
@@ -288,6 +294,8 @@ class FrameWork {
                                                          &clock);
             path.set_first_light_sample(wave.samples[i].u_select, wave.samples[i].u_light);
             path.set_final_gather(final_gather_);
+            if (final_gather_ > 0)
+                path.set_gather_number(gather_number(settings_.seed, wave.pixel[i], s));
             path.set_glossy_memo(&wave.glossy_zh);
             path.set_material_lobes(&material_lobes_);
             if (combined_only_) path.set_combined_only();
@@ -333,7 +341,7 @@ class FrameWork {
     uint64_t first_, count_;
     GBuffer* g_buffer_;  // written by the work units, each in its own pixels
     Progress* progress_;
-    bool screen_space_;  // the field shades_first_surfaces()
+    bool screen_space_;  // lights_first_surfaces()
     const FieldLookup no_light_{ShRgb(2), vec3(0.0f)};  // first surfaces' lookup then
     float reuse_;  // the field's reuse distance; 0: every pixel makes its own lookup
     int final_gather_;  // diffuse bounces before a path reads the field (PreviewSettings)
@@ -449,10 +457,20 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
     const ZeroField no_field;
     const PinnedField pinned(field);  // one state of the field for the whole frame
     field = pinned.get() != nullptr ? pinned.get() : &no_field;  // none: direct light only
+    // Through a final gather, a screen-space field's direct light (INSTANT_GI's filter_direct)
+    // is left out: next-event estimation gives it exactly at the first surface and where the
+    // gather ray lands, which a field that carries it would leave to BSDF sampling alone at
+    // the first surface (and point lights to nothing).
+    std::shared_ptr<const IndirectField> indirect;
+    if (settings_.final_gather && field->shades_first_surfaces() &&
+        (field->includes_world_direct() || field->includes_lights_direct()))
+        indirect = field->without_direct();
+    if (indirect) field = indirect.get();
     if (field->shades_first_surfaces() && samples > 1) {
-        // A screen-space field lights the G-buffer of one sample index: one frame per sample,
-        // so that n samples at once give the frames of n calls of one sample each. A cancel
-        // keeps the samples finished before it.
+        // A screen-space field lights the G-buffer of one sample index, and its gather rays read
+        // that sample's view of it (sample_view): one frame per sample, so that n samples at
+        // once give the frames of n calls of one sample each. A cancel keeps the samples
+        // finished before it.
         PreviewTimings sum;
         for (uint32_t s = 0; s < samples; ++s) {
             render(field, 1, progress);
@@ -472,7 +490,7 @@ void PreviewRenderer::render(const IndirectField* field, uint32_t samples, Progr
     if (view) field = view.get();
     const TimePoint frame_start = now();
     const LightSampler& lights = lights_for(*field);
-    const bool screen_space = field->shades_first_surfaces();
+    const bool screen_space = lights_first_surfaces(*field, settings_.final_gather);
     g_buffer_.set_field_lobes(screen_space);
     // A screen-space field's frame-wide stage runs first, so later stages see its light. Every
     // frame-wide stage is timed apart from the tiles.

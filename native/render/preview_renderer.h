@@ -82,7 +82,11 @@ struct PreviewSettings {
     // Final gather (render/path_integrator.h): the first surface sends one BSDF-sampled ray per
     // sample and the field is read where it lands after a diffuse bounce (a glossy one goes on
     // as a reference path), not at the first surface. Slower per sample, but the field's blocks
-    // and leaks reach the picture only through one more bounce.
+    // and leaks reach the picture only through one more bounce. A screen-space field
+    // (INSTANT_GI) is then read like any other: no frame-wide stage lights the first surfaces
+    // (nothing to filter), its gather rays each read one VPL set of the sample's passes
+    // (IndirectField::gather_lookup), and its filter_direct light is left out (next-event
+    // estimation gives it exactly).
     bool final_gather = false;
 };
 

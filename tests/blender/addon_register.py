@@ -106,7 +106,7 @@ def check_panels_draw(scene):
     scene.shgi.method = "INSTANT_GI"
     shown = {name for _, name, _ in draw_panel_props("SHGI_RENDER_PT_instant_gi", context)}
     if shown != set(settings.INSTANT_GI_DEFAULTS) | {"passes", "viewport_passes",
-                                                     "bake_passes"}:
+                                                     "bake_passes", "final_gather"}:
         raise AssertionError(f"the instant GI panel shows {sorted(shown)}")
     scene.shgi.method = "PROBE_GRID"
     text = draw_panel("SHGI_RENDER_PT_probe_grid", context)

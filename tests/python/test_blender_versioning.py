@@ -72,10 +72,10 @@ def test_a_third_layout_scene_keeps_clamp_indirect_off():
     assert shgi.PathTracerSettings().clamp_indirect == 0.0  # scripts keep the native 0
     assert settings_upgrade.upgrade({"settings_version": 3, "samples": 5}).values == {
         ("", "clamp_indirect"): 0.0, ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6,
-        **INSTANT_GI_BEFORE_7, **BEFORE_9, **BEFORE_10}
+        **INSTANT_GI_BEFORE_7, **BEFORE_9, **BEFORE_10, **INSTANT_GI_BEFORE_11}
     assert settings_upgrade.upgrade({"settings_version": 3, "clamp_indirect": 4.0}).values == {
         ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9,
-        **BEFORE_10}
+        **BEFORE_10, **INSTANT_GI_BEFORE_11}
 
 
 def test_a_fourth_layout_scene_keeps_filter_glossy_off():
@@ -88,9 +88,10 @@ def test_a_fourth_layout_scene_keeps_filter_glossy_off():
     assert shgi.LightmapSettings().filter_glossy == 0.0
     assert settings_upgrade.upgrade({"settings_version": 4, "samples": 5}).values == {
         ("", "filter_glossy"): 0.0, **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9,
-        **BEFORE_10}
+        **BEFORE_10, **INSTANT_GI_BEFORE_11}
     assert settings_upgrade.upgrade({"settings_version": 4, "filter_glossy": 0.25}).values == {
-        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9, **BEFORE_10}
+        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9, **BEFORE_10,
+        **INSTANT_GI_BEFORE_11}
 
 
 # Light Propagation's defaults before layout 6, as an upgrade writes them into the group.
@@ -109,12 +110,13 @@ def test_a_fifth_layout_scene_keeps_the_light_propagation_defaults_of_then():
     assert (settings.PROPAGATION_DEFAULTS["steps"], settings.PROPAGATION_DEFAULTS["distance"]) == (
         0, 32.0)
     assert settings_upgrade.upgrade({"settings_version": 5, "samples": 5}).values == {
-        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9, **BEFORE_10}
+        **PROPAGATION_BEFORE_6, **INSTANT_GI_BEFORE_7, **BEFORE_9, **BEFORE_10,
+        **INSTANT_GI_BEFORE_11}
     stored = {"settings_version": 5, "propagation": {"steps": 16, "unclamped_transfer": True}}
     assert settings_upgrade.upgrade(stored).values == {
         **{key: value for key, value in PROPAGATION_BEFORE_6.items()
            if key[1] not in ("steps", "unclamped_transfer")}, **INSTANT_GI_BEFORE_7, **BEFORE_9,
-        **BEFORE_10}
+        **BEFORE_10, **INSTANT_GI_BEFORE_11}
     assert not any(group == "propagation" for group, _ in settings_upgrade.upgrade(
         {"settings_version": 2, "samples": 5}).values)
 
@@ -132,10 +134,11 @@ def test_a_sixth_layout_scene_keeps_instant_gi_passes_for_renders_and_bakes():
     defaults = settings.default_properties(shgi).instant_gi
     assert (defaults.passes, defaults.bake_passes) == (64, shgi.method("INSTANT_GI").final_passes)
     assert settings_upgrade.upgrade({"settings_version": 6, "samples": 5}).values == {
-        **INSTANT_GI_BEFORE_7, **BEFORE_9, **BEFORE_10}
+        **INSTANT_GI_BEFORE_7, **BEFORE_9, **BEFORE_10, **INSTANT_GI_BEFORE_11}
     stored = {"settings_version": 6, "instant_gi": {"passes": 12, "sets_x": 2}}
     assert settings_upgrade.upgrade(stored).values == {("instant_gi", "bake_passes"): 12,
-                                                       **BEFORE_9, **BEFORE_10}
+                                                       **BEFORE_9, **BEFORE_10,
+                                                       **INSTANT_GI_BEFORE_11}
     assert not any(group == "instant_gi" for group, _ in settings_upgrade.upgrade(
         {"settings_version": 2, "samples": 5}).values)
 
@@ -154,9 +157,10 @@ def test_an_eighth_layout_scene_keeps_the_fast_prefilter():
             settings.PROPERTY_DEFAULTS["filter_width"]) == ("BOX", 1.0)
     for layout in (7, 8):
         assert settings_upgrade.upgrade({"settings_version": layout, "samples": 5}).values == {
-            **BEFORE_9, **BEFORE_10}
+            **BEFORE_9, **BEFORE_10, **INSTANT_GI_BEFORE_11}
         assert settings_upgrade.upgrade({"settings_version": layout,
-                                         "denoising_prefilter": 2}).values == BEFORE_10
+                                         "denoising_prefilter": 2}).values == {
+            **BEFORE_10, **INSTANT_GI_BEFORE_11}
 
 
 # The probe grid's Visibility > Blur before layout 10, as an upgrade writes it into the group.
@@ -169,9 +173,31 @@ def test_a_ninth_layout_scene_keeps_the_probe_grids_wider_visibility_blur():
     scripts get the new default as well."""
     assert settings.PROBE_GRID_DEFAULTS["visibility_blur"] == pytest.approx(
         shgi.ProbeGridSettings().visibility_blur) == pytest.approx(0.10)
-    assert settings_upgrade.upgrade({"settings_version": 9, "samples": 5}).values == BEFORE_10
+    assert settings_upgrade.upgrade({"settings_version": 9, "samples": 5}).values == {
+        **BEFORE_10, **INSTANT_GI_BEFORE_11}
     assert settings_upgrade.upgrade({"settings_version": 9,
-                                     "probe_grid": {"visibility_blur": 0.4}}).values == {}
+                                     "probe_grid": {"visibility_blur": 0.4}}).values == \
+        INSTANT_GI_BEFORE_11
+
+
+# Instant GI's Final Gather before layout 11 (never made), as an upgrade writes it.
+INSTANT_GI_BEFORE_11 = {("instant_gi", "final_gather"): False}
+
+
+def test_a_tenth_layout_scene_keeps_instant_gi_without_a_final_gather():
+    """Layout 11's renderer makes Instant GI's Final Gather, on for a new scene; before, it lit
+    the first surfaces in screen space whatever Final Gather said. A scene saved before renders
+    as it did, without a gather, whether it stored the setting or not; layouts 1 and 2 had no
+    Instant GI group: today's defaults."""
+    assert settings.FINAL_GATHER_DEFAULTS["INSTANT_GI"]
+    assert settings.default_properties(shgi).instant_gi.final_gather
+    for instant_gi in ({}, {"final_gather": True}, {"final_gather": 1}):
+        stored = {"settings_version": 10, "instant_gi": instant_gi}
+        assert settings_upgrade.upgrade(stored).values == INSTANT_GI_BEFORE_11
+    stored = {"settings_version": 10, "instant_gi": {"final_gather": 0}}
+    assert settings_upgrade.upgrade(stored).values == {}
+    assert not any(group == "instant_gi" for group, _ in settings_upgrade.upgrade(
+        {"settings_version": 2, "samples": 5}).values)
 
 
 def test_settings_of_today_layout_are_left_alone():

@@ -51,8 +51,6 @@ def dim_room_ratios(method, preset):
 
 @pytest.mark.reference
 @pytest.mark.parametrize("preset", list(presets.QUALITY_PRESETS))
-# Instant GI's renderer makes no gather (settings.UNGATHERED_METHODS): with Final Gather on its
-# field keeps the full depth and the frame is its first-surface one.
 @pytest.mark.parametrize("method", ["PROBE_GRID", "RADIANCE_FIELD", "PROPAGATION", "INSTANT_GI"])
 def test_dim_room_through_a_final_gather_is_within_five_percent_at_every_preset(method, preset):
     ratios = dim_room_ratios(method, preset)

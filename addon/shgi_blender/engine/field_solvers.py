@@ -387,7 +387,7 @@ def solver_recipe(props, shgi, volumes=(), viewport=False, gather=None, bake=Fal
         RENDER_PASSES_DEFAULTS: a bake gathers every pass, F12's samples some each).
     gather: whether the field will be read through a final gather (one bounce less in the field;
         settings.light_path_fields); None: as F12, the viewport and Solve read it (the group's
-        Final Gather, never for Instant GI: settings.reads_through_gather), False for a bake,
+        Final Gather: settings.reads_through_gather), False for a bake,
         which reads its field at the texels.
     ValueError for a method that solves no field, or a bad volume.
     """

@@ -351,6 +351,7 @@ class SHGI_RENDER_PT_instant_gi(_FieldPanel, bpy.types.Panel):
         column.prop(instant, "viewport_passes", text="Viewport")
         column.prop(instant, "bake_passes", text="Bake")
         column.prop(instant, "passes_per_sample", text="Per Sample")
+        layout.prop(instant, "final_gather")
 
 
 def irradiance_volume_count(scene):

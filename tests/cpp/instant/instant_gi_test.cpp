@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "render/render_test_scenes.h"
 #include "sh/sh_irradiance.h"
@@ -96,6 +98,53 @@ TEST(InstantGi, SampleViewLooksUpTheSamplesPassesAlone) {
     EXPECT_NE(second[0], view[0]);  // other VPLs ...
     EXPECT_NEAR(second[0].x / view[0].x, 1.0f, 0.5f);  // ... of the same light
     EXPECT_EQ(eight->lookup_counts().vpls, eight->vpl_count() - four->vpl_count());
+}
+
+// Where a final gather ray lands (gather_lookup) one set is read, scaled by the sets: over the
+// sets (u at the middle of each's share) the lookups average to the lookup of every set, for
+// the field and for a sample's view of it (that sample's passes), and each reads one set's VPLs.
+TEST(InstantGi, GatherLookupsOfEverySetAverageToTheWholeLookup) {
+    Scene scene;
+    scene.add_material(test::lambert(0.7f));
+    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
+    scene.add_light(test::point_light(vec3(0.3f, 0.2f, 0.5f), 100.0f));
+    scene.set_world(test::black_world());
+    scene.commit();
+    InstantGiSettings settings;
+    settings.seed = 3;
+    settings.passes_per_sample = 2;
+    InstantGi solver(scene, settings);
+    for (int i = 0; i < 4; ++i) solver.refine();
+    const std::shared_ptr<const InstantGiField> field = solver.field();
+    const std::unique_ptr<const IndirectField> view = field->sample_view(1);  // passes 2 and 3
+    const vec3 p(-0.2f, 0.3f, -0.99f), n(0.0f, 0.0f, 1.0f), wo(0.0f, 0.6f, 0.8f);
+    const size_t sets = field->sets().size();
+    ASSERT_EQ(sets, 16u);
+    for (const IndirectField* whole : {static_cast<const IndirectField*>(field.get()),
+                                       view.get()}) {
+        const ShRgb expected = whole->radiance_sh(p, n);
+        ASSERT_GT(expected[0].x, 0.0f);
+        ShRgb mean(2);
+        std::vector<float> dc;
+        for (size_t k = 0; k < sets; ++k) {
+            const FieldLookup one = whole->gather_lookup(p, n, wo, (float(k) + 0.5f) / 16.0f);
+            for (int i = 0; i < 9; ++i) mean[i] += one.radiance[i] / float(sets);
+            dc.push_back(one.radiance[0].x);
+        }
+        for (int i = 0; i < 9; ++i)
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(mean[i][c], expected[i][c], 1e-5f * std::abs(expected[0][c]))
+                    << "coefficient " << i << " channel " << c;
+        // Different sets, so different answers (each of about the whole's size).
+        EXPECT_NE(*std::min_element(dc.begin(), dc.end()), *std::max_element(dc.begin(), dc.end()));
+    }
+    // One set's VPLs of the sample's passes: a sixteenth of the view's whole lookup.
+    const std::unique_ptr<const IndirectField> counted = field->sample_view(1);  // counts reset
+    counted->gather_lookup(p, n, wo, 0.0f);
+    const InstantGiLookupCounts counts = field->lookup_counts();
+    EXPECT_EQ(counts.lookups, 1u);
+    const std::vector<uint64_t>& ends = field->pass_ends()[0];
+    EXPECT_EQ(counts.vpls, ends[3] - ends[1]);  // set 0's VPLs of passes 2 and 3
 }
 
 TEST(InstantGi, SettingsRefusalsNameTheField) {
