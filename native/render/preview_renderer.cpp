@@ -113,6 +113,9 @@ struct Wave {
     std::vector<FieldLookup> lookups;
     std::vector<IrradianceMemo> irradiance;  // per quad: its lookup's irradiance, by normal
     GgxZhMemo glossy_zh;  // every path's glossy band factors, by roughness (kept across waves)
+    // Every path's last triangle normal and shading frame; reset for each render_tiles call,
+    // since a kept wave may next serve another scene or revision.
+    ShadingMemo shading;
     std::vector<Ray> rays;
     std::vector<Hit> hits;
     std::vector<Ray> shadow_rays;
@@ -179,6 +182,7 @@ class FrameWork {
         const uint64_t tile_pixels = uint64_t(grid_.tile) * uint64_t(grid_.tile);
         WaveLease lease(size_t(std::min<uint64_t>(kWavePixels, (end - begin) * tile_pixels)));
         Wave& wave = lease.wave();
+        wave.shading.reset();
         IntegratorClock clock;
         for (uint64_t t = begin; t < end; ++t) {
             int x0, x1, y0, y1;
@@ -290,6 +294,7 @@ class FrameWork {
             path.set_final_gather(final_gather_);
             path.set_glossy_memo(&wave.glossy_zh);
             path.set_material_lobes(&material_lobes_);
+            path.set_shading_memo(&wave.shading);
             if (combined_only_) path.set_combined_only();
             wave.live[i] = path.begin(wave.rays[i], wave.hits[i]);
             if (wave.live[i])
