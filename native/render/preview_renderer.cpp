@@ -286,7 +286,12 @@ class FrameWork {
         camera_rays_.generate_rays(wave.film.data(), wave.count, wave.rays.data());
         scene_.intersect(wave.rays, wave.hits, nullptr, RayCoherence::Coherent);
         for (size_t i = 0; i < wave.count; ++i) {
-            clear_pass_values(wave.values[i]);
+            // A Combined-only path writes no other pass and its film reads no other
+            // (PathIntegrator::set_combined_only): the rest keep whatever they held.
+            if (combined_only_)
+                wave.values[i][Pass::Combined] = vec3(0.0f);
+            else
+                clear_pass_values(wave.values[i]);
             PathIntegrator& path = wave.paths[i].emplace(scene_, camera_, lights_, settings_,
                                                          &field_, wave.rngs[i], wave.values[i],
                                                          &clock);
