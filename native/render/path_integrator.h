@@ -211,6 +211,11 @@ class PathIntegrator {
     // by the caller; it must outlive the path. Without one each surface sets its lobes up
     // itself (the same values).
     void set_material_lobes(const MaterialLobeTable* lobes) { material_lobes_ = lobes; }
+    // The caller's ShadingMemo (render/shading.h) for every surface this path shades, kept
+    // across paths on one thread and reset for each new scene state; it must outlive the path.
+    // Without one each surface computes its triangle's normal and frame itself (the same
+    // values).
+    void set_shading_memo(ShadingMemo* memo) { shading_memo_ = memo; }
     // The first surface as begin() shaded it (position, shading frame, BSDF), for the G-buffer
     // (render/g_buffer.h); valid after begin() returned true and before finish().
     const Shading& first_surface() const { return shading_.value; }
@@ -219,6 +224,7 @@ class PathIntegrator {
     const FieldLookup* shared_lookup_ = nullptr;
     GgxZhMemo* glossy_memo_ = nullptr;
     const MaterialLobeTable* material_lobes_ = nullptr;
+    ShadingMemo* shading_memo_ = nullptr;
     IrradianceMemo* shared_irradiance_ = nullptr;
     struct FirstLightSample {
         float u_select;

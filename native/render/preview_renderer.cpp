@@ -113,6 +113,9 @@ struct Wave {
     std::vector<FieldLookup> lookups;
     std::vector<IrradianceMemo> irradiance;  // per quad: its lookup's irradiance, by normal
     GgxZhMemo glossy_zh;  // every path's glossy band factors, by roughness (kept across waves)
+    // Every path's last triangle normal and shading frame; reset for each render_tiles call,
+    // since a kept wave may next serve another scene or revision.
+    ShadingMemo shading;
     std::vector<Ray> rays;
     std::vector<Hit> hits;
     std::vector<Ray> shadow_rays;
@@ -185,6 +188,7 @@ class FrameWork {
         const uint64_t tile_pixels = uint64_t(grid_.tile) * uint64_t(grid_.tile);
         WaveLease lease(size_t(std::min<uint64_t>(kWavePixels, (end - begin) * tile_pixels)));
         Wave& wave = lease.wave();
+        wave.shading.reset();
         IntegratorClock clock;
         for (uint64_t t = begin; t < end; ++t) {
             int x0, x1, y0, y1;
@@ -288,7 +292,12 @@ class FrameWork {
         camera_rays_.generate_rays(wave.film.data(), wave.count, wave.rays.data());
         scene_.intersect(wave.rays, wave.hits, nullptr, RayCoherence::Coherent);
         for (size_t i = 0; i < wave.count; ++i) {
-            clear_pass_values(wave.values[i]);
+            // A Combined-only path writes no other pass and its film reads no other
+            // (PathIntegrator::set_combined_only): the rest keep whatever they held.
+            if (combined_only_)
+                wave.values[i][Pass::Combined] = vec3(0.0f);
+            else
+                clear_pass_values(wave.values[i]);
             PathIntegrator& path = wave.paths[i].emplace(scene_, camera_, lights_, settings_,
                                                          &field_, wave.rngs[i], wave.values[i],
                                                          &clock);
@@ -298,6 +307,7 @@ class FrameWork {
                 path.set_gather_number(gather_number(settings_.seed, wave.pixel[i], s));
             path.set_glossy_memo(&wave.glossy_zh);
             path.set_material_lobes(&material_lobes_);
+            path.set_shading_memo(&wave.shading);
             if (combined_only_) path.set_combined_only();
             wave.live[i] = path.begin(wave.rays[i], wave.hits[i]);
             if (wave.live[i])

@@ -51,7 +51,7 @@ MaterialLobeTable::MaterialLobeTable(const Scene& scene) {
 }
 
 Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray_direction,
-                     PathOrigin origin, const MaterialLobeTable* lobes) {
+                     PathOrigin origin, const MaterialLobeTable* lobes, FrameMemo* frames) {
     vec3 ng = sp.geometric_normal, ns = sp.shading_normal;
     const bool back_face = glm::dot(ray_direction, ng) > 0.0f;
     if (back_face) {
@@ -89,7 +89,7 @@ Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray
     }
     // An interpolated normal facing away from the viewer would make wo.z <= 0: fall back.
     if (glm::dot(ns, -ray_direction) <= 0.0f && !keep_bent) ns = ng;
-    const Frame frame = Frame::from_z(ns);
+    const Frame frame = frames != nullptr ? frames->from_z(ns) : Frame::from_z(ns);
     vec3 wo = frame.to_local(-ray_direction);
     if (keep_bent) wo.z = std::max(std::fabs(wo.z), kMinLambertCosine);
     vec3 base_color = material.base_color;

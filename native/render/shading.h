@@ -6,6 +6,7 @@
 // surface along the geometric normal, on the side they leave towards.
 #pragma once
 
+#include <cstring>
 #include <new>
 #include <type_traits>
 #include <vector>
@@ -109,11 +110,44 @@ class MaterialLobeTable {
     std::vector<uint8_t> has_lobes_;
 };
 
+// Frame::from_z of the last shading normal asked for, compared by bits (-0 and +0 give
+// different frames). Neighbouring hits on one flat triangle have the same normal's bits, and the
+// frame is a function of the normal alone, so a hit gets the frame a new call would give.
+class FrameMemo {
+  public:
+    const Frame& from_z(const vec3& n) {
+        if (!valid_ || std::memcmp(&n, &frame_.z, sizeof(vec3)) != 0) {
+            frame_ = Frame::from_z(n);
+            valid_ = true;
+        }
+        return frame_;
+    }
+    void reset() { valid_ = false; }
+
+  private:
+    bool valid_ = false;
+    Frame frame_;
+};
+
+// What a tracer that shades many hits in a row on one thread (the preview's wave) keeps between
+// them: the last triangle's geometric normal (Scene::surface_point) and the last shading
+// frame (make_shading). Reset it whenever the scene or its revision changes.
+struct ShadingMemo {
+    TriangleNormalMemo triangle;
+    FrameMemo frame;
+
+    void reset() {
+        triangle.reset();
+        frame.reset();
+    }
+};
+
 // origin: which end of the path the ray came from (PathOrigin::Light for photons). `lobes`
-// (optional): the scene's MaterialLobeTable (the same Shading, made faster).
+// (optional): the scene's MaterialLobeTable; `frames` (optional): the caller's FrameMemo (both
+// give the same Shading, made faster).
 Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray_direction,
                      PathOrigin origin = PathOrigin::Camera,
-                     const MaterialLobeTable* lobes = nullptr);
+                     const MaterialLobeTable* lobes = nullptr, FrameMemo* frames = nullptr);
 
 // make_shading built in `slot`, over the Shading it held (the tracers' per-hit records):
 // assigning make_shading's result would copy the 260-byte record (a `rep movsq`, ~4% of the
@@ -121,8 +155,9 @@ Shading make_shading(const Scene& scene, const SurfacePoint& sp, const vec3& ray
 static_assert(std::is_trivially_destructible_v<Shading>, "make_shading_in skips the destructor");
 inline Shading& make_shading_in(Shading* slot, const Scene& scene, const SurfacePoint& sp,
                                 const vec3& ray_direction, PathOrigin origin = PathOrigin::Camera,
-                                const MaterialLobeTable* lobes = nullptr) {
-    return *::new (slot) Shading(make_shading(scene, sp, ray_direction, origin, lobes));
+                                const MaterialLobeTable* lobes = nullptr,
+                                FrameMemo* frames = nullptr) {
+    return *::new (slot) Shading(make_shading(scene, sp, ray_direction, origin, lobes, frames));
 }
 
 }  // namespace shgi

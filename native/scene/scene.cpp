@@ -869,7 +869,12 @@ void Scene::occluded(const std::vector<Ray>& rays, std::vector<uint8_t>& occlude
 
 // The ray is not needed: positions come from the barycentrics, which stay on the triangle,
 // unlike origin + t * direction (whose rounding error grows with t).
-SurfacePoint Scene::surface_point(const Ray& /*ray*/, const Hit& hit) const {
+SurfacePoint Scene::surface_point(const Ray& ray, const Hit& hit) const {
+    return surface_point(ray, hit, nullptr);
+}
+
+SurfacePoint Scene::surface_point(const Ray& /*ray*/, const Hit& hit,
+                                  TriangleNormalMemo* memo) const {
     require_committed("surface_point");
     if (!hit.valid()) throw InvalidArgument("surface_point: the hit is a miss (no instance)");
     if (hit.instance_id >= instances_.size())
@@ -893,7 +898,15 @@ SurfacePoint Scene::surface_point(const Ray& /*ray*/, const Hit& hit) const {
     point.instance_id = hit.instance_id;
     point.triangle_id = hit.triangle_id;
     point.position = vec3(instance.world_from_object * vec4(b0 * p0 + b1 * p1 + b2 * p2, 1.0f));
-    point.geometric_normal = glm::normalize(normal_from_object * glm::cross(p1 - p0, p2 - p0));
+    if (memo != nullptr && memo->instance_id == hit.instance_id &&
+        memo->triangle_id == hit.triangle_id) {
+        point.geometric_normal = memo->normal;
+    } else {
+        point.geometric_normal =
+            glm::normalize(normal_from_object * glm::cross(p1 - p0, p2 - p0));
+        if (memo != nullptr) *memo = TriangleNormalMemo{hit.instance_id, hit.triangle_id,
+                                                        point.geometric_normal};
+    }
     point.shading_normal = point.geometric_normal;
     if (!mesh.normals.empty()) {
         const vec3 n = normal_from_object * (b0 * mesh.normals[tri.x] + b1 * mesh.normals[tri.y] +

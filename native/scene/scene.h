@@ -108,6 +108,16 @@ struct SurfacePoint {
     uint32_t triangle_id = kInvalidId;
 };
 
+// The last triangle whose geometric normal Scene::surface_point computed for a caller, and that
+// normal (world space, unit, before any flip toward the ray).
+struct TriangleNormalMemo {
+    uint32_t instance_id = kInvalidId;
+    uint32_t triangle_id = kInvalidId;
+    vec3 normal{0.0f, 0.0f, 1.0f};
+
+    void reset() { instance_id = triangle_id = kInvalidId; }
+};
+
 // Meshes used by several instances are flattened (copied into the top level once per instance)
 // while all their copies together hold at most this many triangles (taken in mesh order).
 inline constexpr uint64_t kMaxFlattenedCopyTriangles = uint64_t(1) << 16;
@@ -214,6 +224,12 @@ class Scene {
                   RayCoherence coherence = RayCoherence::Incoherent) const;
     // Shading data at a valid hit (InvalidArgument for a miss or ids out of range).
     SurfacePoint surface_point(const Ray& ray, const Hit& hit) const;
+    // The same, the triangle's geometric normal taken from `memo` when it holds this triangle's
+    // (and stored in it otherwise): a caller shading many hits in a row on one thread (the
+    // preview's wave) mostly meets the triangle its last hit met. The normal is a function of
+    // the triangle alone, so the point is the one above, bit for bit. The memo belongs to this
+    // scene as committed: reset() it for another scene or revision.
+    SurfacePoint surface_point(const Ray& ray, const Hit& hit, TriangleNormalMemo* memo) const;
     // What maps instance `instance_id`'s object-space normals to world (scene.h, "Normals");
     // valid on a committed scene (object-space normal maps read it).
     const mat3& normal_from_object(uint32_t instance_id) const {

@@ -190,6 +190,27 @@ void expect_black(const Film& film, Pass pass, const char* what) {
 
 // With no field the preview shows direct light only: DiffDir is the point light's irradiance /
 // pi at every pixel, the Ind passes are exactly zero, Combined = albedo x DiffDir.
+// The preview's FrameMemo gives Frame::from_z's frame bit for bit: normals repeated (its hits),
+// new ones (its misses), and -0 and +0 components, whose frames differ in sign bits.
+TEST(PreviewRenderer, FrameMemoIsFrameFromZBitForBit) {
+    std::vector<vec3> normals = {vec3(0.0f, 0.0f, 1.0f), vec3(-0.0f, 0.0f, 1.0f),
+                                 vec3(0.0f, -0.0f, 1.0f), vec3(0.0f, 0.0f, -1.0f),
+                                 vec3(-0.0f, -0.0f, -1.0f)};
+    Pcg32 rng(3);
+    for (int i = 0; i < 200; ++i) {
+        const vec3 n = glm::normalize(vec3(rng.next_float(), rng.next_float(), rng.next_float()) -
+                                      0.5f);
+        for (int k = 0; k <= i % 3; ++k) normals.push_back(n);  // runs of 1 to 3
+    }
+    normals.insert(normals.end(), normals.begin(), normals.begin() + 5);
+    FrameMemo memo;
+    for (size_t i = 0; i < normals.size(); ++i) {
+        const Frame expected = Frame::from_z(normals[i]);
+        const Frame frame = memo.from_z(normals[i]);
+        EXPECT_EQ(std::memcmp(&frame, &expected, sizeof(Frame)), 0) << "normal " << i;
+    }
+}
+
 TEST(PreviewRenderer, NullFieldGivesExactDirectLightAndNoIndirect) {
     const Scene scene = point_light_scene();
     const uint32_t samples = 16;

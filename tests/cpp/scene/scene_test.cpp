@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <string>
@@ -252,6 +253,48 @@ TEST(SceneIntersect, SurfacePointGivesMaterialAndInterpolatedNormal) {
     expect_near(point.shading_normal, glm::normalize(n));
     expect_contains(rejection<InvalidArgument>([&] { scene.surface_point(ray, Hit{}); }),
                     "the hit is a miss");
+}
+
+// A TriangleNormalMemo changes no bit of a surface point: hits in runs on the same triangle
+// (the memo's hits) and jumps between triangles and instances (its misses), through a rotated
+// and a non-uniformly scaled instance of one mesh.
+TEST(SceneIntersect, SurfacePointWithATriangleNormalMemoIsBitForBit) {
+    Scene scene;
+    const uint32_t cube = scene.add_mesh(unit_cube());
+    scene.add_instance(cube, mat4(1.0f));
+    scene.add_instance(cube, glm::translate(mat4(1.0f), vec3(2, 0, 0)) *
+                                 glm::rotate(mat4(1.0f), 0.3f, vec3(0, 0, 1)) *
+                                 glm::scale(mat4(1.0f), vec3(0.7f, 1.3f, 1.0f)));
+    scene.commit();
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
+    TriangleNormalMemo memo;
+    int hits = 0, repeated = 0;
+    for (int i = 0; i < 4000; ++i) {
+        // Runs of four rays towards nearby targets mostly meet one triangle in turn.
+        std::mt19937 run_rng{uint32_t(i / 4)};
+        const vec3 target(1.5f + 1.5f * uniform(run_rng), 0.5f + 0.5f * uniform(run_rng),
+                          0.5f + 0.5f * uniform(run_rng));
+        const vec3 origin(1.5f + 4 * uniform(rng), 4 * uniform(rng), 3.0f + uniform(rng));
+        const Ray ray = make_ray(origin, target + 0.01f * vec3(uniform(rng)) - origin);
+        const Hit hit = scene.intersect(ray);
+        if (!hit.valid()) continue;
+        ++hits;
+        repeated += memo.instance_id == hit.instance_id && memo.triangle_id == hit.triangle_id;
+        const SurfacePoint expected = scene.surface_point(ray, hit);
+        const SurfacePoint point = scene.surface_point(ray, hit, &memo);
+        ASSERT_EQ(std::memcmp(&point.geometric_normal, &expected.geometric_normal, sizeof(vec3)),
+                  0)
+            << "ray " << i;
+        EXPECT_EQ(std::memcmp(&point.shading_normal, &expected.shading_normal, sizeof(vec3)), 0);
+        EXPECT_EQ(std::memcmp(&point.position, &expected.position, sizeof(vec3)), 0);
+        EXPECT_EQ(memo.instance_id, hit.instance_id);
+        EXPECT_EQ(memo.triangle_id, hit.triangle_id);
+    }
+    // Both paths of the memo ran.
+    EXPECT_GT(hits, 1000);
+    EXPECT_GT(repeated, 300);
+    EXPECT_LT(repeated, hits - 300);
 }
 
 // A texture reads the UV set its material names; without a name, or with an unknown one, the first.
