@@ -246,6 +246,15 @@ float glossy_lobe_norm(float roughness) {
 // The reach of the ray back along a photon's path that finds its surface (scattered_flux).
 constexpr float kReach = 1e-3f;
 
+// Pixel p's irradiance (>= 0) from the radiance SH `sh` about its shading normal, through its
+// diffuse lobe's bump shadowing where a normal map bent the normal (render/bump_irradiance.h),
+// as the path tracer weighs each light; elsewhere the plain cosine convolution, as before.
+vec3 pixel_irradiance(const GBuffer& g, size_t p, const ShRgb& sh) {
+    if (!g.has_field_lobes() || g.diffuse_bump[p].smooth_normal == vec3(0.0f))
+        return glm::max(sh_irradiance(sh, g.shading_normal[p]), vec3(0.0f));
+    return glm::max(sh_bump_irradiance(sh, g.shading_normal[p], g.diffuse_bump[p]), vec3(0.0f));
+}
+
 }  // namespace
 
 void validate_instant_gi_settings(const InstantGiSettings& s) {
@@ -973,7 +982,7 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                     if (!g.has_surface(p)) continue;
                     ShRgb sh(kOrder);
                     std::copy_n(&plane[p * kCoeffs], kCoeffs, sh.coeffs.begin());
-                    irradiance[p] = glm::max(sh_irradiance(sh, g.shading_normal[p]), vec3(0.0f));
+                    irradiance[p] = pixel_irradiance(g, p, sh);
                 }
             });
         }
@@ -994,8 +1003,7 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                     if (!g.has_surface(p)) continue;
                     ShRgb near_sh(kOrder);
                     std::copy_n(&raw_near[p * kCoeffs], kCoeffs, near_sh.coeffs.begin());
-                    filtered[p] +=
-                        glm::max(sh_irradiance(near_sh, g.shading_normal[p]), vec3(0.0f));
+                    filtered[p] += pixel_irradiance(g, p, near_sh);
                 }
             });
     }
@@ -1038,7 +1046,11 @@ void InstantGiField::shade_first_surfaces(const GBuffer& g, const vec3& camera_p
                     FieldLookup lookup;
                     lookup.radiance = ShRgb(kOrder);
                     std::copy_n(&sh[p * kCoeffs], kCoeffs, lookup.radiance.coeffs.begin());
-                    const vec3 e = filter_irradiance ? e_plane[p] : lookup.irradiance(ns);
+                    const DiffuseBump& bump = g.diffuse_bump[p];
+                    const vec3 e = filter_irradiance ? e_plane[p]
+                                   : bump.smooth_normal == vec3(0.0f)
+                                       ? lookup.irradiance(ns)
+                                       : lookup.irradiance(ns, bump);
                     diffuse = g.field_diffuse[p] * e * kInvPi;
                     glossy = vec3(0.0f);
                     for (int k = 0; k < 2; ++k)

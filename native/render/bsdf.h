@@ -148,6 +148,11 @@ class PrincipledBsdf {
     // The factor the diffuse lobe takes for light from local direction `wi` (the camera path's
     // light side): the bump shadowing term above, 1 unless set_smooth_normal was called.
     float diffuse_bump_shadowing(const vec3& wi) const;
+    // Whether set_smooth_normal was called; the interpolated normal (local frame) and the term
+    // it set (field consumers fold the shadowing into their irradiance: render/bump_irradiance.h).
+    bool has_smooth_normal() const { return bent_; }
+    const vec3& smooth_normal() const { return smooth_normal_; }
+    bool microfacet_bump() const { return microfacet_bump_; }
 
     BsdfEval eval(const vec3& wo, const vec3& wi) const;
     float pdf(const vec3& wo, const vec3& wi) const;

@@ -50,6 +50,7 @@ void GBuffer::set_surface(size_t pixel, const Scene& scene, const Shading& shadi
             glossy_albedo[k][pixel] = k < n ? lobes[k].albedo : vec3(0.0f);
             glossy_roughness[k][pixel] = k < n ? lobes[k].roughness : 0.0f;
         }
+        if (!shgi::diffuse_bump(shading, &diffuse_bump[pixel])) diffuse_bump[pixel] = DiffuseBump{};
     }
 }
 
@@ -57,17 +58,20 @@ void GBuffer::set_field_lobes(bool on) {
     if (on == has_field_lobes()) return;
     const size_t count = on ? pixel_count() : 0;
     if (on)
-        require_memory(saturating_mul(uint64_t(count), uint64_t(3 * sizeof(vec3) + 2 * sizeof(float))),
+        require_memory(saturating_mul(uint64_t(count), uint64_t(3 * sizeof(vec3) + 2 * sizeof(float) +
+                                                                sizeof(DiffuseBump))),
                        format_message("the G-buffer's field lobes of ", width_, " x ", height_,
                                       " pixels"),
                        "lower the camera's resolution_x / resolution_y (or Blender's resolution %)");
     field_diffuse.assign(count, vec3(0.0f));
+    diffuse_bump.assign(count, DiffuseBump{});
     for (int k = 0; k < 2; ++k) {
         glossy_albedo[k].assign(count, vec3(0.0f));
         glossy_roughness[k].assign(count, 0.0f);
     }
     if (!on) {
         field_diffuse.shrink_to_fit();
+        diffuse_bump.shrink_to_fit();
         for (int k = 0; k < 2; ++k) {
             glossy_albedo[k].shrink_to_fit();
             glossy_roughness[k].shrink_to_fit();
@@ -86,6 +90,7 @@ void GBuffer::set_miss(size_t pixel) {
     material_id[pixel] = kNoSurface;
     if (has_field_lobes()) {
         field_diffuse[pixel] = vec3(0.0f);
+        diffuse_bump[pixel] = DiffuseBump{};
         for (int k = 0; k < 2; ++k) {
             glossy_albedo[k][pixel] = vec3(0.0f);
             glossy_roughness[k][pixel] = 0.0f;

@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "render/bump_irradiance.h"
 #include "render/shading.h"
 #include "scene/scene.h"
 #include "util/math.h"
@@ -67,8 +68,11 @@ class GBuffer {
     std::vector<vec3> field_diffuse;
     std::vector<vec3> glossy_albedo[2];
     std::vector<float> glossy_roughness[2];
+    // The diffuse lobe's bump shadowing (render/bump_irradiance.h) where a normal map bent its
+    // normal; a zero smooth_normal elsewhere.
+    std::vector<DiffuseBump> diffuse_bump;
     bool has_field_lobes() const { return !field_diffuse.empty(); }
-    // Allocates (all zero) or frees the field-lobe planes; 32 more bytes a pixel.
+    // Allocates (all zero) or frees the field-lobe planes; 60 more bytes a pixel.
     void set_field_lobes(bool on);
 
   private:

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "render/bump_irradiance.h"
 #include "sh/ggx_zh.h"
 #include "sh/sh_irradiance.h"
 #include "util/rng.h"
@@ -16,15 +17,19 @@ constexpr float kMinGatherRoughness = 0.01f;
 
 // The mean of `radiance` over `rays` directions sampled around `axis` by `sample` (a local
 // direction around +Z from a uniform point of the square), stratified in the first dimension.
-template <typename Sample>
+// Each direction w's radiance is weighed by weight(w) (world space; 1 by default, an exact
+// product).
+template <typename Sample, typename Weight = float (*)(const vec3&)>
 vec3 gathered_mean(const ShRgb& radiance, const vec3& axis, uint32_t rays, uint64_t key,
-                   uint64_t stream, Sample&& sample) {
+                   uint64_t stream, Sample&& sample,
+                   Weight&& weight = [](const vec3&) { return 1.0f; }) {
     Pcg32 rng(key, stream);
     const Frame frame = Frame::from_z(axis);
     vec3 sum(0.0f);
     for (uint32_t i = 0; i < rays; ++i) {
         const vec2 u((float(i) + rng.next_float()) / float(rays), rng.next_float());
-        sum += sh_evaluate(radiance, frame.to_world(sample(u)));
+        const vec3 w = frame.to_world(sample(u));
+        sum += sh_evaluate(radiance, w) * weight(w);
     }
     return sum / float(rays);
 }
@@ -46,6 +51,17 @@ vec3 FieldLookup::irradiance(const vec3& n) const {
         return glm::max(kPi * mean, vec3(0.0f)) + extra_irradiance;
     }
     return glm::max(sh_irradiance(radiance, n), vec3(0.0f)) + extra_irradiance;
+}
+
+vec3 FieldLookup::irradiance(const vec3& n, const DiffuseBump& bump) const {
+    if (diffuse_rays > 0) {
+        const vec3 mean = gathered_mean(
+            radiance, n, diffuse_rays, gather_key, 0,
+            [](const vec2& u) { return sample_cosine_hemisphere(u); },
+            [&](const vec3& w) { return bump.shadowing(n, w); });
+        return glm::max(kPi * mean, vec3(0.0f)) + extra_irradiance;
+    }
+    return glm::max(sh_bump_irradiance(radiance, n, bump), vec3(0.0f)) + extra_irradiance;
 }
 
 vec3 FieldLookup::glossy(const vec3& n, const vec3& wo, float roughness, GgxZhMemo* zh) const {

@@ -22,6 +22,7 @@
 
 namespace shgi {
 
+struct DiffuseBump;  // render/bump_irradiance.h
 class Film;
 class GBuffer;
 class GgxZhMemo;  // sh/ggx_zh.h
@@ -41,6 +42,11 @@ struct FieldLookup {
 
     // E(n), >= 0.
     vec3 irradiance(const vec3& n) const;
+    // E for a diffuse lobe whose normal n a normal map bent, with its bump shadowing toward
+    // each direction (render/bump_irradiance.h), >= 0: the closed form's kernel is the cosine
+    // times the shadowing, projected; a gather weighs each of its directions by the shadowing.
+    // extra_irradiance (a density estimate, without directions) is added as it is.
+    vec3 irradiance(const vec3& n, const DiffuseBump& bump) const;
     // Pre-filtered radiance leaving towards wo (unit, on n's side) for a GGX lobe, >= 0.
     // `zh` (optional): the caller's memo of the lobe's band factors, the same values.
     vec3 glossy(const vec3& n, const vec3& wo, float roughness, GgxZhMemo* zh = nullptr) const;

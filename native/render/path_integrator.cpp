@@ -482,6 +482,7 @@ void PathIntegrator::add_field(const Shading& shading) {
     FieldLobes lobes;
     lobes.diffuse = shading.bsdf.field_diffuse(shading.wo);
     lobes.glossy_count = shading.bsdf.field_glossy_lobes(shading.wo, lobes.glossy);
+    lobes.bumped = diffuse_bump(shading, &lobes.bump);
     if (max_component(lobes.diffuse) <= 0.0f && lobes.glossy_count == 0) return;
     const vec3 wo = shading.frame.to_world(shading.wo);
     if (vertex_ == 0 && shared_lookup_ != nullptr) {
@@ -498,7 +499,9 @@ void PathIntegrator::add_field(const Shading& shading) {
 
 void PathIntegrator::add_field_light(const FieldLookup& field, const FieldLobes& lobes,
                                      const vec3& n, const vec3& wo, IrradianceMemo* irradiance) {
-    const vec3 e = irradiance != nullptr ? irradiance->irradiance(field, n) : field.irradiance(n);
+    const vec3 e = lobes.bumped          ? field.irradiance(n, lobes.bump)
+                   : irradiance != nullptr ? irradiance->irradiance(field, n)
+                                           : field.irradiance(n);
     vec3 by_class[2] = {lobes.diffuse * e * kInvPi, vec3(0.0f)};
     for (int i = 0; i < lobes.glossy_count; ++i)
         by_class[1] +=

@@ -40,6 +40,7 @@
 #include <type_traits>
 
 #include "render/bsdf.h"
+#include "render/bump_irradiance.h"
 #include "render/film.h"
 #include "render/indirect_field.h"
 #include "render/light_sampler.h"
@@ -259,8 +260,13 @@ class PathIntegrator {
         vec3 diffuse{0.0f};
         PrincipledBsdf::GlossyLobe glossy[2];
         int glossy_count = 0;
+        // The diffuse lobe's bump shadowing (render/bump_irradiance.h), where a normal map bent
+        // its normal.
+        bool bumped = false;
+        DiffuseBump bump;
     };
-    // `irradiance`: field.irradiance(n), or null to evaluate it here.
+    // `irradiance`: field.irradiance(n), or null to evaluate it here (unused for a bumped
+    // diffuse lobe, whose irradiance depends on more than the normal).
     void add_field_light(const FieldLookup& field, const FieldLobes& lobes, const vec3& n,
                          const vec3& wo, IrradianceMemo* irradiance = nullptr);
     bool scatter(const Shading& shading, Ray* ray);
