@@ -151,7 +151,7 @@ struct InstantGiSettings {
     // cuts one way: the two rooms' dim room as the add-on renders it read 0.967 × the path
     // tracer's over seeds 0..7 (0.978 × without the clamp), 0.976 × with 0.25 m, the same as
     // with 0.5 m or 1 m, at 1.007 × the VPLs a lookup reads (Cornell box: 1.13 ×; 0.5 m: 1.58 ×).
-    // 0: off (one set whole, as before).
+    // 0: off (a lookup reads its one set whole).
     float gather_near_radius = 0.25f;
     uint64_t seed = 0;
 };
