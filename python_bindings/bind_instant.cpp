@@ -89,7 +89,11 @@ void bind_settings(py::module_& m) {
         .def_readwrite("near_field_reach", &S::near_field_reach,
                        "VPLs nearer to a pixel than this many times its filter window's reach "
                        "(the farthest neighbour it blends) are gathered from every set and kept "
-                       "out of the filter, whose blur they would bias; 0..64, 0 = off (4).");
+                       "out of the filter, whose blur they would bias; 0..64, 0 = off (4).")
+        .def_readwrite("gather_near_radius", &S::gather_near_radius,
+                       "Final gather: where a gather ray lands, VPLs nearer than this (m) are "
+                       "read from every set, the farther ones from the ray's one set: less "
+                       "noise at the same mean; 0 = off (0.25).");
     cls.def("validate", &validate_instant_gi_settings,
             "Raises ValueError naming the first invalid field.");
     register_settings_type<S>("InstantGiSettings");

@@ -274,6 +274,7 @@ void validate_instant_gi_settings(const InstantGiSettings& s) {
     check_float(s.normal_threshold, -1.0f, 1.0f, "normal_threshold");
     check_int(s.passes_per_sample, 1, kMaxPassesPerSample, "passes_per_sample");
     check_float(s.near_field_reach, 0.0f, kMaxNearFieldReach, "near_field_reach");
+    check_float(s.gather_near_radius, 0.0f, 1e6f, "gather_near_radius");
 }
 
 namespace {
@@ -477,9 +478,20 @@ vec3 InstantGiField::lamp_delta(const InstantLampSample& sample, const vec3& p, 
     return e;
 }
 
+void InstantGiField::add_vpl(ShRgb& sh, const vec3& origin, const vec3& p, const vec3& n,
+                             const InstantVpl& vpl, float vpl_scale) const {
+    vec3 w;
+    const vec3 e = vpl_delta(p, n, vpl, vpl_scale, settings_.clamp_distance, &w);
+    Ray ray;
+    if (e == vec3(0.0f) || !shadow_ray(origin, vpl.position, &ray) || scene_->occluded(ray))
+        return;
+    add_delta(sh.coeffs.data(), e, w);
+}
+
 void InstantGiField::gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t set,
                                 const SampleGather* gather, float vpl_scale,
-                                const vec3& sky_weight, float lamp_scale) const {
+                                const vec3& sky_weight, float lamp_scale,
+                                float near_radius2) const {
     const vec3 origin = offset_origin(p, n);
     uint64_t read = 0;
     // visit(i) for every index of `ranges` (every one of [0, size) when there are none) and,
@@ -501,13 +513,11 @@ void InstantGiField::gather_set(ShRgb& sh, const vec3& p, const vec3& n, size_t 
     const auto no_delta = [](uint64_t) { return false; };
     const std::vector<InstantVpl>& vpls = sets_[set];
     each(gather ? &gather->vpls[set] : nullptr, vpls.size(), no_delta, [&](uint64_t i) {
-        const InstantVpl& vpl = vpls[i];
-        vec3 w;
-        const vec3 e = vpl_delta(p, n, vpl, vpl_scale, settings_.clamp_distance, &w);
-        Ray ray;
-        if (e == vec3(0.0f) || !shadow_ray(origin, vpl.position, &ray) || scene_->occluded(ray))
+        if (near_radius2 > 0.0f && distance2(p, vpls[i].position) < near_radius2) {
+            --read;  // the caller's near VPLs, not read here
             return;
-        add_delta(sh.coeffs.data(), e, w);
+        }
+        add_vpl(sh, origin, p, n, vpls[i], vpl_scale);
     });
     // filter_direct: the lights' direct light from the set's lamp samples.
     if (!lamp_sets_.empty()) {
@@ -570,6 +580,21 @@ class InstantGiField::SampleView : public IndirectField {
         if (directions > 0)
             sky_ = field.scene_->world().radiance() * (kFourPi / float(directions));
         lamp_scale_ = 1.0f / float(std::max<size_t>(field.sets_.size(), 1));
+        // gather_near_radius: a grid over every set's VPLs of the sample's passes, so a gather
+        // lookup finds the near ones in the cells around its hit.
+        const float radius = field.settings_.gather_near_radius;
+        if (radius > 0.0f && field.sets_.size() > 1) {
+            std::vector<std::pair<uint32_t, uint32_t>> refs;
+            std::vector<vec3> positions;
+            for (size_t s = 0; s < field.sets_.size(); ++s)
+                for (const VplRange& range : gather_.vpls[s])
+                    for (uint64_t v = range.begin; v < range.end; ++v) {
+                        refs.push_back({uint32_t(s), uint32_t(v)});
+                        positions.push_back(field.sets_[s][v].position);
+                    }
+            near_grid_ = std::make_unique<NearVplGrid>(std::move(refs), positions, radius);
+            near_radius2_ = radius * radius;
+        }
     }
 
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override {
@@ -593,7 +618,22 @@ class InstantGiField::SampleView : public IndirectField {
                              ? field_.scene_->world().radiance() * (kFourPi / float(directions))
                              : vec3(0.0f);
         field_.lookup_counter_->lookups.fetch_add(1, std::memory_order_relaxed);
-        field_.gather_set(out.radiance, p, n, s, &gather_, gather_.vpl_scale, sky, 1.0f);
+        // gather_near_radius: the set's VPLs beyond the radius, scaled by the sets, and every
+        // set's within it, each as the whole view scales it (1 / the passes gathered).
+        field_.gather_set(out.radiance, p, n, s, &gather_, gather_.vpl_scale, sky, 1.0f,
+                          near_radius2_);
+        if (near_grid_) {
+            const vec3 origin = offset_origin(p, n);
+            const vec3 reach(std::sqrt(near_radius2_));
+            uint64_t near = 0;
+            near_grid_->visit_box(p - reach, p + reach, [&](uint32_t set, uint32_t v) {
+                const InstantVpl& vpl = field_.sets_[set][v];
+                if (distance2(p, vpl.position) >= near_radius2_) return;
+                ++near;
+                field_.add_vpl(out.radiance, origin, p, n, vpl, vpl_scale_);
+            });
+            field_.lookup_counter_->vpls.fetch_add(near, std::memory_order_relaxed);
+        }
         return out;
     }
     // The rest is the field's.
@@ -621,6 +661,8 @@ class InstantGiField::SampleView : public IndirectField {
     SampleGather gather_;
     float vpl_scale_ = 0.0f, lamp_scale_ = 0.0f;
     vec3 sky_{0.0f};
+    std::unique_ptr<NearVplGrid> near_grid_;  // gather_near_radius's; null when off
+    float near_radius2_ = 0.0f;
 };
 
 std::unique_ptr<const IndirectField> InstantGiField::sample_view(uint64_t sample) const {

@@ -651,6 +651,14 @@ class InstantGiSettings:
     def gather_cut_windows(self, arg0: bool) -> None:
         ...
     @property
+    def gather_near_radius(self) -> float:
+        """
+        Final gather: where a gather ray lands, VPLs nearer than this (m) are read from every set, the farther ones from the ray's one set: less noise at the same mean; 0 = off (0.25).
+        """
+    @gather_near_radius.setter
+    def gather_near_radius(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
     def glossy_bounces(self) -> int:
         """
         Glossy scatterings of a light path, a budget of their own beside vpl_bounces, 0..64; 4 matches Cycles' default glossy bounces.

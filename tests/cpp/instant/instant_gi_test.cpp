@@ -103,6 +103,8 @@ TEST(InstantGi, SampleViewLooksUpTheSamplesPassesAlone) {
 // Where a final gather ray lands (gather_lookup) one set is read, scaled by the sets: over the
 // sets (u at the middle of each's share) the lookups average to the lookup of every set, for
 // the field and for a sample's view of it (that sample's passes), and each reads one set's VPLs.
+// With gather_near_radius the view reads the VPLs within it from every set and the rest from
+// the one set: the same average, and a lookup reads the set's far VPLs and every near one.
 TEST(InstantGi, GatherLookupsOfEverySetAverageToTheWholeLookup) {
     Scene scene;
     scene.add_material(test::lambert(0.7f));
@@ -110,41 +112,62 @@ TEST(InstantGi, GatherLookupsOfEverySetAverageToTheWholeLookup) {
     scene.add_light(test::point_light(vec3(0.3f, 0.2f, 0.5f), 100.0f));
     scene.set_world(test::black_world());
     scene.commit();
-    InstantGiSettings settings;
-    settings.seed = 3;
-    settings.passes_per_sample = 2;
-    InstantGi solver(scene, settings);
-    for (int i = 0; i < 4; ++i) solver.refine();
-    const std::shared_ptr<const InstantGiField> field = solver.field();
-    const std::unique_ptr<const IndirectField> view = field->sample_view(1);  // passes 2 and 3
     const vec3 p(-0.2f, 0.3f, -0.99f), n(0.0f, 0.0f, 1.0f), wo(0.0f, 0.6f, 0.8f);
-    const size_t sets = field->sets().size();
-    ASSERT_EQ(sets, 16u);
-    for (const IndirectField* whole : {static_cast<const IndirectField*>(field.get()),
-                                       view.get()}) {
-        const ShRgb expected = whole->radiance_sh(p, n);
-        ASSERT_GT(expected[0].x, 0.0f);
-        ShRgb mean(2);
-        std::vector<float> dc;
-        for (size_t k = 0; k < sets; ++k) {
-            const FieldLookup one = whole->gather_lookup(p, n, wo, (float(k) + 0.5f) / 16.0f);
-            for (int i = 0; i < 9; ++i) mean[i] += one.radiance[i] / float(sets);
-            dc.push_back(one.radiance[0].x);
+    for (const float radius : {0.0f, 0.5f}) {
+        SCOPED_TRACE(radius);
+        InstantGiSettings settings;
+        settings.seed = 3;
+        settings.passes_per_sample = 2;
+        settings.gather_near_radius = radius;
+        InstantGi solver(scene, settings);
+        for (int i = 0; i < 4; ++i) solver.refine();
+        const std::shared_ptr<const InstantGiField> field = solver.field();
+        const std::unique_ptr<const IndirectField> view = field->sample_view(1);  // passes 2, 3
+        const size_t sets = field->sets().size();
+        ASSERT_EQ(sets, 16u);
+        for (const IndirectField* whole : {static_cast<const IndirectField*>(field.get()),
+                                           view.get()}) {
+            const ShRgb expected = whole->radiance_sh(p, n);
+            ASSERT_GT(expected[0].x, 0.0f);
+            ShRgb mean(2);
+            std::vector<float> dc;
+            for (size_t k = 0; k < sets; ++k) {
+                const FieldLookup one =
+                    whole->gather_lookup(p, n, wo, (float(k) + 0.5f) / 16.0f);
+                for (int i = 0; i < 9; ++i) mean[i] += one.radiance[i] / float(sets);
+                dc.push_back(one.radiance[0].x);
+            }
+            for (int i = 0; i < 9; ++i)
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_NEAR(mean[i][c], expected[i][c], 1e-5f * std::abs(expected[0][c]))
+                        << "coefficient " << i << " channel " << c;
+            // Different sets, so different answers (each of about the whole's size).
+            EXPECT_NE(*std::min_element(dc.begin(), dc.end()),
+                      *std::max_element(dc.begin(), dc.end()));
         }
-        for (int i = 0; i < 9; ++i)
-            for (int c = 0; c < 3; ++c)
-                EXPECT_NEAR(mean[i][c], expected[i][c], 1e-5f * std::abs(expected[0][c]))
-                    << "coefficient " << i << " channel " << c;
-        // Different sets, so different answers (each of about the whole's size).
-        EXPECT_NE(*std::min_element(dc.begin(), dc.end()), *std::max_element(dc.begin(), dc.end()));
+        // Set 0's VPLs of the sample's passes (passes 2 and 3) beyond the radius, and every
+        // set's within it.
+        uint64_t expected_vpls = 0;
+        for (size_t s = 0; s < sets; ++s) {
+            const std::vector<uint64_t>& ends = field->pass_ends()[s];
+            for (uint64_t v = ends[1]; v < ends[3]; ++v) {
+                const vec3 d = field->sets()[s][v].position - p;
+                const bool near = glm::dot(d, d) < radius * radius;
+                if (near || s == 0) ++expected_vpls;
+            }
+        }
+        const std::unique_ptr<const IndirectField> counted = field->sample_view(1);  // reset
+        counted->gather_lookup(p, n, wo, 0.0f);
+        const InstantGiLookupCounts counts = field->lookup_counts();
+        EXPECT_EQ(counts.lookups, 1u);
+        EXPECT_EQ(counts.vpls, expected_vpls);
+        if (radius == 0.0f) {  // one set alone: a sixteenth of the view's whole lookup
+            const std::vector<uint64_t>& ends = field->pass_ends()[0];
+            EXPECT_EQ(counts.vpls, ends[3] - ends[1]);
+        } else {  // the near VPLs of other sets too
+            EXPECT_GT(counts.vpls, field->pass_ends()[0][3] - field->pass_ends()[0][1]);
+        }
     }
-    // One set's VPLs of the sample's passes: a sixteenth of the view's whole lookup.
-    const std::unique_ptr<const IndirectField> counted = field->sample_view(1);  // counts reset
-    counted->gather_lookup(p, n, wo, 0.0f);
-    const InstantGiLookupCounts counts = field->lookup_counts();
-    EXPECT_EQ(counts.lookups, 1u);
-    const std::vector<uint64_t>& ends = field->pass_ends()[0];
-    EXPECT_EQ(counts.vpls, ends[3] - ends[1]);  // set 0's VPLs of passes 2 and 3
 }
 
 TEST(InstantGi, SettingsRefusalsNameTheField) {
@@ -170,6 +193,7 @@ TEST(InstantGi, SettingsRefusalsNameTheField) {
     refused([](InstantGiSettings& s) { s.normal_threshold = 2.0f; }, "normal_threshold");
     refused([](InstantGiSettings& s) { s.near_field_reach = NAN; }, "near_field_reach");
     refused([](InstantGiSettings& s) { s.near_field_reach = 65.0f; }, "near_field_reach");
+    refused([](InstantGiSettings& s) { s.gather_near_radius = -1.0f; }, "gather_near_radius");
 }
 
 }  // namespace
