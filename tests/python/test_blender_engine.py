@@ -575,20 +575,26 @@ def test_instant_gi_f12_with_final_gather_on_agrees_with_the_path_tracer(name):
     gather_near_radius, the field one bounce shallower): the Cornell box and the two rooms'
     dim room within 5% of the path tracer's (512 samples, no clamp, no Filter Glossy),
     Combined and DiffInd x DiffCol, the leak target of every method (test_instant_gi.py holds
-    the native renderer's over four seeds). The dim room reads 0.965 / 0.950 here, close to
-    the edge: Filter Glossy 1 alone takes 2.9% / 4.2% off the path tracer's own (256 samples),
-    and seed 0's solve reads low (seeds 0..7: 0.976 / 0.966 on average; docs/methods.md)."""
+    the native renderer's over four seeds). The target is the field's bias, so the means are
+    taken over seeds 0..3: 16 light paths a set leave one frame's mean noisy (the dim room's
+    DiffInd x DiffCol 0.950, 0.959, 0.958, 0.981 at seeds 0..3, 0.962 together). Filter
+    Glossy 1 alone takes 2.9% / 4.2% off the path tracer's own (256 samples; docs/methods.md)."""
     scene, reference = path_traced_reference(getattr(scenes, name), 0.5, 512)
-    props = default_props(method="INSTANT_GI", samples=16, instant_gi={"final_gather": True})
-    job = RenderJob(shgi, scene, 16, preview_settings=settings.preview_settings(props, shgi),
-                    solver_recipe=field_solvers.solver_recipe(props, shgi)).start()
-    assert job.wait(600) and job.error is None, job.error
-    image = job.last_snapshot().passes
-    ratios = [float(image["Combined"][..., :3].mean() / reference["Combined"][..., :3].mean()),
-              float((image["DiffInd"] * image["DiffCol"]).mean()
-                    / (reference["DiffInd"] * reference["DiffCol"]).mean())]
-    print(f"{name}: Instant GI F12 with Final Gather on / path tracer (Combined, DiffInd x "
-          f"DiffCol): {ratios[0]:.3f}, {ratios[1]:.3f}")
+    sums = np.zeros(2)
+    for seed in range(4):
+        props = default_props(method="INSTANT_GI", samples=16, seed=seed,
+                              instant_gi={"final_gather": True})
+        job = RenderJob(shgi, scene, 16, preview_settings=settings.preview_settings(props, shgi),
+                        solver_recipe=field_solvers.solver_recipe(props, shgi)).start()
+        assert job.wait(600) and job.error is None, job.error
+        image = job.last_snapshot().passes
+        sums += (float(image["Combined"][..., :3].mean()),
+                 float((image["DiffInd"] * image["DiffCol"]).mean()))
+    exact = (float(reference["Combined"][..., :3].mean()),
+             float((reference["DiffInd"] * reference["DiffCol"]).mean()))
+    ratios = [float(total / 4 / value) for total, value in zip(sums, exact)]
+    print(f"{name}: Instant GI F12 with Final Gather on / path tracer over seeds 0..3 "
+          f"(Combined, DiffInd x DiffCol): {ratios[0]:.3f}, {ratios[1]:.3f}")
     assert all(abs(ratio - 1.0) < 0.05 for ratio in ratios), ratios
 
 
