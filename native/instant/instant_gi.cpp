@@ -143,7 +143,7 @@ constexpr float kNearCapReach = 8.0f;
 // hold more than kNearTrialExcess × the cap: then a quarter of the radius (a sixteenth of its
 // area) likely holds more than the cap. Below, the trials cost more than they save (every
 // third run at 640 x 360 held more than the cap: its frames 1.29 x the paper's filter's CPU
-// with a trial for each, 1.11 x with this; the 128 x 128 Cornell box 1.50 x and 1.48 x, 1.81 x
+// with a trial for each, 1.11-1.19 x with this, as without the cap; the 128 x 128 Cornell box 1.50 x and 1.48 x, 1.81 x
 // without trials). It changes no result, only where the nearest VPLs are looked for.
 constexpr size_t kNearTrialExcess = 16;
 
