@@ -129,9 +129,12 @@ struct InstantGiSettings {
     // and a VPL that near breaks that: its 1/d² and cosines change within the window, most of
     // all where two surfaces meet (the normal-mapped floor's wall foot read 1.5x brute force
     // through the window; 4 brings every interleave phase within 1% of brute force there).
-    // 0: off (the paper's filter); filter_mode None: off. Costs the near VPLs' shadow rays and
-    // the grid lookups that find them: a frame's CPU 1.12 × (Cornell box) and 1.18 × (sun
-    // room) at 640 × 360, 2.8 × on the sun room's 64 × 48 test frame, whose windows reach far.
+    // 0: off (the paper's filter); filter_mode None: off. A pixel's near field holds at most
+    // (near_field_reach / 8)² of a set's VPLs, the nearest (on small frames a window covers
+    // more of the scene); glossy_from_vpls' lobes still read the rest of it. Costs the near
+    // VPLs' shadow rays and the grid lookups that find them: a frame's CPU 1.11-1.19 × (Cornell
+    // box) at 640 × 360, 1.48 × on the 128 × 128 Cornell box and 1.69 × on the sun room's 64 × 48
+    // test frame, whose windows reach far (2.87 × and 2.88 × without the cap).
     float near_field_reach = 4.0f;
     // Passes of VPLs a preview sample gathers: sample i gathers passes i k .. i k + k - 1
     // (mod the field's passes), k = passes_per_sample, each set scaled by sets / k; with no
