@@ -1291,14 +1291,7 @@ void InstantGi::refine(Progress* progress) {
     PhotonMaps maps = trace_photons(*scene_, tracer_settings(settings_), passes_, progress,
                                     kSettings);
     // Every hit as a photon: first hits, then (vpl_bounces > 1) the stored later hits.
-    std::vector<Photon> hits;
-    hits.reserve(maps.first_hits.size() + maps.global.size() + maps.caustic.size());
-    for (const PhotonFirstHit& h : maps.first_hits)
-        hits.push_back({h.position, h.power, h.normal, h.direction});
-    if (settings_.vpl_bounces > 1) {
-        hits.insert(hits.end(), maps.global.begin(), maps.global.end());
-        hits.insert(hits.end(), maps.caustic.begin(), maps.caustic.end());
-    }
+    const std::vector<Photon> hits = vpl_hits(maps, settings_.vpl_bounces > 1);
     const double trace_seconds = seconds_since(start);
     start = now();
     if (progress) progress->begin_stage("reflecting VPLs", 0.8f, 1.0f);

@@ -552,6 +552,18 @@ PhotonMaps trace_photon_range(const Scene& scene, const PhotonTracerSettings& se
     return maps;
 }
 
+std::vector<Photon> vpl_hits(const PhotonMaps& maps, bool later_hits) {
+    std::vector<Photon> hits;
+    hits.reserve(maps.first_hits.size() + maps.global.size() + maps.caustic.size());
+    for (const PhotonFirstHit& h : maps.first_hits)
+        hits.push_back({h.position, h.power, h.normal, h.direction});
+    if (later_hits) {
+        hits.insert(hits.end(), maps.global.begin(), maps.global.end());
+        hits.insert(hits.end(), maps.caustic.begin(), maps.caustic.end());
+    }
+    return hits;
+}
+
 vec3 scattered_flux(const Scene& scene, const vec3& position, const vec3& normal,
                     const vec3& direction, const vec3& power, float reach,
                     float glossy_min_roughness) {

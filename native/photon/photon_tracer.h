@@ -108,6 +108,10 @@ PhotonMaps trace_photon_range(const Scene& scene, const PhotonTracerSettings& se
                               Progress* progress = nullptr,
                               const char* settings_name = "PhotonTracerSettings");
 
+// The hits of a pass that VPL methods light from (Instant GI, Light Propagation), as photons in
+// order: the first hits, then (later_hits) the stored global and caustic photons.
+std::vector<Photon> vpl_hits(const PhotonMaps& maps, bool later_hits);
+
 // The flux the surface under a photon hit scatters (its position, normal, unit direction
 // towards the source and arriving power): the surface is found again by a ray back along the
 // photon's path over 2 x `reach` m (from `reach` before the hit; a grazing photon: along the

@@ -218,14 +218,7 @@ PropagationTransmittance geometry_transmittance(const ShLattice& geometry, const
 std::vector<VirtualPointLight> scattering_vpls(const Scene& scene, const PhotonMaps& maps,
                                                const PropagationSettings& settings,
                                                Progress* progress) {
-    std::vector<Photon> hits;
-    hits.reserve(maps.first_hits.size() + maps.global.size() + maps.caustic.size());
-    for (const PhotonFirstHit& h : maps.first_hits)
-        hits.push_back({h.position, h.power, h.normal, h.direction});
-    if (settings.vpl_bounces > 1) {
-        hits.insert(hits.end(), maps.global.begin(), maps.global.end());
-        hits.insert(hits.end(), maps.caustic.begin(), maps.caustic.end());
-    }
+    const std::vector<Photon> hits = vpl_hits(maps, settings.vpl_bounces > 1);
     std::vector<vec3> scattered(hits.size(), vec3(0.0f));
     const float rough = tracer_settings(settings).specular_roughness;
     parallel_for(0, hits.size(), kVplsPerTask, [&](uint64_t begin, uint64_t end) {

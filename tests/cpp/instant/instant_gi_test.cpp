@@ -64,17 +64,22 @@ TEST(InstantGi, ClampAndFacing) {
     EXPECT_EQ(none[0], vec3(0.0f));
 }
 
+// A closed 1 m box, Lambert 0.7 inside, lit by a 100 W point light off its centre, committed.
+void build_lit_box(Scene& scene) {
+    scene.add_material(test::lambert(0.7f));
+    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
+    scene.add_light(test::point_light(vec3(0.3f, 0.2f, 0.5f), 100.0f));
+    scene.set_world(test::black_world());
+    scene.commit();
+}
+
 // A preview sample's view (sample_view) reads that sample's passes alone: over a field of 8
 // passes at 4 per sample, sample 0's lookups are those of the field of the first 4 passes (the
 // same VPLs, the same scale, summed in the same order: the same bits), and sample 1's read the
 // other 4; the view reads a quarter of the VPLs a lookup of the whole field reads.
 TEST(InstantGi, SampleViewLooksUpTheSamplesPassesAlone) {
     Scene scene;
-    scene.add_material(test::lambert(0.7f));
-    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
-    scene.add_light(test::point_light(vec3(0.3f, 0.2f, 0.5f), 100.0f));
-    scene.set_world(test::black_world());
-    scene.commit();
+    build_lit_box(scene);
     InstantGiSettings settings;
     settings.seed = 7;
     settings.passes_per_sample = 4;
@@ -107,11 +112,7 @@ TEST(InstantGi, SampleViewLooksUpTheSamplesPassesAlone) {
 // the one set: the same average, and a lookup reads the set's far VPLs and every near one.
 TEST(InstantGi, GatherLookupsOfEverySetAverageToTheWholeLookup) {
     Scene scene;
-    scene.add_material(test::lambert(0.7f));
-    scene.add_instance(scene.add_mesh(test::inward_box(1.0f)), mat4(1.0f));
-    scene.add_light(test::point_light(vec3(0.3f, 0.2f, 0.5f), 100.0f));
-    scene.set_world(test::black_world());
-    scene.commit();
+    build_lit_box(scene);
     const vec3 p(-0.2f, 0.3f, -0.99f), n(0.0f, 0.0f, 1.0f), wo(0.0f, 0.6f, 0.8f);
     for (const float radius : {0.0f, 0.5f}) {
         SCOPED_TRACE(radius);
