@@ -32,9 +32,9 @@ its default in the new place while its old value lies unused under the old name.
     distance filter lets half as much of a bright room's light through a 10 cm wall
     (docs/methods.md, probe grid). A scene saved before keeps 0.15 unless it set the blur.
 11. Instant GI's Final Gather is made by the renderer (before, it lit the first surfaces in
-   screen space whatever the setting said) and is on for a new scene
-   (settings.FINAL_GATHER_DEFAULTS). A scene saved before rendered without a gather, whatever
-   it stored: its Final Gather is turned off.
+    screen space whatever the setting said) and is on for a new scene
+    (settings.FINAL_GATHER_DEFAULTS). A scene saved before rendered without a gather, whatever
+    it stored: its Final Gather is turned off.
 
 ``upgrade`` takes what a scene stored (its ID properties as a dict: only values someone set are
 stored, a default is not) and says what to write where, so that the scene renders with the
