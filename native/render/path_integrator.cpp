@@ -296,13 +296,12 @@ bool PathIntegrator::begin(const Ray& camera_ray, const Hit& first_hit) {
 bool PathIntegrator::enter_surface(const Hit& hit) {
     find_emission(ray_, hit);
     if (!hit.valid() || terminate_on_next_surface_) return false;
-    if (shading_memo_ != nullptr)
-        make_shading_in(&shading_.value, scene_,
-                        scene_.surface_point(ray_, hit, &shading_memo_->triangle), ray_.direction,
-                        PathOrigin::Camera, material_lobes_, &shading_memo_->frame);
-    else
-        make_shading_in(&shading_.value, scene_, scene_.surface_point(ray_, hit), ray_.direction,
-                        PathOrigin::Camera, material_lobes_);
+    // Both memos may be null (no set_shading_memo): each callee then computes afresh.
+    const bool memo = shading_memo_ != nullptr;
+    make_shading_in(&shading_.value, scene_,
+                    scene_.surface_point(ray_, hit, memo ? &shading_memo_->triangle : nullptr),
+                    ray_.direction, PathOrigin::Camera, material_lobes_,
+                    memo ? &shading_memo_->frame : nullptr);
     blur_glossy(&shading_.value);
     if (vertex_ == 0 && !combined_only_) record_first_hit(shading_.value, ray_, hit);
     if (write_denoising_features_) record_denoising_features(shading_.value);

@@ -198,19 +198,6 @@ def test_final_gather_frames_do_not_depend_on_threads_or_tiles():
         np.testing.assert_array_equal(images[0][name], images[1][name], err_msg=name)
 
 
-def test_final_gather_samples_at_once_equal_samples_one_by_one():
-    scene = small_cornell()
-    field = solved(scene, passes=8, passes_per_sample=4).current_field()
-    at_once = preview(scene, field, samples=3, final_gather=True)
-    renderer = shgi.PreviewRenderer(scene, shgi.PreviewSettings(seed=5, samples=3,
-                                                                final_gather=True))
-    for _ in range(3):
-        renderer.render(field, 1)
-    one_by_one = renderer.passes()
-    for name in ("Combined", "DiffInd"):
-        np.testing.assert_array_equal(at_once[name], one_by_one[name], err_msg=name)
-
-
 def test_final_gather_leaves_filter_direct_to_next_event_estimation():
     """Through a final gather the field is read without filter_direct's light: next-event
     estimation gives the lamps' and the sky's direct light at the first surface and where the
@@ -276,11 +263,15 @@ def test_frames_of_passes_per_sample_do_not_depend_on_threads_or_tiles():
         np.testing.assert_array_equal(images[0][name], images[1][name], err_msg=name)
 
 
-def test_samples_at_once_equal_samples_one_by_one():
+# Through a final gather, over a field whose samples read passes of their own.
+@pytest.mark.parametrize("final_gather, solve", [(False, {"passes": 1}),
+                                                  (True, {"passes": 8, "passes_per_sample": 4})])
+def test_samples_at_once_equal_samples_one_by_one(final_gather, solve):
     scene = small_cornell()
-    field = solved(scene, passes=1).current_field()
-    at_once = preview(scene, field, samples=3)
-    renderer = shgi.PreviewRenderer(scene, shgi.PreviewSettings(seed=5, samples=3))
+    field = solved(scene, **solve).current_field()
+    at_once = preview(scene, field, samples=3, final_gather=final_gather)
+    renderer = shgi.PreviewRenderer(scene, shgi.PreviewSettings(seed=5, samples=3,
+                                                                final_gather=final_gather))
     for _ in range(3):
         renderer.render(field, 1)
     one_by_one = renderer.passes()
