@@ -561,6 +561,7 @@ ShRgb PhotonLattice::radiance_sh(const vec3& p, const vec3& n) const {
 
 FieldLookup PhotonLattice::lookup(const vec3& p, const vec3& n) const {
     FieldLookup result{radiance_sh(p, n), vec3(0.0f)};
+    result.horizon = true;  // each cell holds what its surfaces receive (lattice/sh_lattice.h)
     if (settings_.caustics == CausticMode::PhotonMap && caustic_map_.size() > 0)
         result.extra_irradiance =
             caustic_map_.irradiance(p, n, settings_.caustic_neighbours, caustic_radius_);

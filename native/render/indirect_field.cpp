@@ -1,6 +1,7 @@
 #include "render/indirect_field.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "render/bump_irradiance.h"
 #include "sh/ggx_zh.h"
@@ -32,6 +33,18 @@ vec3 gathered_mean(const ShRgb& radiance, const vec3& axis, uint32_t rays, uint6
         sum += sh_evaluate(radiance, w) * weight(w);
     }
     return sum / float(rays);
+}
+
+// What the lobe of band factors k_l reads, in the direction at cosine `cosine` from n, of the SH
+// of the upper hemisphere about n (1 where w.n > 0, 0 below) truncated at `order`: the
+// hemisphere's zonal coefficients are sqrt(pi), sqrt(3 pi)/2, 0, -(pi/2) sqrt(7/(16 pi)), 0 (every
+// even band above 0 vanishes), so the sum is 1/2 + (3/4) k_1 c - (7/32) k_3 (5c^3 - 3c). At least
+// 1/2 for c >= 0 (the reflected direction of a view above the surface).
+float upper_hemisphere_read(int order, const BandFactors& factors, float cosine) {
+    const float c = std::max(cosine, 0.0f);
+    float read = 0.5f + 0.75f * factors[1] * c;
+    if (order >= 3) read -= (7.0f / 32.0f) * factors[3] * (5.0f * c * c * c - 3.0f * c);
+    return read;
 }
 
 }  // namespace
@@ -73,8 +86,23 @@ vec3 FieldLookup::glossy(const vec3& n, const vec3& wo, float roughness, GgxZhMe
                           [exponent](const vec2& u) { return sample_power_cosine(u, exponent); });
         return glm::max(mean, vec3(0.0f));
     }
-    if (zh != nullptr) return sh_specular_radiance(radiance, reflected, zh->factors(roughness));
-    return sh_specular_radiance(radiance, reflected, roughness);
+    const BandFactors& factors =
+        zh != nullptr ? zh->factors(roughness) : ggx_specular_zh_tabulated(roughness);
+    if (!horizon || radiance.order < 1)
+        return sh_specular_radiance(radiance, reflected, factors);
+    // Clipped at the horizon, the cosine-weighted GGX lobe leans from r towards n, the more the
+    // rougher and the more grazing the view: its dominant direction (Lagarde & de Rousiers 2014,
+    // "Moving Frostbite to Physically Based Rendering", getSpecularDominantDir, alpha =
+    // roughness^2). Read there, the zonal lobe about r no longer reads mostly the rounded step at
+    // the horizon (docs/methods.md: 80 degrees from a floor's normal read 0.84 of the path
+    // tracer's about r, 0.91 about the dominant direction).
+    const float alpha = roughness * roughness;
+    const float lean = (1.0f - alpha) * (std::sqrt(1.0f - alpha) + alpha);
+    const vec3 towards = n + lean * (reflected - n);
+    const float length2 = glm::dot(towards, towards);  // 0 only for a view from below n
+    const vec3 dominant = length2 > 1e-12f ? towards / std::sqrt(length2) : n;
+    return sh_specular_radiance(radiance, dominant, factors) /
+           upper_hemisphere_read(radiance.order, factors, glm::dot(n, dominant));
 }
 
 FieldLookup IndirectField::lookup(const vec3& p, const vec3& n) const {

@@ -39,6 +39,15 @@ struct FieldLookup {
     uint32_t diffuse_rays = 0;
     uint32_t glossy_rays = 0;
     uint64_t gather_key = 0;
+    // True when `radiance` holds light from above the surface's horizon only, zero below it (the
+    // photon lattice: each cell holds what its surfaces receive). glossy()'s closed form then
+    // reads the lobe about its dominant direction (between reflected and n) divided by what it
+    // reads there of the upper hemisphere's SH (1 above the horizon, truncated alike): even light
+    // from above reads as itself at every view angle. The truncated step reads 1/2 at the horizon
+    // and 1.15 along n (roughness 0.5); the lattice's glossy light read 0.51 of the path tracer's
+    // 80° from a floor's normal, 1.22 along a wall's (docs/methods.md). Irradiance needs no such
+    // factor (the clamped cosine reads the step exactly); gathers (glossy_rays) ignore it.
+    bool horizon = false;
 
     // E(n), >= 0.
     vec3 irradiance(const vec3& n) const;
