@@ -849,7 +849,7 @@ def test_closed_room_settings_holpv_per_transfer_is_closer_than_lpv(name):
 def test_dim_room_through_a_final_gather_with_the_closed_room_settings(order, per_transfer):
     """The leak target (test_dim_room_through_a_final_gather_is_within_five_percent) with the
     three changes: the dim room's Combined mean through a final gather within 5% (measured
-    0.972 LPV, 0.986 HOLPV, PER_TRANSFER_FG HOLPV clamped per transfer)."""
+    0.972 LPV, 0.986 HOLPV, 0.998 the HOLPV clamped per transfer)."""
     scale, samples = REFERENCES["two_rooms"]
     scene, ref = path_traced_reference(scenes.two_rooms, scale, samples)
     volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
