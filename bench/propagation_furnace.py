@@ -19,8 +19,8 @@ rooms: the furnace").
         [--resolution 16] [--configs NAME ...] [--materials] [--set JSON]
 
 settled_room_excess()'s table (propagation_volume.h): --set '{"distance": 96,
-"extend_to_bounds": true}' --configs defaults plain linear plain_linear, and with
-"unclamped_transfer": false for the clamped-then-rescaled rows.
+"extend_to_bounds": true}' --configs defaults plain linear plain_linear per_transfer
+plain_per_transfer, and with "unclamped_transfer": false for the clamped-then-rescaled rows.
 """
 
 import argparse
@@ -45,6 +45,9 @@ CONFIGS = {
     # Linear everywhere: walls stop negative light too (no clamp where they stop light).
     "linear": {"clamp_at_surfaces": False},
     "plain_linear": {"windowed_reinjection": False, "clamp_at_surfaces": False},
+    # Clamped only on the transfers a wall stops in part (clamp_per_transfer).
+    "per_transfer": {"clamp_per_transfer": True},
+    "plain_per_transfer": {"windowed_reinjection": False, "clamp_per_transfer": True},
     "extended": {"extend_to_bounds": True},
     "no_damping": {"damping": False},
 }

@@ -68,6 +68,11 @@ CONFIGS = {
     "fix_linear_plain": dict(furnace_scale=True, distance=96.0, settle_fraction=0.01,
                              glossy_vpls=True, glossy_bounces=4, extend_to_bounds=True,
                              clamp_at_surfaces=False, windowed_reinjection=False),
+    # The fix with clamp_per_transfer: only the transfers a wall stops in part clamped (the
+    # HOLPV's light stays at the rooms' edges; docs/methods.md, "Clamped per transfer").
+    "fix_per_transfer": dict(furnace_scale=True, distance=96.0, settle_fraction=0.01,
+                             glossy_vpls=True, glossy_bounces=4, extend_to_bounds=True,
+                             clamp_per_transfer=True),
     "fix_settle_0.001": dict(furnace_scale=True, distance=192.0, settle_fraction=0.001,
                              glossy_vpls=True, glossy_bounces=4, extend_to_bounds=True),
     "fix_linear_settle_0.001": dict(furnace_scale=True, distance=192.0, settle_fraction=0.001,

@@ -103,7 +103,11 @@ void bind_settings(py::module_& m) {
                        "With unclamped_transfer: clamp the lobes of the cells whose light a wall "
                        "stops in part, linear elsewhere, so that walls neither make light nor "
                        "return what goes into them; no effect without unclamped_transfer "
-                       "(True).");
+                       "(True).")
+        .def_readwrite("clamp_per_transfer", &S::clamp_per_transfer,
+                       "With clamp_at_surfaces: clamp only the transfers a wall stops in part, "
+                       "not every transfer of such a cell, so that the higher-order lobes keep "
+                       "their light at a room's edges (False).");
     def_integer(cls, "cascades", &S::cascades,
                 "Nested volumes around cascade_center, each finer level with half the cells' "
                 "size and `resolution` cells per axis; 1: one volume over the scene (1).");

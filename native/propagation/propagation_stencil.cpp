@@ -158,8 +158,9 @@ void PropagationStep::rescale_factors(const ShVolume& source,
                                       Progress* progress) const {
     factors.assign(source.cell_count(), vec3(1.0f));
     blocked.assign(source.cell_count(), 0);
-    const bool at_surfaces =
-        clamp_ == LobeClamp::AtSurfaces || clamp_ == LobeClamp::AtSurfacesToTotal;
+    const bool per_transfer = clamp_ == LobeClamp::AtBlockedTransfers;
+    const bool at_surfaces = clamp_ == LobeClamp::AtSurfaces ||
+                             clamp_ == LobeClamp::AtSurfacesToTotal || per_transfer;
     if (clamp_ != LobeClamp::Rescaled && !at_surfaces) return;
     if (at_surfaces && transmittance == nullptr) return;  // no wall: linear everywhere
     parallel_for(
@@ -185,6 +186,62 @@ void PropagationStep::rescale_factors(const ShVolume& source,
                     blocked[c] = 1;
                 }
                 const float* cell = source.cell_data(c);
+                if (per_transfer) {
+                    // Over the blocked transfers' faces: the unclamped and clamped fluxes and
+                    // what of each passes the walls; over the free ones the (linear) flux; over
+                    // all, AtSurfaces' sums for the cells it falls back to.
+                    vec3 wall(0.0f), wall_clamped(0.0f), wall_passed(0.0f),
+                        wall_clamped_passed(0.0f), free(0.0f), clamped(0.0f);
+                    for (size_t o = 0; o < offsets_.size(); ++o)
+                        for (const Face& face : offsets_[o].faces) {
+                            const vec3 flux = face.flux_factor * face_intensity(cell, face);
+                            const vec3 positive = glm::max(flux, vec3(0.0f));
+                            clamped += positive;
+                            if (t[o] >= 1.0f) {
+                                free += flux;
+                                continue;
+                            }
+                            wall += flux;
+                            wall_clamped += positive;
+                            wall_passed += t[o] * flux;
+                            wall_clamped_passed += t[o] * positive;
+                        }
+                    // Per transfer only where neither part is negative: a negative part into
+                    // the walls, stopped, would make light; a negative part along or away from
+                    // them (a beam going into a wall leaves its negative ring behind) would
+                    // send negative light back into the room. Elsewhere clamp the whole cell.
+                    const bool split = glm::all(glm::greaterThanEqual(wall, vec3(0.0f))) &&
+                                       glm::all(glm::greaterThanEqual(free, vec3(0.0f)));
+                    blocked[c] = split ? 2 : 1;
+                    const vec3 passed = free + wall_passed;
+                    const vec3 clamped_passed =
+                        wall_clamped_passed + glm::max(clamped - wall_clamped, vec3(0.0f));
+                    for (int ch = 0; ch < 3; ++ch) {
+                        if (split) {
+                            // The clamped transfers rescaled to their own total, passing the
+                            // walls no more than the linear step's share.
+                            const float k = wall[ch] > 0.0f && wall_clamped[ch] > 0.0f
+                                                ? wall[ch] / wall_clamped[ch]
+                                                : 0.0f;
+                            factors[c][ch] =
+                                wall_clamped_passed[ch] > 0.0f
+                                    ? std::max(0.0f, std::min(k, wall_passed[ch] /
+                                                                     wall_clamped_passed[ch]))
+                                    : 0.0f;
+                            continue;
+                        }
+                        // AtSurfaces' factor (the free transfers pass t = 1).
+                        const float total = wall[ch] + free[ch];
+                        const float k = total > 0.0f && clamped[ch] > 0.0f
+                                            ? total / clamped[ch]
+                                            : 0.0f;
+                        factors[c][ch] =
+                            clamped_passed[ch] > 0.0f
+                                ? std::max(0.0f, std::min(k, passed[ch] / clamped_passed[ch]))
+                                : 0.0f;
+                    }
+                    continue;
+                }
                 // Over the faces: the unclamped and clamped fluxes, and what of each passes the
                 // walls.
                 vec3 total(0.0f), clamped(0.0f), passed(0.0f), clamped_passed(0.0f);
@@ -228,8 +285,9 @@ void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
             "PropagationStep: transmittance has ", transmittance->values.size(), " values for ",
             transmittance->offsets, " offsets; expected ", source.cell_count(), " cells × ",
             offset_count(), " offsets"));
-    const bool at_surfaces =
-        clamp_ == LobeClamp::AtSurfaces || clamp_ == LobeClamp::AtSurfacesToTotal;
+    const bool per_transfer = clamp_ == LobeClamp::AtBlockedTransfers;
+    const bool at_surfaces = clamp_ == LobeClamp::AtSurfaces ||
+                             clamp_ == LobeClamp::AtSurfacesToTotal || per_transfer;
     std::vector<uint8_t> blocked;
     std::vector<vec3> factors;
     rescale_factors(source, transmittance, factors, blocked, progress);
@@ -256,9 +314,14 @@ void PropagationStep::operator()(const ShVolume& source, ShVolume& destination,
                     if (t <= 0.0f) continue;
                     const size_t s = source.cell_index(from);
                     const float* src = source.cell_data(s);
+                    // AtBlockedTransfers clamps only the transfers a wall stops in part
+                    // (t < 1) of the cells it splits (blocked 2).
+                    const bool clamp_here =
+                        clamp_all || (at_surfaces && blocked[s] != 0 &&
+                                      (blocked[s] == 1 || t < 1.0f));
                     for (const Face& face : offset.faces) {
                         vec3 intensity = face_intensity(src, face);
-                        if (clamp_all || (at_surfaces && blocked[s] != 0))
+                        if (clamp_here)
                             intensity = glm::max(intensity, vec3(0.0f)) * factors[s];
                         const vec3 crossing = (face.flux_factor * kPi * t) * intensity;
                         if (travel)

@@ -106,6 +106,19 @@ enum class LobeClamp : uint8_t {
     // AtSurfaces' first form, kept to measure against: Rescaled (to the cell's total) where a
     // wall stops part of the light. Walls make no light but return the back lobes' share.
     AtSurfacesToTotal,
+    // As AtSurfaces, but in such a cell only the transfers a wall stops in part (transmittance
+    // < 1) are clamped; the others stay linear, as in free space. The clamped transfers are
+    // rescaled to their own unclamped total, and pass the walls no more than the linear step's
+    // share. Only where neither the blocked transfers' flux nor the others' is negative: a
+    // negative part into the walls, stopped, would make light, and a negative part along or
+    // away from them (a beam into a wall leaves its negative ring behind) would send negative
+    // light back into the room; those cells are clamped whole, as AtSurfaces. Clamping every
+    // transfer of the cells along a wall spreads the L2 lobes there (their negative ring gone,
+    // the rest rescaled) and moves light from a room's edges into its middle (the furnace's
+    // ramp, docs/methods.md); a transfer along or away from the wall is left as free space
+    // carries it. The HOLPV's 26 neighbours cross edges and corners diagonally, so per cell
+    // the clamp takes in far more of its transfers than the LPV's 6.
+    AtBlockedTransfers,
 };
 
 // Solid angle (sr) of the rectangle [x0, x1] × [y0, y1] in the plane at `distance` > 0 from the
@@ -178,9 +191,10 @@ class PropagationStep {
         std::vector<Face> faces;
     };
     // Per source cell and channel, the factor its clamped face intensities are scaled by
-    // (Rescaled: to the unclamped total; AtSurfaces and AtSurfacesToTotal: see LobeClamp, only
-    // for the cells `blocked` marks, which this fills: 1 where a transfer out of the cell is
-    // blocked in part), else 1.
+    // (Rescaled: to the unclamped total; AtSurfaces, AtSurfacesToTotal and AtBlockedTransfers:
+    // see LobeClamp, only for the cells `blocked` marks, which this fills: non-zero where a
+    // transfer out of the cell is blocked in part; AtBlockedTransfers: 2 where only those
+    // transfers are clamped, 1 where the whole cell is), else 1.
     void rescale_factors(const ShVolume& source, const PropagationTransmittance* transmittance,
                          std::vector<vec3>& factors, std::vector<uint8_t>& blocked,
                          Progress* progress) const;

@@ -120,8 +120,9 @@ Reinjection reinjection_of(const PropagationSettings& settings) {
 
 LobeClamp clamp_of(const PropagationSettings& settings) {
     return !settings.unclamped_transfer ? LobeClamp::Rescaled
-           : settings.clamp_at_surfaces ? LobeClamp::AtSurfaces
-                                        : LobeClamp::None;
+           : !settings.clamp_at_surfaces ? LobeClamp::None
+           : settings.clamp_per_transfer  ? LobeClamp::AtBlockedTransfers
+                                          : LobeClamp::AtSurfaces;
 }
 
 PropagationStep step_of(const PropagationSettings& settings) {
@@ -276,16 +277,20 @@ void validate_propagation_settings(const PropagationSettings& settings) {
 float settled_room_excess(int order, LobeClamp clamp, Reinjection reinjection) {
     if (reinjection == Reinjection::FaceNormal || (order != 1 && order != 2) ||
         (clamp != LobeClamp::Rescaled && clamp != LobeClamp::None &&
-         clamp != LobeClamp::AtSurfaces))
+         clamp != LobeClamp::AtSurfaces && clamp != LobeClamp::AtBlockedTransfers))
         throw InvalidArgument(format_message(
             "settled_room_excess: measured for the travel re-injections and the flux-keeping "
             "transfers of orders 1 and 2 only (order ", order, ")"));
-    const int c = clamp == LobeClamp::Rescaled ? 0 : clamp == LobeClamp::None ? 1 : 2;
-    // [transfer: LPV, HOLPV plain beams, HOLPV windowed beams][Rescaled, None, AtSurfaces]
+    const int c = clamp == LobeClamp::Rescaled     ? 0
+                  : clamp == LobeClamp::None         ? 1
+                  : clamp == LobeClamp::AtSurfaces   ? 2
+                                                     : 3;
+    // [transfer: LPV, HOLPV plain beams, HOLPV windowed beams]
+    // [Rescaled, None, AtSurfaces, AtBlockedTransfers]
     // (the LPV's beams have no band 2: windowed is plain).
-    static constexpr float kExcess[3][3] = {{1.2250f, 1.3707f, 1.2850f},
-                                            {1.3164f, 1.2850f, 1.2535f},
-                                            {1.2777f, 1.2650f, 1.2210f}};
+    static constexpr float kExcess[3][4] = {{1.2250f, 1.3707f, 1.2850f, 1.2705f},
+                                            {1.3164f, 1.2850f, 1.2535f, 1.2664f},
+                                            {1.2777f, 1.2650f, 1.2210f, 1.2331f}};
     const int t = order == 1 ? 0 : reinjection == Reinjection::WindowedTravelDirection ? 2 : 1;
     return kExcess[t][c];
 }

@@ -154,6 +154,11 @@ struct PropagationSettings {
     // light, and stopping negative flux makes light (in a closed box 1.138x the VPL's flux in
     // flight for L1, 1.026x for L2). No effect without unclamped_transfer.
     bool clamp_at_surfaces = true;
+    // With clamp_at_surfaces: clamp only the transfers a wall stops in part, not every transfer
+    // of such a cell (LobeClamp::AtBlockedTransfers). Clamping all of them spreads the L2 lobes
+    // along the walls and moves the HOLPV's light off a room's edges (docs/methods.md,
+    // "Clamped per transfer").
+    bool clamp_per_transfer = false;
     // Give the cells whose centres lie outside the scene's bounds (or on them) the light of the
     // inside cell next to them (extend_to_bounds) once propagated. Walls at the bounds run
     // through those cells: the geometry volume blocks their exchange with the inside, so they

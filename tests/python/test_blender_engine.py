@@ -109,10 +109,10 @@ NOT_MIRRORED = {
     # windowed_reinjection (on), extend_to_bounds (off, it misses the agreement targets): the
     # add-on keeps the native default (docs/methods.md). So do the closed-room options, off
     # (glossy_vpls, glossy_bounces, furnace_scale, settle_fraction: docs/methods.md, "The
-    # furnace's scale").
+    # furnace's scale"), and clamp_per_transfer (off: "Clamped per transfer").
     "PropagationSettings": {"cascade_follow_camera", "cascade_center", "windowed_reinjection",
                             "extend_to_bounds", "glossy_vpls", "glossy_bounces",
-                            "furnace_scale", "settle_fraction"},
+                            "furnace_scale", "settle_fraction", "clamp_per_transfer"},
     # As the radiance field's glossy_in_grid: no reason for an artist to change it.
     # glossy_from_vpls: a measured option (+0.2 dB on the sun room, docs/methods.md), scripts
     # only for now; so is gather_cut_windows (14.5x the sun room's frame CPU for +0.05 dB).

@@ -2967,6 +2967,14 @@ class PropagationSettings:
     def clamp_at_surfaces(self, arg0: bool) -> None:
         ...
     @property
+    def clamp_per_transfer(self) -> bool:
+        """
+        With clamp_at_surfaces: clamp only the transfers a wall stops in part, not every transfer of such a cell, so that the higher-order lobes keep their light at a room's edges (False).
+        """
+    @clamp_per_transfer.setter
+    def clamp_per_transfer(self, arg0: bool) -> None:
+        ...
+    @property
     def damping(self) -> bool:
         """
         Damp the lookup where the light arriving against the normal is stronger half a cell behind the lookup point than in front of it (seed 003 §3.2.4's directional derivative, against self-lighting and bleeding) (True).
