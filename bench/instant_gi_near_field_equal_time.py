@@ -113,6 +113,7 @@ def main():
                 ref = reference(scene, f"{name}_{width}x{height}", spp, args.cache)
                 # {(reach, samples): [PSNR per seed]}, {(reach, samples): [CPU s]}
                 quality, cost, denoise_cost = {}, {}, []
+                last = {reach: [] for reach in reaches}  # the most samples' frames per seed
                 for seed in args.seeds:
                     fields = {r: solve(scene, seed, r, args.passes, args.passes_per_sample)
                               for r in reaches}
@@ -134,8 +135,11 @@ def main():
                                 denoise_cost.append(cpu_seconds() - start)
                                 quality.setdefault((reach, samples), []).append(
                                     psnr(ref, denoised["Combined"]))
+                                if samples == counts[-1]:
+                                    last[reach].append(denoised["Combined"][..., :3])
                 report(name, width, height, args, spp, reaches, counts, quality, cost,
                        statistics.median(denoise_cost))
+                spread(ref, last, counts[-1])
 
 
 def report(name, width, height, args, spp, reaches, counts, quality, cost, denoise):
@@ -156,6 +160,23 @@ def report(name, width, height, args, spp, reaches, counts, quality, cost, denoi
             fits = [s for s in counts if median[(r, s)] <= budget * 1.0001]
             cells.append(f"{mean[(r, max(fits))]:.2f} dB ({max(fits)})" if fits else "-")
         print(f"{budget:.3f} s | " + " | ".join(cells))
+
+
+def spread(ref, last, samples):
+    """Where each reach's error lies at `samples`: the RMS of its seed-mean image's difference
+    from the reference (what more seeds would not remove) and the RMS of its frames around that
+    mean (the VPLs' noise; the unbiased spread over seeds)."""
+    if len(next(iter(last.values()))) < 2:
+        return
+    target = np.asarray(ref, np.float64)[..., :3]
+    cells = []
+    for reach, frames in last.items():
+        frames = np.asarray(frames, np.float64)
+        mean = frames.mean(axis=0)
+        noise = np.sqrt(((frames - mean) ** 2).sum(axis=0).mean() / (len(frames) - 1))
+        cells.append(f"reach {reach:g}: mean error {np.sqrt(((mean - target) ** 2).mean()):.4f},"
+                     f" seed spread {noise:.4f}")
+    print(f"RMS over pixels at {samples} samples: " + "; ".join(cells))
 
 
 if __name__ == "__main__":
