@@ -152,14 +152,29 @@ def report(name, width, height, args, spp, reaches, counts, quality, cost, denoi
     for samples in counts:
         print(f"{samples:7d} | " + " | ".join(
             f"{median[(r, samples)]:.3f} s, {mean[(r, samples)]:.2f} dB" for r in reaches))
-    print("budget (reach 0's frames) | " + " | ".join(f"reach {r:g}" for r in reaches))
+    print("budget (reach 0's frames) | " + " | ".join(f"reach {r:g}" for r in reaches) +
+          " | " + " | ".join(f"reach {r:g} interpolated" for r in reaches[1:]))
     for samples in counts:
         budget = median[(0.0, samples)]
         cells = []
         for r in reaches:
             fits = [s for s in counts if median[(r, s)] <= budget * 1.0001]
             cells.append(f"{mean[(r, max(fits))]:.2f} dB ({max(fits)})" if fits else "-")
+        for r in reaches[1:]:
+            quality_at = interpolated(budget, [(median[(r, s)], mean[(r, s)]) for s in counts])
+            cells.append("-" if quality_at is None else f"{quality_at:.2f} dB")
         print(f"{budget:.3f} s | " + " | ".join(cells))
+
+
+def interpolated(budget, frames):
+    """The PSNR a reach would reach at CPU `budget`, linear in log(CPU) between its two frames
+    around it (frames: (CPU, PSNR) by samples); None outside them. The frames' samples double,
+    so a reach slower by 10% would otherwise get half the samples at every budget."""
+    for (cost_lo, psnr_lo), (cost_hi, psnr_hi) in zip(frames, frames[1:]):
+        if cost_lo <= budget <= cost_hi:
+            t = np.log(budget / cost_lo) / np.log(cost_hi / cost_lo)
+            return psnr_lo + t * (psnr_hi - psnr_lo)
+    return None
 
 
 def spread(ref, last, samples):
