@@ -619,15 +619,13 @@ void PrincipledBsdf::lobe_eval_pdf(const Lobe& lobe, const vec3& wo, const vec3&
     *f = lobe.weight * color * (*pdf * masking_given_o(*terms));
 }
 
-void PrincipledBsdf::eval_pdf(const vec3& wo, const vec3& wi, bool field_only, BsdfEval* eval,
-                              float* pdf) const {
+void PrincipledBsdf::eval_pdf(const vec3& wo, const vec3& wi, BsdfEval* eval, float* pdf) const {
     *eval = BsdfEval{};
     *pdf = 0.0f;
     PairTerms terms;
     if (!pair_terms(wo, wi, &terms)) return;
     for (int i = 0; i < lobe_count_; ++i) {
         const Lobe& lobe = lobes_[i];
-        if (field_only && lobe.traced()) continue;
         vec3 f;
         float lobe_pdf;
         lobe_eval_pdf(lobe, wo, wi, &terms, &f, &lobe_pdf);
@@ -655,14 +653,14 @@ bool PrincipledBsdf::lobe_sample(const Lobe& lobe, const vec3& wo, const vec2& u
 BsdfEval PrincipledBsdf::eval(const vec3& wo, const vec3& wi) const {
     BsdfEval result;
     float pdf;
-    eval_pdf(wo, wi, false, &result, &pdf);
+    eval_pdf(wo, wi, &result, &pdf);
     return result;
 }
 
 float PrincipledBsdf::pdf(const vec3& wo, const vec3& wi) const {
     BsdfEval eval;
     float pdf;
-    eval_pdf(wo, wi, false, &eval, &pdf);
+    eval_pdf(wo, wi, &eval, &pdf);
     return pdf;
 }
 
@@ -695,7 +693,7 @@ bool PrincipledBsdf::sample(const vec3& wo, float u_lobe, const vec2& u, BsdfSam
         out->pdf = 0.0f;
         out->eval.by_class[int(out->lobe_class)] = out->weight;
     } else {
-        eval_pdf(wo, out->wi, false, &out->eval, &out->pdf);
+        eval_pdf(wo, out->wi, &out->eval, &out->pdf);
         if (out->pdf <= 0.0f) return false;
         out->weight = out->eval.total() * (1.0f / out->pdf);
     }
@@ -817,10 +815,39 @@ vec3 PrincipledBsdf::field_diffuse(const vec3& wo) const {
     return weight * burley_albedo(wo.z, roughness_);
 }
 
+// eval_pdf over the field lobes alone, without its pdf, in one pass: every field lobe reflects,
+// so a pair with wi on or below the surface is zero (eval_pdf's refraction half vector then
+// serves no field lobe), and each lobe's f is lobe_eval_pdf's reflection branch, the same
+// operations in the same order (bit for bit; tests/cpp/render/bsdf_test.cpp compares the two).
+// The light samples of every preview pixel with a field come here: the shared PairTerms, the
+// out-of-line lobe calls and the pdf sums were half its instructions.
 BsdfEval PrincipledBsdf::eval_field(const vec3& wo, const vec3& wi) const {
     BsdfEval result;
-    float pdf;
-    eval_pdf(wo, wi, true, &result, &pdf);
+    if (wo.z <= 0.0f || !(wi.z > 0.0f)) return result;
+    PairTerms terms;
+    terms.reflection = true;
+    terms.h = glm::normalize(wo + wi);
+    terms.cos_ih = glm::dot(wi, terms.h);
+    for (int i = 0; i < lobe_count_; ++i) {
+        const Lobe& lobe = lobes_[i];
+        if (lobe.traced()) continue;
+        if (lobe.kind == LobeKind::Diffuse) {
+            float cos_factor = diffuse_brdf(wo, wi, terms.cos_ih) * wi.z;
+            if (v2_.from_light) cos_factor *= light_path_side(wi, &terms).layer_transmittance;
+            if (bent_) cos_factor *= diffuse_bump_shadowing(wi);
+            result.by_class[int(LobeClass::Diffuse)] += lobe.weight * cos_factor;
+            continue;
+        }
+        ggx_terms(wo, wi, lobe.alpha, &terms);
+        const float pdf = terms.g1_o * terms.d / (4.0f * wo.z);
+        vec3 color = vec3(1.0f);
+        if (lobe.kind == LobeKind::Specular) {
+            color = specular_color(terms.cos_ih);
+            if (v2_.from_light) color *= light_path_side(wi, &terms).specular_scale;
+        }
+        result.by_class[int(LobeClass::Glossy)] +=
+            lobe.weight * color * (pdf * masking_given_o(terms));
+    }
     return result;
 }
 

@@ -241,8 +241,8 @@ class PrincipledBsdf {
                             PathOrigin origin);
     void select_lobes(float cos_nv);
     // f |cos| and pdf share their half vector and GGX terms: eval(), pdf() and sample() all go
-    // through eval_pdf, which computes both in one pass over the lobes (field_only: skip the
-    // traced lobes, for eval_field).
+    // through eval_pdf, which computes both in one pass over the lobes (eval_field, f alone
+    // over the field lobes, follows the same steps).
     struct PairTerms;
     bool pair_terms(const vec3& wo, const vec3& wi, PairTerms* terms) const;
     void ggx_terms(const vec3& wo, const vec3& wi, float alpha, PairTerms* terms) const;
@@ -251,8 +251,7 @@ class PrincipledBsdf {
     float masking_given_o(const PairTerms& terms) const;
     void lobe_eval_pdf(const Lobe& lobe, const vec3& wo, const vec3& wi, PairTerms* terms,
                        vec3* f, float* pdf) const;
-    void eval_pdf(const vec3& wo, const vec3& wi, bool field_only, BsdfEval* eval,
-                  float* pdf) const;
+    void eval_pdf(const vec3& wo, const vec3& wi, BsdfEval* eval, float* pdf) const;
     bool lobe_sample(const Lobe& lobe, const vec3& wo, const vec2& u, vec3* wi) const;
     vec3 specular_color(float cos_lh) const;
     // PrincipledModel::V2's factors toward the camera-side direction (cos_camera to the normal),

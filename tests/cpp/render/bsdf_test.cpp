@@ -511,5 +511,50 @@ TEST(Bsdf, MaterialLobesFinishToTheFullConstructorBitForBit) {
                                                                   material_terms(layered)));
 }
 
+// eval_field is eval() over the field lobes alone: every field lobe reflects and every traced
+// lobe's f is zero off its Dirac direction, so above the surface the two agree bit for bit, class
+// by class, and below it eval_field is zero (its refraction lobes are traced) — for smooth and
+// rough, metal, glass, PrincipledModel::V2 camera and light paths, and bent normals.
+TEST(Bsdf, EvalFieldIsEvalOfTheFieldLobesBitForBit) {
+    auto same = [](const vec3& a, const vec3& b) { return std::memcmp(&a, &b, sizeof(vec3)) == 0; };
+    std::vector<Material> materials;
+    for (float metallic : {0.0f, 1.0f})
+        for (float transmission : {0.0f, 1.0f})
+            for (float roughness : {0.0f, 0.3f, 0.8f})
+                for (bool v2 : {false, true}) {
+                    Material material = make_material(metallic, transmission, roughness);
+                    material.base_color = vec3(0.7f, 0.2f, 0.05f);
+                    material.diffuse_model =
+                        roughness > 0.5f ? DiffuseModel::Principled : DiffuseModel::Lambert;
+                    if (v2) {
+                        material.principled_model = PrincipledModel::V2;
+                        material.distribution = MicrofacetDistribution::MultiscatterGGX;
+                    }
+                    materials.push_back(material);
+                }
+    int checked = 0, nonzero = 0;
+    for (const Material& material : materials)
+        for (PathOrigin origin : {PathOrigin::Camera, PathOrigin::Light})
+            for (bool bent : {false, true})
+                for (float angle : {0.0f, 0.7f, 1.4f}) {
+                    const vec3 wo = direction_from_angle(angle);
+                    PrincipledBsdf bsdf(material, material.base_color, false, wo.z, origin);
+                    if (bent) bsdf.set_smooth_normal(glm::normalize(vec3(0.3f, -0.2f, 1.0f)), true);
+                    Pcg32 rng(11, uint64_t(checked));
+                    for (int k = 0; k < 32; ++k) {
+                        const vec3 wi = sample_uniform_sphere(rng.next_vec2());
+                        const BsdfEval field = bsdf.eval_field(wo, wi);
+                        const BsdfEval all = wi.z > 0.0f ? bsdf.eval(wo, wi) : BsdfEval{};
+                        for (int c = 0; c < kLobeClassCount; ++c)
+                            ASSERT_TRUE(same(field.by_class[c], all.by_class[c]))
+                                << "material " << checked / 12 << " class " << c;
+                        nonzero += max_component(field.total()) > 0.0f;
+                    }
+                    ++checked;
+                }
+    EXPECT_EQ(checked, 24 * 12);
+    EXPECT_GT(nonzero, checked * 8);  // the comparison is not of zeros
+}
+
 }  // namespace
 }  // namespace shgi
