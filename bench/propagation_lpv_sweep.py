@@ -73,6 +73,18 @@ CONFIGS = {
     "fix_per_transfer": dict(furnace_scale=True, distance=96.0, settle_fraction=0.01,
                              glossy_vpls=True, glossy_bounces=4, extend_to_bounds=True,
                              clamp_per_transfer=True),
+    # The shipped defaults with clamp_per_transfer alone (issue 51's target under the defaults).
+    "per_transfer": dict(clamp_per_transfer=True),
+    # The fix with every transfer clamped then rescaled (LobeClamp::Rescaled, the seed's; the
+    # linear transfers carry the windowed beams' negative lobes, which darken the sun room's
+    # floor around its sun patch; docs/methods.md, "The sun room's floor").
+    "fix_rescaled": dict(furnace_scale=True, distance=96.0, settle_fraction=0.01,
+                         glossy_vpls=True, glossy_bounces=4, extend_to_bounds=True,
+                         unclamped_transfer=False),
+    "fix_rescaled_undamped": dict(furnace_scale=True, distance=96.0, settle_fraction=0.01,
+                                  glossy_vpls=True, glossy_bounces=4, extend_to_bounds=True,
+                                  unclamped_transfer=False, damping=False),
+    "rescaled": dict(unclamped_transfer=False),
     "fix_settle_0.001": dict(furnace_scale=True, distance=192.0, settle_fraction=0.001,
                              glossy_vpls=True, glossy_bounces=4, extend_to_bounds=True),
     "fix_linear_settle_0.001": dict(furnace_scale=True, distance=192.0, settle_fraction=0.001,
