@@ -6,7 +6,7 @@ PSNR (16-spp preview). The references are test_propagation.py's (the Cornell box
 at scale 0.25, 2048 spp; the two rooms at 0.5, 512 spp), cached in --cache between runs.
 
     PYTHONPATH=build/python python3 bench/propagation_lpv_sweep.py [--orders 1 2]
-        [--configs NAME ...]   (default: all of CONFIGS) [--cost]
+        [--configs NAME ...]   (default: all of CONFIGS) [--cost] [--seeds 5 6 7 8]
 """
 
 import argparse
@@ -136,21 +136,25 @@ def main():
     parser.add_argument("--cost", action="store_true",
                         help="also the steps taken and the pass's CPU seconds (all threads)")
     parser.add_argument("--cache", type=pathlib.Path, default=pathlib.Path("/tmp/shgi_lpv_refs"))
+    parser.add_argument("--seeds", type=int, nargs="+", default=[5],
+                        help="the volume's and the preview's seeds, a row each")
     args = parser.parse_args()
     refs = {name: reference(name, args.cache) for name in SCENES}
     for config in args.configs:
-        for order in args.orders:
+        for order, seed in ((o, s) for o in args.orders for s in args.seeds):
             row = f"{config:<20} order {order}:"
+            if args.seeds != [5]:
+                row += f" seed {seed}"
             for name, (scene, ref) in refs.items():
                 volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
-                    seed=5, order=order, **CONFIGS[config]))
+                    seed=seed, order=order, **CONFIGS[config]))
                 cpu = time.process_time()
                 volume.refine()
                 cpu = time.process_time() - cpu
                 steps = sum(stage.startswith("propagation_step_")
                             for stage, _ in volume.stage_seconds)
                 preview, _ = shgi.render_preview(scene, volume.current_field(),
-                                                 shgi.PreviewSettings(seed=5))
+                                                 shgi.PreviewSettings(seed=seed))
                 row += (f"  {name} {indirect(preview) / indirect(ref):.3f}"
                         f" {psnr(ref['Combined'], preview['Combined']):5.2f} dB")
                 if args.cost:
