@@ -193,7 +193,8 @@ class PathIntegrator {
     }
 
     // The field query finish() will make at the first surface (after begin()): its position,
-    // shading normal and the direction towards the viewer, world space. False without a field
+    // the normal the lookup is made for (field_lookup_normal) and the direction towards the
+    // viewer, world space. False without a field
     // to query (none, or one that holds no light).
     bool first_field_query(vec3* position, vec3* normal, vec3* wo) const;
     // A lookup made for another path's first surface (screen-space reuse, see
@@ -267,6 +268,8 @@ class PathIntegrator {
     };
     // `irradiance`: field.irradiance(n), or null to evaluate it here (unused for a bumped
     // diffuse lobe, whose irradiance depends on more than the normal).
+    // The normal a field lookup at `shading` is made for (see the definition).
+    static vec3 field_lookup_normal(const Shading& shading);
     void add_field_light(const FieldLookup& field, const FieldLobes& lobes, const vec3& n,
                          const vec3& wo, IrradianceMemo* irradiance = nullptr);
     bool scatter(const Shading& shading, Ray* ray);
