@@ -176,9 +176,10 @@ object), with resolution probes along each local axis at the cell centres.)doc")
                        "Keep emitters and world seen straight from the probes (False).")
         .def_readwrite("visibility", &S::visibility, "Leak prevention weights (True).")
         .def_readwrite("visibility_blur", &S::visibility_blur,
-                       "Angular radius (rad) of the distance filter (0.15; EEVEE's Blur).")
+                       "Angular radius (rad) of the distance filter (0.10; EEVEE's Blur).")
         .def_readwrite("normal_bias", &S::normal_bias,
-                       "Probe spacings along the shading normal (0.25; EEVEE's Bias).")
+                       "Probe spacings along the surface's interpolated normal (0.25; EEVEE's "
+                       "Bias).")
         .def_readwrite("view_bias", &S::view_bias,
                        "Probe spacings towards the viewer (0; DDGI's view bias).")
         .def_readwrite("bleed_bias", &S::bleed_bias, "Chebyshev cut-off (0; EEVEE's Bleed Bias).")

@@ -68,7 +68,7 @@ void bind_settings(py::module_& m) {
                        "Geometry volume blocking from the second step on, or the first with "
                        "occlude_first_step (True).")
         .def_readwrite("normal_offset", &S::normal_offset,
-                       "Cells along the shading normal before the lookup, against "
+                       "Cells along the surface's interpolated normal before the lookup, against "
                        "self-lighting and leaks through walls (1.0).")
         .def_readwrite("damping", &S::damping,
                        "Damp the lookup where the light arriving against the normal is stronger "

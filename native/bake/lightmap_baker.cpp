@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "bake/lightmap_filter.h"
+#include "render/bump_irradiance.h"
 #include "render/interleave_window.h"
 #include "render/light_sampler.h"
 #include "render/path_integrator.h"
@@ -58,6 +59,13 @@ struct TexelSurface {
     vec3 wo{0.0f, 0.0f, 1.0f};
     vec3 diffuse_color{0.0f};  // DiffCol
     int color_channel = -1;    // the channel the diffuse response is read from; -1: Lambert
+    // Where a normal map bent the shading normal: the diffuse lobe's bump shadowing, whose
+    // smooth_normal places the field's lookup (as PathIntegrator's field_lookup_normal: a field
+    // moves or biases its lookup along the normal, and the bent one would move it sideways).
+    bool bumped = false;
+    DiffuseBump bump;
+
+    vec3 lookup_normal() const { return bumped ? bump.smooth_normal : frame.z; }
 
     // f_diffuse |cos| / DiffCol for world direction wi (Lambert: cos / pi).
     float diffuse_response(const vec3& wi) const {
@@ -82,6 +90,7 @@ TexelSurface texel_surface(const Scene& scene, uint32_t instance, const TexelSam
     const Shading shading = make_shading(scene, scene.surface_point(ray, hit), ray.direction);
     TexelSurface surface{shading.frame, shading.geometric_normal, shading.bsdf, shading.wo};
     surface.diffuse_color = shading.bsdf.class_color(LobeClass::Diffuse);
+    surface.bumped = diffuse_bump(shading, &surface.bump);
     const float peak = max_component(surface.diffuse_color);
     if (peak > 0.0f && shading.wo.z > 0.0f)
         surface.color_channel = surface.diffuse_color.x == peak   ? 0
@@ -267,8 +276,10 @@ class TexelBaker {
             if (texel_sh != nullptr)
                 lookup.radiance = *texel_sh;
             else
-                lookup = field_->lookup(sample.ray_origin, n);
-            const vec3 irradiance = lookup.irradiance(n);
+                lookup = field_->lookup(sample.ray_origin, surface.lookup_normal());
+            // About the bent normal with its bump shadowing, as the preview's field light.
+            const vec3 irradiance =
+                surface.bumped ? lookup.irradiance(n, surface.bump) : lookup.irradiance(n);
             const float response = surface.color_channel < 0
                                        ? 1.0f
                                        : surface.bsdf.field_diffuse(surface.wo)[surface.color_channel] /

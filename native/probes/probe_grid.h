@@ -69,7 +69,7 @@ struct ProbeGridSettings {
     bool visibility = true;
     int visibility_resolution = 8;      // octahedral texels per side, per probe
     float visibility_blur = 0.10f;      // ~ angular radius (rad) of the distance filter
-    float normal_bias = 0.25f;          // probe spacings along the shading normal
+    float normal_bias = 0.25f;          // probe spacings along the interpolated normal
     float view_bias = 0.0f;             // probe spacings towards the viewer
     float bleed_bias = 0.0f;
     // Placement.

@@ -104,11 +104,11 @@ struct PropagationSettings {
     float settle_fraction = 0.0f;
     int order = 2;               // 1: LPV (L1, 6 directions); 2: HOLPV (L2, 26 directions)
     bool occlusion = true;       // geometry volume blocking (§3.2.2), from the second step
-    // Cells along the shading normal the lookup moves before sampling, against self-lighting
-    // and light leaking through walls: a wall's far side holds VPLs half a cell beyond it, and a
-    // trilinear lookup less than a cell in front of the wall reaches them. In the sun room (the
-    // sunlit outside of its walls and roof) half a cell gave 5.9x the path tracer's indirect light
-    // (L1), one cell 0.97x.
+    // Cells along the surface's interpolated normal (not a normal-mapped one) the lookup moves
+    // before sampling, against self-lighting and light leaking through walls: a wall's far side
+    // holds VPLs half a cell beyond it, and a trilinear lookup less than a cell in front of the
+    // wall reaches them. In the sun room (the sunlit outside of its walls and roof) half a cell
+    // gave 5.9x the path tracer's indirect light (L1), one cell 0.97x.
     float normal_offset = 1.0f;
     // Seed 003 §3.2.4 (Kaplanyan & Dachsbacher 2010): damp the lookup where the light arriving
     // along −n is stronger half a cell behind the lookup point than half a cell in front of it

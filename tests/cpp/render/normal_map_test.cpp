@@ -9,6 +9,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
+#include "bake/lightmap_baker.h"
+#include "bake/texel_rasterizer.h"
 #include "photon/photon_tracer.h"
 #include "render/normal_map.h"
 #include "render/path_tracer.h"
@@ -321,6 +323,49 @@ TEST(NormalMap, FieldLookupsUseTheInterpolatedNormal) {
     render_preview(scene, &field, settings);
     EXPECT_GT(field.lookups(), 0u);
     EXPECT_LT(field.largest_lean(), 1e-5f);  // the bent normal leans 1 - cos 0.5 = 0.12
+}
+
+// The bake reads a field as the preview does: looked up for the interpolated normal, its light
+// gathered about the bent normal with the diffuse lobe's bump shadowing. In light from every
+// direction the plain cosine gathers pi whatever the normal (the bake read exactly 1 before);
+// with the shadowing term less, and the bake's Indirect texels (E / pi) times the albedo equal
+// the preview's field light.
+TEST(NormalMap, LightmapBakeReadsTheFieldAsThePreviewDoes) {
+    const float albedo = 0.5f;
+    Scene scene;
+    add_tilted_lambert_plane(scene, albedo, 0.5f);
+    light_from_above(scene, 0.0f);
+    const NormalRecordingField field;
+    TexelRasterSettings raster;
+    raster.width = raster.height = 8;
+    raster.uv_set = "UVMap";
+    LightmapSettings bake;
+    bake.samples = 4;
+    bake.content = LightmapContent::Indirect;
+    const LightmapTexels texels =
+        bake_lightmap(scene, rasterize_texels(scene, 0, raster), &field, bake);
+    EXPECT_GT(field.lookups(), 0u);
+    EXPECT_LT(field.largest_lean(), 1e-5f);
+    double sum = 0.0;
+    uint64_t baked = 0;
+    for (uint64_t t = 0; t < texels.texel_count(); ++t) {
+        if (!texels.baked[t]) continue;
+        sum += texels.color[3 * t];
+        ++baked;
+    }
+    ASSERT_GT(baked, 0u);
+    const double texel_mean = sum / double(baked);
+    EXPECT_LT(texel_mean, 0.99);  // the shadowing term takes light near the horizon
+
+    PreviewSettings settings;
+    settings.samples = 2;
+    const Image image = render_preview(scene, &field, settings);
+    const std::vector<float> combined = image.layer_pixels("Combined");
+    const size_t channels = combined.size() / image.pixel_count();
+    double preview = 0.0;
+    for (size_t i = 0; i < image.pixel_count(); ++i) preview += combined[channels * i];
+    preview /= double(image.pixel_count());
+    EXPECT_NEAR(albedo * texel_mean, preview, 1e-4 * preview);
 }
 
 // Photons onto a normal-mapped Lambert plane under a sun at angle `sun_angle` from the zenith
