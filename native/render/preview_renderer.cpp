@@ -93,6 +93,7 @@ struct Wave {
         shadow_paths.reserve(capacity);
         shadow_slots.reserve(capacity);
         occluded.reserve(capacity);
+        light_lanes.reserve(capacity);
     }
     size_t capacity() const { return x.size(); }
 
@@ -122,6 +123,7 @@ struct Wave {
     std::vector<uint32_t> shadow_paths;  // the path each shadow ray belongs to
     std::vector<uint8_t> shadow_slots;   // and which of its light samples (add_direct's k)
     std::vector<uint8_t> occluded;
+    std::vector<uint32_t> light_lanes;  // the light stage's paths (trace_direct)
 };
 
 // The calling thread's wave, at `capacity` pixels, empty. Each thread keeps one between work
@@ -324,14 +326,47 @@ class FrameWork {
         wave.shadow_paths.clear();
         wave.shadow_slots.clear();
         Ray shadows[kMaxLightSplits];
-        for (size_t i = 0; i < wave.count; ++i) {
-            if (!wave.live[i]) continue;
-            const int count = wave.paths[i]->prepare_direct(shadows);
+        const auto add_shadows = [&](size_t i, int count) {
             for (int k = 0; k < count; ++k) {
                 wave.shadow_rays.push_back(shadows[k]);
                 wave.shadow_paths.push_back(uint32_t(i));
                 wave.shadow_slots.push_back(uint8_t(k));
             }
+        };
+        if (lights_.samples_one_rectangle()) {
+            // The light stage: the light samples of four first surfaces at a time
+            // (LightSampler::sample_split4, the same samples as each path's own), then each
+            // path's BSDF toward its sample. The shadow rays come in the same order.
+            wave.light_lanes.clear();
+            for (size_t i = 0; i < wave.count; ++i)
+                if (wave.live[i] && wave.paths[i]->samples_lights())
+                    wave.light_lanes.push_back(uint32_t(i));
+            const size_t lanes = wave.light_lanes.size();
+            for (size_t j = 0; j < lanes; j += 4) {
+                const size_t used = std::min<size_t>(4, lanes - j);
+                vec3 p[4], n[4];
+                float u_select[4];
+                vec2 u[4];
+                for (size_t k = 0; k < 4; ++k) {  // a short group repeats its last path
+                    const uint32_t i = wave.light_lanes[j + std::min(k, used - 1)];
+                    const Shading& surface = wave.paths[i]->first_surface();
+                    p[k] = surface.position;
+                    n[k] = surface.frame.z;
+                    u_select[k] = wave.samples[i].u_select;
+                    u[k] = wave.samples[i].u_light;
+                }
+                LightSample samples[4];
+                int written[4];
+                lights_.sample_split4(p, n, u_select, u, samples, written);
+                for (size_t k = 0; k < used; ++k) {
+                    const uint32_t i = wave.light_lanes[j + k];
+                    add_shadows(i, wave.paths[i]->prepare_direct(shadows, &samples[k],
+                                                                 written[k]));
+                }
+            }
+        } else {
+            for (size_t i = 0; i < wave.count; ++i)
+                if (wave.live[i]) add_shadows(i, wave.paths[i]->prepare_direct(shadows));
         }
         if (wave.shadow_rays.empty()) return;
         scene_.occluded(wave.shadow_rays, wave.occluded, nullptr, RayCoherence::Coherent);

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -406,6 +407,137 @@ TEST(LightSampler, NextEventEstimationWithSplitsIsUnbiased) {
     EXPECT_THROW(lights.sample(p, n, 0.5f, vec2(0.5f), &one), Internal);
     EXPECT_THROW(LightSampler(scene, WorldSampling::Cosine, true, kMaxLightSplits + 1),
                  InvalidArgument);
+}
+
+// importance4 runs importance() on four SSE2 lanes: the same bits at every point, inside a
+// node's box, behind a one-sided emitter, outside a spot's cone, far away and at NaN.
+TEST(LightTree, Importance4IsImportanceBitForBit) {
+    LightBounds spot = point_bounds(vec3(1.0f, 2.0f, 3.0f), 5.0f);
+    spot.axis = glm::normalize(vec3(0.2f, -0.3f, -1.0f));
+    spot.theta_o = 0.4f;
+    spot.theta_e = 0.3f;
+    LightBounds panel;
+    panel.bounds.extend(vec3(-0.5f, -0.5f, 2.0f));
+    panel.bounds.extend(vec3(0.5f, 0.5f, 2.0f));
+    panel.energy = 40.0f;
+    panel.axis = vec3(0.0f, 0.0f, -1.0f);
+    panel.theta_o = 0.0f;
+    panel.theta_e = kPi / 2.0f;
+    const std::vector<LightTree> trees = {
+        LightTree({panel}), LightTree({spot}),
+        LightTree({panel, spot, point_bounds(vec3(-3.0f, 0.0f, 1.0f), 2.0f)})};
+    Pcg32 rng(7, 1);
+    int compared = 0;
+    for (const LightTree& tree : trees) {
+        for (int n = 0; n < 20000; ++n) {
+            float x[4], y[4], z[4], out[4];
+            for (int k = 0; k < 4; ++k) {
+                const float scale = (n % 3 == 0) ? 0.6f : 6.0f;  // inside the boxes, or around
+                x[k] = (rng.next_float() * 2.0f - 1.0f) * scale;
+                y[k] = (rng.next_float() * 2.0f - 1.0f) * scale;
+                z[k] = 2.0f + (rng.next_float() * 2.0f - 1.0f) * scale;
+            }
+            if (n == 0) x[1] = std::nanf("");
+            if (n == 1) z[2] = 2.0f;  // on the panel's plane
+            tree.importance4(x, y, z, out);
+            for (int k = 0; k < 4; ++k) {
+                const float expected = tree.importance(vec3(x[k], y[k], z[k]));
+                ASSERT_EQ(std::memcmp(&out[k], &expected, sizeof(float)), 0)
+                    << out[k] << " vs " << expected << " at (" << x[k] << ", " << y[k] << ", "
+                    << z[k] << ")";
+                ++compared;
+            }
+        }
+    }
+    EXPECT_EQ(compared, 3 * 20000 * 4);
+}
+
+// A room lit by one rectangle: sample_split4 gives sample_split's samples, bit for bit, at
+// points in front of the light, behind it, beside it and on its plane; a sampler with another
+// emitter (or a disk) does not take that path.
+TEST(LightSampler, SampleSplit4IsSampleSplitBitForBit) {
+    for (const AreaShape shape : {AreaShape::Square, AreaShape::Rectangle}) {
+        Scene scene;
+        scene.add_material(test::lambert(0.5f));
+        scene.add_instance(scene.add_mesh(test::plane(20.0f)), mat4(1.0f));
+        Light area;
+        area.type = LightType::Area;
+        area.shape = shape;
+        area.size_x = 0.7f;
+        area.size_y = 0.3f;
+        area.power = 150.0f;
+        area.world_from_light =
+            glm::rotate(glm::translate(mat4(1.0f), vec3(0.3f, -0.2f, 2.0f)), 0.5f,
+                        glm::normalize(vec3(1.0f, 0.4f, 0.2f)));
+        scene.add_light(area);
+        World world;
+        world.strength = 0.0f;
+        scene.set_world(world);
+        scene.commit();
+        for (const int splits : {1, 4}) {
+            const LightSampler lights(scene, WorldSampling::Cosine, true, splits);
+            ASSERT_TRUE(lights.samples_one_rectangle());
+            Pcg32 rng(11, uint64_t(splits));
+            int sampled = 0, compared = 0;
+            for (int n = 0; n < 20000; ++n) {
+                vec3 p[4], normal[4];
+                float u_select[4];
+                vec2 u[4];
+                for (int k = 0; k < 4; ++k) {
+                    p[k] = vec3(rng.next_float() * 6.0f - 3.0f, rng.next_float() * 6.0f - 3.0f,
+                                rng.next_float() * 4.0f);
+                    normal[k] = vec3(0.0f, 0.0f, 1.0f);
+                    u_select[k] = rng.next_float();
+                    u[k] = vec2(rng.next_float(), rng.next_float());
+                }
+                if (n == 0) p[3] = area.position();  // on the light
+                LightSample out[4];
+                int written[4];
+                lights.sample_split4(p, normal, u_select, u, out, written);
+                for (int k = 0; k < 4; ++k) {
+                    LightSample expected[kMaxLightSplits];
+                    const int count =
+                        lights.sample_split(p[k], normal[k], u_select[k], u[k], expected);
+                    ASSERT_EQ(written[k], count);
+                    ++compared;
+                    if (count == 0) continue;
+                    ++sampled;
+                    EXPECT_EQ(std::memcmp(&out[k].wi, &expected[0].wi, sizeof(vec3)), 0);
+                    EXPECT_EQ(std::memcmp(&out[k].distance, &expected[0].distance, 4), 0);
+                    EXPECT_EQ(std::memcmp(&out[k].radiance, &expected[0].radiance, sizeof(vec3)),
+                              0);
+                    EXPECT_EQ(std::memcmp(&out[k].pdf, &expected[0].pdf, 4), 0);
+                    EXPECT_EQ(out[k].delta, expected[0].delta);
+                }
+            }
+            EXPECT_EQ(compared, 80000);
+            EXPECT_GT(sampled, compared / 4);  // most points lie in front of the light
+            EXPECT_LT(sampled, compared);      // and some behind it
+        }
+    }
+    const Scene many = many_light_scene();
+    EXPECT_FALSE(LightSampler(many, WorldSampling::Cosine).samples_one_rectangle());
+    Scene disk;
+    disk.add_material(test::lambert(0.5f));
+    disk.add_instance(disk.add_mesh(test::plane(20.0f)), mat4(1.0f));
+    Light round;
+    round.type = LightType::Area;
+    round.shape = AreaShape::Disk;
+    round.power = 100.0f;
+    round.world_from_light = glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, 2.0f));
+    disk.add_light(round);
+    World black;
+    black.strength = 0.0f;
+    disk.set_world(black);
+    disk.commit();
+    const LightSampler disk_lights(disk, WorldSampling::Cosine);
+    EXPECT_FALSE(disk_lights.samples_one_rectangle());
+    const vec3 p[4] = {vec3(0.0f)}, n[4] = {vec3(0.0f, 0.0f, 1.0f)};
+    const float us[4] = {0.5f, 0.5f, 0.5f, 0.5f};
+    const vec2 u[4] = {vec2(0.5f)};
+    LightSample out[4];
+    int written[4];
+    EXPECT_THROW(disk_lights.sample_split4(p, n, us, u, out, written), Internal);
 }
 
 }  // namespace
