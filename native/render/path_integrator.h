@@ -151,7 +151,7 @@ class PathIntegrator {
     // prepare_direct() at the first surface with its light samples already drawn by the caller:
     // samples[0, sampled) are what LightSampler::sample_split gives for the surface's position
     // and shading normal and the numbers set by set_first_light_sample (a wave's light stage,
-    // LightSampler::sample_split4). Only right after begin(), with set_first_light_sample.
+    // LightSampler::sample_split_lanes). Only right after begin(), with set_first_light_sample.
     int prepare_direct(Ray* shadows, const LightSample* samples, int sampled);
     // Whether prepare_direct() samples lights here (a surface with lobes a light sample can
     // meet); after begin().
