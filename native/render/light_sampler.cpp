@@ -1,5 +1,7 @@
 #include "render/light_sampler.h"
 
+#include <emmintrin.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -190,6 +192,17 @@ LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, boo
     portals_ = scene_portals(scene);
     tree_ = LightTree(local_bounds_);
     if (!distant_weights_.empty()) distant_ = DiscreteDistribution(distant_weights_);
+    // sample_split_lanes' case: local_probability() is 1, the tree's one leaf a rectangle.
+    const uint32_t only = tree_.only_emitter();
+    if (only != kInvalidId && distant_total_ <= 0.0f) {
+        const Emitter& emitter = emitters_[local_emitter_[only]];
+        if (emitter.kind == Kind::Light) {
+            const Light& light = scene.lights()[emitter.index];
+            if (light.type == LightType::Area && !is_round(light.shape) &&
+                is_finite(area_emission_[emitter.index].radiance))
+                one_rectangle_ = emitter.index;
+        }
+    }
 }
 
 void LightSampler::add_local(Kind kind, uint32_t index, const LightBounds& bounds) {
@@ -248,6 +261,100 @@ int LightSampler::sample_split(const vec3& p, const vec3& n, float u_select, con
     if (!sample_emitter(distant_emitter_[distant], p, n, u, out)) return 0;
     out->pdf *= (1.0f - p_local) * distant_.pdf(distant);
     return out->pdf > 0.0f && is_finite(out->radiance) ? 1 : 0;
+}
+
+// sample_split's path for one rectangle (local_probability 1, the tree's one leaf with pmf 1
+// where its importance is positive, sample_area with its half axes from area_light_point), each
+// lane the scalar operations in their order.
+void LightSampler::sample_split_lanes(size_t count, const float* x, const float* y,
+                                      const float* z, const float* u_select, const float* ux,
+                                      const float* uy, LightSample* out, int8_t* written) const {
+    if (one_rectangle_ == kInvalidId)
+        throw Internal("LightSampler::sample_split_lanes on a sampler that is not one rectangle");
+    const Light& light = scene_->lights()[one_rectangle_];
+    const AreaEmission& emission = area_emission_[one_rectangle_];
+    vec3 ex, ey;
+    area_half_axes(light, &ex, &ey);
+    const vec3 center = light.position();
+    const __m128 nx = _mm_set1_ps(emission.normal.x), ny = _mm_set1_ps(emission.normal.y),
+                 nz = _mm_set1_ps(emission.normal.z);
+    const __m128 cx = _mm_set1_ps(center.x), cy = _mm_set1_ps(center.y),
+                 cz = _mm_set1_ps(center.z);
+    const __m128 zero = _mm_setzero_ps(), two = _mm_set1_ps(2.0f), one = _mm_set1_ps(1.0f);
+    const __m128 area = _mm_set1_ps(emission.area), sign = _mm_set1_ps(-0.0f);
+    // p_local * pmf as sample_split multiplies the pdf by it: 1 * 1.
+    const __m128 selection = _mm_set1_ps(1.0f * 1.0f);
+    // area_light_point: (position + local.x ex) + local.y ey, local = 2 u - 1.
+    const auto point = [](float c, float e_x, float e_y, __m128 lx, __m128 ly) {
+        return _mm_add_ps(_mm_add_ps(_mm_set1_ps(c), _mm_mul_ps(lx, _mm_set1_ps(e_x))),
+                          _mm_mul_ps(ly, _mm_set1_ps(e_y)));
+    };
+    for (size_t j = 0; j < count; j += 4) {
+        // A short last group repeats its last lane.
+        alignas(16) float tail[6][4];
+        const float* in[6] = {x + j, y + j, z + j, ux + j, uy + j, u_select + j};
+        const size_t used = std::min<size_t>(4, count - j);
+        if (used < 4) {
+            for (int c = 0; c < 6; ++c) {
+                for (size_t k = 0; k < 4; ++k) tail[c][k] = in[c][std::min(k, used - 1)];
+                in[c] = tail[c];
+            }
+        }
+        alignas(16) float importance[4];
+        tree_.importance4(in[0], in[1], in[2], importance);
+        const __m128 px = _mm_loadu_ps(in[0]), py = _mm_loadu_ps(in[1]),
+                     pz = _mm_loadu_ps(in[2]);
+        // in_front_of_plane: glm::dot(p - center, normal) > 0.
+        const __m128 front = _mm_cmpgt_ps(
+            _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_sub_ps(px, cx), nx),
+                                  _mm_mul_ps(_mm_sub_ps(py, cy), ny)),
+                       _mm_mul_ps(_mm_sub_ps(pz, cz), nz)),
+            zero);
+        const __m128 lx = _mm_sub_ps(_mm_mul_ps(two, _mm_loadu_ps(in[3])), one);
+        const __m128 ly = _mm_sub_ps(_mm_mul_ps(two, _mm_loadu_ps(in[4])), one);
+        const __m128 ox = _mm_sub_ps(point(center.x, ex.x, ey.x, lx, ly), px);
+        const __m128 oy = _mm_sub_ps(point(center.y, ex.y, ey.y, lx, ly), py);
+        const __m128 oz = _mm_sub_ps(point(center.z, ex.z, ey.z, lx, ly), pz);
+        const __m128 distance = _mm_sqrt_ps(
+            _mm_add_ps(_mm_add_ps(_mm_mul_ps(ox, ox), _mm_mul_ps(oy, oy)), _mm_mul_ps(oz, oz)));
+        const __m128 wx = _mm_div_ps(ox, distance), wy = _mm_div_ps(oy, distance),
+                     wz = _mm_div_ps(oz, distance);
+        // -glm::dot(wi, normal): a sign flip, exact.
+        const __m128 cos_light = _mm_xor_ps(
+            _mm_add_ps(_mm_add_ps(_mm_mul_ps(wx, nx), _mm_mul_ps(wy, ny)), _mm_mul_ps(wz, nz)),
+            sign);
+        const __m128 pdf = _mm_mul_ps(
+            _mm_div_ps(_mm_mul_ps(distance, distance), _mm_mul_ps(cos_light, area)), selection);
+        // sample_area fails behind the light or where cos_light <= 0 (NaN goes on), the tree
+        // where the importance is not positive, sample_split drops a pdf that is not positive.
+        const __m128 kept = _mm_and_ps(
+            _mm_and_ps(_mm_and_ps(front, _mm_cmpnle_ps(cos_light, zero)),
+                       _mm_cmpgt_ps(_mm_load_ps(importance), zero)),
+            _mm_cmpgt_ps(pdf, zero));
+        // The tree's choice needs u_select below p_local (1): another lane is sample_split's.
+        const __m128 tree = _mm_cmplt_ps(_mm_loadu_ps(in[5]), one);
+        alignas(16) float sx[4], sy[4], sz[4], sd[4], spdf[4];
+        _mm_store_ps(sx, wx);
+        _mm_store_ps(sy, wy);
+        _mm_store_ps(sz, wz);
+        _mm_store_ps(sd, distance);
+        _mm_store_ps(spdf, pdf);
+        const int kept_mask = _mm_movemask_ps(kept), tree_mask = _mm_movemask_ps(tree);
+        for (size_t k = 0; k < used; ++k) {
+            if (((tree_mask >> k) & 1) == 0) {
+                written[j + k] = -1;
+                continue;
+            }
+            written[j + k] = int8_t((kept_mask >> k) & 1);
+            if (written[j + k] == 0) continue;
+            LightSample& sample = out[j + k];
+            sample.wi = vec3(sx[k], sy[k], sz[k]);
+            sample.distance = sd[k];
+            sample.radiance = emission.radiance;
+            sample.pdf = spdf[k];
+            sample.delta = false;
+        }
+    }
 }
 
 bool LightSampler::sample_emitter(uint32_t chosen, const vec3& p, const vec3& n, const vec2& u,

@@ -1,5 +1,7 @@
 #include "render/light_tree.h"
 
+#include <emmintrin.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -168,6 +170,67 @@ void LightTree::child_probabilities(uint32_t index, const vec3& p, float* left,
 
 float LightTree::importance(const vec3& p) const {
     return empty() ? 0.0f : node_importance(nodes_[0], p);
+}
+
+uint32_t LightTree::only_emitter() const {
+    return nodes_.size() == 1 ? nodes_[0].emitter : kInvalidId;
+}
+
+// node_importance(nodes_[0], p) on four lanes: each lane runs its operations in its order
+// (no FMA; std::max(a, b) is `a < b ? b : a` and std::clamp std::min(std::max(v, lo), hi),
+// which maxps / minps give with their operands in this order, NaN included), and the branches
+// become selections.
+void LightTree::importance4(const float x[4], const float y[4], const float z[4],
+                            float out[4]) const {
+    if (empty()) {
+        for (int k = 0; k < 4; ++k) out[k] = 0.0f;
+        return;
+    }
+    const Node& node = nodes_[0];
+    const LightBounds& b = node.bounds;
+    const __m128 tx = _mm_sub_ps(_mm_loadu_ps(x), _mm_set1_ps(node.centre.x));
+    const __m128 ty = _mm_sub_ps(_mm_loadu_ps(y), _mm_set1_ps(node.centre.y));
+    const __m128 tz = _mm_sub_ps(_mm_loadu_ps(z), _mm_set1_ps(node.centre.z));
+    const __m128 distance_squared = _mm_add_ps(
+        _mm_add_ps(_mm_mul_ps(tx, tx), _mm_mul_ps(ty, ty)), _mm_mul_ps(tz, tz));
+    const float radius_squared = node.radius * node.radius;
+    const __m128 inside = _mm_cmple_ps(distance_squared, _mm_set1_ps(radius_squared));
+    const __m128 inside_value =
+        _mm_set1_ps(b.energy / std::max(radius_squared, kMinDistanceSquared));
+    const __m128 one = _mm_set1_ps(1.0f), zero = _mm_setzero_ps();
+    const __m128 distance = _mm_sqrt_ps(distance_squared);
+    // glm::dot(b.axis, to_p): (ax tx + ay ty) + az tz.
+    const __m128 axis_dot = _mm_add_ps(
+        _mm_add_ps(_mm_mul_ps(_mm_set1_ps(b.axis.x), tx), _mm_mul_ps(_mm_set1_ps(b.axis.y), ty)),
+        _mm_mul_ps(_mm_set1_ps(b.axis.z), tz));
+    const __m128 cos_theta = _mm_min_ps(
+        one, _mm_max_ps(_mm_set1_ps(-1.0f), _mm_div_ps(axis_dot, distance)));
+    const __m128 sin_theta =
+        _mm_sqrt_ps(_mm_max_ps(_mm_sub_ps(one, _mm_mul_ps(cos_theta, cos_theta)), zero));
+    const __m128 sin_theta_u = _mm_div_ps(_mm_set1_ps(node.radius), distance);
+    const __m128 cos_theta_u =
+        _mm_sqrt_ps(_mm_max_ps(_mm_sub_ps(one, _mm_mul_ps(sin_theta_u, sin_theta_u)), zero));
+    const auto select = [](__m128 mask, __m128 a, __m128 b_) {
+        return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b_));
+    };
+    // cos_sin_of_clamped_difference, twice.
+    const __m128 cos_o = _mm_set1_ps(node.cos_theta_o), sin_o = _mm_set1_ps(node.sin_theta_o);
+    const __m128 within_o = _mm_cmpge_ps(cos_theta, cos_o);
+    const __m128 cos_x =
+        select(within_o, one,
+               _mm_add_ps(_mm_mul_ps(cos_theta, cos_o), _mm_mul_ps(sin_theta, sin_o)));
+    const __m128 sin_x =
+        select(within_o, zero,
+               _mm_sub_ps(_mm_mul_ps(sin_theta, cos_o), _mm_mul_ps(cos_theta, sin_o)));
+    const __m128 within_u = _mm_cmpge_ps(cos_x, cos_theta_u);
+    const __m128 cos_prime =
+        select(within_u, one,
+               _mm_add_ps(_mm_mul_ps(cos_x, cos_theta_u), _mm_mul_ps(sin_x, sin_theta_u)));
+    const __m128 beyond = _mm_cmplt_ps(cos_prime, _mm_set1_ps(node.cos_theta_e));
+    const __m128 value =
+        _mm_div_ps(_mm_mul_ps(_mm_set1_ps(b.energy), cos_prime),
+                   _mm_max_ps(_mm_set1_ps(kMinDistanceSquared), distance_squared));
+    _mm_storeu_ps(out, select(inside, inside_value, select(beyond, zero, value)));
 }
 
 bool LightTree::sample(const vec3& p, float u, uint32_t* emitter, float* pmf) const {

@@ -66,6 +66,12 @@ class LightTree {
     bool empty() const { return nodes_.empty(); }
     // The root's importance at p: how much light the whole tree may give p (0: none can).
     float importance(const vec3& p) const;
+    // importance() at four points at once, point k = (x[k], y[k], z[k]), bit for bit: the same
+    // operations in the same order on four SSE2 lanes (a wave's light stage).
+    void importance4(const float x[4], const float y[4], const float z[4], float out[4]) const;
+    // The tree's one emitter when it has no other (a room lit by one lamp), else kInvalidId:
+    // sample_split() then returns it with pmf 1 wherever importance() is positive.
+    uint32_t only_emitter() const;
     // Chooses an emitter for p with u in [0, 1): its index and probability. False when no
     // emitter can light p.
     bool sample(const vec3& p, float u, uint32_t* emitter, float* pmf) const;

@@ -443,9 +443,24 @@ int PathIntegrator::prepare_direct(Ray* shadows) {
     const vec2 u(u_x, u_y);
     const int sampled = lights_.sample_split(shading.position, shading.frame.z, u_select, u,
                                              samples.value);
+    return direct_from_samples(shadows, samples.value, sampled);
+}
+
+int PathIntegrator::prepare_direct(Ray* shadows, const LightSample* samples, int sampled) {
+    if (vertex_ != 0 || !first_light_sample_)
+        throw Internal("PathIntegrator::prepare_direct with samples: only at the first surface "
+                       "of a path with set_first_light_sample");
+    if (!shading_.value.bsdf.has_smooth_lobes()) return 0;
+    rng_.advance(3);  // as prepare_direct(shadows): the numbers the stratified ones replace
+    return direct_from_samples(shadows, samples, sampled);
+}
+
+// The BSDF toward each light sample and the shadow rays of those it lets through.
+int PathIntegrator::direct_from_samples(Ray* shadows, const LightSample* samples, int sampled) {
+    const Shading& shading = shading_.value;
     int count = 0;
     for (int i = 0; i < sampled; ++i) {
-        const LightSample& ls = samples.value[i];
+        const LightSample& ls = samples[i];
         const vec3 wi = shading.frame.to_local(ls.wi);
         const bool geometric_above = glm::dot(ls.wi, shading.geometric_normal) > 0.0f;
         if (geometric_above != (wi.z > 0.0f)) continue;  // shading and geometric normals disagree

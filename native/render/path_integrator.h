@@ -148,6 +148,14 @@ class PathIntegrator {
     // contributions wait on the shadow rays written to shadows[0, count) (room for
     // kMaxLightSplits).
     int prepare_direct(Ray* shadows);
+    // prepare_direct() at the first surface with its light samples already drawn by the caller:
+    // samples[0, sampled) are what LightSampler::sample_split gives for the surface's position
+    // and shading normal and the numbers set by set_first_light_sample (a wave's light stage,
+    // LightSampler::sample_split_lanes). Only right after begin(), with set_first_light_sample.
+    int prepare_direct(Ray* shadows, const LightSample* samples, int sampled);
+    // Whether prepare_direct() samples lights here (a surface with lobes a light sample can
+    // meet); after begin().
+    bool samples_lights() const { return shading_.value.bsdf.has_smooth_lobes(); }
     // Adds waiting contribution k; call it after prepare_direct() and only when shadow ray k
     // was not occluded, in increasing k.
     void add_direct(int k);
@@ -255,6 +263,7 @@ class PathIntegrator {
     void record_first_hit(const Shading& shading, const Ray& ray, const Hit& hit);
     void record_denoising_features(const Shading& shading);
     void sample_direct();
+    int direct_from_samples(Ray* shadows, const LightSample* samples, int sampled);
     void add_field(const Shading& shading);
     // The field lobes of the current surface (render/bsdf.h): what field light is weighted by.
     struct FieldLobes {

@@ -82,6 +82,26 @@ PreviewTimings split_wall_time(double wall, const std::vector<StageSeconds>& bus
 // A wave's buffers, sized once (each thread keeps its wave: WaveLease): each PathIntegrator
 // refers to its rng and values entries, so these vectors never reallocate while paths are in
 // flight.
+// The first surfaces of a wave that sample lights, one array per coordinate
+// (LightSampler::sample_split_lanes), and what the light stage gave them.
+struct LightLanes {
+    std::vector<uint32_t> path;  // the wave's path
+    std::vector<float> x, y, z, u_select, ux, uy;
+    std::vector<LightSample> samples;
+    std::vector<int8_t> written;
+
+    void reserve(size_t capacity) {
+        for (std::vector<float>* v : {&x, &y, &z, &u_select, &ux, &uy}) v->reserve(capacity);
+        path.reserve(capacity);
+        samples.reserve(capacity);
+        written.reserve(capacity);
+    }
+    void clear() {
+        for (std::vector<float>* v : {&x, &y, &z, &u_select, &ux, &uy}) v->clear();
+        path.clear();
+    }
+};
+
 struct Wave {
     explicit Wave(size_t capacity)
         : x(capacity), y(capacity), pixel(capacity), rngs(capacity), samples(capacity),
@@ -93,6 +113,7 @@ struct Wave {
         shadow_paths.reserve(capacity);
         shadow_slots.reserve(capacity);
         occluded.reserve(capacity);
+        light_lanes.reserve(capacity);
     }
     size_t capacity() const { return x.size(); }
 
@@ -122,6 +143,7 @@ struct Wave {
     std::vector<uint32_t> shadow_paths;  // the path each shadow ray belongs to
     std::vector<uint8_t> shadow_slots;   // and which of its light samples (add_direct's k)
     std::vector<uint8_t> occluded;
+    LightLanes light_lanes;  // the light stage's first surfaces (trace_direct)
 };
 
 // The calling thread's wave, at `capacity` pixels, empty. Each thread keeps one between work
@@ -324,14 +346,48 @@ class FrameWork {
         wave.shadow_paths.clear();
         wave.shadow_slots.clear();
         Ray shadows[kMaxLightSplits];
-        for (size_t i = 0; i < wave.count; ++i) {
-            if (!wave.live[i]) continue;
-            const int count = wave.paths[i]->prepare_direct(shadows);
+        const auto add_shadows = [&](size_t i, int count) {
             for (int k = 0; k < count; ++k) {
                 wave.shadow_rays.push_back(shadows[k]);
                 wave.shadow_paths.push_back(uint32_t(i));
                 wave.shadow_slots.push_back(uint8_t(k));
             }
+        };
+        if (lights_.samples_one_rectangle()) {
+            // The light stage: the light samples of the wave's first surfaces, four at a time
+            // (LightSampler::sample_split_lanes, the same samples as each path's own), then
+            // each path's BSDF toward its sample. The shadow rays come in the same order.
+            LightLanes& lanes = wave.light_lanes;
+            lanes.clear();
+            for (size_t i = 0; i < wave.count; ++i) {
+                if (!wave.live[i] || !wave.paths[i]->samples_lights()) continue;
+                const vec3& p = wave.paths[i]->first_surface().position;
+                const PixelSample& sample = wave.samples[i];
+                lanes.path.push_back(uint32_t(i));
+                lanes.x.push_back(p.x);
+                lanes.y.push_back(p.y);
+                lanes.z.push_back(p.z);
+                lanes.u_select.push_back(sample.u_select);
+                lanes.ux.push_back(sample.u_light.x);
+                lanes.uy.push_back(sample.u_light.y);
+            }
+            const size_t count = lanes.path.size();
+            lanes.samples.resize(count);
+            lanes.written.resize(count);
+            lights_.sample_split_lanes(count, lanes.x.data(), lanes.y.data(), lanes.z.data(),
+                                       lanes.u_select.data(), lanes.ux.data(), lanes.uy.data(),
+                                       lanes.samples.data(), lanes.written.data());
+            for (size_t j = 0; j < count; ++j) {
+                PathIntegrator& path = *wave.paths[lanes.path[j]];
+                add_shadows(lanes.path[j],
+                            lanes.written[j] < 0
+                                ? path.prepare_direct(shadows)
+                                : path.prepare_direct(shadows, &lanes.samples[j],
+                                                      lanes.written[j]));
+            }
+        } else {
+            for (size_t i = 0; i < wave.count; ++i)
+                if (wave.live[i]) add_shadows(i, wave.paths[i]->prepare_direct(shadows));
         }
         if (wave.shadow_rays.empty()) return;
         scene_.occluded(wave.shadow_rays, wave.occluded, nullptr, RayCoherence::Coherent);

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -406,6 +407,141 @@ TEST(LightSampler, NextEventEstimationWithSplitsIsUnbiased) {
     EXPECT_THROW(lights.sample(p, n, 0.5f, vec2(0.5f), &one), Internal);
     EXPECT_THROW(LightSampler(scene, WorldSampling::Cosine, true, kMaxLightSplits + 1),
                  InvalidArgument);
+}
+
+// importance4 runs importance() on four SSE2 lanes: the same bits at every point, inside a
+// node's box, behind a one-sided emitter, outside a spot's cone, far away and at NaN.
+TEST(LightTree, Importance4IsImportanceBitForBit) {
+    LightBounds spot = point_bounds(vec3(1.0f, 2.0f, 3.0f), 5.0f);
+    spot.axis = glm::normalize(vec3(0.2f, -0.3f, -1.0f));
+    spot.theta_o = 0.4f;
+    spot.theta_e = 0.3f;
+    LightBounds panel;
+    panel.bounds.extend(vec3(-0.5f, -0.5f, 2.0f));
+    panel.bounds.extend(vec3(0.5f, 0.5f, 2.0f));
+    panel.energy = 40.0f;
+    panel.axis = vec3(0.0f, 0.0f, -1.0f);
+    panel.theta_o = 0.0f;
+    panel.theta_e = kPi / 2.0f;
+    const std::vector<LightTree> trees = {
+        LightTree({panel}), LightTree({spot}),
+        LightTree({panel, spot, point_bounds(vec3(-3.0f, 0.0f, 1.0f), 2.0f)})};
+    Pcg32 rng(7, 1);
+    int compared = 0;
+    for (const LightTree& tree : trees) {
+        for (int n = 0; n < 20000; ++n) {
+            float x[4], y[4], z[4], out[4];
+            for (int k = 0; k < 4; ++k) {
+                const float scale = (n % 3 == 0) ? 0.6f : 6.0f;  // inside the boxes, or around
+                x[k] = (rng.next_float() * 2.0f - 1.0f) * scale;
+                y[k] = (rng.next_float() * 2.0f - 1.0f) * scale;
+                z[k] = 2.0f + (rng.next_float() * 2.0f - 1.0f) * scale;
+            }
+            if (n == 0) x[1] = std::nanf("");
+            if (n == 1) z[2] = 2.0f;  // on the panel's plane
+            tree.importance4(x, y, z, out);
+            for (int k = 0; k < 4; ++k) {
+                const float expected = tree.importance(vec3(x[k], y[k], z[k]));
+                ASSERT_EQ(std::memcmp(&out[k], &expected, sizeof(float)), 0)
+                    << out[k] << " vs " << expected << " at (" << x[k] << ", " << y[k] << ", "
+                    << z[k] << ")";
+                ++compared;
+            }
+        }
+    }
+    EXPECT_EQ(compared, 3 * 20000 * 4);
+}
+
+// A room lit by one rectangle: sample_split_lanes gives sample_split's samples, bit for bit, at
+// points in front of the light, behind it, beside it and on its plane (a count that leaves a
+// short last group); a lane whose u_select is 1 is left to sample_split; a sampler with another
+// emitter (or a disk) does not take that path.
+TEST(LightSampler, SampleSplitLanesIsSampleSplitBitForBit) {
+    for (const AreaShape shape : {AreaShape::Square, AreaShape::Rectangle}) {
+        Scene scene;
+        scene.add_material(test::lambert(0.5f));
+        scene.add_instance(scene.add_mesh(test::plane(20.0f)), mat4(1.0f));
+        Light area;
+        area.type = LightType::Area;
+        area.shape = shape;
+        area.size_x = 0.7f;
+        area.size_y = 0.3f;
+        area.power = 150.0f;
+        area.world_from_light =
+            glm::rotate(glm::translate(mat4(1.0f), vec3(0.3f, -0.2f, 2.0f)), 0.5f,
+                        glm::normalize(vec3(1.0f, 0.4f, 0.2f)));
+        scene.add_light(area);
+        World world;
+        world.strength = 0.0f;
+        scene.set_world(world);
+        scene.commit();
+        for (const int splits : {1, 4}) {
+            const LightSampler lights(scene, WorldSampling::Cosine, true, splits);
+            ASSERT_TRUE(lights.samples_one_rectangle());
+            Pcg32 rng(11, uint64_t(splits));
+            constexpr size_t kCount = 80003;
+            std::vector<float> x(kCount), y(kCount), z(kCount), u_select(kCount), ux(kCount),
+                uy(kCount);
+            for (size_t i = 0; i < kCount; ++i) {
+                x[i] = rng.next_float() * 6.0f - 3.0f;
+                y[i] = rng.next_float() * 6.0f - 3.0f;
+                z[i] = rng.next_float() * 4.0f;
+                u_select[i] = rng.next_float();
+                ux[i] = rng.next_float();
+                uy[i] = rng.next_float();
+            }
+            x[3] = area.position().x;  // on the light
+            y[3] = area.position().y;
+            z[3] = area.position().z;
+            u_select[5] = 1.0f;  // not the tree's
+            std::vector<LightSample> out(kCount);
+            std::vector<int8_t> written(kCount);
+            lights.sample_split_lanes(kCount, x.data(), y.data(), z.data(), u_select.data(),
+                                      ux.data(), uy.data(), out.data(), written.data());
+            EXPECT_EQ(written[5], -1);
+            size_t sampled = 0;
+            for (size_t i = 0; i < kCount; ++i) {
+                if (i == 5) continue;
+                LightSample expected[kMaxLightSplits];
+                const vec3 p(x[i], y[i], z[i]);
+                const int count = lights.sample_split(p, vec3(0.0f, 0.0f, 1.0f), u_select[i],
+                                                      vec2(ux[i], uy[i]), expected);
+                ASSERT_EQ(int(written[i]), count) << "at point " << i;
+                if (count == 0) continue;
+                ++sampled;
+                EXPECT_EQ(std::memcmp(&out[i].wi, &expected[0].wi, sizeof(vec3)), 0);
+                EXPECT_EQ(std::memcmp(&out[i].distance, &expected[0].distance, 4), 0);
+                EXPECT_EQ(std::memcmp(&out[i].radiance, &expected[0].radiance, sizeof(vec3)), 0);
+                EXPECT_EQ(std::memcmp(&out[i].pdf, &expected[0].pdf, 4), 0);
+                EXPECT_EQ(out[i].delta, expected[0].delta);
+            }
+            EXPECT_GT(sampled, kCount / 4);  // most points lie in front of the light
+            EXPECT_LT(sampled, kCount - 1);  // and some behind it
+        }
+    }
+    const Scene many = many_light_scene();
+    EXPECT_FALSE(LightSampler(many, WorldSampling::Cosine).samples_one_rectangle());
+    Scene disk;
+    disk.add_material(test::lambert(0.5f));
+    disk.add_instance(disk.add_mesh(test::plane(20.0f)), mat4(1.0f));
+    Light round;
+    round.type = LightType::Area;
+    round.shape = AreaShape::Disk;
+    round.power = 100.0f;
+    round.world_from_light = glm::translate(mat4(1.0f), vec3(0.0f, 0.0f, 2.0f));
+    disk.add_light(round);
+    World black;
+    black.strength = 0.0f;
+    disk.set_world(black);
+    disk.commit();
+    const LightSampler disk_lights(disk, WorldSampling::Cosine);
+    EXPECT_FALSE(disk_lights.samples_one_rectangle());
+    const float half = 0.5f;
+    LightSample out;
+    int8_t written;
+    EXPECT_THROW(disk_lights.sample_split_lanes(1, &half, &half, &half, &half, &half, &half,
+                                                &out, &written),
+                 Internal);
 }
 
 }  // namespace
