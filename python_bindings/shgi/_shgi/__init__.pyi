@@ -2687,7 +2687,7 @@ class ProbeGridSettings:
     @property
     def normal_bias(self) -> float:
         """
-        Probe spacings along the shading normal (0.25; EEVEE's Bias).
+        Probe spacings along the surface's interpolated normal (0.25; EEVEE's Bias).
         """
     @normal_bias.setter
     def normal_bias(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
@@ -2759,7 +2759,7 @@ class ProbeGridSettings:
     @property
     def visibility_blur(self) -> float:
         """
-        Angular radius (rad) of the distance filter (0.15; EEVEE's Blur).
+        Angular radius (rad) of the distance filter (0.10; EEVEE's Blur).
         """
     @visibility_blur.setter
     def visibility_blur(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
@@ -3033,7 +3033,7 @@ class PropagationSettings:
     @property
     def normal_offset(self) -> float:
         """
-        Cells along the shading normal before the lookup, against self-lighting and leaks through walls (1.0).
+        Cells along the surface's interpolated normal before the lookup, against self-lighting and leaks through walls (1.0).
         """
     @normal_offset.setter
     def normal_offset(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
