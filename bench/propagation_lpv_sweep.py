@@ -75,6 +75,13 @@ CONFIGS = {
                              clamp_per_transfer=True),
     # The shipped defaults with clamp_per_transfer alone (issue 51's target under the defaults).
     "per_transfer": dict(clamp_per_transfer=True),
+    # Both with 4x the photons: the two rooms' dim room, all the camera sees, gets 1% of them
+    # (its lamp's share of the flux), and its VPLs' noise is most of the orders' difference
+    # there (docs/methods.md, "The two rooms' VPLs").
+    "photons_400k": dict(photons=400000),
+    "per_transfer_400k": dict(clamp_per_transfer=True, photons=400000),
+    "photons_1600k": dict(photons=1600000),
+    "per_transfer_1600k": dict(clamp_per_transfer=True, photons=1600000),
     # The fix with every transfer clamped then rescaled (LobeClamp::Rescaled, the seed's; the
     # linear transfers carry the windowed beams' negative lobes, which darken the sun room's
     # floor around its sun patch; docs/methods.md, "The sun room's floor").

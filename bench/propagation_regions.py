@@ -3,7 +3,9 @@
 of one scene's image (docs/methods.md, "The sun room's floor"): the DiffInd x DiffCol mean over
 the path tracer's in the whole image, on the floors out of the direct light (normals up, the
 table's top among them), on the patch of the brightest direct light (more than half the image's
-brightest DiffDir), on the walls out of it, and on the ceiling; with the Combined PSNR. With
+brightest DiffDir), on the walls out of it, and on the ceiling; with the Combined PSNR and, in
+brackets, each region's share of the squared error of the displayed image that PSNR reads (the
+regions overlap at none but leave out the pixels of other normals: edges, slanted faces). With
 --one-bounce: the VPLs of the first hits only (vpl_bounces 1, no glossy VPLs) against the path
 tracer with one diffuse bounce and no glossy one (1024 spp, cached beside the others).
 
@@ -20,7 +22,7 @@ import pathlib
 import numpy as np
 
 import shgi
-from shgi.metrics import psnr
+from shgi.metrics import auto_exposure, display, psnr
 from propagation_lpv_sweep import CONFIGS, SCENES, reference
 
 
@@ -68,10 +70,14 @@ def main():
             preview = {key: np.asarray(preview[key]) for key in
                        ("Combined", "DiffInd", "DiffCol", "DiffDir", "Normal")}
             ind = (preview["DiffInd"][..., :3] * preview["DiffCol"][..., :3]).mean(-1)
+            exposure = auto_exposure(ref["Combined"])
+            shown = (display(preview["Combined"], exposure)
+                     - display(ref["Combined"], exposure)) ** 2
             row = (f"{config:<22} order {order}: "
                    f"{psnr(ref['Combined'], preview['Combined']):5.2f} dB;")
             for label, mask in regions(preview).items():
-                row += f"  {label} {ind[mask].mean() / exact[mask].mean():.3f}"
+                row += (f"  {label} {ind[mask].mean() / exact[mask].mean():.3f}"
+                        f" [{shown[mask].sum() / shown.sum():.2f}]")
             print(row, flush=True)
 
 
