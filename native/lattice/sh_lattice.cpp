@@ -4,6 +4,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include <glm/gtx/component_wise.hpp>
@@ -386,15 +387,85 @@ constexpr std::array<BlockDigits, 27> kBlockDigits = [] {
     return digits;
 }();
 
-// visit(cell index, w(d) × facing(cell)) for the cells of the 3x3x3 block around `centre` (the
-// cell holding `cells`, at most one cell outside the lattice) that `mask`, the centre's block
-// mask, marks as lattice cells with surface, whose centres are closer than kCubicRadiusCells and
-// that face the normal. Cells without surface would get D_c(n) = 0 and be left out anyway; not
-// visiting them saves a load and a branch each, which goes both ways at random: a point on a
-// wall has surface in about a third of its block.
+// D_c(n) of the cells of one 3x3x3 block for one normal, per block bit k, computed as the walk
+// needs them and kept for the next sample of the same lattice surfaces, block and normal (the
+// bits of n), with the list of the cells of the last block mask walked that face n: the pixels
+// of a wall read the same block with the same normal for several lookups in a row, and finding
+// those cells (the block bit's cell index and D_c(n), two loads and a dot product per bin) was
+// half of a cubic sample's cell walk. Each thread has its own (sample_cubic), so lookups stay
+// independent of the thread count; the values are those facing(cell) gives, visited in the same
+// order, so results are bit for bit those without it.
+struct FacingMemo {
+    uint64_t surfaces_id = 0;  // ShLattice::surfaces_id_; 0 holds nothing
+    size_t block = 0;
+    std::array<uint32_t, 3> normal{};  // the bits of n
+    uint32_t known = 0;     // block bits whose D_c(n) is in density
+    uint32_t positive = 0;  // block bits whose D_c(n) > 0
+    std::array<float, 27> density;
+    // The cells of block mask list_mask that face n, in block-bit order (list_count of them; a
+    // list_mask of 0 holds none).
+    uint32_t list_mask = 0;
+    int list_count = 0;
+    std::array<BlockDigits, 27> list_digits;
+    std::array<size_t, 27> list_cell;
+    std::array<float, 27> list_density;
+
+    // Keyed on (surfaces, block, n): the entries of another key are dropped.
+    void key(uint64_t surfaces, size_t block_index, const vec3& n) {
+        std::array<uint32_t, 3> bits;
+        std::memcpy(bits.data(), &n[0], sizeof(bits));
+        if (surfaces == surfaces_id && block_index == block && bits == normal) return;
+        surfaces_id = surfaces;
+        block = block_index;
+        normal = bits;
+        known = positive = list_mask = 0;
+    }
+};
+
+FacingMemo& thread_facing_memo() {
+    static thread_local FacingMemo memo;
+    return memo;
+}
+
+// visit(cell index, w(d) × D_c(n)) for the cells of the 3x3x3 block around `centre` (the cell
+// holding `cells`, at most one cell outside the lattice) that `mask`, the centre's block mask,
+// marks as lattice cells with surface, that face the normal (D_c(n) > 0, from `memo`, which
+// facing(cell) fills for the bits of `mask` it lacks) and whose centres are closer than
+// kCubicRadiusCells, in block-bit order. Cells without surface would get D_c(n) = 0 and be left
+// out anyway; not visiting them saves a load and a branch each, which goes both ways at random: a
+// point on a wall has surface in about a third of its block.
 template <typename Facing, typename Visit>
 void for_each_cubic_cell(const vec3& cells, const ivec3& centre, uint32_t mask, const ivec3& dims,
-                         Facing&& facing, Visit&& visit) {
+                         FacingMemo& memo, Facing&& facing, Visit&& visit) {
+    if (mask == 0) return;
+    if (mask != memo.list_mask) {
+        // Signed: the centre may lie just outside the lattice; the cells the mask marks lie
+        // inside.
+        const ptrdiff_t row = dims.x, slice = ptrdiff_t(dims.x) * ptrdiff_t(dims.y);
+        const ptrdiff_t centre_cell = centre.x + row * centre.y + slice * centre.z;
+        const auto cell_of_bit = [&](int k) {
+            const BlockDigits digits = kBlockDigits[size_t(k)];
+            return size_t(centre_cell + kBlockOffset[digits.x] + kBlockOffset[digits.y] * row +
+                          kBlockOffset[digits.z] * slice);
+        };
+        for (uint32_t missing = mask & ~memo.known; missing != 0; missing &= missing - 1) {
+            const int k = __builtin_ctz(missing);
+            const float density = facing(cell_of_bit(k));
+            memo.density[size_t(k)] = density;
+            if (density > 0.0f) memo.positive |= uint32_t(1) << k;
+        }
+        memo.known |= mask;
+        memo.list_mask = mask;
+        memo.list_count = 0;
+        for (uint32_t facing_n = mask & memo.positive; facing_n != 0; facing_n &= facing_n - 1) {
+            const int k = __builtin_ctz(facing_n);
+            const size_t at = size_t(memo.list_count++);
+            memo.list_digits[at] = kBlockDigits[size_t(k)];
+            memo.list_cell[at] = cell_of_bit(k);
+            memo.list_density[at] = memo.density[size_t(k)];
+        }
+    }
+    if (memo.list_count == 0) return;
     constexpr float r2 = kCubicRadiusCells * kCubicRadiusCells;
     float d2_along[3][3];  // [axis][offset + 1]: squared distance to that row's centres
     for (int a = 0; a < 3; ++a)
@@ -402,22 +473,17 @@ void for_each_cubic_cell(const vec3& cells, const ivec3& centre, uint32_t mask, 
             const float d = cells[a] - (float(centre[a] + kBlockOffset[i]) + 0.5f);
             d2_along[a][i] = d * d;
         }
-    // Signed: the centre may lie just outside the lattice; the cells the mask marks lie inside.
-    const ptrdiff_t row = dims.x, slice = ptrdiff_t(dims.x) * ptrdiff_t(dims.y);
-    const ptrdiff_t centre_cell = centre.x + row * centre.y + slice * centre.z;
-    while (mask != 0) {
-        const int k = __builtin_ctz(mask);
-        mask &= mask - 1;
-        const BlockDigits digits = kBlockDigits[size_t(k)];
-        const int ix = digits.x, iy = digits.y, iz = digits.z;
-        const float d2 = d2_along[0][ix] + (d2_along[1][iy] + d2_along[2][iz]);
+    for (int i = 0; i < memo.list_count; ++i) {
+        const BlockDigits digits = memo.list_digits[size_t(i)];
+        const float d2 = d2_along[0][digits.x] + (d2_along[1][digits.y] + d2_along[2][digits.z]);
         if (d2 >= r2) continue;
-        const size_t cell = size_t(centre_cell + kBlockOffset[ix] + kBlockOffset[iy] * row +
-                                   kBlockOffset[iz] * slice);
-        const float density = facing(cell);
-        if (density > 0.0f) visit(cell, cubic_falloff(std::sqrt(d2)) * density);
+        visit(memo.list_cell[size_t(i)],
+              cubic_falloff(std::sqrt(d2)) * memo.list_density[size_t(i)]);
     }
 }
+
+// The process-wide source of ShLattice::surfaces_id_ (0 is no lattice's).
+std::atomic<uint64_t> next_surfaces_id{1};
 
 // out[c] = in[c - 1] | in[c] | in[c + 1] along `axis` (cells outside the lattice count as 0).
 void dilate_along(const std::vector<uint8_t>& in, const ivec3& dims, int axis,
@@ -512,6 +578,7 @@ void ShLattice::allocate(const std::string& what) {
     surface_near_.assign(size_t(dims_.x + 2) * size_t(dims_.y + 2) * size_t(dims_.z + 2), 0u);
     visible_near_.assign(surface_near_.size(), kFullBlock);
     radiance_near_.assign(cells, 0);
+    renew_surfaces_id();
 }
 
 ivec3 ShLattice::cell_of(const vec3& p) const {
@@ -653,8 +720,10 @@ void ShLattice::measure_surfaces(const Scene& scene, Progress* progress, bool vi
         surfaces_ = std::move(previous_surfaces);
         surface_near_ = std::move(previous_near);
         visible_near_ = std::move(previous_visible);
+        renew_surfaces_id();
         throw;
     }
+    renew_surfaces_id();
     if (progress) progress->set_fraction(1.0f);
 }
 
@@ -759,9 +828,11 @@ uint64_t ShLattice::inject(const std::vector<Photon>& photons, float scale, Prog
             progress);
     } catch (const Cancelled&) {
         update_radiance_near();  // some cells already hold their photons
+        renew_surfaces_id();     // and have marked their sides
         throw;
     }
     update_radiance_near();
+    renew_surfaces_id();  // the sides the photons arrived on
     return sorted.order.size();
 }
 
@@ -793,6 +864,7 @@ void ShLattice::clear() {
     std::fill(coeffs_.begin(), coeffs_.end(), 0.0f);
     std::fill(radiance_near_.begin(), radiance_near_.end(), uint8_t(0));
     for (CellSurface& surface : surfaces_) surface.receiving = 0;
+    renew_surfaces_id();
 }
 
 void ShLattice::scale(float factor) {
@@ -947,11 +1019,15 @@ ShRgb ShLattice::sample_cubic(const vec3& p, const vec3& n, float normal_offset)
         return zero_radiance(order_);  // the block holds no lattice cell
     const size_t block = padded_index(centre);
     const uint32_t near = surface_near_[block];
+    FacingMemo& memo = thread_facing_memo();
+    memo.key(surfaces_id_, block, n);
     return blend(n, near, near & visible_near_[block],
                  [&](uint32_t mask, auto&& facing, auto&& visit) {
-                     for_each_cubic_cell(cells, centre, mask, dims_, facing, visit);
+                     for_each_cubic_cell(cells, centre, mask, dims_, memo, facing, visit);
                  });
 }
+
+void ShLattice::renew_surfaces_id() { surfaces_id_ = next_surfaces_id.fetch_add(1); }
 
 size_t ShLattice::padded_index(const ivec3& cell) const {
     const ivec3 at = cell + 1;
@@ -1012,6 +1088,7 @@ ShLattice ShLattice::read(BinaryReader& in, bool with_visibility) {
         return IoError(format_message(in.kind(), " \"", in.path(), "\": ", problem));
     };
     ShLattice lattice;
+    lattice.renew_surfaces_id();
     lattice.order_ = in.get<int32_t>("a lattice header");
     lattice.dims_ = in.get<ivec3>("a lattice header");
     lattice.origin_ = in.get<vec3>("a lattice header");

@@ -232,6 +232,8 @@ class ShLattice {
     // D_c(n): those of block mask `seen`, or of `near` when none of those faces n.
     template <typename ForEachCell>
     ShRgb blend(const vec3& n, uint32_t near, uint32_t seen, ForEachCell&& for_each_cell) const;
+    // A new surfaces_id_, after anything that changes the cells or their surfaces.
+    void renew_surfaces_id();
     // Recomputes visible_near_ from surface_near_ and the surfaces' anchors. Cancellable;
     // reports progress from `reported` to `span` units (measure_surfaces' second half).
     void update_visible_near(const Scene& scene, const std::vector<vec3>& anchors,
@@ -267,6 +269,11 @@ class ShLattice {
     // of them are zero, so that samples there return zero at once (a caustic lattice away from
     // its caustics). Kept by every operation that changes coefficients.
     std::vector<uint8_t> radiance_near_;
+    // Names the cells' surfaces (with their receiving sides) and the grid: renewed from a
+    // process-wide counter by every change to them, kept by copies (which hold the same
+    // surfaces), 0 for a default lattice. sample_cubic's per-thread memo of D_c(n) over a block
+    // is keyed on it, so that a memo never outlives the surfaces it was computed from.
+    uint64_t surfaces_id_ = 0;
 };
 
 }  // namespace shgi

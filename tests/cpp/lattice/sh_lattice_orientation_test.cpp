@@ -180,6 +180,54 @@ TEST(ShLatticeOrientation, SamplingWeighsOnlySidesThatFaceTheNormal) {
     EXPECT_EQ(lattice.sample_cubic(o + vec3(s), vec3(1, 0, 0), 0.0f)[0], vec3(0.0f));
 }
 
+// sample_cubic keeps each thread's last block's D_c(n) for the next sample with the same normal
+// (lattice/sh_lattice.cpp, FacingMemo): a sample right after the sides change (inject, clear),
+// or of a copy holding the old sides, reads the sides it has, and a sample from the memo is the
+// same bits as one that computes D_c(n) afresh.
+TEST(ShLatticeOrientation, CubicSamplesFollowTheSidesAsTheyChange) {
+    ShLattice lattice(Bounds3{vec3(0.0f), vec3(2.0f)}, 2, 1);
+    const float s = lattice.cell_size();
+    const vec3 o = lattice.origin();
+    const vec3 across_u(3.0f * s, 0, 0), across_v(0, 3.0f * s, 0), up(0, 0, 1);
+    const vec3 floor_corner = o + vec3(-0.5f * s, -0.5f * s, 0.3f * s);
+    const vec3 ceiling_corner = o + vec3(-0.5f * s, -0.5f * s, 1.7f * s);
+    lattice.measure_surfaces(test::committed_scene(
+        {test::quad(floor_corner, across_u, across_v),
+         test::quad(ceiling_corner, across_v, across_u)}));  // facing down: the floor sees it
+    const auto set_radiance = [&](ShLattice& target) {
+        for (int k = 0; k < 2; ++k)
+            for (int j = 0; j < 2; ++j)
+                for (int i = 0; i < 2; ++i) {
+                    ShRgb radiance(1);
+                    radiance[0] = vec3(k == 0 ? 1.0f : 5.0f);
+                    target.set_cell_radiance(target.cell_index(ivec3(i, j, k)), radiance);
+                }
+    };
+    set_radiance(lattice);
+    const vec3 p = o + vec3(0.7f * s, 1.2f * s, 0.6f * s);
+    const vec3 q = o + vec3(0.8f * s, 1.1f * s, 0.7f * s);  // in p's cell: the same block
+    const vec3 far = o + vec3(1.6f * s, 1.6f * s, 1.6f * s);  // another block: evicts the memo
+    // No photon yet: every side counts, so an upward normal reads the ceiling too.
+    const float unmarked = lattice.sample_cubic(p, up, 0.0f)[0].x;
+    EXPECT_GT(unmarked, 1.1f);
+    const ShLattice unmarked_copy = lattice;
+    lattice.inject(photons_on(floor_corner, across_u, across_v, up, 3), 1.0f);
+    lattice.inject(photons_on(ceiling_corner, across_u, across_v, -up, 4), 1.0f);
+    set_radiance(lattice);
+    EXPECT_NEAR(lattice.sample_cubic(p, up, 0.0f)[0].x, 1.0f, kFloatTolerance);
+    EXPECT_EQ(unmarked_copy.sample_cubic(p, up, 0.0f)[0].x, unmarked);
+    EXPECT_NEAR(lattice.sample_cubic(p, up, 0.0f)[0].x, 1.0f, kFloatTolerance);
+    // From the memo (q after p, same block and normal) and afresh (after a sample elsewhere).
+    (void)lattice.sample_cubic(p, up, 0.0f);
+    const ShRgb memo = lattice.sample_cubic(q, up, 0.0f);
+    (void)lattice.sample_cubic(far, -up, 0.0f);
+    const ShRgb fresh = lattice.sample_cubic(q, up, 0.0f);
+    for (int i = 0; i < memo.num_coefficients(); ++i) EXPECT_EQ(memo[i], fresh[i]);
+    lattice.clear();
+    set_radiance(lattice);
+    EXPECT_EQ(lattice.sample_cubic(p, up, 0.0f)[0].x, unmarked);
+}
+
 // The closed box with every wall's inner side marked (face, edge and corner cells have one, two
 // and three sides): a field that is uniform within each kind of cell but differs between kinds
 // comes out of the blur unchanged, as floors blur with floors only; and a random field keeps
