@@ -85,20 +85,19 @@ PreviewTimings split_wall_time(double wall, const std::vector<StageSeconds>& bus
 // The first surfaces of a wave that sample lights, one array per coordinate
 // (LightSampler::sample_split_lanes), and what the light stage gave them.
 struct LightLanes {
+    // Sized once for the whole wave (resize) and written by index, the live count kept by
+    // the caller: push_back's capacity test and end pointer per coordinate were ~9M
+    // instructions a Cornell box frame (docs/frame-pipeline.md, 2026-11-30, perf10b).
     std::vector<uint32_t> path;  // the wave's path
     std::vector<float> x, y, z, u_select, ux, uy;
     std::vector<LightSample> samples;
     std::vector<int8_t> written;
 
-    void reserve(size_t capacity) {
-        for (std::vector<float>* v : {&x, &y, &z, &u_select, &ux, &uy}) v->reserve(capacity);
-        path.reserve(capacity);
-        samples.reserve(capacity);
-        written.reserve(capacity);
-    }
-    void clear() {
-        for (std::vector<float>* v : {&x, &y, &z, &u_select, &ux, &uy}) v->clear();
-        path.clear();
+    void resize(size_t size) {
+        for (std::vector<float>* v : {&x, &y, &z, &u_select, &ux, &uy}) v->resize(size);
+        path.resize(size);
+        samples.resize(size);
+        written.resize(size);
     }
 };
 
@@ -110,10 +109,11 @@ struct Wave {
         rays.reserve(capacity);
         hits.reserve(capacity);
         shadow_rays.reserve(capacity);
-        shadow_paths.reserve(capacity);
-        shadow_slots.reserve(capacity);
+        // Written by index (trace_direct): at most kMaxLightSplits shadow rays a path.
+        shadow_paths.resize(capacity * kMaxLightSplits);
+        shadow_slots.resize(capacity * kMaxLightSplits);
         occluded.reserve(capacity);
-        light_lanes.reserve(capacity);
+        light_lanes.resize(capacity);
     }
     size_t capacity() const { return x.size(); }
 
@@ -343,14 +343,12 @@ class FrameWork {
     // Next-event estimation at every first surface, its shadow rays as one occlusion stream.
     void trace_direct(Wave& wave) const {
         wave.shadow_rays.clear();
-        wave.shadow_paths.clear();
-        wave.shadow_slots.clear();
         Ray shadows[kMaxLightSplits];
         const auto add_shadows = [&](size_t i, int count) {
             for (int k = 0; k < count; ++k) {
+                wave.shadow_paths[wave.shadow_rays.size()] = uint32_t(i);
+                wave.shadow_slots[wave.shadow_rays.size()] = uint8_t(k);
                 wave.shadow_rays.push_back(shadows[k]);
-                wave.shadow_paths.push_back(uint32_t(i));
-                wave.shadow_slots.push_back(uint8_t(k));
             }
         };
         if (lights_.samples_one_rectangle()) {
@@ -358,22 +356,21 @@ class FrameWork {
             // (LightSampler::sample_split_lanes, the same samples as each path's own), then
             // each path's BSDF toward its sample. The shadow rays come in the same order.
             LightLanes& lanes = wave.light_lanes;
-            lanes.clear();
+            if (lanes.path.size() < wave.count) lanes.resize(wave.count);
+            size_t count = 0;
             for (size_t i = 0; i < wave.count; ++i) {
                 if (!wave.live[i] || !wave.paths[i]->samples_lights()) continue;
                 const vec3& p = wave.paths[i]->first_surface().position;
                 const PixelSample& sample = wave.samples[i];
-                lanes.path.push_back(uint32_t(i));
-                lanes.x.push_back(p.x);
-                lanes.y.push_back(p.y);
-                lanes.z.push_back(p.z);
-                lanes.u_select.push_back(sample.u_select);
-                lanes.ux.push_back(sample.u_light.x);
-                lanes.uy.push_back(sample.u_light.y);
+                lanes.path[count] = uint32_t(i);
+                lanes.x[count] = p.x;
+                lanes.y[count] = p.y;
+                lanes.z[count] = p.z;
+                lanes.u_select[count] = sample.u_select;
+                lanes.ux[count] = sample.u_light.x;
+                lanes.uy[count] = sample.u_light.y;
+                ++count;
             }
-            const size_t count = lanes.path.size();
-            lanes.samples.resize(count);
-            lanes.written.resize(count);
             lights_.sample_split_lanes(count, lanes.x.data(), lanes.y.data(), lanes.z.data(),
                                        lanes.u_select.data(), lanes.ux.data(), lanes.uy.data(),
                                        lanes.samples.data(), lanes.written.data());

@@ -875,7 +875,7 @@ SurfacePoint Scene::surface_point(const Ray& ray, const Hit& hit) const {
 
 SurfacePoint Scene::surface_point(const Ray& /*ray*/, const Hit& hit,
                                   TriangleNormalMemo* memo) const {
-    require_committed("surface_point");
+    if (!committed_) require_committed("surface_point");  // the test inline: a call a hit
     if (!hit.valid()) throw InvalidArgument("surface_point: the hit is a miss (no instance)");
     if (hit.instance_id >= instances_.size())
         throw InvalidArgument(format_message("surface_point: hit.instance_id = ", hit.instance_id,
