@@ -60,8 +60,7 @@ struct TexelSurface {
     vec3 diffuse_color{0.0f};  // DiffCol
     int color_channel = -1;    // the channel the diffuse response is read from; -1: Lambert
     // Where a normal map bent the shading normal: the diffuse lobe's bump shadowing, whose
-    // smooth_normal places the field's lookup (as PathIntegrator's field_lookup_normal: a field
-    // moves or biases its lookup along the normal, and the bent one would move it sideways).
+    // smooth_normal places the field's lookup (field_lookup_normal, render/bump_irradiance.h).
     bool bumped = false;
     DiffuseBump bump;
 

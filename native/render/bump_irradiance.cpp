@@ -94,13 +94,18 @@ const RotationRule& rotation_rule(int order) {
 
 }  // namespace
 
+vec3 field_lookup_normal(const Shading& shading) {
+    if (!shading.bsdf.has_smooth_normal()) return shading.frame.z;
+    return glm::normalize(shading.frame.to_world(shading.bsdf.smooth_normal()));
+}
+
 float DiffuseBump::shadowing(const vec3& bent, const vec3& wi) const {
     return shgi::shadowing(model, smooth_normal, bent, wi);
 }
 
 bool diffuse_bump(const Shading& shading, DiffuseBump* out) {
     if (!shading.bsdf.has_smooth_normal()) return false;
-    out->smooth_normal = glm::normalize(shading.frame.to_world(shading.bsdf.smooth_normal()));
+    out->smooth_normal = field_lookup_normal(shading);
     out->model = shading.bsdf.microfacet_bump() ? BumpShadowing::Microfacet : BumpShadowing::Chiang;
     return true;
 }

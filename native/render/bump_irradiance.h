@@ -44,6 +44,13 @@ struct DiffuseBump {
 // before, is the caller's).
 bool diffuse_bump(const Shading& shading, DiffuseBump* out);
 
+// The normal a field places its lookup by at `shading` (a light propagation volume moves it
+// normal_offset cells along it and damps by the light behind it, a probe grid biases it): the
+// interpolated normal where a normal map bent the shading normal, whose tilt would move the
+// lookup sideways and towards the surface (diffuse_bump's smooth_normal); the shading normal
+// elsewhere. The lobes are then evaluated about the bent normal.
+vec3 field_lookup_normal(const Shading& shading);
+
 // K's SH coefficients (order 0..4) in the world frame, for the unit bent normal `bent`.
 // Throws InvalidArgument for an order outside 0..4.
 ShCoeffs bump_cosine_sh(int order, const vec3& bent, const DiffuseBump& bump);

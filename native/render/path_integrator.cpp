@@ -505,19 +505,11 @@ void PathIntegrator::add_field(const Shading& shading) {
     }
     // The lookup's result binds to the parameter directly: no copy of its SH. Behind a final
     // gather's bounces, one estimate of the field serves (gather_lookup).
-    const vec3 n = field_lookup_normal(shading);
+    // Placed by the interpolated normal (field_lookup_normal, which the bump already holds).
+    const vec3 n = lobes.bumped ? lobes.bump.smooth_normal : shading.frame.z;
     add_field_light(field_from_ > 0 ? field_->gather_lookup(shading.position, n, wo, gather_u_)
                                     : field_->view_lookup(shading.position, n, wo),
                     lobes, shading.frame.z, wo);
-}
-
-// A field places its lookup by the surface's normal (a light propagation volume moves it
-// normal_offset cells along it and damps by the light behind it, a probe grid biases it): the
-// interpolated normal where a normal map bent the shading normal, whose tilt would move the
-// lookup sideways and towards the surface. The lobes are then evaluated about the bent normal.
-vec3 PathIntegrator::field_lookup_normal(const Shading& shading) {
-    if (!shading.bsdf.has_smooth_normal()) return shading.frame.z;
-    return glm::normalize(shading.frame.to_world(shading.bsdf.smooth_normal()));
 }
 
 void PathIntegrator::add_field_light(const FieldLookup& field, const FieldLobes& lobes,
@@ -539,7 +531,7 @@ void PathIntegrator::add_field_light(const FieldLookup& field, const FieldLobes&
 bool PathIntegrator::first_field_query(vec3* position, vec3* normal, vec3* wo) const {
     if (vertex_field() == nullptr || field_->is_zero() || vertex_ != 0) return false;
     *position = shading_.value.position;
-    *normal = field_lookup_normal(shading_.value);
+    *normal = shgi::field_lookup_normal(shading_.value);
     *wo = shading_.value.frame.to_world(shading_.value.wo);
     return true;
 }

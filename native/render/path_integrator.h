@@ -277,8 +277,6 @@ class PathIntegrator {
     };
     // `irradiance`: field.irradiance(n), or null to evaluate it here (unused for a bumped
     // diffuse lobe, whose irradiance depends on more than the normal).
-    // The normal a field lookup at `shading` is made for (see the definition).
-    static vec3 field_lookup_normal(const Shading& shading);
     void add_field_light(const FieldLookup& field, const FieldLobes& lobes, const vec3& n,
                          const vec3& wo, IrradianceMemo* irradiance = nullptr);
     bool scatter(const Shading& shading, Ray* ray);

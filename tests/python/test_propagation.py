@@ -439,9 +439,9 @@ def test_distance_gives_each_order_the_steps_that_carry_light_as_far():
             shgi.propagation_steps(shgi.PropagationSettings(steps=0, distance=value))
 
 
-def test_clamp_at_surfaces_is_deterministic_and_needs_the_unclamped_transfer():
-    """clamp_at_surfaces gives the same field for 1 and 2 threads; without unclamped_transfer
-    it changes nothing (the transfer is clamped and rescaled everywhere then)."""
+def cornell_box_irradiance():
+    """irradiance(**fields): a small Cornell box volume's irradiance at 400 fixed random points
+    and normals, solved with PropagationSettings(**fields) over a fixed seed and size."""
     import numpy as np
     scene = committed(scenes.cornell_box(0.05))
     rng = np.random.default_rng(7)
@@ -455,16 +455,29 @@ def test_clamp_at_surfaces_is_deterministic_and_needs_the_unclamped_transfer():
             seed=2, photons=20000, resolution=16, steps=6, **fields))
         volume.refine()
         return volume.current_field().irradiance(points, normals)
+    return irradiance
 
-    at_walls = dict(unclamped_transfer=True, clamp_at_surfaces=True, order=1)
-    rescaled = dict(unclamped_transfer=False, order=1)
+
+def on_one_and_two_threads(irradiance, **fields):
+    """irradiance(**fields) with 1 thread and with 2."""
     try:
         shgi.set_max_threads(1)
-        one = irradiance(**at_walls)
+        one = irradiance(**fields)
         shgi.set_max_threads(2)
-        two = irradiance(**at_walls)
+        two = irradiance(**fields)
     finally:
         shgi.set_max_threads(0)
+    return one, two
+
+
+def test_clamp_at_surfaces_is_deterministic_and_needs_the_unclamped_transfer():
+    """clamp_at_surfaces gives the same field for 1 and 2 threads; without unclamped_transfer
+    it changes nothing (the transfer is clamped and rescaled everywhere then)."""
+    import numpy as np
+    irradiance = cornell_box_irradiance()
+    at_walls = dict(unclamped_transfer=True, clamp_at_surfaces=True, order=1)
+    rescaled = dict(unclamped_transfer=False, order=1)
+    one, two = on_one_and_two_threads(irradiance, **at_walls)
     np.testing.assert_array_equal(one, two)
     assert not np.array_equal(one, irradiance(**dict(at_walls, clamp_at_surfaces=False)))
     np.testing.assert_array_equal(irradiance(**dict(rescaled, clamp_at_surfaces=True)),
@@ -476,31 +489,13 @@ def test_clamp_per_transfer_is_deterministic_and_needs_the_clamp_at_walls(order)
     """clamp_per_transfer gives the same field for 1 and 2 threads and changes the clamp at
     walls' field; without clamp_at_surfaces (linear) it changes nothing."""
     import numpy as np
-    scene = committed(scenes.cornell_box(0.05))
-    rng = np.random.default_rng(7)
-    lower, upper = (np.array(corner) for corner in scene.bounds())
-    points = rng.uniform(lower, upper, (400, 3)).astype(np.float32)
-    normals = rng.normal(size=(400, 3)).astype(np.float32)
-    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
-
-    def irradiance(**fields):
-        volume = shgi.PropagationVolume(scene, shgi.PropagationSettings(
-            seed=2, photons=20000, resolution=16, steps=6, order=order, **fields))
-        volume.refine()
-        return volume.current_field().irradiance(points, normals)
-
-    try:
-        shgi.set_max_threads(1)
-        one = irradiance(clamp_per_transfer=True)
-        shgi.set_max_threads(2)
-        two = irradiance(clamp_per_transfer=True)
-    finally:
-        shgi.set_max_threads(0)
+    irradiance = cornell_box_irradiance()
+    one, two = on_one_and_two_threads(irradiance, order=order, clamp_per_transfer=True)
     np.testing.assert_array_equal(one, two)
-    assert not np.array_equal(one, irradiance(clamp_per_transfer=False))
+    assert not np.array_equal(one, irradiance(order=order, clamp_per_transfer=False))
     np.testing.assert_array_equal(
-        irradiance(clamp_at_surfaces=False, clamp_per_transfer=True),
-        irradiance(clamp_at_surfaces=False, clamp_per_transfer=False))
+        irradiance(order=order, clamp_at_surfaces=False, clamp_per_transfer=True),
+        irradiance(order=order, clamp_at_surfaces=False, clamp_per_transfer=False))
 
 
 def test_an_empty_or_uncommitted_scene_is_refused():

@@ -143,32 +143,55 @@ TEST(ShLatticeOrientation, PhotonsMarkTheBinClosestToTheirNormal) {
     EXPECT_EQ(lattice.receiving_sides(0), kMinusX);
 }
 
+// A floor (its photons arriving from above) and a ceiling (from below) across a 2 x 2 x 2
+// lattice: the floor in the bottom layer of cells, the ceiling in the top one.
+struct FloorUnderCeiling {
+    ShLattice lattice{Bounds3{vec3(0.0f), vec3(2.0f)}, 2, 1};
+    float s = lattice.cell_size();
+    vec3 o = lattice.origin();
+    vec3 across_u{3.0f * s, 0, 0}, across_v{0, 3.0f * s, 0}, up{0, 0, 1};
+    vec3 floor_corner = o + vec3(-0.5f * s, -0.5f * s, 0.3f * s);
+    vec3 ceiling_corner = o + vec3(-0.5f * s, -0.5f * s, 1.7f * s);
+
+    // ceiling_faces_down: the ceiling quad's winding faces the floor (else it faces up too).
+    explicit FloorUnderCeiling(bool ceiling_faces_down) {
+        lattice.measure_surfaces(test::committed_scene(
+            {test::quad(floor_corner, across_u, across_v),
+             ceiling_faces_down ? test::quad(ceiling_corner, across_v, across_u)
+                                : test::quad(ceiling_corner, across_u, across_v)}));
+    }
+    void inject_photons() {
+        lattice.inject(photons_on(floor_corner, across_u, across_v, up, 3), 1.0f);
+        lattice.inject(photons_on(ceiling_corner, across_u, across_v, -up, 4), 1.0f);
+    }
+    // Radiance 1 in the floor's cells, 5 in the ceiling's.
+    static void set_radiance(ShLattice& target) {
+        for (int k = 0; k < 2; ++k)
+            for (int j = 0; j < 2; ++j)
+                for (int i = 0; i < 2; ++i) {
+                    ShRgb radiance(1);
+                    radiance[0] = vec3(k == 0 ? 1.0f : 5.0f);
+                    target.set_cell_radiance(target.cell_index(ivec3(i, j, k)), radiance);
+                }
+    }
+};
+
 // Sampling counts the receiving sides that face like the shading normal: a floor lit from
 // above (radiance 1 in its cells) under a ceiling lit from below (radiance 5). Upward normals
 // see only floor cells, downward normals only ceiling cells, wherever the point lies between
 // them. Counting both sides of every surface, both would blend to 3 in the middle.
 TEST(ShLatticeOrientation, SamplingWeighsOnlySidesThatFaceTheNormal) {
-    ShLattice lattice(Bounds3{vec3(0.0f), vec3(2.0f)}, 2, 1);
-    const float s = lattice.cell_size();
-    const vec3 o = lattice.origin();
-    const vec3 across_u(3.0f * s, 0, 0), across_v(0, 3.0f * s, 0), up(0, 0, 1);
-    const vec3 floor_corner = o + vec3(-0.5f * s, -0.5f * s, 0.3f * s);
-    const vec3 ceiling_corner = o + vec3(-0.5f * s, -0.5f * s, 1.7f * s);
-    lattice.measure_surfaces(test::committed_scene(
-        {test::quad(floor_corner, across_u, across_v),
-         test::quad(ceiling_corner, across_u, across_v)}));
-    lattice.inject(photons_on(floor_corner, across_u, across_v, up, 3), 1.0f);
-    lattice.inject(photons_on(ceiling_corner, across_u, across_v, -up, 4), 1.0f);
-    ShRgb floor_radiance(1), ceiling_radiance(1);
-    floor_radiance[0] = vec3(1.0f);
-    ceiling_radiance[0] = vec3(5.0f);
+    FloorUnderCeiling room(false);
+    room.inject_photons();
+    ShLattice& lattice = room.lattice;
+    const float s = room.s;
+    const vec3 o = room.o, up = room.up;
     for (int k = 0; k < 2; ++k)
         for (int j = 0; j < 2; ++j)
-            for (int i = 0; i < 2; ++i) {
-                const size_t cell = lattice.cell_index(ivec3(i, j, k));
-                ASSERT_EQ(lattice.receiving_sides(cell), k == 0 ? kPlusZ : kMinusZ);
-                lattice.set_cell_radiance(cell, k == 0 ? floor_radiance : ceiling_radiance);
-            }
+            for (int i = 0; i < 2; ++i)
+                ASSERT_EQ(lattice.receiving_sides(lattice.cell_index(ivec3(i, j, k))),
+                          k == 0 ? kPlusZ : kMinusZ);
+    FloorUnderCeiling::set_radiance(lattice);
     for (const vec3& p : {o + vec3(s), o + vec3(0.7f * s, 1.2f * s, 0.6f * s),
                           o + vec3(1.3f * s, 0.6f * s, 1.4f * s)}) {
         EXPECT_NEAR(lattice.sample_cubic(p, up, 0.0f)[0].x, 1.0f, kFloatTolerance);
@@ -185,24 +208,11 @@ TEST(ShLatticeOrientation, SamplingWeighsOnlySidesThatFaceTheNormal) {
 // or of a copy holding the old sides, reads the sides it has, and a sample from the memo is the
 // same bits as one that computes D_c(n) afresh.
 TEST(ShLatticeOrientation, CubicSamplesFollowTheSidesAsTheyChange) {
-    ShLattice lattice(Bounds3{vec3(0.0f), vec3(2.0f)}, 2, 1);
-    const float s = lattice.cell_size();
-    const vec3 o = lattice.origin();
-    const vec3 across_u(3.0f * s, 0, 0), across_v(0, 3.0f * s, 0), up(0, 0, 1);
-    const vec3 floor_corner = o + vec3(-0.5f * s, -0.5f * s, 0.3f * s);
-    const vec3 ceiling_corner = o + vec3(-0.5f * s, -0.5f * s, 1.7f * s);
-    lattice.measure_surfaces(test::committed_scene(
-        {test::quad(floor_corner, across_u, across_v),
-         test::quad(ceiling_corner, across_v, across_u)}));  // facing down: the floor sees it
-    const auto set_radiance = [&](ShLattice& target) {
-        for (int k = 0; k < 2; ++k)
-            for (int j = 0; j < 2; ++j)
-                for (int i = 0; i < 2; ++i) {
-                    ShRgb radiance(1);
-                    radiance[0] = vec3(k == 0 ? 1.0f : 5.0f);
-                    target.set_cell_radiance(target.cell_index(ivec3(i, j, k)), radiance);
-                }
-    };
+    FloorUnderCeiling room(true);  // facing down: the floor sees it before photons mark sides
+    ShLattice& lattice = room.lattice;
+    const float s = room.s;
+    const vec3 o = room.o, up = room.up;
+    const auto set_radiance = FloorUnderCeiling::set_radiance;
     set_radiance(lattice);
     const vec3 p = o + vec3(0.7f * s, 1.2f * s, 0.6f * s);
     const vec3 q = o + vec3(0.8f * s, 1.1f * s, 0.7f * s);  // in p's cell: the same block
@@ -211,8 +221,7 @@ TEST(ShLatticeOrientation, CubicSamplesFollowTheSidesAsTheyChange) {
     const float unmarked = lattice.sample_cubic(p, up, 0.0f)[0].x;
     EXPECT_GT(unmarked, 1.1f);
     const ShLattice unmarked_copy = lattice;
-    lattice.inject(photons_on(floor_corner, across_u, across_v, up, 3), 1.0f);
-    lattice.inject(photons_on(ceiling_corner, across_u, across_v, -up, 4), 1.0f);
+    room.inject_photons();
     set_radiance(lattice);
     EXPECT_NEAR(lattice.sample_cubic(p, up, 0.0f)[0].x, 1.0f, kFloatTolerance);
     EXPECT_EQ(unmarked_copy.sample_cubic(p, up, 0.0f)[0].x, unmarked);
