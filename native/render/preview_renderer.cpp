@@ -79,9 +79,6 @@ PreviewTimings split_wall_time(double wall, const std::vector<StageSeconds>& bus
     return timings;
 }
 
-// A wave's buffers, sized once (each thread keeps its wave: WaveLease): each PathIntegrator
-// refers to its rng and values entries, so these vectors never reallocate while paths are in
-// flight.
 // The first surfaces of a wave that sample lights, one array per coordinate
 // (LightSampler::sample_split_lanes), and what the light stage gave them.
 struct LightLanes {
@@ -101,6 +98,9 @@ struct LightLanes {
     }
 };
 
+// A wave's buffers, sized once (each thread keeps its wave: WaveLease): each PathIntegrator
+// refers to its rng and values entries, so these vectors never reallocate while paths are in
+// flight.
 struct Wave {
     explicit Wave(size_t capacity)
         : x(capacity), y(capacity), pixel(capacity), rngs(capacity), samples(capacity),
@@ -356,7 +356,7 @@ class FrameWork {
             // (LightSampler::sample_split_lanes, the same samples as each path's own), then
             // each path's BSDF toward its sample. The shadow rays come in the same order.
             LightLanes& lanes = wave.light_lanes;
-            if (lanes.path.size() < wave.count) lanes.resize(wave.count);
+            // Sized for the wave's capacity (Wave's constructor).
             size_t count = 0;
             for (size_t i = 0; i < wave.count; ++i) {
                 if (!wave.live[i] || !wave.paths[i]->samples_lights()) continue;
