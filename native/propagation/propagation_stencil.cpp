@@ -30,6 +30,22 @@ bool same_layout(const ShVolume& a, const ShVolume& b) {
     return a.counts() == b.counts() && a.order() == b.order();
 }
 
+// One channel of a cell's clamped lobe rescaled to its unclamped flux `total` from `clamped`
+// (Rescaled). A cell whose unclamped total is not positive sends nothing (its clamped samples
+// are noise of the truncation).
+float rescale_factor(float total, float clamped) {
+    return total > 0.0f && clamped > 0.0f ? total / clamped : 0.0f;
+}
+
+// AtSurfaces: of the rescaled lobe's light past the walls (`clamped_passed` before the rescale),
+// no more than the linear step's (`passed`, which the light going into a wall does not reach
+// past it), and not below 0.
+float at_surfaces_factor(float total, float clamped, float passed, float clamped_passed) {
+    return clamped_passed > 0.0f
+               ? std::max(0.0f, std::min(rescale_factor(total, clamped), passed / clamped_passed))
+               : 0.0f;
+}
+
 }  // namespace
 
 double rectangle_solid_angle(double x0, double x1, double y0, double y1, double distance) {
@@ -216,30 +232,15 @@ void PropagationStep::rescale_factors(const ShVolume& source,
                     const vec3 passed = free + wall_passed;
                     const vec3 clamped_passed =
                         wall_clamped_passed + glm::max(clamped - wall_clamped, vec3(0.0f));
-                    for (int ch = 0; ch < 3; ++ch) {
-                        if (split) {
-                            // The clamped transfers rescaled to their own total, passing the
-                            // walls no more than the linear step's share.
-                            const float k = wall[ch] > 0.0f && wall_clamped[ch] > 0.0f
-                                                ? wall[ch] / wall_clamped[ch]
-                                                : 0.0f;
-                            factors[c][ch] =
-                                wall_clamped_passed[ch] > 0.0f
-                                    ? std::max(0.0f, std::min(k, wall_passed[ch] /
-                                                                     wall_clamped_passed[ch]))
-                                    : 0.0f;
-                            continue;
-                        }
-                        // AtSurfaces' factor (the free transfers pass t = 1).
-                        const float total = wall[ch] + free[ch];
-                        const float k = total > 0.0f && clamped[ch] > 0.0f
-                                            ? total / clamped[ch]
-                                            : 0.0f;
+                    // Split: the clamped transfers rescaled to their own total, passing the walls
+                    // no more than the linear step's share. Else AtSurfaces' factor over all
+                    // of them (the free transfers pass t = 1).
+                    for (int ch = 0; ch < 3; ++ch)
                         factors[c][ch] =
-                            clamped_passed[ch] > 0.0f
-                                ? std::max(0.0f, std::min(k, passed[ch] / clamped_passed[ch]))
-                                : 0.0f;
-                    }
+                            split ? at_surfaces_factor(wall[ch], wall_clamped[ch], wall_passed[ch],
+                                                       wall_clamped_passed[ch])
+                                  : at_surfaces_factor(wall[ch] + free[ch], clamped[ch],
+                                                       passed[ch], clamped_passed[ch]);
                     continue;
                 }
                 // Over the faces: the unclamped and clamped fluxes, and what of each passes the
@@ -254,19 +255,11 @@ void PropagationStep::rescale_factors(const ShVolume& source,
                         passed += t[o] * flux;
                         clamped_passed += t[o] * positive;
                     }
-                // A cell whose unclamped total is not positive sends nothing (its clamped
-                // samples are noise of the truncation). AtSurfaces: of the rescaled lobe's
-                // light past the walls, no more than the linear step's (which the light going
-                // into a wall does not reach past it), and not below 0.
-                for (int ch = 0; ch < 3; ++ch) {
-                    float k = total[ch] > 0.0f && clamped[ch] > 0.0f ? total[ch] / clamped[ch]
-                                                                      : 0.0f;
-                    if (clamp_ == LobeClamp::AtSurfaces)
-                        k = clamped_passed[ch] > 0.0f
-                                ? std::max(0.0f, std::min(k, passed[ch] / clamped_passed[ch]))
-                                : 0.0f;
-                    factors[c][ch] = k;
-                }
+                for (int ch = 0; ch < 3; ++ch)
+                    factors[c][ch] = clamp_ == LobeClamp::AtSurfaces
+                                         ? at_surfaces_factor(total[ch], clamped[ch], passed[ch],
+                                                              clamped_passed[ch])
+                                         : rescale_factor(total[ch], clamped[ch]);
             }
         });
 }
