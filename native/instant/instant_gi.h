@@ -220,6 +220,8 @@ class InstantGiField : public IndirectField {
                    std::vector<std::vector<uint64_t>> lamp_pass_ends = {});
 
     ShRgb radiance_sh(const vec3& p, const vec3& n) const override;
+    // radiance_sh, marked as light from above the surface only (FieldLookup::horizon).
+    FieldLookup lookup(const vec3& p, const vec3& n) const override;
     // The sets as an interleave pattern (bakes: texel (x, y) gathers one set, a filter within
     // the UV chart restores the whole; filter_mode None keeps each texel's own set).
     Interleave interleave() const override;

@@ -77,6 +77,14 @@ vec3 FieldLookup::irradiance(const vec3& n, const DiffuseBump& bump) const {
     return glm::max(sh_bump_irradiance(radiance, n, bump), vec3(0.0f)) + extra_irradiance;
 }
 
+vec3 glossy_dominant_direction(const vec3& n, const vec3& reflected, float roughness) {
+    const float alpha = roughness * roughness;
+    const float lean = (1.0f - alpha) * (std::sqrt(1.0f - alpha) + alpha);
+    const vec3 towards = n + lean * (reflected - n);
+    const float length2 = glm::dot(towards, towards);  // 0 only for a view from below n
+    return length2 > 1e-12f ? towards / std::sqrt(length2) : n;
+}
+
 vec3 FieldLookup::glossy(const vec3& n, const vec3& wo, float roughness, GgxZhMemo* zh) const {
     const vec3 reflected = 2.0f * glm::dot(wo, n) * n - wo;
     if (glossy_rays > 0) {
@@ -90,17 +98,10 @@ vec3 FieldLookup::glossy(const vec3& n, const vec3& wo, float roughness, GgxZhMe
         zh != nullptr ? zh->factors(roughness) : ggx_specular_zh_tabulated(roughness);
     if (!horizon || radiance.order < 1)
         return sh_specular_radiance(radiance, reflected, factors);
-    // Clipped at the horizon, the cosine-weighted GGX lobe leans from r towards n, the more the
-    // rougher and the more grazing the view: its dominant direction (Lagarde & de Rousiers 2014,
-    // "Moving Frostbite to Physically Based Rendering", getSpecularDominantDir, alpha =
-    // roughness^2). Read there, the zonal lobe about r no longer reads mostly the rounded step at
-    // the horizon (docs/methods.md: 80 degrees from a floor's normal read 0.84 of the path
-    // tracer's about r, 0.91 about the dominant direction).
-    const float alpha = roughness * roughness;
-    const float lean = (1.0f - alpha) * (std::sqrt(1.0f - alpha) + alpha);
-    const vec3 towards = n + lean * (reflected - n);
-    const float length2 = glm::dot(towards, towards);  // 0 only for a view from below n
-    const vec3 dominant = length2 > 1e-12f ? towards / std::sqrt(length2) : n;
+    // Read about the clipped lobe's dominant direction, the zonal lobe about r no longer reads
+    // mostly the rounded step at the horizon (docs/methods.md: 80 degrees from a floor's normal
+    // read 0.84 of the path tracer's about r, 0.91 about the dominant direction).
+    const vec3 dominant = glossy_dominant_direction(n, reflected, roughness);
     return sh_specular_radiance(radiance, dominant, factors) /
            upper_hemisphere_read(radiance.order, factors, glm::dot(n, dominant));
 }

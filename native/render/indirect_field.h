@@ -28,6 +28,13 @@ class GBuffer;
 class GgxZhMemo;  // sh/ggx_zh.h
 class Progress;
 
+// The dominant direction of a GGX lobe of `roughness` clipped at the horizon of n, for the
+// reflected view direction `reflected` (unit): the cosine-weighted lobe leans from it towards n,
+// the more the rougher and the more grazing the view (Lagarde & de Rousiers 2014, "Moving
+// Frostbite to Physically Based Rendering", getSpecularDominantDir, alpha = roughness^2). Unit;
+// n for a view from below n.
+vec3 glossy_dominant_direction(const vec3& n, const vec3& reflected, float roughness);
+
 struct FieldLookup {
     ShRgb radiance;                  // incident radiance SH, W m^-2 sr^-1
     vec3 extra_irradiance{0.0f};     // W m^-2 not represented in `radiance`

@@ -281,10 +281,10 @@ def test_samples_at_once_equal_samples_one_by_one(final_gather, solve):
 
 def test_glossy_from_vpls_changes_only_the_glossy_light():
     """glossy_from_vpls (off by default): glossy lobes of roughness 0.3 and above weigh each VPL
-    by the lobe itself instead of reading the L2 SH. The lobe is normalised as the SH's fitted
-    one, so on the Cornell box (plaster: roughness 0.5) the GlossInd x GlossCol mean stays
-    within 2% of the SH's, while the diffuse light is bit for bit the same and the glossy light
-    per pixel is not; frames do not depend on threads or tiles."""
+    by the lobe itself instead of reading the L2 SH. The diffuse light is bit for bit the same
+    and the glossy light per pixel is not; frames do not depend on threads or tiles. (Both read
+    the lobe clipped at the horizon, normalised above it; how close each comes to the path
+    tracer's glossy light is test_indirect_glossy_converges_to_the_path_tracers'.)"""
     assert shgi.InstantGiSettings().glossy_from_vpls is False
     scene = small_cornell()
     sh = preview(scene, solved(scene).current_field(), samples=2)
@@ -294,13 +294,6 @@ def test_glossy_from_vpls_changes_only_the_glossy_light():
         np.testing.assert_array_equal(images[0][name], images[1][name], err_msg=name)
     np.testing.assert_array_equal(images[0]["DiffInd"], sh["DiffInd"])
     assert not np.array_equal(images[0]["GlossInd"], sh["GlossInd"])
-
-    def glossy(image):
-        return float((image["GlossInd"] * image["GlossCol"]).mean())
-
-    ratio = glossy(images[0]) / glossy(sh)
-    print(f"Cornell box, glossy_from_vpls: GlossInd x GlossCol {ratio:.4f} x the SH's")
-    assert abs(ratio - 1.0) < 0.02, ratio
 
 
 def test_light_paths_clamp_limits_the_screen_space_indirect_light():
@@ -901,6 +894,29 @@ def test_indirect_diffuse_converges_to_the_path_tracers(name):
     ratio = indirect_diffuse(preview(scene, field, samples=4)) / indirect_diffuse(ref)
     print(f"{name}: {field.vpl_count} VPLs, DiffInd x DiffCol {ratio:.4f} x the path tracer's")
     assert abs(ratio - 1.0) < 0.02, ratio
+
+
+@pytest.mark.reference
+@pytest.mark.parametrize("name", ["cornell_box", "sun_room"])
+@pytest.mark.parametrize("glossy_from_vpls", [False, True])
+def test_indirect_glossy_converges_to_the_path_tracers(name, glossy_from_vpls):
+    """The glossy light with the VPLs' noise gone (as the diffuse convergence test): GlossInd x
+    GlossCol within 7% of the path tracer's, read from the L2 SH and from the VPLs
+    (glossy_from_vpls). A pixel's SH holds light from above its surface only, and a lobe about
+    the reflected direction read the zero below the horizon: the SH's 0.72 x the path tracer's on
+    the Cornell box (sun room 0.90 x; a default solve, bench/instant_gi_glossy_horizon.py) before
+    both read the lobe clipped at the horizon about its
+    dominant direction, normalised above it (FieldLookup::horizon; glossy_from_vpls' lobe
+    normalised over the upper hemisphere). Now SH 1.057 x / 0.991 x, VPLs 0.974 x / 0.949 x."""
+    scale, samples = REFERENCES[name]
+    scene, ref = path_traced_reference(getattr(scenes, name), scale, samples)
+    field = solved(scene, photons_per_set=256, glossy_from_vpls=glossy_from_vpls).current_field()
+    image = preview(scene, field, samples=4)
+    ratio = float((image["GlossInd"] * image["GlossCol"]).mean()) / float(
+        (ref["GlossInd"] * ref["GlossCol"]).mean())
+    print(f"{name}, glossy_from_vpls={glossy_from_vpls}: GlossInd x GlossCol {ratio:.4f} x the "
+          f"path tracer's")
+    assert abs(ratio - 1.0) < 0.07, ratio
 
 
 @pytest.mark.reference
