@@ -45,9 +45,13 @@ CONFIGS = {
     # Linear everywhere: walls stop negative light too (no clamp where they stop light).
     "linear": {"clamp_at_surfaces": False},
     "plain_linear": {"windowed_reinjection": False, "clamp_at_surfaces": False},
-    # Clamped only on the transfers a wall stops in part (clamp_per_transfer).
+    # Clamped only on the transfers a wall stops in part (clamp_per_transfer: the HOLPV's
+    # default since 2026-11-30; the LPV ignores it), and every transfer of such a cell clamped
+    # (the HOLPV's default before).
     "per_transfer": {"clamp_per_transfer": True},
     "plain_per_transfer": {"windowed_reinjection": False, "clamp_per_transfer": True},
+    "at_walls": {"clamp_per_transfer": False},
+    "plain_at_walls": {"windowed_reinjection": False, "clamp_per_transfer": False},
     "extended": {"extend_to_bounds": True},
     "no_damping": {"damping": False},
 }

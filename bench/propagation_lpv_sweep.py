@@ -28,11 +28,11 @@ SCENES = {"cornell_box": (0.25, 2048), "sun_room": (0.25, 2048), "two_rooms": (0
 # other propagation benches import it to measure what their tables say.
 SEED = dict(steps=8, damping=False, occlude_first_step=False, drop_outward_vpls=False,
             travel_reinjection=False, unclamped_transfer=False, clamp_at_surfaces=False,
-            windowed_reinjection=False)
+            windowed_reinjection=False, light_share_uniform=0.0)
 CORRECTIONS = dict(SEED, occlude_first_step=True, drop_outward_vpls=True)
 TRAVEL = dict(CORRECTIONS, travel_reinjection=True, damping=True)
 UNCLAMPED = dict(TRAVEL, unclamped_transfer=True)
-AT_SURFACES = dict(UNCLAMPED, clamp_at_surfaces=True)
+AT_SURFACES = dict(UNCLAMPED, clamp_at_surfaces=True, clamp_per_transfer=False)
 CONFIGS = {
     # PropagationSettings' defaults, and those before settings layout 6.
     "defaults": {},
@@ -73,15 +73,25 @@ CONFIGS = {
     "fix_per_transfer": dict(furnace_scale=True, distance=96.0, settle_fraction=0.01,
                              glossy_vpls=True, glossy_bounces=4, extend_to_bounds=True,
                              clamp_per_transfer=True),
-    # The shipped defaults with clamp_per_transfer alone (issue 51's target under the defaults).
-    "per_transfer": dict(clamp_per_transfer=True),
+    # The defaults before 2026-11-30: the HOLPV clamped at walls (clamp_per_transfer off) and
+    # the photons shared among the lamps by flux alone (light_share_uniform 0); "per_transfer"
+    # is the HOLPV clamped per transfer with the photons still by flux.
+    "by_flux_at_walls": dict(clamp_per_transfer=False, light_share_uniform=0.0),
+    "per_transfer": dict(clamp_per_transfer=True, light_share_uniform=0.0),
     # Both with 4x the photons: the two rooms' dim room, all the camera sees, gets 1% of them
-    # (its lamp's share of the flux), and its VPLs' noise is most of the orders' difference
-    # there (docs/methods.md, "The two rooms' VPLs").
-    "photons_400k": dict(photons=400000),
-    "per_transfer_400k": dict(clamp_per_transfer=True, photons=400000),
-    "photons_1600k": dict(photons=1600000),
-    "per_transfer_1600k": dict(clamp_per_transfer=True, photons=1600000),
+    # by flux (its lamp's share), and its VPLs' noise is most of the orders' difference there
+    # (docs/methods.md, "The two rooms' VPLs").
+    "photons_400k": dict(clamp_per_transfer=False, light_share_uniform=0.0, photons=400000),
+    "per_transfer_400k": dict(clamp_per_transfer=True, light_share_uniform=0.0,
+                              photons=400000),
+    "photons_1600k": dict(clamp_per_transfer=False, light_share_uniform=0.0, photons=1600000),
+    "per_transfer_1600k": dict(clamp_per_transfer=True, light_share_uniform=0.0,
+                               photons=1600000),
+    # The photons' lamp share (docs/methods.md, "A share of the photons per lamp"): the default
+    # 0.5, and others; "share_at_walls" the HOLPV clamped at walls with the default share.
+    **{f"share_{u}": dict(light_share_uniform=u) for u in (0.25, 0.5, 0.75, 1.0)},
+    "share_at_walls": dict(clamp_per_transfer=False),
+    "defaults_400k": dict(photons=400000),
     # The fix with every transfer clamped then rescaled (LobeClamp::Rescaled, the seed's; the
     # linear transfers carry the windowed beams' negative lobes, which darken the sun room's
     # floor around its sun patch; docs/methods.md, "The sun room's floor").
@@ -116,6 +126,15 @@ CONFIGS = {
     "travel_r16_s16": dict(TRAVEL, resolution=16, steps=16),
     "travel_r16_s12": dict(TRAVEL, resolution=16, steps=12),
 }
+# The configurations measured before 2026-11-30 keep the defaults of then, so that the figures
+# docs/methods.md quotes for them stay reproducible: the HOLPV clamped at walls and the photons
+# shared among the lamps by flux alone (unless they set these themselves).
+CURRENT = {"defaults", "share_at_walls", "defaults_400k"} | {n for n in CONFIGS
+                                                             if n.startswith("share_")}
+for _name, _config in CONFIGS.items():
+    if _name not in CURRENT:
+        _config.setdefault("clamp_per_transfer", False)
+        _config.setdefault("light_share_uniform", 0.0)
 
 
 def indirect(passes):

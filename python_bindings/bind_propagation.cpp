@@ -105,9 +105,14 @@ void bind_settings(py::module_& m) {
                        "return what goes into them; no effect without unclamped_transfer "
                        "(True).")
         .def_readwrite("clamp_per_transfer", &S::clamp_per_transfer,
-                       "With clamp_at_surfaces: clamp only the transfers a wall stops in part, "
-                       "not every transfer of such a cell, so that the higher-order lobes keep "
-                       "their light at a room's edges (False).");
+                       "HOLPV (order 2) only, with clamp_at_surfaces: clamp only the transfers a "
+                       "wall stops in part, not every transfer of such a cell, so that the "
+                       "higher-order lobes keep their light at a room's edges; the LPV ignores "
+                       "it (True).")
+        .def_readwrite("light_share_uniform", &S::light_share_uniform,
+                       "Share of the photons spread evenly over the lamps (a light, an emissive "
+                       "object, the world), the rest by flux; each photon's power is divided by "
+                       "its probability, so the light stays unbiased; 0..1 (0.5).");
     def_integer(cls, "cascades", &S::cascades,
                 "Nested volumes around cascade_center, each finer level with half the cells' "
                 "size and `resolution` cells per axis; 1: one volume over the scene (1).");

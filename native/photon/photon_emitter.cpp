@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <map>
 
 #include "render/light_sampler.h"
 #include "render/shading.h"
@@ -32,6 +34,26 @@ vec3 light_power(const Light& light, float bounding_radius) {
     return vec3(0.0f);
 }
 
+// The selection probabilities of emitters of flux `weights` (luminance) grouped into `lamps`:
+// (1 - u) x each one's flux share + u / (lamps) x its flux share within its lamp. With one lamp
+// that is the flux share: `weights` are returned as they are (the same distribution, bit for bit).
+std::vector<float> lamp_share_weights(const std::vector<float>& weights,
+                                      const std::vector<uint64_t>& lamps, float u) {
+    std::map<uint64_t, double> lamp_flux;
+    double total = 0.0;
+    for (size_t i = 0; i < weights.size(); ++i) {
+        lamp_flux[lamps[i]] += double(weights[i]);
+        total += double(weights[i]);
+    }
+    if (lamp_flux.size() == 1) return weights;
+    const double per_lamp = double(u) / double(lamp_flux.size());
+    std::vector<float> mixed(weights.size());
+    for (size_t i = 0; i < weights.size(); ++i)
+        mixed[i] = float((1.0 - double(u)) * double(weights[i]) / total +
+                         per_lamp * double(weights[i]) / lamp_flux[lamps[i]]);
+    return mixed;
+}
+
 }  // namespace
 
 vec3 spot_light_power(const Light& light) {
@@ -50,31 +72,45 @@ vec3 spot_light_power(const Light& light) {
     return light.color * (point_intensity_from_power(light.power) * cone_integral);
 }
 
-PhotonEmitter::PhotonEmitter(const Scene& scene) : scene_(&scene) {
+PhotonEmitter::PhotonEmitter(const Scene& scene, float light_share_uniform) : scene_(&scene) {
     if (!scene.committed())
         throw InvalidArgument("PhotonEmitter: the scene is not committed; call commit() first");
+    if (!(light_share_uniform >= 0.0f && light_share_uniform <= 1.0f))
+        throw InvalidArgument(format_message("PhotonEmitter: light_share_uniform is ",
+                                             light_share_uniform, "; it must be in [0, 1]"));
     if (!scene.empty()) {
         const Bounds3 bounds = scene.bounds();
         bounding_center_ = 0.5f * (bounds.lower + bounds.upper);
         bounding_radius_ = scene.bounding_radius();
     }
     std::vector<float> weights;
-    auto add = [&](Kind kind, uint32_t index, const vec3& power) {
+    // Per emitter, its lamp (see the header): lights and the world one each, an emissive
+    // object's triangles one per instance.
+    std::vector<uint64_t> lamps;
+    auto add = [&](Kind kind, uint32_t index, const vec3& power, uint64_t lamp) {
         const float weight = luminance(power);
         if (!(weight > 0.0f)) return;  // zero flux (or an empty scene's sun and world)
         emitters_.push_back({kind, index, power});
         weights.push_back(weight);
+        lamps.push_back(lamp);
         total_power_ += power;
     };
+    // Lamp keys: lights by index, emissive objects by instance after them, the world last.
+    const uint64_t light_count = scene.lights().size();
     for (uint32_t i = 0; i < scene.lights().size(); ++i)
-        add(Kind::Light, i, light_power(scene.lights()[i], bounding_radius_));
+        add(Kind::Light, i, light_power(scene.lights()[i], bounding_radius_), i);
     portals_ = scene_portals(scene);
     const auto& triangles = scene.emissive_triangles();
     for (uint32_t i = 0; i < triangles.size(); ++i)
-        add(Kind::Triangle, i, triangles[i].radiance * (kTwoPi * triangles[i].area));
+        add(Kind::Triangle, i, triangles[i].radiance * (kTwoPi * triangles[i].area),
+            light_count + triangles[i].instance_id);
     const float disk_area = kPi * bounding_radius_ * bounding_radius_;
-    add(Kind::World, 0, scene.world().radiance() * (kFourPi * disk_area));
-    if (!weights.empty()) distribution_ = DiscreteDistribution(weights);
+    add(Kind::World, 0, scene.world().radiance() * (kFourPi * disk_area),
+        std::numeric_limits<uint64_t>::max());
+    if (weights.empty()) return;
+    if (light_share_uniform > 0.0f)
+        weights = lamp_share_weights(weights, lamps, light_share_uniform);
+    distribution_ = DiscreteDistribution(weights);
 }
 
 bool PhotonEmitter::emit(uint64_t index, uint64_t count, Pcg32& rng, EmittedPhoton* out) const {

@@ -30,6 +30,13 @@
 // Photon i of N picks its emitter with u = (i + xi) / N through the flux distribution (stratified)
 // and carries power = flux estimate of its sample / (N x selection probability): the N photons'
 // powers sum to an unbiased estimate of total_power().
+//
+// Lamp share (light_share_uniform = u in [0, 1], 0 by default): the selection probability is
+// (1 - u) x the flux share plus u x a uniform share per lamp, a lamp being a light, an emissive
+// object (its triangles, by flux within it) or the world. A dim lamp beside a bright one then
+// gets at least u / lamps of the photons instead of its flux share (the two rooms' 20 W lamp got
+// 1%); the power divides by the mixed probability, so the estimate stays unbiased. With u = 0
+// the flux distribution is the one above, bit for bit.
 #pragma once
 
 #include <cstdint>
@@ -51,8 +58,9 @@ struct EmittedPhoton {
 
 class PhotonEmitter {
   public:
-    // The scene must be committed (InvalidArgument otherwise).
-    explicit PhotonEmitter(const Scene& scene);
+    // The scene must be committed (InvalidArgument otherwise); light_share_uniform in [0, 1]
+    // (see above; InvalidArgument otherwise).
+    explicit PhotonEmitter(const Scene& scene, float light_share_uniform = 0.0f);
 
     bool empty() const { return emitters_.empty(); }
     // Exact sum of the emitters' flux (W).

@@ -437,6 +437,10 @@ void validate_photon_tracer_settings(const PhotonTracerSettings& settings,
         throw InvalidArgument(format_message(struct_name, ".specular_roughness is ",
                                              settings.specular_roughness,
                                              "; it must be in [0, 1]"));
+    if (!(settings.light_share_uniform >= 0.0f && settings.light_share_uniform <= 1.0f))
+        throw InvalidArgument(format_message(struct_name, ".light_share_uniform is ",
+                                             settings.light_share_uniform,
+                                             "; it must be in [0, 1] (0: lamps by power alone)"));
 }
 
 PhotonMaps trace_photons(const Scene& scene, const PhotonTracerSettings& settings, uint64_t pass,
@@ -459,7 +463,7 @@ PhotonMaps trace_photon_range(const Scene& scene, const PhotonTracerSettings& se
         throw InvalidArgument("trace_photons: the scene is not committed; call commit() first");
     throw_if_cancelled(progress);
     PhotonMaps maps;
-    const PhotonEmitter emitter(scene);
+    const PhotonEmitter emitter(scene, settings.light_share_uniform);
     if (scene.empty() || emitter.empty()) return maps;
     // The chunks are those of the whole pass (photon c * kPhotonsPerChunk onwards), cut to the
     // range: a range that starts and ends on chunk boundaries traces exactly the whole pass's

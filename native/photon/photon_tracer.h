@@ -64,10 +64,14 @@ struct PhotonTracerSettings {
     // Also record each light path's first surface hit in PhotonMaps::first_hits (the maps do
     // not change). Off by default: it costs up to 60 bytes per emitted photon.
     bool store_first_hits = false;
+    // The uniform share of the choice of lamp per photon, in [0, 1] (photon_emitter.h: a dim
+    // lamp beside a bright one gets at least this over the lamps' count of the photons, their
+    // power divided by the mixed probability). 0: by flux alone.
+    float light_share_uniform = 0.0f;
 };
 
-// Throws InvalidArgument naming the field (photons 0 or > 2^40, max_bounces < 1, roughness
-// outside [0, 1] or NaN).
+// Throws InvalidArgument naming the field (photons 0 or > 2^40, max_bounces < 1, roughness or
+// light_share_uniform outside [0, 1] or NaN).
 // `struct_name` names the settings in messages: PhotonLatticeSettings forwards these fields.
 void validate_photon_tracer_settings(const PhotonTracerSettings& settings,
                                      const char* struct_name = "PhotonTracerSettings");

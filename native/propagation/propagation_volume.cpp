@@ -105,6 +105,7 @@ PhotonTracerSettings tracer_settings(const PropagationSettings& settings) {
     tracer.max_bounces = std::max(1, settings.vpl_bounces - 1);
     tracer.max_glossy_bounces = settings.glossy_bounces;
     tracer.store_first_hits = true;
+    tracer.light_share_uniform = settings.light_share_uniform;
     return tracer;
 }
 
@@ -119,10 +120,12 @@ Reinjection reinjection_of(const PropagationSettings& settings) {
 }
 
 LobeClamp clamp_of(const PropagationSettings& settings) {
+    // Per transfer is the HOLPV's alone (see PropagationSettings::clamp_per_transfer).
+    const bool per_transfer = settings.clamp_per_transfer && settings.order == 2;
     return !settings.unclamped_transfer ? LobeClamp::Rescaled
            : !settings.clamp_at_surfaces ? LobeClamp::None
-           : settings.clamp_per_transfer  ? LobeClamp::AtBlockedTransfers
-                                          : LobeClamp::AtSurfaces;
+           : per_transfer                ? LobeClamp::AtBlockedTransfers
+                                         : LobeClamp::AtSurfaces;
 }
 
 PropagationStep step_of(const PropagationSettings& settings) {

@@ -154,11 +154,19 @@ struct PropagationSettings {
     // light, and stopping negative flux makes light (in a closed box 1.138x the VPL's flux in
     // flight for L1, 1.026x for L2). No effect without unclamped_transfer.
     bool clamp_at_surfaces = true;
-    // With clamp_at_surfaces: clamp only the transfers a wall stops in part, not every transfer
-    // of such a cell (LobeClamp::AtBlockedTransfers). Clamping all of them spreads the L2 lobes
-    // along the walls and moves the HOLPV's light off a room's edges (docs/methods.md,
-    // "Clamped per transfer").
-    bool clamp_per_transfer = false;
+    // The HOLPV's (order 2 only) with clamp_at_surfaces: clamp only the transfers a wall stops
+    // in part, not every transfer of such a cell (LobeClamp::AtBlockedTransfers). Clamping all
+    // of them spreads the L2 lobes along the walls and moves the HOLPV's light off a room's
+    // edges (docs/methods.md, "Clamped per transfer"). The LPV (order 1) ignores it and clamps
+    // every transfer of such a cell (LobeClamp::AtSurfaces): per transfer its L1 light ramps
+    // towards a room's edges (27% more light there in the furnace) and its sun room loses 0.8 dB.
+    bool clamp_per_transfer = true;
+    // Photons' choice of lamp (photon_emitter.h): this share of them spread evenly over the
+    // lamps (a light, an emissive object, the world), the rest by flux, each photon's power
+    // divided by its mixed probability (unbiased), in [0, 1]. By flux alone a dim lamp beside a
+    // bright one gets few photons and its VPLs are noisy: the two rooms' dim room, all the
+    // camera sees, got 1% of them (docs/methods.md, "A share of the photons per lamp").
+    float light_share_uniform = 0.5f;
     // Give the cells whose centres lie outside the scene's bounds (or on them) the light of the
     // inside cell next to them (extend_to_bounds) once propagated. Walls at the bounds run
     // through those cells: the geometry volume blocks their exchange with the inside, so they

@@ -109,10 +109,12 @@ NOT_MIRRORED = {
     # windowed_reinjection (on), extend_to_bounds (off, it misses the agreement targets): the
     # add-on keeps the native default (docs/methods.md). So do the closed-room options, off
     # (glossy_vpls, glossy_bounces, furnace_scale, settle_fraction: docs/methods.md, "The
-    # furnace's scale"), and clamp_per_transfer (off: "Clamped per transfer").
+    # furnace's scale"), clamp_per_transfer (on, the HOLPV's: "Clamped per transfer") and
+    # light_share_uniform (0.5: "A share of the photons per lamp").
     "PropagationSettings": {"cascade_follow_camera", "cascade_center", "windowed_reinjection",
                             "extend_to_bounds", "glossy_vpls", "glossy_bounces",
-                            "furnace_scale", "settle_fraction", "clamp_per_transfer"},
+                            "furnace_scale", "settle_fraction", "clamp_per_transfer",
+                            "light_share_uniform"},
     # As the radiance field's glossy_in_grid: no reason for an artist to change it.
     # glossy_from_vpls: a measured option (+0.2 dB on the sun room, docs/methods.md), scripts
     # only for now; so is gather_cut_windows (14.5x the sun room's frame CPU for +0.05 dB).

@@ -2969,7 +2969,7 @@ class PropagationSettings:
     @property
     def clamp_per_transfer(self) -> bool:
         """
-        With clamp_at_surfaces: clamp only the transfers a wall stops in part, not every transfer of such a cell, so that the higher-order lobes keep their light at a room's edges (False).
+        HOLPV (order 2) only, with clamp_at_surfaces: clamp only the transfers a wall stops in part, not every transfer of such a cell, so that the higher-order lobes keep their light at a room's edges; the LPV ignores it (True).
         """
     @clamp_per_transfer.setter
     def clamp_per_transfer(self, arg0: bool) -> None:
@@ -3029,6 +3029,14 @@ class PropagationSettings:
         """
     @glossy_vpls.setter
     def glossy_vpls(self, arg0: bool) -> None:
+        ...
+    @property
+    def light_share_uniform(self) -> float:
+        """
+        Share of the photons spread evenly over the lamps (a light, an emissive object, the world), the rest by flux; each photon's power is divided by its probability, so the light stays unbiased; 0..1 (0.5).
+        """
+    @light_share_uniform.setter
+    def light_share_uniform(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def normal_offset(self) -> float:

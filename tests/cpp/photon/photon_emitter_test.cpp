@@ -34,8 +34,9 @@ struct Tally {
 };
 
 Tally emit_photons(const Scene& scene, uint64_t count,
-                   const std::function<void(const EmittedPhoton&)>& visit = {}) {
-    const PhotonEmitter emitter(scene);
+                   const std::function<void(const EmittedPhoton&)>& visit = {},
+                   float light_share_uniform = 0.0f) {
+    const PhotonEmitter emitter(scene, light_share_uniform);
     double total = 0.0, total2 = 0.0, hit = 0.0, hit2 = 0.0;
     Tally tally;
     for (uint64_t i = 0; i < count; ++i) {
@@ -279,6 +280,102 @@ TEST(PhotonEmitter, MixedEmittersSumToTotalPower) {
     EXPECT_NEAR(PhotonEmitter(scene).total_power().x, expected, 1e-5 * expected);
     const Tally tally = emit_photons(scene, kPhotons);
     expect_within_noise(tally.total, tally.total_error, expected, "mixed total");
+}
+
+// A lamp share: two point lights of 1000 W and 10 W (as the two rooms' bright and dim lamps)
+// and an emissive square, each lamp's photons counted apart. By flux the dim lamp gets ~1% of
+// them; with light_share_uniform u, (1 - u) x its flux share + u / 3. Each lamp's photons still
+// sum to its flux, and so do all of them (the power is divided by the mixed probability).
+TEST(PhotonEmitter, LampShareKeepsEachLampsFlux) {
+    Scene scene;
+    Material emissive = test::lambert(0.5f);
+    emissive.emission_color = vec3(1.0f);
+    emissive.emission_strength = 0.5f;
+    scene.add_material(emissive);
+    scene.add_instance(scene.add_mesh(test::plane(1.0f)), mat4(1.0f));  // 2 pi 0.5 4 = 12.6 W
+    scene.set_world(test::black_world());
+    Light bright = light_at(LightType::Point, vec3(-1.0f, 0.0f, 1.0f));
+    bright.power = 1000.0f;
+    Light dim = light_at(LightType::Point, vec3(1.0f, 0.0f, 1.0f));
+    dim.power = 10.0f;
+    scene.add_light(bright);
+    scene.add_light(dim);
+    scene.commit();
+    const double square = 2.0 * kPiD * 0.5 * 4.0;
+    const double total = 1010.0 + square;
+    for (float u : {0.0f, 0.5f, 1.0f}) {
+        SCOPED_TRACE(u);
+        // Per lamp (by the photon's origin): the photons, their power and its square.
+        double count[3] = {}, sum[3] = {}, sum2[3] = {};
+        const Tally tally = emit_photons(
+            scene, kPhotons,
+            [&](const EmittedPhoton& photon) {
+                const int lamp = photon.ray.origin == bright.position() ? 0
+                                 : photon.ray.origin == dim.position()  ? 1
+                                                                        : 2;
+                const double power = photon.power.x;
+                count[lamp] += 1.0;
+                sum[lamp] += power;
+                sum2[lamp] += power * power;
+            },
+            u);
+        expect_within_noise(tally.total, tally.total_error, total, "all lamps");
+        const double flux[3] = {1000.0, 10.0, square};
+        for (int lamp = 0; lamp < 3; ++lamp) {
+            const double share = (1.0 - u) * flux[lamp] / total + u / 3.0;
+            // Stratified selection: each lamp's count is its share within a photon or two.
+            EXPECT_NEAR(count[lamp], share * double(kPhotons), 2.0) << "lamp " << lamp;
+            expect_within_noise(sum[lamp], standard_error_of_sum(sum[lamp], sum2[lamp], kPhotons),
+                                flux[lamp], "one lamp's photons");
+        }
+    }
+}
+
+// An emissive object's triangles are one lamp: its share is split among them by flux.
+TEST(PhotonEmitter, LampShareTreatsAnEmissiveObjectAsOneLamp) {
+    Scene scene;
+    Material emissive = test::lambert(0.5f);
+    emissive.emission_color = vec3(1.0f);
+    emissive.emission_strength = 1.0f;
+    scene.add_material(emissive);
+    scene.add_instance(scene.add_mesh(test::plane(1.0f)), mat4(1.0f));  // two triangles
+    scene.set_world(test::black_world());
+    Light point = light_at(LightType::Point, vec3(0.0f, 0.0f, 1.0f));
+    point.power = 10000.0f;
+    scene.add_light(point);
+    scene.commit();
+    double from_square = 0.0;
+    emit_photons(
+        scene, kPhotons,
+        [&](const EmittedPhoton& photon) {
+            if (photon.ray.origin != point.position()) from_square += 1.0;
+        },
+        1.0f);
+    // Uniform over two lamps (the light, the square), not over three emitters.
+    EXPECT_NEAR(from_square, 0.5 * double(kPhotons), 2.0);
+}
+
+// u = 0 is the flux distribution bit for bit; u outside [0, 1] or NaN throws.
+TEST(PhotonEmitter, LampShareZeroIsByFluxAndInvalidSharesThrow) {
+    Scene scene = floor_scene(1.0f);
+    Light bright = light_at(LightType::Point, vec3(0.0f, 0.0f, 1.0f));
+    bright.power = 100.0f;
+    Light dim = light_at(LightType::Spot, vec3(0.5f, 0.0f, 1.0f));
+    dim.power = 3.0f;
+    scene.add_light(bright);
+    scene.add_light(dim);
+    scene.commit();
+    const PhotonEmitter by_flux(scene), zero_share(scene, 0.0f);
+    for (uint64_t i = 0; i < 1000; ++i) {
+        Pcg32 rng_a(3, stream_id(0, i)), rng_b(3, stream_id(0, i));
+        EmittedPhoton a, b;
+        ASSERT_EQ(by_flux.emit(i, 1000, rng_a, &a), zero_share.emit(i, 1000, rng_b, &b));
+        EXPECT_EQ(a.power, b.power);
+        EXPECT_EQ(a.ray.origin, b.ray.origin);
+        EXPECT_EQ(a.ray.direction, b.ray.direction);
+    }
+    for (float u : {-0.1f, 1.5f, std::nanf("")})
+        EXPECT_THROW(PhotonEmitter(scene, u), InvalidArgument) << u;
 }
 
 TEST(PhotonEmitter, SceneWithoutEmittersIsEmpty) {
