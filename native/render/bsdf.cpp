@@ -361,7 +361,8 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const MaterialTerms& te
       diffuse_model_(material.diffuse_model),
       height_correlated_(material.principled_model == PrincipledModel::V2) {
     add_material_lobes(material, terms, base_color, back_face, cos_nv, origin);
-    select_lobes(cos_nv);
+    selection_cos_nv_ = cos_nv;  // select_lobes on first use (ensure_selected)
+    selection_pending_ = true;
 }
 
 bool PrincipledBsdf::lobes_depend_on_hit_only_by_view(const Material& material,
@@ -382,9 +383,6 @@ PrincipledBsdf PrincipledBsdf::material_lobes(const Material& material,
     // cos_nv and origin are not read for such a material (no V2 layer, no glass lobes).
     lobes.add_material_lobes(material, terms, material.base_color, false, 1.0f,
                              PathOrigin::Camera);
-    // Set per hit (deferred); zero until then, so that eval(), which computes a pdf it drops,
-    // reads defined values.
-    for (int i = 0; i < lobes.lobe_count_; ++i) lobes.lobes_[i].select_prob = 0.0f;
     return lobes;
 }
 
@@ -480,6 +478,9 @@ void PrincipledBsdf::add_lobe(LobeKind kind, const vec3& weight, float alpha) {
     lobe.kind = kind;
     lobe.weight = weight;
     lobe.alpha = alpha;
+    // Set by select_lobes, which runs on first use: zero until then, so that eval(), which
+    // computes a pdf it drops, reads defined values.
+    lobe.select_prob = 0.0f;
 }
 
 PrincipledBsdf::CameraSide PrincipledBsdf::camera_side(float cos_camera) const {

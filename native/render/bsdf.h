@@ -112,6 +112,12 @@ class PrincipledBsdf {
     // base_color is the material's base colour times its texture at the hit. back_face: the ray
     // hit the back of the surface (ior inverted). cos_nv: wo.z in the shading frame.
     // The diffuse lobe follows material.diffuse_model, the layering material.principled_model.
+    // Every constructor defers the lobe selection (the selection probabilities and the albedo
+    // estimate, which weigh the specular lobe by its Fresnel colour toward wo: a square root and
+    // a division) to the first call that reads it (pdf, sample, sample_traced,
+    // denoising_feature, albedo_estimate), which runs it once on the same values: a preview pixel
+    // whose lobes are all field lobes never does. A BSDF is therefore not to be read by two
+    // threads at once before such a call (a Shading belongs to one path).
     PrincipledBsdf(const Material& material, const vec3& base_color, bool back_face,
                    float cos_nv, PathOrigin origin = PathOrigin::Camera);
     // The same BSDF from the material's terms computed beforehand (terms ==
@@ -132,12 +138,8 @@ class PrincipledBsdf {
     static PrincipledBsdf material_lobes(const Material& material, const MaterialTerms& terms);
     // The BSDF the full constructor builds for the same material (material.base_color), side
     // and view, from material_lobes(material, terms): the same operations on the same values
-    // for the parts that depend on the hit, so the same bits. The lobe selection (the selection
-    // probabilities and the albedo estimate, which weigh the specular lobe by its Fresnel colour
-    // toward wo: a square root and a division) is deferred to the first call that reads it
-    // (pdf, sample, sample_traced, denoising_feature, albedo_estimate): a preview pixel whose
-    // lobes are all field lobes never does. Such a BSDF is then not to be read by two threads
-    // at once before that call (a Shading belongs to one path).
+    // for the parts that depend on the hit, so the same bits (the lobe selection deferred as
+    // above).
     PrincipledBsdf(const PrincipledBsdf& material_lobes, const Material& material,
                    const MaterialTerms& terms, bool back_face, float cos_nv);
 
@@ -251,7 +253,7 @@ class PrincipledBsdf {
     // Sets the selection probabilities and the albedo estimate toward wo (wo.z = cos_nv). const
     // for ensure_selected: it writes only those mutable members.
     void select_lobes(float cos_nv) const;
-    // Runs the selection the table-finishing constructor deferred, once; a no-op otherwise.
+    // Runs the selection the constructor deferred, once; a no-op after.
     void ensure_selected() const {
         if (selection_pending_) {
             selection_pending_ = false;
@@ -318,7 +320,7 @@ class PrincipledBsdf {
     bool bent_ = false;
     bool microfacet_bump_ = false;
     mutable vec3 albedo_estimate_{0.0f};  // select_lobes
-    // The deferred lobe selection's view (see the table-finishing constructor).
+    // The deferred lobe selection's view (see the constructors).
     float selection_cos_nv_ = 1.0f;
     mutable bool selection_pending_ = false;
 };
