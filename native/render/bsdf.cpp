@@ -361,7 +361,8 @@ PrincipledBsdf::PrincipledBsdf(const Material& material, const MaterialTerms& te
       diffuse_model_(material.diffuse_model),
       height_correlated_(material.principled_model == PrincipledModel::V2) {
     add_material_lobes(material, terms, base_color, back_face, cos_nv, origin);
-    select_lobes(cos_nv);
+    selection_cos_nv_ = cos_nv;  // select_lobes on first use (ensure_selected)
+    selection_pending_ = true;
 }
 
 bool PrincipledBsdf::lobes_depend_on_hit_only_by_view(const Material& material,
@@ -389,7 +390,8 @@ PrincipledBsdf::PrincipledBsdf(const PrincipledBsdf& material_lobes, const Mater
                                const MaterialTerms& terms, bool back_face, float cos_nv)
     : PrincipledBsdf(material_lobes) {
     eta_ = back_face ? terms.inv_ior : material.ior;
-    select_lobes(cos_nv);
+    selection_cos_nv_ = cos_nv;
+    selection_pending_ = true;
 }
 
 // The closure weights of the lobes (Cycles' principled closure set-up), before their selection
@@ -450,12 +452,12 @@ void PrincipledBsdf::add_material_lobes(const Material& material, const Material
 }
 
 // Lobe selection probabilities and the albedo estimate toward wo (wo.z = cos_nv).
-void PrincipledBsdf::select_lobes(float cos_nv) {
+void PrincipledBsdf::select_lobes(float cos_nv) const {
     // Lobe selection by average closure weight as Cycles, except that the specular lobe is
     // weighted by its colour at normal view so a 4% dielectric coat does not take half the samples.
     float total = 0.0f;
     for (int i = 0; i < lobe_count_; ++i) {
-        Lobe& lobe = lobes_[i];
+        const Lobe& lobe = lobes_[i];
         lobe.select_prob = average(lobe.weight);
         if (lobe.kind == LobeKind::Specular) {
             const vec3 color = specular_color(cos_nv);
@@ -476,6 +478,9 @@ void PrincipledBsdf::add_lobe(LobeKind kind, const vec3& weight, float alpha) {
     lobe.kind = kind;
     lobe.weight = weight;
     lobe.alpha = alpha;
+    // Set by select_lobes, which runs on first use: zero until then, so that eval(), which
+    // computes a pdf it drops, reads defined values.
+    lobe.select_prob = 0.0f;
 }
 
 PrincipledBsdf::CameraSide PrincipledBsdf::camera_side(float cos_camera) const {
@@ -658,6 +663,7 @@ BsdfEval PrincipledBsdf::eval(const vec3& wo, const vec3& wi) const {
 }
 
 float PrincipledBsdf::pdf(const vec3& wo, const vec3& wi) const {
+    ensure_selected();
     BsdfEval eval;
     float pdf;
     eval_pdf(wo, wi, &eval, &pdf);
@@ -680,6 +686,7 @@ const PrincipledBsdf::Lobe* PrincipledBsdf::choose_lobe(float u_lobe) const {
 
 bool PrincipledBsdf::sample(const vec3& wo, float u_lobe, const vec2& u, BsdfSample* out) const {
     if (wo.z <= 0.0f) return false;
+    ensure_selected();
     const Lobe* chosen = choose_lobe(u_lobe);
     if (chosen == nullptr) return false;
     const Lobe& lobe = *chosen;
@@ -722,6 +729,7 @@ vec3 PrincipledBsdf::class_color_sum() const {
 }
 
 DenoisingFeature PrincipledBsdf::denoising_feature(float cos_nv) const {
+    ensure_selected();
     DenoisingFeature feature;
     for (int i = 0; i < lobe_count_; ++i) {
         const Lobe& lobe = lobes_[i];
@@ -764,6 +772,7 @@ void PrincipledBsdf::blur(float alpha) {
 bool PrincipledBsdf::sample_traced(const vec3& wo, float u_lobe, const vec2& u,
                                    BsdfSample* out) const {
     if (wo.z <= 0.0f) return false;
+    ensure_selected();
     float total = 0.0f;
     for (int i = 0; i < lobe_count_; ++i)
         if (lobes_[i].traced()) total += lobes_[i].select_prob;

@@ -112,6 +112,12 @@ class PrincipledBsdf {
     // base_color is the material's base colour times its texture at the hit. back_face: the ray
     // hit the back of the surface (ior inverted). cos_nv: wo.z in the shading frame.
     // The diffuse lobe follows material.diffuse_model, the layering material.principled_model.
+    // Every constructor defers the lobe selection (the selection probabilities and the albedo
+    // estimate, which weigh the specular lobe by its Fresnel colour toward wo: a square root and
+    // a division) to the first call that reads it (pdf, sample, sample_traced,
+    // denoising_feature, albedo_estimate), which runs it once on the same values: a preview pixel
+    // whose lobes are all field lobes never does. A BSDF is therefore not to be read by two
+    // threads at once before such a call (a Shading belongs to one path).
     PrincipledBsdf(const Material& material, const vec3& base_color, bool back_face,
                    float cos_nv, PathOrigin origin = PathOrigin::Camera);
     // The same BSDF from the material's terms computed beforehand (terms ==
@@ -132,7 +138,8 @@ class PrincipledBsdf {
     static PrincipledBsdf material_lobes(const Material& material, const MaterialTerms& terms);
     // The BSDF the full constructor builds for the same material (material.base_color), side
     // and view, from material_lobes(material, terms): the same operations on the same values
-    // for the parts that depend on the hit, so the same bits.
+    // for the parts that depend on the hit, so the same bits (the lobe selection deferred as
+    // above).
     PrincipledBsdf(const PrincipledBsdf& material_lobes, const Material& material,
                    const MaterialTerms& terms, bool back_face, float cos_nv);
 
@@ -191,7 +198,10 @@ class PrincipledBsdf {
     // much of the light arriving from wo the surface scatters, roughly (it leaves out the
     // lobes' directional albedos and, on light paths of PrincipledModel::V2, the layer's
     // dimming of the diffuse). The photon tracer's Russian roulette survival.
-    const vec3& albedo_estimate() const { return albedo_estimate_; }
+    const vec3& albedo_estimate() const {
+        ensure_selected();
+        return albedo_estimate_;
+    }
 
     // --- The split the preview renderer uses (render/preview_renderer.h). "Field lobes" are the
     // non-Dirac diffuse and glossy reflection lobes, whose indirect light comes from an
@@ -223,7 +233,8 @@ class PrincipledBsdf {
         LobeKind kind;
         vec3 weight;        // closure weight
         float alpha;        // GGX alpha (unused for diffuse)
-        float select_prob;  // probability of sampling this lobe
+        // Probability of sampling this lobe; mutable for the deferred selection (ensure_selected).
+        mutable float select_prob;
         bool delta() const { return kind != LobeKind::Diffuse && alpha < kDeltaAlpha; }
         bool traced() const { return delta() || kind == LobeKind::Refraction; }
         LobeClass lobe_class() const;
@@ -239,7 +250,16 @@ class PrincipledBsdf {
     void add_material_lobes(const Material& material, const MaterialTerms& terms,
                             const vec3& base_color, bool back_face, float cos_nv,
                             PathOrigin origin);
-    void select_lobes(float cos_nv);
+    // Sets the selection probabilities and the albedo estimate toward wo (wo.z = cos_nv). const
+    // for ensure_selected: it writes only those mutable members.
+    void select_lobes(float cos_nv) const;
+    // Runs the selection the constructor deferred, once; a no-op after.
+    void ensure_selected() const {
+        if (selection_pending_) {
+            selection_pending_ = false;
+            select_lobes(selection_cos_nv_);
+        }
+    }
     // f |cos| and pdf share their half vector and GGX terms: eval(), pdf() and sample() all go
     // through eval_pdf, which computes both in one pass over the lobes (eval_field, f alone
     // over the field lobes, follows the same steps).
@@ -299,7 +319,10 @@ class PrincipledBsdf {
     vec3 smooth_normal_{0.0f, 0.0f, 1.0f};  // set_smooth_normal
     bool bent_ = false;
     bool microfacet_bump_ = false;
-    vec3 albedo_estimate_{0.0f};
+    mutable vec3 albedo_estimate_{0.0f};  // select_lobes
+    // The deferred lobe selection's view (see the constructors).
+    float selection_cos_nv_ = 1.0f;
+    mutable bool selection_pending_ = false;
 };
 
 }  // namespace shgi

@@ -493,6 +493,33 @@ TEST(Bsdf, MaterialLobesFinishToTheFullConstructorBitForBit) {
                     ASSERT_TRUE(same(a.wi, b.wi) && same(a.weight, b.weight));
                     ASSERT_EQ(a.pdf, b.pdf);
                 }
+                // The finished BSDF defers its lobe selection to the first reader: each reader
+                // called first, on a fresh one, gives the full constructor's bits.
+                const vec3 wi = direction_from_angle(0.7f);
+                const float u_lobe = 0.6f;
+                const vec2 u(0.3f, 0.8f);
+                EXPECT_EQ(full.pdf(wo, wi),
+                          PrincipledBsdf(lobes, material, terms, back_face, wo.z).pdf(wo, wi));
+                BsdfSample a, b;
+                ASSERT_EQ(full.sample(wo, u_lobe, u, &a),
+                          PrincipledBsdf(lobes, material, terms, back_face, wo.z)
+                              .sample(wo, u_lobe, u, &b));
+                EXPECT_TRUE(same(a.wi, b.wi) && same(a.weight, b.weight) && a.pdf == b.pdf);
+                ASSERT_EQ(full.sample_traced(wo, u_lobe, u, &a),
+                          PrincipledBsdf(lobes, material, terms, back_face, wo.z)
+                              .sample_traced(wo, u_lobe, u, &b));
+                EXPECT_TRUE(same(a.wi, b.wi) && same(a.weight, b.weight) && a.pdf == b.pdf);
+                const DenoisingFeature full_feature = full.denoising_feature(wo.z);
+                const DenoisingFeature finished_feature =
+                    PrincipledBsdf(lobes, material, terms, back_face, wo.z).denoising_feature(wo.z);
+                EXPECT_TRUE(same(full_feature.albedo, finished_feature.albedo) &&
+                            same(full_feature.specular_albedo, finished_feature.specular_albedo));
+                EXPECT_EQ(full_feature.weight, finished_feature.weight);
+                EXPECT_EQ(full_feature.nonspecular_weight, finished_feature.nonspecular_weight);
+                // eval() does not select; a later pdf() still does, on the same bits.
+                const PrincipledBsdf evaluated(lobes, material, terms, back_face, wo.z);
+                EXPECT_TRUE(same(full.eval(wo, wi).total(), evaluated.eval(wo, wi).total()));
+                EXPECT_EQ(full.pdf(wo, wi), evaluated.pdf(wo, wi));
                 ++checked;
             }
     }
