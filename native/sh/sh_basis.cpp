@@ -9,14 +9,8 @@ namespace shgi {
 
 namespace {
 
-// Normalisation constants of the polynomial forms, K_lm times the factors that turn
-// P_l^m(z) cos/sin(mφ) into a polynomial in x, y, z (e.g. sin(2φ) sin²θ = 2xy). Computed in
-// double from K_lm (see sh_basis.h) and checked against sh_eval_reference in sh_basis_test.cpp.
-constexpr float kY00 = 0.28209479177387814f;          // 1 / (2√π)
-constexpr float kY1 = 0.48860251190291992f;           // √3 / (2√π)
-constexpr float kY2xy = 1.0925484305920792f;          // Y2-2 = k xy,  Y2-1 = k yz, Y21 = k xz
-constexpr float kY20 = 0.31539156525252005f;          // Y20 = k (3z² - 1)
-constexpr float kY22 = 0.54627421529603959f;          // Y22 = k (x² - y²)
+// Normalisation constants of bands 3 and 4's polynomial forms (bands 0..2's are in sh_basis.h),
+// computed and checked as those.
 constexpr float kY33 = 0.59004358992664363f;          // Y3±3
 constexpr float kY3xyz = 2.8906114426405547f;         // Y3-2 = k xyz
 constexpr float kY31 = 0.45704579946446577f;          // Y3±1 = k {y, x} (5z² - 1)
@@ -96,17 +90,9 @@ int sh_order_from_count(int num_coefficients, const char* what) {
 void sh_eval(int order, const vec3& dir, float* out) {
     check_sh_order(order, "sh_eval");
     const float x = dir.x, y = dir.y, z = dir.z;
-    out[0] = kY00;
-    if (order < 1) return;
-    out[1] = kY1 * y;
-    out[2] = kY1 * z;
-    out[3] = kY1 * x;
-    if (order < 2) return;
-    out[4] = kY2xy * x * y;
-    out[5] = kY2xy * y * z;
-    out[6] = kY20 * (3.0f * z * z - 1.0f);
-    out[7] = kY2xy * x * z;
-    out[8] = kY22 * (x * x - y * y);
+    if (order < 1) return sh_eval_low_bands<0>(dir, out);
+    if (order < 2) return sh_eval_low_bands<1>(dir, out);
+    sh_eval_low_bands<2>(dir, out);
     if (order < 3) return;
     eval_band3(x, y, z, out);
     if (order < 4) return;

@@ -43,6 +43,37 @@ inline void check_sh_order(int order, const char* what) {
 // `what` unless the count is a perfect square (order + 1)^2 with order <= kMaxShOrder.
 int sh_order_from_count(int num_coefficients, const char* what);
 
+// Normalisation constants of bands 0..2's polynomial forms, K_lm times the factors that turn
+// P_l^m(z) cos/sin(mφ) into a polynomial in x, y, z (e.g. sin(2φ) sin²θ = 2xy). Computed in
+// double from K_lm and checked against sh_eval_reference in sh_basis_test.cpp.
+inline constexpr float kShY00 = 0.28209479177387814f;  // 1 / (2√π)
+inline constexpr float kShY1 = 0.48860251190291992f;   // √3 / (2√π)
+inline constexpr float kShY2xy = 1.0925484305920792f;  // Y2-2 = k xy,  Y2-1 = k yz, Y21 = k xz
+inline constexpr float kShY20 = 0.31539156525252005f;  // Y20 = k (3z² - 1)
+inline constexpr float kShY22 = 0.54627421529603959f;  // Y22 = k (x² - y²)
+
+// sh_eval's bands 0..kOrder for kOrder <= 2, inline: the same expressions (so the same bits),
+// for callers that evaluate a low-order expansion once per shading point and keep the basis in
+// registers (sh_evaluate_scaled) rather than pass it through memory.
+template <int kOrder>
+inline void sh_eval_low_bands(const vec3& dir, float* out) {
+    static_assert(kOrder >= 0 && kOrder <= 2, "bands 3 and 4 are sh_eval's");
+    const float x = dir.x, y = dir.y, z = dir.z;
+    out[0] = kShY00;
+    if constexpr (kOrder >= 1) {
+        out[1] = kShY1 * y;
+        out[2] = kShY1 * z;
+        out[3] = kShY1 * x;
+    }
+    if constexpr (kOrder >= 2) {
+        out[4] = kShY2xy * x * y;
+        out[5] = kShY2xy * y * z;
+        out[6] = kShY20 * (3.0f * z * z - 1.0f);
+        out[7] = kShY2xy * x * z;
+        out[8] = kShY22 * (x * x - y * y);
+    }
+}
+
 // Writes Y_0 .. Y_{n-1}, n = sh_num_coefficients(order), at the unit direction `dir` into
 // `out`. `dir` must be normalised (not checked: this is the inner loop of every projection).
 // Throws InvalidArgument for an order outside 0..kMaxShOrder.

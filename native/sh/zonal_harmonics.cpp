@@ -76,18 +76,28 @@ vec3 evaluate_scaled(const ShRgb& sh, const BandFactors& factors, const float* b
 #endif
 }
 
+// evaluate_scaled with the basis of a low order (the fields' 2 and below) computed in place:
+// the nine values stay in registers instead of going through sh_eval's array.
+template <int kOrder>
+vec3 evaluate_scaled_low(const ShRgb& sh, const BandFactors& factors, const vec3& dir) {
+    float basis[sh_num_coefficients(kOrder)];
+    sh_eval_low_bands<kOrder>(dir, basis);
+    return evaluate_scaled<kOrder>(sh, factors, basis);
+}
+
 }  // namespace
 
 vec3 sh_evaluate_scaled(const ShRgb& sh, const BandFactors& factors, const vec3& dir) {
+    switch (sh.order) {
+        case 0: return evaluate_scaled_low<0>(sh, factors, dir);
+        case 1: return evaluate_scaled_low<1>(sh, factors, dir);
+        case 2: return evaluate_scaled_low<2>(sh, factors, dir);
+        default: break;
+    }
     float basis[kMaxShCoefficients];
     sh_eval(sh.order, dir, basis);  // checks the order
-    switch (sh.order) {
-        case 0: return evaluate_scaled<0>(sh, factors, basis);
-        case 1: return evaluate_scaled<1>(sh, factors, basis);
-        case 2: return evaluate_scaled<2>(sh, factors, basis);
-        case 3: return evaluate_scaled<3>(sh, factors, basis);
-        default: return evaluate_scaled<4>(sh, factors, basis);
-    }
+    return sh.order == 3 ? evaluate_scaled<3>(sh, factors, basis)
+                         : evaluate_scaled<4>(sh, factors, basis);
 }
 
 }  // namespace shgi
