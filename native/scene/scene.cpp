@@ -64,10 +64,8 @@ void check_ray(const Ray& ray, const char* name, const RayLimits& limits,
 // the chunking.
 void check_rays(const std::vector<Ray>& rays, const RayLimits& limits,
                 const std::string& limit_reason) {
-    // The first invalid ray, found by a loop without calls (so the limits stay in registers);
-    // check_ray then names its problem.
-    size_t i = 0;
-    while (i < rays.size() && is_valid_ray(rays[i], limits)) ++i;
+    // The first invalid ray, found four rays at a time; check_ray then names its problem.
+    const size_t i = first_invalid_ray(rays.data(), rays.size(), limits);
     if (i < rays.size())
         check_ray(rays[i], format_message("rays[", i, "]").c_str(), limits, limit_reason);
 }
