@@ -1,7 +1,13 @@
 #include "scene/embree_scene.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <cstring>
+#include <iterator>
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#include <emmintrin.h>
+#endif
 
 #include "scene/embree_device.h"
 #include "scene/scene.h"
@@ -103,8 +109,47 @@ Hit from_embree(const RTCRayHit& in) {
 // test).
 constexpr unsigned kPacket = 16;
 
-// Lane `lane` of a packet, written field by field into Embree's structure-of-arrays layout
-// (the packing is on every coherent ray's path, so no per-field copies through RTCRay).
+#if defined(__SSE2__)
+// The packet's lanes from `size` rays (1..kPacket), four lanes at a time: a Ray is eight packed
+// floats (origin, direction, tmin, tmax), so a 4 x 4 transpose of four rays' first halves gives
+// four lanes of org_x, org_y, org_z and dir_x, one of their second halves dir_y, dir_z, tnear and
+// tfar. Lanes past `size` repeat the last ray, so Embree never reads uninitialised values. Only
+// loads, shuffles and stores: the same bits as one scalar store per field and lane, in a quarter
+// of the instructions (the packing is on every coherent ray's path).
+void set_lanes(RTCRay16& packet, const Ray* rays, size_t size) {
+    static_assert(sizeof(Ray) == 8 * sizeof(float), "Ray is eight packed floats");
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 all_ones = _mm_castsi128_ps(_mm_set1_epi32(-1));
+    for (unsigned lane = 0; lane < kPacket; lane += 4) {
+        const auto* r0 = reinterpret_cast<const float*>(&rays[std::min<size_t>(lane, size - 1)]);
+        const auto* r1 =
+            reinterpret_cast<const float*>(&rays[std::min<size_t>(lane + 1, size - 1)]);
+        const auto* r2 =
+            reinterpret_cast<const float*>(&rays[std::min<size_t>(lane + 2, size - 1)]);
+        const auto* r3 =
+            reinterpret_cast<const float*>(&rays[std::min<size_t>(lane + 3, size - 1)]);
+        __m128 a0 = _mm_loadu_ps(r0), a1 = _mm_loadu_ps(r1), a2 = _mm_loadu_ps(r2),
+               a3 = _mm_loadu_ps(r3);
+        _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
+        _mm_store_ps(packet.org_x + lane, a0);
+        _mm_store_ps(packet.org_y + lane, a1);
+        _mm_store_ps(packet.org_z + lane, a2);
+        _mm_store_ps(packet.dir_x + lane, a3);
+        __m128 b0 = _mm_loadu_ps(r0 + 4), b1 = _mm_loadu_ps(r1 + 4), b2 = _mm_loadu_ps(r2 + 4),
+               b3 = _mm_loadu_ps(r3 + 4);
+        _MM_TRANSPOSE4_PS(b0, b1, b2, b3);
+        _mm_store_ps(packet.dir_y + lane, b0);
+        _mm_store_ps(packet.dir_z + lane, b1);
+        _mm_store_ps(packet.tnear + lane, b2);
+        _mm_store_ps(packet.tfar + lane, b3);
+        _mm_store_ps(packet.time + lane, zero);
+        _mm_store_ps(reinterpret_cast<float*>(packet.mask + lane), all_ones);
+        _mm_store_ps(reinterpret_cast<float*>(packet.id + lane), zero);
+        _mm_store_ps(reinterpret_cast<float*>(packet.flags + lane), zero);
+    }
+}
+#else
+// Lane `lane` of a packet, written field by field into Embree's structure-of-arrays layout.
 void set_lane(RTCRay16& packet, unsigned lane, const Ray& ray) {
     packet.org_x[lane] = ray.origin.x;
     packet.org_y[lane] = ray.origin.y;
@@ -120,6 +165,14 @@ void set_lane(RTCRay16& packet, unsigned lane, const Ray& ray) {
     packet.flags[lane] = 0;
 }
 
+// The packet's lanes from `size` rays (1..kPacket); lanes past `size` repeat the last ray, so
+// Embree never reads uninitialised values.
+void set_lanes(RTCRay16& packet, const Ray* rays, size_t size) {
+    for (unsigned lane = 0; lane < kPacket; ++lane)
+        set_lane(packet, lane, rays[std::min<size_t>(lane, size - 1)]);
+}
+#endif
+
 Hit hit_of_lane(const RTCRayHit16& packet, unsigned lane) {
     Hit hit;
     if (packet.hit.geomID[lane] == RTC_INVALID_GEOMETRY_ID) return hit;
@@ -132,20 +185,70 @@ Hit hit_of_lane(const RTCRayHit16& packet, unsigned lane) {
     return hit;
 }
 
-// For each packet of up to kPacket consecutive rays: fill(lane, ray) for every lane (the
-// masked-off lanes of a partial last packet repeat its last ray, so Embree never reads
-// uninitialised values), trace(valid), then read(lane, index of the ray) for the packet's rays.
+// The packet's first `size` hits, as hit_of_lane gives them. In SSE2 four lanes at a time: a
+// Hit is eight packed 32-bit words (t, instance, triangle, u, v, Ng), so the lanes' words are
+// chosen (a miss's are Hit{}'s, instance_of's choice between instID and geomID) with masks and
+// turned into four Hits by two 4 x 4 transposes: only moves, the same bits as hit_of_lane.
+void read_hits(const RTCRayHit16& packet, Hit* hits, size_t size) {
+    unsigned lane = 0;
+#if defined(__SSE2__)
+    static_assert(sizeof(Hit) == 8 * sizeof(float) && offsetof(Hit, t) == 0 &&
+                      offsetof(Hit, instance_id) == 4 && offsetof(Hit, triangle_id) == 8 &&
+                      offsetof(Hit, barycentrics) == 12 && offsetof(Hit, geometric_normal) == 20,
+                  "Hit is eight packed words: t, instance, triangle, u, v, Ng");
+    static_assert(kInvalidId == RTC_INVALID_GEOMETRY_ID, "a miss's ids are Embree's invalid id");
+    const __m128 invalid = _mm_castsi128_ps(_mm_set1_epi32(int(RTC_INVALID_GEOMETRY_ID)));
+    const __m128 infinity = _mm_set1_ps(Hit{}.t);
+    // mask ? a : b, bit by bit.
+    const auto select = [](__m128 mask, __m128 a, __m128 b) {
+        return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
+    };
+    const auto words = [](const auto* lanes) {
+        return _mm_load_ps(reinterpret_cast<const float*>(lanes));
+    };
+    for (; lane + 4 <= size; lane += 4) {
+        const __m128 geometry = words(packet.hit.geomID + lane);
+        const __m128 instance = words(packet.hit.instID[0] + lane);
+        const __m128 miss = _mm_castsi128_ps(
+            _mm_cmpeq_epi32(_mm_castps_si128(geometry), _mm_castps_si128(invalid)));
+        const __m128 flattened = _mm_castsi128_ps(
+            _mm_cmpeq_epi32(_mm_castps_si128(instance), _mm_castps_si128(invalid)));
+        __m128 t = select(miss, infinity, words(packet.ray.tfar + lane));
+        __m128 id = select(miss, invalid, select(flattened, geometry, instance));
+        __m128 triangle = select(miss, invalid, words(packet.hit.primID + lane));
+        __m128 u = _mm_andnot_ps(miss, words(packet.hit.u + lane));
+        __m128 v = _mm_andnot_ps(miss, words(packet.hit.v + lane));
+        __m128 nx = _mm_andnot_ps(miss, words(packet.hit.Ng_x + lane));
+        __m128 ny = _mm_andnot_ps(miss, words(packet.hit.Ng_y + lane));
+        __m128 nz = _mm_andnot_ps(miss, words(packet.hit.Ng_z + lane));
+        _MM_TRANSPOSE4_PS(t, id, triangle, u);
+        _MM_TRANSPOSE4_PS(v, nx, ny, nz);
+        auto* out = reinterpret_cast<float*>(hits + lane);
+        _mm_storeu_ps(out, t);
+        _mm_storeu_ps(out + 4, v);
+        _mm_storeu_ps(out + 8, id);
+        _mm_storeu_ps(out + 12, nx);
+        _mm_storeu_ps(out + 16, triangle);
+        _mm_storeu_ps(out + 20, ny);
+        _mm_storeu_ps(out + 24, u);
+        _mm_storeu_ps(out + 28, nz);
+    }
+#endif
+    for (; lane < size; ++lane) hits[lane] = hit_of_lane(packet, lane);
+}
+
+// For each packet of up to kPacket consecutive rays: fill(rays, size) sets its lanes
+// (set_lanes), trace(valid), then read(begin, size) takes the results of rays
+// [begin, begin + size).
 template <typename Fill, typename Trace, typename Read>
 void for_each_packet(const Ray* rays, size_t count, Fill&& fill, Trace&& trace, Read&& read) {
     alignas(64) int valid[kPacket];
     for (size_t begin = 0; begin < count; begin += kPacket) {
         const size_t size = std::min<size_t>(kPacket, count - begin);
-        for (unsigned lane = 0; lane < kPacket; ++lane) {
-            valid[lane] = lane < size ? -1 : 0;
-            fill(lane, rays[begin + std::min<size_t>(lane, size - 1)]);
-        }
+        for (unsigned lane = 0; lane < kPacket; ++lane) valid[lane] = lane < size ? -1 : 0;
+        fill(rays + begin, size);
         trace(valid);
-        for (unsigned lane = 0; lane < size; ++lane) read(lane, begin + lane);
+        read(begin, size);
     }
 }
 
@@ -154,22 +257,27 @@ void intersect_packets(RTCScene scene, RTCIntersectContext* context, const Ray* 
     alignas(64) RTCRayHit16 packet;
     for_each_packet(
         rays, count,
-        [&](unsigned lane, const Ray& ray) {
-            set_lane(packet.ray, lane, ray);
-            packet.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
-            packet.hit.instID[0][lane] = RTC_INVALID_GEOMETRY_ID;
+        [&](const Ray* first, size_t size) {
+            set_lanes(packet.ray, first, size);
+            std::fill(std::begin(packet.hit.geomID), std::end(packet.hit.geomID),
+                      RTC_INVALID_GEOMETRY_ID);
+            std::fill(std::begin(packet.hit.instID[0]), std::end(packet.hit.instID[0]),
+                      RTC_INVALID_GEOMETRY_ID);
         },
         [&](const int* valid) { rtcIntersect16(valid, scene, context, &packet); },
-        [&](unsigned lane, size_t i) { hits[i] = hit_of_lane(packet, lane); });
+        [&](size_t begin, size_t size) { read_hits(packet, hits + begin, size); });
 }
 
 void occluded_packets(RTCScene scene, RTCIntersectContext* context, const Ray* rays,
                       uint8_t* occluded, size_t count) {
     alignas(64) RTCRay16 packet;
     for_each_packet(
-        rays, count, [&](unsigned lane, const Ray& ray) { set_lane(packet, lane, ray); },
+        rays, count, [&](const Ray* first, size_t size) { set_lanes(packet, first, size); },
         [&](const int* valid) { rtcOccluded16(valid, scene, context, &packet); },
-        [&](unsigned lane, size_t i) { occluded[i] = occluded_flag(packet.tfar[lane]); });
+        [&](size_t begin, size_t size) {
+            for (unsigned lane = 0; lane < size; ++lane)
+                occluded[begin + lane] = occluded_flag(packet.tfar[lane]);
+        });
 }
 
 // What a top-level build is called in errors: the flattened meshes' triangles are built there,

@@ -64,10 +64,8 @@ void check_ray(const Ray& ray, const char* name, const RayLimits& limits,
 // the chunking.
 void check_rays(const std::vector<Ray>& rays, const RayLimits& limits,
                 const std::string& limit_reason) {
-    // The first invalid ray, found by a loop without calls (so the limits stay in registers);
-    // check_ray then names its problem.
-    size_t i = 0;
-    while (i < rays.size() && is_valid_ray(rays[i], limits)) ++i;
+    // The first invalid ray, found four rays at a time; check_ray then names its problem.
+    const size_t i = first_invalid_ray(rays.data(), rays.size(), limits);
     if (i < rays.size())
         check_ray(rays[i], format_message("rays[", i, "]").c_str(), limits, limit_reason);
 }
@@ -800,7 +798,8 @@ void Scene::require_committed(const char* query) const {
 
 void Scene::finish_hit(Hit& hit) const {
     if (hit.valid())
-        hit.geometric_normal = normal_from_embree_[hit.instance_id] * hit.geometric_normal;
+        hit.geometric_normal =
+            transform_normal(normal_from_embree_[hit.instance_id], hit.geometric_normal);
 }
 
 Hit Scene::intersect(const Ray& ray) const {
@@ -826,11 +825,12 @@ void Scene::intersect(const std::vector<Ray>& rays, std::vector<Hit>& hits,
                       Progress* progress, RayCoherence coherence) const {
     require_committed("intersect");
     check_rays(rays, ray_limits_, ray_limit_reason_);
-    hits.assign(rays.size(), Hit{});
     if (empty()) {
+        hits.assign(rays.size(), Hit{});
         throw_if_cancelled(progress);
         return;
     }
+    hits.resize(rays.size());  // every hit is written by the trace below
     const auto trace = [&](uint64_t begin, uint64_t end) {
         embree_->intersect(&rays[begin], &hits[begin], end - begin, coherence);
         for (uint64_t i = begin; i < end; ++i) finish_hit(hits[i]);

@@ -694,6 +694,71 @@ TEST(SceneValidation, FastRayTestAgreesWithTheNamedProblem) {
     EXPECT_LT(valid, checked);
 }
 
+// first_invalid_ray tests four rays at a time: it must name the same ray as is_valid_ray
+// checked one by one, wherever the bad ray sits in its group of four and in a batch's
+// remainder, for every field's edge values and for lowered limits.
+TEST(SceneValidation, FirstInvalidRayIsTheFirstThatIsValidRayRejects) {
+    const float max = std::numeric_limits<float>::max();
+    const std::vector<float> values = {0.0f, -0.0f, 1e-4f, -1.0f, 1.0f, 1e18f, -1e18f,
+                                       std::nextafter(1e18f, max), max, kInfinity,
+                                       -kInfinity, kNaN};
+    std::vector<Ray> odd;  // valid and invalid rays, one edge value at a time per field
+    for (float a : values) {
+        odd.push_back(make_ray(vec3(a, 1.0f, 0.5f), vec3(0, 0, 1)));
+        odd.push_back(make_ray(vec3(0.5f, a, 0.5f), vec3(0, 0, 1)));
+        odd.push_back(make_ray(vec3(0.5f, 0.5f, a), vec3(0, 0, 1)));
+        odd.push_back(make_ray(vec3(0.5f), vec3(a, 0, 0)));
+        odd.push_back(make_ray(vec3(0.5f), vec3(0, a, 0)));
+        odd.push_back(make_ray(vec3(0.5f), vec3(0, 0, a)));
+        odd.push_back(make_ray(vec3(0.5f), vec3(1, 0, 0), a, 1.0f));
+        odd.push_back(make_ray(vec3(0.5f), vec3(1, 0, 0), 0.0f, a));
+    }
+    const Ray good = make_ray(vec3(0.5f), vec3(0, 0, -1));
+    const auto scalar_first = [](const std::vector<Ray>& rays, const RayLimits& limits) {
+        size_t i = 0;
+        while (i < rays.size() && is_valid_ray(rays[i], limits)) ++i;
+        return i;
+    };
+    size_t batches = 0, found = 0;
+    for (const RayLimits& limits : {RayLimits{}, RayLimits{1e3f, 10.0f, 1e-3f}})
+        for (const Ray& ray : odd)
+            for (size_t size = 1; size <= 9; ++size)
+                for (size_t at = 0; at < size; ++at) {
+                    std::vector<Ray> rays(size, good);
+                    rays[at] = ray;
+                    const size_t expected = scalar_first(rays, limits);
+                    ASSERT_EQ(first_invalid_ray(rays.data(), rays.size(), limits), expected)
+                        << "ray " << (&ray - odd.data()) << " at " << at << " of " << size;
+                    ++batches;
+                    found += expected < size ? 1 : 0;
+                }
+    EXPECT_GT(found, 0u);          // some edge values are rejected...
+    EXPECT_LT(found, batches);     // ...and some accepted
+    EXPECT_EQ(first_invalid_ray(nullptr, 0), 0u);
+}
+
+// transform_normal (every hit's normal into world space) is glm's mat3 * vec3 in SSE2: the
+// same bits on random matrices and normals, and on signed zeros, infinities and NaN.
+TEST(SceneIntersect, TransformNormalIsGlmBitForBit) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> uniform(-3.0f, 3.0f);
+    const std::vector<float> edges = {0.0f, -0.0f, 1.0f, -1.0f, 1e-40f, 3e38f, kInfinity,
+                                      -kInfinity, kNaN};
+    int checked = 0;
+    for (int i = 0; i < 2000; ++i) {
+        mat3 m;
+        for (int c = 0; c < 3; ++c)
+            for (int r = 0; r < 3; ++r) m[c][r] = i % 4 == 0 ? float(r == c) : uniform(rng);
+        vec3 n(uniform(rng), uniform(rng), uniform(rng));
+        if (i % 3 == 0) n[i % 2] = edges[size_t(i / 3) % edges.size()];
+        const vec3 expected = m * n, got = transform_normal(m, n);
+        ASSERT_EQ(std::memcmp(&expected, &got, sizeof(vec3)), 0)
+            << "matrix " << i << ": " << expected.x << " " << got.x;
+        ++checked;
+    }
+    EXPECT_EQ(checked, 2000);
+}
+
 TEST(SceneValidation, QueriesBeforeCommitAreRejected) {
     Scene scene;
     scene.add_instance(scene.add_mesh(unit_quad()), mat4(1.0f));
