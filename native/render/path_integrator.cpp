@@ -345,6 +345,7 @@ void PathIntegrator::finish() {
 // Adds what the ray meets: point/spot disks and area lights in front of the hit, the hit's own
 // emission, or the world and suns when it escapes.
 void PathIntegrator::find_emission(const Ray& ray, const Hit& hit) {
+    if (!lights_.may_emit(hit, vertex_ == 0)) return;  // the common case, without a call
     lights_.for_each_emission(ray.origin, last_normal_, ray.direction, hit, vertex_ == 0,
                               [&](const EmissionHit& emission, bool is_world) {
                                   add_emission(emission.radiance, emission.light_pdf, is_world);
