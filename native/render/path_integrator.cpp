@@ -294,7 +294,9 @@ bool PathIntegrator::begin(const Ray& camera_ray, const Hit& first_hit) {
 
 // What ray_ meets up to `hit`, then the shading of that surface; false when the path ends here.
 bool PathIntegrator::enter_surface(const Hit& hit) {
-    find_emission(ray_, hit);
+    // The test before the call answers the common case (a surface that does not emit, no
+    // lamp the ray can cross) without find_emission's register saves.
+    if (lights_.may_emit(hit, vertex_ == 0)) find_emission(ray_, hit);
     if (!hit.valid() || terminate_on_next_surface_) return false;
     // Both memos may be null (no set_shading_memo): each callee then computes afresh.
     const bool memo = shading_memo_ != nullptr;
@@ -345,7 +347,6 @@ void PathIntegrator::finish() {
 // Adds what the ray meets: point/spot disks and area lights in front of the hit, the hit's own
 // emission, or the world and suns when it escapes.
 void PathIntegrator::find_emission(const Ray& ray, const Hit& hit) {
-    if (!lights_.may_emit(hit, vertex_ == 0)) return;  // the common case, without a call
     lights_.for_each_emission(ray.origin, last_normal_, ray.direction, hit, vertex_ == 0,
                               [&](const EmissionHit& emission, bool is_world) {
                                   add_emission(emission.radiance, emission.light_pdf, is_world);
