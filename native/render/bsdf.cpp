@@ -748,18 +748,6 @@ DenoisingFeature PrincipledBsdf::denoising_feature(float cos_nv) const {
     return feature;
 }
 
-bool PrincipledBsdf::has_smooth_lobes() const {
-    for (int i = 0; i < lobe_count_; ++i)
-        if (!lobes_[i].delta()) return true;
-    return false;
-}
-
-bool PrincipledBsdf::has_traced_lobes() const {
-    for (int i = 0; i < lobe_count_; ++i)
-        if (lobes_[i].traced()) return true;
-    return false;
-}
-
 void PrincipledBsdf::blur(float alpha) {
     for (int i = 0; i < lobe_count_; ++i) {
         Lobe& lobe = lobes_[i];

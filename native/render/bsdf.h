@@ -181,11 +181,20 @@ class PrincipledBsdf {
     // weight, the specular lobe's times its Fresnel colour toward wo (PrincipledModel::V2: its
     // estimated albedo, GlossCol); weights are the lobes' selection probabilities.
     DenoisingFeature denoising_feature(float cos_nv) const;
-    // True when at least one lobe is not a Dirac lobe (light sampling can help).
-    bool has_smooth_lobes() const;
+    // True when at least one lobe is not a Dirac lobe (light sampling can help). Inline (as
+    // has_traced_lobes): a preview path asks both once a pixel.
+    bool has_smooth_lobes() const {
+        for (int i = 0; i < lobe_count_; ++i)
+            if (!lobes_[i].delta()) return true;
+        return false;
+    }
     // True when at least one lobe is traced (see sample_traced below): without one,
     // sample_traced fails whatever its numbers.
-    bool has_traced_lobes() const;
+    bool has_traced_lobes() const {
+        for (int i = 0; i < lobe_count_; ++i)
+            if (lobes_[i].traced()) return true;
+        return false;
+    }
     // Light Paths > Filter Glossy (Cycles' bsdf_blur): every microfacet lobe (specular, glass
     // reflection, refraction) widens to a GGX alpha of at least `alpha`, so a mirror seen through
     // a diffuse bounce is a rough reflection that light sampling reaches. Only the lobes' alpha

@@ -173,12 +173,22 @@ LightSampler::LightSampler(const Scene& scene, WorldSampling world_sampling, boo
         emission.area = area_light_area(light);
         emission.radiance = light.color * area_radiance_from_power(light.power, emission.area);
     }
+    for (uint32_t i = 0; i < scene.lights().size(); ++i) {
+        const Light& light = scene.lights()[i];
+        const bool disk = (light.type == LightType::Point || light.type == LightType::Spot) &&
+                          light.radius > 0.0f;
+        if (!light_active_[i] || !(disk || light.type == LightType::Area)) continue;
+        crossable_lights_[0].push_back(i);
+        if (light.visible_camera) crossable_lights_[1].push_back(i);
+    }
     const auto& triangles = scene.emissive_triangles();
     triangle_emitter_.assign(triangles.size(), kInvalidId);
+    instance_emits_.assign(scene.instances().size(), 0);
     for (uint32_t i = 0; i < triangles.size(); ++i) {
         const LightBounds bounds = triangle_bounds(triangles[i]);
         if (!(bounds.energy > 0.0f)) continue;
         emissive_index_[triangle_key(triangles[i].instance_id, triangles[i].triangle_id)] = i;
+        instance_emits_[triangles[i].instance_id] = 1;
         if (!sample_lights) continue;
         triangle_emitter_[i] = uint32_t(emitters_.size());
         add_local(Kind::Triangle, i, bounds);
@@ -529,10 +539,10 @@ bool LightSampler::intersect_lights(const vec3& p, const vec3& wi, float t_max, 
                                     EmissionHit* out) const {
     float best_t = t_max;
     bool found = false;
-    for (uint32_t i = 0; i < scene_->lights().size(); ++i) {
-        if (!light_active_[i]) continue;
-        const Light& light = scene_->lights()[i];  // portals do not emit: skipped above
-        if (camera_ray && !light.visible_camera) continue;
+    // Only the lights this loop can meet (emitting disks and area lights; for a camera ray,
+    // those it sees), in scene order: the others were skipped at the loop's top.
+    for (const uint32_t i : crossable_lights_[camera_ray ? 1 : 0]) {
+        const Light& light = scene_->lights()[i];  // portals do not emit: not listed
         const bool disk = (light.type == LightType::Point || light.type == LightType::Spot) &&
                           light.radius > 0.0f;
         float t, cos_light, area;
@@ -578,7 +588,7 @@ std::vector<EmissionHit> LightSampler::escaped(const vec3& p, const vec3& n, con
 }
 
 EmissionHit LightSampler::triangle_emission(const vec3& p, const Hit& hit, const vec3& wi) const {
-    if (emissive_index_.empty()) return {};  // spares a hash lookup per hit in most scenes
+    if (!instance_emits(hit)) return {};  // spares a hash lookup per hit on other instances
     const auto found = emissive_index_.find(triangle_key(hit.instance_id, hit.triangle_id));
     if (found == emissive_index_.end()) return {};
     const EmissiveTriangle& tri = scene_->emissive_triangles()[found->second];

@@ -294,7 +294,9 @@ bool PathIntegrator::begin(const Ray& camera_ray, const Hit& first_hit) {
 
 // What ray_ meets up to `hit`, then the shading of that surface; false when the path ends here.
 bool PathIntegrator::enter_surface(const Hit& hit) {
-    find_emission(ray_, hit);
+    // The test before the call answers the common case (a surface that does not emit, no
+    // lamp the ray can cross) without find_emission's register saves.
+    if (lights_.may_emit(hit, vertex_ == 0)) find_emission(ray_, hit);
     if (!hit.valid() || terminate_on_next_surface_) return false;
     // Both memos may be null (no set_shading_memo): each callee then computes afresh.
     const bool memo = shading_memo_ != nullptr;
@@ -320,7 +322,15 @@ void PathIntegrator::blur_glossy(Shading* shading) const {
 // light, then the BSDF chooses whether and where the path continues.
 void PathIntegrator::finish() {
     for (;;) {
-        if (vertex_field() != nullptr) add_field(shading_.value);
+        const bool field_vertex = vertex_field() != nullptr;
+        if (field_vertex) add_field(shading_.value);
+        if (field_vertex && !shading_.value.bsdf.has_traced_lobes()) {
+            // scatter() would fail (sample_traced: the path ends at a preview's matte and
+            // glossy surfaces), so it is not called: its three numbers are skipped rather than
+            // drawn, for callers that go on with the same generator.
+            rng_.advance(3);
+            return;
+        }
         if (!scatter(shading_.value, &ray_)) return;
         const int total = bounces_[0] + bounces_[1] + bounces_[2];
         terminate_on_next_surface_ = total > settings_.max_bounces ||
@@ -536,16 +546,10 @@ bool PathIntegrator::first_field_query(vec3* position, vec3* normal, vec3* wo) c
     return true;
 }
 
-// Samples the BSDF, updates throughput, bounce counts and MIS state; false ends the path.
+// Samples the BSDF, updates throughput, bounce counts and MIS state; false ends the path. At a
+// field vertex only where the BSDF has a traced lobe (finish() ends the path otherwise).
 bool PathIntegrator::scatter(const Shading& shading, Ray* ray) {
-    const bool field_vertex = vertex_field() != nullptr;
-    if (field_vertex && !shading.bsdf.has_traced_lobes()) {
-        // sample_traced would fail (the path ends at a preview's matte and glossy surfaces):
-        // its three numbers are skipped rather than drawn, for callers that go on with the
-        // same generator.
-        rng_.advance(3);
-        return false;
-    }
+    const bool field_vertex = vertex_field() != nullptr;  // with a traced lobe (finish())
     BsdfSample bs;
     float u_lobe = rng_.next_float();
     vec2 u = rng_.next_vec2();

@@ -330,6 +330,92 @@ TEST(LightSampler, WithoutLightsSamplesOnlyTheWorldButRaysStillSeeLightsAndTrian
     EXPECT_FALSE(on_quad.delta);
 }
 
+// LightSampler::may_emit, the test a path makes before looking for emission where its ray
+// ends (for_each_emission): against the scene itself, a ray it answers false for crosses no
+// emitting disk or area light before its hit (none the camera sees, for a camera ray) and hits
+// no emissive triangle; rays that do meet the quad, the area light or a lamp's disk are all
+// answered true. Lamps hidden from the camera (the default) leave camera rays nothing to cross.
+TEST(LightSampler, RaysSkipEmissionOnlyWhereTheyCanMeetNone) {
+    // A lamp with a disk (light 2), which rays can cross; `shown`: the area light (6) seen by
+    // the camera.
+    const auto make = [](bool shown) {
+        Scene scene = many_light_scene();
+        Light disk = scene.lights()[2];
+        disk.radius = 0.5f;
+        scene.set_light(2, disk);
+        Light area = scene.lights()[6];
+        area.visible_camera = shown;
+        scene.set_light(6, area);
+        scene.commit();
+        return scene;
+    };
+    const Scene scene = make(false), shown_scene = make(true);
+    ASSERT_EQ(scene.lights()[6].type, LightType::Area);
+    const LightSampler hidden(scene, WorldSampling::Cosine);
+    EXPECT_TRUE(hidden.has_crossable_lights(false));
+    EXPECT_FALSE(hidden.has_crossable_lights(true));
+    const LightSampler shown(shown_scene, WorldSampling::Cosine);
+    EXPECT_TRUE(shown.has_crossable_lights(true));
+    // The reference: what the ray meets, from the scene's own lists.
+    const auto meets = [&](const Scene& s, const Ray& ray, const Hit& hit, bool camera) {
+        for (const EmissiveTriangle& tri : s.emissive_triangles())
+            if (hit.valid() && tri.instance_id == hit.instance_id &&
+                tri.triangle_id == hit.triangle_id && luminance(tri.radiance) > 0.0f)
+                return true;
+        for (const Light& light : s.lights()) {
+            if (camera && !light.visible_camera) continue;
+            if (light.type == LightType::Area) {
+                float t, cos_axis;
+                if (area_light_crossing(light, ray.origin, ray.direction, &t, &cos_axis) &&
+                    cos_axis < 0.0f && t < hit.t)
+                    return true;
+            } else if (light.type == LightType::Point && light.radius > 0.0f) {
+                // The disk facing the ray's origin: within the radius of the line's closest
+                // approach to the centre, in front of the hit (a conservative test).
+                const vec3 to_center = light.position() - ray.origin;
+                const float along = glm::dot(to_center, ray.direction);
+                const vec3 off = to_center - along * ray.direction;
+                if (along > 0.0f && glm::dot(off, off) <= light.radius * light.radius &&
+                    along - light.radius < hit.t)
+                    return true;
+            }
+        }
+        return false;
+    };
+    Pcg32 rng(11);
+    int skipped = 0, met[2] = {0, 0};
+    for (int i = 0; i < 40000; ++i) {
+        Ray ray;
+        const bool down = i % 2 == 0;  // from above the lights, or from the floor
+        ray.origin = vec3(16.0f * rng.next_float() - 8.0f, 16.0f * rng.next_float() - 8.0f,
+                          down ? 7.0f : 0.01f);
+        const vec3 d = sample_uniform_sphere(rng.next_vec2());
+        ray.direction = vec3(d.x, d.y, down ? -std::fabs(d.z) : std::fabs(d.z));
+        for (const LightSampler* lights : {&hidden, &shown}) {
+            const Scene& s = lights == &hidden ? scene : shown_scene;
+            const Hit hit = s.intersect(ray);
+            for (const bool camera : {false, true}) {
+                int added = 0;
+                lights->for_each_emission(ray.origin, vec3(0.0f, 0.0f, 1.0f), ray.direction, hit,
+                                          camera, [&](const EmissionHit&, bool) { ++added; });
+                if (!lights->may_emit(hit, camera)) {
+                    ++skipped;
+                    EXPECT_EQ(added, 0);
+                    EXPECT_FALSE(meets(s, ray, hit, camera)) << "ray " << i;
+                } else if (hit.valid() && meets(s, ray, hit, camera)) {
+                    ++met[camera ? 1 : 0];
+                }
+            }
+        }
+    }
+    std::printf("rays skipped %d; rays meeting an emitter %d, camera rays %d\n", skipped, met[0],
+                met[1]);
+    // Every branch was taken: skipped rays, and rays that meet emitters, camera rays included.
+    EXPECT_GT(skipped, 1000);
+    EXPECT_GT(met[0], 100);
+    EXPECT_GT(met[1], 10);
+}
+
 // Twelve point lights of four powers above a small plane 5 m below, the world dark, committed;
 // *irradiance: the analytic irradiance sum I cos / d^2 they give at p on unit normal n.
 Scene twelve_point_lights(const vec3& p, const vec3& n, double* irradiance) {
