@@ -23,21 +23,27 @@ import scenes  # noqa: E402  (examples/scenes.py)
 PASSES = ("Combined", "DiffInd", "DiffCol", "GlossInd", "GlossCol")
 
 
+def scene_and_reference(name, cache):
+    """The agreement tests' scene `name` at scale 0.25 and its 2048-spp path-traced PASSES, kept
+    in the folder `cache` between runs (bench/instant_gi_glossy_horizon.py reads them too)."""
+    builder = getattr(scenes, name)(0.25)
+    builder.scene.commit()
+    scene = builder.scene
+    cache = pathlib.Path(cache)
+    cache.mkdir(parents=True, exist_ok=True)
+    path = cache / f"{name}_0.25_2048.npz"
+    if not path.exists():
+        passes = shgi.render_path_traced(scene, shgi.PathTracerSettings(samples=2048, seed=11))
+        np.savez(path, **{p: passes[p] for p in PASSES})
+    return scene, np.load(path)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cache", default="/tmp/shgi_refs")
     args = parser.parse_args()
-    cache = pathlib.Path(args.cache)
-    cache.mkdir(parents=True, exist_ok=True)
     for name in ("cornell_box", "sun_room"):
-        builder = getattr(scenes, name)(0.25)
-        builder.scene.commit()
-        scene = builder.scene
-        path = cache / f"{name}_0.25_2048.npz"
-        if not path.exists():
-            passes = shgi.render_path_traced(scene, shgi.PathTracerSettings(samples=2048, seed=11))
-            np.savez(path, **{p: passes[p] for p in PASSES})
-        reference = np.load(path)
+        scene, reference = scene_and_reference(name, args.cache)
         lattice = shgi.PhotonLattice(scene, shgi.PhotonLatticeSettings(seed=5))
         lattice.solve()
         preview, _ = shgi.render_preview(scene, lattice, shgi.PreviewSettings(seed=5))
