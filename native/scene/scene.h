@@ -106,6 +106,10 @@ struct SurfacePoint {
     uint32_t material_id = 0;
     uint32_t instance_id = kInvalidId;
     uint32_t triangle_id = kInvalidId;
+
+    // The defaults above, member by member: with the defaulted constructor GCC cleared the whole
+    // point with a `rep stos` (slow to start) before Scene::surface_point overwrote most of it.
+    SurfacePoint() {}
 };
 
 // The last triangle whose geometric normal Scene::surface_point computed for a caller, and that
