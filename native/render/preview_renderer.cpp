@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <memory>
+#include <new>
 #include <optional>
+#include <type_traits>
 #include <vector>
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -290,7 +292,10 @@ class FrameWork {
             PathIntegrator& lead = *wave.paths[first + sharing.lead];
             vec3 p, n, wo;
             if (!lead.first_field_query(&p, &n, &wo)) continue;
-            wave.lookups[q] = field_.view_lookup(p, n, wo);
+            // Built in the wave's entry (the call's return slot): assigning the returned value
+            // would copy its ~0.3 KB.
+            static_assert(std::is_trivially_destructible_v<FieldLookup>);
+            ::new (static_cast<void*>(&wave.lookups[q])) FieldLookup(field_.view_lookup(p, n, wo));
             wave.irradiance[q].reset();
             lead.share_first_field_lookup(&wave.lookups[q], &wave.irradiance[q]);
             for (uint32_t k = 0; k < size; ++k)
