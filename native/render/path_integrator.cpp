@@ -199,6 +199,10 @@ struct OwenSobol8 {
 };
 
 // pixel_samples' loop over whole groups of eight pixels; returns how many pixels it did.
+static_assert(sizeof(PixelSample) == 32 && offsetof(PixelSample, u_select) == 8 &&
+                  offsetof(PixelSample, u_light) == 12 && offsetof(PixelSample, u_lobe) == 20 &&
+                  offsetof(PixelSample, u_bsdf) == 24,
+              "pixel_samples_avx2 writes a PixelSample as eight packed floats");
 SHGI_AVX2 size_t pixel_samples_avx2(uint64_t seed, const uint32_t* pixels, size_t count,
                                     uint64_t sample, PixelSample* out) {
     const uint32_t reversed = owen_sobol_detail::reverse_bits(uint32_t(sample));
@@ -206,19 +210,29 @@ SHGI_AVX2 size_t pixel_samples_avx2(uint64_t seed, const uint32_t* pixels, size_
     for (; i + 8 <= count; i += 8) {
         const __m256i base = OwenSobol8::hash(
             seed, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(pixels + i)));
-        alignas(32) float jitter_x[8], jitter_y[8], select[8], light_x[8], light_y[8];
-        __m256 x, y;
-        OwenSobol8::point(reversed, OwenSobol8::hash(base, 0), &x, &y);
-        _mm256_store_ps(jitter_x, x);
-        _mm256_store_ps(jitter_y, y);
-        OwenSobol8::point(reversed, OwenSobol8::hash(base, 1), &x, nullptr);
-        _mm256_store_ps(select, x);
-        OwenSobol8::point(reversed, OwenSobol8::hash(base, 2), &x, &y);
-        _mm256_store_ps(light_x, x);
-        _mm256_store_ps(light_y, y);
-        for (int j = 0; j < 8; ++j)
-            out[i + size_t(j)] = PixelSample{vec2(jitter_x[j], jitter_y[j]), select[j],
-                                             vec2(light_x[j], light_y[j])};
+        __m256 jitter_x, jitter_y, select, light_x, light_y;
+        OwenSobol8::point(reversed, OwenSobol8::hash(base, 0), &jitter_x, &jitter_y);
+        OwenSobol8::point(reversed, OwenSobol8::hash(base, 1), &select, nullptr);
+        OwenSobol8::point(reversed, OwenSobol8::hash(base, 2), &light_x, &light_y);
+        // The eight PixelSamples (eight floats each; u_lobe and u_bsdf zero) by an 8 x 8
+        // transpose whose last three rows are zero, where each pixel took scalar stores.
+        const __m256 zero = _mm256_setzero_ps();
+        const __m256 t0 = _mm256_unpacklo_ps(jitter_x, jitter_y);
+        const __m256 t1 = _mm256_unpackhi_ps(jitter_x, jitter_y);
+        const __m256 t2 = _mm256_unpacklo_ps(select, light_x);
+        const __m256 t3 = _mm256_unpackhi_ps(select, light_x);
+        const __m256 t4 = _mm256_unpacklo_ps(light_y, zero);
+        const __m256 t5 = _mm256_unpackhi_ps(light_y, zero);
+        const __m256 front[4] = {_mm256_shuffle_ps(t0, t2, 0x44), _mm256_shuffle_ps(t0, t2, 0xEE),
+                                 _mm256_shuffle_ps(t1, t3, 0x44), _mm256_shuffle_ps(t1, t3, 0xEE)};
+        const __m256 back[4] = {_mm256_shuffle_ps(t4, zero, 0x44), _mm256_shuffle_ps(t4, zero, 0xEE),
+                                _mm256_shuffle_ps(t5, zero, 0x44), _mm256_shuffle_ps(t5, zero, 0xEE)};
+        for (int j = 0; j < 4; ++j) {
+            const __m256 low = _mm256_permute2f128_ps(front[j], back[j], 0x20);
+            const __m256 high = _mm256_permute2f128_ps(front[j], back[j], 0x31);
+            std::memcpy(static_cast<void*>(&out[i + size_t(j)]), &low, sizeof(PixelSample));
+            std::memcpy(static_cast<void*>(&out[i + size_t(j) + 4]), &high, sizeof(PixelSample));
+        }
     }
     return i;
 }
