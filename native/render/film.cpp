@@ -69,13 +69,6 @@ void Film::add(int x, int y, const PassValues& values) {
     accumulate(x, y, *this, values);
 }
 
-void Film::accumulate(int x, int y, const Film& base, const PassValues& values) {
-    const size_t first = (size_t(y) * size_t(width_) + size_t(x)) * pass_count_;
-    const vec3* from = base.sums_.data() + first;
-    vec3* to = sums_.data() + first;
-    for (size_t p = 0; p < pass_count_; ++p) to[p] = from[p] + values.value[p];
-}
-
 void Film::clear() {
     std::fill(sums_.begin(), sums_.end(), vec3(0.0f));
     samples_ = 0;

@@ -83,7 +83,14 @@ class Film {
     // it must have the same size and passes). A render that must leave its film untouched until
     // it completes sums into a second film this way (ProgressiveFilm), without first copying
     // the whole film.
-    void accumulate(int x, int y, const Film& base, const PassValues& values);
+    // Inline: the preview calls it once a pixel and sample, and a Combined-only film's loop is
+    // one addition (a call cost more than the work).
+    void accumulate(int x, int y, const Film& base, const PassValues& values) {
+        const size_t first = (size_t(y) * size_t(width_) + size_t(x)) * pass_count_;
+        const vec3* from = base.sums_.data() + first;
+        vec3* to = sums_.data() + first;
+        for (size_t p = 0; p < pass_count_; ++p) to[p] = from[p] + values.value[p];
+    }
     void set_samples(uint32_t samples) { samples_ = samples; }
     // Every sum back to zero, samples() to 0.
     void clear();

@@ -25,33 +25,15 @@ GBuffer::GBuffer(int width, int height) : width_(width), height_(height) {
     material_id.assign(count, kNoSurface);
 }
 
-void GBuffer::set_surface(size_t pixel, const Scene& scene, const Shading& shading, const Hit& hit,
-                          const vec3& camera_position, const vec3& forward,
-                          const MaterialLobeTable* material_lobes) {
-    const Mesh& mesh = scene.meshes()[scene.instances()[hit.instance_id].mesh_id];
-    // Meshes without per-triangle materials use material 0 (scene/mesh.h).
-    const uint32_t material =
-        mesh.material_indices.empty() ? 0u : mesh.material_indices[hit.triangle_id];
-    position[pixel] = shading.position;
-    shading_normal[pixel] = shading.frame.z;
-    geometric_normal[pixel] = shading.geometric_normal;
-    const vec3* material_albedo =
-        material_lobes != nullptr ? material_lobes->albedo(material) : nullptr;
-    albedo[pixel] = material_albedo != nullptr ? *material_albedo : shading.bsdf.class_color_sum();
-    roughness[pixel] = scene.materials()[material].roughness;
-    depth[pixel] = glm::dot(shading.position - camera_position, forward);
-    object_id[pixel] = hit.instance_id;
-    material_id[pixel] = material;
-    if (has_field_lobes()) {
-        field_diffuse[pixel] = shading.bsdf.field_diffuse(shading.wo);
-        PrincipledBsdf::GlossyLobe lobes[2];
-        const int n = shading.bsdf.field_glossy_lobes(shading.wo, lobes);
-        for (int k = 0; k < 2; ++k) {
-            glossy_albedo[k][pixel] = k < n ? lobes[k].albedo : vec3(0.0f);
-            glossy_roughness[k][pixel] = k < n ? lobes[k].roughness : 0.0f;
-        }
-        if (!shgi::diffuse_bump(shading, &diffuse_bump[pixel])) diffuse_bump[pixel] = DiffuseBump{};
+void GBuffer::set_field_lobes_at(size_t pixel, const Shading& shading) {
+    field_diffuse[pixel] = shading.bsdf.field_diffuse(shading.wo);
+    PrincipledBsdf::GlossyLobe lobes[2];
+    const int n = shading.bsdf.field_glossy_lobes(shading.wo, lobes);
+    for (int k = 0; k < 2; ++k) {
+        glossy_albedo[k][pixel] = k < n ? lobes[k].albedo : vec3(0.0f);
+        glossy_roughness[k][pixel] = k < n ? lobes[k].roughness : 0.0f;
     }
+    if (!shgi::diffuse_bump(shading, &diffuse_bump[pixel])) diffuse_bump[pixel] = DiffuseBump{};
 }
 
 void GBuffer::set_field_lobes(bool on) {

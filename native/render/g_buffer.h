@@ -46,9 +46,28 @@ class GBuffer {
     // position and unit view axis are `camera_position` and `forward`. `material_lobes`
     // (optional): the scene's MaterialLobeTable, whose albedo of a material it holds is the
     // shading's.
+    // Inline, the field lobes out of line: the preview writes every pixel and sample, and the
+    // call of eight arguments cost about as much as its stores.
     void set_surface(size_t pixel, const Scene& scene, const Shading& shading, const Hit& hit,
                      const vec3& camera_position, const vec3& forward,
-                     const MaterialLobeTable* material_lobes = nullptr);
+                     const MaterialLobeTable* material_lobes = nullptr) {
+        const Mesh& mesh = scene.meshes()[scene.instances()[hit.instance_id].mesh_id];
+        // Meshes without per-triangle materials use material 0 (scene/mesh.h).
+        const uint32_t material =
+            mesh.material_indices.empty() ? 0u : mesh.material_indices[hit.triangle_id];
+        position[pixel] = shading.position;
+        shading_normal[pixel] = shading.frame.z;
+        geometric_normal[pixel] = shading.geometric_normal;
+        const vec3* material_albedo =
+            material_lobes != nullptr ? material_lobes->albedo(material) : nullptr;
+        albedo[pixel] =
+            material_albedo != nullptr ? *material_albedo : shading.bsdf.class_color_sum();
+        roughness[pixel] = scene.materials()[material].roughness;
+        depth[pixel] = glm::dot(shading.position - camera_position, forward);
+        object_id[pixel] = hit.instance_id;
+        material_id[pixel] = material;
+        if (has_field_lobes()) set_field_lobes_at(pixel, shading);
+    }
     // Pixel `pixel` sees no surface.
     void set_miss(size_t pixel);
 
@@ -76,6 +95,9 @@ class GBuffer {
     void set_field_lobes(bool on);
 
   private:
+    // set_surface's field-lobe planes.
+    void set_field_lobes_at(size_t pixel, const Shading& shading);
+
     int width_ = 0, height_ = 0;
 };
 

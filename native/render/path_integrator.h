@@ -135,6 +135,33 @@ class PathIntegrator {
         : scene_(scene), camera_(camera), lights_(lights), settings_(settings), field_(field),
           rng_(rng), out_(out), clock_(clock) {}
 
+    // Makes the integrator ready for a new camera path, as if just constructed with the same
+    // arguments and then given the same set_final_gather, set_combined_only, set_glossy_memo,
+    // set_material_lobes and set_shading_memo: every member a path or the other setters change
+    // goes back to its initial value (first_light_sample, first BSDF sample, gather number,
+    // first ray pdf, shared lookup unset). A caller that traces one path after another into the
+    // same rng and values (the preview's wave) re-arms one integrator per path slot instead of
+    // constructing one a path (~45 member initialisations and the setters a pixel).
+    void restart() {
+        static_assert(kLobeClassCount == 3);
+        shared_lookup_ = nullptr;
+        shared_irradiance_ = nullptr;
+        first_light_sample_.reset();
+        first_bsdf_sample_.reset();
+        terminate_on_next_surface_ = false;
+        throughput_ = vec3(1.0f);
+        write_denoising_features_ = !combined_only_;
+        denoising_throughput_ = vec3(1.0f);
+        vertex_ = 0;
+        gather_u_ = 0.0f;
+        bounces_[0] = bounces_[1] = bounces_[2] = 0;
+        last_delta_ = true;
+        last_pdf_ = 0.0f;
+        min_ray_pdf_ = kInfinity;
+        last_normal_ = vec3(0.0f, 0.0f, 1.0f);
+        class_fraction_[0] = class_fraction_[1] = class_fraction_[2] = 0.0f;
+    }
+
     // Traces a camera ray.
     void trace(const Ray& ray);
     // Traces a camera ray whose first hit is already known (batched primary rays).

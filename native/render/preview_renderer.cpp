@@ -129,6 +129,9 @@ struct Wave {
     std::vector<vec2> film;            // the camera ray's film point: pixel + jitter
     std::vector<PassValues> values;
     std::vector<std::optional<PathIntegrator>> paths;
+    // paths[0, armed) were constructed by this render_tiles call (its scene, field and clock)
+    // and are re-armed per pixel (PathIntegrator::restart); reset by each call.
+    size_t armed = 0;
     std::vector<uint8_t> live;  // the path has a first surface to shade
     // The wave holds whole 2 x 2 quads (fewer pixels at the image border): quad q is pixels
     // [quads[q], quads[q + 1]) (the last one ends at count), and lookups[q] its shared lookup.
@@ -213,6 +216,7 @@ class FrameWork {
         WaveLease lease(size_t(std::min<uint64_t>(kWavePixels, (end - begin) * tile_pixels)));
         Wave& wave = lease.wave();
         wave.shading.reset();
+        wave.armed = 0;  // a kept wave's paths refer to another call's clock
         IntegratorClock clock;
         for (uint64_t t = begin; t < end; ++t) {
             int x0, x1, y0, y1;
@@ -325,17 +329,25 @@ class FrameWork {
                 wave.values[i][Pass::Combined] = vec3(0.0f);
             else
                 clear_pass_values(wave.values[i]);
-            PathIntegrator& path = wave.paths[i].emplace(scene_, camera_, lights_, settings_,
-                                                         &field_, wave.rngs[i], wave.values[i],
-                                                         &clock);
+            // Slot i's path always traces into wave.rngs[i] and wave.values[i]: it is built once
+            // a call and re-armed for each pixel after.
+            if (i < wave.armed) {
+                wave.paths[i]->restart();
+            } else {
+                PathIntegrator& path = wave.paths[i].emplace(
+                    scene_, camera_, lights_, settings_, &field_, wave.rngs[i], wave.values[i],
+                    &clock);
+                path.set_final_gather(final_gather_);
+                path.set_glossy_memo(&wave.glossy_zh);
+                path.set_material_lobes(&material_lobes_);
+                path.set_shading_memo(&wave.shading);
+                if (combined_only_) path.set_combined_only();
+                wave.armed = i + 1;
+            }
+            PathIntegrator& path = *wave.paths[i];
             path.set_first_light_sample(wave.samples[i].u_select, wave.samples[i].u_light);
-            path.set_final_gather(final_gather_);
             if (final_gather_ > 0)
                 path.set_gather_number(gather_number(settings_.seed, wave.pixel[i], s));
-            path.set_glossy_memo(&wave.glossy_zh);
-            path.set_material_lobes(&material_lobes_);
-            path.set_shading_memo(&wave.shading);
-            if (combined_only_) path.set_combined_only();
             wave.live[i] = path.begin(wave.rays[i], wave.hits[i]);
             if (wave.live[i])
                 g_buffer_->set_surface(wave.pixel[i], scene_, path.first_surface(), wave.hits[i],

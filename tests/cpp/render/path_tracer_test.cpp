@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <optional>
 #include <thread>
 
@@ -291,6 +292,58 @@ std::vector<float> render_combined(const Scene& scene, int threads, uint32_t sam
     settings.seed = 7;
     settings.tile_size = threads == 1 ? 16 : 5;  // a different tile split must not matter
     return render_path_traced(scene, settings).layer_pixels("Combined");
+}
+
+// PathIntegrator::restart (the preview's wave re-arms one integrator per slot): paths traced
+// one after another by one restarted integrator, into one rng and one values entry, give the
+// bits of paths each traced by a new integrator with the same setters, Combined only or not,
+// with and without a final gather.
+TEST(PathTracer, RestartedIntegratorTracesAsANewOne) {
+    const Scene scene = mixed_scene();
+    PathTracerSettings settings;
+    const LightSampler lights(scene, settings.world_sampling, true, settings.light_splits);
+    const Camera& camera = scene.camera();
+    const CameraRayGenerator camera_rays(camera);
+    for (const bool combined_only : {false, true})
+        for (const int final_gather : {0, 1}) {
+            Pcg32 kept_rng(1, 0);
+            PassValues kept_values;
+            std::optional<PathIntegrator> kept;
+            int lit = 0;
+            for (uint64_t pixel = 0; pixel < 144; ++pixel) {
+                const vec2 film(float(pixel % 12) + 0.5f, float(pixel / 12) + 0.5f);
+                const Ray ray = camera_rays.generate_ray(film);
+                const PixelSample sample = pixel_sample(7, pixel, 0);
+                const auto setup = [&](PathIntegrator& path) {
+                    path.set_first_light_sample(sample.u_select, sample.u_light);
+                    path.set_gather_number(0.25f);
+                };
+                Pcg32 rng(7, stream_id(0, pixel));
+                PassValues values;
+                PathIntegrator fresh(scene, camera, lights, settings, nullptr, rng, values);
+                fresh.set_final_gather(final_gather);
+                if (combined_only) fresh.set_combined_only();
+                setup(fresh);
+                fresh.trace(ray);
+
+                kept_rng = Pcg32(7, stream_id(0, pixel));
+                kept_values = PassValues{};
+                if (kept) {
+                    kept->restart();
+                } else {
+                    kept.emplace(scene, camera, lights, settings, nullptr, kept_rng, kept_values);
+                    kept->set_final_gather(final_gather);
+                    if (combined_only) kept->set_combined_only();
+                }
+                setup(*kept);
+                kept->trace(ray);
+                ASSERT_EQ(std::memcmp(&values, &kept_values, sizeof(PassValues)), 0)
+                    << "pixel " << pixel << " combined_only " << combined_only
+                    << " final_gather " << final_gather;
+                if (values[Pass::Combined].x > 0.0f) ++lit;
+            }
+            EXPECT_GT(lit, 100);  // the paths met lit surfaces, not only misses
+        }
 }
 
 // The first bounce's lobe choice and direction are one 3-D stratified point: among a pixel's
