@@ -75,6 +75,19 @@ Scene floor_scene(float half) {
     return scene;
 }
 
+// A white-emitting square of half-width 1 at z = 0 (two triangles, area 4) of emission
+// `strength`, under a black world: 2 pi strength 4 W.
+Scene emissive_square_scene(float strength) {
+    Scene scene;
+    Material emissive = test::lambert(0.5f);
+    emissive.emission_color = vec3(1.0f);
+    emissive.emission_strength = strength;
+    scene.add_material(emissive);
+    scene.add_instance(scene.add_mesh(test::plane(1.0f)), mat4(1.0f));
+    scene.set_world(test::black_world());
+    return scene;
+}
+
 Light light_at(LightType type, const vec3& position) {
     Light light;
     light.type = type;
@@ -287,13 +300,7 @@ TEST(PhotonEmitter, MixedEmittersSumToTotalPower) {
 // them; with light_share_uniform u, (1 - u) x its flux share + u / 3. Each lamp's photons still
 // sum to its flux, and so do all of them (the power is divided by the mixed probability).
 TEST(PhotonEmitter, LampShareKeepsEachLampsFlux) {
-    Scene scene;
-    Material emissive = test::lambert(0.5f);
-    emissive.emission_color = vec3(1.0f);
-    emissive.emission_strength = 0.5f;
-    scene.add_material(emissive);
-    scene.add_instance(scene.add_mesh(test::plane(1.0f)), mat4(1.0f));  // 2 pi 0.5 4 = 12.6 W
-    scene.set_world(test::black_world());
+    Scene scene = emissive_square_scene(0.5f);  // 2 pi 0.5 4 = 12.6 W
     Light bright = light_at(LightType::Point, vec3(-1.0f, 0.0f, 1.0f));
     bright.power = 1000.0f;
     Light dim = light_at(LightType::Point, vec3(1.0f, 0.0f, 1.0f));
@@ -333,13 +340,7 @@ TEST(PhotonEmitter, LampShareKeepsEachLampsFlux) {
 
 // An emissive object's triangles are one lamp: its share is split among them by flux.
 TEST(PhotonEmitter, LampShareTreatsAnEmissiveObjectAsOneLamp) {
-    Scene scene;
-    Material emissive = test::lambert(0.5f);
-    emissive.emission_color = vec3(1.0f);
-    emissive.emission_strength = 1.0f;
-    scene.add_material(emissive);
-    scene.add_instance(scene.add_mesh(test::plane(1.0f)), mat4(1.0f));  // two triangles
-    scene.set_world(test::black_world());
+    Scene scene = emissive_square_scene(1.0f);  // two triangles
     Light point = light_at(LightType::Point, vec3(0.0f, 0.0f, 1.0f));
     point.power = 10000.0f;
     scene.add_light(point);
