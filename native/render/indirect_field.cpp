@@ -77,14 +77,6 @@ vec3 FieldLookup::irradiance(const vec3& n, const DiffuseBump& bump) const {
     return glm::max(sh_bump_irradiance(radiance, n, bump), vec3(0.0f)) + extra_irradiance;
 }
 
-vec3 glossy_dominant_direction(const vec3& n, const vec3& reflected, float roughness) {
-    const float alpha = roughness * roughness;
-    const float lean = (1.0f - alpha) * (std::sqrt(1.0f - alpha) + alpha);
-    const vec3 towards = n + lean * (reflected - n);
-    const float length2 = glm::dot(towards, towards);  // 0 only for a view from below n
-    return length2 > 1e-12f ? towards / std::sqrt(length2) : n;
-}
-
 vec3 FieldLookup::glossy(const vec3& n, const vec3& wo, float roughness, GgxZhMemo* zh) const {
     const vec3 reflected = 2.0f * glm::dot(wo, n) * n - wo;
     if (glossy_rays > 0) {

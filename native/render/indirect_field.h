@@ -14,6 +14,7 @@
 // multiplies by the lobe's directional albedo.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 
@@ -32,8 +33,14 @@ class Progress;
 // reflected view direction `reflected` (unit): the cosine-weighted lobe leans from it towards n,
 // the more the rougher and the more grazing the view (Lagarde & de Rousiers 2014, "Moving
 // Frostbite to Physically Based Rendering", getSpecularDominantDir, alpha = roughness^2). Unit;
-// n for a view from below n.
-vec3 glossy_dominant_direction(const vec3& n, const vec3& reflected, float roughness);
+// n for a view from below n. Inline: FieldLookup::glossy calls it per lookup.
+inline vec3 glossy_dominant_direction(const vec3& n, const vec3& reflected, float roughness) {
+    const float alpha = roughness * roughness;
+    const float lean = (1.0f - alpha) * (std::sqrt(1.0f - alpha) + alpha);
+    const vec3 towards = n + lean * (reflected - n);
+    const float length2 = glm::dot(towards, towards);  // 0 only for a view from below n
+    return length2 > 1e-12f ? towards / std::sqrt(length2) : n;
+}
 
 struct FieldLookup {
     ShRgb radiance;                  // incident radiance SH, W m^-2 sr^-1
