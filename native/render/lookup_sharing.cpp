@@ -5,15 +5,8 @@ namespace shgi {
 QuadLookupSharing share_quad_lookup(const GBuffer& g_buffer, const uint32_t* pixels,
                                     uint32_t size, uint64_t sample, float reuse_distance) {
     QuadLookupSharing sharing;
-    if (size == 0) return sharing;
-    // The search starts at sample mod size and wraps. A quad's size is 1 to 4: a mask, or for 3
-    // a division by a constant (a multiplication), where `% size` was a 64-bit division at the
-    // head of every quad (~40 cycles of latency before the quad's first load).
-    const uint32_t start = (size & (size - 1)) == 0 ? uint32_t(sample & (size - 1))
-                           : size == 3              ? uint32_t(sample % 3)
-                                                    : uint32_t(sample % size);
     for (uint32_t k = 0; k < size; ++k) {
-        const uint32_t candidate = start + k < size ? start + k : start + k - size;
+        const uint32_t candidate = uint32_t((sample + k) % size);
         if (g_buffer.has_surface(pixels[candidate])) {
             sharing.lead = candidate;
             break;
