@@ -498,7 +498,7 @@ TEST(ShLattice, CubicWeightsFollowTheSmoothstepAndKeepConstants) {
 // from the per-thread memo, its sums from the blend's vector registers), so that a faster walk or
 // blend is checked against the plain sum. An L2 lattice (27 floats a cell) of random coefficients,
 // a floor and a wall (cells without surface, cells facing away), normals along and across them,
-// points in and up to two cells outside the lattice, with and without a normal offset.
+// points in and around the lattice (up to ten cells out), with and without a normal offset.
 TEST(ShLattice, CubicSampleIsTheScalarWeightedSumBitForBit) {
     ShLattice lattice(Bounds3{vec3(0.0f), vec3(5.0f)}, 5, 2);
     const float s = lattice.cell_size();
@@ -520,8 +520,11 @@ TEST(ShLattice, CubicSampleIsTheScalarWeightedSumBitForBit) {
                             glm::normalize(vec3(0.3f, -0.2f, 0.9f)), vec3(0, 1, 0)};
     for (int trial = 0; trial < 3000; ++trial) {
         const vec3& n = normals[trial % 6];
-        const vec3 p = o + s * vec3(-2.0f + 9.0f * rng.next_float(), -2.0f + 9.0f * rng.next_float(),
-                                    -2.0f + 9.0f * rng.next_float());
+        // Most points in and up to two cells around the lattice; every eighth up to ten cells
+        // out, where the coordinates are clamped.
+        const float reach = trial % 8 == 0 ? 10.0f : 2.0f;
+        const vec3 u(rng.next_float(), rng.next_float(), rng.next_float());
+        const vec3 p = o + s * (-reach + (5.0f + 2.0f * reach) * u);
         const float normal_offset = trial % 2 == 0 ? 0.0f : 0.25f;
         const vec3 cells = glm::clamp((p + (normal_offset * s) * n - o) / s, vec3(-4.0f),
                                       vec3(dims) + 4.0f);

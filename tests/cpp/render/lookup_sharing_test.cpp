@@ -53,7 +53,8 @@ TEST(LookupSharing, LeadSkipsMissesAndNoSurfaceMeansNoLead) {
 TEST(LookupSharing, LeadStartsAtTheSampleIndexModTheQuadSize) {
     GBuffer g = flat_quad();
     for (uint32_t missed = 0; missed < 16; ++missed) {
-        for (uint32_t i = 0; i < 4; ++i) g.object_id[i] = (missed >> i) & 1 ? GBuffer::kNoSurface : 0;
+        for (uint32_t i = 0; i < 4; ++i)
+            g.object_id[i] = (missed >> i) & 1 ? GBuffer::kNoSurface : 0;
         for (uint32_t size = 1; size <= 4; ++size)
             for (const uint64_t base : {uint64_t(0), uint64_t(1) << 33, ~uint64_t(0) - 64})
                 for (uint64_t s = base; s < base + 24; ++s) {
