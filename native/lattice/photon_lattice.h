@@ -199,6 +199,8 @@ class PhotonLattice : public IndirectField, public GiSolver {
                   const std::vector<Photon>& caustic_photons, PhotonLatticeTimings timings,
                   Progress* progress);
     ShRgb sample(const ShLattice& lattice, const vec3& p, const vec3& n) const;
+    // The caustic photon map's irradiance at (p, n) with caustics = PhotonMap, else zero.
+    vec3 caustic_map_irradiance(const vec3& p, const vec3& n) const;
 
     const Scene* scene_ = nullptr;
     std::string loaded_from_;  // the file load() read, for messages

@@ -7,6 +7,10 @@
 #include <cstring>
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <glm/gtx/component_wise.hpp>
 #include <glm/gtx/string_cast.hpp>
 
@@ -987,12 +991,51 @@ ShRgb ShLattice::blend(const vec3& n, uint32_t near, uint32_t seen,
     return blend_cells<9 * 3>(order_, coeffs_.data(), cells);
 }
 
+// sample_coordinates' cells and their floor for a cubic sample. With SSE2, the three axes in one
+// register: one division where the scalar code made three in a row on the divider, and an
+// integer floor (truncate, then one less where that rounded up) of ~8 instructions where
+// glm::floor without SSE4.1 took ~13 an axis. The same IEEE operations per axis, so the same
+// cells; the floor is exact for the clamped cells (|x| < 2^24). False for a non-finite point.
+inline bool ShLattice::cubic_coordinates(const vec3& p, const vec3& n, float normal_offset,
+                                         vec3& cells, ivec3& centre) const {
+#if defined(__SSE2__)
+    const __m128 n_lanes = _mm_setr_ps(n.x, n.y, n.z, 0.0f);
+    const __m128 q = _mm_add_ps(_mm_setr_ps(p.x, p.y, p.z, 0.0f),
+                                _mm_mul_ps(_mm_set1_ps(normal_offset * cell_size_), n_lanes));
+    // x - x is 0 exactly for finite x, NaN for infinities and NaN (std::isfinite per axis).
+    if ((_mm_movemask_ps(_mm_cmpeq_ps(_mm_sub_ps(q, q), _mm_setzero_ps())) & 0x7) != 0x7)
+        return false;
+    const vec3 upper = vec3(dims_) + 4.0f;
+    const __m128 origin = _mm_setr_ps(origin_.x, origin_.y, origin_.z, 0.0f);
+    const __m128 scaled = _mm_div_ps(_mm_sub_ps(q, origin), _mm_set1_ps(cell_size_));
+    const __m128 clamped = _mm_min_ps(_mm_max_ps(scaled, _mm_set1_ps(-4.0f)),
+                                      _mm_setr_ps(upper.x, upper.y, upper.z, 0.0f));
+    const __m128i truncated = _mm_cvttps_epi32(clamped);
+    const __m128i rounded_up = _mm_castps_si128(_mm_cmplt_ps(clamped, _mm_cvtepi32_ps(truncated)));
+    alignas(16) std::array<float, 4> cell_lanes;
+    alignas(16) std::array<int32_t, 4> floor_lanes;
+    _mm_store_ps(cell_lanes.data(), clamped);
+    _mm_store_si128(reinterpret_cast<__m128i*>(floor_lanes.data()),
+                    _mm_add_epi32(truncated, rounded_up));  // rounded_up is -1 or 0
+    cells = vec3(cell_lanes[0], cell_lanes[1], cell_lanes[2]);
+    centre = ivec3(floor_lanes[0], floor_lanes[1], floor_lanes[2]);
+    return true;
+#else
+    if (!sample_coordinates(p, n, normal_offset, origin_, cell_size_, dims_, cells)) return false;
+    centre = ivec3(glm::floor(cells));
+    return true;
+#endif
+}
+
 inline bool ShLattice::radiance_near(const vec3& cells) const {
+    return radiance_near_block(ivec3(glm::floor(cells)));
+}
+
+inline bool ShLattice::radiance_near_block(const ivec3& centre) const {
     if (radiance_near_.empty()) return false;
     // Trilinear and cubic samples read cells of the 3x3x3 block around the cell holding `cells`;
     // clamped into the lattice, that block's flag covers every lattice cell they read.
-    const ivec3 centre = glm::clamp(ivec3(glm::floor(cells)), ivec3(0), dims_ - 1);
-    return radiance_near_[cell_index(centre)] != 0;
+    return radiance_near_[cell_index(glm::clamp(centre, ivec3(0), dims_ - 1))] != 0;
 }
 
 ShRgb ShLattice::sample_trilinear(const vec3& p, const vec3& n, float normal_offset) const {
@@ -1011,10 +1054,9 @@ ShRgb ShLattice::sample_trilinear(const vec3& p, const vec3& n, float normal_off
 
 ShRgb ShLattice::sample_cubic(const vec3& p, const vec3& n, float normal_offset) const {
     vec3 cells(0.0f);
-    if (!sample_coordinates(p, n, normal_offset, origin_, cell_size_, dims_, cells) ||
-        !radiance_near(cells))
+    ivec3 centre(0);
+    if (!cubic_coordinates(p, n, normal_offset, cells, centre) || !radiance_near_block(centre))
         return zero_radiance(order_);
-    const ivec3 centre(glm::floor(cells));
     if (glm::any(glm::lessThan(centre, ivec3(-1))) || glm::any(glm::greaterThan(centre, dims_)))
         return zero_radiance(order_);  // the block holds no lattice cell
     const size_t block = padded_index(centre);

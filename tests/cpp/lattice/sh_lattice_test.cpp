@@ -7,7 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <cstring>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtx/string_cast.hpp>
@@ -487,6 +489,76 @@ TEST(ShLattice, CubicWeightsFollowTheSmoothstepAndKeepConstants) {
             for (int i = 0; i < 4; ++i)
                 for (int ch = 0; ch < 3; ++ch)
                     ASSERT_NEAR(sampled[i][ch], constant[i][ch], kFloatTolerance);
+    }
+}
+
+// A cubic sample is, bit for bit, the scalar weighted sum the header describes, in block-bit
+// order: per cell of the block inside the lattice with D_c(n) > 0 and d² < r², w = w(√d²) D_c(n),
+// Σ w L(c) · (1 / Σ w), each operation in float as the walk does it (its cells and D_c(n) come
+// from the per-thread memo, its sums from the blend's vector registers), so that a faster walk or
+// blend is checked against the plain sum. An L2 lattice (27 floats a cell) of random coefficients,
+// a floor and a wall (cells without surface, cells facing away), normals along and across them,
+// points in and around the lattice (up to ten cells out), with and without a normal offset.
+TEST(ShLattice, CubicSampleIsTheScalarWeightedSumBitForBit) {
+    ShLattice lattice(Bounds3{vec3(0.0f), vec3(5.0f)}, 5, 2);
+    const float s = lattice.cell_size();
+    const vec3 o = lattice.origin();
+    lattice.measure_surfaces(test::committed_scene(
+        {test::quad(o + vec3(-1.0f, -1.0f, 2.5f * s), vec3(5.0f * s + 2.0f, 0, 0),
+                    vec3(0, 5.0f * s + 2.0f, 0)),
+         test::quad(o + vec3(3.5f * s, -1.0f, -1.0f), vec3(0, 5.0f * s + 2.0f, 0),
+                    vec3(0, 0, 5.0f * s + 2.0f))}), nullptr, kNoVisibility);
+    Pcg32 rng(11, 0);
+    constexpr int kFloats = 27;
+    for (size_t c = 0; c < lattice.cell_count(); ++c) {
+        ShRgb radiance(2);
+        for (int i = 0; i < kFloats; ++i) radiance.data()[i] = 2.0f * rng.next_float() - 0.5f;
+        lattice.set_cell_radiance(c, radiance);
+    }
+    const ivec3 dims = lattice.dims();
+    const vec3 normals[] = {kUp, -kUp, vec3(1, 0, 0), vec3(-1, 0, 0),
+                            glm::normalize(vec3(0.3f, -0.2f, 0.9f)), vec3(0, 1, 0)};
+    for (int trial = 0; trial < 3000; ++trial) {
+        const vec3& n = normals[trial % 6];
+        // Most points in and up to two cells around the lattice; every eighth up to ten cells
+        // out, where the coordinates are clamped.
+        const float reach = trial % 8 == 0 ? 10.0f : 2.0f;
+        const vec3 u(rng.next_float(), rng.next_float(), rng.next_float());
+        const vec3 p = o + s * (-reach + (5.0f + 2.0f * reach) * u);
+        const float normal_offset = trial % 2 == 0 ? 0.0f : 0.25f;
+        const vec3 cells = glm::clamp((p + (normal_offset * s) * n - o) / s, vec3(-4.0f),
+                                      vec3(dims) + 4.0f);
+        const ivec3 centre(glm::floor(cells));
+        std::array<float, kFloats> sum{};
+        float total = 0.0f;
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const ivec3 cell = centre + ivec3(dx, dy, dz);
+                    if (glm::any(glm::lessThan(cell, ivec3(0))) ||
+                        glm::any(glm::greaterThanEqual(cell, dims)))
+                        continue;
+                    const size_t index = lattice.cell_index(cell);
+                    const float density = lattice.projected_area(index, n);
+                    if (!(density > 0.0f)) continue;
+                    vec3 d;
+                    for (int a = 0; a < 3; ++a) d[a] = cells[a] - (float(cell[a]) + 0.5f);
+                    const float d2 = d.x * d.x + (d.y * d.y + d.z * d.z);
+                    if (d2 >= kCubicRadiusCells * kCubicRadiusCells) continue;
+                    const float w = cubic_falloff(std::sqrt(d2)) * density;
+                    if (!(w > 0.0f)) continue;
+                    const float* coefficients = lattice.coefficients().data() + index * kFloats;
+                    for (int i = 0; i < kFloats; ++i) sum[size_t(i)] += w * coefficients[i];
+                    total += w;
+                }
+        std::array<float, kFloats> expected{};
+        if (total > 0.0f)
+            for (int i = 0; i < kFloats; ++i) expected[size_t(i)] = sum[size_t(i)] * (1.0f / total);
+        const ShRgb sampled = lattice.sample_cubic(p, n, normal_offset);
+        ASSERT_EQ(sampled.order, 2);
+        ASSERT_EQ(std::memcmp(sampled.data(), expected.data(), sizeof(expected)), 0)
+            << "trial " << trial << " at cells " << glm::to_string(cells) << ", n "
+            << glm::to_string(n) << ": " << sampled[0].x << " against " << expected[0];
     }
 }
 

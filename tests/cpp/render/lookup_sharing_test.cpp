@@ -48,6 +48,30 @@ TEST(LookupSharing, LeadSkipsMissesAndNoSurfaceMeansNoLead) {
     EXPECT_EQ(share_quad_lookup(g, kQuad, 4, 0, kReuse).lead, QuadLookupSharing::kNoLead);
 }
 
+// The lead is the first pixel with a surface from (sample + k) mod size on, for every quad size
+// (border quads have 1 to 3 pixels) and for sample indices far beyond 2^32, with any pixels missed.
+TEST(LookupSharing, LeadStartsAtTheSampleIndexModTheQuadSize) {
+    GBuffer g = flat_quad();
+    for (uint32_t missed = 0; missed < 16; ++missed) {
+        for (uint32_t i = 0; i < 4; ++i)
+            g.object_id[i] = (missed >> i) & 1 ? GBuffer::kNoSurface : 0;
+        for (uint32_t size = 1; size <= 4; ++size)
+            for (const uint64_t base : {uint64_t(0), uint64_t(1) << 33, ~uint64_t(0) - 64})
+                for (uint64_t s = base; s < base + 24; ++s) {
+                    uint32_t expected = QuadLookupSharing::kNoLead;
+                    for (uint32_t k = 0; k < size; ++k) {
+                        const uint32_t candidate = uint32_t((s + k) % size);
+                        if (g.has_surface(kQuad[candidate])) {
+                            expected = candidate;
+                            break;
+                        }
+                    }
+                    EXPECT_EQ(share_quad_lookup(g, kQuad, size, s, kReuse).lead, expected)
+                        << "size " << size << ", sample " << s << ", missed " << missed;
+                }
+    }
+}
+
 TEST(LookupSharing, FarOrTurnedPixelsMakeTheirOwnLookup) {
     GBuffer g = flat_quad();
     g.position[1].z = 2.0f * kReuse;  // a depth jump
