@@ -541,15 +541,6 @@ void PathIntegrator::add_field(const Shading& shading) {
                     lobes, shading.frame.z, wo);
 }
 
-// The slot's query is made from the normal, view and roughness add_field_light reads, so the
-// quad's radiance is the bits field.glossy would give there. A surface without a glossy field
-// lobe takes a slot too (it never reads it): testing for one cost more than the lane it fills.
-int PathIntegrator::join_quad_glossy(QuadGlossy* glossy) const {
-    const Shading& shading = shading_.value;
-    return glossy->add(shading.frame.z, shading.frame.to_world(shading.wo),
-                       shading.bsdf.field_glossy_roughness());
-}
-
 void PathIntegrator::add_field_light(const FieldLookup& field, const FieldLobes& lobes,
                                      const vec3& n, const vec3& wo, IrradianceMemo* irradiance,
                                      QuadGlossy* glossy) {

@@ -305,8 +305,15 @@ class PathIntegrator {
     int direct_from_samples(Ray* shadows, const LightSample* samples, int sampled);
     void add_field(const Shading& shading);
     // Adds the first surface's glossy field query to `glossy`: its slot, or -1 without a free
-    // one.
-    int join_quad_glossy(QuadGlossy* glossy) const;
+    // one. The query is made from the normal, view and roughness add_field_light reads, so the
+    // quad's radiance is the bits field.glossy would give there. A surface without a glossy
+    // field lobe takes a slot too (it never reads it): testing for one cost more than the lane
+    // it fills. Inline: the lookup sharing stage calls it once a pixel.
+    int join_quad_glossy(QuadGlossy* glossy) const {
+        const Shading& shading = shading_.value;
+        return glossy->add(shading.frame.z, shading.frame.to_world(shading.wo),
+                           shading.bsdf.field_glossy_roughness());
+    }
     // The field lobes of the current surface (render/bsdf.h): what field light is weighted by.
     struct FieldLobes {
         vec3 diffuse{0.0f};

@@ -57,6 +57,7 @@ void glossy_closed_form(const ShRgb& radiance, bool horizon, const GlossyLanes& 
             _mm_add_ps(in.n.z, _mm_mul_ps(lean, _mm_sub_ps(dir.z, in.n.z)))};
         const __m128 length2 = dot_lanes(towards, towards);
         const __m128 length = _mm_sqrt_ps(length2);
+        // glossy_dominant_direction's threshold: below it (a view from below n) the direction is n.
         const __m128 long_enough = _mm_cmpgt_ps(length2, _mm_set1_ps(1e-12f));
         dir = {select_lanes(long_enough, _mm_div_ps(towards.x, length), in.n.x),
                select_lanes(long_enough, _mm_div_ps(towards.y, length), in.n.y),
