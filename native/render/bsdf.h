@@ -235,6 +235,8 @@ class PrincipledBsdf {
         float roughness = 0.0f;
     };
     int field_glossy_lobes(const vec3& wo, GlossyLobe out[2]) const;
+    // The roughness every lobe field_glossy_lobes writes has (whether or not it writes one).
+    float field_glossy_roughness() const { return glossy_roughness_; }
 
   private:
     enum class LobeKind : uint8_t { Diffuse, Specular, GlassReflection, Refraction };

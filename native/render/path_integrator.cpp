@@ -522,11 +522,16 @@ void PathIntegrator::add_field(const Shading& shading) {
     lobes.glossy_count = shading.bsdf.field_glossy_lobes(shading.wo, lobes.glossy);
     lobes.bumped = diffuse_bump(shading, &lobes.bump);
     if (max_component(lobes.diffuse) <= 0.0f && lobes.glossy_count == 0) return;
-    const vec3 wo = shading.frame.to_world(shading.wo);
     if (vertex_ == 0 && shared_lookup_ != nullptr) {
-        add_field_light(*shared_lookup_, lobes, shading.frame.z, wo, shared_irradiance_);
+        // A query in the quad's glossy light holds wo already (join_quad_glossy: the same bits).
+        const vec3 wo = shared_glossy_ != nullptr && glossy_slot_ >= 0
+                            ? shared_glossy_->wo(glossy_slot_)
+                            : shading.frame.to_world(shading.wo);
+        add_field_light(*shared_lookup_, lobes, shading.frame.z, wo, shared_irradiance_,
+                        shared_glossy_);
         return;
     }
+    const vec3 wo = shading.frame.to_world(shading.wo);
     // The lookup's result binds to the parameter directly: no copy of its SH. Behind a final
     // gather's bounces, one estimate of the field serves (gather_lookup).
     // Placed by the interpolated normal (field_lookup_normal, which the bump already holds).
@@ -537,14 +542,24 @@ void PathIntegrator::add_field(const Shading& shading) {
 }
 
 void PathIntegrator::add_field_light(const FieldLookup& field, const FieldLobes& lobes,
-                                     const vec3& n, const vec3& wo, IrradianceMemo* irradiance) {
+                                     const vec3& n, const vec3& wo, IrradianceMemo* irradiance,
+                                     QuadGlossy* glossy) {
     const vec3 e = lobes.bumped          ? field.irradiance(n, lobes.bump)
                    : irradiance != nullptr ? irradiance->irradiance(field, n)
                                            : field.irradiance(n);
     vec3 by_class[2] = {lobes.diffuse * e * kInvPi, vec3(0.0f)};
-    for (int i = 0; i < lobes.glossy_count; ++i)
-        by_class[1] +=
-            lobes.glossy[i].albedo * field.glossy(n, wo, lobes.glossy[i].roughness, glossy_memo_);
+    for (int i = 0; i < lobes.glossy_count; ++i) {
+        const float roughness = lobes.glossy[i].roughness;
+        const float slot_roughness = glossy != nullptr && glossy_slot_ >= 0
+                                         ? glossy->roughness(glossy_slot_)
+                                         : roughness;
+        // Bits, not ==: a NaN roughness must reach field.glossy's check.
+        const bool shared = glossy != nullptr && glossy_slot_ >= 0 &&
+                            std::memcmp(&roughness, &slot_roughness, sizeof(float)) == 0;
+        by_class[1] += lobes.glossy[i].albedo *
+                       (shared ? glossy->radiance(glossy_slot_, field, glossy_memo_)
+                               : field.glossy(n, wo, roughness, glossy_memo_));
+    }
     if (vertex_ == 0) {
         for (int c = 0; c < 2; ++c) add_light(throughput_ * by_class[c], c, false);
         return;

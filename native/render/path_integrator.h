@@ -45,6 +45,7 @@
 #include "render/indirect_field.h"
 #include "render/light_sampler.h"
 #include "render/path_tracer.h"
+#include "render/quad_glossy.h"
 #include "render/shading.h"
 #include "sh/ggx_zh.h"
 #include "scene/camera.h"
@@ -146,6 +147,7 @@ class PathIntegrator {
         static_assert(kLobeClassCount == 3);
         shared_lookup_ = nullptr;
         shared_irradiance_ = nullptr;
+        shared_glossy_ = nullptr;
         first_light_sample_.reset();
         first_bsdf_sample_.reset();
         terminate_on_next_surface_ = false;
@@ -235,10 +237,16 @@ class PathIntegrator {
     // A lookup made for another path's first surface (screen-space reuse, see
     // render/preview_renderer.h) for finish() to use at this path's first surface instead of
     // its own; it must outlive finish(). `irradiance` (optional, reset by the caller when the
-    // lookup changes): the irradiance memo of the paths that share it.
-    void share_first_field_lookup(const FieldLookup* lookup, IrradianceMemo* irradiance = nullptr) {
+    // lookup changes): the irradiance memo of the paths that share it. `glossy` (optional,
+    // cleared by the caller when the lookup changes): the quad's QuadGlossy, which this path
+    // adds its glossy lobe's query to, for finish() to read its glossy light from (the same
+    // bits); every path that shares the lookup joins it before the first finish().
+    void share_first_field_lookup(const FieldLookup* lookup, IrradianceMemo* irradiance = nullptr,
+                                  QuadGlossy* glossy = nullptr) {
         shared_lookup_ = lookup;
         shared_irradiance_ = irradiance;
+        shared_glossy_ = glossy;
+        if (glossy != nullptr) glossy_slot_ = join_quad_glossy(glossy);
     }
     // A memo of the glossy lobes' band factors (sh/ggx_zh.h) for this path's field light to
     // use, kept by the caller across paths (one per thread); it must outlive finish(). Without
@@ -263,6 +271,10 @@ class PathIntegrator {
     const MaterialLobeTable* material_lobes_ = nullptr;
     ShadingMemo* shading_memo_ = nullptr;
     IrradianceMemo* shared_irradiance_ = nullptr;
+    // The quad's glossy light and this path's slot in it (-1: none; read only with a shared
+    // lookup and shared_glossy_ set).
+    QuadGlossy* shared_glossy_ = nullptr;
+    int glossy_slot_ = -1;
     struct FirstLightSample {
         float u_select;
         vec2 u;
@@ -292,6 +304,16 @@ class PathIntegrator {
     void sample_direct();
     int direct_from_samples(Ray* shadows, const LightSample* samples, int sampled);
     void add_field(const Shading& shading);
+    // Adds the first surface's glossy field query to `glossy`: its slot, or -1 without a free
+    // one. The query is made from the normal, view and roughness add_field_light reads, so the
+    // quad's radiance is the bits field.glossy would give there. A surface without a glossy
+    // field lobe takes a slot too (it never reads it): testing for one cost more than the lane
+    // it fills. Inline: the lookup sharing stage calls it once a pixel.
+    int join_quad_glossy(QuadGlossy* glossy) const {
+        const Shading& shading = shading_.value;
+        return glossy->add(shading.frame.z, shading.frame.to_world(shading.wo),
+                           shading.bsdf.field_glossy_roughness());
+    }
     // The field lobes of the current surface (render/bsdf.h): what field light is weighted by.
     struct FieldLobes {
         vec3 diffuse{0.0f};
@@ -303,9 +325,11 @@ class PathIntegrator {
         DiffuseBump bump;
     };
     // `irradiance`: field.irradiance(n), or null to evaluate it here (unused for a bumped
-    // diffuse lobe, whose irradiance depends on more than the normal).
+    // diffuse lobe, whose irradiance depends on more than the normal). `glossy`: the quad's
+    // glossy light (slot glossy_slot_), read for lobes of its roughness, or null.
     void add_field_light(const FieldLookup& field, const FieldLobes& lobes, const vec3& n,
-                         const vec3& wo, IrradianceMemo* irradiance = nullptr);
+                         const vec3& wo, IrradianceMemo* irradiance = nullptr,
+                         QuadGlossy* glossy = nullptr);
     bool scatter(const Shading& shading, Ray* ray);
     void add_light(const vec3& contribution, int lobe_class, bool direct);
     void add_split(const vec3& contribution, bool direct);

@@ -138,6 +138,7 @@ struct Wave {
     std::vector<uint32_t> quads;
     std::vector<FieldLookup> lookups;
     std::vector<IrradianceMemo> irradiance;  // per quad: its lookup's irradiance, by normal
+    std::vector<QuadGlossy> glossy;  // per quad: its pixels' glossy light, four lanes at once
     GgxZhMemo glossy_zh;  // every path's glossy band factors, by roughness (kept across waves)
     // Every path's last triangle normal and shading frame; reset for each render_tiles call,
     // since a kept wave may next serve another scene or revision.
@@ -285,6 +286,7 @@ class FrameWork {
         if (wave.lookups.size() < wave.quads.size()) {
             wave.lookups.resize(wave.quads.size());
             wave.irradiance.resize(wave.quads.size());
+            wave.glossy.resize(wave.quads.size());
         }
         for (size_t q = 0; q < wave.quads.size(); ++q) {
             const uint32_t first = wave.quads[q];
@@ -301,11 +303,12 @@ class FrameWork {
             static_assert(std::is_trivially_destructible_v<FieldLookup>);
             ::new (static_cast<void*>(&wave.lookups[q])) FieldLookup(field_.view_lookup(p, n, wo));
             wave.irradiance[q].reset();
-            lead.share_first_field_lookup(&wave.lookups[q], &wave.irradiance[q]);
+            wave.glossy[q].clear();
+            lead.share_first_field_lookup(&wave.lookups[q], &wave.irradiance[q], &wave.glossy[q]);
             for (uint32_t k = 0; k < size; ++k)
                 if (sharing.followers & (1u << k))
-                    wave.paths[first + k]->share_first_field_lookup(&wave.lookups[q],
-                                                                    &wave.irradiance[q]);
+                    wave.paths[first + k]->share_first_field_lookup(
+                        &wave.lookups[q], &wave.irradiance[q], &wave.glossy[q]);
         }
     }
 
