@@ -274,6 +274,8 @@ class FrameWork {
             share_field_lookups(wave, s);
             const Film& sums = s == first_ ? base : target;
             for (size_t i = 0; i < wave.count; ++i) {
+                // The film's lines load while the path is shaded (Film::prefetch).
+                target.prefetch(wave.x[i], wave.y[i], sums);
                 if (wave.live[i]) wave.paths[i]->finish();
                 target.accumulate(wave.x[i], wave.y[i], sums, wave.values[i]);
             }
