@@ -94,7 +94,7 @@ class Film {
     // Starts loading the cache lines accumulate(x, y, base, ...) reads and writes, for a caller
     // with enough work before that call to hide a miss (the preview shades the pixel's path in
     // between). The two films are ~2.7 MB each at 640 x 360 Combined-only, past a core's L2:
-    // the preview's accumulate waited on them (~20% of the render loop's own CPU samples).
+    // the preview's accumulate waited on them (~15% of the render loop's own CPU samples).
     void prefetch(int x, int y, const Film& base) const {
         const size_t first = (size_t(y) * size_t(width_) + size_t(x)) * pass_count_;
         const char* from = reinterpret_cast<const char*>(base.sums_.data() + first);
