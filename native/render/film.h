@@ -91,6 +91,21 @@ class Film {
         vec3* to = sums_.data() + first;
         for (size_t p = 0; p < pass_count_; ++p) to[p] = from[p] + values.value[p];
     }
+    // Starts loading the cache lines accumulate(x, y, base, ...) reads and writes, for a caller
+    // with enough work before that call to hide a miss (the preview shades the pixel's path in
+    // between). The two films are ~2.7 MB each at 640 x 360 Combined-only, past a core's L2:
+    // the preview's accumulate waited on them (~15% of the render loop's own CPU samples).
+    void prefetch(int x, int y, const Film& base) const {
+        const size_t first = (size_t(y) * size_t(width_) + size_t(x)) * pass_count_;
+        const char* from = reinterpret_cast<const char*>(base.sums_.data() + first);
+        const char* to = reinterpret_cast<const char*>(sums_.data() + first);
+        // The lines of the pixel's first and last bytes: all of a Combined-only film's pixel.
+        const size_t last = pass_count_ * sizeof(vec3) - 1;
+        __builtin_prefetch(from, 0);
+        __builtin_prefetch(from + last, 0);
+        __builtin_prefetch(to, 1);
+        __builtin_prefetch(to + last, 1);
+    }
     void set_samples(uint32_t samples) { samples_ = samples; }
     // Every sum back to zero, samples() to 0.
     void clear();

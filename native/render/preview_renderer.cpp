@@ -1,6 +1,7 @@
 #include "render/preview_renderer.h"
 
 #include <algorithm>
+#include <atomic>
 #include <memory>
 #include <new>
 #include <optional>
@@ -129,9 +130,14 @@ struct Wave {
     std::vector<vec2> film;            // the camera ray's film point: pixel + jitter
     std::vector<PassValues> values;
     std::vector<std::optional<PathIntegrator>> paths;
-    // paths[0, armed) were constructed by this render_tiles call (its scene, field and clock)
-    // and are re-armed per pixel (PathIntegrator::restart); reset by each call.
+    // paths[0, armed) were constructed for the frame `armed_frame` (FrameWork::id_: its scene,
+    // field and settings) and are re-armed per pixel (PathIntegrator::restart); another frame's
+    // first call starts again from 0. Built once a render_tiles call, the first of a work
+    // unit's four waves constructed all its paths: a quarter of the pixels, ~18% of the render
+    // loop's own CPU samples (docs/frame-pipeline.md, 2026-11-30, loop16).
     size_t armed = 0;
+    uint64_t armed_frame = 0;  // no frame: FrameWork ids start at 1
+    IntegratorClock clock;     // the paths' clock, zeroed by each render_tiles call
     std::vector<uint8_t> live;  // the path has a first surface to shade
     // The wave holds whole 2 x 2 quads (fewer pixels at the image border): quad q is pixels
     // [quads[q], quads[q + 1]) (the last one ends at count), and lookups[q] its shared lookup.
@@ -206,6 +212,7 @@ class FrameWork {
                      : 0.0f),
           final_gather_(final_gather ? 1 : 0),
           combined_only_(combined_only),
+          id_(next_id()),
           camera_position_(camera.world_from_camera[3]),
           forward_(glm::normalize(-vec3(camera.world_from_camera[2]))) {}
 
@@ -217,8 +224,12 @@ class FrameWork {
         WaveLease lease(size_t(std::min<uint64_t>(kWavePixels, (end - begin) * tile_pixels)));
         Wave& wave = lease.wave();
         wave.shading.reset();
-        wave.armed = 0;  // a kept wave's paths refer to another call's clock
-        IntegratorClock clock;
+        if (wave.armed_frame != id_) {  // a kept wave's paths refer to another frame's objects
+            wave.armed = 0;
+            wave.armed_frame = id_;
+        }
+        wave.clock = IntegratorClock{};
+        IntegratorClock& clock = wave.clock;
         for (uint64_t t = begin; t < end; ++t) {
             int x0, x1, y0, y1;
             grid_.bounds(t, &x0, &x1, &y0, &y1);
@@ -240,6 +251,11 @@ class FrameWork {
     }
 
   private:
+    static uint64_t next_id() {
+        static std::atomic<uint64_t> last{0};
+        return last.fetch_add(1, std::memory_order_relaxed) + 1;
+    }
+
     // Every sample of the wave's pixels, one sample index at a time (each pixel's samples are
     // summed in order, as the path tracer does); empties the wave.
     void render_wave(Wave& wave, IntegratorClock& clock, Film& target, const Film& base,
@@ -259,6 +275,8 @@ class FrameWork {
             share_field_lookups(wave, s);
             const Film& sums = s == first_ ? base : target;
             for (size_t i = 0; i < wave.count; ++i) {
+                // The film's lines load while the path is shaded (Film::prefetch).
+                target.prefetch(wave.x[i], wave.y[i], sums);
                 if (wave.live[i]) wave.paths[i]->finish();
                 target.accumulate(wave.x[i], wave.y[i], sums, wave.values[i]);
             }
@@ -441,6 +459,9 @@ class FrameWork {
     float reuse_;  // the field's reuse distance; 0: every pixel makes its own lookup
     int final_gather_;  // diffuse bounces before a path reads the field (PreviewSettings)
     bool combined_only_;  // the film sums only Combined: the paths write no other pass
+    // Unique in the process (next_id), so a wave kept by a thread knows whether its paths were
+    // built for this frame's objects, whatever addresses a later frame's objects reuse.
+    uint64_t id_;
     vec3 camera_position_, forward_;  // the camera's, for the G-buffer's depth
 };
 

@@ -17,4 +17,17 @@ bool cpu_has_avx2() {
 #endif
 }
 
+bool cpu_has_avx512dq_vl() {
+#if defined(__x86_64__) || defined(__i386__)
+    static const bool avx512 = [] {
+        __builtin_cpu_init();  // as cpu_has_avx2; the checks include the OS's (xgetbv ZMM state)
+        return cpu_has_avx2() && __builtin_cpu_supports("avx512f") != 0 &&
+               __builtin_cpu_supports("avx512dq") != 0 && __builtin_cpu_supports("avx512vl") != 0;
+    }();
+    return avx512;
+#else
+    return false;
+#endif
+}
+
 }  // namespace shgi

@@ -8,5 +8,8 @@ namespace shgi {
 // True when the CPU and the operating system support AVX2 (256-bit integer SIMD); false on
 // other architectures.
 bool cpu_has_avx2();
+// True when the CPU and the operating system support AVX2 and AVX-512 F, DQ and VL (64-bit
+// integer multiplies on 256-bit registers); false on other architectures.
+bool cpu_has_avx512dq_vl();
 
 }  // namespace shgi

@@ -22,6 +22,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -447,6 +448,36 @@ TEST(PreviewRenderer, BitIdenticalForAnyThreadCountAndTileSize) {
     expect_same_film(one->film(), render(2, std::numeric_limits<int>::max())->film());
 }
 
+// A thread keeps its wave's paths from one work unit to the next within a frame and builds them
+// again for another frame's scene, field and settings: on one thread, frames of two renderers
+// (other cameras, the photon lattice and no field, all passes and Combined only) rendered in
+// turn, one sample each, equal those of each renderer alone on a new thread (whose wave is new).
+TEST(PreviewRenderer, FramesOfRenderersInTurnEqualEachRendererAlone) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(1));
+    const Scene room = room_scene();
+    Scene fine = room_scene();
+    fine.set_camera(test::ortho_camera_down(vec3(0.0f, 0.0f, 0.9f), 1.8f, 40));
+    fine.commit();
+    const auto lattice = solved_lattice(room);
+    PreviewSettings combined_only = preview_settings(1);
+    combined_only.combined_only = true;
+    PreviewRenderer alone_a(room, preview_settings(1)), alone_b(fine, combined_only);
+    std::thread([&] {
+        for (int s = 0; s < 3; ++s) alone_a.render(lattice.get(), 1);
+    }).join();
+    std::thread([&] {
+        for (int s = 0; s < 3; ++s) alone_b.render(nullptr, 1);
+    }).join();
+    PreviewRenderer a(room, preview_settings(1)), b(fine, combined_only);
+    for (int s = 0; s < 3; ++s) {
+        a.render(lattice.get(), 1);
+        b.render(nullptr, 1);
+    }
+    expect_same_film(alone_a.film(), a.film());
+    EXPECT_EQ(alone_b.film().samples(), b.film().samples());
+    EXPECT_EQ(alone_b.film().pixels(Pass::Combined), b.film().pixels(Pass::Combined));
+}
+
 // The lookup sharing stage reads its quads from the frame-wide G-buffer: on the fine room with the
 // photon lattice (where sharing is active: the frame differs from one lookup per pixel), frames
 // are bit-identical for tile sizes 2, 16 and 64 on one thread and on two.
@@ -724,15 +755,21 @@ TEST(PreviewRenderer, RejectsInvalidSettingsNamingTheField) {
 
 }  // namespace
 // The wave's Owen-scrambled Sobol' numbers (eight pixels at a time in AVX2 where the CPU has it,
-// four in SSE2, the rest one by one) are pixel_sample's, bit for bit, on every instruction set
-// this CPU runs: for wave sizes with and without a remainder, scattered and large pixel indices,
-// early and late sample indices (all 32 index bits) and several seeds.
+// its 64-bit products in one AVX-512DQ instruction where it has that too, four in SSE2, the rest
+// one by one) are pixel_sample's, bit for bit, on every instruction set this CPU runs: for wave
+// sizes with and without a remainder, scattered and large pixel indices, early and late sample
+// indices (all 32 index bits) and several seeds.
 TEST(PreviewRenderer, PixelSamplesOfAWaveArePixelSampleBitForBit) {
     std::vector<PixelSamplesIsa> isas = {PixelSamplesIsa::Auto, PixelSamplesIsa::Sse2};
     if (cpu_has_avx2())
         isas.push_back(PixelSamplesIsa::Avx2);
     else
         EXPECT_THROW(pixel_samples(0, nullptr, 0, 0, nullptr, PixelSamplesIsa::Avx2),
+                     InvalidArgument);
+    if (cpu_has_avx512dq_vl())
+        isas.push_back(PixelSamplesIsa::Avx512);
+    else
+        EXPECT_THROW(pixel_samples(0, nullptr, 0, 0, nullptr, PixelSamplesIsa::Avx512),
                      InvalidArgument);
     std::vector<uint32_t> pixels;
     uint32_t x = 12345u;
