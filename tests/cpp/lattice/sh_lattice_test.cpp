@@ -492,6 +492,20 @@ TEST(ShLattice, CubicWeightsFollowTheSmoothstepAndKeepConstants) {
     }
 }
 
+// A 5^3 lattice of SH `order` whose surface is a floor through its z = 2 layer and a wall
+// through its x = 3 layer (each quad reaching past the lattice on every side).
+ShLattice floor_and_wall_lattice(int order) {
+    ShLattice lattice(Bounds3{vec3(0.0f), vec3(5.0f)}, 5, order);
+    const float s = lattice.cell_size();
+    const vec3 o = lattice.origin();
+    lattice.measure_surfaces(test::committed_scene(
+        {test::quad(o + vec3(-1.0f, -1.0f, 2.5f * s), vec3(5.0f * s + 2.0f, 0, 0),
+                    vec3(0, 5.0f * s + 2.0f, 0)),
+         test::quad(o + vec3(3.5f * s, -1.0f, -1.0f), vec3(0, 5.0f * s + 2.0f, 0),
+                    vec3(0, 0, 5.0f * s + 2.0f))}), nullptr, kNoVisibility);
+    return lattice;
+}
+
 // A cubic sample is, bit for bit, the scalar weighted sum the header describes, in block-bit
 // order: per cell of the block inside the lattice with D_c(n) > 0 and d² < r², w = w(√d²) D_c(n),
 // Σ w L(c) · (1 / Σ w), each operation in float as the walk does it (its cells and D_c(n) come
@@ -500,14 +514,9 @@ TEST(ShLattice, CubicWeightsFollowTheSmoothstepAndKeepConstants) {
 // a floor and a wall (cells without surface, cells facing away), normals along and across them,
 // points in and around the lattice (up to ten cells out), with and without a normal offset.
 TEST(ShLattice, CubicSampleIsTheScalarWeightedSumBitForBit) {
-    ShLattice lattice(Bounds3{vec3(0.0f), vec3(5.0f)}, 5, 2);
+    ShLattice lattice = floor_and_wall_lattice(2);
     const float s = lattice.cell_size();
     const vec3 o = lattice.origin();
-    lattice.measure_surfaces(test::committed_scene(
-        {test::quad(o + vec3(-1.0f, -1.0f, 2.5f * s), vec3(5.0f * s + 2.0f, 0, 0),
-                    vec3(0, 5.0f * s + 2.0f, 0)),
-         test::quad(o + vec3(3.5f * s, -1.0f, -1.0f), vec3(0, 5.0f * s + 2.0f, 0),
-                    vec3(0, 0, 5.0f * s + 2.0f))}), nullptr, kNoVisibility);
     Pcg32 rng(11, 0);
     constexpr int kFloats = 27;
     for (size_t c = 0; c < lattice.cell_count(); ++c) {
@@ -570,14 +579,9 @@ TEST(ShLattice, CubicSampleIsTheScalarWeightedSumBitForBit) {
 // and y, so each of the 27 neighbours is tried in and out of the lattice, also from block
 // centres just outside it.
 TEST(ShLattice, CubicSamplesWeighOnlyTheCellsWithSurface) {
-    ShLattice lattice(Bounds3{vec3(0.0f), vec3(5.0f)}, 5, 1);
+    ShLattice lattice = floor_and_wall_lattice(1);
     const float s = lattice.cell_size();
     const vec3 o = lattice.origin();
-    lattice.measure_surfaces(test::committed_scene(
-        {test::quad(o + vec3(-1.0f, -1.0f, 2.5f * s), vec3(5.0f * s + 2.0f, 0, 0),
-                    vec3(0, 5.0f * s + 2.0f, 0)),
-         test::quad(o + vec3(3.5f * s, -1.0f, -1.0f), vec3(0, 5.0f * s + 2.0f, 0),
-                    vec3(0, 0, 5.0f * s + 2.0f))}), nullptr, kNoVisibility);
     const ivec3 impulse_cells[2] = {ivec3(2, 2, 2), ivec3(0, 2, 2)};
     for (int i = 0; i < 2; ++i) {
         ShRgb impulse(1);
