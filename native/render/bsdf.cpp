@@ -809,7 +809,7 @@ float PrincipledBsdf::diffuse_bump_shadowing(const vec3& wi) const {
 // class_color(Diffuse) times Burley's albedo (Lambert's: 1, and w * 1 is w, bit for bit). Every
 // preview pixel with a field comes here. The sum is kept in three floats: as a glm vec3 through
 // class_color, GCC kept it on the stack, and both models' results met there too, so each pixel
-// waited on store-to-load round trips after the table read (`perf annotate`: ~40% of the
+// waited on store-to-load round trips after the table read (`perf annotate`: ~27% of the
 // function's samples on them). The table read comes first: it depends on wo alone, so its chain
 // runs while the lobes are summed.
 vec3 PrincipledBsdf::field_diffuse(const vec3& wo) const {
