@@ -443,6 +443,42 @@ TEST(BsdfV2, LightPathsUseTheAdjointBsdf) {
 }
 
 
+// field_diffuse sums the diffuse lobes' weights itself (not through class_color, for the
+// latency): Lambert's field lobe is class_color(Diffuse) bit for bit, Burley's the same colour
+// times one albedo for the three channels, for any view and roughness, the grazing and the
+// clamped table edges too.
+TEST(Bsdf, FieldDiffuseIsTheDiffuseClassColourTimesOneAlbedo) {
+    auto same = [](const vec3& a, const vec3& b) { return std::memcmp(&a, &b, sizeof(vec3)) == 0; };
+    for (DiffuseModel model : {DiffuseModel::Lambert, DiffuseModel::Principled})
+        for (float metallic : {0.0f, 0.4f, 1.0f})
+            for (float roughness : {0.0f, 0.3f, 1.0f}) {
+                Material material = make_material(metallic, 0.0f, roughness);
+                material.base_color = vec3(0.7f, 0.2f, 0.05f);
+                material.diffuse_model = model;
+                const MaterialTerms terms = material_terms(material);
+                for (float angle : {0.0f, 0.4f, 1.1f, 1.5707f, 1.58f}) {
+                    const vec3 wo = direction_from_angle(angle);
+                    const PrincipledBsdf bsdf(material, terms, material.base_color, false,
+                                              std::max(wo.z, 0.0f));
+                    const vec3 color = bsdf.class_color(LobeClass::Diffuse);
+                    const vec3 field = bsdf.field_diffuse(wo);
+                    if (metallic == 1.0f) {  // no diffuse lobe
+                        EXPECT_TRUE(same(field, vec3(0.0f)));
+                        continue;
+                    }
+                    if (model == DiffuseModel::Lambert) {
+                        EXPECT_TRUE(same(field, color));
+                        continue;
+                    }
+                    const float albedo = field.x / color.x;
+                    EXPECT_GT(albedo, 0.25f);  // Burley: 0.49 (smooth, grazing) to 1.53 (rough, grazing)
+                    EXPECT_LT(albedo, 2.0f);
+                    EXPECT_NEAR(field.y, color.y * albedo, 1e-6f);
+                    EXPECT_NEAR(field.z, color.z * albedo, 1e-6f);
+                }
+            }
+}
+
 // A material whose lobes are the same at every hit: its BSDF finished from material_lobes is the
 // full constructor's for every side and view, bit for bit (eval, pdf, samples, colours, field
 // lobes, albedo estimate), so tracers that keep the lobes per material render the same image.
