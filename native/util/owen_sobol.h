@@ -64,7 +64,7 @@ struct SobolDimension1Tables {
     }
 };
 
-// The tables, built on first use (the preview's AVX2 wave reads them with gathers).
+// The tables, built on first use.
 inline const SobolDimension1Tables& sobol_dimension1_tables() {
     static const SobolDimension1Tables tables;
     return tables;
@@ -74,6 +74,20 @@ inline uint32_t sobol_dimension1(uint32_t index) {
     const SobolDimension1Tables& tables = sobol_dimension1_tables();
     return tables.byte[0][index & 0xFFu] ^ tables.byte[1][(index >> 8) & 0xFFu] ^
            tables.byte[2][(index >> 16) & 0xFFu] ^ tables.byte[3][index >> 24];
+}
+
+// reverse_bits(sobol_dimension1(index)) without tables, for lanes, where the tables took four
+// gathers (slow, and the longest latency of the preview's pixel numbers). Reversed, direction
+// number v_i has bit j set where C(i, j) is odd, that is (Lucas's theorem) where j's bits are a
+// subset of i's: bit j of the result is the XOR of the index bits at the positions whose bits are
+// a superset of j's. That sum over supersets takes one shift-and-XOR step per bit of a position
+// (five), as a fast zeta transform does.
+inline uint32_t reversed_sobol_dimension1(uint32_t index) {
+    index ^= (index >> 1) & 0x55555555u;
+    index ^= (index >> 2) & 0x33333333u;
+    index ^= (index >> 4) & 0x0F0F0F0Fu;
+    index ^= (index >> 8) & 0x00FF00FFu;
+    return index ^ (index >> 16);
 }
 
 // The third Sobol' dimension (Joe and Kuo's: primitive polynomial x^2 + x + 1, m = 1, 3), by

@@ -78,6 +78,27 @@ TEST(OwenSobol, SobolDimensionTwoMatchesJoeKuo) {
             << "index " << i;
 }
 
+// The second dimension's reversal without tables is the tables' bit for bit: every single-bit
+// index (each direction number alone), 0, all ones, and a million indices of an LCG (all 32 bits
+// vary, as the scrambled indices renderers pass). Its first eight values reversed are Sobol's
+// second dimension's 0, 1/2, 3/4, 1/4, 5/8, 1/8, 3/8, 7/8 as well.
+TEST(OwenSobol, ReversedSobolDimensionOneIsTheTablesReversed) {
+    using owen_sobol_detail::reverse_bits;
+    using owen_sobol_detail::reversed_sobol_dimension1;
+    using owen_sobol_detail::sobol_dimension1;
+    std::vector<uint32_t> indices = {0u, 0xFFFFFFFFu};
+    for (int bit = 0; bit < 32; ++bit) indices.push_back(1u << bit);
+    uint32_t x = 1u;
+    for (int i = 0; i < 1000000; ++i) indices.push_back(x = x * 1664525u + 1013904223u);
+    for (const uint32_t index : indices)
+        ASSERT_EQ(reversed_sobol_dimension1(index), reverse_bits(sobol_dimension1(index)))
+            << "index " << index;
+    const double expected[8] = {0.0, 0.5, 0.75, 0.25, 0.625, 0.125, 0.375, 0.875};
+    for (uint32_t i = 0; i < 8; ++i)
+        EXPECT_EQ(double(reverse_bits(reversed_sobol_dimension1(i))) * 0x1p-32, expected[i])
+            << "index " << i;
+}
+
 // Each elementary box of volume 2^(1-m) (shape 2^-a x 2^-b x 2^-c, a + b + c = m - 1) holds
 // exactly two of the 2^m points from `first`: the (1, m, 3)-net property, which makes the points
 // a range of z selects stratified in (x, y).
