@@ -334,13 +334,44 @@ ShRgb blend_cells(int order, const float* coefficients, const CellWeights& cells
     return radiance;
 }
 
-// Lattice coordinates in cells of the sample point, or false for a non-finite point. Far-away
-// points are clamped (keeping them outside) so the integer conversions below cannot overflow.
-bool sample_coordinates(const vec3& p, const vec3& n, float normal_offset, const vec3& origin,
-                        float cell_size, const ivec3& dims, vec3& cells) {
+// Lattice coordinates in cells of the sample point and their floor (the cell holding it), or
+// false for a non-finite point: the coordinates of trilinear and cubic samples alike. Far-away
+// points are clamped (keeping them outside) so the integer conversions cannot overflow; the
+// floor is exact for the clamped cells (|x| < 2^24). With SSE2 the three axes run in one
+// register: one division where the scalar code made three in a row on the divider, and an
+// integer floor (truncate, then one less where that rounded up) of ~8 instructions where
+// glm::floor without SSE4.1 took ~13 an axis. The same IEEE operations per axis as the scalar
+// code, so the same cells.
+inline bool sample_coordinates(const vec3& p, const vec3& n, float normal_offset,
+                               const vec3& origin, float cell_size, const ivec3& dims,
+                               vec3& cells, ivec3& centre) {
+#if defined(__SSE2__)
+    const __m128 n_lanes = _mm_setr_ps(n.x, n.y, n.z, 0.0f);
+    const __m128 q = _mm_add_ps(_mm_setr_ps(p.x, p.y, p.z, 0.0f),
+                                _mm_mul_ps(_mm_set1_ps(normal_offset * cell_size), n_lanes));
+    // x - x is 0 exactly for finite x, NaN for infinities and NaN (std::isfinite per axis).
+    if ((_mm_movemask_ps(_mm_cmpeq_ps(_mm_sub_ps(q, q), _mm_setzero_ps())) & 0x7) != 0x7)
+        return false;
+    const vec3 upper = vec3(dims) + 4.0f;
+    const __m128 origin_lanes = _mm_setr_ps(origin.x, origin.y, origin.z, 0.0f);
+    const __m128 scaled = _mm_div_ps(_mm_sub_ps(q, origin_lanes), _mm_set1_ps(cell_size));
+    const __m128 clamped = _mm_min_ps(_mm_max_ps(scaled, _mm_set1_ps(-4.0f)),
+                                      _mm_setr_ps(upper.x, upper.y, upper.z, 0.0f));
+    const __m128i truncated = _mm_cvttps_epi32(clamped);
+    const __m128i rounded_up = _mm_castps_si128(_mm_cmplt_ps(clamped, _mm_cvtepi32_ps(truncated)));
+    alignas(16) std::array<float, 4> cell_lanes;
+    alignas(16) std::array<int32_t, 4> floor_lanes;
+    _mm_store_ps(cell_lanes.data(), clamped);
+    _mm_store_si128(reinterpret_cast<__m128i*>(floor_lanes.data()),
+                    _mm_add_epi32(truncated, rounded_up));  // rounded_up is -1 or 0
+    cells = vec3(cell_lanes[0], cell_lanes[1], cell_lanes[2]);
+    centre = ivec3(floor_lanes[0], floor_lanes[1], floor_lanes[2]);
+#else
     const vec3 q = p + (normal_offset * cell_size) * n;
     if (!is_finite(q)) return false;
     cells = glm::clamp((q - origin) / cell_size, vec3(-4.0f), vec3(dims) + 4.0f);
+    centre = ivec3(glm::floor(cells));
+#endif
     return true;
 }
 
@@ -991,59 +1022,19 @@ ShRgb ShLattice::blend(const vec3& n, uint32_t near, uint32_t seen,
     return blend_cells<9 * 3>(order_, coeffs_.data(), cells);
 }
 
-// sample_coordinates' cells and their floor for a cubic sample. With SSE2, the three axes in one
-// register: one division where the scalar code made three in a row on the divider, and an
-// integer floor (truncate, then one less where that rounded up) of ~8 instructions where
-// glm::floor without SSE4.1 took ~13 an axis. The same IEEE operations per axis, so the same
-// cells; the floor is exact for the clamped cells (|x| < 2^24). False for a non-finite point.
-inline bool ShLattice::cubic_coordinates(const vec3& p, const vec3& n, float normal_offset,
-                                         vec3& cells, ivec3& centre) const {
-#if defined(__SSE2__)
-    const __m128 n_lanes = _mm_setr_ps(n.x, n.y, n.z, 0.0f);
-    const __m128 q = _mm_add_ps(_mm_setr_ps(p.x, p.y, p.z, 0.0f),
-                                _mm_mul_ps(_mm_set1_ps(normal_offset * cell_size_), n_lanes));
-    // x - x is 0 exactly for finite x, NaN for infinities and NaN (std::isfinite per axis).
-    if ((_mm_movemask_ps(_mm_cmpeq_ps(_mm_sub_ps(q, q), _mm_setzero_ps())) & 0x7) != 0x7)
-        return false;
-    const vec3 upper = vec3(dims_) + 4.0f;
-    const __m128 origin = _mm_setr_ps(origin_.x, origin_.y, origin_.z, 0.0f);
-    const __m128 scaled = _mm_div_ps(_mm_sub_ps(q, origin), _mm_set1_ps(cell_size_));
-    const __m128 clamped = _mm_min_ps(_mm_max_ps(scaled, _mm_set1_ps(-4.0f)),
-                                      _mm_setr_ps(upper.x, upper.y, upper.z, 0.0f));
-    const __m128i truncated = _mm_cvttps_epi32(clamped);
-    const __m128i rounded_up = _mm_castps_si128(_mm_cmplt_ps(clamped, _mm_cvtepi32_ps(truncated)));
-    alignas(16) std::array<float, 4> cell_lanes;
-    alignas(16) std::array<int32_t, 4> floor_lanes;
-    _mm_store_ps(cell_lanes.data(), clamped);
-    _mm_store_si128(reinterpret_cast<__m128i*>(floor_lanes.data()),
-                    _mm_add_epi32(truncated, rounded_up));  // rounded_up is -1 or 0
-    cells = vec3(cell_lanes[0], cell_lanes[1], cell_lanes[2]);
-    centre = ivec3(floor_lanes[0], floor_lanes[1], floor_lanes[2]);
-    return true;
-#else
-    if (!sample_coordinates(p, n, normal_offset, origin_, cell_size_, dims_, cells)) return false;
-    centre = ivec3(glm::floor(cells));
-    return true;
-#endif
-}
-
-inline bool ShLattice::radiance_near(const vec3& cells) const {
-    return radiance_near_block(ivec3(glm::floor(cells)));
-}
-
 inline bool ShLattice::radiance_near_block(const ivec3& centre) const {
     if (radiance_near_.empty()) return false;
-    // Trilinear and cubic samples read cells of the 3x3x3 block around the cell holding `cells`;
+    // Trilinear and cubic samples read cells of the 3x3x3 block around `centre`, their cell;
     // clamped into the lattice, that block's flag covers every lattice cell they read.
     return radiance_near_[cell_index(glm::clamp(centre, ivec3(0), dims_ - 1))] != 0;
 }
 
 ShRgb ShLattice::sample_trilinear(const vec3& p, const vec3& n, float normal_offset) const {
     vec3 cells(0.0f);
-    if (!sample_coordinates(p, n, normal_offset, origin_, cell_size_, dims_, cells) ||
-        !radiance_near(cells))
+    ivec3 centre(0);
+    if (!sample_coordinates(p, n, normal_offset, origin_, cell_size_, dims_, cells, centre) ||
+        !radiance_near_block(centre))
         return zero_radiance(order_);
-    const ivec3 centre(glm::floor(cells));
     const bool in_padded = glm::all(glm::greaterThanEqual(centre, ivec3(-1))) &&
                            glm::all(glm::lessThanEqual(centre, dims_));
     const uint32_t seen = in_padded ? visible_near_[padded_index(centre)] : kFullBlock;
@@ -1055,7 +1046,8 @@ ShRgb ShLattice::sample_trilinear(const vec3& p, const vec3& n, float normal_off
 ShRgb ShLattice::sample_cubic(const vec3& p, const vec3& n, float normal_offset) const {
     vec3 cells(0.0f);
     ivec3 centre(0);
-    if (!cubic_coordinates(p, n, normal_offset, cells, centre) || !radiance_near_block(centre))
+    if (!sample_coordinates(p, n, normal_offset, origin_, cell_size_, dims_, cells, centre) ||
+        !radiance_near_block(centre))
         return zero_radiance(order_);
     if (glm::any(glm::lessThan(centre, ivec3(-1))) || glm::any(glm::greaterThan(centre, dims_)))
         return zero_radiance(order_);  // the block holds no lattice cell

@@ -238,14 +238,9 @@ class ShLattice {
     // reports progress from `reported` to `span` units (measure_surfaces' second half).
     void update_visible_near(const Scene& scene, const std::vector<vec3>& anchors,
                              Progress* progress, uint64_t reported, uint64_t span);
-    // False when no cell a sample at lattice coordinates `cells` reads holds radiance.
-    bool radiance_near(const vec3& cells) const;
-    // The same for a sample whose cell (floor of its lattice coordinates) is `centre`.
+    // False when no cell a sample reads holds radiance, for a sample whose cell (floor of its
+    // lattice coordinates) is `centre`.
     bool radiance_near_block(const ivec3& centre) const;
-    // A cubic sample's lattice coordinates (sample_coordinates in sh_lattice.cpp) and their
-    // floor; false for a non-finite point.
-    bool cubic_coordinates(const vec3& p, const vec3& n, float normal_offset, vec3& cells,
-                           ivec3& centre) const;
     void update_radiance_near();  // recomputes radiance_near_ from the coefficients
     void update_surface_near();   // recomputes surface_near_ from surface_index_
     // Index in surface_near_ of a cell of the lattice padded by one cell on every side.

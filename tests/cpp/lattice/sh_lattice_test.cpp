@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -564,6 +565,70 @@ TEST(ShLattice, CubicSampleIsTheScalarWeightedSumBitForBit) {
         if (total > 0.0f)
             for (int i = 0; i < kFloats; ++i) expected[size_t(i)] = sum[size_t(i)] * (1.0f / total);
         const ShRgb sampled = lattice.sample_cubic(p, n, normal_offset);
+        ASSERT_EQ(sampled.order, 2);
+        ASSERT_EQ(std::memcmp(sampled.data(), expected.data(), sizeof(expected)), 0)
+            << "trial " << trial << " at cells " << glm::to_string(cells) << ", n "
+            << glm::to_string(n) << ": " << sampled[0].x << " against " << expected[0];
+    }
+}
+
+// A trilinear sample is, bit for bit, the scalar weighted sum of the 8 cells around its point,
+// in z, y, x order: per cell inside the lattice with D_c(n) > 0, w = (trilinear weight along x x
+// (along y x along z)) D_c(n), Σ w L(c) · (1 / Σ w), with the coordinates and their floor
+// computed axis by axis in float (sample_coordinates, which runs in SSE lanes where the build
+// has them, is checked against it). The lattice, coefficients, normals and points of the cubic
+// test above (no visibility: every cell of the block may be read).
+TEST(ShLattice, TrilinearSampleIsTheScalarWeightedSumBitForBit) {
+    ShLattice lattice = floor_and_wall_lattice(2);
+    const float s = lattice.cell_size();
+    const vec3 o = lattice.origin();
+    Pcg32 rng(12, 0);
+    constexpr int kFloats = 27;
+    for (size_t c = 0; c < lattice.cell_count(); ++c) {
+        ShRgb radiance(2);
+        for (int i = 0; i < kFloats; ++i) radiance.data()[i] = 2.0f * rng.next_float() - 0.5f;
+        lattice.set_cell_radiance(c, radiance);
+    }
+    const ivec3 dims = lattice.dims();
+    const vec3 normals[] = {kUp, -kUp, vec3(1, 0, 0), vec3(-1, 0, 0),
+                            glm::normalize(vec3(0.3f, -0.2f, 0.9f)), vec3(0, 1, 0)};
+    for (int trial = 0; trial < 3000; ++trial) {
+        const vec3& n = normals[trial % 6];
+        const float reach = trial % 8 == 0 ? 10.0f : 2.0f;
+        const vec3 u(rng.next_float(), rng.next_float(), rng.next_float());
+        const vec3 p = o + s * (-reach + (5.0f + 2.0f * reach) * u);
+        const float normal_offset = trial % 2 == 0 ? 0.0f : 0.25f;
+        vec3 cells;
+        for (int a = 0; a < 3; ++a)
+            cells[a] = std::min(std::max((p[a] + (normal_offset * s) * n[a] - o[a]) / s, -4.0f),
+                                float(dims[a]) + 4.0f);
+        const vec3 f = cells - 0.5f;
+        const ivec3 base(int(std::floor(f.x)), int(std::floor(f.y)), int(std::floor(f.z)));
+        const vec3 t = f - vec3(base);
+        std::array<float, kFloats> sum{};
+        float total = 0.0f;
+        for (int z = base.z; z <= base.z + 1; ++z)
+            for (int y = base.y; y <= base.y + 1; ++y)
+                for (int x = base.x; x <= base.x + 1; ++x) {
+                    const ivec3 cell(x, y, z);
+                    if (glm::any(glm::lessThan(cell, ivec3(0))) ||
+                        glm::any(glm::greaterThanEqual(cell, dims)))
+                        continue;
+                    const size_t index = lattice.cell_index(cell);
+                    const float density = lattice.projected_area(index, n);
+                    if (!(density > 0.0f)) continue;
+                    const float wz = z == base.z ? 1.0f - t.z : t.z;
+                    const float wyz = (y == base.y ? 1.0f - t.y : t.y) * wz;
+                    const float w = (x == base.x ? 1.0f - t.x : t.x) * wyz * density;
+                    if (!(w > 0.0f)) continue;
+                    const float* coefficients = lattice.coefficients().data() + index * kFloats;
+                    for (int i = 0; i < kFloats; ++i) sum[size_t(i)] += w * coefficients[i];
+                    total += w;
+                }
+        std::array<float, kFloats> expected{};
+        if (total > 0.0f)
+            for (int i = 0; i < kFloats; ++i) expected[size_t(i)] = sum[size_t(i)] * (1.0f / total);
+        const ShRgb sampled = lattice.sample_trilinear(p, n, normal_offset);
         ASSERT_EQ(sampled.order, 2);
         ASSERT_EQ(std::memcmp(sampled.data(), expected.data(), sizeof(expected)), 0)
             << "trial " << trial << " at cells " << glm::to_string(cells) << ", n "
