@@ -107,6 +107,7 @@ struct OwenSobol4 {
 #if defined(__x86_64__)
 #define SHGI_AVX2 __attribute__((target("avx2")))
 #define SHGI_AVX512 __attribute__((target("avx2,avx512f,avx512dq,avx512vl")))
+#define SHGI_AVX512_GFNI __attribute__((target("avx2,avx512f,avx512dq,avx512vl,gfni")))
 // hash_seed's 64-bit product a * k mod 2^64 on four 64-bit lanes (k a constant). AVX2 has no
 // 64-bit multiply: the low 64 bits of the product from three 32-bit ones.
 struct Mul64Avx2 {
@@ -127,10 +128,44 @@ struct Mul64Avx512 {
     }
 };
 
+// reverse_bits on eight lanes: the bytes of each lane reversed by one shuffle, then each byte's
+// bits by two lookups of its reversed nibbles.
+struct ReverseAvx2 {
+    SHGI_AVX2 static __m256i reverse_bits(__m256i x) {
+        const __m256i bytes = _mm256_setr_epi8(3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12,
+                                               3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12);
+        const __m256i nibbles = _mm256_setr_epi8(0x0, 0x8, 0x4, 0xC, 0x2, 0xA, 0x6, 0xE, 0x1, 0x9,
+                                                 0x5, 0xD, 0x3, 0xB, 0x7, 0xF, 0x0, 0x8, 0x4, 0xC,
+                                                 0x2, 0xA, 0x6, 0xE, 0x1, 0x9, 0x5, 0xD, 0x3, 0xB,
+                                                 0x7, 0xF);
+        const __m256i low_nibble = _mm256_set1_epi8(0x0F);
+        x = _mm256_shuffle_epi8(x, bytes);
+        const __m256i low = _mm256_shuffle_epi8(nibbles, _mm256_and_si256(x, low_nibble));
+        const __m256i high =
+            _mm256_shuffle_epi8(nibbles, _mm256_and_si256(_mm256_srli_epi16(x, 4), low_nibble));
+        // A reversed low nibble (< 16) moves up within its byte: the 16-bit shift carries nothing
+        // into the next byte.
+        return _mm256_or_si256(_mm256_slli_epi16(low, 4), high);
+    }
+};
+// The same reversal with GFNI: after the same byte shuffle, each byte's bits by one affine
+// transform over GF(2) whose matrix 0x8040201008040201 makes output bit i input bit 7 - i. Two
+// instructions where the AVX2 form takes eight, on the dependent chain of each of the eight
+// reversals per eight pixels. Inlined only into a function compiled for GFNI
+// (pixel_samples_avx512_gfni, flattened).
+struct ReverseGfni {
+    SHGI_AVX512_GFNI static __m256i reverse_bits(__m256i x) {
+        const __m256i bytes = _mm256_setr_epi8(3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12,
+                                               3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12);
+        return _mm256_gf2p8affine_epi64_epi8(_mm256_shuffle_epi8(x, bytes),
+                                             _mm256_set1_epi64x(int64_t(0x8040201008040201ull)), 0);
+    }
+};
+
 // The same integer steps on eight lanes (AVX2: 32-bit multiplies and byte shuffles),
 // and hash_seed on four 64-bit lanes per register, its products by Mul (Mul64Avx2 or
-// Mul64Avx512: the same bits).
-template <class Mul>
+// Mul64Avx512) and its bit reversals by Reverse (ReverseAvx2 or ReverseGfni): the same bits.
+template <class Mul, class Reverse>
 struct OwenSobol8 {
     SHGI_AVX2 static __m256i mul64(__m256i a, uint64_t k) { return Mul::mul64(a, k); }
     // The SplitMix64 finaliser of hash_seed from z, the high 32 bits left in each 64-bit lane.
@@ -166,24 +201,7 @@ struct OwenSobol8 {
         return high_halves(finalise(_mm256_add_epi64(low, ak_plus_c)),
                            finalise(_mm256_add_epi64(high, ak_plus_c)));
     }
-    // reverse_bits: the bytes of each lane reversed by one shuffle, then each byte's bits by two
-    // lookups of its reversed nibbles.
-    SHGI_AVX2 static __m256i reverse_bits(__m256i x) {
-        const __m256i bytes = _mm256_setr_epi8(3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12,
-                                               3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12);
-        const __m256i nibbles = _mm256_setr_epi8(0x0, 0x8, 0x4, 0xC, 0x2, 0xA, 0x6, 0xE, 0x1, 0x9,
-                                                 0x5, 0xD, 0x3, 0xB, 0x7, 0xF, 0x0, 0x8, 0x4, 0xC,
-                                                 0x2, 0xA, 0x6, 0xE, 0x1, 0x9, 0x5, 0xD, 0x3, 0xB,
-                                                 0x7, 0xF);
-        const __m256i low_nibble = _mm256_set1_epi8(0x0F);
-        x = _mm256_shuffle_epi8(x, bytes);
-        const __m256i low = _mm256_shuffle_epi8(nibbles, _mm256_and_si256(x, low_nibble));
-        const __m256i high =
-            _mm256_shuffle_epi8(nibbles, _mm256_and_si256(_mm256_srli_epi16(x, 4), low_nibble));
-        // A reversed low nibble (< 16) moves up within its byte: the 16-bit shift carries nothing
-        // into the next byte.
-        return _mm256_or_si256(_mm256_slli_epi16(low, 4), high);
-    }
+    SHGI_AVX2 static __m256i reverse_bits(__m256i x) { return Reverse::reverse_bits(x); }
     SHGI_AVX2 static __m256i laine_karras(__m256i x, __m256i seed) {
         x = _mm256_add_epi32(x, seed);
         for (const uint32_t k : {0x6c50b47cu, 0xb82f1e52u, 0xc7afe638u, 0x8d22f6e6u})
@@ -223,10 +241,10 @@ static_assert(sizeof(PixelSample) == 32 && offsetof(PixelSample, u_select) == 8 
                   offsetof(PixelSample, u_light) == 12 && offsetof(PixelSample, u_lobe) == 20 &&
                   offsetof(PixelSample, u_bsdf) == 24,
               "pixel_samples_lanes writes a PixelSample as eight packed floats");
-template <class Mul>
+template <class Mul, class Reverse>
 SHGI_AVX2 size_t pixel_samples_lanes(uint64_t seed, const uint32_t* pixels, size_t count,
                                      uint64_t sample, PixelSample* out) {
-    using Lanes = OwenSobol8<Mul>;
+    using Lanes = OwenSobol8<Mul, Reverse>;
     const uint32_t reversed = owen_sobol_detail::reverse_bits(uint32_t(sample));
     size_t i = 0;
     for (; i + 8 <= count; i += 8) {
@@ -261,7 +279,7 @@ SHGI_AVX2 size_t pixel_samples_lanes(uint64_t seed, const uint32_t* pixels, size
 
 SHGI_AVX2 size_t pixel_samples_avx2(uint64_t seed, const uint32_t* pixels, size_t count,
                                     uint64_t sample, PixelSample* out) {
-    return pixel_samples_lanes<Mul64Avx2>(seed, pixels, count, sample, out);
+    return pixel_samples_lanes<Mul64Avx2, ReverseAvx2>(seed, pixels, count, sample, out);
 }
 
 // flatten: every call inlined into this AVX-512 function, Mul64Avx512::mul64 included (GCC
@@ -270,8 +288,15 @@ SHGI_AVX512 __attribute__((flatten)) size_t pixel_samples_avx512(uint64_t seed,
                                                                  const uint32_t* pixels,
                                                                  size_t count, uint64_t sample,
                                                                  PixelSample* out) {
-    return pixel_samples_lanes<Mul64Avx512>(seed, pixels, count, sample, out);
+    return pixel_samples_lanes<Mul64Avx512, ReverseAvx2>(seed, pixels, count, sample, out);
 }
+
+// pixel_samples_avx512 with GFNI's bit reversal, flattened alike.
+SHGI_AVX512_GFNI __attribute__((flatten)) size_t pixel_samples_avx512_gfni(
+    uint64_t seed, const uint32_t* pixels, size_t count, uint64_t sample, PixelSample* out) {
+    return pixel_samples_lanes<Mul64Avx512, ReverseGfni>(seed, pixels, count, sample, out);
+}
+#undef SHGI_AVX512_GFNI
 #undef SHGI_AVX512
 #undef SHGI_AVX2
 #endif
@@ -286,8 +311,15 @@ void pixel_samples(uint64_t seed, const uint32_t* pixels, size_t count, uint64_t
     if (isa == PixelSamplesIsa::Avx512 && !cpu_has_avx512dq_vl())
         throw InvalidArgument(
             "pixel_samples: AVX-512 (DQ and VL) was asked for on a CPU without it");
+    if (isa == PixelSamplesIsa::Avx512Gfni && !cpu_has_avx512dq_vl_gfni())
+        throw InvalidArgument(
+            "pixel_samples: AVX-512 (DQ and VL) with GFNI was asked for on a CPU without them");
 #if defined(__x86_64__)
-    if (isa == PixelSamplesIsa::Avx512 || (isa == PixelSamplesIsa::Auto && cpu_has_avx512dq_vl()))
+    if (isa == PixelSamplesIsa::Avx512Gfni ||
+        (isa == PixelSamplesIsa::Auto && cpu_has_avx512dq_vl_gfni()))
+        i = pixel_samples_avx512_gfni(seed, pixels, count, sample, out);
+    else if (isa == PixelSamplesIsa::Avx512 ||
+             (isa == PixelSamplesIsa::Auto && cpu_has_avx512dq_vl()))
         i = pixel_samples_avx512(seed, pixels, count, sample, out);
     else if (isa == PixelSamplesIsa::Avx2 || (isa == PixelSamplesIsa::Auto && cpu_has_avx2()))
         i = pixel_samples_avx2(seed, pixels, count, sample, out);

@@ -88,12 +88,12 @@ float gather_number(uint64_t seed, uint64_t pixel, uint64_t sample);
 // The instruction set pixel_samples runs on: Auto takes AVX2 (eight pixels at a time) when the
 // CPU has it (util/cpu_features.h), else SSE2 (four); tests name each to check it. All give the
 // same bits (integer work, and the same float conversions).
-enum class PixelSamplesIsa : uint8_t { Auto, Sse2, Avx2, Avx512 };
+enum class PixelSamplesIsa : uint8_t { Auto, Sse2, Avx2, Avx512, Avx512Gfni };
 // pixel_sample(seed, pixels[i], sample) for i in [0, count) into out[i] (without first_bsdf),
 // bit for bit, several pixels at a time (the preview's wave: the seed hashes and scrambles are
-// integer work the same for every pixel). Auto takes Avx512 (AVX2 with AVX-512DQ's 64-bit
-// multiply) where the CPU has it, else Avx2, else Sse2. Avx2 or Avx512 on a CPU without it is an
-// InvalidArgument.
+// integer work the same for every pixel). Auto takes Avx512Gfni (Avx512 with GFNI's bit
+// reversal) where the CPU has it, else Avx512 (AVX2 with AVX-512DQ's 64-bit multiply), else
+// Avx2, else Sse2. An instruction set the CPU lacks is an InvalidArgument.
 void pixel_samples(uint64_t seed, const uint32_t* pixels, size_t count, uint64_t sample,
                    PixelSample* out, PixelSamplesIsa isa = PixelSamplesIsa::Auto);
 

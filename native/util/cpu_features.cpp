@@ -30,4 +30,13 @@ bool cpu_has_avx512dq_vl() {
 #endif
 }
 
+bool cpu_has_avx512dq_vl_gfni() {
+#if defined(__x86_64__) || defined(__i386__)
+    static const bool gfni = cpu_has_avx512dq_vl() && __builtin_cpu_supports("gfni") != 0;
+    return gfni;
+#else
+    return false;
+#endif
+}
+
 }  // namespace shgi

@@ -755,10 +755,11 @@ TEST(PreviewRenderer, RejectsInvalidSettingsNamingTheField) {
 
 }  // namespace
 // The wave's Owen-scrambled Sobol' numbers (eight pixels at a time in AVX2 where the CPU has it,
-// its 64-bit products in one AVX-512DQ instruction where it has that too, four in SSE2, the rest
-// one by one) are pixel_sample's, bit for bit, on every instruction set this CPU runs: for wave
-// sizes with and without a remainder, scattered and large pixel indices, early and late sample
-// indices (all 32 index bits) and several seeds.
+// its 64-bit products in one AVX-512DQ instruction where it has that too, its bit reversals by
+// GFNI where it has that as well, four in SSE2, the rest one by one) are pixel_sample's, bit for
+// bit, on every instruction set this CPU runs: for wave sizes with and without a remainder,
+// scattered and large pixel indices, early and late sample indices (all 32 index bits) and
+// several seeds.
 TEST(PreviewRenderer, PixelSamplesOfAWaveArePixelSampleBitForBit) {
     std::vector<PixelSamplesIsa> isas = {PixelSamplesIsa::Auto, PixelSamplesIsa::Sse2};
     if (cpu_has_avx2())
@@ -770,6 +771,11 @@ TEST(PreviewRenderer, PixelSamplesOfAWaveArePixelSampleBitForBit) {
         isas.push_back(PixelSamplesIsa::Avx512);
     else
         EXPECT_THROW(pixel_samples(0, nullptr, 0, 0, nullptr, PixelSamplesIsa::Avx512),
+                     InvalidArgument);
+    if (cpu_has_avx512dq_vl_gfni())
+        isas.push_back(PixelSamplesIsa::Avx512Gfni);
+    else
+        EXPECT_THROW(pixel_samples(0, nullptr, 0, 0, nullptr, PixelSamplesIsa::Avx512Gfni),
                      InvalidArgument);
     std::vector<uint32_t> pixels;
     uint32_t x = 12345u;
