@@ -901,27 +901,18 @@ float PrincipledBsdf::diffuse_bump_shadowing(const vec3& wi) const {
 }
 
 // class_color(Diffuse) times Burley's albedo (Lambert's: 1, and w * 1 is w, bit for bit). Every
-// preview pixel with a field comes here. The sum is kept in three floats: as a glm vec3 through
-// class_color, GCC kept it on the stack, and both models' results met there too, so each pixel
-// waited on store-to-load round trips after the table read (`perf annotate`: ~27% of the
-// function's samples on them). The table read comes first: it depends on wo alone, so its chain
-// runs while the lobes are summed.
+// preview pixel with a field comes here (field_lobes_with). The sum is kept in three floats: as a
+// glm vec3 through class_color, GCC kept it on the stack, and both models' results met there
+// too, so each pixel waited on store-to-load round trips after the table read (`perf
+// annotate`: ~27% of the function's samples on them). The table read comes first: it depends
+// on wo alone, so its chain runs while the lobes are summed.
 vec3 PrincipledBsdf::field_diffuse(const vec3& wo) const {
-    return field_diffuse_with(
-        diffuse_model_ == DiffuseModel::Lambert ? 1.0f : burley_albedo(wo.z, roughness_));
-}
-
-vec3 PrincipledBsdf::field_diffuse_with(float burley) const {
-    const float albedo = diffuse_model_ == DiffuseModel::Lambert ? 1.0f : burley;
-    float r = 0.0f, g = 0.0f, b = 0.0f;  // class_color's order: from 0, lobe by lobe
-    for (int i = 0; i < lobe_count_; ++i) {
-        const Lobe& lobe = lobes_[i];
-        if (lobe.kind != LobeKind::Diffuse) continue;  // lobe_class() == LobeClass::Diffuse
-        r += lobe.weight.x;
-        g += lobe.weight.y;
-        b += lobe.weight.z;
-    }
-    return vec3(r * albedo, g * albedo, b * albedo);
+    vec3 diffuse;
+    GlossyLobe unused[2];
+    field_lobes_with(
+        diffuse_model_ == DiffuseModel::Lambert ? 1.0f : burley_albedo(wo.z, roughness_),
+        vec2(0.0f), &diffuse, unused);
+    return diffuse;
 }
 
 // eval_pdf over the field lobes alone, without its pdf, in one pass: every field lobe reflects,
@@ -962,23 +953,37 @@ BsdfEval PrincipledBsdf::eval_field(const vec3& wo, const vec3& wi) const {
 
 int PrincipledBsdf::field_glossy_lobes(const vec3& wo, GlossyLobe out[2]) const {
     // The table is read only where a glossy field lobe is (one read serves both).
+    vec3 unused;
     for (int i = 0; i < lobe_count_; ++i)
         if (!lobes_[i].traced() && lobes_[i].kind != LobeKind::Diffuse)
-            return field_glossy_lobes_with(ggx_albedo(wo.z, glossy_roughness_), out);
+            return field_lobes_with(1.0f, ggx_albedo(wo.z, glossy_roughness_), &unused, out);
     return 0;
 }
 
-int PrincipledBsdf::field_glossy_lobes_with(const vec2& albedo, GlossyLobe out[2]) const {
-    int count = 0;  // albedo: (colour 1, colour fh)
-    for (int i = 0; i < lobe_count_ && count < 2; ++i) {
+// One pass for both kinds of field lobe: a quad's pixels (PathIntegrator::add_field) read them
+// together, and two passes were two calls and two walks over the lobes a pixel.
+int PrincipledBsdf::field_lobes_with(float burley, const vec2& ggx, vec3* diffuse,
+                                     GlossyLobe glossy[2]) const {
+    float r = 0.0f, g = 0.0f, b = 0.0f;  // class_color(Diffuse)'s order: from 0, lobe by lobe
+    int count = 0;
+    for (int i = 0; i < lobe_count_; ++i) {
         const Lobe& lobe = lobes_[i];
-        if (lobe.traced() || lobe.kind == LobeKind::Diffuse) continue;
-        // Specular colour = cspec0 (1 - fh) + fh, so its albedo is cspec0 (a - a_fh) + a_fh.
+        if (lobe.kind == LobeKind::Diffuse) {  // lobe_class() == LobeClass::Diffuse
+            r += lobe.weight.x;
+            g += lobe.weight.y;
+            b += lobe.weight.z;
+            continue;
+        }
+        if (lobe.traced() || count == 2) continue;
+        // Specular colour = cspec0 (1 - fh) + fh, so its albedo is cspec0 (a - a_fh) + a_fh
+        // (ggx: colour 1, colour fh).
         const vec3 color = lobe.kind == LobeKind::Specular
-                               ? cspec0_ * (albedo.x - albedo.y) + vec3(albedo.y)
-                               : vec3(albedo.x);
-        out[count++] = GlossyLobe{lobe.weight * color, glossy_roughness_};
+                               ? cspec0_ * (ggx.x - ggx.y) + vec3(ggx.y)
+                               : vec3(ggx.x);
+        glossy[count++] = GlossyLobe{lobe.weight * color, glossy_roughness_};
     }
+    const float albedo = diffuse_model_ == DiffuseModel::Lambert ? 1.0f : burley;
+    *diffuse = vec3(r * albedo, g * albedo, b * albedo);
     return count;
 }
 

@@ -245,9 +245,6 @@ class PrincipledBsdf {
     // irradiance): the closure weight times the lobe's directional albedo for wo (1 for
     // Lambert; tabulated for the principled diffuse, which darkens at grazing views).
     vec3 field_diffuse(const vec3& wo) const;
-    // field_diffuse(wo) given burley_albedo(wo.z, field_diffuse_roughness()) (read beforehand,
-    // e.g. by field_albedo_lanes; not read for a Lambert diffuse): the same bits.
-    vec3 field_diffuse_with(float burley) const;
     // The roughness field_diffuse reads Burley's albedo at.
     float field_diffuse_roughness() const { return roughness_; }
     // f |cos(wi)| of the field lobes only (transmission class is always zero).
@@ -260,8 +257,12 @@ class PrincipledBsdf {
         float roughness = 0.0f;
     };
     int field_glossy_lobes(const vec3& wo, GlossyLobe out[2]) const;
-    // field_glossy_lobes(wo, out) given ggx_albedo(wo.z, field_glossy_roughness()): the same bits.
-    int field_glossy_lobes_with(const vec2& ggx, GlossyLobe out[2]) const;
+    // field_diffuse(wo) into *diffuse and field_glossy_lobes(wo, glossy) (returned: the count)
+    // in one pass over the lobes, given their table reads toward wo, burley_albedo(wo.z,
+    // field_diffuse_roughness()) (not read for a Lambert diffuse) and ggx_albedo(wo.z,
+    // field_glossy_roughness()) (not read without a glossy field lobe), e.g. from
+    // field_albedo_lanes: the same bits.
+    int field_lobes_with(float burley, const vec2& ggx, vec3* diffuse, GlossyLobe glossy[2]) const;
     // The roughness every lobe field_glossy_lobes writes has (whether or not it writes one).
     float field_glossy_roughness() const { return glossy_roughness_; }
 

@@ -559,9 +559,9 @@ void PathIntegrator::add_field(const Shading& shading) {
     QuadGlossy* quad = vertex_ == 0 && shared_lookup_ != nullptr ? joined_quad() : nullptr;
     FieldLobes lobes;
     if (quad != nullptr) {
-        lobes.diffuse = shading.bsdf.field_diffuse_with(quad->burley_albedo(glossy_slot_));
-        lobes.glossy_count =
-            shading.bsdf.field_glossy_lobes_with(quad->ggx_albedo(glossy_slot_), lobes.glossy);
+        lobes.glossy_count = shading.bsdf.field_lobes_with(quad->burley_albedo(glossy_slot_),
+                                                           quad->ggx_albedo(glossy_slot_),
+                                                           &lobes.diffuse, lobes.glossy);
     } else {
         lobes.diffuse = shading.bsdf.field_diffuse(shading.wo);
         lobes.glossy_count = shading.bsdf.field_glossy_lobes(shading.wo, lobes.glossy);
