@@ -4,6 +4,10 @@
 #include <cmath>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "render/normal_map.h"
 #include "util/sampling.h"
 
@@ -95,6 +99,9 @@ class LinearTable {
         }
     }
 
+    // The entries, x fastest (field_albedo_lanes reads them itself).
+    const T* entries() const { return entries_.data(); }
+
   private:
     static float node(int i, int n) { return n > 1 ? float(i) / float(n - 1) : 0.0f; }
     static void split(float x, int n, int* i0, float* t) {
@@ -129,7 +136,7 @@ AlbedoTable albedo_table(Integrand integrand) {
 // Directional albedo of a GGX reflection lobe: x with colour 1, y with the colour fh of
 // interpolate_fresnel_color (for Specular 0.5: ior 1.5, F0 0.04), by visible-normal sampling
 // (f cos / pdf = G1(wi) for separable Smith GGX).
-vec2 ggx_albedo(float cos_nv, float roughness) {
+const AlbedoTable& ggx_albedo_table() {
     static const AlbedoTable table = albedo_table([](const vec3& wo, float r, const vec2& u) {
         const float f0 = kSpecularF0Scale * 0.5f;
         const float ior = 2.0f / (1.0f - std::sqrt(f0)) - 1.0f;
@@ -141,12 +148,12 @@ vec2 ggx_albedo(float cos_nv, float roughness) {
         const float fh = (fresnel_dielectric(glm::dot(wi, h), ior) - f0) / (1.0f - f0);
         return vec2(weight, weight * fh);
     });
-    return table.lookup(cos_nv, roughness);
+    return table;
 }
 
 // Directional albedo of Cycles' principled diffuse (Burley, with retro-reflection), by cosine
 // sampling; Lambert's is 1.
-float burley_albedo(float cos_nv, float roughness) {
+const AlbedoTable& burley_albedo_table() {
     static const AlbedoTable table = albedo_table([](const vec3& wo, float r, const vec2& u) {
         const vec3 wi = sample_cosine_hemisphere(u);
         const float fl = schlick_weight(wi.z), fv = schlick_weight(wo.z);
@@ -155,7 +162,7 @@ float burley_albedo(float cos_nv, float roughness) {
         return vec2((1.0f - 0.5f * fl) * (1.0f - 0.5f * fv) + rr * (fl + fv + fl * fv * (rr - 1.0f)),
                     0.0f);
     });
-    return table.lookup(cos_nv, roughness).x;
+    return table;
 }
 
 // --- Cycles 4's Principled v2 terms (PrincipledModel::V2) ---
@@ -295,6 +302,93 @@ EnergyPreservation energy_preservation(const GgxEnergy& energy, const vec3& fss)
 }
 
 }  // namespace
+
+float burley_albedo(float cos_nv, float roughness) {
+    return burley_albedo_table().lookup(cos_nv, roughness).x;
+}
+
+vec2 ggx_albedo(float cos_nv, float roughness) {
+    return ggx_albedo_table().lookup(cos_nv, roughness);
+}
+
+#if defined(__SSE2__)
+namespace {
+
+// The entry index of a node pair is row * 32 + column: a shift.
+constexpr int kAlbedoTableShift = 5;
+static_assert(1 << kAlbedoTableShift == kAlbedoTableSize, "the albedo tables' rows are a shift");
+
+// LinearTable::split of one axis of an AlbedoTable, per lane: the node at or below the clamped
+// coordinate and the fraction past it.
+struct AxisLanes {
+    __m128i node;
+    __m128 t;
+};
+
+AxisLanes split_lanes(__m128 x) {
+    // std::clamp(x, 0, 1) is (x < 0) ? 0 : ((1 < x) ? 1 : x): MAXPS(0, x) is (0 > x) ? 0 : x and
+    // MINPS(1, c) is (1 < c) ? 1 : c, the same comparisons (-0 stays -0).
+    const __m128 clamped = _mm_min_ps(_mm_set1_ps(1.0f), _mm_max_ps(_mm_setzero_ps(), x));
+    const __m128 f = _mm_mul_ps(clamped, _mm_set1_ps(float(kAlbedoTableSize - 1)));
+    // std::min(int(f), kAlbedoTableSize - 2), int() truncating as CVTTPS2DQ does.
+    const __m128i truncated = _mm_cvttps_epi32(f);
+    const __m128i last = _mm_set1_epi32(kAlbedoTableSize - 2);
+    const __m128i past = _mm_cmpgt_epi32(truncated, last);
+    const __m128i node = _mm_or_si128(_mm_and_si128(past, last), _mm_andnot_si128(past, truncated));
+    return {node, _mm_sub_ps(f, _mm_cvtepi32_ps(node))};
+}
+
+// glm::mix(a, b, t): a (1 - t) + b t.
+__m128 mix_lanes(__m128 a, __m128 b, __m128 t) {
+    return _mm_add_ps(_mm_mul_ps(a, _mm_sub_ps(_mm_set1_ps(1.0f), t)), _mm_mul_ps(b, t));
+}
+
+// AlbedoTable::lookup(x, y) per lane, both components (out[0]: x, out[1]: y); `column` is the
+// split of x, which the field's two tables share.
+void lookup_lanes(const AlbedoTable& table, const AxisLanes& column, __m128 y, __m128 out[2]) {
+    const AxisLanes row = split_lanes(y);
+    alignas(16) int32_t corner[4];  // each lane's (i0, j0) entry
+    _mm_store_si128(reinterpret_cast<__m128i*>(corner),
+                    _mm_add_epi32(_mm_slli_epi32(row.node, kAlbedoTableShift), column.node));
+    // Entries (i0, j) and (i1, j) = (i0 + 1, j) are adjacent: one load holds a row's two
+    // corners, (x, y) each; rows j0 and j1 = j0 + 1 are a table width apart.
+    const float* entries = reinterpret_cast<const float*>(table.entries());
+    __m128 bottom[4], top[4];
+    for (int k = 0; k < 4; ++k) {
+        const float* at = entries + 2 * corner[k];
+        bottom[k] = _mm_loadu_ps(at);
+        top[k] = _mm_loadu_ps(at + 2 * kAlbedoTableSize);
+    }
+    // By lane: the (i0, x), (i0, y), (i1, x), (i1, y) values.
+    _MM_TRANSPOSE4_PS(bottom[0], bottom[1], bottom[2], bottom[3]);
+    _MM_TRANSPOSE4_PS(top[0], top[1], top[2], top[3]);
+    for (int c = 0; c < 2; ++c)
+        out[c] = mix_lanes(mix_lanes(bottom[c], bottom[2 + c], column.t),
+                           mix_lanes(top[c], top[2 + c], column.t), row.t);
+}
+
+}  // namespace
+#endif
+
+void field_albedo_lanes(const float cos_nv[4], const float diffuse_roughness[4],
+                        const float glossy_roughness[4], FieldAlbedoLanes* out) {
+#if defined(__SSE2__)
+    const AxisLanes view = split_lanes(_mm_loadu_ps(cos_nv));
+    __m128 burley[2], ggx[2];
+    lookup_lanes(burley_albedo_table(), view, _mm_loadu_ps(diffuse_roughness), burley);
+    lookup_lanes(ggx_albedo_table(), view, _mm_loadu_ps(glossy_roughness), ggx);
+    _mm_store_ps(out->burley, burley[0]);
+    _mm_store_ps(out->ggx[0], ggx[0]);
+    _mm_store_ps(out->ggx[1], ggx[1]);
+#else
+    for (int k = 0; k < 4; ++k) {
+        out->burley[k] = burley_albedo(cos_nv[k], diffuse_roughness[k]);
+        const vec2 ggx = ggx_albedo(cos_nv[k], glossy_roughness[k]);
+        out->ggx[0][k] = ggx.x;
+        out->ggx[1][k] = ggx.y;
+    }
+#endif
+}
 
 float ggx_d(const vec3& h, float alpha) {
     if (h.z <= 0.0f) return 0.0f;
@@ -807,23 +901,18 @@ float PrincipledBsdf::diffuse_bump_shadowing(const vec3& wi) const {
 }
 
 // class_color(Diffuse) times Burley's albedo (Lambert's: 1, and w * 1 is w, bit for bit). Every
-// preview pixel with a field comes here. The sum is kept in three floats: as a glm vec3 through
-// class_color, GCC kept it on the stack, and both models' results met there too, so each pixel
-// waited on store-to-load round trips after the table read (`perf annotate`: ~27% of the
-// function's samples on them). The table read comes first: it depends on wo alone, so its chain
-// runs while the lobes are summed.
+// preview pixel with a field comes here (field_lobes_with). The sum is kept in three floats: as a
+// glm vec3 through class_color, GCC kept it on the stack, and both models' results met there
+// too, so each pixel waited on store-to-load round trips after the table read (`perf
+// annotate`: ~27% of the function's samples on them). The table read comes first: it depends
+// on wo alone, so its chain runs while the lobes are summed.
 vec3 PrincipledBsdf::field_diffuse(const vec3& wo) const {
-    const float albedo =
-        diffuse_model_ == DiffuseModel::Lambert ? 1.0f : burley_albedo(wo.z, roughness_);
-    float r = 0.0f, g = 0.0f, b = 0.0f;  // class_color's order: from 0, lobe by lobe
-    for (int i = 0; i < lobe_count_; ++i) {
-        const Lobe& lobe = lobes_[i];
-        if (lobe.kind != LobeKind::Diffuse) continue;  // lobe_class() == LobeClass::Diffuse
-        r += lobe.weight.x;
-        g += lobe.weight.y;
-        b += lobe.weight.z;
-    }
-    return vec3(r * albedo, g * albedo, b * albedo);
+    vec3 diffuse;
+    GlossyLobe unused[2];
+    field_lobes_with(
+        diffuse_model_ == DiffuseModel::Lambert ? 1.0f : burley_albedo(wo.z, roughness_),
+        vec2(0.0f), &diffuse, unused);
+    return diffuse;
 }
 
 // eval_pdf over the field lobes alone, without its pdf, in one pass: every field lobe reflects,
@@ -863,17 +952,38 @@ BsdfEval PrincipledBsdf::eval_field(const vec3& wo, const vec3& wi) const {
 }
 
 int PrincipledBsdf::field_glossy_lobes(const vec3& wo, GlossyLobe out[2]) const {
+    // The table is read only where a glossy field lobe is (one read serves both).
+    vec3 unused;
+    for (int i = 0; i < lobe_count_; ++i)
+        if (!lobes_[i].traced() && lobes_[i].kind != LobeKind::Diffuse)
+            return field_lobes_with(1.0f, ggx_albedo(wo.z, glossy_roughness_), &unused, out);
+    return 0;
+}
+
+// One pass for both kinds of field lobe: a quad's pixels (PathIntegrator::add_field) read them
+// together, and two passes were two calls and two walks over the lobes a pixel.
+int PrincipledBsdf::field_lobes_with(float burley, const vec2& ggx, vec3* diffuse,
+                                     GlossyLobe glossy[2]) const {
+    float r = 0.0f, g = 0.0f, b = 0.0f;  // class_color(Diffuse)'s order: from 0, lobe by lobe
     int count = 0;
-    for (int i = 0; i < lobe_count_ && count < 2; ++i) {
+    for (int i = 0; i < lobe_count_; ++i) {
         const Lobe& lobe = lobes_[i];
-        if (lobe.traced() || lobe.kind == LobeKind::Diffuse) continue;
-        const vec2 albedo = ggx_albedo(wo.z, glossy_roughness_);  // (colour 1, colour fh)
-        // Specular colour = cspec0 (1 - fh) + fh, so its albedo is cspec0 (a - a_fh) + a_fh.
+        if (lobe.kind == LobeKind::Diffuse) {  // lobe_class() == LobeClass::Diffuse
+            r += lobe.weight.x;
+            g += lobe.weight.y;
+            b += lobe.weight.z;
+            continue;
+        }
+        if (lobe.traced() || count == 2) continue;
+        // Specular colour = cspec0 (1 - fh) + fh, so its albedo is cspec0 (a - a_fh) + a_fh
+        // (ggx: colour 1, colour fh).
         const vec3 color = lobe.kind == LobeKind::Specular
-                               ? cspec0_ * (albedo.x - albedo.y) + vec3(albedo.y)
-                               : vec3(albedo.x);
-        out[count++] = GlossyLobe{lobe.weight * color, glossy_roughness_};
+                               ? cspec0_ * (ggx.x - ggx.y) + vec3(ggx.y)
+                               : vec3(ggx.x);
+        glossy[count++] = GlossyLobe{lobe.weight * color, glossy_roughness_};
     }
+    const float albedo = diffuse_model_ == DiffuseModel::Lambert ? 1.0f : burley;
+    *diffuse = vec3(r * albedo, g * albedo, b * albedo);
     return count;
 }
 

@@ -102,6 +102,26 @@ float height_correlated_masking(float g1_o, float g1_i);
 // 1 under total internal reflection (Cycles' fresnel_dielectric_cos).
 float fresnel_dielectric(float cos_i, float eta);
 
+// The field lobes' tabulated directional albedos (32 x 32 nodes over cos(N.V) and roughness, read
+// bilinearly): Cycles' principled diffuse (Burley, with retro-reflection; Lambert's is 1), and a
+// GGX reflection lobe's with colour 1 (x) and with the colour fh of interpolate_fresnel_color
+// for Specular 0.5 (y). field_diffuse and field_glossy_lobes read them toward wo.
+float burley_albedo(float cos_nv, float roughness);
+vec2 ggx_albedo(float cos_nv, float roughness);
+
+// burley_albedo(cos_nv[k], diffuse_roughness[k]) and ggx_albedo(cos_nv[k], glossy_roughness[k])
+// for four views k at once: the field lobes of a 2 x 2 quad's pixels (render/quad_glossy.h).
+// Each read is a dependent chain (the split by cos(N.V), the loads, three mixes) at the end of a
+// pixel's field light; here the four chains run in SSE2 lanes, each lane the scalar read's IEEE
+// operations in its order (no FMA), so each is the scalar value bit for bit
+// (tests/cpp/render/bsdf_test.cpp). Inputs must not be NaN (nor are the scalar reads').
+struct FieldAlbedoLanes {
+    alignas(16) float burley[4];
+    alignas(16) float ggx[2][4];  // ggx_albedo's x and y
+};
+void field_albedo_lanes(const float cos_nv[4], const float diffuse_roughness[4],
+                        const float glossy_roughness[4], FieldAlbedoLanes* out);
+
 // Which end of a path the BSDF scatters for. Cycles 4's layered Principled BSDF is not reciprocal:
 // its diffuse is dimmed by the specular layer's albedo toward the camera-side direction, which is
 // wo on paths from the camera and the scattered wi on paths from a light (photons).
@@ -225,6 +245,8 @@ class PrincipledBsdf {
     // irradiance): the closure weight times the lobe's directional albedo for wo (1 for
     // Lambert; tabulated for the principled diffuse, which darkens at grazing views).
     vec3 field_diffuse(const vec3& wo) const;
+    // The roughness field_diffuse reads Burley's albedo at.
+    float field_diffuse_roughness() const { return roughness_; }
     // f |cos(wi)| of the field lobes only (transmission class is always zero).
     BsdfEval eval_field(const vec3& wo, const vec3& wi) const;
     // The non-Dirac glossy reflection lobes with their directional albedo for wo (∫ f cos dwi,
@@ -235,6 +257,12 @@ class PrincipledBsdf {
         float roughness = 0.0f;
     };
     int field_glossy_lobes(const vec3& wo, GlossyLobe out[2]) const;
+    // field_diffuse(wo) into *diffuse and field_glossy_lobes(wo, glossy) (returned: the count)
+    // in one pass over the lobes, given their table reads toward wo, burley_albedo(wo.z,
+    // field_diffuse_roughness()) (not read for a Lambert diffuse) and ggx_albedo(wo.z,
+    // field_glossy_roughness()) (not read without a glossy field lobe), e.g. from
+    // field_albedo_lanes: the same bits.
+    int field_lobes_with(float burley, const vec2& ggx, vec3* diffuse, GlossyLobe glossy[2]) const;
     // The roughness every lobe field_glossy_lobes writes has (whether or not it writes one).
     float field_glossy_roughness() const { return glossy_roughness_; }
 

@@ -86,8 +86,7 @@ vec3 FieldLookup::glossy(const vec3& n, const vec3& wo, float roughness, GgxZhMe
                           [exponent](const vec2& u) { return sample_power_cosine(u, exponent); });
         return glm::max(mean, vec3(0.0f));
     }
-    const BandFactors& factors =
-        zh != nullptr ? zh->factors(roughness) : ggx_specular_zh_tabulated(roughness);
+    const BandFactors factors = ggx_specular_zh_factors(roughness, zh);
     if (!horizon || radiance.order < 1)
         return sh_specular_radiance(radiance, reflected, factors);
     // Read about the clipped lobe's dominant direction, the zonal lobe about r no longer reads

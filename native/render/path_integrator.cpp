@@ -591,18 +591,25 @@ void PathIntegrator::add_direct(int k) {
 // Indirect light from the field through the field lobes (see the header).
 void PathIntegrator::add_field(const Shading& shading) {
     if (field_->is_zero()) return;  // every term below would be zero
+    // The first surface of a quad's pixel: the quad read its pixels' albedo tables in four
+    // lanes (QuadGlossy::burley_albedo, the same bits), so the four table chains overlap.
+    QuadGlossy* quad = vertex_ == 0 && shared_lookup_ != nullptr ? joined_quad() : nullptr;
     FieldLobes lobes;
-    lobes.diffuse = shading.bsdf.field_diffuse(shading.wo);
-    lobes.glossy_count = shading.bsdf.field_glossy_lobes(shading.wo, lobes.glossy);
+    if (quad != nullptr) {
+        lobes.glossy_count = shading.bsdf.field_lobes_with(quad->burley_albedo(glossy_slot_),
+                                                           quad->ggx_albedo(glossy_slot_),
+                                                           &lobes.diffuse, lobes.glossy);
+    } else {
+        lobes.diffuse = shading.bsdf.field_diffuse(shading.wo);
+        lobes.glossy_count = shading.bsdf.field_glossy_lobes(shading.wo, lobes.glossy);
+    }
     lobes.bumped = diffuse_bump(shading, &lobes.bump);
     if (max_component(lobes.diffuse) <= 0.0f && lobes.glossy_count == 0) return;
     if (vertex_ == 0 && shared_lookup_ != nullptr) {
-        // A query in the quad's glossy light holds wo already (join_quad_glossy: the same bits).
-        const vec3 wo = shared_glossy_ != nullptr && glossy_slot_ >= 0
-                            ? shared_glossy_->wo(glossy_slot_)
-                            : shading.frame.to_world(shading.wo);
-        add_field_light(*shared_lookup_, lobes, shading.frame.z, wo, shared_irradiance_,
-                        shared_glossy_);
+        // The quad's query holds wo already (join_quad_glossy: the same bits).
+        const vec3 wo =
+            quad != nullptr ? quad->wo(glossy_slot_) : shading.frame.to_world(shading.wo);
+        add_field_light(*shared_lookup_, lobes, shading.frame.z, wo, shared_irradiance_, quad);
         return;
     }
     const vec3 wo = shading.frame.to_world(shading.wo);
@@ -624,11 +631,10 @@ void PathIntegrator::add_field_light(const FieldLookup& field, const FieldLobes&
     vec3 by_class[2] = {lobes.diffuse * e * kInvPi, vec3(0.0f)};
     for (int i = 0; i < lobes.glossy_count; ++i) {
         const float roughness = lobes.glossy[i].roughness;
-        const float slot_roughness = glossy != nullptr && glossy_slot_ >= 0
-                                         ? glossy->roughness(glossy_slot_)
-                                         : roughness;
+        const float slot_roughness =
+            glossy != nullptr ? glossy->roughness(glossy_slot_) : roughness;
         // Bits, not ==: a NaN roughness must reach field.glossy's check.
-        const bool shared = glossy != nullptr && glossy_slot_ >= 0 &&
+        const bool shared = glossy != nullptr &&
                             std::memcmp(&roughness, &slot_roughness, sizeof(float)) == 0;
         by_class[1] += lobes.glossy[i].albedo *
                        (shared ? glossy->radiance(glossy_slot_, field, glossy_memo_)

@@ -314,8 +314,12 @@ class PathIntegrator {
     int join_quad_glossy(QuadGlossy* glossy) const {
         const Shading& shading = shading_.value;
         return glossy->add(shading.frame.z, shading.frame.to_world(shading.wo),
-                           shading.bsdf.field_glossy_roughness());
+                           shading.bsdf.field_glossy_roughness(), shading.wo.z,
+                           shading.bsdf.field_diffuse_roughness());
     }
+    // The quad whose glossy light and albedo reads hold this path's first surface (a slot in
+    // shared_glossy_), or null.
+    QuadGlossy* joined_quad() const { return glossy_slot_ >= 0 ? shared_glossy_ : nullptr; }
     // The field lobes of the current surface (render/bsdf.h): what field light is weighted by.
     struct FieldLobes {
         vec3 diffuse{0.0f};
@@ -327,8 +331,9 @@ class PathIntegrator {
         DiffuseBump bump;
     };
     // `irradiance`: field.irradiance(n), or null to evaluate it here (unused for a bumped
-    // diffuse lobe, whose irradiance depends on more than the normal). `glossy`: the quad's
-    // glossy light (slot glossy_slot_), read for lobes of its roughness, or null.
+    // diffuse lobe, whose irradiance depends on more than the normal). `glossy`: the quad this
+    // path joined (joined_quad(): its glossy light in slot glossy_slot_), read for lobes of its
+    // roughness, or null.
     void add_field_light(const FieldLookup& field, const FieldLobes& lobes, const vec3& n,
                          const vec3& wo, IrradianceMemo* irradiance = nullptr,
                          QuadGlossy* glossy = nullptr);

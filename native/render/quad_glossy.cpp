@@ -106,6 +106,17 @@ void glossy_closed_form(const ShRgb& radiance, bool horizon, const GlossyLanes& 
 
 }  // namespace
 
+void QuadGlossy::read_albedos() {
+    albedos_read_ = true;
+    // Lanes past count_ repeat slot 0 (their results are not read).
+    for (int k = count_; k < kSlots && count_ > 0; ++k) {
+        cos_nv_[k] = cos_nv_[0];
+        diffuse_roughness_[k] = diffuse_roughness_[0];
+        roughness_[k] = roughness_[0];
+    }
+    field_albedo_lanes(cos_nv_, diffuse_roughness_, roughness_, &albedos_);
+}
+
 void QuadGlossy::evaluate(const FieldLookup& lookup, GgxZhMemo* zh) {
     evaluated_ = true;
     const int order = lookup.radiance.order;
@@ -120,22 +131,19 @@ void QuadGlossy::evaluate(const FieldLookup& lookup, GgxZhMemo* zh) {
             roughness_[k] = roughness_[0];
         }
         const __m128 roughness = _mm_load_ps(roughness_);
-        // The band factors FieldLookup::glossy reads (the memo's values are the table's): a
-        // quad's pixels mostly share one material, hence one roughness (compared as bits).
-        const auto band_factors = [zh](float r) {
-            return zh != nullptr ? zh->factors(r) : ggx_specular_zh_tabulated(r);
-        };
+        // The band factors FieldLookup::glossy reads: a quad's pixels mostly share one
+        // material, hence one roughness (compared as bits).
         const __m128i bits = _mm_castps_si128(roughness);
         const bool one_roughness =
             _mm_movemask_epi8(_mm_cmpeq_epi32(bits, _mm_shuffle_epi32(bits, 0))) == 0xFFFF;
         __m128 factors[3];
         if (one_roughness) {
-            const BandFactors band = band_factors(roughness_[0]);
+            const BandFactors band = ggx_specular_zh_factors(roughness_[0], zh);
             for (int l = 0; l < 3; ++l) factors[l] = _mm_set1_ps(band[l]);
         } else {
             alignas(16) float lanes[3][kSlots];
             for (int k = 0; k < kSlots; ++k) {
-                const BandFactors band = band_factors(roughness_[k]);
+                const BandFactors band = ggx_specular_zh_factors(roughness_[k], zh);
                 for (int l = 0; l < 3; ++l) lanes[l][k] = band[l];
             }
             for (int l = 0; l < 3; ++l) factors[l] = _mm_load_ps(lanes[l]);

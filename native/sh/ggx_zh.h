@@ -78,4 +78,10 @@ class GgxZhMemo {
     BandFactors factors_{};
 };
 
+// The band factors of `roughness` from `memo` when there is one, else ggx_specular_zh_tabulated's
+// (the same values): what every glossy field read (FieldLookup::glossy, QuadGlossy) takes.
+inline BandFactors ggx_specular_zh_factors(float roughness, GgxZhMemo* memo) {
+    return memo != nullptr ? memo->factors(roughness) : ggx_specular_zh_tabulated(roughness);
+}
+
 }  // namespace shgi

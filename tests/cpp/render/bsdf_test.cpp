@@ -479,6 +479,98 @@ TEST(Bsdf, FieldDiffuseIsTheDiffuseClassColourTimesOneAlbedo) {
             }
 }
 
+// field_albedo_lanes reads the two albedo tables in SSE2 lanes: each lane is burley_albedo's and
+// ggx_albedo's value bit for bit, over random views and roughnesses and at the tables' edges
+// (every node of cos(N.V) and roughness and the floats beside it, views from below and past 1,
+// -0, roughness 0 and 1).
+TEST(Bsdf, FieldAlbedoLanesAreTheTablesBitForBit) {
+    auto check = [](const float cos_nv[4], const float diffuse[4], const float glossy[4]) {
+        FieldAlbedoLanes lanes;
+        field_albedo_lanes(cos_nv, diffuse, glossy, &lanes);
+        for (int k = 0; k < 4; ++k) {
+            const float burley = burley_albedo(cos_nv[k], diffuse[k]);
+            const vec2 ggx = ggx_albedo(cos_nv[k], glossy[k]);
+            EXPECT_EQ(std::memcmp(&lanes.burley[k], &burley, sizeof(float)), 0)
+                << "cos " << cos_nv[k] << " roughness " << diffuse[k] << ": " << lanes.burley[k]
+                << " against " << burley;
+            EXPECT_EQ(std::memcmp(&lanes.ggx[0][k], &ggx.x, sizeof(float)), 0)
+                << "cos " << cos_nv[k] << " roughness " << glossy[k] << ": " << lanes.ggx[0][k]
+                << " against " << ggx.x;
+            EXPECT_EQ(std::memcmp(&lanes.ggx[1][k], &ggx.y, sizeof(float)), 0)
+                << "cos " << cos_nv[k] << " roughness " << glossy[k] << ": " << lanes.ggx[1][k]
+                << " against " << ggx.y;
+        }
+    };
+    std::vector<float> edges = {-1.0f, -0.5f, -1e-8f, -0.0f, 1e-3f, 1.0f + 1e-7f, 2.0f};
+    for (int node = 0; node < 32; ++node) {
+        const float x = float(node) / 31.0f;
+        edges.push_back(x);
+        edges.push_back(std::nextafter(x, -1.0f));
+        edges.push_back(std::nextafter(x, 2.0f));
+    }
+    // Every edge as cos(N.V) against every edge as either roughness, four at a time.
+    for (size_t a = 0; a < edges.size(); ++a)
+        for (size_t b = 0; b < edges.size(); b += 4) {
+            float cos_nv[4], diffuse[4], glossy[4];
+            for (int k = 0; k < 4; ++k) {
+                cos_nv[k] = edges[a];
+                diffuse[k] = edges[(b + k) % edges.size()];
+                glossy[k] = edges[(b + 3 * k + 1) % edges.size()];
+            }
+            check(cos_nv, diffuse, glossy);
+            check(diffuse, glossy, cos_nv);
+            if (HasFailure()) return;
+        }
+    Pcg32 rng(47, 17);
+    for (int trial = 0; trial < 20000; ++trial) {
+        float cos_nv[4], diffuse[4], glossy[4];
+        for (int k = 0; k < 4; ++k) {
+            const float pick = rng.next_float();
+            cos_nv[k] = pick < 0.1f ? rng.next_float() * 1e-2f : rng.next_float();  // grazing
+            diffuse[k] = rng.next_float();
+            glossy[k] = pick > 0.9f ? float(k % 2) : rng.next_float();  // roughness 0 and 1
+        }
+        check(cos_nv, diffuse, glossy);
+        if (HasFailure()) return;
+    }
+}
+
+// field_lobes_with, given the tables' reads toward wo, is field_diffuse and field_glossy_lobes
+// bit for bit (Lambert and Burley, metals, glass, V2, blurred lobes, grazing views).
+TEST(Bsdf, FieldLobesWithTheirAlbedosAreTheFieldLobes) {
+    auto same = [](const vec3& a, const vec3& b) { return std::memcmp(&a, &b, sizeof(vec3)) == 0; };
+    std::vector<Material> materials;
+    for (DiffuseModel model : {DiffuseModel::Lambert, DiffuseModel::Principled})
+        for (PrincipledModel principled : {PrincipledModel::V1, PrincipledModel::V2})
+            for (float metallic : {0.0f, 0.4f, 1.0f})
+                for (float transmission : {0.0f, 0.5f})
+                    for (float roughness : {0.0f, 0.3f, 1.0f}) {
+                        Material material = make_material(metallic, transmission, roughness);
+                        material.base_color = vec3(0.7f, 0.2f, 0.05f);
+                        material.diffuse_model = model;
+                        material.principled_model = principled;
+                        materials.push_back(material);
+                    }
+    for (const Material& material : materials)
+        for (float blur : {0.0f, 0.5f})
+            for (float angle : {0.0f, 0.4f, 1.1f, 1.5707f}) {
+                const vec3 wo = direction_from_angle(angle);
+                PrincipledBsdf bsdf(material, material.base_color, false, wo.z);
+                if (blur > 0.0f) bsdf.blur(blur);
+                const float burley = burley_albedo(wo.z, bsdf.field_diffuse_roughness());
+                const vec2 ggx = ggx_albedo(wo.z, bsdf.field_glossy_roughness());
+                PrincipledBsdf::GlossyLobe lobes[2], with[2];
+                vec3 diffuse;
+                const int count = bsdf.field_glossy_lobes(wo, lobes);
+                ASSERT_EQ(count, bsdf.field_lobes_with(burley, ggx, &diffuse, with));
+                ASSERT_TRUE(same(bsdf.field_diffuse(wo), diffuse));
+                for (int i = 0; i < count; ++i) {
+                    ASSERT_TRUE(same(lobes[i].albedo, with[i].albedo));
+                    ASSERT_EQ(lobes[i].roughness, with[i].roughness);
+                }
+            }
+}
+
 // A material whose lobes are the same at every hit: its BSDF finished from material_lobes is the
 // full constructor's for every side and view, bit for bit (eval, pdf, samples, colours, field
 // lobes, albedo estimate), so tracers that keep the lobes per material render the same image.

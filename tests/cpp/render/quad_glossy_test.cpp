@@ -3,7 +3,8 @@
 // orders 0 to 2 (the lanes) and 3 and Monte Carlo gathers (the scalar fallback), for 1 to 4
 // slots, with and without a band-factor memo; and at the horizon's edge cases: views from
 // below the surface, grazing views, roughness 0 and 1, and a dominant direction of (near) zero
-// length, which falls back to the normal.
+// length, which falls back to the normal. The same queries' albedo reads are burley_albedo's and
+// ggx_albedo's (render/bsdf.h) bit for bit.
 #include "render/quad_glossy.h"
 
 #include <gtest/gtest.h>
@@ -35,6 +36,24 @@ FieldLookup random_lookup(Pcg32& rng, int order, bool horizon) {
     return lookup;
 }
 
+// Checks the albedo reads of every slot of `quad`, filled with `queries` as expect_lookup_bits
+// does, against burley_albedo and ggx_albedo (render/bsdf.h).
+void expect_albedo_bits(QuadGlossy& quad, const std::vector<Query>& queries) {
+    for (size_t k = 0; k < queries.size(); ++k) {
+        const Query& q = queries[k];
+        const float cos_nv = glm::dot(q.n, q.wo);
+        const float burley = burley_albedo(cos_nv, 1.0f - q.roughness);
+        const vec2 ggx = ggx_albedo(cos_nv, q.roughness);
+        const float lane_burley = quad.burley_albedo(int(k));
+        const vec2 lane_ggx = quad.ggx_albedo(int(k));
+        EXPECT_EQ(std::memcmp(&lane_burley, &burley, sizeof(float)), 0)
+            << "slot " << k << " cos " << cos_nv << ": " << lane_burley << " against " << burley;
+        EXPECT_EQ(std::memcmp(&lane_ggx, &ggx, sizeof(vec2)), 0)
+            << "slot " << k << " cos " << cos_nv << " roughness " << q.roughness << ": ("
+            << lane_ggx.x << ", " << lane_ggx.y << ") against (" << ggx.x << ", " << ggx.y << ")";
+    }
+}
+
 // Checks every slot of a QuadGlossy filled with `queries` (at most four) against
 // FieldLookup::glossy, with a memo (as the preview) and without.
 void expect_lookup_bits(const FieldLookup& lookup, const std::vector<Query>& queries) {
@@ -43,7 +62,13 @@ void expect_lookup_bits(const FieldLookup& lookup, const std::vector<Query>& que
         QuadGlossy quad;
         quad.clear();
         std::vector<int> slots;
-        for (const Query& q : queries) slots.push_back(quad.add(q.n, q.wo, q.roughness));
+        // The albedo tables' query: cos(N.V) as the path's local view gives it, and a diffuse
+        // roughness other than the glossy one.
+        for (const Query& q : queries)
+            slots.push_back(
+                quad.add(q.n, q.wo, q.roughness, glm::dot(q.n, q.wo), 1.0f - q.roughness));
+        // The albedos read before the radiance in one pass, after it in the other.
+        if (!with_memo) expect_albedo_bits(quad, queries);
         for (size_t k = 0; k < queries.size(); ++k) {
             const Query& q = queries[k];
             ASSERT_EQ(slots[k], int(k));
@@ -56,6 +81,7 @@ void expect_lookup_bits(const FieldLookup& lookup, const std::vector<Query>& que
                 << ", " << lanes.y << ", " << lanes.z << ") against (" << scalar.x << ", "
                 << scalar.y << ", " << scalar.z << ")";
         }
+        if (with_memo) expect_albedo_bits(quad, queries);
     }
 }
 
@@ -133,8 +159,8 @@ TEST(QuadGlossy, AFifthQueryFindsNoSlot) {
     QuadGlossy quad;
     quad.clear();
     const vec3 n(0.0f, 0.0f, 1.0f);
-    for (int k = 0; k < QuadGlossy::kSlots; ++k) EXPECT_EQ(quad.add(n, n, 0.5f), k);
-    EXPECT_EQ(quad.add(n, n, 0.5f), -1);
+    for (int k = 0; k < QuadGlossy::kSlots; ++k) EXPECT_EQ(quad.add(n, n, 0.5f, 1.0f, 0.5f), k);
+    EXPECT_EQ(quad.add(n, n, 0.5f, 1.0f, 0.5f), -1);
 }
 
 }  // namespace
