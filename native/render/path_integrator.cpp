@@ -380,18 +380,29 @@ bool PathIntegrator::begin(const Ray& camera_ray, const Hit& first_hit) {
     return enter_surface(first_hit);
 }
 
-// What ray_ meets up to `hit`, then the shading of that surface; false when the path ends here.
-bool PathIntegrator::enter_surface(const Hit& hit) {
+bool PathIntegrator::begin(const Ray& camera_ray, const Hit& first_hit,
+                           const SurfacePoint& first_point) {
+    ray_ = camera_ray;
+    return enter_surface(first_hit, &first_point);
+}
+
+// What ray_ meets up to `hit`, then the shading of that surface (at `point` when given: the
+// hit's surface point); false when the path ends here.
+bool PathIntegrator::enter_surface(const Hit& hit, const SurfacePoint* point) {
     // The test before the call answers the common case (a surface that does not emit, no
     // lamp the ray can cross) without find_emission's register saves.
     if (lights_.may_emit(hit, vertex_ == 0)) find_emission(ray_, hit);
     if (!hit.valid() || terminate_on_next_surface_) return false;
     // Both memos may be null (no set_shading_memo): each callee then computes afresh.
     const bool memo = shading_memo_ != nullptr;
-    make_shading_in(&shading_.value, scene_,
-                    scene_.surface_point(ray_, hit, memo ? &shading_memo_->triangle : nullptr),
-                    ray_.direction, PathOrigin::Camera, material_lobes_,
-                    memo ? &shading_memo_->frame : nullptr);
+    FrameMemo* frames = memo ? &shading_memo_->frame : nullptr;
+    if (point != nullptr)
+        make_shading_in(&shading_.value, scene_, *point, ray_.direction, PathOrigin::Camera,
+                        material_lobes_, frames);
+    else
+        make_shading_in(&shading_.value, scene_,
+                        scene_.surface_point(ray_, hit, memo ? &shading_memo_->triangle : nullptr),
+                        ray_.direction, PathOrigin::Camera, material_lobes_, frames);
     blur_glossy(&shading_.value);
     if (vertex_ == 0 && !combined_only_) record_first_hit(shading_.value, ray_, hit);
     if (write_denoising_features_) record_denoising_features(shading_.value);

@@ -175,6 +175,9 @@ class PathIntegrator {
     // Adds what the camera ray meets and shades its first surface; false when the path ends
     // there (a miss). The steps below may be called only after it returned true.
     bool begin(const Ray& camera_ray, const Hit& first_hit);
+    // The same with the first hit's Scene::surface_point already made (the wave's, four at a
+    // time: Scene::surface_point_lanes); `first_point` is read only when the hit is valid.
+    bool begin(const Ray& camera_ray, const Hit& first_hit, const SurfacePoint& first_point);
     // Samples lights for the current surface and evaluates the BSDF: returns how many
     // contributions wait on the shadow rays written to shadows[0, count) (room for
     // kMaxLightSplits).
@@ -297,7 +300,7 @@ class PathIntegrator {
     const IndirectField* vertex_field() const {
         return bounces_[int(LobeClass::Diffuse)] >= field_from_ ? field_ : nullptr;
     }
-    bool enter_surface(const Hit& hit);
+    bool enter_surface(const Hit& hit, const SurfacePoint* point = nullptr);
     void blur_glossy(Shading* shading) const;
     void find_emission(const Ray& ray, const Hit& hit);
     void add_emission(const vec3& radiance, float light_pdf, bool is_world);

@@ -4,7 +4,13 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <new>
 #include <tuple>
+#include <type_traits>
+
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
 
 #include "scene/embree_scene.h"
 #include "scene/validation.h"
@@ -867,6 +873,22 @@ void Scene::occluded(const std::vector<Ray>& rays, std::vector<uint8_t>& occlude
     parallel_for(0, rays.size(), kRaysPerChunk, trace, progress);
 }
 
+namespace {
+
+// The world geometric normal of the hit's triangle (p0, p1, p2 in object space), from `memo`
+// when it holds this triangle's, else computed (and stored in it).
+inline vec3 triangle_normal(const Hit& hit, const vec3& p0, const vec3& p1, const vec3& p2,
+                            const mat3& normal_from_object, TriangleNormalMemo* memo) {
+    if (memo != nullptr && memo->instance_id == hit.instance_id &&
+        memo->triangle_id == hit.triangle_id)
+        return memo->normal;
+    const vec3 normal = glm::normalize(normal_from_object * glm::cross(p1 - p0, p2 - p0));
+    if (memo != nullptr) *memo = TriangleNormalMemo{hit.instance_id, hit.triangle_id, normal};
+    return normal;
+}
+
+}  // namespace
+
 // The ray is not needed: positions come from the barycentrics, which stay on the triangle,
 // unlike origin + t * direction (whose rounding error grows with t).
 SurfacePoint Scene::surface_point(const Ray& ray, const Hit& hit) const {
@@ -898,15 +920,7 @@ SurfacePoint Scene::surface_point(const Ray& /*ray*/, const Hit& hit,
     point.instance_id = hit.instance_id;
     point.triangle_id = hit.triangle_id;
     point.position = vec3(instance.world_from_object * vec4(b0 * p0 + b1 * p1 + b2 * p2, 1.0f));
-    if (memo != nullptr && memo->instance_id == hit.instance_id &&
-        memo->triangle_id == hit.triangle_id) {
-        point.geometric_normal = memo->normal;
-    } else {
-        point.geometric_normal =
-            glm::normalize(normal_from_object * glm::cross(p1 - p0, p2 - p0));
-        if (memo != nullptr) *memo = TriangleNormalMemo{hit.instance_id, hit.triangle_id,
-                                                        point.geometric_normal};
-    }
+    point.geometric_normal = triangle_normal(hit, p0, p1, p2, normal_from_object, memo);
     point.shading_normal = point.geometric_normal;
     if (!mesh.normals.empty()) {
         const vec3 n = normal_from_object * (b0 * mesh.normals[tri.x] + b1 * mesh.normals[tri.y] +
@@ -941,6 +955,80 @@ SurfacePoint Scene::surface_point(const Ray& /*ray*/, const Hit& hit,
         }
     }
     return point;
+}
+
+static_assert(std::is_trivially_destructible_v<SurfacePoint>,
+              "surface_point_lanes builds points over the caller's without destroying them");
+
+void Scene::surface_point_lanes(const Hit* hits, SurfacePoint* points,
+                                TriangleNormalMemo* memo) const {
+#if defined(__SSE2__)
+    // Lanes only where surface_point would neither throw nor read more than the triangle's
+    // positions and material: one committed instance, a mesh without normals, UVs or tangents
+    // (so no normal map frame and no bump derivatives), triangle ids in range.
+    const uint32_t instance_id = hits[0].instance_id;
+    bool flat = committed_ && instance_id < instances_.size();
+    const Instance* instance = flat ? &instances_[instance_id] : nullptr;
+    const Mesh* mesh = flat ? &meshes_[instance->mesh_id] : nullptr;
+    flat = flat && mesh->normals.empty() && mesh->uv_sets.empty() && mesh->tangents.empty();
+    for (int j = 0; j < 4 && flat; ++j)
+        flat = hits[j].instance_id == instance_id &&
+               hits[j].triangle_id < mesh->triangles.size();
+    if (flat) {
+        // The three vertices' coordinates, lane j the triangle of hits[j].
+        alignas(16) float vertex[3][3][4];
+        alignas(16) float b1[4], b2[4];
+        const uvec3* tris[4];
+        for (int j = 0; j < 4; ++j) {
+            const uvec3& tri = mesh->triangles[hits[j].triangle_id];
+            tris[j] = &tri;
+            for (int v = 0; v < 3; ++v) {
+                const vec3& p = mesh->positions[tri[v]];
+                vertex[v][0][j] = p.x;
+                vertex[v][1][j] = p.y;
+                vertex[v][2][j] = p.z;
+            }
+            b1[j] = hits[j].barycentrics.x;
+            b2[j] = hits[j].barycentrics.y;
+        }
+        // surface_point's b0 = 1 - b1 - b2, then b0 p0 + b1 p1 + b2 p2 summed left to right.
+        const __m128 l1 = _mm_load_ps(b1), l2 = _mm_load_ps(b2);
+        const __m128 l0 = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(1.0f), l1), l2);
+        __m128 object[3];
+        for (int a = 0; a < 3; ++a)
+            object[a] = _mm_add_ps(_mm_add_ps(_mm_mul_ps(l0, _mm_load_ps(vertex[0][a])),
+                                              _mm_mul_ps(l1, _mm_load_ps(vertex[1][a]))),
+                                   _mm_mul_ps(l2, _mm_load_ps(vertex[2][a])));
+        // glm's mat4 x vec4(p, 1): (m0 x + m1 y) + (m2 z + m3 w), where m3 w is m3 (w = 1).
+        const mat4& m = instance->world_from_object;
+        alignas(16) float world[3][4];
+        for (int r = 0; r < 3; ++r) {
+            const __m128 xy = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(m[0][r]), object[0]),
+                                         _mm_mul_ps(_mm_set1_ps(m[1][r]), object[1]));
+            const __m128 zw =
+                _mm_add_ps(_mm_mul_ps(_mm_set1_ps(m[2][r]), object[2]), _mm_set1_ps(m[3][r]));
+            _mm_store_ps(world[r], _mm_add_ps(xy, zw));
+        }
+        const mat3& normal_from_object = normal_from_object_[instance_id];
+        for (int j = 0; j < 4; ++j) {
+            const Hit& hit = hits[j];
+            const uvec3& tri = *tris[j];
+            SurfacePoint& point = *::new (&points[j]) SurfacePoint();
+            point.instance_id = hit.instance_id;
+            point.triangle_id = hit.triangle_id;
+            point.position = vec3(world[0][j], world[1][j], world[2][j]);
+            point.geometric_normal =
+                triangle_normal(hit, mesh->positions[tri.x], mesh->positions[tri.y],
+                                mesh->positions[tri.z], normal_from_object, memo);
+            point.shading_normal = point.geometric_normal;
+            point.material_id =
+                mesh->material_indices.empty() ? 0 : mesh->material_indices[hit.triangle_id];
+        }
+        return;
+    }
+#endif
+    for (int j = 0; j < 4; ++j)
+        if (hits[j].valid()) ::new (&points[j]) SurfacePoint(surface_point(Ray{}, hits[j], memo));
 }
 
 // SurfacePoint::tangent and bitangent from the unnormalised interpolated object-space tangent,

@@ -234,6 +234,13 @@ class Scene {
     // the triangle alone, so the point is the one above, bit for bit. The memo belongs to this
     // scene as committed: reset() it for another scene or revision.
     SurfacePoint surface_point(const Ray& ray, const Hit& hit, TriangleNormalMemo* memo) const;
+    // points[j] = surface_point(ray, hits[j], memo) for the four hits[0, 4) that are valid (a
+    // miss's point is left as it was), bit for bit. Four hits on one instance of a flat mesh (no
+    // vertex normals, UVs or tangents: the preview's wave on a Cornell box) are interpolated and
+    // moved to world space in four SSE2 lanes, each lane the scalar operations in their order;
+    // any other four take surface_point one by one.
+    void surface_point_lanes(const Hit* hits, SurfacePoint* points,
+                             TriangleNormalMemo* memo) const;
     // What maps instance `instance_id`'s object-space normals to world (scene.h, "Normals");
     // valid on a committed scene (object-space normal maps read it).
     const mat3& normal_from_object(uint32_t instance_id) const {
