@@ -249,6 +249,22 @@ class PrincipledBsdf {
     float field_diffuse_roughness() const { return roughness_; }
     // f |cos(wi)| of the field lobes only (transmission class is always zero).
     BsdfEval eval_field(const vec3& wo, const vec3& wi) const;
+    // Whether eval_field_lanes covers this BSDF: its field lobes are a diffuse lobe and/or one
+    // GGX specular lobe (no glass lobes), on a camera path, its normal not bent. The rest goes
+    // through eval_field, chosen per BSDF.
+    // Inline: the light stage asks once a path.
+    bool eval_field_in_lanes() const {
+        if (v2_.from_light || bent_ || lobe_count_ == 0) return false;
+        for (int i = 0; i < lobe_count_; ++i)  // add_lobe adds at most one lobe of each kind
+            if (lobes_[i].kind != LobeKind::Diffuse && lobes_[i].kind != LobeKind::Specular)
+                return false;
+        return true;
+    }
+    // out[k] = bsdf[k]->eval_field(*wo[k], wi[k]) for four BSDFs that eval_field_in_lanes(),
+    // bit for bit, evaluated together in SSE2 lanes (render/bsdf_lanes.cpp) so that the four
+    // dependent chains (normalize, GGX square roots and divisions) overlap.
+    static void eval_field_lanes(const PrincipledBsdf* const bsdf[4], const vec3* const wo[4],
+                                 const vec3* const wi[4], BsdfEval* const out[4]);
     // The non-Dirac glossy reflection lobes with their directional albedo for wo (∫ f cos dwi,
     // from a tabulated GGX albedo; the Fresnel curve of the specular colour is the default
     // Specular 0.5 one) and roughness. Returns how many were written (at most 2).

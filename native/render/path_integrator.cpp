@@ -564,6 +564,31 @@ int PathIntegrator::prepare_direct(Ray* shadows, const LightSample* samples, int
     return direct_from_samples(shadows, samples, sampled);
 }
 
+bool PathIntegrator::begin_direct(const LightSample* samples, int sampled, vec3* wi) {
+    if (vertex_ != 0 || !first_light_sample_ || sampled > 1)
+        throw Internal("PathIntegrator::begin_direct: only at the first surface of a path with "
+                       "set_first_light_sample, for at most one light sample");
+    if (!shading_.value.bsdf.has_smooth_lobes()) return false;
+    rng_.advance(3);  // as prepare_direct(shadows, samples, sampled)
+    if (sampled == 0) return false;
+    // direct_from_samples' first steps.
+    const Shading& shading = shading_.value;
+    const LightSample& ls = samples[0];
+    *wi = shading.frame.to_local(ls.wi);
+    const bool geometric_above = glm::dot(ls.wi, shading.geometric_normal) > 0.0f;
+    return geometric_above == (wi->z > 0.0f);
+}
+
+// direct_from_samples' last steps for its one sample.
+int PathIntegrator::finish_direct(Ray* shadows, const LightSample& sample, const vec3& wi,
+                                  const BsdfEval& eval) {
+    if (max_component(eval.total()) <= 0.0f) return 0;
+    shadows[0] = light_shadow_ray(shading_.value.spawn_origin(sample.wi), sample.wi,
+                                  sample.distance);
+    ::new (&pending_[0].value) PendingDirect{sample, wi, eval};
+    return 1;
+}
+
 // The BSDF toward each light sample and the shadow rays of those it lets through.
 int PathIntegrator::direct_from_samples(Ray* shadows, const LightSample* samples, int sampled) {
     const Shading& shading = shading_.value;

@@ -187,6 +187,22 @@ class PathIntegrator {
     // and shading normal and the numbers set by set_first_light_sample (a wave's light stage,
     // LightSampler::sample_split_lanes). Only right after begin(), with set_first_light_sample.
     int prepare_direct(Ray* shadows, const LightSample* samples, int sampled);
+    // prepare_direct(shadows, samples, sampled) for sampled <= 1 in two halves around the
+    // BSDF's evaluation toward the sample, which a wave's light stage makes for four paths at
+    // once (PrincipledBsdf::eval_field_lanes). begin_direct: false when no shadow ray follows
+    // (no sample, or the shading and geometric normals disagree on its side), else the
+    // sample's direction in the shading frame; then the caller evaluates the BSDF (direct_bsdf
+    // says which evaluation) and finish_direct writes the shadow ray if the value is not zero
+    // (returns how many: 0 or 1), the same steps, so the same bits.
+    bool begin_direct(const LightSample* samples, int sampled, vec3* wi);
+    // The surface's BSDF, and whether the light stage evaluates it by eval_field (the field
+    // lobes; else eval).
+    const PrincipledBsdf& direct_bsdf(bool* field_lobes) const {
+        *field_lobes = vertex_field() != nullptr;
+        return shading_.value.bsdf;
+    }
+    int finish_direct(Ray* shadows, const LightSample& sample, const vec3& wi,
+                      const BsdfEval& eval);
     // Whether prepare_direct() samples lights here (a surface with lobes a light sample can
     // meet); after begin().
     bool samples_lights() const { return shading_.value.bsdf.has_smooth_lobes(); }

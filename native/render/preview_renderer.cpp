@@ -92,12 +92,20 @@ struct LightLanes {
     std::vector<float> x, y, z, u_select, ux, uy;
     std::vector<LightSample> samples;
     std::vector<int8_t> written;
+    // Each path's sample direction in its shading frame (PathIntegrator::begin_direct), whether
+    // a shadow ray may follow, and its BSDF's value there.
+    std::vector<vec3> wi;
+    std::vector<uint8_t> kept;
+    std::vector<BsdfEval> eval;
 
     void resize(size_t size) {
         for (std::vector<float>* v : {&x, &y, &z, &u_select, &ux, &uy}) v->resize(size);
         path.resize(size);
         samples.resize(size);
         written.resize(size);
+        wi.resize(size);
+        kept.resize(size);
+        eval.resize(size);
     }
 };
 
@@ -401,15 +409,80 @@ class FrameWork {
         }
     }
 
+    // Each light stage path's BSDF toward its light sample, then its shadow ray (in path
+    // order): PathIntegrator::prepare_direct's steps, with the evaluations of four paths whose
+    // field lobes the lanes cover made together (PrincipledBsdf::eval_field_lanes), so that their
+    // dependent chains overlap; the others one by one. Each group's paths are finished as soon
+    // as it is evaluated, while their data is still in cache.
+    template <typename AddShadows>
+    void direct_from_lanes(Wave& wave, size_t count, const AddShadows& add_shadows) const {
+        LightLanes& lanes = wave.light_lanes;
+        Ray shadows[kMaxLightSplits];
+        size_t finished = 0;  // lanes [0, finished) have their shadow rays
+        const auto finish_until = [&](size_t end) {
+            for (; finished < end; ++finished) {
+                const size_t j = finished;
+                PathIntegrator& path = *wave.paths[lanes.path[j]];
+                int written = 0;
+                if (lanes.written[j] < 0)
+                    written = path.prepare_direct(shadows);
+                else if (lanes.kept[j])
+                    written = path.finish_direct(shadows, lanes.samples[j], lanes.wi[j],
+                                                 lanes.eval[j]);
+                add_shadows(lanes.path[j], shadows, written);
+            }
+        };
+        const PrincipledBsdf* group_bsdf[4];
+        const vec3* group_wo[4];
+        const vec3* group_wi[4];
+        BsdfEval* group_eval[4];
+        int grouped = 0;
+        BsdfEval padding;  // the value of a lane past a partial group's last, not read
+        const auto evaluate_group = [&]() {
+            for (int k = grouped; k < 4; ++k) {
+                group_bsdf[k] = group_bsdf[0];
+                group_wo[k] = group_wo[0];
+                group_wi[k] = group_wi[0];
+                group_eval[k] = &padding;
+            }
+            PrincipledBsdf::eval_field_lanes(group_bsdf, group_wo, group_wi, group_eval);
+            grouped = 0;
+        };
+        for (size_t j = 0; j < count; ++j) {
+            if (lanes.written[j] < 0) continue;  // the path samples its light itself (finish_until)
+            PathIntegrator& path = *wave.paths[lanes.path[j]];
+            lanes.kept[j] = path.begin_direct(&lanes.samples[j], lanes.written[j], &lanes.wi[j]);
+            if (!lanes.kept[j]) continue;
+            bool field_lobes;
+            const PrincipledBsdf& bsdf = path.direct_bsdf(&field_lobes);
+            const vec3& wo = path.first_surface().wo;
+            if (!field_lobes || !bsdf.eval_field_in_lanes()) {
+                lanes.eval[j] = field_lobes ? bsdf.eval_field(wo, lanes.wi[j])
+                                            : bsdf.eval(wo, lanes.wi[j]);
+                continue;
+            }
+            group_bsdf[grouped] = &bsdf;
+            group_wo[grouped] = &wo;
+            group_wi[grouped] = &lanes.wi[j];
+            group_eval[grouped] = &lanes.eval[j];
+            if (++grouped == 4) {
+                evaluate_group();
+                finish_until(j + 1);
+            }
+        }
+        if (grouped > 0) evaluate_group();
+        finish_until(count);
+    }
+
     // Next-event estimation at every first surface, its shadow rays as one occlusion stream.
     void trace_direct(Wave& wave) const {
         wave.shadow_rays.clear();
         Ray shadows[kMaxLightSplits];
-        const auto add_shadows = [&](size_t i, int count) {
+        const auto add_shadows = [&](size_t i, const Ray* rays, int count) {
             for (int k = 0; k < count; ++k) {
                 wave.shadow_paths[wave.shadow_rays.size()] = uint32_t(i);
                 wave.shadow_slots[wave.shadow_rays.size()] = uint8_t(k);
-                wave.shadow_rays.push_back(shadows[k]);
+                wave.shadow_rays.push_back(rays[k]);
             }
         };
         if (lights_.samples_one_rectangle()) {
@@ -435,17 +508,10 @@ class FrameWork {
             lights_.sample_split_lanes(count, lanes.x.data(), lanes.y.data(), lanes.z.data(),
                                        lanes.u_select.data(), lanes.ux.data(), lanes.uy.data(),
                                        lanes.samples.data(), lanes.written.data());
-            for (size_t j = 0; j < count; ++j) {
-                PathIntegrator& path = *wave.paths[lanes.path[j]];
-                add_shadows(lanes.path[j],
-                            lanes.written[j] < 0
-                                ? path.prepare_direct(shadows)
-                                : path.prepare_direct(shadows, &lanes.samples[j],
-                                                      lanes.written[j]));
-            }
+            direct_from_lanes(wave, count, add_shadows);
         } else {
             for (size_t i = 0; i < wave.count; ++i)
-                if (wave.live[i]) add_shadows(i, wave.paths[i]->prepare_direct(shadows));
+                if (wave.live[i]) add_shadows(i, shadows, wave.paths[i]->prepare_direct(shadows));
         }
         if (wave.shadow_rays.empty()) return;
         scene_.occluded(wave.shadow_rays, wave.occluded, nullptr, RayCoherence::Coherent);
