@@ -15,9 +15,7 @@
 // lobes go through eval_field (eval_field_in_lanes).
 #include "render/bsdf.h"
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
+#include "render/vec3_lanes.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -28,22 +26,6 @@ namespace shgi {
 namespace {
 
 constexpr int kLanes = 4;
-
-// Four vec3, one per lane.
-struct Vec3Lanes {
-    __m128 x, y, z;
-};
-
-// glm::dot's order: (a.x b.x + a.y b.y) + a.z b.z.
-__m128 dot_lanes(const Vec3Lanes& a, const Vec3Lanes& b) {
-    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(a.x, b.x), _mm_mul_ps(a.y, b.y)),
-                      _mm_mul_ps(a.z, b.z));
-}
-
-// where ? a : b, per lane.
-__m128 select_lanes(__m128 where, __m128 a, __m128 b) {
-    return _mm_or_ps(_mm_and_ps(where, a), _mm_andnot_ps(where, b));
-}
 
 // std::clamp(x, 0, 1), which is std::min(std::max(x, 0), 1): (x < 0) ? 0 : x, then
 // (1 < y) ? 1 : y, which MAXPS(0, x) and MINPS(1, y) are, NaN included.

@@ -1,31 +1,12 @@
 #include "render/quad_glossy.h"
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
+#include "render/vec3_lanes.h"
 #include "sh/ggx_zh.h"
 
 namespace shgi {
 namespace {
 
 #if defined(__SSE2__)
-// Four vec3, one per lane.
-struct Vec3Lanes {
-    __m128 x, y, z;
-};
-
-// glm::dot's order: (a.x b.x + a.y b.y) + a.z b.z.
-__m128 dot_lanes(const Vec3Lanes& a, const Vec3Lanes& b) {
-    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(a.x, b.x), _mm_mul_ps(a.y, b.y)),
-                      _mm_mul_ps(a.z, b.z));
-}
-
-// where ? a : b, per lane.
-__m128 select_lanes(__m128 where, __m128 a, __m128 b) {
-    return _mm_or_ps(_mm_and_ps(where, a), _mm_andnot_ps(where, b));
-}
-
 // The queries' inputs, one lane per slot; factors[l] holds each lane's k_l.
 struct GlossyLanes {
     Vec3Lanes n, wo;

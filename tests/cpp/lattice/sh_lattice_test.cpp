@@ -507,6 +507,54 @@ ShLattice floor_and_wall_lattice(int order) {
     return lattice;
 }
 
+// The queries of the bit-for-bit sample tests below: an L2 floor-and-wall lattice of random
+// coefficients in [-0.5, 1.5), normals along and across the floor and the wall, points in and up
+// to two cells around the lattice (every eighth query up to ten cells out, where the coordinates
+// are clamped), with and without a normal offset.
+struct SumQueries {
+    static constexpr int kFloats = 27;
+    static constexpr int kTrials = 3000;
+    struct Query {
+        vec3 p, n;
+        float normal_offset;
+    };
+
+    explicit SumQueries(uint64_t seed) : lattice(floor_and_wall_lattice(2)), rng(seed, 0) {
+        for (size_t c = 0; c < lattice.cell_count(); ++c) {
+            ShRgb radiance(2);
+            for (int i = 0; i < kFloats; ++i) radiance.data()[i] = 2.0f * rng.next_float() - 0.5f;
+            lattice.set_cell_radiance(c, radiance);
+        }
+    }
+
+    // The trial-th query; call with trial 0, 1, 2, ... in turn (the points come from rng).
+    Query query(int trial) {
+        static const vec3 normals[] = {kUp, -kUp, vec3(1, 0, 0), vec3(-1, 0, 0),
+                                       glm::normalize(vec3(0.3f, -0.2f, 0.9f)), vec3(0, 1, 0)};
+        const float s = lattice.cell_size();
+        const float reach = trial % 8 == 0 ? 10.0f : 2.0f;
+        const vec3 u(rng.next_float(), rng.next_float(), rng.next_float());
+        return {lattice.origin() + s * (-reach + (5.0f + 2.0f * reach) * u), normals[trial % 6],
+                trial % 2 == 0 ? 0.0f : 0.25f};
+    }
+
+    ShLattice lattice;
+    Pcg32 rng;
+};
+
+// A sample against the reference's weighted sum, normalised as the samples do (Σ w L · (1 / Σ w),
+// zero without weight), bit for bit.
+void expect_normalised_sum(const ShRgb& sampled, const std::array<float, SumQueries::kFloats>& sum,
+                           float total, int trial, const vec3& cells, const vec3& n) {
+    std::array<float, SumQueries::kFloats> expected{};
+    if (total > 0.0f)
+        for (size_t i = 0; i < expected.size(); ++i) expected[i] = sum[i] * (1.0f / total);
+    ASSERT_EQ(sampled.order, 2);
+    ASSERT_EQ(std::memcmp(sampled.data(), expected.data(), sizeof(expected)), 0)
+        << "trial " << trial << " at cells " << glm::to_string(cells) << ", n "
+        << glm::to_string(n) << ": " << sampled[0].x << " against " << expected[0];
+}
+
 // A cubic sample is, bit for bit, the scalar weighted sum the header describes, in block-bit
 // order: per cell of the block inside the lattice with D_c(n) > 0 and d² < r², w = w(√d²) D_c(n),
 // Σ w L(c) · (1 / Σ w), each operation in float as the walk does it (its cells and D_c(n) come
@@ -515,27 +563,14 @@ ShLattice floor_and_wall_lattice(int order) {
 // a floor and a wall (cells without surface, cells facing away), normals along and across them,
 // points in and around the lattice (up to ten cells out), with and without a normal offset.
 TEST(ShLattice, CubicSampleIsTheScalarWeightedSumBitForBit) {
-    ShLattice lattice = floor_and_wall_lattice(2);
+    SumQueries queries(11);
+    const ShLattice& lattice = queries.lattice;
     const float s = lattice.cell_size();
     const vec3 o = lattice.origin();
-    Pcg32 rng(11, 0);
-    constexpr int kFloats = 27;
-    for (size_t c = 0; c < lattice.cell_count(); ++c) {
-        ShRgb radiance(2);
-        for (int i = 0; i < kFloats; ++i) radiance.data()[i] = 2.0f * rng.next_float() - 0.5f;
-        lattice.set_cell_radiance(c, radiance);
-    }
     const ivec3 dims = lattice.dims();
-    const vec3 normals[] = {kUp, -kUp, vec3(1, 0, 0), vec3(-1, 0, 0),
-                            glm::normalize(vec3(0.3f, -0.2f, 0.9f)), vec3(0, 1, 0)};
-    for (int trial = 0; trial < 3000; ++trial) {
-        const vec3& n = normals[trial % 6];
-        // Most points in and up to two cells around the lattice; every eighth up to ten cells
-        // out, where the coordinates are clamped.
-        const float reach = trial % 8 == 0 ? 10.0f : 2.0f;
-        const vec3 u(rng.next_float(), rng.next_float(), rng.next_float());
-        const vec3 p = o + s * (-reach + (5.0f + 2.0f * reach) * u);
-        const float normal_offset = trial % 2 == 0 ? 0.0f : 0.25f;
+    constexpr int kFloats = SumQueries::kFloats;
+    for (int trial = 0; trial < SumQueries::kTrials; ++trial) {
+        const auto [p, n, normal_offset] = queries.query(trial);
         const vec3 cells = glm::clamp((p + (normal_offset * s) * n - o) / s, vec3(-4.0f),
                                       vec3(dims) + 4.0f);
         const ivec3 centre(glm::floor(cells));
@@ -561,14 +596,7 @@ TEST(ShLattice, CubicSampleIsTheScalarWeightedSumBitForBit) {
                     for (int i = 0; i < kFloats; ++i) sum[size_t(i)] += w * coefficients[i];
                     total += w;
                 }
-        std::array<float, kFloats> expected{};
-        if (total > 0.0f)
-            for (int i = 0; i < kFloats; ++i) expected[size_t(i)] = sum[size_t(i)] * (1.0f / total);
-        const ShRgb sampled = lattice.sample_cubic(p, n, normal_offset);
-        ASSERT_EQ(sampled.order, 2);
-        ASSERT_EQ(std::memcmp(sampled.data(), expected.data(), sizeof(expected)), 0)
-            << "trial " << trial << " at cells " << glm::to_string(cells) << ", n "
-            << glm::to_string(n) << ": " << sampled[0].x << " against " << expected[0];
+        expect_normalised_sum(lattice.sample_cubic(p, n, normal_offset), sum, total, trial, cells, n);
     }
 }
 
@@ -579,25 +607,14 @@ TEST(ShLattice, CubicSampleIsTheScalarWeightedSumBitForBit) {
 // has them, is checked against it). The lattice, coefficients, normals and points of the cubic
 // test above (no visibility: every cell of the block may be read).
 TEST(ShLattice, TrilinearSampleIsTheScalarWeightedSumBitForBit) {
-    ShLattice lattice = floor_and_wall_lattice(2);
+    SumQueries queries(12);
+    const ShLattice& lattice = queries.lattice;
     const float s = lattice.cell_size();
     const vec3 o = lattice.origin();
-    Pcg32 rng(12, 0);
-    constexpr int kFloats = 27;
-    for (size_t c = 0; c < lattice.cell_count(); ++c) {
-        ShRgb radiance(2);
-        for (int i = 0; i < kFloats; ++i) radiance.data()[i] = 2.0f * rng.next_float() - 0.5f;
-        lattice.set_cell_radiance(c, radiance);
-    }
     const ivec3 dims = lattice.dims();
-    const vec3 normals[] = {kUp, -kUp, vec3(1, 0, 0), vec3(-1, 0, 0),
-                            glm::normalize(vec3(0.3f, -0.2f, 0.9f)), vec3(0, 1, 0)};
-    for (int trial = 0; trial < 3000; ++trial) {
-        const vec3& n = normals[trial % 6];
-        const float reach = trial % 8 == 0 ? 10.0f : 2.0f;
-        const vec3 u(rng.next_float(), rng.next_float(), rng.next_float());
-        const vec3 p = o + s * (-reach + (5.0f + 2.0f * reach) * u);
-        const float normal_offset = trial % 2 == 0 ? 0.0f : 0.25f;
+    constexpr int kFloats = SumQueries::kFloats;
+    for (int trial = 0; trial < SumQueries::kTrials; ++trial) {
+        const auto [p, n, normal_offset] = queries.query(trial);
         vec3 cells;
         for (int a = 0; a < 3; ++a)
             cells[a] = std::min(std::max((p[a] + (normal_offset * s) * n[a] - o[a]) / s, -4.0f),
@@ -625,14 +642,7 @@ TEST(ShLattice, TrilinearSampleIsTheScalarWeightedSumBitForBit) {
                     for (int i = 0; i < kFloats; ++i) sum[size_t(i)] += w * coefficients[i];
                     total += w;
                 }
-        std::array<float, kFloats> expected{};
-        if (total > 0.0f)
-            for (int i = 0; i < kFloats; ++i) expected[size_t(i)] = sum[size_t(i)] * (1.0f / total);
-        const ShRgb sampled = lattice.sample_trilinear(p, n, normal_offset);
-        ASSERT_EQ(sampled.order, 2);
-        ASSERT_EQ(std::memcmp(sampled.data(), expected.data(), sizeof(expected)), 0)
-            << "trial " << trial << " at cells " << glm::to_string(cells) << ", n "
-            << glm::to_string(n) << ": " << sampled[0].x << " against " << expected[0];
+        expect_normalised_sum(lattice.sample_trilinear(p, n, normal_offset), sum, total, trial, cells, n);
     }
 }
 
