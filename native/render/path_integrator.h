@@ -36,6 +36,7 @@
 #pragma once
 
 #include <cstring>
+#include <new>
 #include <optional>
 #include <type_traits>
 
@@ -150,8 +151,12 @@ class PathIntegrator {
         shared_lookup_ = nullptr;
         shared_irradiance_ = nullptr;
         shared_glossy_ = nullptr;
-        first_light_sample_.reset();
-        first_bsdf_sample_.reset();
+        // Disengaged by construction, not reset(): reset() loads the engaged flag to test it,
+        // and that load was the first touch of the next slot's line (a cache miss the render
+        // loop waited on); a store does not wait. Trivially destructible: nothing to destroy.
+        static_assert(std::is_trivially_destructible_v<std::optional<FirstLightSample>>);
+        ::new (&first_light_sample_) std::optional<FirstLightSample>();
+        ::new (&first_bsdf_sample_) std::optional<FirstLightSample>();
         terminate_on_next_surface_ = false;
         throughput_ = vec3(1.0f);
         write_denoising_features_ = !combined_only_;
