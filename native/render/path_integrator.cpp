@@ -555,38 +555,33 @@ int PathIntegrator::prepare_direct(Ray* shadows) {
     return direct_from_samples(shadows, samples.value, sampled);
 }
 
-int PathIntegrator::prepare_direct(Ray* shadows, const LightSample* samples, int sampled) {
-    if (vertex_ != 0 || !first_light_sample_)
-        throw Internal("PathIntegrator::prepare_direct with samples: only at the first surface "
-                       "of a path with set_first_light_sample");
-    if (!shading_.value.bsdf.has_smooth_lobes()) return 0;
-    rng_.advance(3);  // as prepare_direct(shadows): the numbers the stratified ones replace
-    return direct_from_samples(shadows, samples, sampled);
-}
-
 bool PathIntegrator::begin_direct(const LightSample* samples, int sampled, vec3* wi) {
     if (vertex_ != 0 || !first_light_sample_ || sampled > 1)
         throw Internal("PathIntegrator::begin_direct: only at the first surface of a path with "
                        "set_first_light_sample, for at most one light sample");
     if (!shading_.value.bsdf.has_smooth_lobes()) return false;
-    rng_.advance(3);  // as prepare_direct(shadows, samples, sampled)
-    if (sampled == 0) return false;
-    // direct_from_samples' first steps.
+    rng_.advance(3);  // as prepare_direct(shadows): the numbers the stratified ones replace
+    return sampled == 1 && light_direction(samples[0], wi);
+}
+
+int PathIntegrator::finish_direct(Ray* shadows, const LightSample& sample, const vec3& wi,
+                                  const BsdfEval& eval) {
+    return add_pending_direct(shadows, 0, sample, wi, eval) ? 1 : 0;
+}
+
+bool PathIntegrator::light_direction(const LightSample& ls, vec3* wi) const {
     const Shading& shading = shading_.value;
-    const LightSample& ls = samples[0];
     *wi = shading.frame.to_local(ls.wi);
     const bool geometric_above = glm::dot(ls.wi, shading.geometric_normal) > 0.0f;
     return geometric_above == (wi->z > 0.0f);
 }
 
-// direct_from_samples' last steps for its one sample.
-int PathIntegrator::finish_direct(Ray* shadows, const LightSample& sample, const vec3& wi,
-                                  const BsdfEval& eval) {
-    if (max_component(eval.total()) <= 0.0f) return 0;
-    shadows[0] = light_shadow_ray(shading_.value.spawn_origin(sample.wi), sample.wi,
-                                  sample.distance);
-    ::new (&pending_[0].value) PendingDirect{sample, wi, eval};
-    return 1;
+bool PathIntegrator::add_pending_direct(Ray* shadows, int k, const LightSample& ls,
+                                        const vec3& wi, const BsdfEval& eval) {
+    if (max_component(eval.total()) <= 0.0f) return false;
+    shadows[k] = light_shadow_ray(shading_.value.spawn_origin(ls.wi), ls.wi, ls.distance);
+    ::new (&pending_[k].value) PendingDirect{ls, wi, eval};
+    return true;
 }
 
 // The BSDF toward each light sample and the shadow rays of those it lets through.
@@ -595,15 +590,11 @@ int PathIntegrator::direct_from_samples(Ray* shadows, const LightSample* samples
     int count = 0;
     for (int i = 0; i < sampled; ++i) {
         const LightSample& ls = samples[i];
-        const vec3 wi = shading.frame.to_local(ls.wi);
-        const bool geometric_above = glm::dot(ls.wi, shading.geometric_normal) > 0.0f;
-        if (geometric_above != (wi.z > 0.0f)) continue;  // shading and geometric normals disagree
+        vec3 wi;
+        if (!light_direction(ls, &wi)) continue;
         const BsdfEval eval = vertex_field() != nullptr ? shading.bsdf.eval_field(shading.wo, wi)
                                                         : shading.bsdf.eval(shading.wo, wi);
-        if (max_component(eval.total()) <= 0.0f) continue;
-        shadows[count] = light_shadow_ray(shading.spawn_origin(ls.wi), ls.wi, ls.distance);
-        ::new (&pending_[count].value) PendingDirect{ls, wi, eval};
-        ++count;
+        if (add_pending_direct(shadows, count, ls, wi, eval)) ++count;
     }
     return count;
 }

@@ -187,15 +187,13 @@ class PathIntegrator {
     // contributions wait on the shadow rays written to shadows[0, count) (room for
     // kMaxLightSplits).
     int prepare_direct(Ray* shadows);
-    // prepare_direct() at the first surface with its light samples already drawn by the caller:
-    // samples[0, sampled) are what LightSampler::sample_split gives for the surface's position
-    // and shading normal and the numbers set by set_first_light_sample (a wave's light stage,
-    // LightSampler::sample_split_lanes). Only right after begin(), with set_first_light_sample.
-    int prepare_direct(Ray* shadows, const LightSample* samples, int sampled);
-    // prepare_direct(shadows, samples, sampled) for sampled <= 1 in two halves around the
-    // BSDF's evaluation toward the sample, which a wave's light stage makes for four paths at
-    // once (PrincipledBsdf::eval_field_lanes). begin_direct: false when no shadow ray follows
-    // (no sample, or the shading and geometric normals disagree on its side), else the
+    // prepare_direct() at the first surface with its light sample already drawn by the caller,
+    // in two halves around the BSDF's evaluation toward it, which a wave's light stage makes for
+    // four paths at once (PrincipledBsdf::eval_field_lanes). samples[0, sampled), sampled <= 1,
+    // are what LightSampler::sample_split gives for the surface's position and shading normal
+    // and the numbers set by set_first_light_sample (LightSampler::sample_split_lanes); only
+    // right after begin(), with set_first_light_sample. begin_direct: false when no shadow ray
+    // follows (no sample, or the shading and geometric normals disagree on its side), else the
     // sample's direction in the shading frame; then the caller evaluates the BSDF (direct_bsdf
     // says which evaluation) and finish_direct writes the shadow ray if the value is not zero
     // (returns how many: 0 or 1), the same steps, so the same bits.
@@ -329,6 +327,13 @@ class PathIntegrator {
     void record_denoising_features(const Shading& shading);
     void sample_direct();
     int direct_from_samples(Ray* shadows, const LightSample* samples, int sampled);
+    // direct_from_samples' steps for one sample, which begin_direct and finish_direct take too:
+    // the sample's direction in the shading frame into *wi, false where the shading and
+    // geometric normals disagree on its side; then shadow ray k and its waiting contribution,
+    // false where the BSDF's value toward it is zero.
+    bool light_direction(const LightSample& ls, vec3* wi) const;
+    bool add_pending_direct(Ray* shadows, int k, const LightSample& ls, const vec3& wi,
+                            const BsdfEval& eval);
     void add_field(const Shading& shading);
     // Adds the first surface's glossy field query to `glossy`: its slot, or -1 without a free
     // one. The query is made from the normal, view and roughness add_field_light reads, so the
